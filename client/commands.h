@@ -1,0 +1,13 @@
+/*
+ * commands.h - the subcommands of the `gigaview` tool, one file each,
+ * listed in the table in gigaview.c.
+ */
+#ifndef GV_COMMANDS_H
+#define GV_COMMANDS_H
+
+/* Each returns the process exit status: 0 success, 1 failure, 2 usage. */
+int cmd_encode(int argc, char **argv);
+int cmd_info(int argc, char **argv);
+int cmd_export(int argc, char **argv);
+
+#endif

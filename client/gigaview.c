@@ -1,0 +1,51 @@
+/*
+ * gigaview.c - entry point of the `gigaview` tool: dispatches to the
+ * subcommand named by the first argument (table below).
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "commands.h"
+#include "config.h"
+
+struct command {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary;
+};
+
+static const struct command commands[] = {
+    {"encode", cmd_encode, "encode images into a store file"},
+    {"info", cmd_info, "describe a store: size, levels, tiles, bits per pixel"},
+    {"export", cmd_export, "decode a region of a store to PNG, TIFF or JPEG"},
+};
+
+static void usage(FILE *out)
+{
+    fprintf(out, "usage: gigaview COMMAND [ARGS]\n\ncommands:\n");
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        fprintf(out, "  %-8s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out, "\n'gigaview COMMAND --help' describes a command.\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+        usage(stdout);
+        return 0;
+    }
+    if (!strcmp(argv[1], "--version")) {
+        printf("gigaview %s\n", PACKAGE_VERSION);
+        return 0;
+    }
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        if (!strcmp(argv[1], commands[i].name))
+            return commands[i].run(argc - 1, argv + 1);
+    fprintf(stderr, "gigaview: unknown command '%s'\n", argv[1]);
+    usage(stderr);
+    return 2;
+}

@@ -1,0 +1,45 @@
+/*
+ * error.h - error reporting shared by every gigaview module.
+ *
+ * Functions that can fail return 0 / -1 (or a pointer / NULL) and fill a
+ * struct gv_error that the caller owns, in the jansson style: no global
+ * buffer, so it is safe across threads.  Messages start with the module
+ * name ("store: bad magic in page 12").  The code classifies the failure so
+ * that the HTTP layer can map it to a status with one table.
+ */
+#ifndef GV_ERROR_H
+#define GV_ERROR_H
+
+enum gv_code {
+    GV_OK = 0,
+    GV_EINVAL,   /* bad argument or bad user input (maps to 400) */
+    GV_ENOTFOUND,/* missing file, image, tile (404) */
+    GV_ELIMIT,   /* a configured limit was exceeded (413 / 400) */
+    GV_EFORMAT,  /* unsupported format or version (415 / 501) */
+    GV_ECORRUPT, /* data failed validation: CRC, sizes, truncation (500) */
+    GV_EIO,      /* operating-system I/O failure (500) */
+    GV_ENOSPC,   /* disk full or file size limit (507) */
+    GV_ENOMEM    /* allocation failure (503) */
+};
+
+struct gv_error {
+    enum gv_code code;
+    char text[320];
+};
+
+/*
+ * Fill *err (which may be NULL) with code and a printf-style message.
+ * Always returns -1 so that callers can write `return gv_fail(...)`.
+ */
+int gv_fail(struct gv_error *err, enum gv_code code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* Like gv_fail, appending ": strerror(errnum)" and choosing GV_ENOSPC for
+ * ENOSPC/EFBIG/EDQUOT and GV_EIO otherwise. */
+int gv_fail_errno(struct gv_error *err, int errnum, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* Reset *err to GV_OK with an empty message. */
+void gv_error_clear(struct gv_error *err);
+
+#endif

@@ -1,0 +1,105 @@
+/*
+ * store_format.h - byte layout of a gigaview store file (format version 1).
+ *
+ * Shared by the reader and the writer; docs/FORMAT.md is the normative
+ * description.  All integers are little-endian.  The file is:
+ *
+ *   header   128 bytes at offset 0, CRC32 in its last 4 bytes
+ *   pages    one per 8x8 tiles of a level, written coarse to fine
+ *   root     the root level and its mips down to 1x1, raw, then a CRC32
+ *   index    16 bytes per page {u64 offset, u32 size, u32 crc32}, then a
+ *            CRC32 of the index
+ *
+ * The header points at the root and the index, which the writer appends
+ * after the pages so that it can stream.
+ */
+#ifndef GV_STORE_FORMAT_H
+#define GV_STORE_FORMAT_H
+
+#include <stdint.h>
+#include <string.h>
+
+#define GV_MAGIC "GIGAVIEW"
+#define GV_VERSION 1
+#define GV_HEADER_SIZE 128
+#define GV_INDEX_ENTRY 16
+#define GV_PAGE_MAGIC "GVPG"
+#define GV_PAGE_HEADER 16
+#define GV_PAGE_SLOTS (GV_PAGE_TILES * GV_PAGE_TILES)
+#define GV_PAGE_TABLE (GV_PAGE_HEADER + 8 * GV_PAGE_SLOTS)
+
+/* Decoded form of the 128-byte header. */
+struct gv_header {
+    uint16_t version;
+    uint32_t width, height;
+    uint8_t channels;
+    uint8_t root;           /* root level index */
+    uint8_t root_mips;
+    uint8_t max_rate;       /* the encoder's cap on r */
+    uint8_t src_bits;       /* bits per sample of the input */
+    uint8_t src_float;
+    uint8_t tone;           /* enum gv_tone_rule */
+    uint32_t target_mpsnr;  /* per-tile PSNR target, millidecibels */
+    uint32_t psnr0_mdb;     /* PSNR of level 0 against the input, mdB */
+    uint64_t root_offset, root_size;   /* root_size includes its CRC */
+    uint64_t index_offset, pages;
+    uint64_t file_size;
+};
+
+static inline void gv_put16(uint8_t *p, uint16_t v)
+{
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+}
+static inline void gv_put32(uint8_t *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (uint8_t)(v >> (8 * i));
+}
+static inline void gv_put64(uint8_t *p, uint64_t v)
+{
+    for (int i = 0; i < 8; i++)
+        p[i] = (uint8_t)(v >> (8 * i));
+}
+static inline uint16_t gv_get16(const uint8_t *p)
+{
+    return (uint16_t)(p[0] | p[1] << 8);
+}
+static inline uint32_t gv_get32(const uint8_t *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
+           (uint32_t)p[3] << 24;
+}
+static inline uint64_t gv_get64(const uint8_t *p)
+{
+    return (uint64_t)gv_get32(p) | (uint64_t)gv_get32(p + 4) << 32;
+}
+
+/* Serialize h into 128 bytes, CRC included. */
+void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE]);
+
+/* Parse and check magic, version and CRC (not the geometry).  Returns 0 or
+ * -1 with *err filled. */
+struct gv_error;
+int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
+                     struct gv_error *err);
+
+/* CRC-32 (ISO-HDLC, as zlib and PNG) of len bytes, continuing from crc
+ * (start with 0). */
+uint32_t gv_crc32(uint32_t crc, const void *data, size_t len);
+
+/* Bytes of the root section's pixels: every mip of a w x h root, channels
+ * interleaved, without the trailing CRC. */
+uint64_t gv_root_pixels_size(uint32_t w, uint32_t h, int channels);
+
+/* Box-reduce one 2x2 level (odd edges replicated, rounded to nearest):
+ * src is sw x sh, dst receives ceil(sw/2) x ceil(sh/2). */
+void gv_box_reduce(const uint8_t *src, uint32_t sw, uint32_t sh, int channels,
+                   uint8_t *dst);
+
+/* Reduce two source rows (r1 may equal r0 at an odd bottom edge) of width
+ * sw into one row of ceil(sw/2) pixels. */
+void gv_box_reduce_row(const uint8_t *r0, const uint8_t *r1, uint32_t sw,
+                       int channels, uint8_t *dst);
+
+#endif

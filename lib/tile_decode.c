@@ -1,0 +1,94 @@
+/*
+ * tile_decode.c - tile buffer layout and the CPU reference decoder.
+ *
+ * This file is the executable form of the tile part of docs/FORMAT.md.
+ * Indices are packed LSB-first: bit b of the index stream is bit (b & 7) of
+ * byte (b >> 3), which is bit (b & 31) of little-endian 32-bit word
+ * (b >> 5), the view a GPU takes.  The stream starts right after the
+ * codebook, at bit 8 * (1 + 2^r * 4 * channels).
+ */
+#include <string.h>
+
+#include "geometry.h"
+#include "tile.h"
+
+size_t gv_tilebuf_size(int rate, int channels)
+{
+    if (rate <= 0)
+        return 4;
+    uint64_t bits = 8u * (1u + ((uint64_t)1 << rate) * 4u * (unsigned)channels) +
+                    (uint64_t)GV_NBLOCKS * (unsigned)rate;
+    return (size_t)((bits + 31) / 32 * 4);
+}
+
+int gv_tilebuf_check(const uint8_t *buf, size_t len, int channels,
+                     struct gv_error *err)
+{
+    if (channels != 1 && channels != 3)
+        return gv_fail(err, GV_EINVAL, "tile: bad channel count %d", channels);
+    if (len < 4 || (len & 3))
+        return gv_fail(err, GV_ECORRUPT, "tile: buffer of %zu bytes is not a "
+                       "positive multiple of 4", len);
+    int rate = buf[0];
+    if (rate > GV_MAX_RATE)
+        return gv_fail(err, GV_ECORRUPT, "tile: index width %d above %d",
+                       rate, GV_MAX_RATE);
+    size_t want = gv_tilebuf_size(rate, channels);
+    if (len != want)
+        return gv_fail(err, GV_ECORRUPT, "tile: %zu bytes where rate %d needs "
+                       "%zu", len, rate, want);
+    return rate;
+}
+
+uint32_t gv_tilebuf_index(const uint8_t *buf, int rate, int channels,
+                          uint32_t k)
+{
+    uint64_t bit = 8u * (1u + ((uint64_t)1 << rate) * 4u * (unsigned)channels) +
+                   (uint64_t)k * (unsigned)rate;
+    const uint8_t *p = buf + (bit >> 3);
+    /* r <= 12 and the shift is <= 7, so three bytes always suffice; the
+     * padding guarantees they exist except at the very end. */
+    uint32_t v = p[0];
+    unsigned have = 8;
+    while (have < (bit & 7) + (unsigned)rate) {
+        v |= (uint32_t)p[have / 8] << have;
+        have += 8;
+    }
+    return (v >> (bit & 7)) & ((1u << rate) - 1);
+}
+
+static inline uint8_t clamp_u8(int v)
+{
+    return (uint8_t)(v < 0 ? 0 : (v > 255 ? 255 : v));
+}
+
+int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
+                   const uint8_t *parent, int qx, int qy, uint8_t *out,
+                   struct gv_error *err)
+{
+    int rate = gv_tilebuf_check(buf, len, channels, err);
+    if (rate < 0)
+        return -1;
+    gv_predict(parent, channels, qx, qy, out);
+    if (rate == 0)
+        return 0;
+    const int dim = 4 * channels;
+    const int8_t *book = (const int8_t *)(buf + 1);
+    const size_t row = (size_t)GV_TILE * channels;
+    for (uint32_t by = 0; by < GV_BLOCKS; by++) {
+        for (uint32_t bx = 0; bx < GV_BLOCKS; bx++) {
+            uint32_t idx = gv_tilebuf_index(buf, rate, channels,
+                                            by * GV_BLOCKS + bx);
+            const int8_t *cv = book + (size_t)idx * dim;
+            for (int j = 0; j < 4; j++) {
+                uint32_t x = 2 * bx + (j & 1), y = 2 * by + (j >> 1);
+                if (x >= GV_TILE || y >= GV_TILE)
+                    continue;
+                uint8_t *px = out + y * row + x * channels;
+                for (int c = 0; c < channels; c++)
+                    px[c] = clamp_u8(px[c] + cv[j * channels + c]);
+            }
+        }
+    }
+    return 0;
+}

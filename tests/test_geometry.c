@@ -1,0 +1,88 @@
+/*
+ * test_geometry.c - level, tile and page arithmetic for the sizes the
+ * format must handle: 1x1, 512, 513, 514, 1x70000, 70000x1, 2^31-1.
+ */
+#include "error.h"
+#include "geometry.h"
+#include "store_format.h"
+#include "util.h"
+
+int main(void)
+{
+    tap_plan(22);
+    struct gv_geometry g;
+
+    check(gv_geometry_init(&g, 1, 1, 3) == 0 && g.root == 0 && g.pages == 0 &&
+          g.root_mips == 1, "1x1 is its own root, no pages");
+    check(gv_geometry_init(&g, 512, 512, 3) == 0 && g.root == 0,
+          "512x512 fits the root");
+    check(gv_geometry_init(&g, 513, 513, 3) == 0 && g.root == 1 &&
+          g.level[0].tiles_x == 1 && g.level[0].tiles_y == 1 &&
+          g.level[1].width == 257, "513x513: one tile and a 257^2 root");
+    check(gv_geometry_init(&g, 514, 514, 3) == 0 && g.level[0].tiles_x == 2 &&
+          g.level[0].tiles_y == 2, "514x514 needs 2x2 tiles");
+    check(gv_tiles_for(1025) == 2 && gv_tiles_for(1026) == 3,
+          "tiles overlap by one pixel: 1025 px = 2 tiles, 1026 px = 3");
+    check(gv_geometry_init(&g, 70000, 1, 3) == 0 && g.root == 8 &&
+          g.level[0].tiles_x == 137 && g.level[0].tiles_y == 1 &&
+          g.level[8].width == 274 && g.level[8].height == 1,
+          "70000x1: 8 tiled levels, 137 tiles wide, 274x1 root");
+    check(gv_geometry_init(&g, 1, 70000, 1) == 0 && g.root == 8 &&
+          g.level[0].tiles_y == 137 && g.channels == 1, "1x70000 gray");
+    check(gv_geometry_init(&g, 0, 5, 3) < 0, "zero width is refused");
+    check(gv_geometry_init(&g, 5, 5, 2) < 0, "two channels are refused");
+    check(gv_geometry_init(&g, 0x80000000u, 5, 3) < 0, "2^31 wide is refused");
+    check(gv_geometry_init(&g, 0x7fffffffu, 0x7fffffffu, 3) == 0 &&
+          g.root < GV_MAX_LEVELS && g.level[g.root].width <= 512,
+          "2^31-1 square fits in %d levels (root %d)", GV_MAX_LEVELS, g.root);
+
+    /* Page numbering: coarse levels first, row-major. */
+    check(gv_geometry_init(&g, 40000, 20000, 3) == 0, "40000x20000");
+    int ok = 1;
+    uint64_t expect = 0;
+    for (int k = g.root - 1; k >= 0; k--)
+        for (uint32_t py = 0; py < g.level[k].pages_y; py++)
+            for (uint32_t px = 0; px < g.level[k].pages_x; px++)
+                ok &= gv_page_number(&g, k, px, py) == expect++;
+    check(ok && expect == g.pages, "pages numbered densely, coarse to fine (%llu)",
+          (unsigned long long)g.pages);
+    check(g.level[0].tiles_x == 79 && g.level[0].pages_x == 10,
+          "40000 px: 79 tiles, 10 pages wide");
+
+    /* Box filter: odd edges replicate, rounding to nearest. */
+    uint8_t src[3 * 3] = {0, 1, 2, 3, 4, 5, 6, 7, 8}, dst[4];
+    gv_box_reduce(src, 3, 3, 1, dst);
+    check(dst[0] == (0 + 1 + 3 + 4 + 2) / 4 && dst[1] == (2 + 2 + 5 + 5 + 2) / 4 &&
+          dst[2] == (6 + 7 + 6 + 7 + 2) / 4 && dst[3] == 8,
+          "3x3 box reduce replicates the odd edge");
+    uint8_t one = 200, out1;
+    gv_box_reduce(&one, 1, 1, 1, &out1);
+    check(out1 == 200, "1x1 reduces to itself");
+    check(gv_root_pixels_size(4, 2, 3) == (8 + 2 + 1) * 3, "root mip chain size");
+
+    /* Header round trip and CRC. */
+    struct gv_header h = {0}, back;
+    h.version = GV_VERSION;
+    h.width = 1234;
+    h.height = 567;
+    h.channels = 3;
+    h.root_offset = 99;
+    h.file_size = 1ull << 40;
+    uint8_t hb[GV_HEADER_SIZE];
+    gv_header_pack(&h, hb);
+    check(gv_header_unpack(hb, &back, NULL) == 0 && back.width == 1234 &&
+          back.file_size == (1ull << 40), "header round trip");
+    hb[13] ^= 1;
+    struct gv_error err;
+    check(gv_header_unpack(hb, &back, &err) < 0 && err.code == GV_ECORRUPT,
+          "header CRC catches a flipped bit: %s", err.text);
+    hb[13] ^= 1;
+    hb[8] = 2;
+    check(gv_header_unpack(hb, &back, &err) < 0 && err.code == GV_EFORMAT,
+          "version 2 is refused: %s", err.text);
+    hb[0] = 'X';
+    check(gv_header_unpack(hb, &back, &err) < 0 && err.code == GV_EFORMAT,
+          "bad magic is refused");
+    check(gv_crc32(0, "123456789", 9) == 0xcbf43926u, "CRC-32 check value");
+    return tap_done();
+}

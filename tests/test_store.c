@@ -1,0 +1,250 @@
+/*
+ * test_store.c - the store file: write, reopen, read pages and regions,
+ * and refuse damaged files (bad CRCs, truncation, versions, hostile
+ * offsets) without crashing or reading out of bounds.  Run under ASan or
+ * valgrind this is also the memory-safety check of the reader.
+ */
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "decoder.h"
+#include "store.h"
+#include "store_writer.h"
+#include "tile.h"
+#include "util.h"
+
+static char dir[] = "/tmp/gv-test-store-XXXXXX";
+
+/* A 1100x600 gray store (levels 0 and 1 tiled, 275x150 root), every tile
+ * coded at rate 0 except tile 0/1/0 at rate 2. */
+static int write_store(const char *path, struct gv_error *err)
+{
+    struct gv_header h = {0};
+    h.width = 1100;
+    h.height = 600;
+    h.channels = 1;
+    h.max_rate = 2;
+    h.src_bits = 8;
+    h.target_mpsnr = 30000;
+    struct gv_store_writer *w = gv_store_writer_new(path, &h, err);
+    if (!w)
+        return -1;
+    struct gv_geometry g;
+    gv_geometry_init(&g, 1100, 600, 1);
+    static uint8_t zero4[4];
+    size_t l2 = gv_tilebuf_size(2, 1);
+    uint8_t *r2 = calloc(1, l2);
+    r2[0] = 2;
+    for (int i = 0; i < 4 * 4; i++)
+        r2[1 + i] = (uint8_t)(i * 5 - 40);
+    for (size_t k = 17; k < l2; k++)
+        r2[k] = (uint8_t)(k * 37);
+    for (int k = g.root - 1; k >= 0; k--) {
+        const uint8_t *tiles[64] = {0};
+        size_t lens[64] = {0};
+        for (uint32_t ty = 0; ty < g.level[k].tiles_y; ty++)
+            for (uint32_t tx = 0; tx < g.level[k].tiles_x; tx++) {
+                int rate2 = k == 0 && tx == 1 && ty == 0;
+                tiles[ty * 8 + tx] = rate2 ? r2 : zero4;
+                lens[ty * 8 + tx] = rate2 ? l2 : 4;
+            }
+        if (gv_store_writer_page(w, k, 0, 0, tiles, lens, err) < 0) {
+            gv_store_writer_abort(w);
+            free(r2);
+            return -1;
+        }
+    }
+    uint8_t *root = malloc(275 * 150);
+    for (int i = 0; i < 275 * 150; i++)
+        root[i] = (uint8_t)(i % 275);
+    int rc = gv_store_writer_root(w, root, err);
+    free(root);
+    free(r2);
+    if (rc < 0) {
+        gv_store_writer_abort(w);
+        return -1;
+    }
+    return gv_store_writer_finish(w, err);
+}
+
+static uint8_t *slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    *len = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    uint8_t *b = malloc(*len);
+    if (fread(b, 1, *len, f) != *len) {
+        free(b);
+        b = NULL;
+    }
+    fclose(f);
+    return b;
+}
+
+static void spit(const char *path, const uint8_t *b, size_t len)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f || fwrite(b, 1, len, f) != len)
+        fail("cannot write %s", path);
+    fclose(f);
+}
+
+/* Open a store and touch everything in it; returns how many parts failed
+ * (open counts as everything). */
+static int exercise(const char *path)
+{
+    struct gv_error err;
+    struct gv_store *s = gv_store_open(path, &err);
+    if (!s)
+        return 1000;
+    const struct gv_geometry *g = &gv_store_info(s)->geometry;
+    struct gv_decoder *d = gv_decoder_new(s, 1 << 20);
+    int failures = 0;
+    for (int k = 0; k < g->root; k++)
+        for (uint32_t ty = 0; ty < g->level[k].tiles_y; ty++)
+            for (uint32_t tx = 0; tx < g->level[k].tiles_x; tx++) {
+                const uint8_t *px;
+                failures += gv_decoder_tile(d, k, tx, ty, &px, &err) < 0;
+            }
+    uint8_t *out = malloc((size_t)g->width * g->height * g->channels);
+    failures += gv_decode_region(d, 0, 0, 0, g->width, g->height, out, &err) < 0;
+    free(out);
+    gv_decoder_free(d);
+    gv_store_close(s);
+    return failures;
+}
+
+int main(void)
+{
+    tap_plan(20);
+    if (!mkdtemp(dir))
+        fail("mkdtemp");
+    char path[256], bad[256];
+    snprintf(path, sizeof path, "%s/a.gv", dir);
+    snprintf(bad, sizeof bad, "%s/bad.gv", dir);
+    struct gv_error err;
+
+    check(write_store(path, &err) == 0, "write a store");
+    struct gv_store *s = gv_store_open(path, &err);
+    check(s != NULL, "reopen it");
+    if (!s)
+        fail("%s", err.text);
+    const struct gv_store_info *in = gv_store_info(s);
+    check(in->geometry.root == 2 && in->header.pages == 2 && in->geometry.channels == 1,
+          "geometry: root level 2, two pages");
+    uint32_t w, h;
+    const uint8_t *root = gv_store_root(s, 0, &w, &h);
+    check(root && w == 275 && h == 150 && root[274] == (uint8_t)274 && root[275] == 0, "root pixels survive");
+    const uint8_t *mip = gv_store_root(s, in->geometry.root_mips - 1, &w, &h);
+    check(mip && w == 1 && h == 1 && !gv_store_root(s, in->geometry.root_mips, &w, &h),
+          "root mips end at 1x1");
+    uint8_t *page;
+    size_t plen;
+    check(gv_store_read_page(s, 0, 0, 0, &page, &plen, &err) == 0, "read page 0/0/0");
+    const uint8_t *t;
+    size_t tl;
+    check(gv_page_tile(page, plen, 1, 1, 0, &t, &tl, &err) == 0 &&
+          tl == gv_tilebuf_size(2, 1) && t[0] == 2, "tile 1,0 is the rate-2 buffer");
+    check(gv_page_tile(page, plen, 1, 5, 5, &t, &tl, &err) < 0,
+          "slot outside the grid is empty");
+    free(page);
+    check(gv_store_read_page(s, 1, 1, 0, &page, &plen, &err) < 0 &&
+          err.code == GV_ENOTFOUND, "no page 1/1/0: %s", err.text);
+    gv_store_close(s);
+    check(exercise(path) == 0, "every tile and the full region decode");
+
+    size_t len;
+    uint8_t *orig = slurp(path, &len);
+    uint8_t *copy = malloc(len);
+
+    /* A flipped byte inside page 0 (level 0, written last): that page
+     * fails, the rest still decodes. */
+    struct gv_store *tmp = gv_store_open(path, &err);
+    uint64_t off;
+    uint32_t psize, pcrc;
+    gv_store_page_extent(tmp, gv_page_number(&gv_store_info(tmp)->geometry, 0, 0, 0),
+                         &off, &psize, &pcrc);
+    gv_store_close(tmp);
+    memcpy(copy, orig, len);
+    copy[off + psize / 2] ^= 0x40;
+    spit(bad, copy, len);
+    s = gv_store_open(bad, &err);
+    int page_fails = s && gv_store_read_page(s, 0, 0, 0, &page, &plen, &err) < 0 &&
+                     err.code == GV_ECORRUPT;
+    check(page_fails, "corrupt page reported: %s", err.text);
+    uint8_t *p1;
+    check(s && gv_store_read_page(s, 1, 0, 0, &p1, &plen, &err) == 0,
+          "the other page still reads");
+    if (s && plen)
+        free(p1);
+    gv_store_close(s);
+
+    memcpy(copy, orig, len);
+    copy[8] = 9;
+    spit(bad, copy, len);
+    check(!gv_store_open(bad, &err) && err.code == GV_EFORMAT, "bad version: %s", err.text);
+
+    spit(bad, orig, len - 7);
+    check(!gv_store_open(bad, &err) && err.code == GV_ECORRUPT, "truncated: %s", err.text);
+    spit(bad, orig, 100);
+    check(!gv_store_open(bad, &err), "truncated inside the header: %s", err.text);
+    spit(bad, orig, 0);
+    check(!gv_store_open(bad, &err), "empty file: %s", err.text);
+
+    /* Index entry pointing past the end, with a valid index CRC. */
+    memcpy(copy, orig, len);
+    uint64_t idx = gv_get64(copy + 56);
+    gv_put64(copy + idx, (uint64_t)len - 10);
+    gv_put32(copy + idx + 2 * 16, gv_crc32(0, copy + idx, 2 * 16));
+    spit(bad, copy, len);
+    check(!gv_store_open(bad, &err) && err.code == GV_ECORRUPT,
+          "hostile page offset: %s", err.text);
+
+    /* Every single-byte corruption, at a stride: never a crash, and only
+     * damage inside the rate-2 tile's indices can go unnoticed by CRCs...
+     * which CRCs catch too, so everything must fail somewhere. */
+    int undetected = 0, trials = 0;
+    for (size_t pos = 0; pos < len; pos += 97, trials++) {
+        memcpy(copy, orig, len);
+        copy[pos] ^= 0x5a;
+        spit(bad, copy, len);
+        undetected += exercise(bad) == 0;
+    }
+    check(undetected == 0, "%d single-byte corruptions, %d undetected", trials, undetected);
+
+    /* Abort leaves nothing; an existing store survives a failed rewrite. */
+    struct gv_header hh = {0};
+    hh.width = 600;
+    hh.height = 600;
+    hh.channels = 3;
+    struct gv_store_writer *wr = gv_store_writer_new(path, &hh, &err);
+    gv_store_writer_abort(wr);
+    size_t len2;
+    uint8_t *again = slurp(path, &len2);
+    check(again && len2 == len && memcmp(again, orig, len) == 0,
+          "aborted rewrite leaves the old store intact");
+    free(again);
+    int entries = 0;
+    char cmd[300];
+    snprintf(cmd, sizeof cmd, "ls -A %s | wc -l", dir);
+    FILE *ls = popen(cmd, "r");
+    if (ls && fscanf(ls, "%d", &entries) != 1)
+        entries = -1;
+    if (ls)
+        pclose(ls);
+    check(entries == 2, "no temporary files left (%d entries)", entries);
+
+    free(orig);
+    free(copy);
+    unlink(path);
+    unlink(bad);
+    rmdir(dir);
+    return tap_done();
+}

@@ -1,0 +1,185 @@
+/*
+ * test_tile.c - the tile codec: the prediction formula, index packing at
+ * every rate, encoder/decoder agreement, quality targets and hostile
+ * buffers.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "geometry.h"
+#include "tile.h"
+#include "util.h"
+
+#define T GV_TILE
+
+static uint64_t rng = 88172645463325252ull;
+static uint32_t next_rand(void)
+{
+    rng ^= rng << 13;
+    rng ^= rng >> 7;
+    rng ^= rng << 17;
+    return (uint32_t)rng;
+}
+
+/* The prediction written out from docs/FORMAT.md, independently. */
+static int reference_pred(const uint8_t *P, int C, int qx, int qy, int u, int v,
+                          int c)
+{
+    int p = 256 * qx + u / 2, q = 256 * qy + v / 2;
+    int pn = u % 2 ? p + 1 : p - 1, qn = v % 2 ? q + 1 : q - 1;
+    pn = pn < 0 ? 0 : pn > 512 ? 512 : pn;
+    qn = qn < 0 ? 0 : qn > 512 ? 512 : qn;
+#define AT(y, x) P[((y) * T + (x)) * C + c]
+    return (9 * AT(q, p) + 3 * AT(q, pn) + 3 * AT(qn, p) + AT(qn, pn) + 8) / 16;
+#undef AT
+}
+
+/* A natural-looking tile: smooth gradient plus texture plus an edge. */
+static void make_tile(uint8_t *t, int C, int noise)
+{
+    for (int y = 0; y < T; y++)
+        for (int x = 0; x < T; x++)
+            for (int c = 0; c < C; c++) {
+                int v = (x / 3 + y / 5 + 40 * c) % 200;
+                if (x > 300 && y < 200)
+                    v += 50;
+                v += noise ? (int)(next_rand() % (unsigned)noise) - noise / 2 : 0;
+                t[(y * T + x) * C + c] = (uint8_t)(v < 0 ? 0 : v > 255 ? 255 : v);
+            }
+}
+
+static double psnr(const uint8_t *a, const uint8_t *b, size_t n)
+{
+    double sse = 0;
+    for (size_t i = 0; i < n; i++)
+        sse += (double)(a[i] - b[i]) * (a[i] - b[i]);
+    return sse == 0 ? 99.0 : 10 * log10(65025.0 * n / sse);
+}
+
+int main(void)
+{
+    tap_plan(27);
+    const size_t tb = gv_tile_bytes(3);
+    uint8_t *parent = malloc(tb), *pred = malloc(tb), *orig = malloc(tb);
+    uint8_t *recon = malloc(tb), *dec = malloc(tb);
+    uint8_t *buf = malloc(gv_tilebuf_size(GV_MAX_RATE, 3));
+    struct gv_tile_workspace *ws = gv_tile_workspace_new();
+    struct gv_error err;
+    if (!parent || !pred || !orig || !recon || !dec || !buf || !ws)
+        fail("out of memory");
+
+    /* 1. Prediction formula, all four quadrants, random parent. */
+    for (size_t i = 0; i < tb; i++)
+        parent[i] = (uint8_t)next_rand();
+    int bad = 0;
+    for (int q = 0; q < 4; q++) {
+        gv_predict(parent, 3, q & 1, q >> 1, pred);
+        for (int v = 0; v < T; v += 7)
+            for (int u = 0; u < T; u++)
+                for (int c = 0; c < 3; c++)
+                    bad += pred[(v * T + u) * 3 + c] !=
+                           reference_pred(parent, 3, q & 1, q >> 1, u, v, c);
+        for (int u = 0; u < T; u++)   /* the last row, always */
+            bad += pred[(512 * T + u) * 3] != reference_pred(parent, 3, q & 1, q >> 1, u, 512, 0);
+    }
+    check(bad == 0, "prediction matches the written formula (%d mismatches)", bad);
+    memset(parent, 77, tb);
+    gv_predict(parent, 3, 1, 0, pred);
+    check(pred[0] == 77 && pred[tb - 1] == 77, "a flat parent predicts flat");
+
+    /* 2. Index packing: an independent LSB-first packer, read back at every
+     *    rate through gv_tilebuf_index. */
+    for (int r = 1; r <= GV_MAX_RATE; r++) {
+        size_t len = gv_tilebuf_size(r, 3);
+        memset(buf, 0, len);
+        buf[0] = (uint8_t)r;
+        uint64_t base = 8 * (1 + ((uint64_t)12 << r));
+        for (uint32_t k = 0; k < GV_NBLOCKS; k++) {
+            uint32_t val = (k * 2654435761u) & ((1u << r) - 1);
+            for (int b = 0; b < r; b++)
+                if (val >> b & 1) {
+                    uint64_t bit = base + (uint64_t)k * r + b;
+                    buf[bit >> 3] |= (uint8_t)(1u << (bit & 7));
+                }
+        }
+        int wrong = gv_tilebuf_check(buf, len, 3, &err) != r;
+        for (uint32_t k = 0; k < GV_NBLOCKS; k++)
+            wrong += gv_tilebuf_index(buf, r, 3, k) != ((k * 2654435761u) & ((1u << r) - 1));
+        check(wrong == 0 && len % 4 == 0 && len * 8 >= base + (uint64_t)GV_NBLOCKS * r &&
+              len * 8 < base + (uint64_t)GV_NBLOCKS * r + 32,
+              "rate %2d: %zu bytes, every index reads back", r, len);
+    }
+
+    /* 3. Encoder and decoder agree at capped rates; rate 0 for a tile the
+     *    prediction already meets. */
+    make_tile(parent, 3, 0);
+    make_tile(orig, 3, 40);
+    int rates[] = {1, 3, 6, 8, 10};
+    for (size_t i = 0; i < sizeof rates / sizeof rates[0]; i++) {
+        struct gv_tile_params prm = {.target_mse = 0.01, .max_rate = rates[i], .seed = 1};
+        struct gv_tile_stats st;
+        size_t len = gv_tile_encode(ws, orig, parent, 1, 1, 3, T, T, &prm, recon, buf, &st);
+        int okdec = gv_tile_decode(buf, len, 3, parent, 1, 1, dec, &err) == 0;
+        check(okdec && st.rate == rates[i] && memcmp(dec, recon, tb) == 0,
+              "rate %d: decode == encoder reconstruction (%.2f dB)", rates[i],
+              psnr(orig, dec, tb));
+    }
+    gv_predict(parent, 3, 0, 1, orig);
+    {
+        struct gv_tile_params prm = {.target_mse = 1.0, .max_rate = 8, .seed = 1};
+        struct gv_tile_stats st;
+        size_t len = gv_tile_encode(ws, orig, parent, 0, 1, 3, T, T, &prm, recon, buf, &st);
+        check(st.rate == 0 && len == 4 && st.sse == 0 &&
+              gv_tile_decode(buf, len, 3, parent, 0, 1, dec, &err) == 0 &&
+              memcmp(dec, orig, tb) == 0, "a predictable tile takes rate 0 (4 bytes)");
+    }
+
+    /* 4. The quality target holds on the valid region of an edge tile. */
+    make_tile(orig, 3, 24);
+    {
+        struct gv_tile_params prm = {.target_mse = 65025.0 / pow(10, 3.3), .max_rate = 12, .seed = 7};
+        struct gv_tile_stats st;
+        size_t len = gv_tile_encode(ws, orig, parent, 0, 0, 3, 300, 200, &prm, recon, buf, &st);
+        double sse = 0;
+        for (int y = 0; y < 200; y++)
+            for (int x = 0; x < 300 * 3; x++) {
+                double d = orig[y * T * 3 + x] - recon[y * T * 3 + x];
+                sse += d * d;
+            }
+        double p = 10 * log10(65025.0 * 300 * 200 * 3 / sse);
+        check(gv_tile_decode(buf, len, 3, parent, 0, 0, dec, &err) == 0 &&
+              st.samples == 300 * 200 * 3 && (uint64_t)sse == st.sse && p >= 33.0 &&
+              st.rate < 12, "33 dB target met on a 300x200 valid region: %.2f dB at r=%d",
+              p, st.rate);
+    }
+
+    /* 5. Hostile buffers are refused, not read past. */
+    buf[0] = 13;
+    check(gv_tilebuf_check(buf, gv_tilebuf_size(12, 3), 3, &err) < 0,
+          "rate 13 refused: %s", err.text);
+    buf[0] = 5;
+    check(gv_tile_decode(buf, gv_tilebuf_size(5, 3) - 4, 3, parent, 0, 0, dec, &err) < 0,
+          "short buffer refused: %s", err.text);
+    check(gv_tilebuf_check(buf, 6, 3, &err) < 0, "odd length refused");
+    check(gv_tilebuf_check(buf, 0, 3, &err) < 0, "empty buffer refused");
+    uint8_t *exact = malloc(gv_tilebuf_size(5, 1));
+    memset(exact, 0xff, gv_tilebuf_size(5, 1));
+    exact[0] = 5;
+    uint8_t *g1 = calloc(1, gv_tile_bytes(1)), *g2 = malloc(gv_tile_bytes(1));
+    check(gv_tile_decode(exact, gv_tilebuf_size(5, 1), 1, g1, 0, 0, g2, &err) == 0,
+          "an exact-size gray buffer of all ones decodes in bounds");
+    free(exact);
+    free(g1);
+    free(g2);
+
+    gv_tile_workspace_free(ws);
+    gv_tile_workspace_free(NULL);
+    free(parent);
+    free(pred);
+    free(orig);
+    free(recon);
+    free(dec);
+    free(buf);
+    return tap_done();
+}
