@@ -26,6 +26,8 @@ static void usage(FILE *out)
         "  -o, --output STORE     store file to write (replaced atomically)\n"
         "  -q, --psnr DB          per-tile quality target in dB (default %.1f)\n"
         "  -r, --max-rate R       cap on bits per index, 1..12 (default %d)\n"
+        "      --rd               rate-distortion mode: spend bits where they\n"
+        "                         lower the error most, at the slope of -q\n"
         "  -j, --jobs N           worker threads (default: every CPU)\n"
         "  -m, --mosaic COLSxROWS inputs are a grid, listed row by row\n"
         "      --range LO:HI      map input values LO..HI to 0..255\n"
@@ -60,7 +62,7 @@ static void on_progress(void *ctx, const struct gv_encode_progress *p)
 
 int cmd_encode(int argc, char **argv)
 {
-    enum { OPT_RANGE = 256, OPT_MAXPX, OPT_TMPDIR, OPT_PROGRESS, OPT_QUIET };
+    enum { OPT_RANGE = 256, OPT_MAXPX, OPT_TMPDIR, OPT_PROGRESS, OPT_QUIET, OPT_RD };
     static const struct option longopts[] = {
         {"output", required_argument, NULL, 'o'},
         {"psnr", required_argument, NULL, 'q'},
@@ -72,6 +74,7 @@ int cmd_encode(int argc, char **argv)
         {"tmpdir", required_argument, NULL, OPT_TMPDIR},
         {"progress", no_argument, NULL, OPT_PROGRESS},
         {"quiet", no_argument, NULL, OPT_QUIET},
+        {"rd", no_argument, NULL, OPT_RD},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -152,6 +155,9 @@ int cmd_encode(int argc, char **argv)
             break;
         case OPT_QUIET:
             quiet = 1;
+            break;
+        case OPT_RD:
+            o.rd = 1;
             break;
         case 'h':
             usage(stdout);

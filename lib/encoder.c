@@ -204,10 +204,14 @@ static void encode_tile(void *ctx, size_t slot, int worker)
     const uint32_t valid_h = l->height - ty * GV_STEP < GV_TILE ?
                              l->height - ty * GV_STEP : GV_TILE;
     const uint8_t *parent = e->parents[(j / 2) * 4 + i / 2];
+    const double target_mse = 65025.0 / pow(10.0, e->opts->target_psnr / 10.0);
     struct gv_tile_params params = {
-        .target_mse = 65025.0 / pow(10.0, e->opts->target_psnr / 10.0),
+        .target_mse = target_mse,
         .max_rate = e->opts->max_rate,
         .seed = tile_seed(e->level, tx, ty),
+        /* High-rate theory: D(R) ~ 2^(-2R), so dD/dR = -2 ln 2 D; at the
+         * target distortion one bit is worth 2 ln 2 D* of squared error. */
+        .lambda = e->opts->rd ? 2.0 * log(2.0) * target_mse : 0.0,
     };
     e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
                                    (int)(ty & 1), c, valid_w, valid_h, &params,
@@ -311,7 +315,8 @@ static int pass2(struct encoder *e, const uint8_t *root_tile, uint64_t *sse0,
                     e->res->rate_tiles[e->stats[s].rate]++;
                     e->res->level_bytes[k] += e->lens[s];
                     double mse = (double)e->stats[s].sse / (double)e->stats[s].samples;
-                    if (mse > 65025.0 / pow(10.0, e->opts->target_psnr / 10.0))
+                    if (!e->opts->rd &&
+                        mse > 65025.0 / pow(10.0, e->opts->target_psnr / 10.0))
                         e->res->below_target++;
                     e->work_done += (double)e->stats[s].samples;
                     if (k == 0)

@@ -31,6 +31,9 @@ struct gv_encode_progress {
 struct gv_encode_opts {
     double target_psnr;       /* per-tile PSNR target in dB */
     int max_rate;             /* cap on the index width r (1..12) */
+    int rd;                   /* 1: rate-distortion mode (see FORMAT.md 8):
+                               * spend bits where they buy the most error,
+                               * at the slope of the target PSNR */
     int threads;              /* workers; 0 = every CPU */
     const char *tmpdir;       /* scratch directory; NULL = output's */
     struct gv_source_opts source;

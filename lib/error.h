@@ -10,6 +10,10 @@
 #ifndef GV_ERROR_H
 #define GV_ERROR_H
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 enum gv_code {
     GV_OK = 0,
     GV_EINVAL,   /* bad argument or bad user input (maps to 400) */
@@ -41,5 +45,9 @@ int gv_fail_errno(struct gv_error *err, int errnum, const char *fmt, ...)
 
 /* Reset *err to GV_OK with an empty message. */
 void gv_error_clear(struct gv_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -2,6 +2,8 @@
  * store_format.c - header (de)serialization, CRC and the box filter that
  * defines every pyramid level (see store_format.h and docs/FORMAT.md).
  */
+#include <stdlib.h>
+
 #include <zlib.h>
 
 #include "error.h"
@@ -120,5 +122,92 @@ void gv_box_reduce(const uint8_t *src, uint32_t sw, uint32_t sh, int channels,
         const uint8_t *r0 = src + (size_t)(2 * y) * srow;
         const uint8_t *r1 = 2 * y + 1 < sh ? r0 + srow : r0;
         gv_box_reduce_row(r0, r1, sw, channels, dst + (size_t)y * drow);
+    }
+}
+
+static inline uint8_t paeth(int a, int b, int c)
+{
+    int p = a + b - c, pa = abs(p - a), pb = abs(p - b), pc = abs(p - c);
+    return (uint8_t)(pa <= pb && pa <= pc ? a : (pb <= pc ? b : c));
+}
+
+/* Paeth prediction of sample i (channel stride `channels`) in row y. */
+static inline uint8_t paeth_at(const uint8_t *img, uint32_t w, uint32_t x,
+                               uint32_t y, int channels, int c)
+{
+    const size_t row = (size_t)w * channels;
+    const uint8_t *cur = img + (size_t)y * row;
+    int a = x ? cur[(x - 1) * channels + c] : 0;
+    int b = y ? cur[x * channels + c - row] : 0;
+    int d = x && y ? cur[(x - 1) * channels + c - row] : 0;
+    return paeth(a, b, d);
+}
+
+int gv_root_pack(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
+                 uint8_t **out, size_t *len, struct gv_error *err)
+{
+    const size_t n = (size_t)w * h * channels;
+    uint8_t *filt = malloc(n);
+    uLongf cap = compressBound((uLong)n);
+    uint8_t *z = malloc(cap);
+    if (!filt || !z) {
+        free(filt);
+        free(z);
+        return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
+    }
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++)
+            for (int c = 0; c < channels; c++) {
+                size_t i = ((size_t)y * w + x) * channels + c;
+                filt[i] = (uint8_t)(pixels[i] - paeth_at(pixels, w, x, y, channels, c));
+            }
+    int zr = compress2(z, &cap, filt, (uLong)n, 9);
+    free(filt);
+    if (zr != Z_OK) {
+        free(z);
+        return gv_fail(err, GV_ENOMEM, "store: deflate failed (%d)", zr);
+    }
+    *out = z;
+    *len = cap;
+    return 0;
+}
+
+int gv_root_unpack(const uint8_t *in, size_t len, uint32_t w, uint32_t h,
+                   int channels, uint8_t *out, struct gv_error *err)
+{
+    const size_t n = (size_t)w * h * channels;
+    z_stream zs;
+    memset(&zs, 0, sizeof zs);
+    if (inflateInit(&zs) != Z_OK)
+        return gv_fail(err, GV_ENOMEM, "store: inflateInit failed");
+    zs.next_in = (Bytef *)(uintptr_t)in;
+    zs.avail_in = (uInt)len;
+    zs.next_out = out;
+    zs.avail_out = (uInt)n;
+    int zr = inflate(&zs, Z_FINISH);
+    size_t got = n - zs.avail_out;
+    int trailing = zs.avail_in != 0;
+    inflateEnd(&zs);
+    if (zr != Z_STREAM_END || got != n || trailing)
+        return gv_fail(err, GV_ECORRUPT, "store: root does not inflate to "
+                       "%ux%ux%d samples", w, h, channels);
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++)
+            for (int c = 0; c < channels; c++) {
+                size_t i = ((size_t)y * w + x) * channels + c;
+                out[i] = (uint8_t)(out[i] + paeth_at(out, w, x, y, channels, c));
+            }
+    return 0;
+}
+
+void gv_root_build_mips(uint8_t *buf, uint32_t w, uint32_t h, int channels)
+{
+    uint8_t *cur = buf;
+    while (w > 1 || h > 1) {
+        uint8_t *next = cur + (size_t)w * h * channels;
+        gv_box_reduce(cur, w, h, channels, next);
+        cur = next;
+        w = (w + 1) / 2;
+        h = (h + 1) / 2;
     }
 }

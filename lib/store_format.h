@@ -6,7 +6,8 @@
  *
  *   header   128 bytes at offset 0, CRC32 in its last 4 bytes
  *   pages    one per 8x8 tiles of a level, written coarse to fine
- *   root     the root level and its mips down to 1x1, raw, then a CRC32
+ *   root     the root level, Paeth-filtered and deflated (lossless), then
+ *            a CRC32; its mips down to 1x1 are derived by the box filter
  *   index    16 bytes per page {u64 offset, u32 size, u32 crc32}, then a
  *            CRC32 of the index
  *
@@ -78,9 +79,9 @@ static inline uint64_t gv_get64(const uint8_t *p)
 /* Serialize h into 128 bytes, CRC included. */
 void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE]);
 
+struct gv_error;
 /* Parse and check magic, version and CRC (not the geometry).  Returns 0 or
  * -1 with *err filled. */
-struct gv_error;
 int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
                      struct gv_error *err);
 
@@ -88,9 +89,29 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
  * (start with 0). */
 uint32_t gv_crc32(uint32_t crc, const void *data, size_t len);
 
-/* Bytes of the root section's pixels: every mip of a w x h root, channels
- * interleaved, without the trailing CRC. */
+/* Bytes of every mip of a w x h root, channels interleaved (what a reader
+ * holds in memory). */
 uint64_t gv_root_pixels_size(uint32_t w, uint32_t h, int channels);
+
+/* Largest root: 512 x 512 x 3. */
+#define GV_ROOT_MAX_BYTES (GV_ROOT_MAX * GV_ROOT_MAX * 3)
+
+/*
+ * Compress the root image losslessly: PNG's Paeth filter per channel
+ * (neighbours outside the image are 0), then zlib deflate.  *out is
+ * malloc'ed (caller frees).  Returns 0 or -1.
+ */
+int gv_root_pack(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
+                 uint8_t **out, size_t *len, struct gv_error *err);
+
+/* Inverse of gv_root_pack into out (w*h*channels bytes).  Fails unless the
+ * stream inflates to exactly that many bytes. */
+int gv_root_unpack(const uint8_t *in, size_t len, uint32_t w, uint32_t h,
+                   int channels, uint8_t *out, struct gv_error *err);
+
+/* Fill the mips after mip 0 in place: buf holds mip 0 (w x h) followed by
+ * room for the rest, as gv_root_pixels_size counts. */
+void gv_root_build_mips(uint8_t *buf, uint32_t w, uint32_t h, int channels);
 
 /* Box-reduce one 2x2 level (odd edges replicated, rounded to nearest):
  * src is sw x sh, dst receives ceil(sw/2) x ceil(sh/2). */

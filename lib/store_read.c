@@ -63,9 +63,9 @@ static int check_header(struct gv_store *s, uint64_t file_size,
         return gv_fail(err, GV_ECORRUPT, "store: file is %llu bytes, header "
                        "says %llu (truncated?)", (unsigned long long)file_size,
                        (unsigned long long)h->file_size);
-    const struct gv_level *r = &g->level[g->root];
-    uint64_t root_px = gv_root_pixels_size(r->width, r->height, g->channels);
-    if (h->root_size != root_px + 4 || h->root_offset < GV_HEADER_SIZE ||
+    /* A deflated root is at most ~0.1% larger than the raw samples. */
+    if (h->root_size < 5 || h->root_size > GV_ROOT_MAX_BYTES + GV_ROOT_MAX_BYTES / 64 + 64 ||
+        h->root_offset < GV_HEADER_SIZE ||
         h->root_offset > file_size || h->root_size > file_size - h->root_offset)
         return gv_fail(err, GV_ECORRUPT, "store: root section out of bounds");
     uint64_t index_bytes = h->pages * GV_INDEX_ENTRY + 4;
@@ -111,19 +111,23 @@ struct gv_store *gv_store_open(const char *path, struct gv_error *err)
 
     const struct gv_header *h = &s->info.header;
     const struct gv_geometry *g = &s->info.geometry;
-    s->root = malloc(h->root_size);
-    if (!s->root) {
+    uint32_t w = g->level[g->root].width, hh = g->level[g->root].height;
+    uint8_t *packed = malloc(h->root_size);
+    s->root = malloc(gv_root_pixels_size(w, hh, g->channels));
+    if (!packed || !s->root) {
+        free(packed);
         gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
         goto fail;
     }
-    if (read_exact(s->fd, s->root, h->root_size, h->root_offset, "root", err) < 0)
-        goto fail;
-    if (gv_crc32(0, s->root, h->root_size - 4) !=
-        gv_get32(s->root + h->root_size - 4)) {
-        gv_fail(err, GV_ECORRUPT, "store: root CRC mismatch");
+    if (read_exact(s->fd, packed, h->root_size, h->root_offset, "root", err) < 0 ||
+        (gv_crc32(0, packed, h->root_size - 4) != gv_get32(packed + h->root_size - 4) &&
+         gv_fail(err, GV_ECORRUPT, "store: root CRC mismatch")) ||
+        gv_root_unpack(packed, h->root_size - 4, w, hh, g->channels, s->root, err) < 0) {
+        free(packed);
         goto fail;
     }
-    uint32_t w = g->level[g->root].width, hh = g->level[g->root].height;
+    free(packed);
+    gv_root_build_mips(s->root, w, hh, g->channels);
     uint64_t off = 0;
     for (int m = 0; m < g->root_mips; m++) {
         s->root_mip_off[m] = off;

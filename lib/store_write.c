@@ -175,30 +175,22 @@ int gv_store_writer_root(struct gv_store_writer *w, const uint8_t *pixels,
                          struct gv_error *err)
 {
     const struct gv_level *r = &w->g.level[w->g.root];
-    const int c = w->g.channels;
-    uint64_t size = gv_root_pixels_size(r->width, r->height, c);
-    uint8_t *buf = malloc(size + 4);
-    if (!buf)
-        return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
-    uint32_t mw = r->width, mh = r->height;
-    memcpy(buf, pixels, (size_t)mw * mh * c);
-    uint8_t *cur = buf;
-    while (mw > 1 || mh > 1) {
-        uint8_t *next = cur + (size_t)mw * mh * c;
-        gv_box_reduce(cur, mw, mh, c, next);
-        cur = next;
-        mw = (mw + 1) / 2;
-        mh = (mh + 1) / 2;
-    }
-    gv_put32(buf + size, gv_crc32(0, buf, size));
-    int rc = write_all(w, buf, size + 4, w->off, err);
+    uint8_t *z;
+    size_t zlen;
+    if (gv_root_pack(pixels, r->width, r->height, w->g.channels, &z, &zlen, err) < 0)
+        return -1;
+    uint8_t crc[4];
+    gv_put32(crc, gv_crc32(0, z, zlen));
+    int rc = write_all(w, z, zlen, w->off, err);
+    if (rc == 0)
+        rc = write_all(w, crc, 4, w->off + zlen, err);
     if (rc == 0) {
         w->h.root_offset = w->off;
-        w->h.root_size = size + 4;
-        w->off += size + 4;
+        w->h.root_size = zlen + 4;
+        w->off += zlen + 4;
         w->have_root = 1;
     }
-    free(buf);
+    free(z);
     return rc;
 }
 

@@ -58,6 +58,8 @@ uint32_t gv_tilebuf_index(const uint8_t *buf, int rate, int channels,
 struct gv_tile_params {
     double target_mse;   /* mean squared error per sample to reach */
     int max_rate;        /* cap on r, 1..GV_MAX_RATE */
+    double lambda;       /* > 0: rate-distortion mode instead of a target:
+                          * pick the r minimizing SSE + lambda * bits */
     uint64_t seed;       /* deterministic sampling seed for this tile */
 };
 

@@ -30,6 +30,8 @@ struct gv_tile_workspace {
     int16_t sample[GV_NBLOCKS * VQ_STRIDE];
     uint16_t idx[GV_NBLOCKS];
     uint32_t dist[GV_NBLOCKS];
+    uint16_t best_idx[GV_NBLOCKS];   /* rate-distortion mode: best so far */
+    int8_t best_book[VQ_MAXK * VQ_MAXDIM];
     struct vq_trainer trainer;
 };
 
@@ -129,6 +131,89 @@ static void pack_buffer(uint8_t *buf, size_t len, int rate, int channels,
     }
 }
 
+/* Shuffle the valid blocks once; training samples are a growing prefix. */
+static uint32_t shuffle_valid(struct gv_tile_workspace *ws, uint32_t valid_w,
+                              uint32_t valid_h, uint64_t seed)
+{
+    const uint32_t vbx = (valid_w + 1) / 2, vby = (valid_h + 1) / 2;
+    uint32_t nvalid = 0;
+    for (uint32_t by = 0; by < vby; by++)
+        for (uint32_t bx = 0; bx < vbx; bx++)
+            ws->order[nvalid++] = by * GV_BLOCKS + bx;
+    for (uint32_t i = nvalid; i > 1; i--) {
+        uint32_t j = (uint32_t)(splitmix(&seed) % i);
+        uint32_t t = ws->order[i - 1];
+        ws->order[i - 1] = ws->order[j];
+        ws->order[j] = t;
+    }
+    return nvalid;
+}
+
+/* Grow the sample to the size training at `rate` wants. */
+static size_t grow_sample(struct gv_tile_workspace *ws, size_t have, int rate,
+                          uint32_t nvalid)
+{
+    size_t want = (size_t)SAMPLE_PER_CELL << rate;
+    if (want < SAMPLE_MIN)
+        want = SAMPLE_MIN;
+    if (want > nvalid)
+        want = nvalid;
+    for (; have < want; have++)
+        memcpy(ws->sample + have * VQ_STRIDE,
+               ws->vecs + (size_t)ws->order[have] * VQ_STRIDE,
+               VQ_STRIDE * sizeof(int16_t));
+    return have;
+}
+
+/*
+ * Rate-distortion mode: every rate up to the cap is coded exactly and the
+ * one minimizing J = SSE + lambda * bits wins; the search stops once J has
+ * risen for two rates in a row (J is close to convex in r).
+ */
+static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
+                        int channels, uint32_t valid_w, uint32_t valid_h,
+                        const struct gv_tile_params *params, int max_rate,
+                        uint64_t sse0, uint8_t *recon, uint8_t *buf,
+                        struct gv_tile_stats *stats)
+{
+    const int dim = 4 * channels;
+    double best_j = (double)sse0 + params->lambda * 8.0 * gv_tilebuf_size(0, channels);
+    int best_rate = 0, rises = 0;
+    uint64_t best_sse = sse0;
+    make_vectors(ws, orig, channels);
+    uint32_t nvalid = shuffle_valid(ws, valid_w, valid_h, params->seed);
+    size_t nsample = 0;
+    struct vq_trainer *t = &ws->trainer;
+    for (int rate = 1; rate <= max_rate && rises < 2; rate++) {
+        nsample = grow_sample(ws, nsample, rate, nvalid);
+        if (rate == 1)
+            vq_train_init(t, dim, ws->sample, nsample);
+        vq_train_double(t, ws->sample, nsample, ws->idx, ws->dist);
+        vq_search_prepare(&t->search, t->book, t->k, dim);
+        vq_nearest(&t->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
+        uint64_t sse = reconstruct(ws, orig, t->book, rate, channels, valid_w,
+                                   valid_h, recon);
+        double j = (double)sse + params->lambda * 8.0 * gv_tilebuf_size(rate, channels);
+        if (j < best_j) {
+            best_j = j;
+            best_rate = rate;
+            best_sse = sse;
+            memcpy(ws->best_idx, ws->idx, sizeof ws->idx);
+            memcpy(ws->best_book, t->book, ((size_t)1 << rate) * dim);
+            rises = 0;
+        } else {
+            rises++;
+        }
+    }
+    memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
+    reconstruct(ws, orig, ws->best_book, best_rate, channels, valid_w, valid_h, recon);
+    size_t len = gv_tilebuf_size(best_rate, channels);
+    pack_buffer(buf, len, best_rate, channels, ws->best_book, ws->idx);
+    stats->rate = best_rate;
+    stats->sse = best_sse;
+    return len;
+}
+
 size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
                       const uint8_t *parent, int qx, int qy, int channels,
                       uint32_t valid_w, uint32_t valid_h,
@@ -145,6 +230,9 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
     stats->samples = samples;
 
     uint64_t sse = reconstruct(ws, orig, NULL, 0, channels, valid_w, valid_h, recon);
+    if (params->lambda > 0)
+        return encode_rd(ws, orig, channels, valid_w, valid_h, params, max_rate,
+                         sse, recon, buf, stats);
     if ((double)sse <= budget) {
         stats->rate = 0;
         stats->sse = sse;
@@ -155,32 +243,12 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
 
     make_vectors(ws, orig, channels);
 
-    /* Shuffle the valid blocks once; the sample is a growing prefix. */
-    const uint32_t vbx = (valid_w + 1) / 2, vby = (valid_h + 1) / 2;
-    uint32_t nvalid = 0;
-    for (uint32_t by = 0; by < vby; by++)
-        for (uint32_t bx = 0; bx < vbx; bx++)
-            ws->order[nvalid++] = by * GV_BLOCKS + bx;
-    uint64_t seed = params->seed;
-    for (uint32_t i = nvalid; i > 1; i--) {
-        uint32_t j = (uint32_t)(splitmix(&seed) % i);
-        uint32_t t = ws->order[i - 1];
-        ws->order[i - 1] = ws->order[j];
-        ws->order[j] = t;
-    }
+    uint32_t nvalid = shuffle_valid(ws, valid_w, valid_h, params->seed);
     size_t nsample = 0;
 
     struct vq_trainer *t = &ws->trainer;
     for (int rate = 1; rate <= max_rate; rate++) {
-        size_t want = (size_t)SAMPLE_PER_CELL << rate;
-        if (want < SAMPLE_MIN)
-            want = SAMPLE_MIN;
-        if (want > nvalid)
-            want = nvalid;
-        for (; nsample < want; nsample++)
-            memcpy(ws->sample + nsample * VQ_STRIDE,
-                   ws->vecs + (size_t)ws->order[nsample] * VQ_STRIDE,
-                   VQ_STRIDE * sizeof(int16_t));
+        nsample = grow_sample(ws, nsample, rate, nvalid);
         if (rate == 1)
             vq_train_init(t, dim, ws->sample, nsample);
         uint64_t est = vq_train_double(t, ws->sample, nsample, ws->idx, ws->dist);

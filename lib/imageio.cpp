@@ -1,0 +1,539 @@
+/*
+ * imageio.cpp - the extern "C" bridge over OpenImageIO 2.4: the only C++ in
+ * gigaview.
+ *
+ * Design.  Each function is a thin wrapper that catches every C++
+ * exception at the boundary and turns OIIO's error strings into a struct
+ * gv_error with the "imageio: PATH: " prefix.  Reading is probe-then-read:
+ * gv_image_open reads the header only (ImageInput::open), and
+ * gv_image_read hands out scanlines strictly top to bottom, converted by
+ * OIIO in type only (UINT8, UINT16 or FLOAT), never to another range.
+ *
+ *  - Integer files of 1..8 bits are delivered as U8 and of 9..16 bits as
+ *    U16.  OIIO's API only knows full-range integers: its readers widen odd
+ *    depths (1, 2, 4, 10, 12 bits) to the full range of the container and
+ *    report the real depth in "oiio:BitsPerSample".  A U8 sample therefore
+ *    always spans 0..255 (for 1..7-bit files that widening is exactly the
+ *    255/(2^bits-1) scaling), while for 9..15-bit files this bridge undoes
+ *    the widening, v = (v16 * (2^bits-1) + 32767) / 65535, which is exact
+ *    because the widened codes are at least 2 apart: U16 samples are in
+ *    the file's own units, 0..2^info->bits-1.  Half, float and double
+ *    files are delivered as F32 with their values untouched (no
+ *    clamping).  Signed integer and 32-bit integer samples are refused
+ *    (GV_EFORMAT): the info struct has no way to tell a caller "F32, but
+ *    integer-valued", and they do not occur in the images gigaview is
+ *    meant for.
+ *  - Tiled files (TIFF, EXR) are read one row of tiles at a time with
+ *    read_tiles into a buffer of tile_height full rows, from which rows
+ *    are then copied.  read_scanlines cannot be used on them: in OIIO
+ *    2.4.7 it dies with SIGFPE (integer division by zero) on a tiled TIFF
+ *    or EXR, and even where it works it would decode a whole tile row
+ *    again for every call of a few rows.
+ *  - Decoders report damaged data in different ways: libjpeg's "premature
+ *    end of data" is only a warning, which OIIO's JPEG reader records as
+ *    an error ("Premature end of JPEG file") while the read itself may
+ *    succeed with filler data.  So has_error() is checked after every call
+ *    and any recorded message fails the read.
+ *  - PNG input is asked for unassociated alpha ("oiio:UnassociatedAlpha"):
+ *    gigaview drops alpha, and OIIO would otherwise premultiply colour by
+ *    it.
+ *  - OIIO's own thread pool is set to one thread once per process
+ *    (attribute "threads"): gigaview runs its own workers, one decoder per
+ *    input, and a second pool per process would oversubscribe the CPUs.
+ *
+ * Writing renders the whole 8-bit image to ".NAME.tmp.PID.N.EXT" in the
+ * target's directory (EXT kept last so OIIO picks the format by it),
+ * fsyncs it, renames it over the final name and fsyncs the directory; on
+ * any failure the temporary file is removed.  JPEG and WebP are written at
+ * quality 90.
+ *
+ * Thread safety: distinct gv_image_in objects may be used from different
+ * threads; one object by one thread at a time.
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <new>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+
+#include "error.h"
+#include "imageio.h"
+
+using OIIO::ImageInput;
+using OIIO::ImageOutput;
+using OIIO::ImageSpec;
+using OIIO::TypeDesc;
+
+struct gv_image_in {
+    std::unique_ptr<ImageInput> in;
+    std::string path;
+    TypeDesc type;             /* what reads deliver */
+    size_t pixel_bytes;        /* channels * bytes per delivered sample */
+    size_t row_bytes;          /* width * pixel_bytes */
+    uint32_t height;
+    uint32_t next_row;         /* next row to deliver, 0-based */
+    uint32_t narrow_max;       /* 2^bits-1 for 9..15-bit files, else 0 */
+    int nchannels;
+    int x0, y0, z0;            /* data window origin */
+    /* tiled files: one row of tiles, rows [buf_first, buf_first+buf_rows) */
+    bool tiled;
+    uint32_t tile_h;
+    std::vector<unsigned char> buf;
+    uint32_t buf_first, buf_rows;
+    bool failed;               /* a decode error happened: no more reads */
+};
+
+static void set_threads_once()
+{
+    static std::once_flag once;
+    std::call_once(once, [] { OIIO::attribute("threads", 1); });
+}
+
+/* OIIO messages may span lines; keep the first one, trimmed, short. */
+static std::string first_line(const std::string &s)
+{
+    size_t b = s.find_first_not_of(" \t\r\n");
+    if (b == std::string::npos)
+        return "unknown error";
+    size_t e = s.find_first_of("\r\n", b);
+    std::string r = s.substr(b, e == std::string::npos ? e : e - b);
+    return r;
+}
+
+static int fail_msg(struct gv_error *err, enum gv_code code,
+                    const std::string &path, const std::string &msg)
+{
+    return gv_fail(err, code, "imageio: %s: %s", path.c_str(),
+                   first_line(msg).c_str());
+}
+
+/* Classify an OIIO read error: truncation and damaged data are
+ * GV_ECORRUPT; everything a reader says is taken as data damage. */
+static int fail_read(struct gv_error *err, struct gv_image_in *im,
+                     const std::string &msg)
+{
+    im->failed = true;
+    return fail_msg(err, GV_ECORRUPT, im->path, msg);
+}
+
+/* Decide the delivered type.  Returns 0 or -1 with *err filled. */
+static int choose_type(const ImageSpec &spec, const std::string &path,
+                       struct gv_image_info *info, TypeDesc *type,
+                       struct gv_error *err)
+{
+    bool any_float = false, any_int = false;
+    int maxbytes = 0;
+    for (int c = 0; c < spec.nchannels; c++) {
+        TypeDesc t = spec.channelformat(c);
+        switch (t.basetype) {
+        case TypeDesc::HALF:
+        case TypeDesc::FLOAT:
+        case TypeDesc::DOUBLE:
+            any_float = true;
+            break;
+        case TypeDesc::UINT8:
+        case TypeDesc::UINT16:
+            any_int = true;
+            break;
+        default:
+            return fail_msg(err, GV_EFORMAT, path,
+                            std::string("unsupported sample type ")
+                                + t.c_str()
+                                + " (use unsigned 8/16-bit or float)");
+        }
+        if ((int)t.size() > maxbytes)
+            maxbytes = (int)t.size();
+    }
+    if (any_float && any_int)
+        return fail_msg(err, GV_EFORMAT, path,
+                        "mixed integer and float channels are not supported");
+    if (any_float) {
+        info->sample = GV_SAMPLE_F32;
+        info->bits = maxbytes * 8;
+        *type = TypeDesc::FLOAT;
+        return 0;
+    }
+    int bits = spec.get_int_attribute("oiio:BitsPerSample", maxbytes * 8);
+    if (bits <= 0 || bits > maxbytes * 8)
+        bits = maxbytes * 8;
+    info->bits = bits;
+    if (bits <= 8) {
+        info->sample = GV_SAMPLE_U8;
+        *type = TypeDesc::UINT8;
+    } else {
+        info->sample = GV_SAMPLE_U16;
+        *type = TypeDesc::UINT16;
+    }
+    return 0;
+}
+
+static struct gv_image_in *open_impl(const char *path, uint64_t max_pixels,
+                                     struct gv_image_info *info,
+                                     struct gv_error *err)
+{
+    set_threads_once();
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        int e = errno;
+        if (e == ENOENT || e == ENOTDIR) {
+            gv_fail(err, GV_ENOTFOUND, "imageio: %s: no such file", path);
+            return NULL;
+        }
+        gv_fail_errno(err, e, "imageio: %s", path);
+        return NULL;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        gv_fail(err, GV_EINVAL, "imageio: %s: not a regular file", path);
+        return NULL;
+    }
+    if (st.st_size == 0) {
+        gv_fail(err, GV_ECORRUPT, "imageio: %s: empty file", path);
+        return NULL;
+    }
+
+    ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    std::unique_ptr<ImageInput> in = ImageInput::open(path, &config);
+    if (!in) {
+        std::string msg = OIIO::geterror();
+        fail_msg(err, GV_EFORMAT, path,
+                 msg.empty() ? "not a readable image" : msg);
+        return NULL;
+    }
+    const ImageSpec &spec = in->spec();
+    if (in->has_error()) {
+        fail_msg(err, GV_ECORRUPT, path, in->geterror());
+        return NULL;
+    }
+    /* Sizes must be positive and fit in 31 bits; checked as int64 so that
+     * the product cannot overflow. */
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
+        gv_fail(err, GV_ECORRUPT, "imageio: %s: bad image size %dx%d", path,
+                spec.width, spec.height);
+        return NULL;
+    }
+    if (spec.depth != 1) {
+        gv_fail(err, GV_EFORMAT, "imageio: %s: volume images are not "
+                "supported", path);
+        return NULL;
+    }
+    /* 64 channels is far above any real colour image; it bounds the
+     * row-size arithmetic below. */
+    if (spec.nchannels > 64) {
+        gv_fail(err, GV_EFORMAT, "imageio: %s: too many channels (%d)", path,
+                spec.nchannels);
+        return NULL;
+    }
+    uint64_t w = (uint64_t)spec.width, h = (uint64_t)spec.height;
+    if (w > 0x7fffffffu || h > 0x7fffffffu || w * h > max_pixels) {
+        gv_fail(err, GV_ELIMIT,
+                "imageio: %s: image of %llux%llu pixels exceeds the limit of "
+                "%llu pixels", path, (unsigned long long)w,
+                (unsigned long long)h, (unsigned long long)max_pixels);
+        return NULL;
+    }
+
+    struct gv_image_info tmp;
+    memset(&tmp, 0, sizeof tmp);
+    TypeDesc type;
+    if (choose_type(spec, path, &tmp, &type, err) != 0)
+        return NULL;
+    tmp.width = (uint32_t)w;
+    tmp.height = (uint32_t)h;
+    tmp.channels = spec.nchannels;
+    snprintf(tmp.format, sizeof tmp.format, "%s", in->format_name());
+
+    std::unique_ptr<gv_image_in> im(new gv_image_in());
+    im->path = path;
+    im->type = type;
+    im->nchannels = spec.nchannels;
+    im->pixel_bytes = (size_t)spec.nchannels * type.size();
+    /* w < 2^31 and pixel_bytes <= 64 * 4: no overflow in 64 bits. */
+    im->row_bytes = (size_t)w * im->pixel_bytes;
+    im->height = (uint32_t)h;
+    im->next_row = 0;
+    im->narrow_max = tmp.sample == GV_SAMPLE_U16 && tmp.bits < 16
+                         ? (1u << tmp.bits) - 1 : 0;
+    im->x0 = spec.x;
+    im->y0 = spec.y;
+    im->z0 = spec.z;
+    im->tiled = spec.tile_width > 0 && spec.tile_height > 0;
+    im->tile_h = im->tiled ? (uint32_t)spec.tile_height : 0;
+    im->buf_first = 0;
+    im->buf_rows = 0;
+    im->failed = false;
+    im->in = std::move(in);
+    *info = tmp;
+    return im.release();
+}
+
+extern "C" struct gv_image_in *gv_image_open(const char *path,
+                                             uint64_t max_pixels,
+                                             struct gv_image_info *info,
+                                             struct gv_error *err)
+{
+    try {
+        return open_impl(path, max_pixels, info, err);
+    } catch (const std::bad_alloc &) {
+        gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+    } catch (const std::exception &e) {
+        gv_fail(err, GV_ECORRUPT, "imageio: %s: %s", path, e.what());
+    } catch (...) {
+        gv_fail(err, GV_ECORRUPT, "imageio: %s: unknown decoder exception",
+                path);
+    }
+    return NULL;
+}
+
+/* Fill im->buf with the row of tiles holding row `row`. */
+static int load_tile_row(struct gv_image_in *im, uint32_t row,
+                         struct gv_error *err)
+{
+    uint32_t first = row - row % im->tile_h;
+    uint32_t n = im->height - first < im->tile_h ? im->height - first
+                                                   : im->tile_h;
+    if (im->buf.empty()) {
+        /* tile_h rows of the full width: the smallest unit a tiled file
+         * can be decoded in without decoding tiles twice. */
+        uint64_t need = (uint64_t)im->row_bytes * im->tile_h;
+        if (need > SIZE_MAX / 2)
+            return gv_fail(err, GV_ENOMEM, "imageio: %s: tile row too large",
+                           im->path.c_str());
+        im->buf.resize((size_t)need);
+    }
+    int y = im->y0 + (int)first;
+    bool ok = im->in->read_tiles(0, 0, im->x0,
+                                 im->x0 + (int)(im->row_bytes
+                                                / im->pixel_bytes),
+                                 y, y + (int)n, im->z0, im->z0 + 1, 0,
+                                 im->nchannels, im->type, im->buf.data());
+    if (!ok || im->in->has_error()) {
+        std::string msg = im->in->geterror();
+        return fail_read(err, im, msg.empty() ? "tile read failed" : msg);
+    }
+    im->buf_first = first;
+    im->buf_rows = n;
+    return 0;
+}
+
+/* Undo OIIO's widening of 9..15-bit samples (see the top of the file). */
+static void narrow(const struct gv_image_in *im, void *out, uint32_t rows)
+{
+    uint16_t *p = static_cast<uint16_t *>(out);
+    size_t n = (size_t)rows * (im->row_bytes / 2);
+    uint32_t m = im->narrow_max;
+    for (size_t i = 0; i < n; i++)
+        p[i] = (uint16_t)((p[i] * m + 32767u) / 65535u);
+}
+
+static int read_rows(struct gv_image_in *im, uint32_t rows, void *out,
+                     struct gv_error *err);
+
+static int read_impl(struct gv_image_in *im, uint32_t rows, void *out,
+                     struct gv_error *err)
+{
+    if (read_rows(im, rows, out, err) != 0)
+        return -1;
+    if (im->narrow_max)
+        narrow(im, out, rows);
+    return 0;
+}
+
+static int read_rows(struct gv_image_in *im, uint32_t rows, void *out,
+                     struct gv_error *err)
+{
+    if (im->failed)
+        return gv_fail(err, GV_ECORRUPT, "imageio: %s: read after an error",
+                       im->path.c_str());
+    if (rows > im->height - im->next_row)
+        return gv_fail(err, GV_EINVAL,
+                       "imageio: %s: read of %u rows from row %u passes the "
+                       "last row (%u)", im->path.c_str(), rows, im->next_row,
+                       im->height);
+    if (rows == 0)
+        return 0;
+    unsigned char *dst = static_cast<unsigned char *>(out);
+    if (!im->tiled) {
+        int y = im->y0 + (int)im->next_row;
+        bool ok = im->in->read_scanlines(0, 0, y, y + (int)rows, im->z0, 0,
+                                         im->nchannels, im->type, dst);
+        if (!ok || im->in->has_error()) {
+            std::string msg = im->in->geterror();
+            return fail_read(err, im,
+                             msg.empty() ? "scanline read failed" : msg);
+        }
+        im->next_row += rows;
+        return 0;
+    }
+    while (rows > 0) {
+        uint32_t r = im->next_row;
+        if (im->buf_rows == 0 || r < im->buf_first
+            || r >= im->buf_first + im->buf_rows) {
+            if (load_tile_row(im, r, err) != 0)
+                return -1;
+        }
+        uint32_t avail = im->buf_first + im->buf_rows - r;
+        uint32_t take = rows < avail ? rows : avail;
+        size_t skip = (size_t)(r - im->buf_first) * im->row_bytes;
+        memcpy(dst, im->buf.data() + skip, (size_t)take * im->row_bytes);
+        dst += (size_t)take * im->row_bytes;
+        rows -= take;
+        im->next_row += take;
+    }
+    return 0;
+}
+
+extern "C" int gv_image_read(struct gv_image_in *in, uint32_t rows,
+                             void *out, struct gv_error *err)
+{
+    try {
+        return read_impl(in, rows, out, err);
+    } catch (const std::bad_alloc &) {
+        in->failed = true;
+        return gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory",
+                       in->path.c_str());
+    } catch (const std::exception &e) {
+        in->failed = true;
+        return gv_fail(err, GV_ECORRUPT, "imageio: %s: %s", in->path.c_str(),
+                       e.what());
+    } catch (...) {
+        in->failed = true;
+        return gv_fail(err, GV_ECORRUPT,
+                       "imageio: %s: unknown decoder exception",
+                       in->path.c_str());
+    }
+}
+
+extern "C" void gv_image_close(struct gv_image_in *in)
+{
+    if (!in)
+        return;
+    try {
+        if (in->in)
+            in->in->close();
+        delete in;
+    } catch (...) {
+        /* nothing sensible to report from a destructor path */
+    }
+}
+
+/* ---- writing ---- */
+
+static std::atomic<unsigned> tmp_counter{0};
+
+static int fsync_path(const std::string &p, int flags)
+{
+    int fd = open(p.c_str(), flags | O_CLOEXEC);
+    if (fd < 0)
+        return -1;
+    int rc = fsync(fd);
+    int e = errno;
+    close(fd);
+    errno = e;
+    return rc;
+}
+
+static int write_impl(const char *path, uint32_t width, uint32_t height,
+                      int channels, const uint8_t *pixels,
+                      struct gv_error *err, std::string &tmp)
+{
+    set_threads_once();
+    if (channels != 1 && channels != 3)
+        return gv_fail(err, GV_EINVAL, "imageio: %s: cannot write %d "
+                       "channels (1 or 3)", path, channels);
+    if (width == 0 || height == 0 || width > 0x7fffffffu
+        || height > 0x7fffffffu)
+        return gv_fail(err, GV_EINVAL, "imageio: %s: bad image size %ux%u",
+                       path, width, height);
+
+    std::string p(path);
+    size_t slash = p.rfind('/');
+    std::string dir = slash == std::string::npos ? "" : p.substr(0, slash + 1);
+    std::string base = slash == std::string::npos ? p : p.substr(slash + 1);
+    size_t dot = base.rfind('.');
+    if (base.empty() || dot == std::string::npos || dot + 1 == base.size())
+        return gv_fail(err, GV_EINVAL, "imageio: %s: no file extension to "
+                       "choose a format by", path);
+    std::string ext = base.substr(dot);
+    struct stat st;
+    std::string d = dir.empty() ? "." : dir;
+    if (stat(d.c_str(), &st) != 0)
+        return gv_fail_errno(err, errno, "imageio: %s: directory %s", path,
+                             d.c_str());
+    tmp = dir + "." + base + ".tmp." + std::to_string((long)getpid()) + "."
+          + std::to_string(tmp_counter.fetch_add(1)) + ext;
+
+    std::unique_ptr<ImageOutput> out = ImageOutput::create(tmp);
+    if (!out) {
+        (void)OIIO::geterror(); /* clear it: the message below says more */
+        tmp.clear(); /* nothing created yet */
+        return gv_fail(err, GV_EFORMAT, "imageio: %s: unsupported output "
+                       "format \"%s\"", path, ext.c_str());
+    }
+    ImageSpec spec((int)width, (int)height, channels, TypeDesc::UINT8);
+    /* 90: visually transparent for JPEG and WebP (lossy formats only). */
+    std::string fmt = out->format_name();
+    if (fmt == "jpeg" || fmt == "webp")
+        spec.attribute("CompressionQuality", 90);
+    /* OIIO 2.4.7 with libtiff 4.5 records "failed TIFFWriteCustomDirectory()
+     * of the Exif data" for every TIFF (empty Exif directory) while still
+     * writing a good file; we have no Exif to write, so skip it. */
+    spec.attribute("tiff:write_exif", 0);
+    if (!out->open(tmp, spec)) {
+        std::string msg = out->geterror();
+        int e = errno;
+        if (e == ENOSPC || e == EDQUOT || e == EFBIG)
+            return gv_fail_errno(err, e, "imageio: %s", path);
+        return gv_fail(err, GV_EIO, "imageio: %s: %s", path,
+                       first_line(msg).c_str());
+    }
+    bool ok = out->write_image(TypeDesc::UINT8, pixels);
+    ok = out->close() && ok;
+    if (!ok || out->has_error()) {
+        std::string msg = out->geterror();
+        return gv_fail(err, GV_EIO, "imageio: %s: %s", path,
+                       first_line(msg.empty() ? "write failed" : msg).c_str());
+    }
+    out.reset();
+    if (fsync_path(tmp, O_RDONLY) != 0)
+        return gv_fail_errno(err, errno, "imageio: %s: fsync", path);
+    if (rename(tmp.c_str(), path) != 0)
+        return gv_fail_errno(err, errno, "imageio: %s: rename", path);
+    tmp.clear();
+    /* Make the rename itself durable; a failure here leaves a complete
+     * file under the final name, so it is not reported. */
+    (void)fsync_path(dir.empty() ? "." : dir, O_RDONLY | O_DIRECTORY);
+    return 0;
+}
+
+extern "C" int gv_image_write(const char *path, uint32_t width,
+                              uint32_t height, int channels,
+                              const uint8_t *pixels, struct gv_error *err)
+{
+    std::string tmp;
+    int rc;
+    try {
+        rc = write_impl(path, width, height, channels, pixels, err, tmp);
+    } catch (const std::bad_alloc &) {
+        rc = gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+    } catch (const std::exception &e) {
+        rc = gv_fail(err, GV_EIO, "imageio: %s: %s", path, e.what());
+    } catch (...) {
+        rc = gv_fail(err, GV_EIO, "imageio: %s: unknown encoder exception",
+                     path);
+    }
+    if (rc != 0 && !tmp.empty())
+        unlink(tmp.c_str());
+    return rc;
+}
