@@ -10,6 +10,7 @@
  */
 #include <limits.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #if defined(__x86_64__) || defined(__i386__)
@@ -106,13 +107,61 @@ nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
 }
 #endif
 
+#ifdef VQ_HAVE_X86
+/* The same search sixteen codevectors at a time. */
+__attribute__((target("avx512f,avx512bw"))) static void
+nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
+               uint16_t *idx, uint32_t *dist)
+{
+    const int k = s->k, pairs = s->dim / 2;
+    const __m512i step = _mm512_set1_epi32(16);
+    const __m512i first = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
+                                            11, 12, 13, 14, 15);
+    for (size_t i = 0; i < n; i++) {
+        const int16_t *x = vecs + i * VQ_STRIDE;
+        __m512i xp[VQ_MAXDIM / 2];
+        for (int j = 0; j < pairs; j++)
+            xp[j] = _mm512_set1_epi32(pack_pair(x[2 * j], x[2 * j + 1]));
+        __m512i best = _mm512_set1_epi32(INT_MAX);
+        __m512i besti = _mm512_setzero_si512();
+        __m512i lane = first;
+        for (int c = 0; c < k; c += 16) {
+            __m512i acc = _mm512_setzero_si512();
+            for (int j = 0; j < pairs; j++) {
+                __m512i cv = _mm512_loadu_si512(s->pairs + j * k + c);
+                __m512i d = _mm512_sub_epi16(xp[j], cv);
+                acc = _mm512_add_epi32(acc, _mm512_madd_epi16(d, d));
+            }
+            __mmask16 lt = _mm512_cmpgt_epi32_mask(best, acc);
+            best = _mm512_mask_mov_epi32(best, lt, acc);
+            besti = _mm512_mask_mov_epi32(besti, lt, lane);
+            lane = _mm512_add_epi32(lane, step);
+        }
+        /* Smallest distance, then the lowest index among lanes holding it. */
+        int32_t m = _mm512_reduce_min_epi32(best);
+        __mmask16 at = _mm512_cmpeq_epi32_mask(best, _mm512_set1_epi32(m));
+        idx[i] = (uint16_t)_mm512_mask_reduce_min_epi32(at, besti);
+        if (dist)
+            dist[i] = (uint32_t)m;
+    }
+}
+#endif
+
 void vq_nearest(const struct vq_search *s, const int16_t *vecs, size_t n,
                 uint16_t *idx, uint32_t *dist)
 {
 #ifdef VQ_HAVE_X86
-    static int have_avx2 = -1;
-    if (have_avx2 < 0)
+    static int have_avx2 = -1, have_avx512 = -1;
+    if (have_avx2 < 0) {
+        have_avx512 = __builtin_cpu_supports("avx512f") &&
+                      __builtin_cpu_supports("avx512bw") &&
+                      !getenv("GIGAVIEW_NO_AVX512");
         have_avx2 = __builtin_cpu_supports("avx2") ? 1 : 0;
+    }
+    if (have_avx512 && s->k % 16 == 0) {
+        nearest_avx512(s, vecs, n, idx, dist);
+        return;
+    }
     if (have_avx2 && s->k % 8 == 0) {
         nearest_avx2(s, vecs, n, idx, dist);
         return;
