@@ -203,6 +203,11 @@ static double principal_axis(const struct vq_trainer *t, const int16_t *sample,
     const int dim = t->dim;
     double cov[VQ_MAXDIM * VQ_MAXDIM] = {0}, mean[VQ_MAXDIM] = {0};
     size_t m = 0;
+    /* Start (and fallback for cells too small to have an axis): a fixed
+     * direction with unequal weights, so it is not orthogonal to the axis
+     * of typical residuals. */
+    for (int a = 0; a < dim; a++)
+        e[a] = 1.0 / sqrt((double)dim) * (a % 3 == 0 ? 1.0 : 0.9);
     for (size_t i = 0; i < n; i++) {
         if (idx[i] != c)
             continue;
@@ -223,8 +228,6 @@ static double principal_axis(const struct vq_trainer *t, const int16_t *sample,
             double v = cov[a * dim + b] / (double)m - mean[a] * mean[b];
             cov[a * dim + b] = cov[b * dim + a] = v;
         }
-    for (int a = 0; a < dim; a++)
-        e[a] = 1.0 / sqrt((double)dim) * (a % 3 == 0 ? 1.0 : 0.9);
     double lambda = 0.0;
     for (int it = 0; it < 12; it++) {
         double y[VQ_MAXDIM], norm = 0.0;
