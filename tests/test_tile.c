@@ -22,17 +22,29 @@ static uint32_t next_rand(void)
     return (uint32_t)rng;
 }
 
-/* The prediction written out from docs/FORMAT.md, independently. */
+/* The prediction written out from docs/FORMAT.md, independently: the
+ * double sum with clamped taps, in 64-bit, one rounding. */
 static int reference_pred(const uint8_t *P, int C, int qx, int qy, int u, int v,
                           int c)
 {
+    static const int even[4] = {-3, 29, 111, -9}, odd[4] = {-9, 111, 29, -3};
     int p = 256 * qx + u / 2, q = 256 * qy + v / 2;
-    int pn = u % 2 ? p + 1 : p - 1, qn = v % 2 ? q + 1 : q - 1;
-    pn = pn < 0 ? 0 : pn > 512 ? 512 : pn;
-    qn = qn < 0 ? 0 : qn > 512 ? 512 : qn;
-#define AT(y, x) P[((y) * T + (x)) * C + c]
-    return (9 * AT(q, p) + 3 * AT(q, pn) + 3 * AT(qn, p) + AT(qn, pn) + 8) / 16;
-#undef AT
+    int px0 = u % 2 ? p - 1 : p - 2, qy0 = v % 2 ? q - 1 : q - 2;
+    const int *wx = u % 2 ? odd : even, *wy = v % 2 ? odd : even;
+    long long s = 0;
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++) {
+            int x = px0 + i, y = qy0 + j;
+            x = x < 0 ? 0 : x > 512 ? 512 : x;
+            y = y < 0 ? 0 : y > 512 ? 512 : y;
+            s += (long long)wx[i] * wy[j] * P[((size_t)y * T + x) * C + c];
+        }
+    s += 8192;
+    if (s < 0)
+        s = 0;
+    if (s > 255 * 16384 + 16383)
+        s = 255 * 16384 + 16383;
+    return (int)(s / 16384);
 }
 
 /* A natural-looking tile: smooth gradient plus texture plus an edge. */
