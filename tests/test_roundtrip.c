@@ -177,12 +177,15 @@ int main(void)
         data = "tests/data";
     if (!mkdtemp(dir))
         fail("mkdtemp");
-    char a[512], b[512], c[512];
+    char a[512], b[512], c[512], d[512];
     snprintf(a, sizeof a, "%s/seeding-640x480.jpg", data);
     snprintf(b, sizeof b, "%s/seeding-700x520.png", data);
     snprintf(c, sizeof c, "%s/etopo-600x400-u16.png", data);
-    tap_plan(41);
+    snprintf(d, sizeof d, "%s/picos-1100x700.jpg", data);
+    tap_plan(53);
     roundtrip(a, 34.0, 10);
+    roundtrip(d, 36.0, 10);   /* a busy mountain scene, two tiled levels */
+    roundtrip(d, 30.0, 6);
     roundtrip(b, 38.0, 10);
     roundtrip(b, 30.0, 4);
     roundtrip(c, 40.0, 10);
