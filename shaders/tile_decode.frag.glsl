@@ -1,0 +1,95 @@
+// tile_decode.frag.glsl - decode one gigaview tile (docs/FORMAT.md,
+// sections 3 and 4) into a 513x513 RGBA8UI target, bit for bit what the CPU
+// reference decoder (lib/tile_decode.c, lib/predict.c) produces.
+//
+// One source for every GPU decoder: the embedding program prepends the
+// #version line and, where shader storage buffers exist (GLSL ES 3.10+,
+// GLSL 4.30), "#define GV_SSBO 1"; WebGL2 (GLSL ES 3.00) reads the tile
+// buffer from an R32UI texture instead, GV_WORDS_WIDTH words per row.
+// Integer arithmetic only: the parent is an RGBA8UI texture read with
+// texelFetch, so no filtering or float rounding takes part.
+
+precision highp float;
+precision highp int;
+precision highp usampler2D;
+
+uniform usampler2D u_parent;   // decoded parent tile, 513x513, RGBA8UI
+uniform ivec2 u_quadrant;      // (tx & 1, ty & 1)
+uniform int u_channels;        // 1 (gray: R, replicated on output) or 3
+
+#ifdef GV_SSBO
+layout(std430, binding = 0) readonly buffer TileWords { uint words[]; };
+uint word_at(int i) { return words[i]; }
+#else
+uniform usampler2D u_words;    // tile buffer as R32UI, GV_WORDS_WIDTH wide
+uniform int u_words_width;
+uint word_at(int i) { return texelFetch(u_words, ivec2(i % u_words_width, i / u_words_width), 0).r; }
+#endif
+
+out uvec4 o_color;
+
+// Byte b of the tile buffer.
+int byte_at(int b)
+{
+    return int((word_at(b >> 2) >> uint(8 * (b & 3))) & 0xffu);
+}
+
+// r bits starting at bit offset `bit` (r <= 12, so at most two words).
+int bits_at(int bit, int r)
+{
+    int w = bit >> 5, s = bit & 31;
+    uint v = word_at(w) >> uint(s);
+    if (s + r > 32)
+        v |= word_at(w + 1) << uint(32 - s);
+    return int(v & ((1u << uint(r)) - 1u));
+}
+
+// Catmull-Rom weights in 128ths at the quarter offsets (FORMAT.md 3).
+int weight(int odd, int k)
+{
+    if (odd == 0)
+        return k == 0 ? -3 : (k == 1 ? 29 : (k == 2 ? 111 : -9));
+    return k == 0 ? -9 : (k == 1 ? 111 : (k == 2 ? 29 : -3));
+}
+
+int first_tap(int q, int u)
+{
+    int p = 256 * q + (u >> 1);
+    return (u & 1) == 1 ? p - 1 : p - 2;
+}
+
+void main()
+{
+    ivec2 uv = ivec2(gl_FragCoord.xy);   // 0..512 each
+    int tx0 = first_tap(u_quadrant.x, uv.x), ty0 = first_tap(u_quadrant.y, uv.y);
+    ivec3 s = ivec3(0);
+    for (int j = 0; j < 4; j++) {
+        int row = clamp(ty0 + j, 0, 512);
+        ivec3 h = ivec3(0);
+        for (int i = 0; i < 4; i++) {
+            int col = clamp(tx0 + i, 0, 512);
+            h += weight(uv.x & 1, i) * ivec3(texelFetch(u_parent, ivec2(col, row), 0).rgb);
+        }
+        s += weight(uv.y & 1, j) * h;
+    }
+    ivec3 pred = clamp(s + 8192, 0, 255 * 16384 + 16383) >> 14;
+
+    ivec3 res = ivec3(0);
+    int r = byte_at(0);
+    if (r > 0) {
+        int dim = 4 * u_channels;
+        int block = (uv.y >> 1) * 257 + (uv.x >> 1);
+        int idx = bits_at(8 * (1 + (1 << r) * dim) + block * r, r);
+        int at = 1 + idx * dim + ((uv.y & 1) * 2 + (uv.x & 1)) * u_channels;
+        for (int c = 0; c < 3; c++) {
+            if (c < u_channels) {
+                int v = byte_at(at + c);
+                res[c] = v >= 128 ? v - 256 : v;
+            }
+        }
+        if (u_channels == 1)
+            res = ivec3(res.x);
+    }
+    ivec3 px = clamp(pred + res, 0, 255);
+    o_color = uvec4(uvec3(px), 255u);
+}

@@ -1,0 +1,152 @@
+/*
+ * test_gpu_decode.c - the GPU decoder (EGL; llvmpipe in CI) against the CPU
+ * reference decoder, bit for bit, on every tile of several stores: RGB and
+ * gray, a real photograph and procedural images, rates from 0 to 12.  Tiles
+ * are decoded top-down entirely on the GPU (each from its GPU-decoded
+ * parent), so an error anywhere would propagate and be seen.  Skips (77)
+ * when no EGL context can be made.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "decoder.h"
+#include "encoder.h"
+#include "gpu.h"
+#include "gpu_decode.h"
+#include "store.h"
+#include "util.h"
+
+static char dir[] = "/tmp/gv-test-gpu-XXXXXX";
+
+static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
+                        int max_rate)
+{
+    char out[256];
+    snprintf(out, sizeof out, "%s/g.gv", dir);
+    struct gv_encode_opts o;
+    gv_encode_opts_default(&o);
+    o.target_psnr = psnr;
+    o.max_rate = max_rate;
+    struct gv_encode_result r;
+    struct gv_error err;
+    const char *in[1] = {input};
+    if (gv_encode(in, 1, out, &o, &r, &err) < 0)
+        fail("encode %s: %s", input, err.text);
+    struct gv_store *s = gv_store_open(out, &err);
+    if (!s)
+        fail("open: %s", err.text);
+    const struct gv_geometry *g = &gv_store_info(s)->geometry;
+    const int c = g->channels;
+    struct gv_decoder *cpu = gv_decoder_new(s, 64u << 20);
+    struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpu, c, &err);
+    if (!gd)
+        fail("gpu decoder: %s", err.text);
+    const size_t tb = gv_tile_bytes(c);
+    uint8_t *px = malloc(tb), *quarter = malloc((size_t)257 * 257 * c);
+    /* Handles of the level above, row-major. */
+    uint32_t *above = NULL, *cur = NULL;
+    uint32_t above_w = 1;
+    const uint8_t *root;
+    if (gv_decoder_tile(cpu, g->root, 0, 0, &root, &err) < 0)
+        fail("root: %s", err.text);
+    above = malloc(sizeof *above);
+    if (gv_gpu_upload_tile(gd, root, &above[0], &err) < 0)
+        fail("upload: %s", err.text);
+    int tiles = 0, mismatched = 0, quarter_bad = 0, rates[16] = {0};
+    for (int k = g->root - 1; k >= 0; k--) {
+        const struct gv_level *l = &g->level[k];
+        cur = malloc(sizeof *cur * l->tiles_x * l->tiles_y);
+        for (uint32_t ty = 0; ty < l->tiles_y; ty++)
+            for (uint32_t tx = 0; tx < l->tiles_x; tx++) {
+                uint8_t *page;
+                size_t plen, tlen;
+                const uint8_t *buf;
+                if (gv_store_read_page(s, k, tx / 8, ty / 8, &page, &plen, &err) < 0 ||
+                    gv_page_tile(page, plen, c, (int)(tx % 8), (int)(ty % 8), &buf,
+                                 &tlen, &err) < 0)
+                    fail("tile %d/%u/%u: %s", k, tx, ty, err.text);
+                rates[buf[0]]++;
+                uint32_t h;
+                if (gv_gpu_decode_tile(gd, buf, tlen, above[(ty / 2) * above_w + tx / 2],
+                                       (int)(tx & 1), (int)(ty & 1), &h, &err) < 0)
+                    fail("gpu decode %d/%u/%u: %s", k, tx, ty, err.text);
+                free(page);
+                cur[ty * l->tiles_x + tx] = h;
+                const uint8_t *ref;
+                if (gv_decoder_tile(cpu, k, tx, ty, &ref, &err) < 0 ||
+                    gv_gpu_read_tile(gd, h, 0, px, &err) < 0)
+                    fail("read %d/%u/%u: %s", k, tx, ty, err.text);
+                tiles++;
+                if (memcmp(px, ref, tb) != 0) {
+                    mismatched++;
+                    size_t i = 0;
+                    while (px[i] == ref[i])
+                        i++;
+                    printf("# tile %d/%u/%u differs first at pixel %zu,%zu: gpu %u cpu %u\n",
+                           k, tx, ty, (i / c) % 513, (i / c) / 513, px[i], ref[i]);
+                }
+                /* Mip 1 is the parent quarter: compare with the CPU parent. */
+                const uint8_t *par;
+                if (gv_gpu_read_tile(gd, h, 1, quarter, &err) < 0 ||
+                    gv_decoder_tile(cpu, k + 1, tx / 2, ty / 2, &par, &err) < 0)
+                    fail("mip 1: %s", err.text);
+                for (int v = 0; v < 257; v++)
+                    quarter_bad += memcmp(quarter + (size_t)v * 257 * c,
+                                          par + ((size_t)(256 * (ty & 1) + v) * 513 +
+                                                 256 * (tx & 1)) * c,
+                                          (size_t)257 * c) != 0;
+            }
+        for (uint32_t i = 0; i < above_w * (k + 1 == g->root ? 1 : g->level[k + 1].tiles_y); i++)
+            gv_gpu_release(gd, above[i]);
+        free(above);
+        above = cur;
+        above_w = l->tiles_x;
+    }
+    for (uint32_t i = 0; i < g->level[0].tiles_x * g->level[0].tiles_y && g->root > 0; i++)
+        gv_gpu_release(gd, above[i]);
+    free(above);
+    char rs[128] = "";
+    for (int q = 0; q < 16; q++)
+        if (rates[q])
+            snprintf(rs + strlen(rs), sizeof rs - strlen(rs), " r%d:%d", q, rates[q]);
+    const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
+    check(mismatched == 0 && quarter_bad == 0 && tiles > 0,
+          "%s: %d tiles (%s) decode identically on the GPU (%d differ, %d mip-1 rows differ)",
+          name, tiles, rs + 1, mismatched, quarter_bad);
+    free(px);
+    free(quarter);
+    gv_gpu_decoder_free(gd);
+    gv_decoder_free(cpu);
+    gv_store_close(s);
+    unlink(out);
+}
+
+int main(void)
+{
+    struct gv_error err;
+    struct gv_gpu *gpu = gv_gpu_open(&err);
+    if (!gpu) {
+        printf("1..0 # SKIP no EGL context: %s\n", err.text);
+        return 0;
+    }
+    const struct gv_gpu_info *in = gv_gpu_info(gpu);
+    printf("# EGL %s platform, %s: %s / %s / %s\n", in->platform, in->api, in->vendor,
+           in->renderer, in->version);
+    if (!mkdtemp(dir))
+        fail("mkdtemp");
+    const char *data = getenv("TESTDATA") ? getenv("TESTDATA") : "tests/data";
+    char picos[512];
+    snprintf(picos, sizeof picos, "%s/picos-1100x700.jpg", data);
+    tap_plan(6);
+    check_store(gpu, picos, 36.0, 10);
+    check_store(gpu, picos, 41.0, 10);                  /* rates 8 to 10 */
+    check_store(gpu, "synth:1500x1100", 60.0, 12);     /* rates up to the cap */
+    check_store(gpu, "synth:1100x1500:gray", 33.0, 10);
+    check_store(gpu, "synth:2100x900", 20.0, 3);       /* low rates, r = 0 */
+    check_store(gpu, "synth:600x600:gray", 99.0, 12);
+    rmdir(dir);
+    gv_gpu_close(gpu);
+    return tap_done();
+}
