@@ -96,7 +96,7 @@ int cmd_info(int argc, char **argv)
         const struct gv_level *l = &g->level[k];
         double lp = (double)l->width * l->height;
         if (k == g->root) {
-            printf("%5d %10u %10u   root (lossless, 24 bpp x channels/3) %12llu %6.3f\n",
+            printf("%5d %10u %10u   root, lossless WebP             %12llu %6.3f\n",
                    k, l->width, l->height, (unsigned long long)h->root_size,
                    8.0 * h->root_size / lp);
             continue;

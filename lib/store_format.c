@@ -1,9 +1,12 @@
 /*
- * store_format.c - header (de)serialization, CRC and the box filter that
- * defines every pyramid level (see store_format.h and docs/FORMAT.md).
+ * store_format.c - header (de)serialization, CRC, the root codec and the
+ * box filter that defines every pyramid level (see store_format.h and
+ * docs/FORMAT.md).
  */
 #include <stdlib.h>
 
+#include <webp/decode.h>
+#include <webp/encode.h>
 #include <zlib.h>
 
 #include "error.h"
@@ -125,78 +128,72 @@ void gv_box_reduce(const uint8_t *src, uint32_t sw, uint32_t sh, int channels,
     }
 }
 
-static inline uint8_t paeth(int a, int b, int c)
-{
-    int p = a + b - c, pa = abs(p - a), pb = abs(p - b), pc = abs(p - c);
-    return (uint8_t)(pa <= pb && pa <= pc ? a : (pb <= pc ? b : c));
-}
-
-/* Paeth prediction of sample i (channel stride `channels`) in row y. */
-static inline uint8_t paeth_at(const uint8_t *img, uint32_t w, uint32_t x,
-                               uint32_t y, int channels, int c)
-{
-    const size_t row = (size_t)w * channels;
-    const uint8_t *cur = img + (size_t)y * row;
-    int a = x ? cur[(x - 1) * channels + c] : 0;
-    int b = y ? cur[x * channels + c - row] : 0;
-    int d = x && y ? cur[(x - 1) * channels + c - row] : 0;
-    return paeth(a, b, d);
-}
-
+/* The root as RGB rows: gray roots are widened to three equal channels
+ * (WebP has no gray mode; its lossless transforms make the copies nearly
+ * free). */
 int gv_root_pack(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
                  uint8_t **out, size_t *len, struct gv_error *err)
 {
-    const size_t n = (size_t)w * h * channels;
-    uint8_t *filt = malloc(n);
-    uLongf cap = compressBound((uLong)n);
-    uint8_t *z = malloc(cap);
-    if (!filt || !z) {
-        free(filt);
-        free(z);
-        return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
+    const uint8_t *rgb = pixels;
+    uint8_t *wide = NULL;
+    if (channels == 1) {
+        wide = malloc((size_t)w * h * 3);
+        if (!wide)
+            return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
+        for (size_t i = 0; i < (size_t)w * h; i++)
+            wide[3 * i] = wide[3 * i + 1] = wide[3 * i + 2] = pixels[i];
+        rgb = wide;
     }
-    for (uint32_t y = 0; y < h; y++)
-        for (uint32_t x = 0; x < w; x++)
-            for (int c = 0; c < channels; c++) {
-                size_t i = ((size_t)y * w + x) * channels + c;
-                filt[i] = (uint8_t)(pixels[i] - paeth_at(pixels, w, x, y, channels, c));
-            }
-    int zr = compress2(z, &cap, filt, (uLong)n, 9);
-    free(filt);
-    if (zr != Z_OK) {
-        free(z);
-        return gv_fail(err, GV_ENOMEM, "store: deflate failed (%d)", zr);
+    WebPConfig cfg;
+    WebPPicture pic;
+    WebPMemoryWriter wr;
+    int ok = WebPConfigInit(&cfg) && WebPConfigLosslessPreset(&cfg, GV_ROOT_EFFORT) &&
+             WebPPictureInit(&pic);
+    if (!ok) {
+        free(wide);
+        return gv_fail(err, GV_EFORMAT, "store: libwebp version mismatch");
     }
-    *out = z;
-    *len = cap;
+    cfg.exact = 1;
+    pic.use_argb = 1;
+    pic.width = (int)w;
+    pic.height = (int)h;
+    WebPMemoryWriterInit(&wr);
+    pic.writer = WebPMemoryWrite;
+    pic.custom_ptr = &wr;
+    ok = WebPPictureImportRGB(&pic, rgb, (int)w * 3) && WebPEncode(&cfg, &pic);
+    WebPPictureFree(&pic);
+    free(wide);
+    if (!ok) {
+        WebPMemoryWriterClear(&wr);
+        return gv_fail(err, GV_ENOMEM, "store: WebP lossless encoding of the "
+                       "root failed (%d)", pic.error_code);
+    }
+    *out = wr.mem;   /* allocated by libwebp with malloc; freed with free() */
+    *len = wr.size;
     return 0;
 }
 
 int gv_root_unpack(const uint8_t *in, size_t len, uint32_t w, uint32_t h,
                    int channels, uint8_t *out, struct gv_error *err)
 {
-    const size_t n = (size_t)w * h * channels;
-    z_stream zs;
-    memset(&zs, 0, sizeof zs);
-    if (inflateInit(&zs) != Z_OK)
-        return gv_fail(err, GV_ENOMEM, "store: inflateInit failed");
-    zs.next_in = (Bytef *)(uintptr_t)in;
-    zs.avail_in = (uInt)len;
-    zs.next_out = out;
-    zs.avail_out = (uInt)n;
-    int zr = inflate(&zs, Z_FINISH);
-    size_t got = n - zs.avail_out;
-    int trailing = zs.avail_in != 0;
-    inflateEnd(&zs);
-    if (zr != Z_STREAM_END || got != n || trailing)
-        return gv_fail(err, GV_ECORRUPT, "store: root does not inflate to "
-                       "%ux%ux%d samples", w, h, channels);
-    for (uint32_t y = 0; y < h; y++)
-        for (uint32_t x = 0; x < w; x++)
-            for (int c = 0; c < channels; c++) {
-                size_t i = ((size_t)y * w + x) * channels + c;
-                out[i] = (uint8_t)(out[i] + paeth_at(out, w, x, y, channels, c));
-            }
+    int fw = 0, fh = 0;
+    if (!WebPGetInfo(in, len, &fw, &fh) || fw != (int)w || fh != (int)h)
+        return gv_fail(err, GV_ECORRUPT, "store: the root is not a %ux%u "
+                       "WebP image", w, h);
+    const size_t n = (size_t)w * h * 3;
+    uint8_t *rgb = channels == 3 ? out : malloc(n);
+    if (!rgb)
+        return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
+    if (!WebPDecodeRGBInto(in, len, rgb, n, (int)w * 3)) {
+        if (rgb != out)
+            free(rgb);
+        return gv_fail(err, GV_ECORRUPT, "store: the root does not decode");
+    }
+    if (channels == 1) {
+        for (size_t i = 0; i < (size_t)w * h; i++)
+            out[i] = rgb[3 * i];
+        free(rgb);
+    }
     return 0;
 }
 

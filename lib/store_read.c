@@ -63,8 +63,8 @@ static int check_header(struct gv_store *s, uint64_t file_size,
         return gv_fail(err, GV_ECORRUPT, "store: file is %llu bytes, header "
                        "says %llu (truncated?)", (unsigned long long)file_size,
                        (unsigned long long)h->file_size);
-    /* A deflated root is at most ~0.1% larger than the raw samples. */
-    if (h->root_size < 5 || h->root_size > GV_ROOT_MAX_BYTES + GV_ROOT_MAX_BYTES / 64 + 64 ||
+    /* Lossless WebP never needs twice the raw samples. */
+    if (h->root_size < 5 || h->root_size > 2 * GV_ROOT_MAX_BYTES + 4096 ||
         h->root_offset < GV_HEADER_SIZE ||
         h->root_offset > file_size || h->root_size > file_size - h->root_offset)
         return gv_fail(err, GV_ECORRUPT, "store: root section out of bounds");
