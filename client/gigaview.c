@@ -43,8 +43,13 @@ int main(int argc, char **argv)
         return 0;
     }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        if (!strcmp(argv[1], commands[i].name))
+        if (!strcmp(argv[1], commands[i].name)) {
+            /* getopt prefixes its messages with argv[0]. */
+            char name[64];
+            snprintf(name, sizeof name, "gigaview %s", commands[i].name);
+            argv[1] = name;
             return commands[i].run(argc - 1, argv + 1);
+        }
     fprintf(stderr, "gigaview: unknown command '%s'\n", argv[1]);
     usage(stderr);
     return 2;

@@ -66,6 +66,11 @@ void gv_decoder_free(struct gv_decoder *d)
     free(d);
 }
 
+const struct gv_store *gv_decoder_store(const struct gv_decoder *d)
+{
+    return d->store;
+}
+
 void gv_root_tile(const uint8_t *root, uint32_t w, uint32_t h, int channels,
                   uint8_t *tile)
 {

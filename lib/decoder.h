@@ -25,6 +25,9 @@ struct gv_decoder *gv_decoder_new(const struct gv_store *s, size_t cache_bytes);
 /* Free.  NULL does nothing. */
 void gv_decoder_free(struct gv_decoder *d);
 
+/* The store d reads (as given to gv_decoder_new). */
+const struct gv_store *gv_decoder_store(const struct gv_decoder *d);
+
 /*
  * Decode tile (tx,ty) of `level` (0 <= level < root; the root level is the
  * single tile (0,0), the root image clamp-padded to 513x513).  *pixels

@@ -50,9 +50,11 @@
  * Thread safety: distinct gv_image_in objects may be used from different
  * threads; one object by one thread at a time.
  */
+#include <cctype>
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -65,6 +67,7 @@
 #include <string>
 #include <vector>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include "error.h"
@@ -444,19 +447,33 @@ static int fsync_path(const std::string &p, int flags)
     return rc;
 }
 
+/* Output format for a file name's extension (case-insensitive), as
+ * gv_image_encode names it, or NULL. */
+static const char *format_for(const std::string &ext)
+{
+    std::string e;
+    for (char ch : ext)
+        e += (char)tolower((unsigned char)ch);
+    if (e == ".png")
+        return "png";
+    if (e == ".jpg" || e == ".jpeg")
+        return "jpg";
+    if (e == ".webp")
+        return "webp";
+    if (e == ".tif" || e == ".tiff")
+        return "tif";
+    return NULL;
+}
+
+/*
+ * Encode in memory (gv_image_encode), then write the bytes ourselves with
+ * write(2), so that a full disk or a file size limit is reported with its
+ * errno (GV_ENOSPC) rather than as an encoder's message.
+ */
 static int write_impl(const char *path, uint32_t width, uint32_t height,
                       int channels, const uint8_t *pixels,
                       struct gv_error *err, std::string &tmp)
 {
-    set_threads_once();
-    if (channels != 1 && channels != 3)
-        return gv_fail(err, GV_EINVAL, "imageio: %s: cannot write %d "
-                       "channels (1 or 3)", path, channels);
-    if (width == 0 || height == 0 || width > 0x7fffffffu
-        || height > 0x7fffffffu)
-        return gv_fail(err, GV_EINVAL, "imageio: %s: bad image size %ux%u",
-                       path, width, height);
-
     std::string p(path);
     size_t slash = p.rfind('/');
     std::string dir = slash == std::string::npos ? "" : p.substr(0, slash + 1);
@@ -465,48 +482,38 @@ static int write_impl(const char *path, uint32_t width, uint32_t height,
     if (base.empty() || dot == std::string::npos || dot + 1 == base.size())
         return gv_fail(err, GV_EINVAL, "imageio: %s: no file extension to "
                        "choose a format by", path);
-    std::string ext = base.substr(dot);
-    struct stat st;
-    std::string d = dir.empty() ? "." : dir;
-    if (stat(d.c_str(), &st) != 0)
-        return gv_fail_errno(err, errno, "imageio: %s: directory %s", path,
-                             d.c_str());
-    tmp = dir + "." + base + ".tmp." + std::to_string((long)getpid()) + "."
-          + std::to_string(tmp_counter.fetch_add(1)) + ext;
-
-    std::unique_ptr<ImageOutput> out = ImageOutput::create(tmp);
-    if (!out) {
-        (void)OIIO::geterror(); /* clear it: the message below says more */
-        tmp.clear(); /* nothing created yet */
+    const char *format = format_for(base.substr(dot));
+    if (!format)
         return gv_fail(err, GV_EFORMAT, "imageio: %s: unsupported output "
-                       "format \"%s\"", path, ext.c_str());
-    }
-    ImageSpec spec((int)width, (int)height, channels, TypeDesc::UINT8);
+                       "format \"%s\" (png, jpg, webp, tif)", path,
+                       base.substr(dot).c_str());
+    uint8_t *bytes = NULL;
+    size_t len = 0;
     /* 90: visually transparent for JPEG and WebP (lossy formats only). */
-    std::string fmt = out->format_name();
-    if (fmt == "jpeg" || fmt == "webp")
-        spec.attribute("CompressionQuality", 90);
-    /* OIIO 2.4.7 with libtiff 4.5 records "failed TIFFWriteCustomDirectory()
-     * of the Exif data" for every TIFF (empty Exif directory) while still
-     * writing a good file; we have no Exif to write, so skip it. */
-    spec.attribute("tiff:write_exif", 0);
-    if (!out->open(tmp, spec)) {
-        std::string msg = out->geterror();
+    if (gv_image_encode(format, width, height, channels, pixels, 90, &bytes,
+                        &len, err) != 0)
+        return -1;
+    std::unique_ptr<uint8_t, void (*)(void *)> hold(bytes, free);
+    tmp = dir + "." + base + ".tmp." + std::to_string((long)getpid()) + "."
+          + std::to_string(tmp_counter.fetch_add(1));
+    int fd = open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0) {
         int e = errno;
-        if (e == ENOSPC || e == EDQUOT || e == EFBIG)
+        tmp.clear(); /* nothing created */
+        return gv_fail_errno(err, e, "imageio: %s", path);
+    }
+    for (size_t done = 0; done < len;) {
+        ssize_t n = write(fd, bytes + done, len - done);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0) {
+            int e = errno;
+            close(fd);
             return gv_fail_errno(err, e, "imageio: %s", path);
-        return gv_fail(err, GV_EIO, "imageio: %s: %s", path,
-                       first_line(msg).c_str());
+        }
+        done += (size_t)n;
     }
-    bool ok = out->write_image(TypeDesc::UINT8, pixels);
-    ok = out->close() && ok;
-    if (!ok || out->has_error()) {
-        std::string msg = out->geterror();
-        return gv_fail(err, GV_EIO, "imageio: %s: %s", path,
-                       first_line(msg.empty() ? "write failed" : msg).c_str());
-    }
-    out.reset();
-    if (fsync_path(tmp, O_RDONLY) != 0)
+    if (fsync(fd) != 0 || close(fd) != 0)
         return gv_fail_errno(err, errno, "imageio: %s: fsync", path);
     if (rename(tmp.c_str(), path) != 0)
         return gv_fail_errno(err, errno, "imageio: %s: rename", path);
@@ -536,4 +543,103 @@ extern "C" int gv_image_write(const char *path, uint32_t width,
     if (rc != 0 && !tmp.empty())
         unlink(tmp.c_str());
     return rc;
+}
+
+/* ---- in-memory encoding ---- */
+
+/*
+ * gv_image_encode writes through an OIIO::Filesystem::IOVecOutput (every
+ * writer used here, png, jpeg, webp and tiff, supports("ioproxy") in OIIO
+ * 2.4.7), so nothing touches the file system and each call has its own
+ * ImageOutput and buffer: safe from any number of threads.  The file name
+ * given to open() only carries the extension; no file is created.
+ */
+static int encode_impl(const char *format, uint32_t width, uint32_t height,
+                       int channels, const uint8_t *pixels, int quality,
+                       uint8_t **out, size_t *len, struct gv_error *err)
+{
+    set_threads_once();
+    /* IIIF format name -> OIIO format name */
+    static const char *const names[][2] = {
+        {"png", "png"}, {"jpg", "jpeg"}, {"webp", "webp"}, {"tif", "tiff"}};
+    const char *oiio_name = NULL;
+    for (const auto &n : names)
+        if (format && strcmp(format, n[0]) == 0)
+            oiio_name = n[1];
+    if (!oiio_name)
+        return gv_fail(err, GV_EFORMAT, "imageio: cannot encode format "
+                       "\"%s\" (png, jpg, webp or tif)",
+                       format ? format : "(null)");
+    if (channels != 1 && channels != 3)
+        return gv_fail(err, GV_EINVAL, "imageio: cannot encode %d channels "
+                       "(1 or 3)", channels);
+    if (width == 0 || height == 0 || width > 0x7fffffffu
+        || height > 0x7fffffffu)
+        return gv_fail(err, GV_EINVAL, "imageio: bad image size %ux%u",
+                       width, height);
+    if (quality < 1)
+        quality = 1;
+    if (quality > 100)
+        quality = 100;
+
+    std::unique_ptr<ImageOutput> o = ImageOutput::create(oiio_name);
+    if (!o) {
+        (void)OIIO::geterror();
+        return gv_fail(err, GV_EFORMAT, "imageio: this OpenImageIO cannot "
+                       "write %s", oiio_name);
+    }
+    if (!o->supports("ioproxy"))
+        return gv_fail(err, GV_EFORMAT, "imageio: the %s writer cannot "
+                       "write to memory", oiio_name);
+    std::vector<unsigned char> buf;
+    OIIO::Filesystem::IOVecOutput vec(buf);
+    ImageSpec spec((int)width, (int)height, channels, TypeDesc::UINT8);
+    std::string fmt = oiio_name;
+    if (fmt == "jpeg" || fmt == "webp")
+        spec.attribute("CompressionQuality", quality);
+    /* see write_impl: no (empty) Exif directory, which libtiff 4.5 fails
+     * on */
+    spec.attribute("tiff:write_exif", 0);
+    std::string name = std::string("memory.") + format;
+    if (!o->set_ioproxy(&vec) || !o->open(name, spec)) {
+        std::string msg = o->geterror();
+        return gv_fail(err, GV_EIO, "imageio: encoding %s: %s", format,
+                       first_line(msg.empty() ? "open failed" : msg).c_str());
+    }
+    bool ok = o->write_image(TypeDesc::UINT8, pixels);
+    ok = o->close() && ok;
+    if (!ok || o->has_error()) {
+        std::string msg = o->geterror();
+        return gv_fail(err, GV_EIO, "imageio: encoding %s: %s", format,
+                       first_line(msg.empty() ? "write failed" : msg).c_str());
+    }
+    o.reset();
+    if (buf.empty())
+        return gv_fail(err, GV_EIO, "imageio: encoding %s produced no bytes",
+                       format);
+    uint8_t *p = static_cast<uint8_t *>(malloc(buf.size()));
+    if (!p)
+        return gv_fail(err, GV_ENOMEM, "imageio: out of memory");
+    memcpy(p, buf.data(), buf.size());
+    *out = p;
+    *len = buf.size();
+    return 0;
+}
+
+extern "C" int gv_image_encode(const char *format, uint32_t width,
+                               uint32_t height, int channels,
+                               const uint8_t *pixels, int quality,
+                               uint8_t **out, size_t *len,
+                               struct gv_error *err)
+{
+    try {
+        return encode_impl(format, width, height, channels, pixels, quality,
+                           out, len, err);
+    } catch (const std::bad_alloc &) {
+        return gv_fail(err, GV_ENOMEM, "imageio: out of memory encoding");
+    } catch (const std::exception &e) {
+        return gv_fail(err, GV_EIO, "imageio: encoding: %s", e.what());
+    } catch (...) {
+        return gv_fail(err, GV_EIO, "imageio: unknown encoder exception");
+    }
 }

@@ -54,6 +54,16 @@ void gv_image_close(struct gv_image_in *in);
 int gv_image_write(const char *path, uint32_t width, uint32_t height,
                    int channels, const uint8_t *pixels, struct gv_error *err);
 
+/*
+ * Encode an 8-bit image (channels 1 or 3) in memory as `format`: "png",
+ * "jpg", "webp" or "tif".  quality (1..100) applies to jpg and webp.  *out is
+ * malloc'ed (caller frees with free()).  Thread-safe.  Returns 0, or -1
+ * (GV_EFORMAT for a format this build cannot write).
+ */
+int gv_image_encode(const char *format, uint32_t width, uint32_t height,
+                    int channels, const uint8_t *pixels, int quality,
+                    uint8_t **out, size_t *len, struct gv_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -71,7 +71,7 @@ static double psnr(const uint8_t *a, const uint8_t *b, size_t n)
 
 int main(void)
 {
-    tap_plan(27);
+    tap_plan(26);
     const size_t tb = gv_tile_bytes(3);
     uint8_t *parent = malloc(tb), *pred = malloc(tb), *orig = malloc(tb);
     uint8_t *recon = malloc(tb), *dec = malloc(tb);

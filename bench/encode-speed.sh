@@ -1,0 +1,134 @@
+#!/bin/bash
+# encode-speed.sh: wall-clock encode speed of gigaview against vips dzsave,
+# on the same inputs in the same run.
+#
+#   bench/encode-speed.sh [--gigaview PATH] [IMAGE...]
+#
+#   anchor:   vips dzsave IMAGE OUT.zip --container zip --suffix .jpg[Q=85]
+#   measured: gigaview encode IMAGE -o OUT.gv          (default settings)
+#
+# Both use every core, both read and decode the input themselves, and both
+# write their output into the same scratch directory. Each command runs REPS
+# times (default 3), alternating between the two, and the best (least) wall
+# time is kept; the median is printed too. Speeds are source megapixels per
+# second of wall time. Nothing is asserted: the script only reports.
+#
+# Environment:
+#   GIGAVIEW=PATH   binary (default: ../gigaview next to bench/, or on PATH)
+#   QUICK=1         two inputs only (one photo and the 58 MP relief), 3 reps
+#   REPS=N          repetitions per command (default 3)
+#   MOSAIC=1        add a 4x4 mosaic of one photo (214 MP, built once as an
+#                   uncompressed tiled TIFF in the scratch directory; both
+#                   tools read the same file)
+#   TMPDIR=DIR      scratch space (default /tmp)
+set -euo pipefail
+
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+
+gv_arg=""
+inputs=()
+while [ $# -gt 0 ]; do
+	case $1 in
+	--gigaview) gv_arg=$2; shift 2 ;;
+	--gigaview=*) gv_arg=${1#*=}; shift ;;
+	-h|--help) sed -n '2,27p' "$0"; exit 0 ;;
+	*) inputs+=("$1"); shift ;;
+	esac
+done
+
+need_cmd vips libvips-tools
+need_cmd vipsheader libvips-tools
+GV_SRC=$(find_gigaview "$gv_arg")
+QUICK=${QUICK:-0}
+REPS=${REPS:-3}
+MOSAIC=${MOSAIC:-0}
+
+P=$DATA_DIR/photos
+LARGE=$DATA_DIR/large/marble-srtm-relief-10800x5400.png
+if [ ${#inputs[@]} -eq 0 ]; then
+	if [ "$QUICK" = 1 ]; then
+		inputs=("$P/Dragonfly_by_Bolly.jpg" "$LARGE")
+	else
+		inputs=("$P/seeding_by_Clements_Engelhardt.jpg" "$P/Dragonfly_by_Bolly.jpg"
+			"$P/sunset_by_Aitzol_Berasategi.jpg" "$P/Bridge_by_Sander_Klootwijk.jpg"
+			"$P/Wine_by_Jakkub_Mede.jpg" "$P/picosdeeuropa_by_Aitzol_Berasategi.jpg"
+			"$P/butterfly.png" "$P/flowers.png" "$LARGE")
+	fi
+fi
+for f in "${inputs[@]}"; do [ -r "$f" ] || die "cannot read input $f"; done
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/gv-speed.XXXXXX")
+trap 'rm -rf "$work"' EXIT INT TERM
+GV=$(snapshot_gigaview "$GV_SRC" "$work")
+
+if [ "$MOSAIC" = 1 ]; then
+	m=$work/mosaic-4x4-Dragonfly.tif
+	echo "# building $m (4x4 copies of Dragonfly_by_Bolly.jpg)" >&2
+	d=$P/Dragonfly_by_Bolly.jpg
+	vips arrayjoin "$d $d $d $d $d $d $d $d $d $d $d $d $d $d $d $d" "${m}[tile,bigtiff]" --across 4
+	inputs+=("$m")
+fi
+
+# time_cmd: runs "$@" once and prints the wall time in seconds.
+time_cmd() {
+	local t0 t1
+	t0=$(now)
+	"$@" >/dev/null 2>&1 || { echo "FAILED: $*" >&2; return 1; }
+	t1=$(now)
+	awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", b - a }'
+}
+
+# best and median of a list of numbers
+best() { printf '%s\n' "$@" | sort -g | head -1; }
+median() { printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else printf "%.3f\n", (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+
+echo "# gigaview encode speed vs vips dzsave (same inputs, same run)"
+echo "# $(date '+%F %T %Z'); $(machine_line)"
+echo "# $(describe_build "$GV_SRC")"
+echo "# vips $(vips --version | awk '{print $1}' | sed 's/^vips-//'); anchor: vips dzsave IN OUT.zip --container zip --suffix '.jpg[Q=85]'"
+echo "# gigaview: encode IN -o OUT.gv (defaults: -q 36, -r 10, every CPU); best of $REPS wall-clock runs each, alternating"
+echo "# MP/s = source megapixels / best wall time (decode of the input included for both);"
+echo "# bpp = output bytes * 8 / source pixels (zip of every JPEG tile level; store of every level);"
+echo "#   the two run at different qualities (JPEG Q85 vs -q 36), so the bpp columns are not a rate-distortion comparison"
+echo
+
+fmt='%-40s %7s %8s %8s %9s %8s %8s %8s %8s\n'
+printf "$fmt" input MP "vips s" "vips med" "vips MP/s" "gv s" "gv med" "gv MP/s" "gv/vips"
+printf "$fmt" "" "" "(best)" "" "" "(best)" "" "" "speed"
+tot_mp=0 tot_v=0 tot_g=0
+bpp_lines=()
+for f in "${inputs[@]}"; do
+	w=$(img_w "$f"); h=$(img_h "$f"); b=$(img_bands "$f")
+	mp=$(awk -v w="$w" -v h="$h" 'BEGIN { printf "%.2f", w * h / 1e6 }')
+	tv=(); tg=()
+	for ((r = 0; r < REPS; r++)); do
+		rm -rf "$work/dz" "$work/dz.zip" "$work/out.gv"
+		tv+=("$(time_cmd vips dzsave "$f" "$work/dz.zip" --container zip --suffix '.jpg[Q=85]')")
+		tg+=("$(time_cmd "$GV" encode "$f" -o "$work/out.gv" --quiet)")
+	done
+	zip=$work/dz.zip; [ -f "$zip" ] || zip=$work/dz
+	vb=$(stat -c %s "$zip"); gb=$(stat -c %s "$work/out.gv")
+	bv=$(best "${tv[@]}"); bg=$(best "${tg[@]}")
+	mv=$(median "${tv[@]}"); mg=$(median "${tg[@]}")
+	read -r sv sg ratio < <(awk -v mp="$mp" -v v="$bv" -v g="$bg" \
+		'BEGIN { printf "%.1f %.1f %.2f\n", mp / v, mp / g, (mp / g) / (mp / v) }')
+	name=$(basename "$f")
+	[ "$b" = 1 ] && name="$name (gray)"
+	printf "$fmt" "${name:0:40}" "$mp" "$bv" "$mv" "$sv" "$bg" "$mg" "$sg" "${ratio}x"
+	bpp_lines+=("$(printf '%-40s %7s %10s %10s' "${name:0:40}" "$mp" \
+		"$(awk -v s="$vb" -v w="$w" -v h="$h" 'BEGIN { printf "%.3f", s * 8 / (w * h) }')" \
+		"$(awk -v s="$gb" -v w="$w" -v h="$h" 'BEGIN { printf "%.3f", s * 8 / (w * h) }')")")
+	tot_mp=$(awk -v a="$tot_mp" -v b="$mp" 'BEGIN { print a + b }')
+	tot_v=$(awk -v a="$tot_v" -v b="$bv" 'BEGIN { print a + b }')
+	tot_g=$(awk -v a="$tot_g" -v b="$bg" 'BEGIN { print a + b }')
+done
+read -r sv sg ratio < <(awk -v mp="$tot_mp" -v v="$tot_v" -v g="$tot_g" \
+	'BEGIN { printf "%.1f %.1f %.2f\n", mp / v, mp / g, (mp / g) / (mp / v) }')
+printf "$fmt" "TOTAL (sum MP / sum best s)" "$(printf %.1f "$tot_mp")" "$(printf %.2f "$tot_v")" "" "$sv" \
+	"$(printf %.2f "$tot_g")" "" "$sg" "${ratio}x"
+echo
+echo "gigaview / vips dzsave speed, all inputs: ${ratio}x  (gigaview $sg MP/s, vips dzsave $sv MP/s)"
+echo "context only (other input): CODEC-NOTES quotes vips dzsave JPEG Q85 into one .zip at 59 MP/s on a 264 MP mosaic."
+echo
+printf '%-40s %7s %10s %10s\n' "output size" MP "vips bpp" "gv bpp"
+printf '%s\n' "${bpp_lines[@]}"

@@ -1,0 +1,84 @@
+# Shared helpers for the bench/*.sh scripts. Sourced, not run.
+# shellcheck shell=bash
+
+BENCH_DIR=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+DATA_DIR=${DATA_DIR:-/work/shared/data}
+
+die() { echo "$(basename "$0"): $*" >&2; exit 1; }
+
+# need_cmd COMMAND DEBIAN-PACKAGE: installs the package only when the command
+# is missing (the scripts never touch the network otherwise).
+need_cmd() {
+	command -v "$1" >/dev/null 2>&1 && return 0
+	echo "# $1 not found: installing Debian package $2" >&2
+	if [ "$(id -u)" -eq 0 ]; then
+		apt-get install -y "$2" >&2 || die "apt-get install $2 failed"
+	else
+		sudo apt-get install -y "$2" >&2 || die "apt-get install $2 failed"
+	fi
+	command -v "$1" >/dev/null 2>&1 || die "$1 still missing after installing $2"
+}
+
+# find_gigaview [PATH]: prints the gigaview binary to use: the argument, else
+# $GIGAVIEW, else ../gigaview next to this directory, else gigaview on PATH.
+find_gigaview() {
+	local c
+	for c in "${1:-}" "${GIGAVIEW:-}" "$BENCH_DIR/../gigaview"; do
+		if [ -n "$c" ] && [ -x "$c" ] && [ -f "$c" ]; then
+			echo "$c"; return 0
+		fi
+	done
+	c=$(command -v gigaview 2>/dev/null) && { echo "$c"; return 0; }
+	die "no gigaview binary: pass --gigaview PATH or set GIGAVIEW (e.g. GIGAVIEW=/path/to/build/gigaview)"
+}
+
+# snapshot_gigaview SRC DIR: copies the binary into DIR so a rebuild during
+# the run cannot change it half-way; prints the copy's path.
+snapshot_gigaview() {
+	cp "$1" "$2/gigaview"
+	chmod +x "$2/gigaview"
+	echo "$2/gigaview"
+}
+
+# describe_build BINARY: one line naming the binary, its checksum and the tree.
+describe_build() {
+	local sum rev=""
+	sum=$(md5sum "$1" | cut -c1-12)
+	if git -C "$BENCH_DIR/.." rev-parse --short HEAD >/dev/null 2>&1; then
+		rev=$(git -C "$BENCH_DIR/.." rev-parse --short HEAD)
+		git -C "$BENCH_DIR/.." diff --quiet HEAD -- 2>/dev/null || rev="$rev+dirty"
+	fi
+	echo "gigaview $1 (md5 $sum, mtime $(date -r "$1" '+%F %T'), source tree ${rev:-unknown})"
+}
+
+machine_line() {
+	local cpu
+	cpu=$(awk -F': ' '/^model name/ {print $2; exit}' /proc/cpuinfo 2>/dev/null || true)
+	echo "machine: $(nproc) cores, ${cpu:-unknown CPU}, $(uname -sr)"
+}
+
+now() { date +%s.%N; }
+
+# pixels FILE: width*height of an image, read by vips.
+img_w() { vipsheader -f width "$1"; }
+img_h() { vipsheader -f height "$1"; }
+img_bands() { vipsheader -f bands "$1"; }
+
+# to_pnm IN OUT.ppm: 8-bit binary PNM (P6 or P5) of IN, alpha dropped.
+to_pnm() {
+	local b
+	b=$(img_bands "$1")
+	case $b in
+	2) vips extract_band "$1" "$2" 0 --n 1 ;;
+	4) vips extract_band "$1" "$2" 0 --n 3 ;;
+	*) vips copy "$1" "$2" ;;
+	esac
+}
+
+# build_imgcompare DIR: compiles imgcompare.c into DIR, prints its path.
+build_imgcompare() {
+	need_cmd cc gcc
+	cc -std=c11 -O2 -Wall -Wextra -o "$1/imgcompare" "$BENCH_DIR/imgcompare.c" -lm \
+		|| die "cannot build imgcompare"
+	echo "$1/imgcompare"
+}

@@ -1,0 +1,191 @@
+#!/bin/sh
+# cli_bad_input.sh - `gigaview encode` on damaged input and hostile
+# output locations.
+#
+# Every case must exit 1 with a message on stderr that names the problem,
+# and leave nothing behind: no file at the output path and no temporary
+# file beside it (the writer uses O_TMPFILE, so even a crash leaves none).
+# A good store already at the output path survives a failed re-encode
+# byte for byte.  Needs python3 (to craft a PNG header) and oiiotool.
+. "$(dirname "$0")/lib.sh"
+
+in="$T/in"
+out="$T/out.d"
+mkdir "$in" "$out" || bail "mkdir"
+jpg="$TESTDATA/seeding-640x480.jpg"
+png="$TESTDATA/seeding-700x520.png"
+
+# bad_case DESCRIPTION PATTERN ENCODE-ARGS...: encode into $out/x.gv must
+# fail with exit 1, stderr matching PATTERN, and $out left empty.
+bad_case() {
+    desc=$1 pattern=$2
+    shift 2
+    run encode "$@" -o "$out/x.gv"
+    expect_rc "$desc" 1
+    expect_err "$desc: message" "$pattern"
+    left=$(listing "$out")
+    if [ -z "$left" ]; then ok "$desc: nothing left in the output directory"; else
+        not_ok "$desc: left behind in the output directory" "$left"; fi
+    rm -rf "$out" && mkdir "$out"
+}
+
+# ----------------------------------------------------- damaged images
+head -c 20000 "$jpg" >"$in/trunc.jpg"
+bad_case "truncated JPEG" "trunc\\.jpg.*(Premature end|truncat)" "$in/trunc.jpg"
+
+head -c 20000 "$png" >"$in/trunc.png"
+bad_case "truncated PNG" "trunc\\.png.*(end of file|truncat)" "$in/trunc.png"
+
+# 2 KiB of 0xFF in the middle of the entropy-coded data.
+cp "$jpg" "$in/corrupt.jpg"
+python3 -c 'import sys; f=open(sys.argv[1],"r+b"); f.seek(30000); f.write(b"\xff"*2048)' \
+    "$in/corrupt.jpg" || bail "python3"
+bad_case "corrupt JPEG" "corrupt\\.jpg.*(Corrupt|corrupt)" "$in/corrupt.jpg"
+
+# A PNG with its IDAT bytes flipped: zlib or the CRC must notice.
+cp "$png" "$in/flipped.png"
+python3 -c 'import sys; f=open(sys.argv[1],"r+b"); f.seek(5000); b=f.read(64); f.seek(5000); f.write(bytes(x ^ 0x5a for x in b))' \
+    "$in/flipped.png" || bail "python3"
+bad_case "PNG with flipped bytes" "flipped\\.png" "$in/flipped.png"
+
+: >"$in/empty.jpg"
+bad_case "zero-byte file" "empty\\.jpg.*empty" "$in/empty.jpg"
+
+bad_case "nonexistent file" "nothere\\.png.*(no such file|No such file)" "$in/nothere.png"
+
+echo "this is not a picture" >"$in/text.jpg"
+bad_case "text file named .jpg" "text\\.jpg.*not a JPEG" "$in/text.jpg"
+
+bad_case "a directory as input" "in" "$in"
+
+bad_case "synth: of zero width" "synth:0x5.*sizes must be" "synth:0x5"
+bad_case "synth: too wide" "sizes must be" "synth:2147483648x1"
+bad_case "synth: garbage" "synth:axb" "synth:axb"
+
+# A valid PNG signature and IHDR (correct CRC) claiming 100000x100000
+# RGB, with one tiny IDAT: 10^10 pixels.
+python3 - "$in/huge.png" <<'EOF' || bail "python3"
+import struct, sys, zlib
+def chunk(kind, data):
+    return (struct.pack(">I", len(data)) + kind + data +
+            struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+ihdr = struct.pack(">IIBBBBB", 100000, 100000, 8, 2, 0, 0, 0)
+with open(sys.argv[1], "wb") as f:
+    f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) +
+            chunk(b"IDAT", zlib.compress(b"\0" * 1000)) + chunk(b"IEND", b""))
+EOF
+bad_case "PNG header claiming 100000x100000, --max-pixels 10^9" \
+    "huge\\.png.*100000x100000.*exceeds the limit of 1000000000" \
+    --max-pixels 1000000000 "$in/huge.png"
+# Under the default limit (2^40) the header is accepted, and the missing
+# pixel data is what fails - quickly, without a 30 GB allocation.
+bad_case "PNG header claiming 100000x100000, default limit" \
+    "huge\\.png" "$in/huge.png"
+bad_case "synth: above the default 2^40 pixel limit" \
+    "exceed the limit of 1099511627776" "synth:2000000x2000000"
+bad_case "--max-pixels 1000 on a 640x480 JPEG" \
+    "640x480 pixels exceeds the limit of 1000" --max-pixels 1000 "$jpg"
+bad_case "--max-pixels 1000 on a mosaic" "limit" --max-pixels 1000 -m 2x1 "$jpg" "$jpg"
+bad_case "mosaic with one damaged tile" "trunc\\.jpg" -m 2x1 "$jpg" "$in/trunc.jpg"
+
+# ------------------------------------------------- output locations
+# A path under a non-directory: no way to create anything.
+run encode "$jpg" -o /dev/null/x.gv
+expect_rc "output under /dev/null" 1
+expect_err "output under /dev/null: message" "/dev/null.*Not a directory"
+
+run encode "$jpg" -o "$out/nodir/x.gv"
+expect_rc "output in a nonexistent directory" 1
+expect_err "output in a nonexistent directory: message" "nodir.*No such file"
+check "output in a nonexistent directory: nothing created" test -z "$(listing "$out")"
+
+run encode "$jpg" -o "$out"
+expect_rc "output path is a directory" 1
+check "output path is a directory: it is left alone" test -d "$out" -a -z "$(listing "$out")"
+
+# A read-only directory; root ignores the mode, so the case is skipped
+# there (the /dev/null case above covers the error path).
+ro="$T/ro"
+mkdir "$ro" && chmod 555 "$ro"
+if [ "$(id -u)" = 0 ]; then
+    skip "output in a read-only directory" "running as root: the mode does not stop writes"
+else
+    run encode "$jpg" -o "$ro/x.gv"
+    expect_rc "output in a read-only directory" 1
+    expect_err "output in a read-only directory: message" "Permission denied"
+    check "output in a read-only directory: nothing created" test -z "$(listing "$ro")"
+fi
+chmod 755 "$ro"
+
+# Disk full, simulated with a file size limit of 200 KiB (the store and
+# the scratch file are both bigger): EFBIG, not a SIGXFSZ death.
+(
+    trap '' XFSZ
+    ulimit -f 200
+    gv encode "$jpg" -o "$out/x.gv" >"$T/out" 2>"$T/err"
+)
+rc=$?
+expect_rc "file size limit (ulimit -f 200)" 1
+expect_err "file size limit: message says the file is too large / no space" \
+    "(File too large|No space|too large)"
+check "file size limit: nothing left in the output directory" test -z "$(listing "$out")"
+
+# --tmpdir that does not exist.
+run encode "$jpg" --tmpdir "$T/nothere" -o "$out/x.gv"
+expect_rc "--tmpdir that does not exist" 1
+expect_err "--tmpdir that does not exist: message" "nothere"
+check "--tmpdir that does not exist: nothing created" test -z "$(listing "$out")"
+
+# ------------------------------- a good store survives a failed encode
+run encode "$png" -o "$out/good.gv" --quiet
+expect_rc "encode a good store" 0
+cp "$out/good.gv" "$T/good.copy"
+for bad in "$in/trunc.jpg" "$in/corrupt.jpg" "$in/empty.jpg" "$in/nothere.png"; do
+    run encode "$bad" -o "$out/good.gv"
+    expect_rc "re-encode from $(basename "$bad") over a good store" 1
+    check "the good store is byte-identical after $(basename "$bad")" \
+        cmp -s "$out/good.gv" "$T/good.copy"
+done
+(
+    trap '' XFSZ
+    ulimit -f 200
+    gv encode synth:900x900 -o "$out/good.gv" >"$T/out" 2>"$T/err"
+)
+rc=$?
+expect_rc "re-encode over a good store hitting the file size limit" 1
+check "the good store is byte-identical after the size limit" \
+    cmp -s "$out/good.gv" "$T/good.copy"
+check "only the good store is in the directory" test "$(listing "$out")" = good.gv
+run info "$out/good.gv"
+expect_rc "the surviving store still opens" 0
+
+# ----------------------------------------------- export failure paths
+# An export that hits the size limit leaves no partial image.
+(
+    trap '' XFSZ
+    ulimit -f 100
+    gv export "$out/good.gv" -o "$out/big.png" >"$T/out" 2>"$T/err"
+)
+rc=$?
+expect_rc "export hitting the file size limit" 1
+# The image is encoded in memory and written with write(2), so the
+# error is the system's own.
+expect_err "export hitting the file size limit: message" \
+    "File too large"
+check "export hitting the file size limit: no image, no temporary" \
+    test "$(listing "$out")" = good.gv
+
+# A damaged store: every command fails cleanly.
+cp "$T/good.copy" "$in/damaged.gv"
+python3 -c 'import sys; f=open(sys.argv[1],"r+b"); f.seek(200); f.write(b"\x00"*16)' \
+    "$in/damaged.gv" || bail "python3"
+run export "$in/damaged.gv" -o "$out/d.png"
+check "export of a store with a damaged page fails" test "$rc" -eq 1
+expect_err "export of a damaged store: message" "(CRC|crc|corrupt|damaged)"
+check "export of a damaged store: no image" test ! -e "$out/d.png"
+head -c 100 "$T/good.copy" >"$in/short.gv"
+run info "$in/short.gv"
+expect_rc "info on a store cut to 100 bytes" 1
+expect_err "info on a store cut to 100 bytes: message" "store"
+
+done_testing

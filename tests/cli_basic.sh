@@ -1,0 +1,319 @@
+#!/bin/sh
+# cli_basic.sh - end-to-end checks of `gigaview encode | info | export`.
+#
+# Encodes the committed crops (8-bit JPEG and PNG, 16-bit gray PNG, float
+# EXR) and procedural images at edge sizes, then checks what `info`
+# reports, that `export` writes images of the right size at level 0, in a
+# sub-region and at root mips, that the decoded pixels are the ones the
+# encoder measured (idiff's PSNR equals the stored level-0 PSNR), that
+# root-only stores are lossless, that mosaics and thread counts do not
+# change a single byte of the store, and the exit statuses of usage errors.
+# Needs oiiotool and idiff (Debian: openimageio-tools).
+. "$(dirname "$0")/lib.sh"
+need_tool oiiotool idiff
+
+mkdir "$T/w" && cd "$T/w" || bail "cd $T/w"
+
+# close_to A B EPS: |A - B| <= EPS (decimal numbers).
+close_to() {
+    awk -v a="$1" -v b="$2" -v e="$3" \
+        'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a != "" && b != "" && d <= e) }'
+}
+
+# idiff_psnr REF TEST: the "Peak SNR" idiff prints.
+idiff_psnr() {
+    idiff "$1" "$2" 2>/dev/null | sed -n 's/.*Peak SNR = *//p'
+}
+
+# check_size DESCRIPTION FILE "W H C"
+check_size() {
+    got=$(image_size "$2")
+    if [ "$got" = "$3" ]; then ok "$1: $2 is $3"; else
+        not_ok "$1: $2 is '$got', wanted '$3'"; fi
+}
+
+# ------------------------------------------------------- committed crops
+# name  width height channels  reference for the PSNR check
+for spec in \
+    "seeding-640x480.jpg 640 480 3 RGB" \
+    "seeding-700x520.png 700 520 3 RGB" \
+    "etopo-600x400-u16.png 600 400 1 gray" \
+    "courtyard-256x128.exr 256 128 3 RGB"; do
+    set -- $spec
+    f=$1 w=$2 h=$3 c=$4 kind=$5
+    s=${f%%.*}.gv
+    run encode "$TESTDATA/$f" -o "$s"
+    expect_rc "encode $f" 0
+    check "encode $f: stderr empty off a terminal" test ! -s "$T/err"
+    check "encode $f: summary names the size" \
+        grep -q "^image  *$w x $h, $kind" "$T/out"
+    check "encode $f: store exists" test -s "$s"
+
+    run info "$s"
+    expect_rc "info $f" 0
+    check "info $f: size and kind" grep -q "^image  *$w x $h, $kind\$" "$T/out"
+    check "info $f: format version 1" grep -q "(format version 1)" "$T/out"
+
+    run info --json "$s"
+    expect_rc "info --json $f" 0
+    cp "$T/out" info.json
+    check "info --json $f: width $w" test "$(json_field info.json width)" = "$w"
+    check "info --json $f: height $h" test "$(json_field info.json height)" = "$h"
+    check "info --json $f: channels $c" test "$(json_field info.json channels)" = "$c"
+    check "info --json $f: bytes = file size" \
+        test "$(json_field info.json bytes)" = "$(wc -c <"$s" | tr -d ' ')"
+    check "info --json $f: one JSON line, closed" \
+        test "$(wc -l <info.json)" -eq 1 -a "$(tail -c 3 info.json)" = "]}"
+    psnr0=$(json_field info.json psnr0)
+    root=$(json_field info.json root_level)
+    mips=$(json_field info.json root_mips)
+
+    # Level 0, whole.
+    run export "$s" -o l0.png
+    expect_rc "export $f level 0" 0
+    check_size "export $f level 0" l0.png "$w $h $c"
+
+    # The exported pixels are exactly what the encoder measured: idiff's
+    # PSNR against the input brought to 8 bits equals the stored psnr0.
+    case $f in
+    *.exr)
+        # Float input: clip to [0,1] and sRGB-encode like the encoder
+        # (docs/FORMAT.md).  The root-only store is lossless, so only
+        # the curve's rounding may differ: at most one code value.
+        oiiotool "$TESTDATA/$f" --clamp:min=0:max=1 \
+            --colorconvert linear sRGB -d uint8 -o ref8.png
+        check "export $f: within 1/255 of the sRGB-encoded input" \
+            idiff -q -fail 0.0040 -failpercent 0 ref8.png l0.png
+        ;;
+    *)
+        oiiotool "$TESTDATA/$f" -d uint8 -o ref8.png
+        p=$(idiff_psnr ref8.png l0.png)
+        if close_to "$p" "$psnr0" 0.01; then
+            ok "export $f: decoded PSNR $p = stored psnr0 $psnr0"
+        else
+            not_ok "export $f: decoded PSNR '$p' != stored psnr0 '$psnr0'"
+        fi
+        ;;
+    esac
+
+    # A sub-region, as TIFF; it must equal the same cut of level 0.
+    rx=$((w / 3)) ry=$((h / 4)) rw=$((w / 2)) rh=$((h / 3))
+    run export "$s" --region "$rx,$ry,$rw,$rh" -o region.tif
+    expect_rc "export $f region $rx,$ry,$rw,$rh to .tif" 0
+    check_size "export $f region" region.tif "$rw $rh $c"
+    oiiotool l0.png --cut "${rw}x${rh}+${rx}+${ry}" -o cut.png
+    check "export $f region equals the cut of level 0" \
+        idiff -q -fail 0 cut.png region.tif
+
+    # The first root mip (half the root) and the last one (1x1).
+    # The root level's size, from the per-level list of the JSON.
+    set -- $(grep -o "{\"level\":$root,\"width\":[0-9]*,\"height\":[0-9]*" info.json |
+        sed 's/.*"width":\([0-9]*\),"height":\([0-9]*\)/\1 \2/')
+    [ $# -eq 2 ] || bail "no root level $root in $(cat info.json)"
+    mw=$(( ($1 + 1) / 2 )) mh=$(( ($2 + 1) / 2 ))
+    run export "$s" --level $((root + 1)) -o mip1.png
+    expect_rc "export $f root mip 1 (level $((root + 1)))" 0
+    check_size "export $f root mip 1" mip1.png "$mw $mh $c"
+    last=$((root + mips - 1))
+    run export "$s" -l $last -o mipl.tif
+    expect_rc "export $f last root mip (level $last)" 0
+    check_size "export $f last root mip" mipl.tif "1 1 $c"
+    run export "$s" -l $((last + 1)) -o none.png
+    expect_rc "export $f level past the last" 1
+    expect_err "export $f level past the last: message" "no level $((last + 1))"
+    check "export $f level past the last: no output" test ! -e none.png
+    rm -f l0.png region.tif cut.png mip1.png mipl.tif ref8.png
+done
+
+# A JPEG export opens and has the right size (lossy, so no pixel check).
+run export seeding-640x480.gv --region 10,20,300,200 -o r.jpg
+expect_rc "export to .jpg" 0
+check_size "export to .jpg" r.jpg "300 200 3"
+
+# --------------------------------------------------------- edge sizes
+# synth:WxH[:gray] at sizes around the tile size and far from square.
+# The long thin ones use a low quality to stay fast.
+for spec in "1x1 1 1 3" "513x513 513 513 3" "514x514 514 514 3" \
+    "514x514:gray 514 514 1" "1x70000 1 70000 3" "70000x1:gray 70000 1 1"; do
+    set -- $spec
+    src=$1 w=$2 h=$3 c=$4
+    s=edge.gv
+    rm -f "$s"
+    fast=
+    [ "$w" -gt 1000 ] || [ "$h" -gt 1000 ] && fast="-r 4 -q 30"
+    run encode "synth:$src" -o "$s" --quiet $fast
+    expect_rc "encode synth:$src" 0
+    check "encode synth:$src --quiet: no output at all" \
+        test ! -s "$T/out" -a ! -s "$T/err"
+    run info --json "$s"
+    expect_rc "info synth:$src" 0
+    cp "$T/out" info.json
+    check "info synth:$src: ${w}x$h, $c channels" test \
+        "$(json_field info.json width) $(json_field info.json height) $(json_field info.json channels)" = "$w $h $c"
+    # A region at the far corner of level 0 (the last tile's column/row).
+    rw=$((w < 100 ? w : 100)) rh=$((h < 100 ? h : 100))
+    rx=$((w - rw)) ry=$((h - rh))
+    run export "$s" --region "$rx,$ry,$rw,$rh" -o edge.png
+    expect_rc "export synth:$src region $rx,$ry,$rw,$rh" 0
+    check_size "export synth:$src region" edge.png "$rw $rh $c"
+    run export "$s" --region "$rx,$ry,$((rw + 1)),$rh" -o bad.png
+    expect_rc "export synth:$src region one past the edge" 1
+    expect_err "export synth:$src region one past the edge: message" "outside level 0"
+    check "export synth:$src region one past the edge: no output" test ! -e bad.png
+    if [ "$src" = 1x70000 ]; then
+        # A whole 1x70000 level 0 exports in one piece.
+        run export "$s" -o tall.png
+        expect_rc "export all of a 1x70000 level 0" 0
+        check_size "export 1x70000" tall.png "1 70000 3"
+        rm -f tall.png
+    fi
+    rm -f edge.png
+done
+rm -f edge.gv
+
+# ------------------------------------------------- lossless root stores
+# A store whose level 0 is its root (<= 512 a side) keeps the pixels
+# exactly: export == input, and psnr0 is reported as 99.
+oiiotool --pattern fill:topleft=0,0,0:topright=1,0,0:bottomleft=0,1,0:bottomright=0,0,1 \
+    512x512 3 --noise:type=uniform:min=0:max=0.3:seed=7 -d uint8 -o n512.png ||
+    bail "oiiotool --pattern"
+oiiotool n512.png --ch R -o g512.png || bail "oiiotool --ch"
+oiiotool --pattern constant:color=0.2,0.4,0.6 1x1 3 -d uint8 -o one.png ||
+    bail "oiiotool 1x1"
+for f in n512.png g512.png one.png; do
+    run encode "$f" -o ll.gv --quiet
+    expect_rc "encode $f" 0
+    gv info --json ll.gv >info.json
+    check "$f: psnr0 is 99 (lossless)" test "$(json_field info.json psnr0)" = 99.000
+    run export ll.gv -o back.png
+    expect_rc "export $f" 0
+    check "$f: export is identical to the input" idiff -q -fail 0 "$f" back.png
+    rm -f ll.gv back.png
+done
+# One more than the root size is tiled and lossy, but still right-sized.
+oiiotool n512.png --resize 513x513 -o n513.png
+gv encode n513.png -o t.gv --quiet || bail "encode n513"
+run export t.gv -o back.png
+check_size "513x513 tiled store" back.png "513 513 3"
+p=$(idiff_psnr n513.png back.png)
+check "513x513: decoded PSNR $p = stored psnr0" \
+    close_to "$p" "$(gv info --json t.gv | grep -o '"psnr0":[0-9.]*' | cut -d: -f2)" 0.01
+rm -f t.gv back.png n513.png
+
+# ------------------------------------------------------------- mosaic
+# A 2x2 mosaic of the cut-up image encodes to the very same bytes.
+img="$TESTDATA/seeding-700x520.png"
+oiiotool "$img" --cut 350x260+0+0 -o m00.png &&
+    oiiotool "$img" --cut 350x260+350+0 -o m10.png &&
+    oiiotool "$img" --cut 350x260+0+260 -o m01.png &&
+    oiiotool "$img" --cut 350x260+350+260 -o m11.png || bail "oiiotool --cut"
+run encode --mosaic 2x2 m00.png m10.png m01.png m11.png -o mosaic.gv --quiet
+expect_rc "encode --mosaic 2x2" 0
+check "mosaic store is byte-identical to the whole image's" \
+    cmp -s mosaic.gv seeding-700x520.gv
+# Row-major order matters: swapping two tiles gives a different store.
+run encode -m 2x2 m10.png m00.png m01.png m11.png -o swapped.gv --quiet
+expect_rc "encode a mosaic with two tiles swapped" 0
+check "swapped mosaic differs" test -s swapped.gv -a -n "$(cmp swapped.gv mosaic.gv 2>&1)"
+# Mosaic column widths must agree.
+oiiotool "$img" --cut 340x260+0+0 -o narrow.png
+run encode -m 2x2 m00.png m10.png narrow.png m11.png -o bad.gv
+check "mosaic with a mismatched tile fails" test "$rc" -ne 0 -a "$rc" -ne 2
+check "mosaic with a mismatched tile: message, no output" \
+    test -s "$T/err" -a ! -e bad.gv
+rm -f m??.png narrow.png swapped.gv mosaic.gv
+
+# ------------------------------------------------------- determinism
+# Thread count does not change a byte (several pages and levels).
+run encode synth:2100x1300 -q 30 -r 6 -j 1 -o j1.gv --quiet
+expect_rc "encode -j 1" 0
+run encode synth:2100x1300 -q 30 -r 6 -j 2 -o j2.gv --quiet
+expect_rc "encode -j 2" 0
+check "-j 1 and -j 2 stores are byte-identical" cmp -s j1.gv j2.gv
+run encode "$TESTDATA/seeding-700x520.png" -j 2 -o j2b.gv --quiet
+check "-j 2 on the PNG matches the default run" cmp -s j2b.gv seeding-700x520.gv
+# Re-encoding over an existing store replaces it.
+run encode synth:600x300:gray -o j1.gv --quiet
+expect_rc "encode over an existing store" 0
+gv info --json j1.gv >info.json
+check "the store was replaced" test "$(json_field info.json width)" = 600
+rm -f j1.gv j2.gv j2b.gv
+
+# ----------------------------------------------------------- progress
+run encode synth:1100x700 -o p.gv --progress --quiet
+expect_rc "encode --progress" 0
+check "--progress draws a percentage on stderr" grep -q '%' "$T/err"
+check "--progress --quiet: nothing on stdout" test ! -s "$T/out"
+rm -f p.gv
+
+# ------------------------------------------------------- usage errors
+# Each must exit 2, say something on stderr and create nothing.
+usage_case() {
+    desc=$1
+    shift
+    run "$@"
+    expect_rc "usage: $desc" 2
+    if [ -s "$T/err" ] && [ ! -s "$T/out" ]; then ok "usage: $desc: message on stderr only"; else
+        not_ok "usage: $desc: message on stderr only"; fi
+}
+usage_case "no command"
+usage_case "unknown command" frobnicate
+usage_case "encode without -o" encode synth:10x10
+usage_case "encode without input" encode -o u.gv
+usage_case "encode -r 0" encode -r 0 synth:10x10 -o u.gv
+usage_case "encode -r 13" encode -r 13 synth:10x10 -o u.gv
+usage_case "encode -j 0" encode -j 0 synth:10x10 -o u.gv
+usage_case "encode -j x" encode -j x synth:10x10 -o u.gv
+usage_case "encode -q 0" encode -q 0 synth:10x10 -o u.gv
+usage_case "encode -q 100" encode -q 100 synth:10x10 -o u.gv
+usage_case "encode -q 30dB" encode -q 30dB synth:10x10 -o u.gv
+usage_case "encode --mosaic 2" encode --mosaic 2 synth:10x10 -o u.gv
+usage_case "encode --mosaic 0x1" encode --mosaic 0x1 synth:10x10 -o u.gv
+usage_case "encode --mosaic count mismatch" encode -m 2x1 synth:10x10 -o u.gv
+usage_case "encode two inputs without --mosaic" encode synth:10x10 synth:10x10 -o u.gv
+usage_case "encode --range 5:1" encode --range 5:1 synth:10x10 -o u.gv
+usage_case "encode --range 5" encode --range 5 synth:10x10 -o u.gv
+usage_case "encode --max-pixels 0" encode --max-pixels 0 synth:10x10 -o u.gv
+usage_case "encode unknown option" encode --frobnicate synth:10x10 -o u.gv
+usage_case "info without a store" info
+usage_case "info with two stores" info a.gv b.gv
+usage_case "export without -o" export seeding-640x480.gv
+usage_case "export without a store" export -o u.png
+usage_case "export --level -1" export seeding-640x480.gv -l -1 -o u.png
+usage_case "export --level x" export seeding-640x480.gv -l x -o u.png
+usage_case "export --region 1,2,3" export seeding-640x480.gv --region 1,2,3 -o u.png
+usage_case "export --max-pixels 0" export seeding-640x480.gv --max-pixels 0 -o u.png
+check "usage errors created no file" test ! -e u.gv -a ! -e u.png
+
+for cmd in "" encode info export; do
+    run $cmd --help
+    expect_rc "gigaview $cmd --help" 0
+    check "gigaview $cmd --help: usage on stdout" grep -q "usage: gigaview" "$T/out"
+done
+run --version
+expect_rc "gigaview --version" 0
+check "--version prints the version" grep -Eq '^gigaview [0-9]+\.[0-9]+' "$T/out"
+
+# --------------------------------------------------- run-time errors
+# Exit 1 with a message naming the problem.
+run info missing.gv
+expect_rc "info on a missing store" 1
+expect_err "info on a missing store: message" "missing.gv"
+run info "$TESTDATA/seeding-640x480.jpg"
+expect_rc "info on a JPEG" 1
+expect_err "info on a JPEG: message" "^gigaview info: store: "
+run export seeding-640x480.gv --region 600,0,41,10 -o u.png
+expect_rc "export region past the right edge" 1
+run export seeding-640x480.gv --max-pixels 100 -o u.png
+expect_rc "export over --max-pixels" 1
+expect_err "export over --max-pixels: message" "exceeds the limit"
+run export seeding-640x480.gv -o u.bogusformat
+expect_rc "export to an unknown format" 1
+expect_err "export to an unknown format: message" "unsupported output format"
+check "run-time errors created no file" test ! -e u.png -a ! -e u.bogusformat
+
+check "no stray files left in the work directory" \
+    test -z "$(listing . | grep -v -e '\.gv$' -e '^info\.json$' -e '^n512\.png$' \
+        -e '^g512\.png$' -e '^one\.png$' -e '^r\.jpg$')"
+
+done_testing

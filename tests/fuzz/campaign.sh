@@ -1,0 +1,52 @@
+#!/bin/sh
+# campaign.sh - runs the libFuzzer targets for a while and reports.
+#
+#   tests/fuzz/campaign.sh BUILDDIR [SECONDS-PER-TARGET] [JOBS]
+#
+# BUILDDIR was configured with --enable-fuzzing CC=clang CXX=clang++ (the
+# targets are built here if needed).  Each target starts from a copy of
+# its seed corpus (tests/fuzz/corpus/*, left untouched) in a work
+# directory, runs for SECONDS (default 60), and the script prints the
+# executions done, the corpus growth and any findings (crash-*, leak-*,
+# timeout-*, oom-* files, kept in the work directory with the logs).
+# Add a finding to tests/fuzz/corpus/<target>/ once it is fixed, so that
+# `make check` replays it forever.  Exit 1 when something was found.
+set -u
+build=${1:?usage: campaign.sh BUILDDIR [SECONDS] [JOBS]}
+secs=${2:-60}
+jobs=${3:-1}
+here=$(cd "$(dirname "$0")" && pwd)
+work=${FUZZ_WORK:-$(mktemp -d "${TMPDIR:-/tmp}/gvfuzz.XXXXXX")}
+make -C "$build" tests/fuzz/fuzz_store tests/fuzz/fuzz_tile >/dev/null ||
+    { echo "campaign: cannot build the fuzz targets in $build" >&2; exit 2; }
+found=0
+for t in store tile; do
+    mkdir -p "$work/$t/corpus" "$work/$t/findings"
+    cp "$here/corpus/$t/"* "$work/$t/corpus/"
+    before=$(ls "$work/$t/corpus" | wc -l)
+    dict=
+    [ "$t" = store ] && dict="-dict=$here/store.dict"
+    # -rss_limit_mb: a store claiming a huge image must not make us
+    # allocate for it.  -timeout: one input must never take seconds.
+    (cd "$work/$t/findings" &&
+        "$build/tests/fuzz/fuzz_$t" $dict -max_total_time="$secs" \
+            -max_len=1048576 -rss_limit_mb=2048 -timeout=10 \
+            -jobs="$jobs" -workers="$jobs" -print_final_stats=1 \
+            "$work/$t/corpus" >"$work/$t/log" 2>&1)
+    execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$work/$t/log" |
+        awk '{ s += $1 } END { print s + 0 }')
+    speed=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$work/$t/log" | tail -n 1)
+    after=$(ls "$work/$t/corpus" | wc -l)
+    findings=$(ls "$work/$t/findings" | grep -E '^(crash|leak|timeout|oom|slow-unit)-' || true)
+    echo "fuzz_$t: ${secs}s, $execs executions (${speed:-?}/s), corpus $before -> $after"
+    if [ -n "$findings" ]; then
+        found=1
+        for f in $findings; do
+            echo "  FINDING $work/$t/findings/$f"
+        done
+        grep -E '^(==[0-9]+==ERROR|SUMMARY|.*runtime error)' "$work/$t/log" | head -n 5 |
+            sed 's/^/    /'
+    fi
+done
+echo "logs and corpora in $work"
+exit $found

@@ -1,0 +1,501 @@
+#!/bin/sh
+# http_api.sh - gigaviewd end to end: start it on port 0 over a scratch
+# store directory and drive every route with curl.
+#
+# Covers: the image list and metadata, tiles (bytes, strong ETag, immutable
+# Cache-Control, 304, HEAD, CORS), batches (POST JSON and GET, framing
+# parsed), the root, regions (pixel-equal to `gigaview export`), IIIF
+# (303, info.json, a dozen request forms pixel-compared with `gigaview
+# export` plus oiiotool rotations and flips), /healthz, /metrics, /, every
+# error case (400, 404, 405, 413, 501, traversal ids), a corrupt page (500
+# for exactly that page's tiles while the rest serves), SIGHUP pick-up and
+# drop, SIGTERM drain of a request in flight (exit 0), and `gigaviewd -t`.
+# Needs curl, python3, oiiotool and idiff (openimageio-tools).
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/http_util.sh"
+need_tool oiiotool idiff
+
+S=$T/stores
+mkdir "$S" "$T/w" || bail "mkdir"
+cd "$T/w" || bail "cd"
+
+# Stores: x (3000x2000: levels 0-2 tiled, root 375x250 at level 3) and m
+# (4700x600: level 0 has 10x2 tiles in two pages, for the corrupt-page
+# case).  Encoded once, reused by every check.
+run encode synth:3000x2000 -o "$S/x.gv"
+[ "$rc" -eq 0 ] || bail "encode x: $(cat "$T/err")"
+run encode -q 30 synth:4700x600 -o "$T/m.gv"
+[ "$rc" -eq 0 ] || bail "encode m: $(cat "$T/err")"
+
+cat >"$T/good.conf" <<EOF2
+# test configuration
+listen = 127.0.0.1
+port = 0
+store_dir = "$S"
+threads = 4
+cache_bytes = 8M   # small, but holds every page of x
+max_region_pixels = 4M
+batch_max_tiles = 8
+connection_timeout = 10
+access_log = stderr
+log_level = info
+EOF2
+
+# ---------------------------------------------------------------- -t
+check "-t accepts a good configuration" "$GIGAVIEWD" -t -c "$T/good.conf"
+printf 'port = 0\nstore_dir = "%s"\nbogus_key = 1\n' "$S" >"$T/bad1.conf"
+rc=0
+"$GIGAVIEWD" -t -c "$T/bad1.conf" >/dev/null 2>"$T/err" || rc=$?
+expect_rc "-t rejects an unknown key" 1
+expect_err "-t names file:line of the unknown key" "bad1.conf:3: unknown key 'bogus_key'"
+printf 'threads = 4\nport = 70000\n' >"$T/bad2.conf"
+rc=0
+"$GIGAVIEWD" -t -c "$T/bad2.conf" >/dev/null 2>"$T/err" || rc=$?
+expect_rc "-t rejects a port out of range" 1
+expect_err "-t names file:line of the bad value" "bad2.conf:2: port"
+for bad in "threads = -1" "cache_bytes = 12Q" "max_upscale = nan" \
+    "threads = 99999999999999999999999" "log_level = loud" "no equals sign"; do
+    printf '%s\n' "$bad" >"$T/bad3.conf"
+    rc=0
+    "$GIGAVIEWD" -t -c "$T/bad3.conf" >/dev/null 2>"$T/err" || rc=$?
+    if [ "$rc" -eq 1 ] && grep -q "bad3.conf:1: " "$T/err"; then
+        ok "-t rejects '$bad' with file:line"
+    else
+        not_ok "-t rejects '$bad' (exit $rc)" "$(cat "$T/err")"
+    fi
+done
+rc=0
+"$GIGAVIEWD" -t -c "$T/nonexistent.conf" >/dev/null 2>&1 || rc=$?
+expect_rc "-t on a missing file" 1
+
+# ---------------------------------------------------------------- systemd unit
+# systemd-analyze verify, with ExecStart pointing at the binary under
+# test; any complaint (unknown key, bad value) counts as a failure.
+unit=$(dirname "$0")/../conf/gigaviewd.service
+if ! command -v systemd-analyze >/dev/null 2>&1; then
+    skip "systemd-analyze verify conf/gigaviewd.service" "no systemd-analyze"
+elif [ ! -f "$unit" ]; then
+    not_ok "conf/gigaviewd.service exists"
+else
+    mkdir "$T/unit"
+    sed "s|/usr/local/bin/gigaviewd|$GIGAVIEWD|g" "$unit" >"$T/unit/gigaviewd.service"
+    rc=0
+    systemd-analyze verify "$T/unit/gigaviewd.service" >"$T/unit.out" 2>&1 || rc=$?
+    if [ "$rc" -eq 0 ] && [ ! -s "$T/unit.out" ]; then
+        ok "systemd-analyze verify conf/gigaviewd.service"
+    elif grep -qi "system has not been booted\|failed to connect to bus\|Failed to initialize manager" "$T/unit.out"; then
+        skip "systemd-analyze verify conf/gigaviewd.service" "systemd cannot run here"
+    else
+        not_ok "systemd-analyze verify conf/gigaviewd.service (exit $rc)" "$(cat "$T/unit.out")"
+    fi
+fi
+
+start_daemon "$T/good.conf"
+diag "gigaviewd on port $PORT"
+
+# ---------------------------------------------------------------- list, metadata
+expect_status "GET /v1/images" 200 /v1/images
+check "list names x with its size" test "$(json_get '[(i["id"],i["width"],i["height"],i["levels"]) for i in j["images"]]')" = "[('x', 3000, 2000, 4)]"
+check "CORS header on /v1" test "$(header Access-Control-Allow-Origin)" = "*"
+expect_status "GET /v1/images/x" 200 /v1/images/x
+check "metadata: geometry" test "$(json_get '(j["width"],j["height"],j["channels"],j["tile_size"],j["tile_overlap"],j["tile_step"],j["format_version"],j["root"]["level"],j["root"]["width"],j["root"]["height"])')" = "(3000, 2000, 3, 513, 1, 512, 1, 3, 375, 250)"
+check "metadata: tile grid per level" test "$(json_get '[(l["level"],l["width"],l["height"],l["tiles_x"],l["tiles_y"]) for l in j["levels"]]')" = "[(0, 3000, 2000, 6, 4), (1, 1500, 1000, 3, 2), (2, 750, 500, 2, 1)]"
+check "metadata: IIIF link" test "$(json_get 'j["links"]["iiif"]')" = "http://127.0.0.1:$PORT/iiif/3/x/info.json"
+check "metadata: bpp is a number" test -n "$(json_get '"%.3f" % j["bpp"]')"
+expect_status "HEAD /v1/images/x" 200 /v1/images/x -I
+check "HEAD has no body" cmp -s "$T/b" "$T/h"
+
+# ---------------------------------------------------------------- tiles
+expect_status "tile 0/0/0" 200 /v1/images/x/tiles/0/0/0
+cp "$T/b" t000
+etag=$(header ETag)
+check "tile: Content-Type octet-stream" test "$(header Content-Type)" = "application/octet-stream"
+check "tile: strong ETag" sh -c "echo '$etag' | grep -Eq '^\"[0-9a-f]+-0-0-0\"\$'"
+check "tile: immutable Cache-Control" test "$(header Cache-Control)" = "public, max-age=31536000, immutable"
+check "tile: CORS" test "$(header Access-Control-Allow-Origin)" = "*"
+check "tile: length is a whole number of 32-bit words" test $(( $(wc -c <t000) % 4 )) -eq 0
+# The first byte is r; the length follows from it (docs/FORMAT.md 4).
+check "tile: buffer length matches its r" python3 -c "
+import sys; b=open('t000','rb').read(); r=b[0]
+n = 4*(((8*(1+(2**r)*12) + 66049*r) + 31)//32) if r else 4
+sys.exit(0 if len(b)==n else 1)"
+expect_status "tile 304 on If-None-Match" 304 /v1/images/x/tiles/0/0/0 -H "If-None-Match: $etag"
+check "304 has the ETag" test "$(header ETag)" = "$etag"
+expect_status "tile 200 on another ETag" 200 /v1/images/x/tiles/0/0/0 -H 'If-None-Match: "nope"'
+expect_status "tile HEAD" 200 /v1/images/x/tiles/0/5/3 -I
+check "tile HEAD: no body" cmp -s "$T/b" "$T/h"
+check "tile HEAD: Content-Length" test "$(header Content-Length)" -gt 0
+expect_status "tile 2/1/0" 200 /v1/images/x/tiles/2/1/0
+other=$(header ETag)
+check "ETags differ between tiles" test "$other" != "$etag"
+
+# ---------------------------------------------------------------- batch
+expect_status "batch POST" 200 /v1/images/x/batch -X POST \
+    -H 'Content-Type: application/json' \
+    --data '{"tiles":[[0,0,0],[0,5,3],[2,1,0],[0,99,0],[7,0,0]]}'
+cp "$T/b" batch.bin
+check "batch: Content-Type" test "$(header Content-Type)" = "application/x-gigaview-batch"
+curl -s -o t053 "$(url /v1/images/x/tiles/0/5/3)"
+curl -s -o t210 "$(url /v1/images/x/tiles/2/1/0)"
+cat >parse_batch.py <<'PY'
+import struct, sys
+b = open(sys.argv[1], 'rb').read()
+assert b[:4] == b'GVB1', 'magic'
+n, = struct.unpack_from('<I', b, 4)
+off, out = 8, []
+for i in range(n):
+    level, = struct.unpack_from('<B', b, off)
+    assert b[off+1:off+4] == b'\0\0\0', 'pad'
+    tx, ty, status, length = struct.unpack_from('<IIII', b, off + 4)
+    off += 20
+    data = b[off:off+length]
+    off += (length + 3) // 4 * 4
+    out.append((level, tx, ty, status, data))
+assert off == len(b), 'trailing bytes %d != %d' % (off, len(b))
+for level, tx, ty, status, data in out:
+    print(level, tx, ty, status, len(data))
+    if len(sys.argv) > 2 and status == 200:
+        open('b_%d_%d_%d' % (level, tx, ty), 'wb').write(data)
+PY
+got=$(python3 parse_batch.py batch.bin save 2>&1)
+want="0 0 0 200 $(wc -c <t000 | tr -d ' ')
+0 5 3 200 $(wc -c <t053 | tr -d ' ')
+2 1 0 200 $(wc -c <t210 | tr -d ' ')
+0 99 0 404 0
+7 0 0 404 0"
+if [ "$got" = "$want" ]; then ok "batch framing: statuses and lengths"; else
+    not_ok "batch framing" "got:" "$got" "wanted:" "$want"; fi
+check "batch tile bytes equal single tiles" sh -c 'cmp -s b_0_0_0 t000 && cmp -s b_0_5_3 t053 && cmp -s b_2_1_0 t210'
+expect_status "batch GET" 200 "/v1/images/x/batch?t=0,5,3;2,1,0"
+check "batch GET: immutable" test "$(header Cache-Control)" = "public, max-age=31536000, immutable"
+cp "$T/b" batch2.bin
+check "batch GET framing" test "$(python3 parse_batch.py batch2.bin)" = "0 5 3 200 $(wc -c <t053 | tr -d ' ')
+2 1 0 200 $(wc -c <t210 | tr -d ' ')"
+expect_status "batch: bad JSON" 400 /v1/images/x/batch -X POST --data '{"tiles":[[0,0,0]'
+check "batch: bad JSON message has line and column" grep -q "line 1, column" "$T/b"
+expect_status "batch: not triples" 400 /v1/images/x/batch -X POST --data '{"tiles":[[0,0]]}'
+expect_status "batch: negative index" 400 /v1/images/x/batch -X POST --data '{"tiles":[[0,-1,0]]}'
+expect_status "batch: empty" 400 /v1/images/x/batch -X POST --data '{"tiles":[]}'
+expect_status "batch: over batch_max_tiles" 413 /v1/images/x/batch -X POST \
+    --data '{"tiles":[[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0],[0,0,0]]}'
+head -c 1100000 /dev/zero | tr '\0' ' ' >big.json
+expect_status "batch: body over 1 MiB" 413 /v1/images/x/batch -X POST \
+    -H 'Content-Type: application/json' --data-binary @big.json
+expect_status "batch: chunked body over 1 MiB" 413 /v1/images/x/batch -X POST \
+    -H 'Transfer-Encoding: chunked' --data-binary @big.json
+expect_status "batch GET: malformed t" 400 "/v1/images/x/batch?t=0,0"
+expect_status "batch GET: missing t" 400 "/v1/images/x/batch"
+expect_status "batch: unknown image" 404 /v1/images/nope/batch -X POST --data '{"tiles":[[0,0,0]]}'
+
+# ---------------------------------------------------------------- root
+run export "$S/x.gv" --level 3 -o e_root.png
+expect_status "root PNG" 200 /v1/images/x/root
+cp "$T/b" root.png
+check "root: image/png" test "$(header Content-Type)" = "image/png"
+check "root PNG equals export --level 3" idiff -q e_root.png root.png
+expect_status "root raw" 200 "/v1/images/x/root?format=raw"
+check "root raw: headers" test "$(header X-Width)x$(header X-Height)x$(header X-Channels)" = "375x250x3"
+check "root raw: w*h*c bytes" test "$(wc -c <"$T/b")" -eq $((375 * 250 * 3))
+expect_status "root mip 1" 200 "/v1/images/x/root?mip=1&format=raw"
+check "root mip 1 is 188x125" test "$(header X-Width)x$(header X-Height)" = "188x125"
+expect_status "root: mip out of range" 404 "/v1/images/x/root?mip=10"
+expect_status "root: bad format" 400 "/v1/images/x/root?format=gif"
+
+# ---------------------------------------------------------------- region
+for f in jpeg webp tiff; do
+    req "$(url "/v1/images/x/region?level=2&x=0&y=0&w=200&h=100&format=$f")"
+    got=$(image_size "$T/b")
+    if [ "$code" = 200 ] && [ "$got" = "200 100 3" ] &&
+        [ "$(header Content-Type)" = "image/$f" ]; then
+        ok "region format=$f"
+    else
+        not_ok "region format=$f (status $code, size '$got', $(header Content-Type))"
+    fi
+done
+
+# ---------------------------------------------------------------- IIIF
+req -H 'Accept: application/ld+json' "$(url /iiif/3/x)"
+check "IIIF base URI: 303" test "$code" = 303
+check "IIIF base URI: Location" test "$(header Location)" = "http://127.0.0.1:$PORT/iiif/3/x/info.json"
+expect_status "info.json" 200 /iiif/3/x/info.json
+check "info.json: application/json by default" test "$(header Content-Type)" = "application/json"
+check "info.json: context Link header" sh -c "grep -qi '^Link: <http://iiif.io/api/image/3/context.json>' '$T/h'"
+check "info.json: CORS *" test "$(header Access-Control-Allow-Origin)" = "*"
+check "info.json: fields" test "$(json_get '(j["@context"],j["id"],j["type"],j["protocol"],j["profile"],j["width"],j["height"])')" = "('http://iiif.io/api/image/3/context.json', 'http://127.0.0.1:$PORT/iiif/3/x', 'ImageService3', 'http://iiif.io/api/image', 'level2', 3000, 2000)"
+check "info.json: tiles" test "$(json_get 'j["tiles"]')" = "[{'width': 512, 'height': 512, 'scaleFactors': [1, 2, 4, 8]}]"
+check "info.json: sizes include every level" test "$(json_get '[(s["width"],s["height"]) for s in j["sizes"]][-4:]')" = "[(375, 250), (750, 500), (1500, 1000), (3000, 2000)]"
+check "info.json: limits" test "$(json_get '(j["maxWidth"],j["maxHeight"],j["maxArea"])')" = "(16384, 16384, 16777216)"
+check "info.json: extras" test "$(json_get '(j["extraFormats"], "mirroring" in j["extraFeatures"])')" = "(['webp', 'tif'], True)"
+expect_status "info.json as JSON-LD" 200 /iiif/3/x/info.json -H 'Accept: application/ld+json'
+check "info.json: JSON-LD content type with profile" test "$(header Content-Type)" = 'application/ld+json;profile="http://iiif.io/api/image/3/context.json"'
+
+# Pixel checks.  Each case fetches an image from gigaviewd and builds its
+# reference from `gigaview export` output with oiiotool (crop, rotate,
+# flop, luma); one oiiotool run converts everything to PNM and pnmcmp.py
+# compares them (exactly, or within a tolerance for gray).  Batching the
+# conversions keeps the test fast: each OpenImageIO start costs ~0.3 s.
+run export "$S/x.gv" -o e_l0.png
+run export "$S/x.gv" --level 1 -o e_l1.png
+run export "$S/x.gv" --level 2 -o e_l2.png
+run export "$S/x.gv" --region 512,512,1024,1024 -o e_r1.png
+cat >pnmcmp.py <<'PY'
+import sys
+def pnm(path):
+    b = open(path, 'rb').read()
+    f = b.split(None, 4)
+    assert f[0] in (b'P5', b'P6') and f[3] == b'255', path
+    w, h = int(f[1]), int(f[2])
+    c = 3 if f[0] == b'P6' else 1
+    return w, h, c, b[len(b) - w * h * c:]
+for line in open(sys.argv[1]):
+    desc, got, ref, tol = line.rstrip('\n').split('|')
+    try:
+        g, r = pnm(got), pnm(ref)
+    except Exception as e:
+        print('not ok|%s|cannot read: %s' % (desc, e)); continue
+    if g[:3] != r[:3]:
+        print('not ok|%s|size %dx%dx%d, wanted %dx%dx%d' % ((desc,) + g[:3] + r[:3])); continue
+    d = 0 if g[3] == r[3] else max(abs(x - y) for x, y in zip(g[3], r[3]))
+    print('%s|%s|max difference %d' % ('ok' if d <= int(tol) else 'not ok', desc, d))
+PY
+: >cases
+ocmd=
+ncase=0
+# pix_case DESC PATH TOLERANCE REFERENCE-OIIOTOOL-ARGS...
+pix_case() {
+    ncase=$((ncase + 1))
+    d=$1 p=$2 tol=$3
+    shift 3
+    req "$(url "$p")"
+    if [ "$code" != 200 ] || [ "$(header Content-Type)" != image/png ]; then
+        not_ok "$d: $p (status $code)" "$(head -c 300 "$T/b")"
+        return
+    fi
+    cp "$T/b" "got$ncase.png"
+    ocmd="$ocmd $* -o ref$ncase.pnm got$ncase.png -o got$ncase.pnm"
+    echo "$d: $p|got$ncase.pnm|ref$ncase.pnm|$tol" >>cases
+}
+pix_case "region level 0 across tiles" \
+    "/v1/images/x/region?level=0&x=500&y=300&w=700&h=600" 0 e_l0.png --cut 700x600+500+300
+pix_case "region level 1 at the edge" \
+    "/v1/images/x/region?level=1&x=1200&y=800&w=300&h=200&format=png" 0 e_l1.png --cut 300x200+1200+800
+pix_case "region root level" "/v1/images/x/region?level=3&x=10&y=10&w=100&h=80" 0 \
+    e_root.png --cut 100x80+10+10
+run export "$S/x.gv" --level 5 -o e_l5.png
+pix_case "region root mip" "/v1/images/x/region?level=5&x=0&y=0&w=94&h=63" 0 e_l5.png
+I=/iiif/3/x
+pix_case "IIIF full/max = level 0" $I/full/max/0/default.png 0 e_l0.png
+pix_case "IIIF full/pct:50 = level 1" $I/full/pct:50/0/default.png 0 e_l1.png
+pix_case "IIIF full/w, = level 1 (color)" $I/full/1500,/0/color.png 0 e_l1.png
+pix_case "IIIF full/,h = level 2" $I/full/,500/0/default.png 0 e_l2.png
+pix_case "IIIF full/!w,h = root" "$I/full/!375,375/0/default.png" 0 e_root.png
+pix_case "IIIF full/w,h = root" $I/full/375,250/0/default.png 0 e_root.png
+pix_case "IIIF x,y,w,h/max = export --region" $I/512,512,1024,1024/max/0/default.png 0 e_r1.png
+pix_case "IIIF tile at scale 2" $I/1024,0,1024,1024/512,/0/default.png 0 e_l1.png --cut 512x512+512+0
+pix_case "IIIF tile at scale 4, w,h" $I/512,0,1024,1024/256,256/0/default.png 0 e_l2.png --cut 256x256+128+0
+pix_case "IIIF edge tile at scale 2" $I/2048,1024,952,976/476,/0/default.png 0 e_l1.png --cut 476x488+1024+512
+pix_case "IIIF pct region" $I/pct:10,10,50,50/max/0/default.png 0 e_l0.png --cut 1500x1000+300+200
+pix_case "IIIF square region" $I/square/max/0/default.png 0 e_l0.png --cut 2000x2000+500+0
+pix_case "IIIF rotation 90" $I/0,0,400,300/max/90/default.png 0 e_l0.png --cut 400x300+0+0 --rotate90
+pix_case "IIIF rotation 180" $I/0,0,400,300/max/180/default.png 0 e_l0.png --cut 400x300+0+0 --rotate180
+pix_case "IIIF rotation 270" $I/0,0,400,300/max/270/default.png 0 e_l0.png --cut 400x300+0+0 --rotate270
+pix_case "IIIF mirror" "$I/0,0,400,300/max/!0/default.png" 0 e_l0.png --cut 400x300+0+0 --flop
+pix_case "IIIF mirror then 90" "$I/0,0,400,300/max/!90/default.png" 0 e_l0.png --cut 400x300+0+0 --flop --rotate90
+pix_case "IIIF gray (BT.601 luma, within 1)" $I/0,0,400,300/max/0/gray.png 1 \
+    e_l0.png --cut 400x300+0+0 --chsum:weight=0.299,0.587,0.114
+pix_case "IIIF full/w, = level 2" $I/full/750,/0/default.png 0 e_l2.png
+# shellcheck disable=SC2086
+oiiotool $ocmd >oiio.out 2>&1 || diag "oiiotool: $(tail -n 3 oiio.out)"
+python3 pnmcmp.py cases >cmp.out 2>&1 || diag "pnmcmp: $(tail -n 3 cmp.out)"
+check "every pixel case compared" test "$(wc -l <cmp.out)" -eq "$ncase"
+while IFS='|' read -r verdict desc detail; do
+    if [ "$verdict" = ok ]; then ok "$desc"; else not_ok "$desc" "$detail"; fi
+done <cmp.out
+req "$(url $I/full/max/0/default.tif)"
+cp "$T/b" got.tif
+check "IIIF tif: image/tiff equal to the export" sh -c "test '$(header Content-Type)' = image/tiff && idiff -q e_l0.png got.tif >/dev/null 2>&1"
+req "$(url $I/full/375,250/0/bitonal.png)"
+cp "$T/b" bit.png
+oiiotool bit.png -o bit.pgm 2>/dev/null
+check "IIIF bitonal: one channel, only 0 and 255, both present" python3 -c "
+import sys
+b = open('bit.pgm', 'rb').read()
+assert b[:2] == b'P5'
+px = b[-375 * 250:]
+sys.exit(0 if set(px) == {0, 255} else 1)"
+req "$(url /iiif/3/x/full/max/0/default.jpg)"
+check "IIIF jpg: image/jpeg 3000x2000" test "$code $(header Content-Type) $(image_size "$T/b")" = "200 image/jpeg 3000 2000 3"
+check "IIIF image: CORS *" test "$(header Access-Control-Allow-Origin)" = "*"
+check "IIIF image: canonical and profile Link" sh -c "grep -i '^Link:' '$T/h' | grep -q 'rel=\"canonical\"' && grep -i '^Link:' '$T/h' | grep -q 'level2.json>;rel=\"profile\"'"
+req "$(url /iiif/3/x/full/max/0/default.webp)"
+check "IIIF webp" test "$code $(header Content-Type) $(image_size "$T/b")" = "200 image/webp 3000 2000 3"
+req "$(url '/iiif/3/x/0,0,100,100/%5E200,/0/default.png')"
+check "IIIF ^ upscaling within the limit" test "$code $(image_size "$T/b")" = "200 200 200 3"
+expect_status "IIIF w, beyond the region without ^" 400 '/iiif/3/x/0,0,100,100/200,/0/default.png'
+expect_status "IIIF ^ beyond max_upscale" 400 '/iiif/3/x/0,0,100,100/%5E1000,/0/default.png'
+expect_status "IIIF arbitrary rotation" 501 /iiif/3/x/full/max/45/default.jpg
+expect_status "IIIF unknown quality" 400 /iiif/3/x/full/max/0/sepia.jpg
+expect_status "IIIF bad region" 400 /iiif/3/x/0,0,abc,10/max/0/default.jpg
+expect_status "IIIF zero-size region" 400 /iiif/3/x/0,0,0,10/max/0/default.jpg
+expect_status "IIIF region outside the image" 400 /iiif/3/x/5000,0,10,10/max/0/default.jpg
+expect_status "IIIF zero size" 400 /iiif/3/x/full/0,/0/default.jpg
+expect_status "IIIF negative size" 400 /iiif/3/x/full/-5,/0/default.jpg
+expect_status "IIIF overflowing number" 400 /iiif/3/x/0,0,99999999999999999999,10/max/0/default.jpg
+expect_status "IIIF unknown image" 404 /iiif/3/nope/info.json
+expect_status "IIIF unknown image (request)" 404 /iiif/3/nope/full/max/0/default.jpg
+check "IIIF errors carry CORS *" test "$(header Access-Control-Allow-Origin)" = "*"
+
+# ---------------------------------------------------------------- health, metrics, home
+expect_status "healthz" 200 /healthz
+check "healthz: ok, 1 store, gpu unavailable" test "$(json_get '(j["status"],j["stores"],j["gpu"])')" = "('ok', 1, 'unavailable')"
+expect_status "home page" 200 /
+check "home: HTML listing x" sh -c "grep -q 'text/html' '$T/h' && grep -q '/iiif/3/x/info.json' '$T/b' && grep -qi 'viewer' '$T/b'"
+
+# ---------------------------------------------------------------- errors
+expect_status "tile: level not a number" 400 /v1/images/x/tiles/a/0/0
+expect_status "tile: negative" 400 /v1/images/x/tiles/0/-1/0
+expect_status "tile: overflowing" 400 /v1/images/x/tiles/0/99999999999999999999/0
+expect_status "tile: plus sign" 400 /v1/images/x/tiles/0/+1/0
+expect_status "tile: outside the grid" 404 /v1/images/x/tiles/0/6/0
+expect_status "tile: root level has no tiles" 404 /v1/images/x/tiles/3/0/0
+expect_status "tile: level past the pyramid" 404 /v1/images/x/tiles/39/0/0
+expect_status "tile: unknown image" 404 /v1/images/nope/tiles/0/0/0
+expect_status "unknown image" 404 /v1/images/nope
+expect_status "unknown route" 404 /v2/images
+expect_status "trailing slash" 404 /v1/images/x/
+expect_status "traversal in id (encoded)" 404 '/v1/images/..%2F..%2Fetc%2Fpasswd'
+expect_status "traversal in id (raw)" 404 '/v1/images/../../etc/passwd'
+expect_status "traversal in IIIF id" 404 '/iiif/3/..%2F..%2Fetc%2Fpasswd/info.json'
+expect_status "dot id" 404 '/v1/images/..'
+expect_status "NUL in id" 404 '/v1/images/x%00.gv/root'
+expect_status "method: DELETE image" 405 /v1/images/x -X DELETE
+check "405 has Allow" test "$(header Allow)" = "GET, HEAD"
+expect_status "method: POST tile" 405 /v1/images/x/tiles/0/0/0 -X POST --data x
+expect_status "method: PUT batch" 405 /v1/images/x/batch -X PUT --data x
+check "405 Allow lists GET and POST" test "$(header Allow)" = "GET, HEAD, POST"
+expect_status "CORS preflight" 204 /v1/images/x/batch -X OPTIONS
+expect_status "region: zero width" 400 "/v1/images/x/region?level=0&x=0&y=0&w=0&h=10"
+expect_status "region: negative" 400 "/v1/images/x/region?level=0&x=-1&y=0&w=10&h=10"
+expect_status "region: overflow" 400 "/v1/images/x/region?level=0&x=4294967296&y=0&w=10&h=10"
+expect_status "region: missing h" 400 "/v1/images/x/region?level=0&x=0&y=0&w=10"
+expect_status "region: outside the level" 400 "/v1/images/x/region?level=1&x=1400&y=0&w=200&h=10"
+expect_status "region: no such level" 400 "/v1/images/x/region?level=13&x=0&y=0&w=1&h=1"
+expect_status "region: bad format" 400 "/v1/images/x/region?level=0&x=0&y=0&w=10&h=10&format=bmp"
+expect_status "region: over max_region_pixels" 413 "/v1/images/x/region?level=0&x=0&y=0&w=3000&h=2000"
+expect_status "region: huge" 413 "/v1/images/x/region?level=0&x=0&y=0&w=2000000000&h=2000000000"
+expect_status "daemon still healthy" 200 /healthz
+
+# ---------------------------------------------------------------- SIGHUP, corrupt page
+# m.gv with one byte flipped in the middle of its last page (level 0,
+# page (1,0): tiles 8..9 x 0..1), and a clean copy as m2.
+cp "$T/m.gv" "$S/m2.gv"
+python3 - "$T/m.gv" "$S/bad.gv" <<'PY'
+import struct, sys
+b = bytearray(open(sys.argv[1], 'rb').read())
+index, pages = struct.unpack_from('<QQ', b, 56)
+off, size, crc = struct.unpack_from('<QII', b, index + 16 * (pages - 1))
+b[off + size // 2] ^= 0x55
+open(sys.argv[2], 'wb').write(b)
+PY
+kill -HUP "$DPID"
+i=0
+while [ $i -lt 50 ]; do
+    req "$(url /healthz)"
+    [ "$(json_get 'j["stores"]')" = 3 ] && break
+    sleep 0.1
+    i=$((i + 1))
+done
+check "SIGHUP picks up two added stores" test "$(json_get 'j["stores"]')" = 3
+bad500=
+for ty in 0 1; do
+    for tx in 0 1 2 3 4 5 6 7 8 9; do
+        req "$(url "/v1/images/bad/tiles/0/$tx/$ty")"
+        [ "$code" = 200 ] || bad500="$bad500 $tx,$ty:$code"
+    done
+done
+check "corrupt page: exactly its 4 tiles fail with 500" test "$bad500" = " 8,0:500 9,0:500 8,1:500 9,1:500"
+expect_status "corrupt page: tile again, still 500" 500 /v1/images/bad/tiles/0/9/1
+check "corrupt page: error code names the corruption" test "$(json_get 'j["error"]["code"]')" = corrupt
+expect_status "corrupt page: other levels serve" 200 /v1/images/bad/tiles/1/4/0
+req "$(url "/v1/images/bad/batch?t=0,7,0;0,8,0")"
+check "corrupt page in a batch: 200 then 500" test "$(python3 parse_batch.py "$T/b" | cut -d' ' -f4 | tr '\n' ' ')" = "200 500 "
+expect_status "clean copy serves the same tile" 200 /v1/images/m2/tiles/0/9/1
+expect_status "metrics" 200 /metrics
+check "metrics: text format 0.0.4" test "$(header Content-Type)" = "text/plain; version=0.0.4; charset=utf-8"
+check "metrics: requests by route and status" grep -q '^gigaview_http_requests_total{route="tile",status="200"} [1-9]' "$T/b"
+check "metrics: 404s counted" grep -q '^gigaview_http_requests_total{route="tile",status="404"} [1-9]' "$T/b"
+check "metrics: latency histogram" grep -q '^gigaview_http_request_duration_seconds_bucket{route="tile",le="+Inf"} [1-9]' "$T/b"
+check "metrics: page cache hits" grep -q '^gigaview_page_cache_hits_total [1-9]' "$T/b"
+check "metrics: page cache misses" grep -q '^gigaview_page_cache_misses_total [1-9]' "$T/b"
+check "metrics: page cache bytes" grep -q '^gigaview_page_cache_bytes [1-9]' "$T/b"
+check "metrics: page errors" grep -q '^gigaview_page_errors_total [1-9]' "$T/b"
+check "metrics: open connections" grep -q '^gigaview_open_connections [0-9]' "$T/b"
+check "metrics: stores" grep -q '^gigaview_stores 3$' "$T/b"
+
+# A replaced store gets new ETags; a removed one disappears; requests
+# never see a half-replaced store.
+req "$(url /v1/images/m2/tiles/0/0/0)"
+e1=$(header ETag)
+cp "$S/x.gv" "$S/.m2.tmp.gv"
+mv "$S/.m2.tmp.gv" "$S/m2.gv"
+rm "$S/bad.gv"
+kill -HUP "$DPID"
+i=0
+while [ $i -lt 50 ]; do
+    req "$(url /healthz)"
+    [ "$(json_get 'j["stores"]')" = 2 ] && break
+    sleep 0.1
+    i=$((i + 1))
+done
+expect_status "SIGHUP drops a removed store" 404 /v1/images/bad
+req "$(url /v1/images/m2/tiles/0/0/0)"
+check "replaced store: the new content" cmp -s "$T/b" t000
+check "replaced store: tile served with a new ETag" test "$code" = 200 -a "$(header ETag)" != "$e1"
+req "$(url '/v1/images/a%22b%0A%1b%E2%82%AC')"
+check "log: client strings escaped in the access line" grep -q 'access: 127.0.0.1 "GET /v1/images/a\\x22b\\x0a\\x1b\\xe2\\x82\\xac" 404' "$T/daemon.log"
+check "log: traversal path logged" grep -q 'access: 127.0.0.1 "GET /v1/images/../../etc/passwd" 404' "$T/daemon.log"
+check "log lines carry time pid level module" grep -Eq '^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9:]{8}Z [0-9]+ info catalog: ' "$T/daemon.log"
+
+# ---------------------------------------------------------------- SIGTERM drain
+# A client sends a batch request's headers and half its body, the daemon
+# gets SIGTERM, then the client sends the rest: the request in flight is
+# answered (200) and the daemon exits 0.
+cat >slow.py <<'PY'
+import socket, sys, time
+body = b'{"tiles":[[0,0,0],[0,1,0]]}'
+s = socket.create_connection(('127.0.0.1', int(sys.argv[1])))
+s.sendall(b'POST /v1/images/x/batch HTTP/1.1\r\nHost: t\r\nContent-Type: application/json\r\n'
+          b'Content-Length: %d\r\nConnection: close\r\n\r\n' % len(body) + body[:10])
+open(sys.argv[2], 'w').write('sent\n')
+time.sleep(1.5)
+s.sendall(body[10:])
+data = b''
+while True:
+    chunk = s.recv(65536)
+    if not chunk:
+        break
+    data += chunk
+print(data.split(b'\r\n')[0].decode())
+PY
+python3 slow.py "$PORT" started >slow.out 2>&1 &
+spid=$!
+i=0
+while [ ! -s started ] && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+sleep 0.3
+kill -TERM "$DPID"
+sleep 0.3
+rc=0
+curl -s -o /dev/null --max-time 2 "$(url /healthz)" || rc=$?
+check "SIGTERM: new connections refused while draining" test "$rc" -ne 0
+wait "$spid"
+check "SIGTERM: the request in flight is answered" grep -q '^HTTP/1.1 200' slow.out
+drc=0
+wait "$DPID" || drc=$?
+DPID=
+check "SIGTERM: exit status 0" test "$drc" -eq 0
+check "SIGTERM: drain logged" grep -q 'waiting for 1 requests in flight' "$T/daemon.log"
+if [ "$tap_failed" -ne 0 ]; then
+    diag "daemon log (tail):"
+    diag "$(tail -n 30 "$T/daemon.log")"
+fi
+done_testing

@@ -1,0 +1,89 @@
+#!/bin/sh
+# http_slow.sh - slow clients cannot pin gigaviewd (slowloris).
+#
+# With connection_timeout = 2 and connection_limit = 12, a client opens
+# 8 connections that send half a request and stall.  Well-behaved requests
+# must still be answered promptly, the stalled connections must be closed
+# by the daemon after the timeout, and when stalled connections fill the
+# whole limit, the daemon must recover by itself once they time out.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/http_util.sh"
+
+S=$T/stores
+mkdir "$S" || bail "mkdir"
+run encode synth:600x400 -o "$S/s.gv"
+[ "$rc" -eq 0 ] || bail "encode: $(cat "$T/err")"
+cat >"$T/slow.conf" <<EOF2
+store_dir = "$S"
+threads = 2
+connection_timeout = 2
+connection_limit = 12
+access_log = off
+EOF2
+start_daemon "$T/slow.conf"
+
+cat >"$T/loris.py" <<'PY'
+import socket, sys, time, http.client
+port, n_stall, timeout = int(sys.argv[1]), int(sys.argv[2]), float(sys.argv[3])
+phase = sys.argv[4]
+
+def stall(n):
+    socks = []
+    for i in range(n):
+        s = socket.create_connection(('127.0.0.1', port), timeout=10)
+        s.sendall(b'GET /v1/images/s HTTP/1.1\r\nHost: t\r\nX-Slow: ')
+        socks.append(s)
+    return socks
+
+def good():
+    t0 = time.time()
+    try:
+        c = http.client.HTTPConnection('127.0.0.1', port, timeout=1.5)
+        c.request('GET', '/healthz')
+        r = c.getresponse()
+        r.read()
+        c.close()
+        return r.status, time.time() - t0
+    except Exception as e:
+        return repr(e), time.time() - t0
+
+def closed(s):
+    s.settimeout(0.2)
+    try:
+        return s.recv(1) == b''
+    except socket.timeout:
+        return False
+    except (ConnectionResetError, BrokenPipeError):
+        return True
+
+if phase == 'under':
+    socks = stall(n_stall)
+    time.sleep(0.3)
+    res = [good() for _ in range(5)]
+    print('good', ' '.join('%s:%.2f' % r for r in res))
+    time.sleep(timeout + 2.0)
+    print('closed', sum(closed(s) for s in socks), 'of', len(socks))
+else:  # fill the whole connection limit
+    socks = stall(n_stall)
+    time.sleep(0.3)
+    s, t = good()
+    print('during', s)
+    time.sleep(timeout + 2.0)
+    s, t = good()
+    print('after', s)
+PY
+python3 "$T/loris.py" "$PORT" 8 2 under >"$T/under.out" 2>&1
+diag "$(cat "$T/under.out")"
+check "good requests answered while 8 connections stall" \
+    sh -c "grep '^good' '$T/under.out' | grep -Eq '^good( 200:0\.[0-9]+){5}\$'"
+check "stalled connections closed after the timeout" grep -q '^closed 8 of 8$' "$T/under.out"
+python3 "$T/loris.py" "$PORT" 12 2 fill >"$T/fill.out" 2>&1
+diag "$(cat "$T/fill.out")"
+check "with the limit full, new requests are not served" \
+    sh -c "! grep -q '^during 200' '$T/fill.out'"
+check "the daemon recovers once the stalled ones time out" grep -q '^after 200$' "$T/fill.out"
+req "$(url /metrics)"
+check "open connections back to 0..1" grep -Eq '^gigaview_open_connections [01]$' "$T/b"
+stop_daemon
+check "exit 0 on SIGTERM" test "$drc" -eq 0
+done_testing

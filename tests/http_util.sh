@@ -1,0 +1,107 @@
+# http_util.sh - helpers for the HTTP tests (tests/http_*.sh), on top of
+# lib.sh.  Sourced, not run.
+#
+# start_daemon CONFIG: start gigaviewd with that configuration file on
+# port 0 (under valgrind when VALGRIND is set), wait for its "listening on
+# http://ADDR:PORT/" line and set DPID, PORT and BASE.  The daemon's
+# stderr goes to $T/daemon.log.  stop_daemon sends SIGTERM and waits;
+# the EXIT trap kills a daemon still running, whatever happens.
+# req [CURL ARGS...] URL-PATH: one request; status in $code, headers in
+# $T/h, body in $T/b.
+# Needs curl and python3.
+
+: "${GIGAVIEWD:=$(dirname "$GIGAVIEW")/gigaviewd}"
+need_tool curl python3
+[ -x "$GIGAVIEWD" ] || bail "no gigaviewd next to $GIGAVIEW"
+
+DPID=
+http_cleanup() {
+    if [ -n "$DPID" ] && kill -0 "$DPID" 2>/dev/null; then
+        kill -KILL "$DPID" 2>/dev/null
+        wait "$DPID" 2>/dev/null
+    fi
+    cleanup
+}
+trap http_cleanup EXIT
+
+# gvd ARGS...: the daemon, under valgrind when asked.
+gvd() {
+    if under_valgrind; then
+        exec valgrind -q --error-exitcode=99 --leak-check=full \
+            --errors-for-leak-kinds=definite --show-leak-kinds=definite \
+            "$GIGAVIEWD" "$@"
+    else
+        exec "$GIGAVIEWD" "$@"
+    fi
+}
+
+start_daemon() {
+    : >"$T/daemon.log"
+    (gvd -c "$1" -p 0) 2>>"$T/daemon.log" &
+    DPID=$!
+    PORT=
+    i=0
+    while [ $i -lt 300 ]; do
+        PORT=$(sed -n 's|.*listening on http://.*:\([0-9][0-9]*\)/$|\1|p' \
+            "$T/daemon.log" | head -n 1)
+        [ -n "$PORT" ] && break
+        kill -0 "$DPID" 2>/dev/null || break
+        sleep 0.1
+        i=$((i + 1))
+    done
+    [ -n "$PORT" ] || bail "gigaviewd did not start: $(tail -n 20 "$T/daemon.log")"
+    BASE="http://127.0.0.1:$PORT"
+}
+
+# stop_daemon: SIGTERM, wait; exit status in $drc.
+stop_daemon() {
+    drc=0
+    kill -TERM "$DPID" 2>/dev/null
+    wait "$DPID" || drc=$?
+    DPID=
+}
+
+req() {
+    code=$(curl -sS --path-as-is -o "$T/b" -D "$T/h" -w '%{http_code}' \
+        --max-time 30 "$@" 2>"$T/curl.err") || code=000
+}
+
+# url PATH: the daemon's URL for PATH.
+url() {
+    printf '%s%s' "$BASE" "$1"
+}
+
+# expect_status DESCRIPTION WANT PATH [CURL ARGS...]: request PATH and
+# check the status (and, for an error, the JSON error body).
+expect_status() {
+    d=$1 want=$2 p=$3
+    shift 3
+    req "$@" "$(url "$p")"
+    if [ "$code" != "$want" ]; then
+        not_ok "$d (got $code, wanted $want)" "$(head -c 600 "$T/b")"
+    elif [ "$want" -ge 400 ] && [ -s "$T/b" ] && ! error_body_ok "$want"; then
+        not_ok "$d ($want) but not the JSON error body" "$(head -c 600 "$T/b")"
+    else
+        ok "$d ($want)"
+    fi
+}
+
+# header NAME: the value of response header NAME from the last req.
+header() {
+    tr -d '\r' <"$T/h" | sed -n "s/^$1: //Ip" | tail -n 1
+}
+
+# json_get EXPR: evaluate a Python expression on the parsed body `j`.
+json_get() {
+    python3 -c "import json,sys; j=json.load(open(sys.argv[1])); print($1)" \
+        "$T/b" 2>/dev/null
+}
+
+# error_ok STATUS: the last body is the JSON error shape with that status.
+error_body_ok() {
+    python3 - "$T/b" "$1" <<'PY' 2>/dev/null
+import json, sys
+e = json.load(open(sys.argv[1]))["error"]
+assert e["status"] == int(sys.argv[2]) and e["code"] and e["message"]
+PY
+}

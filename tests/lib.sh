@@ -1,0 +1,137 @@
+# lib.sh - shared helpers for the shell tests (tests/cli_*.sh).
+#
+# Sourced, not run.  Gives every test a TAP stream (ok/not ok lines, plan
+# at the end), a private scratch directory removed on exit, and `gv`, which
+# runs the gigaview binary - under valgrind when VALGRIND is set to
+# anything but "" or 0 (make check VALGRIND=1), so that memory errors and
+# definite leaks fail the test with status 99.
+#
+# Environment (set by make check; defaults let a test run by hand from the
+# build directory): GIGAVIEW, the binary; TESTDATA, tests/data.
+# POSIX sh only: the harness runs the tests with $(SHELL).
+
+set -u
+
+: "${GIGAVIEW:=./gigaview}"
+: "${TESTDATA:=$(cd "$(dirname "$0")" && pwd)/data}"
+: "${VALGRIND:=}"
+export GIGAVIEW TESTDATA VALGRIND
+
+tap_n=0
+tap_failed=0
+
+# ok DESCRIPTION / not_ok DESCRIPTION [DETAIL...]
+ok() {
+    tap_n=$((tap_n + 1))
+    echo "ok $tap_n - $*"
+}
+not_ok() {
+    tap_n=$((tap_n + 1))
+    tap_failed=$((tap_failed + 1))
+    echo "not ok $tap_n - $1"
+    shift
+    for line in "$@"; do
+        printf '%s\n' "$line" | sed 's/^/#   /'
+    done
+}
+# skip DESCRIPTION REASON
+skip() {
+    tap_n=$((tap_n + 1))
+    echo "ok $tap_n - $1 # SKIP $2"
+}
+# check DESCRIPTION COMMAND...: passes when COMMAND exits 0.
+check() {
+    desc=$1
+    shift
+    if "$@"; then ok "$desc"; else not_ok "$desc" "failed: $*"; fi
+}
+# diag TEXT: a TAP comment.
+diag() {
+    printf '%s\n' "$*" | sed 's/^/# /'
+}
+# bail TEXT: stop the whole test (set-up failure).
+bail() {
+    echo "Bail out! $*"
+    exit 99
+}
+# done_testing: print the plan and exit with the verdict.
+done_testing() {
+    echo "1..$tap_n"
+    [ "$tap_failed" -eq 0 ] && exit 0
+    exit 1
+}
+
+under_valgrind() {
+    [ -n "$VALGRIND" ] && [ "$VALGRIND" != 0 ]
+}
+
+# gv ARGS...: run gigaview (under valgrind when asked).
+gv() {
+    if under_valgrind; then
+        valgrind -q --error-exitcode=99 --leak-check=full \
+            --errors-for-leak-kinds=definite --show-leak-kinds=definite \
+            "$GIGAVIEW" "$@"
+    else
+        "$GIGAVIEW" "$@"
+    fi
+}
+
+# run ARGS...: gv with stdout to $T/out, stderr to $T/err, status in $rc.
+# Never fails (so set -e style callers are safe).
+run() {
+    rc=0
+    gv "$@" >"$T/out" 2>"$T/err" || rc=$?
+}
+
+# expect_rc DESCRIPTION WANT: check $rc from the last run.
+expect_rc() {
+    if [ "$rc" -eq "$2" ]; then
+        ok "$1 (exit $2)"
+    else
+        not_ok "$1 (exit $rc, wanted $2)" "stderr: $(head -c 2000 "$T/err")"
+    fi
+}
+
+# expect_err DESCRIPTION PATTERN: stderr of the last run matches the
+# extended regular expression PATTERN.
+expect_err() {
+    if grep -Eq -- "$2" "$T/err"; then
+        ok "$1"
+    else
+        not_ok "$1" "stderr does not match /$2/:" "$(head -c 2000 "$T/err")"
+    fi
+}
+
+# Scratch directory, removed on exit whatever happens.
+T=$(mktemp -d "${TMPDIR:-/tmp}/gvtest.XXXXXX") || bail "mktemp -d failed"
+cleanup() {
+    chmod -R u+w "$T" 2>/dev/null
+    rm -rf "$T"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM HUP
+
+# listing DIR: its entries, one a line (hidden ones included), for
+# "nothing was left behind" checks.
+listing() {
+    ls -A "$1"
+}
+
+# json_field FILE NAME: the first numeric value of "NAME": in FILE.
+json_field() {
+    grep -o "\"$2\":[-0-9.]*" "$1" | head -n 1 | cut -d: -f2
+}
+
+# need_tool TOOL...: bail out unless every TOOL is on PATH.
+need_tool() {
+    for t in "$@"; do
+        command -v "$t" >/dev/null 2>&1 ||
+            bail "$t is needed (see README: apt-get install openimageio-tools)"
+    done
+}
+
+# image_size FILE: "W H C" of an image file, from oiiotool --info.
+image_size() {
+    oiiotool --info "$1" 2>/dev/null |
+        sed -n 's/.*: *\([0-9]*\) x *\([0-9]*\), \([0-9]*\) channel.*/\1 \2 \3/p'
+}
