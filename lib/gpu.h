@@ -54,4 +54,9 @@ unsigned gv_gpu_program(const struct gv_gpu *g, const char *vertex,
                         const char *fragment, char **listing,
                         struct gv_error *err);
 
+/* Compile and link a compute program from a shared GLSL body, as
+ * gv_gpu_program does.  GL thread only; returns 0 on failure. */
+unsigned gv_gpu_compute_program(const struct gv_gpu *g, const char *compute,
+                                char **listing, struct gv_error *err);
+
 #endif

@@ -18,12 +18,14 @@
 #include "shaders.h"
 #include "store_format.h"
 #include "tile.h"
+#include "tile_rans.h"
 
 struct gv_gpu_decoder {
     struct gv_gpu *gpu;
     int channels;
-    GLuint decode, quarter, fbo, vao, ssbo;
+    GLuint decode, quarter, rans, fbo, vao, ssbo, indices;
     GLint dec_parent, dec_quadrant, dec_channels, q_parent, q_quadrant;
+    GLint rans_rate, rans_tables;
 };
 
 struct job {
@@ -53,7 +55,10 @@ static int setup(void *arg, struct gv_error *err)
     if (d->decode)
         d->quarter = gv_gpu_program(d->gpu, gv_shader_fullscreen_vert,
                                     gv_shader_quarter_copy_frag, &listing, err);
-    if (!d->decode || !d->quarter) {
+    if (d->quarter)
+        d->rans = gv_gpu_compute_program(d->gpu, gv_shader_rans_decode_comp,
+                                         &listing, err);
+    if (!d->decode || !d->quarter || !d->rans) {
         /* Our own shader failing is a bug or a broken driver: show why. */
         if (listing)
             fprintf(stderr, "%s", listing);
@@ -65,9 +70,16 @@ static int setup(void *arg, struct gv_error *err)
     d->dec_channels = glGetUniformLocation(d->decode, "u_channels");
     d->q_parent = glGetUniformLocation(d->quarter, "u_parent");
     d->q_quadrant = glGetUniformLocation(d->quarter, "u_quadrant");
+    d->rans_rate = glGetUniformLocation(d->rans, "u_rate");
+    d->rans_tables = glGetUniformLocation(d->rans, "u_tables");
     glGenFramebuffers(1, &d->fbo);
     glGenVertexArrays(1, &d->vao);
     glGenBuffers(1, &d->ssbo);
+    glGenBuffers(1, &d->indices);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, GV_NBLOCKS * sizeof(GLuint), NULL,
+                 GL_DYNAMIC_COPY);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->indices);
     return gl_failed(err, "decoder set-up");
 }
 
@@ -97,6 +109,10 @@ static int teardown(void *arg, struct gv_error *err)
         glDeleteProgram(d->decode);
     if (d->quarter)
         glDeleteProgram(d->quarter);
+    if (d->rans)
+        glDeleteProgram(d->rans);
+    if (d->indices)
+        glDeleteBuffers(1, &d->indices);
     if (d->fbo)
         glDeleteFramebuffers(1, &d->fbo);
     if (d->vao)
@@ -204,6 +220,17 @@ static int decode(void *arg, struct gv_error *err)
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->ssbo);
     glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)j->len, j->buf, GL_STREAM_DRAW);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->indices);
+    if (j->buf[0] & GV_TILE_ENTROPY) {
+        /* Entropy-coded indices: one compute invocation per row of blocks
+         * decodes them into the index buffer first. */
+        const int rate = j->buf[0] & 0x0f;
+        glUseProgram(d->rans);
+        glUniform1i(d->rans_rate, rate);
+        glUniform1i(d->rans_tables, (GLint)gv_rans_tables_offset(rate, d->channels));
+        glDispatchCompute((GV_BLOCKS + 63) / 64, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
     glUseProgram(d->decode);
     glUniform1i(d->dec_parent, 0);
     glUniform2i(d->dec_quadrant, j->qx, j->qy);

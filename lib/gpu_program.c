@@ -50,45 +50,80 @@ static GLuint compile(GLenum type, const char *src, char **listing,
     if (listing)
         *listing = number_lines(src, log);
     gv_fail(err, GV_EINVAL, "gpu: %s shader does not compile: %.200s",
-            type == GL_VERTEX_SHADER ? "vertex" : "fragment", log);
+            type == GL_VERTEX_SHADER ? "vertex" :
+            type == GL_COMPUTE_SHADER ? "compute" : "fragment", log);
     glDeleteShader(sh);
     return 0;
+}
+
+static const char *version_head(const struct gv_gpu *g)
+{
+    return gv_gpu_info(g)->es ? "#version 310 es\n#define GV_SSBO 1\n"
+                              : "#version 430 core\n#define GV_SSBO 1\n";
+}
+
+static char *with_head(const char *head, const char *body)
+{
+    char *s = malloc(strlen(head) + strlen(body) + 1);
+    if (s)
+        strcat(strcpy(s, head), body);
+    return s;
+}
+
+static GLuint link(GLuint prog, const char *shown, char **listing,
+                   struct gv_error *err)
+{
+    glLinkProgram(prog);
+    GLint ok = 0;
+    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
+    if (ok)
+        return prog;
+    char log[4096] = "";
+    glGetProgramInfoLog(prog, sizeof log, NULL, log);
+    if (listing)
+        *listing = number_lines(shown, log);
+    gv_fail(err, GV_EINVAL, "gpu: program does not link: %.200s", log);
+    glDeleteProgram(prog);
+    return 0;
+}
+
+unsigned gv_gpu_compute_program(const struct gv_gpu *g, const char *compute,
+                                char **listing, struct gv_error *err)
+{
+    char *cs = with_head(version_head(g), compute);
+    GLuint c = 0, prog = 0;
+    if (!cs) {
+        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        return 0;
+    }
+    if ((c = compile(GL_COMPUTE_SHADER, cs, listing, err))) {
+        prog = glCreateProgram();
+        glAttachShader(prog, c);
+        prog = link(prog, cs, listing, err);
+        glDeleteShader(c);
+    }
+    free(cs);
+    return prog;
 }
 
 unsigned gv_gpu_program(const struct gv_gpu *g, const char *vertex,
                         const char *fragment, char **listing,
                         struct gv_error *err)
 {
-    const struct gv_gpu_info *in = gv_gpu_info(g);
-    const char *head = in->es ? "#version 310 es\n#define GV_SSBO 1\n"
-                              : "#version 430 core\n#define GV_SSBO 1\n";
-    char *vs = malloc(strlen(head) + strlen(vertex) + 1);
-    char *fs = malloc(strlen(head) + strlen(fragment) + 1);
+    char *vs = with_head(version_head(g), vertex);
+    char *fs = with_head(version_head(g), fragment);
     GLuint prog = 0, v = 0, f = 0;
     if (!vs || !fs) {
         gv_fail(err, GV_ENOMEM, "gpu: out of memory");
         goto out;
     }
-    strcat(strcpy(vs, head), vertex);
-    strcat(strcpy(fs, head), fragment);
     if (!(v = compile(GL_VERTEX_SHADER, vs, listing, err)) ||
         !(f = compile(GL_FRAGMENT_SHADER, fs, listing, err)))
         goto out;
     prog = glCreateProgram();
     glAttachShader(prog, v);
     glAttachShader(prog, f);
-    glLinkProgram(prog);
-    GLint ok = 0;
-    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = "";
-        glGetProgramInfoLog(prog, sizeof log, NULL, log);
-        if (listing)
-            *listing = number_lines(fs, log);
-        gv_fail(err, GV_EINVAL, "gpu: program does not link: %.200s", log);
-        glDeleteProgram(prog);
-        prog = 0;
-    }
+    prog = link(prog, fs, listing, err);
 out:
     if (v)
         glDeleteShader(v);

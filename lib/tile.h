@@ -24,7 +24,13 @@
 
 #include "error.h"
 
-/* Bytes of a tile buffer at index width `rate` (0..GV_MAX_RATE). */
+/* The largest tile buffer: gv_tilebuf_size(GV_MAX_RATE, 3) (checked by
+ * tests/test_tile.c).  Entropy-coded buffers are only ever written when
+ * smaller than the fixed layout at the same rate. */
+#define GV_TILEBUF_MAX 148228
+
+/* Bytes of a fixed-layout tile buffer at index width `rate`
+ * (0..GV_MAX_RATE). */
 size_t gv_tilebuf_size(int rate, int channels);
 
 /*

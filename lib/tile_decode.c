@@ -7,10 +7,12 @@
  * (b >> 5), the view a GPU takes.  The stream starts right after the
  * codebook, at bit 8 * (1 + 2^r * 4 * channels).
  */
+#include <stdlib.h>
 #include <string.h>
 
 #include "geometry.h"
 #include "tile.h"
+#include "tile_rans.h"
 
 size_t gv_tilebuf_size(int rate, int channels)
 {
@@ -29,10 +31,11 @@ int gv_tilebuf_check(const uint8_t *buf, size_t len, int channels,
     if (len < 4 || (len & 3))
         return gv_fail(err, GV_ECORRUPT, "tile: buffer of %zu bytes is not a "
                        "positive multiple of 4", len);
-    int rate = buf[0];
-    if (rate > GV_MAX_RATE)
-        return gv_fail(err, GV_ECORRUPT, "tile: index width %d above %d",
-                       rate, GV_MAX_RATE);
+    int rate = buf[0] & 0x0f;
+    if ((buf[0] & 0x70) || rate > GV_MAX_RATE || (rate == 0 && buf[0]))
+        return gv_fail(err, GV_ECORRUPT, "tile: bad rate byte 0x%02x", buf[0]);
+    if (buf[0] & GV_TILE_ENTROPY)
+        return gv_rans_check(buf, len, rate, channels, err) < 0 ? -1 : rate;
     size_t want = gv_tilebuf_size(rate, channels);
     if (len != want)
         return gv_fail(err, GV_ECORRUPT, "tile: %zu bytes where rate %d needs "
@@ -69,6 +72,16 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
     int rate = gv_tilebuf_check(buf, len, channels, err);
     if (rate < 0)
         return -1;
+    uint16_t *coded = NULL;
+    if (buf[0] & GV_TILE_ENTROPY) {
+        coded = malloc(GV_NBLOCKS * sizeof *coded);
+        if (!coded)
+            return gv_fail(err, GV_ENOMEM, "tile: out of memory");
+        if (gv_rans_unpack(buf, len, rate, channels, coded, err) < 0) {
+            free(coded);
+            return -1;
+        }
+    }
     gv_predict(parent, channels, qx, qy, out);
     if (rate == 0)
         return 0;
@@ -77,8 +90,8 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
     const size_t row = (size_t)GV_TILE * channels;
     for (uint32_t by = 0; by < GV_BLOCKS; by++) {
         for (uint32_t bx = 0; bx < GV_BLOCKS; bx++) {
-            uint32_t idx = gv_tilebuf_index(buf, rate, channels,
-                                            by * GV_BLOCKS + bx);
+            uint32_t k = by * GV_BLOCKS + bx;
+            uint32_t idx = coded ? coded[k] : gv_tilebuf_index(buf, rate, channels, k);
             const int8_t *cv = book + (size_t)idx * dim;
             for (int j = 0; j < 4; j++) {
                 uint32_t x = 2 * bx + (j & 1), y = 2 * by + (j >> 1);
@@ -90,5 +103,6 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
             }
         }
     }
+    free(coded);
     return 0;
 }

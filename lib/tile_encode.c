@@ -18,6 +18,7 @@
 
 #include "geometry.h"
 #include "tile.h"
+#include "tile_rans.h"
 #include "vq.h"
 
 #define SAMPLE_MIN 4096   /* blocks sampled for training at small rates */
@@ -32,6 +33,7 @@ struct gv_tile_workspace {
     uint32_t dist[GV_NBLOCKS];
     uint16_t best_idx[GV_NBLOCKS];   /* rate-distortion mode: best so far */
     int8_t best_book[VQ_MAXK * VQ_MAXDIM];
+    uint8_t scratch[GV_TILEBUF_MAX]; /* sizing candidate rates (--rd) */
     struct vq_trainer trainer;
 };
 
@@ -131,6 +133,21 @@ static void pack_buffer(uint8_t *buf, size_t len, int rate, int channels,
     }
 }
 
+/* Write the smaller of the two layouts (fixed-width or entropy-coded
+ * indices) into buf; returns its length. */
+static size_t pack_best(uint8_t *buf, int rate, int channels,
+                        const int8_t *book, const uint16_t *idx)
+{
+    size_t fixed = gv_tilebuf_size(rate, channels);
+    if (rate > 0) {
+        size_t coded = gv_rans_pack(idx, rate, channels, book, buf, fixed - 4);
+        if (coded)
+            return coded;
+    }
+    pack_buffer(buf, fixed, rate, channels, book, idx);
+    return fixed;
+}
+
 /* Shuffle the valid blocks once; training samples are a growing prefix. */
 static uint32_t shuffle_valid(struct gv_tile_workspace *ws, uint32_t valid_w,
                               uint32_t valid_h, uint64_t seed)
@@ -193,7 +210,8 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
         vq_nearest(&t->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
         uint64_t sse = reconstruct(ws, orig, t->book, rate, channels, valid_w,
                                    valid_h, recon);
-        double j = (double)sse + params->lambda * 8.0 * gv_tilebuf_size(rate, channels);
+        size_t bytes = pack_best(ws->scratch, rate, channels, t->book, ws->idx);
+        double j = (double)sse + params->lambda * 8.0 * (double)bytes;
         if (j < best_j) {
             best_j = j;
             best_rate = rate;
@@ -207,8 +225,7 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
     }
     memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
     reconstruct(ws, orig, ws->best_book, best_rate, channels, valid_w, valid_h, recon);
-    size_t len = gv_tilebuf_size(best_rate, channels);
-    pack_buffer(buf, len, best_rate, channels, ws->best_book, ws->idx);
+    size_t len = pack_best(buf, best_rate, channels, ws->best_book, ws->idx);
     stats->rate = best_rate;
     stats->sse = best_sse;
     return len;
@@ -263,9 +280,7 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
         if ((double)sse <= budget || rate == max_rate) {
             stats->rate = rate;
             stats->sse = sse;
-            size_t len = gv_tilebuf_size(rate, channels);
-            pack_buffer(buf, len, rate, channels, t->book, ws->idx);
-            return len;
+            return pack_best(buf, rate, channels, t->book, ws->idx);
         }
     }
     /* Not reached: the loop returns at max_rate. */

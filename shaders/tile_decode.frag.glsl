@@ -7,7 +7,10 @@
 // GLSL 4.30), "#define GV_SSBO 1"; WebGL2 (GLSL ES 3.00) reads the tile
 // buffer from an R32UI texture instead, GV_WORDS_WIDTH words per row.
 // Integer arithmetic only: the parent is an RGBA8UI texture read with
-// texelFetch, so no filtering or float rounding takes part.
+// texelFetch, so no filtering or float rounding takes part.  Entropy-coded
+// tiles (byte 0 bit 7) need their indices decoded first by
+// rans_decode.comp.glsl (storage buffers only; WebGL2 clients are served
+// the fixed layout, see docs/FORMAT.md section 4.1).
 
 precision highp float;
 precision highp int;
@@ -20,6 +23,8 @@ uniform int u_channels;        // 1 (gray: R, replicated on output) or 3
 #ifdef GV_SSBO
 layout(std430, binding = 0) readonly buffer TileWords { uint words[]; };
 uint word_at(int i) { return words[i]; }
+// Indices of an entropy-coded tile, decoded by rans_decode.comp.glsl.
+layout(std430, binding = 1) readonly buffer Indices { uint indices[]; };
 #else
 uniform usampler2D u_words;    // tile buffer as R32UI, GV_WORDS_WIDTH wide
 uniform int u_words_width;
@@ -75,11 +80,17 @@ void main()
     ivec3 pred = clamp(s + 8192, 0, 255 * 16384 + 16383) >> 14;
 
     ivec3 res = ivec3(0);
-    int r = byte_at(0);
+    int r = byte_at(0) & 15;
     if (r > 0) {
         int dim = 4 * u_channels;
         int block = (uv.y >> 1) * 257 + (uv.x >> 1);
-        int idx = bits_at(8 * (1 + (1 << r) * dim) + block * r, r);
+        int idx;
+#ifdef GV_SSBO
+        if ((byte_at(0) & 128) != 0)
+            idx = int(indices[block]);
+        else
+#endif
+            idx = bits_at(8 * (1 + (1 << r) * dim) + block * r, r);
         int at = 1 + idx * dim + ((uv.y & 1) * 2 + (uv.x & 1)) * u_channels;
         for (int c = 0; c < 3; c++) {
             if (c < u_channels) {

@@ -54,7 +54,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     above = malloc(sizeof *above);
     if (gv_gpu_upload_tile(gd, root, &above[0], &err) < 0)
         fail("upload: %s", err.text);
-    int tiles = 0, mismatched = 0, quarter_bad = 0, rates[16] = {0};
+    int tiles = 0, mismatched = 0, quarter_bad = 0, rates[16] = {0}, coded = 0;
     for (int k = g->root - 1; k >= 0; k--) {
         const struct gv_level *l = &g->level[k];
         cur = malloc(sizeof *cur * l->tiles_x * l->tiles_y);
@@ -67,7 +67,8 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
                     gv_page_tile(page, plen, c, (int)(tx % 8), (int)(ty % 8), &buf,
                                  &tlen, &err) < 0)
                     fail("tile %d/%u/%u: %s", k, tx, ty, err.text);
-                rates[buf[0]]++;
+                rates[buf[0] & 0x0f]++;
+                coded += (buf[0] & 0x80) != 0;
                 uint32_t h;
                 if (gv_gpu_decode_tile(gd, buf, tlen, above[(ty / 2) * above_w + tx / 2],
                                        (int)(tx & 1), (int)(ty & 1), &h, &err) < 0)
@@ -113,8 +114,9 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
             snprintf(rs + strlen(rs), sizeof rs - strlen(rs), " r%d:%d", q, rates[q]);
     const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
     check(mismatched == 0 && quarter_bad == 0 && tiles > 0,
-          "%s: %d tiles (%s) decode identically on the GPU (%d differ, %d mip-1 rows differ)",
-          name, tiles, rs + 1, mismatched, quarter_bad);
+          "%s: %d tiles (%s; %d entropy-coded) decode identically on the GPU "
+          "(%d differ, %d mip-1 rows differ)", name, tiles, rs + 1, coded,
+          mismatched, quarter_bad);
     free(px);
     free(quarter);
     gv_gpu_decoder_free(gd);

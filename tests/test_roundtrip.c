@@ -107,7 +107,7 @@ static void roundtrip(const char *input, double psnr, int max_rate)
                 if (gv_store_read_page(s, k, tx / 8, ty / 8, &page, &plen, &err) == 0) {
                     if (gv_page_tile(page, plen, c, (int)(tx % 8), (int)(ty % 8), &buf,
                                      &tlen, &err) == 0)
-                        rate = buf[0];
+                        rate = buf[0] & 0x0f;
                     free(page);
                 }
                 uint32_t vw = l->width - tx * 512 < 513 ? l->width - tx * 512 : 513;

@@ -71,7 +71,7 @@ static double psnr(const uint8_t *a, const uint8_t *b, size_t n)
 
 int main(void)
 {
-    tap_plan(26);
+    tap_plan(37);
     const size_t tb = gv_tile_bytes(3);
     uint8_t *parent = malloc(tb), *pred = malloc(tb), *orig = malloc(tb);
     uint8_t *recon = malloc(tb), *dec = malloc(tb);
@@ -123,19 +123,64 @@ int main(void)
               "rate %2d: %zu bytes, every index reads back", r, len);
     }
 
-    /* 3. Encoder and decoder agree at capped rates; rate 0 for a tile the
-     *    prediction already meets. */
+    check(GV_TILEBUF_MAX == gv_tilebuf_size(GV_MAX_RATE, 3), "GV_TILEBUF_MAX is right");
+
+    /* 3. Encoder and decoder agree at capped rates, in both layouts: noise
+     *    gives flat index histograms (fixed layout), a smooth tile with a
+     *    little noise skewed ones (entropy-coded). */
     make_tile(parent, 3, 0);
-    make_tile(orig, 3, 40);
     int rates[] = {1, 3, 6, 8, 10};
-    for (size_t i = 0; i < sizeof rates / sizeof rates[0]; i++) {
-        struct gv_tile_params prm = {.target_mse = 0.01, .max_rate = rates[i], .seed = 1};
+    int noises[] = {40, 6};
+    int entropy_seen = 0, fixed_seen = 0;
+    for (size_t ni = 0; ni < 2; ni++) {
+        make_tile(orig, 3, noises[ni]);
+        for (size_t i = 0; i < sizeof rates / sizeof rates[0]; i++) {
+            struct gv_tile_params prm = {.target_mse = 0.01, .max_rate = rates[i], .seed = 1};
+            struct gv_tile_stats st;
+            size_t len = gv_tile_encode(ws, orig, parent, 1, 1, 3, T, T, &prm, recon, buf, &st);
+            int okdec = gv_tile_decode(buf, len, 3, parent, 1, 1, dec, &err) == 0;
+            int entropy = (buf[0] & 0x80) != 0;
+            entropy_seen += entropy;
+            fixed_seen += !entropy;
+            check(okdec && st.rate == rates[i] && memcmp(dec, recon, tb) == 0 &&
+                  (buf[0] & 0x0f) == rates[i] &&
+                  len <= gv_tilebuf_size(rates[i], 3),
+                  "rate %d, noise %d, %s layout, %zu bytes: decode == encoder "
+                  "reconstruction (%.2f dB)", rates[i], noises[ni],
+                  entropy ? "entropy-coded" : "fixed", len, psnr(orig, dec, tb));
+        }
+    }
+    check(entropy_seen > 0 && fixed_seen > 0, "both layouts occur (%d entropy-coded, %d fixed)",
+          entropy_seen, fixed_seen);
+
+    /* Entropy-coded buffers under attack: every single-byte change in the
+     * tables and streams is either refused or decodes in bounds. */
+    {
+        make_tile(orig, 3, 6);
+        struct gv_tile_params prm = {.target_mse = 0.01, .max_rate = 6, .seed = 3};
         struct gv_tile_stats st;
-        size_t len = gv_tile_encode(ws, orig, parent, 1, 1, 3, T, T, &prm, recon, buf, &st);
-        int okdec = gv_tile_decode(buf, len, 3, parent, 1, 1, dec, &err) == 0;
-        check(okdec && st.rate == rates[i] && memcmp(dec, recon, tb) == 0,
-              "rate %d: decode == encoder reconstruction (%.2f dB)", rates[i],
-              psnr(orig, dec, tb));
+        size_t len = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &prm, recon, buf, &st);
+        uint8_t *copy = malloc(len);
+        int refused = 0, decoded = 0;
+        for (size_t pos = 1 + 64 * 12; pos < len; pos += 7) {
+            memcpy(copy, buf, len);
+            copy[pos] ^= 0x24;
+            if (gv_tile_decode(copy, len, 3, parent, 0, 0, dec, &err) < 0)
+                refused++;
+            else
+                decoded++;
+        }
+        check((buf[0] & 0x80) && refused > 0,
+              "damaged entropy-coded buffers: %d refused, %d decoded, none out of bounds",
+              refused, decoded);
+        int short_ok = gv_tile_decode(buf, len - 4, 3, parent, 0, 0, dec, &err) < 0;
+        check(short_ok, "a truncated entropy-coded buffer is refused: %s", err.text);
+        memcpy(copy, buf, len);
+        copy[0] = 0x80;
+        check(gv_tilebuf_check(copy, len, 3, &err) < 0, "entropy flag at rate 0 is refused");
+        copy[0] = 0x96;
+        check(gv_tilebuf_check(copy, len, 3, &err) < 0, "reserved bits are refused");
+        free(copy);
     }
     gv_predict(parent, 3, 0, 1, orig);
     {
