@@ -14,7 +14,7 @@ gv=${1:?usage: make_corpus.sh GIGAVIEW-BINARY}
 here=$(cd "$(dirname "$0")" && pwd)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-rm -rf "$here/corpus"
+rm -rf "$here/corpus/store" "$here/corpus/tile"
 mkdir -p "$here/corpus/store" "$here/corpus/tile"
 
 # Checkerboards: their roots deflate to almost nothing, so the corpus

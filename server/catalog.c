@@ -1,0 +1,342 @@
+/*
+ * catalog.c - the store directory and its reference-counted images (see
+ * catalog.h).
+ *
+ * The list is a sorted array of image pointers under one mutex; a request
+ * holds the mutex only to find an image and take a reference.  Opening a
+ * store (which validates its header, root and index) happens outside the
+ * lock, so a rescan never stalls requests.  A file is "changed" when its
+ * device, inode, size or mtime differ; stores are immutable and replaced
+ * by rename, so that catches every replacement.
+ */
+#include <dirent.h>
+#include <errno.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "catalog.h"
+#include "log.h"
+#include "store_format.h"
+
+struct catalog {
+    char *dir;
+    size_t decoder_cache;
+    int pool_max;
+    pthread_mutex_t lock;     /* guards items, n, every image's refs */
+    pthread_mutex_t scan_lock;/* one scan at a time */
+    struct image **items;
+    int n;
+    uint64_t next_serial;
+    void (*on_close)(uint64_t, void *);
+    void *on_close_arg;
+};
+
+int catalog_id_valid(const char *id)
+{
+    size_t n = strlen(id);
+    if (n == 0 || n > CATALOG_ID_MAX || id[0] == '.' || strstr(id, ".."))
+        return 0;
+    for (size_t i = 0; i < n; i++) {
+        char ch = id[i];
+        if (!((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
+              (ch >= '0' && ch <= '9') || ch == '.' || ch == '_' || ch == '-'))
+            return 0;
+    }
+    return 1;
+}
+
+struct catalog *catalog_new(const char *dir, size_t decoder_cache, int pool_max)
+{
+    struct catalog *c = calloc(1, sizeof *c);
+    if (!c)
+        return NULL;
+    c->dir = strdup(dir);
+    if (!c->dir) {
+        free(c);
+        return NULL;
+    }
+    c->decoder_cache = decoder_cache;
+    c->pool_max = pool_max > 0 ? pool_max : 1;
+    c->next_serial = 1;
+    pthread_mutex_init(&c->lock, NULL);
+    pthread_mutex_init(&c->scan_lock, NULL);
+    return c;
+}
+
+void catalog_on_close(struct catalog *c, void (*fn)(uint64_t, void *), void *arg)
+{
+    c->on_close = fn;
+    c->on_close_arg = arg;
+}
+
+static void image_destroy(struct image *img)
+{
+    for (int i = 0; i < img->npool; i++)
+        gv_decoder_free(img->pool[i]);
+    free(img->pool);
+    if (img->cat && img->cat->on_close)
+        img->cat->on_close(img->serial, img->cat->on_close_arg);
+    gv_store_close(img->store);
+    free(img);
+}
+
+void image_put(struct image *img)
+{
+    if (!img)
+        return;
+    struct catalog *c = img->cat;
+    pthread_mutex_lock(&c->lock);
+    int last = --img->refs == 0;
+    pthread_mutex_unlock(&c->lock);
+    if (last) {
+        log_msg(LOG_DEBUG, "catalog", "closing %s (instance %llu)", img->id,
+                (unsigned long long)img->serial);
+        image_destroy(img);
+    }
+}
+
+void catalog_free(struct catalog *c)
+{
+    if (!c)
+        return;
+    for (int i = 0; i < c->n; i++)
+        image_put(c->items[i]);
+    free(c->items);
+    pthread_mutex_destroy(&c->lock);
+    pthread_mutex_destroy(&c->scan_lock);
+    free(c->dir);
+    free(c);
+}
+
+static int by_id(const void *a, const void *b)
+{
+    return strcmp((*(struct image *const *)a)->id, (*(struct image *const *)b)->id);
+}
+
+/* Index of id in the sorted array, or -1.  Caller holds the lock. */
+static int find(struct catalog *c, const char *id)
+{
+    int lo = 0, hi = c->n - 1;
+    while (lo <= hi) {
+        int mid = (lo + hi) / 2;
+        int d = strcmp(c->items[mid]->id, id);
+        if (d == 0)
+            return mid;
+        if (d < 0)
+            lo = mid + 1;
+        else
+            hi = mid - 1;
+    }
+    return -1;
+}
+
+static struct image *open_image(struct catalog *c, const char *id,
+                                const char *path, const struct stat *st)
+{
+    struct gv_error err;
+    struct gv_store *s = gv_store_open(path, &err);
+    if (!s) {
+        log_msg(LOG_WARN, "catalog", "skipping %s: %s", path, err.text);
+        return NULL;
+    }
+    struct image *img = calloc(1, sizeof *img);
+    if (!img) {
+        gv_store_close(s);
+        return NULL;
+    }
+    snprintf(img->id, sizeof img->id, "%s", id);
+    img->store = s;
+    img->info = gv_store_info(s);
+    uint8_t h[GV_HEADER_SIZE];
+    gv_header_pack(&img->info->header, h);
+    img->tag = gv_crc32(0, h, sizeof h);
+    img->bytes = (uint64_t)st->st_size;
+    img->dev = (uint64_t)st->st_dev;
+    img->ino = (uint64_t)st->st_ino;
+    img->mtime_ns = (uint64_t)st->st_mtim.tv_sec * 1000000000u +
+                    (uint64_t)st->st_mtim.tv_nsec;
+    img->refs = 1;
+    img->cat = c;
+    return img;
+}
+
+static int same_file(const struct image *img, const struct stat *st)
+{
+    return img->dev == (uint64_t)st->st_dev && img->ino == (uint64_t)st->st_ino &&
+           img->bytes == (uint64_t)st->st_size &&
+           img->mtime_ns == (uint64_t)st->st_mtim.tv_sec * 1000000000u +
+                                (uint64_t)st->st_mtim.tv_nsec;
+}
+
+int catalog_scan(struct catalog *c)
+{
+    pthread_mutex_lock(&c->scan_lock);
+    DIR *d = opendir(c->dir);
+    if (!d) {
+        log_msg(LOG_ERROR, "catalog", "cannot read %s: %s", c->dir,
+                strerror(errno));
+        pthread_mutex_unlock(&c->scan_lock);
+        return -1;
+    }
+    struct image **next = NULL;
+    int n = 0, cap = 0, added = 0, kept = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        size_t len = strlen(e->d_name);
+        if (len <= 3 || strcmp(e->d_name + len - 3, ".gv"))
+            continue;
+        char id[CATALOG_ID_MAX + 1];
+        if (len - 3 > CATALOG_ID_MAX)
+            continue;
+        memcpy(id, e->d_name, len - 3);
+        id[len - 3] = '\0';
+        if (!catalog_id_valid(id)) {
+            if (id[0] != '.') /* hidden files are encoders at work */
+                log_msg(LOG_WARN, "catalog", "skipping %s: not a valid id",
+                        e->d_name);
+            continue;
+        }
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", c->dir, e->d_name);
+        struct stat st;
+        if (stat(path, &st) < 0 || !S_ISREG(st.st_mode))
+            continue;
+        struct image *img = NULL;
+        pthread_mutex_lock(&c->lock);
+        int i = find(c, id);
+        if (i >= 0 && same_file(c->items[i], &st)) {
+            img = c->items[i];
+            img->refs++;
+        }
+        pthread_mutex_unlock(&c->lock);
+        if (img) {
+            kept++;
+        } else {
+            img = open_image(c, id, path, &st);
+            if (!img)
+                continue;
+            added++;
+            log_msg(LOG_INFO, "catalog", "serving %s (%ux%u, %llu bytes)", id,
+                    img->info->geometry.width, img->info->geometry.height,
+                    (unsigned long long)img->bytes);
+        }
+        if (n == cap) {
+            cap = cap ? 2 * cap : 16;
+            struct image **t = realloc(next, (size_t)cap * sizeof *t);
+            if (!t) {
+                image_put(img);
+                break;
+            }
+            next = t;
+        }
+        next[n++] = img;
+    }
+    closedir(d);
+    qsort(next, (size_t)n, sizeof *next, by_id);
+
+    pthread_mutex_lock(&c->lock);
+    for (int i = 0; i < n; i++)
+        if (next[i]->serial == 0)
+            next[i]->serial = c->next_serial++;
+    struct image **old = c->items;
+    int nold = c->n;
+    c->items = next;
+    c->n = n;
+    pthread_mutex_unlock(&c->lock);
+
+    int dropped = 0;
+    for (int i = 0; i < nold; i++) {
+        pthread_mutex_lock(&c->lock);
+        int j = find(c, old[i]->id);
+        int still = j >= 0 && c->items[j] == old[i];
+        pthread_mutex_unlock(&c->lock);
+        if (!still && j >= 0) {
+            log_msg(LOG_INFO, "catalog", "replaced %s (instance %llu by %llu)",
+                    old[i]->id, (unsigned long long)old[i]->serial,
+                    (unsigned long long)c->items[j]->serial);
+        } else if (!still) {
+            dropped++;
+            log_msg(LOG_INFO, "catalog", "no longer serving %s (instance %llu)",
+                    old[i]->id, (unsigned long long)old[i]->serial);
+        }
+        image_put(old[i]);
+    }
+    free(old);
+    log_msg(LOG_INFO, "catalog", "%s: %d images (%d new, %d unchanged, %d dropped)",
+            c->dir, n, added, kept, dropped);
+    pthread_mutex_unlock(&c->scan_lock);
+    return n;
+}
+
+struct image *catalog_get(struct catalog *c, const char *id)
+{
+    if (!catalog_id_valid(id))
+        return NULL;
+    struct image *img = NULL;
+    pthread_mutex_lock(&c->lock);
+    int i = find(c, id);
+    if (i >= 0) {
+        img = c->items[i];
+        img->refs++;
+    }
+    pthread_mutex_unlock(&c->lock);
+    return img;
+}
+
+int catalog_list(struct catalog *c, struct image ***out)
+{
+    pthread_mutex_lock(&c->lock);
+    struct image **a = malloc(((size_t)c->n + 1) * sizeof *a);
+    if (!a) {
+        pthread_mutex_unlock(&c->lock);
+        return -1;
+    }
+    for (int i = 0; i < c->n; i++) {
+        a[i] = c->items[i];
+        a[i]->refs++;
+    }
+    int n = c->n;
+    pthread_mutex_unlock(&c->lock);
+    *out = a;
+    return n;
+}
+
+int catalog_count(struct catalog *c)
+{
+    pthread_mutex_lock(&c->lock);
+    int n = c->n;
+    pthread_mutex_unlock(&c->lock);
+    return n;
+}
+
+struct gv_decoder *image_decoder_get(struct image *img)
+{
+    struct catalog *c = img->cat;
+    struct gv_decoder *d = NULL;
+    pthread_mutex_lock(&c->lock);
+    if (img->npool > 0)
+        d = img->pool[--img->npool];
+    pthread_mutex_unlock(&c->lock);
+    if (!d)
+        d = gv_decoder_new(img->store, c->decoder_cache);
+    return d;
+}
+
+void image_decoder_put(struct image *img, struct gv_decoder *d)
+{
+    if (!d)
+        return;
+    struct catalog *c = img->cat;
+    pthread_mutex_lock(&c->lock);
+    if (!img->pool)
+        img->pool = calloc((size_t)c->pool_max, sizeof *img->pool);
+    if (img->pool && img->npool < c->pool_max) {
+        img->pool[img->npool++] = d;
+        d = NULL;
+    }
+    pthread_mutex_unlock(&c->lock);
+    gv_decoder_free(d);
+}

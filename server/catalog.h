@@ -1,0 +1,88 @@
+/*
+ * catalog.h - the store directory: which images gigaviewd serves.
+ *
+ * An image is one open store (lib/store.h) under an id, the file name
+ * without ".gv".  Ids are restricted to [A-Za-z0-9._-], 1..128 bytes, no
+ * leading dot and no "..", so an id can never name a path outside the
+ * directory.  Images are reference counted: catalog_get hands out a
+ * reference that a request holds while it uses the store, and a rescan
+ * (SIGHUP) that drops or replaces a store only drops the catalog's own
+ * reference, so the store is closed when the last request lets go.
+ *
+ * Each image also keeps a small pool of CPU decoders (lib/decoder.h;
+ * a decoder is single-threaded and borrows the store): a request takes
+ * one with image_decoder_get and returns it with image_decoder_put before
+ * it drops its image reference, so every decoder is freed before its
+ * store is closed.
+ *
+ * Every function is thread-safe.
+ */
+#ifndef GV_SERVER_CATALOG_H
+#define GV_SERVER_CATALOG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "decoder.h"
+#include "store.h"
+
+#define CATALOG_ID_MAX 128
+
+struct image {
+    char id[CATALOG_ID_MAX + 1];
+    struct gv_store *store;            /* read-only after open */
+    const struct gv_store_info *info;
+    uint64_t serial;                   /* unique per opened instance */
+    uint32_t tag;                      /* CRC of the header: ETag seed */
+    uint64_t bytes;                    /* file size */
+    /* private */
+    int refs;
+    uint64_t dev, ino, mtime_ns;
+    struct catalog *cat;
+    struct gv_decoder **pool;
+    int npool;
+};
+
+struct catalog;
+
+/* A catalog over `dir` with decoders caching decoder_cache bytes each and
+ * at most pool_max idle decoders per image.  Does not scan yet. */
+struct catalog *catalog_new(const char *dir, size_t decoder_cache,
+                            int pool_max);
+
+/* Free (every image must have been put back).  NULL does nothing. */
+void catalog_free(struct catalog *c);
+
+/* (Re)scan the directory: open new or changed stores, drop missing ones.
+ * Stores that fail to open are logged and skipped.  Returns the number of
+ * images served afterwards, or -1 if the directory cannot be read (the
+ * old list is kept). */
+int catalog_scan(struct catalog *c);
+
+/* 1 if `id` is a well-formed image id, else 0. */
+int catalog_id_valid(const char *id);
+
+/* A new reference to image `id`, or NULL if there is none. */
+struct image *catalog_get(struct catalog *c, const char *id);
+
+/* Drop a reference from catalog_get or catalog_list.  NULL does nothing. */
+void image_put(struct image *img);
+
+/* References to every image, sorted by id: *out is malloc'ed (free it
+ * after putting each image).  Returns the count, or -1. */
+int catalog_list(struct catalog *c, struct image ***out);
+
+/* Number of images. */
+int catalog_count(struct catalog *c);
+
+/* A decoder for img (from its pool, or new): NULL on allocation failure.
+ * Return it with image_decoder_put while still holding img. */
+struct gv_decoder *image_decoder_get(struct image *img);
+void image_decoder_put(struct image *img, struct gv_decoder *d);
+
+/* Called with the serial of each image when it is finally closed (the
+ * page cache forgets its pages).  Set once before scanning. */
+void catalog_on_close(struct catalog *c, void (*fn)(uint64_t serial, void *),
+                      void *arg);
+
+#endif

@@ -1,0 +1,611 @@
+/*
+ * http.c - libmicrohttpd set-up, routing, per-request state, responses
+ * and the error table (see http.h).
+ *
+ * The daemon runs MHD's internal threads: a pool of cfg->threads threads,
+ * each with its own epoll set, so a handler may block (a page read, a
+ * region render) without stalling other connections on other threads.
+ * MHD_USE_ITC is required by MHD_quiesce_daemon, which SIGTERM uses to
+ * stop accepting while requests in flight finish.
+ */
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "http.h"
+#include "log.h"
+#include "metrics.h"
+#include "routes.h"
+
+/* ---------------------------------------------------------- error table */
+
+static const struct {
+    enum gv_code code;
+    unsigned status;       /* /v1 routes */
+    unsigned iiif_status;  /* IIIF routes: the spec knows no 413 */
+    const char *name;
+} error_table[] = {
+    {GV_OK, 500, 500, "internal"},
+    {GV_EINVAL, 400, 400, "bad_request"},
+    {GV_ENOTFOUND, 404, 404, "not_found"},
+    {GV_ELIMIT, 413, 400, "too_large"},
+    {GV_EFORMAT, 501, 501, "not_implemented"},
+    {GV_ECORRUPT, 500, 500, "corrupt"},
+    {GV_EIO, 500, 500, "io_error"},
+    {GV_ENOSPC, 507, 507, "no_space"},
+    {GV_ENOMEM, 503, 503, "out_of_memory"},
+};
+
+/* ------------------------------------------------------------ responses */
+
+static void add_common_headers(struct req *r, struct MHD_Response *resp)
+{
+    const char *origin = r->iiif ? "*" : r->srv->cfg->cors_origin;
+    if (origin[0]) {
+        MHD_add_response_header(resp, "Access-Control-Allow-Origin", origin);
+        MHD_add_response_header(resp, "Access-Control-Expose-Headers",
+                                "ETag, Link, Location, X-Width, X-Height, "
+                                "X-Channels, X-Level");
+    }
+    MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+}
+
+enum MHD_Result http_send(struct req *r, unsigned status,
+                          struct MHD_Response *resp, size_t body_len)
+{
+    if (!resp) {
+        log_msg(LOG_ERROR, "http", "cannot create a response");
+        r->status = 500;
+        return MHD_NO;
+    }
+    add_common_headers(r, resp);
+    r->status = status;
+    r->bytes = r->head ? 0 : body_len;
+    r->responded = 1;
+    enum MHD_Result ret = MHD_queue_response(r->conn, status, resp);
+    MHD_destroy_response(resp);
+    return ret;
+}
+
+enum MHD_Result http_send_copy(struct req *r, unsigned status,
+                               const char *type, const void *body, size_t len)
+{
+    struct MHD_Response *resp = MHD_create_response_from_buffer(
+        len, (void *)body, MHD_RESPMEM_MUST_COPY);
+    if (resp && type)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, type);
+    return http_send(r, status, resp, len);
+}
+
+enum MHD_Result http_send_owned(struct req *r, unsigned status,
+                                const char *type, void *body, size_t len)
+{
+    struct MHD_Response *resp =
+        MHD_create_response_from_buffer_with_free_callback(len, body, free);
+    if (!resp) {
+        free(body);
+        return http_send(r, status, NULL, 0);
+    }
+    if (type)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, type);
+    return http_send(r, status, resp, len);
+}
+
+enum MHD_Result http_send_json(struct req *r, unsigned status, json_t *json)
+{
+    char *s = json ? json_dumps(json, JSON_COMPACT | JSON_REAL_PRECISION(8)) : NULL;
+    json_decref(json);
+    if (!s)
+        return http_send(r, status, NULL, 0);
+    size_t n = strlen(s);
+    s[n] = '\n'; /* json_dumps leaves room: replace the NUL, length + 1 */
+    return http_send_owned(r, status, "application/json", s, n + 1);
+}
+
+static enum MHD_Result send_error_body(struct req *r, unsigned status,
+                                       const char *code, const char *message,
+                                       const char *allow)
+{
+    json_t *e = json_pack("{s:{s:i,s:s,s:s}}", "error", "status", (int)status,
+                          "code", code, "message", message);
+    char esc[400];
+    log_msg(status >= 500 ? LOG_WARN : LOG_DEBUG, "http", "%u %s: %s", status,
+            code, log_escape(esc, sizeof esc, message));
+    char *s = e ? json_dumps(e, JSON_COMPACT) : NULL;
+    json_decref(e);
+    if (!s)
+        return http_send(r, status, NULL, 0);
+    size_t n = strlen(s);
+    s[n] = '\n';
+    struct MHD_Response *resp =
+        MHD_create_response_from_buffer_with_free_callback(n + 1, s, free);
+    if (!resp) {
+        free(s);
+        return http_send(r, status, NULL, 0);
+    }
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
+                            "application/json");
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    if (allow)
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, allow);
+    return http_send(r, status, resp, n + 1);
+}
+
+enum MHD_Result http_send_error(struct req *r, const struct gv_error *err)
+{
+    size_t i = 0;
+    for (size_t k = 0; k < sizeof error_table / sizeof error_table[0]; k++)
+        if (error_table[k].code == err->code)
+            i = k;
+    unsigned status = r->iiif ? error_table[i].iiif_status : error_table[i].status;
+    return send_error_body(r, status, error_table[i].name,
+                           err->text[0] ? err->text : "internal error", NULL);
+}
+
+enum MHD_Result http_send_errorf(struct req *r, enum gv_code code,
+                                 const char *fmt, ...)
+{
+    struct gv_error err;
+    err.code = code;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err.text, sizeof err.text, fmt, ap);
+    va_end(ap);
+    return http_send_error(r, &err);
+}
+
+enum MHD_Result http_send_status(struct req *r, unsigned status,
+                                 const char *code, const char *message,
+                                 const char *allow)
+{
+    return send_error_body(r, status, code, message, allow);
+}
+
+enum MHD_Result http_send_empty(struct req *r, unsigned status,
+                                const char *header, const char *value)
+{
+    struct MHD_Response *resp =
+        MHD_create_response_from_buffer(0, (void *)"", MHD_RESPMEM_PERSISTENT);
+    if (resp && header)
+        MHD_add_response_header(resp, header, value);
+    return http_send(r, status, resp, 0);
+}
+
+/* ------------------------------------------------------------- requests */
+
+const char *http_header(struct req *r, const char *name)
+{
+    return MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, name);
+}
+
+const char *http_query(struct req *r, const char *name)
+{
+    return MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, name);
+}
+
+int http_parse_u32(const char *s, uint32_t max, uint32_t *out)
+{
+    if (!s || !*s)
+        return -1;
+    uint64_t v = 0;
+    for (const char *p = s; *p; p++) {
+        if (*p < '0' || *p > '9')
+            return -1;
+        v = v * 10 + (uint64_t)(*p - '0');
+        if (v > max)
+            return -1;
+    }
+    *out = (uint32_t)v;
+    return 0;
+}
+
+void http_base_url(struct req *r, char *buf, size_t size)
+{
+    const struct settings *cfg = r->srv->cfg;
+    if (cfg->public_url[0]) {
+        snprintf(buf, size, "%s", cfg->public_url);
+        size_t n = strlen(buf);
+        while (n > 0 && buf[n - 1] == '/')
+            buf[--n] = '\0';
+        return;
+    }
+    const char *host = http_header(r, "Host");
+    int good = host && *host && strlen(host) < 200;
+    for (const char *p = host; good && *p; p++)
+        good = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') ||
+               (*p >= '0' && *p <= '9') || strchr(".-:[]_", *p);
+    if (good)
+        snprintf(buf, size, "http://%s", host);
+    else if (strchr(cfg->listen, ':'))
+        snprintf(buf, size, "http://[%s]:%u", cfg->listen, r->srv->port);
+    else
+        snprintf(buf, size, "http://%s:%u", cfg->listen, r->srv->port);
+}
+
+struct image *http_image(struct req *r, enum MHD_Result *ret)
+{
+    struct image *img = catalog_get(r->srv->catalog, r->param[0]);
+    if (!img) {
+        char esc[160];
+        log_escape(esc, sizeof esc, r->param[0]);
+        *ret = http_send_errorf(r, GV_ENOTFOUND, "no image '%s'", esc);
+    }
+    return img;
+}
+
+int http_authorized(struct req *r)
+{
+    const char *want = r->srv->cfg->auth_token;
+    const char *got = http_header(r, "Authorization");
+    if (!want[0] || !got || strncmp(got, "Bearer ", 7))
+        return 0;
+    got += 7;
+    size_t n = strlen(want), m = strlen(got);
+    /* Constant time in the token's content: always n comparisons. */
+    unsigned char diff = (unsigned char)(n != m);
+    for (size_t i = 0; i < n; i++)
+        diff |= (unsigned char)(want[i] ^ (i < m ? got[i] : 0));
+    return diff == 0;
+}
+
+double http_uptime(const struct server *srv)
+{
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    return (double)(now.tv_sec - srv->started.tv_sec) +
+           (double)(now.tv_nsec - srv->started.tv_nsec) / 1e9;
+}
+
+static int hexval(char c)
+{
+    if (c >= '0' && c <= '9')
+        return c - '0';
+    if (c >= 'a' && c <= 'f')
+        return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F')
+        return c - 'A' + 10;
+    return -1;
+}
+
+/* Split path into segments and match against pattern; on success fill
+ * r->param[] (pointing into r->segbuf).  Returns 1 on a match. */
+static int match(struct req *r, const char *pattern)
+{
+    const char *p = pattern, *u = r->path;
+    const char *params[HTTP_MAX_PARAMS];
+    size_t plen[HTTP_MAX_PARAMS];
+    int np = 0;
+    if (!strcmp(pattern, "/"))
+        return !strcmp(u, "/");
+    while (*p && *u) {
+        if (*p != '/' || *u != '/')
+            return 0;
+        p++;
+        u++;
+        const char *pe = strchr(p, '/'), *ue = strchr(u, '/');
+        size_t pl = pe ? (size_t)(pe - p) : strlen(p);
+        size_t ul = ue ? (size_t)(ue - u) : strlen(u);
+        if (ul == 0)
+            return 0;
+        if (pl == 1 && *p == '*') {
+            if (np == HTTP_MAX_PARAMS)
+                return 0;
+            params[np] = u;
+            plen[np++] = ul;
+        } else if (pl != ul || memcmp(p, u, pl)) {
+            return 0;
+        }
+        p += pl;
+        u += ul;
+    }
+    if (*p || *u)
+        return 0;
+    size_t total = 0;
+    for (int i = 0; i < np; i++)
+        total += plen[i] + 1;
+    free(r->segbuf);
+    r->segbuf = malloc(total + 1);
+    if (!r->segbuf)
+        return 0;
+    char *o = r->segbuf;
+    for (int i = 0; i < np; i++) {
+        memcpy(o, params[i], plen[i]);
+        o[plen[i]] = '\0';
+        r->param[i] = o;
+        o += plen[i] + 1;
+    }
+    r->nparam = np;
+    return 1;
+}
+
+/* Metrics id of a route: the first route with the same name. */
+static int metrics_id(int route)
+{
+    if (route < 0)
+        return -1;
+    for (int i = 0; i < route; i++)
+        if (!strcmp(routes[i].name, routes[route].name))
+            return i;
+    return route;
+}
+
+static enum MHD_Result dispatch(struct req *r)
+{
+    const char *m = r->head ? "GET" : r->method;
+    char allow[64] = "";
+    int found = 0, iiif = 0;
+    for (int i = 0; i < nroutes; i++) {
+        if (!match(r, routes[i].pattern))
+            continue;
+        found = 1;
+        iiif |= routes[i].iiif;
+        if (!strcmp(m, routes[i].method)) {
+            r->route = i;
+            r->iiif = routes[i].iiif;
+            return routes[i].fn(r);
+        }
+        if (!strstr(allow, routes[i].method)) {
+            if (allow[0])
+                strcat(allow, ", ");
+            strcat(allow, routes[i].method);
+            if (!strcmp(routes[i].method, "GET"))
+                strcat(allow, ", HEAD");
+        }
+    }
+    r->iiif = iiif;
+    if (!found)
+        return http_send_errorf(r, GV_ENOTFOUND, "no such resource");
+    if (!strcmp(r->method, "OPTIONS")) { /* CORS preflight */
+        struct MHD_Response *resp = MHD_create_response_from_buffer(
+            0, (void *)"", MHD_RESPMEM_PERSISTENT);
+        if (resp) {
+            char methods[80];
+            snprintf(methods, sizeof methods, "%s, OPTIONS", allow);
+            MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, methods);
+            MHD_add_response_header(resp, "Access-Control-Allow-Methods", methods);
+            MHD_add_response_header(resp, "Access-Control-Allow-Headers",
+                                    "Content-Type, If-None-Match, Authorization");
+            MHD_add_response_header(resp, "Access-Control-Max-Age", "86400");
+        }
+        return http_send(r, 204, resp, 0);
+    }
+    char msg[128];
+    snprintf(msg, sizeof msg, "method not allowed; allowed: %s", allow);
+    return http_send_status(r, 405, "method_not_allowed", msg, allow);
+}
+
+/*
+ * Percent-decoding of the path and the query arguments, in place (MHD's
+ * own, except that "%00" stays undecoded: a NUL would silently cut the
+ * path short in every C string after this point, so "x%00.gv" would name
+ * image "x").  Invalid escapes stay as they are.  Returns the new length.
+ */
+static size_t unescape(void *cls, struct MHD_Connection *conn, char *s)
+{
+    (void)cls;
+    (void)conn;
+    char *o = s;
+    for (const char *p = s; *p; p++) {
+        int hi, lo;
+        if (*p == '%' && (hi = hexval(p[1])) >= 0 && (lo = hexval(p[2])) >= 0 &&
+            (hi | lo) != 0) {
+            *o++ = (char)(hi << 4 | lo);
+            p += 2;
+        } else {
+            *o++ = *p;
+        }
+    }
+    *o = '\0';
+    return (size_t)(o - s);
+}
+
+static void remote_address(struct MHD_Connection *conn, char *buf, size_t size)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+    snprintf(buf, size, "-");
+    if (!ci || !ci->client_addr)
+        return;
+    const struct sockaddr *sa = ci->client_addr;
+    if (sa->sa_family == AF_INET)
+        inet_ntop(AF_INET, &((const struct sockaddr_in *)sa)->sin_addr, buf,
+                  (socklen_t)size);
+    else if (sa->sa_family == AF_INET6)
+        inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)sa)->sin6_addr, buf,
+                  (socklen_t)size);
+}
+
+static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
+                                  const char *url, const char *method,
+                                  const char *version, const char *upload,
+                                  size_t *upload_size, void **req_cls)
+{
+    (void)version;
+    struct req *r = *req_cls;
+    if (!r) { /* first call: headers are in */
+        r = calloc(1, sizeof *r);
+        if (!r)
+            return MHD_NO;
+        r->path = strdup(url);
+        if (!r->path) {
+            free(r);
+            return MHD_NO;
+        }
+        r->srv = cls;
+        r->conn = conn;
+        r->method = method;
+        r->head = !strcmp(method, MHD_HTTP_METHOD_HEAD);
+        r->route = -1;
+        clock_gettime(CLOCK_MONOTONIC, &r->t0);
+        remote_address(conn, r->remote, sizeof r->remote);
+        atomic_fetch_add(&metrics.in_flight, 1);
+        *req_cls = r;
+        /* Refuse an announced oversized body before reading it. */
+        const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
+                                                     "Content-Length");
+        uint32_t n;
+        if (cl && (http_parse_u32(cl, HTTP_MAX_BODY, &n) < 0))
+            return http_send_status(r, 413, "too_large",
+                                    "request body larger than 1 MiB", NULL);
+        return MHD_YES;
+    }
+    if (r->responded)
+        return MHD_YES;
+    if (*upload_size) {
+        size_t n = *upload_size;
+        *upload_size = 0;
+        if (r->body_over || r->body_len + n > HTTP_MAX_BODY) {
+            r->body_over = 1;
+            return MHD_YES;
+        }
+        char *b = realloc(r->body, r->body_len + n + 1);
+        if (!b)
+            return MHD_NO;
+        memcpy(b + r->body_len, upload, n);
+        r->body = b;
+        r->body_len += n;
+        r->body[r->body_len] = '\0';
+        return MHD_YES;
+    }
+    if (r->body_over)
+        return http_send_status(r, 413, "too_large",
+                                "request body larger than 1 MiB", NULL);
+    return dispatch(r);
+}
+
+static void on_completed(void *cls, struct MHD_Connection *conn,
+                         void **req_cls, enum MHD_RequestTerminationCode why)
+{
+    (void)cls;
+    (void)conn;
+    struct req *r = *req_cls;
+    if (!r)
+        return;
+    *req_cls = NULL;
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    uint64_t usec = (uint64_t)(now.tv_sec - r->t0.tv_sec) * 1000000u +
+                    (uint64_t)((now.tv_nsec - r->t0.tv_nsec) / 1000);
+    unsigned status = r->status;
+    if (why != MHD_REQUEST_TERMINATED_COMPLETED_OK && status == 0)
+        status = 499; /* closed before any response, as nginx logs it */
+    log_access(r->remote, r->method, r->path, status,
+               (unsigned long long)r->bytes, (unsigned long long)usec);
+    metrics_record(metrics_id(r->route), status, usec, r->bytes);
+    atomic_fetch_sub(&metrics.in_flight, 1);
+    free(r->segbuf);
+    free(r->body);
+    free(r->path);
+    free(r);
+}
+
+static void on_connection(void *cls, struct MHD_Connection *conn,
+                          void **socket_ctx, enum MHD_ConnectionNotificationCode t)
+{
+    (void)cls;
+    (void)conn;
+    (void)socket_ctx;
+    if (t == MHD_CONNECTION_NOTIFY_STARTED)
+        atomic_fetch_add(&metrics.open_connections, 1);
+    else
+        atomic_fetch_sub(&metrics.open_connections, 1);
+}
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wformat-nonliteral"
+static void mhd_logger(void *cls, const char *fmt, va_list ap)
+{
+    (void)cls;
+    char msg[512];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    size_t n = strlen(msg);
+    while (n > 0 && msg[n - 1] == '\n')
+        msg[--n] = '\0';
+    char esc[600];
+    log_msg(LOG_WARN, "mhd", "%s", log_escape(esc, sizeof esc, msg));
+}
+#pragma GCC diagnostic pop
+
+int http_start(struct server *srv)
+{
+    const struct settings *cfg = srv->cfg;
+    static const char *names[METRICS_ROUTES];
+    for (int i = 0; i < nroutes && i < METRICS_ROUTES - 1; i++)
+        names[i] = routes[i].name;
+    metrics_init(names, nroutes);
+    clock_gettime(CLOCK_MONOTONIC, &srv->started);
+    srv->listen_fd = -1;
+
+    struct sockaddr_storage ss;
+    memset(&ss, 0, sizeof ss);
+    unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL |
+                     MHD_USE_ITC | MHD_USE_ERROR_LOG;
+    struct sockaddr_in *in4 = (struct sockaddr_in *)&ss;
+    struct sockaddr_in6 *in6 = (struct sockaddr_in6 *)&ss;
+    if (inet_pton(AF_INET, cfg->listen, &in4->sin_addr) == 1) {
+        in4->sin_family = AF_INET;
+        in4->sin_port = htons((uint16_t)cfg->port);
+    } else if (inet_pton(AF_INET6, cfg->listen, &in6->sin6_addr) == 1) {
+        in6->sin6_family = AF_INET6;
+        in6->sin6_port = htons((uint16_t)cfg->port);
+        flags |= MHD_USE_IPv6;
+    } else {
+        log_msg(LOG_ERROR, "http", "listen: '%s' is not an IPv4 or IPv6 address",
+                cfg->listen);
+        return -1;
+    }
+    srv->daemon = MHD_start_daemon(
+        flags, (uint16_t)cfg->port, NULL, NULL, on_request, srv,
+        MHD_OPTION_EXTERNAL_LOGGER, mhd_logger, NULL, /* first, MHD insists */
+        MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
+        MHD_OPTION_THREAD_POOL_SIZE, (unsigned)cfg->threads,
+        MHD_OPTION_CONNECTION_LIMIT, (unsigned)cfg->connection_limit,
+        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)cfg->connection_timeout,
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, srv,
+        MHD_OPTION_NOTIFY_CONNECTION, on_connection, srv,
+        MHD_OPTION_UNESCAPE_CALLBACK, unescape, NULL,
+        MHD_OPTION_END);
+    if (!srv->daemon) {
+        log_msg(LOG_ERROR, "http", "cannot listen on %s port %llu (in use, or "
+                "not a local address?)", cfg->listen,
+                (unsigned long long)cfg->port);
+        return -1;
+    }
+    const union MHD_DaemonInfo *di =
+        MHD_get_daemon_info(srv->daemon, MHD_DAEMON_INFO_BIND_PORT);
+    srv->port = di ? di->port : (uint16_t)cfg->port;
+    return 0;
+}
+
+void http_drain_and_stop(struct server *srv, unsigned timeout_s)
+{
+    if (!srv->daemon)
+        return;
+    srv->listen_fd = MHD_quiesce_daemon(srv->daemon);
+    struct timespec t0, now;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    int waited = 0;
+    while (atomic_load(&metrics.in_flight) > 0) {
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        if (now.tv_sec - t0.tv_sec >= (time_t)timeout_s) {
+            log_msg(LOG_WARN, "http", "drain timeout: %d requests cut short",
+                    atomic_load(&metrics.in_flight));
+            break;
+        }
+        if (!waited++)
+            log_msg(LOG_INFO, "http", "waiting for %d requests in flight",
+                    atomic_load(&metrics.in_flight));
+        struct timespec ts = {0, 20 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+    }
+    MHD_stop_daemon(srv->daemon);
+    srv->daemon = NULL;
+    if (srv->listen_fd >= 0)
+        close(srv->listen_fd);
+    srv->listen_fd = -1;
+}

@@ -1,0 +1,132 @@
+/*
+ * http.h - the HTTP layer of gigaviewd over libmicrohttpd.
+ *
+ * http.c owns the daemon (thread pool over epoll, connection limit and
+ * timeout), the access handler that matches a request against the route
+ * table (routes.c) and the per-request state (struct req, kept in
+ * libmicrohttpd's *req_cls and freed in the completion callback, which
+ * also writes the access line and the metrics).  It also owns the one
+ * table that maps a gv_code to an HTTP status and a JSON error body:
+ *
+ *     {"error": {"status": 404, "code": "not_found", "message": "..."}}
+ *
+ * Handlers (route_*.c) build a response with the http_send* helpers,
+ * which add the CORS header, record the status and queue the response.
+ * Every handler runs on a pool thread; struct server is read-only there
+ * except for its thread-safe members (catalog, page cache, metrics).
+ */
+#ifndef GV_SERVER_HTTP_H
+#define GV_SERVER_HTTP_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <time.h>
+
+#include <jansson.h>
+#include <microhttpd.h>
+
+#include "catalog.h"
+#include "settings.h"
+#include "error.h"
+#include "page_cache.h"
+
+struct server {
+    const struct settings *cfg;
+    struct catalog *catalog;
+    struct page_cache *pages;
+    struct MHD_Daemon *daemon;
+    int listen_fd;            /* after quiesce: closed after stop */
+    uint16_t port;
+    struct timespec started;  /* CLOCK_MONOTONIC */
+};
+
+#define HTTP_MAX_PARAMS 8
+#define HTTP_MAX_BODY (1u << 20) /* POST bodies: 1 MiB hard cap */
+
+struct req {
+    struct server *srv;
+    struct MHD_Connection *conn;
+    const char *method;       /* as received; HEAD is routed as GET */
+    char *path;               /* decoded path, owned */
+    int head;                 /* HEAD request: headers only */
+    int route;                /* index in routes[], -1 none */
+    int iiif;                 /* IIIF route: IIIF statuses, CORS "*" */
+    const char *param[HTTP_MAX_PARAMS]; /* the route's '*' segments */
+    int nparam;
+    char *segbuf;             /* storage of param[] */
+    char *body;               /* POST body, NUL-terminated */
+    size_t body_len;
+    int body_over;            /* body exceeded the cap (discarded) */
+    int responded;
+    unsigned status;
+    uint64_t bytes;
+    struct timespec t0;
+    char remote[64];
+};
+
+/* Start serving on cfg's address and port.  Returns 0 (srv->port holds
+ * the bound port) or -1 (logged). */
+int http_start(struct server *srv);
+
+/* Stop accepting, wait up to timeout_s for requests in flight, stop. */
+void http_drain_and_stop(struct server *srv, unsigned timeout_s);
+
+/* ---- helpers for handlers ---- */
+
+/* Queue resp with `status` (adds CORS and common headers, records status
+ * and body size, destroys resp).  resp NULL: 503-style failure, MHD_NO. */
+enum MHD_Result http_send(struct req *r, unsigned status,
+                          struct MHD_Response *resp, size_t body_len);
+
+/* A copy of `len` bytes of body with Content-Type `type`. */
+enum MHD_Result http_send_copy(struct req *r, unsigned status,
+                               const char *type, const void *body, size_t len);
+
+/* A malloc'ed body that the response frees. */
+enum MHD_Result http_send_owned(struct req *r, unsigned status,
+                                const char *type, void *body, size_t len);
+
+/* json: serialized and decref'ed (stolen). */
+enum MHD_Result http_send_json(struct req *r, unsigned status, json_t *json);
+
+/* The JSON error for err->code, through the one error table. */
+enum MHD_Result http_send_error(struct req *r, const struct gv_error *err);
+
+/* Same, built from a code and a message. */
+enum MHD_Result http_send_errorf(struct req *r, enum gv_code code,
+                                 const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* An HTTP-level error that no gv_code stands for (405, 413 body, 401). */
+enum MHD_Result http_send_status(struct req *r, unsigned status,
+                                 const char *code, const char *message,
+                                 const char *allow);
+
+/* A header response with no body (304, 303 with Location). */
+enum MHD_Result http_send_empty(struct req *r, unsigned status,
+                                const char *header, const char *value);
+
+/* Request header / query argument, or NULL. */
+const char *http_header(struct req *r, const char *name);
+const char *http_query(struct req *r, const char *name);
+
+/* Strict unsigned parse: digits only, value <= max.  0 or -1. */
+int http_parse_u32(const char *s, uint32_t max, uint32_t *out);
+
+/* "http://host:port" (or cfg public_url) for absolute links, no trailing
+ * slash.  Only a well-formed Host header is trusted. */
+void http_base_url(struct req *r, char *buf, size_t size);
+
+/* Look up the image named by param[0]: a reference, or NULL after
+ * queueing a 404 (*ret holds the result to return). */
+struct image *http_image(struct req *r, enum MHD_Result *ret);
+
+/* 1 if the request carries "Authorization: Bearer <auth_token>" and a
+ * token is configured (compared in constant time), else 0.  For the write
+ * endpoints (filter graphs) of a later release. */
+int http_authorized(struct req *r);
+
+/* Seconds since the server started. */
+double http_uptime(const struct server *srv);
+
+#endif

@@ -1,0 +1,178 @@
+/*
+ * route_images.c - GET /v1/images (the list), GET /v1/images/{id} (one
+ * image's metadata: geometry, tile grid per level, sizes, links) and
+ * GET /v1/images/{id}/root (the lossless root level or one of its mips,
+ * as PNG or raw samples for GPU clients).
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "geometry.h"
+#include "imageio.h"
+#include "routes.h"
+
+static double bpp(uint64_t bytes, uint64_t pixels)
+{
+    return pixels ? (double)bytes * 8.0 / (double)pixels : 0.0;
+}
+
+enum MHD_Result route_images_list(struct req *r)
+{
+    struct image **imgs;
+    int n = catalog_list(r->srv->catalog, &imgs);
+    if (n < 0)
+        return http_send_errorf(r, GV_ENOMEM, "images: out of memory");
+    json_t *arr = json_array();
+    for (int i = 0; i < n; i++) {
+        const struct gv_geometry *g = &imgs[i]->info->geometry;
+        json_array_append_new(arr, json_pack(
+            "{s:s,s:I,s:I,s:i,s:i,s:I}", "id", imgs[i]->id,
+            "width", (json_int_t)g->width, "height", (json_int_t)g->height,
+            "levels", g->root + 1, "channels", g->channels,
+            "bytes", (json_int_t)imgs[i]->bytes));
+        image_put(imgs[i]);
+    }
+    free(imgs);
+    return http_send_json(r, 200, json_pack("{s:o}", "images", arr));
+}
+
+enum MHD_Result route_image_info(struct req *r)
+{
+    enum MHD_Result ret;
+    struct image *img = http_image(r, &ret);
+    if (!img)
+        return ret;
+    const struct gv_geometry *g = &img->info->geometry;
+    const struct gv_header *h = &img->info->header;
+    json_t *levels = json_array();
+    for (int k = 0; k < g->root; k++) {
+        const struct gv_level *l = &g->level[k];
+        uint64_t b = gv_store_level_bytes(img->store, k);
+        json_array_append_new(levels, json_pack(
+            "{s:i,s:I,s:I,s:I,s:I,s:I,s:I,s:I,s:f}", "level", k,
+            "width", (json_int_t)l->width, "height", (json_int_t)l->height,
+            "tiles_x", (json_int_t)l->tiles_x, "tiles_y", (json_int_t)l->tiles_y,
+            "pages_x", (json_int_t)l->pages_x, "pages_y", (json_int_t)l->pages_y,
+            "bytes", (json_int_t)b,
+            "bpp", bpp(b, (uint64_t)l->width * l->height)));
+    }
+    json_t *mips = json_array();
+    for (int m = 0; m < g->root_mips; m++) {
+        uint32_t w, hh;
+        if (gv_store_root(img->store, m, &w, &hh))
+            json_array_append_new(mips, json_pack("{s:i,s:I,s:I}", "level",
+                                                  g->root + m, "width",
+                                                  (json_int_t)w, "height",
+                                                  (json_int_t)hh));
+    }
+    char base[300], self[600], tiles[700], root[700], iiif[700], region[700],
+        batch[700];
+    http_base_url(r, base, sizeof base);
+    snprintf(self, sizeof self, "%s/v1/images/%s", base, img->id);
+    snprintf(tiles, sizeof tiles, "%s/tiles/{level}/{tx}/{ty}", self);
+    snprintf(batch, sizeof batch, "%s/batch", self);
+    snprintf(root, sizeof root, "%s/root", self);
+    snprintf(region, sizeof region, "%s/region{?level,x,y,w,h,format}", self);
+    snprintf(iiif, sizeof iiif, "%s/iiif/3/%s/info.json", base, img->id);
+    json_t *j = json_pack(
+        "{s:s,s:I,s:I,s:i,s:i,s:I,s:f,s:i,s:i,s:i,s:i,s:i,s:i,s:f,s:f,"
+        "s:{s:i,s:I,s:I,s:I,s:i,s:o},s:o,s:{s:s,s:s,s:s,s:s,s:s,s:s}}",
+        "id", img->id, "width", (json_int_t)g->width,
+        "height", (json_int_t)g->height, "channels", g->channels,
+        "format_version", (int)h->version, "bytes", (json_int_t)img->bytes,
+        "bpp", bpp(img->bytes, (uint64_t)g->width * g->height),
+        "tile_size", GV_TILE, "tile_overlap", GV_TILE - GV_STEP,
+        "tile_step", GV_STEP, "page_tiles", GV_PAGE_TILES,
+        "levels_tiled", g->root, "max_rate", (int)h->max_rate,
+        "psnr_db", h->psnr0_mdb / 1000.0, "target_psnr_db",
+        h->target_mpsnr / 1000.0,
+        "root", "level", g->root, "width", (json_int_t)g->level[g->root].width,
+        "height", (json_int_t)g->level[g->root].height,
+        "bytes", (json_int_t)h->root_size, "mip_count", g->root_mips,
+        "mips", mips,
+        "levels", levels,
+        "links", "self", self, "tiles", tiles, "batch", batch, "root", root,
+        "region", region, "iiif", iiif);
+    image_put(img);
+    if (!j)
+        return http_send_errorf(r, GV_ENOMEM, "images: cannot build JSON");
+    return http_send_json(r, 200, j);
+}
+
+enum MHD_Result route_image_root(struct req *r)
+{
+    enum MHD_Result ret;
+    struct image *img = http_image(r, &ret);
+    if (!img)
+        return ret;
+    const struct gv_geometry *g = &img->info->geometry;
+    uint32_t mip = 0, w, h;
+    const char *ms = http_query(r, "mip");
+    const char *fmt = http_query(r, "format");
+    if (ms && http_parse_u32(ms, 64, &mip) < 0) {
+        ret = http_send_errorf(r, GV_EINVAL, "root: mip must be 0..%d",
+                               g->root_mips - 1);
+        goto out;
+    }
+    if (fmt && strcmp(fmt, "png") && strcmp(fmt, "raw")) {
+        ret = http_send_errorf(r, GV_EINVAL, "root: format must be png or raw");
+        goto out;
+    }
+    const uint8_t *px = gv_store_root(img->store, (int)mip, &w, &h);
+    if (!px) {
+        ret = http_send_errorf(r, GV_ENOTFOUND, "root: no mip %u (0..%d)", mip,
+                               g->root_mips - 1);
+        goto out;
+    }
+    char etag[64];
+    int raw = fmt && !strcmp(fmt, "raw");
+    snprintf(etag, sizeof etag, "\"%08x-root-%u-%s\"", img->tag, mip,
+             raw ? "raw" : "png");
+    const char *inm = http_header(r, "If-None-Match");
+    if (inm && strstr(inm, etag)) {
+        ret = http_send_empty(r, 304, "ETag", etag);
+        goto out;
+    }
+    struct MHD_Response *resp;
+    size_t len = (size_t)w * h * (size_t)g->channels;
+    if (raw) {
+        /* The pixels live as long as the store; copy, since the store may
+         * be closed (rescan) before the response is sent. */
+        resp = MHD_create_response_from_buffer(len, (void *)px,
+                                               MHD_RESPMEM_MUST_COPY);
+        if (resp)
+            MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
+                                    "application/octet-stream");
+    } else {
+        uint8_t *png;
+        struct gv_error err;
+        if (gv_image_encode("png", w, h, g->channels, px, 0, &png, &len, &err) < 0) {
+            ret = http_send_error(r, &err);
+            goto out;
+        }
+        resp = MHD_create_response_from_buffer_with_free_callback(len, png, free);
+        if (!resp)
+            free(png);
+        else
+            MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "image/png");
+    }
+    if (resp) {
+        char num[16];
+        snprintf(num, sizeof num, "%u", w);
+        MHD_add_response_header(resp, "X-Width", num);
+        snprintf(num, sizeof num, "%u", h);
+        MHD_add_response_header(resp, "X-Height", num);
+        snprintf(num, sizeof num, "%d", g->channels);
+        MHD_add_response_header(resp, "X-Channels", num);
+        snprintf(num, sizeof num, "%d", g->root + (int)mip);
+        MHD_add_response_header(resp, "X-Level", num);
+        MHD_add_response_header(resp, "ETag", etag);
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
+                                "public, max-age=3600");
+    }
+    ret = http_send(r, 200, resp, len);
+out:
+    image_put(img);
+    return ret;
+}

@@ -1,0 +1,372 @@
+/*
+ * route_tiles.c - compressed tiles, exactly as a GPU decodes them.
+ *
+ *   GET  /v1/images/{id}/tiles/{level}/{tx}/{ty}   one tile buffer
+ *   POST /v1/images/{id}/batch  {"tiles": [[level, tx, ty], ...]}
+ *   GET  /v1/images/{id}/batch?t=L,X,Y;L,X,Y;...   the same, cacheable
+ *
+ * A tile response points into the cached page (page_cache.h) and holds a
+ * reference to it until libmicrohttpd has sent it: no copy.  The strong
+ * ETag is derived from the store's header CRC, the page CRC and the tile
+ * coordinates, so it changes whenever the bytes could; it is known from
+ * the page index alone, so a 304 costs no disk read.
+ *
+ * A batch answers one framed binary body (docs/API.md):
+ *   "GVB1", u32 count, then per tile: u8 level, 3 zero bytes, u32 tx,
+ *   u32 ty, u32 status, u32 length, length bytes, zero padding to 4.
+ * All integers little-endian.  A tile that fails (404 outside the grid,
+ * 500 corrupt page) has its status and length 0; the others still serve.
+ * The body is an iovec over the cached pages: no copy either.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "geometry.h"
+#include "log.h"
+#include "metrics.h"
+#include "routes.h"
+#include "store_format.h"
+
+#define IMMUTABLE "public, max-age=31536000, immutable"
+
+static void release_page(void *cls)
+{
+    page_release(cls);
+}
+
+/* Check (level, tx, ty) against the grid and find its page.  Returns 0,
+ * or -1 with *err (GV_ENOTFOUND). */
+static int locate(const struct image *img, uint32_t level, uint32_t tx,
+                  uint32_t ty, uint32_t *crc, struct gv_error *err)
+{
+    const struct gv_geometry *g = &img->info->geometry;
+    if (level >= (uint32_t)g->root)
+        return gv_fail(err, GV_ENOTFOUND,
+                       "tiles: level %u has no tiles (tiled levels 0..%d; the "
+                       "root level is served at /root)", level, g->root - 1);
+    const struct gv_level *l = &g->level[level];
+    if (tx >= l->tiles_x || ty >= l->tiles_y)
+        return gv_fail(err, GV_ENOTFOUND,
+                       "tiles: tile (%u,%u) outside level %u's %ux%u grid", tx,
+                       ty, level, l->tiles_x, l->tiles_y);
+    uint64_t off;
+    uint32_t size;
+    uint64_t pn = gv_page_number(g, (int)level, tx / GV_PAGE_TILES,
+                                 ty / GV_PAGE_TILES);
+    if (gv_store_page_extent(img->store, pn, &off, &size, crc) < 0)
+        return gv_fail(err, GV_ENOTFOUND, "tiles: no page %llu",
+                       (unsigned long long)pn);
+    return 0;
+}
+
+/* Fetch a tile: *page referenced (release it), *tile inside it. */
+static int fetch(struct server *srv, const struct image *img, uint32_t level,
+                 uint32_t tx, uint32_t ty, struct page **page,
+                 const uint8_t **tile, size_t *len, struct gv_error *err)
+{
+    struct page *p = page_get(srv->pages, img->store, img->serial, (int)level,
+                              tx / GV_PAGE_TILES, ty / GV_PAGE_TILES, err);
+    if (!p)
+        return -1;
+    if (gv_page_tile(p->data, p->len, img->info->geometry.channels,
+                     (int)(tx % GV_PAGE_TILES), (int)(ty % GV_PAGE_TILES), tile,
+                     len, err) < 0) {
+        page_release(p);
+        err->code = GV_ECORRUPT;
+        return -1;
+    }
+    *page = p;
+    return 0;
+}
+
+static void log_page_error(const struct image *img, uint32_t level,
+                           uint32_t tx, uint32_t ty, const struct gv_error *err)
+{
+    if (err->code == GV_ECORRUPT || err->code == GV_EIO) {
+        atomic_fetch_add(&metrics.page_errors, 1);
+        log_msg(LOG_ERROR, "tiles", "%s: tile %u/%u/%u: %s", img->id, level,
+                tx, ty, err->text);
+    }
+}
+
+enum MHD_Result route_tile(struct req *r)
+{
+    enum MHD_Result ret;
+    uint32_t level, tx, ty, crc;
+    struct gv_error err;
+    if (http_parse_u32(r->param[1], GV_MAX_LEVELS, &level) < 0 ||
+        http_parse_u32(r->param[2], GV_MAX_DIM, &tx) < 0 ||
+        http_parse_u32(r->param[3], GV_MAX_DIM, &ty) < 0)
+        return http_send_errorf(r, GV_EINVAL,
+                                "tiles: level, tx and ty must be non-negative "
+                                "decimal integers in range");
+    struct image *img = http_image(r, &ret);
+    if (!img)
+        return ret;
+    if (locate(img, level, tx, ty, &crc, &err) < 0) {
+        ret = http_send_error(r, &err);
+        goto out;
+    }
+    char etag[64];
+    snprintf(etag, sizeof etag, "\"%08x%08x-%u-%u-%u\"", img->tag, crc, level,
+             tx, ty);
+    const char *inm = http_header(r, "If-None-Match");
+    if (inm && (strstr(inm, etag) || !strcmp(inm, "*"))) {
+        struct MHD_Response *resp = MHD_create_response_from_buffer(
+            0, (void *)"", MHD_RESPMEM_PERSISTENT);
+        if (resp) {
+            MHD_add_response_header(resp, "ETag", etag);
+            MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, IMMUTABLE);
+        }
+        ret = http_send(r, 304, resp, 0);
+        goto out;
+    }
+    struct page *page;
+    const uint8_t *tile;
+    size_t len;
+    if (fetch(r->srv, img, level, tx, ty, &page, &tile, &len, &err) < 0) {
+        log_page_error(img, level, tx, ty, &err);
+        ret = http_send_error(r, &err);
+        goto out;
+    }
+    struct MHD_Response *resp = MHD_create_response_from_buffer_with_free_callback_cls(
+        len, (void *)tile, release_page, page);
+    if (!resp) {
+        page_release(page);
+    } else {
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
+                                "application/octet-stream");
+        MHD_add_response_header(resp, "ETag", etag);
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, IMMUTABLE);
+    }
+    ret = http_send(r, 200, resp, len);
+out:
+    image_put(img);
+    return ret;
+}
+
+/* ------------------------------------------------------------------ batch */
+
+struct batch {
+    uint32_t (*want)[3];      /* level, tx, ty */
+    size_t n;
+    struct page **pages;      /* distinct pages referenced */
+    size_t npages;
+    uint8_t *frames;          /* 8 + 20 per tile header bytes */
+};
+
+static void batch_free(void *cls)
+{
+    struct batch *b = cls;
+    for (size_t i = 0; i < b->npages; i++)
+        page_release(b->pages[i]);
+    free(b->pages);
+    free(b->frames);
+    free(b->want);
+    free(b);
+}
+
+/* Parse "L,X,Y;L,X,Y;..." */
+static int parse_query(const char *t, struct batch *b, size_t max,
+                       struct gv_error *err)
+{
+    size_t cap = 1;
+    for (const char *p = t; *p; p++)
+        cap += *p == ';';
+    if (cap > max)
+        return gv_fail(err, GV_ELIMIT, "batch: %zu tiles, at most %zu", cap, max);
+    b->want = calloc(cap, sizeof *b->want);
+    if (!b->want)
+        return gv_fail(err, GV_ENOMEM, "batch: out of memory");
+    const char *p = t;
+    while (*p) {
+        for (int k = 0; k < 3; k++) {
+            char num[16];
+            size_t n = strspn(p, "0123456789");
+            if (n == 0 || n >= sizeof num)
+                return gv_fail(err, GV_EINVAL,
+                               "batch: t must be L,X,Y triples separated by ';'");
+            memcpy(num, p, n);
+            num[n] = '\0';
+            if (http_parse_u32(num, GV_MAX_DIM, &b->want[b->n][k]) < 0)
+                return gv_fail(err, GV_EINVAL, "batch: number out of range");
+            p += n;
+            if (k < 2 && *p++ != ',')
+                return gv_fail(err, GV_EINVAL,
+                               "batch: t must be L,X,Y triples separated by ';'");
+        }
+        b->n++;
+        if (*p == ';' && p[1])
+            p++;
+        else if (*p)
+            return gv_fail(err, GV_EINVAL,
+                           "batch: t must be L,X,Y triples separated by ';'");
+    }
+    if (b->n == 0)
+        return gv_fail(err, GV_EINVAL, "batch: no tiles asked for");
+    return 0;
+}
+
+static int parse_json(const char *body, size_t len, struct batch *b, size_t max,
+                      struct gv_error *err)
+{
+    json_error_t je;
+    json_t *root = json_loadb(body ? body : "", len, JSON_REJECT_DUPLICATES, &je);
+    if (!root)
+        return gv_fail(err, GV_EINVAL, "batch: bad JSON at line %d, column %d: %s",
+                       je.line, je.column, je.text);
+    int rc = 0;
+    json_t *tiles = json_object_get(root, "tiles");
+    if (!json_is_array(tiles) || json_array_size(tiles) == 0) {
+        rc = gv_fail(err, GV_EINVAL,
+                     "batch: body must be {\"tiles\": [[level, tx, ty], ...]}");
+        goto out;
+    }
+    size_t n = json_array_size(tiles);
+    if (n > max) {
+        rc = gv_fail(err, GV_ELIMIT, "batch: %zu tiles, at most %zu", n, max);
+        goto out;
+    }
+    b->want = calloc(n, sizeof *b->want);
+    if (!b->want) {
+        rc = gv_fail(err, GV_ENOMEM, "batch: out of memory");
+        goto out;
+    }
+    for (size_t i = 0; i < n; i++) {
+        json_t *t = json_array_get(tiles, i);
+        if (!json_is_array(t) || json_array_size(t) != 3) {
+            rc = gv_fail(err, GV_EINVAL, "batch: tiles[%zu] is not [level, tx, ty]", i);
+            goto out;
+        }
+        for (size_t k = 0; k < 3; k++) {
+            json_t *v = json_array_get(t, k);
+            if (!json_is_integer(v) || json_integer_value(v) < 0 ||
+                json_integer_value(v) > (json_int_t)GV_MAX_DIM) {
+                rc = gv_fail(err, GV_EINVAL,
+                             "batch: tiles[%zu][%zu] is not a non-negative integer "
+                             "in range", i, k);
+                goto out;
+            }
+            b->want[i][k] = (uint32_t)json_integer_value(v);
+        }
+    }
+    b->n = n;
+out:
+    json_decref(root);
+    return rc;
+}
+
+static struct page *batch_page(struct batch *b, const struct page *p)
+{
+    for (size_t i = 0; i < b->npages; i++)
+        if (b->pages[i] == p)
+            return b->pages[i];
+    return NULL;
+}
+
+enum MHD_Result route_batch(struct req *r)
+{
+    enum MHD_Result ret;
+    struct gv_error err;
+    size_t max = (size_t)r->srv->cfg->batch_max_tiles;
+    struct batch *b = calloc(1, sizeof *b);
+    if (!b)
+        return http_send_errorf(r, GV_ENOMEM, "batch: out of memory");
+    int get = strcmp(r->method, "POST") != 0;
+    int rc;
+    if (get) {
+        const char *t = http_query(r, "t");
+        if (!t)
+            rc = gv_fail(&err, GV_EINVAL, "batch: missing t=L,X,Y;L,X,Y...");
+        else
+            rc = parse_query(t, b, max, &err);
+    } else {
+        rc = parse_json(r->body, r->body_len, b, max, &err);
+    }
+    if (rc < 0) {
+        batch_free(b);
+        return http_send_error(r, &err);
+    }
+    struct image *img = http_image(r, &ret);
+    if (!img) {
+        batch_free(b);
+        return ret;
+    }
+    b->frames = calloc(1, 8 + 20 * b->n);
+    b->pages = calloc(b->n, sizeof *b->pages);
+    struct MHD_IoVec *iov = calloc(3 * b->n + 1, sizeof *iov);
+    if (!b->frames || !b->pages || !iov) {
+        free(iov);
+        batch_free(b);
+        image_put(img);
+        return http_send_errorf(r, GV_ENOMEM, "batch: out of memory");
+    }
+    static const uint8_t zeros[4];
+    memcpy(b->frames, "GVB1", 4);
+    gv_put32(b->frames + 4, (uint32_t)b->n);
+    unsigned niov = 0;
+    size_t total = 8;
+    int failures = 0, last_frames = 1;
+    iov[niov].iov_base = b->frames;
+    iov[niov++].iov_len = 8;
+    for (size_t i = 0; i < b->n; i++) {
+        uint32_t level = b->want[i][0], tx = b->want[i][1], ty = b->want[i][2];
+        uint8_t *f = b->frames + 8 + 20 * i;
+        uint32_t crc, status = 200;
+        const uint8_t *tile = NULL;
+        size_t len = 0;
+        struct page *p = NULL;
+        if (locate(img, level, tx, ty, &crc, &err) < 0 ||
+            fetch(r->srv, img, level, tx, ty, &p, &tile, &len, &err) < 0) {
+            log_page_error(img, level, tx, ty, &err);
+            status = err.code == GV_ENOTFOUND ? 404 : 500;
+            tile = NULL;
+            len = 0;
+            failures++;
+        } else if (batch_page(b, p)) {
+            page_release(p); /* already holding it */
+        } else {
+            b->pages[b->npages++] = p;
+        }
+        f[0] = (uint8_t)level;
+        gv_put32(f + 4, tx);
+        gv_put32(f + 8, ty);
+        gv_put32(f + 12, status);
+        gv_put32(f + 16, (uint32_t)len);
+        /* Consecutive frame headers stay one iovec when a tile is empty. */
+        if (last_frames) {
+            iov[niov - 1].iov_len += 20;
+        } else {
+            iov[niov].iov_base = f;
+            iov[niov++].iov_len = 20;
+        }
+        last_frames = 1;
+        total += 20;
+        if (len) {
+            last_frames = 0;
+            iov[niov].iov_base = tile;
+            iov[niov++].iov_len = len;
+            total += len;
+            if (len % 4) { /* tile buffers are whole words; belt and braces */
+                iov[niov].iov_base = zeros;
+                iov[niov++].iov_len = 4 - len % 4;
+                total += 4 - len % 4;
+            }
+        }
+    }
+    struct MHD_Response *resp = MHD_create_response_from_iovec(iov, niov,
+                                                               batch_free, b);
+    free(iov);
+    if (!resp) {
+        batch_free(b);
+    } else {
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
+                                "application/x-gigaview-batch");
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
+                                get && !failures ? IMMUTABLE : "no-store");
+    }
+    ret = http_send(r, 200, resp, total);
+    image_put(img);
+    return ret;
+}

@@ -1,0 +1,47 @@
+/*
+ * routes.h - the route table: {method, pattern, handler, name}.
+ *
+ * A pattern is a path whose '*' segments match any one non-empty segment
+ * and become req->param[] in order; literal segments match exactly.  GET
+ * routes also answer HEAD.  A path that matches with another method gets
+ * 405 and an Allow header; OPTIONS gets a CORS preflight answer.  The
+ * name labels the route in /metrics.  One handler file per route group.
+ */
+#ifndef GV_SERVER_ROUTES_H
+#define GV_SERVER_ROUTES_H
+
+#include "http.h"
+
+typedef enum MHD_Result (*route_fn)(struct req *r);
+
+struct route {
+    const char *method;
+    const char *pattern;
+    route_fn fn;
+    const char *name;
+    int iiif;               /* errors and CORS as the IIIF spec wants */
+};
+
+extern const struct route routes[];
+extern const int nroutes;
+
+/* route_home.c */
+enum MHD_Result route_home(struct req *r);
+/* route_images.c */
+enum MHD_Result route_images_list(struct req *r);
+enum MHD_Result route_image_info(struct req *r);
+enum MHD_Result route_image_root(struct req *r);
+/* route_tiles.c */
+enum MHD_Result route_tile(struct req *r);
+enum MHD_Result route_batch(struct req *r);
+/* route_region.c */
+enum MHD_Result route_region(struct req *r);
+/* route_iiif.c */
+enum MHD_Result route_iiif_base(struct req *r);
+enum MHD_Result route_iiif_info(struct req *r);
+enum MHD_Result route_iiif_image(struct req *r);
+/* route_health.c */
+enum MHD_Result route_healthz(struct req *r);
+enum MHD_Result route_metrics(struct req *r);
+
+#endif

@@ -1,0 +1,249 @@
+/*
+ * settings.c - the configuration table and its parser (see settings.h).
+ *
+ * Modelled on redis' static_configs[]: adding a key is adding a row.
+ * Numbers accept decimal digits only (no sign, no hex) with an optional
+ * K, M, G or T suffix (powers of 1024) for sizes; overflow and values
+ * outside [min, max] are errors, never silently clamped.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "settings.h"
+#include "log.h"
+
+enum settings_type { T_STR, T_UINT, T_SIZE, T_DOUBLE, T_LEVEL };
+
+struct settings_key {
+    const char *name;
+    enum settings_type type;
+    size_t offset;
+    size_t size;            /* T_STR: the field's capacity */
+    const char *def;
+    double min, max;
+    const char *help;
+};
+
+#define F(field) offsetof(struct settings, field), sizeof(((struct settings *)0)->field)
+
+static const struct settings_key keys[] = {
+    {"listen", T_STR, F(listen), "127.0.0.1", 0, 0,
+     "address to listen on (IPv4 or IPv6 literal)"},
+    {"port", T_UINT, F(port), "8080", 0, 65535,
+     "TCP port; 0 picks a free one (logged at start)"},
+    {"store_dir", T_STR, F(store_dir), "/var/lib/gigaview/stores", 0, 0,
+     "directory of *.gv stores; the id is the file name without .gv"},
+    {"threads", T_UINT, F(threads), "4", 1, 256,
+     "worker threads (libmicrohttpd thread pool, epoll)"},
+    {"cache_bytes", T_SIZE, F(cache_bytes), "256M", 0, 1e15,
+     "page cache bound in bytes (K, M, G suffixes); 0 disables caching"},
+    {"decoder_cache_bytes", T_SIZE, F(decoder_cache_bytes), "16M", 0, 1e12,
+     "decoded-tile cache of each CPU decoder (one per thread and store)"},
+    {"max_region_pixels", T_SIZE, F(max_region_pixels), "64M", 1, 1e15,
+     "largest region decoded for one request, in pixels (413 beyond)"},
+    {"max_output_pixels", T_SIZE, F(max_output_pixels), "16M", 1, 1e15,
+     "largest output image in pixels (IIIF maxArea)"},
+    {"max_output_side", T_UINT, F(max_output_side), "16384", 1, 2147483647,
+     "largest output width or height (IIIF maxWidth, maxHeight)"},
+    {"max_upscale", T_DOUBLE, F(max_upscale), "4", 1, 64,
+     "largest IIIF ^ upscaling factor"},
+    {"connection_limit", T_UINT, F(connection_limit), "1024", 1, 1000000,
+     "simultaneous connections; further ones are refused"},
+    {"connection_timeout", T_UINT, F(connection_timeout), "30", 1, 86400,
+     "seconds a connection may stay idle (slow clients are closed)"},
+    {"drain_timeout", T_UINT, F(drain_timeout), "10", 0, 3600,
+     "seconds SIGTERM waits for in-flight requests before exiting"},
+    {"cors_origin", T_STR, F(cors_origin), "*", 0, 0,
+     "Access-Control-Allow-Origin of /v1 responses (\"\" for none); IIIF always sends *"},
+    {"auth_token", T_STR, F(auth_token), "", 0, 0,
+     "bearer token required by write endpoints (\"\" disables them)"},
+    {"public_url", T_STR, F(public_url), "", 0, 0,
+     "base URL for absolute links, e.g. https://img.example.org (\"\": from Host)"},
+    {"log_level", T_LEVEL, F(log_level), "info", 0, 0,
+     "error, warn, info or debug"},
+    {"access_log", T_STR, F(access_log), "stderr", 0, 0,
+     "access log: a file path, \"stderr\" or \"off\""},
+    {"batch_max_tiles", T_UINT, F(batch_max_tiles), "256", 1, 65536,
+     "most tiles in one batch request"},
+    {"jpeg_quality", T_UINT, F(jpeg_quality), "90", 1, 100,
+     "quality of JPEG and WebP output"},
+};
+
+#define NKEYS (sizeof keys / sizeof keys[0])
+
+static int parse_uint(const char *s, int sizes, uint64_t *out)
+{
+    if (*s < '0' || *s > '9')
+        return -1;
+    errno = 0;
+    char *end;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (errno == ERANGE)
+        return -1;
+    int shift = 0;
+    if (sizes && *end) {
+        switch (*end) {
+        case 'k': case 'K': shift = 10; break;
+        case 'm': case 'M': shift = 20; break;
+        case 'g': case 'G': shift = 30; break;
+        case 't': case 'T': shift = 40; break;
+        default: return -1;
+        }
+        end++;
+        if (*end == 'i' || *end == 'I')
+            end++;
+        if (*end == 'b' || *end == 'B')
+            end++;
+    }
+    if (*end)
+        return -1;
+    if (shift && v > (UINT64_MAX >> shift))
+        return -1;
+    *out = (uint64_t)v << shift;
+    return 0;
+}
+
+static int set_key(struct settings *c, const struct settings_key *k,
+                   const char *value, const char *where,
+                   struct gv_error *err)
+{
+    char *field = (char *)c + k->offset;
+    switch (k->type) {
+    case T_STR:
+        if (strlen(value) >= k->size)
+            return gv_fail(err, GV_EINVAL, "%s: %s: value longer than %zu bytes",
+                           where, k->name, k->size - 1);
+        memcpy(field, value, strlen(value) + 1);
+        return 0;
+    case T_LEVEL:
+        if (log_level_parse(value) < 0)
+            return gv_fail(err, GV_EINVAL,
+                           "%s: %s: '%s' is not error, warn, info or debug",
+                           where, k->name, value);
+        snprintf(field, k->size, "%s", value);
+        return 0;
+    case T_UINT:
+    case T_SIZE: {
+        uint64_t v;
+        if (parse_uint(value, k->type == T_SIZE, &v) < 0)
+            return gv_fail(err, GV_EINVAL, "%s: %s: '%s' is not a %s", where,
+                           k->name, value,
+                           k->type == T_SIZE ? "size (digits with optional K, M, G, T)"
+                                             : "non-negative integer");
+        if ((double)v < k->min || (double)v > k->max)
+            return gv_fail(err, GV_EINVAL, "%s: %s: %s is outside %.0f..%.0f",
+                           where, k->name, value, k->min, k->max);
+        memcpy(field, &v, sizeof v);
+        return 0;
+    }
+    case T_DOUBLE: {
+        char *end;
+        errno = 0;
+        double v = strtod(value, &end);
+        if (end == value || *end || errno || !isfinite(v))
+            return gv_fail(err, GV_EINVAL, "%s: %s: '%s' is not a number",
+                           where, k->name, value);
+        if (v < k->min || v > k->max)
+            return gv_fail(err, GV_EINVAL, "%s: %s: %s is outside %g..%g",
+                           where, k->name, value, k->min, k->max);
+        memcpy(field, &v, sizeof v);
+        return 0;
+    }
+    }
+    return gv_fail(err, GV_EINVAL, "%s: %s: bad type", where, k->name);
+}
+
+void settings_defaults(struct settings *c)
+{
+    memset(c, 0, sizeof *c);
+    for (size_t i = 0; i < NKEYS; i++) {
+        struct gv_error err;
+        if (set_key(c, &keys[i], keys[i].def, "default", &err) < 0)
+            log_msg(LOG_ERROR, "config", "%s", err.text); /* a bug */
+    }
+}
+
+int settings_set(struct settings *c, const char *key, const char *value,
+               const char *where, struct gv_error *err)
+{
+    for (size_t i = 0; i < NKEYS; i++)
+        if (!strcmp(keys[i].name, key))
+            return set_key(c, &keys[i], value, where, err);
+    return gv_fail(err, GV_EINVAL, "%s: unknown key '%s'", where, key);
+}
+
+static char *trim(char *s)
+{
+    while (*s == ' ' || *s == '\t')
+        s++;
+    size_t n = strlen(s);
+    while (n > 0 && (s[n - 1] == ' ' || s[n - 1] == '\t' || s[n - 1] == '\r' ||
+                     s[n - 1] == '\n'))
+        s[--n] = '\0';
+    return s;
+}
+
+int settings_load(struct settings *c, const char *path, struct gv_error *err)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        int e = errno;
+        if (e == ENOENT)
+            return gv_fail(err, GV_ENOTFOUND, "%s: no such file", path);
+        return gv_fail_errno(err, e, "%s", path);
+    }
+    char line[4096], where[1200];
+    int lineno = 0, rc = 0;
+    while (fgets(line, sizeof line, f)) {
+        lineno++;
+        snprintf(where, sizeof where, "%s:%d", path, lineno);
+        if (!strchr(line, '\n') && !feof(f)) {
+            rc = gv_fail(err, GV_EINVAL, "%s: line too long", where);
+            break;
+        }
+        char *s = trim(line);
+        if (*s == '#' || *s == '\0')
+            continue;
+        char *eq = strchr(s, '=');
+        if (!eq) {
+            rc = gv_fail(err, GV_EINVAL, "%s: expected 'key = value'", where);
+            break;
+        }
+        *eq = '\0';
+        char *key = trim(s), *value = trim(eq + 1);
+        size_t n = strlen(value);
+        if (n > 0 && value[0] == '"') {
+            if (n < 2 || value[n - 1] != '"') {
+                rc = gv_fail(err, GV_EINVAL, "%s: unterminated quote", where);
+                break;
+            }
+            value[n - 1] = '\0';
+            value++;
+        } else {
+            char *hash = strchr(value, '#'); /* trailing comment */
+            if (hash) {
+                *hash = '\0';
+                value = trim(value);
+            }
+        }
+        if (settings_set(c, key, value, where, err) < 0) {
+            rc = -1;
+            break;
+        }
+    }
+    if (rc == 0 && ferror(f))
+        rc = gv_fail_errno(err, errno, "%s: read error", path);
+    fclose(f);
+    return rc;
+}
+
+void settings_print_sample(void)
+{
+    for (size_t i = 0; i < NKEYS; i++)
+        printf("# %s\n%s = %s%s%s\n\n", keys[i].help, keys[i].name,
+               keys[i].type == T_STR ? "\"" : "", keys[i].def,
+               keys[i].type == T_STR ? "\"" : "");
+}

@@ -1,0 +1,65 @@
+/*
+ * settings.h - gigaviewd's configuration: one declarative table.
+ *
+ * (Named settings, not config.h, which is autoconf's header and is
+ * git-ignored.)
+ *
+ * Every key is a row of settings.c's table {name, type, field offset,
+ * default, min, max, help}: the defaults are parsed by the same code as
+ * the file, so a default can never be out of range.  The file format is
+ * "key = value" per line, '#' starts a comment, values may be quoted.
+ * Unknown keys and bad values are reported as "file:line: message".
+ * conf/gigaviewd.conf documents every key in place.
+ */
+#ifndef GV_SERVER_SETTINGS_H
+#define GV_SERVER_SETTINGS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "error.h"
+
+#define SETTINGS_STR 256
+#define SETTINGS_PATH 1024
+
+struct settings {
+    char listen[SETTINGS_STR];       /* address to bind, "0.0.0.0", "::" */
+    uint64_t port;
+    char store_dir[SETTINGS_PATH];
+    uint64_t threads;              /* libmicrohttpd thread pool size */
+    uint64_t cache_bytes;          /* page cache bound */
+    uint64_t decoder_cache_bytes;  /* decoded-tile cache per decoder */
+    uint64_t max_region_pixels;    /* decoded pixels per region request */
+    uint64_t max_output_pixels;    /* IIIF maxArea */
+    uint64_t max_output_side;      /* IIIF maxWidth = maxHeight */
+    double max_upscale;            /* largest IIIF '^' factor */
+    uint64_t connection_limit;
+    uint64_t connection_timeout;   /* seconds idle before a close */
+    uint64_t drain_timeout;        /* seconds SIGTERM waits for requests */
+    char cors_origin[SETTINGS_STR];  /* Access-Control-Allow-Origin, "" off */
+    char auth_token[SETTINGS_STR];   /* bearer token for write endpoints */
+    char public_url[SETTINGS_STR];   /* base URL for absolute links, "" auto */
+    char log_level[16];
+    char access_log[SETTINGS_PATH];
+    uint64_t batch_max_tiles;
+    uint64_t jpeg_quality;
+};
+
+/* Fill *c with every default.  Cannot fail. */
+void settings_defaults(struct settings *c);
+
+/*
+ * Read `path` over the current values of *c.  Returns 0, or -1 with *err
+ * (GV_EINVAL, "FILE:LINE: message"; GV_ENOTFOUND/GV_EIO if unreadable).
+ */
+int settings_load(struct settings *c, const char *path, struct gv_error *err);
+
+/* Set one key from a string (command-line overrides); `where` prefixes
+ * messages.  Returns 0 or -1 with *err. */
+int settings_set(struct settings *c, const char *key, const char *value,
+               const char *where, struct gv_error *err);
+
+/* Print every key with its default and help, as a sample file. */
+void settings_print_sample(void);
+
+#endif
