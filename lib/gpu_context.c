@@ -188,8 +188,10 @@ static void *gl_thread(void *arg)
         eglMakeCurrent(g->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
         eglDestroyContext(g->dpy, g->ctx);
     }
-    if (g->dpy != EGL_NO_DISPLAY)
-        eglTerminate(g->dpy);
+    /* The display is not terminated: an EGL display is one per process and
+     * platform, shared with any other context on it, so terminating it
+     * here would pull the rug from under them.  (It also keeps Mesa from
+     * unloading its driver, whose terminate path leaks.) */
     eglReleaseThread();
     return NULL;
 }
