@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# decode-speed.sh - tile decoding speed in one run on the same store: the
+# CPU reference decoder (1 thread, every core), the GPU decoder through EGL
+# (llvmpipe here; the vendor driver on a GPU machine) and libjpeg-turbo
+# decoding the same level-0 tiles as JPEG at the quality of equal PSNR
+# (bench/decode_bench.c).  Prints figures and ratios; asserts nothing.
+#
+#   bench/decode-speed.sh [BUILD-DIR] [IMAGE...]
+#
+# BUILD-DIR (default: build) holds a configured, built gigaview tree.
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+top=$(cd "$here/.." && pwd)
+build=${1:-build}
+shift || true
+case $build in /*) ;; *) build=$top/$build ;; esac
+[ -f "$build/lib/libgigaview.a" ] || { echo "decode-speed: build gigaview in $build first" >&2; exit 1; }
+images=("$@")
+[ ${#images[@]} -gt 0 ] || images=(/work/shared/data/photos/Dragonfly_by_Bolly.jpg
+                                     /work/shared/data/photos/picosdeeuropa_by_Aitzol_Berasategi.jpg)
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+# shellcheck disable=SC2046 # pkg-config prints several flags
+cc -std=c11 -D_GNU_SOURCE -O2 -pthread -I"$top/lib" -I"$build" \
+    "$here/decode_bench.c" "$build/lib/libgigaview.a" \
+    $(pkg-config --libs OpenImageIO zlib libwebp egl glesv2) -ljpeg -lstdc++ -lm \
+    -o "$work/decode_bench"
+for img in "${images[@]}"; do
+    "$build/gigaview" encode --rd -q 34 --quiet "$img" -o "$work/s.gv"
+    echo "== $(basename "$img") (gigaview encode --rd -q 34)"
+    "$work/decode_bench" "$work/s.gv" "$img"
+done

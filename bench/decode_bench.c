@@ -1,0 +1,324 @@
+/*
+ * decode_bench.c - tile decoding speed, everything in one run on the same
+ * store: the CPU reference decoder on one thread and on every core, the GPU
+ * decoder (EGL: llvmpipe here, the vendor driver on a GPU machine), and,
+ * as the anchor, libjpeg-turbo decoding the same level-0 tiles saved as
+ * JPEG at the quality that matches the store's PSNR.
+ *
+ *   decode_bench STORE [SOURCE-IMAGE]     (SOURCE-IMAGE enables the JPEG anchor)
+ *
+ * Speeds are megapixels of decoded tiles (513 x 513 each) per second of
+ * wall time, best of 3.  Prints figures only; asserts nothing.
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <jpeglib.h>
+
+#include "decoder.h"
+#include "gpu.h"
+#include "gpu_decode.h"
+#include "imageio.h"
+#include "pool.h"
+#include "store.h"
+#include "tile.h"
+
+struct tile_ref {
+    int level;
+    uint32_t tx, ty;
+    const uint8_t *buf;   /* into pages[] */
+    size_t len;
+    int parent;           /* index into tiles, -1 for the root tile */
+};
+
+static double now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec + t.tv_nsec * 1e-9;
+}
+
+static struct tile_ref *tiles;
+static int ntiles, channels;
+static uint8_t **decoded;     /* CPU decode of every tile (parents for the CPU runs) */
+static uint8_t *root_tile;
+
+static void cpu_decode_one(void *ctx, size_t i, int worker)
+{
+    (void)ctx;
+    (void)worker;
+    static _Thread_local uint8_t *out;
+    if (!out)
+        out = malloc(gv_tile_bytes(channels));
+    const struct tile_ref *t = &tiles[i];
+    const uint8_t *parent = t->parent < 0 ? root_tile : decoded[t->parent];
+    struct gv_error err;
+    if (gv_tile_decode(t->buf, t->len, channels, parent, (int)(t->tx & 1),
+                       (int)(t->ty & 1), out, &err) < 0) {
+        fprintf(stderr, "decode: %s\n", err.text);
+        exit(1);
+    }
+}
+
+static double cpu_run(int threads)
+{
+    struct gv_pool *p = gv_pool_new(threads);
+    double best = 1e9;
+    for (int rep = 0; rep < 3; rep++) {
+        double t0 = now();
+        gv_pool_run(p, cpu_decode_one, NULL, (size_t)ntiles);
+        double t = now() - t0;
+        if (t < best)
+            best = t;
+    }
+    gv_pool_free(p);
+    return (double)ntiles * 513 * 513 / best / 1e6;
+}
+
+/* JPEG anchor: level-0 tiles of the source as JPEG files in memory. */
+struct jpeg_tile {
+    unsigned char *data;
+    unsigned long len;
+};
+
+static struct jpeg_tile *jpeg_encode_tiles(const uint8_t *img, uint32_t w, uint32_t h,
+                                           int c, int quality, int *count,
+                                           double *psnr)
+{
+    int tx = (int)((w + 511) / 512), ty = (int)((h + 511) / 512);
+    struct jpeg_tile *jt = calloc((size_t)tx * ty, sizeof *jt);
+    double sse = 0, n = 0;
+    uint8_t *tile = malloc(513 * 513 * 3);
+    for (int y = 0; y < ty; y++)
+        for (int x = 0; x < tx; x++) {
+            for (int v = 0; v < 513; v++)
+                for (int u = 0; u < 513; u++) {
+                    uint32_t sx = (uint32_t)(x * 512 + u), sy = (uint32_t)(y * 512 + v);
+                    if (sx >= w) sx = w - 1;
+                    if (sy >= h) sy = h - 1;
+                    for (int k = 0; k < 3; k++)
+                        tile[(v * 513 + u) * 3 + k] = img[((size_t)sy * w + sx) * c + (c == 3 ? k : 0)];
+                }
+            struct jpeg_compress_struct ci;
+            struct jpeg_error_mgr je;
+            ci.err = jpeg_std_error(&je);
+            jpeg_create_compress(&ci);
+            struct jpeg_tile *o = &jt[y * tx + x];
+            jpeg_mem_dest(&ci, &o->data, &o->len);
+            ci.image_width = 513;
+            ci.image_height = 513;
+            ci.input_components = 3;
+            ci.in_color_space = JCS_RGB;
+            jpeg_set_defaults(&ci);
+            jpeg_set_quality(&ci, quality, TRUE);
+            ci.optimize_coding = TRUE;
+            jpeg_start_compress(&ci, TRUE);
+            while (ci.next_scanline < 513) {
+                JSAMPROW row = tile + ci.next_scanline * 513 * 3;
+                jpeg_write_scanlines(&ci, &row, 1);
+            }
+            jpeg_finish_compress(&ci);
+            jpeg_destroy_compress(&ci);
+            /* quality of this tile, for the PSNR match */
+            struct jpeg_decompress_struct di;
+            di.err = jpeg_std_error(&je);
+            jpeg_create_decompress(&di);
+            jpeg_mem_src(&di, o->data, o->len);
+            jpeg_read_header(&di, TRUE);
+            jpeg_start_decompress(&di);
+            uint8_t *row = malloc(513 * 3);
+            for (int v = 0; v < 513; v++) {
+                jpeg_read_scanlines(&di, &row, 1);
+                for (int u = 0; u < 513 * 3; u++) {
+                    double d = (double)row[u] - tile[v * 513 * 3 + u];
+                    sse += d * d;
+                }
+                n += 513 * 3;
+            }
+            free(row);
+            jpeg_finish_decompress(&di);
+            jpeg_destroy_decompress(&di);
+        }
+    free(tile);
+    *count = tx * ty;
+    *psnr = 10 * log10(65025.0 * n / sse);
+    return jt;
+}
+
+static double jpeg_run(struct jpeg_tile *jt, int count)
+{
+    uint8_t *row = malloc(513 * 3);
+    double best = 1e9;
+    for (int rep = 0; rep < 3; rep++) {
+        double t0 = now();
+        for (int i = 0; i < count; i++) {
+            struct jpeg_decompress_struct di;
+            struct jpeg_error_mgr je;
+            di.err = jpeg_std_error(&je);
+            jpeg_create_decompress(&di);
+            jpeg_mem_src(&di, jt[i].data, jt[i].len);
+            jpeg_read_header(&di, TRUE);
+            jpeg_start_decompress(&di);
+            while (di.output_scanline < di.output_height)
+                jpeg_read_scanlines(&di, &row, 1);
+            jpeg_finish_decompress(&di);
+            jpeg_destroy_decompress(&di);
+        }
+        double t = now() - t0;
+        if (t < best)
+            best = t;
+    }
+    free(row);
+    return (double)count * 513 * 513 / best / 1e6;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        fprintf(stderr, "usage: decode_bench STORE [SOURCE-IMAGE]\n");
+        return 2;
+    }
+    struct gv_error err;
+    struct gv_store *s = gv_store_open(argv[1], &err);
+    if (!s) {
+        fprintf(stderr, "%s\n", err.text);
+        return 1;
+    }
+    const struct gv_geometry *g = &gv_store_info(s)->geometry;
+    channels = g->channels;
+    /* Every tile, parents before children. */
+    int cap = 0;
+    for (int k = 0; k < g->root; k++)
+        cap += (int)(g->level[k].tiles_x * g->level[k].tiles_y);
+    tiles = calloc((size_t)cap, sizeof *tiles);
+    decoded = calloc((size_t)cap, sizeof *decoded);
+    int *first = calloc((size_t)g->root + 1, sizeof *first);
+    uint64_t coded_bytes = 0;
+    int entropy = 0;
+    for (int k = g->root - 1; k >= 0; k--) {
+        const struct gv_level *l = &g->level[k];
+        first[k] = ntiles;
+        for (uint32_t ty = 0; ty < l->tiles_y; ty++)
+            for (uint32_t tx = 0; tx < l->tiles_x; tx++) {
+                uint8_t *page;
+                size_t plen;
+                if (gv_store_read_page(s, k, tx / 8, ty / 8, &page, &plen, &err) < 0) {
+                    fprintf(stderr, "%s\n", err.text);
+                    return 1;
+                }
+                struct tile_ref *t = &tiles[ntiles];
+                const uint8_t *b;
+                gv_page_tile(page, plen, channels, (int)(tx % 8), (int)(ty % 8), &b, &t->len, &err);
+                uint8_t *copy = malloc(t->len);
+                memcpy(copy, b, t->len);
+                free(page);
+                t->buf = copy;
+                t->level = k;
+                t->tx = tx;
+                t->ty = ty;
+                t->parent = k + 1 == g->root ? -1 :
+                    first[k + 1] + (int)((ty / 2) * g->level[k + 1].tiles_x + tx / 2);
+                coded_bytes += t->len;
+                entropy += (copy[0] & 0x80) != 0;
+                ntiles++;
+            }
+    }
+    struct gv_decoder *d = gv_decoder_new(s, 8u << 20);
+    const uint8_t *px;
+    gv_decoder_tile(d, g->root, 0, 0, &px, &err);
+    root_tile = malloc(gv_tile_bytes(channels));
+    memcpy(root_tile, px, gv_tile_bytes(channels));
+    for (int i = 0; i < ntiles; i++) {
+        gv_decoder_tile(d, tiles[i].level, tiles[i].tx, tiles[i].ty, &px, &err);
+        decoded[i] = malloc(gv_tile_bytes(channels));
+        memcpy(decoded[i], px, gv_tile_bytes(channels));
+    }
+    double psnr0 = gv_store_info(s)->header.psnr0_mdb / 1000.0;
+    printf("store %s: %ux%u, %d tiles (%d entropy-coded), %.3f bits per decoded tile pixel, level-0 PSNR %.2f dB\n",
+           argv[1], g->width, g->height, ntiles, entropy,
+           8.0 * coded_bytes / ((double)ntiles * 513 * 513), psnr0);
+
+    double cpu1 = cpu_run(1), cpun = cpu_run(gv_cpu_count());
+    printf("%-34s %9.1f MP/s\n", "CPU reference, 1 thread", cpu1);
+    printf("%-34s %9.1f MP/s  (%d threads)\n", "CPU reference, all cores", cpun, gv_cpu_count());
+
+    double gpu = 0;
+    struct gv_gpu *gpuctx = gv_gpu_open(&err);
+    if (!gpuctx) {
+        printf("%-34s unavailable: %s\n", "GPU (EGL)", err.text);
+    } else {
+        const struct gv_gpu_info *in = gv_gpu_info(gpuctx);
+        struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpuctx, channels, &err);
+        uint32_t *h = calloc((size_t)ntiles, sizeof *h), root;
+        gv_gpu_upload_tile(gd, root_tile, &root, &err);
+        double best = 1e9;
+        uint8_t *one = malloc((size_t)257 * 257 * channels);
+        for (int rep = 0; rep < 3; rep++) {
+            double t0 = now();
+            for (int i = 0; i < ntiles; i++)
+                gv_gpu_decode_tile(gd, tiles[i].buf, tiles[i].len,
+                                   tiles[i].parent < 0 ? root : h[tiles[i].parent],
+                                   (int)(tiles[i].tx & 1), (int)(tiles[i].ty & 1), &h[i], &err);
+            /* Reading back the smallest level of the last tile waits for all. */
+            gv_gpu_read_tile(gd, h[ntiles - 1], 1, one, &err);
+            double t = now() - t0;
+            if (t < best)
+                best = t;
+            for (int i = 0; i < ntiles; i++)
+                gv_gpu_release(gd, h[i]);
+        }
+        gpu = (double)ntiles * 513 * 513 / best / 1e6;
+        printf("%-34s %9.1f MP/s  (%s, %s)\n", "GPU decode (EGL)", gpu, in->renderer, in->version);
+        free(one);
+        free(h);
+        gv_gpu_release(gd, root);
+        gv_gpu_decoder_free(gd);
+        gv_gpu_close(gpuctx);
+    }
+
+    if (argc > 2) {
+        struct gv_image_info info;
+        struct gv_image_in *in = gv_image_open(argv[2], 1ull << 34, &info, &err);
+        if (!in || info.sample != GV_SAMPLE_U8) {
+            printf("JPEG anchor: cannot read %s as 8-bit\n", argv[2]);
+            return 0;
+        }
+        uint8_t *img = malloc((size_t)info.width * info.height * info.channels);
+        gv_image_read(in, info.height, img, &err);
+        gv_image_close(in);
+        /* The quality whose tiles' PSNR is closest to the store's level 0. */
+        int bestq = 0, count = 0;
+        double bestd = 1e9, p;
+        struct jpeg_tile *jt = NULL;
+        for (int q = 10; q <= 98; q += 4) {
+            int n;
+            struct jpeg_tile *t = jpeg_encode_tiles(img, info.width, info.height,
+                                                    info.channels, q, &n, &p);
+            if (fabs(p - psnr0) < bestd) {
+                if (jt)
+                    for (int i = 0; i < count; i++)
+                        free(jt[i].data);
+                free(jt);
+                jt = t;
+                count = n;
+                bestd = fabs(p - psnr0);
+                bestq = q;
+            } else {
+                for (int i = 0; i < n; i++)
+                    free(t[i].data);
+                free(t);
+            }
+        }
+        double jp = jpeg_run(jt, count);
+        printf("%-34s %9.1f MP/s  (level-0 tiles, Q%d, PSNR within %.2f dB of the store)\n",
+               "libjpeg-turbo, 1 thread (anchor)", jp, bestq, bestd);
+        printf("ratio CPU reference 1 thread / libjpeg-turbo 1 thread: %.2fx  (goal >= 3x)\n", cpu1 / jp);
+        if (gpu > 0)
+            printf("ratio GPU decode / libjpeg-turbo 1 thread: %.2fx\n", gpu / jp);
+    }
+    return 0;
+}
