@@ -196,6 +196,17 @@ static void *gl_thread(void *arg)
     return NULL;
 }
 
+/* Wait for the GL thread to end and free everything. */
+static void join_and_free(struct gv_gpu *g)
+{
+    pthread_join(g->thread, NULL);
+    pthread_mutex_destroy(&g->lock);
+    pthread_mutex_destroy(&g->call_lock);
+    pthread_cond_destroy(&g->wake);
+    pthread_cond_destroy(&g->done);
+    free(g);
+}
+
 struct gv_gpu *gv_gpu_open(struct gv_error *err)
 {
     struct gv_gpu *g = calloc(1, sizeof *g);
@@ -222,12 +233,7 @@ struct gv_gpu *gv_gpu_open(struct gv_error *err)
     if (!ok) {
         if (err)
             *err = g->open_err;
-        pthread_join(g->thread, NULL);
-        pthread_mutex_destroy(&g->lock);
-        pthread_mutex_destroy(&g->call_lock);
-        pthread_cond_destroy(&g->wake);
-        pthread_cond_destroy(&g->done);
-        free(g);
+        join_and_free(g);
         return NULL;
     }
     return g;
@@ -241,12 +247,7 @@ void gv_gpu_close(struct gv_gpu *g)
     g->stop = 1;
     pthread_cond_broadcast(&g->wake);
     pthread_mutex_unlock(&g->lock);
-    pthread_join(g->thread, NULL);
-    pthread_mutex_destroy(&g->lock);
-    pthread_mutex_destroy(&g->call_lock);
-    pthread_cond_destroy(&g->wake);
-    pthread_cond_destroy(&g->done);
-    free(g);
+    join_and_free(g);
 }
 
 const struct gv_gpu_info *gv_gpu_info(const struct gv_gpu *g)
