@@ -40,7 +40,7 @@ static const struct settings_key keys[] = {
      "worker threads (libmicrohttpd thread pool, epoll)"},
     {"cache_bytes", T_SIZE, F(cache_bytes), "256M", 0, 1e15,
      "page cache bound in bytes (K, M, G suffixes); 0 disables caching"},
-    {"decoder_cache_bytes", T_SIZE, F(decoder_cache_bytes), "16M", 0, 1e12,
+    {"decoder_cache_bytes", T_SIZE, F(decoder_cache_bytes), "128M", 0, 1e12,
      "decoded-tile cache of each CPU decoder (one per thread and store)"},
     {"max_region_pixels", T_SIZE, F(max_region_pixels), "64M", 1, 1e15,
      "largest region decoded for one request, in pixels (413 beyond)"},

@@ -1,0 +1,262 @@
+#!/bin/bash
+# http-iiif.sh: IIIF 512-pixel JPEG tiles, gigaviewd against iipsrv (Debian
+# iipimage-server, FastCGI behind nginx) in the same run, on loopback.
+#
+#   bench/http-iiif.sh [--gigaview PATH] [--gigaviewd PATH] [IMAGE...]
+#
+# Each image is encoded into a store (gigaview encode, default settings) for
+# gigaviewd, and made into a pyramid TIFF for iipsrv with
+#   vips tiffsave IN ID.tif --tile --pyramid --compression jpeg --Q 90 \
+#       --tile-width 256 --tile-height 256
+# The URL list holds, for every scale factor s in SCALES (default 1 2 4 8),
+# every tile that OpenSeadragon asks for when info.json says tiles of width
+# 512: /iiif/3/ID/x,y,w,h/W,/0/default.jpg with a region of 512*s pixels
+# (cut at the image's edge) and W = ceil(w/s). nginx maps /iiif/3/ID/REST to
+# iipsrv's IIIF=ID.tif/REST, so both servers get the very same URLs. Both
+# write JPEG at quality 90 (gigaviewd's jpeg_quality default; iipsrv's
+# JPEG_QUALITY is set to 90).
+#
+# gigaviewd runs once per decoder_cache_bytes value in GV_DECODER_CACHES
+# (default "16M 512M": the shipped default, and enough to hold every decoded
+# tile of the default inputs), each as its own process. wrk GETs random URLs
+# of the list (same seeds, so the same sequence for every server) at CONNS
+# connections for DURATION seconds per run, REPS rounds alternating between
+# the servers after a short warm-up. It reports the best req/s of each, the
+# ratio gigaviewd/iipsrv (the goal in issue 3 is >= 1.0), p50/p99/max
+# latency, errors (non-2xx/3xx and socket errors, all runs), server CPU time
+# per request, and peak RSS. Nothing is asserted: the script only reports.
+#
+# Environment:
+#   GIGAVIEW, GIGAVIEWD  binaries (default: next to bench/, or on PATH)
+#   QUICK=1        DURATION=10 and a 2 s warm-up
+#   DURATION=S     seconds per wrk run (default 30)
+#   REPS=N         rounds (default 2)
+#   CONNS=N        wrk connections (default 64); WRK_THREADS (default 2)
+#   THREADS=N      gigaviewd threads and iipsrv FastCGI processes (default 2)
+#   CACHE=SIZE     gigaviewd cache_bytes (default 256M)
+#   GV_DECODER_CACHES="16M 512M"  gigaviewd decoder_cache_bytes values
+#   IIP_CACHE_MB=N iipsrv MAX_IMAGE_CACHE_SIZE in MB (default 10, its default)
+#   SCALES="1 2 4 8"  IIIF scale factors in the URL list
+#   TMPDIR=DIR     scratch space (default /tmp)
+set -euo pipefail
+
+. "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
+
+gv_arg="" gvd_arg=""
+inputs=()
+while [ $# -gt 0 ]; do
+	case $1 in
+	--gigaview) gv_arg=$2; shift 2 ;;
+	--gigaview=*) gv_arg=${1#*=}; shift ;;
+	--gigaviewd) gvd_arg=$2; shift 2 ;;
+	--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
+	-h|--help) sed -n '2,44p' "$0"; exit 0 ;;
+	*) inputs+=("$1"); shift ;;
+	esac
+done
+
+IIPSRV=${IIPSRV:-/usr/lib/iipimage-server/iipsrv.fcgi}
+need_cmd nginx nginx
+need_cmd wrk wrk
+need_cmd curl curl
+need_cmd jq jq
+need_cmd vips libvips-tools
+need_cmd vipsheader libvips-tools
+need_cmd spawn-fcgi spawn-fcgi
+if [ ! -x "$IIPSRV" ]; then
+	echo "# $IIPSRV not found: installing Debian package iipimage-server" >&2
+	apt-get install -y iipimage-server >&2 || die "apt-get install iipimage-server failed"
+	[ -x "$IIPSRV" ] || die "$IIPSRV still missing after installing iipimage-server"
+fi
+GV_SRC=$(find_gigaview "$gv_arg")
+GVD_SRC=$(find_gigaviewd "$gvd_arg")
+QUICK=${QUICK:-0}
+if [ "$QUICK" = 1 ]; then DURATION=${DURATION:-10}; WARM=2; else DURATION=${DURATION:-30}; WARM=3; fi
+REPS=${REPS:-2}
+CONNS=${CONNS:-64}
+WRK_THREADS=${WRK_THREADS:-2}
+THREADS=${THREADS:-2}
+CACHE=${CACHE:-256M}
+GV_DECODER_CACHES=${GV_DECODER_CACHES:-16M 512M}
+IIP_CACHE_MB=${IIP_CACHE_MB:-10}
+SCALES=${SCALES:-1 2 4 8}
+export CONNS WRK_THREADS
+
+if [ ${#inputs[@]} -eq 0 ]; then
+	inputs=("$DATA_DIR/photos/Dragonfly_by_Bolly.jpg" "$DATA_DIR/large/marble-srtm-relief-10800x5400.png")
+fi
+for f in "${inputs[@]}"; do [ -r "$f" ] || die "cannot read input $f"; done
+
+WORK=$(mktemp -d "${TMPDIR:-/tmp}/gv-http-iiif.XXXXXX")
+chmod 755 "$WORK"
+trap 'http_cleanup; [ "${KEEP:-0}" = 1 ] || rm -rf "$WORK"' EXIT
+trap 'exit 130' INT TERM
+GV=$(snapshot_gigaview "$GV_SRC" "$WORK")
+cp "$GVD_SRC" "$WORK/gigaviewd"
+GVD=$WORK/gigaviewd
+write_wrk_lua "$WORK/urls.lua"
+mkdir -p "$WORK/stores" "$WORK/tif" "$WORK/nginx/tmp" "$WORK/out"
+
+echo "# encoding ${#inputs[@]} image(s): stores and pyramid TIFFs" >&2
+urls=$WORK/iiif.urls
+: >"$urls"
+ids=()
+for f in "${inputs[@]}"; do
+	id=$(basename "${f%.*}" | tr -c 'A-Za-z0-9._\n-' '_')
+	ids+=("$id")
+	"$GV" encode "$f" -o "$WORK/stores/$id.gv" >/dev/null 2>&1 || die "gigaview encode $f failed"
+	vips tiffsave "$f" "$WORK/tif/$id.tif" --tile --pyramid --compression jpeg --Q 90 \
+		--tile-width 256 --tile-height 256 || die "vips tiffsave $f failed"
+	awk -v id="$id" -v W="$(img_w "$f")" -v H="$(img_h "$f")" -v scales="$SCALES" 'BEGIN {
+		n = split(scales, sc, " ")
+		for (i = 1; i <= n; i++) {
+			s = sc[i]; t = 512 * s
+			for (y = 0; y < H; y += t) for (x = 0; x < W; x += t) {
+				w = (W - x < t) ? W - x : t; h = (H - y < t) ? H - y : t
+				printf "/iiif/3/%s/%d,%d,%d,%d/%d,/0/default.jpg\n", id, x, y, w, h, int((w + s - 1) / s)
+			}
+		}
+	}' >>"$urls"
+done
+chmod -R a+rX "$WORK/tif"
+nurls=$(wc -l <"$urls")
+
+# gigaviewd, one process per decoder cache size.
+gv_labels=() gv_pids=() gv_ports=()
+for dc in $GV_DECODER_CACHES; do
+	cat >"$WORK/gigaviewd-$dc.conf" <<EOF
+listen = "127.0.0.1"
+port = 0
+threads = $THREADS
+store_dir = "$WORK/stores"
+cache_bytes = $CACHE
+decoder_cache_bytes = $dc
+jpeg_quality = 90
+log_level = info
+access_log = "off"
+EOF
+	"$GVD" -t -c "$WORK/gigaviewd-$dc.conf" >/dev/null || die "gigaviewd rejects the configuration"
+	start_gigaviewd "$GVD" "$WORK/gigaviewd-$dc.conf" "$WORK/gigaviewd-$dc.log"
+	gv_labels+=("gigaviewd-dc$dc"); gv_pids+=("$GVD_PID"); gv_ports+=("$GVD_PORT")
+	echo "# gigaviewd (decoder_cache_bytes $dc) pid $GVD_PID on 127.0.0.1:$GVD_PORT" >&2
+done
+
+# iipsrv: THREADS FastCGI processes sharing one socket (spawn-fcgi -F), behind nginx.
+FPORT=$(free_port)
+env FILESYSTEM_PREFIX="$WORK/tif/" JPEG_QUALITY=90 VERBOSITY=1 LOGFILE="$WORK/iipsrv.log" \
+	MAX_IMAGE_CACHE_SIZE="$IIP_CACHE_MB" \
+	spawn-fcgi -a 127.0.0.1 -p "$FPORT" -F "$THREADS" -P "$WORK/iipsrv.pids" -- "$IIPSRV" >/dev/null \
+	|| die "spawn-fcgi $IIPSRV failed"
+mapfile -t IIP_PIDS <"$WORK/iipsrv.pids"
+SERVER_PIDS+=("${IIP_PIDS[@]}")
+NPORT=$(free_port)
+{
+	nginx_conf_head "$WORK/nginx"
+	cat <<EOF
+    server {
+        listen 127.0.0.1:$NPORT;
+        location ~ ^/iiif/3/([A-Za-z0-9._-]+)/(.+)\$ {
+            fastcgi_pass 127.0.0.1:$FPORT;
+            fastcgi_param QUERY_STRING "IIIF=\$1.tif/\$2";
+            fastcgi_param REQUEST_METHOD \$request_method;
+            fastcgi_param REQUEST_URI \$request_uri;
+            fastcgi_param SERVER_PROTOCOL \$server_protocol;
+            fastcgi_param HTTP_HOST \$host;
+        }
+    }
+}
+EOF
+} >"$WORK/nginx/nginx.conf"
+start_nginx "$WORK/nginx/nginx.conf" "$WORK/nginx" "$NPORT"
+echo "# iipsrv pids ${IIP_PIDS[*]} on 127.0.0.1:$FPORT behind nginx $NGX_PID (workers $NGX_WORKERS) on 127.0.0.1:$NPORT" >&2
+port_free 11211 || echo "# note: something listens on 127.0.0.1:11211 (memcached?); iipsrv may cache its output there" >&2
+
+# Check a sample of URLs: 200, image/jpeg, the same pixel size from every server.
+check() { # LABEL PORT URL -> prints "WxH bytes"
+	local f=$WORK/out/$1.jpg h
+	h=$(curl -s -o "$f" -w '%{http_code} %{content_type}' "http://127.0.0.1:$2$3") || true
+	[ "${h%%;*}" = "200 image/jpeg" ] || die "$1: $3 answered '$h' (wanted 200 image/jpeg)"
+	echo "$(img_w "$f")x$(img_h "$f") $(stat -c %s "$f")"
+}
+samples=$( (for id in "${ids[@]}"; do grep -m1 "/$id/" "$urls"; grep "/$id/" "$urls" | tail -1; done;
+	shuf -n 4 --random-source=<(yes) "$urls") )
+for u in $samples; do
+	ref=$(check iipsrv "$NPORT" "$u")
+	for i in "${!gv_labels[@]}"; do
+		got=$(check "${gv_labels[$i]}" "${gv_ports[$i]}" "$u")
+		[ "${got% *}" = "${ref% *}" ] || die "size differs on $u: iipsrv ${ref% *}, ${gv_labels[$i]} ${got% *}"
+	done
+	echo "# ok $u: ${ref% *}, iipsrv ${ref#* } bytes, gigaviewd ${got#* } bytes" >&2
+done
+
+servers=("${gv_labels[@]}" iipsrv)
+port_of() { local i; for i in "${!gv_labels[@]}"; do [ "${gv_labels[$i]}" = "$1" ] && { echo "${gv_ports[$i]}"; return; }; done; echo "$NPORT"; }
+pid_of() { local i; for i in "${!gv_labels[@]}"; do [ "${gv_labels[$i]}" = "$1" ] && { echo "${gv_pids[$i]}"; return; }; done; }
+server_pids() { if [ "$1" = iipsrv ]; then echo "${IIP_PIDS[*]} $NGX_WORKERS"; else pid_of "$1"; fi; }
+
+res=$WORK/runs
+: >"$res"
+echo "# warm-up ${WARM}s each (not reported)" >&2
+for s in "${servers[@]}"; do
+	URLS=$urls wrk -t "$WRK_THREADS" -c "$CONNS" -d "${WARM}s" -s "$WORK/urls.lua" "http://127.0.0.1:$(port_of "$s")" >/dev/null 2>&1 || true
+done
+declare -A rss_runs split_runs
+n=${#servers[@]}
+for r in $(seq "$REPS"); do
+	for k in $(seq 0 $((n - 1))); do
+		s=${servers[$(((k + r - 1) % n))]}   # rotate the order every round
+		pids=$(server_pids "$s")
+		[ "$s" = iipsrv ] || wt0=$(worker_ticks "$pids")
+		# shellcheck disable=SC2086
+		run_wrk "$s" "$(port_of "$s")" "$urls" "$DURATION" "$res" $pids
+		for p in $pids; do kill -0 "$p" 2>/dev/null || die "$s (pid $p) died during the run"; done
+		if [ "$s" != iipsrv ]; then
+			rss_runs[$s]="${rss_runs[$s]:-} $(($(status_kb VmRSS "$pids") / 1024))"
+			split_runs[$s]="${split_runs[$s]:-} $(worker_split "$wt0" "$(worker_ticks "$pids")")"
+		fi
+	done
+done
+
+runs_of() { awk -v l="$2" '$1 == l { printf "%s%.0f", (n++ ? ", " : ""), $2 }' "$1"; }
+cpu_of() { awk -v l="$2" '$1 == l { c += $10 * $6; n += $6 } END { printf "%.3f", (n ? c / n : 0) }' "$1"; }
+row() {
+	local name=$1 label=$2
+	# shellcheck disable=SC2046
+	set -- $(best_of "$res" "$label")
+	printf '| %s | %.0f | %s | %.1f | %.1f | %.1f | %d | %s | %.0f |\n' "$name" "$2" "$(runs_of "$res" "$label")" \
+		"$3" "$4" "$5" "$(sum_col "$res" "$label" 7)" "$(cpu_of "$res" "$label")" "${11}"
+}
+iip_best=$(best_of "$res" iipsrv | cut -d' ' -f2)
+
+echo "## http-iiif.sh, $(date '+%F %H:%M %Z')"
+echo
+echo "- $(machine_line); load average at the end: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "- $(describe_build "$GV_SRC")"
+echo "- gigaviewd $GVD_SRC (md5 $(md5sum "$GVD_SRC" | cut -c1-12)); iipsrv $(dpkg-query -W -f '${Version}' iipimage-server 2>/dev/null || echo '?') ($IIPSRV); $(nginx -v 2>&1 | sed 's/^nginx version: //'); $(wrk -v 2>&1 | head -1 | cut -d' ' -f1-2); vips $(vips --version | sed 's/^vips-//')"
+echo "- inputs: ${inputs[*]}"
+echo "- $nurls IIIF tile URLs (scale factors $SCALES, 512-px tiles, JPEG); stores $(du -cb "$WORK"/stores/*.gv | tail -1 | cut -f1) bytes, pyramid TIFFs $(du -cb "$WORK"/tif/*.tif | tail -1 | cut -f1) bytes"
+echo "- wrk -t$WRK_THREADS -c$CONNS -d${DURATION}s --latency --timeout 10s, random URL of the list per request, ${WARM}s warm-up, $REPS rounds alternating, best run shown"
+echo "- gigaviewd: threads = $THREADS, cache_bytes = $CACHE, jpeg_quality = 90, access_log off; iipsrv: $THREADS FastCGI processes (spawn-fcgi -F $THREADS), JPEG_QUALITY=90, MAX_IMAGE_CACHE_SIZE=$IIP_CACHE_MB MB, behind nginx (2 workers, fastcgi_pass, no upstream keepalive)"
+echo
+echo "| server | req/s (best) | runs | p50 ms | p99 ms | max ms | errors (all runs) | server CPU ms/req | bytes/resp |"
+echo "|---|---|---|---|---|---|---|---|---|"
+for s in "${gv_labels[@]}"; do row "gigaviewd, decoder_cache_bytes ${s#gigaviewd-dc}" "$s"; done
+row "iipsrv + nginx" iipsrv
+echo
+for s in "${gv_labels[@]}"; do
+	awk -v dc="${s#gigaviewd-dc}" -v a="$(best_of "$res" "$s" | cut -d' ' -f2)" -v b="$iip_best" \
+		-v ca="$(cpu_of "$res" "$s")" -v cb="$(cpu_of "$res" iipsrv)" 'BEGIN {
+		printf "- **gigaviewd (decoder_cache_bytes %s) / iipsrv: %.2fx req/s** (goal >= 1.0); server CPU per request %.2fx iipsrv+nginx'"'"'s\n", dc, (b > 0 ? a / b : 0), (cb > 0 ? ca / cb : 0) }'
+done
+echo
+for i in "${!gv_labels[@]}"; do
+	s=${gv_labels[$i]} p=${gv_pids[$i]}
+	metrics=$(curl -sf "http://127.0.0.1:${gv_ports[$i]}/metrics" || true)
+	st=$(awk 'index($1, "gigaview_http_requests_total{route=\"iiif_image\"") == 1 {
+		match($1, /status="[0-9]+"/); c[substr($1, RSTART + 8, 3)] += $2 }
+		END { for (k in c) printf "%s%s: %d", (n++ ? ", " : ""), k, c[k] }' <<<"$metrics")
+	lw=$(grep -acE ' (warn|error) ' "$WORK/gigaviewd-${s#gigaviewd-dc}.log" || true)
+	echo "- ${s}: peak RSS (VmHWM) $(($(status_kb VmHWM "$p") / 1024)) MiB (cache_bytes = $CACHE, decoder_cache_bytes = ${s#gigaviewd-dc} per decoder); VmRSS after each run (MiB):${rss_runs[$s]}; worker threads' CPU share per run (%):${split_runs[$s]}; iiif_image responses by status: ${st:-none}; $lw warn/error log line(s)."
+done
+# shellcheck disable=SC2086
+echo "- iipsrv: peak RSS $(($(status_kb VmHWM "${IIP_PIDS[@]}") / 1024)) MiB over its $THREADS processes; nginx workers $(($(status_kb VmHWM $NGX_WORKERS) / 1024)) MiB."
