@@ -1,5 +1,6 @@
 /*
  * cmd_info.c - `gigaview info STORE [--json]`: what a store holds.
+ * `gigaview info URL` (http:// or https://) lists a server's images.
  *
  * Validates the store while opening it (header, root and index CRCs), then
  * prints dimensions, levels with their tile and page grids, and the bits
@@ -9,6 +10,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "http_fetch.h"
 #include "source.h"
 #include "store.h"
 
@@ -45,6 +47,15 @@ int cmd_info(int argc, char **argv)
         return 2;
     }
     struct gv_error err;
+    if (!strncmp(path, "http://", 7) || !strncmp(path, "https://", 8)) {
+        /* A server: list its images (client/http_fetch.c). */
+        struct gv_http *h = gv_http_new(path, 30000, 0, &err);
+        int bad = !h || gv_http_print_images(h, stdout, &err) < 0;
+        if (bad)
+            fprintf(stderr, "gigaview info: %s\n", err.text);
+        gv_http_free(h);
+        return bad;
+    }
     struct gv_store *s = gv_store_open(path, &err);
     if (!s) {
         fprintf(stderr, "gigaview info: %s\n", err.text);

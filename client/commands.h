@@ -9,5 +9,6 @@
 int cmd_encode(int argc, char **argv);
 int cmd_info(int argc, char **argv);
 int cmd_export(int argc, char **argv);
+int cmd_render(int argc, char **argv);
 
 #endif

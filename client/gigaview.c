@@ -18,6 +18,7 @@ static const struct command commands[] = {
     {"encode", cmd_encode, "encode images into a store file"},
     {"info", cmd_info, "describe a store: size, levels, tiles, bits per pixel"},
     {"export", cmd_export, "decode a region of a store to PNG, TIFF or JPEG"},
+    {"render", cmd_render, "fetch tiles from gigaviewd, decode them on the GPU, write an image"},
 };
 
 static void usage(FILE *out)

@@ -6,13 +6,18 @@ set -eu
 PACKAGES="build-essential autoconf automake libtool pkg-config
   libmicrohttpd-dev libopenimageio-dev openimageio-tools libjansson-dev
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri zlib1g-dev libwebp-dev
-  libcurl4-openssl-dev time valgrind python3"
+  libcurl4-openssl-dev time valgrind python3
+  chromium nodejs"
 
 missing=""
 for p in $PACKAGES; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" ||
         missing="$missing $p"
 done
+# npm for the browser test (tests/browser): Debian's nodejs comes without
+# it, but a nodejs that bundles its own (NodeSource's) conflicts with
+# Debian's npm package, so ask for it only when there is no npm at all.
+command -v npm >/dev/null 2>&1 || missing="$missing npm"
 [ -z "$missing" ] && exit 0
 
 SUDO=""

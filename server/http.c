@@ -20,6 +20,7 @@
 #include "http.h"
 #include "log.h"
 #include "metrics.h"
+#include "router.h"
 #include "routes.h"
 
 /* ---------------------------------------------------------- error table */
@@ -261,105 +262,41 @@ double http_uptime(const struct server *srv)
            (double)(now.tv_nsec - srv->started.tv_nsec) / 1e9;
 }
 
-static int hexval(char c)
-{
-    if (c >= '0' && c <= '9')
-        return c - '0';
-    if (c >= 'a' && c <= 'f')
-        return c - 'a' + 10;
-    if (c >= 'A' && c <= 'F')
-        return c - 'A' + 10;
-    return -1;
-}
-
-/* Split path into segments and match against pattern; on success fill
- * r->param[] (pointing into r->segbuf).  Returns 1 on a match. */
-static int match(struct req *r, const char *pattern)
-{
-    const char *p = pattern, *u = r->path;
-    const char *params[HTTP_MAX_PARAMS];
-    size_t plen[HTTP_MAX_PARAMS];
-    int np = 0;
-    if (!strcmp(pattern, "/"))
-        return !strcmp(u, "/");
-    while (*p && *u) {
-        if (*p != '/' || *u != '/')
-            return 0;
-        p++;
-        u++;
-        const char *pe = strchr(p, '/'), *ue = strchr(u, '/');
-        size_t pl = pe ? (size_t)(pe - p) : strlen(p);
-        size_t ul = ue ? (size_t)(ue - u) : strlen(u);
-        if (ul == 0)
-            return 0;
-        if (pl == 1 && *p == '*') {
-            if (np == HTTP_MAX_PARAMS)
-                return 0;
-            params[np] = u;
-            plen[np++] = ul;
-        } else if (pl != ul || memcmp(p, u, pl)) {
-            return 0;
-        }
-        p += pl;
-        u += ul;
-    }
-    if (*p || *u)
-        return 0;
-    size_t total = 0;
-    for (int i = 0; i < np; i++)
-        total += plen[i] + 1;
-    free(r->segbuf);
-    r->segbuf = malloc(total + 1);
-    if (!r->segbuf)
-        return 0;
-    char *o = r->segbuf;
-    for (int i = 0; i < np; i++) {
-        memcpy(o, params[i], plen[i]);
-        o[plen[i]] = '\0';
-        r->param[i] = o;
-        o += plen[i] + 1;
-    }
-    r->nparam = np;
-    return 1;
-}
-
 /* Metrics id of a route: the first route with the same name. */
 static int metrics_id(int route)
 {
     if (route < 0)
         return -1;
     for (int i = 0; i < route; i++)
-        if (!strcmp(routes[i].name, routes[route].name))
+        if (!strcmp(router_routes[i].name, router_routes[route].name))
             return i;
     return route;
 }
 
+_Static_assert(HTTP_MAX_PARAMS >= ROUTER_MAX_PARAMS, "req.param[] too small");
+
+/* Route the request (router.c) and run its handler, or answer 404, 405
+ * or a CORS preflight. */
 static enum MHD_Result dispatch(struct req *r)
 {
-    const char *m = r->head ? "GET" : r->method;
-    char allow[64] = "";
-    int found = 0, iiif = 0;
-    for (int i = 0; i < nroutes; i++) {
-        if (!match(r, routes[i].pattern))
-            continue;
-        found = 1;
-        iiif |= routes[i].iiif;
-        if (!strcmp(m, routes[i].method)) {
-            r->route = i;
-            r->iiif = routes[i].iiif;
-            return routes[i].fn(r);
-        }
-        if (!strstr(allow, routes[i].method)) {
-            if (allow[0])
-                strcat(allow, ", ");
-            strcat(allow, routes[i].method);
-            if (!strcmp(routes[i].method, "GET"))
-                strcat(allow, ", HEAD");
-        }
+    struct router_match m;
+    enum router_result res = router_find(r->head ? "GET" : r->method, r->path, &m);
+    r->iiif = m.iiif;
+    if (res == ROUTER_MATCH) {
+        free(r->segbuf);
+        r->segbuf = m.segbuf; /* freed with the request */
+        for (int i = 0; i < m.nparam; i++)
+            r->param[i] = m.param[i];
+        r->nparam = m.nparam;
+        r->route = m.route;
+        return route_handlers[m.route](r);
     }
-    r->iiif = iiif;
-    if (!found)
+    router_match_free(&m);
+    if (res == ROUTER_NOMEM)
+        return http_send_errorf(r, GV_ENOMEM, "out of memory");
+    if (res == ROUTER_NOT_FOUND)
         return http_send_errorf(r, GV_ENOTFOUND, "no such resource");
+    const char *allow = m.allow;
     if (!strcmp(r->method, "OPTIONS")) { /* CORS preflight */
         struct MHD_Response *resp = MHD_create_response_from_buffer(
             0, (void *)"", MHD_RESPMEM_PERSISTENT);
@@ -380,28 +317,14 @@ static enum MHD_Result dispatch(struct req *r)
 }
 
 /*
- * Percent-decoding of the path and the query arguments, in place (MHD's
- * own, except that "%00" stays undecoded: a NUL would silently cut the
- * path short in every C string after this point, so "x%00.gv" would name
- * image "x").  Invalid escapes stay as they are.  Returns the new length.
+ * Percent-decoding of the path and the query arguments, in place: MHD's
+ * own, except that "%00" stays undecoded (router_unescape).
  */
 static size_t unescape(void *cls, struct MHD_Connection *conn, char *s)
 {
     (void)cls;
     (void)conn;
-    char *o = s;
-    for (const char *p = s; *p; p++) {
-        int hi, lo;
-        if (*p == '%' && (hi = hexval(p[1])) >= 0 && (lo = hexval(p[2])) >= 0 &&
-            (hi | lo) != 0) {
-            *o++ = (char)(hi << 4 | lo);
-            p += 2;
-        } else {
-            *o++ = *p;
-        }
-    }
-    *o = '\0';
-    return (size_t)(o - s);
+    return router_unescape(s);
 }
 
 static void remote_address(struct MHD_Connection *conn, char *buf, size_t size)
@@ -535,9 +458,14 @@ int http_start(struct server *srv)
 {
     const struct settings *cfg = srv->cfg;
     static const char *names[METRICS_ROUTES];
-    for (int i = 0; i < nroutes && i < METRICS_ROUTES - 1; i++)
-        names[i] = routes[i].name;
-    metrics_init(names, nroutes);
+    for (int i = 0; i < ROUTE_COUNT && i < METRICS_ROUTES - 1; i++) {
+        names[i] = router_routes[i].name;
+        if (!route_handlers[i]) {
+            log_msg(LOG_ERROR, "http", "route '%s' has no handler", names[i]);
+            return -1;
+        }
+    }
+    metrics_init(names, ROUTE_COUNT);
     clock_gettime(CLOCK_MONOTONIC, &srv->started);
     srv->listen_fd = -1;
 

@@ -49,7 +49,7 @@ struct req {
     const char *method;       /* as received; HEAD is routed as GET */
     char *path;               /* decoded path, owned */
     int head;                 /* HEAD request: headers only */
-    int route;                /* index in routes[], -1 none */
+    int route;                /* enum route_id (router.h), -1 none */
     int iiif;                 /* IIIF route: IIIF statuses, CORS "*" */
     const char *param[HTTP_MAX_PARAMS]; /* the route's '*' segments */
     int nparam;

@@ -1,24 +1,21 @@
 /*
- * routes.c - the table of every route gigaviewd answers (see routes.h).
- * Order matters only between patterns of the same shape: the first match
- * wins.
+ * routes.c - the handler of every route (see routes.h); the patterns are
+ * in router.c.
  */
 #include "routes.h"
 
-const struct route routes[] = {
-    {"GET", "/", route_home, "home", 0},
-    {"GET", "/healthz", route_healthz, "healthz", 0},
-    {"GET", "/metrics", route_metrics, "metrics", 0},
-    {"GET", "/v1/images", route_images_list, "images", 0},
-    {"GET", "/v1/images/*", route_image_info, "image", 0},
-    {"GET", "/v1/images/*/root", route_image_root, "root", 0},
-    {"GET", "/v1/images/*/tiles/*/*/*", route_tile, "tile", 0},
-    {"GET", "/v1/images/*/batch", route_batch, "batch", 0},
-    {"POST", "/v1/images/*/batch", route_batch, "batch", 0},
-    {"GET", "/v1/images/*/region", route_region, "region", 0},
-    {"GET", "/iiif/3/*", route_iiif_base, "iiif_base", 1},
-    {"GET", "/iiif/3/*/info.json", route_iiif_info, "iiif_info", 1},
-    {"GET", "/iiif/3/*/*/*/*/*", route_iiif_image, "iiif_image", 1},
+const route_fn route_handlers[ROUTE_COUNT] = {
+    [ROUTE_HOME] = route_home,
+    [ROUTE_HEALTHZ] = route_healthz,
+    [ROUTE_METRICS] = route_metrics,
+    [ROUTE_IMAGES] = route_images_list,
+    [ROUTE_IMAGE] = route_image_info,
+    [ROUTE_ROOT] = route_image_root,
+    [ROUTE_TILE] = route_tile,
+    [ROUTE_BATCH_GET] = route_batch,
+    [ROUTE_BATCH_POST] = route_batch,
+    [ROUTE_REGION] = route_region,
+    [ROUTE_IIIF_BASE] = route_iiif_base,
+    [ROUTE_IIIF_INFO] = route_iiif_info,
+    [ROUTE_IIIF_IMAGE] = route_iiif_image,
 };
-
-const int nroutes = sizeof routes / sizeof routes[0];

@@ -1,29 +1,19 @@
 /*
- * routes.h - the route table: {method, pattern, handler, name}.
- *
- * A pattern is a path whose '*' segments match any one non-empty segment
- * and become req->param[] in order; literal segments match exactly.  GET
- * routes also answer HEAD.  A path that matches with another method gets
- * 405 and an Allow header; OPTIONS gets a CORS preflight answer.  The
- * name labels the route in /metrics.  One handler file per route group.
+ * routes.h - the handler of every route: route_handlers[] maps each
+ * enum route_id (router.h, which holds the {method, pattern, name} table
+ * and the matcher) to its function.  GET routes also answer HEAD.  A path
+ * that matches with another method gets 405 and an Allow header; OPTIONS
+ * gets a CORS preflight answer.  One handler file per route group.
  */
 #ifndef GV_SERVER_ROUTES_H
 #define GV_SERVER_ROUTES_H
 
 #include "http.h"
+#include "router.h"
 
 typedef enum MHD_Result (*route_fn)(struct req *r);
 
-struct route {
-    const char *method;
-    const char *pattern;
-    route_fn fn;
-    const char *name;
-    int iiif;               /* errors and CORS as the IIIF spec wants */
-};
-
-extern const struct route routes[];
-extern const int nroutes;
+extern const route_fn route_handlers[ROUTE_COUNT];
 
 /* route_home.c */
 enum MHD_Result route_home(struct req *r);

@@ -3,6 +3,7 @@
 #
 #   tests/fuzz/campaign.sh BUILDDIR [SECONDS-PER-TARGET] [JOBS]
 #
+# FUZZ_TARGETS picks targets (default: store tile iiif router).
 # BUILDDIR was configured with --enable-fuzzing CC=clang CXX=clang++ (the
 # targets are built here if needed).  Each target starts from a copy of
 # its seed corpus (tests/fuzz/corpus/*, left untouched) in a work
@@ -17,15 +18,16 @@ secs=${2:-60}
 jobs=${3:-1}
 here=$(cd "$(dirname "$0")" && pwd)
 work=${FUZZ_WORK:-$(mktemp -d "${TMPDIR:-/tmp}/gvfuzz.XXXXXX")}
-make -C "$build" tests/fuzz/fuzz_store tests/fuzz/fuzz_tile >/dev/null ||
+targets=${FUZZ_TARGETS:-store tile iiif router}
+make -C "$build" $(for t in $targets; do printf 'tests/fuzz/fuzz_%s ' "$t"; done) >/dev/null ||
     { echo "campaign: cannot build the fuzz targets in $build" >&2; exit 2; }
 found=0
-for t in store tile; do
+for t in $targets; do
     mkdir -p "$work/$t/corpus" "$work/$t/findings"
     cp "$here/corpus/$t/"* "$work/$t/corpus/"
     before=$(ls "$work/$t/corpus" | wc -l)
     dict=
-    [ "$t" = store ] && dict="-dict=$here/store.dict"
+    [ -f "$here/$t.dict" ] && dict="-dict=$here/$t.dict"
     # -rss_limit_mb: a store claiming a huge image must not make us
     # allocate for it.  -timeout: one input must never take seconds.
     (cd "$work/$t/findings" &&

@@ -1,0 +1,515 @@
+/*
+ * http_fetch.c - libcurl transport for the native client (http_fetch.h).
+ *
+ * One curl multi handle lives as long as the struct gv_http, so its
+ * connection cache keeps connections alive across calls; a batch of
+ * transfers runs concurrently on up to MAX_CONNS connections.
+ */
+#include <ctype.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include <curl/curl.h>
+#include <jansson.h>
+
+#include "config.h"
+#include "http_fetch.h"
+#include "tile.h"
+
+#define MAX_CONNS 8
+#define MAX_BODY (64u << 20)
+
+struct gv_http {
+    char base[1024];
+    long timeout_ms;
+    int verbose;
+    CURLM *multi;
+    struct gv_http_stats st;
+};
+
+struct xfer {
+    CURL *e;
+    char url[1400];
+    struct curl_slist *hdrs;
+    uint8_t *body;
+    size_t len, cap;
+    int too_big;
+    char etag[160];
+    long status;
+    CURLcode result;
+    char errbuf[CURL_ERROR_SIZE];
+};
+
+static int curl_ready;
+
+struct gv_http *gv_http_new(const char *base, long timeout_ms, int verbose,
+                            struct gv_error *err)
+{
+    if (strncmp(base, "http://", 7) && strncmp(base, "https://", 8)) {
+        gv_fail(err, GV_EINVAL, "%s: not an http:// or https:// URL", base);
+        return NULL;
+    }
+    if (strlen(base) >= 1000) {
+        gv_fail(err, GV_EINVAL, "URL too long");
+        return NULL;
+    }
+    if (!curl_ready) {
+        if (curl_global_init(CURL_GLOBAL_DEFAULT) != CURLE_OK) {
+            gv_fail(err, GV_EIO, "http: cannot initialise libcurl");
+            return NULL;
+        }
+        curl_ready = 1;
+    }
+    struct gv_http *h = calloc(1, sizeof *h);
+    if (!h || !(h->multi = curl_multi_init())) {
+        free(h);
+        gv_fail(err, GV_ENOMEM, "http: out of memory");
+        return NULL;
+    }
+    snprintf(h->base, sizeof h->base, "%s", base);
+    size_t n = strlen(h->base);
+    while (n > 0 && h->base[n - 1] == '/')
+        h->base[--n] = 0;
+    h->timeout_ms = timeout_ms;
+    h->verbose = verbose;
+    curl_multi_setopt(h->multi, CURLMOPT_MAX_HOST_CONNECTIONS, (long)MAX_CONNS);
+    curl_multi_setopt(h->multi, CURLMOPT_MAX_TOTAL_CONNECTIONS, (long)MAX_CONNS);
+    return h;
+}
+
+void gv_http_free(struct gv_http *h)
+{
+    if (!h)
+        return;
+    curl_multi_cleanup(h->multi);
+    free(h);
+}
+
+const char *gv_http_base(const struct gv_http *h)
+{
+    return h->base;
+}
+
+void gv_http_stats(const struct gv_http *h, struct gv_http_stats *st)
+{
+    *st = h->st;
+}
+
+static size_t on_body(char *p, size_t size, size_t nmemb, void *arg)
+{
+    struct xfer *x = arg;
+    size_t n = size * nmemb;
+    if (x->len + n > MAX_BODY) {
+        x->too_big = 1;
+        return 0;
+    }
+    if (x->len + n > x->cap) {
+        size_t cap = x->cap ? x->cap : 65536;
+        while (cap < x->len + n)
+            cap *= 2;
+        uint8_t *b = realloc(x->body, cap);
+        if (!b)
+            return 0;
+        x->body = b;
+        x->cap = cap;
+    }
+    memcpy(x->body + x->len, p, n);
+    x->len += n;
+    return n;
+}
+
+static size_t on_header(char *p, size_t size, size_t nmemb, void *arg)
+{
+    struct xfer *x = arg;
+    size_t n = size * nmemb;
+    if (n > 5 && !strncasecmp(p, "ETag:", 5)) {
+        size_t i = 5, j = n;
+        while (i < j && (p[i] == ' ' || p[i] == '\t'))
+            i++;
+        while (j > i && isspace((unsigned char)p[j - 1]))
+            j--;
+        if (j - i < sizeof x->etag) {
+            memcpy(x->etag, p + i, j - i);
+            x->etag[j - i] = 0;
+        }
+    }
+    return n;
+}
+
+static int xfer_init(struct gv_http *h, struct xfer *x, const char *path,
+                     const char *if_none_match)
+{
+    memset(x, 0, sizeof *x);
+    snprintf(x->url, sizeof x->url, "%s%s", h->base, path);
+    if (!(x->e = curl_easy_init()))
+        return -1;
+    curl_easy_setopt(x->e, CURLOPT_URL, x->url);
+    curl_easy_setopt(x->e, CURLOPT_WRITEFUNCTION, on_body);
+    curl_easy_setopt(x->e, CURLOPT_WRITEDATA, x);
+    curl_easy_setopt(x->e, CURLOPT_HEADERFUNCTION, on_header);
+    curl_easy_setopt(x->e, CURLOPT_HEADERDATA, x);
+    curl_easy_setopt(x->e, CURLOPT_ERRORBUFFER, x->errbuf);
+    curl_easy_setopt(x->e, CURLOPT_TIMEOUT_MS, h->timeout_ms);
+    curl_easy_setopt(x->e, CURLOPT_CONNECTTIMEOUT_MS, h->timeout_ms);
+    curl_easy_setopt(x->e, CURLOPT_NOSIGNAL, 1L);
+    curl_easy_setopt(x->e, CURLOPT_USERAGENT, "gigaview/" PACKAGE_VERSION);
+#if LIBCURL_VERSION_NUM >= 0x075500
+    curl_easy_setopt(x->e, CURLOPT_PROTOCOLS_STR, "http,https");
+#else
+    curl_easy_setopt(x->e, CURLOPT_PROTOCOLS, (long)(CURLPROTO_HTTP | CURLPROTO_HTTPS));
+#endif
+    curl_easy_setopt(x->e, CURLOPT_PRIVATE, x);
+    if (if_none_match && *if_none_match) {
+        char hdr[200];
+        snprintf(hdr, sizeof hdr, "If-None-Match: %s", if_none_match);
+        x->hdrs = curl_slist_append(NULL, hdr);
+        if (!x->hdrs)
+            return -1;
+        curl_easy_setopt(x->e, CURLOPT_HTTPHEADER, x->hdrs);
+    }
+    return 0;
+}
+
+static void xfer_done(struct xfer *x)
+{
+    if (x->e)
+        curl_easy_cleanup(x->e);
+    curl_slist_free_all(x->hdrs);
+    free(x->body);
+    x->e = NULL;
+    x->hdrs = NULL;
+    x->body = NULL;
+}
+
+/* Run transfers x[0..n) to completion on the shared multi handle, at most
+ * IN_FLIGHT at a time (so that --timeout bounds each request, not its
+ * wait in a queue).  Statuses and results land in each xfer. */
+#define IN_FLIGHT (2 * MAX_CONNS)
+static int run_all(struct gv_http *h, struct xfer *x, size_t n,
+                   struct gv_error *err)
+{
+    size_t next = 0, active = 0;
+    CURLMcode mc = CURLM_OK;
+    while (next < n || active > 0) {
+        while (next < n && active < IN_FLIGHT) {
+            if ((mc = curl_multi_add_handle(h->multi, x[next].e)) != CURLM_OK)
+                goto out;
+            next++;
+            active++;
+        }
+        int running;
+        if ((mc = curl_multi_perform(h->multi, &running)) != CURLM_OK)
+            goto out;
+        CURLMsg *m;
+        int left;
+        while ((m = curl_multi_info_read(h->multi, &left)))
+            if (m->msg == CURLMSG_DONE) {
+                struct xfer *t;
+                curl_easy_getinfo(m->easy_handle, CURLINFO_PRIVATE, (char **)&t);
+                t->result = m->data.result;
+                curl_easy_getinfo(m->easy_handle, CURLINFO_RESPONSE_CODE, &t->status);
+                curl_multi_remove_handle(h->multi, m->easy_handle);
+                active--;
+                h->st.requests++;
+                h->st.bytes += t->len;
+                if (h->verbose) {
+                    if (t->result == CURLE_OK)
+                        fprintf(stderr, "http: GET %s -> %ld (%zu bytes)\n", t->url,
+                                t->status, t->len);
+                    else
+                        fprintf(stderr, "http: GET %s -> failed: %s\n", t->url,
+                                t->errbuf[0] ? t->errbuf
+                                             : curl_easy_strerror(t->result));
+                }
+            }
+        if (active > 0 && running > 0 &&
+            (mc = curl_multi_poll(h->multi, NULL, 0, 1000, NULL)) != CURLM_OK)
+            goto out;
+    }
+out:
+    for (size_t i = 0; i < next; i++)
+        curl_multi_remove_handle(h->multi, x[i].e);   /* no-op when done */
+    if (mc != CURLM_OK)
+        return gv_fail(err, GV_EIO, "http: %s", curl_multi_strerror(mc));
+    return 0;
+}
+
+/* Turn a finished transfer into 0 (status `want` or, if allow_304, 304)
+ * or -1 with a message naming what failed. */
+static int xfer_check(const struct gv_http *h, const struct xfer *x,
+                      const char *what, int allow_304, struct gv_error *err)
+{
+    if (x->too_big)
+        return gv_fail(err, GV_ECORRUPT, "%s: response larger than %u bytes",
+                       what, MAX_BODY);
+    switch (x->result) {
+    case CURLE_OK:
+        break;
+    case CURLE_COULDNT_CONNECT:
+    case CURLE_COULDNT_RESOLVE_HOST:
+    case CURLE_COULDNT_RESOLVE_PROXY:
+        return gv_fail(err, GV_EIO, "cannot reach the server %s: %s", h->base,
+                       x->errbuf[0] ? x->errbuf : curl_easy_strerror(x->result));
+    case CURLE_OPERATION_TIMEDOUT:
+        return gv_fail(err, GV_EIO, "%s: no complete answer from %s within %ld ms "
+                       "(--timeout)", what, h->base, h->timeout_ms);
+    case CURLE_PARTIAL_FILE:
+    case CURLE_RECV_ERROR:
+    case CURLE_GOT_NOTHING:
+        return gv_fail(err, GV_ECORRUPT, "%s: truncated response from %s: %s",
+                       what, h->base,
+                       x->errbuf[0] ? x->errbuf : curl_easy_strerror(x->result));
+    default:
+        return gv_fail(err, GV_EIO, "%s: %s", what,
+                       x->errbuf[0] ? x->errbuf : curl_easy_strerror(x->result));
+    }
+    if (x->status == 200 || (allow_304 && x->status == 304))
+        return 0;
+    /* The server's JSON error message, when there is one. */
+    char msg[200] = "";
+    json_error_t je;
+    json_t *j = x->len ? json_loadb((const char *)x->body, x->len, 0, &je) : NULL;
+    const char *m = NULL;
+    json_unpack(j, "{s:{s:s}}", "error", "message", &m);
+    if (m)
+        snprintf(msg, sizeof msg, ": %s", m);
+    json_decref(j);
+    return gv_fail(err, x->status == 404 ? GV_ENOTFOUND : GV_EIO,
+                   "%s: the server answered HTTP %ld%s", what, x->status, msg);
+}
+
+/* GET path and parse the body as JSON. */
+static json_t *get_json(struct gv_http *h, const char *path, const char *what,
+                        struct gv_error *err)
+{
+    struct xfer x;
+    if (xfer_init(h, &x, path, NULL) < 0) {
+        xfer_done(&x);
+        gv_fail(err, GV_ENOMEM, "http: out of memory");
+        return NULL;
+    }
+    json_t *j = NULL;
+    if (run_all(h, &x, 1, err) == 0 && xfer_check(h, &x, what, 0, err) == 0) {
+        json_error_t je;
+        j = json_loadb((const char *)x.body, x.len, 0, &je);
+        if (!j)
+            gv_fail(err, GV_ECORRUPT, "%s: the server sent malformed JSON (%s)",
+                    what, je.text);
+    }
+    xfer_done(&x);
+    return j;
+}
+
+int gv_http_print_images(struct gv_http *h, FILE *out, struct gv_error *err)
+{
+    json_t *j = get_json(h, "/v1/images", "image list", err);
+    if (!j)
+        return -1;
+    json_t *arr = json_object_get(j, "images");
+    if (!json_is_array(arr)) {
+        json_decref(j);
+        return gv_fail(err, GV_ECORRUPT, "image list: no \"images\" array");
+    }
+    fprintf(out, "server       %s\nimages       %zu\n", h->base, json_array_size(arr));
+    if (json_array_size(arr))
+        fprintf(out, "\n%-32s %10s %10s %6s %8s %14s\n", "id", "width", "height",
+                "levels", "channels", "bytes");
+    size_t i;
+    json_t *v;
+    json_array_foreach(arr, i, v) {
+        const char *id = "?";
+        json_int_t w = 0, hh = 0, bytes = 0;
+        int levels = 0, ch = 0;
+        json_unpack(v, "{s:s,s:I,s:I,s:i,s:i,s:I}", "id", &id, "width", &w,
+                    "height", &hh, "levels", &levels, "channels", &ch, "bytes",
+                    &bytes);
+        fprintf(out, "%-32s %10lld %10lld %6d %8d %14lld\n", id, (long long)w,
+                (long long)hh, levels, ch, (long long)bytes);
+    }
+    json_decref(j);
+    return 0;
+}
+
+static int valid_id(const char *id)
+{
+    size_t n = strlen(id);
+    if (n == 0 || n > 128 || id[0] == '.' || strstr(id, ".."))
+        return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!isalnum((unsigned char)id[i]) && !strchr("._-", id[i]))
+            return 0;
+    return 1;
+}
+
+int gv_http_image(struct gv_http *h, const char *id,
+                  struct gv_remote_image *img, struct gv_error *err)
+{
+    if (!valid_id(id))
+        return gv_fail(err, GV_ENOTFOUND, "'%s' is not a valid image id", id);
+    char path[300], what[200];
+    snprintf(path, sizeof path, "/v1/images/%s", id);
+    snprintf(what, sizeof what, "image '%s'", id);
+    json_t *j = get_json(h, path, what, err);
+    if (!j) {
+        if (err && err->code == GV_ENOTFOUND)
+            gv_fail(err, GV_ENOTFOUND, "no image '%s' on %s", id, h->base);
+        return -1;
+    }
+    memset(img, 0, sizeof *img);
+    snprintf(img->id, sizeof img->id, "%s", id);
+    json_int_t w = 0, hh = 0, rw = 0, rh = 0;
+    int rc = json_unpack(j, "{s:I,s:I,s:i,s:i,s:{s:I,s:I,s:i}}", "width", &w,
+                         "height", &hh, "channels", &img->channels,
+                         "levels_tiled", &img->levels_tiled, "root", "width", &rw,
+                         "height", &rh, "mip_count", &img->root_mips);
+    json_decref(j);
+    if (rc < 0 || w <= 0 || hh <= 0 || w > 0x7fffffff || hh > 0x7fffffff ||
+        (img->channels != 1 && img->channels != 3) || rw <= 0 || rh <= 0 ||
+        rw > 512 || rh > 512 || img->levels_tiled < 0 || img->root_mips < 1)
+        return gv_fail(err, GV_ECORRUPT, "%s: unexpected metadata from the server",
+                       what);
+    img->width = (uint32_t)w;
+    img->height = (uint32_t)hh;
+    img->root_w = (uint32_t)rw;
+    img->root_h = (uint32_t)rh;
+    return 0;
+}
+
+/* A response body to use: a fresh 200 (stored in dc) or the cached data on
+ * a 304.  Takes ownership of *cached. */
+static int settle(struct gv_http *h, struct xfer *x, const char *what,
+                  uint8_t **cached,
+                  size_t cached_len, uint8_t **out, size_t *len,
+                  struct gv_error *err)
+{
+    if (xfer_check(h, x, what, *cached != NULL, err) < 0)
+        return -1;
+    if (x->status == 304) {
+        *out = *cached;
+        *len = cached_len;
+        *cached = NULL;
+        return 1;
+    }
+    *out = x->body ? x->body : malloc(1);
+    if (!*out)
+        return gv_fail(err, GV_ENOMEM, "http: out of memory");
+    *len = x->len;
+    x->body = NULL;
+    return 0;
+}
+
+int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
+                 struct gv_disk_cache *dc, uint8_t **pixels, uint32_t *w,
+                 uint32_t *hh, struct gv_error *err)
+{
+    uint32_t mw = img->root_w, mh = img->root_h;
+    for (int m = 0; m < mip; m++) {
+        mw = (mw + 1) / 2;
+        mh = (mh + 1) / 2;
+    }
+    const size_t want = (size_t)mw * mh * img->channels;
+    char path[400], name[32], etag[160] = "", what[64];
+    snprintf(path, sizeof path, "/v1/images/%s/root?mip=%d&format=raw", img->id, mip);
+    snprintf(name, sizeof name, "root-%d", mip);
+    snprintf(what, sizeof what, "root mip %d", mip);
+    uint8_t *cached = NULL;
+    size_t clen = 0;
+    if (gv_disk_cache_get(dc, name, &cached, &clen, etag, sizeof etag) < 0 ||
+        clen != want) {
+        free(cached);
+        cached = NULL;
+        etag[0] = 0;
+    }
+    struct xfer x;
+    if (xfer_init(h, &x, path, cached ? etag : NULL) < 0) {
+        xfer_done(&x);
+        free(cached);
+        return gv_fail(err, GV_ENOMEM, "http: out of memory");
+    }
+    uint8_t *out = NULL;
+    size_t len = 0;
+    int rc = run_all(h, &x, 1, err);
+    if (rc == 0)
+        rc = settle(h, &x, what, &cached, clen, &out, &len, err);
+    if (rc >= 0 && len != want) {
+        rc = gv_fail(err, GV_ECORRUPT, "%s: %zu bytes from the server, expected "
+                     "%zu (%ux%ux%d)", what, len, want, mw, mh, img->channels);
+    } else if (rc == 0) {
+        gv_disk_cache_put(dc, name, out, len, x.etag);
+    }
+    xfer_done(&x);
+    free(cached);
+    if (rc < 0) {
+        free(out);
+        return -1;
+    }
+    *pixels = out;
+    *w = mw;
+    *hh = mh;
+    return 0;
+}
+
+int gv_http_tiles(struct gv_http *h, const struct gv_remote_image *img,
+                  struct gv_tile_want *t, size_t n, struct gv_disk_cache *dc,
+                  struct gv_error *err)
+{
+    if (n == 0)
+        return 0;
+    struct xfer *x = calloc(n, sizeof *x);
+    uint8_t **cached = calloc(n, sizeof *cached);
+    size_t *clen = calloc(n, sizeof *clen);
+    int rc = 0;
+    if (!x || !cached || !clen) {
+        rc = gv_fail(err, GV_ENOMEM, "http: out of memory");
+        goto out;
+    }
+    for (size_t i = 0; i < n && rc == 0; i++) {
+        char path[400], name[64], etag[160] = "";
+        snprintf(path, sizeof path, "/v1/images/%s/tiles/%d/%u/%u", img->id,
+                 t[i].level, t[i].tx, t[i].ty);
+        snprintf(name, sizeof name, "%d-%u-%u", t[i].level, t[i].tx, t[i].ty);
+        if (gv_disk_cache_get(dc, name, &cached[i], &clen[i], etag, sizeof etag) == 0 &&
+            gv_tilebuf_check(cached[i], clen[i], img->channels, NULL) < 0) {
+            free(cached[i]);   /* damaged entry: fetch afresh */
+            cached[i] = NULL;
+        }
+        if (xfer_init(h, &x[i], path, cached[i] ? etag : NULL) < 0)
+            rc = gv_fail(err, GV_ENOMEM, "http: out of memory");
+    }
+    if (rc == 0)
+        rc = run_all(h, x, n, err);
+    for (size_t i = 0; i < n && rc == 0; i++) {
+        char what[96], name[64];
+        snprintf(what, sizeof what, "tile %d/%u/%u", t[i].level, t[i].tx, t[i].ty);
+        snprintf(name, sizeof name, "%d-%u-%u", t[i].level, t[i].tx, t[i].ty);
+        int s = settle(h, &x[i], what, &cached[i], clen[i], &t[i].buf,
+                       &t[i].len, err);
+        if (s < 0) {
+            rc = -1;
+            break;
+        }
+        struct gv_error te;
+        if (gv_tilebuf_check(t[i].buf, t[i].len, img->channels, &te) < 0) {
+            rc = gv_fail(err, GV_ECORRUPT, "%s from %s is corrupt (%zu bytes): %s",
+                         what, h->base, t[i].len, te.text);
+            break;
+        }
+        if (s == 1)
+            h->st.revalidated++;
+        else {
+            h->st.downloaded++;
+            gv_disk_cache_put(dc, name, t[i].buf, t[i].len, x[i].etag);
+        }
+    }
+out:
+    for (size_t i = 0; x && i < n; i++)
+        xfer_done(&x[i]);
+    for (size_t i = 0; cached && i < n; i++)
+        free(cached[i]);
+    free(x);
+    free(cached);
+    free(clen);
+    return rc;
+}

@@ -1,0 +1,77 @@
+/*
+ * http_fetch.h - the native client's side of the gigaviewd API
+ * (docs/API.md) over libcurl: image list and metadata (JSON), the root
+ * level as raw samples, and compressed tiles fetched in parallel (curl
+ * multi, keep-alive) with the on-disk cache and ETag revalidation.
+ *
+ * Every failure becomes a one-line message in *err: the server cannot be
+ * reached, a transfer timed out or was cut short, the server answered an
+ * error (its JSON message is quoted), or a tile failed gv_tilebuf_check.
+ */
+#ifndef GV_HTTP_FETCH_H
+#define GV_HTTP_FETCH_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "error.h"
+#include "tile_cache_disk.h"
+
+struct gv_http;
+
+struct gv_http_stats {
+    uint64_t requests;     /* HTTP requests made */
+    uint64_t downloaded;   /* tiles that came with a body (200) */
+    uint64_t revalidated;  /* tiles confirmed by 304 from the disk cache */
+    uint64_t bytes;        /* body bytes received */
+};
+
+/* base: "http://host:port" or "https://..." (a trailing '/' is dropped).
+ * timeout_ms bounds every request, connection included.  verbose: log
+ * each request to stderr. */
+struct gv_http *gv_http_new(const char *base, long timeout_ms, int verbose,
+                            struct gv_error *err);
+void gv_http_free(struct gv_http *h);
+const char *gv_http_base(const struct gv_http *h);
+void gv_http_stats(const struct gv_http *h, struct gv_http_stats *st);
+
+/* Print the server's images (GET /v1/images), one line each, to out. */
+int gv_http_print_images(struct gv_http *h, FILE *out, struct gv_error *err);
+
+/* What the client needs of GET /v1/images/{id}. */
+struct gv_remote_image {
+    char id[129];
+    uint32_t width, height;
+    int channels;
+    int levels_tiled;      /* = the root level */
+    uint32_t root_w, root_h;
+    int root_mips;
+};
+
+/* Fetch an image's metadata.  An unknown image is GV_ENOTFOUND. */
+int gv_http_image(struct gv_http *h, const char *id,
+                  struct gv_remote_image *img, struct gv_error *err);
+
+/* Root mip `mip` as raw samples (w x h x channels, malloc'ed), through
+ * the disk cache dc (may be NULL). */
+int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
+                 struct gv_disk_cache *dc, uint8_t **pixels, uint32_t *w,
+                 uint32_t *hh, struct gv_error *err);
+
+struct gv_tile_want {
+    int level;
+    uint32_t tx, ty;
+    uint8_t *buf;          /* filled: malloc'ed tile buffer, checked */
+    size_t len;
+};
+
+/* Fetch every tile of t[0..n) in parallel, through dc (may be NULL):
+ * cached entries are revalidated with If-None-Match.  Each buffer is
+ * checked with gv_tilebuf_check.  On failure the buffers already filled
+ * stay filled (the caller frees them all). */
+int gv_http_tiles(struct gv_http *h, const struct gv_remote_image *img,
+                  struct gv_tile_want *t, size_t n, struct gv_disk_cache *dc,
+                  struct gv_error *err);
+
+#endif

@@ -1,0 +1,86 @@
+/*
+ * router.h - gigaviewd's route matching and path decoding: pure string
+ * functions, no libmicrohttpd types, so that tests/fuzz/fuzz_router.c can
+ * drive them directly.
+ *
+ * The table router_routes[] holds {method, pattern, name, iiif} for every
+ * route, indexed by enum route_id; routes.c pairs each id with its
+ * handler.  A pattern is a path whose '*' segments match any one
+ * non-empty segment and are captured in order; literal segments match
+ * exactly; "/" matches only "/".  An empty segment ("//", a trailing '/')
+ * never matches.  The first route whose pattern and method both match
+ * wins.  A path that some pattern matches under other methods only is
+ * "method not allowed", with the methods it does accept (GET counting for
+ * HEAD too) listed for an Allow header.
+ */
+#ifndef GV_SERVER_ROUTER_H
+#define GV_SERVER_ROUTER_H
+
+#include <stddef.h>
+
+#define ROUTER_MAX_PARAMS 8
+
+enum route_id {
+    ROUTE_HOME,
+    ROUTE_HEALTHZ,
+    ROUTE_METRICS,
+    ROUTE_IMAGES,
+    ROUTE_IMAGE,
+    ROUTE_ROOT,
+    ROUTE_TILE,
+    ROUTE_BATCH_GET,
+    ROUTE_BATCH_POST,
+    ROUTE_REGION,
+    ROUTE_IIIF_BASE,
+    ROUTE_IIIF_INFO,
+    ROUTE_IIIF_IMAGE,
+    ROUTE_COUNT
+};
+
+struct router_route {
+    const char *method;
+    const char *pattern;
+    const char *name;       /* the label in /metrics */
+    int iiif;               /* errors and CORS as the IIIF spec wants */
+};
+
+extern const struct router_route router_routes[ROUTE_COUNT];
+
+enum router_result {
+    ROUTER_MATCH = 0,       /* m->route is the route to run */
+    ROUTER_NOT_FOUND,       /* no pattern matches the path */
+    ROUTER_BAD_METHOD,      /* patterns match, not with this method: m->allow */
+    ROUTER_NOMEM,           /* the parameters could not be stored */
+};
+
+struct router_match {
+    int route;              /* enum route_id; -1 unless ROUTER_MATCH */
+    int iiif;               /* the route's flag, or (no match) that of any
+                               route whose pattern matched the path */
+    int nparam;
+    char *param[ROUTER_MAX_PARAMS]; /* the '*' segments, NUL-terminated */
+    char *segbuf;           /* storage of param[]: router_match_free */
+    char allow[64];         /* "GET, HEAD, POST" style; "" if none */
+};
+
+/* Match `path` (already percent-decoded) with `method` ("GET" for a HEAD
+ * request) against router_routes[].  Always fills *m (route -1, no
+ * parameters, unless ROUTER_MATCH); call router_match_free after. */
+enum router_result router_find(const char *method, const char *path,
+                               struct router_match *m);
+
+void router_match_free(struct router_match *m);
+
+/* Match one pattern: the number of '*' segments captured (pointers into
+ * path and their lengths in seg[]/len[], at most max), or -1. */
+int router_match_pattern(const char *pattern, const char *path,
+                         const char **seg, size_t *len, int max);
+
+/* Percent-decode s in place (the path and every query argument): "%XY"
+ * with two hex digits becomes that byte, except "%00", which stays as it
+ * is (a NUL would silently cut the string short, so "x%00.gv" would name
+ * image "x"); invalid escapes stay as they are.  Returns the new length,
+ * which is also strlen(s). */
+size_t router_unescape(char *s);
+
+#endif
