@@ -54,6 +54,13 @@ unsigned gv_gpu_program(const struct gv_gpu *g, const char *vertex,
                         const char *fragment, char **listing,
                         struct gv_error *err);
 
+/* The same as GLSL ES 3.00 without storage buffers ("#version 300 es"),
+ * the language of WebGL2: used to test the browser's variant of the shared
+ * shaders on EGL.  Needs an OpenGL ES context. */
+unsigned gv_gpu_program_es300(const struct gv_gpu *g, const char *vertex,
+                              const char *fragment, char **listing,
+                              struct gv_error *err);
+
 /* Compile and link a compute program from a shared GLSL body, as
  * gv_gpu_program does.  GL thread only; returns 0 on failure. */
 unsigned gv_gpu_compute_program(const struct gv_gpu *g, const char *compute,

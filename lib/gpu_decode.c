@@ -20,12 +20,18 @@
 #include "tile.h"
 #include "tile_rans.h"
 
+#define WORDS_WIDTH 1024   /* texels per row of the WebGL2 words texture */
+
 struct gv_gpu_decoder {
     struct gv_gpu *gpu;
     int channels;
+    enum gv_gpu_path path;
     GLuint decode, quarter, rans, fbo, vao, ssbo, indices;
+    GLuint words_tex, indices_tex;     /* WebGL2 path */
     GLint dec_parent, dec_quadrant, dec_channels, q_parent, q_quadrant;
     GLint rans_rate, rans_tables;
+    GLint dec_words, dec_words_width, dec_indices;
+    uint16_t *cpu_indices;             /* WebGL2 path: rANS decoded here */
 };
 
 struct job {
@@ -50,15 +56,19 @@ static int setup(void *arg, struct gv_error *err)
 {
     struct gv_gpu_decoder *d = ((struct job *)arg)->d;
     char *listing = NULL;
-    d->decode = gv_gpu_program(d->gpu, gv_shader_fullscreen_vert,
-                               gv_shader_tile_decode_frag, &listing, err);
+    const int webgl2 = d->path == GV_GPU_PATH_WEBGL2;
+    unsigned (*program)(const struct gv_gpu *, const char *, const char *,
+                        char **, struct gv_error *) =
+        webgl2 ? gv_gpu_program_es300 : gv_gpu_program;
+    d->decode = program(d->gpu, gv_shader_fullscreen_vert,
+                        gv_shader_tile_decode_frag, &listing, err);
     if (d->decode)
-        d->quarter = gv_gpu_program(d->gpu, gv_shader_fullscreen_vert,
-                                    gv_shader_quarter_copy_frag, &listing, err);
-    if (d->quarter)
+        d->quarter = program(d->gpu, gv_shader_fullscreen_vert,
+                             gv_shader_quarter_copy_frag, &listing, err);
+    if (d->quarter && !webgl2)
         d->rans = gv_gpu_compute_program(d->gpu, gv_shader_rans_decode_comp,
                                          &listing, err);
-    if (!d->decode || !d->quarter || !d->rans) {
+    if (!d->decode || !d->quarter || (!webgl2 && !d->rans)) {
         /* Our own shader failing is a bug or a broken driver: show why. */
         if (listing)
             fprintf(stderr, "%s", listing);
@@ -70,10 +80,25 @@ static int setup(void *arg, struct gv_error *err)
     d->dec_channels = glGetUniformLocation(d->decode, "u_channels");
     d->q_parent = glGetUniformLocation(d->quarter, "u_parent");
     d->q_quadrant = glGetUniformLocation(d->quarter, "u_quadrant");
-    d->rans_rate = glGetUniformLocation(d->rans, "u_rate");
-    d->rans_tables = glGetUniformLocation(d->rans, "u_tables");
     glGenFramebuffers(1, &d->fbo);
     glGenVertexArrays(1, &d->vao);
+    if (webgl2) {
+        d->dec_words = glGetUniformLocation(d->decode, "u_words");
+        d->dec_words_width = glGetUniformLocation(d->decode, "u_words_width");
+        d->dec_indices = glGetUniformLocation(d->decode, "u_indices");
+        glGenTextures(1, &d->words_tex);
+        glGenTextures(1, &d->indices_tex);
+        glBindTexture(GL_TEXTURE_2D, d->indices_tex);
+        glTexStorage2D(GL_TEXTURE_2D, 1, GL_R16UI, GV_BLOCKS, GV_BLOCKS);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        d->cpu_indices = malloc(GV_NBLOCKS * sizeof *d->cpu_indices);
+        if (!d->cpu_indices)
+            return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        return gl_failed(err, "decoder set-up");
+    }
+    d->rans_rate = glGetUniformLocation(d->rans, "u_rate");
+    d->rans_tables = glGetUniformLocation(d->rans, "u_tables");
     glGenBuffers(1, &d->ssbo);
     glGenBuffers(1, &d->indices);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices);
@@ -86,6 +111,13 @@ static int setup(void *arg, struct gv_error *err)
 struct gv_gpu_decoder *gv_gpu_decoder_new(struct gv_gpu *g, int channels,
                                           struct gv_error *err)
 {
+    return gv_gpu_decoder_new_path(g, channels, GV_GPU_PATH_SSBO, err);
+}
+
+struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
+                                               enum gv_gpu_path path,
+                                               struct gv_error *err)
+{
     struct gv_gpu_decoder *d = calloc(1, sizeof *d);
     if (!d) {
         gv_fail(err, GV_ENOMEM, "gpu: out of memory");
@@ -93,6 +125,7 @@ struct gv_gpu_decoder *gv_gpu_decoder_new(struct gv_gpu *g, int channels,
     }
     d->gpu = g;
     d->channels = channels;
+    d->path = path;
     struct job j = {.d = d};
     if (gv_gpu_call(g, setup, &j, err) < 0) {
         gv_gpu_decoder_free(d);
@@ -113,6 +146,10 @@ static int teardown(void *arg, struct gv_error *err)
         glDeleteProgram(d->rans);
     if (d->indices)
         glDeleteBuffers(1, &d->indices);
+    if (d->words_tex)
+        glDeleteTextures(1, &d->words_tex);
+    if (d->indices_tex)
+        glDeleteTextures(1, &d->indices_tex);
     if (d->fbo)
         glDeleteFramebuffers(1, &d->fbo);
     if (d->vao)
@@ -128,6 +165,7 @@ void gv_gpu_decoder_free(struct gv_gpu_decoder *d)
         return;
     struct job j = {.d = d};
     gv_gpu_call(d->gpu, teardown, &j, NULL);
+    free(d->cpu_indices);
     free(d);
 }
 
@@ -203,6 +241,38 @@ static void draw_into(GLuint fbo, GLuint tex, int mip, int size)
     glDrawArrays(GL_TRIANGLES, 0, 3);
 }
 
+/* WebGL2 path: the tile buffer as an R32UI texture (texture unit 1) and,
+ * for an entropy-coded tile, its indices decoded here as R16UI (unit 2). */
+static int upload_webgl2(struct gv_gpu_decoder *d, const uint8_t *buf,
+                         size_t len, struct gv_error *err)
+{
+    const size_t words = len / 4;
+    const size_t rows = (words + WORDS_WIDTH - 1) / WORDS_WIDTH;
+    uint32_t *padded = calloc(rows * WORDS_WIDTH, sizeof *padded);
+    if (!padded)
+        return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+    for (size_t i = 0; i < words; i++)
+        padded[i] = gv_get32(buf + 4 * i);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, d->words_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_R32UI, WORDS_WIDTH, (GLsizei)rows, 0,
+                 GL_RED_INTEGER, GL_UNSIGNED_INT, padded);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    free(padded);
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D, d->indices_tex);
+    if (buf[0] & GV_TILE_ENTROPY) {
+        if (gv_rans_unpack(buf, len, buf[0] & 0x0f, d->channels, d->cpu_indices,
+                           err) < 0)
+            return -1;
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 2);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GV_BLOCKS, GV_BLOCKS,
+                        GL_RED_INTEGER, GL_UNSIGNED_SHORT, d->cpu_indices);
+    }
+    return 0;
+}
+
 static int decode(void *arg, struct gv_error *err)
 {
     struct job *j = arg;
@@ -217,6 +287,28 @@ static int decode(void *arg, struct gv_error *err)
     glUniform2i(d->q_quadrant, j->qx, j->qy);
     draw_into(d->fbo, tex, 1, 257);
     /* Pass 2: prediction plus residual into mip 0. */
+    if (d->path == GV_GPU_PATH_WEBGL2) {
+        if (upload_webgl2(d, j->buf, j->len, err) < 0) {
+            glDeleteTextures(1, &tex);
+            return -1;
+        }
+        glUseProgram(d->decode);
+        glUniform1i(d->dec_parent, 0);
+        glUniform1i(d->dec_words, 1);
+        glUniform1i(d->dec_words_width, WORDS_WIDTH);
+        glUniform1i(d->dec_indices, 2);
+        glUniform2i(d->dec_quadrant, j->qx, j->qy);
+        glUniform1i(d->dec_channels, d->channels);
+        draw_into(d->fbo, tex, 0, GV_TILE);
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glActiveTexture(GL_TEXTURE0);
+        j->handle = tex;
+        if (gl_failed(err, "tile decode") < 0) {
+            glDeleteTextures(1, &tex);
+            return -1;
+        }
+        return 0;
+    }
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->ssbo);
     glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)j->len, j->buf, GL_STREAM_DRAW);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo);

@@ -19,9 +19,21 @@
 
 struct gv_gpu_decoder;
 
-/* Compile the decode programs for tiles of `channels` channels. */
+/* How the shader reads a tile buffer: from a shader storage buffer, with
+ * rANS streams decoded by a compute pass (GLSL ES 3.10 / GL 4.30), or as
+ * WebGL2 does (GLSL ES 3.00): the buffer as an R32UI texture and rANS
+ * streams decoded on the CPU into an R16UI index texture. */
+enum gv_gpu_path { GV_GPU_PATH_SSBO, GV_GPU_PATH_WEBGL2 };
+
+/* Compile the decode programs for tiles of `channels` channels (the SSBO
+ * path). */
 struct gv_gpu_decoder *gv_gpu_decoder_new(struct gv_gpu *g, int channels,
                                           struct gv_error *err);
+
+/* The same for a chosen path; GV_GPU_PATH_WEBGL2 needs an ES context. */
+struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
+                                               enum gv_gpu_path path,
+                                               struct gv_error *err);
 
 /* Free every texture and program.  NULL does nothing. */
 void gv_gpu_decoder_free(struct gv_gpu_decoder *d);

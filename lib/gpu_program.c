@@ -106,12 +106,12 @@ unsigned gv_gpu_compute_program(const struct gv_gpu *g, const char *compute,
     return prog;
 }
 
-unsigned gv_gpu_program(const struct gv_gpu *g, const char *vertex,
-                        const char *fragment, char **listing,
-                        struct gv_error *err)
+static unsigned program_with_head(const char *head, const char *vertex,
+                                  const char *fragment, char **listing,
+                                  struct gv_error *err)
 {
-    char *vs = with_head(version_head(g), vertex);
-    char *fs = with_head(version_head(g), fragment);
+    char *vs = with_head(head, vertex);
+    char *fs = with_head(head, fragment);
     GLuint prog = 0, v = 0, f = 0;
     if (!vs || !fs) {
         gv_fail(err, GV_ENOMEM, "gpu: out of memory");
@@ -132,4 +132,22 @@ out:
     free(vs);
     free(fs);
     return prog;
+}
+
+unsigned gv_gpu_program(const struct gv_gpu *g, const char *vertex,
+                        const char *fragment, char **listing,
+                        struct gv_error *err)
+{
+    return program_with_head(version_head(g), vertex, fragment, listing, err);
+}
+
+unsigned gv_gpu_program_es300(const struct gv_gpu *g, const char *vertex,
+                              const char *fragment, char **listing,
+                              struct gv_error *err)
+{
+    if (!gv_gpu_info(g)->es) {
+        gv_fail(err, GV_EFORMAT, "gpu: GLSL ES 3.00 needs an OpenGL ES context");
+        return 0;
+    }
+    return program_with_head("#version 300 es\n", vertex, fragment, listing, err);
 }

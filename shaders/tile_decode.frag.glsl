@@ -5,12 +5,13 @@
 // One source for every GPU decoder: the embedding program prepends the
 // #version line and, where shader storage buffers exist (GLSL ES 3.10+,
 // GLSL 4.30), "#define GV_SSBO 1"; WebGL2 (GLSL ES 3.00) reads the tile
-// buffer from an R32UI texture instead, GV_WORDS_WIDTH words per row.
+// buffer from an R32UI texture instead, u_words_width words per row.  Both
+// variants are tested bit for bit on EGL (tests/test_gpu_decode.c).
 // Integer arithmetic only: the parent is an RGBA8UI texture read with
 // texelFetch, so no filtering or float rounding takes part.  Entropy-coded
-// tiles (byte 0 bit 7) need their indices decoded first by
-// rans_decode.comp.glsl (storage buffers only; WebGL2 clients are served
-// the fixed layout, see docs/FORMAT.md section 4.1).
+// tiles (byte 0 bit 7) need their indices decoded first: by
+// rans_decode.comp.glsl where there are compute shaders, on the CPU
+// otherwise (WebGL2), uploaded as a texture.
 
 precision highp float;
 precision highp int;
@@ -26,9 +27,12 @@ uint word_at(int i) { return words[i]; }
 // Indices of an entropy-coded tile, decoded by rans_decode.comp.glsl.
 layout(std430, binding = 1) readonly buffer Indices { uint indices[]; };
 #else
-uniform usampler2D u_words;    // tile buffer as R32UI, GV_WORDS_WIDTH wide
+uniform usampler2D u_words;    // tile buffer as R32UI, u_words_width wide
 uniform int u_words_width;
 uint word_at(int i) { return texelFetch(u_words, ivec2(i % u_words_width, i / u_words_width), 0).r; }
+// Indices of an entropy-coded tile, decoded on the CPU (no compute shaders
+// here) and uploaded as a 257x257 R16UI texture.
+uniform usampler2D u_indices;
 #endif
 
 out uvec4 o_color;
@@ -85,11 +89,13 @@ void main()
         int dim = 4 * u_channels;
         int block = (uv.y >> 1) * 257 + (uv.x >> 1);
         int idx;
-#ifdef GV_SSBO
         if ((byte_at(0) & 128) != 0)
+#ifdef GV_SSBO
             idx = int(indices[block]);
-        else
+#else
+            idx = int(texelFetch(u_indices, ivec2(uv.x >> 1, uv.y >> 1), 0).r);
 #endif
+        else
             idx = bits_at(8 * (1 + (1 << r) * dim) + block * r, r);
         int at = 1 + idx * dim + ((uv.y & 1) * 2 + (uv.x & 1)) * u_channels;
         for (int c = 0; c < 3; c++) {

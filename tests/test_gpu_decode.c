@@ -20,6 +20,11 @@
 
 static char dir[] = "/tmp/gv-test-gpu-XXXXXX";
 
+static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
+                       enum gv_gpu_path path);
+
+/* Encode `input` and check it on both shader paths: storage buffers with
+ * the compute pass, and WebGL2's GLSL ES 3.00 with textures. */
 static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
                         int max_rate)
 {
@@ -34,13 +39,22 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     const char *in[1] = {input};
     if (gv_encode(in, 1, out, &o, &r, &err) < 0)
         fail("encode %s: %s", input, err.text);
+    check_path(gpu, input, out, GV_GPU_PATH_SSBO);
+    check_path(gpu, input, out, GV_GPU_PATH_WEBGL2);
+    unlink(out);
+}
+
+static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
+                       enum gv_gpu_path path)
+{
+    struct gv_error err;
     struct gv_store *s = gv_store_open(out, &err);
     if (!s)
         fail("open: %s", err.text);
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     const int c = g->channels;
     struct gv_decoder *cpu = gv_decoder_new(s, 64u << 20);
-    struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpu, c, &err);
+    struct gv_gpu_decoder *gd = gv_gpu_decoder_new_path(gpu, c, path, &err);
     if (!gd)
         fail("gpu decoder: %s", err.text);
     const size_t tb = gv_tile_bytes(c);
@@ -114,15 +128,15 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
             snprintf(rs + strlen(rs), sizeof rs - strlen(rs), " r%d:%d", q, rates[q]);
     const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
     check(mismatched == 0 && quarter_bad == 0 && tiles > 0,
-          "%s: %d tiles (%s; %d entropy-coded) decode identically on the GPU "
-          "(%d differ, %d mip-1 rows differ)", name, tiles, rs + 1, coded,
-          mismatched, quarter_bad);
+          "%s, %s: %d tiles (%s; %d entropy-coded) decode identically on the GPU "
+          "(%d differ, %d mip-1 rows differ)", name,
+          path == GV_GPU_PATH_SSBO ? "GLSL ES 3.10 + compute" : "GLSL ES 3.00 (WebGL2)",
+          tiles, rs + 1, coded, mismatched, quarter_bad);
     free(px);
     free(quarter);
     gv_gpu_decoder_free(gd);
     gv_decoder_free(cpu);
     gv_store_close(s);
-    unlink(out);
 }
 
 int main(int argc, char **argv)
@@ -144,14 +158,14 @@ int main(int argc, char **argv)
     if (argc > 1) {
         /* Explicit inputs (used to check a machine without the test data,
          * e.g. one with a real GPU): INPUT PSNR MAXRATE triples. */
-        tap_plan((argc - 1) / 3);
+        tap_plan(2 * ((argc - 1) / 3));
         for (int i = 1; i + 2 < argc; i += 3)
             check_store(gpu, argv[i], atof(argv[i + 1]), atoi(argv[i + 2]));
         rmdir(dir);
         gv_gpu_close(gpu);
         return tap_done();
     }
-    tap_plan(6);
+    tap_plan(12);
     check_store(gpu, picos, 36.0, 10);
     check_store(gpu, picos, 41.0, 10);                  /* rates 8 to 10 */
     check_store(gpu, "synth:1500x1100", 60.0, 12);     /* rates up to the cap */
