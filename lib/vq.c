@@ -26,20 +26,31 @@ static inline int32_t pack_pair(int a, int b)
                      (uint16_t)(int16_t)a);
 }
 
+/* Padding codevectors fill the SIMD lanes past k: -32000 in the first two
+ * dimensions and 0 elsewhere.  Against any residual (|x| <= 255) their
+ * distance is over 2.08e9, far above any real one (at most 12 * 383^2),
+ * yet the int16 differences and the int32 sums cannot overflow; so they are
+ * never chosen and every path returns what the portable loop returns. */
+#define PAD_VALUE (-32000)
+
 void vq_search_prepare(struct vq_search *s, const int8_t *book, int k, int dim)
 {
     s->k = k;
     s->dim = dim;
-    for (int j = 0; j < dim / 2; j++)
+    s->kpad = (k + 15) & ~15;
+    for (int j = 0; j < dim / 2; j++) {
         for (int i = 0; i < k; i++)
-            s->pairs[j * k + i] =
+            s->pairs[j * s->kpad + i] =
                 pack_pair(book[i * dim + 2 * j], book[i * dim + 2 * j + 1]);
+        for (int i = k; i < s->kpad; i++)
+            s->pairs[j * s->kpad + i] = j == 0 ? pack_pair(PAD_VALUE, PAD_VALUE) : 0;
+    }
 }
 
 static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
                              size_t n, uint16_t *idx, uint32_t *dist)
 {
-    const int k = s->k, pairs = s->dim / 2;
+    const int k = s->k, pairs = s->dim / 2, stride = s->kpad;
     for (size_t i = 0; i < n; i++) {
         const int16_t *x = vecs + i * VQ_STRIDE;
         uint32_t best = UINT32_MAX;
@@ -47,7 +58,7 @@ static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
         for (int c = 0; c < k; c++) {
             uint32_t d = 0;
             for (int j = 0; j < pairs; j++) {
-                int32_t p = s->pairs[j * k + c];
+                int32_t p = s->pairs[j * stride + c];
                 int d0 = x[2 * j] - (int16_t)(p & 0xffff);
                 int d1 = x[2 * j + 1] - (int16_t)((uint32_t)p >> 16);
                 d += (uint32_t)(d0 * d0 + d1 * d1);
@@ -68,7 +79,7 @@ __attribute__((target("avx2"))) static void
 nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
              uint16_t *idx, uint32_t *dist)
 {
-    const int k = s->k, pairs = s->dim / 2;
+    const int k = s->kpad, pairs = s->dim / 2;
     const __m256i step = _mm256_set1_epi32(8);
     for (size_t i = 0; i < n; i++) {
         const int16_t *x = vecs + i * VQ_STRIDE;
@@ -113,7 +124,7 @@ __attribute__((target("avx512f,avx512bw"))) static void
 nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
                uint16_t *idx, uint32_t *dist)
 {
-    const int k = s->k, pairs = s->dim / 2;
+    const int k = s->kpad, pairs = s->dim / 2;
     const __m512i step = _mm512_set1_epi32(16);
     const __m512i first = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
                                             11, 12, 13, 14, 15);
@@ -158,11 +169,11 @@ void vq_nearest(const struct vq_search *s, const int16_t *vecs, size_t n,
                       !getenv("GIGAVIEW_NO_AVX512");
         have_avx2 = __builtin_cpu_supports("avx2") ? 1 : 0;
     }
-    if (have_avx512 && s->k % 16 == 0) {
+    if (have_avx512) {
         nearest_avx512(s, vecs, n, idx, dist);
         return;
     }
-    if (have_avx2 && s->k % 8 == 0) {
+    if (have_avx2) {
         nearest_avx2(s, vecs, n, idx, dist);
         return;
     }

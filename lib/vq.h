@@ -21,6 +21,7 @@
  * lanes, [dim/2][k] (structure of arrays). */
 struct vq_search {
     int k, dim;
+    int kpad;               /* k rounded up to 16: the SIMD row stride */
     int32_t pairs[VQ_MAXDIM / 2 * VQ_MAXK];
 };
 
