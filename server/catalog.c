@@ -235,7 +235,8 @@ int catalog_scan(struct catalog *c)
         next[n++] = img;
     }
     closedir(d);
-    qsort(next, (size_t)n, sizeof *next, by_id);
+    if (n > 0)   /* an empty directory leaves next NULL, which qsort may not take */
+        qsort(next, (size_t)n, sizeof *next, by_id);
 
     pthread_mutex_lock(&c->lock);
     for (int i = 0; i < n; i++)

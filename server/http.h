@@ -30,6 +30,8 @@
 #include "error.h"
 #include "page_cache.h"
 
+struct gv_gpu;
+
 struct server {
     const struct settings *cfg;
     struct catalog *catalog;
@@ -38,6 +40,13 @@ struct server {
     int listen_fd;            /* after quiesce: closed after stop */
     uint16_t port;
     struct timespec started;  /* CLOCK_MONOTONIC */
+    /* The EGL context opened at start-up (gpu = auto), closed after the
+     * drain; NULL when disabled or when no context could be made, and then
+     * gpu_reason says why.  Set before http_start, read-only after.  No
+     * route uses the GPU yet: only /healthz reports it (server-side filters
+     * come later and will run through gv_gpu_call). */
+    struct gv_gpu *gpu;
+    char gpu_reason[sizeof ((struct gv_error *)0)->text];
 };
 
 #define HTTP_MAX_PARAMS 8

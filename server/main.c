@@ -4,8 +4,9 @@
  *   gigaviewd [-c FILE] [-t] [-p PORT] [-d STOREDIR] [-l ADDR]
  *
  * Life cycle: read the configuration (defaults, then FILE, then the
- * command-line overrides), scan the store directory, start the HTTP
- * daemon, log "listening on http://ADDR:PORT/", then wait for signals in
+ * command-line overrides), scan the store directory, open the GPU context
+ * (gpu = auto; on failure one error line and the daemon serves without
+ * it), start the HTTP daemon, log "listening on http://ADDR:PORT/", then wait for signals in
  * the main thread (sigwait; they are blocked in every other thread, which
  * inherit the mask):
  *   SIGHUP           rescan the store directory (added, replaced and
@@ -26,6 +27,7 @@
 #include "config.h" /* autoconf: PACKAGE_VERSION */
 
 #include "catalog.h"
+#include "gpu.h"
 #include "http.h"
 #include "log.h"
 #include "page_cache.h"
@@ -52,6 +54,40 @@ static void usage(FILE *out)
 static void forget_pages(uint64_t serial, void *pages)
 {
     page_cache_forget(pages, serial);
+}
+
+/* gpu = auto: open the EGL context, logging what was chosen (INFO) or the
+ * one final failure with every attempt (ERROR); the daemon serves without
+ * a GPU then.  gpu = off: EGL is not touched.  Called with the signals
+ * blocked, so the GL thread (and the driver's threads) inherit the mask. */
+static void open_gpu(struct server *srv)
+{
+    if (!strcmp(srv->cfg->gpu, "off")) {
+        snprintf(srv->gpu_reason, sizeof srv->gpu_reason,
+                 "disabled by configuration");
+        log_msg(LOG_INFO, "gpu", "disabled by configuration");
+        return;
+    }
+    struct gv_error err;
+    gv_error_clear(&err);
+    srv->gpu = gv_gpu_open(&err);
+    if (!srv->gpu) {
+        /* err.text reads "gpu: no usable EGL context: ATTEMPT; ATTEMPT; "
+         * (lib/gpu_context.c): drop the last separator. */
+        size_t n = strlen(err.text);
+        while (n > 0 && (err.text[n - 1] == ' ' || err.text[n - 1] == ';'))
+            err.text[--n] = '\0';
+        snprintf(srv->gpu_reason, sizeof srv->gpu_reason, "%s",
+                 n ? err.text : "gpu: no usable EGL context");
+        const char *msg = srv->gpu_reason;
+        if (!strncmp(msg, "gpu: ", 5))
+            msg += 5; /* the module name says it */
+        log_msg(LOG_ERROR, "gpu", "%s; serving without a GPU", msg);
+        return;
+    }
+    const struct gv_gpu_info *in = gv_gpu_info(srv->gpu);
+    log_msg(LOG_INFO, "gpu", "EGL %s platform, %s: %s / %s / %s", in->platform,
+            in->api, in->vendor, in->renderer, in->version);
 }
 
 int main(int argc, char **argv)
@@ -122,8 +158,11 @@ int main(int argc, char **argv)
     }
     catalog_on_close(srv.catalog, forget_pages, srv.pages);
     catalog_scan(srv.catalog);
-    if (http_start(&srv) < 0)
+    open_gpu(&srv);
+    if (http_start(&srv) < 0) {
+        gv_gpu_close(srv.gpu);
         return 1;
+    }
     if (strchr(cfg.listen, ':'))
         log_msg(LOG_INFO, "main", "listening on http://[%s]:%u/", cfg.listen,
                 srv.port);
@@ -146,6 +185,7 @@ int main(int argc, char **argv)
         break;
     }
     http_drain_and_stop(&srv, (unsigned)cfg.drain_timeout);
+    gv_gpu_close(srv.gpu);
     catalog_free(srv.catalog);
     page_cache_free(srv.pages);
     log_msg(LOG_INFO, "main", "stopped");

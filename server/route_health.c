@@ -9,16 +9,30 @@
 
 #include "config.h" /* autoconf: PACKAGE_VERSION */
 
+#include "gpu.h"
 #include "metrics.h"
 #include "routes.h"
 
+/* The start-up GPU context: {"available": true, "platform", "api",
+ * "vendor", "renderer", "version"} or {"available": false, "reason"}. */
+static json_t *gpu_json(const struct server *srv)
+{
+    if (!srv->gpu)
+        return json_pack("{s:b,s:s}", "available", 0, "reason", srv->gpu_reason);
+    const struct gv_gpu_info *in = gv_gpu_info(srv->gpu);
+    return json_pack("{s:b,s:s,s:s,s:s,s:s,s:s}", "available", 1,
+                     "platform", in->platform, "api", in->api,
+                     "vendor", in->vendor, "renderer", in->renderer,
+                     "version", in->version);
+}
+
 enum MHD_Result route_healthz(struct req *r)
 {
-    json_t *j = json_pack("{s:s,s:s,s:i,s:f,s:s,s:i,s:i}", "status", "ok",
+    json_t *j = json_pack("{s:s,s:s,s:i,s:f,s:o,s:i,s:i}", "status", "ok",
                           "version", PACKAGE_VERSION,
                           "stores", catalog_count(r->srv->catalog),
                           "uptime_s", http_uptime(r->srv),
-                          "gpu", "unavailable",
+                          "gpu", gpu_json(r->srv),
                           "open_connections", atomic_load(&metrics.open_connections),
                           "in_flight", atomic_load(&metrics.in_flight));
     return http_send_json(r, 200, j);

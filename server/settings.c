@@ -15,7 +15,7 @@
 #include "settings.h"
 #include "log.h"
 
-enum settings_type { T_STR, T_UINT, T_SIZE, T_DOUBLE, T_LEVEL };
+enum settings_type { T_STR, T_UINT, T_SIZE, T_DOUBLE, T_LEVEL, T_GPU };
 
 struct settings_key {
     const char *name;
@@ -70,6 +70,8 @@ static const struct settings_key keys[] = {
      "most tiles in one batch request"},
     {"jpeg_quality", T_UINT, F(jpeg_quality), "90", 1, 100,
      "quality of JPEG and WebP output"},
+    {"gpu", T_GPU, F(gpu), "auto", 0, 0,
+     "auto: open an EGL context at start (CPU only if none works); off: never"},
 };
 
 #define NKEYS (sizeof keys / sizeof keys[0])
@@ -122,6 +124,12 @@ static int set_key(struct settings *c, const struct settings_key *k,
         if (log_level_parse(value) < 0)
             return gv_fail(err, GV_EINVAL,
                            "%s: %s: '%s' is not error, warn, info or debug",
+                           where, k->name, value);
+        snprintf(field, k->size, "%s", value);
+        return 0;
+    case T_GPU:
+        if (strcmp(value, "auto") && strcmp(value, "off"))
+            return gv_fail(err, GV_EINVAL, "%s: %s: '%s' is not auto or off",
                            where, k->name, value);
         snprintf(field, k->size, "%s", value);
         return 0;

@@ -43,6 +43,7 @@ struct settings {
     char access_log[SETTINGS_PATH];
     uint64_t batch_max_tiles;
     uint64_t jpeg_quality;
+    char gpu[8];                   /* "auto" (open EGL at start) or "off" */
 };
 
 /* Fill *c with every default.  Cannot fail. */

@@ -9,7 +9,9 @@
 # export` plus oiiotool rotations and flips), /healthz, /metrics, /, every
 # error case (400, 404, 405, 413, 501, traversal ids), a corrupt page (500
 # for exactly that page's tiles while the rest serves), SIGHUP pick-up and
-# drop, SIGTERM drain of a request in flight (exit 0), and `gigaviewd -t`.
+# drop, SIGTERM drain of a request in flight (exit 0), `gigaviewd -t`, and
+# the start-up GPU context: opened (gpu = auto), disabled (gpu = off), and
+# failing because EGL finds no driver at all (the daemon serves anyway).
 # Needs curl, python3, oiiotool and idiff (openimageio-tools).
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
@@ -90,8 +92,21 @@ else
     fi
 fi
 
+printf 'gpu = maybe\n' >"$T/bad4.conf"
+rc=0
+"$GIGAVIEWD" -t -c "$T/bad4.conf" >/dev/null 2>"$T/err" || rc=$?
+expect_rc "-t rejects gpu = maybe" 1
+expect_err "-t says what gpu accepts" "bad4.conf:1: gpu: 'maybe' is not auto or off"
+
 start_daemon "$T/good.conf"
 diag "gigaviewd on port $PORT"
+# The log up to "listening on": what start-up said about the GPU (good.conf
+# leaves gpu at its default, auto).
+cp "$T/daemon.log" "$T/start.log"
+diag "$(grep ' gpu: ' "$T/start.log")"
+no_egl=
+grep -q ' error gpu: no usable EGL context' "$T/start.log" &&
+    no_egl=$(sed -n 's/.* error gpu: //p' "$T/start.log" | head -n 1)
 
 # ---------------------------------------------------------------- list, metadata
 expect_status "GET /v1/images" 200 /v1/images
@@ -342,7 +357,30 @@ check "IIIF errors carry CORS *" test "$(header Access-Control-Allow-Origin)" = 
 
 # ---------------------------------------------------------------- health, metrics, home
 expect_status "healthz" 200 /healthz
-check "healthz: ok, 1 store, gpu unavailable" test "$(json_get '(j["status"],j["stores"],j["gpu"])')" = "('ok', 1, 'unavailable')"
+check "healthz: ok, 1 store" test "$(json_get '(j["status"],j["stores"])')" = "('ok', 1)"
+if [ -n "$no_egl" ]; then
+    # A machine with no EGL driver at all: the checks below then only
+    # hold where Mesa (llvmpipe) or a GPU driver is installed.
+    for d in "healthz: gpu available with a renderer" \
+        "log: the info gpu line names platform, api, vendor, renderer, version" \
+        "log: no error line at start-up"; do
+        skip "$d" "no EGL context here: $no_egl"
+    done
+    check "healthz: gpu unavailable with the logged reason" test "$(json_get '(j["gpu"]["available"],"no usable EGL context" in j["gpu"]["reason"])')" = "(False, True)"
+else
+    check "healthz: gpu available with a renderer" python3 -c "
+import json, sys
+g = json.load(open(sys.argv[1]))['gpu']
+assert g['available'] is True, g
+assert g['platform'] in ('device', 'surfaceless', 'default'), g
+assert g['api'].startswith('OpenGL'), g
+assert all(g[k] for k in ('vendor', 'renderer', 'version')), g
+assert 'reason' not in g, g" "$T/b"
+    r=$(json_get 'j["gpu"]["renderer"]')
+    check "log: the info gpu line names platform, api, vendor, renderer, version" \
+        grep -Fq " info gpu: EGL $(json_get 'j["gpu"]["platform"]') platform, $(json_get 'j["gpu"]["api"]'): $(json_get 'j["gpu"]["vendor"]') / $r / $(json_get 'j["gpu"]["version"]')" "$T/start.log"
+    check "log: no error line at start-up" sh -c "! grep -q '^[^ ]* [0-9]* error ' '$T/start.log'"
+fi
 expect_status "home page" 200 /
 check "home: HTML listing x" sh -c "grep -q 'text/html' '$T/h' && grep -q '/iiif/3/x/info.json' '$T/b' && grep -qi 'viewer' '$T/b'"
 
@@ -489,6 +527,60 @@ wait "$DPID" || drc=$?
 DPID=
 check "SIGTERM: exit status 0" test "$drc" -eq 0
 check "SIGTERM: drain logged" grep -q 'waiting for 1 requests in flight' "$T/daemon.log"
+
+# ---------------------------------------------------------------- GPU off, no EGL
+# gpu_daemon DESC: the daemon (started) answers /healthz with the GPU
+# unavailable for reason $reason (a substring), still serves a tile equal
+# to the one served before, and drains to exit 0 on SIGTERM.
+gpu_daemon() {
+    req "$(url /healthz)"
+    check "$1: healthz ok" test "$code $(json_get 'j["status"]')" = "200 ok"
+    check "$1: healthz gpu unavailable with the reason" test "$(json_get '(j["gpu"]["available"], sorted(j["gpu"]), "'"$reason"'" in j["gpu"]["reason"])')" = "(False, ['available', 'reason'], True)"
+    req "$(url /v1/images/x/tiles/0/0/0)"
+    check "$1: tiles still serve" sh -c "test '$code' = 200 && cmp -s '$T/b' t000"
+    req "$(url '/iiif/3/x/full/375,250/0/default.png')"
+    check "$1: IIIF images still serve" test "$code $(header Content-Type)" = "200 image/png"
+    stop_daemon
+    check "$1: SIGTERM, exit status 0" test "$drc" -eq 0
+}
+{ cat "$T/good.conf"; echo 'gpu = off'; } >"$T/off.conf"
+start_daemon "$T/off.conf"
+check "gpu = off: logs that it is disabled" grep -q ' info gpu: disabled by configuration$' "$T/daemon.log"
+check "gpu = off: no error line" sh -c "! grep -q '^[^ ]* [0-9]* error ' '$T/daemon.log'"
+reason="disabled by configuration"
+gpu_daemon "gpu = off"
+
+# No EGL at all.  libglvnd's libEGL loads the vendor libraries named by the
+# JSON files in __EGL_VENDOR_LIBRARY_FILENAMES (instead of
+# /usr/share/glvnd/egl_vendor.d); one that does not exist leaves it with no
+# vendor, so every platform's display query fails, as on a machine with no
+# EGL driver installed.  Where libEGL is not libglvnd's, the variable has
+# no effect and the checks are skipped.
+__EGL_VENDOR_LIBRARY_FILENAMES=$T/nonexistent.json
+export __EGL_VENDOR_LIBRARY_FILENAMES
+start_daemon "$T/good.conf"
+unset __EGL_VENDOR_LIBRARY_FILENAMES
+if grep -q ' info gpu: EGL ' "$T/daemon.log"; then
+    skip "no EGL: the daemon starts and serves" "__EGL_VENDOR_LIBRARY_FILENAMES did not hide EGL here"
+    stop_daemon
+else
+    ok "no EGL: the daemon starts"
+    diag "$(grep ' gpu: ' "$T/daemon.log")"
+    check "no EGL: exactly one error line, from gpu, listing the attempts" test "$(grep -c '^[^ ]* [0-9]* error ' "$T/daemon.log") $(grep -c '^[^ ]* [0-9]* error gpu: no usable EGL context: .*default: .*; serving without a GPU$' "$T/daemon.log")" = "1 1"
+    check "no EGL: no info gpu line" sh -c "! grep -q ' info gpu: ' '$T/daemon.log'"
+    reason="no usable EGL context"
+    gpu_daemon "no EGL"
+fi
+# An empty store directory: the daemon starts and serves no images (the
+# catalog once handed qsort a NULL array here, which UBSan refused).
+mkdir -p "$T/empty"
+sed "s|^store_dir = .*|store_dir = \"$T/empty\"|" "$T/good.conf" >"$T/empty.conf"
+start_daemon "$T/empty.conf"
+req "$BASE/v1/images"
+check "empty store directory: 200 and no images" test "$code $(tr -d ' \n' <"$T/b")" = '200 {"images":[]}'
+stop_daemon
+check "empty store directory: SIGTERM exits 0" test "$drc" -eq 0
+
 if [ "$tap_failed" -ne 0 ]; then
     diag "daemon log (tail):"
     diag "$(tail -n 30 "$T/daemon.log")"
