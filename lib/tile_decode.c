@@ -88,18 +88,42 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
     const int dim = 4 * channels;
     const int8_t *book = (const int8_t *)(buf + 1);
     const size_t row = (size_t)GV_TILE * channels;
+    /* Row by row of blocks: the 257 indices, then for each of the block
+     * row's two pixel rows the matching half of every codevector, added
+     * with clamping (pixel 513 of the last block is skipped). */
+    uint16_t ids[GV_BLOCKS];
+    const uint64_t start = 8u * (1u + ((uint64_t)1 << rate) * 4u * (unsigned)channels);
+    const uint32_t mask = (1u << rate) - 1;
     for (uint32_t by = 0; by < GV_BLOCKS; by++) {
-        for (uint32_t bx = 0; bx < GV_BLOCKS; bx++) {
-            uint32_t k = by * GV_BLOCKS + bx;
-            uint32_t idx = coded ? coded[k] : gv_tilebuf_index(buf, rate, channels, k);
-            const int8_t *cv = book + (size_t)idx * dim;
-            for (int j = 0; j < 4; j++) {
-                uint32_t x = 2 * bx + (j & 1), y = 2 * by + (j >> 1);
-                if (x >= GV_TILE || y >= GV_TILE)
-                    continue;
-                uint8_t *px = out + y * row + x * channels;
-                for (int c = 0; c < channels; c++)
-                    px[c] = clamp_u8(px[c] + cv[j * channels + c]);
+        if (coded) {
+            memcpy(ids, coded + (size_t)by * GV_BLOCKS, sizeof ids);
+        } else {
+            uint64_t bit = start + (uint64_t)by * GV_BLOCKS * (unsigned)rate;
+            for (uint32_t bx = 0; bx < GV_BLOCKS; bx++, bit += (unsigned)rate) {
+                /* At most three bytes hold an index (r <= 12, shift <= 7);
+                 * only those it occupies are read. */
+                const uint8_t *p = buf + (bit >> 3);
+                const unsigned end = (unsigned)(bit & 7) + (unsigned)rate;
+                uint32_t v = p[0];
+                if (end > 8)
+                    v |= (uint32_t)p[1] << 8;
+                if (end > 16)
+                    v |= (uint32_t)p[2] << 16;
+                ids[bx] = (uint16_t)((v >> (bit & 7)) & mask);
+            }
+        }
+        for (int half = 0; half < 2; half++) {
+            const uint32_t y = 2 * by + (uint32_t)half;
+            if (y >= GV_TILE)
+                break;
+            uint8_t *px = out + y * row;
+            const int first = half * 2 * channels;   /* pixels (0|1, half) */
+            for (uint32_t bx = 0; bx < GV_BLOCKS; bx++) {
+                const int8_t *cv = book + (size_t)ids[bx] * dim + first;
+                const int n = bx + 1 < GV_BLOCKS ? 2 * channels : channels;
+                uint8_t *q = px + (size_t)bx * 2 * channels;
+                for (int i = 0; i < n; i++)
+                    q[i] = clamp_u8(q[i] + cv[i]);
             }
         }
     }
