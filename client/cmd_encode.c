@@ -12,6 +12,7 @@
 
 #include "commands.h"
 #include "encoder.h"
+#include "options.h"
 #include "progress.h"
 
 static void usage(FILE *out)
@@ -138,9 +139,8 @@ int cmd_encode(int argc, char **argv)
             break;
         }
         case OPT_MAXPX: {
-            char *end;
-            unsigned long long n = strtoull(optarg, &end, 10);
-            if (end == optarg || *end || n == 0) {
+            unsigned long long n;
+            if (parse_count(optarg, &n) < 0) {
                 fprintf(stderr, "gigaview encode: --max-pixels wants a positive count\n");
                 return 2;
             }

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "options.h"
 #include "decoder.h"
 #include "imageio.h"
 #include "store.h"
@@ -60,8 +61,7 @@ int cmd_export(int argc, char **argv)
             output = optarg;
             break;
         case 'M':
-            max_pixels = strtoull(optarg, &end, 10);
-            if (end == optarg || *end || max_pixels == 0) {
+            if (parse_count(optarg, &max_pixels) < 0) {
                 fprintf(stderr, "gigaview export: bad --max-pixels '%s'\n", optarg);
                 return 2;
             }

@@ -26,6 +26,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "options.h"
 #include "geometry.h"
 #include "gpu.h"
 #include "gpu_cache.h"
@@ -529,8 +530,7 @@ int cmd_render(int argc, char **argv)
             break;
         }
         case 'M':
-            max_pixels = strtoull(optarg, &end, 10);
-            if (end == optarg || *end || max_pixels == 0) {
+            if (parse_count(optarg, &max_pixels) < 0) {
                 fprintf(stderr, ME ": bad --max-pixels '%s'\n", optarg);
                 return 2;
             }

@@ -274,6 +274,7 @@ usage_case "encode two inputs without --mosaic" encode synth:10x10 synth:10x10 -
 usage_case "encode --range 5:1" encode --range 5:1 synth:10x10 -o u.gv
 usage_case "encode --range 5" encode --range 5 synth:10x10 -o u.gv
 usage_case "encode --max-pixels 0" encode --max-pixels 0 synth:10x10 -o u.gv
+usage_case "encode --max-pixels -5 (strtoull would wrap it)" encode --max-pixels -5 synth:10x10 -o u.gv
 usage_case "encode unknown option" encode --frobnicate synth:10x10 -o u.gv
 usage_case "info without a store" info
 usage_case "info with two stores" info a.gv b.gv
@@ -283,6 +284,7 @@ usage_case "export --level -1" export seeding-640x480.gv -l -1 -o u.png
 usage_case "export --level x" export seeding-640x480.gv -l x -o u.png
 usage_case "export --region 1,2,3" export seeding-640x480.gv --region 1,2,3 -o u.png
 usage_case "export --max-pixels 0" export seeding-640x480.gv --max-pixels 0 -o u.png
+usage_case "export --max-pixels ' 7'" export seeding-640x480.gv --max-pixels " 7" -o u.png
 check "usage errors created no file" test ! -e u.gv -a ! -e u.png
 
 for cmd in "" encode info export; do
