@@ -1,0 +1,270 @@
+/*
+ * test_filter_graph.c - filter graph documents without a GPU
+ * (filters/graph.c): every validation failure with its message, the
+ * topological order, texture recycling counts, padding and alignment,
+ * merge skipping, parameter values, and the description.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "filter.h"
+#include "util.h"
+
+static struct gv_filter_graph *try_parse(const char *json, struct gv_error *err)
+{
+    return gv_filter_graph_parse(json, strlen(json), NULL, err);
+}
+
+/* Expect a failure with `code` whose message contains `want`. */
+static void bad(const char *json, enum gv_code code, const char *want, const char *what)
+{
+    struct gv_error err;
+    gv_error_clear(&err);
+    struct gv_filter_graph *g = try_parse(json, &err);
+    check(!g && err.code == code && strstr(err.text, want), "%s: \"%s\"", what,
+          err.text);
+    gv_filter_graph_free(g);
+}
+
+#define PT(id, in) \
+    "{\"id\":\"" id "\",\"template\":\"point\",\"inputs\":[" in "],\"glsl\":\"return vec4(0.0);\"}"
+
+static void test_errors(void)
+{
+    bad("{\"name\":", GV_EINVAL, "JSON", "malformed JSON");
+    bad("[1]", GV_EINVAL, "object", "not an object");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[" PT("a", "\"source\"") "],\"extra\":1}",
+        GV_EINVAL, "unknown key \"extra\"", "unknown top-level key");
+    bad("{\"output\":\"a\",\"modules\":[" PT("a", "\"source\"") "]}", GV_EINVAL,
+        "\"name\" is required", "missing name");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"blur\","
+        "\"inputs\":[\"source\"],\"glsl\":\"return vec4(0.0);\"}]}",
+        GV_EINVAL, "module 'a': unknown template", "unknown template");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[" PT("a", "\"nothere\"") "]}",
+        GV_EINVAL, "module 'a': input 1 names no module: \"nothere\"", "missing input");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[" PT("a", "\"b\"") "," PT("b", "\"c\"")
+        "," PT("c", "\"a\"") "]}",
+        GV_EINVAL, "cycle: ", "a cycle");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[" PT("a", "\"a\"") "]}", GV_EINVAL,
+        "cycle", "a self-loop");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[" PT("a", "\"source\"") ","
+        PT("a", "\"source\"") "]}",
+        GV_EINVAL, "duplicate id", "a duplicate id");
+    bad("{\"name\":\"x\",\"output\":\"zz\",\"modules\":[" PT("a", "\"source\"") "]}",
+        GV_EINVAL, "\"output\" names no module: zz", "a dangling output");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"params\":[{\"name\":\"g\",\"min\":0,\"max\":1,\"default\":2}],"
+        "\"glsl\":\"return vec4($(1));\"}]}",
+        GV_EINVAL, "default outside [min, max]: param g", "a default out of range");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"params\":[{\"name\":\"g\",\"min\":2,\"max\":1,\"default\":1}],"
+        "\"glsl\":\"return vec4($(1));\"}]}",
+        GV_EINVAL, "min > max", "min above max");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"glsl\":\"return vec4($(2));\"}]}",
+        GV_EINVAL, "module 'a' line 1: $(2) but the module has 0 params",
+        "a parameter register past the count");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"glsl\":\"vec4 v = $(FilterInput1)(rel_pos);\\n"
+        "return $(FilterInput2)(rel_pos);\"}]}",
+        GV_EINVAL, "line 2: $(FilterInput2) but the module has 1 input",
+        "an input register past the count");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"glsl\":\"return $(Foo);\"}]}",
+        GV_EINVAL, "unknown register", "an unknown register");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"glsl\":\"uniform float q;\\nreturn vec4(0.0);\"}]}",
+        GV_EINVAL, "'uniform' is not allowed", "a body declaring a uniform");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"glsl\":\"#define X 1\\nreturn vec4(0.0);\"}]}",
+        GV_EINVAL, "preprocessor", "a preprocessor directive");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"propagation\","
+        "\"inputs\":[\"source\"],\"glsl\":\"return vec4(0.0);\"}]}",
+        GV_EINVAL, "needs \"direction\"", "propagation without a direction");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"direction\":\"+x\",\"inputs\":[\"source\"],\"glsl\":\"return vec4(0.0);\"}]}",
+        GV_EINVAL, "for the propagation template only", "a direction on a point module");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"kernel\":{\"width\":3,\"height\":3,\"weights\":[1,2]}}]}",
+        GV_EINVAL, "width x height = 9", "a kernel of the wrong size");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"kernel\":{\"width\":2,\"height\":3,\"weights\":[1,2,3,4,5,6]}}]}",
+        GV_EINVAL, "odd", "an even kernel");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"format\":\"rgb9\",\"inputs\":[\"source\"],\"glsl\":\"return vec4(0.0);\"}]}",
+        GV_EINVAL, "unknown format", "an unknown format");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"source\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"glsl\":\"return vec4(0.0);\"}]}",
+        GV_EINVAL, "reserved", "the reserved id source");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"propagation\","
+        "\"direction\":\"+x\",\"format\":\"rgba32ui\",\"inputs\":[\"source\"],"
+        "\"glsl\":\"return uvec4(0u);\"}]}",
+        GV_EINVAL, "cannot start from the source", "an integer sweep over the source");
+
+    /* Limits. */
+    char deep[256] = "";
+    for (int i = 0; i < 20; i++)
+        strcat(deep, "[");
+    bad(deep, GV_ELIMIT, "nested deeper", "JSON depth over the limit");
+    char *many = malloc(64 * 1024);
+    strcpy(many, "{\"name\":\"x\",\"output\":\"m0\",\"modules\":[");
+    for (int i = 0; i < 33; i++)
+        sprintf(many + strlen(many), "%s{\"id\":\"m%d\",\"template\":\"point\",\"inputs\":[\"source\"],"
+                "\"glsl\":\"return vec4(0.0);\"}", i ? "," : "", i);
+    strcat(many, "]}");
+    bad(many, GV_ELIMIT, "33 modules exceed the limit of 32", "too many modules");
+    free(many);
+    char *big = malloc(40 * 1024);
+    strcpy(big, "{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+                "\"inputs\":[\"source\"],\"glsl\":\"");
+    size_t n = strlen(big);
+    memset(big + n, ' ', 17 * 1024);
+    strcpy(big + n + 17 * 1024, "return vec4(0.0);\"}]}");
+    bad(big, GV_ELIMIT, "exceeds the limit of 16384", "a GLSL body over the limit");
+    free(big);
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"a\",\"template\":\"point\","
+        "\"support\":600,\"inputs\":[\"source\"],\"glsl\":\"return vec4(0.0);\"}]}",
+        GV_ELIMIT, "over the limit of 512", "padding over the limit");
+    struct gv_filter_limits lim;
+    gv_filter_limits_default(&lim);
+    lim.max_json_bytes = 10;
+    struct gv_error err;
+    const char *small = "{\"name\":\"xxxxxxxxxxxxxxxxxxxx\"}";
+    struct gv_filter_graph *g = gv_filter_graph_parse(small, strlen(small), &lim, &err);
+    check(!g && err.code == GV_ELIMIT && strstr(err.text, "exceeds the limit of 10"),
+          "document size over a configured limit: \"%s\"", err.text);
+}
+
+static void test_order_and_plan(void)
+{
+    /* Listed out of order: c reads b reads a; d reads source and c. */
+    const char *doc =
+        "{\"name\":\"chain\",\"output\":\"d\",\"modules\":["
+        PT("c", "\"b\"") "," PT("d", "\"source\",\"c\"") "," PT("b", "\"a\"") ","
+        PT("a", "\"source\"") "," PT("unused", "\"a\"") "]}";
+    struct gv_error err;
+    struct gv_filter_graph *g = try_parse(doc, &err);
+    if (!g)
+        fail("%s", err.text);
+    char order[64] = "";
+    for (int i = 0; i < g->nmodules; i++)
+        strcat(strcat(order, g->module[i].id), " ");
+    check(!strcmp(order, "a b c d unused "),
+          "topological order: %s", order);
+    /* a -> b -> c -> d is a chain: two textures alternate. */
+    check(g->ntextures == 2, "a chain of four point modules needs 2 textures (%d)",
+          g->ntextures);
+    check(g->module[4].texture == -1, "a module the output does not need is not run");
+    gv_filter_graph_free(g);
+
+    /* A fan: a feeds b, c and d, which all feed e: a's texture lives
+     * until d has run, so 4 are in use at the peak. */
+    doc = "{\"name\":\"fan\",\"output\":\"e\",\"modules\":[" PT("a", "\"source\"") ","
+          PT("b", "\"a\"") "," PT("c", "\"a\"") "," PT("d", "\"a\"") ","
+          PT("e", "\"b\",\"c\",\"d\"") "]}";
+    g = try_parse(doc, &err);
+    check(g && g->ntextures == 4, "fan-out of 3 readers: 4 textures (%d)",
+          g ? g->ntextures : -1);
+    gv_filter_graph_free(g);
+
+    /* Padding: supports 2 then 3 on one path, 4 then 3 on the other: 7. */
+    doc = "{\"name\":\"pad\",\"output\":\"c\",\"modules\":["
+          "{\"id\":\"a\",\"template\":\"point\",\"support\":2,\"inputs\":[\"source\"],\"glsl\":\"return vec4(0.0);\"},"
+          "{\"id\":\"b\",\"template\":\"point\",\"support\":4,\"inputs\":[\"source\"],\"glsl\":\"return vec4(0.0);\"},"
+          "{\"id\":\"c\",\"template\":\"point\",\"support\":3,\"inputs\":[\"a\",\"b\"],\"glsl\":\"return vec4(0.0);\"}]}";
+    g = try_parse(doc, &err);
+    check(g && g->pad_left == 7 && g->pad_right == 7 && g->align == 1,
+          "padding is the largest sum of supports along a path: 7 (%d)",
+          g ? g->pad_left : -1);
+    gv_filter_graph_free(g);
+
+    /* A kernel's support comes from its size. */
+    doc = "{\"name\":\"k\",\"output\":\"k\",\"modules\":[{\"id\":\"k\",\"template\":\"point\","
+          "\"inputs\":[\"source\"],\"kernel\":{\"width\":7,\"height\":3,\"weights\":"
+          "[1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1]}}]}";
+    g = try_parse(doc, &err);
+    check(g && g->pad_left == 3, "a 7x3 kernel pads 3 (%d)", g ? g->pad_left : -1);
+    gv_filter_graph_free(g);
+
+    /* Merge skipping only for the opposite sweep on the same axis. */
+#define SW(id, dir, in) \
+    "{\"id\":\"" id "\",\"template\":\"propagation\",\"direction\":\"" dir \
+    "\",\"inputs\":[" in "],\"glsl\":\"return $(FilterInput1)(rel_pos);\"}"
+    doc = "{\"name\":\"sw\",\"output\":\"d\",\"modules\":[" SW("a", "+x", "\"source\"") ","
+          SW("b", "-x", "\"a\"") "," SW("c", "-y", "\"b\"") "," SW("d", "-y", "\"c\"") "]}";
+    g = try_parse(doc, &err);
+    check(g && g->module[0].skip_merge && !g->module[1].skip_merge &&
+              !g->module[2].skip_merge,
+          "merge skipped before an opposite sweep only (+x -> -x yes, -x -> -y no, -y -> -y no)");
+    /* a and b share a pair; c and d each need a new pair while their
+     * input is alive: 1 + 2 at the peak. */
+    check(g && g->ntextures == 3, "a sweep chain needs 3 textures (%d)",
+          g ? g->ntextures : -1);
+    gv_filter_graph_free(g);
+    doc = "{\"name\":\"sw2\",\"output\":\"c\",\"modules\":[" SW("a", "+x", "\"source\"") ","
+          SW("b", "-x", "\"a\"") ","
+          "{\"id\":\"c\",\"template\":\"point\",\"inputs\":[\"a\",\"b\"],\"glsl\":\"return vec4(0.0);\"}]}";
+    g = try_parse(doc, &err);
+    check(g && !g->module[0].skip_merge,
+          "no merge skipping when another module also reads the sweep");
+    gv_filter_graph_free(g);
+
+    /* Log-reduce alignment. */
+    doc = "{\"name\":\"lr\",\"output\":\"s\",\"modules\":["
+          "{\"id\":\"r\",\"template\":\"logreduce\",\"max_passes\":5,\"inputs\":[\"source\"],"
+          "\"glsl\":\"return $(FilterInput1)(2 * texel_pos);\"},"
+          PT("s", "\"r\"") "]}";
+    g = try_parse(doc, &err);
+    check(g && g->align == 32 && g->pad_left == 31, "logreduce of 5 passes: align 32, pad 31");
+    gv_filter_graph_free(g);
+}
+
+static void test_params(void)
+{
+    const char *doc =
+        "{\"name\":\"p\",\"output\":\"b\",\"modules\":["
+        "{\"id\":\"a\",\"template\":\"point\",\"inputs\":[\"source\"],\"params\":["
+        "{\"name\":\"x\",\"min\":0,\"max\":1,\"default\":0.25},"
+        "{\"name\":\"y\",\"min\":-5,\"max\":5,\"default\":1}],\"glsl\":\"return vec4($(1), $(2), 0.0, 1.0);\"},"
+        "{\"id\":\"b\",\"template\":\"point\",\"inputs\":[\"a\"],\"params\":["
+        "{\"name\":\"z\",\"min\":0,\"max\":10,\"default\":3}],\"glsl\":\"return vec4($(1));\"}]}";
+    struct gv_error err;
+    struct gv_filter_graph *g = try_parse(doc, &err);
+    if (!g)
+        fail("%s", err.text);
+    double v[3];
+    json_t *given = json_loads("{\"a\":{\"y\":-2},\"b\":{\"z\":10}}", 0, NULL);
+    int rc = gv_filter_params(g, given, v, &err);
+    check(rc == 0 && g->nparams == 3 && v[0] == 0.25 && v[1] == -2 && v[2] == 10,
+          "params: defaults and given values in module order");
+    json_decref(given);
+    const char *badp[][2] = {{"{\"a\":{\"y\":6}}", "outside [-5, 5]"},
+                             {"{\"q\":{\"y\":1}}", "no module \"q\""},
+                             {"{\"a\":{\"w\":1}}", "has no param \"w\""},
+                             {"{\"a\":{\"y\":\"1\"}}", "finite number"}};
+    for (int i = 0; i < 4; i++) {
+        given = json_loads(badp[i][0], 0, NULL);
+        rc = gv_filter_params(g, given, v, &err);
+        check(rc < 0 && err.code == GV_EINVAL && strstr(err.text, badp[i][1]),
+              "bad params %s: \"%s\"", badp[i][0], err.text);
+        json_decref(given);
+    }
+    json_t *d = gv_filter_graph_describe(g);
+    char *s = json_dumps(d, JSON_COMPACT);
+    check(s && strstr(s, "\"output\":\"b\"") && strstr(s, "\"textures\":2") &&
+              strstr(s, "\"name\":\"z\""),
+          "describe: %.120s...", s ? s : "(null)");
+    free(s);
+    json_decref(d);
+    gv_filter_graph_free(g);
+}
+
+int main(void)
+{
+    tap_plan(45);
+    test_errors();
+    test_order_and_plan();
+    test_params();
+    return tap_done();
+}
