@@ -148,6 +148,13 @@ json_t *gv_filter_graph_describe(const struct gv_filter_graph *g);
 int gv_filter_params(const struct gv_filter_graph *g, const json_t *given,
                      double *values, struct gv_error *err);
 
+/* How propagation modules run (docs/FILTERS.md section 4.3). */
+enum gv_filter_path {
+    GV_FILTER_PATH_AUTO = 0,    /* compute where the context has it */
+    GV_FILTER_PATH_FRAGMENT,    /* the thesis's one draw per line */
+    GV_FILTER_PATH_COMPUTE      /* 32 lines per dispatch */
+};
+
 /* One run's input: the padded region and where the ROI lies in it. */
 struct gv_filter_input {
     uint32_t w, h;            /* padded region, >= 1 each */
@@ -158,10 +165,12 @@ struct gv_filter_input {
                                  top-left texel (abs_pos = these + texel) */
     uint32_t viewport_w, viewport_h;  /* backBufferSize; 0: the ROI size */
     const double *params;     /* g->nparams values (gv_filter_params) */
+    enum gv_filter_path path;
 };
 
 struct gv_filter_stats {
     int passes;               /* draw calls or dispatches of module passes */
+    int compute;              /* 1 if propagation ran as compute shaders */
     int merges;               /* propagation merge passes run */
     int merges_skipped;       /* merges skipped (section 7.8.5) */
     int line_copies;          /* single-line copies between ping-pong pairs */

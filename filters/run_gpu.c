@@ -69,6 +69,7 @@ struct run {
     struct gv_gpu *gpu;
     const struct gv_filter_graph *g;
     const struct gv_filter_input *in;   /* NULL: compile only */
+    int compute;                  /* propagation as compute shaders */
     struct gv_filter_stats st;
     float *out;
     GLuint *prog;                 /* per module, 0 if unused */
@@ -80,7 +81,8 @@ struct run {
     int w, h;                     /* padded region */
     int *levels;                  /* per module: mip levels of its texture */
     unsigned char *valid[2];      /* propagation: line holds latest value */
-    GLuint pair_tex[64][2];       /* per module: its texture(s) */
+    GLuint spare_tex, spare_fbo;  /* propagation partner / compute target */
+    enum gv_filter_format spare_fmt;
 };
 
 static int gl_check(const char *what, struct gv_error *err)
@@ -201,6 +203,27 @@ static GLuint link_program(const char *vs_src, const char *fs_src,
     return p;
 }
 
+static GLuint link_compute(const char *src, const char *module, struct gv_error *err)
+{
+    GLuint cs = compile_stage(GL_COMPUTE_SHADER, src, module, err);
+    if (!cs)
+        return 0;
+    GLuint p = glCreateProgram();
+    glAttachShader(p, cs);
+    glLinkProgram(p);
+    glDeleteShader(cs);
+    GLint ok = 0;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        char log[2048] = "";
+        glGetProgramInfoLog(p, sizeof log, NULL, log);
+        glDeleteProgram(p);
+        map_log(log, module, err);
+        return 0;
+    }
+    return p;
+}
+
 static char *concat(const char *const *parts, int n)
 {
     size_t len = 1;
@@ -217,9 +240,27 @@ static char *concat(const char *const *parts, int n)
 }
 
 /* The fragment source of module i. */
+/* Workgroup size and lines per dispatch of the compute sweeps. */
+#define SWEEP_WG 256
+#define SWEEP_K 32
+
+static const char *image_format(enum gv_filter_format f)
+{
+    switch (f) {
+    case GV_FILTER_RGBA16F: return "rgba16f";
+    case GV_FILTER_RGBA8: return "rgba8";
+    case GV_FILTER_RGBA32UI: return "rgba32ui";
+    case GV_FILTER_RGBA32I: return "rgba32i";
+    default: return "rgba32f";
+    }
+}
+
+static const char *const fam_image[] = {"image2D", "uimage2D", "iimage2D"};
+
 static char *module_source(const struct run *r, int i)
 {
     const struct gv_filter_module *m = &r->g->module[i];
+    const int sweep = r->compute && m->tpl == GV_FILTER_PROPAGATION;
     char *body = gv_filter_expand_body(m->glsl);
     size_t cap = 4096;
     char *reads = malloc(cap);
@@ -235,6 +276,19 @@ static char *module_source(const struct run *r, int i)
         const char *T = fam_type[f];
         n += (size_t)snprintf(reads + n, cap - n, "uniform highp %s gv_tex%d;\n",
                               fam_sampler[f], k + 1);
+        if (k == 0 && sweep) {
+            /* The line being computed from before the sweep; the previous
+             * line from the workgroup's shared copy. */
+            n += (size_t)snprintf(reads + n, cap - n,
+                                  "%s gv_in1(ivec2 p) { ivec2 s = textureSize(gv_tex1, 0);"
+                                  " ivec2 t = clamp(p + gv_origin, ivec2(0), s - 1);"
+                                  " int line = gv_axis == 0 ? t.x : t.y;"
+                                  " int perp = gv_axis == 0 ? t.y : t.x;"
+                                  " if (line == gv_cur_line) return %s(texelFetch(gv_tex1, t, 0));"
+                                  " return gv_prev[clamp(perp - gv_seg0, 0, GV_WG - 1)]; }\n",
+                                  fam_type[family_of(m->format)], fam_type[family_of(m->format)]);
+            continue;
+        }
         if (k == 0 && m->tpl == GV_FILTER_LOGREDUCE) {
             /* The previous level, in its own texel coordinates. */
             n += (size_t)snprintf(reads + n, cap - n,
@@ -255,17 +309,30 @@ static char *module_source(const struct run *r, int i)
                                   " return texelFetch(gv_tex%d, clamp((p + gv_origin) >> l, ivec2(0), s - 1), l); }\n",
                                   k + 1, T, k + 1, k + 1, k + 1, k + 1);
     }
-    char out_decl[160];
-    const char *T = fam_type[family_of(m->format)];
-    snprintf(out_decl, sizeof out_decl,
-             "layout(location = 0) out %s gv_out;\n%s gv_body()\n{\n#line 1\n", T, T);
+    char out_decl[160], sweep_defs[320] = "";
+    enum family mf = family_of(m->format);
+    const char *T = fam_type[mf];
+    if (sweep) {
+        snprintf(out_decl, sizeof out_decl, "%s gv_body()\n{\n#line 1\n", T);
+        snprintf(sweep_defs, sizeof sweep_defs,
+                 "#define GV_WG %d\n#define GV_K %d\n#define GV_OUT_T %s\n"
+                 "#define GV_IMAGE %s\n#define GV_IMAGE_FORMAT %s\n"
+                 "#define GV_PREV_SAMPLER %s\n",
+                 SWEEP_WG, SWEEP_K, T, fam_image[mf], image_format(m->format),
+                 fam_sampler[mf]);
+    } else {
+        snprintf(out_decl, sizeof out_decl,
+                 "layout(location = 0) out %s gv_out;\n%s gv_body()\n{\n#line 1\n", T, T);
+    }
     char line_tpl[32], line_main[32];
     snprintf(line_tpl, sizeof line_tpl, "#line %d\n", GV_TEMPLATE_LINE);
     snprintf(line_main, sizeof line_main, "\n#line %d\n", 2 * GV_TEMPLATE_LINE);
-    const char *parts[] = {version_line(r->gpu), line_tpl, gv_shader_filter_prelude_frag,
-                           reads, out_decl, body, "\n}", line_main,
-                           gv_shader_filter_main_frag};
-    char *s = concat(parts, 9);
+    const char *parts[] = {version_line(r->gpu), sweep_defs, line_tpl,
+                           gv_shader_filter_prelude_frag,
+                           sweep ? gv_shader_filter_sweep_head_comp : "", reads, out_decl,
+                           body, "\n}", line_main,
+                           sweep ? gv_shader_filter_sweep_comp : gv_shader_filter_main_frag};
+    char *s = concat(parts, 11);
     free(body);
     free(reads);
     return s;
@@ -291,7 +358,10 @@ static int compile_all(struct run *r, struct gv_error *err)
             rc = gv_fail(err, GV_ENOMEM, "filter: out of memory");
             break;
         }
-        r->prog[i] = link_program(vs, fs, r->g->module[i].id, err);
+        if (r->compute && r->g->module[i].tpl == GV_FILTER_PROPAGATION)
+            r->prog[i] = link_compute(fs, r->g->module[i].id, err);
+        else
+            r->prog[i] = link_program(vs, fs, r->g->module[i].id, err);
         free(fs);
         if (!r->prog[i])
             rc = -1;
@@ -414,8 +484,8 @@ static void set_common_uniforms(const struct run *r, GLuint p,
     glUniform2f(glGetUniformLocation(p, "backBufferSize"), vw, vh);
     glUniform2f(glGetUniformLocation(p, "filterScaling"), (float)in->roi_w / vw,
                 (float)in->roi_h / vh);
-    glUniform1i(glGetUniformLocation(p, "Pass"), 0);
-    glUniform1i(glGetUniformLocation(p, "numPasses"), 0);
+    glUniform1i(glGetUniformLocation(p, "gv_pass"), 0);
+    glUniform1i(glGetUniformLocation(p, "gv_npasses"), 0);
     glUniform2i(glGetUniformLocation(p, "sweepDir"), m->dir_x, m->dir_y);
     float pv[GV_FILTER_MAX_PARAMS] = {0};
     for (int k = 0; k < m->nparams; k++)
@@ -486,8 +556,8 @@ static int run_logreduce(struct run *r, int i, struct gv_error *err)
     GLuint p = r->prog[i];
     set_common_uniforms(r, p, m);
     bind_inputs(r, p, m, 0);
-    glUniform1i(glGetUniformLocation(p, "numPasses"), passes);
-    GLint loc_pass = glGetUniformLocation(p, "Pass");
+    glUniform1i(glGetUniformLocation(p, "gv_npasses"), passes);
+    GLint loc_pass = glGetUniformLocation(p, "gv_pass");
     GLint loc_shift = glGetUniformLocation(p, "gv_shift");
     glUniform1i(glGetUniformLocation(p, "gv_tex1"), 0);
     for (int k = 1; k <= passes; k++) {
@@ -589,8 +659,8 @@ static int run_propagation(struct run *r, int i, struct pair *pr, struct gv_erro
     set_common_uniforms(r, p, m);
     bind_inputs(r, p, m, 0);
     int passes = nlines - 1;
-    glUniform1i(glGetUniformLocation(p, "numPasses"), passes);
-    GLint loc_pass = glGetUniformLocation(p, "Pass");
+    glUniform1i(glGetUniformLocation(p, "gv_npasses"), passes);
+    GLint loc_pass = glGetUniformLocation(p, "gv_pass");
     GLint loc_tex = glGetUniformLocation(p, "gv_tex1");
     int step = axis == 0 ? m->dir_x : m->dir_y;
     for (int k = 1; k <= passes; k++) {
@@ -631,6 +701,76 @@ static int run_propagation(struct run *r, int i, struct pair *pr, struct gv_erro
         merge(r, pr, f, axis, to);
     }
     return gl_check("propagation", err);
+}
+
+/* The spare texture of the region's size in format f (made or remade). */
+static int spare(struct run *r, enum gv_filter_format f)
+{
+    if (r->spare_tex && r->spare_fmt == f)
+        return 0;
+    if (r->spare_tex) {
+        glDeleteFramebuffers(1, &r->spare_fbo);
+        glDeleteTextures(1, &r->spare_tex);
+    }
+    r->spare_tex = new_texture(internal_format(f), r->w, r->h, 1);
+    r->spare_fbo = fbo_for(r->spare_tex, 0);
+    r->spare_fmt = f;
+    return glGetError() == GL_NO_ERROR ? 0 : -1;
+}
+
+/*
+ * The compute sweep (shaders/filter_sweep.comp.glsl): input 1 is read,
+ * the module's texture written, SWEEP_K lines per dispatch.  When the plan
+ * put the module in its input's texture (a skipped merge), it writes the
+ * spare texture and the two are swapped afterwards.
+ */
+static int run_propagation_compute(struct run *r, int i, struct gv_error *err)
+{
+    const struct gv_filter_module *m = &r->g->module[i];
+    struct slot *sl = &r->slots[m->texture];
+    GLuint a = module_tex(r, m->input[0]);
+    int in_place = sl->tex == a;
+    if (in_place && spare(r, m->format) < 0)
+        return gl_check("spare texture", err);
+    GLuint b = in_place ? r->spare_tex : sl->tex;
+    GLuint bfbo = in_place ? r->spare_fbo : sl->fbo;
+    int axis = m->dir_x ? 0 : 1;
+    int nline = axis == 0 ? r->w : r->h, nperp = axis == 0 ? r->h : r->w;
+    int passes = nline - 1;
+    if (passes < 1) {
+        copy_pass(r, family_of(m->format), a, bfbo, -1, 0, -1);
+    } else {
+        GLuint p = r->prog[i];
+        set_common_uniforms(r, p, m);
+        bind_inputs(r, p, m, 0);
+        bind_sampler(p, "gv_tex1", 0, a);
+        bind_sampler(p, "gv_prev_tex", m->ninputs, b);
+        glBindImageTexture(0, b, 0, GL_FALSE, 0, GL_WRITE_ONLY, internal_format(m->format));
+        glUniform1i(glGetUniformLocation(p, "gv_npasses"), passes);
+        glUniform1i(glGetUniformLocation(p, "gv_axis"), axis);
+        glUniform1i(glGetUniformLocation(p, "gv_step"), m->dir_x + m->dir_y);
+        GLint loc_first = glGetUniformLocation(p, "gv_first_pass");
+        GLint loc_lines = glGetUniformLocation(p, "gv_lines");
+        GLint loc_read_first = glGetUniformLocation(p, "gv_read_first");
+        GLuint groups = (GLuint)((nperp + SWEEP_WG - 2 * SWEEP_K - 1) / (SWEEP_WG - 2 * SWEEP_K));
+        for (int k0 = 1; k0 <= passes; k0 += SWEEP_K) {
+            int lines = passes - k0 + 1 < SWEEP_K ? passes - k0 + 1 : SWEEP_K;
+            glUniform1i(loc_first, k0);
+            glUniform1i(loc_lines, lines);
+            glUniform1i(loc_read_first, k0 == 1);
+            glDispatchCompute(groups, 1, 1);
+            glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+            r->st.passes++;
+        }
+        glMemoryBarrier(GL_ALL_BARRIER_BITS);
+    }
+    if (in_place) {
+        r->spare_tex = sl->tex;
+        r->spare_fbo = sl->fbo;
+        sl->tex = b;
+        sl->fbo = bfbo;
+    }
+    return gl_check("compute propagation", err);
 }
 
 /* ---- the run ---- */
@@ -713,8 +853,6 @@ static int execute(struct run *r, struct gv_error *err)
         return gv_fail(err, GV_ENOMEM, "filter: out of memory");
     }
     int rc = 0;
-    GLuint partner_tex = 0, partner_fbo = 0;
-    int partner_slot = r->nslots - 1;   /* a spare slot reserved below */
     for (int i = 0; i < g->nmodules && rc == 0; i++) {
         const struct gv_filter_module *m = &g->module[i];
         if (m->texture < 0)
@@ -729,26 +867,20 @@ static int execute(struct run *r, struct gv_error *err)
             rc = run_logreduce(r, i, err);
         } else {
             int prev = m->input[0];
+            if (r->compute) {
+                rc = run_propagation_compute(r, i, err);
+                continue;
+            }
             if (!(prev >= 0 && g->module[prev].skip_merge)) {
-                /* A fresh pair: the module's slot and a partner texture of
-                 * the same format, made once per format and reused. */
-                if (partner_tex && r->slots[partner_slot].levels != (int)m->format + 100) {
-                    glDeleteFramebuffers(1, &partner_fbo);
-                    glDeleteTextures(1, &partner_tex);
-                    partner_tex = 0;
+                /* A fresh pair: the module's slot and the spare texture. */
+                if (spare(r, m->format) < 0) {
+                    rc = gl_check("spare texture", err);
+                    break;
                 }
-                if (!partner_tex) {
-                    partner_tex = new_texture(internal_format(m->format), r->w, r->h, 1);
-                    glGenFramebuffers(1, &partner_fbo);
-                    glBindFramebuffer(GL_FRAMEBUFFER, partner_fbo);
-                    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0,
-                                           GL_TEXTURE_2D, partner_tex, 0);
-                    r->slots[partner_slot].tex = partner_tex;
-                    r->slots[partner_slot].fbo = partner_fbo;
-                    r->slots[partner_slot].levels = (int)m->format + 100;
-                }
+                r->slots[r->nslots - 1].tex = r->spare_tex;
+                r->slots[r->nslots - 1].fbo = r->spare_fbo;
                 pr.slot[0] = m->texture;
-                pr.slot[1] = partner_slot;
+                pr.slot[1] = r->nslots - 1;
             } else if (pr.slot[0] != m->texture) {
                 /* graph.c gave this module its predecessor's slot. */
                 rc = gv_fail(err, GV_EIO, "filter: internal: propagation pair mismatch");
@@ -767,6 +899,8 @@ static int execute(struct run *r, struct gv_error *err)
 static void release(struct run *r)
 {
     for (int i = 0; i < r->nslots; i++) {
+        if (r->slots[i].tex == r->spare_tex)
+            continue;   /* the spare, deleted below */
         if (r->slots[i].fbo)
             glDeleteFramebuffers(1, &r->slots[i].fbo);
         if (r->slots[i].tex)
@@ -774,6 +908,10 @@ static void release(struct run *r)
     }
     if (r->source_tex)
         glDeleteTextures(1, &r->source_tex);
+    if (r->spare_tex) {
+        glDeleteFramebuffers(1, &r->spare_fbo);
+        glDeleteTextures(1, &r->spare_tex);
+    }
     for (int i = 0; i < r->g->nmodules; i++)
         if (r->prog && r->prog[i])
             glDeleteProgram(r->prog[i]);
@@ -819,6 +957,7 @@ static int on_gl_thread(void *arg, struct gv_error *err)
         glFinish();
     release(r);
     r->st.textures = r->g->ntextures;
+    r->st.compute = r->compute;
     r->st.gpu_ms = now_ms() - t0;
     return rc;
 }
@@ -830,6 +969,7 @@ int gv_filter_compile(struct gv_gpu *gpu, const struct gv_filter_graph *g,
     memset(&r, 0, sizeof r);
     r.gpu = gpu;
     r.g = g;
+    r.compute = gv_gpu_info(gpu)->ssbo;
     return gv_gpu_call(gpu, on_gl_thread, &r, err);
 }
 
@@ -849,6 +989,10 @@ int gv_filter_run(struct gv_gpu *gpu, const struct gv_filter_graph *g,
     r.gpu = gpu;
     r.g = g;
     r.in = in;
+    r.compute = in->path == GV_FILTER_PATH_AUTO ? gv_gpu_info(gpu)->ssbo
+                                                : in->path == GV_FILTER_PATH_COMPUTE;
+    if (r.compute && !gv_gpu_info(gpu)->ssbo)
+        return gv_fail(err, GV_EFORMAT, "filter: this GPU context has no compute shaders");
     int rc = gv_gpu_call(gpu, on_gl_thread, &r, err);
     if (stats)
         *stats = r.st;

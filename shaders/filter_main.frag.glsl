@@ -4,6 +4,8 @@
 // filters/run_gpu.c before the body.
 void main()
 {
+    Pass = gv_pass;
+    numPasses = gv_npasses;
     texel_pos = ivec2(gl_FragCoord.xy);
     rel_pos = (texel_pos << gv_shift) - gv_origin;
     abs_pos = gv_abs + (texel_pos << gv_shift);

@@ -9,7 +9,8 @@
  *     through $(FilterInput1)(p, lod), exact;
  *   - propagation: integer prefix sums along every direction, and a +x
  *     sweep followed by a -x sweep (merge skipped: the pass, merge and
- *     line-copy counts are checked), exact;
+ *     line-copy counts are checked), exact; then all of it again as
+ *     compute shaders;
  *   - the distance transform of FILTERS.md's four sweeps against a scalar
  *     implementation of the same rules (sites identical);
  *   - a GLSL error reported with the module and the body's line.
@@ -42,6 +43,8 @@ static struct gv_filter_graph *parse(const char *json)
 
 /* Run g on img (w x h RGBA8) with the ROI at (rx, ry, rw, rh), abs origin
  * (ax, ay).  Returns the float ROI or NULL (message printed). */
+static enum gv_filter_path path = GV_FILTER_PATH_FRAGMENT;
+
 static float *run(struct gv_gpu *gpu, const struct gv_filter_graph *g,
                   const uint8_t *img, int w, int h, int rx, int ry, int rw, int rh,
                   int ax, int ay, struct gv_filter_stats *st)
@@ -53,7 +56,8 @@ static float *run(struct gv_gpu *gpu, const struct gv_filter_graph *g,
     struct gv_filter_input in = {
         .w = (uint32_t)w, .h = (uint32_t)h, .rgba = img,
         .roi_x = (uint32_t)rx, .roi_y = (uint32_t)ry, .roi_w = (uint32_t)rw,
-        .roi_h = (uint32_t)rh, .abs_x = ax, .abs_y = ay, .params = params};
+        .roi_h = (uint32_t)rh, .abs_x = ax, .abs_y = ay, .params = params,
+        .path = path};
     float *out = NULL;
     if (gv_filter_run(gpu, g, &in, &out, st, &err) < 0) {
         printf("# run: %s\n", err.text);
@@ -242,10 +246,12 @@ static void test_propagation(struct gv_gpu *gpu)
                     bad++;
             }
         int lines = d < 2 ? w : h;
-        check(bad == 0 && st.passes == 1 + lines - 1 && st.merges == 1 &&
-                  st.merges_skipped == 0,
-              "propagation %s: prefix sums exact (%d wrong), %d passes, %d merge",
-              dirs[d], bad, st.passes, st.merges);
+        int frag = path == GV_FILTER_PATH_FRAGMENT;
+        check(bad == 0 && st.compute == !frag &&
+                  (frag ? st.passes == 1 + lines - 1 && st.merges == 1
+                        : st.passes == 1 + (lines - 1 + 31) / 32 && st.merges == 0),
+              "propagation %s (%s): prefix sums exact (%d wrong), %d passes, %d merge",
+              dirs[d], frag ? "fragment" : "compute", bad, st.passes, st.merges);
         free(out);
         gv_filter_graph_free(g);
     }
@@ -280,8 +286,13 @@ static void test_propagation(struct gv_gpu *gpu)
         }
     }
     check(bad == 0, "+x then -x in place: exact (%d wrong)", bad);
-    check(st.passes == 1 + 2 * (w - 1) && st.merges == 1 && st.merges_skipped == 1 &&
-              st.line_copies == 1,
+    if (path == GV_FILTER_PATH_FRAGMENT)
+        check(st.passes == 1 + 2 * (w - 1) && st.merges == 1 && st.merges_skipped == 1 &&
+                  st.line_copies == 1,
+              "+x then -x: %d passes, %d merge, %d skipped, %d line copy",
+              st.passes, st.merges, st.merges_skipped, st.line_copies);
+    else
+        check(st.passes == 1 + 2 && st.merges == 0 && st.line_copies == 0,
           "+x then -x: %d passes, %d merge, %d skipped, %d line copy",
           st.passes, st.merges, st.merges_skipped, st.line_copies);
     free(out);
@@ -394,8 +405,13 @@ static void test_edt(struct gv_gpu *gpu)
                        o[2], o[3], ref[i].x, ref[i].y, ref[i].id, ref[i].valid);
     }
     check(bad == 0, "EDT sweeps on the GPU equal the scalar rules: %d texels differ", bad);
-    check(st.passes == 1 + 2 * (w - 1) + 2 * (h - 1) && st.merges == 2 &&
-              st.merges_skipped == 2 && st.line_copies == 2,
+    if (path == GV_FILTER_PATH_FRAGMENT)
+        check(st.passes == 1 + 2 * (w - 1) + 2 * (h - 1) && st.merges == 2 &&
+                  st.merges_skipped == 2 && st.line_copies == 2,
+              "EDT: %d passes, %d merges, %d skipped, %d line copies, %d textures",
+              st.passes, st.merges, st.merges_skipped, st.line_copies, st.textures);
+    else
+        check(st.passes == 1 + 2 * 3 + 2 * 3 && st.merges == 0,
           "EDT: %d passes, %d merges, %d skipped, %d line copies, %d textures",
           st.passes, st.merges, st.merges_skipped, st.line_copies, st.textures);
     free(out);
@@ -429,12 +445,21 @@ int main(void)
         return 0;
     }
     printf("# %s / %s\n", gv_gpu_info(gpu)->api, gv_gpu_info(gpu)->renderer);
-    tap_plan(21);
+    tap_plan(31);
     test_point(gpu);
     test_kernel(gpu);
     test_logreduce(gpu);
     test_propagation(gpu);
     test_edt(gpu);
+    if (gv_gpu_info(gpu)->ssbo) {
+        /* The same sweeps as compute shaders, 32 lines per dispatch. */
+        path = GV_FILTER_PATH_COMPUTE;
+        test_propagation(gpu);
+        test_edt(gpu);
+    } else {
+        for (int i = 0; i < 10; i++)
+            check(1, "# SKIP no compute shaders in this context");
+    }
     test_compile_error(gpu);
     gv_gpu_close(gpu);
     return tap_done();
