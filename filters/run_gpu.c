@@ -79,6 +79,7 @@ struct run {
     int nslots;
     GLuint vao;
     int w, h;                     /* padded region */
+    int mip_levels;               /* of every log-reduce texture */
     int *levels;                  /* per module: mip levels of its texture */
     unsigned char *valid[2];      /* propagation: line holds latest value */
     GLuint spare_tex, spare_fbo;  /* propagation partner / compute target */
@@ -280,7 +281,7 @@ static char *module_source(const struct run *r, int i)
             /* The line being computed from before the sweep; the previous
              * line from the workgroup's shared copy. */
             n += (size_t)snprintf(reads + n, cap - n,
-                                  "%s gv_in1(ivec2 p) { ivec2 s = textureSize(gv_tex1, 0);"
+                                  "%s gv_in1(ivec2 p) { ivec2 s = gv_size;"
                                   " ivec2 t = clamp(p + gv_origin, ivec2(0), s - 1);"
                                   " int line = gv_axis == 0 ? t.x : t.y;"
                                   " int perp = gv_axis == 0 ? t.y : t.x;"
@@ -292,22 +293,22 @@ static char *module_source(const struct run *r, int i)
         if (k == 0 && m->tpl == GV_FILTER_LOGREDUCE) {
             /* The previous level, in its own texel coordinates. */
             n += (size_t)snprintf(reads + n, cap - n,
-                                  "%s gv_in1(ivec2 q) { ivec2 s = textureSize(gv_tex1, 0);"
+                                  "%s gv_in1(ivec2 q) { int k = gv_shift - 1; ivec2 s = (gv_size + (1 << k) - 1) >> k;"
                                   " return texelFetch(gv_tex1, clamp(q, ivec2(0), s - 1), 0); }\n",
                                   T);
             continue;
         }
         n += (size_t)snprintf(reads + n, cap - n,
-                              "%s gv_in%d(ivec2 p) { ivec2 s = textureSize(gv_tex%d, 0);"
+                              "%s gv_in%d(ivec2 p) { ivec2 s = gv_size;"
                               " return texelFetch(gv_tex%d, clamp(p + gv_origin, ivec2(0), s - 1), 0); }\n",
-                              T, k + 1, k + 1, k + 1);
+                              T, k + 1, k + 1);
         if (src >= 0 && r->g->module[src].tpl == GV_FILTER_LOGREDUCE)
             n += (size_t)snprintf(reads + n, cap - n,
                                   "uniform int gv_levels%d;\n"
                                   "%s gv_in%d(ivec2 p, int lod) { int l = clamp(lod, 0, gv_levels%d - 1);"
-                                  " ivec2 s = textureSize(gv_tex%d, l);"
+                                  " ivec2 s = (gv_size + (1 << l) - 1) >> l;"
                                   " return texelFetch(gv_tex%d, clamp((p + gv_origin) >> l, ivec2(0), s - 1), l); }\n",
-                                  k + 1, T, k + 1, k + 1, k + 1, k + 1);
+                                  k + 1, T, k + 1, k + 1, k + 1);
     }
     char out_decl[160], sweep_defs[320] = "";
     enum family mf = family_of(m->format);
@@ -421,8 +422,16 @@ static int slot_texture(struct run *r, int s, const struct gv_filter_module *m,
 {
     struct slot *sl = &r->slots[s];
     if (!sl->tex) {
-        sl->levels = m->tpl == GV_FILTER_LOGREDUCE ? logreduce_passes(m, r->w, r->h) + 1 : 1;
-        sl->tex = new_texture(internal_format(m->format), r->w, r->h, sl->levels);
+        /* Mip chains get a base rounded up to a multiple of 2^(levels-1),
+         * so that every level holds at least ceil(size / 2^k) texels
+         * (glTexStorage2D rounds level sizes down); reads clamp to the
+         * region's own level sizes. */
+        int lr = m->tpl == GV_FILTER_LOGREDUCE;
+        sl->levels = lr ? r->mip_levels : 1;
+        int unit = 1 << (sl->levels - 1);
+        sl->tex = new_texture(internal_format(m->format),
+                              lr ? (r->w + unit - 1) / unit * unit : r->w,
+                              lr ? (r->h + unit - 1) / unit * unit : r->h, sl->levels);
         glGenFramebuffers(1, &sl->fbo);
         glBindFramebuffer(GL_FRAMEBUFFER, sl->fbo);
         glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
@@ -473,6 +482,7 @@ static void set_common_uniforms(const struct run *r, GLuint p,
     const struct gv_filter_input *in = r->in;
     glUseProgram(p);
     glUniform2i(glGetUniformLocation(p, "gv_origin"), (GLint)in->roi_x, (GLint)in->roi_y);
+    glUniform2i(glGetUniformLocation(p, "gv_size"), r->w, r->h);
     glUniform2i(glGetUniformLocation(p, "gv_abs"), (GLint)in->abs_x, (GLint)in->abs_y);
     glUniform1i(glGetUniformLocation(p, "gv_shift"), 0);
     glUniform4f(glGetUniformLocation(p, "pixelsAround"), (float)in->roi_x,
@@ -542,8 +552,8 @@ static int run_logreduce(struct run *r, int i, struct gv_error *err)
 {
     const struct gv_filter_module *m = &r->g->module[i];
     struct slot *sl = &r->slots[m->texture];
-    int passes = sl->levels - 1;
-    r->levels[i] = sl->levels;
+    int passes = logreduce_passes(m, r->w, r->h);
+    r->levels[i] = passes + 1;
     glBindTexture(GL_TEXTURE_2D, sl->tex);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, sl->levels - 1);
@@ -831,6 +841,11 @@ static int execute(struct run *r, struct gv_error *err)
         return gv_fail(err, GV_ELIMIT,
                        "filter: a padded region of %dx%d exceeds this GPU's texture "
                        "size of %d", r->w, r->h, (int)maxsize);
+    r->mip_levels = 1;
+    for (int i = 0; i < g->nmodules; i++)
+        if (g->module[i].texture >= 0 && g->module[i].tpl == GV_FILTER_LOGREDUCE &&
+            logreduce_passes(&g->module[i], r->w, r->h) + 1 > r->mip_levels)
+            r->mip_levels = logreduce_passes(&g->module[i], r->w, r->h) + 1;
     r->source_tex = new_texture(GL_RGBA8, r->w, r->h, 1);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, r->w, r->h, GL_RGBA, GL_UNSIGNED_BYTE,

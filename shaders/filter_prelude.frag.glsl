@@ -14,6 +14,7 @@ precision highp uimage2D;
 precision highp iimage2D;
 
 uniform ivec2 gv_origin;      // the ROI's top-left texel in the padded region
+uniform ivec2 gv_size;        // the padded region's size (level 0)
 uniform ivec2 gv_abs;         // level coordinates of texel (0, 0)
 uniform int gv_shift;         // log-reduce: the level being written, else 0
 uniform vec4 pixelsAround;

@@ -16,7 +16,7 @@
 void main()
 {
     int j = int(gl_LocalInvocationID.x);
-    ivec2 size = textureSize(gv_tex1, 0);
+    ivec2 size = gv_size;
     int nline = gv_axis == 0 ? size.x : size.y;
     int nperp = gv_axis == 0 ? size.y : size.x;
     gv_seg0 = int(gl_WorkGroupID.x) * (GV_WG - 2 * GV_K) - GV_K;
