@@ -43,11 +43,25 @@ int gv_geometry_init(struct gv_geometry *g, uint32_t width, uint32_t height,
     struct gv_level *r = &g->level[g->root];
     r->tiles_x = r->tiles_y = r->pages_x = r->pages_y = 0;
     r->first_page = 0;
-    uint64_t page = 0;
-    for (int i = g->root - 1; i >= 0; i--) {
+    /* Every tile's parent (tx / 2, ty / 2) must exist: a level has at
+     * least half (rounded up) the tiles of the level below.  Without this,
+     * widths such as 1026 (3 tiles, over a level of 513 pixels and 1 tile)
+     * had tiles with no parent. */
+    for (int i = 0; i < g->root; i++) {
         struct gv_level *l = &g->level[i];
         l->tiles_x = gv_tiles_for(l->width);
         l->tiles_y = gv_tiles_for(l->height);
+        if (i > 0) {
+            const struct gv_level *c = &g->level[i - 1];
+            if (l->tiles_x < (c->tiles_x + 1) / 2)
+                l->tiles_x = (c->tiles_x + 1) / 2;
+            if (l->tiles_y < (c->tiles_y + 1) / 2)
+                l->tiles_y = (c->tiles_y + 1) / 2;
+        }
+    }
+    uint64_t page = 0;
+    for (int i = g->root - 1; i >= 0; i--) {
+        struct gv_level *l = &g->level[i];
         l->pages_x = (l->tiles_x + GV_PAGE_TILES - 1) / GV_PAGE_TILES;
         l->pages_y = (l->tiles_y + GV_PAGE_TILES - 1) / GV_PAGE_TILES;
         l->first_page = page;

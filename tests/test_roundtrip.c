@@ -182,7 +182,7 @@ int main(void)
     snprintf(b, sizeof b, "%s/seeding-700x520.png", data);
     snprintf(c, sizeof c, "%s/etopo-600x400-u16.png", data);
     snprintf(d, sizeof d, "%s/picos-1100x700.jpg", data);
-    tap_plan(53);
+    tap_plan(64);
     roundtrip(a, 34.0, 10);
     roundtrip(d, 36.0, 10);   /* a busy mountain scene, two tiled levels */
     roundtrip(d, 30.0, 6);
@@ -192,6 +192,11 @@ int main(void)
     roundtrip("synth:1500x1100", 36.0, 10);
     roundtrip("synth:1100x1500:gray", 33.0, 8);
     roundtrip("synth:2100x700", 45.0, 3);   /* a cap that binds */
+    /* Widths whose last tile's parent exists only because a level has at
+     * least half the tiles of the level below (1026: 3 tiles over a level
+     * of 513 pixels; 2050: 5 tiles, then 3 and 2). */
+    roundtrip("synth:1026x600", 36.0, 10);
+    roundtrip("synth:600x2050:gray", 36.0, 10);
     rmdir(dir);
     return tap_done();
 }
