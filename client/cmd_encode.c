@@ -3,7 +3,9 @@
  *
  * Parses options into struct gv_encode_opts, draws the progress bar on a
  * terminal, and prints a summary: size, levels, tiles, rates, the bits
- * per source pixel of the whole file and the PSNR of level 0.
+ * per source pixel of the whole file and the PSNR of level 0.  With
+ * --shard I/N it writes one shard file instead (docs/OPERATIONS.md,
+ * "Encoding on many machines"), which `gigaview merge` assembles.
  */
 #include <getopt.h>
 #include <stdio.h>
@@ -14,6 +16,8 @@
 #include "encoder.h"
 #include "options.h"
 #include "progress.h"
+#include "shard_plan.h"
+#include "summary.h"
 
 static void usage(FILE *out)
 {
@@ -34,6 +38,11 @@ static void usage(FILE *out)
         "      --range LO:HI      map input values LO..HI to 0..255\n"
         "      --max-pixels N     refuse inputs larger than N pixels\n"
         "      --tmpdir DIR       scratch directory (default: the output's)\n"
+        "      --shard I/N        encode only shard I of N (0 <= I < N) into a\n"
+        "                         shard file at -o; run all N (on any machines)\n"
+        "                         with the same input and options, then\n"
+        "                         'gigaview merge -o STORE SHARD...' writes the\n"
+        "                         store, identical to an unsharded encode\n"
         "      --progress         draw the progress bar even off a terminal\n"
         "      --quiet            no summary\n",
         GV_DEFAULT_PSNR, GV_DEFAULT_MAX_RATE);
@@ -63,7 +72,8 @@ static void on_progress(void *ctx, const struct gv_encode_progress *p)
 
 int cmd_encode(int argc, char **argv)
 {
-    enum { OPT_RANGE = 256, OPT_MAXPX, OPT_TMPDIR, OPT_PROGRESS, OPT_QUIET, OPT_RD };
+    enum { OPT_RANGE = 256, OPT_MAXPX, OPT_TMPDIR, OPT_PROGRESS, OPT_QUIET, OPT_RD,
+           OPT_SHARD };
     static const struct option longopts[] = {
         {"output", required_argument, NULL, 'o'},
         {"psnr", required_argument, NULL, 'q'},
@@ -76,6 +86,7 @@ int cmd_encode(int argc, char **argv)
         {"progress", no_argument, NULL, OPT_PROGRESS},
         {"quiet", no_argument, NULL, OPT_QUIET},
         {"rd", no_argument, NULL, OPT_RD},
+        {"shard", required_argument, NULL, OPT_SHARD},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
@@ -159,6 +170,13 @@ int cmd_encode(int argc, char **argv)
         case OPT_RD:
             o.rd = 1;
             break;
+        case OPT_SHARD:
+            if (gv_shard_parse(optarg, &o.shard_index, &o.shard_count) < 0) {
+                fprintf(stderr, "gigaview encode: --shard wants I/N with 0 <= I < N <= %d, not '%s'\n",
+                        GV_SHARD_MAX, optarg);
+                return 2;
+            }
+            break;
         case 'h':
             usage(stdout);
             return 0;
@@ -198,29 +216,14 @@ int cmd_encode(int argc, char **argv)
     }
     if (quiet)
         return 0;
-    const struct gv_geometry *g = &r.geometry;
-    double mp = (double)g->width * g->height / 1e6;
-    printf("store      %s\n", output);
-    printf("image      %u x %u, %s, %.1f MP\n", g->width, g->height,
-           g->channels == 1 ? "gray" : "RGB", mp);
-    printf("levels     %d tiled + root %u x %u\n", g->root,
-           g->level[g->root].width, g->level[g->root].height);
-    printf("tiles      %llu", (unsigned long long)r.tiles);
-    const char *sep = " (rate:tiles";
-    for (int k = 0; k <= GV_MAX_RATE; k++)
-        if (r.rate_tiles[k]) {
-            printf("%s %d:%llu", sep, k, (unsigned long long)r.rate_tiles[k]);
-            sep = "";
-        }
-    printf("%s\n", r.tiles ? ")" : "");
-    if (r.below_target)
-        printf("warning    %llu tiles reached the rate cap before the %.1f dB target\n",
-               (unsigned long long)r.below_target, o.target_psnr);
-    printf("size       %llu bytes, %.3f bits per source pixel\n",
-           (unsigned long long)r.file_bytes, r.bpp);
-    printf("psnr       %.2f dB at level 0 (target %.1f dB per tile)\n", r.psnr0,
-           o.target_psnr);
-    printf("time       %.2f s, %.2f MP/s\n", r.seconds,
-           r.seconds > 0 ? mp / r.seconds : 0.0);
+    if (o.shard_count > 0) {
+        printf("shard      %d/%d of a %u x %u image -> %s\n", o.shard_index,
+               o.shard_count, r.geometry.width, r.geometry.height, output);
+        printf("tiles      %llu\n", (unsigned long long)r.tiles);
+        printf("size       %llu bytes\n", (unsigned long long)r.file_bytes);
+        printf("time       %.2f s\n", r.seconds);
+        return 0;
+    }
+    print_store_summary(output, &r, o.target_psnr);
     return 0;
 }

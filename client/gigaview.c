@@ -16,6 +16,7 @@ struct command {
 
 static const struct command commands[] = {
     {"encode", cmd_encode, "encode images into a store file"},
+    {"merge", cmd_merge, "assemble the shard files of 'encode --shard' into a store"},
     {"info", cmd_info, "describe a store: size, levels, tiles, bits per pixel"},
     {"export", cmd_export, "decode a region of a store to PNG, TIFF or JPEG"},
     {"render", cmd_render, "fetch tiles from gigaviewd, decode them on the GPU, write an image"},

@@ -10,6 +10,12 @@
  * up to 16 parent tiles, 64 decoded tiles and 64 tile buffers, plus one
  * tile workspace per thread.  Pass 1 holds one chunk of input rows and one
  * pending row per level.
+ *
+ * A shard writes only the pixels of its tiles to the scratch file, which
+ * is sized once so that the rest are holes (they read as zeros and take
+ * no disk), skips the pages it has no tile in, and leaves the other slots
+ * of its pages unencoded: every tile it encodes has its parent among them
+ * too, so what it reads from the holes is never used.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -19,6 +25,8 @@
 #include "decoder.h"
 #include "encoder.h"
 #include "pool.h"
+#include "shard_file.h"
+#include "shard_plan.h"
 #include "spill.h"
 #include "store_writer.h"
 #include "tile.h"
@@ -32,6 +40,13 @@ void gv_encode_opts_default(struct gv_encode_opts *o)
     memset(o, 0, sizeof *o);
     o->target_psnr = GV_DEFAULT_PSNR;
     o->max_rate = GV_DEFAULT_MAX_RATE;
+}
+
+double gv_encode_psnr0(uint64_t sse0, uint64_t samples0)
+{
+    double p = sse0 == 0 ? 99.0 :
+               10.0 * log10(65025.0 * (double)samples0 / (double)sse0);
+    return p > 99.0 ? 99.0 : p;
 }
 
 static double now_seconds(void)
@@ -48,6 +63,9 @@ struct encoder {
     struct gv_spill *spill;
     uint64_t orig_base[GV_MAX_LEVELS], recon_base[GV_MAX_LEVELS];
     struct gv_store_writer *writer;
+    struct gv_shard_plan plan;
+    int sharded;              /* plan is in use; shard replaces writer */
+    struct gv_shard_writer *shard;
     struct gv_pool *pool;
     struct gv_tile_workspace **ws;
     int nws;
@@ -91,6 +109,43 @@ static void report(struct encoder *e, const char *phase, double fraction)
 
 static int push_row(struct encoder *e, int k, const uint8_t *row);
 
+/* Store row `rows_out[k]` of level k in the scratch file: all of it, or
+ * for a shard the runs of columns that its tiles of level k cover. */
+static int store_row(struct encoder *e, int k, const uint8_t *row)
+{
+    const struct gv_level *l = &e->g.level[k];
+    const size_t rb = (size_t)l->width * e->c;
+    const uint64_t at = e->orig_base[k] + (uint64_t)e->rows_out[k] * rb;
+    if (!e->sharded || k == e->g.root)
+        return gv_spill_write(e->spill, row, rb, at, e->err);
+    /* Row y is in tile row y/512, and is row 512 of the tile row above
+     * when y is a multiple of 512. */
+    const uint32_t y = e->rows_out[k], ta = y / GV_STEP;
+    const int above = y % GV_STEP == 0 && y > 0;
+    uint32_t run = 0;
+    int in_run = 0;
+    for (uint32_t tx = 0; tx <= l->tiles_x; tx++) {
+        int want = tx < l->tiles_x &&
+                   (gv_shard_plan_wants(&e->plan, &e->g, k, tx, ta) ||
+                    (above && gv_shard_plan_wants(&e->plan, &e->g, k, tx, ta - 1)));
+        if (want && !in_run) {
+            run = tx;
+            in_run = 1;
+        } else if (!want && in_run) {
+            /* Tiles run..tx-1 cover columns 512*run .. 512*(tx-1)+512. */
+            uint32_t x0 = run * GV_STEP, x1 = tx * GV_STEP + 1;
+            if (x1 > l->width)
+                x1 = l->width;
+            if (gv_spill_write(e->spill, row + (size_t)x0 * e->c,
+                               (size_t)(x1 - x0) * e->c, at + (uint64_t)x0 * e->c,
+                               e->err) < 0)
+                return -1;
+            in_run = 0;
+        }
+    }
+    return 0;
+}
+
 static int emit_reduced(struct encoder *e, int k, const uint8_t *r0,
                         const uint8_t *r1)
 {
@@ -104,8 +159,7 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
 {
     const struct gv_level *l = &e->g.level[k];
     const size_t rb = (size_t)l->width * e->c;
-    if (gv_spill_write(e->spill, row, rb,
-                       e->orig_base[k] + (uint64_t)e->rows_out[k] * rb, e->err) < 0)
+    if (store_row(e, k, row) < 0)
         return -1;
     e->rows_out[k]++;
     if (k == e->g.root)
@@ -183,6 +237,8 @@ static void encode_tile(void *ctx, size_t slot, int worker)
     const uint32_t ty = e->py * GV_PAGE_TILES + (uint32_t)j;
     e->lens[slot] = 0;
     if (tx >= l->tiles_x || ty >= l->tiles_y)
+        return;
+    if (e->sharded && !gv_shard_plan_wants(&e->plan, &e->g, e->level, tx, ty))
         return;
     /* Cut the clamp-padded original tile out of the page window. */
     uint8_t *orig = e->origs + (size_t)worker * gv_tile_bytes(c);
@@ -279,11 +335,31 @@ static int store_recon(struct encoder *e)
     for (int s = 0; s < GV_PAGE_SLOTS; s++) {
         uint32_t tx = e->px * GV_PAGE_TILES + (uint32_t)(s % GV_PAGE_TILES);
         uint32_t ty = e->py * GV_PAGE_TILES + (uint32_t)(s / GV_PAGE_TILES);
-        if (tx >= l->tiles_x || ty >= l->tiles_y)
+        if (tx >= l->tiles_x || ty >= l->tiles_y || !e->lens[s])
             continue;
         if (gv_spill_write(e->spill, e->recon[s], tb,
                            e->recon_base[e->level] +
                                ((uint64_t)ty * l->tiles_x + tx) * tb, e->err) < 0)
+            return -1;
+    }
+    return 0;
+}
+
+/* Hand the encoded tiles of the current page to the store or the shard. */
+static int emit_page(struct encoder *e)
+{
+    if (!e->sharded)
+        return gv_store_writer_page(e->writer, e->level, e->px, e->py,
+                                    (const uint8_t *const *)e->bufs, e->lens,
+                                    e->err);
+    for (int s = 0; s < GV_PAGE_SLOTS; s++) {
+        if (!e->lens[s])
+            continue;
+        uint32_t tx = e->px * GV_PAGE_TILES + (uint32_t)(s % GV_PAGE_TILES);
+        uint32_t ty = e->py * GV_PAGE_TILES + (uint32_t)(s / GV_PAGE_TILES);
+        if (gv_shard_writer_tile(e->shard, e->level, tx, ty, e->bufs[s], e->lens[s],
+                                 &e->stats[s], e->level == 0 ? e->canon_sse[s] : 0,
+                                 e->err) < 0)
             return -1;
     }
     return 0;
@@ -299,12 +375,12 @@ static int pass2(struct encoder *e, const uint8_t *root_tile, uint64_t *sse0,
             for (uint32_t px = 0; px < l->pages_x; px++) {
                 e->px = px;
                 e->py = py;
+                if (e->sharded && !gv_shard_plan_wants_page(&e->plan, &e->g, k, px, py))
+                    continue;
                 if (load_window(e) < 0 || load_parents(e, root_tile) < 0)
                     return -1;
                 gv_pool_run(e->pool, encode_tile, e, GV_PAGE_SLOTS);
-                if (gv_store_writer_page(e->writer, k, px, py,
-                                         (const uint8_t *const *)e->bufs,
-                                         e->lens, e->err) < 0)
+                if (emit_page(e) < 0)
                     return -1;
                 if (k > 0 && store_recon(e) < 0)
                     return -1;
@@ -351,6 +427,14 @@ static int setup(struct encoder *e)
     }
     for (int k = 0; k < g->root; k++)
         e->work_total += (double)g->level[k].width * g->level[k].height * c;
+    if (e->sharded) {
+        e->work_total = (double)e->plan.samples;
+        /* Size the scratch file once: what the shard never writes stays a
+         * hole, so reading a whole page window cannot run past the end. */
+        static const uint8_t zero = 0;
+        if (off > 0 && gv_spill_write(e->spill, &zero, 1, off - 1, e->err) < 0)
+            return -1;
+    }
     if (e->work_total <= 0)
         e->work_total = 1;
 
@@ -382,6 +466,7 @@ static int setup(struct encoder *e)
 static void teardown(struct encoder *e)
 {
     gv_pool_free(e->pool);
+    gv_shard_plan_free(&e->plan);
     for (int i = 0; i < e->nws; i++)
         gv_tile_workspace_free(e->ws[i]);
     free(e->ws);
@@ -443,9 +528,21 @@ int gv_encode(const char *const *inputs, int n, const char *output,
     h.src_float = (uint8_t)res->source.src_float;
     h.tone = (uint8_t)res->source.tone;
     h.target_mpsnr = (uint32_t)lround(opts->target_psnr * 1000.0);
-    e.writer = gv_store_writer_new(output, &h, err);
-    if (!e.writer)
-        goto out;
+    if (opts->shard_count > 0) {
+        if (gv_shard_plan_init(&e.plan, &e.g, opts->shard_index,
+                               opts->shard_count, err) < 0)
+            goto out;
+        e.sharded = 1;
+        e.shard = gv_shard_writer_new(output, &h, opts->shard_index,
+                                      opts->shard_count,
+                                      opts->rd ? GV_SHARD_FLAG_RD : 0, err);
+        if (!e.shard)
+            goto out;
+    } else {
+        e.writer = gv_store_writer_new(output, &h, err);
+        if (!e.writer)
+            goto out;
+    }
 
     char *outdir = NULL;
     const char *tmpdir = opts->tmpdir;
@@ -477,16 +574,26 @@ int gv_encode(const char *const *inputs, int n, const char *output,
     if (gv_spill_read(e.spill, root, rbytes, e.orig_base[e.g.root], err) < 0)
         goto out;
     gv_root_tile(root, rl->width, rl->height, e.c, root_tile);
+    if (e.sharded && gv_shard_writer_root(e.shard, root, err) < 0)
+        goto out;
 
     uint64_t sse0 = 0, samples0 = 1;
     if (pass2(&e, root_tile, &sse0, &samples0) < 0)
         goto out;
+    if (e.sharded) {
+        struct gv_shard_writer *sw = e.shard;
+        e.shard = NULL;
+        res->file_bytes = gv_shard_writer_bytes(sw);
+        if (gv_shard_writer_finish(sw, err) < 0)
+            goto out;
+        res->bpp = 8.0 * (double)res->file_bytes / ((double)e.g.width * e.g.height);
+        report(&e, "done", 1.0);
+        rc = 0;
+        goto out;
+    }
     if (gv_store_writer_root(e.writer, root, err) < 0)
         goto out;
-    res->psnr0 = sse0 == 0 ? 99.0 :
-                 10.0 * log10(65025.0 * (double)samples0 / (double)sse0);
-    if (res->psnr0 > 99.0)
-        res->psnr0 = 99.0;
+    res->psnr0 = gv_encode_psnr0(sse0, samples0);
     gv_store_writer_set_psnr(e.writer, (uint32_t)lround(res->psnr0 * 1000.0));
     struct gv_store_writer *w = e.writer;
     e.writer = NULL;
@@ -507,6 +614,7 @@ out:
     res->seconds = now_seconds() - t0;
     gv_source_free(src);
     gv_store_writer_abort(e.writer);
+    gv_shard_writer_abort(e.shard);
     teardown(&e);
     free(root);
     free(root_tile);

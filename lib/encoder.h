@@ -8,6 +8,12 @@
  * Peak memory is bounded by a page's working set plus a few rows of the
  * widest level: it does not grow with the image's area (docs/FORMAT.md,
  * "Encoder memory").
+ *
+ * A sharded encode (shard_count > 0) runs both passes over the whole
+ * input but keeps and encodes only the tiles of its shard (shard_plan.h)
+ * and writes them to a shard file (shard_file.h); gv_shard_merge
+ * (shard_merge.h) then writes the store, byte for byte the one a single
+ * encode writes.
  */
 #ifndef GV_ENCODER_H
 #define GV_ENCODER_H
@@ -35,6 +41,9 @@ struct gv_encode_opts {
                                * spend bits where they buy the most error,
                                * at the slope of the target PSNR */
     int threads;              /* workers; 0 = every CPU */
+    int shard_index;          /* with shard_count > 0: write shard */
+    int shard_count;          /* shard_index of shard_count (0-based) to
+                               * `output` as a shard file, not a store */
     const char *tmpdir;       /* scratch directory; NULL = output's */
     struct gv_source_opts source;
     /* Called from the encoding thread after each page and every few rows
@@ -56,14 +65,22 @@ struct gv_encode_result {
     double seconds;
 };
 
+/* The level-0 PSNR in dB that a store header records, from the squared
+ * error summed over level 0 and the sample count (99 when lossless).
+ * The encoder and the shard merge share it so that both write the same
+ * header. */
+double gv_encode_psnr0(uint64_t sse0, uint64_t samples0);
+
 /* Fill *o with the defaults. */
 void gv_encode_opts_default(struct gv_encode_opts *o);
 
 /*
  * Encode `n` inputs (one image, a mosaic, or a synth: pattern; see
- * source.h) into the store file `output`.  Returns 0 and fills *res, or -1
- * with *err filled; on failure no file exists under `output` (an existing
- * one is left as it was).
+ * source.h) into the store file `output` (or the shard file, see
+ * shard_count).  Returns 0 and fills *res, or -1 with *err filled; on
+ * failure no file exists under `output` (an existing one is left as it
+ * was).  For a shard, *res counts the shard's tiles, file_bytes is the
+ * shard file's size and psnr0 is 0.
  */
 int gv_encode(const char *const *inputs, int n, const char *output,
               const struct gv_encode_opts *opts, struct gv_encode_result *res,

@@ -1,0 +1,35 @@
+/*
+ * summary.c - the store summary shared by encode and merge (summary.h).
+ */
+#include <stdio.h>
+
+#include "summary.h"
+
+void print_store_summary(const char *output, const struct gv_encode_result *r,
+                         double target)
+{
+    const struct gv_geometry *g = &r->geometry;
+    double mp = (double)g->width * g->height / 1e6;
+    printf("store      %s\n", output);
+    printf("image      %u x %u, %s, %.1f MP\n", g->width, g->height,
+           g->channels == 1 ? "gray" : "RGB", mp);
+    printf("levels     %d tiled + root %u x %u\n", g->root,
+           g->level[g->root].width, g->level[g->root].height);
+    printf("tiles      %llu", (unsigned long long)r->tiles);
+    const char *sep = " (rate:tiles";
+    for (int k = 0; k <= GV_MAX_RATE; k++)
+        if (r->rate_tiles[k]) {
+            printf("%s %d:%llu", sep, k, (unsigned long long)r->rate_tiles[k]);
+            sep = "";
+        }
+    printf("%s\n", r->tiles ? ")" : "");
+    if (r->below_target)
+        printf("warning    %llu tiles reached the rate cap before the %.1f dB target\n",
+               (unsigned long long)r->below_target, target);
+    printf("size       %llu bytes, %.3f bits per source pixel\n",
+           (unsigned long long)r->file_bytes, r->bpp);
+    printf("psnr       %.2f dB at level 0 (target %.1f dB per tile)\n", r->psnr0,
+           target);
+    printf("time       %.2f s, %.2f MP/s\n", r->seconds,
+           r->seconds > 0 ? mp / r->seconds : 0.0);
+}
