@@ -14,8 +14,9 @@
 # Environment: THREADS (default: every core), REPS (best of, default 3),
 # SCIPY_REPS (default 1 from 4096 up, else REPS: SciPy takes seconds),
 # DENSITY (default 0.001), SEED (default 1), ERROR_SIZES (default 8192),
-# EDT_METHODS (default cpu1,cpu,cpu+sites: the rows of methods[] in
-# bench/edt_bench.c; add the GPU path there and name it here).
+# EDT_METHODS (default cpu1,cpu,cpu+sites, plus egl-frag,egl-compute when
+# BUILD, default build/, holds a built tree: the rows of methods[] in
+# bench/edt_bench.c).
 # About 2 minutes on the 2-core machine with the defaults.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -57,9 +58,27 @@ need_cmd cc gcc
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # The same flags as the default build (configure: -g -O3).
-cc -std=c11 -D_GNU_SOURCE -g -O3 -pthread -I"$top/lib" -I"$top/filters" \
-	-I"$top/tests" "$here/edt_bench.c" "$top/filters/edt_cpu.c" \
-	"$top/tests/edt_exact.c" "$top/lib/error.c" -lm -o "$work/edt_bench"
+# The same flags as the default build (configure: -g -O3).  With a built
+# tree in BUILD (default build/), the EGL methods are linked in too.
+build=${BUILD:-$top/build}
+if [ -f "$build/filters/libgvfilter.a" ] && [ -f "$build/lib/libgigaview.a" ]; then
+	for f in "$here/edt_bench.c" "$top/tests/edt_exact.c"; do
+		cc -c -std=c11 -D_GNU_SOURCE -DGV_EDT_BENCH_EGL -g -O3 -pthread -I"$top/lib" \
+			-I"$top/filters" -I"$top/tests" $(pkg-config --cflags jansson) \
+			"$f" -o "$work/$(basename "$f" .c).o"
+	done
+	# The OpenImageIO bridge is C++: link with the C++ driver.
+	c++ -pthread "$work/edt_bench.o" "$work/edt_exact.o" \
+		"$build/filters/libgvfilter.a" "$build/lib/libgigaview.a" \
+		$(pkg-config --libs jansson egl glesv2 OpenImageIO libwebp zlib) -lm \
+		-o "$work/edt_bench"
+	export GV_EDT_GRAPH="$top/filters/library/distance-transform.json"
+	methods=${EDT_METHODS:-cpu1,cpu,cpu+sites,egl-frag,egl-compute}
+else
+	cc -std=c11 -D_GNU_SOURCE -g -O3 -pthread -I"$top/lib" -I"$top/filters" \
+		-I"$top/tests" "$here/edt_bench.c" "$top/filters/edt_cpu.c" \
+		"$top/tests/edt_exact.c" "$top/lib/error.c" -lm -o "$work/edt_bench"
+fi
 
 echo "# edt-speed: $(date '+%F %T'), $(machine_line)"
 echo "# source tree $(git -C "$top" rev-parse --short HEAD 2>/dev/null || echo unknown), edt_cpu.c + edt_kernel.h md5 $(cat "$top/filters/edt_cpu.c" "$top/filters/edt_kernel.h" | md5sum | cut -c1-12); load average $(cut -d' ' -f1-3 /proc/loadavg)"

@@ -20,8 +20,10 @@
  *         error NAME MAX_ABS_ERR ERRING_PIXELS PIXELS
  *       (a pixel errs when |d - exact| > 1e-3 px).
  *
- * Methods are rows of `methods[]`: the GPU (EGL) path plugs in there as
- * one more row.  Prints figures only; asserts nothing.
+ * Methods are rows of `methods[]`; built with -DGV_EDT_BENCH_EGL against
+ * a build's libraries, egl-frag and egl-compute run the stock distance
+ * transform graph on the EGL context.  Prints figures only; asserts
+ * nothing.
  */
 #include <math.h>
 #include <stdio.h>
@@ -151,20 +153,103 @@ static int m_cpu_sites(const uint32_t *ids, uint32_t w, uint32_t h,
     return run_cpu(ids, w, h, nthreads, 1, dist);
 }
 
+#ifdef GV_EDT_BENCH_EGL
+/*
+ * The EGL path: the stock graph filters/library/distance-transform.json
+ * (feature = red channel >= 0.5) run by gv_filter_run on the whole image,
+ * fragment or compute propagation.  Timed as a service would see it: the
+ * RGBA upload, the four sweeps, the distance pass and the read-back of
+ * the float result.  The context and the parsed graph are made once.
+ */
+#include "filter.h"
+#include "gpu.h"
+
+static struct gv_gpu *egl;
+static struct gv_filter_graph *egl_graph;
+static double egl_params[16];
+
+static int egl_setup(void)
+{
+    if (egl)
+        return 0;
+    struct gv_error err;
+    const char *path = getenv("GV_EDT_GRAPH");
+    FILE *f = path ? fopen(path, "rb") : NULL;
+    if (!f)
+        return fprintf(stderr, "edt_bench: set GV_EDT_GRAPH to distance-transform.json\n"), -1;
+    char *doc = malloc(1 << 20);
+    size_t n = doc ? fread(doc, 1, (1 << 20) - 1, f) : 0;
+    fclose(f);
+    if (!doc)
+        return -1;
+    egl_graph = gv_filter_graph_parse(doc, n, NULL, &err);
+    free(doc);
+    json_t *given = json_pack("{s:{s:f, s:f}}", "features", "channel", 0.0, "threshold", 0.5);
+    if (!egl_graph || gv_filter_params(egl_graph, given, egl_params, &err) < 0 ||
+        !(egl = gv_gpu_open(&err))) {
+        json_decref(given);
+        return fprintf(stderr, "edt_bench: %s\n", err.text), -1;
+    }
+    json_decref(given);
+    fprintf(stderr, "# egl: %s\n", gv_gpu_info(egl)->renderer);
+    return 0;
+}
+
+static int run_egl(const uint32_t *ids, uint32_t w, uint32_t h, float *dist,
+                   enum gv_filter_path path)
+{
+    if (egl_setup() < 0)
+        return -1;
+    size_t n = (size_t)w * h;
+    uint8_t *rgba = malloc(n * 4);
+    if (!rgba)
+        die("out of memory");
+    for (size_t i = 0; i < n; i++) {
+        rgba[i * 4] = ids[i] ? 255 : 0;
+        rgba[i * 4 + 1] = rgba[i * 4 + 2] = 0;
+        rgba[i * 4 + 3] = 255;
+    }
+    struct gv_filter_input in = {.w = w, .h = h, .rgba = rgba, .roi_w = w, .roi_h = h,
+                                 .params = egl_params, .path = path};
+    float *out = NULL;
+    struct gv_error err;
+    int rc = gv_filter_run(egl, egl_graph, &in, &out, NULL, &err);
+    if (rc)
+        fprintf(stderr, "edt_bench: %s\n", err.text);
+    for (size_t i = 0; rc == 0 && i < n; i++)
+        dist[i] = out[i * 4];
+    free(out);
+    free(rgba);
+    return rc;
+}
+
+static int m_egl_frag(const uint32_t *ids, uint32_t w, uint32_t h, float *dist)
+{
+    return run_egl(ids, w, h, dist, GV_FILTER_PATH_FRAGMENT);
+}
+
+static int m_egl_compute(const uint32_t *ids, uint32_t w, uint32_t h, float *dist)
+{
+    return run_egl(ids, w, h, dist, GV_FILTER_PATH_COMPUTE);
+}
+#endif
+
 struct method {
     const char *name;
     const char *what;
     int (*run)(const uint32_t *ids, uint32_t w, uint32_t h, float *dist);
 };
 
-/* Add the GPU path here, e.g. {"egl", "EGL propagation template", m_egl}
- * with m_egl opening a gv_gpu context once and returning the distance
- * channel; edt-speed.sh takes it with EDT_METHODS=cpu1,cpu,egl. */
 static const struct method methods[] = {
     {"cpu1", "gv_edt_cpu, 1 thread, distances only", m_cpu1},
     {"cpu", "gv_edt_cpu, every core, distances only", m_cpu},
     {"cpu+sites", "gv_edt_cpu, every core, distances, sites and ids",
      m_cpu_sites},
+#ifdef GV_EDT_BENCH_EGL
+    {"egl-frag", "stock graph on EGL, fragment sweeps (one draw per line)", m_egl_frag},
+    {"egl-compute", "stock graph on EGL, compute sweeps (32 lines per dispatch)",
+     m_egl_compute},
+#endif
 };
 
 static const struct method *find_method(const char *name)
