@@ -34,9 +34,15 @@
  *    an error ("Premature end of JPEG file") while the read itself may
  *    succeed with filler data.  So has_error() is checked after every call
  *    and any recorded message fails the read.
+ *  - Every buffer handed to a reader is zeroed first, because a reader
+ *    may report success without writing every byte: the heap's old
+ *    contents must never reach a store.  EXR is read through OpenEXRCore
+ *    ("openexr:core"), since the C++ OpenEXR reader does exactly that on
+ *    a damaged file (set_threads_once).
  *  - PNG input is asked for unassociated alpha ("oiio:UnassociatedAlpha"):
  *    gigaview drops alpha, and OIIO would otherwise premultiply colour by
  *    it.
+ *  - Only the readers in accepted_formats are used (see there why).
  *  - OIIO's own thread pool is set to one thread once per process
  *    (attribute "threads"): gigaview runs its own workers, one decoder per
  *    input, and a second pool per process would oversubscribe the CPUs.
@@ -100,7 +106,15 @@ struct gv_image_in {
 static void set_threads_once()
 {
     static std::once_flag once;
-    std::call_once(once, [] { OIIO::attribute("threads", 1); });
+    std::call_once(once, [] {
+        OIIO::attribute("threads", 1);
+        /* EXR through the OpenEXRCore library, not the C++ one: on a
+         * damaged zip-compressed file (corpus finding-exr-unwritten) the
+         * C++ reader copies bytes its decompressor never wrote into the
+         * pixels and reports success; Core reads the same file cleanly
+         * (valgrind). */
+        OIIO::attribute("openexr:core", 1);
+    });
 }
 
 /* OIIO messages may span lines; keep the first one, trimmed, short. */
@@ -181,6 +195,115 @@ static int choose_type(const ImageSpec &spec, const std::string &path,
     return 0;
 }
 
+/*
+ * The readers gigaview accepts input from, by OpenImageIO format name:
+ * the formats large images actually come in.  No other reader OpenImageIO
+ * has is ever asked to open a file (choose_reader), because each is attack
+ * surface that buys nothing here, and some are broken in OIIO 2.4.7 (found
+ * by tests/fuzz/fuzz_imageio.c under valgrind; its corpus has a file of
+ * each): the ICO reader writes past its buffer on an ordinary 17x13 RGBA
+ * icon (corpus rgb-ico); the DPX reader runs strlen over header bytes it
+ * never initialised (finding-dpx-strlen); the SGI reader reports success
+ * on a damaged RLE file without filling OIIO's conversion buffer, whose
+ * old heap bytes would become pixels (finding-sgi-unwritten).  Besides,
+ * "null" fabricates images from the file name and "ffmpeg" opens video.
+ */
+static const char *const accepted_formats[] = {
+    "tiff", "jpeg", "png", "openexr", "webp", "jpeg2000", "pnm", "bmp",
+    "targa", "hdr", "psd", "fits", "gif",
+};
+
+static bool format_accepted(const char *name)
+{
+    for (const char *f : accepted_formats)
+        if (strcmp(f, name) == 0)
+            return true;
+    return false;
+}
+
+static const char *accepted_list()
+{
+    static std::string list;
+    static std::once_flag once;
+    std::call_once(once, [] {
+        for (const char *f : accepted_formats)
+            list += (list.empty() ? "" : ", ") + std::string(f);
+    });
+    return list.c_str();
+}
+
+/* The OpenImageIO format whose reader claims `path`'s extension
+ * (case-insensitive), or "" - from OIIO's "extension_list" attribute,
+ * "fmt:ext,ext;fmt:ext...". */
+static std::string format_of_extension(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(slash ? slash : path, '.');
+    if (!dot || !dot[1])
+        return "";
+    std::string ext;
+    for (const char *p = dot + 1; *p; p++)
+        ext += (char)tolower((unsigned char)*p);
+    std::string list;
+    OIIO::getattribute("extension_list", list);
+    size_t i = 0;
+    while (i < list.size()) {
+        size_t end = list.find(';', i);
+        if (end == std::string::npos)
+            end = list.size();
+        std::string entry = list.substr(i, end - i);
+        size_t colon = entry.find(':');
+        if (colon != std::string::npos) {
+            std::string exts = "," + entry.substr(colon + 1) + ",";
+            if (exts.find("," + ext + ",") != std::string::npos)
+                return entry.substr(0, colon);
+        }
+        i = end + 1;
+    }
+    return "";
+}
+
+/*
+ * The reader for `path`, not yet opened.  Only readers in
+ * accepted_formats are ever created, so no other reader sees a byte of
+ * the file (OIIO's ImageInput::open, and create() for a file, would try
+ * every reader it has, and a reader's valid_file() is often its open()).
+ * First the reader of the file's extension, if accepted and it recognises
+ * the file (valid_file); else the first accepted reader that recognises it
+ * (a misnamed file); else the extension's reader all the same (formats
+ * without a magic number, and its own message for a file that is not
+ * one).  NULL with *err when no accepted reader will take the file.
+ */
+static std::unique_ptr<ImageInput> choose_reader(const char *path,
+                                                 const ImageSpec *config,
+                                                 struct gv_error *err)
+{
+    std::string fmt = format_of_extension(path);
+    std::unique_ptr<ImageInput> by_ext;
+    if (!fmt.empty() && format_accepted(fmt.c_str())) {
+        by_ext = ImageInput::create(fmt, false, config);
+        if (by_ext && by_ext->valid_file(path))
+            return by_ext;
+    }
+    for (const char *f : accepted_formats) {
+        if (fmt == f)
+            continue;
+        std::unique_ptr<ImageInput> c = ImageInput::create(f, false, config);
+        if (c && c->valid_file(path))
+            return c;
+    }
+    (void)OIIO::geterror(); /* what the probes left behind */
+    if (by_ext)
+        return by_ext;
+    if (!fmt.empty())
+        gv_fail(err, GV_EFORMAT, "imageio: %s: %s images are not accepted "
+                "(accepted: %s)", path, fmt.c_str(), accepted_list());
+    else
+        gv_fail(err, GV_EFORMAT, "imageio: %s: not an image in an accepted "
+                "format (%s)", path, accepted_list());
+    return nullptr;
+}
+
 static struct gv_image_in *open_impl(const char *path, uint64_t max_pixels,
                                      struct gv_image_info *info,
                                      struct gv_error *err)
@@ -207,9 +330,12 @@ static struct gv_image_in *open_impl(const char *path, uint64_t max_pixels,
 
     ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
-    std::unique_ptr<ImageInput> in = ImageInput::open(path, &config);
-    if (!in) {
-        std::string msg = OIIO::geterror();
+    std::unique_ptr<ImageInput> in = choose_reader(path, &config, err);
+    if (!in)
+        return NULL;
+    ImageSpec opened;
+    if (!in->open(path, opened, config)) {
+        std::string msg = in->geterror();
         fail_msg(err, GV_EFORMAT, path,
                  msg.empty() ? "not a readable image" : msg);
         return NULL;
@@ -308,13 +434,19 @@ static int load_tile_row(struct gv_image_in *im, uint32_t row,
                                                    : im->tile_h;
     if (im->buf.empty()) {
         /* tile_h rows of the full width: the smallest unit a tiled file
-         * can be decoded in without decoding tiles twice. */
-        uint64_t need = (uint64_t)im->row_bytes * im->tile_h;
+         * can be decoded in without decoding tiles twice - but never more
+         * rows than the image has: tile_h comes from the header and may
+         * be far taller than the image, and the buffer must stay inside
+         * the pixel cap checked at open. */
+        uint32_t buf_h = im->tile_h < im->height ? im->tile_h : im->height;
+        uint64_t need = (uint64_t)im->row_bytes * buf_h;
         if (need > SIZE_MAX / 2)
             return gv_fail(err, GV_ENOMEM, "imageio: %s: tile row too large",
                            im->path.c_str());
         im->buf.resize((size_t)need);
     }
+    /* Zeroed first: see read_rows. */
+    memset(im->buf.data(), 0, im->buf.size());
     int y = im->y0 + (int)first;
     bool ok = im->in->read_tiles(0, 0, im->x0,
                                  im->x0 + (int)(im->row_bytes
@@ -368,6 +500,11 @@ static int read_rows(struct gv_image_in *im, uint32_t rows, void *out,
         return 0;
     unsigned char *dst = static_cast<unsigned char *>(out);
     if (!im->tiled) {
+        /* A reader may report success without writing every byte.
+         * Zeroed first, such bytes become black instead of whatever the
+         * heap held before - which the encoder would otherwise put into a
+         * store for anyone to download. */
+        memset(dst, 0, (size_t)rows * im->row_bytes);
         int y = im->y0 + (int)im->next_row;
         bool ok = im->in->read_scanlines(0, 0, y, y + (int)rows, im->z0, 0,
                                          im->nchannels, im->type, dst);

@@ -248,9 +248,12 @@ int gv_page_check(const struct gv_store *s, const uint8_t *page, size_t len,
             if (to < GV_PAGE_TABLE || (to & 3) || to > len || ts > len - to)
                 return gv_fail(err, GV_ECORRUPT, "store: tile %d/%u/%u lies "
                                "outside its page", level, tx, ty);
-            if (gv_tilebuf_check(page + to, ts, g->channels, err) < 0)
+            struct gv_error why;
+            if (gv_tilebuf_check(page + to, ts, g->channels, &why) < 0)
+                /* why, not err: snprintf must not read the buffer it
+                 * writes (found by fuzz_store's valgrind replay). */
                 return gv_fail(err, GV_ECORRUPT, "store: tile %d/%u/%u: %s",
-                               level, tx, ty, err ? err->text : "bad buffer");
+                               level, tx, ty, why.text);
         }
     return 0;
 }

@@ -343,6 +343,15 @@ static void remote_address(struct MHD_Connection *conn, char *buf, size_t size)
                   (socklen_t)size);
 }
 
+/* 413 for a body over max_request_bytes (announced or received). */
+static enum MHD_Result send_too_large(struct req *r)
+{
+    char msg[96];
+    snprintf(msg, sizeof msg, "request body larger than %llu bytes (max_request_bytes)",
+             (unsigned long long)r->srv->cfg->max_request_bytes);
+    return http_send_status(r, 413, "too_large", msg, NULL);
+}
+
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
                                   const char *url, const char *method,
                                   const char *version, const char *upload,
@@ -372,9 +381,9 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
         const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
                                                      "Content-Length");
         uint32_t n;
-        if (cl && (http_parse_u32(cl, HTTP_MAX_BODY, &n) < 0))
-            return http_send_status(r, 413, "too_large",
-                                    "request body larger than 1 MiB", NULL);
+        if (cl && (http_parse_u32(cl, (uint32_t)r->srv->cfg->max_request_bytes,
+                                  &n) < 0))
+            return send_too_large(r);
         return MHD_YES;
     }
     if (r->responded)
@@ -382,7 +391,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
     if (*upload_size) {
         size_t n = *upload_size;
         *upload_size = 0;
-        if (r->body_over || r->body_len + n > HTTP_MAX_BODY) {
+        if (r->body_over || r->body_len + n > r->srv->cfg->max_request_bytes) {
             r->body_over = 1;
             return MHD_YES;
         }
@@ -396,8 +405,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
         return MHD_YES;
     }
     if (r->body_over)
-        return http_send_status(r, 413, "too_large",
-                                "request body larger than 1 MiB", NULL);
+        return send_too_large(r);
     return dispatch(r);
 }
 
@@ -471,8 +479,10 @@ int http_start(struct server *srv)
 
     struct sockaddr_storage ss;
     memset(&ss, 0, sizeof ss);
+    /* MHD_ALLOW_SUSPEND_RESUME: filter requests wait for their worker
+     * suspended, not blocking a pool thread (route_filters.c). */
     unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL |
-                     MHD_USE_ITC | MHD_USE_ERROR_LOG;
+                     MHD_USE_ITC | MHD_USE_ERROR_LOG | MHD_ALLOW_SUSPEND_RESUME;
     struct sockaddr_in *in4 = (struct sockaddr_in *)&ss;
     struct sockaddr_in6 *in6 = (struct sockaddr_in6 *)&ss;
     if (inet_pton(AF_INET, cfg->listen, &in4->sin_addr) == 1) {

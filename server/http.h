@@ -13,7 +13,9 @@
  * Handlers (route_*.c) build a response with the http_send* helpers,
  * which add the CORS header, record the status and queue the response.
  * Every handler runs on a pool thread; struct server is read-only there
- * except for its thread-safe members (catalog, page cache, metrics).
+ * except for its thread-safe members (catalog, page cache, metrics,
+ * filters).  A handler may suspend its connection (MHD_suspend_connection)
+ * and keep its state in req.async; it is called again once resumed.
  */
 #ifndef GV_SERVER_HTTP_H
 #define GV_SERVER_HTTP_H
@@ -31,6 +33,8 @@
 #include "page_cache.h"
 
 struct gv_gpu;
+struct filter_jobs;
+struct filter_store;
 
 struct server {
     const struct settings *cfg;
@@ -47,10 +51,16 @@ struct server {
      * come later and will run through gv_gpu_call). */
     struct gv_gpu *gpu;
     char gpu_reason[sizeof ((struct gv_error *)0)->text];
+    /* Filter graphs (route_filters.c): the pool of sandboxed worker
+     * processes, NULL when filters cannot run (then filter_reason says
+     * why: gpu = off, no EGL, no worker program), and the stock and stored
+     * graphs.  Set before http_start; both are thread-safe. */
+    struct filter_jobs *filters;
+    struct filter_store *filter_store;
+    char filter_reason[sizeof ((struct gv_error *)0)->text + 64];
 };
 
 #define HTTP_MAX_PARAMS 8
-#define HTTP_MAX_BODY (1u << 20) /* POST bodies: 1 MiB hard cap */
 
 struct req {
     struct server *srv;
@@ -67,6 +77,10 @@ struct req {
     size_t body_len;
     int body_over;            /* body exceeded the cap (discarded) */
     int responded;
+    /* A handler's state while its connection is suspended (filter jobs:
+     * route_filters.c); the handler runs again when it is resumed, and
+     * frees this before answering. */
+    void *async;
     unsigned status;
     uint64_t bytes;
     struct timespec t0;

@@ -11,12 +11,18 @@
  * inherit the mask):
  *   SIGHUP           rescan the store directory (added, replaced and
  *                    removed stores; requests in flight keep their store)
- *   SIGTERM, SIGINT  stop accepting, let requests in flight finish (up to
- *                    drain_timeout seconds), exit 0
+ *                    and the filter graph directories
+ *   SIGTERM, SIGINT  let filter jobs finish, stop accepting, let requests
+ *                    in flight finish (up to drain_timeout seconds each),
+ *                    exit 0
+ * Filter graphs run in a pool of worker processes (filter_jobs.h) started
+ * after the GPU context: only when it opened, since a worker needs EGL
+ * just as much.
  * -t checks the configuration (and that the store directory is readable)
  * and exits 0 or 1 without serving.
  */
 #include <errno.h>
+#include <malloc.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,6 +33,9 @@
 #include "config.h" /* autoconf: PACKAGE_VERSION */
 
 #include "catalog.h"
+#include "filter.h"
+#include "filter_jobs.h"
+#include "filter_store.h"
 #include "gpu.h"
 #include "http.h"
 #include "log.h"
@@ -90,12 +99,105 @@ static void open_gpu(struct server *srv)
             in->api, in->vendor, in->renderer, in->version);
 }
 
+#ifndef GV_FILTER_WORKER
+#define GV_FILTER_WORKER "/usr/local/libexec/gigaview-filter-worker"
+#endif
+
+/* The worker program: filter_worker, else gigaview-filter-worker next to
+ * this executable (a build tree), else the installed one.  0 and path, or
+ * -1 with the places tried in why. */
+static int find_worker(const struct settings *cfg, char *path, size_t size,
+                       char *why, size_t whysize)
+{
+    if (cfg->filter_worker[0]) {
+        snprintf(path, size, "%s", cfg->filter_worker);
+        if (access(path, X_OK) == 0)
+            return 0;
+        snprintf(why, whysize, "filter_worker %.200s: %s", path, strerror(errno));
+        return -1;
+    }
+    char self[2048]; /* with the name appended, fits path[4096] */
+    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n > 0) {
+        self[n] = '\0';
+        char *slash = strrchr(self, '/');
+        if (slash) {
+            *slash = '\0';
+            snprintf(path, size, "%s/gigaview-filter-worker", self);
+            if (access(path, X_OK) == 0)
+                return 0;
+        }
+    }
+    snprintf(path, size, "%s", GV_FILTER_WORKER);
+    if (access(path, X_OK) == 0)
+        return 0;
+    snprintf(why, whysize, "no gigaview-filter-worker next to gigaviewd or at %s",
+             GV_FILTER_WORKER);
+    return -1;
+}
+
+/* The stock and stored graphs, and (with a GPU) the worker pool; when
+ * there is no pool, filter_reason says why for the 503s. */
+static int start_filters(struct server *srv)
+{
+    const struct settings *cfg = srv->cfg;
+    struct gv_filter_limits lim = {
+        (size_t)cfg->filter_max_json_bytes, (int)cfg->filter_max_json_depth,
+        (int)cfg->filter_max_modules, (size_t)cfg->filter_max_glsl_bytes,
+        (int)cfg->filter_max_padding};
+    srv->filter_store = filter_store_new(cfg->filter_library_dir, cfg->filter_dir, &lim);
+    if (!srv->filter_store) {
+        log_msg(LOG_ERROR, "main", "out of memory");
+        return -1;
+    }
+    char path[4096], why[300];
+    if (!strcmp(cfg->gpu, "off")) {
+        snprintf(srv->filter_reason, sizeof srv->filter_reason,
+                 "filter: filters are disabled: they need the GPU, and gpu = off");
+    } else if (!srv->gpu) {
+        snprintf(srv->filter_reason, sizeof srv->filter_reason,
+                 "filter: filters need an EGL context and there is none: %s",
+                 srv->gpu_reason);
+    } else if (cfg->filter_workers == 0) {
+        snprintf(srv->filter_reason, sizeof srv->filter_reason,
+                 "filter: filters are disabled (filter_workers = 0)");
+    } else if (find_worker(cfg, path, sizeof path, why, sizeof why) < 0) {
+        snprintf(srv->filter_reason, sizeof srv->filter_reason,
+                 "filter: filters are unavailable: %s", why);
+    } else {
+        struct filter_jobs_config fc = {
+            path, (int)cfg->filter_workers, (int)cfg->filter_timeout_ms,
+            cfg->filter_memory_limit, cfg->max_filter_pixels,
+            (int)cfg->filter_max_jobs};
+        struct gv_error err;
+        srv->filters = filter_jobs_new(&fc, &err);
+        if (!srv->filters) {
+            log_msg(LOG_ERROR, "filter", "%s", err.text);
+            return -1;
+        }
+        log_msg(LOG_INFO, "filter", "%d workers (%s), %llu ms per job, memory "
+                "limit %llu bytes", (int)cfg->filter_workers, path,
+                (unsigned long long)cfg->filter_timeout_ms,
+                (unsigned long long)cfg->filter_memory_limit);
+        return 0;
+    }
+    log_msg(LOG_INFO, "filter", "%s", srv->filter_reason + 8 /* "filter: " */);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     static struct settings cfg;
     struct gv_error err;
     const char *file = NULL, *port = NULL, *dir = NULL, *addr = NULL;
     int test = 0, c;
+    /* Pages and decoded tiles are large blocks freed in any order as the
+     * caches evict; with glibc's sliding mmap threshold they end up on the
+     * heap, whose freed pages stay resident (measured: RSS 150 MiB above
+     * the configured caches under eviction, bench/README.md "Load and
+     * soak").  A fixed threshold keeps such blocks in their own mappings,
+     * returned to the system when freed. */
+    mallopt(M_MMAP_THRESHOLD, 128 * 1024);
     settings_defaults(&cfg);
     while ((c = getopt(argc, argv, "c:tp:d:l:SVh")) != -1) {
         switch (c) {
@@ -159,7 +261,9 @@ int main(int argc, char **argv)
     catalog_on_close(srv.catalog, forget_pages, srv.pages);
     catalog_scan(srv.catalog);
     open_gpu(&srv);
-    if (http_start(&srv) < 0) {
+    if (start_filters(&srv) < 0 || http_start(&srv) < 0) {
+        filter_jobs_free(srv.filters);
+        filter_store_free(srv.filter_store);
         gv_gpu_close(srv.gpu);
         return 1;
     }
@@ -177,6 +281,7 @@ int main(int argc, char **argv)
         if (sig == SIGHUP) {
             log_msg(LOG_INFO, "main", "SIGHUP: rescanning %s", cfg.store_dir);
             catalog_scan(srv.catalog);
+            filter_store_scan(srv.filter_store);
             continue;
         }
         log_msg(LOG_INFO, "main", "%s: draining (up to %llus)",
@@ -184,7 +289,13 @@ int main(int argc, char **argv)
                 (unsigned long long)cfg.drain_timeout);
         break;
     }
+    /* Filter jobs first: a request waiting for one is suspended, and
+     * every job's end (done or cancelled) resumes it before the HTTP
+     * drain. */
+    filter_jobs_stop(srv.filters, (unsigned)cfg.drain_timeout * 1000u);
     http_drain_and_stop(&srv, (unsigned)cfg.drain_timeout);
+    filter_jobs_free(srv.filters);
+    filter_store_free(srv.filter_store);
     gv_gpu_close(srv.gpu);
     catalog_free(srv.catalog);
     page_cache_free(srv.pages);

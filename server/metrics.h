@@ -33,7 +33,9 @@ struct metrics {
     int nroutes;
     atomic_int open_connections;
     atomic_int in_flight;
-    atomic_uint_fast64_t page_errors;   /* tiles answered 500 for a page */
+    atomic_uint_fast64_t page_errors;   /* answers (tiles, batch entries,
+                                           regions, IIIF images) that failed
+                                           on a damaged or unreadable page */
     atomic_uint_fast64_t bytes_sent;
 };
 

@@ -9,6 +9,7 @@
 
 #include "config.h" /* autoconf: PACKAGE_VERSION */
 
+#include "filter_jobs.h"
 #include "gpu.h"
 #include "metrics.h"
 #include "routes.h"
@@ -153,6 +154,10 @@ enum MHD_Result route_metrics(struct req *r)
         "# HELP gigaview_page_errors_total Pages that failed their CRC or could not be read.\n"
         "# TYPE gigaview_page_errors_total counter\n"
         "gigaview_page_errors_total %llu\n"
+        "# HELP gigaview_page_error_responses_total Tiles, batch entries, regions "
+        "and IIIF images answered 500 because a page was damaged or unreadable.\n"
+        "# TYPE gigaview_page_error_responses_total counter\n"
+        "gigaview_page_error_responses_total %llu\n"
         "# HELP gigaview_open_connections Open HTTP connections.\n"
         "# TYPE gigaview_open_connections gauge\n"
         "gigaview_open_connections %d\n"
@@ -172,9 +177,16 @@ enum MHD_Result route_metrics(struct req *r)
         (unsigned long long)st.evictions, (unsigned long long)st.bytes,
         (unsigned long long)st.max_bytes, (unsigned long long)st.pages,
         (unsigned long long)st.errors,
+        (unsigned long long)atomic_load(&metrics.page_errors),
         atomic_load(&metrics.open_connections), atomic_load(&metrics.in_flight),
         (unsigned long long)atomic_load(&metrics.bytes_sent),
         catalog_count(r->srv->catalog), http_uptime(r->srv));
+    char *fm = filter_jobs_metrics(r->srv->filters); /* filter workers */
+    if (fm)
+        put(&t, "%s", fm);
+    else
+        t.failed = 1;
+    free(fm);
     if (t.failed) {
         free(t.s);
         return http_send_errorf(r, GV_ENOMEM, "metrics: out of memory");

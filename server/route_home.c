@@ -1,22 +1,39 @@
 /*
- * route_home.c - GET /: a small HTML page listing the images, with links
- * to their metadata, IIIF info.json and a root preview.  The WebGL2 viewer
- * (client/web/) replaces it in a later step.  Ids are restricted to
- * [A-Za-z0-9._-] (catalog.h), so they need no HTML escaping.
+ * route_home.c - GET /: the browser viewer (client/web/index.html,
+ * embedded by client/web/embed.sh) with the list of images filled in on
+ * the server, so the list shows even before (or without) JavaScript.
+ * Each entry links the viewer (#image=ID), the metadata and the IIIF
+ * info.json.  Ids are restricted to [A-Za-z0-9._-] (catalog.h), so they
+ * need no HTML or URL escaping.  The page is built per request (the
+ * catalog changes on SIGHUP) and sent with "Cache-Control: no-cache" and
+ * the viewer's Content-Security-Policy.
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "routes.h"
+#include "web_assets.h"
+
+#define MARK "<!--gv:images-->"   /* where index.html takes the list */
 
 enum MHD_Result route_home(struct req *r)
 {
+    const struct web_asset *page = web_asset_find("index.html");
+    if (!page)
+        return http_send_errorf(r, GV_EIO, "home: the viewer was not built in");
+    const char *text = (const char *)page->data;
+    const char *mark = strstr(text, MARK);
+    size_t head = mark ? (size_t)(mark - text) : page->len;
+    size_t tail_at = mark ? head + strlen(MARK) : page->len;
+
     struct image **imgs;
     int n = catalog_list(r->srv->catalog, &imgs);
     if (n < 0)
         return http_send_errorf(r, GV_ENOMEM, "home: out of memory");
-    size_t cap = 2048 + (size_t)n * 1024, len = 0;
+    /* One entry: four ids of at most 128 bytes, two numbers, markup;
+     * 512 for the empty-list message. */
+    size_t cap = page->len + 512 + (size_t)n * 1024, len = 0;
     char *s = malloc(cap);
     if (!s) {
         for (int i = 0; i < n; i++)
@@ -24,30 +41,34 @@ enum MHD_Result route_home(struct req *r)
         free(imgs);
         return http_send_errorf(r, GV_ENOMEM, "home: out of memory");
     }
-    len += (size_t)snprintf(s + len, cap - len,
-        "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-        "<title>gigaview</title>"
-        "<style>body{font-family:sans-serif;margin:2em}td,th{padding:.3em 1em;"
-        "text-align:left}img{max-width:128px;max-height:128px}</style></head>"
-        "<body><h1>gigaview</h1>\n<p>%d image%s. The WebGL2 viewer arrives in a "
-        "later release; until then, use any IIIF viewer (OpenSeadragon, "
-        "Leaflet-IIIF, Mirador) with the info.json links below, or the "
-        "<a href=\"/v1/images\">JSON API</a>.</p>\n<table><tr><th>preview</th>"
-        "<th>image</th><th>size</th><th>links</th></tr>\n", n, n == 1 ? "" : "s");
+    memcpy(s, text, head);
+    len = head;
+    if (n == 0)
+        len += (size_t)snprintf(s + len, cap - len,
+            "<li class=\"dim\">No images yet: encode one with <code>gigaview "
+            "encode</code> into the store directory and send gigaviewd a "
+            "SIGHUP.</li>");
     for (int i = 0; i < n; i++) {
         const char *id = imgs[i]->id;
         const struct gv_geometry *g = &imgs[i]->info->geometry;
         len += (size_t)snprintf(s + len, cap - len,
-            "<tr><td><img src=\"/v1/images/%s/root\" alt=\"\"></td><td>%s</td>"
-            "<td>%u &times; %u</td><td><a href=\"/v1/images/%s\">metadata</a> "
-            "&middot; <a href=\"/iiif/3/%s/info.json\">IIIF info.json</a> "
-            "&middot; <a href=\"/iiif/3/%s/full/max/0/default.jpg\">IIIF full</a>"
-            "</td></tr>\n", id, id, g->width, g->height, id, id, id);
+            "<li><a href=\"#image=%s\">%s</a> <span class=\"dim\">%u &times; "
+            "%u</span> &middot; <a href=\"/v1/images/%s\">metadata</a> &middot; "
+            "<a href=\"/iiif/3/%s/info.json\">IIIF info.json</a></li>\n",
+            id, id, g->width, g->height, id, id);
         image_put(imgs[i]);
     }
     free(imgs);
-    len += (size_t)snprintf(s + len, cap - len,
-        "</table>\n<p><a href=\"/healthz\">health</a> &middot; "
-        "<a href=\"/metrics\">metrics</a></p></body></html>\n");
-    return http_send_owned(r, 200, "text/html; charset=utf-8", s, len);
+    memcpy(s + len, text + tail_at, page->len - tail_at);
+    len += page->len - tail_at;
+    struct MHD_Response *resp =
+        MHD_create_response_from_buffer_with_free_callback(len, s, free);
+    if (!resp) {
+        free(s);
+        return http_send(r, 500, NULL, 0);
+    }
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, page->type);
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-cache");
+    MHD_add_response_header(resp, "Content-Security-Policy", WEB_CSP);
+    return http_send(r, 200, resp, len);
 }

@@ -19,6 +19,8 @@
 
 #include "iiif.h"
 #include "imageio.h"
+#include "log.h"
+#include "metrics.h"
 #include "render.h"
 #include "routes.h"
 
@@ -212,6 +214,10 @@ enum MHD_Result route_iiif_image(struct req *r)
     if (gv_render(d, &q.render, &pix, &w, &h, &c, &err) < 0 ||
         gv_image_encode(q.format, w, h, c, pix,
                         (int)r->srv->cfg->jpeg_quality, &out, &len, &err) < 0) {
+        if (err.code == GV_ECORRUPT || err.code == GV_EIO) { /* the store */
+            atomic_fetch_add(&metrics.page_errors, 1);
+            log_msg(LOG_ERROR, "iiif", "%s: %s", img->id, err.text);
+        }
         ret = http_send_error(r, &err);
         goto out;
     }

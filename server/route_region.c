@@ -14,6 +14,8 @@
 
 #include "geometry.h"
 #include "imageio.h"
+#include "log.h"
+#include "metrics.h"
 #include "routes.h"
 
 struct out_format {
@@ -111,6 +113,10 @@ enum MHD_Result route_region(struct req *r)
     if (gv_decode_region(d, (int)level, x, y, w, h, pix, &err) < 0 ||
         gv_image_encode(f->encoder, w, h, c, pix, (int)quality, &out, &len,
                         &err) < 0) {
+        if (err.code == GV_ECORRUPT || err.code == GV_EIO) { /* the store */
+            atomic_fetch_add(&metrics.page_errors, 1);
+            log_msg(LOG_ERROR, "region", "%s: %s", img->id, err.text);
+        }
         ret = http_send_error(r, &err);
         goto out;
     }

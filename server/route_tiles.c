@@ -16,12 +16,14 @@
  *   u32 ty, u32 status, u32 length, length bytes, zero padding to 4.
  * All integers little-endian.  A tile that fails (404 outside the grid,
  * 500 corrupt page) has its status and length 0; the others still serve.
- * The body is an iovec over the cached pages: no copy either.
+ * The body is an iovec over the cached pages: no copy either.  The tile
+ * list itself is parsed by batch_request.c (fuzzed on its own).
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "batch_request.h"
 #include "geometry.h"
 #include "log.h"
 #include "metrics.h"
@@ -149,7 +151,7 @@ out:
 /* ------------------------------------------------------------------ batch */
 
 struct batch {
-    uint32_t (*want)[3];      /* level, tx, ty */
+    struct batch_tile *want;  /* batch_request.h */
     size_t n;
     struct page **pages;      /* distinct pages referenced */
     size_t npages;
@@ -165,96 +167,6 @@ static void batch_free(void *cls)
     free(b->frames);
     free(b->want);
     free(b);
-}
-
-/* Parse "L,X,Y;L,X,Y;..." */
-static int parse_query(const char *t, struct batch *b, size_t max,
-                       struct gv_error *err)
-{
-    size_t cap = 1;
-    for (const char *p = t; *p; p++)
-        cap += *p == ';';
-    if (cap > max)
-        return gv_fail(err, GV_ELIMIT, "batch: %zu tiles, at most %zu", cap, max);
-    b->want = calloc(cap, sizeof *b->want);
-    if (!b->want)
-        return gv_fail(err, GV_ENOMEM, "batch: out of memory");
-    const char *p = t;
-    while (*p) {
-        for (int k = 0; k < 3; k++) {
-            char num[16];
-            size_t n = strspn(p, "0123456789");
-            if (n == 0 || n >= sizeof num)
-                return gv_fail(err, GV_EINVAL,
-                               "batch: t must be L,X,Y triples separated by ';'");
-            memcpy(num, p, n);
-            num[n] = '\0';
-            if (http_parse_u32(num, GV_MAX_DIM, &b->want[b->n][k]) < 0)
-                return gv_fail(err, GV_EINVAL, "batch: number out of range");
-            p += n;
-            if (k < 2 && *p++ != ',')
-                return gv_fail(err, GV_EINVAL,
-                               "batch: t must be L,X,Y triples separated by ';'");
-        }
-        b->n++;
-        if (*p == ';' && p[1])
-            p++;
-        else if (*p)
-            return gv_fail(err, GV_EINVAL,
-                           "batch: t must be L,X,Y triples separated by ';'");
-    }
-    if (b->n == 0)
-        return gv_fail(err, GV_EINVAL, "batch: no tiles asked for");
-    return 0;
-}
-
-static int parse_json(const char *body, size_t len, struct batch *b, size_t max,
-                      struct gv_error *err)
-{
-    json_error_t je;
-    json_t *root = json_loadb(body ? body : "", len, JSON_REJECT_DUPLICATES, &je);
-    if (!root)
-        return gv_fail(err, GV_EINVAL, "batch: bad JSON at line %d, column %d: %s",
-                       je.line, je.column, je.text);
-    int rc = 0;
-    json_t *tiles = json_object_get(root, "tiles");
-    if (!json_is_array(tiles) || json_array_size(tiles) == 0) {
-        rc = gv_fail(err, GV_EINVAL,
-                     "batch: body must be {\"tiles\": [[level, tx, ty], ...]}");
-        goto out;
-    }
-    size_t n = json_array_size(tiles);
-    if (n > max) {
-        rc = gv_fail(err, GV_ELIMIT, "batch: %zu tiles, at most %zu", n, max);
-        goto out;
-    }
-    b->want = calloc(n, sizeof *b->want);
-    if (!b->want) {
-        rc = gv_fail(err, GV_ENOMEM, "batch: out of memory");
-        goto out;
-    }
-    for (size_t i = 0; i < n; i++) {
-        json_t *t = json_array_get(tiles, i);
-        if (!json_is_array(t) || json_array_size(t) != 3) {
-            rc = gv_fail(err, GV_EINVAL, "batch: tiles[%zu] is not [level, tx, ty]", i);
-            goto out;
-        }
-        for (size_t k = 0; k < 3; k++) {
-            json_t *v = json_array_get(t, k);
-            if (!json_is_integer(v) || json_integer_value(v) < 0 ||
-                json_integer_value(v) > (json_int_t)GV_MAX_DIM) {
-                rc = gv_fail(err, GV_EINVAL,
-                             "batch: tiles[%zu][%zu] is not a non-negative integer "
-                             "in range", i, k);
-                goto out;
-            }
-            b->want[i][k] = (uint32_t)json_integer_value(v);
-        }
-    }
-    b->n = n;
-out:
-    json_decref(root);
-    return rc;
 }
 
 static struct page *batch_page(struct batch *b, const struct page *p)
@@ -280,9 +192,9 @@ enum MHD_Result route_batch(struct req *r)
         if (!t)
             rc = gv_fail(&err, GV_EINVAL, "batch: missing t=L,X,Y;L,X,Y...");
         else
-            rc = parse_query(t, b, max, &err);
+            rc = batch_parse_query(t, max, &b->want, &b->n, &err);
     } else {
-        rc = parse_json(r->body, r->body_len, b, max, &err);
+        rc = batch_parse_json(r->body, r->body_len, max, &b->want, &b->n, &err);
     }
     if (rc < 0) {
         batch_free(b);
@@ -311,7 +223,7 @@ enum MHD_Result route_batch(struct req *r)
     iov[niov].iov_base = b->frames;
     iov[niov++].iov_len = 8;
     for (size_t i = 0; i < b->n; i++) {
-        uint32_t level = b->want[i][0], tx = b->want[i][1], ty = b->want[i][2];
+        uint32_t level = b->want[i].level, tx = b->want[i].tx, ty = b->want[i].ty;
         uint8_t *f = b->frames + 8 + 20 * i;
         uint32_t crc, status = 200;
         const uint8_t *tile = NULL;

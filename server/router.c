@@ -22,6 +22,12 @@ const struct router_route router_routes[ROUTE_COUNT] = {
     [ROUTE_IIIF_BASE] = {"GET", "/iiif/3/*", "iiif_base", 1},
     [ROUTE_IIIF_INFO] = {"GET", "/iiif/3/*/info.json", "iiif_info", 1},
     [ROUTE_IIIF_IMAGE] = {"GET", "/iiif/3/*/*/*/*/*", "iiif_image", 1},
+    [ROUTE_FILTERS] = {"GET", "/v1/filters", "filters", 0},
+    [ROUTE_FILTERS_POST] = {"POST", "/v1/filters", "filters", 0},
+    [ROUTE_FILTER] = {"GET", "/v1/filters/*", "filter", 0},
+    [ROUTE_FILTER_DELETE] = {"DELETE", "/v1/filters/*", "filter", 0},
+    [ROUTE_IMAGE_FILTER] = {"POST", "/v1/images/*/filter", "image_filter", 0},
+    [ROUTE_WEB] = {"GET", "/web/*", "web", 0},
 };
 
 int router_match_pattern(const char *pattern, const char *path,

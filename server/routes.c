@@ -18,4 +18,10 @@ const route_fn route_handlers[ROUTE_COUNT] = {
     [ROUTE_IIIF_BASE] = route_iiif_base,
     [ROUTE_IIIF_INFO] = route_iiif_info,
     [ROUTE_IIIF_IMAGE] = route_iiif_image,
+    [ROUTE_FILTERS] = route_filters_list,
+    [ROUTE_FILTERS_POST] = route_filters_post,
+    [ROUTE_FILTER] = route_filter_get,
+    [ROUTE_FILTER_DELETE] = route_filter_delete,
+    [ROUTE_IMAGE_FILTER] = route_image_filter,
+    [ROUTE_WEB] = route_static,
 };

@@ -15,8 +15,9 @@ typedef enum MHD_Result (*route_fn)(struct req *r);
 
 extern const route_fn route_handlers[ROUTE_COUNT];
 
-/* route_home.c */
+/* route_home.c: the viewer page; route_static.c: its files */
 enum MHD_Result route_home(struct req *r);
+enum MHD_Result route_static(struct req *r);
 /* route_images.c */
 enum MHD_Result route_images_list(struct req *r);
 enum MHD_Result route_image_info(struct req *r);
@@ -30,6 +31,12 @@ enum MHD_Result route_region(struct req *r);
 enum MHD_Result route_iiif_base(struct req *r);
 enum MHD_Result route_iiif_info(struct req *r);
 enum MHD_Result route_iiif_image(struct req *r);
+/* route_filters.c */
+enum MHD_Result route_filters_list(struct req *r);
+enum MHD_Result route_filters_post(struct req *r);
+enum MHD_Result route_filter_get(struct req *r);
+enum MHD_Result route_filter_delete(struct req *r);
+enum MHD_Result route_image_filter(struct req *r);
 /* route_health.c */
 enum MHD_Result route_healthz(struct req *r);
 enum MHD_Result route_metrics(struct req *r);

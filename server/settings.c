@@ -15,6 +15,11 @@
 #include "settings.h"
 #include "log.h"
 
+/* Where `make install` puts the stock filter graphs (Makefile.am). */
+#ifndef GV_FILTER_LIBRARY_DIR
+#define GV_FILTER_LIBRARY_DIR "/usr/local/share/gigaview/filters"
+#endif
+
 enum settings_type { T_STR, T_UINT, T_SIZE, T_DOUBLE, T_LEVEL, T_GPU };
 
 struct settings_key {
@@ -68,10 +73,39 @@ static const struct settings_key keys[] = {
      "access log: a file path, \"stderr\" or \"off\""},
     {"batch_max_tiles", T_UINT, F(batch_max_tiles), "256", 1, 65536,
      "most tiles in one batch request"},
+    {"max_request_bytes", T_SIZE, F(max_request_bytes), "1M", 1024, 67108864,
+     "largest request body (POST) in bytes; 413 beyond, refused before reading "
+     "when announced"},
     {"jpeg_quality", T_UINT, F(jpeg_quality), "90", 1, 100,
      "quality of JPEG and WebP output"},
     {"gpu", T_GPU, F(gpu), "auto", 0, 0,
      "auto: open an EGL context at start (CPU only if none works); off: never"},
+    {"filter_workers", T_UINT, F(filter_workers), "2", 0, 64,
+     "filter worker processes (each with its own EGL context); 0 disables filters"},
+    {"filter_timeout_ms", T_UINT, F(filter_timeout_ms), "10000", 100, 3600000,
+     "time limit of one filter job in ms; the worker is killed past it (504)"},
+    {"filter_memory_limit", T_SIZE, F(filter_memory_limit), "1G", 0, 1e15,
+     "RLIMIT_DATA of each filter worker (heap and private mappings); 0: none"},
+    {"filter_max_jobs", T_UINT, F(filter_max_jobs), "8", 1, 4096,
+     "filter jobs queued or running at once; more get 503 with Retry-After"},
+    {"max_filter_pixels", T_SIZE, F(max_filter_pixels), "4M", 1, 268435456,
+     "largest padded region of one filter request, in pixels (413 beyond)"},
+    {"filter_worker", T_STR, F(filter_worker), "", 0, 0,
+     "the gigaview-filter-worker program (\"\": next to gigaviewd, else installed)"},
+    {"filter_dir", T_STR, F(filter_dir), "/var/lib/gigaview-filters", 0, 0,
+     "directory of graphs stored with POST /v1/filters (\"\": storing disabled)"},
+    {"filter_library_dir", T_STR, F(filter_library_dir), GV_FILTER_LIBRARY_DIR, 0, 0,
+     "directory of the stock filter graphs (*.json)"},
+    {"filter_max_json_bytes", T_SIZE, F(filter_max_json_bytes), "64K", 64, 1048576,
+     "largest filter graph document in bytes"},
+    {"filter_max_json_depth", T_UINT, F(filter_max_json_depth), "16", 4, 64,
+     "deepest nesting of arrays and objects in a graph document"},
+    {"filter_max_modules", T_UINT, F(filter_max_modules), "32", 1, 64,
+     "most modules in one filter graph"},
+    {"filter_max_glsl_bytes", T_SIZE, F(filter_max_glsl_bytes), "16K", 1, 1048576,
+     "largest GLSL body of one module in bytes"},
+    {"filter_max_padding", T_UINT, F(filter_max_padding), "512", 0, 16384,
+     "largest region padding per side in pixels (sum of supports)"},
 };
 
 #define NKEYS (sizeof keys / sizeof keys[0])

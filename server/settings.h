@@ -42,8 +42,23 @@ struct settings {
     char log_level[16];
     char access_log[SETTINGS_PATH];
     uint64_t batch_max_tiles;
+    uint64_t max_request_bytes;    /* POST body cap (413 beyond) */
     uint64_t jpeg_quality;
     char gpu[8];                   /* "auto" (open EGL at start) or "off" */
+    /* filter graphs (docs/FILTERS.md sections 7 and 9) */
+    uint64_t filter_workers;       /* worker processes; 0 disables filters */
+    uint64_t filter_timeout_ms;    /* per job; the worker is killed past it */
+    uint64_t filter_memory_limit;  /* RLIMIT_DATA of a worker; 0 none */
+    uint64_t filter_max_jobs;      /* queued plus running; 503 beyond */
+    uint64_t max_filter_pixels;    /* padded region of one filter request */
+    char filter_worker[SETTINGS_PATH];      /* program; "" finds it */
+    char filter_dir[SETTINGS_PATH];         /* stored graphs; "" none */
+    char filter_library_dir[SETTINGS_PATH]; /* stock graphs */
+    uint64_t filter_max_json_bytes;
+    uint64_t filter_max_json_depth;
+    uint64_t filter_max_modules;
+    uint64_t filter_max_glsl_bytes;
+    uint64_t filter_max_padding;
 };
 
 /* Fill *c with every default.  Cannot fail. */

@@ -19,6 +19,8 @@ need_tool oiiotool idiff
 
 S=$T/stores
 mkdir "$S" "$T/w" || bail "mkdir"
+# The source tree, absolute: $0 may be relative (make distcheck).
+srcroot=$(cd "$(dirname "$0")/.." && pwd)
 cd "$T/w" || bail "cd"
 
 # Stores: x (3000x2000: levels 0-2 tiled, root 375x250 at level 3) and m
@@ -73,7 +75,7 @@ expect_rc "-t on a missing file" 1
 # ---------------------------------------------------------------- systemd unit
 # systemd-analyze verify, with ExecStart pointing at the binary under
 # test; any complaint (unknown key, bad value) counts as a failure.
-unit=$(dirname "$0")/../conf/gigaviewd.service
+unit=$srcroot/conf/gigaviewd.service
 if ! command -v systemd-analyze >/dev/null 2>&1; then
     skip "systemd-analyze verify conf/gigaviewd.service" "no systemd-analyze"
 elif [ ! -f "$unit" ]; then

@@ -3,7 +3,8 @@
 #
 #   tests/fuzz/campaign.sh BUILDDIR [SECONDS-PER-TARGET] [JOBS]
 #
-# FUZZ_TARGETS picks targets (default: store tile iiif router filter_graph).
+# FUZZ_TARGETS picks targets (default: store tile iiif router filter_graph
+# worker settings batch imageio).
 # BUILDDIR was configured with --enable-fuzzing CC=clang CXX=clang++ (the
 # targets are built here if needed).  Each target starts from a copy of
 # its seed corpus (tests/fuzz/corpus/*, left untouched) in a work
@@ -12,13 +13,21 @@
 # timeout-*, oom-* files, kept in the work directory with the logs).
 # Add a finding to tests/fuzz/corpus/<target>/ once it is fixed, so that
 # `make check` replays it forever.  Exit 1 when something was found.
+#
+# VALGRIND_REPLAY=PLAINBUILD (a build without sanitizers, with the
+# run_fuzz_* programs built) also replays each grown corpus through
+# PLAINBUILD/tests/fuzz/run_fuzz_TARGET under valgrind: the libraries the
+# targets call (OpenImageIO and its readers, jansson) are not
+# instrumented, so AddressSanitizer misses a stray write inside them that
+# does not crash, and valgrind sees it.  Its errors count as findings
+# (the log names the input: run_corpus prints each file's name first).
 set -u
 build=${1:?usage: campaign.sh BUILDDIR [SECONDS] [JOBS]}
 secs=${2:-60}
 jobs=${3:-1}
 here=$(cd "$(dirname "$0")" && pwd)
 work=${FUZZ_WORK:-$(mktemp -d "${TMPDIR:-/tmp}/gvfuzz.XXXXXX")}
-targets=${FUZZ_TARGETS:-store tile iiif router filter_graph}
+targets=${FUZZ_TARGETS:-store tile iiif router filter_graph worker settings batch imageio}
 make -C "$build" $(for t in $targets; do printf 'tests/fuzz/fuzz_%s ' "$t"; done) >/dev/null ||
     { echo "campaign: cannot build the fuzz targets in $build" >&2; exit 2; }
 found=0
@@ -48,6 +57,22 @@ for t in $targets; do
         done
         grep -E '^(==[0-9]+==ERROR|SUMMARY|.*runtime error)' "$work/$t/log" | head -n 5 |
             sed 's/^/    /'
+    fi
+    if [ -n "${VALGRIND_REPLAY:-}" ]; then
+        make -C "$VALGRIND_REPLAY" "tests/fuzz/run_fuzz_$t" >/dev/null 2>&1 ||
+            { echo "campaign: cannot build run_fuzz_$t in $VALGRIND_REPLAY" >&2; exit 2; }
+        if valgrind -q --error-exitcode=99 --leak-check=full \
+            --errors-for-leak-kinds=definite --show-leak-kinds=definite \
+            "$VALGRIND_REPLAY/tests/fuzz/run_fuzz_$t" "$work/$t/corpus" \
+            >"$work/$t/valgrind.log" 2>&1; then
+            echo "  valgrind replay of $after inputs: clean"
+        else
+            found=1
+            echo "  FINDING valgrind replay: $work/$t/valgrind.log"
+            grep -m 1 -B 30 '^==[0-9]*== [A-Z]' "$work/$t/valgrind.log" |
+                grep '^# ' | tail -n 1 | sed 's/^# /    input /'
+            grep -m 3 '^==[0-9]*== [A-Z]' "$work/$t/valgrind.log" | sed 's/^/    /'
+        fi
     fi
 done
 echo "logs and corpora in $work"

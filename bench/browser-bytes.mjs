@@ -1,0 +1,206 @@
+// browser-bytes.mjs - bytes transferred along a scripted pan and zoom
+// path: the gigaview viewer (compressed tiles from gigaviewd, decoded in
+// the browser) against OpenSeadragon on static IIIF JPEG tiles (made by
+// bench/browser-bytes.sh with vips dzsave at the JPEG quality of equal
+// PSNR).  Run by bench/browser-bytes.sh; prints "RESULT" lines.
+//
+//   node browser-bytes.mjs --base URL --id ID --iiif DIR [--size WxH]
+//        [--chromium PATH]
+//
+// The path, for a W x H viewport (zoom z: one screen pixel shows 2^z
+// level-0 pixels; `home` is the whole image):
+//   1 home   2 z=1.2 at the centre (or 0.4 below home)   3 z=0.2
+//   4 pan right half a screen   5 pan down half a screen   6 pan left one
+//   screen   7 z=-0.8 (magnified)   8 home again
+// Each viewer gets a fresh browser profile (no HTTP cache) and waits at
+// every step until its picture is complete (gigaview: every tile of the
+// view decoded; OpenSeadragon: fully-loaded).  Bytes are what the network
+// layer received for the image data (Chrome DevTools Protocol
+// encodedDataLength: bodies and headers): gigaview's metadata, root and
+// tile batches; OpenSeadragon's info.json and tiles; not the pages and
+// scripts.  gigaview runs twice: without prefetching (what the path
+// needs) and as shipped (with the prefetch circle of thesis section 7.5).
+import { createServer } from 'node:http';
+import { mkdtempSync, readFileSync, rmSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { dirname, join, normalize } from 'node:path';
+import { fileURLToPath, pathToFileURL } from 'node:url';
+
+const here = dirname(fileURLToPath(import.meta.url));
+const nm = join(here, '..', 'tests', 'browser', 'node_modules');
+const { chromium } = await import(pathToFileURL(join(nm, 'playwright-core', 'index.mjs')).href);
+
+const opt = { base: '', id: '', iiif: '', size: '1280x800', chromium: '/usr/bin/chromium' };
+const argv = process.argv.slice(2);
+for (let i = 0; i < argv.length; i += 2) {
+    const k = argv[i].replace(/^--/, '');
+    if (!(k in opt) || argv[i + 1] === undefined) {
+        console.error('usage: node browser-bytes.mjs --base URL --id ID --iiif DIR [--size WxH] [--chromium PATH]');
+        process.exit(2);
+    }
+    opt[k] = argv[i + 1];
+}
+const base = opt.base.replace(/\/+$/, '');
+const [W, H] = opt.size.split('x').map(Number);
+const info = await (await fetch(`${base}/v1/images/${opt.id}`)).json();
+const IW = info.width, IH = info.height;
+const home = { cx: IW / 2, cy: IH / 2, zoom: Math.log2(Math.max(IW / W, IH / H)), rot: 0 };
+
+// The path, each step from the previous one.
+const path = [['home', () => home]];
+{
+    // Zooms off the integers: at an integer zoom OpenSeadragon (its
+    // default minPixelRatio 0.5) takes the next finer level, the viewer
+    // the level itself; elsewhere both draw from the same level.
+    // Pans of half a screen stay inside the image at these zooms for
+    // images of 3 megapixels or more.
+    let v = { ...home, zoom: Math.min(1.2, home.zoom - 0.4) };
+    path.push([`z=${v.zoom.toFixed(2)} at the centre`, () => v]);
+    const step = (name, f) => { const w = f(v); v = w; path.push([name, () => w]); };
+    step('z=0.2', (u) => ({ ...u, zoom: 0.2 }));
+    step('pan right half a screen', (u) => ({ ...u, cx: u.cx + W / 2 * 2 ** u.zoom }));
+    step('pan down half a screen', (u) => ({ ...u, cy: u.cy + H / 2 * 2 ** u.zoom }));
+    step('pan left one screen', (u) => ({ ...u, cx: u.cx - W * 2 ** u.zoom }));
+    step('z=-0.8', (u) => ({ ...u, zoom: -0.8 }));
+    path.push(['home again', () => home]);
+}
+
+// ------------------------------------------------- the static IIIF server
+const osdJs = readFileSync(join(nm, 'openseadragon', 'build', 'openseadragon', 'openseadragon.min.js'));
+let iiifBase = '';
+const page = (infoUrl) => `<!doctype html><html><head><meta charset="utf-8"><title>osd bytes</title>
+<style>html,body{margin:0;background:#000}#v{width:${W}px;height:${H}px}</style>
+<script src="/openseadragon.min.js"></script></head><body><div id="v"></div><script>
+window.osd = OpenSeadragon({ id: 'v', prefixUrl: '/images/', tileSources: ${JSON.stringify(infoUrl)},
+  crossOriginPolicy: 'Anonymous', showNavigationControl: false, animationTime: 0, blendTime: 0,
+  immediateRender: false, springStiffness: 100 });
+window.osdOpen = new Promise((ok) => window.osd.addHandler('open', ok));
+</script></body></html>`;
+const server = createServer((req, res) => {
+    const u = decodeURIComponent(req.url.split('?')[0]);
+    if (u === '/') {
+        res.writeHead(200, { 'Content-Type': 'text/html' });
+        res.end(page(`${iiifBase}/${opt.id}/info.json`));
+        return;
+    }
+    if (u === '/openseadragon.min.js') {
+        res.writeHead(200, { 'Content-Type': 'text/javascript' });
+        res.end(osdJs);
+        return;
+    }
+    const prefix = `/${opt.id}/`;
+    const f = normalize(join(opt.iiif, u.slice(prefix.length)));
+    if (!u.startsWith(prefix) || !f.startsWith(normalize(opt.iiif)) || !existsSync(f)) {
+        res.writeHead(404, { 'Access-Control-Allow-Origin': '*' });
+        res.end();
+        return;
+    }
+    let body = readFileSync(f);
+    if (u.endsWith('/info.json')) {
+        const j = JSON.parse(body);
+        j.id = `${iiifBase}/${opt.id}`;
+        body = Buffer.from(JSON.stringify(j));
+    }
+    res.writeHead(200, { 'Content-Type': u.endsWith('.json') ? 'application/json' : 'image/jpeg',
+        'Access-Control-Allow-Origin': '*' });
+    res.end(body);
+});
+await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
+iiifBase = `http://127.0.0.1:${server.address().port}`;
+
+// Bytes of image data received, counted through the DevTools protocol.
+async function meter(ctx, pg, isData) {
+    const cdp = await ctx.newCDPSession(pg);
+    await cdp.send('Network.enable');
+    const urls = new Map();
+    const m = { bytes: 0, requests: 0 };
+    cdp.on('Network.responseReceived', (e) => urls.set(e.requestId, e.response.url));
+    cdp.on('Network.loadingFinished', (e) => {
+        const u = urls.get(e.requestId);
+        if (u && isData(u)) {
+            m.bytes += e.encodedDataLength;
+            m.requests++;
+        }
+    });
+    return m;
+}
+
+async function launch() {
+    const profile = mkdtempSync(join(tmpdir(), 'gv-bytes-'));
+    const ctx = await chromium.launchPersistentContext(profile, {
+        executablePath: opt.chromium, headless: true, viewport: { width: W, height: H }, deviceScaleFactor: 1,
+        args: ['--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+            '--disable-background-networking', '--no-first-run', '--force-color-profile=srgb'],
+    });
+    return { ctx, done: async () => { await ctx.close(); rmSync(profile, { recursive: true, force: true }); } };
+}
+
+async function runGigaview(prefetch) {
+    const b = await launch();
+    try {
+        const pg = b.ctx.pages()[0] || await b.ctx.newPage();
+        pg.setDefaultTimeout(300000);
+        const m = await meter(b.ctx, pg, (u) => u.startsWith(`${base}/v1/`));
+        const steps = [];
+        let last = 0;
+        // workers=0: the batches are fetched by the page itself, where the
+        // protocol session sees them (a worker's requests are its own).
+        await pg.goto(`${base}/?workers=0${prefetch ? '' : '&prefetch=0'}#image=${opt.id}`);
+        await pg.evaluate(() => window.gigaview.ready);
+        for (const [name, f] of path) {
+            await pg.evaluate((v) => window.gigaview.viewer.setView(v), f());
+            await pg.evaluate(() => window.gigaview.viewer.settled());
+            // Let prefetching (when on) and late responses finish.
+            await pg.waitForTimeout(prefetch ? 1500 : 300);
+            steps.push([name, m.bytes - last]);
+            last = m.bytes;
+        }
+        return { ...m, steps };
+    } finally {
+        await b.done();
+    }
+}
+
+async function runOsd() {
+    const b = await launch();
+    try {
+        const pg = b.ctx.pages()[0] || await b.ctx.newPage();
+        pg.setDefaultTimeout(300000);
+        const m = await meter(b.ctx, pg, (u) => u.startsWith(`${iiifBase}/${opt.id}/`));
+        const steps = [];
+        let last = 0;
+        await pg.goto(`${iiifBase}/`);
+        await pg.evaluate(() => window.osdOpen);
+        for (const [name, f] of path) {
+            const v = f();
+            // The same image rectangle as the gigaview view.
+            const w = W * 2 ** v.zoom, h = H * 2 ** v.zoom;
+            await pg.evaluate(({ x, y, w, h, IW }) => {
+                window.osd.viewport.fitBounds(new OpenSeadragon.Rect(x / IW, y / IW, w / IW, h / IW), true);
+            }, { x: v.cx - w / 2, y: v.cy - h / 2, w, h, IW });
+            // OSD decides what to load on its next update: let two frames
+            // pass before asking whether everything is loaded.
+            for (let i = 0; i < 2; i++) {
+                await pg.evaluate(() => new Promise((ok) => requestAnimationFrame(() => requestAnimationFrame(ok))));
+                await pg.waitForFunction(() => window.osd.world.getItemAt(0).getFullyLoaded());
+                await pg.waitForTimeout(300);
+            }
+            steps.push([name, m.bytes - last]);
+            last = m.bytes;
+        }
+        return { ...m, steps };
+    } finally {
+        await b.done();
+    }
+}
+
+const kib = (x) => `${(x / 1024).toFixed(0)} KiB`;
+const g0 = await runGigaview(false);
+const g1 = await runGigaview(true);
+const o = await runOsd();
+server.close();
+console.log(`RESULT bytes ${opt.id} ${W}x${H}, path of ${path.length} views: gigaview ${kib(g0.bytes)} in ${g0.requests} requests ` +
+    `(with prefetching ${kib(g1.bytes)} in ${g1.requests}); OpenSeadragon on IIIF JPEG tiles ${kib(o.bytes)} in ${o.requests} requests; ` +
+    `ratio gigaview/OSD ${(g0.bytes / o.bytes).toFixed(2)} (with prefetching ${(g1.bytes / o.bytes).toFixed(2)})`);
+for (let i = 0; i < path.length; i++)
+    console.log(`# step ${i + 1} ${path[i][0]}: gigaview ${kib(g0.steps[i][1])}, with prefetching ${kib(g1.steps[i][1])}, OSD ${kib(o.steps[i][1])}`);

@@ -1,0 +1,75 @@
+// batch.js - many compressed tiles in one round trip: GET
+// /v1/images/{id}/batch?t=L,X,Y;... and its "GVB1" framing (docs/API.md,
+// "Batches").  GET rather than POST so that the browser's HTTP cache and
+// proxies keep whole batches (a batch of 200s is immutable).
+//
+// fetchPrepared() also checks every tile and decodes entropy-coded
+// indices (tilebuf.js): it is what tile_worker.js runs off the main
+// thread, and what the viewer runs itself where workers are unavailable.
+
+import { prepareTile } from './tilebuf.js';
+
+/** The batch URL for tiles [[level, tx, ty], ...] of image base `imageUrl`. */
+export function batchUrl(imageUrl, tiles) {
+    return `${imageUrl}/batch?t=${tiles.map((t) => t.join(',')).join(';')}`;
+}
+
+/**
+ * Parse a GVB1 response (an ArrayBuffer).  Returns [{level, tx, ty,
+ * status, tile}], tile a Uint8Array view of the buffer (empty unless
+ * status is 200).  Throws on a malformed body.
+ */
+export function parseBatch(buf) {
+    const dv = new DataView(buf);
+    if (buf.byteLength < 8 || dv.getUint32(0, false) !== 0x47564231)   // "GVB1"
+        throw new Error('batch: not a GVB1 body');
+    const n = dv.getUint32(4, true), out = [];
+    let off = 8;
+    for (let i = 0; i < n; i++) {
+        if (off + 20 > buf.byteLength)
+            throw new Error(`batch: frame ${i} of ${n} is cut short`);
+        const len = dv.getUint32(off + 16, true);
+        if (off + 20 + len > buf.byteLength)
+            throw new Error(`batch: tile ${i} of ${n} is cut short`);
+        out.push({
+            level: dv.getUint8(off), tx: dv.getUint32(off + 4, true),
+            ty: dv.getUint32(off + 8, true), status: dv.getUint32(off + 12, true),
+            tile: new Uint8Array(buf, off + 20, len),
+        });
+        off += 20 + ((len + 3) & ~3);
+    }
+    return out;
+}
+
+/**
+ * Fetch tiles [[level, tx, ty], ...] and prepare each for the GPU.
+ * Resolves to {bytes, ms, tiles: [{level, tx, ty, status, error?,
+ * prep?}]}: prep from prepareTile for a well-formed 200 tile, error
+ * (a message) for a damaged or missing one.  Rejects on a network error,
+ * an HTTP error status or an abort (signal).
+ */
+export async function fetchPrepared(imageUrl, tiles, channels, signal) {
+    const t0 = performance.now();
+    const resp = await fetch(batchUrl(imageUrl, tiles), { signal });
+    if (!resp.ok)
+        throw new Error(`batch: HTTP ${resp.status}`);
+    const buf = await resp.arrayBuffer();
+    const frames = parseBatch(buf);
+    const t1 = performance.now();
+    const out = [];
+    for (const f of frames) {
+        const r = { level: f.level, tx: f.tx, ty: f.ty, status: f.status };
+        if (f.status === 200) {
+            try {
+                r.prep = prepareTile(f.tile, channels);
+            } catch (e) {
+                r.status = 500;
+                r.error = e.message;
+            }
+        } else {
+            r.error = `HTTP ${f.status}`;
+        }
+        out.push(r);
+    }
+    return { bytes: buf.byteLength, fetchMs: t1 - t0, prepMs: performance.now() - t1, tiles: out };
+}

@@ -1,0 +1,43 @@
+// tile_worker.js - a module worker that fetches batches of compressed
+// tiles, checks them and decodes their rANS indices (batch.js,
+// tilebuf.js) off the main thread, which then only uploads and draws.
+//
+// Messages in:  {type: 'fetch', id, imageUrl, tiles, channels}
+//               {type: 'abort', id}
+// Messages out: {type: 'done', id, result} (result as fetchPrepared,
+//               the word and index arrays transferred, not copied)
+//               {type: 'failed', id, error, aborted}
+
+import { fetchPrepared } from './batch.js';
+
+const pending = new Map();   // id -> AbortController
+
+self.onmessage = async (ev) => {
+    const m = ev.data;
+    if (m.type === 'abort') {
+        const c = pending.get(m.id);
+        if (c)
+            c.abort();
+        return;
+    }
+    if (m.type !== 'fetch')
+        return;
+    const ctl = new AbortController();
+    pending.set(m.id, ctl);
+    try {
+        const result = await fetchPrepared(m.imageUrl, m.tiles, m.channels, ctl.signal);
+        const transfer = [];
+        for (const t of result.tiles)
+            if (t.prep) {
+                transfer.push(t.prep.words.buffer);
+                if (t.prep.indices)
+                    transfer.push(t.prep.indices.buffer);
+            }
+        self.postMessage({ type: 'done', id: m.id, result }, transfer);
+    } catch (e) {
+        self.postMessage({ type: 'failed', id: m.id, error: String(e && e.message || e),
+            aborted: ctl.signal.aborted });
+    } finally {
+        pending.delete(m.id);
+    }
+};

@@ -1,0 +1,177 @@
+// tilebuf.js - checking a compressed tile buffer and decoding its
+// entropy-coded indices on the CPU (docs/FORMAT.md sections 4 and 4.1).
+//
+// A port of gv_tilebuf_check (lib/tile_decode.c) and gv_rans_check /
+// gv_rans_unpack (lib/tile_rans.c), statement for statement, so that the
+// browser refuses exactly the buffers the C decoders refuse and produces
+// the same indices.  WebGL2 has no compute shaders, so the rANS streams of
+// an "E" tile are decoded here and uploaded as a 257x257 R16UI texture
+// (the GV_GPU_PATH_WEBGL2 variant of shaders/tile_decode.frag.glsl).
+// Everything here is pure: no DOM, no GL, so it runs in a worker too.
+
+export const TILE = 513;          // tile edge in pixels
+export const STEP = 512;          // distance between tile origins
+export const BLOCKS = 257;        // 2x2 blocks per tile edge
+export const NBLOCKS = BLOCKS * BLOCKS;
+export const MAX_RATE = 12;
+export const TILEBUF_MAX = 148228; // the largest buffer: fixed layout, r 12, RGB
+export const ENTROPY = 0x80;      // byte 0 flag: rANS-coded indices
+
+const PROB_BITS = 15;
+const PROB_SCALE = 1 << PROB_BITS;
+const RANS_L = 1 << 16;
+
+/** Bytes of a fixed-layout buffer at index width `rate` (gv_tilebuf_size). */
+export function tileBufferSize(rate, channels) {
+    if (rate <= 0)
+        return 4;
+    const bits = 8 * (1 + 2 ** rate * 4 * channels) + NBLOCKS * rate;
+    return Math.ceil(bits / 32) * 4;
+}
+
+/** Byte offset of the cumulative frequencies (gv_rans_tables_offset). */
+export function ransTablesOffset(rate, channels) {
+    const book = 1 + (1 << rate) * 4 * channels;
+    return (book + 3) & ~3;
+}
+
+const u16 = (b, at) => b[at] | (b[at + 1] << 8);
+
+function corrupt(msg) {
+    const e = new Error(`tile: ${msg}`);
+    e.code = 'corrupt';
+    return e;
+}
+
+/** gv_rans_check: tables and stream lengths of an entropy-coded buffer. */
+export function ransCheck(buf, rate, channels) {
+    const len = buf.length;
+    const k = 1 << rate;
+    const tables = ransTablesOffset(rate, channels);
+    const lengths = tables + 2 * k;
+    const streams = lengths + ((2 * BLOCKS + 3) & ~3);
+    if (len < streams || (len & 3))
+        throw corrupt(`entropy-coded buffer of ${len} bytes is too short for rate ${rate}`);
+    for (let i = 1 + k * 4 * channels; i < tables; i++)
+        if (buf[i])
+            throw corrupt('nonzero padding');
+    if (u16(buf, tables) !== 0)
+        throw corrupt('first cumulative frequency is not 0');
+    for (let s = 1; s < k; s++) {
+        const c0 = u16(buf, tables + 2 * (s - 1)), c1 = u16(buf, tables + 2 * s);
+        if (c1 < c0 || c1 > PROB_SCALE)
+            throw corrupt(`cumulative frequencies decrease at symbol ${s}`);
+    }
+    let words = 0;
+    for (let row = 0; row < BLOCKS; row++) {
+        const n = u16(buf, lengths + 2 * row);
+        if (n < 2 || n > BLOCKS + 2)
+            throw corrupt(`stream ${row} has ${n} words`);
+        words += n;
+    }
+    if (((streams + 2 * words + 3) & ~3) !== len)
+        throw corrupt(`streams need ${2 * words} bytes, the buffer has ${len - streams}`);
+}
+
+/**
+ * gv_tilebuf_check: throws an Error (code 'corrupt') unless buf (a
+ * Uint8Array) is a well-formed tile buffer for `channels` (1 or 3).
+ * Returns the rate r.
+ */
+export function checkTile(buf, channels) {
+    const len = buf.length;
+    if (len < 4 || (len & 3))
+        throw corrupt(`buffer of ${len} bytes is not a positive multiple of 4`);
+    const rate = buf[0] & 0x0f;
+    if ((buf[0] & 0x70) || rate > MAX_RATE || (rate === 0 && buf[0]))
+        throw corrupt(`bad rate byte 0x${buf[0].toString(16).padStart(2, '0')}`);
+    if (buf[0] & ENTROPY) {
+        ransCheck(buf, rate, channels);
+        return rate;
+    }
+    const want = tileBufferSize(rate, channels);
+    if (len !== want)
+        throw corrupt(`${len} bytes where rate ${rate} needs ${want}`);
+    return rate;
+}
+
+/**
+ * gv_rans_unpack: decode the 257 streams of an entropy-coded buffer into
+ * idx (a Uint16Array of NBLOCKS, row-major by block row), validating each
+ * stream (no read past its end, clean final state).  Throws on damage.
+ */
+export function ransUnpack(buf, rate, channels, idx) {
+    ransCheck(buf, rate, channels);
+    const k = 1 << rate;
+    const tables = ransTablesOffset(rate, channels);
+    const lengths = tables + 2 * k;
+    // The cumulative frequencies once, with cum[k] = PROB_SCALE, so the
+    // inner loop reads an array rather than bytes (same values).
+    const cum = new Uint32Array(k + 1);
+    for (let s = 0; s < k; s++)
+        cum[s] = u16(buf, tables + 2 * s);
+    cum[k] = PROB_SCALE;
+    let at = lengths + ((2 * BLOCKS + 3) & ~3);
+    for (let row = 0; row < BLOCKS; row++) {
+        const n = u16(buf, lengths + 2 * row);
+        const w = at;
+        // x stays below 2^32: use >>> 0 to keep it unsigned.
+        let x = (u16(buf, w) | (u16(buf, w + 2) << 16)) >>> 0;
+        let next = 2;
+        const base = row * BLOCKS;
+        for (let i = 0; i < BLOCKS; i++) {
+            const slot = x & (PROB_SCALE - 1);
+            // Last symbol whose cumulative frequency is <= slot.
+            let lo = 0, hi = k - 1;
+            while (lo < hi) {
+                const mid = (lo + hi + 1) >> 1;
+                if (cum[mid] <= slot)
+                    lo = mid;
+                else
+                    hi = mid - 1;
+            }
+            const c = cum[lo], f = cum[lo + 1] - c;
+            if (f === 0 || x < RANS_L)
+                throw corrupt(`stream ${row} is corrupt`);
+            idx[base + i] = lo;
+            // f <= 2^15 and x >> 15 < 2^17: exact in a double; >>> 0
+            // wraps like the C uint32 arithmetic (only damaged data gets
+            // that far).
+            x = (f * (x >>> PROB_BITS) + slot - c) >>> 0;
+            if (x < RANS_L) {
+                if (next >= n)
+                    throw corrupt(`stream ${row} ends early`);
+                x = (x * 65536 + u16(buf, w + 2 * next++)) >>> 0;
+            }
+        }
+        if (x !== RANS_L || next !== n)
+            throw corrupt(`stream ${row} does not end cleanly`);
+        at += 2 * n;
+    }
+}
+
+/** Words of the R32UI texture that holds a tile buffer: 1024 per row. */
+export const WORDS_WIDTH = 1024;
+export const WORDS_ROWS_MAX = Math.ceil(TILEBUF_MAX / 4 / WORDS_WIDTH);
+
+/**
+ * Everything the GPU needs for one tile buffer (a Uint8Array): the buffer
+ * as 32-bit little-endian words padded to whole rows of WORDS_WIDTH, and
+ * for an entropy-coded tile its decoded indices (else null).  Checks the
+ * buffer first; throws on damage.
+ */
+export function prepareTile(buf, channels) {
+    const rate = checkTile(buf, channels);
+    const nwords = buf.length >> 2;
+    const rows = Math.max(1, Math.ceil(nwords / WORDS_WIDTH));
+    const words = new Uint32Array(rows * WORDS_WIDTH);
+    const dv = new DataView(buf.buffer, buf.byteOffset, buf.length);
+    for (let i = 0; i < nwords; i++)
+        words[i] = dv.getUint32(4 * i, true);
+    let indices = null;
+    if (buf[0] & ENTROPY) {
+        indices = new Uint16Array(NBLOCKS);
+        ransUnpack(buf, rate, channels, indices);
+    }
+    return { rate, entropy: !!(buf[0] & ENTROPY), bytes: buf.length, rows, words, indices };
+}

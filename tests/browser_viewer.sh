@@ -1,0 +1,153 @@
+#!/bin/sh
+# browser_viewer.sh - the browser viewer that gigaviewd serves at /
+# (client/web/), in headless Chromium with WebGL2 on SwiftShader (Debian's
+# /usr/bin/chromium driven by playwright-core; tests/browser/viewer.mjs
+# lists every check), and its filter panel against the server's filter
+# graphs (the stock library, a token for saving).
+#
+# Encodes tests/data/picos-1100x700.jpg as store "picos" (two tiled
+# levels; every tile of it is entropy-coded) and synth:3000x2000 as
+# "synth" (three tiled levels, both tile layouts), starts gigaviewd on
+# port 0, and runs viewer.mjs: 1:1 views of pyramid levels read back from
+# the canvas against the region endpoint (the CPU reference decoder; mean
+# absolute difference <= 1 per channel, measured 0: the shared decode
+# shader and the JavaScript rANS decoder are bit-exact in the browser),
+# every decoded tile against the same endpoint, mouse, keyboard, wheel,
+# touch and gamepad input checked for the view they reach and against
+# `gigaview render` of that view, the URL hash round trip, the fallback
+# without WebGL2, the image list, and no console errors.  Then the filter
+# flows: an ROI and a graph from a link, ROI drag-select, a slider
+# (debounced, stale requests aborted), re-running after a pan with the
+# stale result in place meanwhile, the graph view, a GLSL compile error at
+# its line, saving; every ROI picture bit for bit the filter endpoint's.
+#
+# Negative controls of the whole pipeline, each must FAIL the 1:1 match:
+# a decode shader with one prediction weight changed (29/111 to 30/110),
+# and a rANS decoder that flips the lowest bit of every index.
+#
+# Skipped when /usr/bin/chromium, node or tests/browser/node_modules is
+# missing (scripts/install-deps.sh installs chromium and nodejs;
+# scripts/check.sh runs `npm ci` in tests/browser), and under valgrind.
+# Needs curl and python3 (http_util.sh).
+. "$(dirname "$0")/lib.sh"
+
+: "${CHROMIUM:=/usr/bin/chromium}"
+srcdir=${top_srcdir:-$(dirname "$0")/..}
+BROWSER_DIR=$(cd "$srcdir/tests/browser" && pwd)
+if [ ! -x "$CHROMIUM" ]; then
+    echo "1..0 # SKIP $CHROMIUM not installed (apt-get install chromium)"
+    exit 0
+fi
+if ! command -v node >/dev/null 2>&1; then
+    echo "1..0 # SKIP node not installed (apt-get install nodejs npm)"
+    exit 0
+fi
+node_major=$(node -p 'process.versions.node.split(".")[0]' 2>/dev/null || echo 0)
+if [ "$node_major" -lt 20 ]; then
+    echo "1..0 # SKIP node $node_major is too old for playwright-core (needs 20)"
+    exit 0
+fi
+if [ ! -d "$BROWSER_DIR/node_modules/playwright-core" ]; then
+    echo "1..0 # SKIP no tests/browser/node_modules (cd tests/browser && npm ci)"
+    exit 0
+fi
+if under_valgrind; then
+    echo "1..0 # SKIP browser timings are not meant for valgrind (gigaviewd is covered by http_api.sh)"
+    exit 0
+fi
+. "$(dirname "$0")/http_util.sh"
+
+S=$T/stores
+mkdir "$S" || bail "mkdir"
+run encode "$TESTDATA/picos-1100x700.jpg" -o "$S/picos.gv"
+[ "$rc" -eq 0 ] || bail "encode picos: $(cat "$T/err")"
+run encode synth:3000x2000 -o "$S/synth.gv"
+[ "$rc" -eq 0 ] || bail "encode synth: $(cat "$T/err")"
+
+absrc=$(cd "$srcdir" && pwd)
+cat >"$T/viewer.conf" <<EOF2
+listen = 127.0.0.1
+port = 0
+store_dir = "$S"
+threads = 4
+access_log = stderr
+log_level = info
+filter_library_dir = "$absrc/filters/library"
+filter_dir = "$T/filters"
+auth_token = "viewer-test-token"
+EOF2
+start_daemon "$T/viewer.conf"
+
+# The page and its files come from the daemon, with validators.
+req "$(url /)"
+check "/ is the viewer page with the image list" sh -c "[ '$code' = 200 ] &&
+    grep -q 'text/html' '$T/h' && grep -qi 'content-security-policy' '$T/h' &&
+    grep -q 'href=\"#image=picos\"' '$T/b' && grep -q 'web/main.js' '$T/b'"
+req "$(url /web/tile_decode.frag.glsl)"
+if [ "$code" = 200 ] && cmp -s "$T/b" "$srcdir/shaders/tile_decode.frag.glsl"; then
+    ok "/web/tile_decode.frag.glsl is the shared decode shader, byte for byte"
+else
+    not_ok "/web/tile_decode.frag.glsl is the shared decode shader (HTTP $code)"
+fi
+etag=$(header ETag)
+req -H "If-None-Match: $etag" "$(url /web/tile_decode.frag.glsl)"
+check "a matching If-None-Match gets 304 (ETag $etag)" [ "$code" = 304 ]
+req "$(url /web/nope.js)"
+check "an unknown file is 404" [ "$code" = 404 ]
+req "$(url /web/..%2fviewer.conf)"
+check "no path escapes the embedded files" [ "$code" = 404 ]
+
+# The filter flows need filter graphs to run on this server (an EGL
+# context and a worker); without them they are skipped.
+req -H 'Content-Type: application/json' \
+    -d '{"filter":"negate","level":0,"region":[0,0,8,8]}' "$(url /v1/images/picos/filter)"
+if [ "$code" = 200 ]; then
+    filters="--filters 1 --token viewer-test-token"
+else
+    filters=""
+    skip "ROI filter flows" "no filter graphs on this server (HTTP $code: $(head -c 200 "$T/b"))"
+fi
+
+# viewer [ARGS...]: run viewer.mjs (timeout 400 s); output in
+# $T/viewer.out, status in $vrc.
+viewer() {
+    vrc=0
+    timeout 400 node "$BROWSER_DIR/viewer.mjs" --base "$BASE" --gigaview "$GIGAVIEW" \
+        --chromium "$CHROMIUM" "$@" >"$T/viewer.out" 2>&1 || vrc=$?
+}
+# shellcheck disable=SC2086
+viewer $filters
+while IFS= read -r line; do
+    case $line in
+    "PASS "*) ok "${line#PASS }" ;;
+    "FAIL "*) not_ok "${line#FAIL }" ;;
+    "#"*) printf '%s\n' "$line" ;;
+    *) diag "$line" ;;
+    esac
+done <"$T/viewer.out"
+if [ "$vrc" -ne 0 ] && ! grep -q '^FAIL ' "$T/viewer.out"; then
+    not_ok "viewer.mjs ran (exit $vrc)" "$(tail -n 20 "$T/viewer.out")"
+fi
+
+# expect_mismatch DESCRIPTION ARGS...: the sabotaged run must fail the
+# 1:1 match, and nothing else may have broken it.
+expect_mismatch() {
+    d=$1
+    shift
+    viewer "$@"
+    if [ "$vrc" -eq 1 ] && grep -q '^FAIL picos level 0 1:1: the canvas matches' "$T/viewer.out" &&
+        grep -q '^PASS the viewer opened with WebGL2' "$T/viewer.out"; then
+        ok "negative control: $d fails the match ($(grep -A1 '^FAIL picos level 0' "$T/viewer.out" |
+            sed -n 's/^# \(MAD [^,]*\).*/\1/p'))"
+    else
+        not_ok "negative control: $d fails the match (exit $vrc)" "$(tail -n 20 "$T/viewer.out")"
+    fi
+}
+expect_mismatch "a decode shader with one weight changed" --sabotage shader
+expect_mismatch "a rANS decoder that flips index bits" --sabotage rans
+
+stop_daemon
+if [ "$drc" -eq 0 ]; then ok "gigaviewd exits 0 on SIGTERM"; else
+    not_ok "gigaviewd exits 0 on SIGTERM (exit $drc)" "$(tail -n 20 "$T/daemon.log")"
+fi
+done_testing

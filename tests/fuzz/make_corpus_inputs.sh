@@ -1,0 +1,184 @@
+#!/bin/sh
+# make_corpus_inputs.sh - regenerates the seed corpora of the input-parser
+# targets: tests/fuzz/corpus/settings, batch and imageio (make_corpus.sh
+# does store and tile).
+#
+#   tests/fuzz/make_corpus_inputs.sh
+#
+# settings/: the shipped conf/gigaviewd.conf, small valid files in every
+# value style (quotes, suffixes, trailing comments, CRLF) and one file per
+# kind of error.  batch/: fuzz_batch inputs - a selector byte (bit 0: JSON,
+# the rest: the tile limit minus one, times two) then a query value or a
+# JSON body, valid and invalid.  imageio/: fuzz_imageio inputs - a
+# selector byte (the extension, index into its table) then a tiny image in
+# every format and sample type the bridge handles, tiled and striped,
+# plus a few damaged ones and a PNG whose header claims 100000x100000
+# pixels (past the 1 MP cap).  Needs oiiotool and python3.  Deterministic.
+set -eu
+here=$(cd "$(dirname "$0")" && pwd)
+top=$(cd "$here/../.." && pwd)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+# Past findings (finding-*) stay: make check replays them forever.
+for d in settings batch imageio; do
+    mkdir -p "$here/corpus/$d"
+    find "$here/corpus/$d" -type f ! -name 'finding-*' -delete
+done
+
+# ------------------------------------------------------------- images
+P="--pattern checker:width=4:height=3:color1=0.1,0.6,0.3:color2=0.9,0.2,0.5 17x13 3"
+G="--pattern checker:width=5:height=2:color1=0.2:color2=0.7 11x9 1"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb8.png"
+oiiotool --nosoftwareattrib $G -d uint16 -o "$tmp/gray16.png"
+oiiotool --nosoftwareattrib $P --ch R,G,B,A=0.5 -d uint8 -o "$tmp/rgba8.png"
+oiiotool --nosoftwareattrib $G --ch Y,A=1.0 -d uint8 -o "$tmp/graya8.png"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb.jpg"
+oiiotool --nosoftwareattrib $G -d uint8 -o "$tmp/gray.jpg"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/strip8.tif"
+oiiotool --nosoftwareattrib $P -d uint16 --tile 16 16 -o "$tmp/tile16.tif"
+oiiotool --nosoftwareattrib $G -d float --tile 16 16 -o "$tmp/tilef.tif"
+oiiotool --nosoftwareattrib $P -d half --tile 16 16 -o "$tmp/tileh.exr"
+oiiotool --nosoftwareattrib $P -d float -o "$tmp/scanf.exr"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb.webp"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb.gif"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb.bmp"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb.ppm"
+oiiotool --nosoftwareattrib $P -o "$tmp/rgb.hdr"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb.tga"
+oiiotool --nosoftwareattrib $P -d uint16 -o "$tmp/rgb16.dpx"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb.sgi"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb.ico"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb.rla"
+oiiotool --nosoftwareattrib $P -d uint8 -o "$tmp/rgb.jp2"
+oiiotool --nosoftwareattrib $G -d uint16 -o "$tmp/gray16.fits"
+
+python3 - "$tmp" "$here/corpus" <<'PY'
+import os, struct, sys, zlib
+tmp, out = sys.argv[1], sys.argv[2]
+# The extension table of fuzz_imageio.c, in order.
+EXT = ["png", "jpg", "tif", "exr", "webp", "gif", "bmp", "ppm",
+       "hdr", "tga", "psd", "dpx", "sgi", "ico", "rla", "bin", "jp2", "fits"]
+
+def save(kind, name, data):
+    with open(os.path.join(out, kind, name), "wb") as f:
+        f.write(data)
+
+def img(name, ext=None):
+    data = open(os.path.join(tmp, name), "rb").read()
+    e = ext or name.rsplit(".", 1)[1]
+    save("imageio", name.replace(".", "-") + ("-as-" + ext if ext else ""),
+         bytes([EXT.index(e)]) + data)
+    return data
+
+for name in sorted(os.listdir(tmp)):
+    img(name)
+# The same bytes under no known extension: every reader is tried.
+img("rgb8.png", "bin")
+img("tile16.tif", "bin")
+# Damaged: truncated, and a flipped byte in the middle.  No truncated
+# PNG: OpenImageIO 2.4.7 leaks 31 bytes on one (see fuzz_imageio.c), which
+# make check VALGRIND=1 would count.
+for name in ["rgb8.png", "rgb.jpg", "tile16.tif", "tileh.exr"]:
+    d = open(os.path.join(tmp, name), "rb").read()
+    e = EXT.index(name.rsplit(".", 1)[1])
+    if e != 0:
+        save("imageio", name.replace(".", "-") + "-trunc", bytes([e]) + d[:len(d) // 2])
+    f = bytearray(d)
+    f[len(f) // 2] ^= 0x40
+    save("imageio", name.replace(".", "-") + "-flip", bytes([e]) + bytes(f))
+
+def chunk(kind, data):
+    return (struct.pack(">I", len(data)) + kind + data +
+            struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+# A PNG header claiming 100000x100000 RGB: refused by the cap.
+ihdr = struct.pack(">IIBBBBB", 100000, 100000, 8, 2, 0, 0, 0)
+save("imageio", "png-huge-header", bytes([0]) + b"\x89PNG\r\n\x1a\n" +
+     chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"\0" * 100)) +
+     chunk(b"IEND", b""))
+# A palette PNG (colour type 3), 4x2, which oiiotool does not write.
+ihdr = struct.pack(">IIBBBBB", 4, 2, 8, 3, 0, 0, 0)
+plte = bytes([255, 0, 0, 0, 255, 0, 0, 0, 255])
+rows = b"\0\0\1\2\0" + b"\0\2\1\0\1"
+save("imageio", "png-palette", bytes([0]) + b"\x89PNG\r\n\x1a\n" +
+     chunk(b"IHDR", ihdr) + chunk(b"PLTE", plte) +
+     chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+# A 16-bit binary PGM (maxval 65535) and a 10-bit one (maxval 1023).
+save("imageio", "pgm16", bytes([EXT.index("ppm")]) + b"P5\n3 2\n65535\n" +
+     struct.pack(">6H", 0, 1, 1000, 30000, 65534, 65535))
+save("imageio", "pgm10", bytes([EXT.index("ppm")]) + b"P5\n3 2\n1023\n" +
+     struct.pack(">6H", 0, 1, 100, 512, 1022, 1023))
+save("imageio", "empty-png", bytes([0]))
+save("imageio", "text-jpg", bytes([1]) + b"this is not a picture\n")
+
+# ------------------------------------------------------------- batch
+def batch(name, json, limit, body):
+    save("batch", name, bytes([(limit - 1) << 1 | json]) + body)
+batch("q-one", 0, 8, b"0,0,0")
+batch("q-three", 0, 8, b"0,5,3;2,1,0;7,0,0")
+batch("q-max", 0, 128, b"2147483647,2147483647,2147483647")
+batch("q-over-max", 0, 8, b"0,0,2147483648")
+batch("q-leading-zeros", 0, 8, b"0000000000000000001,2,3")
+batch("q-trailing-semi", 0, 8, b"0,0,0;")
+batch("q-empty", 0, 8, b"")
+batch("q-pair", 0, 8, b"0,0")
+batch("q-sign", 0, 8, b"0,+1,0")
+batch("q-limit", 0, 2, b"0,0,0;0,0,1;0,0,2")
+batch("q-nul", 0, 8, b"0,0,0\0;1,1,1")
+batch("j-one", 1, 8, b'{"tiles":[[0,0,0]]}')
+batch("j-five", 1, 8, b'{"tiles":[[0,0,0],[0,5,3],[2,1,0],[0,99,0],[7,0,0]]}')
+batch("j-extra", 1, 8, b'{"x":{"y":[1,2]},"tiles":[[1,2,3]]}')
+batch("j-dup", 1, 8, b'{"tiles":[[0,0,0]],"tiles":[[1,1,1]]}')
+batch("j-negative", 1, 8, b'{"tiles":[[0,-1,0]]}')
+batch("j-float", 1, 8, b'{"tiles":[[0,1.5,0]]}')
+batch("j-huge", 1, 8, b'{"tiles":[[0,99999999999999999999,0]]}')
+batch("j-pair", 1, 8, b'{"tiles":[[0,0]]}')
+batch("j-empty", 1, 8, b'{"tiles":[]}')
+batch("j-limit", 1, 2, b'{"tiles":[[0,0,0],[0,0,0],[0,0,0]]}')
+batch("j-unterminated", 1, 8, b'{"tiles":[[0,0,0]')
+batch("j-deep", 1, 8, b'{"tiles":' + b"[" * 3000 + b"]" * 3000 + b"}")
+batch("j-not-object", 1, 8, b"[[0,0,0]]")
+batch("j-nul", 1, 8, b'{"tiles":[[0,0,0]]}\0')
+PY
+
+# ------------------------------------------------------------- settings
+s=$here/corpus/settings
+cp "$top/conf/gigaviewd.conf" "$s/shipped.conf"
+cat >"$s/minimal.conf" <<'EOF'
+store_dir = "/srv/stores"
+port = 0
+EOF
+cat >"$s/styles.conf" <<'EOF'
+# every value style
+listen = ::1
+port = 8080   # a trailing comment
+cache_bytes = 1G
+decoder_cache_bytes = 64MiB
+max_region_pixels = 4m
+max_upscale = 2.5
+cors_origin = "https://a.example#b"
+auth_token = ""
+log_level = debug
+gpu = off
+jpeg_quality = 100
+	threads = 8
+EOF
+printf 'port = 80\r\nlog_level = warn\r\n' >"$s/crlf.conf"
+printf 'port = 1' >"$s/no-newline.conf"
+: >"$s/empty.conf"
+echo 'bogus_key = 1' >"$s/unknown-key.conf"
+echo 'port = 70000' >"$s/out-of-range.conf"
+echo 'threads = -1' >"$s/negative.conf"
+echo 'cache_bytes = 12Q' >"$s/bad-suffix.conf"
+echo 'cache_bytes = 17179869184T' >"$s/suffix-overflow.conf"
+echo 'threads = 99999999999999999999999' >"$s/overflow.conf"
+echo 'max_upscale = nan' >"$s/nan.conf"
+echo 'max_upscale = 1e400' >"$s/inf.conf"
+echo 'log_level = loud' >"$s/bad-level.conf"
+echo 'gpu = maybe' >"$s/bad-gpu.conf"
+echo 'no equals sign' >"$s/no-equals.conf"
+echo 'listen = "127.0.0.1' >"$s/unterminated-quote.conf"
+echo 'listen = "' >"$s/lone-quote.conf"
+python3 -c 'print("listen = " + "x" * 300)' >"$s/string-too-long.conf"
+python3 -c 'print("# " + "y" * 5000)' >"$s/line-too-long.conf"
+printf 'port = 1\n\0 = 2\n' >"$s/nul.conf"
+du -sh "$here/corpus/settings" "$here/corpus/batch" "$here/corpus/imageio"
