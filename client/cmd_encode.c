@@ -24,8 +24,9 @@ static void usage(FILE *out)
     fprintf(out,
         "usage: gigaview encode [OPTIONS] INPUT... -o STORE\n"
         "\n"
-        "INPUT is any image OpenImageIO reads (JPEG, PNG, TIFF/BigTIFF, EXR,\n"
-        "16-bit and float included), several images with --mosaic, or\n"
+        "INPUT is an image in TIFF/BigTIFF, JPEG, PNG, OpenEXR, WebP, JPEG 2000,\n"
+        "PNM, BMP, Targa, HDR, PSD, FITS or GIF (16-bit and float included),\n"
+        "several images with --mosaic, or\n"
         "synth:WIDTHxHEIGHT[:gray] for a procedural test image.\n"
         "\n"
         "  -o, --output STORE     store file to write (replaced atomically)\n"

