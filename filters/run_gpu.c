@@ -172,57 +172,48 @@ static GLuint compile_stage(GLenum type, const char *src, const char *module,
     return 0;
 }
 
+/* Link the compiled stages (deleted here, whatever happens); link errors
+ * are mapped like compile errors. */
+static GLuint link_stages(const GLuint *sh, int n, const char *module,
+                          struct gv_error *err)
+{
+    GLuint p = glCreateProgram();
+    for (int i = 0; i < n; i++)
+        glAttachShader(p, sh[i]);
+    glLinkProgram(p);
+    for (int i = 0; i < n; i++)
+        glDeleteShader(sh[i]);
+    GLint ok = 0;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (ok)
+        return p;
+    char log[2048] = "";
+    glGetProgramInfoLog(p, sizeof log, NULL, log);
+    glDeleteProgram(p);
+    if (module)
+        map_log(log, module, err);
+    else
+        gv_fail(err, GV_EIO, "filter: template program does not link: %.200s", log);
+    return 0;
+}
+
 static GLuint link_program(const char *vs_src, const char *fs_src,
                            const char *module, struct gv_error *err)
 {
-    GLuint vs = compile_stage(GL_VERTEX_SHADER, vs_src, NULL, err);
-    if (!vs)
+    GLuint sh[2] = {compile_stage(GL_VERTEX_SHADER, vs_src, NULL, err), 0};
+    if (!sh[0])
         return 0;
-    GLuint fs = compile_stage(GL_FRAGMENT_SHADER, fs_src, module, err);
-    if (!fs) {
-        glDeleteShader(vs);
-        return 0;
-    }
-    GLuint p = glCreateProgram();
-    glAttachShader(p, vs);
-    glAttachShader(p, fs);
-    glLinkProgram(p);
-    glDeleteShader(vs);
-    glDeleteShader(fs);
-    GLint ok = 0;
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[2048] = "";
-        glGetProgramInfoLog(p, sizeof log, NULL, log);
-        glDeleteProgram(p);
-        if (module)
-            map_log(log, module, err);
-        else
-            gv_fail(err, GV_EIO, "filter: template program does not link: %.200s", log);
+    if (!(sh[1] = compile_stage(GL_FRAGMENT_SHADER, fs_src, module, err))) {
+        glDeleteShader(sh[0]);
         return 0;
     }
-    return p;
+    return link_stages(sh, 2, module, err);
 }
 
 static GLuint link_compute(const char *src, const char *module, struct gv_error *err)
 {
     GLuint cs = compile_stage(GL_COMPUTE_SHADER, src, module, err);
-    if (!cs)
-        return 0;
-    GLuint p = glCreateProgram();
-    glAttachShader(p, cs);
-    glLinkProgram(p);
-    glDeleteShader(cs);
-    GLint ok = 0;
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[2048] = "";
-        glGetProgramInfoLog(p, sizeof log, NULL, log);
-        glDeleteProgram(p);
-        map_log(log, module, err);
-        return 0;
-    }
-    return p;
+    return cs ? link_stages(&cs, 1, module, err) : 0;
 }
 
 static char *concat(const char *const *parts, int n)
