@@ -14,15 +14,15 @@ top=$(cd "$here/.." && pwd)
 build=${1:-build}
 shift || true
 case $build in /*) ;; *) build=$top/$build ;; esac
-[ -f "$build/lib/libgigaview.a" ] || { echo "decode-speed: build gigaview in $build first" >&2; exit 1; }
+[ -f "$build/lib/base/libgvbase.a" ] || { echo "decode-speed: build gigaview in $build first" >&2; exit 1; }
 images=("$@")
 [ ${#images[@]} -gt 0 ] || images=(/work/shared/data/photos/Dragonfly_by_Bolly.jpg
                                      /work/shared/data/photos/picosdeeuropa_by_Aitzol_Berasategi.jpg)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # shellcheck disable=SC2046 # pkg-config prints several flags
-cc -std=c11 -D_GNU_SOURCE -O2 -pthread -I"$top/lib" -I"$build" \
-    "$here/decode_bench.c" "$build/lib/libgigaview.a" \
+cc -std=c11 -D_GNU_SOURCE -O2 -pthread -I"$top/lib" -I"$build" -I"$build/shaders" \
+    "$here/decode_bench.c" "$build"/lib/gpu/libgvgpu.a "$build"/lib/encode/libgvencode.a "$build"/lib/render/libgvrender.a "$build"/lib/store/libgvstore.a "$build"/lib/codec/libgvcodec.a "$build"/lib/imageio/libgvimageio.a "$build"/lib/base/libgvbase.a \
     $(pkg-config --libs OpenImageIO zlib libwebp egl glesv2) -ljpeg -lstdc++ -lm \
     -o "$work/decode_bench"
 for img in "${images[@]}"; do

@@ -19,13 +19,13 @@
 
 #include <jpeglib.h>
 
-#include "decoder.h"
-#include "gpu.h"
-#include "gpu_decode.h"
-#include "imageio.h"
-#include "pool.h"
-#include "store.h"
-#include "tile.h"
+#include "render/store_decoder.h"
+#include "gpu/gpu.h"
+#include "gpu/gpu_decode.h"
+#include "imageio/imageio.h"
+#include "base/pool.h"
+#include "store/store_read.h"
+#include "codec/tile.h"
 
 struct tile_ref {
     int level;

@@ -61,7 +61,7 @@ trap 'rm -rf "$work"' EXIT
 # The same flags as the default build (configure: -g -O3).  With a built
 # tree in BUILD (default build/), the EGL methods are linked in too.
 build=${BUILD:-$top/build}
-if [ -f "$build/filters/libgvfilter.a" ] && [ -f "$build/lib/libgigaview.a" ]; then
+if [ -f "$build/filters/libgvfilter.a" ] && [ -f "$build/lib/base/libgvbase.a" ]; then
 	for f in "$here/edt_bench.c" "$top/tests/edt_exact.c"; do
 		cc -c -std=c11 -D_GNU_SOURCE -DGV_EDT_BENCH_EGL -g -O3 -pthread -I"$top/lib" \
 			-I"$top/filters" -I"$top/tests" $(pkg-config --cflags jansson) \
@@ -69,7 +69,7 @@ if [ -f "$build/filters/libgvfilter.a" ] && [ -f "$build/lib/libgigaview.a" ]; t
 	done
 	# The OpenImageIO bridge is C++: link with the C++ driver.
 	c++ -pthread "$work/edt_bench.o" "$work/edt_exact.o" \
-		"$build/filters/libgvfilter.a" "$build/lib/libgigaview.a" \
+		"$build/filters/libgvfilter.a" "$build"/lib/gpu/libgvgpu.a "$build"/lib/encode/libgvencode.a "$build"/lib/render/libgvrender.a "$build"/lib/store/libgvstore.a "$build"/lib/codec/libgvcodec.a "$build"/lib/imageio/libgvimageio.a "$build"/lib/base/libgvbase.a \
 		$(pkg-config --libs jansson egl glesv2 OpenImageIO libwebp zlib) -lm \
 		-o "$work/edt_bench"
 	export GV_EDT_GRAPH="$top/filters/library/distance-transform.json"
@@ -77,7 +77,7 @@ if [ -f "$build/filters/libgvfilter.a" ] && [ -f "$build/lib/libgigaview.a" ]; t
 else
 	cc -std=c11 -D_GNU_SOURCE -g -O3 -pthread -I"$top/lib" -I"$top/filters" \
 		-I"$top/tests" "$here/edt_bench.c" "$top/filters/edt_cpu.c" \
-		"$top/tests/edt_exact.c" "$top/lib/error.c" -lm -o "$work/edt_bench"
+		"$top/tests/edt_exact.c" "$top/lib/base/error.c" -lm -o "$work/edt_bench"
 fi
 
 echo "# edt-speed: $(date '+%F %T'), $(machine_line)"

@@ -162,7 +162,7 @@ static int m_cpu_sites(const uint32_t *ids, uint32_t w, uint32_t h,
  * the float result.  The context and the parsed graph are made once.
  */
 #include "filter.h"
-#include "gpu.h"
+#include "gpu/gpu.h"
 
 static struct gv_gpu *egl;
 static struct gv_filter_graph *egl_graph;

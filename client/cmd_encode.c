@@ -13,10 +13,10 @@
 #include <string.h>
 
 #include "commands.h"
-#include "encoder.h"
+#include "encode/stream_encoder.h"
 #include "options.h"
 #include "progress.h"
-#include "shard_plan.h"
+#include "encode/shard_plan.h"
 #include "summary.h"
 
 static void usage(FILE *out)

@@ -11,9 +11,9 @@
 
 #include "commands.h"
 #include "options.h"
-#include "decoder.h"
-#include "imageio.h"
-#include "store.h"
+#include "render/store_decoder.h"
+#include "imageio/imageio.h"
+#include "store/store_read.h"
 
 #define DEFAULT_MAX_PIXELS (256ull << 20)  /* 256 MP: 768 MiB of RGB */
 

@@ -11,8 +11,8 @@
 
 #include "commands.h"
 #include "http_fetch.h"
-#include "source.h"
-#include "store.h"
+#include "encode/source.h"
+#include "store/store_read.h"
 
 static const char *tone_name(int tone)
 {

@@ -1,6 +1,6 @@
 /*
  * cmd_merge.c - `gigaview merge -o STORE SHARD...`: the shard files of
- * `gigaview encode --shard I/N` to a store (lib/shard_merge.h).
+ * `gigaview encode --shard I/N` to a store (lib/encode/shard_merge.h).
  *
  * The shards may be listed in any order; all N of them are needed.  The
  * store is written atomically, like encode's, and is byte for byte the
@@ -11,8 +11,8 @@
 #include <stdio.h>
 
 #include "commands.h"
-#include "shard_merge.h"
-#include "store.h"
+#include "encode/shard_merge.h"
+#include "store/store_read.h"
 #include "summary.h"
 
 static void usage(FILE *out)

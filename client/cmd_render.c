@@ -3,7 +3,7 @@
  * client.  It fetches only the compressed tiles a picture needs, plus
  * their ancestors, from gigaviewd (in parallel, through the on-disk cache
  * with ETag revalidation), decodes them on the GPU through EGL
- * (lib/gpu_cache.c pulls missing parents recursively), composes the
+ * (lib/gpu/gpu_cache.c pulls missing parents recursively), composes the
  * picture on the CPU from the read-back tiles and writes it atomically.
  *
  * Two forms:
@@ -27,12 +27,12 @@
 
 #include "commands.h"
 #include "options.h"
-#include "geometry.h"
-#include "gpu.h"
-#include "gpu_cache.h"
-#include "gpu_decode.h"
+#include "store/geometry.h"
+#include "gpu/gpu.h"
+#include "gpu/gpu_cache.h"
+#include "gpu/gpu_decode.h"
 #include "http_fetch.h"
-#include "imageio.h"
+#include "imageio/imageio.h"
 #include "tile_cache_disk.h"
 
 #define DEFAULT_MAX_PIXELS (256ull << 20)
@@ -256,7 +256,7 @@ static int lvl_load(struct session *s, struct lvl *l, int k, uint32_t t0x,
 static void tile_span(const struct gv_level *l, uint32_t x0, uint32_t x1,
                       uint32_t y0, uint32_t y1, uint32_t *t)
 {
-    /* Pixels x0..x1, y0..y1 inclusive -> tile ranges, as decoder.c does. */
+    /* Pixels x0..x1, y0..y1 inclusive -> tile ranges, as store_decoder.c does. */
     t[0] = x0 / GV_STEP;
     t[2] = x1 / GV_STEP;
     t[1] = y0 / GV_STEP;
@@ -436,7 +436,7 @@ static int render_region(struct session *s, int level, uint32_t x, uint32_t y,
                 free(px);
                 return -1;
             }
-            /* The pixels this tile is the source of (decoder.c's rule). */
+            /* The pixels this tile is the source of (store_decoder.c's rule). */
             uint32_t sx0 = tx * GV_STEP, sy0 = ty * GV_STEP;
             uint32_t sx1 = tx + 1 == l->tiles_x ? l->width : sx0 + GV_STEP;
             uint32_t sy1 = ty + 1 == l->tiles_y ? l->height : sy0 + GV_STEP;

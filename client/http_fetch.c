@@ -16,7 +16,7 @@
 
 #include "config.h"
 #include "http_fetch.h"
-#include "tile.h"
+#include "codec/tile.h"
 
 #define MAX_CONNS 8
 #define MAX_BODY (64u << 20)

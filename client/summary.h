@@ -5,7 +5,7 @@
 #ifndef GV_SUMMARY_H
 #define GV_SUMMARY_H
 
-#include "encoder.h"
+#include "encode/stream_encoder.h"
 
 /* Print the store summary of *r for `output` on stdout: size, levels,
  * tiles by rate, bits per source pixel, level-0 PSNR against `target`

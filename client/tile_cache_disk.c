@@ -9,7 +9,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "store_format.h"
+#include "store/store_format.h"
 #include "tile_cache_disk.h"
 
 #define MAX_ENTRY (64u << 20)

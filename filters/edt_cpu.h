@@ -49,7 +49,7 @@
 
 #include <stdint.h>
 
-#include "error.h"
+#include "base/error.h"
 
 /* Site coordinate of a pixel that has no site. */
 #define GV_EDT_NONE (-1)

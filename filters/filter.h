@@ -25,7 +25,7 @@
 
 #include <jansson.h>
 
-#include "error.h"
+#include "base/error.h"
 
 struct gv_gpu;
 

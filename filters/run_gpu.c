@@ -35,7 +35,7 @@
 #include <GLES3/gl31.h>
 
 #include "filter.h"
-#include "gpu.h"
+#include "gpu/gpu.h"
 #include "graph_body.h"
 #include "shaders.h"
 

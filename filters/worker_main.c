@@ -19,7 +19,7 @@
  *   - every inherited descriptor but 0, 1, 2 and N is closed, and the
  *     signal mask and dispositions are reset.
  *
- * Then it opens its own EGL context (lib/gpu.h), says hello (the renderer,
+ * Then it opens its own EGL context (lib/gpu/gpu.h), says hello (the renderer,
  * or why there is no context) and answers jobs until the socket closes.
  * Time limits are the server's business: it SIGKILLs a worker that
  * overruns one.
@@ -33,7 +33,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include "gpu.h"
+#include "gpu/gpu.h"
 #include "worker.h"
 
 static void usage(void)

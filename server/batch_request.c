@@ -16,7 +16,7 @@
 #include <jansson.h>
 
 #include "batch_request.h"
-#include "geometry.h"
+#include "store/geometry.h"
 
 #define SYNTAX "batch: t must be L,X,Y triples separated by ';'"
 

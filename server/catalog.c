@@ -19,7 +19,7 @@
 
 #include "catalog.h"
 #include "log.h"
-#include "store_format.h"
+#include "store/store_format.h"
 
 struct catalog {
     char *dir;

@@ -1,7 +1,7 @@
 /*
  * catalog.h - the store directory: which images gigaviewd serves.
  *
- * An image is one open store (lib/store.h) under an id, the file name
+ * An image is one open store (lib/store/store_read.h) under an id, the file name
  * without ".gv".  Ids are restricted to [A-Za-z0-9._-], 1..128 bytes, no
  * leading dot and no "..", so an id can never name a path outside the
  * directory.  Images are reference counted: catalog_get hands out a
@@ -9,7 +9,7 @@
  * (SIGHUP) that drops or replaces a store only drops the catalog's own
  * reference, so the store is closed when the last request lets go.
  *
- * Each image also keeps a small pool of CPU decoders (lib/decoder.h;
+ * Each image also keeps a small pool of CPU decoders (lib/render/store_decoder.h;
  * a decoder is single-threaded and borrows the store): a request takes
  * one with image_decoder_get and returns it with image_decoder_put before
  * it drops its image reference, so every decoder is freed before its
@@ -23,8 +23,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "decoder.h"
-#include "store.h"
+#include "render/store_decoder.h"
+#include "store/store_read.h"
 
 #define CATALOG_ID_MAX 128
 

@@ -2,7 +2,7 @@
  * filter_output.h - encoding a filter result (float RGBA) as PNG, 16-bit
  * or float TIFF, or raw floats, after docs/FILTERS.md section 6.
  *
- * The shared image writer (lib/imageio.h) takes 8-bit gray or RGB only;
+ * The shared image writer (lib/imageio/imageio.h) takes 8-bit gray or RGB only;
  * filter results also need RGBA, 16-bit and 32-bit float samples, so
  * these encoders are written out here: PNG through zlib, baseline TIFF
  * (one uncompressed strip, little-endian) by hand.  Both are plain enough
@@ -14,7 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "error.h"
+#include "base/error.h"
 
 enum filter_output_form {
     FILTER_OUT_PNG = 0,   /* 8-bit: floor(clamp(v, 0, 1) * 255 + 0.5) */

@@ -22,7 +22,7 @@
 
 #include <jansson.h>
 
-#include "error.h"
+#include "base/error.h"
 #include "filter.h"
 
 struct filter_store;

@@ -29,7 +29,7 @@
 
 #include "catalog.h"
 #include "settings.h"
-#include "error.h"
+#include "base/error.h"
 #include "page_cache.h"
 
 struct gv_gpu;

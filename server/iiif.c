@@ -51,7 +51,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "geometry.h"
+#include "store/geometry.h"
 #include "iiif.h"
 
 #define FRAC_DIGITS 9                     /* decimals kept in a decimal */

@@ -15,8 +15,8 @@
 
 #include <stdint.h>
 
-#include "error.h"
-#include "render.h"
+#include "base/error.h"
+#include "render/region.h"
 
 struct iiif_limits {
     uint32_t max_width, max_height; /* advertised maxWidth / maxHeight; 0: none */

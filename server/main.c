@@ -36,7 +36,7 @@
 #include "filter.h"
 #include "filter_jobs.h"
 #include "filter_store.h"
-#include "gpu.h"
+#include "gpu/gpu.h"
 #include "http.h"
 #include "log.h"
 #include "page_cache.h"
@@ -82,7 +82,7 @@ static void open_gpu(struct server *srv)
     srv->gpu = gv_gpu_open(&err);
     if (!srv->gpu) {
         /* err.text reads "gpu: no usable EGL context: ATTEMPT; ATTEMPT; "
-         * (lib/gpu_context.c): drop the last separator. */
+         * (lib/gpu/gpu_context.c): drop the last separator. */
         size_t n = strlen(err.text);
         while (n > 0 && (err.text[n - 1] == ' ' || err.text[n - 1] == ';'))
             err.text[--n] = '\0';

@@ -1,7 +1,7 @@
 /*
  * page_cache.h - an LRU cache of whole store pages, bounded in bytes.
  *
- * Pages (8x8 tiles, lib/store.h) are the unit of disk I/O: a miss reads
+ * Pages (8x8 tiles, lib/store/store_read.h) are the unit of disk I/O: a miss reads
  * the page with gv_store_read_page (pread, CRC and tile table checked) and
  * keeps it.  Entries are reference counted, so that a tile response can
  * point straight into a cached page (no copy): the response holds a
@@ -17,8 +17,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "error.h"
-#include "store.h"
+#include "base/error.h"
+#include "store/store_read.h"
 
 struct page_cache;
 

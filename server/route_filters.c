@@ -26,7 +26,7 @@
 #include "filter_jobs.h"
 #include "filter_output.h"
 #include "filter_store.h"
-#include "geometry.h"
+#include "store/geometry.h"
 #include "log.h"
 #include "routes.h"
 

@@ -10,7 +10,7 @@
 #include "config.h" /* autoconf: PACKAGE_VERSION */
 
 #include "filter_jobs.h"
-#include "gpu.h"
+#include "gpu/gpu.h"
 #include "metrics.h"
 #include "routes.h"
 

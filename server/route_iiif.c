@@ -18,10 +18,10 @@
 #include <string.h>
 
 #include "iiif.h"
-#include "imageio.h"
+#include "imageio/imageio.h"
 #include "log.h"
 #include "metrics.h"
-#include "render.h"
+#include "render/region.h"
 #include "routes.h"
 
 #define IIIF_CONTEXT "http://iiif.io/api/image/3/context.json"

@@ -8,8 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry.h"
-#include "imageio.h"
+#include "store/geometry.h"
+#include "imageio/imageio.h"
 #include "routes.h"
 
 static double bpp(uint64_t bytes, uint64_t pixels)

@@ -12,8 +12,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry.h"
-#include "imageio.h"
+#include "store/geometry.h"
+#include "imageio/imageio.h"
 #include "log.h"
 #include "metrics.h"
 #include "routes.h"

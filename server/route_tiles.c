@@ -24,11 +24,11 @@
 #include <string.h>
 
 #include "batch_request.h"
-#include "geometry.h"
+#include "store/geometry.h"
 #include "log.h"
 #include "metrics.h"
 #include "routes.h"
-#include "store_format.h"
+#include "store/store_format.h"
 
 #define IMMUTABLE "public, max-age=31536000, immutable"
 

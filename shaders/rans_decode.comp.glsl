@@ -1,7 +1,7 @@
 // rans_decode.comp.glsl - decode the 257 rANS index streams of an
 // entropy-coded tile buffer (docs/FORMAT.md, section 4.1), one invocation
 // per row of blocks, into one uint per index.  Bit for bit what
-// lib/tile_rans.c gv_rans_unpack produces for a well-formed buffer (the
+// lib/codec/tile_rans.c gv_rans_unpack produces for a well-formed buffer (the
 // CPU checks the buffer before it is uploaded).  Needs compute shaders and
 // storage buffers: GLSL ES 3.10 or GLSL 4.30.
 

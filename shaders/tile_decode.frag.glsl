@@ -1,6 +1,6 @@
 // tile_decode.frag.glsl - decode one gigaview tile (docs/FORMAT.md,
 // sections 3 and 4) into a 513x513 RGBA8UI target, bit for bit what the CPU
-// reference decoder (lib/tile_decode.c, lib/predict.c) produces.
+// reference decoder (lib/codec/tile_decode.c, lib/codec/predict.c) produces.
 //
 // One source for every GPU decoder: the embedding program prepends the
 // #version line and, where shader storage buffers exist (GLSL ES 3.10+,

@@ -24,7 +24,7 @@
 #include "edt_cpu.h"
 #include "edt_exact.h"
 #include "filter.h"
-#include "gpu.h"
+#include "gpu/gpu.h"
 #include "util.h"
 
 #define BOUND 0.0910034   /* sqrt(485) - sqrt(481) = 0.09100335 */

@@ -37,9 +37,9 @@
 #include "edt_cpu.h"
 #include "filter.h"
 #include "filter_ref.h"
-#include "gpu.h"
-#include "imageio.h"
-#include "source.h"
+#include "gpu/gpu.h"
+#include "imageio/imageio.h"
+#include "encode/source.h"
 #include "util.h"
 
 #define ROI_W 160

@@ -22,7 +22,7 @@
 #include <string.h>
 
 #include "filter.h"
-#include "gpu.h"
+#include "gpu/gpu.h"
 #include "util.h"
 
 static uint32_t rng = 12345;

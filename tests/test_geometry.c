@@ -2,9 +2,9 @@
  * test_geometry.c - level, tile and page arithmetic for the sizes the
  * format must handle: 1x1, 512, 513, 514, 1x70000, 70000x1, 2^31-1.
  */
-#include "error.h"
-#include "geometry.h"
-#include "store_format.h"
+#include "base/error.h"
+#include "store/geometry.h"
+#include "store/store_format.h"
 #include "util.h"
 
 int main(void)

@@ -1,5 +1,5 @@
 /*
- * test_gpu_cache.c - recursive parent pulling on the GPU (lib/gpu_cache.c):
+ * test_gpu_cache.c - recursive parent pulling on the GPU (lib/gpu/gpu_cache.c):
  * every tile of a few stores, asked for in an order that defeats a small
  * byte budget (finest level first, then a shuffled pass), read back from
  * the GPU and compared bit for bit with the CPU reference decoder.  The
@@ -13,12 +13,12 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "decoder.h"
-#include "encoder.h"
-#include "gpu.h"
-#include "gpu_cache.h"
-#include "gpu_decode.h"
-#include "store.h"
+#include "render/store_decoder.h"
+#include "encode/stream_encoder.h"
+#include "gpu/gpu.h"
+#include "gpu/gpu_cache.h"
+#include "gpu/gpu_decode.h"
+#include "store/store_read.h"
 #include "util.h"
 
 static char dir[] = "/tmp/gv-test-gpucache-XXXXXX";

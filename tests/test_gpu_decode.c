@@ -11,11 +11,11 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "decoder.h"
-#include "encoder.h"
-#include "gpu.h"
-#include "gpu_decode.h"
-#include "store.h"
+#include "render/store_decoder.h"
+#include "encode/stream_encoder.h"
+#include "gpu/gpu.h"
+#include "gpu/gpu_decode.h"
+#include "store/store_read.h"
 #include "util.h"
 
 static char dir[] = "/tmp/gv-test-gpu-XXXXXX";

@@ -19,11 +19,11 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "decoder.h"
-#include "encoder.h"
-#include "imageio.h"
-#include "render.h"
-#include "store.h"
+#include "render/store_decoder.h"
+#include "encode/stream_encoder.h"
+#include "imageio/imageio.h"
+#include "render/region.h"
+#include "store/store_read.h"
 #include "util.h"
 
 static char dir[] = "/tmp/gv-test-render-XXXXXX";

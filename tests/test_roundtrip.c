@@ -13,11 +13,11 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "decoder.h"
-#include "encoder.h"
-#include "source.h"
-#include "store.h"
-#include "tile.h"
+#include "render/store_decoder.h"
+#include "encode/stream_encoder.h"
+#include "encode/source.h"
+#include "store/store_read.h"
+#include "codec/tile.h"
 #include "util.h"
 
 static char dir[] = "/tmp/gv-test-roundtrip-XXXXXX";

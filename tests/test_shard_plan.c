@@ -12,8 +12,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry.h"
-#include "shard_plan.h"
+#include "store/geometry.h"
+#include "encode/shard_plan.h"
 #include "util.h"
 
 static uint64_t area(const struct gv_level *l, uint32_t tx, uint32_t ty)

@@ -1,5 +1,5 @@
 /*
- * test_source.c - unit tests for lib/source.c and lib/imageio.cpp.
+ * test_source.c - unit tests for lib/encode/source.c and lib/imageio/imageio.cpp.
  *
  * Reads the small committed images in $TESTDATA (tests/data, see
  * LICENSES.md there) and files it writes itself into a fresh directory
@@ -19,8 +19,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "imageio.h"
-#include "source.h"
+#include "imageio/imageio.h"
+#include "encode/source.h"
 #include "util.h"
 
 static const char *datadir;

@@ -11,10 +11,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "decoder.h"
-#include "store.h"
-#include "store_writer.h"
-#include "tile.h"
+#include "render/store_decoder.h"
+#include "store/store_read.h"
+#include "store/store_write.h"
+#include "codec/tile.h"
 #include "util.h"
 
 static char dir[] = "/tmp/gv-test-store-XXXXXX";

@@ -7,8 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry.h"
-#include "tile.h"
+#include "store/geometry.h"
+#include "codec/tile.h"
 #include "util.h"
 
 #define T GV_TILE

@@ -1,14 +1,14 @@
 // gpu_decode.js - the WebGL2 tile decoder: shaders/tile_decode.frag.glsl,
 // the very file that gigaviewd, the native client and tests/test_gpu_decode
 // compile, fetched from the server and compiled here as GLSL ES 3.00
-// (the GV_GPU_PATH_WEBGL2 variant of lib/gpu_decode.c).
+// (the GV_GPU_PATH_WEBGL2 variant of lib/gpu/gpu_decode.c).
 //
 // A decoded tile is a 513 x 513 RGBA8UI texture (gray replicated, alpha
 // 255) rendered in one pass from its parent's texture (texelFetch only, no
 // filtering: integer arithmetic bit for bit as the CPU decoder) and the
 // tile buffer, uploaded as an R32UI texture 1024 words wide; an
 // entropy-coded tile's indices, decoded on the CPU (tilebuf.js), go in a
-// 257 x 257 R16UI texture.  Unlike lib/gpu_decode.c no second mip level
+// 257 x 257 R16UI texture.  Unlike lib/gpu/gpu_decode.c no second mip level
 // (the parent quarter) is made: the viewer blends two levels by drawing
 // the parent tile itself (renderer.js), which it keeps anyway.
 

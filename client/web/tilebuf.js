@@ -1,8 +1,8 @@
 // tilebuf.js - checking a compressed tile buffer and decoding its
 // entropy-coded indices on the CPU (docs/FORMAT.md sections 4 and 4.1).
 //
-// A port of gv_tilebuf_check (lib/tile_decode.c) and gv_rans_check /
-// gv_rans_unpack (lib/tile_rans.c), statement for statement, so that the
+// A port of gv_tilebuf_check (lib/codec/tile_decode.c) and gv_rans_check /
+// gv_rans_unpack (lib/codec/tile_rans.c), statement for statement, so that the
 // browser refuses exactly the buffers the C decoders refuse and produces
 // the same indices.  WebGL2 has no compute shaders, so the rANS streams of
 // an "E" tile are decoded here and uploaded as a 257x257 R16UI texture

@@ -21,7 +21,7 @@
 
 #include "batch_request.h"
 #include "fuzz.h"
-#include "geometry.h"
+#include "store/geometry.h"
 
 #define MAX_INPUT (64u << 10) /* far above any useful request; keeps it fast */
 

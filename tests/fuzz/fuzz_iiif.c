@@ -17,7 +17,7 @@
 #include <string.h>
 
 #include "fuzz.h"
-#include "geometry.h"
+#include "store/geometry.h"
 #include "iiif.h"
 
 #define MAX_SEGMENT 4096   /* bytes per segment, NUL excluded */

@@ -1,6 +1,6 @@
 /*
  * fuzz_imageio.c - libFuzzer target for the encoder's image input: the
- * OpenImageIO bridge (lib/imageio.cpp) behind the source (lib/source.c),
+ * OpenImageIO bridge (lib/imageio/imageio.cpp) behind the source (lib/encode/source.c),
  * with a pixel cap.
  *
  * Byte 0 picks a file name extension (modulo the table's size;
@@ -29,7 +29,7 @@
 #include <unistd.h>
 
 #include "fuzz.h"
-#include "source.h"
+#include "encode/source.h"
 
 #define MAX_INPUT (1u << 20)   /* bigger files add time, not coverage */
 #define MAX_PIXELS (1u << 20)  /* the cap under test: 1 MP */
@@ -40,7 +40,7 @@
 static const char *const ext[] = {
     "png", "jpg", "tif", "exr", "webp", "gif", "bmp", "ppm",
     "hdr", "tga", "psd", "dpx", "sgi", "ico", "rla", "bin", "jp2", "fits",
-    /* dpx, sgi, ico and rla are refused (lib/imageio.cpp
+    /* dpx, sgi, ico and rla are refused (lib/imageio/imageio.cpp
      * accepted_formats), bin has no reader: the refusal and the search
      * among the accepted readers are fuzzed too. */
 };

@@ -19,10 +19,10 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
-#include "decoder.h"
+#include "render/store_decoder.h"
 #include "fuzz.h"
-#include "store.h"
-#include "store_format.h"
+#include "store/store_read.h"
+#include "store/store_format.h"
 
 #define MAX_INPUT (4u << 20)   /* larger inputs add nothing but time */
 #define MAX_PAGES 64           /* pages read per input */

@@ -12,8 +12,8 @@
 #include <string.h>
 
 #include "fuzz.h"
-#include "geometry.h"
-#include "tile.h"
+#include "store/geometry.h"
+#include "codec/tile.h"
 
 static uint8_t parent[GV_TILE * GV_TILE * 3];
 static uint8_t out[GV_TILE * GV_TILE * 3];

@@ -1,0 +1,99 @@
+/*
+ * spill.c - unnamed scratch file for the encoder (see spill.h).
+ *
+ * The directory's name is kept for error messages only: when the scratch
+ * file's file system fills up, the message must say which one (it is
+ * --tmpdir, or the output's directory), since the file itself has no
+ * name an operator could find.
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "base/spill.h"
+
+struct gv_spill {
+    int fd;
+    char *dir;   /* where the file lives, for messages */
+};
+
+struct gv_spill *gv_spill_new(const char *dir, struct gv_error *err)
+{
+    struct gv_spill *s = malloc(sizeof *s);
+    if (s && !(s->dir = strdup(dir))) {
+        free(s);
+        s = NULL;
+    }
+    if (!s) {
+        gv_fail(err, GV_ENOMEM, "spill: out of memory");
+        return NULL;
+    }
+    s->fd = open(dir, O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+    if (s->fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL)) {
+        char name[4096];
+        snprintf(name, sizeof name, "%s/.gigaview-spill.XXXXXX", dir);
+        s->fd = mkostemp(name, O_CLOEXEC);
+        if (s->fd >= 0)
+            unlink(name);
+    }
+    if (s->fd < 0) {
+        gv_fail_errno(err, errno, "spill: cannot create a scratch file in %s", dir);
+        free(s->dir);
+        free(s);
+        return NULL;
+    }
+    return s;
+}
+
+void gv_spill_free(struct gv_spill *s)
+{
+    if (!s)
+        return;
+    close(s->fd);
+    free(s->dir);
+    free(s);
+}
+
+int gv_spill_write(struct gv_spill *s, const void *buf, size_t len,
+                   uint64_t off, struct gv_error *err)
+{
+    const uint8_t *p = buf;
+    while (len > 0) {
+        ssize_t n = pwrite(s->fd, p, len, (off_t)off);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            return gv_fail_errno(err, errno, "spill: writing the scratch file in %s",
+                                 s->dir);
+        }
+        p += n;
+        len -= (size_t)n;
+        off += (uint64_t)n;
+    }
+    return 0;
+}
+
+int gv_spill_read(struct gv_spill *s, void *buf, size_t len, uint64_t off,
+                  struct gv_error *err)
+{
+    uint8_t *p = buf;
+    while (len > 0) {
+        ssize_t n = pread(s->fd, p, len, (off_t)off);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            return gv_fail_errno(err, errno, "spill: reading the scratch file in %s",
+                                 s->dir);
+        }
+        if (n == 0)
+            return gv_fail(err, GV_EIO, "spill: the scratch file in %s ends early",
+                           s->dir);
+        p += n;
+        len -= (size_t)n;
+        off += (uint64_t)n;
+    }
+    return 0;
+}

@@ -1,0 +1,102 @@
+/*
+ * tile.h - the tile codec: prediction from the parent, the fig. 7.2 tile
+ * buffer, and the CPU reference decoder.
+ *
+ * A tile is 513x513 pixels of `channels` interleaved 8-bit samples.  It is
+ * predicted from one quarter of its parent tile by the integer bilinear
+ * upsample of docs/FORMAT.md, and the residual is coded as one index per
+ * 2x2 block into a per-tile signed 8-bit codebook:
+ *
+ *   byte 0          r, the index width in bits (0..GV_MAX_RATE)
+ *   bytes 1..       2^r codevectors of 4*channels signed bytes
+ *   then            257*257 indices of r bits, LSB-first
+ *   then            zero padding to a multiple of 4 bytes
+ *
+ * The decoder uses integer arithmetic only, so that every GPU decoder can
+ * reproduce it bit for bit.  All functions are thread-safe and allocate
+ * nothing.
+ */
+#ifndef GV_TILE_H
+#define GV_TILE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+
+/* The largest tile buffer: gv_tilebuf_size(GV_MAX_RATE, 3) (checked by
+ * tests/test_tile.c).  Entropy-coded buffers are only ever written when
+ * smaller than the fixed layout at the same rate. */
+#define GV_TILEBUF_MAX 148228
+
+/* Bytes of a fixed-layout tile buffer at index width `rate`
+ * (0..GV_MAX_RATE). */
+size_t gv_tilebuf_size(int rate, int channels);
+
+/*
+ * Predict a 513x513 tile from quadrant (qx,qy) in {0,1}^2 of the decoded
+ * parent tile `parent` (513x513xC).  Writes 513x513xC bytes to `pred`.
+ */
+void gv_predict(const uint8_t *parent, int channels, int qx, int qy,
+                uint8_t *pred);
+
+/*
+ * Check that buf[0..len) is a well-formed tile buffer for `channels`.
+ * Returns its rate r, or -1 with *err filled.
+ */
+int gv_tilebuf_check(const uint8_t *buf, size_t len, int channels,
+                     struct gv_error *err);
+
+/*
+ * Decode tile buffer `buf` (len bytes) against its decoded parent.  `out`
+ * receives 513x513xC bytes.  Returns 0, or -1 for a malformed buffer
+ * (never reads outside buf).
+ */
+int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
+                   const uint8_t *parent, int qx, int qy, uint8_t *out,
+                   struct gv_error *err);
+
+/* Read index k (0..257^2-1) of a checked buffer at rate r >= 1. */
+uint32_t gv_tilebuf_index(const uint8_t *buf, int rate, int channels,
+                          uint32_t k);
+
+/* Quality and rate controls for gv_tile_encode. */
+struct gv_tile_params {
+    double target_mse;   /* mean squared error per sample to reach */
+    int max_rate;        /* cap on r, 1..GV_MAX_RATE */
+    double lambda;       /* > 0: rate-distortion mode instead of a target:
+                          * pick the r minimizing SSE + lambda * bits */
+    uint64_t seed;       /* deterministic sampling seed for this tile */
+};
+
+struct gv_tile_stats {
+    int rate;            /* chosen r */
+    uint64_t sse;        /* squared error over the valid samples */
+    uint64_t samples;    /* valid pixels x channels */
+};
+
+struct gv_tile_workspace;
+
+/* Allocate / free the scratch memory one encoding thread needs (~3 MiB).
+ * gv_tile_workspace_free(NULL) does nothing. */
+struct gv_tile_workspace *gv_tile_workspace_new(void);
+void gv_tile_workspace_free(struct gv_tile_workspace *ws);
+
+/*
+ * Encode one tile.
+ *   orig    513x513xC original pixels, already clamp-padded past the image
+ *   parent  decoded parent tile; (qx,qy) the quadrant this tile covers
+ *   valid_w, valid_h  how many columns/rows of the tile lie in the image;
+ *           only those count in the error
+ *   recon   receives the decoded tile (exactly what gv_tile_decode gives)
+ *   buf     receives the tile buffer; it must hold
+ *           gv_tilebuf_size(params->max_rate, channels) bytes
+ * Returns the buffer length in bytes and fills *stats.  Cannot fail.
+ */
+size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
+                      const uint8_t *parent, int qx, int qy, int channels,
+                      uint32_t valid_w, uint32_t valid_h,
+                      const struct gv_tile_params *params, uint8_t *recon,
+                      uint8_t *buf, struct gv_tile_stats *stats);
+
+#endif

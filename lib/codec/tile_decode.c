@@ -1,0 +1,132 @@
+/*
+ * tile_decode.c - tile buffer layout and the CPU reference decoder.
+ *
+ * This file is the executable form of the tile part of docs/FORMAT.md.
+ * Indices are packed LSB-first: bit b of the index stream is bit (b & 7) of
+ * byte (b >> 3), which is bit (b & 31) of little-endian 32-bit word
+ * (b >> 5), the view a GPU takes.  The stream starts right after the
+ * codebook, at bit 8 * (1 + 2^r * 4 * channels).
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "codec/tile_layout.h"
+#include "codec/tile.h"
+#include "codec/tile_rans.h"
+
+size_t gv_tilebuf_size(int rate, int channels)
+{
+    if (rate <= 0)
+        return 4;
+    uint64_t bits = 8u * (1u + ((uint64_t)1 << rate) * 4u * (unsigned)channels) +
+                    (uint64_t)GV_NBLOCKS * (unsigned)rate;
+    return (size_t)((bits + 31) / 32 * 4);
+}
+
+int gv_tilebuf_check(const uint8_t *buf, size_t len, int channels,
+                     struct gv_error *err)
+{
+    if (channels != 1 && channels != 3)
+        return gv_fail(err, GV_EINVAL, "tile: bad channel count %d", channels);
+    if (len < 4 || (len & 3))
+        return gv_fail(err, GV_ECORRUPT, "tile: buffer of %zu bytes is not a "
+                       "positive multiple of 4", len);
+    int rate = buf[0] & 0x0f;
+    if ((buf[0] & 0x70) || rate > GV_MAX_RATE || (rate == 0 && buf[0]))
+        return gv_fail(err, GV_ECORRUPT, "tile: bad rate byte 0x%02x", buf[0]);
+    if (buf[0] & GV_TILE_ENTROPY)
+        return gv_rans_check(buf, len, rate, channels, err) < 0 ? -1 : rate;
+    size_t want = gv_tilebuf_size(rate, channels);
+    if (len != want)
+        return gv_fail(err, GV_ECORRUPT, "tile: %zu bytes where rate %d needs "
+                       "%zu", len, rate, want);
+    return rate;
+}
+
+uint32_t gv_tilebuf_index(const uint8_t *buf, int rate, int channels,
+                          uint32_t k)
+{
+    uint64_t bit = 8u * (1u + ((uint64_t)1 << rate) * 4u * (unsigned)channels) +
+                   (uint64_t)k * (unsigned)rate;
+    const uint8_t *p = buf + (bit >> 3);
+    /* r <= 12 and the shift is <= 7, so three bytes always suffice; the
+     * padding guarantees they exist except at the very end. */
+    uint32_t v = p[0];
+    unsigned have = 8;
+    while (have < (bit & 7) + (unsigned)rate) {
+        v |= (uint32_t)p[have / 8] << have;
+        have += 8;
+    }
+    return (v >> (bit & 7)) & ((1u << rate) - 1);
+}
+
+static inline uint8_t clamp_u8(int v)
+{
+    return (uint8_t)(v < 0 ? 0 : (v > 255 ? 255 : v));
+}
+
+int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
+                   const uint8_t *parent, int qx, int qy, uint8_t *out,
+                   struct gv_error *err)
+{
+    int rate = gv_tilebuf_check(buf, len, channels, err);
+    if (rate < 0)
+        return -1;
+    uint16_t *coded = NULL;
+    if (buf[0] & GV_TILE_ENTROPY) {
+        coded = malloc(GV_NBLOCKS * sizeof *coded);
+        if (!coded)
+            return gv_fail(err, GV_ENOMEM, "tile: out of memory");
+        if (gv_rans_unpack(buf, len, rate, channels, coded, err) < 0) {
+            free(coded);
+            return -1;
+        }
+    }
+    gv_predict(parent, channels, qx, qy, out);
+    if (rate == 0)
+        return 0;
+    const int dim = 4 * channels;
+    const int8_t *book = (const int8_t *)(buf + 1);
+    const size_t row = (size_t)GV_TILE * channels;
+    /* Row by row of blocks: the 257 indices, then for each of the block
+     * row's two pixel rows the matching half of every codevector, added
+     * with clamping (pixel 513 of the last block is skipped). */
+    uint16_t ids[GV_BLOCKS];
+    const uint64_t start = 8u * (1u + ((uint64_t)1 << rate) * 4u * (unsigned)channels);
+    const uint32_t mask = (1u << rate) - 1;
+    for (uint32_t by = 0; by < GV_BLOCKS; by++) {
+        if (coded) {
+            memcpy(ids, coded + (size_t)by * GV_BLOCKS, sizeof ids);
+        } else {
+            uint64_t bit = start + (uint64_t)by * GV_BLOCKS * (unsigned)rate;
+            for (uint32_t bx = 0; bx < GV_BLOCKS; bx++, bit += (unsigned)rate) {
+                /* At most three bytes hold an index (r <= 12, shift <= 7);
+                 * only those it occupies are read. */
+                const uint8_t *p = buf + (bit >> 3);
+                const unsigned end = (unsigned)(bit & 7) + (unsigned)rate;
+                uint32_t v = p[0];
+                if (end > 8)
+                    v |= (uint32_t)p[1] << 8;
+                if (end > 16)
+                    v |= (uint32_t)p[2] << 16;
+                ids[bx] = (uint16_t)((v >> (bit & 7)) & mask);
+            }
+        }
+        for (int half = 0; half < 2; half++) {
+            const uint32_t y = 2 * by + (uint32_t)half;
+            if (y >= GV_TILE)
+                break;
+            uint8_t *px = out + y * row;
+            const int first = half * 2 * channels;   /* pixels (0|1, half) */
+            for (uint32_t bx = 0; bx < GV_BLOCKS; bx++) {
+                const int8_t *cv = book + (size_t)ids[bx] * dim + first;
+                const int n = bx + 1 < GV_BLOCKS ? 2 * channels : channels;
+                uint8_t *q = px + (size_t)bx * 2 * channels;
+                for (int i = 0; i < n; i++)
+                    q[i] = clamp_u8(q[i] + cv[i]);
+            }
+        }
+    }
+    free(coded);
+    return 0;
+}

@@ -1,0 +1,290 @@
+/*
+ * tile_encode.c - hierarchical VQ encoding of one tile (section 7.4).
+ *
+ * The residual (original minus the prediction from the decoded parent) is
+ * cut into 257x257 blocks of 2x2 pixels.  Rates are tried from r = 0 (the
+ * prediction alone) upwards, each codebook grown from the previous one by a
+ * PCA split followed by LBG (vq.c) on a random sample of the tile's blocks.
+ * When the sample says a rate may meet the target, every block is assigned
+ * exactly and the true squared error of the clamped reconstruction decides;
+ * the first rate that meets the target (or the cap) wins.  So every tile the
+ * encoder writes meets the target unless it is at the cap.
+ *
+ * Sampling uses a per-tile seed, and the search is exact, so the output
+ * does not depend on thread count or CPU.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "codec/tile_layout.h"
+#include "codec/tile.h"
+#include "codec/tile_rans.h"
+#include "codec/vq.h"
+
+#define SAMPLE_MIN 4096   /* blocks sampled for training at small rates */
+#define SAMPLE_PER_CELL 12 /* ... growing to this many per codevector */
+
+struct gv_tile_workspace {
+    uint8_t pred[GV_TILE * GV_TILE * 3];
+    int16_t vecs[GV_NBLOCKS * VQ_STRIDE];
+    uint32_t order[GV_NBLOCKS];      /* shuffled valid blocks */
+    int16_t sample[GV_NBLOCKS * VQ_STRIDE];
+    uint16_t idx[GV_NBLOCKS];
+    uint32_t dist[GV_NBLOCKS];
+    uint16_t best_idx[GV_NBLOCKS];   /* rate-distortion mode: best so far */
+    int8_t best_book[VQ_MAXK * VQ_MAXDIM];
+    uint8_t scratch[GV_TILEBUF_MAX]; /* sizing candidate rates (--rd) */
+    struct vq_trainer trainer;
+};
+
+struct gv_tile_workspace *gv_tile_workspace_new(void)
+{
+    return calloc(1, sizeof(struct gv_tile_workspace));
+}
+
+void gv_tile_workspace_free(struct gv_tile_workspace *ws)
+{
+    free(ws);
+}
+
+static uint64_t splitmix(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+/* Residual vectors of all blocks; pixels past the tile edge (x or y = 513)
+ * repeat pixel 512 so that they pull codevectors toward real content. */
+static void make_vectors(struct gv_tile_workspace *ws, const uint8_t *orig,
+                         int channels)
+{
+    const size_t row = (size_t)GV_TILE * channels;
+    for (int by = 0; by < GV_BLOCKS; by++)
+        for (int bx = 0; bx < GV_BLOCKS; bx++) {
+            int16_t *v = ws->vecs + ((size_t)by * GV_BLOCKS + bx) * VQ_STRIDE;
+            memset(v, 0, VQ_STRIDE * sizeof *v);
+            for (int j = 0; j < 4; j++) {
+                int x = 2 * bx + (j & 1), y = 2 * by + (j >> 1);
+                if (x > GV_TILE - 1) x = GV_TILE - 1;
+                if (y > GV_TILE - 1) y = GV_TILE - 1;
+                size_t o = (size_t)y * row + (size_t)x * channels;
+                for (int c = 0; c < channels; c++)
+                    v[j * channels + c] = (int16_t)(orig[o + c] - ws->pred[o + c]);
+            }
+        }
+}
+
+static inline uint8_t clamp_u8(int v)
+{
+    return (uint8_t)(v < 0 ? 0 : (v > 255 ? 255 : v));
+}
+
+/* Reconstruct into recon from pred + book[idx] and return the squared error
+ * against orig over the valid region. */
+static uint64_t reconstruct(const struct gv_tile_workspace *ws,
+                            const uint8_t *orig, const int8_t *book, int rate,
+                            int channels, uint32_t vw, uint32_t vh,
+                            uint8_t *recon)
+{
+    const size_t row = (size_t)GV_TILE * channels;
+    const int dim = 4 * channels;
+    memcpy(recon, ws->pred, row * GV_TILE);
+    if (rate > 0) {
+        for (int y = 0; y < GV_TILE; y++) {
+            const uint16_t *ir = ws->idx + (size_t)(y >> 1) * GV_BLOCKS;
+            uint8_t *out = recon + (size_t)y * row;
+            const int jy = (y & 1) * 2;
+            for (int x = 0; x < GV_TILE; x++) {
+                const int8_t *cv = book + (size_t)ir[x >> 1] * dim +
+                                   (jy + (x & 1)) * channels;
+                for (int c = 0; c < channels; c++)
+                    out[x * channels + c] = clamp_u8(out[x * channels + c] + cv[c]);
+            }
+        }
+    }
+    uint64_t sse = 0;
+    for (uint32_t y = 0; y < vh; y++) {
+        const uint8_t *a = orig + y * row, *b = recon + y * row;
+        for (uint32_t i = 0; i < vw * (uint32_t)channels; i++) {
+            int d = a[i] - b[i];
+            sse += (uint64_t)(d * d);
+        }
+    }
+    return sse;
+}
+
+static void pack_buffer(uint8_t *buf, size_t len, int rate, int channels,
+                        const int8_t *book, const uint16_t *idx)
+{
+    memset(buf, 0, len);
+    buf[0] = (uint8_t)rate;
+    if (rate == 0)
+        return;
+    const size_t booklen = ((size_t)1 << rate) * 4 * channels;
+    memcpy(buf + 1, book, booklen);
+    uint64_t bit = 8 * (1 + booklen);
+    for (uint32_t k = 0; k < GV_NBLOCKS; k++, bit += rate) {
+        uint32_t v = (uint32_t)idx[k] << (bit & 7);
+        uint8_t *p = buf + (bit >> 3);
+        for (unsigned s = 0; s < (bit & 7) + (unsigned)rate; s += 8)
+            p[s / 8] |= (uint8_t)(v >> s);
+    }
+}
+
+/* Write the smaller of the two layouts (fixed-width or entropy-coded
+ * indices) into buf; returns its length. */
+static size_t pack_best(uint8_t *buf, int rate, int channels,
+                        const int8_t *book, const uint16_t *idx)
+{
+    size_t fixed = gv_tilebuf_size(rate, channels);
+    if (rate > 0) {
+        size_t coded = gv_rans_pack(idx, rate, channels, book, buf, fixed - 4);
+        if (coded)
+            return coded;
+    }
+    pack_buffer(buf, fixed, rate, channels, book, idx);
+    return fixed;
+}
+
+/* Shuffle the valid blocks once; training samples are a growing prefix. */
+static uint32_t shuffle_valid(struct gv_tile_workspace *ws, uint32_t valid_w,
+                              uint32_t valid_h, uint64_t seed)
+{
+    const uint32_t vbx = (valid_w + 1) / 2, vby = (valid_h + 1) / 2;
+    uint32_t nvalid = 0;
+    for (uint32_t by = 0; by < vby; by++)
+        for (uint32_t bx = 0; bx < vbx; bx++)
+            ws->order[nvalid++] = by * GV_BLOCKS + bx;
+    for (uint32_t i = nvalid; i > 1; i--) {
+        uint32_t j = (uint32_t)(splitmix(&seed) % i);
+        uint32_t t = ws->order[i - 1];
+        ws->order[i - 1] = ws->order[j];
+        ws->order[j] = t;
+    }
+    return nvalid;
+}
+
+/* Grow the sample to the size training at `rate` wants. */
+static size_t grow_sample(struct gv_tile_workspace *ws, size_t have, int rate,
+                          uint32_t nvalid)
+{
+    size_t want = (size_t)SAMPLE_PER_CELL << rate;
+    if (want < SAMPLE_MIN)
+        want = SAMPLE_MIN;
+    if (want > nvalid)
+        want = nvalid;
+    for (; have < want; have++)
+        memcpy(ws->sample + have * VQ_STRIDE,
+               ws->vecs + (size_t)ws->order[have] * VQ_STRIDE,
+               VQ_STRIDE * sizeof(int16_t));
+    return have;
+}
+
+/*
+ * Rate-distortion mode: every rate up to the cap is coded exactly and the
+ * one minimizing J = SSE + lambda * bits wins; the search stops once J has
+ * risen for two rates in a row (J is close to convex in r).
+ */
+static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
+                        int channels, uint32_t valid_w, uint32_t valid_h,
+                        const struct gv_tile_params *params, int max_rate,
+                        uint64_t sse0, uint8_t *recon, uint8_t *buf,
+                        struct gv_tile_stats *stats)
+{
+    const int dim = 4 * channels;
+    double best_j = (double)sse0 + params->lambda * 8.0 * gv_tilebuf_size(0, channels);
+    int best_rate = 0, rises = 0;
+    uint64_t best_sse = sse0;
+    make_vectors(ws, orig, channels);
+    uint32_t nvalid = shuffle_valid(ws, valid_w, valid_h, params->seed);
+    size_t nsample = 0;
+    struct vq_trainer *t = &ws->trainer;
+    for (int rate = 1; rate <= max_rate && rises < 2; rate++) {
+        nsample = grow_sample(ws, nsample, rate, nvalid);
+        if (rate == 1)
+            vq_train_init(t, dim, ws->sample, nsample);
+        vq_train_double(t, ws->sample, nsample, ws->idx, ws->dist);
+        vq_search_prepare(&t->search, t->book, t->k, dim);
+        vq_nearest(&t->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
+        uint64_t sse = reconstruct(ws, orig, t->book, rate, channels, valid_w,
+                                   valid_h, recon);
+        size_t bytes = pack_best(ws->scratch, rate, channels, t->book, ws->idx);
+        double j = (double)sse + params->lambda * 8.0 * (double)bytes;
+        if (j < best_j) {
+            best_j = j;
+            best_rate = rate;
+            best_sse = sse;
+            memcpy(ws->best_idx, ws->idx, sizeof ws->idx);
+            memcpy(ws->best_book, t->book, ((size_t)1 << rate) * dim);
+            rises = 0;
+        } else {
+            rises++;
+        }
+    }
+    memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
+    reconstruct(ws, orig, ws->best_book, best_rate, channels, valid_w, valid_h, recon);
+    size_t len = pack_best(buf, best_rate, channels, ws->best_book, ws->idx);
+    stats->rate = best_rate;
+    stats->sse = best_sse;
+    return len;
+}
+
+size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
+                      const uint8_t *parent, int qx, int qy, int channels,
+                      uint32_t valid_w, uint32_t valid_h,
+                      const struct gv_tile_params *params, uint8_t *recon,
+                      uint8_t *buf, struct gv_tile_stats *stats)
+{
+    const int dim = 4 * channels;
+    const uint64_t samples = (uint64_t)valid_w * valid_h * channels;
+    const double budget = params->target_mse * (double)samples;
+    const int max_rate = params->max_rate < 1 ? 1 :
+                         (params->max_rate > GV_MAX_RATE ? GV_MAX_RATE : params->max_rate);
+
+    gv_predict(parent, channels, qx, qy, ws->pred);
+    stats->samples = samples;
+
+    uint64_t sse = reconstruct(ws, orig, NULL, 0, channels, valid_w, valid_h, recon);
+    if (params->lambda > 0)
+        return encode_rd(ws, orig, channels, valid_w, valid_h, params, max_rate,
+                         sse, recon, buf, stats);
+    if ((double)sse <= budget) {
+        stats->rate = 0;
+        stats->sse = sse;
+        size_t len = gv_tilebuf_size(0, channels);
+        pack_buffer(buf, len, 0, channels, NULL, NULL);
+        return len;
+    }
+
+    make_vectors(ws, orig, channels);
+
+    uint32_t nvalid = shuffle_valid(ws, valid_w, valid_h, params->seed);
+    size_t nsample = 0;
+
+    struct vq_trainer *t = &ws->trainer;
+    for (int rate = 1; rate <= max_rate; rate++) {
+        nsample = grow_sample(ws, nsample, rate, nvalid);
+        if (rate == 1)
+            vq_train_init(t, dim, ws->sample, nsample);
+        uint64_t est = vq_train_double(t, ws->sample, nsample, ws->idx, ws->dist);
+        /* The sample's error per sample, scaled to the valid region. */
+        double est_mse = (double)est / ((double)nsample * dim);
+        if (rate < max_rate && est_mse > params->target_mse)
+            continue;
+        vq_search_prepare(&t->search, t->book, t->k, dim);
+        vq_nearest(&t->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
+        sse = reconstruct(ws, orig, t->book, rate, channels, valid_w, valid_h,
+                          recon);
+        if ((double)sse <= budget || rate == max_rate) {
+            stats->rate = rate;
+            stats->sse = sse;
+            return pack_best(buf, rate, channels, t->book, ws->idx);
+        }
+    }
+    /* Not reached: the loop returns at max_rate. */
+    stats->rate = 0;
+    stats->sse = sse;
+    return 0;
+}

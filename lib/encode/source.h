@@ -1,0 +1,75 @@
+/*
+ * source.h - the encoder's input: one image, a mosaic of images, or a
+ * procedural test pattern, delivered as 8-bit rows from top to bottom.
+ *
+ * Opening probes headers only (cheap); rows are then read strictly in
+ * order, so no input ever has to fit in memory.  Input with more than 8
+ * bits per sample is brought to 8 bits by the rule in docs/FORMAT.md
+ * ("Bringing deep input to 8 bits"): integers scale by 255/(2^bits - 1)
+ * with rounding, floats are treated as linear light, clipped to [0,1] and
+ * encoded with the sRGB transfer curve, and --range LO:HI maps [LO,HI]
+ * linearly onto [0,255] instead.  One-channel and gray+alpha input
+ * gives a gray (1-channel) image; three or more channels give RGB (alpha
+ * and extra channels are dropped).
+ */
+#ifndef GV_SOURCE_H
+#define GV_SOURCE_H
+
+#include <stdint.h>
+
+#include "base/error.h"
+
+enum gv_tone_rule {
+    GV_TONE_NONE = 0,      /* 8-bit input, copied */
+    GV_TONE_SCALE = 1,     /* integer input, scaled by 255 / (2^bits - 1) */
+    GV_TONE_SRGB_CLIP = 2, /* float input: clip to [0,1], sRGB encode */
+    GV_TONE_RANGE = 3      /* any input: [lo,hi] mapped linearly to [0,255] */
+};
+
+struct gv_source_opts {
+    int mosaic_cols;       /* > 0: inputs form a grid of this many columns */
+    int mosaic_rows;       /* ... and rows, listed row by row */
+    uint64_t max_pixels;   /* refuse larger images (0: GV_SOURCE_MAX_PIXELS) */
+    double range_lo;       /* used when range_hi > range_lo */
+    double range_hi;
+};
+
+/* Default cap on width x height: 2^40 pixels (a terapixel). */
+#define GV_SOURCE_MAX_PIXELS (1ull << 40)
+
+struct gv_source_info {
+    uint32_t width, height;
+    int channels;          /* 1 or 3: what the rows hold */
+    int src_bits;          /* bits per sample of the input (8, 16, 32...) */
+    int src_float;         /* 1 for half/float input */
+    enum gv_tone_rule tone;
+};
+
+struct gv_source;
+
+/*
+ * Open `n` inputs.  A single input is an image path or a pattern
+ * "synth:WIDTHxHEIGHT[:gray]" (a deterministic procedural image, used for
+ * tests and benchmarks at any size).  With opts->mosaic_cols > 0 the
+ * inputs are cols x rows tiles given row by row; every tile of a grid
+ * column must have the same width and of a grid row the same height, and
+ * all must agree on gray or colour.  Fills *info.  Returns NULL with *err
+ * filled for a missing, unreadable, unsupported or oversized input.
+ */
+struct gv_source *gv_source_open(const char *const *inputs, int n,
+                                 const struct gv_source_opts *opts,
+                                 struct gv_source_info *info,
+                                 struct gv_error *err);
+
+/*
+ * Read the next `rows` rows (width * channels bytes each) into out.
+ * Returns 0, or -1 with *err filled when an input is truncated or corrupt
+ * (decoder warnings about damaged data count as errors).
+ */
+int gv_source_read(struct gv_source *s, uint32_t rows, uint8_t *out,
+                   struct gv_error *err);
+
+/* Close every input.  gv_source_free(NULL) does nothing. */
+void gv_source_free(struct gv_source *s);
+
+#endif

@@ -1,0 +1,622 @@
+/*
+ * stream_encoder.c - the two-pass streaming encoder (see stream_encoder.h).
+ *
+ * Scratch layout: level k of the original pyramid (k = 0..root) is stored
+ * row-major at orig_base[k]; decoded tiles of level k (1..root-1) are
+ * stored as 513x513xC records at recon_base[k], row-major by tile, because
+ * level k-1 is predicted from decoded tiles, not from a decoded image.
+ *
+ * Working set of pass 2 for one page: the original window (4097^2 x C),
+ * up to 16 parent tiles, 64 decoded tiles and 64 tile buffers, plus one
+ * tile workspace per thread.  Pass 1 holds one chunk of input rows and one
+ * pending row per level.
+ *
+ * A shard writes only the pixels of its tiles to the scratch file, which
+ * is sized once so that the rest are holes (they read as zeros and take
+ * no disk), skips the pages it has no tile in, and leaves the other slots
+ * of its pages unencoded: every tile it encodes has its parent among them
+ * too, so what it reads from the holes is never used.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "render/store_decoder.h"
+#include "encode/stream_encoder.h"
+#include "base/pool.h"
+#include "encode/shard_file.h"
+#include "encode/shard_plan.h"
+#include "base/spill.h"
+#include "store/store_write.h"
+#include "codec/tile.h"
+
+#define WINDOW (GV_PAGE_TILES * GV_STEP + 1)  /* 4097: a page plus overlap */
+#define CHUNK_BYTES (16u << 20)               /* input rows read at once */
+#define PASS1_SHARE 0.15                      /* progress weight of pass 1 */
+
+void gv_encode_opts_default(struct gv_encode_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->target_psnr = GV_DEFAULT_PSNR;
+    o->max_rate = GV_DEFAULT_MAX_RATE;
+}
+
+double gv_encode_psnr0(uint64_t sse0, uint64_t samples0)
+{
+    double p = sse0 == 0 ? 99.0 :
+               10.0 * log10(65025.0 * (double)samples0 / (double)sse0);
+    return p > 99.0 ? 99.0 : p;
+}
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+struct encoder {
+    const struct gv_encode_opts *opts;
+    struct gv_geometry g;
+    int c;
+    struct gv_spill *spill;
+    uint64_t orig_base[GV_MAX_LEVELS], recon_base[GV_MAX_LEVELS];
+    struct gv_store_writer *writer;
+    struct gv_shard_plan plan;
+    int sharded;              /* plan is in use; shard replaces writer */
+    struct gv_shard_writer *shard;
+    struct gv_pool *pool;
+    struct gv_tile_workspace **ws;
+    int nws;
+    struct gv_encode_result *res;
+    struct gv_error *err;
+    /* pass 1 */
+    uint8_t *pending[GV_MAX_LEVELS];
+    int have_pending[GV_MAX_LEVELS];
+    uint32_t rows_out[GV_MAX_LEVELS];
+    uint8_t *reduced[GV_MAX_LEVELS];
+    /* pass 2: the current page */
+    int level;
+    uint32_t px, py;
+    uint8_t *window;          /* WINDOW x WINDOW x C */
+    uint32_t win_w, win_h;
+    uint8_t *parents[16];     /* decoded parent tiles, 4x4 around the page */
+    uint8_t *recon[GV_PAGE_SLOTS];
+    uint8_t *bufs[GV_PAGE_SLOTS];
+    size_t lens[GV_PAGE_SLOTS];
+    struct gv_tile_stats stats[GV_PAGE_SLOTS];
+    uint64_t canon_sse[GV_PAGE_SLOTS];
+    uint8_t *origs;           /* per-worker 513^2 x C original tile */
+    /* progress */
+    double work_total, work_done;
+};
+
+static void report(struct encoder *e, const char *phase, double fraction)
+{
+    if (!e->opts->progress)
+        return;
+    struct gv_encode_progress p = {
+        .fraction = fraction,
+        .source_pixels = (uint64_t)e->g.width * e->g.height,
+        .phase = phase,
+        .level = e->level,
+    };
+    e->opts->progress(e->opts->progress_ctx, &p);
+}
+
+/* ------------------------------------------------------------ pass 1 */
+
+static int push_row(struct encoder *e, int k, const uint8_t *row);
+
+/* Store row `rows_out[k]` of level k in the scratch file: all of it, or
+ * for a shard the runs of columns that its tiles of level k cover. */
+static int store_row(struct encoder *e, int k, const uint8_t *row)
+{
+    const struct gv_level *l = &e->g.level[k];
+    const size_t rb = (size_t)l->width * e->c;
+    const uint64_t at = e->orig_base[k] + (uint64_t)e->rows_out[k] * rb;
+    if (!e->sharded || k == e->g.root)
+        return gv_spill_write(e->spill, row, rb, at, e->err);
+    /* Row y is in tile row y/512, and is row 512 of the tile row above
+     * when y is a multiple of 512. */
+    const uint32_t y = e->rows_out[k], ta = y / GV_STEP;
+    const int above = y % GV_STEP == 0 && y > 0;
+    uint32_t run = 0;
+    int in_run = 0;
+    for (uint32_t tx = 0; tx <= l->tiles_x; tx++) {
+        int want = tx < l->tiles_x &&
+                   (gv_shard_plan_wants(&e->plan, &e->g, k, tx, ta) ||
+                    (above && gv_shard_plan_wants(&e->plan, &e->g, k, tx, ta - 1)));
+        if (want && !in_run) {
+            run = tx;
+            in_run = 1;
+        } else if (!want && in_run) {
+            /* Tiles run..tx-1 cover columns 512*run .. 512*(tx-1)+512. */
+            uint32_t x0 = run * GV_STEP, x1 = tx * GV_STEP + 1;
+            if (x1 > l->width)
+                x1 = l->width;
+            if (gv_spill_write(e->spill, row + (size_t)x0 * e->c,
+                               (size_t)(x1 - x0) * e->c, at + (uint64_t)x0 * e->c,
+                               e->err) < 0)
+                return -1;
+            in_run = 0;
+        }
+    }
+    return 0;
+}
+
+static int emit_reduced(struct encoder *e, int k, const uint8_t *r0,
+                        const uint8_t *r1)
+{
+    const struct gv_level *l = &e->g.level[k];
+    gv_box_reduce_row(r0, r1, l->width, e->c, e->reduced[k + 1]);
+    return push_row(e, k + 1, e->reduced[k + 1]);
+}
+
+/* Store row `rows_out[k]` of level k and feed the level above. */
+static int push_row(struct encoder *e, int k, const uint8_t *row)
+{
+    const struct gv_level *l = &e->g.level[k];
+    const size_t rb = (size_t)l->width * e->c;
+    if (store_row(e, k, row) < 0)
+        return -1;
+    e->rows_out[k]++;
+    if (k == e->g.root)
+        return 0;
+    if (!e->have_pending[k]) {
+        memcpy(e->pending[k], row, rb);
+        e->have_pending[k] = 1;
+        return 0;
+    }
+    e->have_pending[k] = 0;
+    return emit_reduced(e, k, e->pending[k], row);
+}
+
+static int pass1(struct encoder *e, struct gv_source *src)
+{
+    const struct gv_geometry *g = &e->g;
+    const size_t rb0 = (size_t)g->width * e->c;
+    uint32_t chunk = (uint32_t)(CHUNK_BYTES / rb0);
+    if (chunk < 1)
+        chunk = 1;
+    if (chunk > g->height)
+        chunk = g->height;
+    uint8_t *buf = malloc((size_t)chunk * rb0);
+    int rc = -1;
+    if (!buf) {
+        gv_fail(e->err, GV_ENOMEM, "encode: out of memory for input rows");
+        goto out;
+    }
+    for (int k = 0; k <= g->root; k++) {
+        size_t rb = (size_t)g->level[k].width * e->c;
+        e->pending[k] = malloc(rb);
+        e->reduced[k] = malloc(rb);
+        if (!e->pending[k] || !e->reduced[k]) {
+            gv_fail(e->err, GV_ENOMEM, "encode: out of memory for pyramid rows");
+            goto out;
+        }
+    }
+    for (uint32_t y = 0; y < g->height; y += chunk) {
+        uint32_t n = g->height - y < chunk ? g->height - y : chunk;
+        if (gv_source_read(src, n, buf, e->err) < 0)
+            goto out;
+        for (uint32_t r = 0; r < n; r++)
+            if (push_row(e, 0, buf + (size_t)r * rb0) < 0)
+                goto out;
+        report(e, "pyramid", PASS1_SHARE * (double)(y + n) / g->height);
+    }
+    /* Odd heights: the last row of a level pairs with itself. */
+    for (int k = 0; k < g->root; k++)
+        if (e->have_pending[k]) {
+            e->have_pending[k] = 0;
+            if (emit_reduced(e, k, e->pending[k], e->pending[k]) < 0)
+                goto out;
+        }
+    rc = 0;
+out:
+    free(buf);
+    return rc;
+}
+
+/* ------------------------------------------------------------ pass 2 */
+
+static uint64_t tile_seed(int level, uint32_t tx, uint32_t ty)
+{
+    return ((uint64_t)(unsigned)level << 56) ^ ((uint64_t)tx << 28) ^ ty ^
+           0x6a09e667f3bcc909ull;
+}
+
+static void encode_tile(void *ctx, size_t slot, int worker)
+{
+    struct encoder *e = ctx;
+    const struct gv_level *l = &e->g.level[e->level];
+    const int c = e->c;
+    const int i = (int)(slot % GV_PAGE_TILES), j = (int)(slot / GV_PAGE_TILES);
+    const uint32_t tx = e->px * GV_PAGE_TILES + (uint32_t)i;
+    const uint32_t ty = e->py * GV_PAGE_TILES + (uint32_t)j;
+    e->lens[slot] = 0;
+    if (tx >= l->tiles_x || ty >= l->tiles_y)
+        return;
+    if (e->sharded && !gv_shard_plan_wants(&e->plan, &e->g, e->level, tx, ty))
+        return;
+    /* Cut the clamp-padded original tile out of the page window. */
+    uint8_t *orig = e->origs + (size_t)worker * gv_tile_bytes(c);
+    const size_t row = (size_t)GV_TILE * c;
+    for (uint32_t v = 0; v < GV_TILE; v++) {
+        uint32_t wy = (uint32_t)j * GV_STEP + v;
+        if (wy >= e->win_h)
+            wy = e->win_h - 1;
+        const uint8_t *src = e->window + (size_t)wy * WINDOW * c;
+        uint8_t *dst = orig + v * row;
+        uint32_t x0 = (uint32_t)i * GV_STEP;
+        uint32_t avail = e->win_w - x0 < GV_TILE ? e->win_w - x0 : GV_TILE;
+        memcpy(dst, src + (size_t)x0 * c, (size_t)avail * c);
+        for (uint32_t u = avail; u < GV_TILE; u++)
+            memcpy(dst + u * c, src + (size_t)(e->win_w - 1) * c, (size_t)c);
+    }
+    const uint32_t valid_w = l->width - tx * GV_STEP < GV_TILE ?
+                             l->width - tx * GV_STEP : GV_TILE;
+    const uint32_t valid_h = l->height - ty * GV_STEP < GV_TILE ?
+                             l->height - ty * GV_STEP : GV_TILE;
+    const uint8_t *parent = e->parents[(j / 2) * 4 + i / 2];
+    const double target_mse = 65025.0 / pow(10.0, e->opts->target_psnr / 10.0);
+    struct gv_tile_params params = {
+        .target_mse = target_mse,
+        .max_rate = e->opts->max_rate,
+        .seed = tile_seed(e->level, tx, ty),
+        /* High-rate theory: D(R) ~ 2^(-2R), so dD/dR = -2 ln 2 D; at the
+         * target distortion one bit is worth 2 ln 2 D* of squared error. */
+        .lambda = e->opts->rd ? 2.0 * log(2.0) * target_mse : 0.0,
+    };
+    e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
+                                   (int)(ty & 1), c, valid_w, valid_h, &params,
+                                   e->recon[slot], e->bufs[slot], &e->stats[slot]);
+    if (e->level == 0) {
+        /* Level-0 PSNR over the pixels this tile is the source of. */
+        uint32_t cw = tx + 1 == l->tiles_x ? valid_w : GV_STEP;
+        uint32_t ch = ty + 1 == l->tiles_y ? valid_h : GV_STEP;
+        uint64_t sse = 0;
+        for (uint32_t v = 0; v < ch; v++) {
+            const uint8_t *a = orig + v * row, *b = e->recon[slot] + v * row;
+            for (uint32_t k = 0; k < cw * (uint32_t)c; k++) {
+                int d = a[k] - b[k];
+                sse += (uint64_t)(d * d);
+            }
+        }
+        e->canon_sse[slot] = sse;
+    }
+}
+
+static int load_window(struct encoder *e)
+{
+    const struct gv_level *l = &e->g.level[e->level];
+    const int c = e->c;
+    const uint32_t x0 = e->px * GV_PAGE_TILES * GV_STEP;
+    const uint32_t y0 = e->py * GV_PAGE_TILES * GV_STEP;
+    e->win_w = l->width - x0 < WINDOW ? l->width - x0 : WINDOW;
+    e->win_h = l->height - y0 < WINDOW ? l->height - y0 : WINDOW;
+    const size_t rb = (size_t)l->width * c;
+    for (uint32_t r = 0; r < e->win_h; r++)
+        if (gv_spill_read(e->spill, e->window + (size_t)r * WINDOW * c,
+                          (size_t)e->win_w * c,
+                          e->orig_base[e->level] + (uint64_t)(y0 + r) * rb +
+                              (uint64_t)x0 * c, e->err) < 0)
+            return -1;
+    return 0;
+}
+
+static int load_parents(struct encoder *e, const uint8_t *root_tile)
+{
+    const int pl = e->level + 1;
+    if (pl == e->g.root) {
+        for (int s = 0; s < 16; s++)
+            memcpy(e->parents[s], root_tile, gv_tile_bytes(e->c));
+        return 0;
+    }
+    const struct gv_level *l = &e->g.level[pl];
+    const size_t tb = gv_tile_bytes(e->c);
+    for (int s = 0; s < 16; s++) {
+        uint32_t ptx = e->px * 4 + (uint32_t)(s % 4), pty = e->py * 4 + (uint32_t)(s / 4);
+        if (ptx >= l->tiles_x || pty >= l->tiles_y)
+            continue;
+        if (gv_spill_read(e->spill, e->parents[s], tb,
+                          e->recon_base[pl] + ((uint64_t)pty * l->tiles_x + ptx) * tb,
+                          e->err) < 0)
+            return -1;
+    }
+    return 0;
+}
+
+static int store_recon(struct encoder *e)
+{
+    const struct gv_level *l = &e->g.level[e->level];
+    const size_t tb = gv_tile_bytes(e->c);
+    for (int s = 0; s < GV_PAGE_SLOTS; s++) {
+        uint32_t tx = e->px * GV_PAGE_TILES + (uint32_t)(s % GV_PAGE_TILES);
+        uint32_t ty = e->py * GV_PAGE_TILES + (uint32_t)(s / GV_PAGE_TILES);
+        if (tx >= l->tiles_x || ty >= l->tiles_y || !e->lens[s])
+            continue;
+        if (gv_spill_write(e->spill, e->recon[s], tb,
+                           e->recon_base[e->level] +
+                               ((uint64_t)ty * l->tiles_x + tx) * tb, e->err) < 0)
+            return -1;
+    }
+    return 0;
+}
+
+/* Hand the encoded tiles of the current page to the store or the shard. */
+static int emit_page(struct encoder *e)
+{
+    if (!e->sharded)
+        return gv_store_writer_page(e->writer, e->level, e->px, e->py,
+                                    (const uint8_t *const *)e->bufs, e->lens,
+                                    e->err);
+    for (int s = 0; s < GV_PAGE_SLOTS; s++) {
+        if (!e->lens[s])
+            continue;
+        uint32_t tx = e->px * GV_PAGE_TILES + (uint32_t)(s % GV_PAGE_TILES);
+        uint32_t ty = e->py * GV_PAGE_TILES + (uint32_t)(s / GV_PAGE_TILES);
+        if (gv_shard_writer_tile(e->shard, e->level, tx, ty, e->bufs[s], e->lens[s],
+                                 &e->stats[s], e->level == 0 ? e->canon_sse[s] : 0,
+                                 e->err) < 0)
+            return -1;
+    }
+    return 0;
+}
+
+static int pass2(struct encoder *e, const uint8_t *root_tile, uint64_t *sse0,
+                 uint64_t *samples0)
+{
+    for (int k = e->g.root - 1; k >= 0; k--) {
+        const struct gv_level *l = &e->g.level[k];
+        e->level = k;
+        for (uint32_t py = 0; py < l->pages_y; py++)
+            for (uint32_t px = 0; px < l->pages_x; px++) {
+                e->px = px;
+                e->py = py;
+                if (e->sharded && !gv_shard_plan_wants_page(&e->plan, &e->g, k, px, py))
+                    continue;
+                if (load_window(e) < 0 || load_parents(e, root_tile) < 0)
+                    return -1;
+                gv_pool_run(e->pool, encode_tile, e, GV_PAGE_SLOTS);
+                if (emit_page(e) < 0)
+                    return -1;
+                if (k > 0 && store_recon(e) < 0)
+                    return -1;
+                for (int s = 0; s < GV_PAGE_SLOTS; s++) {
+                    if (!e->lens[s])
+                        continue;
+                    e->res->tiles++;
+                    e->res->rate_tiles[e->stats[s].rate]++;
+                    e->res->level_bytes[k] += e->lens[s];
+                    double mse = (double)e->stats[s].sse / (double)e->stats[s].samples;
+                    if (!e->opts->rd &&
+                        mse > 65025.0 / pow(10.0, e->opts->target_psnr / 10.0))
+                        e->res->below_target++;
+                    e->work_done += (double)e->stats[s].samples;
+                    if (k == 0)
+                        *sse0 += e->canon_sse[s];
+                }
+                report(e, "encode", PASS1_SHARE + (1.0 - PASS1_SHARE) *
+                                        e->work_done / e->work_total);
+            }
+    }
+    if (e->g.root == 0) {
+        *sse0 = 0;  /* the root is level 0, stored losslessly */
+    }
+    *samples0 = (uint64_t)e->g.width * e->g.height * e->c;
+    return 0;
+}
+
+/* ------------------------------------------------------------ driver */
+
+static int setup(struct encoder *e)
+{
+    const struct gv_geometry *g = &e->g;
+    const int c = e->c;
+    uint64_t off = 0;
+    for (int k = 0; k <= g->root; k++) {
+        e->orig_base[k] = off;
+        off += (uint64_t)g->level[k].width * g->level[k].height * c;
+    }
+    e->work_total = 0;
+    for (int k = 1; k < g->root; k++) {
+        e->recon_base[k] = off;
+        off += (uint64_t)g->level[k].tiles_x * g->level[k].tiles_y * gv_tile_bytes(c);
+    }
+    for (int k = 0; k < g->root; k++)
+        e->work_total += (double)g->level[k].width * g->level[k].height * c;
+    if (e->sharded) {
+        e->work_total = (double)e->plan.samples;
+        /* Size the scratch file once: what the shard never writes stays a
+         * hole, so reading a whole page window cannot run past the end. */
+        static const uint8_t zero = 0;
+        if (off > 0 && gv_spill_write(e->spill, &zero, 1, off - 1, e->err) < 0)
+            return -1;
+    }
+    if (e->work_total <= 0)
+        e->work_total = 1;
+
+    int threads = e->opts->threads > 0 ? e->opts->threads : gv_cpu_count();
+    e->pool = gv_pool_new(threads);
+    if (!e->pool)
+        return gv_fail(e->err, GV_ENOMEM, "encode: cannot start %d threads", threads);
+    int n = gv_pool_size(e->pool);
+    e->ws = calloc((size_t)n, sizeof *e->ws);
+    e->nws = e->ws ? n : 0;
+    e->origs = malloc((size_t)n * gv_tile_bytes(c));
+    e->window = malloc((size_t)WINDOW * WINDOW * c);
+    if (!e->ws || !e->origs || !e->window)
+        return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
+    for (int i = 0; i < n; i++)
+        if (!(e->ws[i] = gv_tile_workspace_new()))
+            return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
+    size_t maxbuf = gv_tilebuf_size(e->opts->max_rate, c);
+    for (int s = 0; s < 16; s++)
+        if (!(e->parents[s] = malloc(gv_tile_bytes(c))))
+            return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
+    for (int s = 0; s < GV_PAGE_SLOTS; s++)
+        if (!(e->recon[s] = malloc(gv_tile_bytes(c))) ||
+            !(e->bufs[s] = malloc(maxbuf)))
+            return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
+    return 0;
+}
+
+static void teardown(struct encoder *e)
+{
+    gv_pool_free(e->pool);
+    gv_shard_plan_free(&e->plan);
+    for (int i = 0; i < e->nws; i++)
+        gv_tile_workspace_free(e->ws[i]);
+    free(e->ws);
+    free(e->origs);
+    free(e->window);
+    for (int s = 0; s < 16; s++)
+        free(e->parents[s]);
+    for (int s = 0; s < GV_PAGE_SLOTS; s++) {
+        free(e->recon[s]);
+        free(e->bufs[s]);
+    }
+    for (int k = 0; k < GV_MAX_LEVELS; k++) {
+        free(e->pending[k]);
+        free(e->reduced[k]);
+    }
+    gv_spill_free(e->spill);
+}
+
+int gv_encode(const char *const *inputs, int n, const char *output,
+              const struct gv_encode_opts *opts, struct gv_encode_result *res,
+              struct gv_error *err)
+{
+    struct encoder e;
+    memset(&e, 0, sizeof e);
+    memset(res, 0, sizeof *res);
+    e.opts = opts;
+    e.res = res;
+    e.err = err;
+    double t0 = now_seconds();
+    int rc = -1;
+    uint8_t *root = NULL, *root_tile = NULL;
+    struct gv_source *src = NULL;
+
+    if (opts->target_psnr <= 0 || opts->target_psnr > 99)
+        return gv_fail(err, GV_EINVAL, "encode: target PSNR %.2f dB is outside "
+                       "(0, 99]", opts->target_psnr);
+    if (opts->max_rate < 1 || opts->max_rate > GV_MAX_RATE)
+        return gv_fail(err, GV_EINVAL, "encode: rate cap %d is outside 1..%d",
+                       opts->max_rate, GV_MAX_RATE);
+
+    src = gv_source_open(inputs, n, &opts->source, &res->source, err);
+    if (!src)
+        return -1;
+    e.c = res->source.channels;
+    if (gv_geometry_init(&e.g, res->source.width, res->source.height, e.c) < 0) {
+        gv_fail(err, GV_EINVAL, "encode: unsupported size %ux%u",
+                res->source.width, res->source.height);
+        goto out;
+    }
+    res->geometry = e.g;
+
+    struct gv_header h;
+    memset(&h, 0, sizeof h);
+    h.width = e.g.width;
+    h.height = e.g.height;
+    h.channels = (uint8_t)e.c;
+    h.max_rate = (uint8_t)opts->max_rate;
+    h.src_bits = (uint8_t)res->source.src_bits;
+    h.src_float = (uint8_t)res->source.src_float;
+    h.tone = (uint8_t)res->source.tone;
+    h.target_mpsnr = (uint32_t)lround(opts->target_psnr * 1000.0);
+    if (opts->shard_count > 0) {
+        if (gv_shard_plan_init(&e.plan, &e.g, opts->shard_index,
+                               opts->shard_count, err) < 0)
+            goto out;
+        e.sharded = 1;
+        e.shard = gv_shard_writer_new(output, &h, opts->shard_index,
+                                      opts->shard_count,
+                                      opts->rd ? GV_SHARD_FLAG_RD : 0, err);
+        if (!e.shard)
+            goto out;
+    } else {
+        e.writer = gv_store_writer_new(output, &h, err);
+        if (!e.writer)
+            goto out;
+    }
+
+    char *outdir = NULL;
+    const char *tmpdir = opts->tmpdir;
+    if (!tmpdir) {
+        outdir = strdup(output);
+        char *slash = outdir ? strrchr(outdir, '/') : NULL;
+        if (slash)
+            *(slash == outdir ? slash + 1 : slash) = '\0';
+        tmpdir = slash ? outdir : ".";
+    }
+    e.spill = gv_spill_new(tmpdir, err);
+    free(outdir);
+    if (!e.spill || setup(&e) < 0)
+        goto out;
+    if (pass1(&e, src) < 0)
+        goto out;
+    gv_source_free(src);
+    src = NULL;
+
+    /* The root: read back the top level, store it, build its tile. */
+    const struct gv_level *rl = &e.g.level[e.g.root];
+    size_t rbytes = (size_t)rl->width * rl->height * e.c;
+    root = malloc(rbytes);
+    root_tile = malloc(gv_tile_bytes(e.c));
+    if (!root || !root_tile) {
+        gv_fail(err, GV_ENOMEM, "encode: out of memory for the root");
+        goto out;
+    }
+    if (gv_spill_read(e.spill, root, rbytes, e.orig_base[e.g.root], err) < 0)
+        goto out;
+    gv_root_tile(root, rl->width, rl->height, e.c, root_tile);
+    if (e.sharded && gv_shard_writer_root(e.shard, root, err) < 0)
+        goto out;
+
+    uint64_t sse0 = 0, samples0 = 1;
+    if (pass2(&e, root_tile, &sse0, &samples0) < 0)
+        goto out;
+    if (e.sharded) {
+        struct gv_shard_writer *sw = e.shard;
+        e.shard = NULL;
+        res->file_bytes = gv_shard_writer_bytes(sw);
+        if (gv_shard_writer_finish(sw, err) < 0)
+            goto out;
+        res->bpp = 8.0 * (double)res->file_bytes / ((double)e.g.width * e.g.height);
+        report(&e, "done", 1.0);
+        rc = 0;
+        goto out;
+    }
+    if (gv_store_writer_root(e.writer, root, err) < 0)
+        goto out;
+    res->psnr0 = gv_encode_psnr0(sse0, samples0);
+    gv_store_writer_set_psnr(e.writer, (uint32_t)lround(res->psnr0 * 1000.0));
+    struct gv_store_writer *w = e.writer;
+    e.writer = NULL;
+    if (gv_store_writer_finish(w, err) < 0)
+        goto out;
+    {
+        /* Read back what was published: the header and index must verify. */
+        struct gv_store *check = gv_store_open(output, err);
+        if (!check)
+            goto out;
+        res->file_bytes = gv_store_info(check)->header.file_size;
+        gv_store_close(check);
+    }
+    res->bpp = 8.0 * (double)res->file_bytes / ((double)e.g.width * e.g.height);
+    report(&e, "done", 1.0);
+    rc = 0;
+out:
+    res->seconds = now_seconds() - t0;
+    gv_source_free(src);
+    gv_store_writer_abort(e.writer);
+    gv_shard_writer_abort(e.shard);
+    teardown(&e);
+    free(root);
+    free(root_tile);
+    return rc;
+}

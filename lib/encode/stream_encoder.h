@@ -1,0 +1,89 @@
+/*
+ * stream_encoder.h - `gigaview encode`: input images to a store file, streaming.
+ *
+ * Pass 1 reads the input once, top to bottom, and builds the box pyramid
+ * row by row into a scratch file.  Pass 2 encodes level by level from the
+ * root down, one page (8x8 tiles) at a time, its 64 tiles in parallel on
+ * the thread pool, each predicted from its decoded parent (closed loop).
+ * Peak memory is bounded by a page's working set plus a few rows of the
+ * widest level: it does not grow with the image's area (docs/FORMAT.md,
+ * "Encoder memory").
+ *
+ * A sharded encode (shard_count > 0) runs both passes over the whole
+ * input but keeps and encodes only the tiles of its shard (shard_plan.h)
+ * and writes them to a shard file (shard_file.h); gv_shard_merge
+ * (shard_merge.h) then writes the store, byte for byte the one a single
+ * encode writes.
+ */
+#ifndef GV_STREAM_ENCODER_H
+#define GV_STREAM_ENCODER_H
+
+#include <stdint.h>
+
+#include "base/error.h"
+#include "store/geometry.h"
+#include "encode/source.h"
+
+#define GV_DEFAULT_PSNR 36.0     /* dB per tile: ~2 bpp on photographs */
+#define GV_DEFAULT_MAX_RATE 10   /* 1024 codevectors */
+
+struct gv_encode_progress {
+    double fraction;          /* 0..1 of the whole encode */
+    uint64_t source_pixels;   /* width * height */
+    const char *phase;        /* "pyramid" or "encode" */
+    int level;                /* level being encoded (pass 2) */
+};
+
+struct gv_encode_opts {
+    double target_psnr;       /* per-tile PSNR target in dB */
+    int max_rate;             /* cap on the index width r (1..12) */
+    int rd;                   /* 1: rate-distortion mode (see FORMAT.md 8):
+                               * spend bits where they buy the most error,
+                               * at the slope of the target PSNR */
+    int threads;              /* workers; 0 = every CPU */
+    int shard_index;          /* with shard_count > 0: write shard */
+    int shard_count;          /* shard_index of shard_count (0-based) to
+                               * `output` as a shard file, not a store */
+    const char *tmpdir;       /* scratch directory; NULL = output's */
+    struct gv_source_opts source;
+    /* Called from the encoding thread after each page and every few rows
+     * of pass 1; may be NULL. */
+    void (*progress)(void *ctx, const struct gv_encode_progress *p);
+    void *progress_ctx;
+};
+
+struct gv_encode_result {
+    struct gv_source_info source;
+    struct gv_geometry geometry;
+    uint64_t file_bytes;
+    double bpp;               /* file bits per source pixel */
+    double psnr0;             /* level 0 against the (8-bit) input, dB */
+    uint64_t tiles;
+    uint64_t rate_tiles[GV_MAX_RATE + 1]; /* tiles per chosen rate */
+    uint64_t level_bytes[GV_MAX_LEVELS];
+    uint64_t below_target;    /* tiles at the cap that missed the target */
+    double seconds;
+};
+
+/* The level-0 PSNR in dB that a store header records, from the squared
+ * error summed over level 0 and the sample count (99 when lossless).
+ * The encoder and the shard merge share it so that both write the same
+ * header. */
+double gv_encode_psnr0(uint64_t sse0, uint64_t samples0);
+
+/* Fill *o with the defaults. */
+void gv_encode_opts_default(struct gv_encode_opts *o);
+
+/*
+ * Encode `n` inputs (one image, a mosaic, or a synth: pattern; see
+ * source.h) into the store file `output` (or the shard file, see
+ * shard_count).  Returns 0 and fills *res, or -1 with *err filled; on
+ * failure no file exists under `output` (an existing one is left as it
+ * was).  For a shard, *res counts the shard's tiles, file_bytes is the
+ * shard file's size and psnr0 is 0.
+ */
+int gv_encode(const char *const *inputs, int n, const char *output,
+              const struct gv_encode_opts *opts, struct gv_encode_result *res,
+              struct gv_error *err);
+
+#endif

@@ -1,0 +1,80 @@
+/*
+ * gpu_cache.h - decoded tiles on the GPU, pulled recursively and kept in an
+ * LRU cache bounded in bytes (section 7.5).
+ *
+ * Asking for tile T of level k decodes it on the GPU from its tile buffer
+ * and its parent's texture; a parent that is not cached is obtained the
+ * same way first, up to the root tile, which is uploaded from the root
+ * image.  Tile buffers come from a callback the caller supplies, so the
+ * cache works the same over HTTP and over a local store.  Every texture
+ * (514x514 RGBA8UI plus its 257x257 mip, GV_GPU_TILE_BYTES) counts against
+ * the budget; the least recently used ones are deleted first, and the tile
+ * just decoded is always kept, so any budget works (a small one merely
+ * re-pulls ancestors more often).  Not thread-safe: one cache per thread.
+ */
+#ifndef GV_GPU_CACHE_H
+#define GV_GPU_CACHE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+#include "store/geometry.h"
+#include "gpu/gpu_decode.h"
+
+/* GPU memory of one decoded tile: 514^2 + 257^2 texels of 4 bytes. */
+#define GV_GPU_TILE_BYTES ((size_t)(514 * 514 + 257 * 257) * 4)
+
+/*
+ * Fetch the tile buffer of tile (tx,ty) of `level` (0 <= level < root).
+ * On success set *buf (malloc'ed; the cache frees it) and *len and return
+ * 0; otherwise return -1 with *err filled.  The buffer is checked with
+ * gv_tilebuf_check before it reaches the GPU.
+ */
+typedef int (*gv_tile_fetch_fn)(void *ctx, int level, uint32_t tx, uint32_t ty,
+                                uint8_t **buf, size_t *len,
+                                struct gv_error *err);
+
+struct gv_gpu_cache;
+
+struct gv_gpu_cache_stats {
+    uint64_t hits;        /* requests answered from the cache */
+    uint64_t decodes;     /* tiles decoded on the GPU (the root upload included) */
+    uint64_t fetches;     /* calls to the fetch callback */
+    uint64_t evictions;   /* textures deleted to stay within the budget */
+    size_t bytes, peak_bytes;
+    size_t tiles;         /* textures held now */
+};
+
+/*
+ * New cache over decoder d (borrowed) for an image of geometry g (copied).
+ * root: the root level image (root_w x root_h x g->channels, copied into
+ * the padded root tile).  budget: bytes of textures to keep.
+ */
+struct gv_gpu_cache *gv_gpu_cache_new(struct gv_gpu_decoder *d,
+                                      const struct gv_geometry *g,
+                                      const uint8_t *root, uint32_t root_w,
+                                      uint32_t root_h, size_t budget,
+                                      gv_tile_fetch_fn fetch, void *ctx,
+                                      struct gv_error *err);
+
+/* Delete every texture and free.  NULL does nothing. */
+void gv_gpu_cache_free(struct gv_gpu_cache *c);
+
+/*
+ * The texture of tile (tx,ty) of `level` (the root level: tile (0,0)),
+ * decoding it and its missing ancestors as needed.  *handle stays valid
+ * until the next call on c.  Returns 0, or -1 (no such tile, fetch or
+ * decode failure; the cache stays usable).
+ */
+int gv_gpu_cache_get(struct gv_gpu_cache *c, int level, uint32_t tx,
+                     uint32_t ty, uint32_t *handle, struct gv_error *err);
+
+/* gv_gpu_cache_get, then read mip 0 back into pixels (513x513xC). */
+int gv_gpu_cache_read(struct gv_gpu_cache *c, int level, uint32_t tx,
+                      uint32_t ty, uint8_t *pixels, struct gv_error *err);
+
+void gv_gpu_cache_stats(const struct gv_gpu_cache *c,
+                        struct gv_gpu_cache_stats *st);
+
+#endif

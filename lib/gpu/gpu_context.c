@@ -1,0 +1,275 @@
+/*
+ * gpu_context.c - EGL context creation and the GL-owner thread (gpu.h).
+ *
+ * Attempts are recorded as they fail and reported together only when all
+ * of them fail (mpv's egl_helpers does the same): on a machine with a GPU
+ * the first attempt wins and nothing is logged as an error.
+ */
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <EGL/egl.h>
+#include <EGL/eglext.h>
+#include <GLES3/gl31.h>
+
+#include "gpu/gpu.h"
+
+struct gv_gpu {
+    pthread_t thread;
+    pthread_mutex_t lock, call_lock;
+    pthread_cond_t wake, done;
+    int started, ok, stop, has_job, job_done;
+    int (*job)(void *, struct gv_error *);
+    void *job_arg;
+    struct gv_error *job_err;
+    int job_rc;
+    EGLDisplay dpy;
+    EGLContext ctx;
+    struct gv_gpu_info info;
+    struct gv_error open_err;
+};
+
+__attribute__((format(printf, 3, 4))) static void
+note(char *log, size_t cap, const char *fmt, ...)
+{
+    size_t n = strlen(log);
+    if (n + 2 >= cap)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(log + n, cap - n, fmt, ap);
+    va_end(ap);
+}
+
+/* Try ES 3.2, ES 3.1, then GL 4.3 core on an initialized display. */
+static int try_contexts(struct gv_gpu *g, const char *platform, char *log,
+                        size_t cap)
+{
+    static const struct {
+        EGLenum api;
+        int major, minor, es;
+        const char *name;
+    } want[] = {
+        {EGL_OPENGL_ES_API, 3, 2, 1, "OpenGL ES 3.2"},
+        {EGL_OPENGL_ES_API, 3, 1, 1, "OpenGL ES 3.1"},
+        {EGL_OPENGL_API, 4, 3, 0, "OpenGL 4.3 core"},
+    };
+    const char *ext = eglQueryString(g->dpy, EGL_EXTENSIONS);
+    int no_config = ext && strstr(ext, "EGL_KHR_no_config_context");
+    int surfaceless = ext && strstr(ext, "EGL_KHR_surfaceless_context");
+    if (!surfaceless) {
+        note(log, cap, "%s: no EGL_KHR_surfaceless_context; ", platform);
+        return -1;
+    }
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
+        if (!eglBindAPI(want[i].api)) {
+            note(log, cap, "%s: %s: eglBindAPI failed (0x%x); ", platform,
+                 want[i].name, (unsigned)eglGetError());
+            continue;
+        }
+        EGLConfig cfg = (EGLConfig)0;
+        if (!no_config) {
+            EGLint attrs[] = {EGL_RENDERABLE_TYPE,
+                              want[i].es ? EGL_OPENGL_ES3_BIT : EGL_OPENGL_BIT,
+                              EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_NONE};
+            EGLint n = 0;
+            if (!eglChooseConfig(g->dpy, attrs, &cfg, 1, &n) || n < 1) {
+                note(log, cap, "%s: %s: no config (0x%x); ", platform,
+                     want[i].name, (unsigned)eglGetError());
+                continue;
+            }
+        }
+        EGLint cattrs[] = {EGL_CONTEXT_MAJOR_VERSION, want[i].major,
+                           EGL_CONTEXT_MINOR_VERSION, want[i].minor,
+                           want[i].es ? EGL_NONE : EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                           EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+        g->ctx = eglCreateContext(g->dpy, cfg, EGL_NO_CONTEXT, cattrs);
+        if (g->ctx == EGL_NO_CONTEXT) {
+            note(log, cap, "%s: %s: eglCreateContext failed (0x%x); ", platform,
+                 want[i].name, (unsigned)eglGetError());
+            continue;
+        }
+        if (!eglMakeCurrent(g->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, g->ctx)) {
+            note(log, cap, "%s: %s: eglMakeCurrent failed (0x%x); ", platform,
+                 want[i].name, (unsigned)eglGetError());
+            eglDestroyContext(g->dpy, g->ctx);
+            g->ctx = EGL_NO_CONTEXT;
+            continue;
+        }
+        struct gv_gpu_info *in = &g->info;
+        snprintf(in->platform, sizeof in->platform, "%s", platform);
+        snprintf(in->api, sizeof in->api, "%s", want[i].name);
+        snprintf(in->vendor, sizeof in->vendor, "%s", (const char *)glGetString(GL_VENDOR));
+        snprintf(in->renderer, sizeof in->renderer, "%s", (const char *)glGetString(GL_RENDERER));
+        snprintf(in->version, sizeof in->version, "%s", (const char *)glGetString(GL_VERSION));
+        in->es = want[i].es;
+        in->ssbo = 1;   /* ES 3.1+ and GL 4.3 both have SSBOs */
+        return 0;
+    }
+    return -1;
+}
+
+static int try_display(struct gv_gpu *g, EGLDisplay dpy, const char *platform,
+                       char *log, size_t cap)
+{
+    if (dpy == EGL_NO_DISPLAY) {
+        note(log, cap, "%s: no display (0x%x); ", platform, (unsigned)eglGetError());
+        return -1;
+    }
+    EGLint major, minor;
+    if (!eglInitialize(dpy, &major, &minor)) {
+        note(log, cap, "%s: eglInitialize failed (0x%x); ", platform,
+             (unsigned)eglGetError());
+        return -1;
+    }
+    g->dpy = dpy;
+    if (try_contexts(g, platform, log, cap) == 0)
+        return 0;
+    eglTerminate(dpy);
+    g->dpy = EGL_NO_DISPLAY;
+    return -1;
+}
+
+static int create_context(struct gv_gpu *g)
+{
+    char log[1024] = "";
+    const char *cext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+    PFNEGLGETPLATFORMDISPLAYEXTPROC get_platform_display =
+        (PFNEGLGETPLATFORMDISPLAYEXTPROC)eglGetProcAddress("eglGetPlatformDisplayEXT");
+    if (cext && get_platform_display && strstr(cext, "EGL_EXT_platform_device")) {
+        PFNEGLQUERYDEVICESEXTPROC query_devices =
+            (PFNEGLQUERYDEVICESEXTPROC)eglGetProcAddress("eglQueryDevicesEXT");
+        EGLDeviceEXT devs[16];
+        EGLint n = 0;
+        if (query_devices && query_devices(16, devs, &n))
+            for (EGLint i = 0; i < n; i++)
+                if (try_display(g, get_platform_display(EGL_PLATFORM_DEVICE_EXT, devs[i], NULL),
+                                "device", log, sizeof log) == 0)
+                    return 0;
+    }
+    if (cext && get_platform_display && strstr(cext, "EGL_MESA_platform_surfaceless") &&
+        try_display(g, get_platform_display(EGL_PLATFORM_SURFACELESS_MESA,
+                                            EGL_DEFAULT_DISPLAY, NULL),
+                    "surfaceless", log, sizeof log) == 0)
+        return 0;
+    if (try_display(g, eglGetDisplay(EGL_DEFAULT_DISPLAY), "default", log,
+                    sizeof log) == 0)
+        return 0;
+    gv_fail(&g->open_err, GV_EFORMAT, "gpu: no usable EGL context: %s", log);
+    return -1;
+}
+
+static void *gl_thread(void *arg)
+{
+    struct gv_gpu *g = arg;
+    int ok = create_context(g) == 0;
+    pthread_mutex_lock(&g->lock);
+    g->started = 1;
+    g->ok = ok;
+    pthread_cond_broadcast(&g->done);
+    while (ok) {
+        while (!g->has_job && !g->stop)
+            pthread_cond_wait(&g->wake, &g->lock);
+        if (g->stop)
+            break;
+        g->has_job = 0;
+        pthread_mutex_unlock(&g->lock);
+        int rc = g->job(g->job_arg, g->job_err);
+        pthread_mutex_lock(&g->lock);
+        g->job_rc = rc;
+        g->job_done = 1;
+        pthread_cond_broadcast(&g->done);
+    }
+    pthread_mutex_unlock(&g->lock);
+    if (g->ctx != EGL_NO_CONTEXT) {
+        eglMakeCurrent(g->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+        eglDestroyContext(g->dpy, g->ctx);
+    }
+    /* The display is not terminated: an EGL display is one per process and
+     * platform, shared with any other context on it, so terminating it
+     * here would pull the rug from under them.  (It also keeps Mesa from
+     * unloading its driver, whose terminate path leaks.) */
+    eglReleaseThread();
+    return NULL;
+}
+
+/* Wait for the GL thread to end and free everything. */
+static void join_and_free(struct gv_gpu *g)
+{
+    pthread_join(g->thread, NULL);
+    pthread_mutex_destroy(&g->lock);
+    pthread_mutex_destroy(&g->call_lock);
+    pthread_cond_destroy(&g->wake);
+    pthread_cond_destroy(&g->done);
+    free(g);
+}
+
+struct gv_gpu *gv_gpu_open(struct gv_error *err)
+{
+    struct gv_gpu *g = calloc(1, sizeof *g);
+    if (!g) {
+        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        return NULL;
+    }
+    g->dpy = EGL_NO_DISPLAY;
+    g->ctx = EGL_NO_CONTEXT;
+    pthread_mutex_init(&g->lock, NULL);
+    pthread_mutex_init(&g->call_lock, NULL);
+    pthread_cond_init(&g->wake, NULL);
+    pthread_cond_init(&g->done, NULL);
+    if (pthread_create(&g->thread, NULL, gl_thread, g) != 0) {
+        gv_fail(err, GV_ENOMEM, "gpu: cannot start the GL thread");
+        free(g);
+        return NULL;
+    }
+    pthread_mutex_lock(&g->lock);
+    while (!g->started)
+        pthread_cond_wait(&g->done, &g->lock);
+    int ok = g->ok;
+    pthread_mutex_unlock(&g->lock);
+    if (!ok) {
+        if (err)
+            *err = g->open_err;
+        join_and_free(g);
+        return NULL;
+    }
+    return g;
+}
+
+void gv_gpu_close(struct gv_gpu *g)
+{
+    if (!g)
+        return;
+    pthread_mutex_lock(&g->lock);
+    g->stop = 1;
+    pthread_cond_broadcast(&g->wake);
+    pthread_mutex_unlock(&g->lock);
+    join_and_free(g);
+}
+
+const struct gv_gpu_info *gv_gpu_info(const struct gv_gpu *g)
+{
+    return &g->info;
+}
+
+int gv_gpu_call(struct gv_gpu *g, int (*fn)(void *arg, struct gv_error *err),
+                void *arg, struct gv_error *err)
+{
+    pthread_mutex_lock(&g->call_lock);
+    pthread_mutex_lock(&g->lock);
+    g->job = fn;
+    g->job_arg = arg;
+    g->job_err = err;
+    g->job_done = 0;
+    g->has_job = 1;
+    pthread_cond_broadcast(&g->wake);
+    while (!g->job_done)
+        pthread_cond_wait(&g->done, &g->lock);
+    int rc = g->job_rc;
+    pthread_mutex_unlock(&g->lock);
+    pthread_mutex_unlock(&g->call_lock);
+    return rc;
+}

@@ -1,0 +1,397 @@
+/*
+ * gpu_decode.c - the GPU tile decoder (gpu_decode.h).
+ *
+ * Two passes per tile, as section 7.5 describes: the parent quarter is
+ * copied into mip 1, and the decode shader renders mip 0 from the parent
+ * and the tile buffer (a shader storage buffer of 32-bit words).  Both
+ * draw one viewport-covering triangle into a framebuffer bound to the
+ * target mip level.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <GLES3/gl31.h>
+
+#include "store/geometry.h"
+#include "gpu/gpu_decode.h"
+#include "shaders.h"
+#include "store/store_format.h"
+#include "codec/tile.h"
+#include "codec/tile_rans.h"
+
+#define WORDS_WIDTH 1024   /* texels per row of the WebGL2 words texture */
+
+struct gv_gpu_decoder {
+    struct gv_gpu *gpu;
+    int channels;
+    enum gv_gpu_path path;
+    GLuint decode, quarter, rans, fbo, vao, ssbo, indices;
+    GLuint words_tex, indices_tex;     /* WebGL2 path */
+    GLint dec_parent, dec_quadrant, dec_channels, q_parent, q_quadrant;
+    GLint rans_rate, rans_tables;
+    GLint dec_words, dec_words_width, dec_indices;
+    uint16_t *cpu_indices;             /* WebGL2 path: rANS decoded here */
+};
+
+struct job {
+    struct gv_gpu_decoder *d;
+    const uint8_t *buf;
+    size_t len;
+    const uint8_t *pixels_in;
+    uint8_t *pixels_out;
+    uint32_t parent, handle;
+    int qx, qy, mip;
+};
+
+static int gl_failed(struct gv_error *err, const char *what)
+{
+    GLenum e = glGetError();
+    if (e == GL_NO_ERROR)
+        return 0;
+    return gv_fail(err, GV_EIO, "gpu: %s failed (GL error 0x%x)", what, e);
+}
+
+static int setup(void *arg, struct gv_error *err)
+{
+    struct gv_gpu_decoder *d = ((struct job *)arg)->d;
+    char *listing = NULL;
+    const int webgl2 = d->path == GV_GPU_PATH_WEBGL2;
+    unsigned (*program)(const struct gv_gpu *, const char *, const char *,
+                        char **, struct gv_error *) =
+        webgl2 ? gv_gpu_program_es300 : gv_gpu_program;
+    d->decode = program(d->gpu, gv_shader_fullscreen_vert,
+                        gv_shader_tile_decode_frag, &listing, err);
+    if (d->decode)
+        d->quarter = program(d->gpu, gv_shader_fullscreen_vert,
+                             gv_shader_quarter_copy_frag, &listing, err);
+    if (d->quarter && !webgl2)
+        d->rans = gv_gpu_compute_program(d->gpu, gv_shader_rans_decode_comp,
+                                         &listing, err);
+    if (!d->decode || !d->quarter || (!webgl2 && !d->rans)) {
+        /* Our own shader failing is a bug or a broken driver: show why. */
+        if (listing)
+            fprintf(stderr, "%s", listing);
+        free(listing);
+        return -1;
+    }
+    d->dec_parent = glGetUniformLocation(d->decode, "u_parent");
+    d->dec_quadrant = glGetUniformLocation(d->decode, "u_quadrant");
+    d->dec_channels = glGetUniformLocation(d->decode, "u_channels");
+    d->q_parent = glGetUniformLocation(d->quarter, "u_parent");
+    d->q_quadrant = glGetUniformLocation(d->quarter, "u_quadrant");
+    glGenFramebuffers(1, &d->fbo);
+    glGenVertexArrays(1, &d->vao);
+    if (webgl2) {
+        d->dec_words = glGetUniformLocation(d->decode, "u_words");
+        d->dec_words_width = glGetUniformLocation(d->decode, "u_words_width");
+        d->dec_indices = glGetUniformLocation(d->decode, "u_indices");
+        glGenTextures(1, &d->words_tex);
+        glGenTextures(1, &d->indices_tex);
+        glBindTexture(GL_TEXTURE_2D, d->indices_tex);
+        glTexStorage2D(GL_TEXTURE_2D, 1, GL_R16UI, GV_BLOCKS, GV_BLOCKS);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        d->cpu_indices = malloc(GV_NBLOCKS * sizeof *d->cpu_indices);
+        if (!d->cpu_indices)
+            return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        return gl_failed(err, "decoder set-up");
+    }
+    d->rans_rate = glGetUniformLocation(d->rans, "u_rate");
+    d->rans_tables = glGetUniformLocation(d->rans, "u_tables");
+    glGenBuffers(1, &d->ssbo);
+    glGenBuffers(1, &d->indices);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, GV_NBLOCKS * sizeof(GLuint), NULL,
+                 GL_DYNAMIC_COPY);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->indices);
+    return gl_failed(err, "decoder set-up");
+}
+
+struct gv_gpu_decoder *gv_gpu_decoder_new(struct gv_gpu *g, int channels,
+                                          struct gv_error *err)
+{
+    return gv_gpu_decoder_new_path(g, channels, GV_GPU_PATH_SSBO, err);
+}
+
+struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
+                                               enum gv_gpu_path path,
+                                               struct gv_error *err)
+{
+    struct gv_gpu_decoder *d = calloc(1, sizeof *d);
+    if (!d) {
+        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        return NULL;
+    }
+    d->gpu = g;
+    d->channels = channels;
+    d->path = path;
+    struct job j = {.d = d};
+    if (gv_gpu_call(g, setup, &j, err) < 0) {
+        gv_gpu_decoder_free(d);
+        return NULL;
+    }
+    return d;
+}
+
+static int teardown(void *arg, struct gv_error *err)
+{
+    (void)err;
+    struct gv_gpu_decoder *d = ((struct job *)arg)->d;
+    if (d->decode)
+        glDeleteProgram(d->decode);
+    if (d->quarter)
+        glDeleteProgram(d->quarter);
+    if (d->rans)
+        glDeleteProgram(d->rans);
+    if (d->indices)
+        glDeleteBuffers(1, &d->indices);
+    if (d->words_tex)
+        glDeleteTextures(1, &d->words_tex);
+    if (d->indices_tex)
+        glDeleteTextures(1, &d->indices_tex);
+    if (d->fbo)
+        glDeleteFramebuffers(1, &d->fbo);
+    if (d->vao)
+        glDeleteVertexArrays(1, &d->vao);
+    if (d->ssbo)
+        glDeleteBuffers(1, &d->ssbo);
+    return 0;
+}
+
+void gv_gpu_decoder_free(struct gv_gpu_decoder *d)
+{
+    if (!d)
+        return;
+    struct job j = {.d = d};
+    gv_gpu_call(d->gpu, teardown, &j, NULL);
+    free(d->cpu_indices);
+    free(d);
+}
+
+/* GL halves mip sizes rounding down, so a 513-texel level 0 would have a
+ * 256-texel level 1; like the thesis (eq. 7.1) the texture is 514 wide so
+ * that level 1 holds the 257 texels of the parent quarter.  Column and row
+ * 513 of level 0 are never written or read. */
+#define TEX_SIZE (GV_TILE + 1)
+
+static GLuint new_tile_texture(void)
+{
+    GLuint tex;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glTexStorage2D(GL_TEXTURE_2D, 2, GL_RGBA8UI, TEX_SIZE, TEX_SIZE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 1);
+    return tex;
+}
+
+/* Expand C-channel rows to RGBA (gray replicated, alpha 255). */
+static void to_rgba(const uint8_t *src, int channels, size_t n, uint8_t *dst)
+{
+    for (size_t i = 0; i < n; i++) {
+        for (int c = 0; c < 3; c++)
+            dst[4 * i + c] = src[i * channels + (channels == 3 ? c : 0)];
+        dst[4 * i + 3] = 255;
+    }
+}
+
+static int upload(void *arg, struct gv_error *err)
+{
+    struct job *j = arg;
+    const size_t n = (size_t)GV_TILE * GV_TILE;
+    uint8_t *rgba = malloc(n * 4);
+    if (!rgba)
+        return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+    to_rgba(j->pixels_in, j->d->channels, n, rgba);
+    GLuint tex = new_tile_texture();
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GV_TILE, GV_TILE, GL_RGBA_INTEGER,
+                    GL_UNSIGNED_BYTE, rgba);
+    /* Mip 1 of an uploaded (root) tile: its own 2x2 box reduction. */
+    uint8_t *half = malloc((size_t)257 * 257 * 4);
+    if (half) {
+        gv_box_reduce(rgba, GV_TILE, GV_TILE, 4, half);
+        glTexSubImage2D(GL_TEXTURE_2D, 1, 0, 0, 257, 257, GL_RGBA_INTEGER,
+                        GL_UNSIGNED_BYTE, half);
+    }
+    free(half);
+    free(rgba);
+    j->handle = tex;
+    return gl_failed(err, "tile upload");
+}
+
+int gv_gpu_upload_tile(struct gv_gpu_decoder *d, const uint8_t *pixels,
+                       uint32_t *handle, struct gv_error *err)
+{
+    struct job j = {.d = d, .pixels_in = pixels};
+    if (gv_gpu_call(d->gpu, upload, &j, err) < 0)
+        return -1;
+    *handle = j.handle;
+    return 0;
+}
+
+static void draw_into(GLuint fbo, GLuint tex, int mip, int size)
+{
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                           tex, mip);
+    glViewport(0, 0, size, size);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+}
+
+/* WebGL2 path: the tile buffer as an R32UI texture (texture unit 1) and,
+ * for an entropy-coded tile, its indices decoded here as R16UI (unit 2). */
+static int upload_webgl2(struct gv_gpu_decoder *d, const uint8_t *buf,
+                         size_t len, struct gv_error *err)
+{
+    const size_t words = len / 4;
+    const size_t rows = (words + WORDS_WIDTH - 1) / WORDS_WIDTH;
+    uint32_t *padded = calloc(rows * WORDS_WIDTH, sizeof *padded);
+    if (!padded)
+        return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+    for (size_t i = 0; i < words; i++)
+        padded[i] = gv_get32(buf + 4 * i);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, d->words_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_R32UI, WORDS_WIDTH, (GLsizei)rows, 0,
+                 GL_RED_INTEGER, GL_UNSIGNED_INT, padded);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    free(padded);
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D, d->indices_tex);
+    if (buf[0] & GV_TILE_ENTROPY) {
+        if (gv_rans_unpack(buf, len, buf[0] & 0x0f, d->channels, d->cpu_indices,
+                           err) < 0)
+            return -1;
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 2);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GV_BLOCKS, GV_BLOCKS,
+                        GL_RED_INTEGER, GL_UNSIGNED_SHORT, d->cpu_indices);
+    }
+    return 0;
+}
+
+static int decode(void *arg, struct gv_error *err)
+{
+    struct job *j = arg;
+    struct gv_gpu_decoder *d = j->d;
+    GLuint tex = new_tile_texture();
+    glBindVertexArray(d->vao);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, j->parent);
+    /* Pass 1: the parent quarter into mip 1. */
+    glUseProgram(d->quarter);
+    glUniform1i(d->q_parent, 0);
+    glUniform2i(d->q_quadrant, j->qx, j->qy);
+    draw_into(d->fbo, tex, 1, 257);
+    /* Pass 2: prediction plus residual into mip 0. */
+    if (d->path == GV_GPU_PATH_WEBGL2) {
+        if (upload_webgl2(d, j->buf, j->len, err) < 0) {
+            glDeleteTextures(1, &tex);
+            return -1;
+        }
+        glUseProgram(d->decode);
+        glUniform1i(d->dec_parent, 0);
+        glUniform1i(d->dec_words, 1);
+        glUniform1i(d->dec_words_width, WORDS_WIDTH);
+        glUniform1i(d->dec_indices, 2);
+        glUniform2i(d->dec_quadrant, j->qx, j->qy);
+        glUniform1i(d->dec_channels, d->channels);
+        draw_into(d->fbo, tex, 0, GV_TILE);
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glActiveTexture(GL_TEXTURE0);
+        j->handle = tex;
+        if (gl_failed(err, "tile decode") < 0) {
+            glDeleteTextures(1, &tex);
+            return -1;
+        }
+        return 0;
+    }
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->ssbo);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)j->len, j->buf, GL_STREAM_DRAW);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->indices);
+    if (j->buf[0] & GV_TILE_ENTROPY) {
+        /* Entropy-coded indices: one compute invocation per row of blocks
+         * decodes them into the index buffer first. */
+        const int rate = j->buf[0] & 0x0f;
+        glUseProgram(d->rans);
+        glUniform1i(d->rans_rate, rate);
+        glUniform1i(d->rans_tables, (GLint)gv_rans_tables_offset(rate, d->channels));
+        glDispatchCompute((GV_BLOCKS + 63) / 64, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    glUseProgram(d->decode);
+    glUniform1i(d->dec_parent, 0);
+    glUniform2i(d->dec_quadrant, j->qx, j->qy);
+    glUniform1i(d->dec_channels, d->channels);
+    draw_into(d->fbo, tex, 0, GV_TILE);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    j->handle = tex;
+    if (gl_failed(err, "tile decode") < 0) {
+        glDeleteTextures(1, &tex);
+        return -1;
+    }
+    return 0;
+}
+
+int gv_gpu_decode_tile(struct gv_gpu_decoder *d, const uint8_t *buf,
+                       size_t len, uint32_t parent, int qx, int qy,
+                       uint32_t *handle, struct gv_error *err)
+{
+    if (gv_tilebuf_check(buf, len, d->channels, err) < 0)
+        return -1;
+    struct job j = {.d = d, .buf = buf, .len = len, .parent = parent,
+                    .qx = qx, .qy = qy};
+    if (gv_gpu_call(d->gpu, decode, &j, err) < 0)
+        return -1;
+    *handle = j.handle;
+    return 0;
+}
+
+static int readback(void *arg, struct gv_error *err)
+{
+    struct job *j = arg;
+    const int size = j->mip ? 257 : GV_TILE;
+    const size_t n = (size_t)size * size;
+    GLuint *px = malloc(n * 4 * sizeof *px);
+    if (!px)
+        return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+    glBindFramebuffer(GL_FRAMEBUFFER, j->d->fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                           j->handle, j->mip);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    /* RGBA_INTEGER + UNSIGNED_INT is the combination ES 3.0 guarantees for
+     * unsigned integer colour buffers. */
+    glReadPixels(0, 0, size, size, GL_RGBA_INTEGER, GL_UNSIGNED_INT, px);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    const int c = j->d->channels;
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < c; k++)
+            j->pixels_out[i * c + k] = (uint8_t)px[4 * i + k];
+    free(px);
+    return gl_failed(err, "tile read-back");
+}
+
+int gv_gpu_read_tile(struct gv_gpu_decoder *d, uint32_t handle, int mip,
+                     uint8_t *pixels, struct gv_error *err)
+{
+    struct job j = {.d = d, .handle = handle, .mip = mip, .pixels_out = pixels};
+    return gv_gpu_call(d->gpu, readback, &j, err);
+}
+
+static int release(void *arg, struct gv_error *err)
+{
+    (void)err;
+    GLuint tex = ((struct job *)arg)->handle;
+    glDeleteTextures(1, &tex);
+    return 0;
+}
+
+void gv_gpu_release(struct gv_gpu_decoder *d, uint32_t handle)
+{
+    struct job j = {.d = d, .handle = handle};
+    gv_gpu_call(d->gpu, release, &j, NULL);
+}

@@ -1,0 +1,71 @@
+/*
+ * imageio.h - the C face of the OpenImageIO bridge (imageio.cpp, the only
+ * C++ in gigaview).
+ *
+ * Reading is split into a cheap probe (open: format and size from the
+ * header) and sequential scanline reads in the file's own sample type
+ * widened to one of three types, so that the caller applies the documented
+ * 8-bit rule itself.  Writing takes a whole 8-bit image and writes it
+ * atomically: a temporary name in the same directory, then rename.
+ */
+#ifndef GV_IMAGEIO_H
+#define GV_IMAGEIO_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum gv_sample { GV_SAMPLE_U8, GV_SAMPLE_U16, GV_SAMPLE_F32 };
+
+struct gv_image_info {
+    uint32_t width, height;
+    int channels;            /* channels in the file */
+    int bits;                /* bits per sample in the file */
+    enum gv_sample sample;   /* what gv_image_read delivers */
+    char format[32];         /* OpenImageIO format name, e.g. "jpeg" */
+};
+
+struct gv_image_in;
+
+/* Open and probe `path`.  Rejects images whose width*height exceeds
+ * max_pixels or whose sizes do not fit in 31 bits.  Returns NULL and fills
+ * *err on failure. */
+struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
+                                  struct gv_image_info *info,
+                                  struct gv_error *err);
+
+/* Read the next `rows` scanlines, all channels, as info->sample values
+ * (1, 2 or 4 bytes each) into out.  Returns 0, or -1 on a decode error or a
+ * truncated file. */
+int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,
+                  struct gv_error *err);
+
+/* Close.  gv_image_close(NULL) does nothing. */
+void gv_image_close(struct gv_image_in *in);
+
+/* Write an 8-bit image (channels 1 or 3, rows packed) to `path`, format by
+ * extension (.png, .tif/.tiff, .jpg, .webp ...).  The file appears under
+ * its final name only when complete. */
+int gv_image_write(const char *path, uint32_t width, uint32_t height,
+                   int channels, const uint8_t *pixels, struct gv_error *err);
+
+/*
+ * Encode an 8-bit image (channels 1 or 3) in memory as `format`: "png",
+ * "jpg", "webp" or "tif".  quality (1..100) applies to jpg and webp.  *out is
+ * malloc'ed (caller frees with free()).  Thread-safe.  Returns 0, or -1
+ * (GV_EFORMAT for a format this build cannot write).
+ */
+int gv_image_encode(const char *format, uint32_t width, uint32_t height,
+                    int channels, const uint8_t *pixels, int quality,
+                    uint8_t **out, size_t *len, struct gv_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

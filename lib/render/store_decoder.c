@@ -1,0 +1,250 @@
+/*
+ * store_decoder.c - recursive tile decoding with an LRU cache (see store_decoder.h).
+ *
+ * The cache is a small array scanned linearly: it holds decoded tiles of a
+ * few hundred KiB each, so even a 1 GiB budget is only ~1300 entries and a
+ * scan costs far less than one tile decode.  A page read for one tile is
+ * kept while its neighbours are decoded.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/store_decoder.h"
+#include "codec/tile.h"
+
+#define MIN_ENTRIES 8   /* enough for a tile and its whole parent chain */
+
+struct cache_entry {
+    int level;
+    uint32_t tx, ty;
+    uint64_t stamp;      /* 0: empty */
+    uint8_t *pixels;
+};
+
+struct gv_decoder {
+    const struct gv_store *store;
+    const struct gv_store_info *info;
+    int channels;
+    size_t nentries;
+    struct cache_entry *entries;
+    uint64_t clock;
+    uint8_t *page;       /* last page read */
+    size_t page_len;
+    int page_level;
+    uint32_t page_px, page_py;
+};
+
+struct gv_decoder *gv_decoder_new(const struct gv_store *s, size_t cache_bytes)
+{
+    struct gv_decoder *d = calloc(1, sizeof *d);
+    if (!d)
+        return NULL;
+    d->store = s;
+    d->info = gv_store_info(s);
+    d->channels = d->info->geometry.channels;
+    size_t n = cache_bytes / gv_tile_bytes(d->channels);
+    if (n < MIN_ENTRIES)
+        n = MIN_ENTRIES;
+    d->nentries = n;
+    d->entries = calloc(n, sizeof *d->entries);
+    if (!d->entries) {
+        free(d);
+        return NULL;
+    }
+    d->page_level = -1;
+    return d;
+}
+
+void gv_decoder_free(struct gv_decoder *d)
+{
+    if (!d)
+        return;
+    for (size_t i = 0; i < d->nentries; i++)
+        free(d->entries[i].pixels);
+    free(d->entries);
+    free(d->page);
+    free(d);
+}
+
+const struct gv_store *gv_decoder_store(const struct gv_decoder *d)
+{
+    return d->store;
+}
+
+void gv_root_tile(const uint8_t *root, uint32_t w, uint32_t h, int channels,
+                  uint8_t *tile)
+{
+    const size_t row = (size_t)GV_TILE * channels;
+    for (uint32_t y = 0; y < GV_TILE; y++) {
+        const uint8_t *src = root + (size_t)(y < h ? y : h - 1) * w * channels;
+        uint8_t *dst = tile + y * row;
+        for (uint32_t x = 0; x < GV_TILE; x++)
+            memcpy(dst + x * channels, src + (size_t)(x < w ? x : w - 1) * channels,
+                   (size_t)channels);
+    }
+}
+
+static struct cache_entry *lookup(struct gv_decoder *d, int level, uint32_t tx,
+                                  uint32_t ty)
+{
+    for (size_t i = 0; i < d->nentries; i++) {
+        struct cache_entry *e = &d->entries[i];
+        if (e->stamp && e->level == level && e->tx == tx && e->ty == ty) {
+            e->stamp = ++d->clock;
+            return e;
+        }
+    }
+    return NULL;
+}
+
+/* A free or least recently used slot, excluding `keep` (the parent being
+ * decoded from). */
+static struct cache_entry *victim(struct gv_decoder *d,
+                                  const struct cache_entry *keep)
+{
+    struct cache_entry *best = NULL;
+    for (size_t i = 0; i < d->nentries; i++) {
+        struct cache_entry *e = &d->entries[i];
+        if (e == keep)
+            continue;
+        if (!e->stamp)
+            return e;
+        if (!best || e->stamp < best->stamp)
+            best = e;
+    }
+    return best;
+}
+
+static int load_page(struct gv_decoder *d, int level, uint32_t px, uint32_t py,
+                     struct gv_error *err)
+{
+    if (d->page && d->page_level == level && d->page_px == px && d->page_py == py)
+        return 0;
+    free(d->page);
+    d->page = NULL;
+    d->page_level = -1;
+    if (gv_store_read_page(d->store, level, px, py, &d->page, &d->page_len, err) < 0)
+        return -1;
+    d->page_level = level;
+    d->page_px = px;
+    d->page_py = py;
+    return 0;
+}
+
+static struct cache_entry *decode_entry(struct gv_decoder *d, int level,
+                                        uint32_t tx, uint32_t ty,
+                                        struct gv_error *err)
+{
+    const struct gv_geometry *g = &d->info->geometry;
+    struct cache_entry *e = lookup(d, level, tx, ty);
+    if (e)
+        return e;
+    if (level == g->root) {
+        if (tx || ty) {
+            gv_fail(err, GV_ENOTFOUND, "decode: no root tile %u,%u", tx, ty);
+            return NULL;
+        }
+        e = victim(d, NULL);
+        if (!e->pixels && !(e->pixels = malloc(gv_tile_bytes(d->channels)))) {
+            gv_fail(err, GV_ENOMEM, "decode: out of memory");
+            return NULL;
+        }
+        uint32_t w, h;
+        const uint8_t *root = gv_store_root(d->store, 0, &w, &h);
+        gv_root_tile(root, w, h, d->channels, e->pixels);
+    } else {
+        if (level < 0 || level > g->root || tx >= g->level[level].tiles_x ||
+            ty >= g->level[level].tiles_y) {
+            gv_fail(err, GV_ENOTFOUND, "decode: no tile %d/%u/%u", level, tx, ty);
+            return NULL;
+        }
+        struct cache_entry *parent = decode_entry(d, level + 1, tx / 2, ty / 2, err);
+        if (!parent)
+            return NULL;
+        if (load_page(d, level, tx / GV_PAGE_TILES, ty / GV_PAGE_TILES, err) < 0)
+            return NULL;
+        const uint8_t *buf;
+        size_t len;
+        if (gv_page_tile(d->page, d->page_len, d->channels, (int)(tx % GV_PAGE_TILES),
+                         (int)(ty % GV_PAGE_TILES), &buf, &len, err) < 0)
+            return NULL;
+        e = victim(d, parent);
+        if (!e->pixels && !(e->pixels = malloc(gv_tile_bytes(d->channels)))) {
+            gv_fail(err, GV_ENOMEM, "decode: out of memory");
+            return NULL;
+        }
+        e->stamp = 0;
+        if (gv_tile_decode(buf, len, d->channels, parent->pixels, (int)(tx & 1),
+                           (int)(ty & 1), e->pixels, err) < 0)
+            return NULL;
+    }
+    e->level = level;
+    e->tx = tx;
+    e->ty = ty;
+    e->stamp = ++d->clock;
+    return e;
+}
+
+int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
+                    const uint8_t **pixels, struct gv_error *err)
+{
+    struct cache_entry *e = decode_entry(d, level, tx, ty, err);
+    if (!e)
+        return -1;
+    *pixels = e->pixels;
+    return 0;
+}
+
+int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
+                     uint32_t w, uint32_t h, uint8_t *out,
+                     struct gv_error *err)
+{
+    const struct gv_geometry *g = &d->info->geometry;
+    const int c = d->channels;
+    if (level < 0 || level >= g->root + g->root_mips)
+        return gv_fail(err, GV_EINVAL, "decode: no level %d (levels 0..%d)",
+                       level, g->root + g->root_mips - 1);
+    uint32_t lw, lh;
+    const uint8_t *mip = NULL;
+    if (level >= g->root) {
+        mip = gv_store_root(d->store, level - g->root, &lw, &lh);
+    } else {
+        lw = g->level[level].width;
+        lh = g->level[level].height;
+    }
+    if (w == 0 || h == 0 || x >= lw || y >= lh || w > lw - x || h > lh - y)
+        return gv_fail(err, GV_EINVAL, "decode: region %u,%u %ux%u is outside "
+                       "level %d (%ux%u)", x, y, w, h, level, lw, lh);
+    const size_t orow = (size_t)w * c;
+    if (mip) {
+        for (uint32_t r = 0; r < h; r++)
+            memcpy(out + r * orow, mip + ((size_t)(y + r) * lw + x) * c, orow);
+        return 0;
+    }
+    const struct gv_level *l = &g->level[level];
+    uint32_t t0x = x / GV_STEP, t1x = (x + w - 1) / GV_STEP;
+    uint32_t t0y = y / GV_STEP, t1y = (y + h - 1) / GV_STEP;
+    if (t1x >= l->tiles_x) t1x = l->tiles_x - 1;
+    if (t1y >= l->tiles_y) t1y = l->tiles_y - 1;
+    if (t0x > t1x) t0x = t1x;
+    if (t0y > t1y) t0y = t1y;
+    for (uint32_t ty = t0y; ty <= t1y; ty++)
+        for (uint32_t tx = t0x; tx <= t1x; tx++) {
+            const uint8_t *px;
+            if (gv_decoder_tile(d, level, tx, ty, &px, err) < 0)
+                return -1;
+            /* Pixels this tile is the source of, clipped to the region. */
+            uint32_t sx0 = tx * GV_STEP, sy0 = ty * GV_STEP;
+            uint32_t sx1 = tx + 1 == l->tiles_x ? lw : sx0 + GV_STEP;
+            uint32_t sy1 = ty + 1 == l->tiles_y ? lh : sy0 + GV_STEP;
+            uint32_t ax = x > sx0 ? x : sx0, bx = x + w < sx1 ? x + w : sx1;
+            uint32_t ay = y > sy0 ? y : sy0, by = y + h < sy1 ? y + h : sy1;
+            if (ax >= bx || ay >= by)
+                continue;
+            for (uint32_t yy = ay; yy < by; yy++)
+                memcpy(out + (size_t)(yy - y) * orow + (size_t)(ax - x) * c,
+                       px + ((size_t)(yy - sy0) * GV_TILE + (ax - sx0)) * c,
+                       (size_t)(bx - ax) * c);
+        }
+    return 0;
+}

@@ -1,0 +1,55 @@
+/*
+ * store_decoder.h - the CPU reference decoder over a store: tiles at any level,
+ * with their ancestors pulled recursively (section 7.5), and regions.
+ *
+ * Decoded tiles are kept in an LRU cache bounded in bytes, so decoding the
+ * tiles of a region in order touches each ancestor once.  A decoder is not
+ * thread-safe: use one per thread (they may share the store).
+ */
+#ifndef GV_STORE_DECODER_H
+#define GV_STORE_DECODER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+#include "store/store_read.h"
+
+struct gv_decoder;
+
+/* New decoder over s (borrowed; it must outlive the decoder), caching at
+ * most cache_bytes of decoded tiles (at least a few tiles are always
+ * kept).  Returns NULL on allocation failure. */
+struct gv_decoder *gv_decoder_new(const struct gv_store *s, size_t cache_bytes);
+
+/* Free.  NULL does nothing. */
+void gv_decoder_free(struct gv_decoder *d);
+
+/* The store d reads (as given to gv_decoder_new). */
+const struct gv_store *gv_decoder_store(const struct gv_decoder *d);
+
+/*
+ * Decode tile (tx,ty) of `level` (0 <= level < root; the root level is the
+ * single tile (0,0), the root image clamp-padded to 513x513).  *pixels
+ * points at 513x513xC bytes owned by the decoder, valid until the next
+ * call.  Returns 0 or -1 (missing tile, corrupt page or tile).
+ */
+int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
+                    const uint8_t **pixels, struct gv_error *err);
+
+/*
+ * Decode the region [x, x+w) x [y, y+h) of `level` into out (w*h*C bytes,
+ * rows packed).  Levels root..root+root_mips-1 read the stored root mips.
+ * Pixel (x,y) of a tiled level comes from tile min(x/512, tiles_x-1) (same
+ * for y), so each pixel has exactly one source.  Returns 0 or -1 (region
+ * outside the level, or a decoding failure).
+ */
+int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
+                     uint32_t w, uint32_t h, uint8_t *out,
+                     struct gv_error *err);
+
+/* Build the padded root tile (513x513xC) from a w x h root image. */
+void gv_root_tile(const uint8_t *root, uint32_t w, uint32_t h, int channels,
+                  uint8_t *tile);
+
+#endif

@@ -1,0 +1,56 @@
+/*
+ * geometry.h - the shape of a gigaview pyramid: levels, tiles and pages.
+ *
+ * Level 0 is the full image; level k+1 is the 2x2 box average of level k
+ * (ceil halving).  The first level that fits in 512x512 is the root.  Every
+ * level below the root is cut into 513x513 tiles on a 512-pixel step (one
+ * pixel of overlap to the right and below) and 8x8 tiles make a page.
+ * Everything here is pure arithmetic on the header fields; see
+ * docs/FORMAT.md for the definitions.
+ */
+#ifndef GV_GEOMETRY_H
+#define GV_GEOMETRY_H
+
+#include <stdint.h>
+
+#include "codec/tile_layout.h"
+
+#define GV_STEP 512          /* distance between tile origins (GV_TILE - 1) */
+#define GV_PAGE_TILES 8      /* tiles per page edge: 4096^2 pixels a page */
+#define GV_ROOT_MAX 512      /* root level fits in this many pixels a side */
+#define GV_MAX_LEVELS 40     /* 2^32 wide images need 24; room to spare */
+#define GV_MAX_DIM 0x7fffffffu /* width and height must stay below 2^31 */
+
+struct gv_level {
+    uint32_t width, height;   /* pixels of this level */
+    uint32_t tiles_x, tiles_y;/* tile grid (0 for the root level) */
+    uint32_t pages_x, pages_y;/* page grid */
+    uint64_t first_page;      /* index of its first page in the page index */
+};
+
+struct gv_geometry {
+    uint32_t width, height;
+    int channels;             /* 1 (gray) or 3 (RGB) */
+    int root;                 /* index of the root level: levels 0..root */
+    int root_mips;            /* mip levels stored for the root, root..1x1 */
+    uint64_t pages;           /* total pages of levels 0..root-1 */
+    struct gv_level level[GV_MAX_LEVELS];
+};
+
+/*
+ * Fill *g for an image of width x height pixels with the given channel
+ * count.  Returns 0, or -1 if a dimension is 0 or above GV_MAX_DIM.
+ * Page numbering runs from the level just below the root down to level 0
+ * (the order the encoder writes them), row-major inside a level.
+ */
+int gv_geometry_init(struct gv_geometry *g, uint32_t width, uint32_t height,
+                     int channels);
+
+/* Number of tiles along an edge of `pixels` pixels: max(1, ceil((n-1)/512)). */
+uint32_t gv_tiles_for(uint32_t pixels);
+
+/* Index of page (px,py) of `level` in the page index. */
+uint64_t gv_page_number(const struct gv_geometry *g, int level, uint32_t px,
+                        uint32_t py);
+
+#endif

@@ -1,0 +1,196 @@
+/*
+ * store_format.c - header (de)serialization, the root codec and the
+ * box filter that defines every pyramid level (see store_format.h and
+ * docs/FORMAT.md).
+ */
+#include <stdlib.h>
+
+#include <webp/decode.h>
+#include <webp/encode.h>
+
+#include "base/error.h"
+#include "store/geometry.h"
+#include "store/store_format.h"
+
+void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE])
+{
+    memset(out, 0, GV_HEADER_SIZE);
+    memcpy(out, GV_MAGIC, 8);
+    gv_put16(out + 8, h->version);
+    gv_put16(out + 10, GV_HEADER_SIZE);
+    gv_put32(out + 12, h->width);
+    gv_put32(out + 16, h->height);
+    out[20] = h->channels;
+    out[21] = h->root;
+    out[22] = h->root_mips;
+    out[23] = h->max_rate;
+    gv_put16(out + 24, GV_TILE);
+    gv_put16(out + 26, GV_STEP);
+    out[28] = GV_PAGE_TILES;
+    out[29] = h->src_bits;
+    out[30] = h->src_float;
+    out[31] = h->tone;
+    gv_put32(out + 32, h->target_mpsnr);
+    gv_put32(out + 36, h->psnr0_mdb);
+    gv_put64(out + 40, h->root_offset);
+    gv_put64(out + 48, h->root_size);
+    gv_put64(out + 56, h->index_offset);
+    gv_put64(out + 64, h->pages);
+    gv_put64(out + 72, h->file_size);
+    gv_put32(out + 124, gv_crc32(0, out, 124));
+}
+
+int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
+                     struct gv_error *err)
+{
+    if (memcmp(in, GV_MAGIC, 8) != 0)
+        return gv_fail(err, GV_EFORMAT, "store: not a gigaview store (bad magic)");
+    h->version = gv_get16(in + 8);
+    if (h->version != GV_VERSION)
+        return gv_fail(err, GV_EFORMAT, "store: format version %u is not "
+                       "supported (this build reads version %d)",
+                       h->version, GV_VERSION);
+    if (gv_get32(in + 124) != gv_crc32(0, in, 124))
+        return gv_fail(err, GV_ECORRUPT, "store: header CRC mismatch");
+    if (gv_get16(in + 10) != GV_HEADER_SIZE || gv_get16(in + 24) != GV_TILE ||
+        gv_get16(in + 26) != GV_STEP || in[28] != GV_PAGE_TILES)
+        return gv_fail(err, GV_ECORRUPT, "store: unexpected header or tile "
+                       "layout constants");
+    h->width = gv_get32(in + 12);
+    h->height = gv_get32(in + 16);
+    h->channels = in[20];
+    h->root = in[21];
+    h->root_mips = in[22];
+    h->max_rate = in[23];
+    h->src_bits = in[29];
+    h->src_float = in[30];
+    h->tone = in[31];
+    h->target_mpsnr = gv_get32(in + 32);
+    h->psnr0_mdb = gv_get32(in + 36);
+    h->root_offset = gv_get64(in + 40);
+    h->root_size = gv_get64(in + 48);
+    h->index_offset = gv_get64(in + 56);
+    h->pages = gv_get64(in + 64);
+    h->file_size = gv_get64(in + 72);
+    return 0;
+}
+
+uint64_t gv_root_pixels_size(uint32_t w, uint32_t h, int channels)
+{
+    uint64_t total = 0;
+    for (;;) {
+        total += (uint64_t)w * h * (unsigned)channels;
+        if (w == 1 && h == 1)
+            break;
+        w = (w + 1) / 2;
+        h = (h + 1) / 2;
+    }
+    return total;
+}
+
+void gv_box_reduce_row(const uint8_t *r0, const uint8_t *r1, uint32_t sw,
+                       int channels, uint8_t *dst)
+{
+    const uint32_t dw = (sw + 1) / 2;
+    for (uint32_t x = 0; x < dw; x++) {
+        uint32_t a = 2 * x, b = 2 * x + 1 < sw ? 2 * x + 1 : 2 * x;
+        for (int c = 0; c < channels; c++) {
+            unsigned s = r0[a * channels + c] + r0[b * channels + c] +
+                         r1[a * channels + c] + r1[b * channels + c] + 2;
+            dst[x * channels + c] = (uint8_t)(s >> 2);
+        }
+    }
+}
+
+void gv_box_reduce(const uint8_t *src, uint32_t sw, uint32_t sh, int channels,
+                   uint8_t *dst)
+{
+    const uint32_t dw = (sw + 1) / 2, dh = (sh + 1) / 2;
+    const size_t srow = (size_t)sw * channels, drow = (size_t)dw * channels;
+    for (uint32_t y = 0; y < dh; y++) {
+        const uint8_t *r0 = src + (size_t)(2 * y) * srow;
+        const uint8_t *r1 = 2 * y + 1 < sh ? r0 + srow : r0;
+        gv_box_reduce_row(r0, r1, sw, channels, dst + (size_t)y * drow);
+    }
+}
+
+/* The root as RGB rows: gray roots are widened to three equal channels
+ * (WebP has no gray mode; its lossless transforms make the copies nearly
+ * free). */
+int gv_root_pack(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
+                 uint8_t **out, size_t *len, struct gv_error *err)
+{
+    const uint8_t *rgb = pixels;
+    uint8_t *wide = NULL;
+    if (channels == 1) {
+        wide = malloc((size_t)w * h * 3);
+        if (!wide)
+            return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
+        for (size_t i = 0; i < (size_t)w * h; i++)
+            wide[3 * i] = wide[3 * i + 1] = wide[3 * i + 2] = pixels[i];
+        rgb = wide;
+    }
+    WebPConfig cfg;
+    WebPPicture pic;
+    WebPMemoryWriter wr;
+    int ok = WebPConfigInit(&cfg) && WebPConfigLosslessPreset(&cfg, GV_ROOT_EFFORT) &&
+             WebPPictureInit(&pic);
+    if (!ok) {
+        free(wide);
+        return gv_fail(err, GV_EFORMAT, "store: libwebp version mismatch");
+    }
+    cfg.exact = 1;
+    pic.use_argb = 1;
+    pic.width = (int)w;
+    pic.height = (int)h;
+    WebPMemoryWriterInit(&wr);
+    pic.writer = WebPMemoryWrite;
+    pic.custom_ptr = &wr;
+    ok = WebPPictureImportRGB(&pic, rgb, (int)w * 3) && WebPEncode(&cfg, &pic);
+    WebPPictureFree(&pic);
+    free(wide);
+    if (!ok) {
+        WebPMemoryWriterClear(&wr);
+        return gv_fail(err, GV_ENOMEM, "store: WebP lossless encoding of the "
+                       "root failed (%d)", pic.error_code);
+    }
+    *out = wr.mem;   /* allocated by libwebp with malloc; freed with free() */
+    *len = wr.size;
+    return 0;
+}
+
+int gv_root_unpack(const uint8_t *in, size_t len, uint32_t w, uint32_t h,
+                   int channels, uint8_t *out, struct gv_error *err)
+{
+    int fw = 0, fh = 0;
+    if (!WebPGetInfo(in, len, &fw, &fh) || fw != (int)w || fh != (int)h)
+        return gv_fail(err, GV_ECORRUPT, "store: the root is not a %ux%u "
+                       "WebP image", w, h);
+    const size_t n = (size_t)w * h * 3;
+    uint8_t *rgb = channels == 3 ? out : malloc(n);
+    if (!rgb)
+        return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
+    if (!WebPDecodeRGBInto(in, len, rgb, n, (int)w * 3)) {
+        if (rgb != out)
+            free(rgb);
+        return gv_fail(err, GV_ECORRUPT, "store: the root does not decode");
+    }
+    if (channels == 1) {
+        for (size_t i = 0; i < (size_t)w * h; i++)
+            out[i] = rgb[3 * i];
+        free(rgb);
+    }
+    return 0;
+}
+
+void gv_root_build_mips(uint8_t *buf, uint32_t w, uint32_t h, int channels)
+{
+    uint8_t *cur = buf;
+    while (w > 1 || h > 1) {
+        uint8_t *next = cur + (size_t)w * h * channels;
+        gv_box_reduce(cur, w, h, channels, next);
+        cur = next;
+        w = (w + 1) / 2;
+        h = (h + 1) / 2;
+    }
+}

@@ -1,0 +1,309 @@
+/*
+ * store_read.c - open, validate and read store files (see store_read.h).
+ *
+ * Every size and offset read from the file is checked against the file's
+ * real length before use, with 64-bit arithmetic, so a hostile file can
+ * make open fail but never makes the reader touch memory it does not own.
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "store/store_read.h"
+#include "codec/tile.h"
+
+struct gv_store {
+    int fd;
+    struct gv_store_info info;
+    uint8_t *root;            /* all root mips */
+    uint64_t root_mip_off[GV_MAX_LEVELS + 2];
+    uint8_t *index;           /* pages * 16 bytes */
+    char *path;
+};
+
+static int read_exact(int fd, void *buf, size_t len, uint64_t off,
+                      const char *what, struct gv_error *err)
+{
+    uint8_t *p = buf;
+    while (len > 0) {
+        ssize_t n = pread(fd, p, len, (off_t)off);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            return gv_fail_errno(err, errno, "store: reading %s", what);
+        }
+        if (n == 0)
+            return gv_fail(err, GV_ECORRUPT, "store: %s is truncated", what);
+        p += n;
+        len -= (size_t)n;
+        off += (uint64_t)n;
+    }
+    return 0;
+}
+
+static int check_header(struct gv_store *s, uint64_t file_size,
+                        struct gv_error *err)
+{
+    const struct gv_header *h = &s->info.header;
+    struct gv_geometry *g = &s->info.geometry;
+    if (gv_geometry_init(g, h->width, h->height, h->channels) < 0)
+        return gv_fail(err, GV_ECORRUPT, "store: bad dimensions %ux%u or "
+                       "channels %u", h->width, h->height, h->channels);
+    if (g->root != h->root || g->root_mips != h->root_mips)
+        return gv_fail(err, GV_ECORRUPT, "store: level count does not match "
+                       "the dimensions");
+    if (h->pages != g->pages)
+        return gv_fail(err, GV_ECORRUPT, "store: page count %llu, expected "
+                       "%llu", (unsigned long long)h->pages,
+                       (unsigned long long)g->pages);
+    if (h->file_size != file_size)
+        return gv_fail(err, GV_ECORRUPT, "store: file is %llu bytes, header "
+                       "says %llu (truncated?)", (unsigned long long)file_size,
+                       (unsigned long long)h->file_size);
+    /* Lossless WebP never needs twice the raw samples. */
+    if (h->root_size < 5 || h->root_size > 2 * GV_ROOT_MAX_BYTES + 4096 ||
+        h->root_offset < GV_HEADER_SIZE ||
+        h->root_offset > file_size || h->root_size > file_size - h->root_offset)
+        return gv_fail(err, GV_ECORRUPT, "store: root section out of bounds");
+    uint64_t index_bytes = h->pages * GV_INDEX_ENTRY + 4;
+    if (h->index_offset < GV_HEADER_SIZE || h->index_offset > file_size ||
+        index_bytes > file_size - h->index_offset)
+        return gv_fail(err, GV_ECORRUPT, "store: page index out of bounds");
+    return 0;
+}
+
+struct gv_store *gv_store_open(const char *path, struct gv_error *err)
+{
+    struct gv_store *s = calloc(1, sizeof *s);
+    if (!s) {
+        gv_fail(err, GV_ENOMEM, "store: out of memory");
+        return NULL;
+    }
+    s->fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (s->fd < 0) {
+        int e = errno;
+        gv_fail_errno(err, e, "store: %s", path);
+        if (e == ENOENT && err)
+            err->code = GV_ENOTFOUND;
+        goto fail;
+    }
+    struct stat st;
+    if (fstat(s->fd, &st) < 0) {
+        gv_fail_errno(err, errno, "store: %s", path);
+        goto fail;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        gv_fail(err, GV_EFORMAT, "store: %s is not a regular file", path);
+        goto fail;
+    }
+    uint8_t hb[GV_HEADER_SIZE];
+    if ((uint64_t)st.st_size < GV_HEADER_SIZE) {
+        gv_fail(err, GV_EFORMAT, "store: %s is too short to be a store", path);
+        goto fail;
+    }
+    if (read_exact(s->fd, hb, sizeof hb, 0, "header", err) < 0 ||
+        gv_header_unpack(hb, &s->info.header, err) < 0 ||
+        check_header(s, (uint64_t)st.st_size, err) < 0)
+        goto fail;
+
+    const struct gv_header *h = &s->info.header;
+    const struct gv_geometry *g = &s->info.geometry;
+    uint32_t w = g->level[g->root].width, hh = g->level[g->root].height;
+    uint8_t *packed = malloc(h->root_size);
+    s->root = malloc(gv_root_pixels_size(w, hh, g->channels));
+    if (!packed || !s->root) {
+        free(packed);
+        gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
+        goto fail;
+    }
+    if (read_exact(s->fd, packed, h->root_size, h->root_offset, "root", err) < 0 ||
+        (gv_crc32(0, packed, h->root_size - 4) != gv_get32(packed + h->root_size - 4) &&
+         gv_fail(err, GV_ECORRUPT, "store: root CRC mismatch")) ||
+        gv_root_unpack(packed, h->root_size - 4, w, hh, g->channels, s->root, err) < 0) {
+        free(packed);
+        goto fail;
+    }
+    free(packed);
+    gv_root_build_mips(s->root, w, hh, g->channels);
+    uint64_t off = 0;
+    for (int m = 0; m < g->root_mips; m++) {
+        s->root_mip_off[m] = off;
+        off += (uint64_t)w * hh * g->channels;
+        w = (w + 1) / 2;
+        hh = (hh + 1) / 2;
+    }
+
+    size_t ib = (size_t)h->pages * GV_INDEX_ENTRY + 4;
+    s->index = malloc(ib);
+    if (!s->index) {
+        gv_fail(err, GV_ENOMEM, "store: out of memory for the page index");
+        goto fail;
+    }
+    if (read_exact(s->fd, s->index, ib, h->index_offset, "page index", err) < 0)
+        goto fail;
+    if (gv_crc32(0, s->index, ib - 4) != gv_get32(s->index + ib - 4)) {
+        gv_fail(err, GV_ECORRUPT, "store: page index CRC mismatch");
+        goto fail;
+    }
+    for (uint64_t p = 0; p < h->pages; p++) {
+        const uint8_t *e = s->index + p * GV_INDEX_ENTRY;
+        uint64_t po = gv_get64(e);
+        uint32_t ps = gv_get32(e + 8);
+        if (po < GV_HEADER_SIZE || po > h->file_size ||
+            ps > h->file_size - po || ps < GV_PAGE_TABLE) {
+            gv_fail(err, GV_ECORRUPT, "store: page %llu lies outside the file",
+                    (unsigned long long)p);
+            goto fail;
+        }
+    }
+    s->path = strdup(path);
+    return s;
+fail:
+    gv_store_close(s);
+    return NULL;
+}
+
+void gv_store_close(struct gv_store *s)
+{
+    if (!s)
+        return;
+    if (s->fd >= 0)
+        close(s->fd);
+    free(s->root);
+    free(s->index);
+    free(s->path);
+    free(s);
+}
+
+const struct gv_store_info *gv_store_info(const struct gv_store *s)
+{
+    return &s->info;
+}
+
+const uint8_t *gv_store_root(const struct gv_store *s, int mip, uint32_t *w,
+                             uint32_t *h)
+{
+    const struct gv_geometry *g = &s->info.geometry;
+    if (mip < 0 || mip >= g->root_mips)
+        return NULL;
+    uint32_t mw = g->level[g->root].width, mh = g->level[g->root].height;
+    for (int m = 0; m < mip; m++) {
+        mw = (mw + 1) / 2;
+        mh = (mh + 1) / 2;
+    }
+    *w = mw;
+    *h = mh;
+    return s->root + s->root_mip_off[mip];
+}
+
+int gv_store_page_extent(const struct gv_store *s, uint64_t page,
+                         uint64_t *offset, uint32_t *size, uint32_t *crc)
+{
+    if (page >= s->info.header.pages)
+        return -1;
+    const uint8_t *e = s->index + page * GV_INDEX_ENTRY;
+    *offset = gv_get64(e);
+    *size = gv_get32(e + 8);
+    *crc = gv_get32(e + 12);
+    return 0;
+}
+
+uint64_t gv_store_level_bytes(const struct gv_store *s, int level)
+{
+    const struct gv_geometry *g = &s->info.geometry;
+    if (level < 0 || level >= g->root)
+        return 0;
+    const struct gv_level *l = &g->level[level];
+    uint64_t total = 0, n = (uint64_t)l->pages_x * l->pages_y;
+    for (uint64_t p = 0; p < n; p++)
+        total += gv_get32(s->index + (l->first_page + p) * GV_INDEX_ENTRY + 8);
+    return total;
+}
+
+int gv_page_check(const struct gv_store *s, const uint8_t *page, size_t len,
+                  int level, uint32_t px, uint32_t py, struct gv_error *err)
+{
+    const struct gv_geometry *g = &s->info.geometry;
+    const struct gv_level *l = &g->level[level];
+    if (len < GV_PAGE_TABLE || memcmp(page, GV_PAGE_MAGIC, 4) != 0 ||
+        page[4] != level || gv_get32(page + 8) != px || gv_get32(page + 12) != py)
+        return gv_fail(err, GV_ECORRUPT, "store: page %d/%u/%u has a bad "
+                       "header", level, px, py);
+    for (int j = 0; j < GV_PAGE_TILES; j++)
+        for (int i = 0; i < GV_PAGE_TILES; i++) {
+            uint32_t tx = px * GV_PAGE_TILES + (uint32_t)i;
+            uint32_t ty = py * GV_PAGE_TILES + (uint32_t)j;
+            const uint8_t *e = page + GV_PAGE_HEADER + 8 * (j * GV_PAGE_TILES + i);
+            uint32_t to = gv_get32(e), ts = gv_get32(e + 4);
+            int inside = tx < l->tiles_x && ty < l->tiles_y;
+            if (!inside) {
+                if (to || ts)
+                    return gv_fail(err, GV_ECORRUPT, "store: page %d/%u/%u "
+                                   "has a tile outside the grid", level, px, py);
+                continue;
+            }
+            if (to < GV_PAGE_TABLE || (to & 3) || to > len || ts > len - to)
+                return gv_fail(err, GV_ECORRUPT, "store: tile %d/%u/%u lies "
+                               "outside its page", level, tx, ty);
+            struct gv_error why;
+            if (gv_tilebuf_check(page + to, ts, g->channels, &why) < 0)
+                /* why, not err: snprintf must not read the buffer it
+                 * writes (found by fuzz_store's valgrind replay). */
+                return gv_fail(err, GV_ECORRUPT, "store: tile %d/%u/%u: %s",
+                               level, tx, ty, why.text);
+        }
+    return 0;
+}
+
+int gv_store_read_page(const struct gv_store *s, int level, uint32_t px,
+                       uint32_t py, uint8_t **data, size_t *len,
+                       struct gv_error *err)
+{
+    const struct gv_geometry *g = &s->info.geometry;
+    if (level < 0 || level >= g->root || px >= g->level[level].pages_x ||
+        py >= g->level[level].pages_y)
+        return gv_fail(err, GV_ENOTFOUND, "store: no page %d/%u/%u", level,
+                       px, py);
+    uint64_t off;
+    uint32_t size, crc;
+    gv_store_page_extent(s, gv_page_number(g, level, px, py), &off, &size, &crc);
+    uint8_t *buf = malloc(size);
+    if (!buf)
+        return gv_fail(err, GV_ENOMEM, "store: out of memory for a page");
+    if (read_exact(s->fd, buf, size, off, "page", err) < 0)
+        goto fail;
+    if (gv_crc32(0, buf, size) != crc) {
+        gv_fail(err, GV_ECORRUPT, "store: CRC mismatch in page %d/%u/%u",
+                level, px, py);
+        goto fail;
+    }
+    if (gv_page_check(s, buf, size, level, px, py, err) < 0)
+        goto fail;
+    *data = buf;
+    *len = size;
+    return 0;
+fail:
+    free(buf);
+    return -1;
+}
+
+int gv_page_tile(const uint8_t *page, size_t len, int channels, int i, int j,
+                 const uint8_t **tile, size_t *tile_len, struct gv_error *err)
+{
+    if (i < 0 || j < 0 || i >= GV_PAGE_TILES || j >= GV_PAGE_TILES ||
+        len < GV_PAGE_TABLE)
+        return gv_fail(err, GV_EINVAL, "store: bad tile slot %d,%d", i, j);
+    const uint8_t *e = page + GV_PAGE_HEADER + 8 * (j * GV_PAGE_TILES + i);
+    uint32_t to = gv_get32(e), ts = gv_get32(e + 4);
+    if (ts == 0)
+        return gv_fail(err, GV_ENOTFOUND, "store: empty tile slot %d,%d", i, j);
+    if (to < GV_PAGE_TABLE || to > len || ts > len - to)
+        return gv_fail(err, GV_ECORRUPT, "store: tile slot %d,%d outside page", i, j);
+    (void)channels;
+    *tile = page + to;
+    *tile_len = ts;
+    return 0;
+}

@@ -1,0 +1,73 @@
+/*
+ * store_read.h - reading a gigaview store file.
+ *
+ * gv_store_open validates everything it reads up front: header CRC, the
+ * geometry, the root section (with its CRC; it is at most ~1 MiB and kept
+ * in memory) and the page index (CRC, every extent inside the file).
+ * Pages are read on demand with pread and checked against their CRC before
+ * any byte of them is used, so a damaged page fails alone and clearly.
+ * A store is immutable; an open store may be shared by threads, since
+ * reads are pread and the in-memory parts are read-only after open.
+ */
+#ifndef GV_STORE_READ_H
+#define GV_STORE_READ_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+#include "store/geometry.h"
+#include "store/store_format.h"
+
+struct gv_store;
+
+struct gv_store_info {
+    struct gv_header header;
+    struct gv_geometry geometry;
+};
+
+/* Open and validate `path`.  Returns NULL with *err filled (GV_ENOTFOUND,
+ * GV_EFORMAT for a foreign file or version, GV_ECORRUPT otherwise). */
+struct gv_store *gv_store_open(const char *path, struct gv_error *err);
+
+/* Close.  gv_store_close(NULL) does nothing. */
+void gv_store_close(struct gv_store *s);
+
+const struct gv_store_info *gv_store_info(const struct gv_store *s);
+
+/* Root mip `mip` (0 = the root level itself): its pixels (read-only, valid
+ * until close) and size.  NULL if mip is out of range. */
+const uint8_t *gv_store_root(const struct gv_store *s, int mip, uint32_t *w,
+                             uint32_t *h);
+
+/* Extent of page number `page` in the file.  Returns 0 or -1. */
+int gv_store_page_extent(const struct gv_store *s, uint64_t page,
+                         uint64_t *offset, uint32_t *size, uint32_t *crc);
+
+/* Total bytes of the pages of `level` (for bits-per-pixel figures). */
+uint64_t gv_store_level_bytes(const struct gv_store *s, int level);
+
+/*
+ * Read page (px,py) of `level` into a new malloc'ed buffer (*data, caller
+ * frees) after checking its CRC and its tile table.  Returns 0, or -1 with
+ * GV_ENOTFOUND (no such page), GV_ECORRUPT or GV_EIO.
+ */
+int gv_store_read_page(const struct gv_store *s, int level, uint32_t px,
+                       uint32_t py, uint8_t **data, size_t *len,
+                       struct gv_error *err);
+
+/*
+ * Locate tile (i,j) (0..7 within the page) in a page buffer that
+ * gv_store_read_page returned.  *tile points into page.  Returns 0, or -1
+ * if the slot is empty or malformed.
+ */
+int gv_page_tile(const uint8_t *page, size_t len, int channels, int i, int j,
+                 const uint8_t **tile, size_t *tile_len, struct gv_error *err);
+
+/* Check a page buffer's header and tile table against (level, px, py) and
+ * the channel count: every slot inside the page, 4-byte aligned and a
+ * well-formed tile buffer, empty slots exactly those outside the grid. */
+int gv_page_check(const struct gv_store *s, const uint8_t *page, size_t len,
+                  int level, uint32_t px, uint32_t py, struct gv_error *err);
+
+#endif

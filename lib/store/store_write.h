@@ -1,0 +1,57 @@
+/*
+ * store_write.h - writing a store file, atomically.
+ *
+ * The file is created unnamed (O_TMPFILE) in the destination directory, or
+ * as a hidden temporary name where the filesystem lacks O_TMPFILE.  Pages
+ * are appended as they are produced; gv_store_writer_finish appends the
+ * root and the index, writes the header, fsyncs, and only then gives the
+ * file its final name (rename, so an existing store is replaced whole) and
+ * fsyncs the directory.  A crash or kill at any point leaves no file under
+ * the final name, and no temporary name either when O_TMPFILE works.
+ * One thread uses a writer at a time.
+ */
+#ifndef GV_STORE_WRITE_H
+#define GV_STORE_WRITE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+#include "store/store_format.h"
+
+struct gv_store_writer;
+
+/* Start writing `path` for the geometry and settings in *h (dimensions,
+ * channels, source description, target, cap; the offsets are filled in by
+ * the writer).  Fails if the directory is not writable. */
+struct gv_store_writer *gv_store_writer_new(const char *path,
+                                            const struct gv_header *h,
+                                            struct gv_error *err);
+
+/*
+ * Append page (px,py) of `level`.  tiles[j*8+i] / lens[j*8+i] hold the
+ * buffer of tile (8px+i, 8py+j), or NULL / 0 for slots outside the grid.
+ */
+int gv_store_writer_page(struct gv_store_writer *w, int level, uint32_t px,
+                         uint32_t py, const uint8_t *const *tiles,
+                         const size_t *lens, struct gv_error *err);
+
+/* Append the root level (root width x height x channels); its mips are
+ * computed here. */
+int gv_store_writer_root(struct gv_store_writer *w, const uint8_t *pixels,
+                         struct gv_error *err);
+
+/* Record the level-0 PSNR in millidecibels for the header. */
+void gv_store_writer_set_psnr(struct gv_store_writer *w, uint32_t psnr0_mdb);
+
+/* Bytes written so far. */
+uint64_t gv_store_writer_bytes(const struct gv_store_writer *w);
+
+/* Finish, publish under the final name and free w.  On failure nothing is
+ * published and w is freed all the same. */
+int gv_store_writer_finish(struct gv_store_writer *w, struct gv_error *err);
+
+/* Abandon: remove the temporary file and free.  NULL does nothing. */
+void gv_store_writer_abort(struct gv_store_writer *w);
+
+#endif
