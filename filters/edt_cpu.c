@@ -146,7 +146,9 @@ static inline uint32_t edt_swap16(uint32_t v)
 }
 
 /* The scalar strip transposes: rows [ya, yb), strip columns c0 .. nc-1
- * (edt_kernel.h's edt_load and edt_store do the 16 x 16 blocks). */
+ * (edt_kernel.h's edt_load and edt_store do the 16 x 16 blocks).  Load and
+ * store are mirror images on purpose (same walk, opposite direction of
+ * copy), kept as two plain loops so each compiles to straight code. */
 static inline void edt_load_scalar(const uint32_t *restrict ids,
                                    const uint32_t *restrict px,
                                    const uint32_t *restrict py, size_t w,

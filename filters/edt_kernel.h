@@ -164,6 +164,9 @@ EDT_ATTR static void EDT_FN(edt_dist)(const uint32_t *restrict sx,
         db = b - yy;
         d2 = da * da + db * db;
         f = __builtin_convertvector(d2, edt_vf32);
+/* One square root per ISA: the AVX-512, AVX2 and SSE2 branches repeat
+ * the same shape deliberately (one 512-bit, two 256-bit or four 128-bit
+ * halves), because each must use only its own ISA's instruction. */
 #if EDT_ISA == 3
         {
             __m512 v;

@@ -529,23 +529,20 @@ static int is_reader_of(const struct gv_filter_module *r, int m)
     return 0;
 }
 
-/* Padding, merge skipping and texture slots, on the ordered graph. */
-static int plan(struct gv_filter_graph *g, const struct gv_filter_limits *lim,
-                struct gv_error *err)
+/* Which modules the output depends on (used[]), and the padding of the
+ * source: the largest sum of supports along any path to the output, a
+ * log-reduce counting at least its block.  Sets the graph's padding and
+ * alignment. */
+static int plan_padding(struct gv_filter_graph *g, const struct gv_filter_limits *lim,
+                        int *used, struct gv_error *err)
 {
     int n = g->nmodules;
-    struct gv_filter_module *m = g->module;
-    int *used = calloc((size_t)n, sizeof *used);
-    long *need = calloc((size_t)n, sizeof *need);
-    if (!used || !need) {
-        free(used);
-        free(need);
+    const struct gv_filter_module *m = g->module;
+    long *need = calloc((size_t)n, sizeof *need); /* padding of i's output */
+    if (!need)
         return gv_fail(err, GV_ENOMEM, "filter: out of memory");
-    }
-    /* Which modules the output depends on, and the padding each one's
-     * output needs: need[reader] + support[reader], maximized. */
     used[g->output] = 1;
-    long src_need = -1;
+    long src_need = 0;
     int align_log = 0;
     for (int i = n - 1; i >= 0; i--) {
         if (!used[i])
@@ -572,32 +569,38 @@ static int plan(struct gv_filter_graph *g, const struct gv_filter_limits *lim,
         }
     }
     free(need);
-    if (src_need < 0)
-        src_need = 0;
-    if (src_need > lim->max_padding) {
-        free(used);
+    if (src_need > lim->max_padding)
         return gv_fail(err, GV_ELIMIT,
                        "filter: the supports sum to a padding of %ld pixels, over "
                        "the limit of %d", src_need, lim->max_padding);
-    }
     g->pad_left = g->pad_top = g->pad_right = g->pad_bottom = (int)src_need;
     g->align = 1 << align_log;
+    return 0;
+}
 
-    /* Last reader of each module (a module nobody reads lives until its
-     * own position: the output, or an unused module). */
-    for (int i = 0; i < n; i++) {
+/* Last reader of each module (a module nobody reads lives until its own
+ * position: the output, or an unused module). */
+static void plan_last_use(struct gv_filter_graph *g, const int *used)
+{
+    struct gv_filter_module *m = g->module;
+    for (int i = 0; i < g->nmodules; i++) {
         m[i].last_use = i;
         m[i].skip_merge = 0;
         m[i].texture = -1;
     }
-    for (int i = 0; i < n; i++)
+    for (int i = 0; i < g->nmodules; i++)
         for (int k = 0; k < m[i].ninputs && used[i]; k++)
             if (m[i].input[k] >= 0 && m[m[i].input[k]].last_use < i)
                 m[m[i].input[k]].last_use = i;
+}
 
-    /* Merge skipping: a used propagation module whose only reader is one
-     * propagation module sweeping the opposite way on the same axis and
-     * reading it as input 1 only. */
+/* Merge skipping (thesis section 7.8.5): a used propagation module whose
+ * only reader is one propagation module sweeping the opposite way on the
+ * same axis and reading it as input 1 only. */
+static void plan_skipped_merges(struct gv_filter_graph *g, const int *used)
+{
+    struct gv_filter_module *m = g->module;
+    int n = g->nmodules;
     for (int i = 0; i < n; i++) {
         if (!used[i] || m[i].tpl != GV_FILTER_PROPAGATION || i == g->output)
             continue;
@@ -618,83 +621,120 @@ static int plan(struct gv_filter_graph *g, const struct gv_filter_limits *lim,
         if (!other)
             m[i].skip_merge = 1;
     }
+}
 
-    /* Texture slots.  A slot has a kind (format, mipmapped); propagation
-     * modules hold two of the same kind, the second (the ping-pong
-     * partner) freed when the module ends unless its merge is skipped, in
-     * which case the reader takes over both. */
-    enum { MAXS = 2 * 64 + 2 };
-    int slot_kind[MAXS], slot_busy[MAXS], nslots = 0, peak = 0, busy = 0;
+/* The texture pool of plan_textures: slots of a kind (format, mipmapped),
+ * busy or free, and the most ever busy at once. */
+enum { MAX_SLOTS = 2 * 64 + 2 };
+struct slot_pool {
+    int kind[MAX_SLOTS], busy[MAX_SLOTS];
+    int nslots, nbusy, peak;
+};
+
+/* A free slot of `kind`, not `except`, or a new one; -1 past MAX_SLOTS. */
+static int slot_take(struct slot_pool *p, int kind, int except)
+{
+    int s = 0;
+    while (s < p->nslots && (p->busy[s] || p->kind[s] != kind || s == except))
+        s++;
+    if (s == p->nslots) {
+        if (p->nslots >= MAX_SLOTS)
+            return -1;
+        p->kind[p->nslots++] = kind;
+    }
+    p->busy[s] = 1;
+    if (++p->nbusy > p->peak)
+        p->peak = p->nbusy;
+    return s;
+}
+
+static void slot_give(struct slot_pool *p, int s)
+{
+    if (p->busy[s]) {
+        p->busy[s] = 0;
+        p->nbusy--;
+    }
+}
+
+/* Free the slots of the inputs whose last reader is module i (a
+ * skipped-merge predecessor's slots now belong to i). */
+static void release_inputs(struct slot_pool *p, const struct gv_filter_module *m,
+                           int i)
+{
+    for (int k = 0; k < m[i].ninputs; k++) {
+        int in = m[i].input[k];
+        if (in < 0 || m[in].last_use != i || m[in].texture < 0 ||
+            m[in].texture == m[i].texture)
+            continue;
+        int dup = 0;
+        for (int q = 0; q < k; q++)
+            if (m[i].input[q] == in)
+                dup = 1;
+        if (!dup)
+            slot_give(p, m[in].texture);
+    }
+}
+
+/* Texture slots, greedily by liveness.  Propagation modules hold two
+ * slots of the same kind, the second (the ping-pong partner) freed when
+ * the module ends unless its merge is skipped, in which case the reader
+ * takes over both.  Sets g->ntextures to the peak. */
+static int plan_textures(struct gv_filter_graph *g, const int *used,
+                         struct gv_error *err)
+{
+    struct gv_filter_module *m = g->module;
+    struct slot_pool pool = {.nslots = 0};
     int partner[64];
-    for (int i = 0; i < n && i < 64; i++)
+    for (int i = 0; i < g->nmodules && i < 64; i++)
         partner[i] = -1;
-    for (int i = 0; i < n; i++) {
+    for (int i = 0; i < g->nmodules; i++) {
         if (!used[i])
             continue;
         int kind = (int)m[i].format * 2 + (m[i].tpl == GV_FILTER_LOGREDUCE);
         int prev = m[i].input[0];
-        if (m[i].tpl == GV_FILTER_PROPAGATION && prev >= 0 &&
-            m[prev].skip_merge) {
+        if (m[i].tpl == GV_FILTER_PROPAGATION && prev >= 0 && m[prev].skip_merge) {
             /* In place on the predecessor's pair. */
             m[i].texture = m[prev].texture;
             partner[i] = partner[prev];
             partner[prev] = -1;
         } else {
-            int need_slots = m[i].tpl == GV_FILTER_PROPAGATION ? 2 : 1;
-            int got[2] = {-1, -1};
-            for (int s = 0; s < nslots && got[need_slots - 1] < 0; s++)
-                if (!slot_busy[s] && slot_kind[s] == kind) {
-                    if (got[0] < 0)
-                        got[0] = s;
-                    else
-                        got[1] = s;
-                }
-            for (int q = 0; q < need_slots; q++) {
-                if (got[q] < 0) {
-                    if (nslots >= MAXS) {
-                        free(used);
-                        return gv_fail(err, GV_ELIMIT, "filter: too many textures");
-                    }
-                    got[q] = nslots;
-                    slot_kind[nslots++] = kind;
-                }
-                slot_busy[got[q]] = 1;
-                busy++;
-            }
-            m[i].texture = got[0];
+            int pair = m[i].tpl == GV_FILTER_PROPAGATION;
+            m[i].texture = slot_take(&pool, kind, -1);
+            int second = pair && m[i].texture >= 0
+                         ? slot_take(&pool, kind, m[i].texture) : -1;
+            if (m[i].texture < 0 || (pair && second < 0))
+                return gv_fail(err, GV_ELIMIT, "filter: too many textures");
             if (i < 64)
-                partner[i] = need_slots == 2 ? got[1] : -1;
+                partner[i] = second;
         }
-        if (busy > peak)
-            peak = busy;
         /* The partner goes back to the pool once the module has merged. */
         if (i < 64 && partner[i] >= 0 && !m[i].skip_merge) {
-            slot_busy[partner[i]] = 0;
-            busy--;
+            slot_give(&pool, partner[i]);
             partner[i] = -1;
         }
-        /* Inputs whose last reader was this module are free now (a
-         * skipped-merge predecessor's slots now belong to this module). */
-        for (int k = 0; k < m[i].ninputs; k++) {
-            int in = m[i].input[k];
-            if (in < 0 || m[in].last_use != i || m[in].texture < 0 ||
-                m[in].texture == m[i].texture)
-                continue;
-            int dup = 0;
-            for (int q = 0; q < k; q++)
-                if (m[i].input[q] == in)
-                    dup = 1;
-            if (!dup && slot_busy[m[in].texture]) {
-                slot_busy[m[in].texture] = 0;
-                busy--;
-            }
-        }
+        release_inputs(&pool, m, i);
     }
-    g->ntextures = peak;
-    /* Unused modules keep texture -1 and are neither compiled nor run
-     * beyond validation. */
-    free(used);
+    g->ntextures = pool.peak;
     return 0;
+}
+
+/* Padding, merge skipping and texture slots, on the ordered graph.
+ * Unused modules keep texture -1 and are neither compiled nor run beyond
+ * validation. */
+static int plan(struct gv_filter_graph *g, const struct gv_filter_limits *lim,
+                struct gv_error *err)
+{
+    int *used = calloc((size_t)g->nmodules, sizeof *used);
+    if (!used)
+        return gv_fail(err, GV_ENOMEM, "filter: out of memory");
+    int rc = plan_padding(g, lim, used, err);
+    if (rc == 0) {
+        plan_last_use(g, used);
+        plan_skipped_merges(g, used);
+        rc = plan_textures(g, used, err);
+    }
+    free(used);
+    return rc;
 }
 
 void gv_filter_graph_free(struct gv_filter_graph *g)
