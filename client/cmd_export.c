@@ -1,140 +1,114 @@
 /*
- * cmd_export.c - `gigaview export STORE [--level L] [--region x,y,w,h]
+ * cmd_export.c - `gigaview export STORE [--level L] [--region X,Y,W,H]
  * -o OUT`: decode a region with the CPU reference decoder and write it as
  * PNG, TIFF or JPEG (by extension).  The output appears under its name
  * only when complete.
  */
-#include <getopt.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "commands.h"
-#include "options.h"
-#include "render/store_decoder.h"
 #include "imageio/imageio.h"
+#include "options.h"
+#include "region_arg.h"
+#include "render/store_decoder.h"
 #include "store/store_read.h"
 
-#define DEFAULT_MAX_PIXELS (256ull << 20)  /* 256 MP: 768 MiB of RGB */
+#define ME "gigaview export"
+#define DECODER_CACHE (64u << 20)   /* decoded-tile LRU: 64 MiB */
 
-static void usage(FILE *out)
+struct export_args {
+    int level;
+    const char *region, *output;
+    uint64_t max_pixels;
+};
+
+#define F(field) offsetof(struct export_args, field)
+static const struct opt_spec export_opts[] = {
+    {.name = "level", .short_name = 'l', .kind = OPT_INT, .arg = "L",
+     .field = F(level), .min = 0, .max = 64,
+     .help = "pyramid level, 0 = full resolution (default 0)"},
+    {.name = "region", .short_name = 'R', .kind = OPT_STRING, .arg = "X,Y,W,H",
+     .field = F(region), .help = "pixels of that level (default: all of it)"},
+    {.name = "output", .short_name = 'o', .kind = OPT_STRING, .arg = "OUT",
+     .field = F(output), .help = ".png, .tif/.tiff or .jpg"},
+    {.name = "max-pixels", .kind = OPT_COUNT, .arg = "N", .field = F(max_pixels),
+     .help = "refuse larger regions (default "
+             OPT_STR(REGION_DEFAULT_MAX_PIXELS) ")"},
+};
+#undef F
+
+static const struct opt_command export_command = {
+    .me = ME,
+    .synopsis = "usage: gigaview export STORE [--level L] [--region X,Y,W,H] -o OUT\n",
+    .opts = export_opts,
+    .nopts = sizeof export_opts / sizeof export_opts[0],
+};
+
+/* The size of level k of s (a tiled level or a root mip), or -1 with a
+ * message when the store has no such level. */
+static int level_size(struct gv_store *s, int k, uint32_t *lw, uint32_t *lh)
 {
-    fprintf(out,
-        "usage: gigaview export STORE [--level L] [--region X,Y,W,H] -o OUT\n"
-        "\n"
-        "  -l, --level L          pyramid level, 0 = full resolution (default 0)\n"
-        "  -R, --region X,Y,W,H   pixels of that level (default: all of it)\n"
-        "  -o, --output OUT       .png, .tif/.tiff or .jpg\n"
-        "      --max-pixels N     refuse larger regions (default %llu)\n",
-        DEFAULT_MAX_PIXELS);
+    const struct gv_geometry *g = &gv_store_info(s)->geometry;
+    if (k >= g->root + g->root_mips) {
+        fprintf(stderr, ME ": no level %d (the store has 0..%d)\n", k,
+                g->root + g->root_mips - 1);
+        return -1;
+    }
+    if (k >= g->root) {
+        gv_store_root(s, k - g->root, lw, lh);
+    } else {
+        *lw = g->level[k].width;
+        *lh = g->level[k].height;
+    }
+    return 0;
+}
+
+/* Decode region r of level k of s and write it to `output`.  Returns the
+ * exit status. */
+static int decode_and_write(struct gv_store *s, int k, const struct region *r,
+                            const char *output)
+{
+    const int c = gv_store_info(s)->geometry.channels;
+    uint8_t *pixels = malloc((size_t)r->w * r->h * c);
+    struct gv_decoder *d = gv_decoder_new(s, DECODER_CACHE);
+    struct gv_error err;
+    int rc = 1;
+    if (!pixels || !d)
+        fprintf(stderr, ME ": out of memory\n");
+    else if (gv_decode_region(d, k, r->x, r->y, r->w, r->h, pixels, &err) < 0 ||
+             gv_image_write(output, r->w, r->h, c, pixels, &err) < 0)
+        fprintf(stderr, ME ": %s\n", err.text);
+    else
+        rc = 0;
+    gv_decoder_free(d);
+    free(pixels);
+    return rc;
 }
 
 int cmd_export(int argc, char **argv)
 {
-    static const struct option longopts[] = {
-        {"level", required_argument, NULL, 'l'},
-        {"region", required_argument, NULL, 'R'},
-        {"output", required_argument, NULL, 'o'},
-        {"max-pixels", required_argument, NULL, 'M'},
-        {"help", no_argument, NULL, 'h'},
-        {NULL, 0, NULL, 0},
-    };
-    const char *output = NULL, *region = NULL;
-    long level = 0;
-    unsigned long long max_pixels = DEFAULT_MAX_PIXELS;
-    int c;
-    optind = 1;
-    while ((c = getopt_long(argc, argv, "l:R:o:h", longopts, NULL)) != -1) {
-        char *end;
-        switch (c) {
-        case 'l':
-            level = strtol(optarg, &end, 10);
-            if (end == optarg || *end || level < 0 || level > 64) {
-                fprintf(stderr, "gigaview export: bad --level '%s'\n", optarg);
-                return 2;
-            }
-            break;
-        case 'R':
-            region = optarg;
-            break;
-        case 'o':
-            output = optarg;
-            break;
-        case 'M':
-            if (parse_count(optarg, &max_pixels) < 0) {
-                fprintf(stderr, "gigaview export: bad --max-pixels '%s'\n", optarg);
-                return 2;
-            }
-            break;
-        case 'h':
-            usage(stdout);
-            return 0;
-        default:
-            usage(stderr);
-            return 2;
-        }
-    }
-    if (!output || optind != argc - 1) {
-        usage(stderr);
+    struct export_args a = {.max_pixels = REGION_DEFAULT_MAX_PIXELS};
+    int first, rc = opt_parse(&export_command, argc, argv, &a, &first);
+    if (rc != OPT_GO_ON)
+        return rc;
+    if (!a.output || first != argc - 1) {
+        opt_usage(&export_command, stderr);
         return 2;
     }
     struct gv_error err;
-    struct gv_store *s = gv_store_open(argv[optind], &err);
+    struct gv_store *s = gv_store_open(argv[first], &err);
     if (!s) {
-        fprintf(stderr, "gigaview export: %s\n", err.text);
+        fprintf(stderr, ME ": %s\n", err.text);
         return 1;
     }
-    const struct gv_geometry *g = &gv_store_info(s)->geometry;
-    int rc = 1;
-    uint8_t *pixels = NULL;
-    struct gv_decoder *d = NULL;
-    if (level >= g->root + g->root_mips) {
-        fprintf(stderr, "gigaview export: no level %ld (the store has 0..%d)\n",
-                level, g->root + g->root_mips - 1);
-        goto out;
-    }
     uint32_t lw, lh;
-    if (level >= g->root)
-        gv_store_root(s, (int)level - g->root, &lw, &lh);
-    else {
-        lw = g->level[level].width;
-        lh = g->level[level].height;
-    }
-    unsigned long long x = 0, y = 0, w = lw, h = lh;
-    if (region) {
-        char tail;
-        if (sscanf(region, "%llu,%llu,%llu,%llu%c", &x, &y, &w, &h, &tail) != 4) {
-            fprintf(stderr, "gigaview export: --region wants X,Y,W,H, not '%s'\n", region);
-            rc = 2;
-            goto out;
-        }
-    }
-    if (w == 0 || h == 0 || x >= lw || y >= lh || w > lw - x || h > lh - y) {
-        fprintf(stderr, "gigaview export: region %llu,%llu,%llu,%llu is outside "
-                "level %ld (%u x %u)\n", x, y, w, h, level, lw, lh);
-        goto out;
-    }
-    if (w * h > max_pixels) {
-        fprintf(stderr, "gigaview export: region of %llu pixels exceeds the limit "
-                "of %llu (--max-pixels)\n", w * h, max_pixels);
-        goto out;
-    }
-    pixels = malloc((size_t)(w * h * g->channels));
-    d = gv_decoder_new(s, 64u << 20);
-    if (!pixels || !d) {
-        fprintf(stderr, "gigaview export: out of memory\n");
-        goto out;
-    }
-    if (gv_decode_region(d, (int)level, (uint32_t)x, (uint32_t)y, (uint32_t)w,
-                         (uint32_t)h, pixels, &err) < 0 ||
-        gv_image_write(output, (uint32_t)w, (uint32_t)h, g->channels, pixels, &err) < 0) {
-        fprintf(stderr, "gigaview export: %s\n", err.text);
-        goto out;
-    }
-    rc = 0;
-out:
-    gv_decoder_free(d);
-    free(pixels);
+    struct region r;
+    if (level_size(s, a.level, &lw, &lh) < 0)
+        rc = 1;
+    else if (!(rc = region_arg_check(ME, a.region, a.level, lw, lh, a.max_pixels, &r)))
+        rc = decode_and_write(s, a.level, &r, a.output);
     gv_store_close(s);
     return rc;
 }

@@ -18,60 +18,102 @@
  *                                and blended by the fraction of Z, as
  *                                section 7.5 blends adjacent levels.
  *                                Outside the image is black.
+ *
+ * The steps, one function each: check the arguments (check_args), connect
+ * and read the image's metadata (session_open), plan the tiles a picture
+ * needs (need_range, plan_view_tiles), fetch them and start the GPU
+ * (start_decoding), decode and read back (lvl_load, render_region),
+ * compose (compose_view), write (cmd_render) and report (print_stats).
  */
-#include <getopt.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "commands.h"
-#include "options.h"
-#include "store/geometry.h"
 #include "gpu/gpu.h"
 #include "gpu/gpu_cache.h"
 #include "gpu/gpu_decode.h"
 #include "http_fetch.h"
 #include "imageio/imageio.h"
+#include "options.h"
+#include "region_arg.h"
+#include "store/geometry.h"
 #include "tile_cache_disk.h"
 
-#define DEFAULT_MAX_PIXELS (256ull << 20)
 #define ME "gigaview render"
 
-static void usage(FILE *out)
-{
-    fprintf(out,
+struct render_args {
+    const char *image, *region, *center, *size, *output, *cache_dir;
+    int level;             /* -1: not given (the region form then uses 0) */
+    int no_cache, verbose;
+    double zoom;           /* NAN: not given */
+    double rotate, timeout, gpu_mib;
+    uint64_t max_pixels;
+};
+
+#define F(field) offsetof(struct render_args, field)
+static const struct opt_spec render_opts[] = {
+    {.name = "image", .short_name = 'i', .kind = OPT_STRING, .arg = "ID",
+     .field = F(image), .help = "the image (see 'gigaview info URL')"},
+    {.name = "level", .short_name = 'l', .kind = OPT_INT, .arg = "L",
+     .field = F(level), .min = 0, .max = 64,
+     .help = "pyramid level, 0 = full resolution (default 0)"},
+    {.name = "region", .short_name = 'R', .kind = OPT_STRING, .arg = "X,Y,W,H",
+     .field = F(region), .help = "pixels of that level (default: all of it)"},
+    {.name = "center", .alias = "centre", .short_name = 'c', .kind = OPT_STRING,
+     .arg = "X,Y", .field = F(center),
+     .help = "view centre in level-0 pixels (default: image centre)"},
+    {.name = "zoom", .short_name = 'z', .kind = OPT_DOUBLE, .arg = "Z",
+     .field = F(zoom), .min = -64, .max = 64, .flags = OPT_FINITE,
+     .help = "level of detail: one output pixel is 2^Z level-0\n"
+             "pixels; fractions blend two levels"},
+    {.name = "rotate", .short_name = 'r', .kind = OPT_DOUBLE, .arg = "DEG",
+     .field = F(rotate), .min = -HUGE_VAL, .max = HUGE_VAL, .flags = OPT_FINITE,
+     .help = "clockwise rotation of the view (default 0)"},
+    {.name = "size", .short_name = 's', .kind = OPT_STRING, .arg = "WxH",
+     .field = F(size), .help = "output size of the view"},
+    {.name = "output", .short_name = 'o', .kind = OPT_STRING, .arg = "OUT",
+     .field = F(output), .help = "the image to write"},
+    {.name = "timeout", .short_name = 't', .kind = OPT_DOUBLE, .arg = "SEC",
+     .field = F(timeout), .min = 0, .max = 86400, .flags = OPT_FINITE | OPT_MIN_OPEN,
+     .help = "limit for each HTTP request (default 30)"},
+    {.name = "cache-dir", .kind = OPT_STRING, .arg = "DIR", .field = F(cache_dir),
+     .help = "tile cache (default $XDG_CACHE_HOME/gigaview\n"
+             "or ~/.cache/gigaview)"},
+    {.name = "no-cache", .kind = OPT_FLAG, .field = F(no_cache),
+     .help = "do not use the tile cache"},
+    {.name = "gpu-cache", .kind = OPT_DOUBLE, .arg = "MIB", .field = F(gpu_mib),
+     .min = 0, .max = HUGE_VAL, .flags = OPT_FINITE,
+     .help = "GPU memory for decoded tiles (default 256)"},
+    {.name = "max-pixels", .kind = OPT_COUNT, .arg = "N", .field = F(max_pixels),
+     .help = "refuse larger outputs (default " OPT_STR(REGION_DEFAULT_MAX_PIXELS) ")"},
+    {.name = "verbose", .short_name = 'v', .kind = OPT_FLAG, .field = F(verbose),
+     .help = "log requests and statistics to stderr"},
+};
+#undef F
+
+static const struct opt_command render_command = {
+    .me = ME,
+    .synopsis =
         "usage: gigaview render URL --image ID [--level L] [--region X,Y,W,H] -o OUT\n"
         "       gigaview render URL --image ID --center X,Y --zoom Z [--rotate DEG]\n"
         "                       --size WxH -o OUT\n"
         "\n"
         "Fetch compressed tiles from the gigaviewd at URL (http:// or https://),\n"
-        "decode them on the GPU and write OUT (.png, .tif or .jpg).\n"
-        "\n"
-        "  -i, --image ID         the image (see 'gigaview info URL')\n"
-        "  -l, --level L          pyramid level, 0 = full resolution (default 0)\n"
-        "  -R, --region X,Y,W,H   pixels of that level (default: all of it)\n"
-        "  -c, --center X,Y       view centre in level-0 pixels (default: image centre)\n"
-        "  -z, --zoom Z           level of detail: one output pixel is 2^Z level-0\n"
-        "                         pixels; fractions blend two levels\n"
-        "  -r, --rotate DEG       clockwise rotation of the view (default 0)\n"
-        "  -s, --size WxH         output size of the view\n"
-        "  -o, --output OUT       the image to write\n"
-        "  -t, --timeout SEC      limit for each HTTP request (default 30)\n"
-        "      --cache-dir DIR    tile cache (default $XDG_CACHE_HOME/gigaview\n"
-        "                         or ~/.cache/gigaview)\n"
-        "      --no-cache         do not use the tile cache\n"
-        "      --gpu-cache MIB    GPU memory for decoded tiles (default 256)\n"
-        "      --max-pixels N     refuse larger outputs (default %llu)\n"
-        "  -v, --verbose          log requests and statistics to stderr\n",
-        DEFAULT_MAX_PIXELS);
-}
+        "decode them on the GPU and write OUT (.png, .tif or .jpg).\n",
+    .opts = render_opts,
+    .nopts = sizeof render_opts / sizeof render_opts[0],
+};
 
+/* The tiles a picture needs, fetched as one batch. */
 struct need {
     struct gv_tile_want *t;
     size_t n, cap;
 };
 
+/* Order of the tile list: coarse levels first, then row-major. */
 static int cmp_want(const void *a, const void *b)
 {
     const struct gv_tile_want *x = a, *y = b;
@@ -113,6 +155,7 @@ static int need_range(struct need *nd, const struct gv_geometry *g, int level,
     return 0;
 }
 
+/* Sort the list (cmp_want) and drop repeated tiles. */
 static void need_unique(struct need *nd)
 {
     if (!nd->n)
@@ -165,6 +208,8 @@ struct lvl {
     uint8_t *mip;          /* levels >= root */
 };
 
+/* The pixel (x, y) of level l: from the tile it belongs to (the last
+ * tile of a row or column holds the level's edge). */
 static const uint8_t *lvl_px(const struct lvl *l, uint32_t x, uint32_t y, int c)
 {
     if (l->mip)
@@ -188,6 +233,8 @@ static void lvl_free(struct lvl *l)
     memset(l, 0, sizeof *l);
 }
 
+/* One run of the client: the server connection, the image's metadata and
+ * geometry, the disk cache, the tiles fetched, and the GPU side. */
 struct session {
     struct gv_http *http;
     struct gv_remote_image img;
@@ -199,10 +246,11 @@ struct session {
     struct gv_gpu_cache *cache;
     struct fetch_ctx fetch;
     size_t gpu_budget;
-    int verbose;
 };
 
-/* Fetch every tile in s->nd, then start the GPU and its cache. */
+/* Fetch every tile in s->nd (deduplicated first) in one parallel batch;
+ * on the first call also start the GPU, its decoder and the decoded-tile
+ * cache, seeded with the root. */
 static int start_decoding(struct session *s, struct gv_error *err)
 {
     need_unique(&s->nd);
@@ -225,7 +273,9 @@ static int start_decoding(struct session *s, struct gv_error *err)
     return s->cache ? 0 : -1;
 }
 
-/* Load level k's tiles [t0x..t1x] x [t0y..t1y] (or its root mip). */
+/* Load into *l level k's tiles [t0x..t1x] x [t0y..t1y], decoded and read
+ * back from the GPU cache (or, for k >= root, its root mip).  On failure
+ * *l holds what was loaded; lvl_free frees it either way. */
 static int lvl_load(struct session *s, struct lvl *l, int k, uint32_t t0x,
                     uint32_t t0y, uint32_t t1x, uint32_t t1y, struct gv_error *err)
 {
@@ -253,10 +303,11 @@ static int lvl_load(struct session *s, struct lvl *l, int k, uint32_t t0x,
     return 0;
 }
 
+/* The tiles of level l that pixels x0..x1, y0..y1 (inclusive) need, as
+ * store_decoder.c finds them: t = {first x, first y, last x, last y}. */
 static void tile_span(const struct gv_level *l, uint32_t x0, uint32_t x1,
                       uint32_t y0, uint32_t y1, uint32_t *t)
 {
-    /* Pixels x0..x1, y0..y1 inclusive -> tile ranges, as store_decoder.c does. */
     t[0] = x0 / GV_STEP;
     t[2] = x1 / GV_STEP;
     t[1] = y0 / GV_STEP;
@@ -267,35 +318,35 @@ static void tile_span(const struct gv_level *l, uint32_t x0, uint32_t x1,
     if (t[1] > t[3]) t[1] = t[3];
 }
 
-/* Bounding box in level k pixels (inclusive, clamped) of level-0 box
- * [ax,bx] x [ay,by], widened by one pixel for bilinear taps. */
-static void level_box(const struct lvl *l, double s, double ax, double ay,
+/* Bounding box in level pixels (inclusive, clamped to the level's w x h)
+ * of the level-0 box [ax,bx] x [ay,by], at s level-0 pixels per level
+ * pixel, widened by one pixel for bilinear taps.  box: x0, y0, x1, y1. */
+static void level_box(uint32_t w, uint32_t h, double s, double ax, double ay,
                       double bx, double by, uint32_t *box)
 {
     double v[4] = {floor(ax / s - 0.5) - 1, floor(ay / s - 0.5) - 1,
                    ceil(bx / s - 0.5) + 1, ceil(by / s - 0.5) + 1};
-    double lim[4] = {l->w - 1.0, l->h - 1.0, l->w - 1.0, l->h - 1.0};
+    double lim[4] = {w - 1.0, h - 1.0, w - 1.0, h - 1.0};
     for (int i = 0; i < 4; i++)
         box[i] = (uint32_t)(v[i] < 0 ? 0 : v[i] > lim[i] ? lim[i] : v[i]);
 }
 
-static void level_size(const struct gv_geometry *g, const struct gv_remote_image *img,
-                       int k, uint32_t *w, uint32_t *h)
+/* The size of level k of the served image: a tiled level from the
+ * geometry, a root mip from the server's metadata. */
+static void remote_level_size(const struct gv_geometry *g,
+                              const struct gv_remote_image *img, int k, uint32_t *w,
+                              uint32_t *h)
 {
     if (k < g->root) {
         *w = g->level[k].width;
         *h = g->level[k].height;
-        return;
-    }
-    *w = img->root_w;
-    *h = img->root_h;
-    for (int m = g->root; m < k; m++) {
-        *w = (*w + 1) / 2;
-        *h = (*h + 1) / 2;
+    } else {
+        gv_remote_mip_size(img, k - g->root, w, h);
     }
 }
 
-/* Bilinear sample of level l at level-0 point (px,py), into acc. */
+/* Bilinear sample of level l at level-0 point (px,py), s level-0 pixels
+ * per level pixel, added with weight wgt to acc[0..c). */
 static void sample(const struct lvl *l, double s, double px, double py, int c,
                    double *acc, double wgt)
 {
@@ -317,85 +368,136 @@ static void sample(const struct lvl *l, double s, double px, double py, int c,
                          av * ((1 - au) * p01[k] + au * p11[k]));
 }
 
+/* A view: centre (level-0 pixels), zoom, clockwise rotation in degrees
+ * and output size. */
 struct view {
     double cx, cy, zoom, rot;
     uint32_t w, h;
 };
 
-static int render_view(struct session *s, const struct view *v, uint8_t *out,
-                       struct gv_error *err)
+/* How a view maps output to level-0 pixels, and the levels it samples:
+ * level f with weight 1 - t, and level f + 1 with weight t when nl is 2. */
+struct view_plan {
+    int f, nl;
+    double t;
+    double scale;       /* level-0 pixels per output pixel, 2^zoom */
+    double cs, sn;      /* the rotation from output to image */
+};
+
+/* Plan view v over levels 0..top (top: the last root mip): zooms below
+ * 0 sample level 0 magnified, zooms at or past top sample top alone. */
+static void plan_view(const struct view *v, int top, struct view_plan *p)
 {
-    const struct gv_geometry *g = &s->geo;
-    const int c = g->channels;
-    const int top = g->root + s->img.root_mips - 1;
-    int f = (int)floor(v->zoom);
-    double t = v->zoom - f;
-    if (f < 0) {
-        f = 0;
-        t = 0;
+    p->f = (int)floor(v->zoom);
+    p->t = v->zoom - p->f;
+    if (p->f < 0) {
+        p->f = 0;
+        p->t = 0;
     }
-    if (f >= top) {
-        f = top;
-        t = 0;
+    if (p->f >= top) {
+        p->f = top;
+        p->t = 0;
     }
-    const int nl = t > 0 ? 2 : 1;
-    const double scale = exp2(v->zoom), th = v->rot * M_PI / 180.0;
+    p->nl = p->t > 0 ? 2 : 1;
+    p->scale = exp2(v->zoom);
+    const double th = v->rot * M_PI / 180.0;
     /* Output to image: rotate by -DEG, so the image appears turned
      * clockwise by DEG (y points down). */
-    const double cs = cos(th), sn = -sin(th);
-    /* Level-0 bounding box of the view, clipped to the image. */
+    p->cs = cos(th);
+    p->sn = -sin(th);
+}
+
+/* The level-0 bounding box of the view's corners, b = {ax, ay, bx, by},
+ * clipped to the image.  Returns 0 when the view shows none of it. */
+static int view_bounds(const struct view *v, const struct view_plan *p,
+                       const struct gv_geometry *g, double *b)
+{
     double ax = 1e300, ay = 1e300, bx = -1e300, by = -1e300;
     for (int i = 0; i < 4; i++) {
         double dx = ((i & 1) ? 0.5 : -0.5) * v->w, dy = ((i & 2) ? 0.5 : -0.5) * v->h;
-        double px = v->cx + scale * (dx * cs - dy * sn);
-        double py = v->cy + scale * (dx * sn + dy * cs);
+        double px = v->cx + p->scale * (dx * p->cs - dy * p->sn);
+        double py = v->cy + p->scale * (dx * p->sn + dy * p->cs);
         ax = fmin(ax, px), bx = fmax(bx, px), ay = fmin(ay, py), by = fmax(by, py);
     }
-    memset(out, 0, (size_t)v->w * v->h * c);
     if (bx <= 0 || by <= 0 || ax >= g->width || ay >= g->height)
-        return 0;                                   /* nothing of the image */
-    ax = fmax(ax, 0), ay = fmax(ay, 0);
-    bx = fmin(bx, g->width), by = fmin(by, g->height);
-    struct lvl L[2];
-    uint32_t box[2][4], span[2][4];
-    memset(L, 0, sizeof L);
-    int rc = -1;
-    for (int i = 0; i < nl; i++) {
-        int k = f + i;
-        struct lvl tmp = {.k = k};
-        level_size(g, &s->img, k, &tmp.w, &tmp.h);
-        level_box(&tmp, exp2(k), ax, ay, bx, by, box[i]);
-        if (k < g->root) {
-            tile_span(&g->level[k], box[i][0], box[i][2], box[i][1], box[i][3], span[i]);
-            if (need_range(&s->nd, g, k, span[i][0], span[i][1], span[i][2],
-                           span[i][3]) < 0) {
-                gv_fail(err, GV_ENOMEM, "out of memory");
-                goto out;
-            }
-        }
+        return 0;
+    b[0] = fmax(ax, 0), b[1] = fmax(ay, 0);
+    b[2] = fmin(bx, g->width), b[3] = fmin(by, g->height);
+    return 1;
+}
+
+/* Add to s->nd the tiles of the sampled tiled levels that cover the
+ * level-0 box b (and their ancestors); span[i]: the tile range of level
+ * f + i (set for tiled levels only). */
+static int plan_view_tiles(struct session *s, const struct view_plan *p,
+                           const double *b, uint32_t span[2][4], struct gv_error *err)
+{
+    const struct gv_geometry *g = &s->geo;
+    for (int i = 0; i < p->nl; i++) {
+        int k = p->f + i;
+        uint32_t w, h, box[4];
+        remote_level_size(g, &s->img, k, &w, &h);
+        level_box(w, h, exp2(k), b[0], b[1], b[2], b[3], box);
+        if (k >= g->root)
+            continue;
+        tile_span(&g->level[k], box[0], box[2], box[1], box[3], span[i]);
+        if (need_range(&s->nd, g, k, span[i][0], span[i][1], span[i][2],
+                       span[i][3]) < 0)
+            return gv_fail(err, GV_ENOMEM, "out of memory");
     }
-    if (s->nd.n && start_decoding(s, err) < 0)
-        goto out;
-    for (int i = 0; i < nl; i++)
-        if (lvl_load(s, &L[i], f + i, span[i][0], span[i][1], span[i][2],
-                     span[i][3], err) < 0)
-            goto out;
+    return 0;
+}
+
+/* Every output pixel of the view inside the image: the blend of its
+ * bilinear samples of the loaded levels L[0..p->nl). */
+static void compose_view(const struct view *v, const struct view_plan *p,
+                         const struct gv_geometry *g, const struct lvl *L, uint8_t *out)
+{
+    const int c = g->channels;
     for (uint32_t j = 0; j < v->h; j++)
         for (uint32_t i = 0; i < v->w; i++) {
-            double dx = (i + 0.5 - v->w / 2.0) * scale, dy = (j + 0.5 - v->h / 2.0) * scale;
-            double px = v->cx + dx * cs - dy * sn, py = v->cy + dx * sn + dy * cs;
+            double dx = (i + 0.5 - v->w / 2.0) * p->scale;
+            double dy = (j + 0.5 - v->h / 2.0) * p->scale;
+            double px = v->cx + dx * p->cs - dy * p->sn;
+            double py = v->cy + dx * p->sn + dy * p->cs;
             if (px < 0 || py < 0 || px >= g->width || py >= g->height)
                 continue;
             double acc[3] = {0, 0, 0};
-            sample(&L[0], exp2(f), px, py, c, acc, 1 - t);
-            if (nl == 2)
-                sample(&L[1], exp2(f + 1), px, py, c, acc, t);
+            sample(&L[0], exp2(p->f), px, py, c, acc, 1 - p->t);
+            if (p->nl == 2)
+                sample(&L[1], exp2(p->f + 1), px, py, c, acc, p->t);
             uint8_t *o = out + ((size_t)j * v->w + i) * c;
             for (int k = 0; k < c; k++) {
                 double q = floor(acc[k] + 0.5);
                 o[k] = (uint8_t)(q < 0 ? 0 : q > 255 ? 255 : q);
             }
         }
+}
+
+/* Render view v into out (v->w x v->h pixels; black outside the image). */
+static int render_view(struct session *s, const struct view *v, uint8_t *out,
+                       struct gv_error *err)
+{
+    const struct gv_geometry *g = &s->geo;
+    struct view_plan p;
+    double b[4];
+    plan_view(v, g->root + s->img.root_mips - 1, &p);
+    memset(out, 0, (size_t)v->w * v->h * g->channels);
+    if (!view_bounds(v, &p, g, b))
+        return 0;                                   /* nothing of the image */
+    struct lvl L[2];
+    uint32_t span[2][4];
+    memset(L, 0, sizeof L);
+    int rc = -1;
+    if (plan_view_tiles(s, &p, b, span, err) < 0)
+        goto out;
+    if (s->nd.n && start_decoding(s, err) < 0)
+        goto out;
+    for (int i = 0; i < p.nl; i++)
+        if (lvl_load(s, &L[i], p.f + i, span[i][0], span[i][1], span[i][2],
+                     span[i][3], err) < 0)
+            goto out;
+    compose_view(v, &p, g, L, out);
     rc = 0;
 out:
     lvl_free(&L[0]);
@@ -403,26 +505,52 @@ out:
     return rc;
 }
 
-static int render_region(struct session *s, int level, uint32_t x, uint32_t y,
-                         uint32_t w, uint32_t h, uint8_t *out, struct gv_error *err)
+/* Copy region r of root mip `mip` into out. */
+static int copy_root_region(struct session *s, int mip, const struct region *r,
+                            uint8_t *out, struct gv_error *err)
+{
+    const int c = s->geo.channels;
+    const size_t orow = (size_t)r->w * c;
+    uint8_t *px;
+    uint32_t mw, mh;
+    if (gv_http_root(s->http, &s->img, mip, s->dc, &px, &mw, &mh, err) < 0)
+        return -1;
+    for (uint32_t row = 0; row < r->h; row++)
+        memcpy(out + row * orow, px + ((size_t)(r->y + row) * mw + r->x) * c, orow);
+    free(px);
+    return 0;
+}
+
+/* Copy the part of region r that tile (tx, ty) of level l is the source
+ * of (store_decoder.c's rule) from its pixels px into out. */
+static void copy_tile_part(const struct gv_level *l, uint32_t tx, uint32_t ty,
+                           const uint8_t *px, const struct region *r, int c,
+                           uint8_t *out)
+{
+    const size_t orow = (size_t)r->w * c;
+    uint32_t sx0 = tx * GV_STEP, sy0 = ty * GV_STEP;
+    uint32_t sx1 = tx + 1 == l->tiles_x ? l->width : sx0 + GV_STEP;
+    uint32_t sy1 = ty + 1 == l->tiles_y ? l->height : sy0 + GV_STEP;
+    uint32_t ax = r->x > sx0 ? r->x : sx0, bx = r->x + r->w < sx1 ? r->x + r->w : sx1;
+    uint32_t ay = r->y > sy0 ? r->y : sy0, by = r->y + r->h < sy1 ? r->y + r->h : sy1;
+    for (uint32_t yy = ay; ax < bx && yy < by; yy++)
+        memcpy(out + (size_t)(yy - r->y) * orow + (size_t)(ax - r->x) * c,
+               px + ((size_t)(yy - sy0) * GV_TILE + (ax - sx0)) * c,
+               (size_t)(bx - ax) * c);
+}
+
+/* Render region r of `level` into out (r->w x r->h pixels): the pixels
+ * `gigaview export` writes for it. */
+static int render_region(struct session *s, int level, const struct region *r,
+                         uint8_t *out, struct gv_error *err)
 {
     const struct gv_geometry *g = &s->geo;
     const int c = g->channels;
-    const size_t orow = (size_t)w * c;
-    if (level >= g->root) {
-        uint8_t *mip;
-        uint32_t mw, mh;
-        if (gv_http_root(s->http, &s->img, level - g->root, s->dc, &mip, &mw, &mh,
-                         err) < 0)
-            return -1;
-        for (uint32_t r = 0; r < h; r++)
-            memcpy(out + r * orow, mip + ((size_t)(y + r) * mw + x) * c, orow);
-        free(mip);
-        return 0;
-    }
+    if (level >= g->root)
+        return copy_root_region(s, level - g->root, r, out, err);
     const struct gv_level *l = &g->level[level];
     uint32_t sp[4];
-    tile_span(l, x, x + w - 1, y, y + h - 1, sp);
+    tile_span(l, r->x, r->x + r->w - 1, r->y, r->y + r->h - 1, sp);
     if (need_range(&s->nd, g, level, sp[0], sp[1], sp[2], sp[3]) < 0)
         return gv_fail(err, GV_ENOMEM, "out of memory");
     if (start_decoding(s, err) < 0)
@@ -436,21 +564,13 @@ static int render_region(struct session *s, int level, uint32_t x, uint32_t y,
                 free(px);
                 return -1;
             }
-            /* The pixels this tile is the source of (store_decoder.c's rule). */
-            uint32_t sx0 = tx * GV_STEP, sy0 = ty * GV_STEP;
-            uint32_t sx1 = tx + 1 == l->tiles_x ? l->width : sx0 + GV_STEP;
-            uint32_t sy1 = ty + 1 == l->tiles_y ? l->height : sy0 + GV_STEP;
-            uint32_t ax = x > sx0 ? x : sx0, bx = x + w < sx1 ? x + w : sx1;
-            uint32_t ay = y > sy0 ? y : sy0, by = y + h < sy1 ? y + h : sy1;
-            for (uint32_t yy = ay; ax < bx && yy < by; yy++)
-                memcpy(out + (size_t)(yy - y) * orow + (size_t)(ax - x) * c,
-                       px + ((size_t)(yy - sy0) * GV_TILE + (ax - sx0)) * c,
-                       (size_t)(bx - ax) * c);
+            copy_tile_part(l, tx, ty, px, r, c, out);
         }
     free(px);
     return 0;
 }
 
+/* "AxB" (sep 'x') or "A,B" (sep ','): two finite numbers. */
 static int parse_pair(const char *s, char sep, double *a, double *b)
 {
     char *end;
@@ -462,240 +582,215 @@ static int parse_pair(const char *s, char sep, double *a, double *b)
     return end == p || *end || !isfinite(*a) || !isfinite(*b) ? -1 : 0;
 }
 
-int cmd_render(int argc, char **argv)
+/* The view form: any of --center, --size, --zoom, or a rotation. */
+static int is_view_form(const struct render_args *a)
 {
-    static const struct option longopts[] = {
-        {"image", required_argument, NULL, 'i'},
-        {"level", required_argument, NULL, 'l'},
-        {"region", required_argument, NULL, 'R'},
-        {"center", required_argument, NULL, 'c'},
-        {"centre", required_argument, NULL, 'c'},
-        {"zoom", required_argument, NULL, 'z'},
-        {"rotate", required_argument, NULL, 'r'},
-        {"size", required_argument, NULL, 's'},
-        {"output", required_argument, NULL, 'o'},
-        {"timeout", required_argument, NULL, 't'},
-        {"cache-dir", required_argument, NULL, 'C'},
-        {"no-cache", no_argument, NULL, 'N'},
-        {"gpu-cache", required_argument, NULL, 'G'},
-        {"max-pixels", required_argument, NULL, 'M'},
-        {"verbose", no_argument, NULL, 'v'},
-        {"help", no_argument, NULL, 'h'},
-        {NULL, 0, NULL, 0},
-    };
-    const char *image = NULL, *region = NULL, *output = NULL, *center = NULL,
-               *size = NULL, *cache_dir = NULL;
-    long level = 0;
-    double zoom = NAN, rot = 0, timeout = 30, gpu_mib = 256;
-    int no_cache = 0, verbose = 0, have_level = 0, c;
-    unsigned long long max_pixels = DEFAULT_MAX_PIXELS;
-    optind = 1;
-    while ((c = getopt_long(argc, argv, "i:l:R:c:z:r:s:o:t:vh", longopts, NULL)) != -1) {
-        char *end;
-        switch (c) {
-        case 'i': image = optarg; break;
-        case 'R': region = optarg; break;
-        case 'c': center = optarg; break;
-        case 's': size = optarg; break;
-        case 'o': output = optarg; break;
-        case 'C': cache_dir = optarg; break;
-        case 'N': no_cache = 1; break;
-        case 'v': verbose = 1; break;
-        case 'l':
-            level = strtol(optarg, &end, 10);
-            have_level = 1;
-            if (end == optarg || *end || level < 0 || level > 64) {
-                fprintf(stderr, ME ": bad --level '%s'\n", optarg);
-                return 2;
-            }
-            break;
-        case 'z':
-        case 'r':
-        case 't':
-        case 'G': {
-            double d = strtod(optarg, &end);
-            if (end == optarg || *end || !isfinite(d) ||
-                (c == 't' && (d <= 0 || d > 86400)) || (c == 'G' && d < 0) ||
-                (c == 'z' && fabs(d) > 64)) {
-                fprintf(stderr, ME ": bad --%s '%s'\n",
-                        c == 'z' ? "zoom" : c == 'r' ? "rotate" : c == 't' ? "timeout"
-                                                                   : "gpu-cache",
-                        optarg);
-                return 2;
-            }
-            if (c == 'z') zoom = d;
-            else if (c == 'r') rot = d;
-            else if (c == 't') timeout = d;
-            else gpu_mib = d;
-            break;
-        }
-        case 'M':
-            if (parse_count(optarg, &max_pixels) < 0) {
-                fprintf(stderr, ME ": bad --max-pixels '%s'\n", optarg);
-                return 2;
-            }
-            break;
-        case 'h':
-            usage(stdout);
-            return 0;
-        default:
-            usage(stderr);
-            return 2;
-        }
-    }
-    const int view_form = center || size || !isnan(zoom) || rot != 0;
-    if (!output || !image || optind != argc - 1) {
-        usage(stderr);
+    return a->center || a->size || !isnan(a->zoom) || a->rotate != 0;
+}
+
+/* Check the arguments beyond each option's own value: the operands (one
+ * URL), the options each form needs and refuses, and parse --size and
+ * --center into *v.  Returns OPT_GO_ON, or 2 after a message. */
+static int check_args(const struct render_args *a, int noperands, struct view *v)
+{
+    if (!a->output || !a->image || noperands != 1) {
+        opt_usage(&render_command, stderr);
         return 2;
     }
-    if (view_form && (region || have_level || !size || isnan(zoom))) {
+    if (is_view_form(a) && (a->region || a->level >= 0 || !a->size || isnan(a->zoom))) {
         fprintf(stderr, ME ": the view form takes --zoom and --size (and optionally "
                 "--center, --rotate), not --level or --region\n");
         return 2;
     }
-    struct view v = {.zoom = zoom, .rot = rot};
-    if (size) {
-        double a, b;
-        if (parse_pair(size, 'x', &a, &b) < 0 || a < 1 || b < 1 || a > 1e6 ||
-            b > 1e6 || a != floor(a) || b != floor(b)) {
-            fprintf(stderr, ME ": --size wants WxH, not '%s'\n", size);
+    *v = (struct view){.zoom = a->zoom, .rot = a->rotate};
+    if (a->size) {
+        double w, h;
+        if (parse_pair(a->size, 'x', &w, &h) < 0 || w < 1 || h < 1 || w > 1e6 ||
+            h > 1e6 || w != floor(w) || h != floor(h)) {
+            fprintf(stderr, ME ": --size wants WxH, not '%s'\n", a->size);
             return 2;
         }
-        v.w = (uint32_t)a;
-        v.h = (uint32_t)b;
+        v->w = (uint32_t)w;
+        v->h = (uint32_t)h;
     }
-    if (center && parse_pair(center, ',', &v.cx, &v.cy) < 0) {
-        fprintf(stderr, ME ": --center wants X,Y, not '%s'\n", center);
+    if (a->center && parse_pair(a->center, ',', &v->cx, &v->cy) < 0) {
+        fprintf(stderr, ME ": --center wants X,Y, not '%s'\n", a->center);
         return 2;
     }
+    return OPT_GO_ON;
+}
 
+/* Open the disk cache of the image (a failure is only a warning). */
+static void open_disk_cache(struct session *s, const struct render_args *a)
+{
+    s->dc = gv_disk_cache_open(a->cache_dir, gv_http_base(s->http), a->image);
+    if (!s->dc && a->cache_dir)
+        fprintf(stderr, ME ": warning: cannot use the cache directory %s\n",
+                a->cache_dir);
+    if (a->verbose && s->dc)
+        fprintf(stderr, "render: tile cache %s\n", gv_disk_cache_dir(s->dc));
+}
+
+/* Connect to the server at url, read the image's metadata and check it
+ * against the geometry it implies, and open the disk cache.  Returns 0,
+ * or -1 after a message; session_close frees *s either way. */
+static int session_open(struct session *s, const char *url, const struct render_args *a)
+{
     struct gv_error err;
+    memset(s, 0, sizeof *s);
+    s->gpu_budget = (size_t)(a->gpu_mib * 1048576.0);
+    if (!(s->http = gv_http_new(url, (long)(a->timeout * 1000), a->verbose, &err)) ||
+        gv_http_image(s->http, a->image, &s->img, &err) < 0) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return -1;
+    }
+    if (gv_geometry_init(&s->geo, s->img.width, s->img.height, s->img.channels) < 0 ||
+        s->geo.root != s->img.levels_tiled ||
+        s->geo.level[s->geo.root].width != s->img.root_w ||
+        s->geo.level[s->geo.root].height != s->img.root_h) {
+        fprintf(stderr, ME ": the server's metadata for '%s' is inconsistent\n",
+                a->image);
+        return -1;
+    }
+    if (!a->no_cache)
+        open_disk_cache(s, a);
+    return 0;
+}
+
+static void session_close(struct session *s)
+{
+    gv_gpu_cache_free(s->cache);
+    gv_gpu_decoder_free(s->dec);
+    gv_gpu_close(s->gpu);
+    for (size_t i = 0; i < s->nd.n; i++)
+        free(s->nd.t[i].buf);
+    free(s->nd.t);
+    gv_disk_cache_free(s->dc);
+    gv_http_free(s->http);
+}
+
+/* The picture to write: w x h pixels of the image's channels. */
+struct picture {
+    uint8_t *px;
+    uint32_t w, h;
+};
+
+static int picture_alloc(struct picture *pic, uint32_t w, uint32_t h, int c)
+{
+    pic->w = w;
+    pic->h = h;
+    if (!(pic->px = malloc((size_t)w * h * c))) {
+        fprintf(stderr, ME ": out of memory\n");
+        return -1;
+    }
+    return 0;
+}
+
+/* The view form: check the output against --max-pixels, then render.
+ * Returns the exit status. */
+static int draw_view(struct session *s, const struct render_args *a, struct view *v,
+                     struct picture *pic)
+{
+    struct gv_error err;
+    if (!a->center) {
+        v->cx = s->img.width / 2.0;
+        v->cy = s->img.height / 2.0;
+    }
+    if ((unsigned long long)v->w * v->h > a->max_pixels) {
+        fprintf(stderr, ME ": output of %llu pixels exceeds the limit of %llu "
+                "(--max-pixels)\n", (unsigned long long)v->w * v->h,
+                (unsigned long long)a->max_pixels);
+        return 1;
+    }
+    /* Decoding at level floor(zoom) must stay within reason too. */
+    double span = exp2(v->zoom < 0 ? 0 : -floor(v->zoom));
+    if ((double)v->w * v->h * span * span * 2 > (double)a->max_pixels * 4) {
+        fprintf(stderr, ME ": the view needs too many decoded pixels\n");
+        return 1;
+    }
+    if (picture_alloc(pic, v->w, v->h, s->img.channels) < 0)
+        return 1;
+    if (render_view(s, v, pic->px, &err) < 0) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return 1;
+    }
+    return 0;
+}
+
+/* The region form: check --level and --region against the image, then
+ * render.  Returns the exit status. */
+static int draw_region(struct session *s, const struct render_args *a,
+                       struct picture *pic)
+{
+    struct gv_error err;
+    const int top = s->geo.root + s->img.root_mips - 1;
+    const int level = a->level < 0 ? 0 : a->level;
+    if (level > top) {
+        fprintf(stderr, ME ": no level %d (image '%s' has 0..%d)\n", level,
+                a->image, top);
+        return 1;
+    }
+    uint32_t lw, lh;
+    struct region r;
+    remote_level_size(&s->geo, &s->img, level, &lw, &lh);
+    int rc = region_arg_check(ME, a->region, level, lw, lh, a->max_pixels, &r);
+    if (rc)
+        return rc;
+    if (picture_alloc(pic, r.w, r.h, s->img.channels) < 0)
+        return 1;
+    if (render_region(s, level, &r, pic->px, &err) < 0) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return 1;
+    }
+    return 0;
+}
+
+/* --verbose: what was fetched over HTTP and decoded on the GPU. */
+static void print_stats(const struct session *s)
+{
+    struct gv_http_stats hs;
+    gv_http_stats(s->http, &hs);
+    fprintf(stderr, "render: %zu tiles needed (ancestors included); http: %llu "
+            "requests, %llu tiles downloaded, %llu revalidated (304), %llu bytes\n",
+            s->nd.n, (unsigned long long)hs.requests,
+            (unsigned long long)hs.downloaded, (unsigned long long)hs.revalidated,
+            (unsigned long long)hs.bytes);
+    if (!s->cache)
+        return;
+    struct gv_gpu_cache_stats gs;
+    gv_gpu_cache_stats(s->cache, &gs);
+    const struct gv_gpu_info *gi = gv_gpu_info(s->gpu);
+    fprintf(stderr, "render: gpu %s (%s): %llu tiles decoded, %llu cache hits, "
+            "%llu evictions, peak %zu bytes\n", gi->renderer, gi->platform,
+            (unsigned long long)gs.decodes, (unsigned long long)gs.hits,
+            (unsigned long long)gs.evictions, gs.peak_bytes);
+}
+
+int cmd_render(int argc, char **argv)
+{
+    struct render_args a = {.level = -1, .zoom = NAN, .timeout = 30, .gpu_mib = 256,
+                            .max_pixels = REGION_DEFAULT_MAX_PIXELS};
+    int first, rc = opt_parse(&render_command, argc, argv, &a, &first);
+    if (rc != OPT_GO_ON)
+        return rc;
+    struct view v;
+    if ((rc = check_args(&a, argc - first, &v)) != OPT_GO_ON)
+        return rc;
     struct session s;
-    memset(&s, 0, sizeof s);
-    s.verbose = verbose;
-    s.gpu_budget = (size_t)(gpu_mib * 1048576.0);
-    int rc = 1;
-    uint8_t *pixels = NULL;
-    uint32_t ow = 0, oh = 0;
-    if (!(s.http = gv_http_new(argv[optind], (long)(timeout * 1000), verbose, &err)) ||
-        gv_http_image(s.http, image, &s.img, &err) < 0) {
-        fprintf(stderr, ME ": %s\n", err.text);
-        goto out;
-    }
-    if (gv_geometry_init(&s.geo, s.img.width, s.img.height, s.img.channels) < 0 ||
-        s.geo.root != s.img.levels_tiled ||
-        s.geo.level[s.geo.root].width != s.img.root_w ||
-        s.geo.level[s.geo.root].height != s.img.root_h) {
-        fprintf(stderr, ME ": the server's metadata for '%s' is inconsistent\n", image);
-        goto out;
-    }
-    if (!no_cache) {
-        s.dc = gv_disk_cache_open(cache_dir, gv_http_base(s.http), image);
-        if (!s.dc && cache_dir)
-            fprintf(stderr, ME ": warning: cannot use the cache directory %s\n",
-                    cache_dir);
-        if (verbose && s.dc)
-            fprintf(stderr, "render: tile cache %s\n", gv_disk_cache_dir(s.dc));
-    }
-    const int c3 = s.img.channels;
-    if (view_form) {
-        if (!center) {
-            v.cx = s.img.width / 2.0;
-            v.cy = s.img.height / 2.0;
-        }
-        if ((unsigned long long)v.w * v.h > max_pixels) {
-            fprintf(stderr, ME ": output of %llu pixels exceeds the limit of %llu "
-                    "(--max-pixels)\n", (unsigned long long)v.w * v.h, max_pixels);
-            goto out;
-        }
-        /* Decoding at level floor(zoom) must stay within reason too. */
-        double span = exp2(v.zoom < 0 ? 0 : -floor(v.zoom));
-        if ((double)v.w * v.h * span * span * 2 > (double)max_pixels * 4) {
-            fprintf(stderr, ME ": the view needs too many decoded pixels\n");
-            goto out;
-        }
-        ow = v.w;
-        oh = v.h;
-        if (!(pixels = malloc((size_t)ow * oh * c3))) {
-            fprintf(stderr, ME ": out of memory\n");
-            goto out;
-        }
-        if (render_view(&s, &v, pixels, &err) < 0) {
+    struct picture pic = {NULL, 0, 0};
+    struct gv_error err;
+    rc = 1;
+    if (session_open(&s, argv[first], &a) == 0) {
+        rc = is_view_form(&a) ? draw_view(&s, &a, &v, &pic) : draw_region(&s, &a, &pic);
+        if (rc == 0 && gv_image_write(a.output, pic.w, pic.h, s.img.channels, pic.px,
+                                      &err) < 0) {
             fprintf(stderr, ME ": %s\n", err.text);
-            goto out;
+            rc = 1;
         }
-    } else {
-        const int top = s.geo.root + s.img.root_mips - 1;
-        if (level > top) {
-            fprintf(stderr, ME ": no level %ld (image '%s' has 0..%d)\n", level,
-                    image, top);
-            goto out;
-        }
-        uint32_t lw, lh;
-        level_size(&s.geo, &s.img, (int)level, &lw, &lh);
-        unsigned long long x = 0, y = 0, w = lw, h = lh;
-        if (region) {
-            char tail;
-            if (sscanf(region, "%llu,%llu,%llu,%llu%c", &x, &y, &w, &h, &tail) != 4) {
-                fprintf(stderr, ME ": --region wants X,Y,W,H, not '%s'\n", region);
-                rc = 2;
-                goto out;
-            }
-        }
-        if (w == 0 || h == 0 || x >= lw || y >= lh || w > lw - x || h > lh - y) {
-            fprintf(stderr, ME ": region %llu,%llu,%llu,%llu is outside level %ld "
-                    "(%u x %u)\n", x, y, w, h, level, lw, lh);
-            goto out;
-        }
-        if (w * h > max_pixels) {
-            fprintf(stderr, ME ": region of %llu pixels exceeds the limit of %llu "
-                    "(--max-pixels)\n", w * h, max_pixels);
-            goto out;
-        }
-        ow = (uint32_t)w;
-        oh = (uint32_t)h;
-        if (!(pixels = malloc((size_t)(w * h * c3)))) {
-            fprintf(stderr, ME ": out of memory\n");
-            goto out;
-        }
-        if (render_region(&s, (int)level, (uint32_t)x, (uint32_t)y, ow, oh, pixels,
-                          &err) < 0) {
-            fprintf(stderr, ME ": %s\n", err.text);
-            goto out;
-        }
+        if (rc == 0 && a.verbose)
+            print_stats(&s);
     }
-    if (gv_image_write(output, ow, oh, c3, pixels, &err) < 0) {
-        fprintf(stderr, ME ": %s\n", err.text);
-        goto out;
-    }
-    rc = 0;
-    if (verbose) {
-        struct gv_http_stats hs;
-        gv_http_stats(s.http, &hs);
-        fprintf(stderr, "render: %zu tiles needed (ancestors included); http: %llu "
-                "requests, %llu tiles downloaded, %llu revalidated (304), %llu bytes\n",
-                s.nd.n, (unsigned long long)hs.requests,
-                (unsigned long long)hs.downloaded, (unsigned long long)hs.revalidated,
-                (unsigned long long)hs.bytes);
-        if (s.cache) {
-            struct gv_gpu_cache_stats gs;
-            gv_gpu_cache_stats(s.cache, &gs);
-            const struct gv_gpu_info *gi = gv_gpu_info(s.gpu);
-            fprintf(stderr, "render: gpu %s (%s): %llu tiles decoded, %llu cache hits, "
-                    "%llu evictions, peak %zu bytes\n", gi->renderer, gi->platform,
-                    (unsigned long long)gs.decodes, (unsigned long long)gs.hits,
-                    (unsigned long long)gs.evictions, gs.peak_bytes);
-        }
-    }
-out:
-    free(pixels);
-    gv_gpu_cache_free(s.cache);
-    gv_gpu_decoder_free(s.dec);
-    gv_gpu_close(s.gpu);
-    for (size_t i = 0; i < s.nd.n; i++)
-        free(s.nd.t[i].buf);
-    free(s.nd.t);
-    gv_disk_cache_free(s.dc);
-    gv_http_free(s.http);
+    free(pic.px);
+    session_close(&s);
     return rc;
 }

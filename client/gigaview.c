@@ -1,6 +1,7 @@
 /*
  * gigaview.c - entry point of the `gigaview` tool: dispatches to the
- * subcommand named by the first argument (table below).
+ * subcommand named by the first argument (table below).  Each command
+ * parses the rest of argv against its own option table (options.h).
  */
 #include <stdio.h>
 #include <string.h>
@@ -27,7 +28,10 @@ static void usage(FILE *out)
     fprintf(out, "usage: gigaview COMMAND [ARGS]\n\ncommands:\n");
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         fprintf(out, "  %-8s %s\n", commands[i].name, commands[i].summary);
-    fprintf(out, "\n'gigaview COMMAND --help' describes a command.\n");
+    fprintf(out, "\noptions:\n"
+                 "  -h, --help     print this help and exit\n"
+                 "      --version  print the version and exit\n"
+                 "\n'gigaview COMMAND --help' describes a command.\n");
 }
 
 int main(int argc, char **argv)
@@ -46,7 +50,7 @@ int main(int argc, char **argv)
     }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name)) {
-            /* getopt prefixes its messages with argv[0]. */
+            /* getopt prefixes its messages with argv[0]: "gigaview CMD". */
             char name[64];
             snprintf(name, sizeof name, "gigaview %s", commands[i].name);
             argv[1] = name;

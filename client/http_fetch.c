@@ -236,8 +236,9 @@ out:
     return 0;
 }
 
-/* Turn a finished transfer into 0 (status `want` or, if allow_304, 304)
- * or -1 with a message naming what failed. */
+/* Turn a finished transfer into 0 (status 200 or, if allow_304, 304) or
+ * -1 with a message naming `what` failed: too large a body, a transport
+ * error, or another status (with the server's JSON message if any). */
 static int xfer_check(const struct gv_http *h, const struct xfer *x,
                       const char *what, int allow_304, struct gv_error *err)
 {
@@ -377,8 +378,11 @@ int gv_http_image(struct gv_http *h, const char *id,
     return 0;
 }
 
-/* A response body to use: a fresh 200 (stored in dc) or the cached data on
- * a 304.  Takes ownership of *cached. */
+/* The body of finished transfer x, checked (xfer_check; a 304 is allowed
+ * when there is cached data): on a 200 returns 0 and moves x's body to
+ * *out (a 1-byte buffer when empty); on a 304 returns 1 and moves *cached
+ * (cached_len bytes) to *out, setting *cached to NULL.  Returns -1 with
+ * *err filled otherwise; *cached then stays the caller's. */
 static int settle(struct gv_http *h, struct xfer *x, const char *what,
                   uint8_t **cached,
                   size_t cached_len, uint8_t **out, size_t *len,
@@ -400,15 +404,23 @@ static int settle(struct gv_http *h, struct xfer *x, const char *what,
     return 0;
 }
 
+void gv_remote_mip_size(const struct gv_remote_image *img, int mip, uint32_t *w,
+                        uint32_t *h)
+{
+    *w = img->root_w;
+    *h = img->root_h;
+    for (int m = 0; m < mip; m++) {
+        *w = (*w + 1) / 2;
+        *h = (*h + 1) / 2;
+    }
+}
+
 int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
                  struct gv_disk_cache *dc, uint8_t **pixels, uint32_t *w,
                  uint32_t *hh, struct gv_error *err)
 {
-    uint32_t mw = img->root_w, mh = img->root_h;
-    for (int m = 0; m < mip; m++) {
-        mw = (mw + 1) / 2;
-        mh = (mh + 1) / 2;
-    }
+    uint32_t mw, mh;
+    gv_remote_mip_size(img, mip, &mw, &mh);
     const size_t want = (size_t)mw * mh * img->channels;
     char path[400], name[32], etag[160] = "", what[64];
     snprintf(path, sizeof path, "/v1/images/%s/root?mip=%d&format=raw", img->id, mip);

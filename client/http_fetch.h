@@ -27,16 +27,23 @@ struct gv_http_stats {
     uint64_t bytes;        /* body bytes received */
 };
 
-/* base: "http://host:port" or "https://..." (a trailing '/' is dropped).
- * timeout_ms bounds every request, connection included.  verbose: log
- * each request to stderr. */
+/* A client of the server at base: "http://host:port" or "https://..."
+ * (trailing '/'s are dropped).  timeout_ms bounds every request,
+ * connection included.  verbose: log each request to stderr.  Returns
+ * NULL with *err filled when base is not an http(s) URL, is 1000 bytes or
+ * longer, or memory runs out.  gv_http_free(NULL) does nothing. */
 struct gv_http *gv_http_new(const char *base, long timeout_ms, int verbose,
                             struct gv_error *err);
 void gv_http_free(struct gv_http *h);
+
+/* The base URL requests go to (without its trailing '/'s). */
 const char *gv_http_base(const struct gv_http *h);
+
+/* The counters since gv_http_new. */
 void gv_http_stats(const struct gv_http *h, struct gv_http_stats *st);
 
-/* Print the server's images (GET /v1/images), one line each, to out. */
+/* Print the server's images (GET /v1/images) to out: the server and the
+ * count, then a table with one line per image. */
 int gv_http_print_images(struct gv_http *h, FILE *out, struct gv_error *err);
 
 /* What the client needs of GET /v1/images/{id}. */
@@ -49,12 +56,19 @@ struct gv_remote_image {
     int root_mips;
 };
 
-/* Fetch an image's metadata.  An unknown image is GV_ENOTFOUND. */
+/* Fetch an image's metadata into *img.  An unknown image, or an id that
+ * cannot be one, is GV_ENOTFOUND; metadata out of bounds is GV_ECORRUPT. */
 int gv_http_image(struct gv_http *h, const char *id,
                   struct gv_remote_image *img, struct gv_error *err);
 
-/* Root mip `mip` as raw samples (w x h x channels, malloc'ed), through
- * the disk cache dc (may be NULL). */
+/* The size of root mip `mip` of img (0: the root itself; each mip halves
+ * the one before, rounding up). */
+void gv_remote_mip_size(const struct gv_remote_image *img, int mip, uint32_t *w,
+                        uint32_t *h);
+
+/* Root mip `mip` as raw samples (w x h x channels, malloc'ed, the
+ * caller's), through the disk cache dc (may be NULL); a body of another
+ * size than the metadata implies is GV_ECORRUPT. */
 int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
                  struct gv_disk_cache *dc, uint8_t **pixels, uint32_t *w,
                  uint32_t *hh, struct gv_error *err);

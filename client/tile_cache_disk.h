@@ -31,7 +31,8 @@ struct gv_disk_cache *gv_disk_cache_open(const char *dir, const char *server,
 void gv_disk_cache_free(struct gv_disk_cache *dc);
 
 /* Look up entry `name`.  On a hit returns 0 with *data (malloc'ed), *len
- * and etag (NUL-terminated, at most etag_cap - 1 bytes); -1 on a miss. */
+ * and etag (NUL-terminated, at most etag_cap - 1 bytes); -1 on a miss,
+ * which a damaged entry, a longer etag or dc NULL also is. */
 int gv_disk_cache_get(struct gv_disk_cache *dc, const char *name,
                       uint8_t **data, size_t *len, char *etag, size_t etag_cap);
 
