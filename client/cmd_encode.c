@@ -7,6 +7,7 @@
  * --shard I/N it writes one shard file instead (docs/OPERATIONS.md,
  * "Encoding on many machines"), which `gigaview merge` assembles.
  */
+#include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -57,7 +58,7 @@ static int parse_range(const char *arg, void *fields, const char **wants)
     if (end == arg || end != colon)
         return -1;
     double hi = strtod(colon + 1, &end);
-    if (end == colon + 1 || *end || hi <= lo)
+    if (end == colon + 1 || *end || !isfinite(lo) || !isfinite(hi) || hi <= lo)
         return -1;
     src->range_lo = lo;
     src->range_hi = hi;

@@ -103,7 +103,7 @@ static int convert(const struct opt_spec *o, const char *arg, void *fields,
     }
     case OPT_DOUBLE: {
         double v = strtod(arg, &end);
-        if (end == arg || *end || ((o->flags & OPT_FINITE) && !isfinite(v)) ||
+        if (end == arg || *end || isnan(v) || ((o->flags & OPT_FINITE) && !isfinite(v)) ||
             !in_range(o, v))
             return -1;
         *(double *)field = v;

@@ -29,14 +29,14 @@ enum opt_kind {
     OPT_FLAG,    /* no argument; int field set to 1 */
     OPT_STRING,  /* const char * field: the argument itself (points into argv) */
     OPT_INT,     /* int field: decimal (strtol over the whole argument), in min..max */
-    OPT_DOUBLE,  /* double field: strtod over the whole argument, in min..max */
+    OPT_DOUBLE,  /* double field: strtod over the whole argument, not nan, in min..max */
     OPT_COUNT,   /* uint64_t field: parse_count (digits only, at least 1) */
     OPT_CUSTOM,  /* the row's parse function fills what it wants */
 };
 
 /* Flags of a row. */
-#define OPT_FINITE   1u   /* OPT_DOUBLE: refuse inf and nan (else nan passes
-                             every range check, as a comparison with it is false) */
+#define OPT_FINITE   1u   /* OPT_DOUBLE: refuse inf too (nan is always refused:
+                             it would pass every range check) */
 #define OPT_MIN_OPEN 2u   /* the range excludes min itself */
 #define OPT_NO_ECHO  4u   /* the message for a bad value does not quote it */
 
