@@ -168,7 +168,7 @@ static GLuint compile_stage(GLenum type, const char *src, const char *module,
     if (module)
         map_log(log, module, err);
     else
-        gv_fail(err, GV_EIO, "filter: template shader does not compile: %.200s", log);
+        gv_fail(err, GV_EINVAL, "filter: template shader does not compile: %.200s", log);
     return 0;
 }
 
@@ -193,7 +193,7 @@ static GLuint link_stages(const GLuint *sh, int n, const char *module,
     if (module)
         map_log(log, module, err);
     else
-        gv_fail(err, GV_EIO, "filter: template program does not link: %.200s", log);
+        gv_fail(err, GV_EINVAL, "filter: template program does not link: %.200s", log);
     return 0;
 }
 

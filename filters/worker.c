@@ -349,7 +349,7 @@ int gv_worker_recv_result(int fd, const struct gv_worker_job *job,
             return rc;
         struct rbuf r = {b, (size_t)len, 0, 0};
         uint32_t code = get_u32(&r), n = get_u32(&r);
-        if (code <= GV_OK || code > GV_ENOMEM || n != len - 8) {
+        if (code <= GV_OK || code > GV_CODE_MAX || n != len - 8) {
             gv_fail(err, GV_EIO, "worker: malformed failure frame");
             return GV_WORKER_BAD;
         }
@@ -543,7 +543,7 @@ static int run_job(struct gv_gpu *gpu, const struct gv_worker_job *job,
                    struct gv_error *jerr)
 {
     if (!gpu)
-        return gv_fail(jerr, GV_EIO, "worker: no GPU context");
+        return gv_fail(jerr, GV_EUNAVAIL, "worker: no GPU context");
     struct gv_filter_graph *g =
         gv_filter_graph_parse(job->doc, job->doc_len, &job->lim, jerr);
     if (!g)

@@ -171,6 +171,77 @@ static int same_file(const struct image *img, const struct stat *st)
                                 (uint64_t)st->st_mtim.tv_nsec;
 }
 
+/* The image for directory entry `name` ("ID.gv"): the one served now if
+ * the file is unchanged (a new reference), else the store opened anew.
+ * NULL for anything else.  *added counts opened stores, *kept reused ones. */
+static struct image *scan_entry(struct catalog *c, const char *name,
+                                int *added, int *kept)
+{
+    size_t len = strlen(name);
+    if (len <= 3 || strcmp(name + len - 3, ".gv"))
+        return NULL;
+    char id[CATALOG_ID_MAX + 1];
+    if (len - 3 > CATALOG_ID_MAX)
+        return NULL;
+    memcpy(id, name, len - 3);
+    id[len - 3] = '\0';
+    if (!catalog_id_valid(id)) {
+        if (id[0] != '.') /* hidden files are encoders at work */
+            log_msg(LOG_WARN, "catalog", "skipping %s: not a valid id", name);
+        return NULL;
+    }
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", c->dir, name);
+    struct stat st;
+    if (stat(path, &st) < 0 || !S_ISREG(st.st_mode))
+        return NULL;
+    struct image *img = NULL;
+    pthread_mutex_lock(&c->lock);
+    int i = find(c, id);
+    if (i >= 0 && same_file(c->items[i], &st)) {
+        img = c->items[i];
+        img->refs++;
+    }
+    pthread_mutex_unlock(&c->lock);
+    if (img) {
+        (*kept)++;
+        return img;
+    }
+    img = open_image(c, id, path, &st);
+    if (!img)
+        return NULL;
+    (*added)++;
+    log_msg(LOG_INFO, "catalog", "serving %s (%ux%u, %llu bytes)", id,
+            img->info->geometry.width, img->info->geometry.height,
+            (unsigned long long)img->bytes);
+    return img;
+}
+
+/* Put the images of the old list back, logging those replaced or no
+ * longer served.  Returns how many are no longer served. */
+static int drop_old(struct catalog *c, struct image **old, int nold)
+{
+    int dropped = 0;
+    for (int i = 0; i < nold; i++) {
+        pthread_mutex_lock(&c->lock);
+        int j = find(c, old[i]->id);
+        int still = j >= 0 && c->items[j] == old[i];
+        pthread_mutex_unlock(&c->lock);
+        if (!still && j >= 0) {
+            log_msg(LOG_INFO, "catalog", "replaced %s (instance %llu by %llu)",
+                    old[i]->id, (unsigned long long)old[i]->serial,
+                    (unsigned long long)c->items[j]->serial);
+        } else if (!still) {
+            dropped++;
+            log_msg(LOG_INFO, "catalog", "no longer serving %s (instance %llu)",
+                    old[i]->id, (unsigned long long)old[i]->serial);
+        }
+        image_put(old[i]);
+    }
+    free(old);
+    return dropped;
+}
+
 int catalog_scan(struct catalog *c)
 {
     pthread_mutex_lock(&c->scan_lock);
@@ -185,44 +256,9 @@ int catalog_scan(struct catalog *c)
     int n = 0, cap = 0, added = 0, kept = 0;
     struct dirent *e;
     while ((e = readdir(d))) {
-        size_t len = strlen(e->d_name);
-        if (len <= 3 || strcmp(e->d_name + len - 3, ".gv"))
+        struct image *img = scan_entry(c, e->d_name, &added, &kept);
+        if (!img)
             continue;
-        char id[CATALOG_ID_MAX + 1];
-        if (len - 3 > CATALOG_ID_MAX)
-            continue;
-        memcpy(id, e->d_name, len - 3);
-        id[len - 3] = '\0';
-        if (!catalog_id_valid(id)) {
-            if (id[0] != '.') /* hidden files are encoders at work */
-                log_msg(LOG_WARN, "catalog", "skipping %s: not a valid id",
-                        e->d_name);
-            continue;
-        }
-        char path[4096];
-        snprintf(path, sizeof path, "%s/%s", c->dir, e->d_name);
-        struct stat st;
-        if (stat(path, &st) < 0 || !S_ISREG(st.st_mode))
-            continue;
-        struct image *img = NULL;
-        pthread_mutex_lock(&c->lock);
-        int i = find(c, id);
-        if (i >= 0 && same_file(c->items[i], &st)) {
-            img = c->items[i];
-            img->refs++;
-        }
-        pthread_mutex_unlock(&c->lock);
-        if (img) {
-            kept++;
-        } else {
-            img = open_image(c, id, path, &st);
-            if (!img)
-                continue;
-            added++;
-            log_msg(LOG_INFO, "catalog", "serving %s (%ux%u, %llu bytes)", id,
-                    img->info->geometry.width, img->info->geometry.height,
-                    (unsigned long long)img->bytes);
-        }
         if (n == cap) {
             cap = cap ? 2 * cap : 16;
             struct image **t = realloc(next, (size_t)cap * sizeof *t);
@@ -248,24 +284,7 @@ int catalog_scan(struct catalog *c)
     c->n = n;
     pthread_mutex_unlock(&c->lock);
 
-    int dropped = 0;
-    for (int i = 0; i < nold; i++) {
-        pthread_mutex_lock(&c->lock);
-        int j = find(c, old[i]->id);
-        int still = j >= 0 && c->items[j] == old[i];
-        pthread_mutex_unlock(&c->lock);
-        if (!still && j >= 0) {
-            log_msg(LOG_INFO, "catalog", "replaced %s (instance %llu by %llu)",
-                    old[i]->id, (unsigned long long)old[i]->serial,
-                    (unsigned long long)c->items[j]->serial);
-        } else if (!still) {
-            dropped++;
-            log_msg(LOG_INFO, "catalog", "no longer serving %s (instance %llu)",
-                    old[i]->id, (unsigned long long)old[i]->serial);
-        }
-        image_put(old[i]);
-    }
-    free(old);
+    int dropped = drop_old(c, old, nold);
     log_msg(LOG_INFO, "catalog", "%s: %d images (%d new, %d unchanged, %d dropped)",
             c->dir, n, added, kept, dropped);
     pthread_mutex_unlock(&c->scan_lock);

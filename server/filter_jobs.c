@@ -32,6 +32,7 @@
 
 #include "filter_jobs.h"
 #include "log.h"
+#include "metrics.h"
 
 extern char **environ;
 
@@ -137,27 +138,23 @@ static int start_failed(struct slot *s, const struct gv_error *err)
     return -1;
 }
 
-/* Spawn the slot's worker and wait for its hello.  0 or -1 (s->start_err
- * says why, and the next attempt waits for the back-off).  Slot thread. */
-static int start_worker(struct slot *s)
+/* Spawn p's worker program on one end of a new socket pair (descriptor 3
+ * in the child).  0 with *pid and *fd (our end, non-blocking), or -1 with
+ * *err. */
+static int spawn_worker(struct filter_jobs *p, pid_t *pid, int *fd,
+                        struct gv_error *err)
 {
-    struct filter_jobs *p = s->pool;
-    struct gv_error err;
-    gv_error_clear(&err);
-    double t0 = now_s();
     int sv[2];
-    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) < 0) {
-        gv_fail_errno(&err, errno, "filter: socketpair");
-        return start_failed(s, &err);
-    }
+    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) < 0)
+        return gv_fail_errno(err, errno, "filter: socketpair");
     if (sv[1] == CHILD_FD) { /* dup2(3, 3) would keep FD_CLOEXEC */
         int d = fcntl(sv[1], F_DUPFD_CLOEXEC, CHILD_FD + 1);
         close(sv[1]);
         sv[1] = d;
         if (d < 0) {
-            gv_fail_errno(&err, errno, "filter: fcntl");
+            gv_fail_errno(err, errno, "filter: fcntl");
             close(sv[0]);
-            return start_failed(s, &err);
+            return -1;
         }
     }
     char a_parent[24], a_mem[24], a_px[24];
@@ -187,47 +184,73 @@ static int start_worker(struct slot *s)
         rc = posix_spawnattr_setsigmask(&at, &none);
     if (!rc)
         rc = posix_spawnattr_setsigdefault(&at, &all);
-    pid_t pid = 0;
+    *pid = 0;
     if (!rc)
-        rc = posix_spawn(&pid, p->path, &fa, &at, argv, environ);
+        rc = posix_spawn(pid, p->path, &fa, &at, argv, environ);
     posix_spawn_file_actions_destroy(&fa);
     posix_spawnattr_destroy(&at);
     close(sv[1]);
     if (rc) {
         close(sv[0]);
-        gv_fail(&err, GV_EIO, "filter: cannot start %s: %s", p->path, strerror(rc));
-        return start_failed(s, &err);
+        return gv_fail(err, GV_EIO, "filter: cannot start %s: %s", p->path,
+                       strerror(rc));
     }
     fcntl(sv[0], F_SETFL, fcntl(sv[0], F_GETFL) | O_NONBLOCK);
+    *fd = sv[0];
+    return 0;
+}
+
+/* The slot's new worker gave no good hello (io: what reading it returned;
+ * text: what it said): kill it and fail the start, unless the pool is
+ * stopping under it.  Returns -1.  Slot thread. */
+static int hello_failed(struct slot *s, pid_t pid, int io, const char *text,
+                        struct gv_error *err)
+{
+    struct filter_jobs *p = s->pool;
+    char why[96];
+    stop_worker(s, why, sizeof why);
     pthread_mutex_lock(&p->lock);
-    s->pid = pid;
-    s->fd = sv[0];
     int stopping = p->stop;
     pthread_mutex_unlock(&p->lock);
-    char text[GV_WORKER_MSG_MAX + 1] = "", why[96];
+    if (stopping) { /* shut down under it: not a failure to report */
+        gv_fail(&s->start_err, GV_EUNAVAIL, "filter: the server is stopping");
+        return -1;
+    }
+    if (io == GV_WORKER_TIMEOUT)
+        gv_fail(err, GV_EIO, "filter: worker %ld said nothing within %d s; "
+                "killed", (long)pid, START_TIMEOUT_MS / 1000);
+    else if (io == GV_WORKER_EOF)
+        gv_fail(err, GV_EIO, "filter: worker %s %s before it was ready",
+                p->path, why);
+    else if (io == 0)
+        gv_fail(err, GV_EUNAVAIL, "filter: worker has no GPU context: %s", text);
+    return start_failed(s, err);
+}
+
+/* Spawn the slot's worker and wait for its hello.  0 or -1 (s->start_err
+ * says why, and the next attempt waits for the back-off).  Slot thread. */
+static int start_worker(struct slot *s)
+{
+    struct filter_jobs *p = s->pool;
+    struct gv_error err;
+    gv_error_clear(&err);
+    double t0 = now_s();
+    pid_t pid = 0;
+    int fd = -1;
+    if (spawn_worker(p, &pid, &fd, &err) < 0)
+        return start_failed(s, &err);
+    pthread_mutex_lock(&p->lock);
+    s->pid = pid;
+    s->fd = fd;
+    int stopping = p->stop;
+    pthread_mutex_unlock(&p->lock);
+    char text[GV_WORKER_MSG_MAX + 1] = "";
     int ok = 0;
     int io = stopping ? GV_WORKER_EOF
-                      : gv_worker_recv_hello(sv[0], gv_worker_now_ms() + START_TIMEOUT_MS,
+                      : gv_worker_recv_hello(fd, gv_worker_now_ms() + START_TIMEOUT_MS,
                                              &ok, text, sizeof text, &err);
-    if (io || !ok) {
-        stop_worker(s, why, sizeof why);
-        pthread_mutex_lock(&p->lock);
-        stopping = p->stop;
-        pthread_mutex_unlock(&p->lock);
-        if (stopping) { /* shut down under it: not a failure to report */
-            gv_fail(&s->start_err, GV_EIO, "filter: the server is stopping");
-            return -1;
-        }
-        if (io == GV_WORKER_TIMEOUT)
-            gv_fail(&err, GV_EIO, "filter: worker %ld said nothing within %d s; "
-                    "killed", (long)pid, START_TIMEOUT_MS / 1000);
-        else if (io == GV_WORKER_EOF)
-            gv_fail(&err, GV_EIO, "filter: worker %s %s before it was ready",
-                    p->path, why);
-        else if (io == 0)
-            gv_fail(&err, GV_EIO, "filter: worker has no GPU context: %s", text);
-        return start_failed(s, &err);
-    }
+    if (io || !ok)
+        return hello_failed(s, pid, io, text, &err);
     s->backoff_ms = 0;
     s->retry_at = 0;
     pthread_mutex_lock(&p->lock);
@@ -268,7 +291,7 @@ static int run_job(struct slot *s, struct filter_job *j)
     if (s->pid <= 0 &&
         (gv_worker_now_ms() < s->retry_at || start_worker(s) < 0)) {
         j->status = FILTER_JOB_UNAVAILABLE;
-        gv_fail(&j->err, GV_EIO, "filters unavailable: %s", s->start_err.text);
+        gv_fail(&j->err, GV_EUNAVAIL, "filters unavailable: %s", s->start_err.text);
         atomic_fetch_add(&p->n_unavailable, 1);
         return 0;
     }
@@ -306,23 +329,23 @@ static int run_job(struct slot *s, struct filter_job *j)
     pthread_mutex_unlock(&p->lock);
     if (stopping) {
         j->status = FILTER_JOB_CANCELLED;
-        gv_fail(&j->err, GV_EIO, "filter: cancelled: the server is stopping");
+        gv_fail(&j->err, GV_EUNAVAIL, "filter: cancelled: the server is stopping");
         atomic_fetch_add(&p->n_cancelled, 1);
         return 0;
     }
     if (rc == GV_WORKER_TIMEOUT) {
         j->status = FILTER_JOB_TIMEOUT;
-        gv_fail(&j->err, GV_EIO, "filter: the job ran past the time limit of "
+        gv_fail(&j->err, GV_ETIMEOUT, "filter: the job ran past the time limit of "
                 "%d ms (filter_timeout_ms); its worker was killed",
                 p->cfg.timeout_ms);
         atomic_fetch_add(&p->n_timeout, 1);
     } else {
         j->status = FILTER_JOB_CRASHED;
         if (rc == GV_WORKER_EOF)
-            gv_fail(&j->err, GV_EIO, "filter: the worker process died during "
+            gv_fail(&j->err, GV_ECRASH, "filter: the worker process died during "
                     "the job (%s)", why);
         else
-            gv_fail(&j->err, GV_EIO, "filter: the worker broke the protocol "
+            gv_fail(&j->err, GV_ECRASH, "filter: the worker broke the protocol "
                     "(%s) and was killed", err.text);
         atomic_fetch_add(&p->n_crash, 1);
     }
@@ -508,7 +531,7 @@ void filter_jobs_stop(struct filter_jobs *p, unsigned timeout_ms)
         struct filter_job *j = cancelled;
         cancelled = j->next;
         j->status = FILTER_JOB_CANCELLED;
-        gv_fail(&j->err, GV_EIO, "filter: cancelled: the server is stopping");
+        gv_fail(&j->err, GV_EUNAVAIL, "filter: cancelled: the server is stopping");
         atomic_fetch_add(&p->n_cancelled, 1);
         j->done(j, j->arg);
     }
@@ -532,8 +555,10 @@ void filter_jobs_free(struct filter_jobs *p)
     free(p);
 }
 
-char *filter_jobs_metrics(struct filter_jobs *p)
+void filter_jobs_metrics(struct filter_jobs *p, struct prom *out)
 {
+    static const char *const results[] = {"ok", "error", "timeout", "crash",
+                                          "unavailable", "cancelled"};
     uint64_t v[11] = {0};
     int ready = 0, queued = 0, running = 0;
     if (p) {
@@ -549,52 +574,32 @@ char *filter_jobs_metrics(struct filter_jobs *p)
         running = p->running;
         pthread_mutex_unlock(&p->lock);
     }
-    char *s = NULL;
-    int n = asprintf(&s,
-        "# HELP gigaview_filter_jobs_total Filter jobs by result: ok, error (the "
-        "graph failed in the worker: GLSL, limits), timeout (worker killed at "
-        "filter_timeout_ms), crash (worker died), unavailable (no worker could "
-        "start), cancelled (shutdown).\n"
-        "# TYPE gigaview_filter_jobs_total counter\n"
-        "gigaview_filter_jobs_total{result=\"ok\"} %llu\n"
-        "gigaview_filter_jobs_total{result=\"error\"} %llu\n"
-        "gigaview_filter_jobs_total{result=\"timeout\"} %llu\n"
-        "gigaview_filter_jobs_total{result=\"crash\"} %llu\n"
-        "gigaview_filter_jobs_total{result=\"unavailable\"} %llu\n"
-        "gigaview_filter_jobs_total{result=\"cancelled\"} %llu\n"
-        "# HELP gigaview_filter_jobs_rejected_total Filter requests refused "
-        "with 503 because filter_max_jobs were queued or running.\n"
-        "# TYPE gigaview_filter_jobs_rejected_total counter\n"
-        "gigaview_filter_jobs_rejected_total %llu\n"
-        "# HELP gigaview_filter_worker_starts_total Worker processes started.\n"
-        "# TYPE gigaview_filter_worker_starts_total counter\n"
-        "gigaview_filter_worker_starts_total %llu\n"
-        "# HELP gigaview_filter_worker_restarts_total Workers started to "
-        "replace one that was killed or died.\n"
-        "# TYPE gigaview_filter_worker_restarts_total counter\n"
-        "gigaview_filter_worker_restarts_total %llu\n"
-        "# HELP gigaview_filter_worker_start_failures_total Workers that could "
-        "not start (no EGL context, missing program).\n"
-        "# TYPE gigaview_filter_worker_start_failures_total counter\n"
-        "gigaview_filter_worker_start_failures_total %llu\n"
-        "# HELP gigaview_filter_worker_seconds_total Time jobs spent in "
-        "workers, from sending to the answer.\n"
-        "# TYPE gigaview_filter_worker_seconds_total counter\n"
-        "gigaview_filter_worker_seconds_total %.6f\n"
-        "# HELP gigaview_filter_workers Worker processes ready for jobs.\n"
-        "# TYPE gigaview_filter_workers gauge\n"
-        "gigaview_filter_workers %d\n"
-        "# HELP gigaview_filter_jobs_queued Filter jobs waiting for a worker.\n"
-        "# TYPE gigaview_filter_jobs_queued gauge\n"
-        "gigaview_filter_jobs_queued %d\n"
-        "# HELP gigaview_filter_jobs_running Filter jobs in workers.\n"
-        "# TYPE gigaview_filter_jobs_running gauge\n"
-        "gigaview_filter_jobs_running %d\n",
-        (unsigned long long)v[0], (unsigned long long)v[1],
-        (unsigned long long)v[2], (unsigned long long)v[3],
-        (unsigned long long)v[4], (unsigned long long)v[5],
-        (unsigned long long)v[6], (unsigned long long)v[7],
-        (unsigned long long)v[8], (unsigned long long)v[9], (double)v[10] / 1e6,
-        ready, queued, running);
-    return n < 0 ? NULL : s;
+    prom_family(out, "gigaview_filter_jobs_total", "counter",
+                "Filter jobs by result: ok, error (the graph failed in the "
+                "worker: GLSL, limits), timeout (worker killed at "
+                "filter_timeout_ms), crash (worker died), unavailable (no worker "
+                "could start), cancelled (shutdown).");
+    for (int i = 0; i < 6; i++)
+        prom_printf(out, "gigaview_filter_jobs_total{result=\"%s\"} %llu\n",
+                    results[i], (unsigned long long)v[i]);
+    prom_metric(out, "gigaview_filter_jobs_rejected_total", "counter",
+                "Filter requests refused with 503 because filter_max_jobs were "
+                "queued or running.", "%llu", (unsigned long long)v[6]);
+    prom_metric(out, "gigaview_filter_worker_starts_total", "counter",
+                "Worker processes started.", "%llu", (unsigned long long)v[7]);
+    prom_metric(out, "gigaview_filter_worker_restarts_total", "counter",
+                "Workers started to replace one that was killed or died.", "%llu",
+                (unsigned long long)v[8]);
+    prom_metric(out, "gigaview_filter_worker_start_failures_total", "counter",
+                "Workers that could not start (no EGL context, missing "
+                "program).", "%llu", (unsigned long long)v[9]);
+    prom_metric(out, "gigaview_filter_worker_seconds_total", "counter",
+                "Time jobs spent in workers, from sending to the answer.", "%.6f",
+                (double)v[10] / 1e6);
+    prom_metric(out, "gigaview_filter_workers", "gauge",
+                "Worker processes ready for jobs.", "%d", ready);
+    prom_metric(out, "gigaview_filter_jobs_queued", "gauge",
+                "Filter jobs waiting for a worker.", "%d", queued);
+    prom_metric(out, "gigaview_filter_jobs_running", "gauge",
+                "Filter jobs in workers.", "%d", running);
 }

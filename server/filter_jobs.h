@@ -34,6 +34,7 @@
 #include "worker.h"
 
 struct filter_jobs;
+struct prom;
 
 struct filter_jobs_config {
     const char *worker_path;   /* the gigaview-filter-worker program */
@@ -60,7 +61,10 @@ struct filter_job {
     /* out, valid in done() and after */
     enum filter_job_status status;
     struct gv_worker_result res;      /* DONE: res.out is the caller's */
-    struct gv_error err;              /* not DONE: what happened */
+    struct gv_error err;              /* not DONE: what happened, as
+                                         GV_ETIMEOUT, GV_ECRASH or
+                                         GV_EUNAVAIL (unavailable,
+                                         cancelled) */
     double worker_ms;                 /* send to answer */
     struct filter_job *next;          /* private */
 };
@@ -97,10 +101,9 @@ void filter_jobs_stop(struct filter_jobs *p, unsigned timeout_ms);
 void filter_jobs_free(struct filter_jobs *p);
 
 /*
- * The pool's counters in the Prometheus text format (docs/API.md,
- * /metrics): a malloc'ed string, or NULL on allocation failure.  p may be
+ * Write the pool's counters to out (docs/API.md, /metrics).  p may be
  * NULL (filters off): the counters read 0.
  */
-char *filter_jobs_metrics(struct filter_jobs *p);
+void filter_jobs_metrics(struct filter_jobs *p, struct prom *out);
 
 #endif

@@ -15,14 +15,17 @@
 #include <zlib.h>
 
 #include "filter_output.h"
+#include "imageio/output_format.h"
 
+/* Each form's name, and the output format (imageio/output_format.h)
+ * whose MIME type it has. */
 static const struct {
-    const char *name, *type;
+    const char *name, *format;
 } forms[] = {
-    [FILTER_OUT_PNG] = {"png", "image/png"},
-    [FILTER_OUT_TIFF16] = {"tiff16", "image/tiff"},
-    [FILTER_OUT_TIFF32F] = {"tiff32f", "image/tiff"},
-    [FILTER_OUT_RAW] = {"raw", "application/octet-stream"},
+    [FILTER_OUT_PNG] = {"png", "png"},
+    [FILTER_OUT_TIFF16] = {"tiff16", "tif"},
+    [FILTER_OUT_TIFF32F] = {"tiff32f", "tif"},
+    [FILTER_OUT_RAW] = {"raw", "raw"},
 };
 
 int filter_output_parse(const char *name, enum filter_output_form *form)
@@ -37,7 +40,7 @@ int filter_output_parse(const char *name, enum filter_output_form *form)
 
 const char *filter_output_type(enum filter_output_form form)
 {
-    return forms[form].type;
+    return gv_output_format_find(forms[form].format)->mime;
 }
 
 static uint8_t to_u8(float v)

@@ -25,8 +25,13 @@
 
 /* ---------------------------------------------------------- error table */
 
+/* The one failure that only the HTTP layer has: a method the route does
+ * not take.  Numbered after every gv_code, so that the table holds it. */
+#define HTTP_EMETHOD (GV_CODE_MAX + 1)
+
+/* Every error status and JSON code gigaviewd answers with. */
 static const struct {
-    enum gv_code code;
+    int code;              /* enum gv_code, or HTTP_EMETHOD */
     unsigned status;       /* /v1 routes */
     unsigned iiif_status;  /* IIIF routes: the spec knows no 413 */
     const char *name;
@@ -40,7 +45,34 @@ static const struct {
     {GV_EIO, 500, 500, "io_error"},
     {GV_ENOSPC, 507, 507, "no_space"},
     {GV_ENOMEM, 503, 503, "out_of_memory"},
+    {GV_EUNAVAIL, 503, 503, "unavailable"},
+    {GV_EBUSY, 503, 503, "busy"},
+    {GV_ETIMEOUT, 504, 504, "timeout"},
+    {GV_ECRASH, 500, 500, "worker_crashed"},
+    {GV_EPERM, 403, 403, "forbidden"},
+    {GV_EAUTH, 401, 401, "unauthorized"},
+    {HTTP_EMETHOD, 405, 405, "method_not_allowed"},
 };
+
+/* The row of `code`; an unknown code is "internal" (500). */
+static size_t error_row(int code)
+{
+    for (size_t k = 0; k < sizeof error_table / sizeof error_table[0]; k++)
+        if (error_table[k].code == code)
+            return k;
+    return 0;
+}
+
+/* The status of table row i on r's route. */
+static unsigned row_status(const struct req *r, size_t i)
+{
+    return r->iiif ? error_table[i].iiif_status : error_table[i].status;
+}
+
+unsigned http_error_status(const struct req *r, enum gv_code code)
+{
+    return row_status(r, error_row((int)code));
+}
 
 /* ------------------------------------------------------------ responses */
 
@@ -73,79 +105,110 @@ enum MHD_Result http_send(struct req *r, unsigned status,
     return ret;
 }
 
-enum MHD_Result http_send_copy(struct req *r, unsigned status,
-                               const char *type, const void *body, size_t len)
+struct MHD_Response *http_response_copy(const void *body, size_t len,
+                                        const char *type)
 {
     struct MHD_Response *resp = MHD_create_response_from_buffer(
         len, (void *)body, MHD_RESPMEM_MUST_COPY);
     if (resp && type)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, type);
-    return http_send(r, status, resp, len);
+    return resp;
 }
 
-enum MHD_Result http_send_owned(struct req *r, unsigned status,
-                                const char *type, void *body, size_t len)
+struct MHD_Response *http_response_owned(void *body, size_t len,
+                                         const char *type)
 {
     struct MHD_Response *resp =
         MHD_create_response_from_buffer_with_free_callback(len, body, free);
     if (!resp) {
         free(body);
-        return http_send(r, status, NULL, 0);
+        return NULL;
     }
     if (type)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, type);
+    return resp;
+}
+
+struct MHD_Response *http_response_json(json_t *json, size_t flags,
+                                        const char *type, size_t *len)
+{
+    char *s = json ? json_dumps(json, flags) : NULL;
+    json_decref(json);
+    *len = 0;
+    if (!s)
+        return NULL;
+    size_t n = strlen(s);
+    s[n] = '\n'; /* json_dumps leaves room: replace the NUL, length + 1 */
+    *len = n + 1;
+    return http_response_owned(s, n + 1, type);
+}
+
+void http_header_int(struct MHD_Response *resp, const char *name, long long v)
+{
+    char s[32];
+    snprintf(s, sizeof s, "%lld", v);
+    MHD_add_response_header(resp, name, s);
+}
+
+enum MHD_Result http_send_owned(struct req *r, unsigned status,
+                                const char *type, void *body, size_t len)
+{
+    return http_send(r, status, http_response_owned(body, len, type), len);
+}
+
+enum MHD_Result http_send_json_header(struct req *r, unsigned status,
+                                      json_t *json, const char *name,
+                                      const char *value)
+{
+    size_t len;
+    struct MHD_Response *resp = http_response_json(
+        json, JSON_COMPACT | JSON_REAL_PRECISION(8), "application/json", &len);
+    if (resp && name)
+        MHD_add_response_header(resp, name, value);
     return http_send(r, status, resp, len);
 }
 
 enum MHD_Result http_send_json(struct req *r, unsigned status, json_t *json)
 {
-    char *s = json ? json_dumps(json, JSON_COMPACT | JSON_REAL_PRECISION(8)) : NULL;
-    json_decref(json);
-    if (!s)
-        return http_send(r, status, NULL, 0);
-    size_t n = strlen(s);
-    s[n] = '\n'; /* json_dumps leaves room: replace the NUL, length + 1 */
-    return http_send_owned(r, status, "application/json", s, n + 1);
+    return http_send_json_header(r, status, json, NULL, NULL);
 }
 
-static enum MHD_Result send_error_body(struct req *r, unsigned status,
-                                       const char *code, const char *message,
-                                       const char *allow)
+/* The error body of row `code` of the table, logged, with one extra
+ * header (name NULL: none). */
+static enum MHD_Result send_error(struct req *r, int code, const char *message,
+                                  const char *name, const char *value)
 {
-    json_t *e = json_pack("{s:{s:i,s:s,s:s}}", "error", "status", (int)status,
-                          "code", code, "message", message);
+    size_t i = error_row(code);
+    unsigned status = row_status(r, i);
+    const char *id = error_table[i].name;
+    if (!message[0])
+        message = "internal error";
     char esc[400];
     log_msg(status >= 500 ? LOG_WARN : LOG_DEBUG, "http", "%u %s: %s", status,
-            code, log_escape(esc, sizeof esc, message));
-    char *s = e ? json_dumps(e, JSON_COMPACT) : NULL;
-    json_decref(e);
-    if (!s)
-        return http_send(r, status, NULL, 0);
-    size_t n = strlen(s);
-    s[n] = '\n';
+            id, log_escape(esc, sizeof esc, message));
+    json_t *e = json_pack("{s:{s:i,s:s,s:s}}", "error", "status", (int)status,
+                          "code", id, "message", message);
+    size_t len;
     struct MHD_Response *resp =
-        MHD_create_response_from_buffer_with_free_callback(n + 1, s, free);
-    if (!resp) {
-        free(s);
-        return http_send(r, status, NULL, 0);
+        http_response_json(e, JSON_COMPACT, "application/json", &len);
+    if (resp) {
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+        if (name)
+            MHD_add_response_header(resp, name, value);
     }
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
-                            "application/json");
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
-    if (allow)
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, allow);
-    return http_send(r, status, resp, n + 1);
+    return http_send(r, status, resp, len);
 }
 
 enum MHD_Result http_send_error(struct req *r, const struct gv_error *err)
 {
-    size_t i = 0;
-    for (size_t k = 0; k < sizeof error_table / sizeof error_table[0]; k++)
-        if (error_table[k].code == err->code)
-            i = k;
-    unsigned status = r->iiif ? error_table[i].iiif_status : error_table[i].status;
-    return send_error_body(r, status, error_table[i].name,
-                           err->text[0] ? err->text : "internal error", NULL);
+    return send_error(r, (int)err->code, err->text, NULL, NULL);
+}
+
+enum MHD_Result http_send_fail(struct req *r, enum gv_code code,
+                               const char *message, const char *name,
+                               const char *value)
+{
+    return send_error(r, (int)code, message, name, value);
 }
 
 enum MHD_Result http_send_errorf(struct req *r, enum gv_code code,
@@ -158,13 +221,6 @@ enum MHD_Result http_send_errorf(struct req *r, enum gv_code code,
     vsnprintf(err.text, sizeof err.text, fmt, ap);
     va_end(ap);
     return http_send_error(r, &err);
-}
-
-enum MHD_Result http_send_status(struct req *r, unsigned status,
-                                 const char *code, const char *message,
-                                 const char *allow)
-{
-    return send_error_body(r, status, code, message, allow);
 }
 
 enum MHD_Result http_send_empty(struct req *r, unsigned status,
@@ -237,6 +293,15 @@ struct image *http_image(struct req *r, enum MHD_Result *ret)
         *ret = http_send_errorf(r, GV_ENOTFOUND, "no image '%s'", esc);
     }
     return img;
+}
+
+void http_page_error(const struct image *img, const char *module,
+                     const char *where, const struct gv_error *err)
+{
+    if (err->code != GV_ECORRUPT && err->code != GV_EIO)
+        return;
+    atomic_fetch_add(&metrics.page_errors, 1);
+    log_msg(LOG_ERROR, module, "%s: %s%s", img->id, where, err->text);
 }
 
 int http_authorized(struct req *r)
@@ -313,7 +378,7 @@ static enum MHD_Result dispatch(struct req *r)
     }
     char msg[128];
     snprintf(msg, sizeof msg, "method not allowed; allowed: %s", allow);
-    return http_send_status(r, 405, "method_not_allowed", msg, allow);
+    return send_error(r, HTTP_EMETHOD, msg, MHD_HTTP_HEADER_ALLOW, allow);
 }
 
 /*
@@ -343,13 +408,13 @@ static void remote_address(struct MHD_Connection *conn, char *buf, size_t size)
                   (socklen_t)size);
 }
 
-/* 413 for a body over max_request_bytes (announced or received). */
+/* 413 for a body over max_request_bytes (announced or received): no
+ * route has matched yet, so this is never an IIIF 400. */
 static enum MHD_Result send_too_large(struct req *r)
 {
-    char msg[96];
-    snprintf(msg, sizeof msg, "request body larger than %llu bytes (max_request_bytes)",
-             (unsigned long long)r->srv->cfg->max_request_bytes);
-    return http_send_status(r, 413, "too_large", msg, NULL);
+    return http_send_errorf(r, GV_ELIMIT, "request body larger than %llu bytes "
+                            "(max_request_bytes)",
+                            (unsigned long long)r->srv->cfg->max_request_bytes);
 }
 
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,

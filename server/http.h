@@ -10,8 +10,11 @@
  *
  *     {"error": {"status": 404, "code": "not_found", "message": "..."}}
  *
- * Handlers (route_*.c) build a response with the http_send* helpers,
- * which add the CORS header, record the status and queue the response.
+ * Every error answer comes from that table: handlers report a gv_code
+ * (http_send_error*), never a status of their own.  Handlers (route_*.c)
+ * build a response with the http_send* helpers, or make one with
+ * http_response_* and add headers, then http_send: that adds the CORS
+ * header, records the status and queues the response.
  * Every handler runs on a pool thread; struct server is read-only there
  * except for its thread-safe members (catalog, page cache, metrics,
  * filters).  A handler may suspend its connection (MHD_suspend_connection)
@@ -47,8 +50,9 @@ struct server {
     /* The EGL context opened at start-up (gpu = auto), closed after the
      * drain; NULL when disabled or when no context could be made, and then
      * gpu_reason says why.  Set before http_start, read-only after.  No
-     * route uses the GPU yet: only /healthz reports it (server-side filters
-     * come later and will run through gv_gpu_call). */
+     * route uses it: /healthz reports it, and filters run in worker
+     * processes with EGL contexts of their own, started only when this
+     * one opened. */
     struct gv_gpu *gpu;
     char gpu_reason[sizeof ((struct gv_error *)0)->text];
     /* Filter graphs (route_filters.c): the pool of sandboxed worker
@@ -97,33 +101,62 @@ void http_drain_and_stop(struct server *srv, unsigned timeout_s);
 /* ---- helpers for handlers ---- */
 
 /* Queue resp with `status` (adds CORS and common headers, records status
- * and body size, destroys resp).  resp NULL: 503-style failure, MHD_NO. */
+ * and body size, destroys resp).  resp NULL: logged, the request fails
+ * (status 500 in the access log) and MHD_NO is returned. */
 enum MHD_Result http_send(struct req *r, unsigned status,
                           struct MHD_Response *resp, size_t body_len);
 
-/* A copy of `len` bytes of body with Content-Type `type`. */
-enum MHD_Result http_send_copy(struct req *r, unsigned status,
-                               const char *type, const void *body, size_t len);
+/*
+ * Responses to add headers to before http_send: `len` bytes of body with
+ * Content-Type `type` (NULL: none).  http_response_copy copies body;
+ * http_response_owned takes a malloc'ed body, which the response frees
+ * (or which is freed here on failure).  NULL on allocation failure.
+ */
+struct MHD_Response *http_response_copy(const void *body, size_t len,
+                                        const char *type);
+struct MHD_Response *http_response_owned(void *body, size_t len,
+                                         const char *type);
+
+/* The one JSON serializer: json (stolen: decref'ed here, may be NULL)
+ * dumped with jansson's `flags` and a final newline, as a response with
+ * Content-Type `type`; *len is the body's length.  NULL if json is NULL or
+ * on allocation failure. */
+struct MHD_Response *http_response_json(json_t *json, size_t flags,
+                                        const char *type, size_t *len);
+
+/* Add header `name` with the decimal value v. */
+void http_header_int(struct MHD_Response *resp, const char *name, long long v);
 
 /* A malloc'ed body that the response frees. */
 enum MHD_Result http_send_owned(struct req *r, unsigned status,
                                 const char *type, void *body, size_t len);
 
-/* json: serialized and decref'ed (stolen). */
+/* json (stolen), compact, as application/json; http_send_json_header
+ * adds one header (name NULL: none). */
 enum MHD_Result http_send_json(struct req *r, unsigned status, json_t *json);
+enum MHD_Result http_send_json_header(struct req *r, unsigned status,
+                                      json_t *json, const char *name,
+                                      const char *value);
 
-/* The JSON error for err->code, through the one error table. */
+/* The JSON error for err->code, through the one error table (an unknown
+ * code is 500 "internal"), with Cache-Control: no-store.  The message is
+ * err->text ("internal error" when empty). */
 enum MHD_Result http_send_error(struct req *r, const struct gv_error *err);
+
+/* Same from a code and a message of any length, with one more header
+ * (Retry-After, WWW-Authenticate; name NULL: none). */
+enum MHD_Result http_send_fail(struct req *r, enum gv_code code,
+                               const char *message, const char *name,
+                               const char *value);
 
 /* Same, built from a code and a message. */
 enum MHD_Result http_send_errorf(struct req *r, enum gv_code code,
                                  const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
-/* An HTTP-level error that no gv_code stands for (405, 413 body, 401). */
-enum MHD_Result http_send_status(struct req *r, unsigned status,
-                                 const char *code, const char *message,
-                                 const char *allow);
+/* The status the error table gives `code` on r's route, for a failure
+ * reported inside a response rather than as one (a batch's tile). */
+unsigned http_error_status(const struct req *r, enum gv_code code);
 
 /* A header response with no body (304, 303 with Location). */
 enum MHD_Result http_send_empty(struct req *r, unsigned status,
@@ -144,9 +177,16 @@ void http_base_url(struct req *r, char *buf, size_t size);
  * queueing a 404 (*ret holds the result to return). */
 struct image *http_image(struct req *r, enum MHD_Result *ret);
 
+/* After a failure that may come from img's store: a damaged or unreadable
+ * page (GV_ECORRUPT, GV_EIO) is counted (gigaview_page_error_responses_total)
+ * and logged as an error under `module`, "ID: WHERE MESSAGE".  Other codes
+ * are not the store's: nothing happens. */
+void http_page_error(const struct image *img, const char *module,
+                     const char *where, const struct gv_error *err);
+
 /* 1 if the request carries "Authorization: Bearer <auth_token>" and a
  * token is configured (compared in constant time), else 0.  For the write
- * endpoints (filter graphs) of a later release. */
+ * endpoints: storing and deleting filter graphs. */
 int http_authorized(struct req *r);
 
 /* Seconds since the server started. */

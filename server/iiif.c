@@ -51,8 +51,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "store/geometry.h"
 #include "iiif.h"
+#include "imageio/output_format.h"
+#include "store/geometry.h"
 
 #define FRAC_DIGITS 9                     /* decimals kept in a decimal */
 #define FRAC_ONE 1000000000ull            /* 10^FRAC_DIGITS */
@@ -289,63 +290,57 @@ static void fit(uint64_t bw, uint64_t bh, double scale, const struct caps *c,
     *oh = h;
 }
 
-static int parse_size(const char *size, uint32_t rw, uint32_t rh,
-                      const struct iiif_limits *lim, struct gv_render_req *r,
-                      struct gv_error *err)
+/* The limits as caps: 0 means none, sides stop at GV_MAX_DIM, and the
+ * upscaling factor is at least 1 (NaN included) and at most 1e9. */
+static void caps_of(const struct iiif_limits *lim, struct caps *c)
+{
+    c->mw = lim->max_width ? lim->max_width : GV_MAX_DIM;
+    c->mh = lim->max_height ? lim->max_height : GV_MAX_DIM;
+    if (c->mw > GV_MAX_DIM)
+        c->mw = GV_MAX_DIM;
+    if (c->mh > GV_MAX_DIM)
+        c->mh = GV_MAX_DIM;
+    c->area = lim->max_area ? lim->max_area : UINT64_MAX;
+    c->up = lim->max_upscale >= 1.0 ? lim->max_upscale : 1.0; /* NaN -> 1 */
+    if (c->up > 1e9)     /* beyond any side cap; keeps the products finite */
+        c->up = 1e9;
+}
+
+/* pct:n (the number at [s, e)) of the region rw x rh, each side at
+ * least 1; above 100 only with ^ (up). */
+static int size_pct(const char *size, const char *s, const char *e, int up,
+                    uint32_t rw, uint32_t rh, uint64_t *ow, uint64_t *oh,
+                    struct gv_error *err)
 {
     char shown[48];
-    const char *s = size, *e = size + strlen(size);
-    int up = 0;
-    uint64_t ow, oh;
-    struct caps c;
+    uint64_t n;
+    if (parse_decimal(s, e, &n) != 0)
+        return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": pct: needs a "
+                       "decimal number of at most %d integer digits",
+                       SHOW(size), INT_DIGITS);
+    if (n == 0)
+        return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": zero size",
+                       SHOW(size));
+    if (!up && n > 100 * FRAC_ONE)
+        return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": above 100%% "
+                       "needs ^ to upscale", SHOW(size));
+    *ow = mul_div_round(n, rw, 100 * FRAC_ONE);
+    *oh = mul_div_round(n, rh, 100 * FRAC_ONE);
+    if (*ow == 0)
+        *ow = 1;
+    if (*oh == 0)
+        *oh = 1;
+    return 0;
+}
 
-    c.mw = lim->max_width ? lim->max_width : GV_MAX_DIM;
-    c.mh = lim->max_height ? lim->max_height : GV_MAX_DIM;
-    if (c.mw > GV_MAX_DIM)
-        c.mw = GV_MAX_DIM;
-    if (c.mh > GV_MAX_DIM)
-        c.mh = GV_MAX_DIM;
-    c.area = lim->max_area ? lim->max_area : UINT64_MAX;
-    c.up = lim->max_upscale >= 1.0 ? lim->max_upscale : 1.0; /* NaN -> 1 */
-    if (c.up > 1e9)     /* beyond any side cap; keeps the products finite */
-        c.up = 1e9;
-
-    if (*s == '^') {
-        up = 1;
-        s++;
-    }
-    if (strcmp(s, "max") == 0) {
-        fit(rw, rh, up ? c.up : 1.0, &c, &ow, &oh);
-        goto done;
-    }
-    if (strncmp(s, "pct:", 4) == 0) {
-        uint64_t n;
-        if (parse_decimal(s + 4, e, &n) != 0)
-            return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": pct: needs a "
-                           "decimal number of at most %d integer digits",
-                           SHOW(size), INT_DIGITS);
-        if (n == 0)
-            return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": zero size",
-                           SHOW(size));
-        if (!up && n > 100 * FRAC_ONE)
-            return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": above 100%% "
-                           "needs ^ to upscale", SHOW(size));
-        ow = mul_div_round(n, rw, 100 * FRAC_ONE);
-        oh = mul_div_round(n, rh, 100 * FRAC_ONE);
-        if (ow == 0)
-            ow = 1;
-        if (oh == 0)
-            oh = 1;
-        goto check;
-    }
-    int bang = 0;
-    if (*s == '!') {
-        bang = 1;
-        s++;
-    }
+/* The "w,h" of the w,  ,h  w,h and !w,h forms at [s, e): v[i] where
+ * have[i]; at least one, both for !w,h (bang), none of them zero. */
+static int parse_wh(const char *size, const char *s, const char *e, int bang,
+                    uint32_t *v, int *have, struct gv_error *err)
+{
+    char shown[48];
     const char *fs[2], *fe[2];
-    uint32_t v[2] = {0, 0};
-    int have[2];
+    v[0] = v[1] = 0;
     if (split(s, e, 2, fs, fe) != 0)
         return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": expected max, "
                        "w,  ,h  w,h  !w,h or pct:n, each optionally after ^",
@@ -366,67 +361,123 @@ static int parse_size(const char *size, uint32_t rw, uint32_t rh,
     if ((have[0] && v[0] == 0) || (have[1] && v[1] == 0))
         return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": zero size",
                        SHOW(size));
-    if (bang) {
-        /* scale = min(w/rw, h/rh): compare w*rh with h*rw exactly */
-        uint64_t bw = v[0], bh = v[1];
-        if (bw * rh <= bh * rw) {   /* width-limited */
-            ow = bw;
-            oh = mul_div_round(rh, bw, rw);
-        } else {
-            oh = bh;
-            ow = mul_div_round(rw, bh, rh);
-        }
-        if (ow == 0)
-            ow = 1;
-        if (oh == 0)
-            oh = 1;
-        double want = bw * (double)rh <= bh * (double)rw
-                          ? (double)bw / rw : (double)bh / rh;
-        if (!up && (ow > rw || oh > rh)) {
-            /* not larger than the region */
-            ow = rw;
-            oh = rh;
-        }
-        if (!within(ow, oh, &c)
-            || (up && (ow > rw * c.up || oh > rh * c.up)))
-            fit(rw, rh, want < (up ? c.up : 1.0) ? want : (up ? c.up : 1.0),
-                &c, &ow, &oh);
-        goto done;
-    }
-    if (have[0] && have[1]) {
-        ow = v[0];
-        oh = v[1];
-    } else if (have[0]) {
-        ow = v[0];
-        oh = mul_div_round(rh, v[0], rw);
-        if (oh == 0)
-            oh = 1;
+    return 0;
+}
+
+/* !w,h: the largest size of the region's aspect within a w x h box (not
+ * above the region's size without ^), shrunk to fit the limits. */
+static void size_best_fit(const uint32_t *v, uint32_t rw, uint32_t rh, int up,
+                          const struct caps *c, uint64_t *ow, uint64_t *oh)
+{
+    /* scale = min(w/rw, h/rh): compare w*rh with h*rw exactly */
+    uint64_t bw = v[0], bh = v[1];
+    if (bw * rh <= bh * rw) {   /* width-limited */
+        *ow = bw;
+        *oh = mul_div_round(rh, bw, rw);
     } else {
-        oh = v[1];
-        ow = mul_div_round(rw, v[1], rh);
-        if (ow == 0)
-            ow = 1;
+        *oh = bh;
+        *ow = mul_div_round(rw, bh, rh);
     }
-check:
+    if (*ow == 0)
+        *ow = 1;
+    if (*oh == 0)
+        *oh = 1;
+    double want = bw * (double)rh <= bh * (double)rw
+                      ? (double)bw / rw : (double)bh / rh;
+    if (!up && (*ow > rw || *oh > rh)) {
+        /* not larger than the region */
+        *ow = rw;
+        *oh = rh;
+    }
+    if (!within(*ow, *oh, c)
+        || (up && (*ow > rw * c->up || *oh > rh * c->up)))
+        fit(rw, rh, want < (up ? c->up : 1.0) ? want : (up ? c->up : 1.0),
+            c, ow, oh);
+}
+
+/* w,  ,h and w,h: the sides given, the missing one from the aspect ratio
+ * (at least 1). */
+static void size_exact(const uint32_t *v, const int *have, uint32_t rw,
+                       uint32_t rh, uint64_t *ow, uint64_t *oh)
+{
+    if (have[0] && have[1]) {
+        *ow = v[0];
+        *oh = v[1];
+    } else if (have[0]) {
+        *ow = v[0];
+        *oh = mul_div_round(rh, v[0], rw);
+        if (*oh == 0)
+            *oh = 1;
+    } else {
+        *oh = v[1];
+        *ow = mul_div_round(rw, v[1], rh);
+        if (*ow == 0)
+            *ow = 1;
+    }
+}
+
+/* A size that names exact pixels: larger than the region only with ^
+ * (up) and within the upscaling cap (GV_ELIMIT), and within the limits
+ * (GV_ELIMIT). */
+static int check_exact(const char *size, uint64_t ow, uint64_t oh, uint32_t rw,
+                       uint32_t rh, int up, const struct caps *c,
+                       struct gv_error *err)
+{
+    char shown[48];
     if (ow > rw || oh > rh) {
         if (!up)
             return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": %llux%llu is "
                            "larger than the region (%ux%u); use ^ to "
                            "upscale", SHOW(size), (unsigned long long)ow,
                            (unsigned long long)oh, rw, rh);
-        if ((double)ow > rw * c.up || (double)oh > rh * c.up)
+        if ((double)ow > rw * c->up || (double)oh > rh * c->up)
             return gv_fail(err, GV_ELIMIT, "iiif: size \"%s\": %llux%llu "
                            "enlarges the region (%ux%u) more than the "
                            "allowed %gx", SHOW(size), (unsigned long long)ow,
-                           (unsigned long long)oh, rw, rh, c.up);
+                           (unsigned long long)oh, rw, rh, c->up);
     }
-    if (!within(ow, oh, &c))
+    if (!within(ow, oh, c))
         return gv_fail(err, GV_ELIMIT, "iiif: size \"%s\": %llux%llu is past "
                        "the limits (maxWidth %llu, maxHeight %llu, maxArea "
                        "%llu)", SHOW(size), (unsigned long long)ow,
-                       (unsigned long long)oh, (unsigned long long)c.mw,
-                       (unsigned long long)c.mh, (unsigned long long)c.area);
-done:
+                       (unsigned long long)oh, (unsigned long long)c->mw,
+                       (unsigned long long)c->mh, (unsigned long long)c->area);
+    return 0;
+}
+
+/* The size segment for a region of rw x rh: r->out_w, r->out_h.  The
+ * "as large as possible" forms (max, !w,h) are fitted to the limits; the
+ * exact forms (pct:n, w,  ,h  w,h) are checked against them. */
+static int parse_size(const char *size, uint32_t rw, uint32_t rh,
+                      const struct iiif_limits *lim, struct gv_render_req *r,
+                      struct gv_error *err)
+{
+    const char *s = size, *e = size + strlen(size);
+    struct caps c;
+    caps_of(lim, &c);
+    int up = *s == '^';
+    s += up;
+    uint64_t ow = 0, oh = 0;
+    if (strcmp(s, "max") == 0) {
+        fit(rw, rh, up ? c.up : 1.0, &c, &ow, &oh);
+    } else if (strncmp(s, "pct:", 4) == 0) {
+        if (size_pct(size, s + 4, e, up, rw, rh, &ow, &oh, err) != 0 ||
+            check_exact(size, ow, oh, rw, rh, up, &c, err) != 0)
+            return -1;
+    } else {
+        int bang = *s == '!', have[2];
+        uint32_t v[2];
+        s += bang;
+        if (parse_wh(size, s, e, bang, v, have, err) != 0)
+            return -1;
+        if (bang) {
+            size_best_fit(v, rw, rh, up, &c, &ow, &oh);
+        } else {
+            size_exact(v, have, rw, rh, &ow, &oh);
+            if (check_exact(size, ow, oh, rw, rh, up, &c, err) != 0)
+                return -1;
+        }
+    }
     r->out_w = (uint32_t)ow;
     r->out_h = (uint32_t)oh;
     return 0;
@@ -465,8 +516,8 @@ static int parse_quality_format(const char *qf, struct iiif_request *out,
     static const enum gv_quality qvals[] = {
         GV_QUALITY_DEFAULT, GV_QUALITY_COLOR, GV_QUALITY_GRAY,
         GV_QUALITY_BITONAL};
-    static const char *const supported[] = {"jpg", "png", "webp", "tif"};
-    /* in the specification's table (4.5) but not produced here */
+    /* in the specification's table (4.5) but not produced here; the
+     * formats produced are the image formats of output_format.h */
     static const char *const known[] = {"gif", "jp2", "pdf"};
     char shown[48];
     const char *dot = strchr(qf, '.');
@@ -483,12 +534,12 @@ static int parse_quality_format(const char *qf, struct iiif_request *out,
         return gv_fail(err, GV_EINVAL, "iiif: quality \"%s\": expected "
                        "default, color, gray or bitonal",
                        show(qf, qlen, shown, sizeof shown));
-    for (int i = 0; i < 4; i++)
-        if (strcmp(fmt, supported[i]) == 0) {
-            out->render.quality = qvals[q];
-            snprintf(out->format, sizeof out->format, "%s", supported[i]);
-            return 0;
-        }
+    const struct gv_output_format *f = gv_output_format_image(fmt);
+    if (f) {
+        out->render.quality = qvals[q];
+        snprintf(out->format, sizeof out->format, "%s", f->name);
+        return 0;
+    }
     for (int i = 0; i < 3; i++)
         if (strcmp(fmt, known[i]) == 0)
             return gv_fail(err, GV_EFORMAT, "iiif: format \"%s\" is not "

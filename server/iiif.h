@@ -7,8 +7,9 @@
  * produces a canonical, validated request, or an error classified as the
  * specification wants: GV_EINVAL -> 400 Bad Request, GV_EFORMAT -> 501 Not
  * Implemented (a valid form this server does not support, e.g. arbitrary
- * rotation), GV_ELIMIT -> 400/413 (past maxWidth/maxHeight/maxArea or the
- * upscaling limit).  Pure function, no I/O: fuzzed directly.
+ * rotation), GV_ELIMIT -> 400 on the IIIF routes, which know no 413 (past
+ * maxWidth/maxHeight/maxArea or the upscaling limit).  Pure function, no
+ * I/O: fuzzed directly.
  */
 #ifndef GV_IIIF_H
 #define GV_IIIF_H

@@ -185,20 +185,16 @@ static int start_filters(struct server *srv)
     return 0;
 }
 
-int main(int argc, char **argv)
+/* Read the configuration: the defaults, then -c FILE, then the command-
+ * line overrides; check the store directory.  Returns -1 to go on and
+ * serve, else the exit status (-t, -S, -V, -h, a usage error, a bad
+ * configuration). */
+static int configure(int argc, char **argv, struct settings *cfg)
 {
-    static struct settings cfg;
     struct gv_error err;
     const char *file = NULL, *port = NULL, *dir = NULL, *addr = NULL;
     int test = 0, c;
-    /* Pages and decoded tiles are large blocks freed in any order as the
-     * caches evict; with glibc's sliding mmap threshold they end up on the
-     * heap, whose freed pages stay resident (measured: RSS 150 MiB above
-     * the configured caches under eviction, bench/README.md "Load and
-     * soak").  A fixed threshold keeps such blocks in their own mappings,
-     * returned to the system when freed. */
-    mallopt(M_MMAP_THRESHOLD, 128 * 1024);
-    settings_defaults(&cfg);
+    settings_defaults(cfg);
     while ((c = getopt(argc, argv, "c:tp:d:l:SVh")) != -1) {
         switch (c) {
         case 'c': file = optarg; break;
@@ -216,19 +212,19 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    if ((file && settings_load(&cfg, file, &err) < 0) ||
-        (port && settings_set(&cfg, "port", port, "-p", &err) < 0) ||
-        (dir && settings_set(&cfg, "store_dir", dir, "-d", &err) < 0) ||
-        (addr && settings_set(&cfg, "listen", addr, "-l", &err) < 0)) {
+    if ((file && settings_load(cfg, file, &err) < 0) ||
+        (port && settings_set(cfg, "port", port, "-p", &err) < 0) ||
+        (dir && settings_set(cfg, "store_dir", dir, "-d", &err) < 0) ||
+        (addr && settings_set(cfg, "listen", addr, "-l", &err) < 0)) {
         fprintf(stderr, "gigaviewd: %s\n", err.text);
         return 1;
     }
     struct stat st;
     errno = 0;
-    if (stat(cfg.store_dir, &st) < 0 || !S_ISDIR(st.st_mode) ||
-        access(cfg.store_dir, R_OK | X_OK) < 0) {
+    if (stat(cfg->store_dir, &st) < 0 || !S_ISDIR(st.st_mode) ||
+        access(cfg->store_dir, R_OK | X_OK) < 0) {
         fprintf(stderr, "gigaviewd: %s%sstore_dir %s: %s\n", file ? file : "",
-                file ? ": " : "", cfg.store_dir,
+                file ? ": " : "", cfg->store_dir,
                 errno ? strerror(errno) : "not a directory");
         return 1;
     }
@@ -236,6 +232,43 @@ int main(int argc, char **argv)
         printf("gigaviewd: configuration %s is valid\n", file ? file : "(defaults)");
         return 0;
     }
+    return -1;
+}
+
+/* Serve until SIGTERM or SIGINT (blocked in every thread, taken here with
+ * sigwait); SIGHUP rescans the stores and the filter graphs. */
+static void wait_for_stop(struct server *srv, const sigset_t *set)
+{
+    for (;;) {
+        int sig;
+        if (sigwait(set, &sig) != 0)
+            continue;
+        if (sig == SIGHUP) {
+            log_msg(LOG_INFO, "main", "SIGHUP: rescanning %s", srv->cfg->store_dir);
+            catalog_scan(srv->catalog);
+            filter_store_scan(srv->filter_store);
+            continue;
+        }
+        log_msg(LOG_INFO, "main", "%s: draining (up to %llus)",
+                sig == SIGTERM ? "SIGTERM" : "SIGINT",
+                (unsigned long long)srv->cfg->drain_timeout);
+        return;
+    }
+}
+
+int main(int argc, char **argv)
+{
+    static struct settings cfg;
+    /* Pages and decoded tiles are large blocks freed in any order as the
+     * caches evict; with glibc's sliding mmap threshold they end up on the
+     * heap, whose freed pages stay resident (measured: RSS 150 MiB above
+     * the configured caches under eviction, bench/README.md "Load and
+     * soak").  A fixed threshold keeps such blocks in their own mappings,
+     * returned to the system when freed. */
+    mallopt(M_MMAP_THRESHOLD, 128 * 1024);
+    int rc = configure(argc, argv, &cfg);
+    if (rc >= 0)
+        return rc;
     if (log_init((enum log_level)log_level_parse(cfg.log_level), cfg.access_log) < 0)
         return 1;
 
@@ -274,21 +307,7 @@ int main(int argc, char **argv)
         log_msg(LOG_INFO, "main", "listening on http://%s:%u/", cfg.listen,
                 srv.port);
 
-    for (;;) {
-        int sig;
-        if (sigwait(&set, &sig) != 0)
-            continue;
-        if (sig == SIGHUP) {
-            log_msg(LOG_INFO, "main", "SIGHUP: rescanning %s", cfg.store_dir);
-            catalog_scan(srv.catalog);
-            filter_store_scan(srv.filter_store);
-            continue;
-        }
-        log_msg(LOG_INFO, "main", "%s: draining (up to %llus)",
-                sig == SIGTERM ? "SIGTERM" : "SIGINT",
-                (unsigned long long)cfg.drain_timeout);
-        break;
-    }
+    wait_for_stop(&srv, &set);
     /* Filter jobs first: a request waiting for one is suspended, and
      * every job's end (done or cancelled) resumes it before the HTTP
      * drain. */

@@ -1,7 +1,13 @@
 /*
- * metrics.c - lock-free request accounting (see metrics.h).  The last
- * route slot collects requests that matched no route.
+ * metrics.c - lock-free request accounting and the Prometheus text writer
+ * (see metrics.h).  The last route slot collects requests that matched no
+ * route.
  */
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
 #include "metrics.h"
 
 struct metrics metrics;
@@ -45,4 +51,120 @@ void metrics_record(int route, unsigned status, uint64_t usec, uint64_t bytes)
     atomic_fetch_add(&r->count, 1);
     atomic_fetch_add(&r->usec_sum, usec);
     atomic_fetch_add(&metrics.bytes_sent, bytes);
+}
+
+/* ------------------------------------------------------- Prometheus text */
+
+static void prom_vprintf(struct prom *p, const char *fmt, va_list ap)
+{
+    while (!p->failed) {
+        size_t room = p->cap - p->len;
+        va_list aq;
+        va_copy(aq, ap);
+        int n = vsnprintf(room ? p->s + p->len : NULL, room, fmt, aq);
+        va_end(aq);
+        if (n < 0) {
+            p->failed = 1;
+            return;
+        }
+        if ((size_t)n < room) {
+            p->len += (size_t)n;
+            return;
+        }
+        /* the whole text is some 10 KiB: start there, then double */
+        size_t cap = p->cap ? 2 * p->cap + (size_t)n : 16384 + (size_t)n;
+        char *s = realloc(p->s, cap);
+        if (!s) {
+            p->failed = 1;
+            return;
+        }
+        p->s = s;
+        p->cap = cap;
+    }
+}
+
+void prom_printf(struct prom *p, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    prom_vprintf(p, fmt, ap);
+    va_end(ap);
+}
+
+void prom_family(struct prom *p, const char *name, const char *type,
+                 const char *help)
+{
+    prom_printf(p, "# HELP %s %s\n# TYPE %s %s\n", name, help, name, type);
+}
+
+void prom_metric(struct prom *p, const char *name, const char *type,
+                 const char *help, const char *fmt, ...)
+{
+    prom_family(p, name, type, help);
+    prom_printf(p, "%s ", name);
+    va_list ap;
+    va_start(ap, fmt);
+    prom_vprintf(p, fmt, ap);
+    va_end(ap);
+    prom_printf(p, "\n");
+}
+
+/* 1 if route i has a name that no earlier route has. */
+static int first_of_name(int i)
+{
+    const char *name = metrics.route[i].name;
+    if (!name)
+        return 0;
+    for (int k = 0; k < i; k++)
+        if (metrics.route[k].name && !strcmp(metrics.route[k].name, name))
+            return 0;
+    return 1;
+}
+
+static void write_requests(struct prom *p, const struct metrics_route *m)
+{
+    for (int s = 0; s <= METRICS_STATUSES; s++) {
+        uint64_t v = atomic_load(&m->by_status[s]);
+        if (!v)
+            continue;
+        if (s < METRICS_STATUSES)
+            prom_printf(p, "gigaview_http_requests_total{route=\"%s\",status=\"%u\"} "
+                        "%llu\n", m->name, metrics_status_codes[s],
+                        (unsigned long long)v);
+        else
+            prom_printf(p, "gigaview_http_requests_total{route=\"%s\",status=\"other\"} "
+                        "%llu\n", m->name, (unsigned long long)v);
+    }
+}
+
+static void write_durations(struct prom *p, const struct metrics_route *m)
+{
+    const char *name = "gigaview_http_request_duration_seconds";
+    uint64_t cum = 0;
+    for (int b = 0; b < METRICS_BUCKETS; b++) {
+        cum += atomic_load(&m->bucket[b]);
+        prom_printf(p, "%s_bucket{route=\"%s\",le=\"%g\"} %llu\n", name, m->name,
+                    metrics_bucket_le[b], (unsigned long long)cum);
+    }
+    uint64_t count = atomic_load(&m->count);
+    prom_printf(p, "%s_bucket{route=\"%s\",le=\"+Inf\"} %llu\n", name, m->name,
+                (unsigned long long)count);
+    prom_printf(p, "%s_sum{route=\"%s\"} %.6f\n", name, m->name,
+                (double)atomic_load(&m->usec_sum) / 1e6);
+    prom_printf(p, "%s_count{route=\"%s\"} %llu\n", name, m->name,
+                (unsigned long long)count);
+}
+
+void metrics_write(struct prom *p)
+{
+    prom_family(p, "gigaview_http_requests_total", "counter",
+                "HTTP requests by route and status.");
+    for (int i = 0; i < metrics.nroutes; i++)
+        if (first_of_name(i))
+            write_requests(p, &metrics.route[i]);
+    prom_family(p, "gigaview_http_request_duration_seconds", "histogram",
+                "Time from request headers to the end of the response.");
+    for (int i = 0; i < metrics.nroutes; i++)
+        if (first_of_name(i))
+            write_durations(p, &metrics.route[i]);
 }

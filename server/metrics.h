@@ -2,13 +2,16 @@
  * metrics.h - request counters and latency histograms for /metrics.
  *
  * Counters are C11 atomics indexed by route (the route table's order) and
- * by status code, so recording a request takes no lock.  Rendering in the
- * Prometheus text format 0.0.4 is in route_health.c.
+ * by status code, so recording a request takes no lock.  The one writer
+ * of the Prometheus text format 0.0.4 is here too (struct prom): these
+ * counters, the page cache's and the filter pool's are all written with
+ * it, and route_health.c serves the text at /metrics.
  */
 #ifndef GV_SERVER_METRICS_H
 #define GV_SERVER_METRICS_H
 
 #include <stdatomic.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #define METRICS_ROUTES 32
@@ -46,5 +49,35 @@ void metrics_init(const char *const *names, int n);
 
 /* Record one finished request of route `route` (-1: no route matched). */
 void metrics_record(int route, unsigned status, uint64_t usec, uint64_t bytes);
+
+/*
+ * A Prometheus text being written: s holds len bytes (malloc'ed, the
+ * caller frees it; start from {0}).  After an allocation failure failed
+ * is set and every later call does nothing.  One thread.
+ */
+struct prom {
+    char *s;
+    size_t len, cap;
+    int failed;
+};
+
+/* The "# HELP" and "# TYPE" lines of metric `name`; its samples follow
+ * with prom_printf. */
+void prom_family(struct prom *p, const char *name, const char *type,
+                 const char *help);
+
+/* Append printf-formatted text (sample lines). */
+void prom_printf(struct prom *p, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+/* A metric with one unlabelled sample: its HELP and TYPE lines, then
+ * "name VALUE", VALUE formatted by fmt. */
+void prom_metric(struct prom *p, const char *name, const char *type,
+                 const char *help, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+
+/* The request counters by route and status and the latency histograms by
+ * route, each route name once (routes that share a name share counters). */
+void metrics_write(struct prom *p);
 
 #endif

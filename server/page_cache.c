@@ -125,6 +125,50 @@ static struct entry *lookup(struct page_cache *pc, uint64_t serial, int level,
     return NULL;
 }
 
+/* Drop the references of a chain of unlinked entries (through hnext). */
+static void unref_chain(struct entry *victims)
+{
+    while (victims) {
+        struct entry *v = victims;
+        victims = v->hnext;
+        entry_unref(v);
+    }
+}
+
+/* Cache the new entry e (which holds the caller's reference), evicting
+ * from the tail down to max_bytes; if another thread cached the same page
+ * meanwhile, drop e and return that one instead, referenced. */
+static struct entry *insert(struct page_cache *pc, struct entry *e)
+{
+    pthread_mutex_lock(&pc->lock);
+    struct entry *other = lookup(pc, e->serial, e->level, e->px, e->py);
+    if (other) { /* lost a race: use the cached copy */
+        atomic_fetch_add(&other->refs, 1);
+        pthread_mutex_unlock(&pc->lock);
+        entry_unref(e);
+        return other;
+    }
+    atomic_fetch_add(&e->refs, 1); /* the cache's */
+    unsigned b = hash(e->serial, e->level, e->px, e->py);
+    e->hnext = pc->bucket[b];
+    pc->bucket[b] = e;
+    push_front(pc, e);
+    e->linked = 1;
+    pc->bytes += e->pub.len;
+    pc->pages++;
+    struct entry *victims = NULL;
+    while (pc->bytes > pc->max_bytes && pc->tail && pc->tail != e) {
+        struct entry *v = pc->tail;
+        unlink_entry(pc, v);
+        pc->evictions++;
+        v->hnext = victims;
+        victims = v;
+    }
+    pthread_mutex_unlock(&pc->lock);
+    unref_chain(victims);
+    return e;
+}
+
 struct page *page_get(struct page_cache *pc, const struct gv_store *s,
                       uint64_t serial, int level, uint32_t px, uint32_t py,
                       struct gv_error *err)
@@ -174,38 +218,7 @@ struct page *page_get(struct page_cache *pc, const struct gv_store *s,
     atomic_init(&e->refs, 1); /* the caller's */
     if (pc->max_bytes == 0 || len > pc->max_bytes)
         return &e->pub; /* uncached: freed on release */
-
-    pthread_mutex_lock(&pc->lock);
-    struct entry *other = lookup(pc, serial, level, px, py);
-    if (other) { /* lost a race: use the cached copy */
-        atomic_fetch_add(&other->refs, 1);
-        pthread_mutex_unlock(&pc->lock);
-        entry_unref(e);
-        return &other->pub;
-    }
-    atomic_fetch_add(&e->refs, 1); /* the cache's */
-    unsigned b = hash(serial, level, px, py);
-    e->hnext = pc->bucket[b];
-    pc->bucket[b] = e;
-    push_front(pc, e);
-    e->linked = 1;
-    pc->bytes += len;
-    pc->pages++;
-    struct entry *victims = NULL;
-    while (pc->bytes > pc->max_bytes && pc->tail && pc->tail != e) {
-        struct entry *v = pc->tail;
-        unlink_entry(pc, v);
-        pc->evictions++;
-        v->hnext = victims;
-        victims = v;
-    }
-    pthread_mutex_unlock(&pc->lock);
-    while (victims) {
-        struct entry *v = victims;
-        victims = v->hnext;
-        entry_unref(v);
-    }
-    return &e->pub;
+    return &insert(pc, e)->pub;
 }
 
 void page_cache_forget(struct page_cache *pc, uint64_t serial)
@@ -221,11 +234,7 @@ void page_cache_forget(struct page_cache *pc, uint64_t serial)
         }
     }
     pthread_mutex_unlock(&pc->lock);
-    while (victims) {
-        struct entry *v = victims;
-        victims = v->hnext;
-        entry_unref(v);
-    }
+    unref_chain(victims);
 }
 
 void page_cache_stats(struct page_cache *pc, struct page_cache_stats *st)

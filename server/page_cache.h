@@ -50,6 +50,10 @@ void page_cache_forget(struct page_cache *pc, uint64_t serial);
 struct page_cache_stats {
     uint64_t hits, misses, evictions, errors, bytes, pages, max_bytes;
 };
+
+/* The counters since start (errors: pages that failed their check or
+ * could not be read) and the present size, read together under the
+ * lock. */
 void page_cache_stats(struct page_cache *pc, struct page_cache_stats *st);
 
 #endif

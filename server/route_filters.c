@@ -15,7 +15,9 @@
  * calls the handler again, which finds its call in r->async and answers.
  * Graph validation failures are 400 (docs/FILTERS.md section 2, limits
  * included); a job past its time limit is 504, a worker that died is 500,
- * no worker (gpu = off, no EGL) is 503.
+ * no worker (gpu = off, no EGL) is 503.  Each is a gv_code (the pool sets
+ * them, filter_jobs.c) that server/http.c's error table turns into the
+ * status and the JSON body.
  */
 #include <math.h>
 #include <stdio.h>
@@ -71,58 +73,18 @@ static void limits(const struct settings *cfg, struct gv_filter_limits *lim)
     lim->max_padding = (int)cfg->filter_max_padding;
 }
 
-/* A JSON response with one extra header (name NULL: none). */
-static enum MHD_Result send_json_hdr(struct req *r, unsigned status, json_t *j,
-                                     const char *name, const char *value)
-{
-    char *s = j ? json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(8)) : NULL;
-    json_decref(j);
-    if (!s)
-        return http_send(r, status, NULL, 0);
-    size_t n = strlen(s);
-    s[n] = '\n'; /* json_dumps leaves room: replace the NUL */
-    struct MHD_Response *resp =
-        MHD_create_response_from_buffer_with_free_callback(n + 1, s, free);
-    if (!resp) {
-        free(s);
-        return http_send(r, status, NULL, 0);
-    }
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
-    if (status >= 400)
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
-    if (name)
-        MHD_add_response_header(resp, name, value);
-    return http_send(r, status, resp, n + 1);
-}
-
-/* The error body of server/http.c's table, for statuses no gv_code
- * stands for, with one extra header (Retry-After, WWW-Authenticate). */
-static enum MHD_Result send_fail(struct req *r, unsigned status, const char *code,
-                                 const char *message, const char *name,
-                                 const char *value)
-{
-    char esc[400];
-    log_msg(status >= 500 ? LOG_WARN : LOG_DEBUG, "http", "%u %s: %s", status,
-            code, log_escape(esc, sizeof esc, message));
-    return send_json_hdr(r, status,
-                         json_pack("{s:{s:i,s:s,s:s}}", "error", "status",
-                                   (int)status, "code", code, "message", message),
-                         name, value);
-}
-
 /* A graph that does not parse: 400 whatever the cause, limits included
  * (docs/FILTERS.md section 2). */
-static enum MHD_Result send_invalid(struct req *r, struct gv_error *err)
+static void invalid_graph(struct gv_error *err)
 {
     if (err->code == GV_ELIMIT)
         err->code = GV_EINVAL;
-    return http_send_error(r, err);
 }
 
 /* No pool (gpu = off, no EGL, no worker program): 503. */
 static enum MHD_Result send_no_filters(struct req *r)
 {
-    return send_fail(r, 503, "unavailable", r->srv->filter_reason, NULL, NULL);
+    return http_send_fail(r, GV_EUNAVAIL, r->srv->filter_reason, NULL, NULL);
 }
 
 static enum MHD_Result send_busy(struct req *r)
@@ -131,40 +93,34 @@ static enum MHD_Result send_busy(struct req *r)
     snprintf(msg, sizeof msg, "filter: %llu jobs are queued or running "
              "(filter_max_jobs), or the server is stopping; try again",
              (unsigned long long)r->srv->cfg->filter_max_jobs);
-    return send_fail(r, 503, "busy", msg, "Retry-After", "1");
+    return http_send_fail(r, GV_EBUSY, msg, "Retry-After", "1");
 }
 
-/* The answer for a job that did not produce a result. */
+/* The answer for a job that did not produce a result: the worker's
+ * verdict, or what became of the job (err: timeout, crash, no worker). */
 static enum MHD_Result send_job_error(struct req *r, struct filter_job *j)
 {
-    switch (j->status) {
-    case FILTER_JOB_DONE:
-        return http_send_error(r, &j->res.err); /* the worker's verdict */
-    case FILTER_JOB_TIMEOUT:
-        return send_fail(r, 504, "timeout", j->err.text, NULL, NULL);
-    case FILTER_JOB_CRASHED:
-        return send_fail(r, 500, "worker_crashed", j->err.text, NULL, NULL);
-    case FILTER_JOB_UNAVAILABLE:
-    case FILTER_JOB_CANCELLED:
-        return send_fail(r, 503, "unavailable", j->err.text, "Retry-After", "5");
-    }
-    return http_send_errorf(r, GV_EIO, "filter: unknown job status");
+    if (j->status == FILTER_JOB_DONE)
+        return http_send_error(r, &j->res.err);
+    if (j->status == FILTER_JOB_UNAVAILABLE || j->status == FILTER_JOB_CANCELLED)
+        return http_send_fail(r, j->err.code, j->err.text, "Retry-After", "5");
+    return http_send_error(r, &j->err);
 }
 
 /* Writes need auth_token configured and presented.  0, or -1 with *ret. */
 static int check_auth(struct req *r, enum MHD_Result *ret)
 {
     if (!r->srv->cfg->auth_token[0]) {
-        *ret = send_fail(r, 403, "forbidden",
-                         "filter: storing and deleting graphs is disabled: "
-                         "no auth_token is configured", NULL, NULL);
+        *ret = http_send_fail(r, GV_EPERM,
+                              "filter: storing and deleting graphs is disabled: "
+                              "no auth_token is configured", NULL, NULL);
         return -1;
     }
     if (!http_authorized(r)) {
-        *ret = send_fail(r, 401, "unauthorized",
-                         "filter: this needs the header 'Authorization: Bearer "
-                         "<auth_token>'", "WWW-Authenticate",
-                         "Bearer realm=\"gigaview\"");
+        *ret = http_send_fail(r, GV_EAUTH,
+                              "filter: this needs the header 'Authorization: "
+                              "Bearer <auth_token>'", "WWW-Authenticate",
+                              "Bearer realm=\"gigaview\"");
         return -1;
     }
     return 0;
@@ -235,7 +191,7 @@ enum MHD_Result route_filter_delete(struct req *r)
         char msg[160], esc[80];
         snprintf(msg, sizeof msg, "filter: '%s' is a stock graph and cannot be "
                  "deleted", log_escape(esc, sizeof esc, r->param[0]));
-        return send_fail(r, 403, "forbidden", msg, NULL, NULL);
+        return http_send_fail(r, GV_EPERM, msg, NULL, NULL);
     }
     if (rc < 0)
         return http_send_error(r, &err);
@@ -259,10 +215,10 @@ static enum MHD_Result finish_store(struct req *r, struct call *c)
     snprintf(where, sizeof where, "%s/v1/filters/%s", base, id);
     log_msg(LOG_INFO, "filter", "%s graph %s (%zu bytes)",
             created ? "stored" : "already had", id, c->doc_len);
-    return send_json_hdr(r, created ? 201 : 200,
-                         json_pack("{s:s,s:b,s:s}", "id", id, "created", created,
-                                   "url", where),
-                         MHD_HTTP_HEADER_LOCATION, where);
+    return http_send_json_header(r, created ? 201 : 200,
+                                 json_pack("{s:s,s:b,s:s}", "id", id, "created",
+                                           created, "url", where),
+                                 MHD_HTTP_HEADER_LOCATION, where);
 }
 
 enum MHD_Result route_filters_post(struct req *r)
@@ -279,9 +235,8 @@ enum MHD_Result route_filters_post(struct req *r)
         return ret;
     char why[320];
     if (!filter_store_writable(r->srv->filter_store, why, sizeof why))
-        return send_fail(r, r->srv->cfg->filter_dir[0] ? 503 : 403,
-                         r->srv->cfg->filter_dir[0] ? "unavailable" : "forbidden",
-                         why, NULL, NULL);
+        return http_send_fail(r, r->srv->cfg->filter_dir[0] ? GV_EUNAVAIL : GV_EPERM,
+                              why, NULL, NULL);
     if (!r->body_len)
         return http_send_errorf(r, GV_EINVAL, "filter: the body must be a graph "
                                 "document (docs/FILTERS.md)");
@@ -289,8 +244,10 @@ enum MHD_Result route_filters_post(struct req *r)
     struct gv_filter_limits lim;
     limits(r->srv->cfg, &lim);
     struct gv_filter_graph *g = gv_filter_graph_parse(r->body, r->body_len, &lim, &err);
-    if (!g)
-        return send_invalid(r, &err);
+    if (!g) {
+        invalid_graph(&err);
+        return http_send_error(r, &err);
+    }
     gv_filter_graph_free(g);
     if (!r->srv->filters)
         return send_no_filters(r);
@@ -314,21 +271,6 @@ enum MHD_Result route_filters_post(struct req *r)
 }
 
 /* ------------------------------------------------------------ POST run */
-
-/* Size of level k (tiled, root, or a root mip): 0, or -1 if none. */
-static int level_size(const struct image *img, uint32_t k, uint32_t *w,
-                      uint32_t *h)
-{
-    const struct gv_geometry *g = &img->info->geometry;
-    if (k <= (uint32_t)g->root) {
-        *w = g->level[k].width;
-        *h = g->level[k].height;
-        return 0;
-    }
-    if (k - (uint32_t)g->root >= (uint32_t)g->root_mips)
-        return -1;
-    return gv_store_root(img->store, (int)(k - (uint32_t)g->root), w, h) ? 0 : -1;
-}
 
 /* Integer member `key` of o in [lo, hi], or def if absent (def < 0:
  * required).  0 or -1 with *err. */
@@ -368,30 +310,28 @@ static int get_uints(const json_t *o, const char *key, size_t n, const int64_t *
     return 0;
 }
 
-/* Parse the request body into c (doc, values, output form, level,
- * region, viewport) and *g.  0 or -1 with *err (GV_EINVAL, GV_ENOTFOUND
- * for an unknown stored graph). */
-static int parse_request(struct req *r, struct call *c,
-                         struct gv_filter_graph **g, uint32_t *roi,
-                         uint32_t *viewport, struct gv_error *err)
+/* The request body as a JSON object with only the documented keys: a new
+ * reference, or NULL with *err. */
+static json_t *load_body(const struct req *r, struct gv_error *err)
 {
     static const char *const keys[] = {"graph", "filter", "params", "level",
                                        "region", "format", "scale", "viewport"};
     json_error_t je;
-    int rc = -1;
-    json_t *b = r->body_len ? json_loadb(r->body, r->body_len,
-                                         JSON_REJECT_DUPLICATES, &je)
-                            : NULL;
+    if (!r->body_len) {
+        gv_fail(err, GV_EINVAL, "filter: the body must be a JSON object "
+                "(docs/API.md, Filters)");
+        return NULL;
+    }
+    json_t *b = json_loadb(r->body, r->body_len, JSON_REJECT_DUPLICATES, &je);
     if (!b) {
-        if (r->body_len)
-            return gv_fail(err, GV_EINVAL, "filter: request body: JSON: %s at "
-                           "line %d column %d", je.text, je.line, je.column);
-        return gv_fail(err, GV_EINVAL, "filter: the body must be a JSON object "
-                       "(docs/API.md, Filters)");
+        gv_fail(err, GV_EINVAL, "filter: request body: JSON: %s at line %d "
+                "column %d", je.text, je.line, je.column);
+        return NULL;
     }
     if (!json_is_object(b)) {
         gv_fail(err, GV_EINVAL, "filter: the body must be a JSON object");
-        goto out;
+        json_decref(b);
+        return NULL;
     }
     const char *k;
     json_t *v;
@@ -403,80 +343,108 @@ static int parse_request(struct req *r, struct call *c,
             char esc[80];
             gv_fail(err, GV_EINVAL, "filter: unknown key \"%s\" in the request",
                     log_escape(esc, sizeof esc, k));
-            goto out;
+            json_decref(b);
+            return NULL;
         }
     }
+    return b;
+}
+
+/* The graph document of body b into c->doc: "graph" inline, or "filter"
+ * naming a stock or stored graph (GV_ENOTFOUND when there is none).  0 or
+ * -1 with *err. */
+static int load_document(struct req *r, const json_t *b, struct call *c,
+                         struct gv_error *err)
+{
     json_t *graph = json_object_get(b, "graph"), *fid = json_object_get(b, "filter");
-    if (!graph == !fid) {
-        gv_fail(err, GV_EINVAL, "filter: give exactly one of \"graph\" (a graph "
-                "document) and \"filter\" (a graph id)");
-        goto out;
-    }
+    if (!graph == !fid)
+        return gv_fail(err, GV_EINVAL, "filter: give exactly one of \"graph\" (a "
+                       "graph document) and \"filter\" (a graph id)");
     if (graph) {
-        if (!json_is_object(graph)) {
-            gv_fail(err, GV_EINVAL, "filter: \"graph\" must be a graph object");
-            goto out;
-        }
+        if (!json_is_object(graph))
+            return gv_fail(err, GV_EINVAL, "filter: \"graph\" must be a graph object");
         c->doc = json_dumps(graph, JSON_COMPACT);
-        if (!c->doc) {
-            gv_fail(err, GV_ENOMEM, "filter: out of memory");
-            goto out;
-        }
+        if (!c->doc)
+            return gv_fail(err, GV_ENOMEM, "filter: out of memory");
         c->doc_len = strlen(c->doc);
-    } else {
-        int stock;
-        if (!json_is_string(fid)) {
-            gv_fail(err, GV_EINVAL, "filter: \"filter\" must be a graph id");
-            goto out;
-        }
-        if (filter_store_get(r->srv->filter_store, json_string_value(fid), &c->doc,
-                             &c->doc_len, &stock, err) < 0)
-            goto out;
+        return 0;
     }
+    int stock;
+    if (!json_is_string(fid))
+        return gv_fail(err, GV_EINVAL, "filter: \"filter\" must be a graph id");
+    return filter_store_get(r->srv->filter_store, json_string_value(fid), &c->doc,
+                            &c->doc_len, &stock, err);
+}
+
+/* Parse c's document into *g and the body's "params" into c->values. */
+static int load_graph(struct req *r, const json_t *b, struct call *c,
+                      struct gv_filter_graph **g, struct gv_error *err)
+{
     struct gv_filter_limits lim;
     limits(r->srv->cfg, &lim);
     *g = gv_filter_graph_parse(c->doc, c->doc_len, &lim, err);
     if (!*g) {
-        if (err->code == GV_ELIMIT)
-            err->code = GV_EINVAL;
-        goto out;
+        invalid_graph(err);
+        return -1;
     }
     c->fj.job.lim = lim;
+    c->channels = (*g)->output_channels;
     c->values = malloc(((size_t)(*g)->nparams + 1) * sizeof *c->values);
-    if (!c->values) {
-        gv_fail(err, GV_ENOMEM, "filter: out of memory");
-        goto out;
-    }
-    if (gv_filter_params(*g, json_object_get(b, "params"), c->values, err) < 0)
-        goto out;
+    if (!c->values)
+        return gv_fail(err, GV_ENOMEM, "filter: out of memory");
+    return gv_filter_params(*g, json_object_get(b, "params"), c->values, err);
+}
+
+/* "level", "region" (roi) and "viewport" (0, 0 when absent). */
+static int load_area(const json_t *b, struct call *c, uint32_t *roi,
+                     uint32_t *viewport, struct gv_error *err)
+{
     static const int64_t lo4[4] = {0, 0, 1, 1}, lo2[2] = {1, 1};
     if (get_uint(b, "level", 0, 0, 255, &c->level, err) < 0 ||
         get_uints(b, "region", 4, lo4, roi, err) < 0)
-        goto out;
+        return -1;
     viewport[0] = viewport[1] = 0;
     if (json_object_get(b, "viewport") &&
         get_uints(b, "viewport", 2, lo2, viewport, err) < 0)
-        goto out;
+        return -1;
+    return 0;
+}
+
+/* "format" (default png) and "scale" (default 65535). */
+static int load_output(const json_t *b, struct call *c, struct gv_error *err)
+{
     json_t *f = json_object_get(b, "format");
     c->form = FILTER_OUT_PNG;
     if (f && (!json_is_string(f) || filter_output_parse(json_string_value(f),
-                                                        &c->form) < 0)) {
-        gv_fail(err, GV_EINVAL, "filter: \"format\" must be \"png\", \"tiff16\", "
-                "\"tiff32f\" or \"raw\"");
-        goto out;
-    }
+                                                        &c->form) < 0))
+        return gv_fail(err, GV_EINVAL, "filter: \"format\" must be \"png\", "
+                       "\"tiff16\", \"tiff32f\" or \"raw\"");
     json_t *s = json_object_get(b, "scale");
     c->scale = 65535;
     if (s) {
         c->scale = json_is_number(s) ? json_number_value(s) : NAN;
-        if (!isfinite(c->scale) || c->scale <= 0) {
-            gv_fail(err, GV_EINVAL, "filter: \"scale\" must be a positive number");
-            goto out;
-        }
+        if (!isfinite(c->scale) || c->scale <= 0)
+            return gv_fail(err, GV_EINVAL, "filter: \"scale\" must be a positive "
+                           "number");
     }
-    c->channels = (*g)->output_channels;
-    rc = 0;
-out:
+    return 0;
+}
+
+/* Parse the request body into c (doc, values, output form, level,
+ * region, viewport) and *g, in the order of docs/API.md, so that the
+ * first failure is the one reported.  0 or -1 with *err (GV_EINVAL,
+ * GV_ENOTFOUND for an unknown stored graph, GV_ENOMEM). */
+static int parse_request(struct req *r, struct call *c,
+                         struct gv_filter_graph **g, uint32_t *roi,
+                         uint32_t *viewport, struct gv_error *err)
+{
+    json_t *b = load_body(r, err);
+    if (!b)
+        return -1;
+    int rc = load_document(r, b, c, err) < 0 || load_graph(r, b, c, g, err) < 0 ||
+                     load_area(b, c, roi, viewport, err) < 0 ||
+                     load_output(b, c, err) < 0
+                 ? -1 : 0;
     json_decref(b);
     return rc;
 }
@@ -497,13 +465,6 @@ static void expand_rgba(uint8_t *buf, size_t n, int c)
     }
 }
 
-static void add_int(struct MHD_Response *resp, const char *name, long long v)
-{
-    char s[32];
-    snprintf(s, sizeof s, "%lld", v);
-    MHD_add_response_header(resp, name, s);
-}
-
 static enum MHD_Result finish_run(struct req *r, struct call *c)
 {
     if (c->fj.status != FILTER_JOB_DONE || c->fj.res.failed)
@@ -516,27 +477,23 @@ static enum MHD_Result finish_run(struct req *r, struct call *c)
                              c->channels, c->scale, &out, &len, &err) < 0)
         return http_send_error(r, &err);
     struct MHD_Response *resp =
-        MHD_create_response_from_buffer_with_free_callback(len, out, free);
-    if (!resp) {
-        free(out);
+        http_response_owned(out, len, filter_output_type(c->form));
+    if (!resp)
         return http_send(r, 200, NULL, 0);
-    }
     const struct gv_filter_stats *st = &c->fj.res.stats;
     char s[96];
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
-                            filter_output_type(c->form));
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
-    add_int(resp, "X-Gigaview-Width", in->roi_w);
-    add_int(resp, "X-Gigaview-Height", in->roi_h);
-    add_int(resp, "X-Gigaview-Channels", c->channels);
-    add_int(resp, "X-Gigaview-Level", c->level);
+    http_header_int(resp, "X-Gigaview-Width", in->roi_w);
+    http_header_int(resp, "X-Gigaview-Height", in->roi_h);
+    http_header_int(resp, "X-Gigaview-Channels", c->channels);
+    http_header_int(resp, "X-Gigaview-Level", c->level);
     snprintf(s, sizeof s, "%u,%u,%u,%u", c->px, c->py, c->pw, c->ph);
     MHD_add_response_header(resp, "X-Gigaview-Padded-Region", s);
-    add_int(resp, "X-Gigaview-Filter-Passes", st->passes);
-    add_int(resp, "X-Gigaview-Filter-Textures", st->textures);
-    add_int(resp, "X-Gigaview-Filter-Merges", st->merges);
-    add_int(resp, "X-Gigaview-Filter-Merges-Skipped", st->merges_skipped);
-    add_int(resp, "X-Gigaview-Filter-Line-Copies", st->line_copies);
+    http_header_int(resp, "X-Gigaview-Filter-Passes", st->passes);
+    http_header_int(resp, "X-Gigaview-Filter-Textures", st->textures);
+    http_header_int(resp, "X-Gigaview-Filter-Merges", st->merges);
+    http_header_int(resp, "X-Gigaview-Filter-Merges-Skipped", st->merges_skipped);
+    http_header_int(resp, "X-Gigaview-Filter-Line-Copies", st->line_copies);
     snprintf(s, sizeof s, "%.3f", st->gpu_ms);
     MHD_add_response_header(resp, "X-Gigaview-Filter-Gpu-Ms", s);
     snprintf(s, sizeof s, "%.3f", c->fj.worker_ms);
@@ -551,6 +508,95 @@ static enum MHD_Result finish_run(struct req *r, struct call *c)
                                 "X-Gigaview-Filter-Line-Copies, "
                                 "X-Gigaview-Filter-Gpu-Ms, X-Gigaview-Filter-Worker-Ms");
     return http_send(r, 200, resp, len);
+}
+
+/*
+ * The padded region of roi (x, y, w, h) that g reads, per docs/FILTERS.md
+ * section 5: pad, align the left and top edges down to multiples of
+ * g->align, clip to the level (lw x lh).  roi lies inside the level.
+ */
+static void pad_region(const struct gv_filter_graph *g, const uint32_t *roi,
+                       uint32_t lw, uint32_t lh, struct call *c)
+{
+    int64_t a = g->align > 0 ? g->align : 1;
+    int64_t x0 = (int64_t)roi[0] - g->pad_left, y0 = (int64_t)roi[1] - g->pad_top;
+    int64_t x1 = (int64_t)roi[0] + roi[2] + g->pad_right;
+    int64_t y1 = (int64_t)roi[1] + roi[3] + g->pad_bottom;
+    x0 = x0 < 0 ? 0 : x0 - x0 % a;
+    y0 = y0 < 0 ? 0 : y0 - y0 % a;
+    x1 = x1 > lw ? lw : x1;
+    y1 = y1 > lh ? lh : y1;
+    c->px = (uint32_t)x0;
+    c->py = (uint32_t)y0;
+    c->pw = (uint32_t)(x1 - x0);
+    c->ph = (uint32_t)(y1 - y0);
+}
+
+/* Check roi against c->level of img and set c's padded region, within
+ * max_filter_pixels.  0 or -1 with *err. */
+static int place_region(struct req *r, const struct image *img,
+                        const struct gv_filter_graph *g, const uint32_t *roi,
+                        struct call *c, struct gv_error *err)
+{
+    const struct gv_geometry *geo = &img->info->geometry;
+    uint32_t lw, lh, x = roi[0], y = roi[1], w = roi[2], h = roi[3];
+    if (gv_level_size(geo, (int)c->level, &lw, &lh) < 0)
+        return gv_fail(err, GV_EINVAL, "filter: no level %u (0..%d)", c->level,
+                       geo->root + geo->root_mips - 1);
+    if ((uint64_t)x + w > lw || (uint64_t)y + h > lh)
+        return gv_fail(err, GV_EINVAL, "filter: region %u,%u,%u,%u is outside "
+                       "level %u (%ux%u)", x, y, w, h, c->level, lw, lh);
+    pad_region(g, roi, lw, lh, c);
+    uint64_t pixels = (uint64_t)c->pw * c->ph;
+    if (pixels > r->srv->cfg->max_filter_pixels)
+        return gv_fail(err, GV_ELIMIT, "filter: the padded region %lldx%lld "
+                       "(%llu pixels) exceeds max_filter_pixels (%llu)",
+                       (long long)c->pw, (long long)c->ph,
+                       (unsigned long long)pixels,
+                       (unsigned long long)r->srv->cfg->max_filter_pixels);
+    return 0;
+}
+
+/* Decode c's padded region of img as RGBA into c->rgba.  0 or -1. */
+static int decode_input(struct image *img, struct call *c, struct gv_error *err)
+{
+    size_t pixels = (size_t)c->pw * c->ph;
+    c->rgba = malloc(pixels * 4);
+    struct gv_decoder *d = image_decoder_get(img);
+    int rc = 0;
+    if (!c->rgba || !d)
+        rc = gv_fail(err, GV_ENOMEM, "filter: out of memory");
+    else if (gv_decode_region(d, (int)c->level, c->px, c->py, c->pw, c->ph,
+                              c->rgba, err) < 0)
+        rc = -1;
+    else
+        expand_rgba(c->rgba, pixels, img->info->geometry.channels);
+    image_decoder_put(img, d);
+    return rc;
+}
+
+/* The RUN job for c: its document and inputs, the region roi of the
+ * padded region, in the level's coordinates at (px, py). */
+static void fill_job(struct call *c, const struct gv_filter_graph *g,
+                     const uint32_t *roi, const uint32_t *viewport)
+{
+    struct gv_worker_job *job = &c->fj.job;
+    job->op = GV_WORKER_RUN;
+    job->doc = c->doc;
+    job->doc_len = c->doc_len;
+    job->nparams = g->nparams;
+    job->in.w = c->pw;
+    job->in.h = c->ph;
+    job->in.rgba = c->rgba;
+    job->in.roi_x = roi[0] - c->px;
+    job->in.roi_y = roi[1] - c->py;
+    job->in.roi_w = roi[2];
+    job->in.roi_h = roi[3];
+    job->in.abs_x = c->px;
+    job->in.abs_y = c->py;
+    job->in.viewport_w = viewport[0];
+    job->in.viewport_h = viewport[1];
+    job->in.params = c->values;
 }
 
 enum MHD_Result route_image_filter(struct req *r)
@@ -569,7 +615,6 @@ enum MHD_Result route_image_filter(struct req *r)
     gv_error_clear(&err);
     struct gv_filter_graph *g = NULL;
     struct image *img = NULL;
-    struct gv_decoder *d = NULL;
     int reserved = 0;
     uint32_t roi[4], viewport[2];
     c = calloc(1, sizeof *c);
@@ -582,35 +627,8 @@ enum MHD_Result route_image_filter(struct req *r)
     img = http_image(r, &ret);
     if (!img)
         goto fail;
-    uint32_t lw, lh, x = roi[0], y = roi[1], w = roi[2], h = roi[3];
-    if (level_size(img, c->level, &lw, &lh) < 0) {
-        ret = http_send_errorf(r, GV_EINVAL, "filter: no level %u (0..%d)", c->level,
-                               img->info->geometry.root +
-                                   img->info->geometry.root_mips - 1);
-        goto fail;
-    }
-    if ((uint64_t)x + w > lw || (uint64_t)y + h > lh) {
-        ret = http_send_errorf(r, GV_EINVAL, "filter: region %u,%u,%u,%u is "
-                               "outside level %u (%ux%u)", x, y, w, h, c->level,
-                               lw, lh);
-        goto fail;
-    }
-    /* docs/FILTERS.md section 5: pad, align the left and top edges down
-     * to multiples of g->align, clip to the level. */
-    int64_t a = g->align > 0 ? g->align : 1;
-    int64_t x0 = (int64_t)x - g->pad_left, y0 = (int64_t)y - g->pad_top;
-    int64_t x1 = (int64_t)x + w + g->pad_right, y1 = (int64_t)y + h + g->pad_bottom;
-    x0 = x0 < 0 ? 0 : x0 - x0 % a;
-    y0 = y0 < 0 ? 0 : y0 - y0 % a;
-    x1 = x1 > lw ? lw : x1;
-    y1 = y1 > lh ? lh : y1;
-    uint64_t pixels = (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0);
-    if (pixels > r->srv->cfg->max_filter_pixels) {
-        ret = http_send_errorf(r, GV_ELIMIT, "filter: the padded region %lldx%lld "
-                               "(%llu pixels) exceeds max_filter_pixels (%llu)",
-                               (long long)(x1 - x0), (long long)(y1 - y0),
-                               (unsigned long long)pixels,
-                               (unsigned long long)r->srv->cfg->max_filter_pixels);
+    if (place_region(r, img, g, roi, c, &err) < 0) {
+        ret = http_send_error(r, &err);
         goto fail;
     }
     if (filter_jobs_reserve(r->srv->filters) < 0) {
@@ -618,48 +636,16 @@ enum MHD_Result route_image_filter(struct req *r)
         goto fail;
     }
     reserved = 1;
-    c->px = (uint32_t)x0;
-    c->py = (uint32_t)y0;
-    c->pw = (uint32_t)(x1 - x0);
-    c->ph = (uint32_t)(y1 - y0);
-    c->rgba = malloc((size_t)pixels * 4);
-    d = image_decoder_get(img);
-    if (!c->rgba || !d) {
-        ret = http_send_errorf(r, GV_ENOMEM, "filter: out of memory");
-        goto fail;
-    }
-    if (gv_decode_region(d, (int)c->level, c->px, c->py, c->pw, c->ph, c->rgba,
-                         &err) < 0) {
+    if (decode_input(img, c, &err) < 0) {
         ret = http_send_error(r, &err);
         goto fail;
     }
-    expand_rgba(c->rgba, (size_t)pixels, img->info->geometry.channels);
-    image_decoder_put(img, d);
     image_put(img);
-    struct gv_worker_job *job = &c->fj.job;
-    job->op = GV_WORKER_RUN;
-    job->doc = c->doc;
-    job->doc_len = c->doc_len;
-    job->nparams = g->nparams;
-    job->in.w = c->pw;
-    job->in.h = c->ph;
-    job->in.rgba = c->rgba;
-    job->in.roi_x = x - c->px;
-    job->in.roi_y = y - c->py;
-    job->in.roi_w = w;
-    job->in.roi_h = h;
-    job->in.abs_x = x0;
-    job->in.abs_y = y0;
-    job->in.viewport_w = viewport[0];
-    job->in.viewport_h = viewport[1];
-    job->in.params = c->values;
+    fill_job(c, g, roi, viewport);
     gv_filter_graph_free(g);
     return suspend_on(r, c);
 fail:
-    if (img) {
-        image_decoder_put(img, d);
-        image_put(img);
-    }
+    image_put(img);
     if (reserved)
         filter_jobs_unreserve(r->srv->filters);
     gv_filter_graph_free(g);

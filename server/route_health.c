@@ -2,7 +2,6 @@
  * route_health.c - GET /healthz (liveness and a summary, JSON) and
  * GET /metrics (Prometheus text exposition format 0.0.4).
  */
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,158 +38,55 @@ enum MHD_Result route_healthz(struct req *r)
     return http_send_json(r, 200, j);
 }
 
-/* A growing text buffer. */
-struct text {
-    char *s;
-    size_t len, cap;
-    int failed;
-};
-
-static void put(struct text *t, const char *fmt, ...)
-    __attribute__((format(printf, 2, 3)));
-static void put(struct text *t, const char *fmt, ...)
+/* The page cache's counters and the server's gauges. */
+static void write_server(struct prom *p, struct server *srv)
 {
-    for (;;) {
-        if (t->failed)
-            return;
-        va_list ap;
-        va_start(ap, fmt);
-        int n = vsnprintf(t->s + t->len, t->cap - t->len, fmt, ap);
-        va_end(ap);
-        if (n < 0) {
-            t->failed = 1;
-            return;
-        }
-        if ((size_t)n < t->cap - t->len) {
-            t->len += (size_t)n;
-            return;
-        }
-        size_t cap = 2 * t->cap + (size_t)n;
-        char *s = realloc(t->s, cap);
-        if (!s) {
-            t->failed = 1;
-            return;
-        }
-        t->s = s;
-        t->cap = cap;
-    }
+    struct page_cache_stats st;
+    page_cache_stats(srv->pages, &st);
+    prom_metric(p, "gigaview_page_cache_hits_total", "counter",
+                "Page cache hits.", "%llu", (unsigned long long)st.hits);
+    prom_metric(p, "gigaview_page_cache_misses_total", "counter",
+                "Page cache misses (pages read).", "%llu",
+                (unsigned long long)st.misses);
+    prom_metric(p, "gigaview_page_cache_evictions_total", "counter",
+                "Pages evicted.", "%llu", (unsigned long long)st.evictions);
+    prom_metric(p, "gigaview_page_cache_bytes", "gauge",
+                "Bytes of pages cached.", "%llu", (unsigned long long)st.bytes);
+    prom_metric(p, "gigaview_page_cache_limit_bytes", "gauge",
+                "The cache bound (cache_bytes).", "%llu",
+                (unsigned long long)st.max_bytes);
+    prom_metric(p, "gigaview_page_cache_pages", "gauge", "Pages cached.", "%llu",
+                (unsigned long long)st.pages);
+    prom_metric(p, "gigaview_page_errors_total", "counter",
+                "Pages that failed their CRC or could not be read.", "%llu",
+                (unsigned long long)st.errors);
+    prom_metric(p, "gigaview_page_error_responses_total", "counter",
+                "Tiles, batch entries, regions and IIIF images answered 500 "
+                "because a page was damaged or unreadable.", "%llu",
+                (unsigned long long)atomic_load(&metrics.page_errors));
+    prom_metric(p, "gigaview_open_connections", "gauge", "Open HTTP connections.",
+                "%d", atomic_load(&metrics.open_connections));
+    prom_metric(p, "gigaview_http_requests_in_flight", "gauge",
+                "Requests being answered.", "%d", atomic_load(&metrics.in_flight));
+    prom_metric(p, "gigaview_http_response_bytes_total", "counter",
+                "Body bytes sent.", "%llu",
+                (unsigned long long)atomic_load(&metrics.bytes_sent));
+    prom_metric(p, "gigaview_stores", "gauge", "Stores served.", "%d",
+                catalog_count(srv->catalog));
+    prom_metric(p, "gigaview_uptime_seconds", "gauge", "Seconds since start.",
+                "%.3f", http_uptime(srv));
 }
 
 enum MHD_Result route_metrics(struct req *r)
 {
-    struct text t = {malloc(16384), 0, 16384, 0};
-    if (!t.s)
-        return http_send_errorf(r, GV_ENOMEM, "metrics: out of memory");
-    put(&t, "# HELP gigaview_http_requests_total HTTP requests by route and status.\n"
-            "# TYPE gigaview_http_requests_total counter\n");
-    for (int i = 0; i < metrics.nroutes; i++) {
-        struct metrics_route *m = &metrics.route[i];
-        if (!m->name)
-            continue;
-        int dup = 0;
-        for (int k = 0; k < i; k++)
-            dup |= metrics.route[k].name && !strcmp(metrics.route[k].name, m->name);
-        if (dup)
-            continue;
-        for (int s = 0; s <= METRICS_STATUSES; s++) {
-            uint64_t v = atomic_load(&m->by_status[s]);
-            if (!v)
-                continue;
-            if (s < METRICS_STATUSES)
-                put(&t, "gigaview_http_requests_total{route=\"%s\",status=\"%u\"} %llu\n",
-                    m->name, metrics_status_codes[s], (unsigned long long)v);
-            else
-                put(&t, "gigaview_http_requests_total{route=\"%s\",status=\"other\"} %llu\n",
-                    m->name, (unsigned long long)v);
-        }
-    }
-    put(&t, "# HELP gigaview_http_request_duration_seconds Time from request "
-            "headers to the end of the response.\n"
-            "# TYPE gigaview_http_request_duration_seconds histogram\n");
-    for (int i = 0; i < metrics.nroutes; i++) {
-        struct metrics_route *m = &metrics.route[i];
-        int dup = 0;
-        for (int k = 0; k < i; k++)
-            dup |= metrics.route[k].name && m->name &&
-                   !strcmp(metrics.route[k].name, m->name);
-        if (!m->name || dup)
-            continue;
-        uint64_t cum = 0;
-        for (int b = 0; b < METRICS_BUCKETS; b++) {
-            cum += atomic_load(&m->bucket[b]);
-            put(&t, "gigaview_http_request_duration_seconds_bucket{route=\"%s\","
-                    "le=\"%g\"} %llu\n", m->name, metrics_bucket_le[b],
-                (unsigned long long)cum);
-        }
-        uint64_t count = atomic_load(&m->count);
-        put(&t, "gigaview_http_request_duration_seconds_bucket{route=\"%s\","
-                "le=\"+Inf\"} %llu\n", m->name, (unsigned long long)count);
-        put(&t, "gigaview_http_request_duration_seconds_sum{route=\"%s\"} %.6f\n",
-            m->name, (double)atomic_load(&m->usec_sum) / 1e6);
-        put(&t, "gigaview_http_request_duration_seconds_count{route=\"%s\"} %llu\n",
-            m->name, (unsigned long long)count);
-    }
-    struct page_cache_stats st;
-    page_cache_stats(r->srv->pages, &st);
-    put(&t,
-        "# HELP gigaview_page_cache_hits_total Page cache hits.\n"
-        "# TYPE gigaview_page_cache_hits_total counter\n"
-        "gigaview_page_cache_hits_total %llu\n"
-        "# HELP gigaview_page_cache_misses_total Page cache misses (pages read).\n"
-        "# TYPE gigaview_page_cache_misses_total counter\n"
-        "gigaview_page_cache_misses_total %llu\n"
-        "# HELP gigaview_page_cache_evictions_total Pages evicted.\n"
-        "# TYPE gigaview_page_cache_evictions_total counter\n"
-        "gigaview_page_cache_evictions_total %llu\n"
-        "# HELP gigaview_page_cache_bytes Bytes of pages cached.\n"
-        "# TYPE gigaview_page_cache_bytes gauge\n"
-        "gigaview_page_cache_bytes %llu\n"
-        "# HELP gigaview_page_cache_limit_bytes The cache bound (cache_bytes).\n"
-        "# TYPE gigaview_page_cache_limit_bytes gauge\n"
-        "gigaview_page_cache_limit_bytes %llu\n"
-        "# HELP gigaview_page_cache_pages Pages cached.\n"
-        "# TYPE gigaview_page_cache_pages gauge\n"
-        "gigaview_page_cache_pages %llu\n"
-        "# HELP gigaview_page_errors_total Pages that failed their CRC or could not be read.\n"
-        "# TYPE gigaview_page_errors_total counter\n"
-        "gigaview_page_errors_total %llu\n"
-        "# HELP gigaview_page_error_responses_total Tiles, batch entries, regions "
-        "and IIIF images answered 500 because a page was damaged or unreadable.\n"
-        "# TYPE gigaview_page_error_responses_total counter\n"
-        "gigaview_page_error_responses_total %llu\n"
-        "# HELP gigaview_open_connections Open HTTP connections.\n"
-        "# TYPE gigaview_open_connections gauge\n"
-        "gigaview_open_connections %d\n"
-        "# HELP gigaview_http_requests_in_flight Requests being answered.\n"
-        "# TYPE gigaview_http_requests_in_flight gauge\n"
-        "gigaview_http_requests_in_flight %d\n"
-        "# HELP gigaview_http_response_bytes_total Body bytes sent.\n"
-        "# TYPE gigaview_http_response_bytes_total counter\n"
-        "gigaview_http_response_bytes_total %llu\n"
-        "# HELP gigaview_stores Stores served.\n"
-        "# TYPE gigaview_stores gauge\n"
-        "gigaview_stores %d\n"
-        "# HELP gigaview_uptime_seconds Seconds since start.\n"
-        "# TYPE gigaview_uptime_seconds gauge\n"
-        "gigaview_uptime_seconds %.3f\n",
-        (unsigned long long)st.hits, (unsigned long long)st.misses,
-        (unsigned long long)st.evictions, (unsigned long long)st.bytes,
-        (unsigned long long)st.max_bytes, (unsigned long long)st.pages,
-        (unsigned long long)st.errors,
-        (unsigned long long)atomic_load(&metrics.page_errors),
-        atomic_load(&metrics.open_connections), atomic_load(&metrics.in_flight),
-        (unsigned long long)atomic_load(&metrics.bytes_sent),
-        catalog_count(r->srv->catalog), http_uptime(r->srv));
-    char *fm = filter_jobs_metrics(r->srv->filters); /* filter workers */
-    if (fm)
-        put(&t, "%s", fm);
-    else
-        t.failed = 1;
-    free(fm);
-    if (t.failed) {
-        free(t.s);
+    struct prom p = {0};
+    metrics_write(&p);
+    write_server(&p, r->srv);
+    filter_jobs_metrics(r->srv->filters, &p);
+    if (p.failed) {
+        free(p.s);
         return http_send_errorf(r, GV_ENOMEM, "metrics: out of memory");
     }
     return http_send_owned(r, 200, "text/plain; version=0.0.4; charset=utf-8",
-                           t.s, t.len);
+                           p.s, p.len);
 }

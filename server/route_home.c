@@ -61,14 +61,10 @@ enum MHD_Result route_home(struct req *r)
     free(imgs);
     memcpy(s + len, text + tail_at, page->len - tail_at);
     len += page->len - tail_at;
-    struct MHD_Response *resp =
-        MHD_create_response_from_buffer_with_free_callback(len, s, free);
-    if (!resp) {
-        free(s);
-        return http_send(r, 500, NULL, 0);
+    struct MHD_Response *resp = http_response_owned(s, len, page->type);
+    if (resp) {
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-cache");
+        MHD_add_response_header(resp, "Content-Security-Policy", WEB_CSP);
     }
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, page->type);
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-cache");
-    MHD_add_response_header(resp, "Content-Security-Policy", WEB_CSP);
     return http_send(r, 200, resp, len);
 }

@@ -19,8 +19,7 @@
 
 #include "iiif.h"
 #include "imageio/imageio.h"
-#include "log.h"
-#include "metrics.h"
+#include "imageio/output_format.h"
 #include "render/region.h"
 #include "routes.h"
 
@@ -35,56 +34,67 @@ static void limits_of(const struct settings *cfg, struct iiif_limits *l)
     l->max_upscale = cfg->max_upscale;
 }
 
+/* "{base}/iiif/3/{id}" into buf. */
+static void service_id(struct req *r, const struct image *img, char *buf,
+                       size_t size)
+{
+    char base[300];
+    http_base_url(r, base, sizeof base);
+    snprintf(buf, size, "%s/iiif/3/%s", base, img->id);
+}
+
 enum MHD_Result route_iiif_base(struct req *r)
 {
     enum MHD_Result ret;
     struct image *img = http_image(r, &ret);
     if (!img)
         return ret;
-    char base[300], loc[600];
-    http_base_url(r, base, sizeof base);
-    snprintf(loc, sizeof loc, "%s/iiif/3/%s/info.json", base, img->id);
+    char id[600], loc[620];
+    service_id(r, img, id, sizeof id);
+    snprintf(loc, sizeof loc, "%s/info.json", id);
     image_put(img);
     return http_send_empty(r, 303, MHD_HTTP_HEADER_LOCATION, loc);
 }
 
-enum MHD_Result route_iiif_info(struct req *r)
+static json_t *size_json(uint32_t w, uint32_t h)
 {
-    enum MHD_Result ret;
-    struct image *img = http_image(r, &ret);
-    if (!img)
-        return ret;
-    const struct gv_geometry *g = &img->info->geometry;
-    struct iiif_limits lim;
-    limits_of(r->srv->cfg, &lim);
-    char base[300], id[600];
-    http_base_url(r, base, sizeof base);
-    snprintf(id, sizeof id, "%s/iiif/3/%s", base, img->id);
+    return json_pack("{s:I,s:I}", "width", (json_int_t)w, "height", (json_int_t)h);
+}
 
-    /* sizes: every pyramid level (root mips, root, tiled levels) whose
-     * whole image is within the output limits, smallest first: each is
-     * decoded without resampling. */
+/* info.json's sizes: every pyramid level (root mips, root, tiled levels)
+ * whose whole image is within the output limits, smallest first: each is
+ * decoded without resampling. */
+static json_t *sizes_json(const struct image *img, const struct iiif_limits *lim)
+{
+    const struct gv_geometry *g = &img->info->geometry;
     json_t *sizes = json_array();
     for (int m = g->root_mips - 1; m >= 1; m--) {
         uint32_t w, h;
         if (gv_store_root(img->store, m, &w, &h))
-            json_array_append_new(sizes, json_pack("{s:I,s:I}", "width",
-                                                   (json_int_t)w, "height",
-                                                   (json_int_t)h));
+            json_array_append_new(sizes, size_json(w, h));
     }
     for (int k = g->root; k >= 0; k--) {
         uint32_t w = g->level[k].width, h = g->level[k].height;
-        if (w > lim.max_width || h > lim.max_height ||
-            (uint64_t)w * h > lim.max_area)
+        if (w > lim->max_width || h > lim->max_height ||
+            (uint64_t)w * h > lim->max_area)
             break;
-        json_array_append_new(sizes, json_pack("{s:I,s:I}", "width",
-                                               (json_int_t)w, "height",
-                                               (json_int_t)h));
+        json_array_append_new(sizes, size_json(w, h));
     }
+    return sizes;
+}
+
+/* The image information document (spec 5), or NULL. */
+static json_t *info_json(struct req *r, const struct image *img)
+{
+    const struct gv_geometry *g = &img->info->geometry;
+    struct iiif_limits lim;
+    limits_of(r->srv->cfg, &lim);
+    char id[600];
+    service_id(r, img, id, sizeof id);
     json_t *factors = json_array();
     for (int k = 0; k <= g->root; k++)
         json_array_append_new(factors, json_integer((json_int_t)1 << k));
-    json_t *j = json_pack(
+    return json_pack(
         "{s:s,s:s,s:s,s:s,s:s,s:I,s:I,s:I,s:I,s:I,s:o,"
         "s:[{s:i,s:i,s:o}],s:[s,s],s:[s,s,s],s:[s,s,s,s,s]}",
         "@context", IIIF_CONTEXT, "id", id, "type", "ImageService3",
@@ -93,44 +103,41 @@ enum MHD_Result route_iiif_info(struct req *r)
         "maxWidth", (json_int_t)lim.max_width,
         "maxHeight", (json_int_t)lim.max_height,
         "maxArea", (json_int_t)lim.max_area,
-        "sizes", sizes,
+        "sizes", sizes_json(img, &lim),
         "tiles", "width", 512, "height", 512, "scaleFactors", factors,
         "extraFormats", "webp", "tif",
         "extraQualities", "color", "gray", "bitonal",
         "extraFeatures", "mirroring", "rotationBy90s", "sizeUpscaling",
         "canonicalLinkHeader", "profileLinkHeader");
+}
+
+enum MHD_Result route_iiif_info(struct req *r)
+{
+    enum MHD_Result ret;
+    struct image *img = http_image(r, &ret);
+    if (!img)
+        return ret;
+    json_t *j = info_json(r, img);
     image_put(img);
-    if (!j)
-        return http_send_errorf(r, GV_ENOMEM, "iiif: cannot build info.json");
-    char *s = json_dumps(j, JSON_INDENT(2));
-    json_decref(j);
-    if (!s)
-        return http_send_errorf(r, GV_ENOMEM, "iiif: cannot build info.json");
-    size_t n = strlen(s);
-    s[n] = '\n';
-    struct MHD_Response *resp =
-        MHD_create_response_from_buffer_with_free_callback(n + 1, s, free);
-    if (!resp) {
-        free(s);
-        return http_send(r, 500, NULL, 0);
-    }
     /* JSON-LD only when asked for (spec 5.1); otherwise plain JSON with
      * the context in a Link header. */
     const char *accept = http_header(r, "Accept");
-    if (accept && strstr(accept, "application/ld+json")) {
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
-                                "application/ld+json;profile=\"" IIIF_CONTEXT "\"");
-    } else {
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
-                                "application/json");
+    int ld = accept && strstr(accept, "application/ld+json");
+    size_t len;
+    struct MHD_Response *resp = http_response_json(
+        j, JSON_INDENT(2),
+        ld ? "application/ld+json;profile=\"" IIIF_CONTEXT "\"" : "application/json",
+        &len);
+    if (!resp)
+        return http_send_errorf(r, GV_ENOMEM, "iiif: cannot build info.json");
+    if (!ld)
         MHD_add_response_header(resp, "Link",
                                 "<" IIIF_CONTEXT ">; rel=\"http://www.w3.org/ns/"
                                 "json-ld#context\"; type=\"application/ld+json\"");
-    }
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
                             "public, max-age=86400");
     MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Accept");
-    return http_send(r, 200, resp, n + 1);
+    return http_send(r, 200, resp, len);
 }
 
 static const char *quality_name(enum gv_quality q)
@@ -143,27 +150,15 @@ static const char *quality_name(enum gv_quality q)
     }
 }
 
-static const char *content_type(const char *format)
-{
-    if (!strcmp(format, "jpg"))
-        return "image/jpeg";
-    if (!strcmp(format, "png"))
-        return "image/png";
-    if (!strcmp(format, "webp"))
-        return "image/webp";
-    if (!strcmp(format, "tif"))
-        return "image/tiff";
-    return "application/octet-stream";
-}
-
-/* The canonical URI of a parsed request (spec 4.7) into buf. */
-static void canonical(struct req *r, const struct image *img,
-                      const struct iiif_request *q, char *buf, size_t size)
+/* The canonical URI of a parsed request (spec 4.7) and the compliance
+ * profile, as a Link header value, into buf. */
+static void links(struct req *r, const struct image *img,
+                  const struct iiif_request *q, char *buf, size_t size)
 {
     const struct gv_render_req *p = &q->render;
     const struct gv_geometry *g = &img->info->geometry;
-    char base[300], region[64], sz[48];
-    http_base_url(r, base, sizeof base);
+    char id[600], region[64], sz[48];
+    service_id(r, img, id, sizeof id);
     if (p->x == 0 && p->y == 0 && p->w == g->width && p->h == g->height)
         snprintf(region, sizeof region, "full");
     else
@@ -174,9 +169,42 @@ static void canonical(struct req *r, const struct image *img,
         snprintf(sz, sizeof sz, "%s%u,%u",
                  p->out_w > p->w || p->out_h > p->h ? "^" : "", p->out_w,
                  p->out_h);
-    snprintf(buf, size, "<%s/iiif/3/%s/%s/%s/%s%d/%s.%s>;rel=\"canonical\"",
-             base, img->id, region, sz, p->mirror ? "!" : "", p->rotation,
-             quality_name(p->quality), q->format);
+    snprintf(buf, size, "<%s/%s/%s/%s%d/%s.%s>;rel=\"canonical\", "
+             IIIF_PROFILE_LINK, id, region, sz, p->mirror ? "!" : "",
+             p->rotation, quality_name(p->quality), q->format);
+}
+
+/* Parse the request for img, render and encode it: *out (malloc'ed) of
+ * *len bytes.  0, or -1 with *err. */
+static int render(struct req *r, struct image *img, struct iiif_request *q,
+                  uint8_t **out, size_t *len, struct gv_error *err)
+{
+    const struct gv_geometry *g = &img->info->geometry;
+    struct iiif_limits lim;
+    limits_of(r->srv->cfg, &lim);
+    if (iiif_parse(r->param[1], r->param[2], r->param[3], r->param[4],
+                   g->width, g->height, &lim, q, err) < 0)
+        return -1;
+    /* gv_render decodes at most 2x oversampled, so a request within
+     * maxArea decodes at most about 4 x maxArea pixels (plus a pixel of
+     * rounding per edge); /region's max_region_pixels does not apply, or
+     * info.json would advertise sizes the server refuses. */
+    q->render.max_decode_pixels = 4 * (r->srv->cfg->max_output_pixels +
+                                       2 * r->srv->cfg->max_output_side + 1);
+    struct gv_decoder *d = image_decoder_get(img);
+    if (!d)
+        return gv_fail(err, GV_ENOMEM, "iiif: out of memory");
+    uint8_t *pix = NULL;
+    uint32_t w, h;
+    int c;
+    int rc = gv_render(d, &q->render, &pix, &w, &h, &c, err) < 0 ||
+                     gv_image_encode(q->format, w, h, c, pix,
+                                     (int)r->srv->cfg->jpeg_quality, out, len,
+                                     err) < 0
+                 ? -1 : 0;
+    image_decoder_put(img, d);
+    free(pix);
+    return rc;
 }
 
 enum MHD_Result route_iiif_image(struct req *r)
@@ -185,60 +213,25 @@ enum MHD_Result route_iiif_image(struct req *r)
     struct image *img = http_image(r, &ret);
     if (!img)
         return ret;
-    const struct gv_geometry *g = &img->info->geometry;
-    struct iiif_limits lim;
-    limits_of(r->srv->cfg, &lim);
     struct iiif_request q;
     struct gv_error err;
-    uint8_t *pix = NULL, *out = NULL;
-    struct gv_decoder *d = NULL;
+    uint8_t *out;
     size_t len;
-    uint32_t w, h;
-    int c;
-    if (iiif_parse(r->param[1], r->param[2], r->param[3], r->param[4],
-                   g->width, g->height, &lim, &q, &err) < 0) {
+    if (render(r, img, &q, &out, &len, &err) < 0) {
+        http_page_error(img, "iiif", "", &err);
         ret = http_send_error(r, &err);
-        goto out;
-    }
-    /* gv_render decodes at most 2x oversampled, so a request within
-     * maxArea decodes at most about 4 x maxArea pixels (plus a pixel of
-     * rounding per edge); /region's max_region_pixels does not apply, or
-     * info.json would advertise sizes the server refuses. */
-    q.render.max_decode_pixels = 4 * (r->srv->cfg->max_output_pixels +
-                                      2 * r->srv->cfg->max_output_side + 1);
-    d = image_decoder_get(img);
-    if (!d) {
-        ret = http_send_errorf(r, GV_ENOMEM, "iiif: out of memory");
-        goto out;
-    }
-    if (gv_render(d, &q.render, &pix, &w, &h, &c, &err) < 0 ||
-        gv_image_encode(q.format, w, h, c, pix,
-                        (int)r->srv->cfg->jpeg_quality, &out, &len, &err) < 0) {
-        if (err.code == GV_ECORRUPT || err.code == GV_EIO) { /* the store */
-            atomic_fetch_add(&metrics.page_errors, 1);
-            log_msg(LOG_ERROR, "iiif", "%s: %s", img->id, err.text);
+    } else {
+        struct MHD_Response *resp =
+            http_response_owned(out, len, gv_output_format_image(q.format)->mime);
+        if (resp) {
+            char link[1024];
+            links(r, img, &q, link, sizeof link);
+            MHD_add_response_header(resp, "Link", link);
+            MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
+                                    "public, max-age=86400");
         }
-        ret = http_send_error(r, &err);
-        goto out;
+        ret = http_send(r, 200, resp, len);
     }
-    struct MHD_Response *resp =
-        MHD_create_response_from_buffer_with_free_callback(len, out, free);
-    if (resp) {
-        out = NULL;
-        char link[1024];
-        canonical(r, img, &q, link, sizeof link);
-        strncat(link, ", " IIIF_PROFILE_LINK, sizeof link - strlen(link) - 1);
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
-                                content_type(q.format));
-        MHD_add_response_header(resp, "Link", link);
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
-                                "public, max-age=86400");
-    }
-    ret = http_send(r, 200, resp, len);
-out:
-    image_decoder_put(img, d);
-    free(pix);
-    free(out);
     image_put(img);
     return ret;
 }

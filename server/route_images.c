@@ -8,9 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "store/geometry.h"
 #include "imageio/imageio.h"
+#include "imageio/output_format.h"
 #include "routes.h"
+#include "store/geometry.h"
 
 static double bpp(uint64_t bytes, uint64_t pixels)
 {
@@ -100,6 +101,29 @@ enum MHD_Result route_image_info(struct req *r)
     return http_send_json(r, 200, j);
 }
 
+/* A response with the root mip px (w x h) of img as raw samples or as
+ * PNG: 0 with *resp (NULL on allocation failure) and *len, or -1 with
+ * *err when the PNG encoder fails. */
+static int root_response(const struct image *img, const uint8_t *px,
+                         uint32_t w, uint32_t h, int raw,
+                         struct MHD_Response **resp, size_t *len,
+                         struct gv_error *err)
+{
+    int c = img->info->geometry.channels;
+    const struct gv_output_format *f = gv_output_format_find(raw ? "raw" : "png");
+    *len = (size_t)w * h * (size_t)c;
+    if (raw) { /* The pixels live as long as the store; copy, since the
+                * store may be closed (rescan) before the response is sent. */
+        *resp = http_response_copy(px, *len, f->mime);
+        return 0;
+    }
+    uint8_t *png;
+    if (gv_image_encode(f->name, w, h, c, px, 0, &png, len, err) < 0)
+        return -1;
+    *resp = http_response_owned(png, *len, f->mime);
+    return 0;
+}
+
 enum MHD_Result route_image_root(struct req *r)
 {
     enum MHD_Result ret;
@@ -135,38 +159,17 @@ enum MHD_Result route_image_root(struct req *r)
         goto out;
     }
     struct MHD_Response *resp;
-    size_t len = (size_t)w * h * (size_t)g->channels;
-    if (raw) {
-        /* The pixels live as long as the store; copy, since the store may
-         * be closed (rescan) before the response is sent. */
-        resp = MHD_create_response_from_buffer(len, (void *)px,
-                                               MHD_RESPMEM_MUST_COPY);
-        if (resp)
-            MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
-                                    "application/octet-stream");
-    } else {
-        uint8_t *png;
-        struct gv_error err;
-        if (gv_image_encode("png", w, h, g->channels, px, 0, &png, &len, &err) < 0) {
-            ret = http_send_error(r, &err);
-            goto out;
-        }
-        resp = MHD_create_response_from_buffer_with_free_callback(len, png, free);
-        if (!resp)
-            free(png);
-        else
-            MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "image/png");
+    size_t len;
+    struct gv_error err;
+    if (root_response(img, px, w, h, raw, &resp, &len, &err) < 0) {
+        ret = http_send_error(r, &err);
+        goto out;
     }
     if (resp) {
-        char num[16];
-        snprintf(num, sizeof num, "%u", w);
-        MHD_add_response_header(resp, "X-Width", num);
-        snprintf(num, sizeof num, "%u", h);
-        MHD_add_response_header(resp, "X-Height", num);
-        snprintf(num, sizeof num, "%d", g->channels);
-        MHD_add_response_header(resp, "X-Channels", num);
-        snprintf(num, sizeof num, "%d", g->root + (int)mip);
-        MHD_add_response_header(resp, "X-Level", num);
+        http_header_int(resp, "X-Width", w);
+        http_header_int(resp, "X-Height", h);
+        http_header_int(resp, "X-Channels", g->channels);
+        http_header_int(resp, "X-Level", g->root + (int)mip);
         MHD_add_response_header(resp, "ETag", etag);
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
                                 "public, max-age=3600");

@@ -14,8 +14,9 @@
  * A batch answers one framed binary body (docs/API.md):
  *   "GVB1", u32 count, then per tile: u8 level, 3 zero bytes, u32 tx,
  *   u32 ty, u32 status, u32 length, length bytes, zero padding to 4.
- * All integers little-endian.  A tile that fails (404 outside the grid,
- * 500 corrupt page) has its status and length 0; the others still serve.
+ * All integers little-endian.  A tile that fails has the status the error
+ * table (http.c) gives its failure (404 outside the grid, 500 corrupt
+ * page) and length 0; the others still serve.
  * The body is an iovec over the cached pages: no copy either.  The tile
  * list itself is parsed by batch_request.c (fuzzed on its own).
  */
@@ -24,10 +25,8 @@
 #include <string.h>
 
 #include "batch_request.h"
-#include "store/geometry.h"
-#include "log.h"
-#include "metrics.h"
 #include "routes.h"
+#include "store/geometry.h"
 #include "store/store_format.h"
 
 #define IMMUTABLE "public, max-age=31536000, immutable"
@@ -82,14 +81,13 @@ static int fetch(struct server *srv, const struct image *img, uint32_t level,
     return 0;
 }
 
+/* A tile's failure: counted and logged when the page was at fault. */
 static void log_page_error(const struct image *img, uint32_t level,
                            uint32_t tx, uint32_t ty, const struct gv_error *err)
 {
-    if (err->code == GV_ECORRUPT || err->code == GV_EIO) {
-        atomic_fetch_add(&metrics.page_errors, 1);
-        log_msg(LOG_ERROR, "tiles", "%s: tile %u/%u/%u: %s", img->id, level,
-                tx, ty, err->text);
-    }
+    char where[64];
+    snprintf(where, sizeof where, "tile %u/%u/%u: ", level, tx, ty);
+    http_page_error(img, "tiles", where, err);
 }
 
 enum MHD_Result route_tile(struct req *r)
@@ -177,26 +175,88 @@ static struct page *batch_page(struct batch *b, const struct page *p)
     return NULL;
 }
 
+/* The tile list of a GET (?t=) or POST (JSON) batch into b.  0 or -1. */
+static int batch_parse(struct req *r, struct batch *b, struct gv_error *err)
+{
+    size_t max = (size_t)r->srv->cfg->batch_max_tiles;
+    if (!strcmp(r->method, "POST"))
+        return batch_parse_json(r->body, r->body_len, max, &b->want, &b->n, err);
+    const char *t = http_query(r, "t");
+    if (!t)
+        return gv_fail(err, GV_EINVAL, "batch: missing t=L,X,Y;L,X,Y...");
+    return batch_parse_query(t, max, &b->want, &b->n, err);
+}
+
+/* The body under construction: iovecs over frame headers (b->frames) and
+ * cached tiles. */
+struct body {
+    struct MHD_IoVec *iov;
+    unsigned n;
+    size_t total;
+    int last_frames;   /* iov[n - 1] holds frame headers */
+};
+
+static void body_add(struct body *y, const void *p, size_t len)
+{
+    y->iov[y->n].iov_base = p;
+    y->iov[y->n++].iov_len = len;
+    y->total += len;
+}
+
+/* Tile i of b: its 20-byte frame (status 200, or the table's status of
+ * its failure) and its bytes.  Returns 1 if the tile failed, else 0. */
+static int batch_tile(struct req *r, const struct image *img, struct batch *b,
+                      size_t i, struct body *y)
+{
+    static const uint8_t zeros[4];
+    uint32_t level = b->want[i].level, tx = b->want[i].tx, ty = b->want[i].ty;
+    uint8_t *f = b->frames + 8 + 20 * i;
+    uint32_t crc, status = 200;
+    const uint8_t *tile = NULL;
+    size_t len = 0;
+    struct page *p = NULL;
+    struct gv_error err;
+    if (locate(img, level, tx, ty, &crc, &err) < 0 ||
+        fetch(r->srv, img, level, tx, ty, &p, &tile, &len, &err) < 0) {
+        log_page_error(img, level, tx, ty, &err);
+        status = http_error_status(r, err.code);
+        tile = NULL;
+        len = 0;
+    } else if (batch_page(b, p)) {
+        page_release(p); /* already holding it */
+    } else {
+        b->pages[b->npages++] = p;
+    }
+    f[0] = (uint8_t)level;
+    gv_put32(f + 4, tx);
+    gv_put32(f + 8, ty);
+    gv_put32(f + 12, status);
+    gv_put32(f + 16, (uint32_t)len);
+    /* Consecutive frame headers stay one iovec when a tile is empty. */
+    if (y->last_frames) {
+        y->iov[y->n - 1].iov_len += 20;
+        y->total += 20;
+    } else {
+        body_add(y, f, 20);
+    }
+    y->last_frames = 1;
+    if (len) {
+        y->last_frames = 0;
+        body_add(y, tile, len);
+        if (len % 4) /* tile buffers are whole words; belt and braces */
+            body_add(y, zeros, 4 - len % 4);
+    }
+    return status != 200;
+}
+
 enum MHD_Result route_batch(struct req *r)
 {
     enum MHD_Result ret;
     struct gv_error err;
-    size_t max = (size_t)r->srv->cfg->batch_max_tiles;
     struct batch *b = calloc(1, sizeof *b);
     if (!b)
         return http_send_errorf(r, GV_ENOMEM, "batch: out of memory");
-    int get = strcmp(r->method, "POST") != 0;
-    int rc;
-    if (get) {
-        const char *t = http_query(r, "t");
-        if (!t)
-            rc = gv_fail(&err, GV_EINVAL, "batch: missing t=L,X,Y;L,X,Y...");
-        else
-            rc = batch_parse_query(t, max, &b->want, &b->n, &err);
-    } else {
-        rc = batch_parse_json(r->body, r->body_len, max, &b->want, &b->n, &err);
-    }
-    if (rc < 0) {
+    if (batch_parse(r, b, &err) < 0) {
         batch_free(b);
         return http_send_error(r, &err);
     }
@@ -207,78 +267,32 @@ enum MHD_Result route_batch(struct req *r)
     }
     b->frames = calloc(1, 8 + 20 * b->n);
     b->pages = calloc(b->n, sizeof *b->pages);
-    struct MHD_IoVec *iov = calloc(3 * b->n + 1, sizeof *iov);
-    if (!b->frames || !b->pages || !iov) {
-        free(iov);
+    struct body y = {calloc(3 * b->n + 1, sizeof *y.iov), 0, 0, 1};
+    if (!b->frames || !b->pages || !y.iov) {
+        free(y.iov);
         batch_free(b);
         image_put(img);
         return http_send_errorf(r, GV_ENOMEM, "batch: out of memory");
     }
-    static const uint8_t zeros[4];
     memcpy(b->frames, "GVB1", 4);
     gv_put32(b->frames + 4, (uint32_t)b->n);
-    unsigned niov = 0;
-    size_t total = 8;
-    int failures = 0, last_frames = 1;
-    iov[niov].iov_base = b->frames;
-    iov[niov++].iov_len = 8;
-    for (size_t i = 0; i < b->n; i++) {
-        uint32_t level = b->want[i].level, tx = b->want[i].tx, ty = b->want[i].ty;
-        uint8_t *f = b->frames + 8 + 20 * i;
-        uint32_t crc, status = 200;
-        const uint8_t *tile = NULL;
-        size_t len = 0;
-        struct page *p = NULL;
-        if (locate(img, level, tx, ty, &crc, &err) < 0 ||
-            fetch(r->srv, img, level, tx, ty, &p, &tile, &len, &err) < 0) {
-            log_page_error(img, level, tx, ty, &err);
-            status = err.code == GV_ENOTFOUND ? 404 : 500;
-            tile = NULL;
-            len = 0;
-            failures++;
-        } else if (batch_page(b, p)) {
-            page_release(p); /* already holding it */
-        } else {
-            b->pages[b->npages++] = p;
-        }
-        f[0] = (uint8_t)level;
-        gv_put32(f + 4, tx);
-        gv_put32(f + 8, ty);
-        gv_put32(f + 12, status);
-        gv_put32(f + 16, (uint32_t)len);
-        /* Consecutive frame headers stay one iovec when a tile is empty. */
-        if (last_frames) {
-            iov[niov - 1].iov_len += 20;
-        } else {
-            iov[niov].iov_base = f;
-            iov[niov++].iov_len = 20;
-        }
-        last_frames = 1;
-        total += 20;
-        if (len) {
-            last_frames = 0;
-            iov[niov].iov_base = tile;
-            iov[niov++].iov_len = len;
-            total += len;
-            if (len % 4) { /* tile buffers are whole words; belt and braces */
-                iov[niov].iov_base = zeros;
-                iov[niov++].iov_len = 4 - len % 4;
-                total += 4 - len % 4;
-            }
-        }
-    }
-    struct MHD_Response *resp = MHD_create_response_from_iovec(iov, niov,
+    body_add(&y, b->frames, 8);
+    int failures = 0;
+    for (size_t i = 0; i < b->n; i++)
+        failures += batch_tile(r, img, b, i, &y);
+    struct MHD_Response *resp = MHD_create_response_from_iovec(y.iov, y.n,
                                                                batch_free, b);
-    free(iov);
+    free(y.iov);
     if (!resp) {
         batch_free(b);
     } else {
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
                                 "application/x-gigaview-batch");
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
-                                get && !failures ? IMMUTABLE : "no-store");
+                                strcmp(r->method, "POST") && !failures
+                                    ? IMMUTABLE : "no-store");
     }
-    ret = http_send(r, 200, resp, total);
+    ret = http_send(r, 200, resp, y.total);
     image_put(img);
     return ret;
 }

@@ -9,7 +9,7 @@
 
 int main(void)
 {
-    tap_plan(22);
+    tap_plan(25);
     struct gv_geometry g;
 
     check(gv_geometry_init(&g, 1, 1, 3) == 0 && g.root == 0 && g.pages == 0 &&
@@ -27,6 +27,15 @@ int main(void)
           g.level[0].tiles_x == 137 && g.level[0].tiles_y == 1 &&
           g.level[8].width == 274 && g.level[8].height == 1,
           "70000x1: 8 tiled levels, 137 tiles wide, 274x1 root");
+    uint32_t lw = 0, lh = 0;
+    check(gv_level_size(&g, 3, &lw, &lh) == 0 && lw == 8750 && lh == 1 &&
+          gv_level_size(&g, 9, &lw, &lh) == 0 && lw == 137 && lh == 1,
+          "level sizes: tiled level 3 is 8750x1, the root's first mip 137x1");
+    check(g.root_mips == 10 && gv_level_size(&g, 17, &lw, &lh) == 0 &&
+          lw == 1 && lh == 1, "the last mip (level 17) is 1x1");
+    lw = lh = 7;
+    check(gv_level_size(&g, 18, &lw, &lh) < 0 && gv_level_size(&g, -1, &lw, &lh) < 0 &&
+          lw == 7 && lh == 7, "no level 18 or -1; sizes untouched");
     check(gv_geometry_init(&g, 1, 70000, 1) == 0 && g.root == 8 &&
           g.level[0].tiles_y == 137 && g.channels == 1, "1x70000 gray");
     check(gv_geometry_init(&g, 0, 5, 3) < 0, "zero width is refused");

@@ -5,7 +5,10 @@
  * struct gv_error that the caller owns, in the jansson style: no global
  * buffer, so it is safe across threads.  Messages start with the module
  * name ("store: bad magic in page 12").  The code classifies the failure so
- * that the HTTP layer can map it to a status with one table.
+ * that the HTTP layer can map it to a status with one table (server/http.c;
+ * the statuses are noted below).  The first failure is the one reported: a
+ * caller that goes on after a failure does not overwrite *err with a
+ * later one.
  */
 #ifndef GV_ERROR_H
 #define GV_ERROR_H
@@ -16,14 +19,26 @@ extern "C" {
 
 enum gv_code {
     GV_OK = 0,
-    GV_EINVAL,   /* bad argument or bad user input (maps to 400) */
+    GV_EINVAL,   /* bad argument or bad user input, GLSL that does not
+                    compile included (400) */
     GV_ENOTFOUND,/* missing file, image, tile (404) */
-    GV_ELIMIT,   /* a configured limit was exceeded (413 / 400) */
-    GV_EFORMAT,  /* unsupported format or version (415 / 501) */
+    GV_ELIMIT,   /* a configured limit was exceeded (413; 400 on IIIF routes) */
+    GV_EFORMAT,  /* a valid request for a format or feature this build
+                    does not support (501) */
     GV_ECORRUPT, /* data failed validation: CRC, sizes, truncation (500) */
     GV_EIO,      /* operating-system I/O failure (500) */
     GV_ENOSPC,   /* disk full or file size limit (507) */
-    GV_ENOMEM    /* allocation failure (503) */
+    GV_ENOMEM,   /* allocation failure (503) */
+    GV_EUNAVAIL, /* something it needs is not there: no usable EGL context,
+                    no filter worker, the server is stopping (503) */
+    GV_EBUSY,    /* too much work queued already; try again (503) */
+    GV_ETIMEOUT, /* a time limit ran out (504) */
+    GV_ECRASH,   /* a helper process died during the work (500) */
+    GV_EPERM,    /* not allowed by the configuration (403) */
+    GV_EAUTH,    /* needs credentials that were not given (401) */
+    GV_CODE_MAX = GV_EAUTH /* the highest code: codes that cross a process
+                              boundary (filters/worker.h) are checked
+                              against it */
 };
 
 struct gv_error {

@@ -27,8 +27,8 @@ struct gv_gpu_info {
     int ssbo;            /* shader storage buffers available */
 };
 
-/* Open a context.  Returns NULL with *err describing every attempt when
- * none works (no EGL, no driver). */
+/* Open a context.  Returns NULL with *err (GV_EUNAVAIL) describing every
+ * attempt when none works (no EGL, no driver). */
 struct gv_gpu *gv_gpu_open(struct gv_error *err);
 
 /* Stop the GL thread and destroy the context.  NULL does nothing. */

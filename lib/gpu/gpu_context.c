@@ -158,7 +158,7 @@ static int create_context(struct gv_gpu *g)
     if (try_display(g, eglGetDisplay(EGL_DEFAULT_DISPLAY), "default", log,
                     sizeof log) == 0)
         return 0;
-    gv_fail(&g->open_err, GV_EFORMAT, "gpu: no usable EGL context: %s", log);
+    gv_fail(&g->open_err, GV_EUNAVAIL, "gpu: no usable EGL context: %s", log);
     return -1;
 }
 

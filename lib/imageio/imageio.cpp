@@ -78,6 +78,7 @@
 
 #include "base/error.h"
 #include "imageio/imageio.h"
+#include "imageio/output_format.h"
 
 using OIIO::ImageInput;
 using OIIO::ImageOutput;
@@ -584,22 +585,13 @@ static int fsync_path(const std::string &p, int flags)
     return rc;
 }
 
-/* Output format for a file name's extension (case-insensitive), as
- * gv_image_encode names it, or NULL. */
+/* Output format for a file name's extension (with its dot, any case),
+ * as gv_image_encode names it, or NULL. */
 static const char *format_for(const std::string &ext)
 {
-    std::string e;
-    for (char ch : ext)
-        e += (char)tolower((unsigned char)ch);
-    if (e == ".png")
-        return "png";
-    if (e == ".jpg" || e == ".jpeg")
-        return "jpg";
-    if (e == ".webp")
-        return "webp";
-    if (e == ".tif" || e == ".tiff")
-        return "tif";
-    return NULL;
+    const struct gv_output_format *f =
+        gv_output_format_for_extension(ext.c_str() + 1);
+    return f ? f->name : NULL;
 }
 
 /*
@@ -696,13 +688,8 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
                        uint8_t **out, size_t *len, struct gv_error *err)
 {
     set_threads_once();
-    /* IIIF format name -> OIIO format name */
-    static const char *const names[][2] = {
-        {"png", "png"}, {"jpg", "jpeg"}, {"webp", "webp"}, {"tif", "tiff"}};
-    const char *oiio_name = NULL;
-    for (const auto &n : names)
-        if (format && strcmp(format, n[0]) == 0)
-            oiio_name = n[1];
+    const struct gv_output_format *f = gv_output_format_image(format);
+    const char *oiio_name = f ? f->oiio : NULL;
     if (!oiio_name)
         return gv_fail(err, GV_EFORMAT, "imageio: cannot encode format "
                        "\"%s\" (png, jpg, webp or tif)",

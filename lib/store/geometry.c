@@ -71,6 +71,22 @@ int gv_geometry_init(struct gv_geometry *g, uint32_t width, uint32_t height,
     return 0;
 }
 
+int gv_level_size(const struct gv_geometry *g, int level, uint32_t *w,
+                  uint32_t *h)
+{
+    if (level < 0 || level >= g->root + g->root_mips)
+        return -1;
+    int k = level < g->root ? level : g->root;
+    uint32_t lw = g->level[k].width, lh = g->level[k].height;
+    for (; k < level; k++) {
+        lw = (lw + 1) / 2;
+        lh = (lh + 1) / 2;
+    }
+    *w = lw;
+    *h = lh;
+    return 0;
+}
+
 uint64_t gv_page_number(const struct gv_geometry *g, int level, uint32_t px,
                         uint32_t py)
 {

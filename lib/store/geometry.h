@@ -49,6 +49,16 @@ int gv_geometry_init(struct gv_geometry *g, uint32_t width, uint32_t height,
 /* Number of tiles along an edge of `pixels` pixels: max(1, ceil((n-1)/512)). */
 uint32_t gv_tiles_for(uint32_t pixels);
 
+/*
+ * Width and height of pyramid level `level` of g: levels 0..g->root are
+ * g->level[], and the root's mips follow as levels g->root + 1 ..
+ * g->root + g->root_mips - 1, each the previous one halved, rounding up
+ * (the sizes gv_store_root gives).  Returns 0, or -1 with *w and *h
+ * untouched when there is no such level.  Pure; any thread.
+ */
+int gv_level_size(const struct gv_geometry *g, int level, uint32_t *w,
+                  uint32_t *h);
+
 /* Index of page (px,py) of `level` in the page index. */
 uint64_t gv_page_number(const struct gv_geometry *g, int level, uint32_t px,
                         uint32_t py);

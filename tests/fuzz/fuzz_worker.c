@@ -96,7 +96,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         int rc = gv_worker_recv_result(sv[0], &job, deadline, &res, &err);
         check_rc(rc);
         if (rc == 0 && res.failed) {
-            if (res.err.code <= GV_OK || res.err.code > GV_ENOMEM || res.out)
+            if (res.err.code <= GV_OK || res.err.code > GV_CODE_MAX || res.out)
                 abort();
             check_text(res.err.text);
         } else if (rc == 0) {
