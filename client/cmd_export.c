@@ -51,16 +51,10 @@ static const struct opt_command export_command = {
 static int level_size(struct gv_store *s, int k, uint32_t *lw, uint32_t *lh)
 {
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
-    if (k >= g->root + g->root_mips) {
+    if (gv_level_size(g, k, lw, lh) < 0) {
         fprintf(stderr, ME ": no level %d (the store has 0..%d)\n", k,
                 g->root + g->root_mips - 1);
         return -1;
-    }
-    if (k >= g->root) {
-        gv_store_root(s, k - g->root, lw, lh);
-    } else {
-        *lw = g->level[k].width;
-        *lh = g->level[k].height;
     }
     return 0;
 }

@@ -331,20 +331,6 @@ static void level_box(uint32_t w, uint32_t h, double s, double ax, double ay,
         box[i] = (uint32_t)(v[i] < 0 ? 0 : v[i] > lim[i] ? lim[i] : v[i]);
 }
 
-/* The size of level k of the served image: a tiled level from the
- * geometry, a root mip from the server's metadata. */
-static void remote_level_size(const struct gv_geometry *g,
-                              const struct gv_remote_image *img, int k, uint32_t *w,
-                              uint32_t *h)
-{
-    if (k < g->root) {
-        *w = g->level[k].width;
-        *h = g->level[k].height;
-    } else {
-        gv_remote_mip_size(img, k - g->root, w, h);
-    }
-}
-
 /* Bilinear sample of level l at level-0 point (px,py), s level-0 pixels
  * per level pixel, added with weight wgt to acc[0..c). */
 static void sample(const struct lvl *l, double s, double px, double py, int c,
@@ -436,7 +422,7 @@ static int plan_view_tiles(struct session *s, const struct view_plan *p,
     for (int i = 0; i < p->nl; i++) {
         int k = p->f + i;
         uint32_t w, h, box[4];
-        remote_level_size(g, &s->img, k, &w, &h);
+        gv_level_size(g, k, &w, &h); /* the server's root matched g */
         level_box(w, h, exp2(k), b[0], b[1], b[2], b[3], box);
         if (k >= g->root)
             continue;
@@ -725,14 +711,13 @@ static int draw_region(struct session *s, const struct render_args *a,
     struct gv_error err;
     const int top = s->geo.root + s->img.root_mips - 1;
     const int level = a->level < 0 ? 0 : a->level;
-    if (level > top) {
+    uint32_t lw, lh;
+    if (level > top || gv_level_size(&s->geo, level, &lw, &lh) < 0) {
         fprintf(stderr, ME ": no level %d (image '%s' has 0..%d)\n", level,
                 a->image, top);
         return 1;
     }
-    uint32_t lw, lh;
     struct region r;
-    remote_level_size(&s->geo, &s->img, level, &lw, &lh);
     int rc = region_arg_check(ME, a->region, level, lw, lh, a->max_pixels, &r);
     if (rc)
         return rc;
