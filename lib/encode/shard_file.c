@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "base/atomic_file.h"
+#include "base/file_io.h"
 #include "store/geometry.h"
 #include "encode/shard_file.h"
 #include "encode/shard_plan.h"
@@ -181,20 +182,11 @@ struct gv_shard_reader {
 static int read_at(struct gv_shard_reader *r, void *buf, size_t len,
                    uint64_t off, struct gv_error *err)
 {
-    uint8_t *p = buf;
-    while (len > 0) {
-        ssize_t n = pread(r->fd, p, len, (off_t)off);
-        if (n < 0) {
-            if (errno == EINTR)
-                continue;
-            return gv_fail_errno(err, errno, "shard: reading %s", r->path);
-        }
-        if (n == 0)
-            return gv_fail(err, GV_ECORRUPT, "shard: %s is truncated", r->path);
-        p += n;
-        len -= (size_t)n;
-        off += (uint64_t)n;
-    }
+    int rc = gv_pread_full(r->fd, buf, len, off);
+    if (rc < 0)
+        return gv_fail_errno(err, errno, "shard: reading %s", r->path);
+    if (rc > 0)
+        return gv_fail(err, GV_ECORRUPT, "shard: %s is truncated", r->path);
     return 0;
 }
 

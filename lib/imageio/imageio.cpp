@@ -4,7 +4,7 @@
  *
  * Design.  Each function is a thin wrapper that catches every C++
  * exception at the boundary and turns OIIO's error strings into a struct
- * gv_error with the "imageio: PATH: " prefix.  Reading is probe-then-read:
+ * gv_error that starts "imageio:" and names the file.  Reading is probe-then-read:
  * gv_image_open reads the header only (ImageInput::open), and
  * gv_image_read hands out scanlines strictly top to bottom, converted by
  * OIIO in type only (UINT8, UINT16 or FLOAT), never to another range.
@@ -47,25 +47,21 @@
  *    (attribute "threads"): gigaview runs its own workers, one decoder per
  *    input, and a second pool per process would oversubscribe the CPUs.
  *
- * Writing renders the whole 8-bit image to ".NAME.tmp.PID.N.EXT" in the
- * target's directory (EXT kept last so OIIO picks the format by it),
- * fsyncs it, renames it over the final name and fsyncs the directory; on
- * any failure the temporary file is removed.  JPEG and WebP are written at
- * quality 90.
+ * Writing encodes the whole 8-bit image in memory (gv_image_encode) and
+ * publishes the bytes through base/atomic_file.h: the image appears under
+ * its name only when complete, replacing any file there, and a failure
+ * leaves nothing behind.  JPEG and WebP are written at quality 90.
  *
  * Thread safety: distinct gv_image_in objects may be used from different
  * threads; one object by one thread at a time.
  */
 #include <cctype>
 #include <errno.h>
-#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <unistd.h>
 
-#include <atomic>
 #include <exception>
 #include <memory>
 #include <mutex>
@@ -76,6 +72,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include "base/atomic_file.h"
 #include "base/error.h"
 #include "imageio/imageio.h"
 
@@ -570,20 +567,6 @@ extern "C" void gv_image_close(struct gv_image_in *in)
 
 /* ---- writing ---- */
 
-static std::atomic<unsigned> tmp_counter{0};
-
-static int fsync_path(const std::string &p, int flags)
-{
-    int fd = open(p.c_str(), flags | O_CLOEXEC);
-    if (fd < 0)
-        return -1;
-    int rc = fsync(fd);
-    int e = errno;
-    close(fd);
-    errno = e;
-    return rc;
-}
-
 /* Output format for a file name's extension (case-insensitive), as
  * gv_image_encode names it, or NULL. */
 static const char *format_for(const std::string &ext)
@@ -603,17 +586,17 @@ static const char *format_for(const std::string &ext)
 }
 
 /*
- * Encode in memory (gv_image_encode), then write the bytes ourselves with
- * write(2), so that a full disk or a file size limit is reported with its
- * errno (GV_ENOSPC) rather than as an encoder's message.
+ * Encode in memory (gv_image_encode), then publish the bytes with
+ * gv_atomic_file_write, so that a full disk or a file size limit is
+ * reported with its errno (GV_ENOSPC) rather than as an encoder's message,
+ * and the image appears under its name only when complete.
  */
 static int write_impl(const char *path, uint32_t width, uint32_t height,
                       int channels, const uint8_t *pixels,
-                      struct gv_error *err, std::string &tmp)
+                      struct gv_error *err)
 {
     std::string p(path);
     size_t slash = p.rfind('/');
-    std::string dir = slash == std::string::npos ? "" : p.substr(0, slash + 1);
     std::string base = slash == std::string::npos ? p : p.substr(slash + 1);
     size_t dot = base.rfind('.');
     if (base.empty() || dot == std::string::npos || dot + 1 == base.size())
@@ -631,55 +614,25 @@ static int write_impl(const char *path, uint32_t width, uint32_t height,
                         &len, err) != 0)
         return -1;
     std::unique_ptr<uint8_t, void (*)(void *)> hold(bytes, free);
-    tmp = dir + "." + base + ".tmp." + std::to_string((long)getpid()) + "."
-          + std::to_string(tmp_counter.fetch_add(1));
-    int fd = open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (fd < 0) {
-        int e = errno;
-        tmp.clear(); /* nothing created */
-        return gv_fail_errno(err, e, "imageio: %s", path);
-    }
-    for (size_t done = 0; done < len;) {
-        ssize_t n = write(fd, bytes + done, len - done);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0) {
-            int e = errno;
-            close(fd);
-            return gv_fail_errno(err, e, "imageio: %s", path);
-        }
-        done += (size_t)n;
-    }
-    if (fsync(fd) != 0 || close(fd) != 0)
-        return gv_fail_errno(err, errno, "imageio: %s: fsync", path);
-    if (rename(tmp.c_str(), path) != 0)
-        return gv_fail_errno(err, errno, "imageio: %s: rename", path);
-    tmp.clear();
-    /* Make the rename itself durable; a failure here leaves a complete
-     * file under the final name, so it is not reported. */
-    (void)fsync_path(dir.empty() ? "." : dir, O_RDONLY | O_DIRECTORY);
-    return 0;
+    struct gv_atomic_opts opts = {};
+    opts.module = "imageio";
+    return gv_atomic_file_write(path, bytes, len, &opts, err);
 }
 
 extern "C" int gv_image_write(const char *path, uint32_t width,
                               uint32_t height, int channels,
                               const uint8_t *pixels, struct gv_error *err)
 {
-    std::string tmp;
-    int rc;
     try {
-        rc = write_impl(path, width, height, channels, pixels, err, tmp);
+        return write_impl(path, width, height, channels, pixels, err);
     } catch (const std::bad_alloc &) {
-        rc = gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+        return gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
     } catch (const std::exception &e) {
-        rc = gv_fail(err, GV_EIO, "imageio: %s: %s", path, e.what());
+        return gv_fail(err, GV_EIO, "imageio: %s: %s", path, e.what());
     } catch (...) {
-        rc = gv_fail(err, GV_EIO, "imageio: %s: unknown encoder exception",
-                     path);
+        return gv_fail(err, GV_EIO, "imageio: %s: unknown encoder exception",
+                       path);
     }
-    if (rc != 0 && !tmp.empty())
-        unlink(tmp.c_str());
-    return rc;
 }
 
 /* ---- in-memory encoding ---- */

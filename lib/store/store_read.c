@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "base/file_io.h"
 #include "store/store_read.h"
 #include "codec/tile.h"
 
@@ -27,20 +28,11 @@ struct gv_store {
 static int read_exact(int fd, void *buf, size_t len, uint64_t off,
                       const char *what, struct gv_error *err)
 {
-    uint8_t *p = buf;
-    while (len > 0) {
-        ssize_t n = pread(fd, p, len, (off_t)off);
-        if (n < 0) {
-            if (errno == EINTR)
-                continue;
-            return gv_fail_errno(err, errno, "store: reading %s", what);
-        }
-        if (n == 0)
-            return gv_fail(err, GV_ECORRUPT, "store: %s is truncated", what);
-        p += n;
-        len -= (size_t)n;
-        off += (uint64_t)n;
-    }
+    int rc = gv_pread_full(fd, buf, len, off);
+    if (rc < 0)
+        return gv_fail_errno(err, errno, "store: reading %s", what);
+    if (rc > 0)
+        return gv_fail(err, GV_ECORRUPT, "store: %s is truncated", what);
     return 0;
 }
 
