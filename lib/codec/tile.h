@@ -60,6 +60,12 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
 uint32_t gv_tilebuf_index(const uint8_t *buf, int rate, int channels,
                           uint32_t k);
 
+/* The mean squared error per 8-bit sample that a PSNR of psnr_db decibels
+ * allows: 255^2 / 10^(psnr_db / 10).  The one form of this conversion, so
+ * that the encoder, its statistics and the merge of shards agree to the
+ * bit. */
+double gv_psnr_to_mse(double psnr_db);
+
 /* Quality and rate controls for gv_tile_encode. */
 struct gv_tile_params {
     double target_mse;   /* mean squared error per sample to reach */

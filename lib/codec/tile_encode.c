@@ -13,6 +13,7 @@
  * Sampling uses a per-tile seed, and the search is exact, so the output
  * does not depend on thread count or CPU.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -45,6 +46,11 @@ struct gv_tile_workspace *gv_tile_workspace_new(void)
 void gv_tile_workspace_free(struct gv_tile_workspace *ws)
 {
     free(ws);
+}
+
+double gv_psnr_to_mse(double psnr_db)
+{
+    return 65025.0 / pow(10.0, psnr_db / 10.0);   /* 65025 = 255^2 */
 }
 
 static uint64_t splitmix(uint64_t *s)

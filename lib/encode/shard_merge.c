@@ -13,6 +13,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "codec/tile.h"
 #include "store/geometry.h"
 #include "encode/shard_file.h"
 #include "encode/shard_merge.h"
@@ -107,8 +108,8 @@ static int scan_shard(struct merge *m, int s)
 {
     struct gv_shard_record rec;
     int got;
-    const double target = m->info->header.target_mpsnr / 1000.0;
-    const double target_mse = 65025.0 / pow(10.0, target / 10.0);
+    const double target_mse =
+        gv_psnr_to_mse(m->info->header.target_mpsnr / 1000.0);
     while ((got = gv_shard_next(m->r[s], &rec, m->err)) == 1) {
         const struct gv_level *l = &m->g.level[rec.level];
         struct slot *t = &m->tab[rec.level][(uint64_t)rec.ty * l->tiles_x + rec.tx];

@@ -58,6 +58,7 @@ static double now_seconds(void)
 
 struct encoder {
     const struct gv_encode_opts *opts;
+    double target_mse;        /* gv_psnr_to_mse(opts->target_psnr) */
     struct gv_geometry g;
     int c;
     struct gv_spill *spill;
@@ -260,14 +261,13 @@ static void encode_tile(void *ctx, size_t slot, int worker)
     const uint32_t valid_h = l->height - ty * GV_STEP < GV_TILE ?
                              l->height - ty * GV_STEP : GV_TILE;
     const uint8_t *parent = e->parents[(j / 2) * 4 + i / 2];
-    const double target_mse = 65025.0 / pow(10.0, e->opts->target_psnr / 10.0);
     struct gv_tile_params params = {
-        .target_mse = target_mse,
+        .target_mse = e->target_mse,
         .max_rate = e->opts->max_rate,
         .seed = tile_seed(e->level, tx, ty),
         /* High-rate theory: D(R) ~ 2^(-2R), so dD/dR = -2 ln 2 D; at the
          * target distortion one bit is worth 2 ln 2 D* of squared error. */
-        .lambda = e->opts->rd ? 2.0 * log(2.0) * target_mse : 0.0,
+        .lambda = e->opts->rd ? 2.0 * log(2.0) * e->target_mse : 0.0,
     };
     e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
                                    (int)(ty & 1), c, valid_w, valid_h, &params,
@@ -391,8 +391,7 @@ static int pass2(struct encoder *e, const uint8_t *root_tile, uint64_t *sse0,
                     e->res->rate_tiles[e->stats[s].rate]++;
                     e->res->level_bytes[k] += e->lens[s];
                     double mse = (double)e->stats[s].sse / (double)e->stats[s].samples;
-                    if (!e->opts->rd &&
-                        mse > 65025.0 / pow(10.0, e->opts->target_psnr / 10.0))
+                    if (!e->opts->rd && mse > e->target_mse)
                         e->res->below_target++;
                     e->work_done += (double)e->stats[s].samples;
                     if (k == 0)
@@ -507,6 +506,7 @@ int gv_encode(const char *const *inputs, int n, const char *output,
         return gv_fail(err, GV_EINVAL, "encode: rate cap %d is outside 1..%d",
                        opts->max_rate, GV_MAX_RATE);
 
+    e.target_mse = gv_psnr_to_mse(opts->target_psnr);
     src = gv_source_open(inputs, n, &opts->source, &res->source, err);
     if (!src)
         return -1;
