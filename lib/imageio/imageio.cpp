@@ -301,30 +301,85 @@ static std::unique_ptr<ImageInput> choose_reader(const char *path,
     return nullptr;
 }
 
+/* A regular, non-empty file at path, or -1 with *err filled. */
+static int check_file(const char *path, struct gv_error *err)
+{
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        int e = errno;
+        if (e == ENOENT || e == ENOTDIR)
+            return gv_fail(err, GV_ENOTFOUND, "imageio: %s: no such file", path);
+        return gv_fail_errno(err, e, "imageio: %s", path);
+    }
+    if (!S_ISREG(st.st_mode))
+        return gv_fail(err, GV_EINVAL, "imageio: %s: not a regular file", path);
+    if (st.st_size == 0)
+        return gv_fail(err, GV_ECORRUPT, "imageio: %s: empty file", path);
+    return 0;
+}
+
+/* The opened image's size: positive, one slice, at most 64 channels, and
+ * sides and area within 31 bits and max_pixels. */
+static int check_size(const ImageSpec &spec, const char *path,
+                      uint64_t max_pixels, struct gv_error *err)
+{
+    /* Sizes must be positive and fit in 31 bits; checked as int64 so that
+     * the product cannot overflow. */
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+        return gv_fail(err, GV_ECORRUPT, "imageio: %s: bad image size %dx%d",
+                       path, spec.width, spec.height);
+    if (spec.depth != 1)
+        return gv_fail(err, GV_EFORMAT, "imageio: %s: volume images are not "
+                       "supported", path);
+    /* 64 channels is far above any real colour image; it bounds the
+     * row-size arithmetic of make_input. */
+    if (spec.nchannels > 64)
+        return gv_fail(err, GV_EFORMAT, "imageio: %s: too many channels (%d)",
+                       path, spec.nchannels);
+    uint64_t w = (uint64_t)spec.width, h = (uint64_t)spec.height;
+    if (w > 0x7fffffffu || h > 0x7fffffffu || w * h > max_pixels)
+        return gv_fail(err, GV_ELIMIT,
+                       "imageio: %s: image of %llux%llu pixels exceeds the "
+                       "limit of %llu pixels", path, (unsigned long long)w,
+                       (unsigned long long)h, (unsigned long long)max_pixels);
+    return 0;
+}
+
+/* The reading state for an opened, checked image delivered as `type`. */
+static std::unique_ptr<gv_image_in> make_input(const char *path,
+                                               const ImageSpec &spec,
+                                               const struct gv_image_info &info,
+                                               TypeDesc type)
+{
+    std::unique_ptr<gv_image_in> im(new gv_image_in());
+    im->path = path;
+    im->type = type;
+    im->nchannels = spec.nchannels;
+    im->pixel_bytes = (size_t)spec.nchannels * type.size();
+    /* w < 2^31 and pixel_bytes <= 64 * 4: no overflow in 64 bits. */
+    im->row_bytes = (size_t)info.width * im->pixel_bytes;
+    im->height = info.height;
+    im->next_row = 0;
+    im->narrow_max = info.sample == GV_SAMPLE_U16 && info.bits < 16
+                         ? (1u << info.bits) - 1 : 0;
+    im->x0 = spec.x;
+    im->y0 = spec.y;
+    im->z0 = spec.z;
+    im->tiled = spec.tile_width > 0 && spec.tile_height > 0;
+    im->tile_h = im->tiled ? (uint32_t)spec.tile_height : 0;
+    im->buf_first = 0;
+    im->buf_rows = 0;
+    im->failed = false;
+    return im;
+}
+
 static struct gv_image_in *open_impl(const char *path, uint64_t max_pixels,
                                      struct gv_image_info *info,
                                      struct gv_error *err)
 {
     set_threads_once();
-    struct stat st;
-    if (stat(path, &st) != 0) {
-        int e = errno;
-        if (e == ENOENT || e == ENOTDIR) {
-            gv_fail(err, GV_ENOTFOUND, "imageio: %s: no such file", path);
-            return NULL;
-        }
-        gv_fail_errno(err, e, "imageio: %s", path);
+    if (check_file(path, err) != 0)
         return NULL;
-    }
-    if (!S_ISREG(st.st_mode)) {
-        gv_fail(err, GV_EINVAL, "imageio: %s: not a regular file", path);
-        return NULL;
-    }
-    if (st.st_size == 0) {
-        gv_fail(err, GV_ECORRUPT, "imageio: %s: empty file", path);
-        return NULL;
-    }
-
     ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
     std::unique_ptr<ImageInput> in = choose_reader(path, &config, err);
@@ -342,63 +397,19 @@ static struct gv_image_in *open_impl(const char *path, uint64_t max_pixels,
         fail_msg(err, GV_ECORRUPT, path, in->geterror());
         return NULL;
     }
-    /* Sizes must be positive and fit in 31 bits; checked as int64 so that
-     * the product cannot overflow. */
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
-        gv_fail(err, GV_ECORRUPT, "imageio: %s: bad image size %dx%d", path,
-                spec.width, spec.height);
+    if (check_size(spec, path, max_pixels, err) != 0)
         return NULL;
-    }
-    if (spec.depth != 1) {
-        gv_fail(err, GV_EFORMAT, "imageio: %s: volume images are not "
-                "supported", path);
-        return NULL;
-    }
-    /* 64 channels is far above any real colour image; it bounds the
-     * row-size arithmetic below. */
-    if (spec.nchannels > 64) {
-        gv_fail(err, GV_EFORMAT, "imageio: %s: too many channels (%d)", path,
-                spec.nchannels);
-        return NULL;
-    }
-    uint64_t w = (uint64_t)spec.width, h = (uint64_t)spec.height;
-    if (w > 0x7fffffffu || h > 0x7fffffffu || w * h > max_pixels) {
-        gv_fail(err, GV_ELIMIT,
-                "imageio: %s: image of %llux%llu pixels exceeds the limit of "
-                "%llu pixels", path, (unsigned long long)w,
-                (unsigned long long)h, (unsigned long long)max_pixels);
-        return NULL;
-    }
 
     struct gv_image_info tmp;
     memset(&tmp, 0, sizeof tmp);
     TypeDesc type;
     if (choose_type(spec, path, &tmp, &type, err) != 0)
         return NULL;
-    tmp.width = (uint32_t)w;
-    tmp.height = (uint32_t)h;
+    tmp.width = (uint32_t)spec.width;
+    tmp.height = (uint32_t)spec.height;
     tmp.channels = spec.nchannels;
     snprintf(tmp.format, sizeof tmp.format, "%s", in->format_name());
-
-    std::unique_ptr<gv_image_in> im(new gv_image_in());
-    im->path = path;
-    im->type = type;
-    im->nchannels = spec.nchannels;
-    im->pixel_bytes = (size_t)spec.nchannels * type.size();
-    /* w < 2^31 and pixel_bytes <= 64 * 4: no overflow in 64 bits. */
-    im->row_bytes = (size_t)w * im->pixel_bytes;
-    im->height = (uint32_t)h;
-    im->next_row = 0;
-    im->narrow_max = tmp.sample == GV_SAMPLE_U16 && tmp.bits < 16
-                         ? (1u << tmp.bits) - 1 : 0;
-    im->x0 = spec.x;
-    im->y0 = spec.y;
-    im->z0 = spec.z;
-    im->tiled = spec.tile_width > 0 && spec.tile_height > 0;
-    im->tile_h = im->tiled ? (uint32_t)spec.tile_height : 0;
-    im->buf_first = 0;
-    im->buf_rows = 0;
-    im->failed = false;
+    std::unique_ptr<gv_image_in> im = make_input(path, spec, tmp, type);
     im->in = std::move(in);
     *info = tmp;
     return im.release();
