@@ -5,7 +5,9 @@
  * Indices are packed LSB-first: bit b of the index stream is bit (b & 7) of
  * byte (b >> 3), which is bit (b & 31) of little-endian 32-bit word
  * (b >> 5), the view a GPU takes.  The stream starts right after the
- * codebook, at bit 8 * (1 + 2^r * 4 * channels).
+ * codebook, at bit 8 * (1 + 2^r * 4 * channels).  Entropy-coded buffers
+ * are decoded one block row at a time (tile_rans.h), as fixed ones are, so
+ * the decoder needs no array of all the indices.
  */
 #include "codec/tile_layout.h"
 #include "codec/tile.h"

@@ -3,10 +3,12 @@
  *
  * The search packs two dimensions per 32-bit lane so that one
  * _mm256_madd_epi16 yields d0^2 + d1^2 for eight codevectors at once; a
- * codevector needs dim/2 (6 for RGB) load-subtract-madd-add steps.  The
- * AVX2 kernel is chosen at run time and returns exactly what the portable
- * loop returns (strictly-less comparison in index order, ties to the lowest
- * index), so stores do not depend on the CPU that wrote them.
+ * codevector needs dim/2 (6 for RGB) load-subtract-madd-add steps.  An
+ * AVX-512 kernel (16 codevectors at once) or the AVX2 one is chosen at run
+ * time (GIGAVIEW_NO_AVX512 in the environment rules out the first), and
+ * each returns exactly what the portable loop returns (strictly-less
+ * comparison in index order, ties to the lowest index), so stores do not
+ * depend on the CPU that wrote them.
  */
 #include <limits.h>
 #include <math.h>
@@ -75,6 +77,12 @@ static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
 }
 
 #ifdef VQ_HAVE_X86
+/* The search eight codevectors at a time.  nearest_avx512 repeats this
+ * loop on purpose, with 16 lanes and mask registers: one generic kernel
+ * would need the width and the compare-and-blend as parameters and would
+ * no longer compile to either instruction set's best form.  A change to
+ * one kernel must be made to the other, and to nearest_portable, which
+ * both must match exactly. */
 __attribute__((target("avx2"))) static void
 nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
              uint16_t *idx, uint32_t *dist)
@@ -119,7 +127,9 @@ nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
 #endif
 
 #ifdef VQ_HAVE_X86
-/* The same search sixteen codevectors at a time. */
+/* The same search sixteen codevectors at a time: a deliberate repeat of
+ * nearest_avx2 for AVX-512 (see there why), returning exactly what it and
+ * nearest_portable return. */
 __attribute__((target("avx512f,avx512bw"))) static void
 nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
                uint16_t *idx, uint32_t *dist)

@@ -698,8 +698,9 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
     std::string fmt = oiio_name;
     if (fmt == "jpeg" || fmt == "webp")
         spec.attribute("CompressionQuality", quality);
-    /* see write_impl: no (empty) Exif directory, which libtiff 4.5 fails
-     * on */
+    /* OIIO 2.4.7 with libtiff 4.5 records "failed TIFFWriteCustomDirectory()
+     * of the Exif data" for every TIFF (an empty Exif directory) while still
+     * writing a good file; there is no Exif to write, so skip it. */
     spec.attribute("tiff:write_exif", 0);
     std::string name = std::string("memory.") + format;
     if (!o->set_ioproxy(&vec) || !o->open(name, spec)) {
