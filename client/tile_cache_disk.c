@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "base/atomic_file.h"
 #include "store/store_format.h"
 #include "tile_cache_disk.h"
 
@@ -173,22 +174,13 @@ void gv_disk_cache_put(struct gv_disk_cache *dc, const char *name,
     wr32(b + 12 + elen, (uint32_t)((uint64_t)len >> 32));
     memcpy(b + 16 + elen, data, len);
     wr32(b + n - 4, gv_crc32(0, b, n - 4));
-    char path[4200], tmp[4300];
+    /* Published like every file (atomic_file.h), but without fsync: an
+     * entry lost in a crash is fetched again, and one damaged is caught by
+     * its CRC.  Mode 0600, as the cache directories are 0700. */
+    static const struct gv_atomic_opts entry_file = {
+        .module = "cache", .mode = 0600, .no_sync = 1};
+    char path[4200];
     snprintf(path, sizeof path, "%s/%s", dc->dir, name);
-    snprintf(tmp, sizeof tmp, "%s/.%s.XXXXXX", dc->dir, name);
-    int fd = mkstemp(tmp);
-    if (fd < 0) {
-        free(b);
-        return;
-    }
-    size_t put = 0;
-    while (put < n) {
-        ssize_t w = write(fd, b + put, n - put);
-        if (w <= 0)
-            break;
-        put += (size_t)w;
-    }
+    gv_atomic_file_write(path, b, n, &entry_file, NULL);
     free(b);
-    if (close(fd) < 0 || put != n || rename(tmp, path) < 0)
-        unlink(tmp);
 }

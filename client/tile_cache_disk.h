@@ -9,8 +9,8 @@
  *
  *   "GVC1"  u32 etag length  etag  u64 data length  data  u32 CRC32 of all before
  *
- * Files are written under a temporary name in the same directory and
- * renamed, so a reader sees a whole entry or none; an entry that fails
+ * Files are published atomically (base/atomic_file.h, without fsync), so
+ * a reader sees a whole entry or none; an entry that fails
  * its checks is ignored (and overwritten by the next fetch).  Every failure
  * to write is silent: the cache is an optimisation only.
  */

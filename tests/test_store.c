@@ -2,8 +2,10 @@
  * test_store.c - the store file: write, reopen, read pages and regions,
  * and refuse damaged files (bad CRCs, truncation, versions, hostile
  * offsets) without crashing or reading out of bounds.  Run under ASan or
- * valgrind this is also the memory-safety check of the reader.
+ * valgrind this is also the memory-safety check of the reader.  Also the
+ * contract of base/atomic_file.h that the writer publishes through.
  */
+#include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,6 +13,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "base/atomic_file.h"
 #include "render/store_decoder.h"
 #include "store/store_read.h"
 #include "store/store_write.h"
@@ -121,9 +124,52 @@ static int exercise(const char *path)
     return failures;
 }
 
+/* gv_atomic_file_write: replaces a file whole (an open reader keeps the
+ * old bytes), takes opts->mode, and fails with the module's message and
+ * errno set, leaving nothing behind. */
+static void atomic_file_contract(void)
+{
+    char p[256], sub[256], missing[256];
+    snprintf(p, sizeof p, "%s/af", dir);
+    snprintf(sub, sizeof sub, "%s/sub", dir);
+    snprintf(missing, sizeof missing, "%s/nodir/af", dir);
+    const struct gv_atomic_opts opts = {.module = "af", .mode = 0600};
+    struct gv_error err;
+    int ok = gv_atomic_file_write(p, "one", 3, &opts, &err) == 0;
+    int fd = open(p, O_RDONLY);
+    ok = ok && fd >= 0 && gv_atomic_file_write(p, "second", 6, &opts, &err) == 0;
+    char old[8] = {0};
+    size_t n = 0;
+    uint8_t *now = slurp(p, &n);
+    struct stat st;
+    check(ok && read(fd, old, sizeof old) == 3 && memcmp(old, "one", 3) == 0 &&
+              now && n == 6 && memcmp(now, "second", 6) == 0 &&
+              stat(p, &st) == 0 && (st.st_mode & 0777) == 0600,
+          "atomic file: replaced whole, an open reader keeps the old bytes, mode 0600");
+    free(now);
+    if (fd >= 0)
+        close(fd);
+    unlink(p);
+
+    errno = 0;
+    int rc = gv_atomic_file_write(missing, "x", 1, &opts, &err);
+    check(rc == -1 && errno == ENOENT && err.code == GV_EIO &&
+              strncmp(err.text, "af: cannot create a file in ", 28) == 0,
+          "atomic file: a missing directory fails with errno ENOENT: %s", err.text);
+
+    mkdir(sub, 0755);
+    errno = 0;
+    rc = gv_atomic_file_write(sub, "x", 1, &opts, &err);
+    int e = errno;
+    check(rc == -1 && e != 0 && stat(sub, &st) == 0 && S_ISDIR(st.st_mode) &&
+              strncmp(err.text, "af: ", 4) == 0,
+          "atomic file: a directory is not replaced: %s", err.text);
+    rmdir(sub);
+}
+
 int main(void)
 {
-    tap_plan(20);
+    tap_plan(24);
     if (!mkdtemp(dir))
         fail("mkdtemp");
     char path[256], bad[256];
@@ -240,6 +286,14 @@ int main(void)
     if (ls)
         pclose(ls);
     check(entries == 2, "no temporary files left (%d entries)", entries);
+    atomic_file_contract();
+    snprintf(cmd, sizeof cmd, "ls -A %s | wc -l", dir);
+    ls = popen(cmd, "r");
+    if (ls && fscanf(ls, "%d", &entries) != 1)
+        entries = -1;
+    if (ls)
+        pclose(ls);
+    check(entries == 2, "atomic file: nothing left behind (%d entries)", entries);
 
     free(orig);
     free(copy);

@@ -7,12 +7,12 @@
  * name an operator could find.
  */
 #include <errno.h>
-#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
+#include "base/file_io.h"
 #include "base/spill.h"
 
 struct gv_spill {
@@ -31,14 +31,13 @@ struct gv_spill *gv_spill_new(const char *dir, struct gv_error *err)
         gv_fail(err, GV_ENOMEM, "spill: out of memory");
         return NULL;
     }
-    s->fd = open(dir, O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
-    if (s->fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL)) {
-        char name[4096];
-        snprintf(name, sizeof name, "%s/.gigaview-spill.XXXXXX", dir);
-        s->fd = mkostemp(name, O_CLOEXEC);
-        if (s->fd >= 0)
-            unlink(name);
-    }
+    /* Where the file must have a name, it loses it at once. */
+    char name[4096];
+    int named;
+    snprintf(name, sizeof name, "%s/.gigaview-spill.XXXXXX", dir);
+    s->fd = gv_open_unnamed(dir, 0600, name, &named);
+    if (s->fd >= 0 && named)
+        unlink(name);
     if (s->fd < 0) {
         gv_fail_errno(err, errno, "spill: cannot create a scratch file in %s", dir);
         free(s->dir);
@@ -60,40 +59,21 @@ void gv_spill_free(struct gv_spill *s)
 int gv_spill_write(struct gv_spill *s, const void *buf, size_t len,
                    uint64_t off, struct gv_error *err)
 {
-    const uint8_t *p = buf;
-    while (len > 0) {
-        ssize_t n = pwrite(s->fd, p, len, (off_t)off);
-        if (n < 0) {
-            if (errno == EINTR)
-                continue;
-            return gv_fail_errno(err, errno, "spill: writing the scratch file in %s",
-                                 s->dir);
-        }
-        p += n;
-        len -= (size_t)n;
-        off += (uint64_t)n;
-    }
+    if (gv_pwrite_full(s->fd, buf, len, off) < 0)
+        return gv_fail_errno(err, errno, "spill: writing the scratch file in %s",
+                             s->dir);
     return 0;
 }
 
 int gv_spill_read(struct gv_spill *s, void *buf, size_t len, uint64_t off,
                   struct gv_error *err)
 {
-    uint8_t *p = buf;
-    while (len > 0) {
-        ssize_t n = pread(s->fd, p, len, (off_t)off);
-        if (n < 0) {
-            if (errno == EINTR)
-                continue;
-            return gv_fail_errno(err, errno, "spill: reading the scratch file in %s",
-                                 s->dir);
-        }
-        if (n == 0)
-            return gv_fail(err, GV_EIO, "spill: the scratch file in %s ends early",
-                           s->dir);
-        p += n;
-        len -= (size_t)n;
-        off += (uint64_t)n;
-    }
+    int rc = gv_pread_full(s->fd, buf, len, off);
+    if (rc < 0)
+        return gv_fail_errno(err, errno, "spill: reading the scratch file in %s",
+                             s->dir);
+    if (rc > 0)
+        return gv_fail(err, GV_EIO, "spill: the scratch file in %s ends early",
+                       s->dir);
     return 0;
 }

@@ -1,20 +1,27 @@
 /*
  * tile.h - the tile codec: prediction from the parent, the fig. 7.2 tile
- * buffer, and the CPU reference decoder.
+ * buffer, the encoder, and the CPU reference decoder.
  *
  * A tile is 513x513 pixels of `channels` interleaved 8-bit samples.  It is
- * predicted from one quarter of its parent tile by the integer bilinear
- * upsample of docs/FORMAT.md, and the residual is coded as one index per
- * 2x2 block into a per-tile signed 8-bit codebook:
+ * predicted from one quarter of its decoded parent tile by the separable
+ * 4-tap Catmull-Rom cubic of docs/FORMAT.md section 3 (integer weights
+ * -3, 29, 111, -9 in 128ths, one rounding; predict.c), and the residual
+ * is coded as one index per 2x2 block into a per-tile signed 8-bit
+ * codebook (FORMAT.md section 4):
  *
- *   byte 0          r, the index width in bits (0..GV_MAX_RATE)
+ *   byte 0          r, the index width in bits (0..GV_MAX_RATE), in bits
+ *                   0-3; bit 7 is the layout flag E (tile_rans.h)
  *   bytes 1..       2^r codevectors of 4*channels signed bytes
- *   then            257*257 indices of r bits, LSB-first
- *   then            zero padding to a multiple of 4 bytes
+ *   then, E = 0     257*257 indices of r bits, LSB-first, then zero
+ *                   padding to a multiple of 4 bytes
+ *   then, E = 1     the indices as 257 rANS streams, one per block row
+ *                   (FORMAT.md section 4.1)
  *
  * The decoder uses integer arithmetic only, so that every GPU decoder can
- * reproduce it bit for bit.  All functions are thread-safe and allocate
- * nothing.
+ * reproduce it bit for bit.  Every function is thread-safe.
+ * gv_tilebuf_*, gv_predict and gv_tile_decode allocate nothing (their
+ * scratch is on the stack, about 60 KiB); gv_tile_encode works in a
+ * workspace the caller allocates once per thread.
  */
 #ifndef GV_TILE_H
 #define GV_TILE_H
@@ -49,8 +56,9 @@ int gv_tilebuf_check(const uint8_t *buf, size_t len, int channels,
 
 /*
  * Decode tile buffer `buf` (len bytes) against its decoded parent.  `out`
- * receives 513x513xC bytes.  Returns 0, or -1 for a malformed buffer
- * (never reads outside buf).
+ * receives 513x513xC bytes.  Returns 0, or -1 with *err filled for a
+ * malformed buffer (never reads outside buf); after a failure `out` holds
+ * unspecified bytes (a damaged rANS stream is only found on the way).
  */
 int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
                    const uint8_t *parent, int qx, int qy, uint8_t *out,
@@ -59,6 +67,12 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
 /* Read index k (0..257^2-1) of a checked buffer at rate r >= 1. */
 uint32_t gv_tilebuf_index(const uint8_t *buf, int rate, int channels,
                           uint32_t k);
+
+/* The mean squared error per 8-bit sample that a PSNR of psnr_db decibels
+ * allows: 255^2 / 10^(psnr_db / 10).  The one form of this conversion, so
+ * that the encoder, its statistics and the merge of shards agree to the
+ * bit. */
+double gv_psnr_to_mse(double psnr_db);
 
 /* Quality and rate controls for gv_tile_encode. */
 struct gv_tile_params {

@@ -5,11 +5,10 @@
  * Indices are packed LSB-first: bit b of the index stream is bit (b & 7) of
  * byte (b >> 3), which is bit (b & 31) of little-endian 32-bit word
  * (b >> 5), the view a GPU takes.  The stream starts right after the
- * codebook, at bit 8 * (1 + 2^r * 4 * channels).
+ * codebook, at bit 8 * (1 + 2^r * 4 * channels).  Entropy-coded buffers
+ * are decoded one block row at a time (tile_rans.h), as fixed ones are, so
+ * the decoder needs no array of all the indices.
  */
-#include <stdlib.h>
-#include <string.h>
-
 #include "codec/tile_layout.h"
 #include "codec/tile.h"
 #include "codec/tile_rans.h"
@@ -72,31 +71,27 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
     int rate = gv_tilebuf_check(buf, len, channels, err);
     if (rate < 0)
         return -1;
-    uint16_t *coded = NULL;
-    if (buf[0] & GV_TILE_ENTROPY) {
-        coded = malloc(GV_NBLOCKS * sizeof *coded);
-        if (!coded)
-            return gv_fail(err, GV_ENOMEM, "tile: out of memory");
-        if (gv_rans_unpack(buf, len, rate, channels, coded, err) < 0) {
-            free(coded);
-            return -1;
-        }
-    }
     gv_predict(parent, channels, qx, qy, out);
     if (rate == 0)
         return 0;
+    const int entropy = (buf[0] & GV_TILE_ENTROPY) != 0;
+    struct gv_rans_rows rows;
+    if (entropy)
+        gv_rans_rows_begin(&rows, buf, rate, channels);
     const int dim = 4 * channels;
     const int8_t *book = (const int8_t *)(buf + 1);
     const size_t row = (size_t)GV_TILE * channels;
-    /* Row by row of blocks: the 257 indices, then for each of the block
-     * row's two pixel rows the matching half of every codevector, added
-     * with clamping (pixel 513 of the last block is skipped). */
+    /* Row by row of blocks: the 257 indices (rANS-decoded, or unpacked
+     * from the fixed layout), then for each of the block row's two pixel
+     * rows the matching half of every codevector, added with clamping
+     * (pixel 513 of the last block is skipped). */
     uint16_t ids[GV_BLOCKS];
     const uint64_t start = 8u * (1u + ((uint64_t)1 << rate) * 4u * (unsigned)channels);
     const uint32_t mask = (1u << rate) - 1;
     for (uint32_t by = 0; by < GV_BLOCKS; by++) {
-        if (coded) {
-            memcpy(ids, coded + (size_t)by * GV_BLOCKS, sizeof ids);
+        if (entropy) {
+            if (gv_rans_rows_next(&rows, ids, err) < 0)
+                return -1;
         } else {
             uint64_t bit = start + (uint64_t)by * GV_BLOCKS * (unsigned)rate;
             for (uint32_t bx = 0; bx < GV_BLOCKS; bx++, bit += (unsigned)rate) {
@@ -127,6 +122,5 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
             }
         }
     }
-    free(coded);
     return 0;
 }

@@ -8,11 +8,16 @@
  * When the sample says a rate may meet the target, every block is assigned
  * exactly and the true squared error of the clamped reconstruction decides;
  * the first rate that meets the target (or the cap) wins.  So every tile the
- * encoder writes meets the target unless it is at the cap.
+ * encoder writes meets the target unless it is at the cap.  In
+ * rate-distortion mode (params->lambda > 0) every rate is coded exactly
+ * instead, and the one with the least SSE + lambda * bits wins.  Either way
+ * the buffer is written in the smaller of the fixed and the entropy-coded
+ * layouts.
  *
  * Sampling uses a per-tile seed, and the search is exact, so the output
  * does not depend on thread count or CPU.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -45,6 +50,11 @@ struct gv_tile_workspace *gv_tile_workspace_new(void)
 void gv_tile_workspace_free(struct gv_tile_workspace *ws)
 {
     free(ws);
+}
+
+double gv_psnr_to_mse(double psnr_db)
+{
+    return 65025.0 / pow(10.0, psnr_db / 10.0);   /* 65025 = 255^2 */
 }
 
 static uint64_t splitmix(uint64_t *s)
@@ -182,6 +192,43 @@ static size_t grow_sample(struct gv_tile_workspace *ws, size_t have, int rate,
     return have;
 }
 
+/* Residual vectors of every block, and the valid blocks shuffled once:
+ * what both modes train on.  Returns the number of valid blocks. */
+static uint32_t start_training(struct gv_tile_workspace *ws, const uint8_t *orig,
+                               int channels, uint32_t valid_w, uint32_t valid_h,
+                               uint64_t seed)
+{
+    make_vectors(ws, orig, channels);
+    return shuffle_valid(ws, valid_w, valid_h, seed);
+}
+
+/* Train the codebook for `rate` (2^rate entries): grow the sample, start
+ * from its mean at rate 1, then split and refine.  Returns the sample's
+ * squared error. */
+static uint64_t train_rate(struct gv_tile_workspace *ws, int rate, int dim,
+                           uint32_t nvalid, size_t *nsample)
+{
+    struct vq_trainer *t = &ws->trainer;
+    *nsample = grow_sample(ws, *nsample, rate, nvalid);
+    if (rate == 1)
+        vq_train_init(t, dim, ws->sample, *nsample);
+    return vq_train_double(t, ws->sample, *nsample, ws->idx, ws->dist);
+}
+
+/* Assign every block exactly to the trained codebook (ws->idx) and
+ * reconstruct into recon; returns the squared error over the valid
+ * region. */
+static uint64_t code_all(struct gv_tile_workspace *ws, const uint8_t *orig,
+                         int rate, int channels, uint32_t valid_w,
+                         uint32_t valid_h, uint8_t *recon)
+{
+    struct vq_trainer *t = &ws->trainer;
+    vq_search_prepare(&t->search, t->book, t->k, 4 * channels);
+    vq_nearest(&t->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
+    return reconstruct(ws, orig, t->book, rate, channels, valid_w, valid_h,
+                       recon);
+}
+
 /*
  * Rate-distortion mode: every rate up to the cap is coded exactly and the
  * one minimizing J = SSE + lambda * bits wins; the search stops once J has
@@ -197,19 +244,14 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
     double best_j = (double)sse0 + params->lambda * 8.0 * gv_tilebuf_size(0, channels);
     int best_rate = 0, rises = 0;
     uint64_t best_sse = sse0;
-    make_vectors(ws, orig, channels);
-    uint32_t nvalid = shuffle_valid(ws, valid_w, valid_h, params->seed);
+    uint32_t nvalid = start_training(ws, orig, channels, valid_w, valid_h,
+                                     params->seed);
     size_t nsample = 0;
     struct vq_trainer *t = &ws->trainer;
     for (int rate = 1; rate <= max_rate && rises < 2; rate++) {
-        nsample = grow_sample(ws, nsample, rate, nvalid);
-        if (rate == 1)
-            vq_train_init(t, dim, ws->sample, nsample);
-        vq_train_double(t, ws->sample, nsample, ws->idx, ws->dist);
-        vq_search_prepare(&t->search, t->book, t->k, dim);
-        vq_nearest(&t->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
-        uint64_t sse = reconstruct(ws, orig, t->book, rate, channels, valid_w,
-                                   valid_h, recon);
+        train_rate(ws, rate, dim, nvalid, &nsample);
+        uint64_t sse = code_all(ws, orig, rate, channels, valid_w, valid_h,
+                                recon);
         size_t bytes = pack_best(ws->scratch, rate, channels, t->book, ws->idx);
         double j = (double)sse + params->lambda * 8.0 * (double)bytes;
         if (j < best_j) {
@@ -231,13 +273,43 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
     return len;
 }
 
+/*
+ * Target mode: the first rate whose exact error meets the budget (or the
+ * cap).  A rate is coded exactly only when its training sample says it
+ * may meet the target, since the exact assignment is the costly step.
+ */
+static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
+                            int channels, uint32_t valid_w, uint32_t valid_h,
+                            const struct gv_tile_params *params, int max_rate,
+                            double budget, uint8_t *recon, uint8_t *buf,
+                            struct gv_tile_stats *stats)
+{
+    const int dim = 4 * channels;
+    uint32_t nvalid = start_training(ws, orig, channels, valid_w, valid_h,
+                                     params->seed);
+    size_t nsample = 0;
+    for (int rate = 1;; rate++) {
+        uint64_t est = train_rate(ws, rate, dim, nvalid, &nsample);
+        /* The sample's error per sample, scaled to the valid region. */
+        double est_mse = (double)est / ((double)nsample * dim);
+        if (rate < max_rate && est_mse > params->target_mse)
+            continue;
+        uint64_t sse = code_all(ws, orig, rate, channels, valid_w, valid_h,
+                                recon);
+        if ((double)sse <= budget || rate == max_rate) {
+            stats->rate = rate;
+            stats->sse = sse;
+            return pack_best(buf, rate, channels, ws->trainer.book, ws->idx);
+        }
+    }
+}
+
 size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
                       const uint8_t *parent, int qx, int qy, int channels,
                       uint32_t valid_w, uint32_t valid_h,
                       const struct gv_tile_params *params, uint8_t *recon,
                       uint8_t *buf, struct gv_tile_stats *stats)
 {
-    const int dim = 4 * channels;
     const uint64_t samples = (uint64_t)valid_w * valid_h * channels;
     const double budget = params->target_mse * (double)samples;
     const int max_rate = params->max_rate < 1 ? 1 :
@@ -257,34 +329,6 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
         pack_buffer(buf, len, 0, channels, NULL, NULL);
         return len;
     }
-
-    make_vectors(ws, orig, channels);
-
-    uint32_t nvalid = shuffle_valid(ws, valid_w, valid_h, params->seed);
-    size_t nsample = 0;
-
-    struct vq_trainer *t = &ws->trainer;
-    for (int rate = 1; rate <= max_rate; rate++) {
-        nsample = grow_sample(ws, nsample, rate, nvalid);
-        if (rate == 1)
-            vq_train_init(t, dim, ws->sample, nsample);
-        uint64_t est = vq_train_double(t, ws->sample, nsample, ws->idx, ws->dist);
-        /* The sample's error per sample, scaled to the valid region. */
-        double est_mse = (double)est / ((double)nsample * dim);
-        if (rate < max_rate && est_mse > params->target_mse)
-            continue;
-        vq_search_prepare(&t->search, t->book, t->k, dim);
-        vq_nearest(&t->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
-        sse = reconstruct(ws, orig, t->book, rate, channels, valid_w, valid_h,
-                          recon);
-        if ((double)sse <= budget || rate == max_rate) {
-            stats->rate = rate;
-            stats->sse = sse;
-            return pack_best(buf, rate, channels, t->book, ws->idx);
-        }
-    }
-    /* Not reached: the loop returns at max_rate. */
-    stats->rate = 0;
-    stats->sse = sse;
-    return 0;
+    return encode_target(ws, orig, channels, valid_w, valid_h, params, max_rate,
+                         budget, recon, buf, stats);
 }

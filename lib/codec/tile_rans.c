@@ -158,48 +158,68 @@ int gv_rans_check(const uint8_t *buf, size_t len, int rate, int channels,
     return 0;
 }
 
+void gv_rans_rows_begin(struct gv_rans_rows *it, const uint8_t *buf,
+                        int rate, int channels)
+{
+    it->buf = buf;
+    it->k = 1 << rate;
+    it->tables = gv_rans_tables_offset(rate, channels);
+    it->lengths = it->tables + 2 * (size_t)it->k;
+    it->at = it->lengths + ((2 * GV_BLOCKS + 3) & ~(size_t)3);
+    it->row = 0;
+}
+
+int gv_rans_rows_next(struct gv_rans_rows *it, uint16_t *idx,
+                      struct gv_error *err)
+{
+    const uint8_t *buf = it->buf;
+    const size_t tables = it->tables;
+    const int k = it->k, row = it->row;
+    const uint32_t n = gv_get16(buf + it->lengths + 2 * row);
+    const uint8_t *w = buf + it->at;
+    uint32_t x = gv_get16(w) | (uint32_t)gv_get16(w + 2) << 16;
+    uint32_t next = 2;
+    for (int i = 0; i < GV_BLOCKS; i++) {
+        uint32_t slot = x & (PROB_SCALE - 1);
+        /* Last symbol whose cumulative frequency is <= slot. */
+        int lo = 0, hi = k - 1;
+        while (lo < hi) {
+            int mid = (lo + hi + 1) / 2;
+            if (gv_get16(buf + tables + 2 * mid) <= slot)
+                lo = mid;
+            else
+                hi = mid - 1;
+        }
+        uint32_t c = gv_get16(buf + tables + 2 * lo);
+        uint32_t c1 = lo + 1 < k ? gv_get16(buf + tables + 2 * (lo + 1)) : PROB_SCALE;
+        uint32_t f = c1 - c;
+        if (f == 0 || x < RANS_L)
+            return gv_fail(err, GV_ECORRUPT, "tile: stream %d is corrupt", row);
+        idx[i] = (uint16_t)lo;
+        x = f * (x >> PROB_BITS) + slot - c;
+        if (x < RANS_L) {
+            if (next >= n)
+                return gv_fail(err, GV_ECORRUPT, "tile: stream %d ends early", row);
+            x = x << 16 | gv_get16(w + 2 * next++);
+        }
+    }
+    if (x != RANS_L || next != n)
+        return gv_fail(err, GV_ECORRUPT, "tile: stream %d does not end "
+                       "cleanly", row);
+    it->at += 2 * (size_t)n;
+    it->row++;
+    return 0;
+}
+
 int gv_rans_unpack(const uint8_t *buf, size_t len, int rate, int channels,
                    uint16_t *idx, struct gv_error *err)
 {
     if (gv_rans_check(buf, len, rate, channels, err) < 0)
         return -1;
-    const int k = 1 << rate;
-    const size_t tables = gv_rans_tables_offset(rate, channels);
-    const size_t lengths = tables + 2 * (size_t)k;
-    size_t at = lengths + ((2 * GV_BLOCKS + 3) & ~(size_t)3);
-    for (int row = 0; row < GV_BLOCKS; row++) {
-        const uint32_t n = gv_get16(buf + lengths + 2 * row);
-        const uint8_t *w = buf + at;
-        uint32_t x = gv_get16(w) | (uint32_t)gv_get16(w + 2) << 16;
-        uint32_t next = 2;
-        for (int i = 0; i < GV_BLOCKS; i++) {
-            uint32_t slot = x & (PROB_SCALE - 1);
-            /* Last symbol whose cumulative frequency is <= slot. */
-            int lo = 0, hi = k - 1;
-            while (lo < hi) {
-                int mid = (lo + hi + 1) / 2;
-                if (gv_get16(buf + tables + 2 * mid) <= slot)
-                    lo = mid;
-                else
-                    hi = mid - 1;
-            }
-            uint32_t c = gv_get16(buf + tables + 2 * lo);
-            uint32_t c1 = lo + 1 < k ? gv_get16(buf + tables + 2 * (lo + 1)) : PROB_SCALE;
-            uint32_t f = c1 - c;
-            if (f == 0 || x < RANS_L)
-                return gv_fail(err, GV_ECORRUPT, "tile: stream %d is corrupt", row);
-            idx[(size_t)row * GV_BLOCKS + i] = (uint16_t)lo;
-            x = f * (x >> PROB_BITS) + slot - c;
-            if (x < RANS_L) {
-                if (next >= n)
-                    return gv_fail(err, GV_ECORRUPT, "tile: stream %d ends early", row);
-                x = x << 16 | gv_get16(w + 2 * next++);
-            }
-        }
-        if (x != RANS_L || next != n)
-            return gv_fail(err, GV_ECORRUPT, "tile: stream %d does not end "
-                           "cleanly", row);
-        at += 2 * (size_t)n;
-    }
+    struct gv_rans_rows it;
+    gv_rans_rows_begin(&it, buf, rate, channels);
+    for (int row = 0; row < GV_BLOCKS; row++)
+        if (gv_rans_rows_next(&it, idx + (size_t)row * GV_BLOCKS, err) < 0)
+            return -1;
     return 0;
 }

@@ -33,4 +33,22 @@ int gv_rans_check(const uint8_t *buf, size_t len, int rate, int channels,
 int gv_rans_unpack(const uint8_t *buf, size_t len, int rate, int channels,
                    uint16_t *idx, struct gv_error *err);
 
+/* The streams one block row at a time, in order, for a decoder that needs
+ * no index array (gv_tile_decode).  Fields are private. */
+struct gv_rans_rows {
+    const uint8_t *buf;
+    size_t tables, lengths;   /* offsets of cum[] and n[] */
+    size_t at;                /* offset of the next stream */
+    int k, row;               /* 2^r; the next block row */
+};
+
+/* Start at block row 0 of a buffer that passed gv_rans_check. */
+void gv_rans_rows_begin(struct gv_rans_rows *it, const uint8_t *buf,
+                        int rate, int channels);
+
+/* Decode the 257 indices of the next block row into idx, validating its
+ * stream as gv_rans_unpack does.  At most 257 calls.  Returns 0 or -1. */
+int gv_rans_rows_next(struct gv_rans_rows *it, uint16_t *idx,
+                      struct gv_error *err);
+
 #endif

@@ -3,10 +3,12 @@
  *
  * The search packs two dimensions per 32-bit lane so that one
  * _mm256_madd_epi16 yields d0^2 + d1^2 for eight codevectors at once; a
- * codevector needs dim/2 (6 for RGB) load-subtract-madd-add steps.  The
- * AVX2 kernel is chosen at run time and returns exactly what the portable
- * loop returns (strictly-less comparison in index order, ties to the lowest
- * index), so stores do not depend on the CPU that wrote them.
+ * codevector needs dim/2 (6 for RGB) load-subtract-madd-add steps.  An
+ * AVX-512 kernel (16 codevectors at once) or the AVX2 one is chosen at run
+ * time (GIGAVIEW_NO_AVX512 in the environment rules out the first), and
+ * each returns exactly what the portable loop returns (strictly-less
+ * comparison in index order, ties to the lowest index), so stores do not
+ * depend on the CPU that wrote them.
  */
 #include <limits.h>
 #include <math.h>
@@ -75,6 +77,12 @@ static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
 }
 
 #ifdef VQ_HAVE_X86
+/* The search eight codevectors at a time.  nearest_avx512 repeats this
+ * loop on purpose, with 16 lanes and mask registers: one generic kernel
+ * would need the width and the compare-and-blend as parameters and would
+ * no longer compile to either instruction set's best form.  A change to
+ * one kernel must be made to the other, and to nearest_portable, which
+ * both must match exactly. */
 __attribute__((target("avx2"))) static void
 nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
              uint16_t *idx, uint32_t *dist)
@@ -119,7 +127,9 @@ nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
 #endif
 
 #ifdef VQ_HAVE_X86
-/* The same search sixteen codevectors at a time. */
+/* The same search sixteen codevectors at a time: a deliberate repeat of
+ * nearest_avx2 for AVX-512 (see there why), returning exactly what it and
+ * nearest_portable return. */
 __attribute__((target("avx512f,avx512bw"))) static void
 nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
                uint16_t *idx, uint32_t *dist)
@@ -258,12 +268,13 @@ static double principal_axis(const struct vq_trainer *t, const int16_t *sample,
     return lambda;
 }
 
-uint64_t vq_train_double(struct vq_trainer *t, const int16_t *sample, size_t n,
-                         uint16_t *idx, uint32_t *dist)
+/* Split every cell c of the current book into c +/- 0.8 sigma along its
+ * principal axis (the half-means of a Gaussian lie at +/-0.8 sigma),
+ * doubling t->k; idx is scratch for the assignment. */
+static void split_cells(struct vq_trainer *t, const int16_t *sample, size_t n,
+                        uint16_t *idx)
 {
     const int dim = t->dim, k = t->k;
-    /* Split: assign to the current book, then c +/- 0.8 sigma along the
-     * principal axis (the half-means of a Gaussian lie at +/-0.8 sigma). */
     vq_search_prepare(&t->search, t->book, k, dim);
     vq_nearest(&t->search, sample, n, idx, NULL);
     for (int c = 0; c < k; c++) {
@@ -280,10 +291,52 @@ uint64_t vq_train_double(struct vq_trainer *t, const int16_t *sample, size_t n,
         }
     }
     t->k = 2 * k;
+}
+
+/* One LBG step after an assignment (idx, dist): every cell moves to the
+ * rounded mean of its vectors; an empty cell is reseeded with the
+ * worst-coded vector, each used once. */
+static void move_cells(struct vq_trainer *t, const int16_t *sample, size_t n,
+                       const uint16_t *idx, uint32_t *dist)
+{
+    const int dim = t->dim, kk = t->k;
+    memset(t->sum, 0, sizeof(int64_t) * (size_t)kk * dim);
+    memset(t->count, 0, sizeof(uint32_t) * (size_t)kk);
+    for (size_t i = 0; i < n; i++) {
+        const int16_t *x = sample + i * VQ_STRIDE;
+        int64_t *s = t->sum + (size_t)idx[i] * dim;
+        for (int d = 0; d < dim; d++)
+            s[d] += x[d];
+        t->count[idx[i]]++;
+    }
+    for (int c = 0; c < kk; c++) {
+        if (t->count[c]) {
+            for (int d = 0; d < dim; d++)
+                t->book[c * dim + d] = mean_s8(t->sum[c * dim + d], t->count[c]);
+            continue;
+        }
+        size_t worst = 0;
+        uint32_t wd = 0;
+        for (size_t i = 0; i < n; i++)
+            if (dist[i] > wd) {
+                wd = dist[i];
+                worst = i;
+            }
+        if (wd == 0)
+            continue;
+        for (int d = 0; d < dim; d++)
+            t->book[c * dim + d] = clamp_s8(sample[worst * VQ_STRIDE + d]);
+        dist[worst] = 0;
+    }
+}
+
+uint64_t vq_train_double(struct vq_trainer *t, const int16_t *sample, size_t n,
+                         uint16_t *idx, uint32_t *dist)
+{
+    split_cells(t, sample, n, idx);
     uint64_t prev = UINT64_MAX, total = 0;
     for (int it = 0; it < 12; it++) {
-        const int kk = t->k;
-        vq_search_prepare(&t->search, t->book, kk, dim);
+        vq_search_prepare(&t->search, t->book, t->k, t->dim);
         vq_nearest(&t->search, sample, n, idx, dist);
         total = 0;
         for (size_t i = 0; i < n; i++)
@@ -293,35 +346,7 @@ uint64_t vq_train_double(struct vq_trainer *t, const int16_t *sample, size_t n,
         if (total == 0)
             break;
         prev = total;
-        memset(t->sum, 0, sizeof(int64_t) * (size_t)kk * dim);
-        memset(t->count, 0, sizeof(uint32_t) * (size_t)kk);
-        for (size_t i = 0; i < n; i++) {
-            const int16_t *x = sample + i * VQ_STRIDE;
-            int64_t *s = t->sum + (size_t)idx[i] * dim;
-            for (int d = 0; d < dim; d++)
-                s[d] += x[d];
-            t->count[idx[i]]++;
-        }
-        /* Reseed empty cells with the worst-coded vectors, each used once. */
-        for (int c = 0; c < kk; c++) {
-            if (t->count[c]) {
-                for (int d = 0; d < dim; d++)
-                    t->book[c * dim + d] = mean_s8(t->sum[c * dim + d], t->count[c]);
-                continue;
-            }
-            size_t worst = 0;
-            uint32_t wd = 0;
-            for (size_t i = 0; i < n; i++)
-                if (dist[i] > wd) {
-                    wd = dist[i];
-                    worst = i;
-                }
-            if (wd == 0)
-                continue;
-            for (int d = 0; d < dim; d++)
-                t->book[c * dim + d] = clamp_s8(sample[worst * VQ_STRIDE + d]);
-            dist[worst] = 0;
-        }
+        move_cells(t, sample, n, idx, dist);
     }
     return total;
 }

@@ -4,8 +4,10 @@
  * Vectors are int16 with a stride of VQ_STRIDE lanes (dimension 4 or 12,
  * zero padded).  Codebooks are signed 8-bit, as stored in tile buffers.
  * The search is exact (ties go to the lowest index) and gives identical
- * answers on the AVX2 and portable paths, so encoding is deterministic on
- * every machine.
+ * answers on the AVX-512, AVX2 and portable paths, so encoding is
+ * deterministic on every machine.  Internal to the tile encoder; one
+ * thread per vq_search or vq_trainer (the structures are large: allocate
+ * them, as the tile workspace does).
  */
 #ifndef GV_VQ_H
 #define GV_VQ_H

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "base/atomic_file.h"
+#include "base/file_io.h"
 #include "store/geometry.h"
 #include "encode/shard_file.h"
 #include "encode/shard_plan.h"
@@ -27,6 +28,76 @@ static uint64_t root_bytes(const struct gv_geometry *g)
 {
     const struct gv_level *r = &g->level[g->root];
     return (uint64_t)r->width * r->height * (unsigned)g->channels;
+}
+
+/* ------------------------------------------------- header and records */
+
+/* The fields of the 64-byte shard header (docs/FORMAT.md, appendix A)
+ * besides magic, version, size and CRC. */
+struct shard_head {
+    uint32_t index, count, flags;
+    uint64_t records, file_size;
+    uint64_t first;           /* offset of the first record */
+};
+
+static void head_pack(const struct shard_head *s, uint8_t h[GV_SHARD_HEADER])
+{
+    memset(h, 0, GV_SHARD_HEADER);
+    memcpy(h, GV_SHARD_MAGIC, 8);
+    gv_put16(h + 8, SHARD_VERSION);
+    gv_put16(h + 10, GV_SHARD_HEADER);
+    gv_put32(h + 12, s->index);
+    gv_put32(h + 16, s->count);
+    gv_put32(h + 20, s->flags);
+    gv_put64(h + 24, s->records);
+    gv_put64(h + 32, s->file_size);
+    gv_put64(h + 40, s->first);
+    gv_put32(h + 60, gv_crc32(0, h, 60));
+}
+
+/* The fields only: magic, CRC and version are checked by the caller. */
+static void head_unpack(const uint8_t h[GV_SHARD_HEADER], struct shard_head *s)
+{
+    s->index = gv_get32(h + 12);
+    s->count = gv_get32(h + 16);
+    s->flags = gv_get32(h + 20);
+    s->records = gv_get64(h + 24);
+    s->file_size = gv_get64(h + 32);
+    s->first = gv_get64(h + 40);
+}
+
+/* The 64-byte header of a tile record (rec->offset is not stored). */
+static void record_pack(const struct gv_shard_record *rec,
+                        uint8_t h[GV_SHARD_RECORD])
+{
+    memset(h, 0, GV_SHARD_RECORD);
+    memcpy(h, RECORD_MAGIC, 4);
+    h[4] = (uint8_t)rec->level;
+    h[5] = (uint8_t)rec->rate;
+    gv_put32(h + 8, rec->tx);
+    gv_put32(h + 12, rec->ty);
+    gv_put32(h + 16, rec->len);
+    gv_put32(h + 20, rec->crc);
+    gv_put64(h + 24, rec->sse);
+    gv_put64(h + 32, rec->samples);
+    gv_put64(h + 40, rec->sse0);
+    gv_put32(h + 60, gv_crc32(0, h, 60));
+}
+
+/* The fields only, offset 0: magic and CRC are checked by the caller. */
+static void record_unpack(const uint8_t h[GV_SHARD_RECORD],
+                          struct gv_shard_record *rec)
+{
+    memset(rec, 0, sizeof *rec);
+    rec->level = h[4];
+    rec->rate = h[5];
+    rec->tx = gv_get32(h + 8);
+    rec->ty = gv_get32(h + 12);
+    rec->len = gv_get32(h + 16);
+    rec->crc = gv_get32(h + 20);
+    rec->sse = gv_get64(h + 24);
+    rec->samples = gv_get64(h + 32);
+    rec->sse0 = gv_get64(h + 40);
 }
 
 /* ------------------------------------------------------------ writer */
@@ -101,18 +172,12 @@ int gv_shard_writer_tile(struct gv_shard_writer *w, int level, uint32_t tx,
 {
     if (len > GV_TILEBUF_MAX || len == 0)
         return gv_fail(err, GV_EINVAL, "shard: tile buffer of %zu bytes", len);
-    uint8_t rec[GV_SHARD_RECORD] = {0};
-    memcpy(rec, RECORD_MAGIC, 4);
-    rec[4] = (uint8_t)level;
-    rec[5] = (uint8_t)stats->rate;
-    gv_put32(rec + 8, tx);
-    gv_put32(rec + 12, ty);
-    gv_put32(rec + 16, (uint32_t)len);
-    gv_put32(rec + 20, gv_crc32(0, buf, len));
-    gv_put64(rec + 24, stats->sse);
-    gv_put64(rec + 32, stats->samples);
-    gv_put64(rec + 40, sse0);
-    gv_put32(rec + 60, gv_crc32(0, rec, 60));
+    const struct gv_shard_record r = {
+        .level = level, .tx = tx, .ty = ty, .rate = stats->rate,
+        .len = (uint32_t)len, .crc = gv_crc32(0, buf, len),
+        .sse = stats->sse, .samples = stats->samples, .sse0 = sse0};
+    uint8_t rec[GV_SHARD_RECORD];
+    record_pack(&r, rec);
     static const uint8_t pad[4] = {0};
     size_t padded = (len + 3) & ~(size_t)3;
     if (gv_atomic_file_pwrite(&w->f, rec, sizeof rec, w->off, err) < 0 ||
@@ -137,17 +202,12 @@ int gv_shard_writer_finish(struct gv_shard_writer *w, struct gv_error *err)
         gv_fail(err, GV_EINVAL, "shard: finishing without a root");
         goto out;
     }
-    uint8_t h[GV_SHARD_HEADER] = {0};
-    memcpy(h, GV_SHARD_MAGIC, 8);
-    gv_put16(h + 8, SHARD_VERSION);
-    gv_put16(h + 10, GV_SHARD_HEADER);
-    gv_put32(h + 12, (uint32_t)w->index);
-    gv_put32(h + 16, (uint32_t)w->count);
-    gv_put32(h + 20, w->flags);
-    gv_put64(h + 24, w->records);
-    gv_put64(h + 32, w->off);
-    gv_put64(h + 40, ROOT_AT + root_bytes(&w->g) + 4);
-    gv_put32(h + 60, gv_crc32(0, h, 60));
+    const struct shard_head head = {
+        .index = (uint32_t)w->index, .count = (uint32_t)w->count,
+        .flags = w->flags, .records = w->records, .file_size = w->off,
+        .first = ROOT_AT + root_bytes(&w->g) + 4};
+    uint8_t h[GV_SHARD_HEADER];
+    head_pack(&head, h);
     if (gv_atomic_file_pwrite(&w->f, h, sizeof h, 0, err) < 0)
         goto out;
     rc = gv_atomic_file_publish(&w->f, err);
@@ -181,20 +241,11 @@ struct gv_shard_reader {
 static int read_at(struct gv_shard_reader *r, void *buf, size_t len,
                    uint64_t off, struct gv_error *err)
 {
-    uint8_t *p = buf;
-    while (len > 0) {
-        ssize_t n = pread(r->fd, p, len, (off_t)off);
-        if (n < 0) {
-            if (errno == EINTR)
-                continue;
-            return gv_fail_errno(err, errno, "shard: reading %s", r->path);
-        }
-        if (n == 0)
-            return gv_fail(err, GV_ECORRUPT, "shard: %s is truncated", r->path);
-        p += n;
-        len -= (size_t)n;
-        off += (uint64_t)n;
-    }
+    int rc = gv_pread_full(r->fd, buf, len, off);
+    if (rc < 0)
+        return gv_fail_errno(err, errno, "shard: reading %s", r->path);
+    if (rc > 0)
+        return gv_fail(err, GV_ECORRUPT, "shard: %s is truncated", r->path);
     return 0;
 }
 
@@ -209,6 +260,79 @@ void gv_shard_close(struct gv_shard_reader *r)
     free(r);
 }
 
+/* Open path; *size is its length. */
+static int open_file(struct gv_shard_reader *r, const char *path,
+                     uint64_t *size, struct gv_error *err)
+{
+    r->fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (r->fd < 0) {
+        int e = errno;
+        gv_fail_errno(err, e, "shard: cannot open %s", path);
+        if (e == ENOENT && err)
+            err->code = GV_ENOTFOUND;
+        return -1;
+    }
+    struct stat st;
+    if (fstat(r->fd, &st) < 0)
+        return gv_fail_errno(err, errno, "shard: %s", path);
+    *size = (uint64_t)st.st_size;
+    return 0;
+}
+
+/* Read and check the shard header and the store header after it; fills
+ * r->info and r->g, and *first with the offset of the first record. */
+static int read_headers(struct gv_shard_reader *r, uint64_t size,
+                        uint64_t *first, struct gv_error *err)
+{
+    const char *path = r->path;
+    uint8_t h[ROOT_AT];
+    if (size < ROOT_AT || read_at(r, h, sizeof h, 0, err) < 0 ||
+        memcmp(h, GV_SHARD_MAGIC, 8) != 0)
+        return gv_fail(err, GV_EFORMAT, "shard: %s is not a shard file", path);
+    if (gv_get32(h + 60) != gv_crc32(0, h, 60))
+        return gv_fail(err, GV_ECORRUPT, "shard: %s: header CRC mismatch", path);
+    if (gv_get16(h + 8) != SHARD_VERSION || gv_get16(h + 10) != GV_SHARD_HEADER)
+        return gv_fail(err, GV_EFORMAT, "shard: %s: version %u is not "
+                       "supported", path, gv_get16(h + 8));
+    struct shard_head head;
+    head_unpack(h, &head);
+    if (head.count < 1 || head.count > GV_SHARD_MAX || head.index >= head.count ||
+        head.file_size != size)
+        return gv_fail(err, GV_ECORRUPT, "shard: %s: bad shard number, count "
+                       "or size", path);
+    struct gv_shard_info *in = &r->info;
+    in->index = (int)head.index;
+    in->count = (int)head.count;
+    in->flags = head.flags;
+    in->records = head.records;
+    in->file_size = head.file_size;
+    memcpy(in->header_raw, h + TEMPLATE_AT, GV_HEADER_SIZE);
+    if (gv_header_unpack(in->header_raw, &in->header, err) < 0)
+        return -1;
+    if (gv_geometry_init(&r->g, in->header.width, in->header.height,
+                         in->header.channels) < 0 ||
+        in->header.root != r->g.root || in->header.pages != r->g.pages)
+        return gv_fail(err, GV_ECORRUPT, "shard: %s: inconsistent store header",
+                       path);
+    *first = head.first;
+    return 0;
+}
+
+/* Read the root level's pixels and check their CRC. */
+static int read_root(struct gv_shard_reader *r, struct gv_error *err)
+{
+    uint8_t crc[4];
+    r->root = malloc(r->root_len);
+    if (!r->root)
+        return gv_fail(err, GV_ENOMEM, "shard: out of memory");
+    if (read_at(r, r->root, r->root_len, ROOT_AT, err) < 0 ||
+        read_at(r, crc, 4, ROOT_AT + r->root_len, err) < 0)
+        return -1;
+    if (gv_get32(crc) != gv_crc32(0, r->root, r->root_len))
+        return gv_fail(err, GV_ECORRUPT, "shard: %s: root CRC mismatch", r->path);
+    return 0;
+}
+
 struct gv_shard_reader *gv_shard_open(const char *path, struct gv_error *err)
 {
     struct gv_shard_reader *r = calloc(1, sizeof *r);
@@ -217,73 +341,17 @@ struct gv_shard_reader *gv_shard_open(const char *path, struct gv_error *err)
         gv_fail(err, GV_ENOMEM, "shard: out of memory");
         return NULL;
     }
-    r->fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (r->fd < 0) {
-        gv_fail_errno(err, errno, "shard: cannot open %s", path);
-        if (errno == ENOENT)
-            err->code = GV_ENOTFOUND;
+    uint64_t size = 0, first = 0;
+    if (open_file(r, path, &size, err) < 0 ||
+        read_headers(r, size, &first, err) < 0)
         goto fail;
-    }
-    struct stat st;
-    if (fstat(r->fd, &st) < 0) {
-        gv_fail_errno(err, errno, "shard: %s", path);
-        goto fail;
-    }
-    uint8_t h[ROOT_AT];
-    if ((uint64_t)st.st_size < ROOT_AT || read_at(r, h, sizeof h, 0, err) < 0 ||
-        memcmp(h, GV_SHARD_MAGIC, 8) != 0) {
-        gv_fail(err, GV_EFORMAT, "shard: %s is not a shard file", path);
-        goto fail;
-    }
-    if (gv_get32(h + 60) != gv_crc32(0, h, 60)) {
-        gv_fail(err, GV_ECORRUPT, "shard: %s: header CRC mismatch", path);
-        goto fail;
-    }
-    if (gv_get16(h + 8) != SHARD_VERSION || gv_get16(h + 10) != GV_SHARD_HEADER) {
-        gv_fail(err, GV_EFORMAT, "shard: %s: version %u is not supported", path,
-                gv_get16(h + 8));
-        goto fail;
-    }
-    struct gv_shard_info *in = &r->info;
-    uint32_t index = gv_get32(h + 12), count = gv_get32(h + 16);
-    in->flags = gv_get32(h + 20);
-    in->records = gv_get64(h + 24);
-    in->file_size = gv_get64(h + 32);
-    uint64_t first = gv_get64(h + 40);
-    if (count < 1 || count > GV_SHARD_MAX || index >= count ||
-        in->file_size != (uint64_t)st.st_size) {
-        gv_fail(err, GV_ECORRUPT, "shard: %s: bad shard number, count or size", path);
-        goto fail;
-    }
-    in->index = (int)index;
-    in->count = (int)count;
-    memcpy(in->header_raw, h + TEMPLATE_AT, GV_HEADER_SIZE);
-    if (gv_header_unpack(in->header_raw, &in->header, err) < 0)
-        goto fail;
-    if (gv_geometry_init(&r->g, in->header.width, in->header.height,
-                         in->header.channels) < 0 ||
-        in->header.root != r->g.root || in->header.pages != r->g.pages) {
-        gv_fail(err, GV_ECORRUPT, "shard: %s: inconsistent store header", path);
-        goto fail;
-    }
     r->root_len = (size_t)root_bytes(&r->g);
-    if (first != ROOT_AT + r->root_len + 4 || first > in->file_size) {
+    if (first != ROOT_AT + r->root_len + 4 || first > r->info.file_size) {
         gv_fail(err, GV_ECORRUPT, "shard: %s: bad record offset", path);
         goto fail;
     }
-    uint8_t crc[4];
-    r->root = malloc(r->root_len);
-    if (!r->root) {
-        gv_fail(err, GV_ENOMEM, "shard: out of memory");
+    if (read_root(r, err) < 0)
         goto fail;
-    }
-    if (read_at(r, r->root, r->root_len, ROOT_AT, err) < 0 ||
-        read_at(r, crc, 4, ROOT_AT + r->root_len, err) < 0)
-        goto fail;
-    if (gv_get32(crc) != gv_crc32(0, r->root, r->root_len)) {
-        gv_fail(err, GV_ECORRUPT, "shard: %s: root CRC mismatch", path);
-        goto fail;
-    }
     r->next_off = first;
     return r;
 fail:
@@ -320,16 +388,7 @@ int gv_shard_next(struct gv_shard_reader *r, struct gv_shard_record *rec,
     if (memcmp(h, RECORD_MAGIC, 4) != 0 || gv_get32(h + 60) != gv_crc32(0, h, 60))
         return gv_fail(err, GV_ECORRUPT, "shard: %s: record %llu is damaged",
                        r->path, (unsigned long long)r->seen);
-    memset(rec, 0, sizeof *rec);
-    rec->level = h[4];
-    rec->rate = h[5];
-    rec->tx = gv_get32(h + 8);
-    rec->ty = gv_get32(h + 12);
-    rec->len = gv_get32(h + 16);
-    rec->crc = gv_get32(h + 20);
-    rec->sse = gv_get64(h + 24);
-    rec->samples = gv_get64(h + 32);
-    rec->sse0 = gv_get64(h + 40);
+    record_unpack(h, rec);
     rec->offset = r->next_off + GV_SHARD_RECORD;
     uint64_t padded = ((uint64_t)rec->len + 3) & ~(uint64_t)3;
     if (rec->level >= r->g.root || rec->tx >= r->g.level[rec->level].tiles_x ||

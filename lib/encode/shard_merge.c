@@ -11,9 +11,10 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "codec/tile.h"
 #include "store/geometry.h"
+#include "encode/encode_int.h"
 #include "encode/shard_file.h"
 #include "encode/shard_merge.h"
 #include "store/store_read.h"
@@ -39,13 +40,6 @@ struct merge {
     struct gv_encode_result *res;
     struct gv_error *err;
 };
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
-}
 
 /* Open every shard and check that they belong together. */
 static int open_shards(struct merge *m)
@@ -107,8 +101,8 @@ static int scan_shard(struct merge *m, int s)
 {
     struct gv_shard_record rec;
     int got;
-    const double target = m->info->header.target_mpsnr / 1000.0;
-    const double target_mse = 65025.0 / pow(10.0, target / 10.0);
+    const double target_mse =
+        gv_psnr_to_mse(m->info->header.target_mpsnr / 1000.0);
     while ((got = gv_shard_next(m->r[s], &rec, m->err)) == 1) {
         const struct gv_level *l = &m->g.level[rec.level];
         struct slot *t = &m->tab[rec.level][(uint64_t)rec.ty * l->tiles_x + rec.tx];
@@ -176,6 +170,70 @@ static int write_store(struct merge *m, struct gv_store_writer *w)
     return gv_store_writer_root(w, gv_shard_root(m->r[0], &rootlen), m->err);
 }
 
+/* Buffers for copying tiles, and one slot per tile of every level. */
+static int alloc_tables(struct merge *m)
+{
+    m->cmp = malloc(GV_TILEBUF_MAX);
+    if (!m->cmp)
+        return gv_fail(m->err, GV_ENOMEM, "merge: out of memory");
+    for (int s = 0; s < GV_PAGE_SLOTS; s++)
+        if (!(m->bufs[s] = malloc(GV_TILEBUF_MAX)))
+            return gv_fail(m->err, GV_ENOMEM, "merge: out of memory");
+    for (int k = 0; k < m->g.root; k++) {
+        const struct gv_level *l = &m->g.level[k];
+        m->tab[k] = calloc((size_t)l->tiles_x * l->tiles_y, sizeof *m->tab[k]);
+        if (!m->tab[k])
+            return gv_fail(m->err, GV_ENOMEM, "merge: out of memory for the "
+                           "tile table");
+    }
+    return 0;
+}
+
+/* Every tile of the pyramid must be in some shard. */
+static int check_complete(struct merge *m)
+{
+    for (int k = 0; k < m->g.root; k++) {
+        const struct gv_level *l = &m->g.level[k];
+        for (uint32_t ty = 0; ty < l->tiles_y; ty++)
+            for (uint32_t tx = 0; tx < l->tiles_x; tx++)
+                if (!m->tab[k][(uint64_t)ty * l->tiles_x + tx].have)
+                    return gv_fail(m->err, GV_EINVAL, "merge: tile %d/%u/%u is "
+                                   "in none of the shards", k, tx, ty);
+    }
+    return 0;
+}
+
+/* The geometry and the source description, from the shards' header. */
+static int describe_source(struct merge *m)
+{
+    const struct gv_header *h = &m->info->header;
+    struct gv_encode_result *res = m->res;
+    if (gv_geometry_init(&m->g, h->width, h->height, h->channels) < 0)
+        return gv_fail(m->err, GV_ECORRUPT, "merge: bad dimensions %ux%u",
+                       h->width, h->height);
+    res->geometry = m->g;
+    res->source.width = h->width;
+    res->source.height = h->height;
+    res->source.channels = h->channels;
+    res->source.src_bits = h->src_bits;
+    res->source.src_float = h->src_float;
+    res->source.tone = (enum gv_tone_rule)h->tone;
+    return 0;
+}
+
+static void merge_free(struct merge *m)
+{
+    for (int k = 0; k < GV_MAX_LEVELS; k++)
+        free(m->tab[k]);
+    for (int s = 0; s < GV_PAGE_SLOTS; s++)
+        free(m->bufs[s]);
+    free(m->cmp);
+    if (m->r)
+        for (int i = 0; i < m->n; i++)
+            gv_shard_close(m->r[i]);
+    free(m->r);
+}
+
 int gv_shard_merge(const char *const *paths, int n, const char *output,
                    struct gv_encode_result *res, struct gv_error *err)
 {
@@ -186,87 +244,31 @@ int gv_shard_merge(const char *const *paths, int n, const char *output,
     m.n = n;
     m.res = res;
     m.err = err;
-    double t0 = now_seconds();
+    double t0 = gv_encode_now();
     int rc = -1;
     struct gv_store_writer *w = NULL;
     if (n < 1)
         return gv_fail(err, GV_EINVAL, "merge: no shard files");
-    if (open_shards(&m) < 0)
+    if (open_shards(&m) < 0 || describe_source(&m) < 0 || alloc_tables(&m) < 0)
         goto out;
-    const struct gv_header *h = &m.info->header;
-    if (gv_geometry_init(&m.g, h->width, h->height, h->channels) < 0) {
-        gv_fail(err, GV_ECORRUPT, "merge: bad dimensions %ux%u", h->width, h->height);
-        goto out;
-    }
-    res->geometry = m.g;
-    res->source.width = h->width;
-    res->source.height = h->height;
-    res->source.channels = h->channels;
-    res->source.src_bits = h->src_bits;
-    res->source.src_float = h->src_float;
-    res->source.tone = (enum gv_tone_rule)h->tone;
-    m.cmp = malloc(GV_TILEBUF_MAX);
-    if (!m.cmp) {
-        gv_fail(err, GV_ENOMEM, "merge: out of memory");
-        goto out;
-    }
-    for (int s = 0; s < GV_PAGE_SLOTS; s++)
-        if (!(m.bufs[s] = malloc(GV_TILEBUF_MAX))) {
-            gv_fail(err, GV_ENOMEM, "merge: out of memory");
-            goto out;
-        }
-    for (int k = 0; k < m.g.root; k++) {
-        const struct gv_level *l = &m.g.level[k];
-        m.tab[k] = calloc((size_t)l->tiles_x * l->tiles_y, sizeof *m.tab[k]);
-        if (!m.tab[k]) {
-            gv_fail(err, GV_ENOMEM, "merge: out of memory for the tile table");
-            goto out;
-        }
-    }
     for (int s = 0; s < n; s++)
         if (scan_shard(&m, s) < 0)
             goto out;
-    for (int k = 0; k < m.g.root; k++) {
-        const struct gv_level *l = &m.g.level[k];
-        for (uint32_t ty = 0; ty < l->tiles_y; ty++)
-            for (uint32_t tx = 0; tx < l->tiles_x; tx++)
-                if (!m.tab[k][(uint64_t)ty * l->tiles_x + tx].have) {
-                    gv_fail(err, GV_EINVAL, "merge: tile %d/%u/%u is in none of "
-                            "the shards", k, tx, ty);
-                    goto out;
-                }
-    }
-    w = gv_store_writer_new(output, h, err);
+    if (check_complete(&m) < 0)
+        goto out;
+    w = gv_store_writer_new(output, &m.info->header, err);
     if (!w || write_store(&m, w) < 0)
         goto out;
-    uint64_t samples0 = (uint64_t)h->width * h->height * h->channels;
-    res->psnr0 = gv_encode_psnr0(m.g.root == 0 ? 0 : m.sse0, samples0);
-    gv_store_writer_set_psnr(w, (uint32_t)lround(res->psnr0 * 1000.0));
+    res->psnr0 = gv_encode_psnr0(m.g.root == 0 ? 0 : m.sse0,
+                                 (uint64_t)m.g.width * m.g.height * m.g.channels);
     struct gv_store_writer *done = w;
     w = NULL;
-    if (gv_store_writer_finish(done, err) < 0)
+    if (gv_encode_publish_store(done, output, res, err) < 0)
         goto out;
-    {
-        /* Read back what was published: the header and index must verify. */
-        struct gv_store *check = gv_store_open(output, err);
-        if (!check)
-            goto out;
-        res->file_bytes = gv_store_info(check)->header.file_size;
-        gv_store_close(check);
-    }
-    res->bpp = 8.0 * (double)res->file_bytes / ((double)h->width * h->height);
     rc = 0;
 out:
-    res->seconds = now_seconds() - t0;
+    res->seconds = gv_encode_now() - t0;
     gv_store_writer_abort(w);
-    for (int k = 0; k < GV_MAX_LEVELS; k++)
-        free(m.tab[k]);
-    for (int s = 0; s < GV_PAGE_SLOTS; s++)
-        free(m.bufs[s]);
-    free(m.cmp);
-    if (m.r)
-        for (int i = 0; i < n; i++)
-            gv_shard_close(m.r[i]);
-    free(m.r);
+    merge_free(&m);
     return rc;
 }

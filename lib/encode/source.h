@@ -5,7 +5,8 @@
  * Opening probes headers only (cheap); rows are then read strictly in
  * order, so no input ever has to fit in memory.  Input with more than 8
  * bits per sample is brought to 8 bits by the rule in docs/FORMAT.md
- * ("Bringing deep input to 8 bits"): integers scale by 255/(2^bits - 1)
+ * (section 7, "Bringing input to 8 bits"; source.c gives it exactly):
+ * integers scale by 255/(2^bits - 1)
  * with rounding, floats are treated as linear light, clipped to [0,1] and
  * encoded with the sRGB transfer curve, and --range LO:HI maps [LO,HI]
  * linearly onto [0,255] instead.  One-channel and gray+alpha input

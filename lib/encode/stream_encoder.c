@@ -22,14 +22,15 @@
 #include <string.h>
 #include <time.h>
 
-#include "render/store_decoder.h"
-#include "encode/stream_encoder.h"
 #include "base/pool.h"
+#include "base/spill.h"
+#include "codec/tile.h"
+#include "encode/encode_int.h"
 #include "encode/shard_file.h"
 #include "encode/shard_plan.h"
-#include "base/spill.h"
+#include "encode/stream_encoder.h"
+#include "render/store_decoder.h"
 #include "store/store_write.h"
-#include "codec/tile.h"
 
 #define WINDOW (GV_PAGE_TILES * GV_STEP + 1)  /* 4097: a page plus overlap */
 #define CHUNK_BYTES (16u << 20)               /* input rows read at once */
@@ -42,22 +43,9 @@ void gv_encode_opts_default(struct gv_encode_opts *o)
     o->max_rate = GV_DEFAULT_MAX_RATE;
 }
 
-double gv_encode_psnr0(uint64_t sse0, uint64_t samples0)
-{
-    double p = sse0 == 0 ? 99.0 :
-               10.0 * log10(65025.0 * (double)samples0 / (double)sse0);
-    return p > 99.0 ? 99.0 : p;
-}
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
 struct encoder {
     const struct gv_encode_opts *opts;
+    double target_mse;        /* gv_psnr_to_mse(opts->target_psnr) */
     struct gv_geometry g;
     int c;
     struct gv_spill *spill;
@@ -69,6 +57,8 @@ struct encoder {
     struct gv_pool *pool;
     struct gv_tile_workspace **ws;
     int nws;
+    uint8_t *root;            /* the root level's pixels */
+    uint8_t *root_tile;       /* ... clamp-padded to a tile: level R-1's parent */
     struct gv_encode_result *res;
     struct gv_error *err;
     /* pass 1 */
@@ -227,21 +217,12 @@ static uint64_t tile_seed(int level, uint32_t tx, uint32_t ty)
            0x6a09e667f3bcc909ull;
 }
 
-static void encode_tile(void *ctx, size_t slot, int worker)
+/* Cut the original of tile (i, j) of the current page out of the page
+ * window into orig (513x513xC), repeating the last row and column past
+ * the image's edge. */
+static void cut_tile(const struct encoder *e, int i, int j, uint8_t *orig)
 {
-    struct encoder *e = ctx;
-    const struct gv_level *l = &e->g.level[e->level];
     const int c = e->c;
-    const int i = (int)(slot % GV_PAGE_TILES), j = (int)(slot / GV_PAGE_TILES);
-    const uint32_t tx = e->px * GV_PAGE_TILES + (uint32_t)i;
-    const uint32_t ty = e->py * GV_PAGE_TILES + (uint32_t)j;
-    e->lens[slot] = 0;
-    if (tx >= l->tiles_x || ty >= l->tiles_y)
-        return;
-    if (e->sharded && !gv_shard_plan_wants(&e->plan, &e->g, e->level, tx, ty))
-        return;
-    /* Cut the clamp-padded original tile out of the page window. */
-    uint8_t *orig = e->origs + (size_t)worker * gv_tile_bytes(c);
     const size_t row = (size_t)GV_TILE * c;
     for (uint32_t v = 0; v < GV_TILE; v++) {
         uint32_t wy = (uint32_t)j * GV_STEP + v;
@@ -255,37 +236,65 @@ static void encode_tile(void *ctx, size_t slot, int worker)
         for (uint32_t u = avail; u < GV_TILE; u++)
             memcpy(dst + u * c, src + (size_t)(e->win_w - 1) * c, (size_t)c);
     }
+}
+
+/* Squared error of a level-0 tile over the pixels it is the source of
+ * (513 minus the overlap, except in the last column and row of tiles). */
+static uint64_t level0_sse(const struct encoder *e, uint32_t tx, uint32_t ty,
+                           uint32_t valid_w, uint32_t valid_h,
+                           const uint8_t *orig, const uint8_t *recon)
+{
+    const struct gv_level *l = &e->g.level[0];
+    const size_t row = (size_t)GV_TILE * e->c;
+    uint32_t cw = tx + 1 == l->tiles_x ? valid_w : GV_STEP;
+    uint32_t ch = ty + 1 == l->tiles_y ? valid_h : GV_STEP;
+    uint64_t sse = 0;
+    for (uint32_t v = 0; v < ch; v++) {
+        const uint8_t *a = orig + v * row, *b = recon + v * row;
+        for (uint32_t k = 0; k < cw * (uint32_t)e->c; k++) {
+            int d = a[k] - b[k];
+            sse += (uint64_t)(d * d);
+        }
+    }
+    return sse;
+}
+
+/* Pool job: encode slot `slot` of the current page with the workspace of
+ * `worker`; lens[slot] stays 0 for a slot outside the level or the shard. */
+static void encode_tile(void *ctx, size_t slot, int worker)
+{
+    struct encoder *e = ctx;
+    const struct gv_level *l = &e->g.level[e->level];
+    const int c = e->c;
+    const int i = (int)(slot % GV_PAGE_TILES), j = (int)(slot / GV_PAGE_TILES);
+    const uint32_t tx = e->px * GV_PAGE_TILES + (uint32_t)i;
+    const uint32_t ty = e->py * GV_PAGE_TILES + (uint32_t)j;
+    e->lens[slot] = 0;
+    if (tx >= l->tiles_x || ty >= l->tiles_y)
+        return;
+    if (e->sharded && !gv_shard_plan_wants(&e->plan, &e->g, e->level, tx, ty))
+        return;
+    uint8_t *orig = e->origs + (size_t)worker * gv_tile_bytes(c);
+    cut_tile(e, i, j, orig);
     const uint32_t valid_w = l->width - tx * GV_STEP < GV_TILE ?
                              l->width - tx * GV_STEP : GV_TILE;
     const uint32_t valid_h = l->height - ty * GV_STEP < GV_TILE ?
                              l->height - ty * GV_STEP : GV_TILE;
     const uint8_t *parent = e->parents[(j / 2) * 4 + i / 2];
-    const double target_mse = 65025.0 / pow(10.0, e->opts->target_psnr / 10.0);
     struct gv_tile_params params = {
-        .target_mse = target_mse,
+        .target_mse = e->target_mse,
         .max_rate = e->opts->max_rate,
         .seed = tile_seed(e->level, tx, ty),
         /* High-rate theory: D(R) ~ 2^(-2R), so dD/dR = -2 ln 2 D; at the
          * target distortion one bit is worth 2 ln 2 D* of squared error. */
-        .lambda = e->opts->rd ? 2.0 * log(2.0) * target_mse : 0.0,
+        .lambda = e->opts->rd ? 2.0 * log(2.0) * e->target_mse : 0.0,
     };
     e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
                                    (int)(ty & 1), c, valid_w, valid_h, &params,
                                    e->recon[slot], e->bufs[slot], &e->stats[slot]);
-    if (e->level == 0) {
-        /* Level-0 PSNR over the pixels this tile is the source of. */
-        uint32_t cw = tx + 1 == l->tiles_x ? valid_w : GV_STEP;
-        uint32_t ch = ty + 1 == l->tiles_y ? valid_h : GV_STEP;
-        uint64_t sse = 0;
-        for (uint32_t v = 0; v < ch; v++) {
-            const uint8_t *a = orig + v * row, *b = e->recon[slot] + v * row;
-            for (uint32_t k = 0; k < cw * (uint32_t)c; k++) {
-                int d = a[k] - b[k];
-                sse += (uint64_t)(d * d);
-            }
-        }
-        e->canon_sse[slot] = sse;
-    }
+    if (e->level == 0)
+        e->canon_sse[slot] = level0_sse(e, tx, ty, valid_w, valid_h, orig,
+                                        e->recon[slot]);
 }
 
 static int load_window(struct encoder *e)
@@ -365,41 +374,60 @@ static int emit_page(struct encoder *e)
     return 0;
 }
 
-static int pass2(struct encoder *e, const uint8_t *root_tile, uint64_t *sse0,
-                 uint64_t *samples0)
+/* Add the current page's tiles to the summary, to the progress, and to
+ * the level-0 squared error. */
+static void account_page(struct encoder *e, uint64_t *sse0)
+{
+    for (int s = 0; s < GV_PAGE_SLOTS; s++) {
+        if (!e->lens[s])
+            continue;
+        e->res->tiles++;
+        e->res->rate_tiles[e->stats[s].rate]++;
+        e->res->level_bytes[e->level] += e->lens[s];
+        double mse = (double)e->stats[s].sse / (double)e->stats[s].samples;
+        if (!e->opts->rd && mse > e->target_mse)
+            e->res->below_target++;
+        e->work_done += (double)e->stats[s].samples;
+        if (e->level == 0)
+            *sse0 += e->canon_sse[s];
+    }
+}
+
+/* Encode page (px, py) of level e->level: read its window and parents,
+ * encode its tiles on the pool, hand them on, and keep the decoded tiles
+ * that the level below is predicted from. */
+static int encode_page(struct encoder *e, uint32_t px, uint32_t py,
+                       uint64_t *sse0)
+{
+    e->px = px;
+    e->py = py;
+    if (load_window(e) < 0 || load_parents(e, e->root_tile) < 0)
+        return -1;
+    gv_pool_run(e->pool, encode_tile, e, GV_PAGE_SLOTS);
+    if (emit_page(e) < 0)
+        return -1;
+    if (e->level > 0 && store_recon(e) < 0)
+        return -1;
+    account_page(e, sse0);
+    report(e, "encode", PASS1_SHARE + (1.0 - PASS1_SHARE) *
+                            e->work_done / e->work_total);
+    return 0;
+}
+
+/* Pass 2: every level from the root down, page by page (a shard skips the
+ * pages it has no tile in).  Fills the level-0 squared error and sample
+ * count for the header's PSNR. */
+static int pass2(struct encoder *e, uint64_t *sse0, uint64_t *samples0)
 {
     for (int k = e->g.root - 1; k >= 0; k--) {
         const struct gv_level *l = &e->g.level[k];
         e->level = k;
         for (uint32_t py = 0; py < l->pages_y; py++)
             for (uint32_t px = 0; px < l->pages_x; px++) {
-                e->px = px;
-                e->py = py;
                 if (e->sharded && !gv_shard_plan_wants_page(&e->plan, &e->g, k, px, py))
                     continue;
-                if (load_window(e) < 0 || load_parents(e, root_tile) < 0)
+                if (encode_page(e, px, py, sse0) < 0)
                     return -1;
-                gv_pool_run(e->pool, encode_tile, e, GV_PAGE_SLOTS);
-                if (emit_page(e) < 0)
-                    return -1;
-                if (k > 0 && store_recon(e) < 0)
-                    return -1;
-                for (int s = 0; s < GV_PAGE_SLOTS; s++) {
-                    if (!e->lens[s])
-                        continue;
-                    e->res->tiles++;
-                    e->res->rate_tiles[e->stats[s].rate]++;
-                    e->res->level_bytes[k] += e->lens[s];
-                    double mse = (double)e->stats[s].sse / (double)e->stats[s].samples;
-                    if (!e->opts->rd &&
-                        mse > 65025.0 / pow(10.0, e->opts->target_psnr / 10.0))
-                        e->res->below_target++;
-                    e->work_done += (double)e->stats[s].samples;
-                    if (k == 0)
-                        *sse0 += e->canon_sse[s];
-                }
-                report(e, "encode", PASS1_SHARE + (1.0 - PASS1_SHARE) *
-                                        e->work_done / e->work_total);
             }
     }
     if (e->g.root == 0) {
@@ -411,7 +439,10 @@ static int pass2(struct encoder *e, const uint8_t *root_tile, uint64_t *sse0,
 
 /* ------------------------------------------------------------ driver */
 
-static int setup(struct encoder *e)
+/* Lay out the scratch file (see the top of this file) and the work that
+ * progress counts; a shard sizes the file once so that what it never
+ * writes stays a hole. */
+static int layout_scratch(struct encoder *e)
 {
     const struct gv_geometry *g = &e->g;
     const int c = e->c;
@@ -437,7 +468,15 @@ static int setup(struct encoder *e)
     }
     if (e->work_total <= 0)
         e->work_total = 1;
+    return 0;
+}
 
+/* The thread pool, and the buffers of pass 2: one tile workspace and one
+ * original tile per worker, the page window, 16 parents, and 64 decoded
+ * tiles and tile buffers. */
+static int start_workers(struct encoder *e)
+{
+    const int c = e->c;
     int threads = e->opts->threads > 0 ? e->opts->threads : gv_cpu_count();
     e->pool = gv_pool_new(threads);
     if (!e->pool)
@@ -482,7 +521,122 @@ static void teardown(struct encoder *e)
         free(e->pending[k]);
         free(e->reduced[k]);
     }
+    free(e->root);
+    free(e->root_tile);
     gv_spill_free(e->spill);
+}
+
+static int check_opts(const struct gv_encode_opts *opts, struct gv_error *err)
+{
+    if (opts->target_psnr <= 0 || opts->target_psnr > 99)
+        return gv_fail(err, GV_EINVAL, "encode: target PSNR %.2f dB is outside "
+                       "(0, 99]", opts->target_psnr);
+    if (opts->max_rate < 1 || opts->max_rate > GV_MAX_RATE)
+        return gv_fail(err, GV_EINVAL, "encode: rate cap %d is outside 1..%d",
+                       opts->max_rate, GV_MAX_RATE);
+    return 0;
+}
+
+/* The store header before any page: geometry, source and settings. */
+static void make_header(const struct encoder *e, struct gv_header *h)
+{
+    const struct gv_source_info *src = &e->res->source;
+    memset(h, 0, sizeof *h);
+    h->width = e->g.width;
+    h->height = e->g.height;
+    h->channels = (uint8_t)e->c;
+    h->max_rate = (uint8_t)e->opts->max_rate;
+    h->src_bits = (uint8_t)src->src_bits;
+    h->src_float = (uint8_t)src->src_float;
+    h->tone = (uint8_t)src->tone;
+    h->target_mpsnr = (uint32_t)lround(e->opts->target_psnr * 1000.0);
+}
+
+/* The geometry of the opened source, and the output: a shard file (with
+ * the shard's plan) or a store. */
+static int open_output(struct encoder *e, const char *output)
+{
+    const struct gv_encode_opts *opts = e->opts;
+    struct gv_encode_result *res = e->res;
+    e->c = res->source.channels;
+    if (gv_geometry_init(&e->g, res->source.width, res->source.height, e->c) < 0)
+        return gv_fail(e->err, GV_EINVAL, "encode: unsupported size %ux%u",
+                       res->source.width, res->source.height);
+    res->geometry = e->g;
+    struct gv_header h;
+    make_header(e, &h);
+    if (opts->shard_count <= 0) {
+        e->writer = gv_store_writer_new(output, &h, e->err);
+        return e->writer ? 0 : -1;
+    }
+    if (gv_shard_plan_init(&e->plan, &e->g, opts->shard_index,
+                           opts->shard_count, e->err) < 0)
+        return -1;
+    e->sharded = 1;
+    e->shard = gv_shard_writer_new(output, &h, opts->shard_index,
+                                   opts->shard_count,
+                                   opts->rd ? GV_SHARD_FLAG_RD : 0, e->err);
+    return e->shard ? 0 : -1;
+}
+
+/* The scratch file, in --tmpdir or else in the output's directory. */
+static int open_spill(struct encoder *e, const char *output)
+{
+    char *outdir = NULL;
+    const char *tmpdir = e->opts->tmpdir;
+    if (!tmpdir) {
+        outdir = strdup(output);
+        char *slash = outdir ? strrchr(outdir, '/') : NULL;
+        if (slash)
+            *(slash == outdir ? slash + 1 : slash) = '\0';
+        tmpdir = slash ? outdir : ".";
+    }
+    e->spill = gv_spill_new(tmpdir, e->err);
+    free(outdir);
+    return e->spill ? 0 : -1;
+}
+
+/* After pass 1: read the root level back from the scratch file and build
+ * its tile, the parent of level R-1; a shard records the root now. */
+static int load_root(struct encoder *e)
+{
+    const struct gv_level *rl = &e->g.level[e->g.root];
+    size_t rbytes = (size_t)rl->width * rl->height * e->c;
+    e->root = malloc(rbytes);
+    e->root_tile = malloc(gv_tile_bytes(e->c));
+    if (!e->root || !e->root_tile)
+        return gv_fail(e->err, GV_ENOMEM, "encode: out of memory for the root");
+    if (gv_spill_read(e->spill, e->root, rbytes, e->orig_base[e->g.root],
+                      e->err) < 0)
+        return -1;
+    gv_root_tile(e->root, rl->width, rl->height, e->c, e->root_tile);
+    if (e->sharded && gv_shard_writer_root(e->shard, e->root, e->err) < 0)
+        return -1;
+    return 0;
+}
+
+/* Publish the shard file; its size is the result's file_bytes. */
+static int finish_shard(struct encoder *e)
+{
+    struct gv_shard_writer *sw = e->shard;
+    e->shard = NULL;
+    e->res->file_bytes = gv_shard_writer_bytes(sw);
+    if (gv_shard_writer_finish(sw, e->err) < 0)
+        return -1;
+    e->res->bpp = gv_encode_bpp(e->res);
+    return 0;
+}
+
+/* Append the root, then publish and verify the store. */
+static int finish_store(struct encoder *e, const char *output, uint64_t sse0,
+                        uint64_t samples0)
+{
+    if (gv_store_writer_root(e->writer, e->root, e->err) < 0)
+        return -1;
+    e->res->psnr0 = gv_encode_psnr0(sse0, samples0);
+    struct gv_store_writer *w = e->writer;
+    e->writer = NULL;
+    return gv_encode_publish_store(w, output, e->res, e->err);
 }
 
 int gv_encode(const char *const *inputs, int n, const char *output,
@@ -495,128 +649,72 @@ int gv_encode(const char *const *inputs, int n, const char *output,
     e.opts = opts;
     e.res = res;
     e.err = err;
-    double t0 = now_seconds();
+    double t0 = gv_encode_now();
     int rc = -1;
-    uint8_t *root = NULL, *root_tile = NULL;
-    struct gv_source *src = NULL;
-
-    if (opts->target_psnr <= 0 || opts->target_psnr > 99)
-        return gv_fail(err, GV_EINVAL, "encode: target PSNR %.2f dB is outside "
-                       "(0, 99]", opts->target_psnr);
-    if (opts->max_rate < 1 || opts->max_rate > GV_MAX_RATE)
-        return gv_fail(err, GV_EINVAL, "encode: rate cap %d is outside 1..%d",
-                       opts->max_rate, GV_MAX_RATE);
-
-    src = gv_source_open(inputs, n, &opts->source, &res->source, err);
+    if (check_opts(opts, err) < 0)
+        return -1;
+    e.target_mse = gv_psnr_to_mse(opts->target_psnr);
+    struct gv_source *src = gv_source_open(inputs, n, &opts->source,
+                                           &res->source, err);
     if (!src)
         return -1;
-    e.c = res->source.channels;
-    if (gv_geometry_init(&e.g, res->source.width, res->source.height, e.c) < 0) {
-        gv_fail(err, GV_EINVAL, "encode: unsupported size %ux%u",
-                res->source.width, res->source.height);
-        goto out;
-    }
-    res->geometry = e.g;
-
-    struct gv_header h;
-    memset(&h, 0, sizeof h);
-    h.width = e.g.width;
-    h.height = e.g.height;
-    h.channels = (uint8_t)e.c;
-    h.max_rate = (uint8_t)opts->max_rate;
-    h.src_bits = (uint8_t)res->source.src_bits;
-    h.src_float = (uint8_t)res->source.src_float;
-    h.tone = (uint8_t)res->source.tone;
-    h.target_mpsnr = (uint32_t)lround(opts->target_psnr * 1000.0);
-    if (opts->shard_count > 0) {
-        if (gv_shard_plan_init(&e.plan, &e.g, opts->shard_index,
-                               opts->shard_count, err) < 0)
-            goto out;
-        e.sharded = 1;
-        e.shard = gv_shard_writer_new(output, &h, opts->shard_index,
-                                      opts->shard_count,
-                                      opts->rd ? GV_SHARD_FLAG_RD : 0, err);
-        if (!e.shard)
-            goto out;
-    } else {
-        e.writer = gv_store_writer_new(output, &h, err);
-        if (!e.writer)
-            goto out;
-    }
-
-    char *outdir = NULL;
-    const char *tmpdir = opts->tmpdir;
-    if (!tmpdir) {
-        outdir = strdup(output);
-        char *slash = outdir ? strrchr(outdir, '/') : NULL;
-        if (slash)
-            *(slash == outdir ? slash + 1 : slash) = '\0';
-        tmpdir = slash ? outdir : ".";
-    }
-    e.spill = gv_spill_new(tmpdir, err);
-    free(outdir);
-    if (!e.spill || setup(&e) < 0)
-        goto out;
-    if (pass1(&e, src) < 0)
+    if (open_output(&e, output) < 0 || open_spill(&e, output) < 0 ||
+        layout_scratch(&e) < 0 || start_workers(&e) < 0 || pass1(&e, src) < 0)
         goto out;
     gv_source_free(src);
     src = NULL;
-
-    /* The root: read back the top level, store it, build its tile. */
-    const struct gv_level *rl = &e.g.level[e.g.root];
-    size_t rbytes = (size_t)rl->width * rl->height * e.c;
-    root = malloc(rbytes);
-    root_tile = malloc(gv_tile_bytes(e.c));
-    if (!root || !root_tile) {
-        gv_fail(err, GV_ENOMEM, "encode: out of memory for the root");
-        goto out;
-    }
-    if (gv_spill_read(e.spill, root, rbytes, e.orig_base[e.g.root], err) < 0)
-        goto out;
-    gv_root_tile(root, rl->width, rl->height, e.c, root_tile);
-    if (e.sharded && gv_shard_writer_root(e.shard, root, err) < 0)
-        goto out;
-
     uint64_t sse0 = 0, samples0 = 1;
-    if (pass2(&e, root_tile, &sse0, &samples0) < 0)
+    if (load_root(&e) < 0 || pass2(&e, &sse0, &samples0) < 0)
         goto out;
-    if (e.sharded) {
-        struct gv_shard_writer *sw = e.shard;
-        e.shard = NULL;
-        res->file_bytes = gv_shard_writer_bytes(sw);
-        if (gv_shard_writer_finish(sw, err) < 0)
-            goto out;
-        res->bpp = 8.0 * (double)res->file_bytes / ((double)e.g.width * e.g.height);
-        report(&e, "done", 1.0);
-        rc = 0;
+    if ((e.sharded ? finish_shard(&e)
+                   : finish_store(&e, output, sse0, samples0)) < 0)
         goto out;
-    }
-    if (gv_store_writer_root(e.writer, root, err) < 0)
-        goto out;
-    res->psnr0 = gv_encode_psnr0(sse0, samples0);
-    gv_store_writer_set_psnr(e.writer, (uint32_t)lround(res->psnr0 * 1000.0));
-    struct gv_store_writer *w = e.writer;
-    e.writer = NULL;
-    if (gv_store_writer_finish(w, err) < 0)
-        goto out;
-    {
-        /* Read back what was published: the header and index must verify. */
-        struct gv_store *check = gv_store_open(output, err);
-        if (!check)
-            goto out;
-        res->file_bytes = gv_store_info(check)->header.file_size;
-        gv_store_close(check);
-    }
-    res->bpp = 8.0 * (double)res->file_bytes / ((double)e.g.width * e.g.height);
     report(&e, "done", 1.0);
     rc = 0;
 out:
-    res->seconds = now_seconds() - t0;
+    res->seconds = gv_encode_now() - t0;
     gv_source_free(src);
     gv_store_writer_abort(e.writer);
     gv_shard_writer_abort(e.shard);
     teardown(&e);
-    free(root);
-    free(root_tile);
     return rc;
+}
+
+/* ------------------------------------------ shared with shard_merge.c */
+
+double gv_encode_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+double gv_encode_psnr0(uint64_t sse0, uint64_t samples0)
+{
+    double p = sse0 == 0 ? 99.0 :
+               10.0 * log10(65025.0 * (double)samples0 / (double)sse0);
+    return p > 99.0 ? 99.0 : p;
+}
+
+double gv_encode_bpp(const struct gv_encode_result *res)
+{
+    return 8.0 * (double)res->file_bytes /
+           ((double)res->geometry.width * res->geometry.height);
+}
+
+int gv_encode_publish_store(struct gv_store_writer *w, const char *output,
+                            struct gv_encode_result *res,
+                            struct gv_error *err)
+{
+    gv_store_writer_set_psnr(w, (uint32_t)lround(res->psnr0 * 1000.0));
+    if (gv_store_writer_finish(w, err) < 0)
+        return -1;
+    /* Read back what was published: the header and index must verify. */
+    struct gv_store *check = gv_store_open(output, err);
+    if (!check)
+        return -1;
+    res->file_bytes = gv_store_info(check)->header.file_size;
+    gv_store_close(check);
+    res->bpp = gv_encode_bpp(res);
+    return 0;
 }

@@ -30,7 +30,8 @@
 struct gv_encode_progress {
     double fraction;          /* 0..1 of the whole encode */
     uint64_t source_pixels;   /* width * height */
-    const char *phase;        /* "pyramid" or "encode" */
+    const char *phase;        /* "pyramid" (pass 1), "encode" (pass 2),
+                               * then "done" once, with fraction 1 */
     int level;                /* level being encoded (pass 2) */
 };
 
@@ -64,12 +65,6 @@ struct gv_encode_result {
     uint64_t below_target;    /* tiles at the cap that missed the target */
     double seconds;
 };
-
-/* The level-0 PSNR in dB that a store header records, from the squared
- * error summed over level 0 and the sample count (99 when lossless).
- * The encoder and the shard merge share it so that both write the same
- * header. */
-double gv_encode_psnr0(uint64_t sse0, uint64_t samples0);
 
 /* Fill *o with the defaults. */
 void gv_encode_opts_default(struct gv_encode_opts *o);

@@ -4,7 +4,7 @@
  *
  * Design.  Each function is a thin wrapper that catches every C++
  * exception at the boundary and turns OIIO's error strings into a struct
- * gv_error with the "imageio: PATH: " prefix.  Reading is probe-then-read:
+ * gv_error that starts "imageio:" and names the file.  Reading is probe-then-read:
  * gv_image_open reads the header only (ImageInput::open), and
  * gv_image_read hands out scanlines strictly top to bottom, converted by
  * OIIO in type only (UINT8, UINT16 or FLOAT), never to another range.
@@ -47,25 +47,21 @@
  *    (attribute "threads"): gigaview runs its own workers, one decoder per
  *    input, and a second pool per process would oversubscribe the CPUs.
  *
- * Writing renders the whole 8-bit image to ".NAME.tmp.PID.N.EXT" in the
- * target's directory (EXT kept last so OIIO picks the format by it),
- * fsyncs it, renames it over the final name and fsyncs the directory; on
- * any failure the temporary file is removed.  JPEG and WebP are written at
- * quality 90.
+ * Writing encodes the whole 8-bit image in memory (gv_image_encode) and
+ * publishes the bytes through base/atomic_file.h: the image appears under
+ * its name only when complete, replacing any file there, and a failure
+ * leaves nothing behind.  JPEG and WebP are written at quality 90.
  *
  * Thread safety: distinct gv_image_in objects may be used from different
  * threads; one object by one thread at a time.
  */
 #include <cctype>
 #include <errno.h>
-#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <unistd.h>
 
-#include <atomic>
 #include <exception>
 #include <memory>
 #include <mutex>
@@ -76,6 +72,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include "base/atomic_file.h"
 #include "base/error.h"
 #include "imageio/imageio.h"
 #include "imageio/output_format.h"
@@ -305,30 +302,85 @@ static std::unique_ptr<ImageInput> choose_reader(const char *path,
     return nullptr;
 }
 
+/* A regular, non-empty file at path, or -1 with *err filled. */
+static int check_file(const char *path, struct gv_error *err)
+{
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        int e = errno;
+        if (e == ENOENT || e == ENOTDIR)
+            return gv_fail(err, GV_ENOTFOUND, "imageio: %s: no such file", path);
+        return gv_fail_errno(err, e, "imageio: %s", path);
+    }
+    if (!S_ISREG(st.st_mode))
+        return gv_fail(err, GV_EINVAL, "imageio: %s: not a regular file", path);
+    if (st.st_size == 0)
+        return gv_fail(err, GV_ECORRUPT, "imageio: %s: empty file", path);
+    return 0;
+}
+
+/* The opened image's size: positive, one slice, at most 64 channels, and
+ * sides and area within 31 bits and max_pixels. */
+static int check_size(const ImageSpec &spec, const char *path,
+                      uint64_t max_pixels, struct gv_error *err)
+{
+    /* Sizes must be positive and fit in 31 bits; checked as int64 so that
+     * the product cannot overflow. */
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+        return gv_fail(err, GV_ECORRUPT, "imageio: %s: bad image size %dx%d",
+                       path, spec.width, spec.height);
+    if (spec.depth != 1)
+        return gv_fail(err, GV_EFORMAT, "imageio: %s: volume images are not "
+                       "supported", path);
+    /* 64 channels is far above any real colour image; it bounds the
+     * row-size arithmetic of make_input. */
+    if (spec.nchannels > 64)
+        return gv_fail(err, GV_EFORMAT, "imageio: %s: too many channels (%d)",
+                       path, spec.nchannels);
+    uint64_t w = (uint64_t)spec.width, h = (uint64_t)spec.height;
+    if (w > 0x7fffffffu || h > 0x7fffffffu || w * h > max_pixels)
+        return gv_fail(err, GV_ELIMIT,
+                       "imageio: %s: image of %llux%llu pixels exceeds the "
+                       "limit of %llu pixels", path, (unsigned long long)w,
+                       (unsigned long long)h, (unsigned long long)max_pixels);
+    return 0;
+}
+
+/* The reading state for an opened, checked image delivered as `type`. */
+static std::unique_ptr<gv_image_in> make_input(const char *path,
+                                               const ImageSpec &spec,
+                                               const struct gv_image_info &info,
+                                               TypeDesc type)
+{
+    std::unique_ptr<gv_image_in> im(new gv_image_in());
+    im->path = path;
+    im->type = type;
+    im->nchannels = spec.nchannels;
+    im->pixel_bytes = (size_t)spec.nchannels * type.size();
+    /* w < 2^31 and pixel_bytes <= 64 * 4: no overflow in 64 bits. */
+    im->row_bytes = (size_t)info.width * im->pixel_bytes;
+    im->height = info.height;
+    im->next_row = 0;
+    im->narrow_max = info.sample == GV_SAMPLE_U16 && info.bits < 16
+                         ? (1u << info.bits) - 1 : 0;
+    im->x0 = spec.x;
+    im->y0 = spec.y;
+    im->z0 = spec.z;
+    im->tiled = spec.tile_width > 0 && spec.tile_height > 0;
+    im->tile_h = im->tiled ? (uint32_t)spec.tile_height : 0;
+    im->buf_first = 0;
+    im->buf_rows = 0;
+    im->failed = false;
+    return im;
+}
+
 static struct gv_image_in *open_impl(const char *path, uint64_t max_pixels,
                                      struct gv_image_info *info,
                                      struct gv_error *err)
 {
     set_threads_once();
-    struct stat st;
-    if (stat(path, &st) != 0) {
-        int e = errno;
-        if (e == ENOENT || e == ENOTDIR) {
-            gv_fail(err, GV_ENOTFOUND, "imageio: %s: no such file", path);
-            return NULL;
-        }
-        gv_fail_errno(err, e, "imageio: %s", path);
+    if (check_file(path, err) != 0)
         return NULL;
-    }
-    if (!S_ISREG(st.st_mode)) {
-        gv_fail(err, GV_EINVAL, "imageio: %s: not a regular file", path);
-        return NULL;
-    }
-    if (st.st_size == 0) {
-        gv_fail(err, GV_ECORRUPT, "imageio: %s: empty file", path);
-        return NULL;
-    }
-
     ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
     std::unique_ptr<ImageInput> in = choose_reader(path, &config, err);
@@ -346,63 +398,19 @@ static struct gv_image_in *open_impl(const char *path, uint64_t max_pixels,
         fail_msg(err, GV_ECORRUPT, path, in->geterror());
         return NULL;
     }
-    /* Sizes must be positive and fit in 31 bits; checked as int64 so that
-     * the product cannot overflow. */
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
-        gv_fail(err, GV_ECORRUPT, "imageio: %s: bad image size %dx%d", path,
-                spec.width, spec.height);
+    if (check_size(spec, path, max_pixels, err) != 0)
         return NULL;
-    }
-    if (spec.depth != 1) {
-        gv_fail(err, GV_EFORMAT, "imageio: %s: volume images are not "
-                "supported", path);
-        return NULL;
-    }
-    /* 64 channels is far above any real colour image; it bounds the
-     * row-size arithmetic below. */
-    if (spec.nchannels > 64) {
-        gv_fail(err, GV_EFORMAT, "imageio: %s: too many channels (%d)", path,
-                spec.nchannels);
-        return NULL;
-    }
-    uint64_t w = (uint64_t)spec.width, h = (uint64_t)spec.height;
-    if (w > 0x7fffffffu || h > 0x7fffffffu || w * h > max_pixels) {
-        gv_fail(err, GV_ELIMIT,
-                "imageio: %s: image of %llux%llu pixels exceeds the limit of "
-                "%llu pixels", path, (unsigned long long)w,
-                (unsigned long long)h, (unsigned long long)max_pixels);
-        return NULL;
-    }
 
     struct gv_image_info tmp;
     memset(&tmp, 0, sizeof tmp);
     TypeDesc type;
     if (choose_type(spec, path, &tmp, &type, err) != 0)
         return NULL;
-    tmp.width = (uint32_t)w;
-    tmp.height = (uint32_t)h;
+    tmp.width = (uint32_t)spec.width;
+    tmp.height = (uint32_t)spec.height;
     tmp.channels = spec.nchannels;
     snprintf(tmp.format, sizeof tmp.format, "%s", in->format_name());
-
-    std::unique_ptr<gv_image_in> im(new gv_image_in());
-    im->path = path;
-    im->type = type;
-    im->nchannels = spec.nchannels;
-    im->pixel_bytes = (size_t)spec.nchannels * type.size();
-    /* w < 2^31 and pixel_bytes <= 64 * 4: no overflow in 64 bits. */
-    im->row_bytes = (size_t)w * im->pixel_bytes;
-    im->height = (uint32_t)h;
-    im->next_row = 0;
-    im->narrow_max = tmp.sample == GV_SAMPLE_U16 && tmp.bits < 16
-                         ? (1u << tmp.bits) - 1 : 0;
-    im->x0 = spec.x;
-    im->y0 = spec.y;
-    im->z0 = spec.z;
-    im->tiled = spec.tile_width > 0 && spec.tile_height > 0;
-    im->tile_h = im->tiled ? (uint32_t)spec.tile_height : 0;
-    im->buf_first = 0;
-    im->buf_rows = 0;
-    im->failed = false;
+    std::unique_ptr<gv_image_in> im = make_input(path, spec, tmp, type);
     im->in = std::move(in);
     *info = tmp;
     return im.release();
@@ -571,20 +579,6 @@ extern "C" void gv_image_close(struct gv_image_in *in)
 
 /* ---- writing ---- */
 
-static std::atomic<unsigned> tmp_counter{0};
-
-static int fsync_path(const std::string &p, int flags)
-{
-    int fd = open(p.c_str(), flags | O_CLOEXEC);
-    if (fd < 0)
-        return -1;
-    int rc = fsync(fd);
-    int e = errno;
-    close(fd);
-    errno = e;
-    return rc;
-}
-
 /* Output format for a file name's extension (with its dot, any case),
  * as gv_image_encode names it, or NULL. */
 static const char *format_for(const std::string &ext)
@@ -595,17 +589,17 @@ static const char *format_for(const std::string &ext)
 }
 
 /*
- * Encode in memory (gv_image_encode), then write the bytes ourselves with
- * write(2), so that a full disk or a file size limit is reported with its
- * errno (GV_ENOSPC) rather than as an encoder's message.
+ * Encode in memory (gv_image_encode), then publish the bytes with
+ * gv_atomic_file_write, so that a full disk or a file size limit is
+ * reported with its errno (GV_ENOSPC) rather than as an encoder's message,
+ * and the image appears under its name only when complete.
  */
 static int write_impl(const char *path, uint32_t width, uint32_t height,
                       int channels, const uint8_t *pixels,
-                      struct gv_error *err, std::string &tmp)
+                      struct gv_error *err)
 {
     std::string p(path);
     size_t slash = p.rfind('/');
-    std::string dir = slash == std::string::npos ? "" : p.substr(0, slash + 1);
     std::string base = slash == std::string::npos ? p : p.substr(slash + 1);
     size_t dot = base.rfind('.');
     if (base.empty() || dot == std::string::npos || dot + 1 == base.size())
@@ -623,55 +617,25 @@ static int write_impl(const char *path, uint32_t width, uint32_t height,
                         &len, err) != 0)
         return -1;
     std::unique_ptr<uint8_t, void (*)(void *)> hold(bytes, free);
-    tmp = dir + "." + base + ".tmp." + std::to_string((long)getpid()) + "."
-          + std::to_string(tmp_counter.fetch_add(1));
-    int fd = open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (fd < 0) {
-        int e = errno;
-        tmp.clear(); /* nothing created */
-        return gv_fail_errno(err, e, "imageio: %s", path);
-    }
-    for (size_t done = 0; done < len;) {
-        ssize_t n = write(fd, bytes + done, len - done);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0) {
-            int e = errno;
-            close(fd);
-            return gv_fail_errno(err, e, "imageio: %s", path);
-        }
-        done += (size_t)n;
-    }
-    if (fsync(fd) != 0 || close(fd) != 0)
-        return gv_fail_errno(err, errno, "imageio: %s: fsync", path);
-    if (rename(tmp.c_str(), path) != 0)
-        return gv_fail_errno(err, errno, "imageio: %s: rename", path);
-    tmp.clear();
-    /* Make the rename itself durable; a failure here leaves a complete
-     * file under the final name, so it is not reported. */
-    (void)fsync_path(dir.empty() ? "." : dir, O_RDONLY | O_DIRECTORY);
-    return 0;
+    struct gv_atomic_opts opts = {};
+    opts.module = "imageio";
+    return gv_atomic_file_write(path, bytes, len, &opts, err);
 }
 
 extern "C" int gv_image_write(const char *path, uint32_t width,
                               uint32_t height, int channels,
                               const uint8_t *pixels, struct gv_error *err)
 {
-    std::string tmp;
-    int rc;
     try {
-        rc = write_impl(path, width, height, channels, pixels, err, tmp);
+        return write_impl(path, width, height, channels, pixels, err);
     } catch (const std::bad_alloc &) {
-        rc = gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+        return gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
     } catch (const std::exception &e) {
-        rc = gv_fail(err, GV_EIO, "imageio: %s: %s", path, e.what());
+        return gv_fail(err, GV_EIO, "imageio: %s: %s", path, e.what());
     } catch (...) {
-        rc = gv_fail(err, GV_EIO, "imageio: %s: unknown encoder exception",
-                     path);
+        return gv_fail(err, GV_EIO, "imageio: %s: unknown encoder exception",
+                       path);
     }
-    if (rc != 0 && !tmp.empty())
-        unlink(tmp.c_str());
-    return rc;
 }
 
 /* ---- in-memory encoding ---- */
@@ -721,8 +685,9 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
     std::string fmt = oiio_name;
     if (fmt == "jpeg" || fmt == "webp")
         spec.attribute("CompressionQuality", quality);
-    /* see write_impl: no (empty) Exif directory, which libtiff 4.5 fails
-     * on */
+    /* OIIO 2.4.7 with libtiff 4.5 records "failed TIFFWriteCustomDirectory()
+     * of the Exif data" for every TIFF (an empty Exif directory) while still
+     * writing a good file; there is no Exif to write, so skip it. */
     spec.attribute("tiff:write_exif", 0);
     std::string name = std::string("memory.") + format;
     if (!o->set_ioproxy(&vec) || !o->open(name, spec)) {

@@ -5,8 +5,8 @@
  * Reading is split into a cheap probe (open: format and size from the
  * header) and sequential scanline reads in the file's own sample type
  * widened to one of three types, so that the caller applies the documented
- * 8-bit rule itself.  Writing takes a whole 8-bit image and writes it
- * atomically: a temporary name in the same directory, then rename.
+ * 8-bit rule itself.  Writing takes a whole 8-bit image, encodes it in
+ * memory and publishes it atomically (base/atomic_file.h).
  */
 #ifndef GV_IMAGEIO_H
 #define GV_IMAGEIO_H
@@ -49,8 +49,11 @@ int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,
 void gv_image_close(struct gv_image_in *in);
 
 /* Write an 8-bit image (channels 1 or 3, rows packed) to `path`, format by
- * extension (.png, .tif/.tiff, .jpg, .webp ...).  The file appears under
- * its final name only when complete. */
+ * extension (.png, .tif/.tiff, .jpg/.jpeg, .webp).  The file appears under
+ * its final name only when complete, replacing any file there, and is
+ * fsynced (gv_atomic_file_write).  Returns 0, or -1 with *err filled:
+ * GV_EINVAL / GV_EFORMAT for a name or an image it cannot write, the codes
+ * of atomic_file.h for the file system. */
 int gv_image_write(const char *path, uint32_t width, uint32_t height,
                    int channels, const uint8_t *pixels, struct gv_error *err);
 

@@ -216,16 +216,10 @@ static inline void convert(const uint8_t *p, int sc, uint8_t *o, int oc,
     }
 }
 
-int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
-              uint8_t **pixels, uint32_t *w, uint32_t *h, int *channels,
-              struct gv_error *err)
+/* Refuse a request that does not fit geometry g; returns 0 or -1. */
+static int check_request(const struct gv_geometry *g,
+                         const struct gv_render_req *req, struct gv_error *err)
 {
-    const struct gv_geometry *g = &gv_store_info(gv_decoder_store(d))->geometry;
-    const int sc = g->channels;
-    uint8_t *dec = NULL, *scaled = NULL, *final = NULL;
-    struct axis ax = {0}, ay = {0};
-    int rc = -1;
-
     if (req->w == 0 || req->h == 0 || req->x >= g->width
         || req->y >= g->height || req->w > g->width - req->x
         || req->h > g->height - req->y)
@@ -243,55 +237,139 @@ int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
     if (req->quality < GV_QUALITY_DEFAULT || req->quality > GV_QUALITY_BITONAL)
         return gv_fail(err, GV_EINVAL, "render: bad quality %d",
                        (int)req->quality);
-    int oc = req->quality == GV_QUALITY_GRAY
-                     || req->quality == GV_QUALITY_BITONAL ? 1
-             : req->quality == GV_QUALITY_COLOR ? 3 : sc;
-    uint64_t out_px = (uint64_t)req->out_w * req->out_h;
-    if (out_px > SIZE_MAX / 4)
+    if ((uint64_t)req->out_w * req->out_h > SIZE_MAX / 4)
         return gv_fail(err, GV_ELIMIT, "render: output of %ux%u pixels is "
                        "too large", req->out_w, req->out_h);
+    return 0;
+}
 
-    /* Level: the coarsest whose exact footprint still covers the output
-     * (out << k <= size on both axes). */
+/* The decoded rectangle: level k, and the region rounded outwards to
+ * that level's pixels. */
+struct footprint {
+    int k;
+    uint32_t x, y, w, h;
+};
+
+/* The coarsest level whose exact footprint still covers the output
+ * (out << k <= size on both axes), and the rectangle decoded there;
+ * refused past the request's decode limit. */
+static int choose_footprint(const struct gv_geometry *g,
+                            const struct gv_render_req *req,
+                            struct footprint *f, struct gv_error *err)
+{
     const int lmax = g->root + g->root_mips - 1;
     int k = 0;
     while (k < lmax && ((uint64_t)req->out_w << (k + 1)) <= req->w
            && ((uint64_t)req->out_h << (k + 1)) <= req->h)
         k++;
     const uint64_t x = req->x, y = req->y, one = 1ull << k;
-    const uint32_t xk = (uint32_t)(x >> k), yk = (uint32_t)(y >> k);
-    const uint32_t sw = (uint32_t)(((x + req->w + one - 1) >> k) - xk);
-    const uint32_t sh = (uint32_t)(((y + req->h + one - 1) >> k) - yk);
-    const uint64_t dec_px = (uint64_t)sw * sh;
+    f->k = k;
+    f->x = (uint32_t)(x >> k);
+    f->y = (uint32_t)(y >> k);
+    f->w = (uint32_t)(((x + req->w + one - 1) >> k) - f->x);
+    f->h = (uint32_t)(((y + req->h + one - 1) >> k) - f->y);
+    const uint64_t dec_px = (uint64_t)f->w * f->h;
     if (req->max_decode_pixels && dec_px > req->max_decode_pixels)
         return gv_fail(err, GV_ELIMIT, "render: decoding %ux%u pixels at "
-                       "level %d exceeds the limit of %llu pixels", sw, sh, k,
-                       (unsigned long long)req->max_decode_pixels);
+                       "level %d exceeds the limit of %llu pixels", f->w, f->h,
+                       k, (unsigned long long)req->max_decode_pixels);
     if (dec_px > SIZE_MAX / 4)
         return gv_fail(err, GV_ELIMIT, "render: region too large");
+    return 0;
+}
 
+/* The weights of both axes: box where the footprint is at least the
+ * output, bilinear where it is upscaled (only possible at level 0, by the
+ * choice of the level). */
+static int make_axes(const struct gv_render_req *req, const struct footprint *f,
+                     struct axis *ax, struct axis *ay)
+{
+    const int k = f->k;
     int up_x = ((uint64_t)req->out_w << k) > req->w;
     int up_y = ((uint64_t)req->out_h << k) > req->h;
-    /* (up_x or up_y implies k == 0 by the choice of k.) */
-    if ((up_x ? axis_bilinear(&ax, req->w, req->out_w)
-              : axis_box(&ax, x, req->w, req->out_w, k, sw)) != 0
-        || (up_y ? axis_bilinear(&ay, req->h, req->out_h)
-                 : axis_box(&ay, y, req->h, req->out_h, k, sh)) != 0) {
+    if ((up_x ? axis_bilinear(ax, req->w, req->out_w)
+              : axis_box(ax, req->x, req->w, req->out_w, k, f->w)) != 0
+        || (up_y ? axis_bilinear(ay, req->h, req->out_h)
+                 : axis_box(ay, req->y, req->h, req->out_h, k, f->h)) != 0)
+        return -1;
+    return 0;
+}
+
+/* Output channels for the request's quality from a store of sc. */
+static int out_channels(const struct gv_render_req *req, int sc)
+{
+    if (req->quality == GV_QUALITY_GRAY || req->quality == GV_QUALITY_BITONAL)
+        return 1;
+    return req->quality == GV_QUALITY_COLOR ? 3 : sc;
+}
+
+/* Whether the scaled image already is the answer: no rotation, no mirror
+ * and no change of channels. */
+static int scaled_is_final(const struct gv_render_req *req, int sc, int oc)
+{
+    return req->rotation == 0 && !req->mirror && oc == sc
+        && (req->quality == GV_QUALITY_DEFAULT
+            || req->quality == GV_QUALITY_COLOR
+            || (sc == 1 && req->quality == GV_QUALITY_GRAY));
+}
+
+/* Mirror, rotate and convert the out_w x out_h scaled image (sc channels)
+ * into final (fw x fh, oc channels). */
+static void orient(const uint8_t *scaled, int sc, const struct gv_render_req *req,
+                   uint32_t fw, uint32_t fh, int oc, uint8_t *final)
+{
+    const uint32_t ow = req->out_w, oh = req->out_h;
+    /* Final pixel (X, Y) comes from mirrored pixel (mx, my), which is
+     * scaled pixel (mirror ? ow-1-mx : mx, my). */
+    for (uint32_t Y = 0; Y < fh; Y++) {
+        uint8_t *o = final + (size_t)Y * fw * oc;
+        for (uint32_t X = 0; X < fw; X++) {
+            uint32_t mx, my;
+            switch (req->rotation) {
+            case 90: mx = Y; my = oh - 1 - X; break;
+            case 180: mx = ow - 1 - X; my = oh - 1 - Y; break;
+            case 270: mx = ow - 1 - Y; my = X; break;
+            default: mx = X; my = Y; break;
+            }
+            if (req->mirror)
+                mx = ow - 1 - mx;
+            convert(scaled + ((size_t)my * ow + mx) * sc, sc,
+                    o + (size_t)X * oc, oc, req->quality);
+        }
+    }
+}
+
+int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
+              uint8_t **pixels, uint32_t *w, uint32_t *h, int *channels,
+              struct gv_error *err)
+{
+    const struct gv_geometry *g = &gv_store_info(gv_decoder_store(d))->geometry;
+    const int sc = g->channels;
+    uint8_t *dec = NULL, *scaled = NULL, *final = NULL;
+    struct axis ax = {0}, ay = {0};
+    struct footprint f;
+    int rc = -1;
+
+    if (check_request(g, req, err) < 0 || choose_footprint(g, req, &f, err) < 0)
+        return -1;
+    const int oc = out_channels(req, sc);
+    const uint64_t out_px = (uint64_t)req->out_w * req->out_h;
+    if (make_axes(req, &f, &ax, &ay) < 0) {
         gv_fail(err, GV_ENOMEM, "render: out of memory for weights");
         goto out;
     }
 
-    dec = malloc((size_t)dec_px * sc);
+    dec = malloc((size_t)f.w * f.h * sc);
     if (!dec) {
         gv_fail(err, GV_ENOMEM, "render: out of memory decoding %ux%u pixels",
-                sw, sh);
+                f.w, f.h);
         goto out;
     }
-    if (gv_decode_region(d, k, xk, yk, sw, sh, dec, err) != 0)
+    if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, dec, err) != 0)
         goto out;
 
     scaled = malloc((size_t)out_px * sc);
-    if (!scaled || resample(dec, sw, sc, &ax, &ay, scaled) != 0) {
+    if (!scaled || resample(dec, f.w, sc, &ax, &ay, scaled) != 0) {
         gv_fail(err, GV_ENOMEM, "render: out of memory scaling to %ux%u",
                 req->out_w, req->out_h);
         goto out;
@@ -299,15 +377,11 @@ int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
     free(dec);
     dec = NULL;
 
-    const uint32_t ow = req->out_w, oh = req->out_h;
-    const int rot = req->rotation;
-    const uint32_t fw = rot == 90 || rot == 270 ? oh : ow;
-    const uint32_t fh = rot == 90 || rot == 270 ? ow : oh;
-    if (rot == 0 && !req->mirror && oc == sc
-        && (req->quality == GV_QUALITY_DEFAULT
-            || req->quality == GV_QUALITY_COLOR
-            || (sc == 1 && req->quality == GV_QUALITY_GRAY))) {
-        final = scaled;        /* nothing left to do */
+    const int turned = req->rotation == 90 || req->rotation == 270;
+    const uint32_t fw = turned ? req->out_h : req->out_w;
+    const uint32_t fh = turned ? req->out_w : req->out_h;
+    if (scaled_is_final(req, sc, oc)) {
+        final = scaled;
         scaled = NULL;
     } else {
         final = malloc((size_t)out_px * oc);
@@ -315,24 +389,7 @@ int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
             gv_fail(err, GV_ENOMEM, "render: out of memory");
             goto out;
         }
-        /* Final pixel (X, Y) comes from mirrored pixel (mx, my), which is
-         * scaled pixel (mirror ? ow-1-mx : mx, my). */
-        for (uint32_t Y = 0; Y < fh; Y++) {
-            uint8_t *o = final + (size_t)Y * fw * oc;
-            for (uint32_t X = 0; X < fw; X++) {
-                uint32_t mx, my;
-                switch (rot) {
-                case 90: mx = Y; my = oh - 1 - X; break;
-                case 180: mx = ow - 1 - X; my = oh - 1 - Y; break;
-                case 270: mx = ow - 1 - Y; my = X; break;
-                default: mx = X; my = Y; break;
-                }
-                if (req->mirror)
-                    mx = ow - 1 - mx;
-                convert(scaled + ((size_t)my * ow + mx) * sc, sc,
-                        o + (size_t)X * oc, oc, req->quality);
-            }
-        }
+        orient(scaled, sc, req, fw, fh, oc, final);
     }
     *pixels = final;
     final = NULL;

@@ -18,8 +18,8 @@
 struct gv_decoder;
 
 /* New decoder over s (borrowed; it must outlive the decoder), caching at
- * most cache_bytes of decoded tiles (at least a few tiles are always
- * kept).  Returns NULL on allocation failure. */
+ * most cache_bytes of decoded tiles (but always room for 8, a tile and
+ * its chain of ancestors).  Returns NULL on allocation failure. */
 struct gv_decoder *gv_decoder_new(const struct gv_store *s, size_t cache_bytes);
 
 /* Free.  NULL does nothing. */
@@ -29,10 +29,12 @@ void gv_decoder_free(struct gv_decoder *d);
 const struct gv_store *gv_decoder_store(const struct gv_decoder *d);
 
 /*
- * Decode tile (tx,ty) of `level` (0 <= level < root; the root level is the
+ * Decode tile (tx,ty) of `level` (0 <= level <= root; level root is the
  * single tile (0,0), the root image clamp-padded to 513x513).  *pixels
  * points at 513x513xC bytes owned by the decoder, valid until the next
- * call.  Returns 0 or -1 (missing tile, corrupt page or tile).
+ * call.  Returns 0, or -1 with *err filled (GV_ENOTFOUND for a tile
+ * outside the level; a corrupt page or tile, or I/O, as the store reports
+ * it).
  */
 int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
                     const uint8_t **pixels, struct gv_error *err);

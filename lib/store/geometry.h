@@ -18,7 +18,7 @@
 #define GV_STEP 512          /* distance between tile origins (GV_TILE - 1) */
 #define GV_PAGE_TILES 8      /* tiles per page edge: 4096^2 pixels a page */
 #define GV_ROOT_MAX 512      /* root level fits in this many pixels a side */
-#define GV_MAX_LEVELS 40     /* 2^32 wide images need 24; room to spare */
+#define GV_MAX_LEVELS 40     /* a 2^31-pixel side needs 23; room to spare */
 #define GV_MAX_DIM 0x7fffffffu /* width and height must stay below 2^31 */
 
 struct gv_level {
@@ -39,9 +39,12 @@ struct gv_geometry {
 
 /*
  * Fill *g for an image of width x height pixels with the given channel
- * count.  Returns 0, or -1 if a dimension is 0 or above GV_MAX_DIM.
- * Page numbering runs from the level just below the root down to level 0
- * (the order the encoder writes them), row-major inside a level.
+ * count.  Returns 0, or -1 if a dimension is 0 or above GV_MAX_DIM or
+ * channels is not 1 or 3.  A level has at least half (rounded up) the
+ * tiles of the level below in each direction, so every tile has a parent
+ * (which can add a column or row of tiles past a level's edge).  Page
+ * numbering runs from the level just below the root down to level 0 (the
+ * order the encoder writes them), row-major inside a level.
  */
 int gv_geometry_init(struct gv_geometry *g, uint32_t width, uint32_t height,
                      int channels);

@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "base/file_io.h"
 #include "store/store_read.h"
 #include "codec/tile.h"
 
@@ -27,20 +28,11 @@ struct gv_store {
 static int read_exact(int fd, void *buf, size_t len, uint64_t off,
                       const char *what, struct gv_error *err)
 {
-    uint8_t *p = buf;
-    while (len > 0) {
-        ssize_t n = pread(fd, p, len, (off_t)off);
-        if (n < 0) {
-            if (errno == EINTR)
-                continue;
-            return gv_fail_errno(err, errno, "store: reading %s", what);
-        }
-        if (n == 0)
-            return gv_fail(err, GV_ECORRUPT, "store: %s is truncated", what);
-        p += n;
-        len -= (size_t)n;
-        off += (uint64_t)n;
-    }
+    int rc = gv_pread_full(fd, buf, len, off);
+    if (rc < 0)
+        return gv_fail_errno(err, errno, "store: reading %s", what);
+    if (rc > 0)
+        return gv_fail(err, GV_ECORRUPT, "store: %s is truncated", what);
     return 0;
 }
 
@@ -75,40 +67,34 @@ static int check_header(struct gv_store *s, uint64_t file_size,
     return 0;
 }
 
-struct gv_store *gv_store_open(const char *path, struct gv_error *err)
+/* Open path as a regular file of at least a header's size; *size is its
+ * length. */
+static int open_file(struct gv_store *s, const char *path, uint64_t *size,
+                     struct gv_error *err)
 {
-    struct gv_store *s = calloc(1, sizeof *s);
-    if (!s) {
-        gv_fail(err, GV_ENOMEM, "store: out of memory");
-        return NULL;
-    }
     s->fd = open(path, O_RDONLY | O_CLOEXEC);
     if (s->fd < 0) {
         int e = errno;
         gv_fail_errno(err, e, "store: %s", path);
         if (e == ENOENT && err)
             err->code = GV_ENOTFOUND;
-        goto fail;
+        return -1;
     }
     struct stat st;
-    if (fstat(s->fd, &st) < 0) {
-        gv_fail_errno(err, errno, "store: %s", path);
-        goto fail;
-    }
-    if (!S_ISREG(st.st_mode)) {
-        gv_fail(err, GV_EFORMAT, "store: %s is not a regular file", path);
-        goto fail;
-    }
-    uint8_t hb[GV_HEADER_SIZE];
-    if ((uint64_t)st.st_size < GV_HEADER_SIZE) {
-        gv_fail(err, GV_EFORMAT, "store: %s is too short to be a store", path);
-        goto fail;
-    }
-    if (read_exact(s->fd, hb, sizeof hb, 0, "header", err) < 0 ||
-        gv_header_unpack(hb, &s->info.header, err) < 0 ||
-        check_header(s, (uint64_t)st.st_size, err) < 0)
-        goto fail;
+    if (fstat(s->fd, &st) < 0)
+        return gv_fail_errno(err, errno, "store: %s", path);
+    if (!S_ISREG(st.st_mode))
+        return gv_fail(err, GV_EFORMAT, "store: %s is not a regular file", path);
+    if ((uint64_t)st.st_size < GV_HEADER_SIZE)
+        return gv_fail(err, GV_EFORMAT, "store: %s is too short to be a store",
+                       path);
+    *size = (uint64_t)st.st_size;
+    return 0;
+}
 
+/* Read, check and decompress the root, and derive its mips. */
+static int load_root(struct gv_store *s, struct gv_error *err)
+{
     const struct gv_header *h = &s->info.header;
     const struct gv_geometry *g = &s->info.geometry;
     uint32_t w = g->level[g->root].width, hh = g->level[g->root].height;
@@ -116,15 +102,14 @@ struct gv_store *gv_store_open(const char *path, struct gv_error *err)
     s->root = malloc(gv_root_pixels_size(w, hh, g->channels));
     if (!packed || !s->root) {
         free(packed);
-        gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
-        goto fail;
+        return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
     }
     if (read_exact(s->fd, packed, h->root_size, h->root_offset, "root", err) < 0 ||
         (gv_crc32(0, packed, h->root_size - 4) != gv_get32(packed + h->root_size - 4) &&
          gv_fail(err, GV_ECORRUPT, "store: root CRC mismatch")) ||
         gv_root_unpack(packed, h->root_size - 4, w, hh, g->channels, s->root, err) < 0) {
         free(packed);
-        goto fail;
+        return -1;
     }
     free(packed);
     gv_root_build_mips(s->root, w, hh, g->channels);
@@ -135,35 +120,53 @@ struct gv_store *gv_store_open(const char *path, struct gv_error *err)
         w = (w + 1) / 2;
         hh = (hh + 1) / 2;
     }
+    return 0;
+}
 
+/* Read the page index, check its CRC, and check that every page lies
+ * inside the file. */
+static int load_index(struct gv_store *s, struct gv_error *err)
+{
+    const struct gv_header *h = &s->info.header;
     size_t ib = (size_t)h->pages * GV_INDEX_ENTRY + 4;
     s->index = malloc(ib);
-    if (!s->index) {
-        gv_fail(err, GV_ENOMEM, "store: out of memory for the page index");
-        goto fail;
-    }
+    if (!s->index)
+        return gv_fail(err, GV_ENOMEM, "store: out of memory for the page index");
     if (read_exact(s->fd, s->index, ib, h->index_offset, "page index", err) < 0)
-        goto fail;
-    if (gv_crc32(0, s->index, ib - 4) != gv_get32(s->index + ib - 4)) {
-        gv_fail(err, GV_ECORRUPT, "store: page index CRC mismatch");
-        goto fail;
-    }
+        return -1;
+    if (gv_crc32(0, s->index, ib - 4) != gv_get32(s->index + ib - 4))
+        return gv_fail(err, GV_ECORRUPT, "store: page index CRC mismatch");
     for (uint64_t p = 0; p < h->pages; p++) {
         const uint8_t *e = s->index + p * GV_INDEX_ENTRY;
         uint64_t po = gv_get64(e);
         uint32_t ps = gv_get32(e + 8);
         if (po < GV_HEADER_SIZE || po > h->file_size ||
-            ps > h->file_size - po || ps < GV_PAGE_TABLE) {
-            gv_fail(err, GV_ECORRUPT, "store: page %llu lies outside the file",
-                    (unsigned long long)p);
-            goto fail;
-        }
+            ps > h->file_size - po || ps < GV_PAGE_TABLE)
+            return gv_fail(err, GV_ECORRUPT, "store: page %llu lies outside "
+                           "the file", (unsigned long long)p);
+    }
+    return 0;
+}
+
+struct gv_store *gv_store_open(const char *path, struct gv_error *err)
+{
+    struct gv_store *s = calloc(1, sizeof *s);
+    if (!s) {
+        gv_fail(err, GV_ENOMEM, "store: out of memory");
+        return NULL;
+    }
+    uint64_t size = 0;
+    uint8_t hb[GV_HEADER_SIZE];
+    if (open_file(s, path, &size, err) < 0 ||
+        read_exact(s->fd, hb, sizeof hb, 0, "header", err) < 0 ||
+        gv_header_unpack(hb, &s->info.header, err) < 0 ||
+        check_header(s, size, err) < 0 || load_root(s, err) < 0 ||
+        load_index(s, err) < 0) {
+        gv_store_close(s);
+        return NULL;
     }
     s->path = strdup(path);
     return s;
-fail:
-    gv_store_close(s);
-    return NULL;
 }
 
 void gv_store_close(struct gv_store *s)

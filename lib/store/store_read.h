@@ -26,8 +26,9 @@ struct gv_store_info {
     struct gv_geometry geometry;
 };
 
-/* Open and validate `path`.  Returns NULL with *err filled (GV_ENOTFOUND,
- * GV_EFORMAT for a foreign file or version, GV_ECORRUPT otherwise). */
+/* Open and validate `path`.  Returns NULL with *err filled: GV_ENOTFOUND
+ * for a missing file, GV_EFORMAT for a foreign file or version, GV_ECORRUPT
+ * for a damaged or truncated store, GV_EIO or GV_ENOMEM. */
 struct gv_store *gv_store_open(const char *path, struct gv_error *err);
 
 /* Close.  gv_store_close(NULL) does nothing. */
@@ -40,17 +41,20 @@ const struct gv_store_info *gv_store_info(const struct gv_store *s);
 const uint8_t *gv_store_root(const struct gv_store *s, int mip, uint32_t *w,
                              uint32_t *h);
 
-/* Extent of page number `page` in the file.  Returns 0 or -1. */
+/* Extent of page number `page` in the file, from the page index (checked
+ * at open to lie inside the file).  Returns 0, or -1 past the last page. */
 int gv_store_page_extent(const struct gv_store *s, uint64_t page,
                          uint64_t *offset, uint32_t *size, uint32_t *crc);
 
-/* Total bytes of the pages of `level` (for bits-per-pixel figures). */
+/* Total bytes of the pages of `level` (for bits-per-pixel figures); 0 for
+ * the root level and past it. */
 uint64_t gv_store_level_bytes(const struct gv_store *s, int level);
 
 /*
  * Read page (px,py) of `level` into a new malloc'ed buffer (*data, caller
- * frees) after checking its CRC and its tile table.  Returns 0, or -1 with
- * GV_ENOTFOUND (no such page), GV_ECORRUPT or GV_EIO.
+ * frees) after checking its CRC and its tile table (gv_page_check).
+ * Returns 0, or -1 with GV_ENOTFOUND (no such page), GV_ECORRUPT, GV_EIO
+ * or GV_ENOMEM.
  */
 int gv_store_read_page(const struct gv_store *s, int level, uint32_t px,
                        uint32_t py, uint8_t **data, size_t *len,
@@ -59,14 +63,18 @@ int gv_store_read_page(const struct gv_store *s, int level, uint32_t px,
 /*
  * Locate tile (i,j) (0..7 within the page) in a page buffer that
  * gv_store_read_page returned.  *tile points into page.  Returns 0, or -1
- * if the slot is empty or malformed.
+ * with GV_ENOTFOUND for an empty slot (outside the level's grid),
+ * GV_EINVAL for a bad (i,j), GV_ECORRUPT for a slot outside the page.
+ * `channels` is unused.
  */
 int gv_page_tile(const uint8_t *page, size_t len, int channels, int i, int j,
                  const uint8_t **tile, size_t *tile_len, struct gv_error *err);
 
-/* Check a page buffer's header and tile table against (level, px, py) and
- * the channel count: every slot inside the page, 4-byte aligned and a
- * well-formed tile buffer, empty slots exactly those outside the grid. */
+/* Check a page buffer's header and tile table against (level, px, py) of
+ * a tiled level (the caller checks that the page exists) and the channel
+ * count: every slot inside the page, 4-byte aligned and a well-formed tile
+ * buffer (gv_tilebuf_check), empty slots exactly those outside the grid.
+ * Returns 0, or -1 with GV_ECORRUPT. */
 int gv_page_check(const struct gv_store *s, const uint8_t *page, size_t len,
                   int level, uint32_t px, uint32_t py, struct gv_error *err);
 

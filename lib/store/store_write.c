@@ -1,22 +1,19 @@
 /*
  * store_write.c - streaming, crash-safe store writer (see store_write.h).
  */
-#include <errno.h>
-#include <fcntl.h>
-#include <libgen.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
+#include "base/atomic_file.h"
 #include "store/geometry.h"
 #include "store/store_write.h"
 
+/* Error messages of the file itself start "store:", as every other message
+ * of the writer. */
+static const struct gv_atomic_opts STORE_FILE = {.module = "store"};
+
 struct gv_store_writer {
-    int fd;
-    int unnamed;              /* 1: O_TMPFILE, no name yet */
-    char *path, *dir, *tmpname;
+    struct gv_atomic_file f;
     struct gv_header h;
     struct gv_geometry g;
     uint64_t off;             /* append position */
@@ -25,31 +22,16 @@ struct gv_store_writer {
     int have_root;
 };
 
-static int write_all(struct gv_store_writer *w, const void *buf, size_t len,
-                     uint64_t off, struct gv_error *err)
+static int write_at(struct gv_store_writer *w, const void *buf, size_t len,
+                    uint64_t off, struct gv_error *err)
 {
-    const uint8_t *p = buf;
-    while (len > 0) {
-        ssize_t n = pwrite(w->fd, p, len, (off_t)off);
-        if (n < 0) {
-            if (errno == EINTR)
-                continue;
-            return gv_fail_errno(err, errno, "store: writing %s", w->path);
-        }
-        p += n;
-        len -= (size_t)n;
-        off += (uint64_t)n;
-    }
-    return 0;
+    return gv_atomic_file_pwrite(&w->f, buf, len, off, err);
 }
 
+/* Free w; the file is closed already or abandoned here. */
 static void writer_free(struct gv_store_writer *w)
 {
-    if (w->fd >= 0)
-        close(w->fd);
-    free(w->path);
-    free(w->dir);
-    free(w->tmpname);
+    gv_atomic_file_abort(&w->f);
     free(w->index);
     free(w->written);
     free(w);
@@ -64,7 +46,7 @@ struct gv_store_writer *gv_store_writer_new(const char *path,
         gv_fail(err, GV_ENOMEM, "store: out of memory");
         return NULL;
     }
-    w->fd = -1;
+    w->f.fd = -1;
     w->h = *h;
     w->h.version = GV_VERSION;
     if (gv_geometry_init(&w->g, h->width, h->height, h->channels) < 0) {
@@ -74,50 +56,17 @@ struct gv_store_writer *gv_store_writer_new(const char *path,
     w->h.root = (uint8_t)w->g.root;
     w->h.root_mips = (uint8_t)w->g.root_mips;
     w->h.pages = w->g.pages;
-    w->path = strdup(path);
-    char *tmp = strdup(path);
-    w->dir = tmp ? strdup(dirname(tmp)) : NULL;
-    free(tmp);
     w->index = calloc(w->g.pages ? w->g.pages : 1, GV_INDEX_ENTRY);
     w->written = calloc(w->g.pages ? w->g.pages : 1, 1);
-    if (!w->path || !w->dir || !w->index || !w->written) {
+    if (!w->index || !w->written) {
         gv_fail(err, GV_ENOMEM, "store: out of memory");
         goto fail;
     }
-    w->fd = open(w->dir, O_TMPFILE | O_RDWR | O_CLOEXEC, 0644);
-    if (w->fd >= 0) {
-        w->unnamed = 1;
-    } else if (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL) {
-        /* No O_TMPFILE here: a hidden name beside the target. */
-        char *base = strdup(path), *b = base ? basename(base) : NULL;
-        size_t n = strlen(w->dir) + (b ? strlen(b) : 0) + 32;
-        w->tmpname = malloc(n);
-        if (!base || !w->tmpname) {
-            free(base);
-            gv_fail(err, GV_ENOMEM, "store: out of memory");
-            goto fail;
-        }
-        snprintf(w->tmpname, n, "%s/.%s.XXXXXX", w->dir, b);
-        free(base);
-        w->fd = mkostemp(w->tmpname, O_CLOEXEC);
-        if (w->fd < 0) {
-            gv_fail_errno(err, errno, "store: cannot create a file in %s", w->dir);
-            free(w->tmpname);
-            w->tmpname = NULL;
-            goto fail;
-        }
-        /* mkostemp makes 0600; a store is world-readable like O_TMPFILE's. */
-        if (fchmod(w->fd, 0644) < 0) {
-            gv_fail_errno(err, errno, "store: chmod %s", w->tmpname);
-            goto fail;
-        }
-    } else {
-        gv_fail_errno(err, errno, "store: cannot create a file in %s", w->dir);
+    if (gv_atomic_file_open_opts(&w->f, path, &STORE_FILE, err) < 0)
         goto fail;
-    }
     /* Reserve the header; it is written last. */
     uint8_t zero[GV_HEADER_SIZE] = {0};
-    if (write_all(w, zero, sizeof zero, 0, err) < 0)
+    if (write_at(w, zero, sizeof zero, 0, err) < 0)
         goto fail;
     w->off = GV_HEADER_SIZE;
     return w;
@@ -158,7 +107,7 @@ int gv_store_writer_page(struct gv_store_writer *w, int level, uint32_t px,
         memcpy(buf + at, tiles[s], lens[s]);
         at += (lens[s] + 3) & ~(size_t)3;
     }
-    int rc = write_all(w, buf, total, w->off, err);
+    int rc = write_at(w, buf, total, w->off, err);
     if (rc == 0) {
         uint8_t *e = w->index + pn * GV_INDEX_ENTRY;
         gv_put64(e, w->off);
@@ -181,9 +130,9 @@ int gv_store_writer_root(struct gv_store_writer *w, const uint8_t *pixels,
         return -1;
     uint8_t crc[4];
     gv_put32(crc, gv_crc32(0, z, zlen));
-    int rc = write_all(w, z, zlen, w->off, err);
+    int rc = write_at(w, z, zlen, w->off, err);
     if (rc == 0)
-        rc = write_all(w, crc, 4, w->off + zlen, err);
+        rc = write_at(w, crc, 4, w->off + zlen, err);
     if (rc == 0) {
         w->h.root_offset = w->off;
         w->h.root_size = zlen + 4;
@@ -204,10 +153,28 @@ uint64_t gv_store_writer_bytes(const struct gv_store_writer *w)
     return w->off;
 }
 
+/* Append the page index and its CRC, then write the header over the
+ * reserved first bytes. */
+static int write_index_and_header(struct gv_store_writer *w,
+                                  struct gv_error *err)
+{
+    size_t ib = (size_t)w->g.pages * GV_INDEX_ENTRY;
+    uint8_t crc[4];
+    gv_put32(crc, gv_crc32(0, w->index, ib));
+    w->h.index_offset = w->off;
+    if (write_at(w, w->index, ib, w->off, err) < 0 ||
+        write_at(w, crc, 4, w->off + ib, err) < 0)
+        return -1;
+    w->off += ib + 4;
+    w->h.file_size = w->off;
+    uint8_t hb[GV_HEADER_SIZE];
+    gv_header_pack(&w->h, hb);
+    return write_at(w, hb, sizeof hb, 0, err);
+}
+
 int gv_store_writer_finish(struct gv_store_writer *w, struct gv_error *err)
 {
     int rc = -1;
-    char *linkname = NULL;
     if (!w->have_root) {
         gv_fail(err, GV_EINVAL, "store: finishing without a root");
         goto out;
@@ -218,71 +185,16 @@ int gv_store_writer_finish(struct gv_store_writer *w, struct gv_error *err)
                     (unsigned long long)p);
             goto out;
         }
-    size_t ib = (size_t)w->g.pages * GV_INDEX_ENTRY;
-    uint8_t crc[4];
-    gv_put32(crc, gv_crc32(0, w->index, ib));
-    w->h.index_offset = w->off;
-    if (write_all(w, w->index, ib, w->off, err) < 0 ||
-        write_all(w, crc, 4, w->off + ib, err) < 0)
+    if (write_index_and_header(w, err) < 0)
         goto out;
-    w->off += ib + 4;
-    w->h.file_size = w->off;
-    uint8_t hb[GV_HEADER_SIZE];
-    gv_header_pack(&w->h, hb);
-    if (write_all(w, hb, sizeof hb, 0, err) < 0)
-        goto out;
-    if (fsync(w->fd) < 0) {
-        gv_fail_errno(err, errno, "store: fsync %s", w->path);
-        goto out;
-    }
-    if (w->unnamed) {
-        /* Name it beside the target, then rename over the target. */
-        char proc[64];
-        size_t n = strlen(w->path) + 32;
-        linkname = malloc(n);
-        if (!linkname) {
-            gv_fail(err, GV_ENOMEM, "store: out of memory");
-            goto out;
-        }
-        snprintf(proc, sizeof proc, "/proc/self/fd/%d", w->fd);
-        for (int attempt = 0;; attempt++) {
-            snprintf(linkname, n, "%s.tmp%ld.%d", w->path, (long)getpid(), attempt);
-            if (linkat(AT_FDCWD, proc, AT_FDCWD, linkname, AT_SYMLINK_FOLLOW) == 0)
-                break;
-            if (errno != EEXIST || attempt > 100) {
-                gv_fail_errno(err, errno, "store: cannot name %s", w->path);
-                goto out;
-            }
-        }
-        w->tmpname = linkname;
-        linkname = NULL;
-    }
-    if (rename(w->tmpname, w->path) < 0) {
-        gv_fail_errno(err, errno, "store: cannot rename to %s", w->path);
-        goto out;
-    }
-    free(w->tmpname);
-    w->tmpname = NULL;
-    int dfd = open(w->dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd >= 0) {
-        fsync(dfd);
-        close(dfd);
-    }
-    rc = 0;
+    rc = gv_atomic_file_publish(&w->f, err);
 out:
-    free(linkname);
-    if (rc < 0)
-        gv_store_writer_abort(w);
-    else
-        writer_free(w);
+    writer_free(w);
     return rc;
 }
 
 void gv_store_writer_abort(struct gv_store_writer *w)
 {
-    if (!w)
-        return;
-    if (w->tmpname)
-        unlink(w->tmpname);
-    writer_free(w);
+    if (w)
+        writer_free(w);
 }

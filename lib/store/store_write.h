@@ -1,14 +1,14 @@
 /*
  * store_write.h - writing a store file, atomically.
  *
- * The file is created unnamed (O_TMPFILE) in the destination directory, or
- * as a hidden temporary name where the filesystem lacks O_TMPFILE.  Pages
- * are appended as they are produced; gv_store_writer_finish appends the
- * root and the index, writes the header, fsyncs, and only then gives the
- * file its final name (rename, so an existing store is replaced whole) and
- * fsyncs the directory.  A crash or kill at any point leaves no file under
- * the final name, and no temporary name either when O_TMPFILE works.
- * One thread uses a writer at a time.
+ * Pages are appended as they are produced, then the root
+ * (gv_store_writer_root); gv_store_writer_finish appends the page index,
+ * writes the header over the 128 bytes reserved for it, and only then
+ * publishes the file under its name through base/atomic_file.h (fsync,
+ * then a rename that replaces an existing store whole, then fsync of the
+ * directory).  A crash or kill at any point before that leaves no file
+ * under the final name (atomic_file.h says exactly what may remain).
+ * Error messages start "store:".  One thread uses a writer at a time.
  */
 #ifndef GV_STORE_WRITE_H
 #define GV_STORE_WRITE_H
