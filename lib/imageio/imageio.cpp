@@ -679,10 +679,21 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
     if (!o->supports("ioproxy"))
         return gv_fail(err, GV_EFORMAT, "imageio: the %s writer cannot "
                        "write to memory", oiio_name);
+    std::string fmt = oiio_name;
+    /* WebP has no gray mode, and OIIO 2.4's WebP writer reads three bytes
+     * a pixel whatever the channel count (a 1-channel image made it read
+     * past the buffer and crash): write gray as RGB with equal channels. */
+    std::vector<uint8_t> rgb;
+    if (fmt == "webp" && channels == 1) {
+        rgb.resize((size_t)width * height * 3);
+        for (size_t i = 0; i < (size_t)width * height; i++)
+            rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = pixels[i];
+        pixels = rgb.data();
+        channels = 3;
+    }
     std::vector<unsigned char> buf;
     OIIO::Filesystem::IOVecOutput vec(buf);
     ImageSpec spec((int)width, (int)height, channels, TypeDesc::UINT8);
-    std::string fmt = oiio_name;
     if (fmt == "jpeg" || fmt == "webp")
         spec.attribute("CompressionQuality", quality);
     /* OIIO 2.4.7 with libtiff 4.5 records "failed TIFFWriteCustomDirectory()
