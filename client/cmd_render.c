@@ -18,12 +18,18 @@
  *                                and blended by the fraction of Z, as
  *                                section 7.5 blends adjacent levels.
  *                                Outside the image is black.
+ *
+ * GIGAVIEW_GPU_PLATFORM (auto, device, surfaceless or default) forces an
+ * EGL platform, as gigaviewd's gpu_platform does.  A build configured
+ * --without-gpu has only a cmd_render that says it needs the GPU.
  */
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "config.h" /* autoconf: GV_HAVE_GPU */
 
 #include "commands.h"
 #include "options.h"
@@ -37,6 +43,8 @@
 
 #define DEFAULT_MAX_PIXELS (256ull << 20)
 #define ME "gigaview render"
+
+#ifdef GV_HAVE_GPU
 
 static void usage(FILE *out)
 {
@@ -63,7 +71,10 @@ static void usage(FILE *out)
         "      --no-cache         do not use the tile cache\n"
         "      --gpu-cache MIB    GPU memory for decoded tiles (default 256)\n"
         "      --max-pixels N     refuse larger outputs (default %llu)\n"
-        "  -v, --verbose          log requests and statistics to stderr\n",
+        "  -v, --verbose          log requests and statistics to stderr\n"
+        "\n"
+        "GIGAVIEW_GPU_PLATFORM=auto|device|surfaceless|default in the environment\n"
+        "chooses the EGL platform (default auto: the first that works).\n",
         DEFAULT_MAX_PIXELS);
 }
 
@@ -199,8 +210,24 @@ struct session {
     struct gv_gpu_cache *cache;
     struct fetch_ctx fetch;
     size_t gpu_budget;
+    enum gv_gpu_platform platform;
     int verbose;
 };
+
+/* The EGL platform GIGAVIEW_GPU_PLATFORM names (unset or empty: auto).
+ * 0, or -1 after saying what it accepts. */
+static int platform_from_env(enum gv_gpu_platform *platform)
+{
+    const char *name = getenv("GIGAVIEW_GPU_PLATFORM");
+    int p = name && *name ? gv_gpu_platform_parse(name) : GV_GPU_PLATFORM_AUTO;
+    if (p < 0) {
+        fprintf(stderr, ME ": GIGAVIEW_GPU_PLATFORM wants auto, device, "
+                "surfaceless or default, not '%s'\n", name);
+        return -1;
+    }
+    *platform = (enum gv_gpu_platform)p;
+    return 0;
+}
 
 /* Fetch every tile in s->nd, then start the GPU and its cache. */
 static int start_decoding(struct session *s, struct gv_error *err)
@@ -210,7 +237,7 @@ static int start_decoding(struct session *s, struct gv_error *err)
         return -1;
     if (s->cache)
         return 0;
-    if (!(s->gpu = gv_gpu_open(err)))
+    if (!(s->gpu = gv_gpu_open(s->platform, err)))
         return -1;
     if (!(s->dec = gv_gpu_decoder_new(s->gpu, s->img.channels, err)))
         return -1;
@@ -574,6 +601,8 @@ int cmd_render(int argc, char **argv)
     memset(&s, 0, sizeof s);
     s.verbose = verbose;
     s.gpu_budget = (size_t)(gpu_mib * 1048576.0);
+    if (platform_from_env(&s.platform) < 0)
+        return 2;
     int rc = 1;
     uint8_t *pixels = NULL;
     uint32_t ow = 0, oh = 0;
@@ -699,3 +728,17 @@ out:
     gv_http_free(s.http);
     return rc;
 }
+
+#else /* !GV_HAVE_GPU */
+
+/* Decoding on the GPU is all render does; this build has no EGL. */
+int cmd_render(int argc, char **argv)
+{
+    (void)argc;
+    (void)argv;
+    fprintf(stderr, ME ": needs a build with GPU support (this gigaview was "
+            "configured --without-gpu); 'gigaview export' decodes on the CPU\n");
+    return 1;
+}
+
+#endif

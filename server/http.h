@@ -45,10 +45,11 @@ struct server {
     uint16_t port;
     struct timespec started;  /* CLOCK_MONOTONIC */
     /* The EGL context opened at start-up (gpu = auto), closed after the
-     * drain; NULL when disabled or when no context could be made, and then
-     * gpu_reason says why.  Set before http_start, read-only after.  No
-     * route uses the GPU yet: only /healthz reports it (server-side filters
-     * come later and will run through gv_gpu_call). */
+     * drain; NULL when disabled, when no context could be made or in a
+     * build configured --without-gpu, and then gpu_reason says why.  Set
+     * before http_start, read-only after.  No route draws with it: /healthz
+     * reports it, and filter graphs run in worker processes with contexts
+     * of their own, started only when this one opened. */
     struct gv_gpu *gpu;
     char gpu_reason[sizeof ((struct gv_error *)0)->text];
     /* Filter graphs (route_filters.c): the pool of sandboxed worker
@@ -58,6 +59,8 @@ struct server {
     struct filter_jobs *filters;
     struct filter_store *filter_store;
     char filter_reason[sizeof ((struct gv_error *)0)->text + 64];
+    const char *filter_code;  /* the 503's code then: "unavailable", or
+                                 "gpu_not_built" (configured --without-gpu) */
 };
 
 #define HTTP_MAX_PARAMS 8

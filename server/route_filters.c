@@ -15,7 +15,8 @@
  * calls the handler again, which finds its call in r->async and answers.
  * Graph validation failures are 400 (docs/FILTERS.md section 2, limits
  * included); a job past its time limit is 504, a worker that died is 500,
- * no worker (gpu = off, no EGL) is 503.
+ * no worker (gpu = off, no EGL) is 503, and so is a build without the GPU
+ * (with the code gpu_not_built).
  */
 #include <math.h>
 #include <stdio.h>
@@ -119,10 +120,11 @@ static enum MHD_Result send_invalid(struct req *r, struct gv_error *err)
     return http_send_error(r, err);
 }
 
-/* No pool (gpu = off, no EGL, no worker program): 503. */
+/* No pool (gpu = off, no EGL, no worker program, no GPU built): 503. */
 static enum MHD_Result send_no_filters(struct req *r)
 {
-    return send_fail(r, 503, "unavailable", r->srv->filter_reason, NULL, NULL);
+    return send_fail(r, 503, r->srv->filter_code, r->srv->filter_reason, NULL,
+                     NULL);
 }
 
 static enum MHD_Result send_busy(struct req *r)
