@@ -247,7 +247,7 @@ int main(int argc, char **argv)
     printf("%-34s %9.1f MP/s  (%d threads)\n", "CPU reference, all cores", cpun, gv_cpu_count());
 
     double gpu = 0;
-    struct gv_gpu *gpuctx = gv_gpu_open(&err);
+    struct gv_gpu *gpuctx = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpuctx) {
         printf("%-34s unavailable: %s\n", "GPU (EGL)", err.text);
     } else {

@@ -186,7 +186,7 @@ static int egl_setup(void)
     free(doc);
     json_t *given = json_pack("{s:{s:f, s:f}}", "features", "channel", 0.0, "threshold", 0.5);
     if (!egl_graph || gv_filter_params(egl_graph, given, egl_params, &err) < 0 ||
-        !(egl = gv_gpu_open(&err))) {
+        !(egl = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err))) {
         json_decref(given);
         return fprintf(stderr, "edt_bench: %s\n", err.text), -1;
     }

@@ -24,12 +24,18 @@
  * needs (need_range, plan_view_tiles), fetch them and start the GPU
  * (start_decoding), decode and read back (lvl_load, render_region),
  * compose (compose_view), write (cmd_render) and report (print_stats).
+ *
+ * GIGAVIEW_GPU_PLATFORM (auto, device, surfaceless or default) forces an
+ * EGL platform, as gigaviewd's gpu_platform does.  A build configured
+ * --without-gpu has only a cmd_render that says it needs the GPU.
  */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "config.h" /* autoconf: GV_HAVE_GPU */
 
 #include "commands.h"
 #include "gpu/gpu.h"
@@ -43,6 +49,8 @@
 #include "tile_cache_disk.h"
 
 #define ME "gigaview render"
+
+#ifdef GV_HAVE_GPU
 
 struct render_args {
     const char *image, *region, *center, *size, *output, *cache_dir;
@@ -102,7 +110,9 @@ static const struct opt_command render_command = {
         "                       --size WxH -o OUT\n"
         "\n"
         "Fetch compressed tiles from the gigaviewd at URL (http:// or https://),\n"
-        "decode them on the GPU and write OUT (.png, .tif or .jpg).\n",
+        "decode them on the GPU and write OUT (.png, .tif or .jpg).\n"
+        "GIGAVIEW_GPU_PLATFORM=auto|device|surfaceless|default in the environment\n"
+        "chooses the EGL platform (default auto: the first that works).\n",
     .opts = render_opts,
     .nopts = sizeof render_opts / sizeof render_opts[0],
 };
@@ -246,7 +256,23 @@ struct session {
     struct gv_gpu_cache *cache;
     struct fetch_ctx fetch;
     size_t gpu_budget;
+    enum gv_gpu_platform platform;
 };
+
+/* The EGL platform GIGAVIEW_GPU_PLATFORM names (unset or empty: auto).
+ * 0, or -1 after saying what it accepts. */
+static int platform_from_env(enum gv_gpu_platform *platform)
+{
+    const char *name = getenv("GIGAVIEW_GPU_PLATFORM");
+    int p = name && *name ? gv_gpu_platform_parse(name) : GV_GPU_PLATFORM_AUTO;
+    if (p < 0) {
+        fprintf(stderr, ME ": GIGAVIEW_GPU_PLATFORM wants auto, device, "
+                "surfaceless or default, not '%s'\n", name);
+        return -1;
+    }
+    *platform = (enum gv_gpu_platform)p;
+    return 0;
+}
 
 /* Fetch every tile in s->nd (deduplicated first) in one parallel batch;
  * on the first call also start the GPU, its decoder and the decoded-tile
@@ -258,7 +284,7 @@ static int start_decoding(struct session *s, struct gv_error *err)
         return -1;
     if (s->cache)
         return 0;
-    if (!(s->gpu = gv_gpu_open(err)))
+    if (!(s->gpu = gv_gpu_open(s->platform, err)))
         return -1;
     if (!(s->dec = gv_gpu_decoder_new(s->gpu, s->img.channels, err)))
         return -1;
@@ -620,10 +646,12 @@ static void open_disk_cache(struct session *s, const struct render_args *a)
 /* Connect to the server at url, read the image's metadata and check it
  * against the geometry it implies, and open the disk cache.  Returns 0,
  * or -1 after a message; session_close frees *s either way. */
-static int session_open(struct session *s, const char *url, const struct render_args *a)
+static int session_open(struct session *s, const char *url, const struct render_args *a,
+                        enum gv_gpu_platform platform)
 {
     struct gv_error err;
     memset(s, 0, sizeof *s);
+    s->platform = platform;
     s->gpu_budget = (size_t)(a->gpu_mib * 1048576.0);
     if (!(s->http = gv_http_new(url, (long)(a->timeout * 1000), a->verbose, &err)) ||
         gv_http_image(s->http, a->image, &s->img, &err) < 0) {
@@ -761,11 +789,14 @@ int cmd_render(int argc, char **argv)
     struct view v;
     if ((rc = check_args(&a, argc - first, &v)) != OPT_GO_ON)
         return rc;
+    enum gv_gpu_platform platform;
+    if (platform_from_env(&platform) < 0)
+        return 2;
     struct session s;
     struct picture pic = {NULL, 0, 0};
     struct gv_error err;
     rc = 1;
-    if (session_open(&s, argv[first], &a) == 0) {
+    if (session_open(&s, argv[first], &a, platform) == 0) {
         rc = is_view_form(&a) ? draw_view(&s, &a, &v, &pic) : draw_region(&s, &a, &pic);
         if (rc == 0 && gv_image_write(a.output, pic.w, pic.h, s.img.channels, pic.px,
                                       &err) < 0) {
@@ -779,3 +810,17 @@ int cmd_render(int argc, char **argv)
     session_close(&s);
     return rc;
 }
+
+#else /* !GV_HAVE_GPU */
+
+/* Decoding on the GPU is all render does; this build has no EGL. */
+int cmd_render(int argc, char **argv)
+{
+    (void)argc;
+    (void)argv;
+    fprintf(stderr, ME ": needs a build with GPU support (this gigaview was "
+            "configured --without-gpu); 'gigaview export' decodes on the CPU\n");
+    return 1;
+}
+
+#endif

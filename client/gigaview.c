@@ -20,7 +20,11 @@ static const struct command commands[] = {
     {"merge", cmd_merge, "assemble the shard files of 'encode --shard' into a store"},
     {"info", cmd_info, "describe a store: size, levels, tiles, bits per pixel"},
     {"export", cmd_export, "decode a region of a store to PNG, TIFF or JPEG"},
+#ifdef GV_HAVE_GPU
     {"render", cmd_render, "fetch tiles from gigaviewd, decode them on the GPU, write an image"},
+#else
+    {"render", cmd_render, "needs GPU support, which this build lacks (--without-gpu)"},
+#endif
 };
 
 static void usage(FILE *out)

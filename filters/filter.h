@@ -9,7 +9,8 @@
  * that holds the modules in topological order, the texture plan and the
  * padding.  gv_filter_run (run_gpu.c) evaluates it on a gv_gpu context
  * over one padded RGBA8 input region and returns the region of interest
- * as float RGBA.  Running user GLSL is not safe in a process that serves
+ * as float RGBA; in a build configured --without-gpu, run_none.c stands
+ * in and fails.  Running user GLSL is not safe in a process that serves
  * other requests: gigaviewd runs graphs in worker processes (worker.h).
  *
  * Errors: GV_EINVAL for anything wrong with the graph or the request (the

@@ -3,7 +3,7 @@
  * filter graphs for gigaviewd (worker.h, docs/FILTERS.md section 9).
  *
  *   gigaview-filter-worker --fd N [--parent PID] [--memory-limit BYTES]
- *                          [--max-pixels N]
+ *                          [--max-pixels N] [--gpu-platform PLATFORM]
  *
  * gigaviewd starts it with posix_spawn (server/filter_jobs.c) and talks
  * to it over the connected socket N.  Before it touches EGL or reads a
@@ -19,8 +19,10 @@
  *   - every inherited descriptor but 0, 1, 2 and N is closed, and the
  *     signal mask and dispositions are reset.
  *
- * Then it opens its own EGL context (lib/gpu/gpu.h), says hello (the renderer,
- * or why there is no context) and answers jobs until the socket closes.
+ * Then it opens its own EGL context (lib/gpu/gpu.h) on PLATFORM (auto,
+ * device, surfaceless or default: gigaviewd passes its gpu_platform), says
+ * hello (the platform, API and renderer, or why there is no context) and
+ * answers jobs until the socket closes.
  * Time limits are the server's business: it SIGKILLs a worker that
  * overruns one.
  */
@@ -40,6 +42,7 @@ static void usage(void)
 {
     fprintf(stderr, "usage: gigaview-filter-worker --fd N [--parent PID] "
                     "[--memory-limit BYTES] [--max-pixels N]\n"
+                    "       [--gpu-platform auto|device|surfaceless|default]\n"
                     "(started by gigaviewd; see docs/FILTERS.md section 9)\n");
 }
 
@@ -88,7 +91,15 @@ static void reset_signals(void)
 int main(int argc, char **argv)
 {
     uint64_t fd = UINT64_MAX, parent = 0, mem = 0, max_pixels = 4u << 20;
+    int platform = GV_GPU_PLATFORM_AUTO;
     for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--gpu-platform")) {
+            if (i + 1 >= argc || (platform = gv_gpu_platform_parse(argv[++i])) < 0) {
+                usage();
+                return 2;
+            }
+            continue;
+        }
         uint64_t *dst = !strcmp(argv[i], "--fd")             ? &fd
                         : !strcmp(argv[i], "--parent")       ? &parent
                         : !strcmp(argv[i], "--memory-limit") ? &mem
@@ -133,7 +144,7 @@ int main(int argc, char **argv)
 
     struct gv_error err;
     gv_error_clear(&err);
-    struct gv_gpu *gpu = gv_gpu_open(&err);
+    struct gv_gpu *gpu = gv_gpu_open((enum gv_gpu_platform)platform, &err);
     char hello[GV_WORKER_MSG_MAX + 1];
     if (gpu) {
         const struct gv_gpu_info *in = gv_gpu_info(gpu);

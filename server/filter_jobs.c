@@ -162,7 +162,10 @@ static int spawn_worker(struct filter_jobs *p, pid_t *pid, int *fd,
     snprintf(a_mem, sizeof a_mem, "%llu", (unsigned long long)p->cfg.memory_limit);
     snprintf(a_px, sizeof a_px, "%llu", (unsigned long long)p->cfg.max_pixels);
     char *argv[] = {p->path, "--fd", "3", "--parent", a_parent,
-                    "--memory-limit", a_mem, "--max-pixels", a_px, NULL};
+                    "--memory-limit", a_mem, "--max-pixels", a_px,
+                    "--gpu-platform",
+                    (char *)(p->cfg.gpu_platform ? p->cfg.gpu_platform : "auto"),
+                    NULL};
     posix_spawn_file_actions_t fa;
     posix_spawnattr_t at;
     sigset_t none, all;

@@ -43,6 +43,7 @@ struct filter_jobs_config {
     uint64_t memory_limit;     /* RLIMIT_DATA of each worker; 0 none */
     uint64_t max_pixels;       /* largest padded region a worker accepts */
     int max_jobs;              /* queued plus running */
+    const char *gpu_platform;  /* the workers' --gpu-platform; NULL: auto */
 };
 
 enum filter_job_status {

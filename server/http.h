@@ -48,11 +48,11 @@ struct server {
     uint16_t port;
     struct timespec started;  /* CLOCK_MONOTONIC */
     /* The EGL context opened at start-up (gpu = auto), closed after the
-     * drain; NULL when disabled or when no context could be made, and then
-     * gpu_reason says why.  Set before http_start, read-only after.  No
-     * route uses it: /healthz reports it, and filters run in worker
-     * processes with EGL contexts of their own, started only when this
-     * one opened. */
+     * drain; NULL when disabled, when no context could be made or in a
+     * build configured --without-gpu, and then gpu_reason says why.  Set
+     * before http_start, read-only after.  No route draws with it: /healthz
+     * reports it, and filter graphs run in worker processes with contexts
+     * of their own, started only when this one opened. */
     struct gv_gpu *gpu;
     char gpu_reason[sizeof ((struct gv_error *)0)->text];
     /* Filter graphs (route_filters.c): the pool of sandboxed worker
@@ -62,6 +62,9 @@ struct server {
     struct filter_jobs *filters;
     struct filter_store *filter_store;
     char filter_reason[sizeof ((struct gv_error *)0)->text + 64];
+    enum gv_code filter_code; /* the error then: GV_EUNAVAIL (503), or
+                                 GV_EFORMAT (501) in a build configured
+                                 --without-gpu */
 };
 
 #define HTTP_MAX_PARAMS 8

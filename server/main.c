@@ -5,8 +5,9 @@
  *
  * Life cycle: read the configuration (defaults, then FILE, then the
  * command-line overrides), scan the store directory, open the GPU context
- * (gpu = auto; on failure one error line and the daemon serves without
- * it), start the HTTP daemon, log "listening on http://ADDR:PORT/", then wait for signals in
+ * (gpu = auto, on the EGL platform gpu_platform names; on failure one
+ * error line and the daemon serves without it), start the HTTP daemon,
+ * log "listening on http://ADDR:PORT/", then wait for signals in
  * the main thread (sigwait; they are blocked in every other thread, which
  * inherit the mask):
  *   SIGHUP           rescan the store directory (added, replaced and
@@ -17,10 +18,13 @@
  *                    exit 0
  * Filter graphs run in a pool of worker processes (filter_jobs.h) started
  * after the GPU context: only when it opened, since a worker needs EGL
- * just as much.
+ * just as much (on the same gpu_platform).  A build configured
+ * --without-gpu never touches EGL: it serves tiles, regions and IIIF, and
+ * answers filter runs 501 not_implemented.
  * -t checks the configuration (and that the store directory is readable)
  * and exits 0 or 1 without serving.
  */
+#include <assert.h>
 #include <errno.h>
 #include <malloc.h>
 #include <signal.h>
@@ -30,7 +34,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "config.h" /* autoconf: PACKAGE_VERSION */
+#include "config.h" /* autoconf: PACKAGE_VERSION, GV_HAVE_GPU */
 
 #include "catalog.h"
 #include "filter.h"
@@ -65,21 +69,36 @@ static void forget_pages(uint64_t serial, void *pages)
     page_cache_forget(pages, serial);
 }
 
-/* gpu = auto: open the EGL context, logging what was chosen (INFO) or the
- * one final failure with every attempt (ERROR); the daemon serves without
- * a GPU then.  gpu = off: EGL is not touched.  Called with the signals
- * blocked, so the GL thread (and the driver's threads) inherit the mask. */
+#ifdef GV_HAVE_GPU
+#define GPU_BUILT 1
+#else
+#define GPU_BUILT 0
+#endif
+
+/* gpu = auto: open the EGL context on gpu_platform, logging what was
+ * chosen (INFO) or the one final failure with every attempt (ERROR); the
+ * daemon serves without a GPU then.  gpu = off: EGL is not touched.  A
+ * build without the GPU says so (INFO).  Called with the signals blocked,
+ * so the GL thread (and the driver's threads) inherit the mask. */
 static void open_gpu(struct server *srv)
 {
+#ifndef GV_HAVE_GPU
+    snprintf(srv->gpu_reason, sizeof srv->gpu_reason,
+             "gpu: not built: this gigaviewd was configured --without-gpu");
+    log_msg(LOG_INFO, "gpu", "not built (configured --without-gpu): serving "
+            "tiles, regions and IIIF on the CPU, no filters");
+#else
     if (!strcmp(srv->cfg->gpu, "off")) {
         snprintf(srv->gpu_reason, sizeof srv->gpu_reason,
                  "disabled by configuration");
         log_msg(LOG_INFO, "gpu", "disabled by configuration");
         return;
     }
+    int platform = gv_gpu_platform_parse(srv->cfg->gpu_platform);
+    assert(platform >= 0); /* settings.c accepts only these names */
     struct gv_error err;
     gv_error_clear(&err);
-    srv->gpu = gv_gpu_open(&err);
+    srv->gpu = gv_gpu_open((enum gv_gpu_platform)platform, &err);
     if (!srv->gpu) {
         /* err.text reads "gpu: no usable EGL context: ATTEMPT; ATTEMPT; "
          * (lib/gpu/gpu_context.c): drop the last separator. */
@@ -97,6 +116,17 @@ static void open_gpu(struct server *srv)
     const struct gv_gpu_info *in = gv_gpu_info(srv->gpu);
     log_msg(LOG_INFO, "gpu", "EGL %s platform, %s: %s / %s / %s", in->platform,
             in->api, in->vendor, in->renderer, in->version);
+#endif
+}
+
+/* Close the context open_gpu opened, if any. */
+static void close_gpu(struct server *srv)
+{
+#ifdef GV_HAVE_GPU
+    gv_gpu_close(srv->gpu);
+#else
+    (void)srv;
+#endif
 }
 
 #ifndef GV_FILTER_WORKER
@@ -137,7 +167,7 @@ static int find_worker(const struct settings *cfg, char *path, size_t size,
 }
 
 /* The stock and stored graphs, and (with a GPU) the worker pool; when
- * there is no pool, filter_reason says why for the 503s. */
+ * there is no pool, filter_reason and filter_code say why. */
 static int start_filters(struct server *srv)
 {
     const struct settings *cfg = srv->cfg;
@@ -151,7 +181,13 @@ static int start_filters(struct server *srv)
         return -1;
     }
     char path[4096], why[300];
-    if (!strcmp(cfg->gpu, "off")) {
+    srv->filter_code = GV_EUNAVAIL;
+    if (!GPU_BUILT) {
+        srv->filter_code = GV_EFORMAT;
+        snprintf(srv->filter_reason, sizeof srv->filter_reason,
+                 "filter: filters need GPU support, which this gigaviewd "
+                 "lacks (configured --without-gpu)");
+    } else if (!strcmp(cfg->gpu, "off")) {
         snprintf(srv->filter_reason, sizeof srv->filter_reason,
                  "filter: filters are disabled: they need the GPU, and gpu = off");
     } else if (!srv->gpu) {
@@ -168,7 +204,7 @@ static int start_filters(struct server *srv)
         struct filter_jobs_config fc = {
             path, (int)cfg->filter_workers, (int)cfg->filter_timeout_ms,
             cfg->filter_memory_limit, cfg->max_filter_pixels,
-            (int)cfg->filter_max_jobs};
+            (int)cfg->filter_max_jobs, cfg->gpu_platform};
         struct gv_error err;
         srv->filters = filter_jobs_new(&fc, &err);
         if (!srv->filters) {
@@ -297,7 +333,7 @@ int main(int argc, char **argv)
     if (start_filters(&srv) < 0 || http_start(&srv) < 0) {
         filter_jobs_free(srv.filters);
         filter_store_free(srv.filter_store);
-        gv_gpu_close(srv.gpu);
+        close_gpu(&srv);
         return 1;
     }
     if (strchr(cfg.listen, ':'))
@@ -315,7 +351,7 @@ int main(int argc, char **argv)
     http_drain_and_stop(&srv, (unsigned)cfg.drain_timeout);
     filter_jobs_free(srv.filters);
     filter_store_free(srv.filter_store);
-    gv_gpu_close(srv.gpu);
+    close_gpu(&srv);
     catalog_free(srv.catalog);
     page_cache_free(srv.pages);
     log_msg(LOG_INFO, "main", "stopped");

@@ -15,7 +15,7 @@
  * calls the handler again, which finds its call in r->async and answers.
  * Graph validation failures are 400 (docs/FILTERS.md section 2, limits
  * included); a job past its time limit is 504, a worker that died is 500,
- * no worker (gpu = off, no EGL) is 503.  Each is a gv_code (the pool sets
+ * no worker (gpu = off, no EGL) is 503 and a build without the GPU 501.  Each is a gv_code (the pool sets
  * them, filter_jobs.c) that server/http.c's error table turns into the
  * status and the JSON body.
  */
@@ -81,10 +81,11 @@ static void invalid_graph(struct gv_error *err)
         err->code = GV_EINVAL;
 }
 
-/* No pool (gpu = off, no EGL, no worker program): 503. */
+/* No pool: 503 (gpu = off, no EGL, no worker program), or 501 in a build
+ * without the GPU. */
 static enum MHD_Result send_no_filters(struct req *r)
 {
-    return http_send_fail(r, GV_EUNAVAIL, r->srv->filter_reason, NULL, NULL);
+    return http_send_fail(r, r->srv->filter_code, r->srv->filter_reason, NULL, NULL);
 }
 
 static enum MHD_Result send_busy(struct req *r)

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "config.h" /* autoconf: PACKAGE_VERSION */
+#include "config.h" /* autoconf: PACKAGE_VERSION, GV_HAVE_GPU */
 
 #include "filter_jobs.h"
 #include "gpu/gpu.h"
@@ -14,9 +14,15 @@
 #include "routes.h"
 
 /* The start-up GPU context: {"available": true, "platform", "api",
- * "vendor", "renderer", "version"} or {"available": false, "reason"}. */
+ * "vendor", "renderer", "version"} or {"available": false, "reason"}, and
+ * in a build configured --without-gpu {"available": false, "built": false,
+ * "reason"}. */
 static json_t *gpu_json(const struct server *srv)
 {
+#ifndef GV_HAVE_GPU
+    return json_pack("{s:b,s:b,s:s}", "available", 0, "built", 0, "reason",
+                     srv->gpu_reason);
+#else
     if (!srv->gpu)
         return json_pack("{s:b,s:s}", "available", 0, "reason", srv->gpu_reason);
     const struct gv_gpu_info *in = gv_gpu_info(srv->gpu);
@@ -24,6 +30,7 @@ static json_t *gpu_json(const struct server *srv)
                      "platform", in->platform, "api", in->api,
                      "vendor", in->vendor, "renderer", in->renderer,
                      "version", in->version);
+#endif
 }
 
 enum MHD_Result route_healthz(struct req *r)

@@ -20,7 +20,8 @@
 #define GV_FILTER_LIBRARY_DIR "/usr/local/share/gigaview/filters"
 #endif
 
-enum settings_type { T_STR, T_UINT, T_SIZE, T_DOUBLE, T_LEVEL, T_GPU };
+enum settings_type { T_STR, T_UINT, T_SIZE, T_DOUBLE, T_LEVEL, T_GPU,
+                     T_GPU_PLATFORM };
 
 struct settings_key {
     const char *name;
@@ -80,6 +81,9 @@ static const struct settings_key keys[] = {
      "quality of JPEG and WebP output"},
     {"gpu", T_GPU, F(gpu), "auto", 0, 0,
      "auto: open an EGL context at start (CPU only if none works); off: never"},
+    {"gpu_platform", T_GPU_PLATFORM, F(gpu_platform), "auto", 0, 0,
+     "EGL platform of gigaviewd and its filter workers: auto (device, then "
+     "surfaceless, then default), device, surfaceless or default"},
     {"filter_workers", T_UINT, F(filter_workers), "2", 0, 64,
      "filter worker processes (each with its own EGL context); 0 disables filters"},
     {"filter_timeout_ms", T_UINT, F(filter_timeout_ms), "10000", 100, 3600000,
@@ -165,6 +169,13 @@ static int set_key(struct settings *c, const struct settings_key *k,
         if (strcmp(value, "auto") && strcmp(value, "off"))
             return gv_fail(err, GV_EINVAL, "%s: %s: '%s' is not auto or off",
                            where, k->name, value);
+        snprintf(field, k->size, "%s", value);
+        return 0;
+    case T_GPU_PLATFORM: /* the names of lib/gpu's gv_gpu_platform_parse */
+        if (strcmp(value, "auto") && strcmp(value, "device") &&
+            strcmp(value, "surfaceless") && strcmp(value, "default"))
+            return gv_fail(err, GV_EINVAL, "%s: %s: '%s' is not auto, device, "
+                           "surfaceless or default", where, k->name, value);
         snprintf(field, k->size, "%s", value);
         return 0;
     case T_UINT:

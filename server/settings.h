@@ -45,6 +45,7 @@ struct settings {
     uint64_t max_request_bytes;    /* POST body cap (413 beyond) */
     uint64_t jpeg_quality;
     char gpu[8];                   /* "auto" (open EGL at start) or "off" */
+    char gpu_platform[16];         /* "auto", "device", "surfaceless", "default" */
     /* filter graphs (docs/FILTERS.md sections 7 and 9) */
     uint64_t filter_workers;       /* worker processes; 0 disables filters */
     uint64_t filter_timeout_ms;    /* per job; the worker is killed past it */

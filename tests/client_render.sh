@@ -12,8 +12,10 @@
 # ignored; errors exit 1 with a clear message and leave any existing
 # output untouched: unreachable server, unknown image, region and level
 # out of range, truncated bodies (cut connection and short body), a 500,
-# and a response slower than --timeout.  Render checks skip when no EGL
-# context can be made.  Needs curl, python3, oiiotool and idiff.
+# and a response slower than --timeout; GIGAVIEW_GPU_PLATFORM forces the
+# EGL platform.  Render checks skip when no EGL context can be made; a
+# build configured --without-gpu only checks that render refuses.  Needs
+# curl, python3, oiiotool and idiff.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
 need_tool oiiotool idiff
@@ -51,6 +53,39 @@ else
 fi
 run info "$BASE/"
 expect_rc "info URL with a trailing slash" 0
+
+# ---------------------------------------------------------------- GPU build, platform
+# A build configured --without-gpu has no render: it says what it needs,
+# exits 1 and writes nothing, and nothing below can run.
+run render "$BASE" --image x --level 2 --region 0,0,64,64 -o nb.png
+if grep -q 'needs a build with GPU support' "$T/err"; then
+    check "not built: render exits 1, says it needs GPU support, writes nothing" \
+        test "$rc" -eq 1 -a ! -e nb.png
+    stop_daemon
+    done_testing
+fi
+# GIGAVIEW_GPU_PLATFORM forces an EGL platform: an unknown one is a usage
+# error before anything is fetched; Mesa's surfaceless platform works
+# wherever the daemon's automatic choice was Mesa.
+req "$(url /healthz)"
+gpu_vendor=$(json_get 'j["gpu"].get("vendor", "")')
+GIGAVIEW_GPU_PLATFORM=wayland
+export GIGAVIEW_GPU_PLATFORM
+run render "$BASE" --image x --level 2 --region 0,0,64,64 -o p.png
+expect_rc "GIGAVIEW_GPU_PLATFORM=wayland is refused" 2
+expect_err "GIGAVIEW_GPU_PLATFORM=wayland: says what it accepts" \
+    "GIGAVIEW_GPU_PLATFORM wants auto, device, surfaceless or default, not 'wayland'"
+GIGAVIEW_GPU_PLATFORM=surfaceless
+run render "$BASE" --image x --level 2 --region 0,0,64,64 -o p.png -v
+unset GIGAVIEW_GPU_PLATFORM
+case $gpu_vendor in
+*Mesa*)
+    expect_rc "GIGAVIEW_GPU_PLATFORM=surfaceless renders" 0
+    expect_err "GIGAVIEW_GPU_PLATFORM=surfaceless: decoded there" 'render: gpu .*\(surfaceless\): ' ;;
+*)
+    skip "GIGAVIEW_GPU_PLATFORM=surfaceless renders" "the daemon's EGL is not Mesa (${gpu_vendor:-none})"
+    skip "GIGAVIEW_GPU_PLATFORM=surfaceless: decoded there" "the daemon's EGL is not Mesa" ;;
+esac
 
 # ---------------------------------------------------------------- render == export
 # same_as_export DESC STORE LEVEL [REGION]: render and export agree.

@@ -10,8 +10,10 @@
 # error case (400, 404, 405, 413, 501, traversal ids), a corrupt page (500
 # for exactly that page's tiles while the rest serves), SIGHUP pick-up and
 # drop, SIGTERM drain of a request in flight (exit 0), `gigaviewd -t`, and
-# the start-up GPU context: opened (gpu = auto), disabled (gpu = off), and
-# failing because EGL finds no driver at all (the daemon serves anyway).
+# the start-up GPU context: opened (gpu = auto), on the platform
+# gpu_platform forces, disabled (gpu = off), failing because EGL finds no
+# driver at all (the daemon serves anyway), and not built (configure
+# --without-gpu: the daemon serves tiles, regions and IIIF all the same).
 # Needs curl, python3, oiiotool and idiff (openimageio-tools).
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
@@ -99,6 +101,11 @@ rc=0
 "$GIGAVIEWD" -t -c "$T/bad4.conf" >/dev/null 2>"$T/err" || rc=$?
 expect_rc "-t rejects gpu = maybe" 1
 expect_err "-t says what gpu accepts" "bad4.conf:1: gpu: 'maybe' is not auto or off"
+printf '# platforms\ngpu_platform = wayland\n' >"$T/bad5.conf"
+rc=0
+"$GIGAVIEWD" -t -c "$T/bad5.conf" >/dev/null 2>"$T/err" || rc=$?
+expect_rc "-t rejects gpu_platform = wayland" 1
+expect_err "-t says what gpu_platform accepts" "bad5.conf:2: gpu_platform: 'wayland' is not auto, device, surfaceless or default"
 
 start_daemon "$T/good.conf"
 diag "gigaviewd on port $PORT"
@@ -109,6 +116,8 @@ diag "$(grep ' gpu: ' "$T/start.log")"
 no_egl=
 grep -q ' error gpu: no usable EGL context' "$T/start.log" &&
     no_egl=$(sed -n 's/.* error gpu: //p' "$T/start.log" | head -n 1)
+not_built=
+grep -q ' info gpu: not built ' "$T/start.log" && not_built=yes
 
 # ---------------------------------------------------------------- list, metadata
 expect_status "GET /v1/images" 200 /v1/images
@@ -360,7 +369,16 @@ check "IIIF errors carry CORS *" test "$(header Access-Control-Allow-Origin)" = 
 # ---------------------------------------------------------------- health, metrics, home
 expect_status "healthz" 200 /healthz
 check "healthz: ok, 1 store" test "$(json_get '(j["status"],j["stores"])')" = "('ok', 1)"
-if [ -n "$no_egl" ]; then
+gpu_vendor=$(json_get 'j["gpu"].get("vendor", "")')
+if [ -n "$not_built" ]; then
+    # configure --without-gpu: EGL is never touched.
+    for d in "healthz: gpu available with a renderer" \
+        "log: the info gpu line names platform, api, vendor, renderer, version"; do
+        skip "$d" "built without the GPU"
+    done
+    check "healthz: gpu not built, saying so" test "$(json_get '(j["gpu"]["available"], j["gpu"]["built"], "configured --without-gpu" in j["gpu"]["reason"])')" = "(False, False, True)"
+    check "log: no error line at start-up" sh -c "! grep -q '^[^ ]* [0-9]* error ' '$T/start.log'"
+elif [ -n "$no_egl" ]; then
     # A machine with no EGL driver at all: the checks below then only
     # hold where Mesa (llvmpipe) or a GPU driver is installed.
     for d in "healthz: gpu available with a renderer" \
@@ -537,7 +555,7 @@ check "SIGTERM: drain logged" grep -q 'waiting for 1 requests in flight' "$T/dae
 gpu_daemon() {
     req "$(url /healthz)"
     check "$1: healthz ok" test "$code $(json_get 'j["status"]')" = "200 ok"
-    check "$1: healthz gpu unavailable with the reason" test "$(json_get '(j["gpu"]["available"], sorted(j["gpu"]), "'"$reason"'" in j["gpu"]["reason"])')" = "(False, ['available', 'reason'], True)"
+    check "$1: healthz gpu unavailable with the reason" test "$(json_get '(j["gpu"]["available"], sorted(j["gpu"]), "'"$reason"'" in j["gpu"]["reason"])')" = "(False, $keys, True)"
     req "$(url /v1/images/x/tiles/0/0/0)"
     check "$1: tiles still serve" sh -c "test '$code' = 200 && cmp -s '$T/b' t000"
     req "$(url '/iiif/3/x/full/375,250/0/default.png')"
@@ -545,12 +563,43 @@ gpu_daemon() {
     stop_daemon
     check "$1: SIGTERM, exit status 0" test "$drc" -eq 0
 }
+keys="['available', 'reason']"
 { cat "$T/good.conf"; echo 'gpu = off'; } >"$T/off.conf"
-start_daemon "$T/off.conf"
-check "gpu = off: logs that it is disabled" grep -q ' info gpu: disabled by configuration$' "$T/daemon.log"
-check "gpu = off: no error line" sh -c "! grep -q '^[^ ]* [0-9]* error ' '$T/daemon.log'"
-reason="disabled by configuration"
-gpu_daemon "gpu = off"
+if [ -n "$not_built" ]; then
+    # Without the GPU built, gpu = off changes nothing: EGL is never
+    # touched either way, and /healthz says why.
+    keys="['available', 'built', 'reason']"
+    start_daemon "$T/off.conf"
+    check "not built, gpu = off: logs that the GPU is not built" grep -q ' info gpu: not built (configured --without-gpu)' "$T/daemon.log"
+    reason="configured --without-gpu"
+    gpu_daemon "not built"
+else
+    start_daemon "$T/off.conf"
+    check "gpu = off: logs that it is disabled" grep -q ' info gpu: disabled by configuration$' "$T/daemon.log"
+    check "gpu = off: no error line" sh -c "! grep -q '^[^ ]* [0-9]* error ' '$T/daemon.log'"
+    reason="disabled by configuration"
+    gpu_daemon "gpu = off"
+fi
+
+# gpu_platform = surfaceless: only Mesa's surfaceless platform is tried,
+# and it works wherever the automatic choice was Mesa (llvmpipe or a Mesa
+# GPU driver).
+{ cat "$T/good.conf"; echo 'gpu_platform = surfaceless'; } >"$T/surfaceless.conf"
+case $not_built:$gpu_vendor in
+:*Mesa*)
+    start_daemon "$T/surfaceless.conf"
+    req "$(url /healthz)"
+    check "gpu_platform = surfaceless: healthz platform" test "$(json_get '(j["gpu"]["available"], j["gpu"]["platform"])')" = "(True, 'surfaceless')"
+    check "gpu_platform = surfaceless: the info gpu line says so" grep -q ' info gpu: EGL surfaceless platform, ' "$T/daemon.log"
+    stop_daemon ;;
+*)
+    why="no EGL context from Mesa here (${gpu_vendor:-none})"
+    [ -n "$not_built" ] && why="built without the GPU"
+    for d in "gpu_platform = surfaceless: healthz platform" \
+        "gpu_platform = surfaceless: the info gpu line says so"; do
+        skip "$d" "$why"
+    done ;;
+esac
 
 # No EGL at all.  libglvnd's libEGL loads the vendor libraries named by the
 # JSON files in __EGL_VENDOR_LIBRARY_FILENAMES (instead of
@@ -562,7 +611,10 @@ __EGL_VENDOR_LIBRARY_FILENAMES=$T/nonexistent.json
 export __EGL_VENDOR_LIBRARY_FILENAMES
 start_daemon "$T/good.conf"
 unset __EGL_VENDOR_LIBRARY_FILENAMES
-if grep -q ' info gpu: EGL ' "$T/daemon.log"; then
+if [ -n "$not_built" ]; then
+    skip "no EGL: the daemon starts and serves" "built without the GPU"
+    stop_daemon
+elif grep -q ' info gpu: EGL ' "$T/daemon.log"; then
     skip "no EGL: the daemon starts and serves" "__EGL_VENDOR_LIBRARY_FILENAMES did not hide EGL here"
     stop_daemon
 else

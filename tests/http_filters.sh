@@ -18,7 +18,9 @@
 # killed during a job gets 500 and one killed while idle is replaced
 # unnoticed; an out-of-bounds array write; a full queue gets 503 with
 # Retry-After; SIGTERM cancels a job in flight and exits 0; gpu = off and
-# a machine with no EGL answer 503 with the reason.  /metrics counts it.
+# a machine with no EGL answer 503 with the reason, and a build
+# configured --without-gpu answers 501 not_implemented; gpu_platform reaches the
+# workers.  /metrics counts it.
 # Needs curl, python3 and oiiotool (openimageio-tools).
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
@@ -140,6 +142,22 @@ expect "PUT /v1/filters/blur" 405
 # Is there a GPU?  Without one the daemon serves no filters (503), and
 # only the checks that need no worker run.
 req "$(url /healthz)"
+if [ "$(json_get 'j["gpu"].get("built", True)')" = False ]; then
+    # configure --without-gpu: graphs are listed and validated (above; no
+    # GPU needed), running or storing one is 501 not_implemented.
+    run_filter '{"filter":"negate","region":[0,0,8,8]}'
+    expect "not built: running a graph is 501" 501 "GPU support"
+    check "not built: the code is not_implemented" test "$(json_get 'j["error"]["code"]')" = not_implemented
+    post_graph "$T/lib/negate.json"
+    expect "not built: storing a graph (it cannot be compiled) is 501" 501 "configured --without-gpu"
+    printf '{"name": "bad", "output": "nope", "modules": []}' >bad.json
+    post_graph bad.json
+    expect "not built: an invalid graph is still refused (400)" 400
+    check "not built: no worker started" sh -c "! grep -q 'ready in' '$T/daemon.log'"
+    stop_daemon
+    done_testing
+fi
+gpu_vendor=$(json_get 'j["gpu"]["vendor"]')
 if [ "$(json_get 'j["gpu"]["available"]')" != True ]; then
     diag "no EGL context here: $(json_get 'j["gpu"]')"
     run_filter '{"filter":"negate","region":[0,0,8,8]}'
@@ -609,6 +627,21 @@ else
     expect "no EGL: running a graph" 503 "EGL"
 fi
 stop_daemon
+
+# gpu_platform reaches the workers: with Mesa's surfaceless platform
+# forced, gigaviewd and every worker open their contexts there.
+case $gpu_vendor in
+*Mesa*)
+    { cat "$T/f.conf"; echo 'gpu_platform = surfaceless'; } >"$T/sl.conf"
+    start_daemon "$T/sl.conf"
+    run_filter "{\"filter\": \"negate\", $R}"
+    expect "gpu_platform = surfaceless: running a graph" 200
+    check "gpu_platform = surfaceless: the workers say hello from it" sh -c "grep 'ready in' '$T/daemon.log' | grep -q '(surfaceless, ' && ! grep 'ready in' '$T/daemon.log' | grep -vq '(surfaceless, '"
+    stop_daemon ;;
+*)
+    skip "gpu_platform = surfaceless: running a graph" "the EGL driver is not Mesa ($gpu_vendor)"
+    skip "gpu_platform = surfaceless: the workers say hello from it" "the EGL driver is not Mesa" ;;
+esac
 
 { cat "$T/f.conf"; echo 'filter_worker = "/nonexistent/worker"'; } >"$T/nw.conf"
 start_daemon "$T/nw.conf"

@@ -620,7 +620,7 @@ int main(void)
     }
 
     struct gv_error err;
-    struct gv_gpu *gpu = gv_gpu_open(&err);
+    struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu) {
         printf("ok %d # SKIP no EGL context: %s\n", ++tap_count, err.text);
     } else {

@@ -439,7 +439,7 @@ static void test_compile_error(struct gv_gpu *gpu)
 int main(void)
 {
     struct gv_error err;
-    struct gv_gpu *gpu = gv_gpu_open(&err);
+    struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu) {
         printf("1..0 # SKIP no EGL context: %s\n", err.text);
         return 0;

@@ -142,7 +142,7 @@ static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
 int main(int argc, char **argv)
 {
     struct gv_error err;
-    struct gv_gpu *gpu = gv_gpu_open(&err);
+    struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu) {
         printf("1..0 # SKIP no EGL context: %s\n", err.text);
         return 0;

@@ -2,12 +2,18 @@
  * gpu.h - a headless GPU context on EGL, owned by one thread.
  *
  * gv_gpu_open starts a thread that creates the context, trying in order the
- * EGL device platform (EGL_EXT_platform_device: a real GPU), the Mesa
- * surfaceless platform (llvmpipe where there is no GPU) and the default
- * display; on each, OpenGL ES 3.2, 3.1, then desktop OpenGL 4.3 core.
+ * EGL device platform (EGL_EXT_platform_device: a real GPU, or Mesa's
+ * software device), the Mesa surfaceless platform (llvmpipe where there is
+ * no GPU) and the default display, or only the one platform the caller
+ * forces; on each, OpenGL ES 3.2, 3.1, then desktop OpenGL 4.3 core.
  * Every GL call happens on that thread: other threads hand it work with
  * gv_gpu_call and wait for the result, so GL objects never cross threads.
- * Only the gpu_*.c files include EGL and GL headers.
+ *
+ * This header includes no GL header, and only lib/gpu/gpu_*.c and
+ * filters/run_gpu.c include EGL or GL headers: everything else talks to
+ * the GPU through this API, gpu_decode.h, gpu_cache.h and filter.h.  The
+ * whole of lib/gpu is left out of a build configured --without-gpu
+ * (config.h then lacks GV_HAVE_GPU), and its callers say so instead.
  */
 #ifndef GV_GPU_H
 #define GV_GPU_H
@@ -19,6 +25,27 @@
 
 struct gv_gpu;
 
+/* Which EGL platform gv_gpu_open uses (gigaviewd's gpu_platform,
+ * GIGAVIEW_GPU_PLATFORM for `gigaview render`). */
+enum gv_gpu_platform {
+    GV_GPU_PLATFORM_AUTO = 0,     /* device, then surfaceless, then default */
+    GV_GPU_PLATFORM_DEVICE,       /* EGL_EXT_platform_device only */
+    GV_GPU_PLATFORM_SURFACELESS,  /* EGL_MESA_platform_surfaceless only */
+    GV_GPU_PLATFORM_DEFAULT       /* eglGetDisplay(EGL_DEFAULT_DISPLAY) only */
+};
+
+/* The platform called `name` ("auto", "device", "surfaceless" or
+ * "default"), or -1 for any other string (NULL included). */
+int gv_gpu_platform_parse(const char *name);
+
+/*
+ * Whether the space-separated extension list `list` (eglQueryString's or
+ * glGetString's EXTENSIONS; NULL is an empty list) names extension `name`
+ * as a whole word: "EGL_EXT_platform_device_foo" does not name
+ * "EGL_EXT_platform_device".  Returns 1 or 0.  Any thread.
+ */
+int gv_has_extension(const char *list, const char *name);
+
 struct gv_gpu_info {
     char platform[32];   /* "device", "surfaceless" or "default" */
     char api[32];        /* e.g. "OpenGL ES 3.2" */
@@ -27,18 +54,27 @@ struct gv_gpu_info {
     int ssbo;            /* shader storage buffers available */
 };
 
-/* Open a context.  Returns NULL with *err (GV_EUNAVAIL) describing every
- * attempt when none works (no EGL, no driver). */
-struct gv_gpu *gv_gpu_open(struct gv_error *err);
+/*
+ * Open a context on `platform` (GV_GPU_PLATFORM_AUTO: the first of the
+ * three that works).  Returns the context, to be closed with gv_gpu_close,
+ * or NULL with *err: GV_EUNAVAIL, "gpu: no usable EGL context: " and every
+ * failed attempt, each ending in "; ", when none works (no EGL, no driver,
+ * the forced platform missing); GV_ENOMEM when memory or the thread
+ * cannot be had.  Any thread.
+ */
+struct gv_gpu *gv_gpu_open(enum gv_gpu_platform platform, struct gv_error *err);
 
-/* Stop the GL thread and destroy the context.  NULL does nothing. */
+/* Stop the GL thread and destroy the context.  NULL does nothing.  Not on
+ * the GL thread itself, and not while another thread is in gv_gpu_call. */
 void gv_gpu_close(struct gv_gpu *g);
 
+/* What gv_gpu_open chose; valid until gv_gpu_close.  Any thread. */
 const struct gv_gpu_info *gv_gpu_info(const struct gv_gpu *g);
 
 /*
  * Run fn(arg, err) on the GL thread and return its result.  Callers from
- * any thread; calls are serialized.  fn may use GL freely.
+ * any thread but the GL thread itself (fn must not call gv_gpu_call: it
+ * would wait for itself); calls are serialized.  fn may use GL freely.
  */
 int gv_gpu_call(struct gv_gpu *g, int (*fn)(void *arg, struct gv_error *err),
                 void *arg, struct gv_error *err);
@@ -46,23 +82,26 @@ int gv_gpu_call(struct gv_gpu *g, int (*fn)(void *arg, struct gv_error *err),
 /*
  * Compile and link a program from a vertex and a fragment source, each
  * given as the shared GLSL body; the version line and defines suited to
- * this context are prepended.  GL thread only.  On a compile or link
- * failure returns 0 and, if listing is not NULL, sets *listing to a
- * malloc'ed text with the numbered source and the driver's log.
+ * this context are prepended.  GL thread only.  Returns the program, or 0
+ * with *err; on a compile or link failure, if listing is not NULL, also
+ * sets *listing to a malloc'ed text (the caller frees it) with the
+ * numbered source and the driver's log.
  */
 unsigned gv_gpu_program(const struct gv_gpu *g, const char *vertex,
                         const char *fragment, char **listing,
                         struct gv_error *err);
 
-/* The same as GLSL ES 3.00 without storage buffers ("#version 300 es"),
- * the language of WebGL2: used to test the browser's variant of the shared
- * shaders on EGL.  Needs an OpenGL ES context. */
+/* The same, compiled as GLSL ES 3.00 without storage buffers ("#version
+ * 300 es"), the language of WebGL2: used to test the browser's variant of
+ * the shared shaders on EGL.  Needs an OpenGL ES context (else 0 with
+ * GV_EFORMAT). */
 unsigned gv_gpu_program_es300(const struct gv_gpu *g, const char *vertex,
                               const char *fragment, char **listing,
                               struct gv_error *err);
 
 /* Compile and link a compute program from a shared GLSL body, as
- * gv_gpu_program does.  GL thread only; returns 0 on failure. */
+ * gv_gpu_program does (listing likewise).  GL thread only; returns the
+ * program, or 0 with *err. */
 unsigned gv_gpu_compute_program(const struct gv_gpu *g, const char *compute,
                                 char **listing, struct gv_error *err);
 

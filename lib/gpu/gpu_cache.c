@@ -84,7 +84,7 @@ static struct entry *lookup(struct gv_gpu_cache *c, int level, uint32_t tx,
 }
 
 /* Delete least recently used textures until within budget, sparing the
- * newest entry.  Returns that entry's handle. */
+ * newest entry, and update the tile count. */
 static void evict(struct gv_gpu_cache *c)
 {
     while (c->n > 1 && c->st.bytes > c->budget) {

@@ -49,7 +49,9 @@ struct gv_gpu_cache_stats {
 /*
  * New cache over decoder d (borrowed) for an image of geometry g (copied).
  * root: the root level image (root_w x root_h x g->channels, copied into
- * the padded root tile).  budget: bytes of textures to keep.
+ * the padded root tile).  budget: bytes of textures to keep.  fetch(ctx,
+ * ...) supplies tile buffers.  Returns the cache, or NULL with *err
+ * (GV_EINVAL: a root empty or larger than a tile; GV_ENOMEM).
  */
 struct gv_gpu_cache *gv_gpu_cache_new(struct gv_gpu_decoder *d,
                                       const struct gv_geometry *g,
@@ -74,6 +76,7 @@ int gv_gpu_cache_get(struct gv_gpu_cache *c, int level, uint32_t tx,
 int gv_gpu_cache_read(struct gv_gpu_cache *c, int level, uint32_t tx,
                       uint32_t ty, uint8_t *pixels, struct gv_error *err);
 
+/* Copy the counters so far into *st. */
 void gv_gpu_cache_stats(const struct gv_gpu_cache *c,
                         struct gv_gpu_cache_stats *st);
 

@@ -3,7 +3,10 @@
  *
  * Attempts are recorded as they fail and reported together only when all
  * of them fail (mpv's egl_helpers does the same): on a machine with a GPU
- * the first attempt wins and nothing is logged as an error.
+ * the first attempt wins and nothing is logged as an error.  With a
+ * platform forced, only that platform is tried, and a missing extension
+ * or device counts as a failed attempt (with auto it merely skips the
+ * platform).  Extensions are matched as whole words (gv_has_extension).
  */
 #include <pthread.h>
 #include <stdarg.h>
@@ -18,6 +21,7 @@
 #include "gpu/gpu.h"
 
 struct gv_gpu {
+    enum gv_gpu_platform want;    /* what the caller asked for */
     pthread_t thread;
     pthread_mutex_t lock, call_lock;
     pthread_cond_t wake, done;
@@ -31,6 +35,33 @@ struct gv_gpu {
     struct gv_gpu_info info;
     struct gv_error open_err;
 };
+
+/* Indexed by enum gv_gpu_platform. */
+static const char *const platform_names[] = {"auto", "device", "surfaceless",
+                                             "default"};
+#define NPLATFORMS ((int)(sizeof platform_names / sizeof platform_names[0]))
+
+int gv_gpu_platform_parse(const char *name)
+{
+    for (int i = 0; name && i < NPLATFORMS; i++)
+        if (!strcmp(name, platform_names[i]))
+            return i;
+    return -1;
+}
+
+int gv_has_extension(const char *list, const char *name)
+{
+    const size_t n = strlen(name);
+    for (const char *p = list; p && *p;) {
+        while (*p == ' ')
+            p++;
+        size_t len = strcspn(p, " ");
+        if (len == n && n > 0 && !memcmp(p, name, n))
+            return 1;
+        p += len;
+    }
+    return 0;
+}
 
 __attribute__((format(printf, 3, 4))) static void
 note(char *log, size_t cap, const char *fmt, ...)
@@ -58,8 +89,8 @@ static int try_contexts(struct gv_gpu *g, const char *platform, char *log,
         {EGL_OPENGL_API, 4, 3, 0, "OpenGL 4.3 core"},
     };
     const char *ext = eglQueryString(g->dpy, EGL_EXTENSIONS);
-    int no_config = ext && strstr(ext, "EGL_KHR_no_config_context");
-    int surfaceless = ext && strstr(ext, "EGL_KHR_surfaceless_context");
+    int no_config = gv_has_extension(ext, "EGL_KHR_no_config_context");
+    int surfaceless = gv_has_extension(ext, "EGL_KHR_surfaceless_context");
     if (!surfaceless) {
         note(log, cap, "%s: no EGL_KHR_surfaceless_context; ", platform);
         return -1;
@@ -133,30 +164,76 @@ static int try_display(struct gv_gpu *g, EGLDisplay dpy, const char *platform,
     return -1;
 }
 
-static int create_context(struct gv_gpu *g)
+/* eglGetPlatformDisplayEXT where the client extensions offer `ext`, else
+ * NULL, noted in the log when the platform was forced (with auto a
+ * platform the EGL library lacks is skipped silently). */
+static PFNEGLGETPLATFORMDISPLAYEXTPROC platform_display_fn(const struct gv_gpu *g,
+                                                           const char *ext,
+                                                           const char *platform,
+                                                           char *log, size_t cap)
 {
-    char log[1024] = "";
     const char *cext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
     PFNEGLGETPLATFORMDISPLAYEXTPROC get_platform_display =
         (PFNEGLGETPLATFORMDISPLAYEXTPROC)eglGetProcAddress("eglGetPlatformDisplayEXT");
-    if (cext && get_platform_display && strstr(cext, "EGL_EXT_platform_device")) {
-        PFNEGLQUERYDEVICESEXTPROC query_devices =
-            (PFNEGLQUERYDEVICESEXTPROC)eglGetProcAddress("eglQueryDevicesEXT");
-        EGLDeviceEXT devs[16];
-        EGLint n = 0;
-        if (query_devices && query_devices(16, devs, &n))
-            for (EGLint i = 0; i < n; i++)
-                if (try_display(g, get_platform_display(EGL_PLATFORM_DEVICE_EXT, devs[i], NULL),
-                                "device", log, sizeof log) == 0)
-                    return 0;
-    }
-    if (cext && get_platform_display && strstr(cext, "EGL_MESA_platform_surfaceless") &&
-        try_display(g, get_platform_display(EGL_PLATFORM_SURFACELESS_MESA,
-                                            EGL_DEFAULT_DISPLAY, NULL),
-                    "surfaceless", log, sizeof log) == 0)
+    if (get_platform_display && gv_has_extension(cext, ext))
+        return get_platform_display;
+    if (g->want != GV_GPU_PLATFORM_AUTO)
+        note(log, cap, "%s: no %s; ", platform, ext);
+    return NULL;
+}
+
+/* Every EGL device in turn (EGL_EXT_platform_device): a GPU driver's, or
+ * Mesa's software device. */
+static int try_device(struct gv_gpu *g, char *log, size_t cap)
+{
+    PFNEGLGETPLATFORMDISPLAYEXTPROC get_platform_display =
+        platform_display_fn(g, "EGL_EXT_platform_device", "device", log, cap);
+    if (!get_platform_display)
+        return -1;
+    PFNEGLQUERYDEVICESEXTPROC query_devices =
+        (PFNEGLQUERYDEVICESEXTPROC)eglGetProcAddress("eglQueryDevicesEXT");
+    EGLDeviceEXT devs[16]; /* far more devices than one machine has */
+    EGLint n = 0;
+    if (query_devices && query_devices(16, devs, &n))
+        for (EGLint i = 0; i < n; i++)
+            if (try_display(g, get_platform_display(EGL_PLATFORM_DEVICE_EXT, devs[i], NULL),
+                            "device", log, cap) == 0)
+                return 0;
+    if (n == 0 && g->want != GV_GPU_PLATFORM_AUTO)
+        note(log, cap, "device: no EGL device; ");
+    return -1;
+}
+
+/* Mesa's surfaceless platform (EGL_MESA_platform_surfaceless). */
+static int try_surfaceless(struct gv_gpu *g, char *log, size_t cap)
+{
+    PFNEGLGETPLATFORMDISPLAYEXTPROC get_platform_display = platform_display_fn(
+        g, "EGL_MESA_platform_surfaceless", "surfaceless", log, cap);
+    if (!get_platform_display)
+        return -1;
+    return try_display(g, get_platform_display(EGL_PLATFORM_SURFACELESS_MESA,
+                                               EGL_DEFAULT_DISPLAY, NULL),
+                       "surfaceless", log, cap);
+}
+
+/* The EGL library's default display. */
+static int try_default(struct gv_gpu *g, char *log, size_t cap)
+{
+    return try_display(g, eglGetDisplay(EGL_DEFAULT_DISPLAY), "default", log, cap);
+}
+
+static int create_context(struct gv_gpu *g)
+{
+    char log[1024] = "";
+    const enum gv_gpu_platform w = g->want;
+    if ((w == GV_GPU_PLATFORM_AUTO || w == GV_GPU_PLATFORM_DEVICE) &&
+        try_device(g, log, sizeof log) == 0)
         return 0;
-    if (try_display(g, eglGetDisplay(EGL_DEFAULT_DISPLAY), "default", log,
-                    sizeof log) == 0)
+    if ((w == GV_GPU_PLATFORM_AUTO || w == GV_GPU_PLATFORM_SURFACELESS) &&
+        try_surfaceless(g, log, sizeof log) == 0)
+        return 0;
+    if ((w == GV_GPU_PLATFORM_AUTO || w == GV_GPU_PLATFORM_DEFAULT) &&
+        try_default(g, log, sizeof log) == 0)
         return 0;
     gv_fail(&g->open_err, GV_EUNAVAIL, "gpu: no usable EGL context: %s", log);
     return -1;
@@ -207,13 +284,14 @@ static void join_and_free(struct gv_gpu *g)
     free(g);
 }
 
-struct gv_gpu *gv_gpu_open(struct gv_error *err)
+struct gv_gpu *gv_gpu_open(enum gv_gpu_platform platform, struct gv_error *err)
 {
     struct gv_gpu *g = calloc(1, sizeof *g);
     if (!g) {
         gv_fail(err, GV_ENOMEM, "gpu: out of memory");
         return NULL;
     }
+    g->want = platform;
     g->dpy = EGL_NO_DISPLAY;
     g->ctx = EGL_NO_CONTEXT;
     pthread_mutex_init(&g->lock, NULL);

@@ -3,9 +3,12 @@
  *
  * Two passes per tile, as section 7.5 describes: the parent quarter is
  * copied into mip 1, and the decode shader renders mip 0 from the parent
- * and the tile buffer (a shader storage buffer of 32-bit words).  Both
- * draw one viewport-covering triangle into a framebuffer bound to the
- * target mip level.
+ * and the tile buffer.  Both draw one viewport-covering triangle into a
+ * framebuffer bound to the target mip level.  On the SSBO path the tile
+ * buffer is a shader storage buffer of 32-bit words, and an entropy-coded
+ * tile's indices are first decoded by a compute pass (rans_decode); on the
+ * WebGL2 path the buffer is an R32UI texture and the indices are decoded
+ * on the CPU into an R16UI texture, as the browser does.
  */
 #include <stdio.h>
 #include <stdlib.h>

@@ -2,11 +2,12 @@
  * gpu_decode.h - decoding tiles on the GPU with the shared decode shader
  * (shaders/tile_decode.frag.glsl), bit for bit what lib/codec/tile_decode.c does.
  *
- * Decoded tiles live on the GPU as RGBA8UI textures of 513x513 with a
- * second mip level of 257x257 (the parent quarter, section 7.5), named by
- * handles.  A tile is decoded from its tile buffer and its parent's
- * handle; the root tile is uploaded.  Every function may be called from
- * any thread (the work runs on the GPU's thread).
+ * Decoded tiles live on the GPU as RGBA8UI textures named by handles:
+ * mip 0 is 514x514 of which the 513x513 tile is used (so that GL's halving
+ * leaves 257 texels), mip 1 the 257x257 parent quarter (section 7.5).  A
+ * tile is decoded from its tile buffer and its parent's handle; the root
+ * tile is uploaded.  Every function may be called from any thread but the
+ * GPU's own (the work runs there, through gv_gpu_call).
  */
 #ifndef GV_GPU_DECODE_H
 #define GV_GPU_DECODE_H
@@ -25,12 +26,15 @@ struct gv_gpu_decoder;
  * streams decoded on the CPU into an R16UI index texture. */
 enum gv_gpu_path { GV_GPU_PATH_SSBO, GV_GPU_PATH_WEBGL2 };
 
-/* Compile the decode programs for tiles of `channels` channels (the SSBO
- * path). */
+/* Compile the decode programs for tiles of `channels` channels (1 or 3)
+ * on the SSBO path.  Returns the decoder (g is borrowed: close it after
+ * gv_gpu_decoder_free), or NULL with *err; a shader that does not compile
+ * is also listed on stderr. */
 struct gv_gpu_decoder *gv_gpu_decoder_new(struct gv_gpu *g, int channels,
                                           struct gv_error *err);
 
-/* The same for a chosen path; GV_GPU_PATH_WEBGL2 needs an ES context. */
+/* The same for a chosen path; GV_GPU_PATH_WEBGL2 needs an ES context
+ * (else NULL with GV_EFORMAT). */
 struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
                                                enum gv_gpu_path path,
                                                struct gv_error *err);
@@ -38,21 +42,25 @@ struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
 /* Free every texture and program.  NULL does nothing. */
 void gv_gpu_decoder_free(struct gv_gpu_decoder *d);
 
-/* Upload 513x513xC decoded pixels (the root tile) as a new texture. */
+/* Upload 513x513xC decoded pixels (the root tile) as a new texture, with
+ * its own 2x2 box reduction as mip 1.  Returns 0 with *handle, or -1. */
 int gv_gpu_upload_tile(struct gv_gpu_decoder *d, const uint8_t *pixels,
                        uint32_t *handle, struct gv_error *err);
 
-/* Decode tile buffer buf (len bytes, checked first) against the decoded
- * parent `parent` and quadrant (qx,qy) into a new texture. */
+/* Decode tile buffer buf (len bytes, checked with gv_tilebuf_check first)
+ * against the decoded parent `parent` and quadrant (qx,qy) into a new
+ * texture.  Returns 0 with *handle, or -1 with *err (the buffer failed
+ * gv_tilebuf_check, or GL failed: GV_EIO). */
 int gv_gpu_decode_tile(struct gv_gpu_decoder *d, const uint8_t *buf,
                        size_t len, uint32_t parent, int qx, int qy,
                        uint32_t *handle, struct gv_error *err);
 
-/* Read mip 0 (513x513) or mip 1 (257x257) back as C-channel pixels. */
+/* Read mip 0 (513x513) or mip 1 (257x257) of `handle` back into pixels
+ * (that many C-channel pixels, rows packed).  Returns 0 or -1. */
 int gv_gpu_read_tile(struct gv_gpu_decoder *d, uint32_t handle, int mip,
                      uint8_t *pixels, struct gv_error *err);
 
-/* Delete a texture. */
+/* Delete a texture made by this decoder; the handle is then invalid. */
 void gv_gpu_release(struct gv_gpu_decoder *d, uint32_t handle);
 
 #endif

@@ -1,6 +1,6 @@
 /*
  * gpu_program.c - compiling the embedded GLSL for the current context
- * (gpu.h, gv_gpu_program).
+ * (gpu.h: gv_gpu_program, gv_gpu_program_es300, gv_gpu_compute_program).
  *
  * The shared shader bodies carry no #version line: it depends on the
  * context (GLSL ES 3.10 on ES 3.1+, 4.30 core on desktop GL, 3.00 ES in
