@@ -17,12 +17,13 @@
  * CPU path of filters/edt_cpu.c over the whole padded region, and the
  * 2-NN diagram's nearest site a brute force.
  *
- * Tolerances (issue 5): 8-bit outputs within 1 LSB after the PNG
- * conversion of docs/FILTERS.md section 6; the distance field within 1e-4
- * (relative above 1 px), feature ids and site offsets exactly.  The
- * distance transform is also checked against an exact EDT of the whole
- * image where the exact distance is at most 32 px (well inside the 64 px
- * of padding): the error bound of thesis eq. 7.17, sqrt(485) - sqrt(481).
+ * Tolerances (the filter service's accuracy goals): 8-bit outputs within
+ * 1 LSB after the PNG conversion of docs/FILTERS.md section 6; the
+ * distance field within 1e-4 (relative above 1 px), feature ids and site
+ * offsets exactly.  The distance transform is also checked against an
+ * exact EDT of the whole image where the exact distance is at most 32 px
+ * (well inside the 64 px of padding): the error bound of thesis eq. 7.17,
+ * sqrt(485) - sqrt(481).
  *
  * Without an EGL context the graphs are still parsed and the GPU
  * comparisons are skipped.
