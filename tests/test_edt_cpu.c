@@ -521,7 +521,7 @@ static void test_errors(void)
 
 /* Sites of a worst case, reaching sqrt(485) - sqrt(481) exactly at pixel
  * (1, 1): found by a random search over three sites on 32x32 images, like
- * the thesis's exhaustive one (2 million images, 29 s). */
+ * the exhaustive one of thesis section 7.8.6 (2 million images, 29 s). */
 static const struct {
     uint32_t w, h;
     uint32_t site[3][2];
