@@ -6,7 +6,7 @@
 #
 #   bench/browser-bytes.sh [--gigaview PATH] [--gigaviewd PATH] [IMAGE]
 #
-# The image (default: Picos de Europa, 3264x2448, from /work/shared/data)
+# The image (default: Picos de Europa, 3264x2448, from $DATA_DIR)
 # is copied to a metadata-free PNG and encoded with gigaview ($GV_ARGS,
 # default --rd, its best rate-distortion mode; GV_ARGS="" for the default
 # per-tile target); the store's level 0 is exported and its PSNR against the

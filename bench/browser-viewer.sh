@@ -22,7 +22,8 @@
 #   QUICK=1       REPS=1 and only the first image
 #   TMPDIR=DIR    scratch space (default /tmp)
 # Default images: Picos de Europa (3264x2448 photo) and the 58 MP SRTM
-# relief (10800x5400 gray) from /work/shared/data.
+# relief (10800x5400 gray) from $DATA_DIR (default: shared/data beside the
+# checkout).
 set -euo pipefail
 
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"

@@ -16,8 +16,10 @@ shift || true
 case $build in /*) ;; *) build=$top/$build ;; esac
 [ -f "$build/lib/base/libgvbase.a" ] || { echo "decode-speed: build gigaview in $build first" >&2; exit 1; }
 images=("$@")
-[ ${#images[@]} -gt 0 ] || images=(/work/shared/data/photos/Dragonfly_by_Bolly.jpg
-                                     /work/shared/data/photos/picosdeeuropa_by_Aitzol_Berasategi.jpg)
+# The benchmark images: shared/data beside the checkout, unless DATA_DIR says.
+DATA_DIR=${DATA_DIR:-$top/../shared/data}
+[ ${#images[@]} -gt 0 ] || images=("$DATA_DIR/photos/Dragonfly_by_Bolly.jpg"
+                                     "$DATA_DIR/photos/picosdeeuropa_by_Aitzol_Berasategi.jpg")
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # shellcheck disable=SC2046 # pkg-config prints several flags

@@ -1,8 +1,8 @@
 #!/bin/bash
 # http-idle.sh: gigaviewd with thousands of idle connections and slow
 # readers, on loopback: what tests/fault_slow_clients.sh checks with 400,
-# measured at the scale of issue 7 ("thousands of idle connections up to
-# the configured limit").
+# measured at the scale the daemon is meant to hold: thousands of idle
+# connections, up to the configured limit.
 #
 #   bench/http-idle.sh [--gigaview PATH] [--gigaviewd PATH]
 #

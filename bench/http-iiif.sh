@@ -22,7 +22,7 @@
 # of the list (same seeds, so the same sequence for every server) at CONNS
 # connections for DURATION seconds per run, REPS rounds alternating between
 # the servers after a short warm-up. It reports the best req/s of each, the
-# ratio gigaviewd/iipsrv (the goal in issue 3 is >= 1.0), p50/p99/max
+# ratio gigaviewd/iipsrv (the project's goal is >= 1.0), p50/p99/max
 # latency, errors (non-2xx/3xx and socket errors, all runs), server CPU time
 # per request, and peak RSS. Nothing is asserted: the script only reports.
 #

@@ -12,7 +12,7 @@
 # script; thread i seeds with i, so both servers see the same sequence) at
 # CONNS connections for DURATION seconds, alternating between the servers,
 # REPS times each after a short warm-up. It reports the best req/s of each,
-# the ratio gigaviewd/nginx (the goal in issue 3 is >= 0.9), p50/p99/max
+# the ratio gigaviewd/nginx (the project's goal is >= 0.9), p50/p99/max
 # latency, errors (non-2xx/3xx and socket errors, all runs), the server CPU
 # time per request, and gigaviewd's peak RSS (VmHWM) against cache_bytes.
 # Nothing is asserted: the script only reports.

@@ -2,7 +2,9 @@
 # shellcheck shell=bash
 
 BENCH_DIR=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-DATA_DIR=${DATA_DIR:-/work/shared/data}
+top=$(cd "$BENCH_DIR/.." && pwd)
+# The benchmark images: shared/data beside the checkout, unless DATA_DIR says.
+DATA_DIR=${DATA_DIR:-$top/../shared/data}
 
 die() { echo "$(basename "$0"): $*" >&2; exit 1; }
 

@@ -64,7 +64,6 @@ need_cmd cc gcc
 GV=$(find_gigaview "$GV_ARG")
 GVD=$(find_gigaviewd "$GVD_ARG")
 WORKER=$(dirname "$GVD")/gigaview-filter-worker
-top=$(cd "$BENCH_DIR/.." && pwd)
 
 own_work=0
 if [ -z "${WORK:-}" ]; then

@@ -12,6 +12,8 @@
 . "$(dirname "$0")/lib.sh"
 need_tool oiiotool idiff
 
+# The source tree, absolute: $0 may be relative (make distcheck).
+srcroot=$(cd "$(dirname "$0")/.." && pwd)
 mkdir "$T/w" && cd "$T/w" || bail "cd $T/w"
 
 # close_to A B EPS: |A - B| <= EPS (decimal numbers).
@@ -120,7 +122,8 @@ for spec in \
     check_size "export $f last root mip" mipl.tif "1 1 $c"
     run export "$s" -l $((last + 1)) -o none.png
     expect_rc "export $f level past the last" 1
-    expect_err "export $f level past the last: message" "no level $((last + 1))"
+    expect_err_is "export $f level past the last: message" \
+        "gigaview export: no level $((last + 1)) (the store has 0..$last)"
     check "export $f level past the last: no output" test ! -e none.png
     rm -f l0.png region.tif cut.png mip1.png mipl.tif ref8.png
 done
@@ -158,7 +161,8 @@ for spec in "1x1 1 1 3" "513x513 513 513 3" "514x514 514 514 3" \
     check_size "export synth:$src region" edge.png "$rw $rh $c"
     run export "$s" --region "$rx,$ry,$((rw + 1)),$rh" -o bad.png
     expect_rc "export synth:$src region one past the edge" 1
-    expect_err "export synth:$src region one past the edge: message" "outside level 0"
+    expect_err_is "export synth:$src region one past the edge: message" \
+        "gigaview export: region $rx,$ry,$((rw + 1)),$rh is outside level 0 ($w x $h)"
     check "export synth:$src region one past the edge: no output" test ! -e bad.png
     if [ "$src" = 1x70000 ]; then
         # A whole 1x70000 level 0 exports in one piece.
@@ -218,9 +222,10 @@ check "swapped mosaic differs" test -s swapped.gv -a -n "$(cmp swapped.gv mosaic
 # Mosaic column widths must agree.
 oiiotool "$img" --cut 340x260+0+0 -o narrow.png
 run encode -m 2x2 m00.png m10.png narrow.png m11.png -o bad.gv
-check "mosaic with a mismatched tile fails" test "$rc" -ne 0 -a "$rc" -ne 2
-check "mosaic with a mismatched tile: message, no output" \
-    test -s "$T/err" -a ! -e bad.gv
+expect_rc "mosaic with a mismatched tile fails" 1
+expect_err_is "mosaic with a mismatched tile: message" \
+    "gigaview encode: source: mosaic: narrow.png is 340 pixels wide but m00.png above it in grid column 1 is 350"
+check "mosaic with a mismatched tile: no output" test ! -e bad.gv
 rm -f m??.png narrow.png swapped.gv mosaic.gv
 
 # ------------------------------------------------------- determinism
@@ -242,76 +247,115 @@ rm -f j1.gv j2.gv j2b.gv
 # ----------------------------------------------------------- progress
 run encode synth:1100x700 -o p.gv --progress --quiet
 expect_rc "encode --progress" 0
-check "--progress draws a percentage on stderr" grep -q '%' "$T/err"
+# The bar is redrawn after carriage returns; the last drawing is the full
+# bar at 100.0% (the rate and the time vary).
+check "--progress ends with the full bar at 100.0% on stderr" sh -c \
+    "tr '\\r' '\\n' <'$T/err' | tail -n 1 |
+        grep -Eq '^done     \\[#{30}\\] 100\\.0% +[0-9.]+ MP/s +[0-9]+:[0-9]{2} total\$'"
 check "--progress --quiet: nothing on stdout" test ! -s "$T/out"
 rm -f p.gv
 
 # ------------------------------------------------------- usage errors
-# Each must exit 2, say something on stderr and create nothing.
+# Each must exit 2, print its message (the first line of stderr, checked
+# exactly; a usage text follows some) on stderr only, and create nothing.
+# usage_case DESCRIPTION FIRST-LINE ARGS...
 usage_case() {
-    desc=$1
-    shift
+    desc=$1 want=$2
+    shift 2
     run "$@"
     expect_rc "usage: $desc" 2
-    if [ -s "$T/err" ] && [ ! -s "$T/out" ]; then ok "usage: $desc: message on stderr only"; else
-        not_ok "usage: $desc: message on stderr only"; fi
+    got=$(head -n 1 "$T/err")
+    if [ "$got" = "$want" ] && [ ! -s "$T/out" ]; then ok "usage: $desc: message on stderr only"; else
+        not_ok "usage: $desc: message on stderr only" "got: $got" "wanted: $want"; fi
 }
-usage_case "no command"
-usage_case "unknown command" frobnicate
-usage_case "encode without -o" encode synth:10x10
-usage_case "encode without input" encode -o u.gv
-usage_case "encode -r 0" encode -r 0 synth:10x10 -o u.gv
-usage_case "encode -r 13" encode -r 13 synth:10x10 -o u.gv
-usage_case "encode -j 0" encode -j 0 synth:10x10 -o u.gv
-usage_case "encode -j x" encode -j x synth:10x10 -o u.gv
-usage_case "encode -q 0" encode -q 0 synth:10x10 -o u.gv
-usage_case "encode -q 100" encode -q 100 synth:10x10 -o u.gv
-usage_case "encode -q 30dB" encode -q 30dB synth:10x10 -o u.gv
-usage_case "encode --mosaic 2" encode --mosaic 2 synth:10x10 -o u.gv
-usage_case "encode --mosaic 0x1" encode --mosaic 0x1 synth:10x10 -o u.gv
-usage_case "encode --mosaic count mismatch" encode -m 2x1 synth:10x10 -o u.gv
-usage_case "encode two inputs without --mosaic" encode synth:10x10 synth:10x10 -o u.gv
-usage_case "encode --range 5:1" encode --range 5:1 synth:10x10 -o u.gv
-usage_case "encode --range 5" encode --range 5 synth:10x10 -o u.gv
-usage_case "encode --max-pixels 0" encode --max-pixels 0 synth:10x10 -o u.gv
-usage_case "encode --max-pixels -5 (strtoull would wrap it)" encode --max-pixels -5 synth:10x10 -o u.gv
-usage_case "encode unknown option" encode --frobnicate synth:10x10 -o u.gv
-usage_case "info without a store" info
-usage_case "info with two stores" info a.gv b.gv
-usage_case "export without -o" export seeding-640x480.gv
-usage_case "export without a store" export -o u.png
-usage_case "export --level -1" export seeding-640x480.gv -l -1 -o u.png
-usage_case "export --level x" export seeding-640x480.gv -l x -o u.png
-usage_case "export --region 1,2,3" export seeding-640x480.gv --region 1,2,3 -o u.png
-usage_case "export --max-pixels 0" export seeding-640x480.gv --max-pixels 0 -o u.png
-usage_case "export --max-pixels ' 7'" export seeding-640x480.gv --max-pixels " 7" -o u.png
+U_TOP="usage: gigaview COMMAND [ARGS]"
+U_ENC="usage: gigaview encode [OPTIONS] INPUT... -o STORE"
+U_INFO="usage: gigaview info STORE [--json]"
+U_EXP="usage: gigaview export STORE [--level L] [--region X,Y,W,H] -o OUT"
+E="gigaview encode:"
+X="gigaview export:"
+usage_case "no command" "$U_TOP"
+usage_case "unknown command" "gigaview: unknown command 'frobnicate'" frobnicate
+usage_case "encode without -o" "$U_ENC" encode synth:10x10
+usage_case "encode without input" "$U_ENC" encode -o u.gv
+usage_case "encode -r 0" "$E --max-rate wants 1..12, not '0'" encode -r 0 synth:10x10 -o u.gv
+usage_case "encode -r 13" "$E --max-rate wants 1..12, not '13'" encode -r 13 synth:10x10 -o u.gv
+usage_case "encode -j 0" "$E --jobs wants 1..1024, not '0'" encode -j 0 synth:10x10 -o u.gv
+usage_case "encode -j x" "$E --jobs wants 1..1024, not 'x'" encode -j x synth:10x10 -o u.gv
+usage_case "encode -q 0" "$E --psnr wants a number of dB in (0, 99], not '0'" \
+    encode -q 0 synth:10x10 -o u.gv
+usage_case "encode -q 100" "$E --psnr wants a number of dB in (0, 99], not '100'" \
+    encode -q 100 synth:10x10 -o u.gv
+usage_case "encode -q 30dB" "$E --psnr wants a number of dB in (0, 99], not '30dB'" \
+    encode -q 30dB synth:10x10 -o u.gv
+usage_case "encode --mosaic 2" "$E --mosaic wants COLSxROWS, not '2'" \
+    encode --mosaic 2 synth:10x10 -o u.gv
+usage_case "encode --mosaic 0x1" "$E --mosaic wants COLSxROWS, not '0x1'" \
+    encode --mosaic 0x1 synth:10x10 -o u.gv
+usage_case "encode --mosaic count mismatch" "$E a 2x1 mosaic needs 2 inputs, got 1" \
+    encode -m 2x1 synth:10x10 -o u.gv
+usage_case "encode two inputs without --mosaic" "$E several inputs need --mosaic COLSxROWS" \
+    encode synth:10x10 synth:10x10 -o u.gv
+usage_case "encode --range 5:1" "$E --range wants LO:HI with LO < HI" \
+    encode --range 5:1 synth:10x10 -o u.gv
+usage_case "encode --range 5" "$E --range wants LO:HI" encode --range 5 synth:10x10 -o u.gv
+usage_case "encode --max-pixels 0" "$E --max-pixels wants a positive count" \
+    encode --max-pixels 0 synth:10x10 -o u.gv
+usage_case "encode --max-pixels -5 (strtoull would wrap it)" "$E --max-pixels wants a positive count" \
+    encode --max-pixels -5 synth:10x10 -o u.gv
+# getopt's own words (glibc), then the usage.
+usage_case "encode unknown option" "$E unrecognized option '--frobnicate'" \
+    encode --frobnicate synth:10x10 -o u.gv
+usage_case "info without a store" "$U_INFO" info
+usage_case "info with two stores" "$U_INFO" info a.gv b.gv
+usage_case "export without -o" "$U_EXP" export seeding-640x480.gv
+usage_case "export without a store" "$U_EXP" export -o u.png
+usage_case "export --level -1" "$X bad --level '-1'" export seeding-640x480.gv -l -1 -o u.png
+usage_case "export --level x" "$X bad --level 'x'" export seeding-640x480.gv -l x -o u.png
+usage_case "export --region 1,2,3" "$X --region wants X,Y,W,H, not '1,2,3'" \
+    export seeding-640x480.gv --region 1,2,3 -o u.png
+usage_case "export --max-pixels 0" "$X bad --max-pixels '0'" \
+    export seeding-640x480.gv --max-pixels 0 -o u.png
+usage_case "export --max-pixels ' 7'" "$X bad --max-pixels ' 7'" \
+    export seeding-640x480.gv --max-pixels " 7" -o u.png
 check "usage errors created no file" test ! -e u.gv -a ! -e u.png
 
 for cmd in "" encode info export; do
     run $cmd --help
     expect_rc "gigaview $cmd --help" 0
-    check "gigaview $cmd --help: usage on stdout" grep -q "usage: gigaview" "$T/out"
+    case $cmd in
+    encode) want=$U_ENC ;;
+    info) want=$U_INFO ;;
+    export) want=$U_EXP ;;
+    *) want=$U_TOP ;;
+    esac
+    check "gigaview $cmd --help: usage on stdout" test "$(head -n 1 "$T/out")" = "$want"
 done
 run --version
 expect_rc "gigaview --version" 0
-check "--version prints the version" grep -Eq '^gigaview [0-9]+\.[0-9]+' "$T/out"
+version=$(sed -n 's/^AC_INIT(\[gigaview\], \[\([^]]*\)\].*/\1/p' "$srcroot/configure.ac")
+check "--version prints the version of configure.ac ($version)" \
+    test "$(cat "$T/out")" = "gigaview $version"
 
 # --------------------------------------------------- run-time errors
 # Exit 1 with a message naming the problem.
 run info missing.gv
 expect_rc "info on a missing store" 1
-expect_err "info on a missing store: message" "missing.gv"
+expect_err_is "info on a missing store: message" \
+    "gigaview info: store: missing.gv: No such file or directory"
 run info "$TESTDATA/seeding-640x480.jpg"
 expect_rc "info on a JPEG" 1
-expect_err "info on a JPEG: message" "^gigaview info: store: "
+expect_err_is "info on a JPEG: message" "gigaview info: store: not a gigaview store (bad magic)"
 run export seeding-640x480.gv --region 600,0,41,10 -o u.png
 expect_rc "export region past the right edge" 1
 run export seeding-640x480.gv --max-pixels 100 -o u.png
 expect_rc "export over --max-pixels" 1
-expect_err "export over --max-pixels: message" "exceeds the limit"
+expect_err_is "export over --max-pixels: message" \
+    "gigaview export: region of 307200 pixels exceeds the limit of 100 (--max-pixels)"
 run export seeding-640x480.gv -o u.bogusformat
 expect_rc "export to an unknown format" 1
-expect_err "export to an unknown format: message" "unsupported output format"
+expect_err_is "export to an unknown format: message" \
+    "gigaview export: imageio: u.bogusformat: unsupported output format \".bogusformat\" (png, jpg, webp, tif)"
 check "run-time errors created no file" test ! -e u.png -a ! -e u.bogusformat
 
 check "no stray files left in the work directory" \

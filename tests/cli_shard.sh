@@ -95,26 +95,31 @@ fi
 s="$d/m2.gv.shards"
 run merge -o "$d/bad.gv" "$s/0.gvshard"
 expect_rc "merge with a shard missing fails" 1
-expect_err "... and says how many were expected" "1 shard files|of 2"
+expect_err_is "... and says how many were expected" \
+    "gigaview merge: merge: $s/0.gvshard is shard 0 of 2, but 1 shard files were given"
 run merge -o "$d/bad.gv" "$s/0.gvshard" "$s/0.gvshard"
 expect_rc "merge with a shard given twice fails" 1
-expect_err "... and names it" "given twice"
+expect_err_is "... and names it" "gigaview merge: merge: shard 0/2 is given twice ($s/0.gvshard)"
 gv encode --quiet --shard 1/3 "$src" -o "$d/n3.gvshard" 2>/dev/null
 run merge -o "$d/bad.gv" "$s/0.gvshard" "$d/n3.gvshard"
 expect_rc "merge with a shard of another count fails" 1
+expect_err_is "... as coming from another shard count" \
+    "gigaview merge: merge: $s/0.gvshard and $d/n3.gvshard come from different images, options or shard counts"
 gv encode --quiet --shard 1/2 -q 30 "$src" -o "$d/q30.gvshard" 2>/dev/null
 run merge -o "$d/bad.gv" "$s/0.gvshard" "$d/q30.gvshard"
 expect_rc "merge with a shard encoded at another -q fails" 1
-expect_err "... as coming from different options" "different"
+expect_err_is "... as coming from different options" \
+    "gigaview merge: merge: $s/0.gvshard and $d/q30.gvshard come from different images, options or shard counts"
 cp "$s/1.gvshard" "$d/damaged.gvshard"
 size=$(wc -c <"$d/damaged.gvshard")
 # Flip a byte in the last tile buffer (records are at the end).
 printf '\377' | dd of="$d/damaged.gvshard" bs=1 seek=$((size - 100)) conv=notrunc 2>/dev/null
 run merge -o "$d/bad.gv" "$s/0.gvshard" "$d/damaged.gvshard"
 expect_rc "merge with a damaged shard fails" 1
-expect_err "... on its CRC" "CRC|damaged"
+expect_err_is "... on its CRC" "gigaview merge: shard: $d/damaged.gvshard: tile 0/2/1 fails its CRC"
 run merge -o "$d/bad.gv" "$d/whole.gv" "$s/1.gvshard"
 expect_rc "a store is not a shard file" 1
+expect_err_is "... and is named" "gigaview merge: shard: $d/whole.gv is not a shard file"
 check "no store was written by any failed merge" test ! -e "$d/bad.gv"
 cp "$d/whole.gv" "$d/keep.gv"
 run merge -o "$d/keep.gv" "$s/0.gvshard"

@@ -102,6 +102,16 @@ expect_err() {
     fi
 }
 
+# expect_err_is DESCRIPTION TEXT: stderr of the last run is exactly TEXT
+# (all of it; lines separated by newlines).
+expect_err_is() {
+    if [ "$(cat "$T/err")" = "$2" ]; then
+        ok "$1"
+    else
+        not_ok "$1" "stderr:" "$(head -c 2000 "$T/err")" "wanted:" "$2"
+    fi
+}
+
 # Scratch directory, removed on exit whatever happens.
 T=$(mktemp -d "${TMPDIR:-/tmp}/gvtest.XXXXXX") || bail "mktemp -d failed"
 cleanup() {

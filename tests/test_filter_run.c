@@ -430,9 +430,10 @@ static void test_compile_error(struct gv_gpu *gpu)
     int rc = gv_filter_compile(gpu, g, &err);
     printf("# %s\n", err.text);
 
-    check(rc < 0 && err.code == GV_EINVAL && strstr(err.text, "module 'b'") &&
-              strstr(err.text, "line 2"),
-          "a GLSL error names the module and the body's line 2");
+    /* The driver's own words follow the prefix; they differ between drivers. */
+    static const char prefix[] = "filter: module 'b' line 2: ";
+    check(rc < 0 && err.code == GV_EINVAL && strncmp(err.text, prefix, strlen(prefix)) == 0,
+          "a GLSL error starts \"%s\": the module and the body's line 2", prefix);
     gv_filter_graph_free(g);
 }
 
@@ -441,11 +442,9 @@ int main(void)
     struct gv_error err;
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu) {
-        printf("1..0 # SKIP no EGL context: %s\n", err.text);
-        return 0;
+        return tap_skip_all("no EGL context: %s", err.text);
     }
     printf("# %s / %s\n", gv_gpu_info(gpu)->api, gv_gpu_info(gpu)->renderer);
-    tap_plan(31);
     test_point(gpu);
     test_kernel(gpu);
     test_logreduce(gpu);
@@ -457,8 +456,8 @@ int main(void)
         test_propagation(gpu);
         test_edt(gpu);
     } else {
-        for (int i = 0; i < 10; i++)
-            check(1, "# SKIP no compute shaders in this context");
+        tap_skip("no compute shaders in this context",
+                 "propagation and EDT sweeps as compute shaders");
     }
     test_compile_error(gpu);
     gv_gpu_close(gpu);

@@ -87,7 +87,6 @@ static int check_plans(uint32_t w, uint32_t h, int n)
 
 int main(void)
 {
-    tap_plan(13);
     static const struct { uint32_t w, h; } sizes[] = {
         {1100, 700}, {4700, 1100}, {513, 513}, {600, 600}, {70000, 1},
         {1, 70000}, {40000, 20000}, {9000, 9000}, {3000, 20000},
@@ -113,10 +112,15 @@ int main(void)
           gv_shard_plan_init(&p, &g, -1, 2, &err) < 0 &&
           gv_shard_plan_init(&p, &g, 0, 0, &err) < 0, "shard index and count checked");
     /* 1026 wide: 3 tiles at level 0, 2 at level 1 (every tile has a
-     * parent), so it shards like any other size. */
+     * parent), so it shards like any other size.  Shard 0 of 2 takes the
+     * full 513x513 tile 0,0 (the even split of the pixels, to within a
+     * tile) and its parent. */
     gv_geometry_init(&g, 1026, 600, 3);
-    check(gv_shard_plan_init(&p, &g, 0, 2, &err) == 0 && p.tiles > 0,
-          "1026 wide: planned like any other size (%u tiles)", (unsigned)p.tiles);
+    int rc = gv_shard_plan_init(&p, &g, 0, 2, &err);
+    check(rc == 0 && p.own_tiles == 1 && p.tiles == 2 && gv_shard_plan_wants(&p, &g, 0, 0, 0) &&
+              gv_shard_plan_wants(&p, &g, 1, 0, 0),
+          "1026 wide: planned like any other size (shard 0/2: %llu level-0 tile, "
+          "%llu in all)", (unsigned long long)p.own_tiles, (unsigned long long)p.tiles);
     gv_shard_plan_free(&p);
 
     int i, n, ok = 1;
@@ -128,5 +132,5 @@ int main(void)
     for (size_t b = 0; b < sizeof bad / sizeof bad[0]; b++)
         ok &= gv_shard_parse(bad[b], &i, &n) < 0;
     check(ok, "I/N parser: accepts 0/1, 3/4, 65534/65535; refuses 13 bad forms");
-    return tap_failed ? 1 : 0;
+    return tap_done();
 }

@@ -12,6 +12,7 @@
 #include <errno.h>
 #include <malloc.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -42,6 +43,25 @@ static const char *tmp(const char *name)
     i = (i + 1) % 4;
     snprintf(buf[i], sizeof buf[i], "%s/%s", tmpdir, name);
     return buf[i];
+}
+
+/* FMT formatted into a static buffer (one of two, reused in turn): the
+ * expected message of a check. */
+__attribute__((format(printf, 1, 2))) static const char *msg(const char *fmt, ...)
+{
+    static char buf[2][8192];
+    static int i;
+    va_list ap;
+    i = (i + 1) % 2;
+    va_start(ap, fmt);
+    vsnprintf(buf[i], sizeof buf[i], fmt, ap);
+    va_end(ap);
+    return buf[i];
+}
+
+static int starts_with(const char *s, const char *prefix)
+{
+    return strncmp(s, prefix, strlen(prefix)) == 0;
 }
 
 static void write_file(const char *path, const void *p, size_t n)
@@ -368,16 +388,19 @@ static void test_mosaic(void)
     /* swap the two tiles of the bottom row: grid column widths differ */
     const char *bad[4] = {inputs[0], inputs[1], inputs[3], inputs[2]};
     m = read_source(bad, 4, &o, 50, &info, &err);
-    check(!m && err.code == GV_EINVAL && strstr(err.text, "source: mosaic")
-              && strstr(err.text, "wide"),
-          "mosaic with mismatched widths fails: %s", err.text);
+    check_str(!m && err.code == GV_EINVAL ? err.text : NULL,
+              msg("source: mosaic: %s is 400 pixels wide but %s above it in grid "
+                  "column 1 is 300", tmp("m11.png"), tmp("m00.png")),
+              "mosaic with mismatched widths fails");
     free(m);
 
     /* transposed grid: heights in a row differ */
     const char *bad2[4] = {inputs[0], inputs[2], inputs[1], inputs[3]};
     m = read_source(bad2, 4, &o, 50, &info, &err);
-    check(!m && strstr(err.text, "source: mosaic"),
-          "mosaic with mismatched sizes fails: %s", err.text);
+    check_str(!m && err.code == GV_EINVAL ? err.text : NULL,
+              msg("source: mosaic: %s is 320 pixels high but %s left of it in grid "
+                  "row 1 is 200", tmp("m10.png"), tmp("m00.png")),
+              "mosaic with mismatched sizes fails");
     free(m);
 
     /* gray among colour */
@@ -387,14 +410,17 @@ static void test_mosaic(void)
         fail("%s", err.text);
     const char *bad3[4] = {tmp("gray.png"), inputs[1], inputs[2], inputs[3]};
     m = read_source(bad3, 4, &o, 50, &info, &err);
-    check(!m && strstr(err.text, "gray"),
-          "mosaic mixing gray and colour fails: %s", err.text);
+    check_str(!m && err.code == GV_EINVAL ? err.text : NULL,
+              msg("source: mosaic: %s is colour but %s is gray", tmp("m01.png"),
+                  tmp("gray.png")),
+              "mosaic mixing gray and colour fails");
     free(m);
 
     o.mosaic_rows = 3;
     m = read_source(inputs, 4, &o, 50, &info, &err);
-    check(!m && err.code == GV_EINVAL, "mosaic with the wrong input count "
-          "fails: %s", err.text);
+    check_str(!m && err.code == GV_EINVAL ? err.text : NULL,
+              "source: a 2x3 mosaic needs 6 inputs, got 4",
+              "mosaic with the wrong input count fails");
     free(m);
     free(whole);
 }
@@ -414,9 +440,11 @@ static void test_bad_files(void)
     uint8_t row[640 * 3];
     for (uint32_t y = 0; s && y < info.height && rc == 0; y++)
         rc = gv_source_read(s, 1, row, &err);
+    /* After the path the text is libjpeg's, through OpenImageIO: it
+     * differs between versions, so only its start is fixed here. */
     check(rc == -1 && err.code == GV_ECORRUPT
-              && strstr(err.text, "trunc.jpg")
-              && strstr(err.text, "Premature end"),
+              && starts_with(err.text, msg("imageio: %s: JPEG error: Premature end of JPEG "
+                                           "file", tmp("trunc.jpg"))),
           "truncated JPEG fails while reading: %s", err.text);
     check(s && gv_source_read(s, 1, row, &err) == -1,
           "no reads after an error");
@@ -424,18 +452,19 @@ static void test_bad_files(void)
 
     write_file(tmp("empty.png"), "", 0);
     uint8_t *p = read_one(tmp("empty.png"), NULL, &info, &err);
-    check(!p && strstr(err.text, "empty.png"), "zero-byte file fails: %s",
-          err.text);
+    check_str(!p && err.code == GV_ECORRUPT ? err.text : NULL,
+              msg("imageio: %s: empty file", tmp("empty.png")), "zero-byte file fails");
 
     write_file(tmp("junk.jpg"), "this is not an image at all\n", 28);
     p = read_one(tmp("junk.jpg"), NULL, &info, &err);
-    check(!p && strstr(err.text, "junk.jpg"), "non-image file fails: %s",
-          err.text);
+    /* OpenImageIO's words after the path, as above. */
+    check(!p && starts_with(err.text, msg("imageio: %s: ", tmp("junk.jpg"))),
+          "non-image file fails: %s", err.text);
 
     p = read_one(tmp("no-such-file.png"), NULL, &info, &err);
-    check(!p && err.code == GV_ENOTFOUND
-              && strstr(err.text, "no-such-file.png"),
-          "missing file fails with GV_ENOTFOUND: %s", err.text);
+    check_str(!p && err.code == GV_ENOTFOUND ? err.text : NULL,
+              msg("imageio: %s: no such file", tmp("no-such-file.png")),
+              "missing file fails with GV_ENOTFOUND");
 }
 
 static uint32_t crc32_png(const unsigned char *p, size_t n)
@@ -493,10 +522,10 @@ static void test_huge_header(void)
     struct mallinfo2 before = mallinfo2();
     struct gv_source *s = gv_source_open(in, 1, &o, &info, &err);
     struct mallinfo2 after = mallinfo2();
-    check(!s && err.code == GV_ELIMIT && strstr(err.text, "huge.png")
-              && strstr(err.text, "100000x100000"),
-          "PNG header claiming 100000x100000 is refused by the limit: %s",
-          err.text);
+    check_str(!s && err.code == GV_ELIMIT ? err.text : NULL,
+              msg("imageio: %s: image of 100000x100000 pixels exceeds the limit of "
+                  "1073741824 pixels", tmp("huge.png")),
+              "PNG header claiming 100000x100000 is refused by the limit");
     /* heap in use must not have grown by anything like an image (under
      * ASan mallinfo2 reports nothing, which passes trivially) */
     check(after.uordblks < before.uordblks + (64u << 20),
@@ -529,7 +558,7 @@ static void test_synth(void)
         seen[p[i]] = 1;
     for (int i = 0; i < 256; i++)
         distinct += seen[i];
-    check(distinct > 200, "synth uses most of the 8-bit range (%d values)",
+    check(distinct == 256, "synth uses the whole 8-bit range (%d values)",
           distinct);
     free(q);
 
@@ -556,25 +585,32 @@ static void test_synth(void)
     free(p);
     free(q);
 
-    static const char *bad[] = {"synth:0x5", "synth:10x", "synth:x10",
-                                "synth:10x10:grey", "synth:10x10x3",
-                                "synth:3000000000x2", "synth:-5x5"};
-    int all = 1;
+    /* Each malformed spec with the exact reason its message gives. */
+#define SYNTH_FORM "expected synth:WIDTHxHEIGHT or synth:WIDTHxHEIGHT:gray"
+#define SYNTH_SIZE "sizes must be 1 to 2147483647"
+    static const char *const bad[][2] = {
+        {"synth:0x5", SYNTH_SIZE},        {"synth:10x", SYNTH_FORM},
+        {"synth:x10", SYNTH_FORM},        {"synth:10x10:grey", SYNTH_FORM},
+        {"synth:10x10x3", SYNTH_FORM},    {"synth:3000000000x2", SYNTH_SIZE},
+        {"synth:-5x5", SYNTH_FORM}};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        const char *bi[1] = {bad[i]};
+        const char *bi[1] = {bad[i][0]};
         struct gv_source *s = gv_source_open(bi, 1, NULL, &a, &err);
-        all &= s == NULL && err.code == GV_EINVAL
-               && strncmp(err.text, "source: ", 8) == 0;
+        check_str(s == NULL && err.code == GV_EINVAL ? err.text : NULL,
+                  msg("source: %s: %s", bad[i][0], bad[i][1]),
+                  "malformed synth spec %s is refused", bad[i][0]);
         gv_source_free(s);
     }
-    check(all, "malformed synth specs are refused");
+#undef SYNTH_FORM
+#undef SYNTH_SIZE
 
     struct gv_source_opts o = {0};
     o.max_pixels = 1000000;
     const char *big[1] = {"synth:2000x1000"};
     struct gv_source *s = gv_source_open(big, 1, &o, &a, &err);
-    check(!s && err.code == GV_ELIMIT, "synth over max_pixels is refused: %s",
-          err.text);
+    check_str(!s && err.code == GV_ELIMIT ? err.text : NULL,
+              "source: synth:2000x1000: 2000000 pixels exceed the limit of 1000000",
+              "synth over max_pixels is refused");
     gv_source_free(s);
 
     /* a terapixel pattern opens without memory proportional to its size,
@@ -595,14 +631,15 @@ static void test_past_end(void)
     const char *in[1] = {data("seeding-640x480.jpg")};
     struct gv_source *s = gv_source_open(in, 1, NULL, &info, &err);
     uint8_t *buf = malloc(640 * 3 * 481);
-    check(s && gv_source_read(s, 481, buf, &err) == -1
-              && strstr(err.text, "last row"),
-          "reading 481 rows of a 480-row image fails: %s", err.text);
+    check_str(s && gv_source_read(s, 481, buf, &err) == -1 ? err.text : NULL,
+              "source: read of 481 rows at row 0 passes the last row (height 480)",
+              "reading 481 rows of a 480-row image fails");
     check(s && gv_source_read(s, 480, buf, &err) == 0,
           "reading exactly 480 rows works");
-    check(s && gv_source_read(s, 1, buf, &err) == -1
-              && err.code == GV_EINVAL,
-          "reading past the last row fails: %s", err.text);
+    check_str(s && gv_source_read(s, 1, buf, &err) == -1 && err.code == GV_EINVAL
+                  ? err.text : NULL,
+              "source: read of 1 rows at row 480 passes the last row (height 480)",
+              "reading past the last row fails");
     gv_source_free(s);
 
     const char *sy[1] = {"synth:10x10"};
@@ -663,14 +700,22 @@ static void test_write(void)
     struct stat st;
     int rc = gv_image_write(tmp("w.xyz"), 48, 32, 3, px, &err);
     check(rc == -1 && err.code == GV_EFORMAT && stat(tmp("w.xyz"), &st) != 0,
-          "unknown extension fails and leaves no file: %s", err.text);
+          "unknown extension fails and leaves no file");
+    check_str(err.text,
+              msg("imageio: %s: unsupported output format \".xyz\" (png, jpg, webp, tif)",
+                  tmp("w.xyz")),
+              "unknown extension: the message");
     rc = gv_image_write(tmp("nodir/w.png"), 48, 32, 3, px, &err);
-    check(rc == -1 && strstr(err.text, "nodir") &&
-              strstr(err.text, "No such file"),
-          "missing directory fails, naming it: %s", err.text);
+    /* The atomic writer names the directory it could not create in. */
+    check(rc == -1, "missing directory fails");
+    check_str(err.text, msg("imageio: cannot create a file in %s: No such file or directory",
+                            tmp("nodir")),
+              "missing directory: the message names the directory");
     rc = gv_image_write(tmp("w2.png"), 48, 32, 2, px, &err);
     check(rc == -1 && err.code == GV_EINVAL && stat(tmp("w2.png"), &st) != 0,
-          "two channels are refused: %s", err.text);
+          "two channels are refused and leave no file");
+    check_str(err.text, "imageio: cannot encode 2 channels (1 or 3)",
+              "two channels: the message");
     check(no_temp_left(), "no temporary files are left behind");
 }
 
@@ -716,6 +761,5 @@ int main(void)
     test_write();
 
     cleanup();
-    tap_plan(tap_count);
     return tap_done();
 }

@@ -16,8 +16,8 @@
 //      placed so that pixel centres fall on texel centres) read back from
 //      the canvas equal the server's region endpoint (CPU reference
 //      decoder) bit for bit: every pixel identical (so also the mean
-//      absolute difference <= MAX_MAD per channel that the issue asks
-//      for); on levels 0 and 1 of picos and synth, across tile edges, and
+//      absolute difference <= MAX_MAD per channel that the viewer's goal
+//      asks for); on levels 0 and 1 of picos and synth, across tile edges, and
 //      with the image smaller than the canvas (black outside);
 //   2. every decoded tile texture, read back, equals the region endpoint
 //      over the tile's 513 x 513 pixels (inside the level), for both tile

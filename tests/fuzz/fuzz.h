@@ -1,7 +1,7 @@
 /*
  * fuzz.h - what the fuzz targets share with their drivers.
  *
- * Each target (fuzz_store.c, fuzz_tile.c) defines LLVMFuzzerTestOneInput.
+ * Each target (fuzz_*.c) defines LLVMFuzzerTestOneInput.
  * Built with --enable-fuzzing it links against libFuzzer; otherwise
  * run_corpus.c supplies main() and replays a corpus, so `make check` runs
  * every committed case (and every past crash) as a regression test.
