@@ -22,13 +22,10 @@ DATA_DIR=${DATA_DIR:-$top/../shared/data}
                                      "$DATA_DIR/photos/picosdeeuropa_by_Aitzol_Berasategi.jpg")
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-# shellcheck disable=SC2046 # pkg-config prints several flags
-cc -std=c11 -D_GNU_SOURCE -O2 -pthread -I"$top/lib" -I"$build" -I"$build/shaders" \
-    "$here/decode_bench.c" "$build"/lib/gpu/libgvgpu.a "$build"/lib/encode/libgvencode.a "$build"/lib/render/libgvrender.a "$build"/lib/store/libgvstore.a "$build"/lib/codec/libgvcodec.a "$build"/lib/imageio/libgvimageio.a "$build"/lib/base/libgvbase.a \
-    $(pkg-config --libs OpenImageIO zlib libwebp egl glesv2) -ljpeg -lstdc++ -lm \
-    -o "$work/decode_bench"
+# Built by the tree's own rules (Makefile.am, bench section), with its flags.
+make -s -C "$build" bench/decode_bench >&2
 for img in "${images[@]}"; do
     "$build/gigaview" encode --rd -q 34 --quiet "$img" -o "$work/s.gv"
     echo "== $(basename "$img") (gigaview encode --rd -q 34)"
-    "$work/decode_bench" "$work/s.gv" "$img"
+    "$build/bench/decode_bench" "$work/s.gv" "$img"
 done

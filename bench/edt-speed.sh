@@ -57,21 +57,14 @@ need_cmd cc gcc
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-# The same flags as the default build (configure: -g -O3).
-# The same flags as the default build (configure: -g -O3).  With a built
-# tree in BUILD (default build/), the EGL methods are linked in too.
+# With a built tree in BUILD (default build/), bench/edt_bench is built by
+# the tree's own rules (Makefile.am, bench section) with the EGL methods;
+# without one, the CPU methods alone are compiled here with the default
+# build's flags (configure: -g -O3).
 build=${BUILD:-$top/build}
-if [ -f "$build/filters/libgvfilter.a" ] && [ -f "$build/lib/base/libgvbase.a" ]; then
-	for f in "$here/edt_bench.c" "$top/tests/edt_exact.c"; do
-		cc -c -std=c11 -D_GNU_SOURCE -DGV_EDT_BENCH_EGL -g -O3 -pthread -I"$top/lib" \
-			-I"$top/filters" -I"$top/tests" $(pkg-config --cflags jansson) \
-			"$f" -o "$work/$(basename "$f" .c).o"
-	done
-	# The OpenImageIO bridge is C++: link with the C++ driver.
-	c++ -pthread "$work/edt_bench.o" "$work/edt_exact.o" \
-		"$build/filters/libgvfilter.a" "$build"/lib/gpu/libgvgpu.a "$build"/lib/encode/libgvencode.a "$build"/lib/render/libgvrender.a "$build"/lib/store/libgvstore.a "$build"/lib/codec/libgvcodec.a "$build"/lib/imageio/libgvimageio.a "$build"/lib/base/libgvbase.a \
-		$(pkg-config --libs jansson egl glesv2 OpenImageIO libwebp zlib) -lm \
-		-o "$work/edt_bench"
+if [ -f "$build/Makefile" ]; then
+	make -s -C "$build" bench/edt_bench >&2
+	ln -s "$build/bench/edt_bench" "$work/edt_bench"
 	export GV_EDT_GRAPH="$top/filters/library/distance-transform.json"
 	methods=${EDT_METHODS:-cpu1,cpu,cpu+sites,egl-frag,egl-compute}
 else

@@ -1,6 +1,6 @@
 /*
  * edt_cpu.h - the CPU path of the distance transform and Voronoi diagram
- * (issue 5; thesis section 7.8): 2D vector propagation with the modified
+ * (thesis section 7.8): 2D vector propagation with the modified
  * four-sweep templates of fig. 7.14, which reach the Moore neighbourhood.
  *
  * The result is defined exactly, so that the GPU propagation template can
