@@ -80,6 +80,29 @@ def held():
 base = 0
 base = held()   # the listening socket (and any the filter pool keeps)
 
+# Synchronisation this client controls, so that no phase depends on how
+# long another takes on a loaded machine: the slow readers slow to
+# 256 KiB/s after their first 2 MiB until `release` is set (36 s for the
+# rest), so they are still running through the flood, yet active enough
+# that the daemon's connection_timeout does not end them; the idle and
+# flood connections send one more header byte every 2 s until
+# `stop_trickle`, so that none reaches connection_timeout while it is
+# meant to be held.
+release = threading.Event()
+stop_trickle = threading.Event()
+trickled = []
+trickle_lock = threading.Lock()
+
+def trickle():
+    while not stop_trickle.wait(2):
+        with trickle_lock:
+            socks = list(trickled)
+        for s in socks:
+            try:
+                s.send(b'a')
+            except OSError:
+                pass
+
 def slow_reader(k, res):
     s = socket.socket()
     s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 32768)
@@ -87,11 +110,21 @@ def slow_reader(k, res):
     s.connect(('127.0.0.1', port))
     s.sendall(('GET %s HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n' % big).encode())
     data, t0, slice_ = b'', time.time(), 16384
+    held_back = 0
     while True:
         chunk = s.recv(slice_)
         if not chunk:
             break
         data += chunk
+        if len(data) >= 2 << 20 and not release.is_set():
+            held_back += len(chunk)
+            if held_back >= 512 << 10:
+                # 256 KiB/s: the daemon's socket turns writable again when
+                # half of its send queue (up to 4 MiB) has drained, which
+                # must happen within its connection_timeout (15 s).
+                release.wait(2)
+                held_back = 0
+            continue
         ahead = len(data) / rate - (time.time() - t0)
         if ahead > 0:
             time.sleep(ahead)
@@ -118,6 +151,8 @@ def good(path):
 def half_open():
     s = socket.create_connection(('127.0.0.1', port), timeout=10)
     s.sendall(b'GET /healthz HTTP/1.1\r\nHost: t\r\nX-Idle: ')
+    with trickle_lock:
+        trickled.append(s)
     return s
 
 def closed_by_peer(s):
@@ -138,6 +173,7 @@ def wait_held(cond, secs):
         time.sleep(0.1)
     return held()
 
+threading.Thread(target=trickle, daemon=True).start()
 idle = []
 for i in range(n_idle):
     idle.append(half_open())
@@ -175,6 +211,9 @@ say('queued_while_full', queued.get('r', 'waiting'))
 # libmicrohttpd 0.9.75 until connection_timeout once accepted: its
 # edge-triggered epoll never sees the FIN.  So the flood is closed only
 # once it has been accepted.)
+stop_trickle.set()
+with trickle_lock:
+    trickled.clear()
 for s in idle:
     s.close()
 qt.join(30)
@@ -185,6 +224,7 @@ for s in flood:
 # Connections libmicrohttpd did not see closing (above) go at
 # connection_timeout (15 s here): released within it, plus slack.
 say('held_released', wait_held(lambda h: h <= n_slow, 25))
+release.set()
 goods = [good('/healthz') for _ in range(10)]
 say('good_after', sum(g == '200' for g in goods), len(goods), ' '.join(sorted(set(goods))))
 for t in slow:
