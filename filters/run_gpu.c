@@ -155,16 +155,10 @@ static void map_log(const char *log, const char *module, struct gv_error *err)
 static GLuint compile_stage(GLenum type, const char *src, const char *module,
                             struct gv_error *err)
 {
-    GLuint sh = glCreateShader(type);
-    glShaderSource(sh, 1, &src, NULL);
-    glCompileShader(sh);
-    GLint ok = 0;
-    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
-    if (ok)
+    char log[2048];
+    GLuint sh = gv_gpu_compile_stage(type, src, log, sizeof log);
+    if (sh)
         return sh;
-    char log[2048] = "";
-    glGetShaderInfoLog(sh, sizeof log, NULL, log);
-    glDeleteShader(sh);
     if (module)
         map_log(log, module, err);
     else
@@ -177,19 +171,10 @@ static GLuint compile_stage(GLenum type, const char *src, const char *module,
 static GLuint link_stages(const GLuint *sh, int n, const char *module,
                           struct gv_error *err)
 {
-    GLuint p = glCreateProgram();
-    for (int i = 0; i < n; i++)
-        glAttachShader(p, sh[i]);
-    glLinkProgram(p);
-    for (int i = 0; i < n; i++)
-        glDeleteShader(sh[i]);
-    GLint ok = 0;
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (ok)
+    char log[2048];
+    GLuint p = gv_gpu_link_stages(sh, n, log, sizeof log);
+    if (p)
         return p;
-    char log[2048] = "";
-    glGetProgramInfoLog(p, sizeof log, NULL, log);
-    glDeleteProgram(p);
     if (module)
         map_log(log, module, err);
     else

@@ -99,6 +99,19 @@ unsigned gv_gpu_program_es300(const struct gv_gpu *g, const char *vertex,
                               const char *fragment, char **listing,
                               struct gv_error *err);
 
+/*
+ * The two steps every program here is built with (gv_gpu_program above and
+ * the filter templates, filters/run_gpu.c), for callers that add their own
+ * version line and map the driver's log themselves.  GL thread only.
+ * gv_gpu_compile_stage compiles src as a shader of GL type `type`
+ * (GL_VERTEX_SHADER, ...) and returns it, or 0 with the driver's log in
+ * log (cap bytes, always terminated).  gv_gpu_link_stages links n compiled
+ * stages into a program, deletes the stages whatever happens, and returns
+ * the program, or 0 with the driver's log.
+ */
+unsigned gv_gpu_compile_stage(unsigned type, const char *src, char *log, size_t cap);
+unsigned gv_gpu_link_stages(const unsigned *stages, int n, char *log, size_t cap);
+
 /* Compile and link a compute program from a shared GLSL body, as
  * gv_gpu_program does (listing likewise).  GL thread only; returns the
  * program, or 0 with *err. */

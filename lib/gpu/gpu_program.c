@@ -35,8 +35,7 @@ static char *number_lines(const char *src, const char *log)
     return out;
 }
 
-static GLuint compile(GLenum type, const char *src, char **listing,
-                      struct gv_error *err)
+unsigned gv_gpu_compile_stage(unsigned type, const char *src, char *log, size_t cap)
 {
     GLuint sh = glCreateShader(type);
     glShaderSource(sh, 1, &src, NULL);
@@ -45,14 +44,44 @@ static GLuint compile(GLenum type, const char *src, char **listing,
     glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
     if (ok)
         return sh;
-    char log[4096] = "";
-    glGetShaderInfoLog(sh, sizeof log, NULL, log);
+    log[0] = 0;
+    glGetShaderInfoLog(sh, (GLsizei)cap, NULL, log);
+    log[cap - 1] = 0;
+    glDeleteShader(sh);
+    return 0;
+}
+
+unsigned gv_gpu_link_stages(const unsigned *stages, int n, char *log, size_t cap)
+{
+    GLuint p = glCreateProgram();
+    for (int i = 0; i < n; i++)
+        glAttachShader(p, stages[i]);
+    glLinkProgram(p);
+    for (int i = 0; i < n; i++)
+        glDeleteShader(stages[i]);
+    GLint ok = 0;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (ok)
+        return p;
+    log[0] = 0;
+    glGetProgramInfoLog(p, (GLsizei)cap, NULL, log);
+    log[cap - 1] = 0;
+    glDeleteProgram(p);
+    return 0;
+}
+
+static GLuint compile(GLenum type, const char *src, char **listing,
+                      struct gv_error *err)
+{
+    char log[4096];
+    GLuint sh = gv_gpu_compile_stage(type, src, log, sizeof log);
+    if (sh)
+        return sh;
     if (listing)
         *listing = number_lines(src, log);
     gv_fail(err, GV_EINVAL, "gpu: %s shader does not compile: %.200s",
             type == GL_VERTEX_SHADER ? "vertex" :
             type == GL_COMPUTE_SHADER ? "compute" : "fragment", log);
-    glDeleteShader(sh);
     return 0;
 }
 
@@ -70,20 +99,17 @@ static char *with_head(const char *head, const char *body)
     return s;
 }
 
-static GLuint link(GLuint prog, const char *shown, char **listing,
+/* Link the n stages (deleted here); on failure the listing shows `shown`. */
+static GLuint link(const GLuint *stages, int n, const char *shown, char **listing,
                    struct gv_error *err)
 {
-    glLinkProgram(prog);
-    GLint ok = 0;
-    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
-    if (ok)
+    char log[4096];
+    GLuint prog = gv_gpu_link_stages(stages, n, log, sizeof log);
+    if (prog)
         return prog;
-    char log[4096] = "";
-    glGetProgramInfoLog(prog, sizeof log, NULL, log);
     if (listing)
         *listing = number_lines(shown, log);
     gv_fail(err, GV_EINVAL, "gpu: program does not link: %.200s", log);
-    glDeleteProgram(prog);
     return 0;
 }
 
@@ -96,12 +122,8 @@ unsigned gv_gpu_compute_program(const struct gv_gpu *g, const char *compute,
         gv_fail(err, GV_ENOMEM, "gpu: out of memory");
         return 0;
     }
-    if ((c = compile(GL_COMPUTE_SHADER, cs, listing, err))) {
-        prog = glCreateProgram();
-        glAttachShader(prog, c);
-        prog = link(prog, cs, listing, err);
-        glDeleteShader(c);
-    }
+    if ((c = compile(GL_COMPUTE_SHADER, cs, listing, err)))
+        prog = link(&c, 1, cs, listing, err);
     free(cs);
     return prog;
 }
@@ -117,18 +139,14 @@ static unsigned program_with_head(const char *head, const char *vertex,
         gv_fail(err, GV_ENOMEM, "gpu: out of memory");
         goto out;
     }
-    if (!(v = compile(GL_VERTEX_SHADER, vs, listing, err)) ||
-        !(f = compile(GL_FRAGMENT_SHADER, fs, listing, err)))
+    if (!(v = compile(GL_VERTEX_SHADER, vs, listing, err)))
         goto out;
-    prog = glCreateProgram();
-    glAttachShader(prog, v);
-    glAttachShader(prog, f);
-    prog = link(prog, fs, listing, err);
-out:
-    if (v)
+    if (!(f = compile(GL_FRAGMENT_SHADER, fs, listing, err))) {
         glDeleteShader(v);
-    if (f)
-        glDeleteShader(f);
+        goto out;
+    }
+    prog = link((const GLuint[]){v, f}, 2, fs, listing, err);
+out:
     free(vs);
     free(fs);
     return prog;
