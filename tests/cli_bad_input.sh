@@ -199,10 +199,10 @@ expect_rc "the surviving store still opens" 0
 )
 rc=$?
 expect_rc "export hitting the file size limit" 1
-# The image is encoded in memory and written with write(2), so the
-# error is the system's own.
+# The image is encoded in memory and published by the atomic writer, so
+# the error is the system's own.
 expect_err_is "export hitting the file size limit: message" \
-    "gigaview export: imageio: $out/big.png: File too large"
+    "gigaview export: imageio: writing $out/big.png: File too large"
 check "export hitting the file size limit: no image, no temporary" \
     test "$(listing "$out")" = good.gv
 
