@@ -167,10 +167,10 @@ if [ "$(json_get 'j["gpu"].get("built", True)')" = False ]; then
     # configure --without-gpu: graphs are listed and validated (above; no
     # GPU needed), running or storing one is 501 not_implemented.
     run_filter '{"filter":"negate","region":[0,0,8,8]}'
-    expect "not built: running a graph is 501" 501 "GPU support"
+    expect "not built: running a graph is 501" 501 "filter: filters need GPU support, which this gigaviewd lacks (configured --without-gpu)"
     check "not built: the code is not_implemented" test "$(json_get 'j["error"]["code"]')" = not_implemented
     post_graph "$T/lib/negate.json"
-    expect "not built: storing a graph (it cannot be compiled) is 501" 501 "configured --without-gpu"
+    expect "not built: storing a graph (it cannot be compiled) is 501" 501 "filter: filters need GPU support, which this gigaviewd lacks (configured --without-gpu)"
     printf '{"name": "bad", "output": "nope", "modules": []}' >bad.json
     post_graph bad.json
     expect "not built: an invalid graph is still refused (400)" 400
