@@ -19,6 +19,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "base/atomic_file.h"
 #include "filter_store.h"
 #include "log.h"
 
@@ -354,39 +355,15 @@ static int sync_dir(const char *dir, struct gv_error *err)
     return 0;
 }
 
-/* Write dir/name atomically: temporary file, fsync, rename, fsync dir. */
+/* Write dir/name atomically (base/atomic_file.h: fsync, rename, fsync of
+ * the directory), readable by gigaviewd's user only, as filter_dir is. */
 static int write_atomic(const char *dir, const char *name, const char *data,
                         size_t len, struct gv_error *err)
 {
-    char tmp[4096], path[4096];
-    snprintf(tmp, sizeof tmp, "%s/.tmp-%s-XXXXXX", dir, name);
+    char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, name);
-    int fd = mkostemp(tmp, O_CLOEXEC);
-    if (fd < 0)
-        return gv_fail_errno(err, errno, "filter: %s", tmp);
-    size_t off = 0;
-    int e = 0;
-    while (off < len) {
-        ssize_t k = write(fd, data + off, len - off);
-        if (k < 0 && errno == EINTR)
-            continue;
-        if (k < 0) {
-            e = errno;
-            break;
-        }
-        off += (size_t)k;
-    }
-    if (!e && fsync(fd) < 0)
-        e = errno;
-    if (close(fd) < 0 && !e)
-        e = errno;
-    if (!e && rename(tmp, path) < 0)
-        e = errno;
-    if (e) {
-        unlink(tmp);
-        return gv_fail_errno(err, e, "filter: writing %s", path);
-    }
-    return sync_dir(dir, err);
+    const struct gv_atomic_opts opts = {.module = "filter", .mode = 0600};
+    return gv_atomic_file_write(path, data, len, &opts, err);
 }
 
 int filter_store_put(struct filter_store *fs, const char *doc, size_t len,
