@@ -79,7 +79,13 @@ struct gv_tile_params {
     double target_mse;   /* mean squared error per sample to reach */
     int max_rate;        /* cap on r, 1..GV_MAX_RATE */
     double lambda;       /* > 0: rate-distortion mode instead of a target:
-                          * pick the r minimizing SSE + lambda * bits */
+                          * pick the r minimizing SSE + lambda * bits, with
+                          * entropy-constrained VQ (every index chosen and
+                          * every codebook trained by squared error +
+                          * lambda * its code length) */
+    int nearest_only;    /* rate-distortion mode without entropy-constrained
+                          * VQ (nearest codevector, LBG codebooks): the
+                          * encoder before it, kept for comparisons */
     uint64_t seed;       /* deterministic sampling seed for this tile */
 };
 
