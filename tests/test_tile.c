@@ -219,7 +219,7 @@ static void cut(const uint8_t *img, uint32_t w, uint32_t h, uint32_t tx,
 /* Rate-distortion mode on tiles of a photograph: what the encoder
  * reconstructs is what the decoder gives, and at the same lambda the
  * entropy-constrained encoder's J = SSE + lambda * bits is below that of
- * nearest-codevector coding. */
+ * nearest-codevector coding.  Then the target mode on one of them. */
 static void check_rd_photo(struct gv_tile_workspace *ws)
 {
     const char *data = getenv("TESTDATA");
@@ -287,9 +287,28 @@ static void check_rd_photo(struct gv_tile_workspace *ws)
               "< nearest-codevector J %.4g (r=%d, %zu bytes)", tx, ty, j[0], rate[0], len[0],
               j[1], rate[1], len[1]);
     }
-    /* The workspace keeps nothing from one tile to the next. */
+    /* Target mode: 36 dB met with and without entropy-constrained VQ, in
+     * fewer bytes with it. */
     cut(img, info.width, info.height, 0, 0, orig);
     cut(half, pw, ph, 0, 0, parent);
+    {
+        size_t len[2];
+        int met = 1, same = 1;
+        const double budget = gv_psnr_to_mse(36.0) * T * T * 3;
+        for (int plain = 0; plain < 2; plain++) {
+            struct gv_tile_params prm = {.target_mse = gv_psnr_to_mse(36.0), .max_rate = 10,
+                                         .nearest_only = plain, .seed = 5};
+            struct gv_tile_stats st;
+            len[plain] = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &prm, recon, buf, &st);
+            met &= (double)st.sse <= budget && st.rate < 10;
+            same &= gv_tile_decode(buf, len[plain], 3, parent, 0, 0, dec, &err) == 0 &&
+                    memcmp(dec, recon, tb) == 0;
+        }
+        check(met && same && len[0] < len[1], "photo tile (0,0), 36 dB target: met in %zu bytes "
+              "entropy-constrained, %zu nearest-codevector; decode == encoder reconstruction",
+              len[0], len[1]);
+    }
+    /* The workspace keeps nothing from one tile to the next. */
     struct gv_tile_params prm = {.target_mse = 1.0, .max_rate = 10, .lambda = lambda, .seed = 5};
     struct gv_tile_stats st;
     size_t again = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &prm, recon, buf, &st);
@@ -307,7 +326,7 @@ static void check_rd_photo(struct gv_tile_workspace *ws)
 
 int main(void)
 {
-    tap_plan(37 + 4 + 1 + 7);
+    tap_plan(37 + 4 + 1 + 8);
     const size_t tb = gv_tile_bytes(3);
     uint8_t *parent = malloc(tb), *pred = malloc(tb), *orig = malloc(tb);
     uint8_t *recon = malloc(tb), *dec = malloc(tb);

@@ -74,6 +74,12 @@ uint32_t gv_tilebuf_index(const uint8_t *buf, int rate, int channels,
  * bit. */
 double gv_psnr_to_mse(double psnr_db);
 
+/* The price of a bit, in squared error, at a target mean squared error
+ * per sample: the slope 2 ln 2 * target_mse of the high-rate model
+ * D(R) ~ 2^(-2R).  The lambda of the rate-distortion mode, and the one
+ * the target mode's entropy-constrained VQ uses. */
+double gv_rd_lambda(double target_mse);
+
 /* Quality and rate controls for gv_tile_encode. */
 struct gv_tile_params {
     double target_mse;   /* mean squared error per sample to reach */
@@ -83,8 +89,8 @@ struct gv_tile_params {
                           * entropy-constrained VQ (every index chosen and
                           * every codebook trained by squared error +
                           * lambda * its code length) */
-    int nearest_only;    /* rate-distortion mode without entropy-constrained
-                          * VQ (nearest codevector, LBG codebooks): the
+    int nearest_only;    /* either mode without entropy-constrained VQ
+                          * (nearest codevector, LBG codebooks): the
                           * encoder before it, kept for comparisons */
     uint64_t seed;       /* deterministic sampling seed for this tile */
 };

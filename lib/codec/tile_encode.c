@@ -5,14 +5,14 @@
  * cut into 257x257 blocks of 2x2 pixels.  Rates are tried from r = 0 (the
  * prediction alone) upwards, each codebook grown from the previous one by a
  * PCA split followed by LBG (vq.c) on a random sample of the tile's blocks.
- * When the sample says a rate may meet the target, every block is assigned
- * exactly and the true squared error of the clamped reconstruction decides;
- * the first rate that meets the target (or the cap) wins.  So every tile the
- * encoder writes meets the target unless it is at the cap.  In
- * rate-distortion mode (params->lambda > 0) every rate is coded exactly
- * instead, with entropy-constrained VQ (indices and codebooks chosen by
- * squared error + lambda * code length), and the one with the least
- * SSE + lambda * bits wins.  Either way the buffer is written in the
+ * Blocks are coded with entropy-constrained VQ: indices and codebooks are
+ * chosen by squared error + lambda * code length.  When the sample says a
+ * rate may meet the target, every block is assigned and the true squared
+ * error of the clamped reconstruction decides; the first rate that meets
+ * the target (or the cap) wins.  So every tile the encoder writes meets
+ * the target unless it is at the cap.  In rate-distortion mode
+ * (params->lambda > 0) every rate is coded instead, and the one with the
+ * least SSE + lambda * bits wins.  Either way the buffer is written in the
  * smaller of the fixed and the entropy-coded layouts.
  *
  * Sampling uses a per-tile seed, and the search is exact, so the output
@@ -66,6 +66,13 @@ void gv_tile_workspace_free(struct gv_tile_workspace *ws)
 double gv_psnr_to_mse(double psnr_db)
 {
     return 65025.0 / pow(10.0, psnr_db / 10.0);   /* 65025 = 255^2 */
+}
+
+double gv_rd_lambda(double target_mse)
+{
+    /* High-rate theory: D(R) ~ 2^(-2R), so dD/dR = -2 ln 2 D; at the
+     * target distortion one bit is worth 2 ln 2 D* of squared error. */
+    return 2.0 * log(2.0) * target_mse;
 }
 
 static uint64_t splitmix(uint64_t *s)
@@ -419,9 +426,39 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
 }
 
 /*
+ * Target mode at the cap, when entropy-constrained coding (ws->idx, the
+ * book in ws->ecvq, error ecvq_sse) misses the budget: nearest-codevector
+ * coding has less error, and is taken if it meets the budget, so that no
+ * tile misses a target the nearest codevectors would meet.  Otherwise the
+ * entropy-constrained coding stays.  Returns the error of the coding left
+ * in ws->idx, *book and recon.
+ */
+static uint64_t nearest_at_cap(struct gv_tile_workspace *ws, const uint8_t *orig,
+                               int rate, int channels, uint32_t valid_w,
+                               uint32_t valid_h, double budget,
+                               uint64_t ecvq_sse, uint8_t *recon,
+                               const int8_t **book)
+{
+    memcpy(ws->best_idx, ws->idx, sizeof ws->idx);
+    uint64_t sse = code_all(ws, orig, rate, channels, valid_w, valid_h, recon);
+    if ((double)sse <= budget) {
+        *book = ws->trainer.book;
+        return sse;
+    }
+    memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
+    reconstruct(ws, orig, ws->ecvq.book, rate, channels, valid_w, valid_h,
+                recon);
+    *book = ws->ecvq.book;
+    return ecvq_sse;
+}
+
+/*
  * Target mode: the first rate whose exact error meets the budget (or the
  * cap).  A rate is coded exactly only when its training sample says it
- * may meet the target, since the exact assignment is the costly step.
+ * may meet the target, since the exact assignment is the costly step.  It
+ * is coded with entropy-constrained VQ at the slope of the rate-distortion
+ * mode for the same target (fewer bits, more error at each rate), and at
+ * the cap also with nearest codevectors if that is needed to meet it.
  */
 static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
                             int channels, uint32_t valid_w, uint32_t valid_h,
@@ -429,7 +466,8 @@ static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
                             double budget, uint8_t *recon, uint8_t *buf,
                             struct gv_tile_stats *stats)
 {
-    const int dim = 4 * channels;
+    const int dim = 4 * channels, ecvq = !params->nearest_only;
+    const double lambda = gv_rd_lambda(params->target_mse);
     uint32_t nvalid = start_training(ws, orig, channels, valid_w, valid_h,
                                      params->seed);
     size_t nsample = 0;
@@ -440,12 +478,23 @@ static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
         double est_mse = (double)est / ((double)nsample * dim);
         if (rate < max_rate && est_mse > params->target_mse)
             continue;
-        uint64_t sse = code_all(ws, orig, rate, channels, valid_w, valid_h,
-                                recon);
+        uint64_t sse;
+        const int8_t *book;
+        if (ecvq) {
+            sse = code_all_ecvq(ws, orig, rate, channels, valid_w, valid_h,
+                                nsample, lambda, recon);
+            book = ws->ecvq.book;
+            if (rate == max_rate && (double)sse > budget)
+                sse = nearest_at_cap(ws, orig, rate, channels, valid_w,
+                                     valid_h, budget, sse, recon, &book);
+        } else {
+            sse = code_all(ws, orig, rate, channels, valid_w, valid_h, recon);
+            book = ws->trainer.book;
+        }
         if ((double)sse <= budget || rate == max_rate) {
             stats->rate = rate;
             stats->sse = sse;
-            return pack_best(buf, rate, channels, ws->trainer.book, ws->idx);
+            return pack_best(buf, rate, channels, book, ws->idx);
         }
     }
 }
