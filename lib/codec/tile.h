@@ -103,7 +103,7 @@ struct gv_tile_stats {
 
 struct gv_tile_workspace;
 
-/* Allocate / free the scratch memory one encoding thread needs (~3 MiB).
+/* Allocate / free the scratch memory one encoding thread needs (~7 MiB).
  * gv_tile_workspace_free(NULL) does nothing. */
 struct gv_tile_workspace *gv_tile_workspace_new(void);
 void gv_tile_workspace_free(struct gv_tile_workspace *ws);
