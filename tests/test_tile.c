@@ -1,7 +1,8 @@
 /*
  * test_tile.c - the tile codec: the prediction formula, index packing at
- * every rate, encoder/decoder agreement, quality targets and hostile
- * buffers.
+ * every rate, encoder/decoder agreement, quality targets, hostile
+ * buffers, the biased codevector search on every SIMD path, and the
+ * entropy-constrained rate-distortion mode on a photograph.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -9,6 +10,8 @@
 
 #include "store/geometry.h"
 #include "codec/tile.h"
+#include "codec/vq.h"
+#include "encode/source.h"
 #include "util.h"
 
 #define T GV_TILE
@@ -74,6 +77,258 @@ static double psnr(const uint8_t *a, const uint8_t *b, size_t n)
     for (size_t i = 0; i < n; i++)
         sse += (double)(a[i] - b[i]) * (a[i] - b[i]);
     return sse == 0 ? 99.0 : 10 * log10(65025.0 * n / sse);
+}
+
+/* The biased search written out: squared distance plus the bias clamped
+ * to 0 .. VQ_BIAS_MAX, in 64 bits, the lowest index among equal costs. */
+static void reference_nearest(const int8_t *book, const int32_t *bias, int k,
+                              int dim, const int16_t *x, uint16_t *idx,
+                              uint32_t *cost)
+{
+    int64_t best = INT64_MAX;
+    *idx = 0;
+    for (int c = 0; c < k; c++) {
+        int64_t b = bias[c] < 0 ? 0 : bias[c] > VQ_BIAS_MAX ? VQ_BIAS_MAX : bias[c];
+        for (int d = 0; d < dim; d++)
+            b += (int64_t)(x[d] - book[c * dim + d]) * (x[d] - book[c * dim + d]);
+        if (b < best) {
+            best = b;
+            *idx = (uint16_t)c;
+        }
+    }
+    *cost = (uint32_t)best;
+}
+
+/* Every search path against reference_nearest on random codebooks, biases
+ * (some out of range, some equal over duplicated codevectors, so that
+ * ties occur) and residuals (some at +-255, the extremes). */
+static void check_biased_search(void)
+{
+    static const int ks[] = {1, 5, 16, 37, 256, 1000};
+    static const char *names[] = {"portable", "AVX2", "AVX-512"};
+    struct vq_search *s = malloc(sizeof *s);
+    int8_t *book = malloc(1000 * VQ_MAXDIM);
+    int32_t *bias = malloc(1000 * sizeof *bias);
+    const size_t n = 300;
+    int16_t *vecs = calloc(n * VQ_STRIDE, sizeof *vecs);
+    uint16_t *idx = malloc(n * sizeof *idx), ridx;
+    uint32_t *dist = malloc(n * sizeof *dist), rcost;
+    if (!s || !book || !bias || !vecs || !idx || !dist)
+        fail("out of memory");
+    for (int path = VQ_PATH_PORTABLE; path <= VQ_PATH_AVX512; path++) {
+        int wrong = 0, ties = 0, runs = 0, have = 1;
+        for (int dim = 4; dim <= 12 && have; dim += 8)
+            for (size_t ki = 0; ki < sizeof ks / sizeof ks[0] && have; ki++) {
+                const int k = ks[ki];
+                for (int i = 0; i < k * dim; i++)
+                    book[i] = (int8_t)(next_rand() % 256 - 128);
+                for (int c = 0; c < k; c++) {
+                    uint32_t r = next_rand() % 8;
+                    bias[c] = r == 0 ? 0 : r == 1 ? VQ_BIAS_MAX : r == 2 ? INT32_MAX :
+                              r == 3 ? -5 : (int32_t)(next_rand() % 200000);
+                }
+                for (int c = 1; c < k; c += 3) {   /* duplicates: ties */
+                    memcpy(book + c * dim, book + (c - 1) * dim, (size_t)dim);
+                    bias[c] = bias[c - 1];
+                }
+                for (size_t i = 0; i < n; i++)
+                    for (int d = 0; d < dim; d++) {
+                        uint32_t r = next_rand() % 16;
+                        vecs[i * VQ_STRIDE + d] = (int16_t)(r == 0 ? 255 : r == 1 ? -255 :
+                                                            (int)(next_rand() % 161) - 80);
+                    }
+                vq_search_prepare(s, book, k, dim);
+                vq_search_set_bias(s, bias);
+                if (vq_nearest_path(path, s, vecs, n, idx, dist) < 0) {
+                    have = 0;
+                    break;
+                }
+                runs++;
+                for (size_t i = 0; i < n; i++) {
+                    reference_nearest(book, bias, k, dim, vecs + i * VQ_STRIDE, &ridx, &rcost);
+                    wrong += idx[i] != ridx || dist[i] != rcost;
+                    ties += ridx % 3 == 0 && ridx + 1 < k;
+                }
+            }
+        if (!have) {
+            check(1, "biased search, %s path # SKIP not on this CPU", names[path]);
+            continue;
+        }
+        check(wrong == 0 && ties > 0, "biased search, %s path: %d of %zu answers differ from "
+              "the reference (%d could tie)", names[path], wrong, runs * n, ties);
+    }
+    /* NULL biases: the plain nearest search, the same on the dispatched path. */
+    vq_search_set_bias(s, NULL);
+    vq_nearest(s, vecs, n, idx, dist);
+    int wrong = 0;
+    memset(bias, 0, 1000 * sizeof *bias);
+    for (size_t i = 0; i < n; i++) {
+        reference_nearest(book, bias, s->k, s->dim, vecs + i * VQ_STRIDE, &ridx, &rcost);
+        wrong += idx[i] != ridx || dist[i] != rcost;
+    }
+    check(wrong == 0, "no biases: the squared distance to the nearest codevector");
+    free(s);
+    free(book);
+    free(bias);
+    free(vecs);
+    free(idx);
+    free(dist);
+}
+
+/* Code lengths: vq_log2_q16 is log2 in 16.16 fixed point, to one unit. */
+static void check_log2(void)
+{
+    int wrong = 0;
+    for (uint64_t x = 1; x < (1ull << 62); x = x < 70000 ? x + 1 : x * 3 + 1) {
+        double d = log2((double)x) * 65536.0 - vq_log2_q16(x);
+        wrong += d < 0 || d >= 1.01;
+    }
+    check(wrong == 0 && vq_log2_q16(1) == 0 && vq_log2_q16(65536) == 16u << 16,
+          "fixed-point log2 within one unit (%d wrong)", wrong);
+}
+
+/* The 2x2 box average of a w x h RGB image (odd edges replicated). */
+static uint8_t *box_half(const uint8_t *img, uint32_t w, uint32_t h,
+                         uint32_t *hw, uint32_t *hh)
+{
+    *hw = (w + 1) / 2;
+    *hh = (h + 1) / 2;
+    uint8_t *out = malloc((size_t)*hw * *hh * 3);
+    if (!out)
+        fail("out of memory");
+    for (uint32_t y = 0; y < *hh; y++)
+        for (uint32_t x = 0; x < *hw; x++)
+            for (int c = 0; c < 3; c++) {
+                uint32_t x1 = 2 * x + 1 < w ? 2 * x + 1 : w - 1;
+                uint32_t y1 = 2 * y + 1 < h ? 2 * y + 1 : h - 1;
+                int s = img[((size_t)2 * y * w + 2 * x) * 3 + c] +
+                        img[((size_t)2 * y * w + x1) * 3 + c] +
+                        img[((size_t)y1 * w + 2 * x) * 3 + c] +
+                        img[((size_t)y1 * w + x1) * 3 + c];
+                out[((size_t)y * *hw + x) * 3 + c] = (uint8_t)((s + 2) >> 2);
+            }
+    return out;
+}
+
+/* Tile (tx, ty) of a w x h RGB image, clamp-padded past its edges. */
+static void cut(const uint8_t *img, uint32_t w, uint32_t h, uint32_t tx,
+                uint32_t ty, uint8_t *tile)
+{
+    for (uint32_t v = 0; v < T; v++)
+        for (uint32_t u = 0; u < T; u++) {
+            uint32_t x = tx * GV_STEP + u, y = ty * GV_STEP + v;
+            x = x < w ? x : w - 1;
+            y = y < h ? y : h - 1;
+            memcpy(tile + ((size_t)v * T + u) * 3, img + ((size_t)y * w + x) * 3, 3);
+        }
+}
+
+/* Rate-distortion mode on tiles of a photograph: what the encoder
+ * reconstructs is what the decoder gives, and at the same lambda the
+ * entropy-constrained encoder's J = SSE + lambda * bits is below that of
+ * nearest-codevector coding.  Then the target mode on one of them. */
+static void check_rd_photo(struct gv_tile_workspace *ws)
+{
+    const char *data = getenv("TESTDATA");
+    char path[1024];
+    snprintf(path, sizeof path, "%s/picos-1100x700.jpg", data ? data : "tests/data");
+    const char *in[1] = {path};
+    struct gv_source_info info;
+    struct gv_error err;
+    struct gv_source *src = gv_source_open(in, 1, NULL, &info, &err);
+    if (!src || info.channels != 3)
+        fail("cannot read %s: %s", path, src ? "not RGB" : err.text);
+    uint8_t *img = malloc((size_t)info.width * info.height * 3);
+    if (!img || gv_source_read(src, info.height, img, &err) < 0)
+        fail("cannot read %s", path);
+    gv_source_free(src);
+    uint32_t pw, ph;
+    uint8_t *half = box_half(img, info.width, info.height, &pw, &ph);
+
+    const size_t tb = gv_tile_bytes(3);
+    uint8_t *parent = malloc(tb), *orig = malloc(tb), *recon = malloc(tb);
+    uint8_t *dec = malloc(tb), *buf = malloc(GV_TILEBUF_MAX);
+    uint8_t *first = malloc(GV_TILEBUF_MAX);
+    if (!parent || !orig || !recon || !dec || !buf || !first)
+        fail("out of memory");
+    const double lambda = 2.0 * log(2.0) * gv_psnr_to_mse(36.0);
+    /* A whole tile, then the image's corner tile (76 x 188 valid pixels),
+     * coded with and without entropy-constrained VQ. */
+    static const uint32_t tiles[2][2] = {{0, 0}, {2, 1}};
+    size_t first_len = 0;
+    for (int t = 0; t < 2; t++) {
+        const uint32_t tx = tiles[t][0], ty = tiles[t][1];
+        const uint32_t vw = info.width - tx * GV_STEP < T ? info.width - tx * GV_STEP : T;
+        const uint32_t vh = info.height - ty * GV_STEP < T ? info.height - ty * GV_STEP : T;
+        cut(img, info.width, info.height, tx, ty, orig);
+        cut(half, pw, ph, tx / 2, ty / 2, parent);
+        double j[2];
+        int rate[2];
+        size_t len[2];
+        for (int plain = 0; plain < 2; plain++) {
+            struct gv_tile_params prm = {.target_mse = gv_psnr_to_mse(36.0), .max_rate = 10,
+                                         .lambda = lambda, .nearest_only = plain, .seed = 5};
+            struct gv_tile_stats st;
+            len[plain] = gv_tile_encode(ws, orig, parent, (int)(tx & 1), (int)(ty & 1), 3,
+                                        vw, vh, &prm, recon, buf, &st);
+            int same = gv_tile_decode(buf, len[plain], 3, parent, (int)(tx & 1), (int)(ty & 1),
+                                      dec, &err) == 0 && memcmp(dec, recon, tb) == 0;
+            double sse = 0;
+            for (uint32_t y = 0; y < vh; y++)
+                for (uint32_t x = 0; x < vw * 3; x++) {
+                    double d = orig[(size_t)y * T * 3 + x] - recon[(size_t)y * T * 3 + x];
+                    sse += d * d;
+                }
+            j[plain] = sse + lambda * 8.0 * (double)len[plain];
+            rate[plain] = st.rate;
+            check(same && (uint64_t)sse == st.sse, "photo tile (%u,%u), %s: decode == encoder "
+                  "reconstruction (r=%d, %zu bytes, %.2f dB)", tx, ty,
+                  plain ? "nearest codevector" : "entropy-constrained", st.rate, len[plain],
+                  10 * log10(65025.0 * vw * vh * 3 / (sse > 0 ? sse : 1)));
+            if (t == 0 && !plain) {
+                memcpy(first, buf, len[0]);
+                first_len = len[0];
+            }
+        }
+        check(j[0] < j[1], "photo tile (%u,%u): entropy-constrained J %.4g (r=%d, %zu bytes) "
+              "< nearest-codevector J %.4g (r=%d, %zu bytes)", tx, ty, j[0], rate[0], len[0],
+              j[1], rate[1], len[1]);
+    }
+    /* Target mode: 36 dB met with and without entropy-constrained VQ, in
+     * fewer bytes with it. */
+    cut(img, info.width, info.height, 0, 0, orig);
+    cut(half, pw, ph, 0, 0, parent);
+    {
+        size_t len[2];
+        int met = 1, same = 1;
+        const double budget = gv_psnr_to_mse(36.0) * T * T * 3;
+        for (int plain = 0; plain < 2; plain++) {
+            struct gv_tile_params prm = {.target_mse = gv_psnr_to_mse(36.0), .max_rate = 10,
+                                         .nearest_only = plain, .seed = 5};
+            struct gv_tile_stats st;
+            len[plain] = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &prm, recon, buf, &st);
+            met &= (double)st.sse <= budget && st.rate < 10;
+            same &= gv_tile_decode(buf, len[plain], 3, parent, 0, 0, dec, &err) == 0 &&
+                    memcmp(dec, recon, tb) == 0;
+        }
+        check(met && same && len[0] < len[1], "photo tile (0,0), 36 dB target: met in %zu bytes "
+              "entropy-constrained, %zu nearest-codevector; decode == encoder reconstruction",
+              len[0], len[1]);
+    }
+    /* The workspace keeps nothing from one tile to the next. */
+    struct gv_tile_params prm = {.target_mse = 1.0, .max_rate = 10, .lambda = lambda, .seed = 5};
+    struct gv_tile_stats st;
+    size_t again = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &prm, recon, buf, &st);
+    check(again == first_len && memcmp(buf, first, again) == 0,
+          "the same tile coded again gives the same bytes");
+    free(img);
+    free(half);
+    free(parent);
+    free(orig);
+    free(recon);
+    free(dec);
+    free(buf);
+    free(first);
 }
 
 int main(void)
@@ -266,6 +521,11 @@ int main(void)
     free(exact);
     free(g1);
     free(g2);
+
+    /* 6. The biased search, code lengths, rate-distortion on a photo. */
+    check_biased_search();
+    check_log2();
+    check_rd_photo(ws);
 
     gv_tile_workspace_free(ws);
     gv_tile_workspace_free(NULL);

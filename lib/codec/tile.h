@@ -74,12 +74,24 @@ uint32_t gv_tilebuf_index(const uint8_t *buf, int rate, int channels,
  * bit. */
 double gv_psnr_to_mse(double psnr_db);
 
+/* The price of a bit, in squared error, at a target mean squared error
+ * per sample: the slope 2 ln 2 * target_mse of the high-rate model
+ * D(R) ~ 2^(-2R).  The lambda of the rate-distortion mode, and the one
+ * the target mode's entropy-constrained VQ uses. */
+double gv_rd_lambda(double target_mse);
+
 /* Quality and rate controls for gv_tile_encode. */
 struct gv_tile_params {
     double target_mse;   /* mean squared error per sample to reach */
     int max_rate;        /* cap on r, 1..GV_MAX_RATE */
     double lambda;       /* > 0: rate-distortion mode instead of a target:
-                          * pick the r minimizing SSE + lambda * bits */
+                          * pick the r minimizing SSE + lambda * bits, with
+                          * entropy-constrained VQ (every index chosen and
+                          * every codebook trained by squared error +
+                          * lambda * its code length) */
+    int nearest_only;    /* either mode without entropy-constrained VQ
+                          * (nearest codevector, LBG codebooks): the
+                          * encoder before it, kept for comparisons */
     uint64_t seed;       /* deterministic sampling seed for this tile */
 };
 
@@ -91,7 +103,7 @@ struct gv_tile_stats {
 
 struct gv_tile_workspace;
 
-/* Allocate / free the scratch memory one encoding thread needs (~3 MiB).
+/* Allocate / free the scratch memory one encoding thread needs (~7 MiB).
  * gv_tile_workspace_free(NULL) does nothing. */
 struct gv_tile_workspace *gv_tile_workspace_new(void);
 void gv_tile_workspace_free(struct gv_tile_workspace *ws);

@@ -5,14 +5,15 @@
  * cut into 257x257 blocks of 2x2 pixels.  Rates are tried from r = 0 (the
  * prediction alone) upwards, each codebook grown from the previous one by a
  * PCA split followed by LBG (vq.c) on a random sample of the tile's blocks.
- * When the sample says a rate may meet the target, every block is assigned
- * exactly and the true squared error of the clamped reconstruction decides;
- * the first rate that meets the target (or the cap) wins.  So every tile the
- * encoder writes meets the target unless it is at the cap.  In
- * rate-distortion mode (params->lambda > 0) every rate is coded exactly
- * instead, and the one with the least SSE + lambda * bits wins.  Either way
- * the buffer is written in the smaller of the fixed and the entropy-coded
- * layouts.
+ * Blocks are coded with entropy-constrained VQ: indices and codebooks are
+ * chosen by squared error + lambda * code length.  When the sample says a
+ * rate may meet the target, every block is assigned and the true squared
+ * error of the clamped reconstruction decides; the first rate that meets
+ * the target (or the cap) wins.  So every tile the encoder writes meets
+ * the target unless it is at the cap.  In rate-distortion mode
+ * (params->lambda > 0) every rate is coded instead, and the one with the
+ * least SSE + lambda * bits wins.  Either way the buffer is written in the
+ * smaller of the fixed and the entropy-coded layouts.
  *
  * Sampling uses a per-tile seed, and the search is exact, so the output
  * does not depend on thread count or CPU.
@@ -28,6 +29,15 @@
 
 #define SAMPLE_MIN 4096   /* blocks sampled for training at small rates */
 #define SAMPLE_PER_CELL 12 /* ... growing to this many per codevector */
+#define TARGET_LBG_ITERS 12 /* LBG assignments per rate, target mode */
+
+/* Rate-distortion mode (measured on four photographs, docs/FORMAT.md
+ * section 8): LBG only seeds ECVQ there, so it stops early; more rounds
+ * of either kind buy under 0.1 dB for 5 to 8 % more time each. */
+#define RD_LBG_ITERS 3    /* LBG assignments per rate */
+#define ECVQ_ROUNDS 3     /* entropy-constrained rounds on the sample */
+#define POLISH_ROUNDS 3   /* whole-tile rounds at the chosen rate */
+#define CONVEX_FROM 5     /* from this rate on, one rise of J ends the search */
 
 struct gv_tile_workspace {
     uint8_t pred[GV_TILE * GV_TILE * 3];
@@ -40,6 +50,7 @@ struct gv_tile_workspace {
     int8_t best_book[VQ_MAXK * VQ_MAXDIM];
     uint8_t scratch[GV_TILEBUF_MAX]; /* sizing candidate rates (--rd) */
     struct vq_trainer trainer;
+    struct vq_trainer ecvq;          /* --rd: the entropy-constrained book */
 };
 
 struct gv_tile_workspace *gv_tile_workspace_new(void)
@@ -55,6 +66,13 @@ void gv_tile_workspace_free(struct gv_tile_workspace *ws)
 double gv_psnr_to_mse(double psnr_db)
 {
     return 65025.0 / pow(10.0, psnr_db / 10.0);   /* 65025 = 255^2 */
+}
+
+double gv_rd_lambda(double target_mse)
+{
+    /* High-rate theory: D(R) ~ 2^(-2R), so dD/dR = -2 ln 2 D; at the
+     * target distortion one bit is worth 2 ln 2 D* of squared error. */
+    return 2.0 * log(2.0) * target_mse;
 }
 
 static uint64_t splitmix(uint64_t *s)
@@ -206,13 +224,14 @@ static uint32_t start_training(struct gv_tile_workspace *ws, const uint8_t *orig
  * from its mean at rate 1, then split and refine.  Returns the sample's
  * squared error. */
 static uint64_t train_rate(struct gv_tile_workspace *ws, int rate, int dim,
-                           uint32_t nvalid, size_t *nsample)
+                           uint32_t nvalid, int lbg_iters, size_t *nsample)
 {
     struct vq_trainer *t = &ws->trainer;
     *nsample = grow_sample(ws, *nsample, rate, nvalid);
     if (rate == 1)
         vq_train_init(t, dim, ws->sample, *nsample);
-    return vq_train_double(t, ws->sample, *nsample, ws->idx, ws->dist);
+    return vq_train_double(t, ws->sample, *nsample, lbg_iters, ws->idx,
+                           ws->dist);
 }
 
 /* Assign every block exactly to the trained codebook (ws->idx) and
@@ -229,10 +248,133 @@ static uint64_t code_all(struct gv_tile_workspace *ws, const uint8_t *orig,
                        recon);
 }
 
+/* Blocks wholly outside the valid region cost only their index: give them
+ * the cheapest one (the least bias, the lowest index among equals). */
+static void cheapest_outside(uint16_t *idx, const int32_t *bias, int k,
+                             uint32_t valid_w, uint32_t valid_h)
+{
+    int cheap = 0;
+    for (int c = 1; c < k; c++)
+        if (bias[c] < bias[cheap])
+            cheap = c;
+    const uint32_t vbx = (valid_w + 1) / 2, vby = (valid_h + 1) / 2;
+    for (uint32_t by = 0; by < GV_BLOCKS; by++)
+        for (uint32_t bx = by < vby ? vbx : 0; bx < GV_BLOCKS; bx++)
+            idx[by * GV_BLOCKS + bx] = (uint16_t)cheap;
+}
+
+/* Move every used codevector of e to the rounded mean of the valid blocks
+ * assigned to it by ws->idx.  The indices, hence the bits, stay, and the
+ * error before the reconstruction's clamp cannot rise (the rounded,
+ * clamped mean is the best signed 8-bit centre of a cell). */
+static void refit_cells(struct gv_tile_workspace *ws, struct vq_trainer *e,
+                        uint32_t valid_w, uint32_t valid_h)
+{
+    const int dim = e->dim;
+    const uint32_t vbx = (valid_w + 1) / 2, vby = (valid_h + 1) / 2;
+    memset(e->sum, 0, sizeof(int64_t) * (size_t)e->k * dim);
+    memset(e->count, 0, sizeof(uint32_t) * (size_t)e->k);
+    for (uint32_t by = 0; by < vby; by++)
+        for (uint32_t bx = 0; bx < vbx; bx++) {
+            const uint32_t b = by * GV_BLOCKS + bx;
+            const int16_t *x = ws->vecs + (size_t)b * VQ_STRIDE;
+            int64_t *sum = e->sum + (size_t)ws->idx[b] * dim;
+            for (int d = 0; d < dim; d++)
+                sum[d] += x[d];
+            e->count[ws->idx[b]]++;
+        }
+    for (int c = 0; c < e->k; c++)
+        if (e->count[c])
+            for (int d = 0; d < dim; d++) {
+                long v = lround((double)e->sum[c * dim + d] / e->count[c]);
+                e->book[c * dim + d] = (int8_t)(v < -128 ? -128 : (v > 127 ? 127 : v));
+            }
+}
+
+/* Assign every block by distortion + e's biases (ws->idx), the blocks
+ * outside the image to the cheapest index, then refit e's book to the
+ * whole tile. */
+static void assign_all(struct gv_tile_workspace *ws, struct vq_trainer *e,
+                       uint32_t valid_w, uint32_t valid_h)
+{
+    vq_nearest(&e->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
+    cheapest_outside(ws->idx, e->bias, e->k, valid_w, valid_h);
+    refit_cells(ws, e, valid_w, valid_h);
+}
+
+/* Entropy-constrained coding at `rate`: a copy of the LBG book of
+ * ws->trainer is refined on the sample under J = distortion + lambda *
+ * bits (ECVQ_ROUNDS rounds), every block is assigned by the same cost and
+ * the book refit to the whole tile.  The book is left in ws->ecvq, the
+ * indices in ws->idx, the reconstruction in recon; returns the squared
+ * error over the valid region. */
+static uint64_t code_all_ecvq(struct gv_tile_workspace *ws, const uint8_t *orig,
+                              int rate, int channels, uint32_t valid_w,
+                              uint32_t valid_h, size_t nsample, double lambda,
+                              uint8_t *recon)
+{
+    struct vq_trainer *e = &ws->ecvq;
+    vq_train_from(e, ws->trainer.book, ws->trainer.k, 4 * channels);
+    vq_train_ecvq(e, ws->sample, nsample, lambda, ECVQ_ROUNDS, ws->idx,
+                  ws->dist);
+    assign_all(ws, e, valid_w, valid_h);
+    return reconstruct(ws, orig, e->book, rate, channels, valid_w, valid_h,
+                       recon);
+}
+
+/* The best candidate of the rate-distortion search so far. */
+struct rd_best {
+    int rate;
+    uint64_t sse;
+    double j;
+};
+
+/* Keep the current candidate (ws->idx and `book`) as the best. */
+static void keep_best(struct gv_tile_workspace *ws, struct rd_best *best,
+                      int rate, int dim, const int8_t *book, uint64_t sse,
+                      double j)
+{
+    best->rate = rate;
+    best->sse = sse;
+    best->j = j;
+    memcpy(ws->best_idx, ws->idx, sizeof ws->idx);
+    memcpy(ws->best_book, book, ((size_t)1 << rate) * dim);
+}
+
+/* Whole-tile ECVQ rounds at the chosen rate: code lengths from the best
+ * assignment's counts (every block, as the rANS model counts them),
+ * biased assignment of every block, refit; a round is kept while J
+ * falls, and the first that does not lower it ends the polish. */
+static void polish(struct gv_tile_workspace *ws, const uint8_t *orig,
+                   int channels, uint32_t valid_w, uint32_t valid_h,
+                   double lambda, struct rd_best *best, uint8_t *recon)
+{
+    struct vq_trainer *e = &ws->ecvq;
+    const int dim = 4 * channels, k = 1 << best->rate;
+    for (int round = 0; round < POLISH_ROUNDS && best->rate > 0; round++) {
+        vq_train_from(e, ws->best_book, k, dim);
+        vq_set_biases(e, ws->best_idx, GV_NBLOCKS, lambda);
+        vq_search_prepare(&e->search, e->book, k, dim);
+        vq_search_set_bias(&e->search, e->bias);
+        assign_all(ws, e, valid_w, valid_h);
+        uint64_t sse = reconstruct(ws, orig, e->book, best->rate, channels,
+                                   valid_w, valid_h, recon);
+        size_t bytes = pack_best(ws->scratch, best->rate, channels, e->book,
+                                 ws->idx);
+        double j = (double)sse + lambda * 8.0 * (double)bytes;
+        if (!(j < best->j))
+            break;
+        keep_best(ws, best, best->rate, dim, e->book, sse, j);
+    }
+}
+
 /*
- * Rate-distortion mode: every rate up to the cap is coded exactly and the
- * one minimizing J = SSE + lambda * bits wins; the search stops once J has
- * risen for two rates in a row (J is close to convex in r).
+ * Rate-distortion mode: every rate is coded (entropy-constrained, above)
+ * and the one minimizing J = SSE + lambda * bits wins.  The search stops
+ * once J has risen for two rates in a row, or for one from CONVEX_FROM on
+ * (J is close to convex in r there); then the winner is polished.  With
+ * params->nearest_only, LBG codebooks and nearest assignment instead, two
+ * rises always, no polish.
  */
 static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
                         int channels, uint32_t valid_w, uint32_t valid_h,
@@ -241,42 +383,82 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
                         struct gv_tile_stats *stats)
 {
     const int dim = 4 * channels;
-    double best_j = (double)sse0 + params->lambda * 8.0 * gv_tilebuf_size(0, channels);
-    int best_rate = 0, rises = 0;
-    uint64_t best_sse = sse0;
+    const double lambda = params->lambda;
+    struct rd_best best = {
+        .rate = 0, .sse = sse0,
+        .j = (double)sse0 + lambda * 8.0 * gv_tilebuf_size(0, channels),
+    };
     uint32_t nvalid = start_training(ws, orig, channels, valid_w, valid_h,
                                      params->seed);
     size_t nsample = 0;
-    struct vq_trainer *t = &ws->trainer;
-    for (int rate = 1; rate <= max_rate && rises < 2; rate++) {
-        train_rate(ws, rate, dim, nvalid, &nsample);
-        uint64_t sse = code_all(ws, orig, rate, channels, valid_w, valid_h,
-                                recon);
-        size_t bytes = pack_best(ws->scratch, rate, channels, t->book, ws->idx);
-        double j = (double)sse + params->lambda * 8.0 * (double)bytes;
-        if (j < best_j) {
-            best_j = j;
-            best_rate = rate;
-            best_sse = sse;
-            memcpy(ws->best_idx, ws->idx, sizeof ws->idx);
-            memcpy(ws->best_book, t->book, ((size_t)1 << rate) * dim);
-            rises = 0;
+    int rises = 0;
+    const int ecvq = !params->nearest_only;
+    for (int rate = 1; rate <= max_rate; rate++) {
+        uint64_t sse;
+        const int8_t *book;
+        if (ecvq) {
+            train_rate(ws, rate, dim, nvalid, RD_LBG_ITERS, &nsample);
+            sse = code_all_ecvq(ws, orig, rate, channels, valid_w, valid_h,
+                                nsample, lambda, recon);
+            book = ws->ecvq.book;
         } else {
-            rises++;
+            train_rate(ws, rate, dim, nvalid, TARGET_LBG_ITERS, &nsample);
+            sse = code_all(ws, orig, rate, channels, valid_w, valid_h, recon);
+            book = ws->trainer.book;
+        }
+        size_t bytes = pack_best(ws->scratch, rate, channels, book, ws->idx);
+        double j = (double)sse + lambda * 8.0 * (double)bytes;
+        if (j < best.j) {
+            keep_best(ws, &best, rate, dim, book, sse, j);
+            rises = 0;
+        } else if (++rises == 2 || (ecvq && rate >= CONVEX_FROM)) {
+            break;
         }
     }
+    if (ecvq)
+        polish(ws, orig, channels, valid_w, valid_h, lambda, &best, recon);
     memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
-    reconstruct(ws, orig, ws->best_book, best_rate, channels, valid_w, valid_h, recon);
-    size_t len = pack_best(buf, best_rate, channels, ws->best_book, ws->idx);
-    stats->rate = best_rate;
-    stats->sse = best_sse;
-    return len;
+    reconstruct(ws, orig, ws->best_book, best.rate, channels, valid_w, valid_h,
+                recon);
+    stats->rate = best.rate;
+    stats->sse = best.sse;
+    return pack_best(buf, best.rate, channels, ws->best_book, ws->idx);
+}
+
+/*
+ * Target mode at the cap, when entropy-constrained coding (ws->idx, the
+ * book in ws->ecvq, error ecvq_sse) misses the budget: nearest-codevector
+ * coding has less error, and is taken if it meets the budget, so that no
+ * tile misses a target the nearest codevectors would meet.  Otherwise the
+ * entropy-constrained coding stays.  Returns the error of the coding left
+ * in ws->idx, *book and recon.
+ */
+static uint64_t nearest_at_cap(struct gv_tile_workspace *ws, const uint8_t *orig,
+                               int rate, int channels, uint32_t valid_w,
+                               uint32_t valid_h, double budget,
+                               uint64_t ecvq_sse, uint8_t *recon,
+                               const int8_t **book)
+{
+    memcpy(ws->best_idx, ws->idx, sizeof ws->idx);
+    uint64_t sse = code_all(ws, orig, rate, channels, valid_w, valid_h, recon);
+    if ((double)sse <= budget) {
+        *book = ws->trainer.book;
+        return sse;
+    }
+    memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
+    reconstruct(ws, orig, ws->ecvq.book, rate, channels, valid_w, valid_h,
+                recon);
+    *book = ws->ecvq.book;
+    return ecvq_sse;
 }
 
 /*
  * Target mode: the first rate whose exact error meets the budget (or the
  * cap).  A rate is coded exactly only when its training sample says it
- * may meet the target, since the exact assignment is the costly step.
+ * may meet the target, since the exact assignment is the costly step.  It
+ * is coded with entropy-constrained VQ at the slope of the rate-distortion
+ * mode for the same target (fewer bits, more error at each rate), and at
+ * the cap also with nearest codevectors if that is needed to meet it.
  */
 static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
                             int channels, uint32_t valid_w, uint32_t valid_h,
@@ -284,22 +466,35 @@ static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
                             double budget, uint8_t *recon, uint8_t *buf,
                             struct gv_tile_stats *stats)
 {
-    const int dim = 4 * channels;
+    const int dim = 4 * channels, ecvq = !params->nearest_only;
+    const double lambda = gv_rd_lambda(params->target_mse);
     uint32_t nvalid = start_training(ws, orig, channels, valid_w, valid_h,
                                      params->seed);
     size_t nsample = 0;
     for (int rate = 1;; rate++) {
-        uint64_t est = train_rate(ws, rate, dim, nvalid, &nsample);
+        uint64_t est = train_rate(ws, rate, dim, nvalid, TARGET_LBG_ITERS,
+                                  &nsample);
         /* The sample's error per sample, scaled to the valid region. */
         double est_mse = (double)est / ((double)nsample * dim);
         if (rate < max_rate && est_mse > params->target_mse)
             continue;
-        uint64_t sse = code_all(ws, orig, rate, channels, valid_w, valid_h,
-                                recon);
+        uint64_t sse;
+        const int8_t *book;
+        if (ecvq) {
+            sse = code_all_ecvq(ws, orig, rate, channels, valid_w, valid_h,
+                                nsample, lambda, recon);
+            book = ws->ecvq.book;
+            if (rate == max_rate && (double)sse > budget)
+                sse = nearest_at_cap(ws, orig, rate, channels, valid_w,
+                                     valid_h, budget, sse, recon, &book);
+        } else {
+            sse = code_all(ws, orig, rate, channels, valid_w, valid_h, recon);
+            book = ws->trainer.book;
+        }
         if ((double)sse <= budget || rate == max_rate) {
             stats->rate = rate;
             stats->sse = sse;
-            return pack_best(buf, rate, channels, ws->trainer.book, ws->idx);
+            return pack_best(buf, rate, channels, book, ws->idx);
         }
     }
 }

@@ -8,7 +8,12 @@
  * time (GIGAVIEW_NO_AVX512 in the environment rules out the first), and
  * each returns exactly what the portable loop returns (strictly-less
  * comparison in index order, ties to the lowest index), so stores do not
- * depend on the CPU that wrote them.
+ * depend on the CPU that wrote them.  A per-codevector bias is where each
+ * cost starts: every path adds it before the first pair, in int32.
+ *
+ * Training is LBG (vq_train_double) and, for the rate-distortion mode,
+ * entropy-constrained refinement (vq_train_ecvq: Chou, Lookabaugh and
+ * Gray's ECVQ, the assignment by distortion + lambda * code length).
  */
 #include <limits.h>
 #include <math.h>
@@ -29,10 +34,11 @@ static inline int32_t pack_pair(int a, int b)
 }
 
 /* Padding codevectors fill the SIMD lanes past k: -32000 in the first two
- * dimensions and 0 elsewhere.  Against any residual (|x| <= 255) their
- * distance is over 2.08e9, far above any real one (at most 12 * 383^2),
- * yet the int16 differences and the int32 sums cannot overflow; so they are
- * never chosen and every path returns what the portable loop returns. */
+ * dimensions and 0 elsewhere, with bias 0.  Against any residual
+ * (|x| <= 255) their distance is over 2.01e9, far above any real cost (at
+ * most VQ_BIAS_MAX + 12 * 383^2 < 1.08e9), yet the int16 differences and
+ * the int32 sums cannot overflow (at most 2.09e9); so they are never
+ * chosen and every path returns what the portable loop returns. */
 #define PAD_VALUE (-32000)
 
 void vq_search_prepare(struct vq_search *s, const int8_t *book, int k, int dim)
@@ -47,6 +53,15 @@ void vq_search_prepare(struct vq_search *s, const int8_t *book, int k, int dim)
         for (int i = k; i < s->kpad; i++)
             s->pairs[j * s->kpad + i] = j == 0 ? pack_pair(PAD_VALUE, PAD_VALUE) : 0;
     }
+    memset(s->bias, 0, sizeof(int32_t) * (size_t)s->kpad);
+}
+
+void vq_search_set_bias(struct vq_search *s, const int32_t *bias)
+{
+    for (int i = 0; i < s->k; i++) {
+        int32_t b = bias ? bias[i] : 0;
+        s->bias[i] = b < 0 ? 0 : (b > VQ_BIAS_MAX ? VQ_BIAS_MAX : b);
+    }
 }
 
 static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
@@ -58,7 +73,7 @@ static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
         uint32_t best = UINT32_MAX;
         int besti = 0;
         for (int c = 0; c < k; c++) {
-            uint32_t d = 0;
+            uint32_t d = (uint32_t)s->bias[c];
             for (int j = 0; j < pairs; j++) {
                 int32_t p = s->pairs[j * stride + c];
                 int d0 = x[2 * j] - (int16_t)(p & 0xffff);
@@ -98,7 +113,7 @@ nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
         __m256i besti = _mm256_setzero_si256();
         __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
         for (int c = 0; c < k; c += 8) {
-            __m256i acc = _mm256_setzero_si256();
+            __m256i acc = _mm256_loadu_si256((const __m256i *)(s->bias + c));
             for (int j = 0; j < pairs; j++) {
                 __m256i cv = _mm256_loadu_si256(
                     (const __m256i *)(s->pairs + j * k + c));
@@ -147,7 +162,7 @@ nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
         __m512i besti = _mm512_setzero_si512();
         __m512i lane = first;
         for (int c = 0; c < k; c += 16) {
-            __m512i acc = _mm512_setzero_si512();
+            __m512i acc = _mm512_loadu_si512(s->bias + c);
             for (int j = 0; j < pairs; j++) {
                 __m512i cv = _mm512_loadu_si512(s->pairs + j * k + c);
                 __m512i d = _mm512_sub_epi16(xp[j], cv);
@@ -167,6 +182,31 @@ nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
     }
 }
 #endif
+
+int vq_nearest_path(enum vq_path path, const struct vq_search *s,
+                    const int16_t *vecs, size_t n, uint16_t *idx,
+                    uint32_t *dist)
+{
+    switch (path) {
+    case VQ_PATH_PORTABLE:
+        nearest_portable(s, vecs, n, idx, dist);
+        return 0;
+#ifdef VQ_HAVE_X86
+    case VQ_PATH_AVX2:
+        if (!__builtin_cpu_supports("avx2"))
+            return -1;
+        nearest_avx2(s, vecs, n, idx, dist);
+        return 0;
+    case VQ_PATH_AVX512:
+        if (!__builtin_cpu_supports("avx512f") || !__builtin_cpu_supports("avx512bw"))
+            return -1;
+        nearest_avx512(s, vecs, n, idx, dist);
+        return 0;
+#endif
+    default:
+        return -1;
+    }
+}
 
 void vq_nearest(const struct vq_search *s, const int16_t *vecs, size_t n,
                 uint16_t *idx, uint32_t *dist)
@@ -331,11 +371,11 @@ static void move_cells(struct vq_trainer *t, const int16_t *sample, size_t n,
 }
 
 uint64_t vq_train_double(struct vq_trainer *t, const int16_t *sample, size_t n,
-                         uint16_t *idx, uint32_t *dist)
+                         int max_iters, uint16_t *idx, uint32_t *dist)
 {
     split_cells(t, sample, n, idx);
     uint64_t prev = UINT64_MAX, total = 0;
-    for (int it = 0; it < 12; it++) {
+    for (int it = 0; it < max_iters; it++) {
         vq_search_prepare(&t->search, t->book, t->k, t->dim);
         vq_nearest(&t->search, sample, n, idx, dist);
         total = 0;
@@ -348,5 +388,84 @@ uint64_t vq_train_double(struct vq_trainer *t, const int16_t *sample, size_t n,
         prev = total;
         move_cells(t, sample, n, idx, dist);
     }
+    return total;
+}
+
+void vq_train_from(struct vq_trainer *t, const int8_t *book, int k, int dim)
+{
+    t->dim = dim;
+    t->k = k;
+    memcpy(t->book, book, (size_t)k * dim);
+}
+
+uint32_t vq_log2_q16(uint64_t x)
+{
+    int e = 63 - __builtin_clzll(x);
+    /* The mantissa in [1, 2) as Q31; each squaring yields one more bit. */
+    uint64_t m = e >= 31 ? x >> (e - 31) : x << (31 - e);
+    uint32_t frac = 0;
+    for (int b = 15; b >= 0; b--) {
+        m = (m * m) >> 31;
+        if (m >= (1ull << 32)) {
+            frac |= 1u << b;
+            m >>= 1;
+        }
+    }
+    return (uint32_t)e << 16 | frac;
+}
+
+void vq_set_biases(struct vq_trainer *t, const uint16_t *idx, size_t n,
+                   double lambda)
+{
+    const int kk = t->k;
+    memset(t->count, 0, sizeof(uint32_t) * (size_t)kk);
+    for (size_t i = 0; i < n; i++)
+        t->count[idx[i]]++;
+    const int64_t log_n = vq_log2_q16(n);
+    for (int c = 0; c < kk; c++) {
+        int64_t len = t->count[c] ? log_n - vq_log2_q16(t->count[c])
+                                  : vq_log2_q16(2 * (uint64_t)n);
+        double b = lambda * (double)(len > 0 ? len : 0) / 65536.0;
+        t->bias[c] = b >= VQ_BIAS_MAX ? VQ_BIAS_MAX : (int32_t)lround(b);
+    }
+}
+
+/* Every cell with vectors moves to their rounded mean (t->count is the
+ * assignment's count); empty cells stay. */
+static void move_used_cells(struct vq_trainer *t, const int16_t *sample,
+                            size_t n, const uint16_t *idx)
+{
+    const int dim = t->dim, kk = t->k;
+    memset(t->sum, 0, sizeof(int64_t) * (size_t)kk * dim);
+    for (size_t i = 0; i < n; i++) {
+        const int16_t *x = sample + i * VQ_STRIDE;
+        int64_t *s = t->sum + (size_t)idx[i] * dim;
+        for (int d = 0; d < dim; d++)
+            s[d] += x[d];
+    }
+    for (int c = 0; c < kk; c++)
+        if (t->count[c])
+            for (int d = 0; d < dim; d++)
+                t->book[c * dim + d] = mean_s8(t->sum[c * dim + d], t->count[c]);
+}
+
+uint64_t vq_train_ecvq(struct vq_trainer *t, const int16_t *sample, size_t n,
+                       double lambda, int iters, uint16_t *idx, uint32_t *dist)
+{
+    uint64_t total = 0;
+    memset(t->bias, 0, sizeof(int32_t) * (size_t)t->k);
+    for (int it = 0;; it++) {
+        vq_search_prepare(&t->search, t->book, t->k, t->dim);
+        vq_search_set_bias(&t->search, t->bias);
+        vq_nearest(&t->search, sample, n, idx, dist);
+        total = 0;
+        for (size_t i = 0; i < n; i++)
+            total += dist[i];
+        vq_set_biases(t, idx, n, lambda);
+        if (it == iters)
+            break;
+        move_used_cells(t, sample, n, idx);
+    }
+    vq_search_set_bias(&t->search, t->bias);
     return total;
 }

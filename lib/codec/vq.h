@@ -5,9 +5,11 @@
  * zero padded).  Codebooks are signed 8-bit, as stored in tile buffers.
  * The search is exact (ties go to the lowest index) and gives identical
  * answers on the AVX-512, AVX2 and portable paths, so encoding is
- * deterministic on every machine.  Internal to the tile encoder; one
- * thread per vq_search or vq_trainer (the structures are large: allocate
- * them, as the tile workspace does).
+ * deterministic on every machine.  Each codevector may carry an integer
+ * bias added to its squared distance (entropy-constrained VQ: the bias is
+ * lambda times the codevector's code length).  Internal to the tile
+ * encoder; one thread per vq_search or vq_trainer (the structures are
+ * large: allocate them, as the tile workspace does).
  */
 #ifndef GV_VQ_H
 #define GV_VQ_H
@@ -19,23 +21,45 @@
 #define VQ_MAXDIM 12
 #define VQ_MAXK 4096
 
+/* The largest bias: a biased cost (at most VQ_BIAS_MAX + 12 * 383^2) stays
+ * in int32 and below the cost of any padding lane. */
+#define VQ_BIAS_MAX (1 << 30)
+
 /* A codebook prepared for searching: pairs of dimensions packed into int32
- * lanes, [dim/2][k] (structure of arrays). */
+ * lanes, [dim/2][k] (structure of arrays), and the per-codevector biases
+ * (0 in the padding lanes). */
 struct vq_search {
     int k, dim;
     int kpad;               /* k rounded up to 16: the SIMD row stride */
     int32_t pairs[VQ_MAXDIM / 2 * VQ_MAXK];
+    int32_t bias[VQ_MAXK];
 };
 
-/* Prepare `book` (k entries of dim signed bytes) for vq_nearest. */
+/* Prepare `book` (k entries of dim signed bytes) for vq_nearest, with
+ * every bias 0 (plain nearest search). */
 void vq_search_prepare(struct vq_search *s, const int8_t *book, int k, int dim);
 
+/* Set the biases of a prepared search: bias[c] is added to the squared
+ * distance to codevector c; each is clamped to 0 .. VQ_BIAS_MAX.  NULL
+ * sets every bias to 0. */
+void vq_search_set_bias(struct vq_search *s, const int32_t *bias);
+
 /*
- * For each of the n vectors, the index of the nearest codevector in idx[i]
- * and, if dist is not NULL, its squared distance in dist[i].
+ * For each of the n vectors, the index c minimizing the squared distance
+ * plus bias[c] in idx[i] (ties to the lowest index) and, if dist is not
+ * NULL, that cost (the squared distance when biases are 0) in dist[i].
  */
 void vq_nearest(const struct vq_search *s, const int16_t *vecs, size_t n,
                 uint16_t *idx, uint32_t *dist);
+
+/* The search paths, for tests: each gives what VQ_PATH_PORTABLE gives. */
+enum vq_path { VQ_PATH_PORTABLE, VQ_PATH_AVX2, VQ_PATH_AVX512 };
+
+/* vq_nearest on one given path.  Returns 0, or -1 (computing nothing)
+ * when this CPU or build does not have it. */
+int vq_nearest_path(enum vq_path path, const struct vq_search *s,
+                    const int16_t *vecs, size_t n, uint16_t *idx,
+                    uint32_t *dist);
 
 /* Scratch for vq_train: sized for VQ_MAXK entries. */
 struct vq_trainer {
@@ -43,6 +67,7 @@ struct vq_trainer {
     int8_t book[VQ_MAXK * VQ_MAXDIM];
     int64_t sum[VQ_MAXK * VQ_MAXDIM];
     uint32_t count[VQ_MAXK];
+    int32_t bias[VQ_MAXK];  /* vq_train_ecvq: lambda * code length */
     struct vq_search search;
 };
 
@@ -53,11 +78,43 @@ void vq_train_init(struct vq_trainer *t, int dim, const int16_t *sample,
 /*
  * Double the codebook by splitting every cell along its principal axis
  * (PCA split, section 2.7), then refine with LBG on the sample until the
- * distortion improves by less than 0.5% or 12 iterations pass.  Empty
- * cells are reseeded with the worst-coded sample vectors.  idx and dist
- * are caller scratch of n entries.  Returns the final sample distortion.
+ * distortion improves by less than 0.5% or max_iters assignments pass.
+ * Empty cells are reseeded with the worst-coded sample vectors.  idx and
+ * dist are caller scratch of n entries.  Returns the sample distortion of
+ * the last assignment.
  */
 uint64_t vq_train_double(struct vq_trainer *t, const int16_t *sample, size_t n,
-                         uint16_t *idx, uint32_t *dist);
+                         int max_iters, uint16_t *idx, uint32_t *dist);
+
+/* Start a trainer from a given codebook of k entries of dim bytes. */
+void vq_train_from(struct vq_trainer *t, const int8_t *book, int k, int dim);
+
+/*
+ * Entropy-constrained refinement of t's codebook on the sample: `iters`
+ * rounds of (assignment by squared distance + t->bias, code lengths
+ * -log2(count / n) from that assignment, bias = round(lambda * length),
+ * every used cell to the mean of its vectors).  The first assignment is
+ * unbiased; a cell that empties keeps its codevector and gets the length
+ * of half a vector, log2(2n).  lambda is squared error per bit, in the
+ * distance's units.  On return t->bias holds the biases from the last
+ * assignment and t->search is prepared with the final book and those
+ * biases, ready for vq_nearest.  Integer arithmetic apart from IEEE
+ * divisions (the means) and one multiplication per bias, so the result
+ * is the same on every CPU.
+ * Returns the sample's last biased cost (distortion + lambda * bits).
+ */
+uint64_t vq_train_ecvq(struct vq_trainer *t, const int16_t *sample, size_t n,
+                       double lambda, int iters, uint16_t *idx, uint32_t *dist);
+
+/* Count the assignment idx (n entries) into t->count and set t->bias[c]
+ * to round(lambda * len_c), len_c = -log2(count_c / n) in 16.16 fixed
+ * point (log2(2n) for an empty cell), clamped to VQ_BIAS_MAX. */
+void vq_set_biases(struct vq_trainer *t, const uint16_t *idx, size_t n,
+                   double lambda);
+
+/* log2(x) in 16.16 fixed point for x >= 1: floor(log2(x) * 65536) or one
+ * less (the mantissa is truncated as it is squared), by integer arithmetic
+ * only, so that code lengths are the same on every CPU. */
+uint32_t vq_log2_q16(uint64_t x);
 
 #endif

@@ -285,9 +285,7 @@ static void encode_tile(void *ctx, size_t slot, int worker)
         .target_mse = e->target_mse,
         .max_rate = e->opts->max_rate,
         .seed = tile_seed(e->level, tx, ty),
-        /* High-rate theory: D(R) ~ 2^(-2R), so dD/dR = -2 ln 2 D; at the
-         * target distortion one bit is worth 2 ln 2 D* of squared error. */
-        .lambda = e->opts->rd ? 2.0 * log(2.0) * e->target_mse : 0.0,
+        .lambda = e->opts->rd ? gv_rd_lambda(e->target_mse) : 0.0,
     };
     e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
                                    (int)(ty & 1), c, valid_w, valid_h, &params,
