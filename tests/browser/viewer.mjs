@@ -7,7 +7,7 @@
 //
 // Needs stores "picos" (tests/data/picos-1100x700.jpg: two tiled levels,
 // every tile entropy-coded) and "synth" (synth:3000x2000: three tiled
-// levels, fixed-layout and entropy-coded tiles) on the server.  The page
+// levels at -q 30, fixed-layout and entropy-coded tiles) on the server.  The page
 // is 800 x 500 CSS pixels at device scale 1.
 //
 // Checks, one a line as "PASS text" or "FAIL text" (details start with
