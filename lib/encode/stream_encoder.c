@@ -86,6 +86,10 @@ static void report(struct encoder *e, const char *phase, double fraction)
 {
     if (!e->opts->progress)
         return;
+    /* Tiles overlap by one pixel, so the samples they count add up to a
+     * little more than the levels' pixels: never report past the end. */
+    if (fraction > 1.0)
+        fraction = 1.0;
     struct gv_encode_progress p = {
         .fraction = fraction,
         .source_pixels = (uint64_t)e->g.width * e->g.height,
