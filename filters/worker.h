@@ -19,7 +19,8 @@
  * hello carries the protocol version).  Bodies:
  *
  *   HELLO   (worker, once, first)  u32 version, u32 ok, u32 n, n bytes of
- *           text: the renderer, or why the EGL context could not be made
+ *           text: "platform, API: renderer", or why the EGL context could
+ *           not be made
  *   COMPILE (server)  limits, u32 n, n bytes of graph document
  *   RUN     (server)  limits, document as for COMPILE, u32 nparams,
  *           nparams f64, u32 w, h, roi_x, roi_y, roi_w, roi_h, i64 abs_x,

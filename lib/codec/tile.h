@@ -48,8 +48,10 @@ void gv_predict(const uint8_t *parent, int channels, int qx, int qy,
                 uint8_t *pred);
 
 /*
- * Check that buf[0..len) is a well-formed tile buffer for `channels`.
- * Returns its rate r, or -1 with *err filled.
+ * Check that buf[0..len) is a well-formed tile buffer for `channels`:
+ * all of a fixed-layout buffer; the layout of an entropy-coded one (its
+ * tables and stream lengths), whose streams gv_tile_decode validates as it
+ * decodes them.  Returns its rate r, or -1 with *err filled.
  */
 int gv_tilebuf_check(const uint8_t *buf, size_t len, int channels,
                      struct gv_error *err);
