@@ -5,7 +5,10 @@
  * as the anchor, libjpeg-turbo decoding the same level-0 tiles saved as
  * JPEG at the quality that matches the store's PSNR.
  *
- *   decode_bench STORE [SOURCE-IMAGE]     (SOURCE-IMAGE enables the JPEG anchor)
+ *   decode_bench [--no-gpu] [--no-cpu] STORE [SOURCE-IMAGE]
+ *
+ * SOURCE-IMAGE enables the JPEG anchor; --no-gpu and --no-cpu leave out
+ * those decoders (to profile one of them).
  *
  * Speeds are megapixels of decoded tiles (513 x 513 each) per second of
  * wall time, best of 3.  Prints figures only; asserts nothing.
@@ -178,8 +181,19 @@ static double jpeg_run(struct jpeg_tile *jt, int count)
 
 int main(int argc, char **argv)
 {
+    int want_gpu = 1, want_cpu = 1;
+    while (argc > 1 && argv[1][0] == '-') {
+        if (!strcmp(argv[1], "--no-gpu"))
+            want_gpu = 0;
+        else if (!strcmp(argv[1], "--no-cpu"))
+            want_cpu = 0;
+        else
+            break;
+        argv++;
+        argc--;
+    }
     if (argc < 2) {
-        fprintf(stderr, "usage: decode_bench STORE [SOURCE-IMAGE]\n");
+        fprintf(stderr, "usage: decode_bench [--no-gpu] [--no-cpu] STORE [SOURCE-IMAGE]\n");
         return 2;
     }
     struct gv_error err;
@@ -242,15 +256,19 @@ int main(int argc, char **argv)
            argv[1], g->width, g->height, ntiles, entropy,
            8.0 * coded_bytes / ((double)ntiles * 513 * 513), psnr0);
 
-    double cpu1 = cpu_run(1), cpun = cpu_run(gv_cpu_count());
-    printf("%-34s %9.1f MP/s\n", "CPU reference, 1 thread", cpu1);
-    printf("%-34s %9.1f MP/s  (%d threads)\n", "CPU reference, all cores", cpun, gv_cpu_count());
+    double cpu1 = 0, cpun = 0;
+    if (want_cpu) {
+        cpu1 = cpu_run(1);
+        cpun = cpu_run(gv_cpu_count());
+        printf("%-34s %9.1f MP/s\n", "CPU reference, 1 thread", cpu1);
+        printf("%-34s %9.1f MP/s  (%d threads)\n", "CPU reference, all cores", cpun, gv_cpu_count());
+    }
 
     double gpu = 0;
-    struct gv_gpu *gpuctx = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
-    if (!gpuctx) {
+    struct gv_gpu *gpuctx = want_gpu ? gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err) : NULL;
+    if (want_gpu && !gpuctx) {
         printf("%-34s unavailable: %s\n", "GPU (EGL)", err.text);
-    } else {
+    } else if (gpuctx) {
         const struct gv_gpu_info *in = gv_gpu_info(gpuctx);
         struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpuctx, channels, &err);
         uint32_t *h = calloc((size_t)ntiles, sizeof *h), root;
@@ -316,7 +334,10 @@ int main(int argc, char **argv)
         double jp = jpeg_run(jt, count);
         printf("%-34s %9.1f MP/s  (level-0 tiles, Q%d, PSNR within %.2f dB of the store)\n",
                "libjpeg-turbo, 1 thread (anchor)", jp, bestq, bestd);
-        printf("ratio CPU reference 1 thread / libjpeg-turbo 1 thread: %.2fx  (goal >= 3x)\n", cpu1 / jp);
+        if (cpu1 > 0) {
+            printf("ratio CPU reference 1 thread / libjpeg-turbo 1 thread: %.2fx  (goal >= 3x)\n", cpu1 / jp);
+            printf("ratio CPU reference all cores / libjpeg-turbo 1 thread: %.2fx\n", cpun / jp);
+        }
         if (gpu > 0)
             printf("ratio GPU decode / libjpeg-turbo 1 thread: %.2fx\n", gpu / jp);
     }

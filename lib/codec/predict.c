@@ -1,6 +1,7 @@
 /*
  * predict.c - the integer cubic upsample that predicts a tile from one
- * quarter of its decoded parent.
+ * quarter of its decoded parent, row by row (predict.h), and the residual
+ * addition that follows it in the decoder.
  *
  * Child pixel u (0..512) of quadrant q sits a quarter pixel before
  * (u even) or after (u odd) parent pixel p = 256*q + u/2, the sample
@@ -19,16 +20,65 @@
  *
  * Compared with the bilinear (3,1)/4 kernel this lowered the bits needed
  * for the same PSNR by 5 to 10 % on the benchmark photographs (FORMAT.md,
- * section 3).  Here the horizontal sums of each parent row are computed
- * once (exact, no rounding) and combined vertically, which gives the same
- * integers as the double sum above.  The GLSL
- * decoders compute the same expression; docs/FORMAT.md is normative.
+ * section 3).  The GLSL decoders compute the same expression;
+ * docs/FORMAT.md is normative.
+ *
+ * How it is made fast, with the same integers:
+ * - Separable: the horizontal sums h of each parent row are computed once
+ *   (a ring of rows, since child rows walk the parent downwards), and each
+ *   child row is the vertical 4-tap sum of four of them.
+ * - 16 bits: h lies in [-12*255, 140*255], so h - 16384 fits in a signed
+ *   16-bit integer; the rows are kept that way (half the memory traffic),
+ *   and as the vertical weights sum to 128 the offset comes back as the
+ *   constant 128*16384 in the 32-bit vertical sum.
+ * - No clamping inside the loops: the parent pixels a quadrant reads are
+ *   copied once per row into a segment padded by clamping at its ends, so
+ *   the even and odd children are two straight 4-tap filters over it.
+ * - The vertical sum runs on AVX2 where the CPU has it (pairs of rows
+ *   interleaved into VPMADDWD, the clamp done by the saturating packs,
+ *   which equals clamping before the shift since the shift is a floor);
+ *   elsewhere a plain C loop the compiler vectorizes.
  */
-#include "codec/tile_layout.h"
+#include <string.h>
+
+#include "codec/predict.h"
 #include "codec/tile.h"
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define HAVE_AVX2_PATH 1
+#else
+#define HAVE_AVX2_PATH 0
+#endif
 
 static const int W_EVEN[4] = {-3, 29, 111, -9};  /* taps at p-2 .. p+1 */
 static const int W_ODD[4] = {-9, 111, 29, -3};   /* taps at p-1 .. p+2 */
+
+/* h - OFFSET fits in int16_t; sum(w) * OFFSET returns in the vertical sum. */
+#define OFFSET 16384
+#define ROUND (8192 + 128 * OFFSET)
+#define SUM_MAX (255 * 16384 + 16383)
+
+static int simd_allowed = 1;
+
+int gv_predict_simd(int allow)
+{
+    simd_allowed = allow;
+#if HAVE_AVX2_PATH
+    return allow && __builtin_cpu_supports("avx2");
+#else
+    return 0;
+#endif
+}
+
+static inline int use_avx2(void)
+{
+#if HAVE_AVX2_PATH
+    return simd_allowed && __builtin_cpu_supports("avx2");
+#else
+    return 0;
+#endif
+}
 
 static inline int clamp_tile(int i)
 {
@@ -42,95 +92,234 @@ static inline int first_tap(int q, int u)
     return (u & 1) ? p - 1 : p - 2;
 }
 
-/* Where the compiler and CPU allow, the two hot loops are also compiled
- * for AVX2 (32-bit multiplies in vector registers need SSE4.1 or later;
- * the baseline x86-64 target has none), chosen at load time.  The integers
- * are the same on every path. */
+/* Where the compiler and CPU allow, the plain C loops are also compiled
+ * for AVX2, chosen at load time.  The integers are the same on every
+ * path. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define HOT_LOOP __attribute__((target_clones("avx2", "default")))
 #else
 #define HOT_LOOP
 #endif
 
-/* Largest padded parent segment: 258 quadrant pixels + 2 + 2 of clamp. */
-#define SEG (258 + 4)
+/* Parent pixels a quadrant reads: 256*q - 2 .. 256*q + 257 (260), padded. */
+#define SEG 262
 
-/*
- * Horizontal sums of one parent row for every child column u = 0..512 of
- * quadrant qx, written interleaved as dst[u * C + c].  The parent pixels
- * the quadrant reads, 256*qx - 2 .. 256*qx + 258, are first copied with
- * clamping into a padded segment, so that the filter loops have no
- * branches: "even" children (u = 2k) and "odd" ones (u = 2k + 1) are each
- * a straight 4-tap filter over the segment, which compilers vectorize.
- */
-HOT_LOOP static void filter_row(const uint8_t *src, int channels, int qx,
-                                int32_t *dst)
+/* Copy parent pixels base .. base+SEG-1 of one row, clamped to the tile:
+ * only the few at the ends are clamped, the rest is one copy. */
+static void load_segment(const uint8_t *src, int C, int base, uint8_t *seg)
 {
-    int32_t seg[SEG * 3], even[257 * 3], odd[257 * 3];
-    const int base = 256 * qx - 2;
-    for (int i = 0; i < SEG; i++) {
-        const uint8_t *px = src + clamp_tile(base + i) * channels;
-        for (int c = 0; c < channels; c++)
-            seg[i * channels + c] = px[c];
-    }
-    /* Child 2k reads parent p-2..p+1 and child 2k+1 parent p-1..p+2, with
-     * p = 256*qx + k, i.e. segment positions k..k+3 and k+1..k+4. */
-    const int n = 257 * channels, C = channels;
-    const int32_t *s0 = seg, *s1 = seg + C, *s2 = seg + 2 * C, *s3 = seg + 3 * C,
-                  *s4 = seg + 4 * C;
-    for (int i = 0; i < n; i++) {
-        even[i] = W_EVEN[0] * s0[i] + W_EVEN[1] * s1[i] + W_EVEN[2] * s2[i] +
-                  W_EVEN[3] * s3[i];
-        odd[i] = W_ODD[0] * s1[i] + W_ODD[1] * s2[i] + W_ODD[2] * s3[i] +
-                 W_ODD[3] * s4[i];
-    }
-    for (int k = 0; k < 257; k++)
-        for (int c = 0; c < C; c++) {
-            dst[(2 * k) * C + c] = even[k * C + c];
-            if (k < 256)
-                dst[(2 * k + 1) * C + c] = odd[k * C + c];
-        }
+    const int lo = base < 0 ? -base : 0;                  /* clamped to 0 */
+    const int hi = GV_TILE - base < SEG ? GV_TILE - base : SEG; /* direct up to */
+    for (int i = 0; i < lo; i++)
+        memcpy(seg + i * C, src, (size_t)C);
+    memcpy(seg + lo * C, src + (size_t)(base + lo) * C, (size_t)(hi - lo) * C);
+    for (int i = hi; i < SEG; i++)
+        memcpy(seg + i * C, src + (size_t)(GV_TILE - 1) * C, (size_t)C);
 }
 
-#define RING 8   /* parent rows kept filtered: a child row needs 4 */
+/*
+ * Horizontal sums (minus OFFSET) of one parent row for every child column
+ * u = 0..512 of quadrant qx, interleaved as dst[u * C + c].  Child 2k reads
+ * segment pixels k..k+3 and child 2k+1 pixels k+1..k+4.  The sums are
+ * exact in wrapping 16-bit arithmetic because the true value fits.
+ */
+HOT_LOOP static void filter_row(const uint8_t *src, int C, int qx,
+                                int16_t *dst)
+{
+    uint8_t seg[SEG * 3];
+    uint16_t even[257 * 3 + 4], odd[257 * 3 + 4];
+    load_segment(src, C, 256 * qx - 2, seg);
+    const int n = 257 * C;
+    const uint8_t *s0 = seg, *s1 = seg + C, *s2 = seg + 2 * C,
+                  *s3 = seg + 3 * C, *s4 = seg + 4 * C;
+    for (int i = 0; i < n; i++) {
+        even[i] = (uint16_t)(W_EVEN[0] * s0[i] + W_EVEN[1] * s1[i] +
+                             W_EVEN[2] * s2[i] + W_EVEN[3] * s3[i] - OFFSET);
+        odd[i] = (uint16_t)(W_ODD[0] * s1[i] + W_ODD[1] * s2[i] +
+                            W_ODD[2] * s3[i] + W_ODD[3] * s4[i] - OFFSET);
+    }
+    /* Interleave: child 2k from even[k], 2k+1 from odd[k]. */
+    if (C == 1) {
+        for (int k = 0; k < 256; k++) {
+            dst[2 * k] = (int16_t)even[k];
+            dst[2 * k + 1] = (int16_t)odd[k];
+        }
+        dst[512] = (int16_t)even[256];
+        return;
+    }
+    /* Three samples per pixel: copies of four, each spare sample
+     * overwritten by the next copy (even[] and odd[] have spare room). */
+    for (int k = 0; k < 256; k++) {
+        memcpy(dst + 6 * k, even + 3 * k, 4 * sizeof *dst);
+        memcpy(dst + 6 * k + 3, odd + 3 * k, 4 * sizeof *dst);
+    }
+    memcpy(dst + 6 * 256, even + 3 * 256, 3 * sizeof *dst);
+}
 
-/* One child row from the four filtered parent rows it reads. */
-HOT_LOOP static void vertical(const int32_t *restrict h0, const int32_t *restrict h1,
-                     const int32_t *restrict h2, const int32_t *restrict h3,
-                     const int *w, size_t n, uint8_t *restrict out)
+/* One child row from the four filtered parent rows it reads (portable). */
+HOT_LOOP static void vertical_c(const int16_t *restrict h0,
+                                const int16_t *restrict h1,
+                                const int16_t *restrict h2,
+                                const int16_t *restrict h3, const int *w,
+                                size_t n, uint8_t *restrict out)
 {
     const int32_t w0 = w[0], w1 = w[1], w2 = w[2], w3 = w[3];
-    const int32_t hi = 255 * 16384 + 16383;
     for (size_t i = 0; i < n; i++) {
-        int32_t s = w0 * h0[i] + w1 * h1[i] + w2 * h2[i] + w3 * h3[i] + 8192;
+        int32_t s = w0 * h0[i] + w1 * h1[i] + w2 * h2[i] + w3 * h3[i] + ROUND;
         s = s < 0 ? 0 : s;
-        s = s > hi ? hi : s;
+        s = s > SUM_MAX ? SUM_MAX : s;
         out[i] = (uint8_t)(s >> 14);
     }
+}
+
+#if HAVE_AVX2_PATH
+/* 16 samples of a child row as 16-bit values (before the final pack):
+ * rows interleaved pairwise, VPMADDWD, round, shift (a floor). */
+__attribute__((target("avx2"))) static inline __m256i
+vertical16(const int16_t *h0, const int16_t *h1, const int16_t *h2,
+           const int16_t *h3, __m256i w01, __m256i w23, __m256i rnd)
+{
+    __m256i a0 = _mm256_loadu_si256((const __m256i *)h0);
+    __m256i a1 = _mm256_loadu_si256((const __m256i *)h1);
+    __m256i a2 = _mm256_loadu_si256((const __m256i *)h2);
+    __m256i a3 = _mm256_loadu_si256((const __m256i *)h3);
+    __m256i lo = _mm256_add_epi32(
+        _mm256_madd_epi16(_mm256_unpacklo_epi16(a0, a1), w01),
+        _mm256_madd_epi16(_mm256_unpacklo_epi16(a2, a3), w23));
+    __m256i hi = _mm256_add_epi32(
+        _mm256_madd_epi16(_mm256_unpackhi_epi16(a0, a1), w01),
+        _mm256_madd_epi16(_mm256_unpackhi_epi16(a2, a3), w23));
+    lo = _mm256_srai_epi32(_mm256_add_epi32(lo, rnd), 14);
+    hi = _mm256_srai_epi32(_mm256_add_epi32(hi, rnd), 14);
+    /* Within each 128-bit lane, lo holds samples 0-3 and hi 4-7: the
+     * pack puts them back in order (|values| < 2^12, no saturation). */
+    return _mm256_packs_epi32(lo, hi);
+}
+
+/* The same as vertical_c.  The clamp to 0..255 is the unsigned saturating
+ * pack after the floor shift: floor is monotonic, so clamping after the
+ * shift equals clamping to [0, SUM_MAX] before it. */
+__attribute__((target("avx2"))) static void
+vertical_avx2(const int16_t *h0, const int16_t *h1, const int16_t *h2,
+              const int16_t *h3, const int *w, size_t n, uint8_t *out)
+{
+    const __m256i w01 = _mm256_set1_epi32((int32_t)((uint32_t)(uint16_t)w[0] |
+                                                    (uint32_t)w[1] << 16));
+    const __m256i w23 = _mm256_set1_epi32((int32_t)((uint32_t)(uint16_t)w[2] |
+                                                    (uint32_t)(uint16_t)w[3] << 16));
+    const __m256i rnd = _mm256_set1_epi32(ROUND);
+    size_t i = 0;
+    for (; i + 32 <= n; i += 32) {
+        __m256i p0 = vertical16(h0 + i, h1 + i, h2 + i, h3 + i, w01, w23, rnd);
+        __m256i p1 = vertical16(h0 + i + 16, h1 + i + 16, h2 + i + 16,
+                                h3 + i + 16, w01, w23, rnd);
+        __m256i b = _mm256_permute4x64_epi64(_mm256_packus_epi16(p0, p1), 0xd8);
+        _mm256_storeu_si256((__m256i *)(out + i), b);
+    }
+    if (i < n)
+        vertical_c(h0 + i, h1 + i, h2 + i, h3 + i, w, n - i, out + i);
+}
+#endif
+
+void gv_predictor_init(struct gv_predictor *p, const uint8_t *parent,
+                       int channels, int qx, int qy)
+{
+    p->parent = parent;
+    p->channels = channels;
+    p->qx = qx;
+    p->qy = qy;
+    for (int k = 0; k < GV_PREDICT_RING; k++)
+        p->tag[k] = -1;
+}
+
+void gv_predictor_row(struct gv_predictor *p, int v, uint8_t *row)
+{
+    const int C = p->channels;
+    const int *w = (v & 1) ? W_ODD : W_EVEN;
+    const int t = first_tap(p->qy, v);
+    const int16_t *h[4];
+    for (int k = 0; k < 4; k++) {
+        int pr = clamp_tile(t + k), slot = pr % GV_PREDICT_RING;
+        if (p->tag[slot] != pr) {
+            filter_row(p->parent + (size_t)pr * GV_TILE * C, C, p->qx,
+                       p->ring[slot]);
+            p->tag[slot] = pr;
+        }
+        h[k] = p->ring[slot];
+    }
+    const size_t n = (size_t)GV_TILE * C;
+#if HAVE_AVX2_PATH
+    if (use_avx2()) {
+        vertical_avx2(h[0], h[1], h[2], h[3], w, n, row);
+        return;
+    }
+#endif
+    vertical_c(h[0], h[1], h[2], h[3], w, n, row);
 }
 
 void gv_predict(const uint8_t *parent, int channels, int qx, int qy,
                 uint8_t *pred)
 {
+    struct gv_predictor p;
+    gv_predictor_init(&p, parent, channels, qx, qy);
     const size_t row = (size_t)GV_TILE * channels;
-    /* Filtered parent rows, tagged with their row number; child rows walk
-     * the parent downwards, so a small ring holds the ones in use. */
-    int32_t ring[RING][GV_TILE * 3];
-    int tag[RING];
-    for (int k = 0; k < RING; k++)
-        tag[k] = -1;
-    for (int v = 0; v < GV_TILE; v++) {
-        const int *w = (v & 1) ? W_ODD : W_EVEN;
-        int t = first_tap(qy, v);
-        const int32_t *h[4];
-        for (int k = 0; k < 4; k++) {
-            int pr = clamp_tile(t + k), slot = pr % RING;
-            if (tag[slot] != pr) {
-                filter_row(parent + (size_t)pr * row, channels, qx, ring[slot]);
-                tag[slot] = pr;
-            }
-            h[k] = ring[slot];
-        }
-        vertical(h[0], h[1], h[2], h[3], w, row, pred + (size_t)v * row);
+    for (int v = 0; v < GV_TILE; v++)
+        gv_predictor_row(&p, v, pred + (size_t)v * row);
+}
+
+/* row[i] = clamp(row[i] + res[i], 0, 255). */
+HOT_LOOP static void add_clamped_c(uint8_t *restrict row,
+                                   const int8_t *restrict res, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        int v = row[i] + res[i];
+        row[i] = (uint8_t)(v < 0 ? 0 : (v > 255 ? 255 : v));
     }
+}
+
+#if HAVE_AVX2_PATH
+/* The same with unsigned saturating byte arithmetic: add max(res, 0),
+ * then subtract max(-res, 0) (computed as max(res, 0) - res, which is
+ * 128 for -128); at most one of the two is non-zero. */
+__attribute__((target("avx2"))) static void
+add_clamped_avx2(uint8_t *row, const int8_t *res, size_t n)
+{
+    const __m256i zero = _mm256_setzero_si256();
+    size_t i = 0;
+    for (; i + 32 <= n; i += 32) {
+        __m256i r = _mm256_loadu_si256((const __m256i *)(res + i));
+        __m256i x = _mm256_loadu_si256((const __m256i *)(row + i));
+        __m256i pos = _mm256_max_epi8(r, zero);
+        __m256i neg = _mm256_sub_epi8(pos, r);
+        x = _mm256_subs_epu8(_mm256_adds_epu8(x, pos), neg);
+        _mm256_storeu_si256((__m256i *)(row + i), x);
+    }
+    if (i < n)
+        add_clamped_c(row + i, res + i, n - i);
+}
+#endif
+
+void gv_add_residual_row(uint8_t *row, const int8_t *book,
+                         const uint16_t *ids, int channels, int half)
+{
+    /* The residual row, gathered from the codevectors (the last block's
+     * second pixel lands in the spare bytes and is not added). */
+    int8_t res[GV_BLOCKS * 6];
+    if (channels == 3) {
+        const int8_t *b = book + 6 * half;
+        for (int bx = 0; bx < GV_BLOCKS; bx++)
+            memcpy(res + 6 * bx, b + (size_t)ids[bx] * 12, 6);
+    } else {
+        const int8_t *b = book + 2 * half;
+        for (int bx = 0; bx < GV_BLOCKS; bx++)
+            memcpy(res + 2 * bx, b + (size_t)ids[bx] * 4, 2);
+    }
+    const size_t n = (size_t)GV_TILE * channels;
+#if HAVE_AVX2_PATH
+    if (use_avx2()) {
+        add_clamped_avx2(row, res, n);
+        return;
+    }
+#endif
+    add_clamped_c(row, res, n);
 }

@@ -10,6 +10,7 @@
  * the decoder needs no array of all the indices.
  */
 #include "codec/tile_layout.h"
+#include "codec/predict.h"
 #include "codec/tile.h"
 #include "codec/tile_rans.h"
 
@@ -59,11 +60,6 @@ uint32_t gv_tilebuf_index(const uint8_t *buf, int rate, int channels,
     return (v >> (bit & 7)) & ((1u << rate) - 1);
 }
 
-static inline uint8_t clamp_u8(int v)
-{
-    return (uint8_t)(v < 0 ? 0 : (v > 255 ? 255 : v));
-}
-
 int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
                    const uint8_t *parent, int qx, int qy, uint8_t *out,
                    struct gv_error *err)
@@ -71,14 +67,18 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
     int rate = gv_tilebuf_check(buf, len, channels, err);
     if (rate < 0)
         return -1;
-    gv_predict(parent, channels, qx, qy, out);
-    if (rate == 0)
+    if (rate == 0) {
+        gv_predict(parent, channels, qx, qy, out);
         return 0;
+    }
+    /* Each pixel row is predicted just before its residual is added, so
+     * that it stays in cache (predict.h). */
+    struct gv_predictor pred;
+    gv_predictor_init(&pred, parent, channels, qx, qy);
     const int entropy = (buf[0] & GV_TILE_ENTROPY) != 0;
     struct gv_rans_rows rows;
     if (entropy)
         gv_rans_rows_begin(&rows, buf, rate, channels);
-    const int dim = 4 * channels;
     const int8_t *book = (const int8_t *)(buf + 1);
     const size_t row = (size_t)GV_TILE * channels;
     /* Row by row of blocks: the 257 indices (rANS-decoded, or unpacked
@@ -108,18 +108,12 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
             }
         }
         for (int half = 0; half < 2; half++) {
-            const uint32_t y = 2 * by + (uint32_t)half;
+            const int y = 2 * (int)by + half;
             if (y >= GV_TILE)
                 break;
-            uint8_t *px = out + y * row;
-            const int first = half * 2 * channels;   /* pixels (0|1, half) */
-            for (uint32_t bx = 0; bx < GV_BLOCKS; bx++) {
-                const int8_t *cv = book + (size_t)ids[bx] * dim + first;
-                const int n = bx + 1 < GV_BLOCKS ? 2 * channels : channels;
-                uint8_t *q = px + (size_t)bx * 2 * channels;
-                for (int i = 0; i < n; i++)
-                    q[i] = clamp_u8(q[i] + cv[i]);
-            }
+            uint8_t *px = out + (size_t)y * row;
+            gv_predictor_row(&pred, y, px);
+            gv_add_residual_row(px, book, ids, channels, half);
         }
     }
     return 0;
