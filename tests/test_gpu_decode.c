@@ -3,8 +3,9 @@
  * reference decoder, bit for bit, on every tile of several stores: RGB and
  * gray, a real photograph and procedural images, rates from 0 to 12.  Tiles
  * are decoded top-down entirely on the GPU (each from its GPU-decoded
- * parent), so an error anywhere would propagate and be seen.  Skips (77)
- * when no EGL context can be made.
+ * parent), so an error anywhere would propagate and be seen: one call per
+ * tile, and the whole pyramid as one batch (gv_gpu_decode_batch, each tile
+ * naming its parent's job).  Skips (77) when no EGL context can be made.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,6 +23,8 @@ static char dir[] = "/tmp/gv-test-gpu-XXXXXX";
 
 static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
                        enum gv_gpu_path path);
+static void check_batch(struct gv_gpu *gpu, const char *input, const char *out,
+                        enum gv_gpu_path path, int copies);
 
 /* Encode `input` and check it on both shader paths: storage buffers with
  * the compute pass, and WebGL2's GLSL ES 3.00 with textures. */
@@ -41,6 +44,11 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
         fail("encode %s: %s", input, err.text);
     check_path(gpu, input, out, GV_GPU_PATH_SSBO);
     check_path(gpu, input, out, GV_GPU_PATH_WEBGL2);
+    /* The gray synthetic store five times over (65 tiles): a batch longer
+     * than one upload group, parents in the previous group. */
+    const int copies = strcmp(input, "synth:1100x1500:gray") == 0 ? 5 : 1;
+    check_batch(gpu, input, out, GV_GPU_PATH_SSBO, copies);
+    check_batch(gpu, input, out, GV_GPU_PATH_WEBGL2, 1);
     unlink(out);
 }
 
@@ -134,6 +142,112 @@ static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
           tiles, rs + 1, coded, mismatched, quarter_bad);
     free(px);
     free(quarter);
+    gv_gpu_decoder_free(gd);
+    gv_decoder_free(cpu);
+    gv_store_close(s);
+}
+
+static const char *path_name(enum gv_gpu_path path)
+{
+    return path == GV_GPU_PATH_SSBO ? "GLSL ES 3.10 + compute" : "GLSL ES 3.00 (WebGL2)";
+}
+
+/* Every tile of the store in one gv_gpu_decode_batch, top level first,
+ * each naming its parent's job (the root tile uploaded), then read back
+ * and compared with the CPU decoder; `copies` times over in the batch. */
+static void check_batch(struct gv_gpu *gpu, const char *input, const char *out,
+                        enum gv_gpu_path path, int copies)
+{
+    struct gv_error err;
+    struct gv_store *s = gv_store_open(out, &err);
+    if (!s)
+        fail("open: %s", err.text);
+    const struct gv_geometry *g = &gv_store_info(s)->geometry;
+    const int c = g->channels;
+    struct gv_decoder *cpu = gv_decoder_new(s, 64u << 20);
+    struct gv_gpu_decoder *gd = gv_gpu_decoder_new_path(gpu, c, path, &err);
+    if (!gd)
+        fail("gpu decoder: %s", err.text);
+    size_t one = 0;
+    for (int k = 0; k < g->root; k++)
+        one += (size_t)g->level[k].tiles_x * g->level[k].tiles_y;
+    const size_t n = one * (size_t)copies;
+    struct gv_gpu_tile_job *jobs = calloc(n ? n : 1, sizeof *jobs);
+    uint8_t **pages = calloc(n ? n : 1, sizeof *pages);
+    struct { int level; uint32_t tx, ty; } *where = calloc(n ? n : 1, sizeof *where);
+    const uint8_t *root;
+    uint32_t root_h;
+    if (gv_decoder_tile(cpu, g->root, 0, 0, &root, &err) < 0 ||
+        gv_gpu_upload_tile(gd, root, &root_h, &err) < 0)
+        fail("root: %s", err.text);
+    size_t at = 0;
+    for (int copy = 0; copy < copies; copy++) {
+    size_t level_start = at, above_start = at;
+    for (int k = g->root - 1; k >= 0; k--) {
+        const struct gv_level *l = &g->level[k];
+        const uint32_t above_w = k + 1 == g->root ? 1 : g->level[k + 1].tiles_x;
+        level_start = at;
+        for (uint32_t ty = 0; ty < l->tiles_y; ty++)
+            for (uint32_t tx = 0; tx < l->tiles_x; tx++, at++) {
+                size_t plen;
+                if (gv_store_read_page(s, k, tx / 8, ty / 8, &pages[at], &plen, &err) < 0 ||
+                    gv_page_tile(pages[at], plen, c, (int)(tx % 8), (int)(ty % 8),
+                                 &jobs[at].buf, &jobs[at].len, &err) < 0)
+                    fail("tile %d/%u/%u: %s", k, tx, ty, err.text);
+                jobs[at].qx = (int)(tx & 1);
+                jobs[at].qy = (int)(ty & 1);
+                if (k + 1 == g->root) {
+                    jobs[at].parent = root_h;
+                    jobs[at].parent_job = -1;
+                } else {
+                    jobs[at].parent_job = (long)(above_start + (ty / 2) * above_w + tx / 2);
+                }
+                where[at].level = k;
+                where[at].tx = tx;
+                where[at].ty = ty;
+            }
+        above_start = level_start;
+    }
+    }
+    /* A parent that is not an earlier job is refused, and nothing made. */
+    if (n > 0) {
+        struct gv_gpu_tile_job bad = jobs[0];
+        bad.parent_job = 0;
+        int rc = gv_gpu_decode_batch(gd, &bad, 1, &err);
+        check(rc < 0 && err.code == GV_EINVAL, "%s: a job naming itself as parent "
+              "is refused (%s)", path_name(path), rc < 0 ? err.text : "accepted");
+    }
+    if (gv_gpu_decode_batch(gd, jobs, n, &err) < 0)
+        fail("batch of %zu tiles: %s", n, err.text);
+    const size_t tb = gv_tile_bytes(c);
+    uint8_t *px = malloc(tb);
+    int mismatched = 0, distinct = 1;
+    for (size_t i = 0; i < n; i++) {
+        const uint8_t *ref;
+        if (gv_decoder_tile(cpu, where[i].level, where[i].tx, where[i].ty, &ref, &err) < 0 ||
+            gv_gpu_read_tile(gd, jobs[i].handle, 0, px, &err) < 0)
+            fail("read %d/%u/%u: %s", where[i].level, where[i].tx, where[i].ty, err.text);
+        if (memcmp(px, ref, tb) != 0) {
+            mismatched++;
+            printf("# batch: job %zu, tile %d/%u/%u (byte 0 0x%02x) differs\n", i,
+                   where[i].level, where[i].tx, where[i].ty, jobs[i].buf[0]);
+        }
+        distinct &= jobs[i].handle != 0 && jobs[i].handle != root_h &&
+                    (i == 0 || jobs[i].handle != jobs[i - 1].handle);
+    }
+    const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
+    check(mismatched == 0 && distinct && n > 0, "%s, %s: all %zu tiles in one batch "
+          "(the store %d time(s)) decode identically on the GPU (%d differ)", name,
+          path_name(path), n, copies, mismatched);
+    for (size_t i = 0; i < n; i++) {
+        gv_gpu_release(gd, jobs[i].handle);
+        free(pages[i]);
+    }
+    gv_gpu_release(gd, root_h);
+    free(px);
+    free(jobs);
+    free(pages);
+    free(where);
     gv_gpu_decoder_free(gd);
     gv_decoder_free(cpu);
     gv_store_close(s);

@@ -9,6 +9,13 @@
  * tile's indices are first decoded by a compute pass (rans_decode); on the
  * WebGL2 path the buffer is an R32UI texture and the indices are decoded
  * on the CPU into an R16UI texture, as the browser does.
+ *
+ * A single tile is a batch of one.  A batch (gv_gpu_decode_batch) runs in
+ * one call on the GL thread: on the SSBO path, groups of up to 64 tiles
+ * share one upload of their buffers (each tile bound as a range of it) and
+ * one index buffer, their rANS passes run back to back before a single
+ * memory barrier, and then each tile's two draws follow.  Nothing in a
+ * batch waits for the GPU; a read-back or the next call does.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,7 +36,14 @@ struct gv_gpu_decoder {
     struct gv_gpu *gpu;
     int channels;
     enum gv_gpu_path path;
-    GLuint decode, quarter, rans, fbo, vao, ssbo, indices;
+    GLuint decode, quarter, rans, fbo, vao;
+    /* Two sets of storage buffers (tile buffers, rANS indices), used by
+     * alternate groups of tiles; a set is refilled only once the fence
+     * after its last group's draws has passed. */
+    GLuint ssbo[2], indices[2];
+    size_t indices_cap[2];             /* tiles each index buffer holds */
+    GLsync fence[2];
+    int set;
     GLuint words_tex, indices_tex;     /* WebGL2 path */
     GLint dec_parent, dec_quadrant, dec_channels, q_parent, q_quadrant;
     GLint rans_rate, rans_tables;
@@ -102,12 +116,16 @@ static int setup(void *arg, struct gv_error *err)
     }
     d->rans_rate = glGetUniformLocation(d->rans, "u_rate");
     d->rans_tables = glGetUniformLocation(d->rans, "u_tables");
-    glGenBuffers(1, &d->ssbo);
-    glGenBuffers(1, &d->indices);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices);
-    glBufferData(GL_SHADER_STORAGE_BUFFER, GV_NBLOCKS * sizeof(GLuint), NULL,
-                 GL_DYNAMIC_COPY);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->indices);
+    glGenBuffers(2, d->ssbo);
+    glGenBuffers(2, d->indices);
+    /* The index buffers must exist even for a fixed-layout tile, whose
+     * decode pass has one bound but never reads it. */
+    for (int k = 0; k < 2; k++) {
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices[k]);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, GV_NBLOCKS * sizeof(GLuint), NULL,
+                     GL_DYNAMIC_COPY);
+        d->indices_cap[k] = 1;
+    }
     return gl_failed(err, "decoder set-up");
 }
 
@@ -147,8 +165,14 @@ static int teardown(void *arg, struct gv_error *err)
         glDeleteProgram(d->quarter);
     if (d->rans)
         glDeleteProgram(d->rans);
-    if (d->indices)
-        glDeleteBuffers(1, &d->indices);
+    for (int k = 0; k < 2; k++) {
+        if (d->indices[k])
+            glDeleteBuffers(1, &d->indices[k]);
+        if (d->ssbo[k])
+            glDeleteBuffers(1, &d->ssbo[k]);
+        if (d->fence[k])
+            glDeleteSync(d->fence[k]);
+    }
     if (d->words_tex)
         glDeleteTextures(1, &d->words_tex);
     if (d->indices_tex)
@@ -157,8 +181,6 @@ static int teardown(void *arg, struct gv_error *err)
         glDeleteFramebuffers(1, &d->fbo);
     if (d->vao)
         glDeleteVertexArrays(1, &d->vao);
-    if (d->ssbo)
-        glDeleteBuffers(1, &d->ssbo);
     return 0;
 }
 
@@ -276,79 +298,206 @@ static int upload_webgl2(struct gv_gpu_decoder *d, const uint8_t *buf,
     return 0;
 }
 
-static int decode(void *arg, struct gv_error *err)
+/* Pass 1 of a tile: the parent quarter into mip 1 of tex. */
+static void draw_quarter(struct gv_gpu_decoder *d, GLuint tex, GLuint parent,
+                         int qx, int qy)
 {
-    struct job *j = arg;
-    struct gv_gpu_decoder *d = j->d;
-    GLuint tex = new_tile_texture();
-    glBindVertexArray(d->vao);
     glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, j->parent);
-    /* Pass 1: the parent quarter into mip 1. */
+    glBindTexture(GL_TEXTURE_2D, parent);
     glUseProgram(d->quarter);
     glUniform1i(d->q_parent, 0);
-    glUniform2i(d->q_quadrant, j->qx, j->qy);
+    glUniform2i(d->q_quadrant, qx, qy);
     draw_into(d->fbo, tex, 1, 257);
-    /* Pass 2: prediction plus residual into mip 0. */
-    if (d->path == GV_GPU_PATH_WEBGL2) {
-        if (upload_webgl2(d, j->buf, j->len, err) < 0) {
-            glDeleteTextures(1, &tex);
+}
+
+/* Pass 2: prediction plus residual into mip 0, the decode program's
+ * inputs bound (parent on unit 0). */
+static void draw_decode(struct gv_gpu_decoder *d, GLuint tex, GLuint parent,
+                        int qx, int qy)
+{
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, parent);
+    glUseProgram(d->decode);
+    glUniform1i(d->dec_parent, 0);
+    glUniform2i(d->dec_quadrant, qx, qy);
+    glUniform1i(d->dec_channels, d->channels);
+    draw_into(d->fbo, tex, 0, GV_TILE);
+}
+
+/* The parent texture of job i of the batch: a handle, or an earlier job's
+ * texture (parent_job counts from the batch's first job). */
+static GLuint parent_of(const struct gv_gpu_tile_job *jobs, size_t i)
+{
+    return jobs[i].parent_job >= 0 ? jobs[jobs[i].parent_job].handle
+                                   : jobs[i].parent;
+}
+
+/* WebGL2 path: tile by tile (each buffer and index texture uploaded just
+ * before its draw, as the browser does), still within one call. */
+static int decode_webgl2(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *jobs,
+                         size_t n, struct gv_error *err)
+{
+    glBindVertexArray(d->vao);
+    for (size_t i = 0; i < n; i++) {
+        GLuint tex = new_tile_texture(), parent = parent_of(jobs, i);
+        jobs[i].handle = tex;
+        draw_quarter(d, tex, parent, jobs[i].qx, jobs[i].qy);
+        if (upload_webgl2(d, jobs[i].buf, jobs[i].len, err) < 0)
             return -1;
-        }
         glUseProgram(d->decode);
-        glUniform1i(d->dec_parent, 0);
         glUniform1i(d->dec_words, 1);
         glUniform1i(d->dec_words_width, WORDS_WIDTH);
         glUniform1i(d->dec_indices, 2);
-        glUniform2i(d->dec_quadrant, j->qx, j->qy);
-        glUniform1i(d->dec_channels, d->channels);
-        draw_into(d->fbo, tex, 0, GV_TILE);
-        glBindFramebuffer(GL_FRAMEBUFFER, 0);
-        glActiveTexture(GL_TEXTURE0);
-        j->handle = tex;
-        if (gl_failed(err, "tile decode") < 0) {
-            glDeleteTextures(1, &tex);
-            return -1;
-        }
-        return 0;
-    }
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->ssbo);
-    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)j->len, j->buf, GL_STREAM_DRAW);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->indices);
-    if (j->buf[0] & GV_TILE_ENTROPY) {
-        /* Entropy-coded indices: one compute invocation per row of blocks
-         * decodes them into the index buffer first. */
-        const int rate = j->buf[0] & 0x0f;
-        glUseProgram(d->rans);
-        glUniform1i(d->rans_rate, rate);
-        glUniform1i(d->rans_tables, (GLint)gv_rans_tables_offset(rate, d->channels));
-        glDispatchCompute((GV_BLOCKS + 63) / 64, 1, 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-    }
-    glUseProgram(d->decode);
-    glUniform1i(d->dec_parent, 0);
-    glUniform2i(d->dec_quadrant, j->qx, j->qy);
-    glUniform1i(d->dec_channels, d->channels);
-    draw_into(d->fbo, tex, 0, GV_TILE);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    j->handle = tex;
-    if (gl_failed(err, "tile decode") < 0) {
-        glDeleteTextures(1, &tex);
-        return -1;
+        draw_decode(d, tex, parent, jobs[i].qx, jobs[i].qy);
     }
     return 0;
+}
+
+static size_t align_up(size_t v, size_t a)
+{
+    return (v + a - 1) / a * a;
+}
+
+/* Tiles per group on the SSBO path: bounds the staging buffers (at most
+ * 64 x 145 KiB of tile buffers and 64 x 258 KiB of indices). */
+#define GROUP 64
+
+/*
+ * SSBO path, a group of at most GROUP tiles: every tile buffer in one
+ * storage buffer (one upload), the indices of every entropy-coded tile in
+ * one index buffer, all rANS compute passes, one barrier, then the two
+ * draws of each tile in order (a parent earlier in the group is rendered
+ * before its children read it).  Nothing waits for the GPU.
+ */
+static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
+                        size_t first, size_t n, struct gv_error *err)
+{
+    struct gv_gpu_tile_job *jobs = all + first;
+    GLint al = 4;
+    glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &al);
+    const size_t align = al > 4 ? (size_t)al : 4;
+    const size_t idx_bytes = align_up(GV_NBLOCKS * sizeof(GLuint), align);
+    size_t off[GROUP], idx_off[GROUP], total = 0, nidx = 0;
+    for (size_t i = 0; i < n; i++) {
+        off[i] = total;
+        total = align_up(total + jobs[i].len, align);
+        idx_off[i] = (jobs[i].buf[0] & GV_TILE_ENTROPY) ? idx_bytes * nidx++ : 0;
+    }
+    /* This group's set of buffers, once the GPU is done with its previous
+     * group: shader storage is not ordered after earlier draws' reads
+     * (llvmpipe, which runs compute passes at once but defers draws, showed
+     * an earlier tile reading a later group's data). */
+    const int set = d->set;
+    d->set ^= 1;
+    if (d->fence[set]) {
+        while (glClientWaitSync(d->fence[set], GL_SYNC_FLUSH_COMMANDS_BIT,
+                                1000000000) == GL_TIMEOUT_EXPIRED)
+            ;
+        glDeleteSync(d->fence[set]);
+        d->fence[set] = 0;
+    }
+    const GLuint ssbo = d->ssbo[set], indices = d->indices[set];
+    uint8_t *staging = malloc(total);
+    if (!staging)
+        return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+    for (size_t i = 0; i < n; i++)
+        memcpy(staging + off[i], jobs[i].buf, jobs[i].len);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, ssbo);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)total, staging, GL_STREAM_DRAW);
+    free(staging);
+    if (nidx > d->indices_cap[set]) {
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, indices);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(idx_bytes * nidx), NULL,
+                     GL_DYNAMIC_COPY);
+        d->indices_cap[set] = nidx;
+    }
+    /* Entropy-coded indices: one compute invocation per row of blocks. */
+    if (nidx) {
+        glUseProgram(d->rans);
+        for (size_t i = 0; i < n; i++) {
+            if (!(jobs[i].buf[0] & GV_TILE_ENTROPY))
+                continue;
+            const int rate = jobs[i].buf[0] & 0x0f;
+            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, ssbo, (GLintptr)off[i],
+                              (GLsizeiptr)jobs[i].len);
+            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, indices,
+                              (GLintptr)idx_off[i], GV_NBLOCKS * sizeof(GLuint));
+            glUniform1i(d->rans_rate, rate);
+            glUniform1i(d->rans_tables, (GLint)gv_rans_tables_offset(rate, d->channels));
+            glDispatchCompute((GV_BLOCKS + 63) / 64, 1, 1);
+        }
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    glBindVertexArray(d->vao);
+    for (size_t i = 0; i < n; i++) {
+        GLuint tex = new_tile_texture(), parent = parent_of(all, first + i);
+        jobs[i].handle = tex;
+        draw_quarter(d, tex, parent, jobs[i].qx, jobs[i].qy);
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, ssbo, (GLintptr)off[i],
+                          (GLsizeiptr)jobs[i].len);
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, indices,
+                          (GLintptr)idx_off[i], GV_NBLOCKS * sizeof(GLuint));
+        draw_decode(d, tex, parent, jobs[i].qx, jobs[i].qy);
+    }
+    d->fence[set] = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    return 0;
+}
+
+struct batch {
+    struct gv_gpu_decoder *d;
+    struct gv_gpu_tile_job *jobs;
+    size_t n;
+};
+
+static int decode_batch(void *arg, struct gv_error *err)
+{
+    struct batch *b = arg;
+    struct gv_gpu_decoder *d = b->d;
+    for (size_t i = 0; i < b->n; i++)
+        b->jobs[i].handle = 0;
+    int rc = 0;
+    if (d->path == GV_GPU_PATH_WEBGL2)
+        rc = decode_webgl2(d, b->jobs, b->n, err);
+    else
+        for (size_t i = 0; i < b->n && rc == 0; i += GROUP)
+            rc = decode_group(d, b->jobs, i, b->n - i < GROUP ? b->n - i : GROUP, err);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glActiveTexture(GL_TEXTURE0);
+    if (rc == 0)
+        rc = gl_failed(err, "tile decode");
+    if (rc < 0)
+        for (size_t i = 0; i < b->n; i++)
+            if (b->jobs[i].handle) {
+                GLuint tex = b->jobs[i].handle;
+                glDeleteTextures(1, &tex);
+                b->jobs[i].handle = 0;
+            }
+    return rc;
+}
+
+int gv_gpu_decode_batch(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *jobs,
+                        size_t n, struct gv_error *err)
+{
+    for (size_t i = 0; i < n; i++) {
+        if (jobs[i].parent_job >= (long)i)
+            return gv_fail(err, GV_EINVAL, "gpu: job %zu's parent is not an "
+                           "earlier job", i);
+        if (gv_tilebuf_check(jobs[i].buf, jobs[i].len, d->channels, err) < 0)
+            return -1;
+    }
+    if (n == 0)
+        return 0;
+    struct batch b = {.d = d, .jobs = jobs, .n = n};
+    return gv_gpu_call(d->gpu, decode_batch, &b, err);
 }
 
 int gv_gpu_decode_tile(struct gv_gpu_decoder *d, const uint8_t *buf,
                        size_t len, uint32_t parent, int qx, int qy,
                        uint32_t *handle, struct gv_error *err)
 {
-    if (gv_tilebuf_check(buf, len, d->channels, err) < 0)
-        return -1;
-    struct job j = {.d = d, .buf = buf, .len = len, .parent = parent,
-                    .qx = qx, .qy = qy};
-    if (gv_gpu_call(d->gpu, decode, &j, err) < 0)
+    struct gv_gpu_tile_job j = {.buf = buf, .len = len, .parent = parent,
+                                .parent_job = -1, .qx = qx, .qy = qy};
+    if (gv_gpu_decode_batch(d, &j, 1, err) < 0)
         return -1;
     *handle = j.handle;
     return 0;

@@ -6,8 +6,10 @@
  * mip 0 is 514x514 of which the 513x513 tile is used (so that GL's halving
  * leaves 257 texels), mip 1 the 257x257 parent quarter (section 7.5).  A
  * tile is decoded from its tile buffer and its parent's handle; the root
- * tile is uploaded.  Every function may be called from any thread but the
- * GPU's own (the work runs there, through gv_gpu_call).
+ * tile is uploaded.  Tiles are decoded one per call or many per call
+ * (gv_gpu_decode_batch, which saves a round trip to the GL thread per
+ * tile).  Every function may be called from any thread but the GPU's own
+ * (the work runs there, through gv_gpu_call).
  */
 #ifndef GV_GPU_DECODE_H
 #define GV_GPU_DECODE_H
@@ -54,6 +56,31 @@ int gv_gpu_upload_tile(struct gv_gpu_decoder *d, const uint8_t *pixels,
 int gv_gpu_decode_tile(struct gv_gpu_decoder *d, const uint8_t *buf,
                        size_t len, uint32_t parent, int qx, int qy,
                        uint32_t *handle, struct gv_error *err);
+
+/* One tile of a batch: its buffer (len bytes, borrowed for the call), its
+ * parent (a handle, or, when parent_job >= 0, the tile of that earlier
+ * job in the same batch), its quadrant, and, after the call, its handle. */
+struct gv_gpu_tile_job {
+    const uint8_t *buf;
+    size_t len;
+    uint32_t parent;
+    long parent_job;      /* -1: `parent` is the parent's handle */
+    int qx, qy;
+    uint32_t handle;      /* out: the new texture */
+};
+
+/*
+ * Decode n tiles in one call to the GL thread, as gv_gpu_decode_tile would
+ * one by one, in order (a tile may name an earlier job as its parent, so a
+ * pyramid can be decoded level by level in one batch).  On the SSBO path
+ * the tile buffers go up in one storage buffer per group of tiles, every
+ * rANS pass of the group runs before one barrier, and no call waits for
+ * the GPU.  Every buffer is checked with gv_tilebuf_check first.  Returns
+ * 0 with every jobs[i].handle set, or -1 with *err and no texture made
+ * (GV_EINVAL: a parent_job not earlier than its job).
+ */
+int gv_gpu_decode_batch(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *jobs,
+                        size_t n, struct gv_error *err);
 
 /* Read mip 0 (513x513) or mip 1 (257x257) of `handle` back into pixels
  * (that many C-channel pixels, rows packed).  Returns 0 or -1. */
