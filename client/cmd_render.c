@@ -318,6 +318,9 @@ static int lvl_load(struct session *s, struct lvl *l, int k, uint32_t t0x,
     l->tiles_y = gl->tiles_y;
     if (!(l->tile = calloc((size_t)l->tiles_x * l->tiles_y, sizeof *l->tile)))
         return gv_fail(err, GV_ENOMEM, "out of memory");
+    /* Missing tiles and ancestors in one batch, where the budget allows. */
+    if (gv_gpu_cache_prepare(s->cache, k, t0x, t0y, t1x, t1y, err) < 0)
+        return -1;
     for (uint32_t ty = t0y; ty <= t1y; ty++)
         for (uint32_t tx = t0x; tx <= t1x; tx++) {
             uint8_t **p = &l->tile[(size_t)ty * l->tiles_x + tx];
@@ -566,6 +569,8 @@ static int render_region(struct session *s, int level, const struct region *r,
     if (need_range(&s->nd, g, level, sp[0], sp[1], sp[2], sp[3]) < 0)
         return gv_fail(err, GV_ENOMEM, "out of memory");
     if (start_decoding(s, err) < 0)
+        return -1;
+    if (gv_gpu_cache_prepare(s->cache, level, sp[0], sp[1], sp[2], sp[3], err) < 0)
         return -1;
     uint8_t *px = malloc(gv_tile_bytes(c));
     if (!px)

@@ -5,7 +5,8 @@
  * the GPU and compared bit for bit with the CPU reference decoder.  The
  * budget forces evictions and re-pulls of ancestors; the cache must stay
  * within it, and a failing fetch or a truncated tile buffer must fail that
- * one request cleanly and leave the cache usable.  Skips (77 semantics:
+ * one request cleanly and leave the cache usable.  A range prepared in one
+ * batch (gv_gpu_cache_prepare) must then be read as hits.  Skips (77 semantics:
  * "1..0 # SKIP") when no EGL context can be made.
  */
 #include <stdio.h>
@@ -178,6 +179,44 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
           "%s: a failed fetch and a truncated buffer fail that request only; "
           "the tile decodes once the source heals; outside the grid is not found",
           name);
+
+    /* A batch: every level-0 tile prepared at once (their ancestors with
+     * them), then read as hits, equal to the CPU decoder; with a budget
+     * too small for them, prepare decodes nothing but the root. */
+    gv_gpu_cache_free(gc);
+    gc = gv_gpu_cache_new(gd, g, root, rw, rh, n * GV_GPU_TILE_BYTES, fetch, &src, &err);
+    if (!gc)
+        fail("gpu cache: %s", err.text);
+    const uint32_t lx = g->level[0].tiles_x, ly = g->level[0].tiles_y;
+    int prc = gv_gpu_cache_prepare(gc, 0, 0, 0, lx, ly, &err);   /* clipped */
+    struct gv_gpu_cache_stats ps;
+    gv_gpu_cache_stats(gc, &ps);
+    int bad = 0;
+    for (uint32_t ty = 0; ty < ly; ty++)
+        for (uint32_t tx = 0; tx < lx; tx++) {
+            if (gv_gpu_cache_read(gc, 0, tx, ty, px, &err) < 0 ||
+                gv_decoder_tile(cpu, 0, tx, ty, &ref, &err) < 0)
+                fail("prepared %u/%u: %s", tx, ty, err.text);
+            bad += memcmp(px, ref, tb) != 0;
+        }
+    struct gv_gpu_cache_stats after;
+    gv_gpu_cache_stats(gc, &after);
+    check(prc == 0 && ps.decodes == n && ps.fetches == n - 1 && bad == 0 &&
+              after.decodes == ps.decodes && after.hits == ps.hits + (uint64_t)lx * ly,
+          "%s: prepare decodes all %zu tiles in one batch (%llu decodes, %llu "
+          "fetches); the %u level-0 reads then hit, equal to the CPU decoder "
+          "(%d differ)", name, n, (unsigned long long)ps.decodes,
+          (unsigned long long)ps.fetches, lx * ly, bad);
+    gv_gpu_cache_free(gc);
+    gc = gv_gpu_cache_new(gd, g, root, rw, rh, 2 * GV_GPU_TILE_BYTES, fetch, &src, &err);
+    if (!gc)
+        fail("gpu cache: %s", err.text);
+    prc = gv_gpu_cache_prepare(gc, 0, 0, 0, lx - 1, ly - 1, &err);
+    gv_gpu_cache_stats(gc, &ps);
+    check(prc == 0 && ps.decodes == 1 && ps.fetches == 0,
+          "%s: with room for 2 tiles, prepare of %u leaves them to the "
+          "per-tile path (%llu decodes: the root)", name, lx * ly,
+          (unsigned long long)ps.decodes);
 
     free(px);
     free(ids);

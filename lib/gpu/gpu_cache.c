@@ -6,7 +6,10 @@
  * few thousand 1.3 MB textures, and a scan is far cheaper than a decode.
  * Eviction runs after each insertion and never removes the entry just
  * inserted, so the parent of a tile being decoded (touched just before)
- * survives until the child is made, whatever the budget.
+ * survives until the child is made, whatever the budget.  A range of tiles
+ * can be prepared in one batch: the missing tiles and their missing
+ * ancestors, found level by level upwards, go to the GPU in one call,
+ * top level first.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -165,10 +168,137 @@ int gv_gpu_cache_get(struct gv_gpu_cache *c, int level, uint32_t tx,
     return 0;
 }
 
+struct want {
+    int level;
+    uint32_t tx, ty;
+    uint8_t *buf;
+    size_t len;
+};
+
+/* Index of (level,tx,ty) in w[0..n), or -1. */
+static long find_want(const struct want *w, size_t n, int level, uint32_t tx,
+                      uint32_t ty)
+{
+    for (size_t i = 0; i < n; i++)
+        if (w[i].level == level && w[i].tx == tx && w[i].ty == ty)
+            return (long)i;
+    return -1;
+}
+
+/* Is (level,tx,ty) cached?  (Without touching it.) */
+static int cached(const struct gv_gpu_cache *c, int level, uint32_t tx, uint32_t ty)
+{
+    for (size_t i = 0; i < c->n; i++)
+        if (c->e[i].level == level && c->e[i].tx == tx && c->e[i].ty == ty)
+            return 1;
+    return 0;
+}
+
+/* The missing tiles: those of the range at `level`, then the missing
+ * parents of each level's missing tiles, up to below the root.  Listed
+ * finest first into *out (malloc'ed); returns their count, or -1 when
+ * they would exceed `max`. */
+static long missing_tiles(const struct gv_gpu_cache *c, int level, uint32_t t0x,
+                          uint32_t t0y, uint32_t t1x, uint32_t t1y, size_t max,
+                          struct want **out)
+{
+    const size_t range = (size_t)(t1x - t0x + 1) * (t1y - t0y + 1);
+    size_t cap = range * 2 + 16, n = 0;
+    struct want *w = calloc(cap, sizeof *w);
+    if (!w)
+        return -1;
+    for (uint32_t ty = t0y; ty <= t1y; ty++)
+        for (uint32_t tx = t0x; tx <= t1x; tx++)
+            if (!cached(c, level, tx, ty)) {
+                if (n == max) {
+                    free(w);
+                    return -1;
+                }
+                w[n++] = (struct want){level, tx, ty, NULL, 0};
+            }
+    /* Each pass adds the parents of the previous level's tiles; a level
+     * has at most as many as the one below, so cap suffices. */
+    for (size_t a = 0, b = n; a < b && w[a].level + 1 < c->geo.root; a = b, b = n)
+        for (size_t i = a; i < b; i++) {
+            const int k = w[i].level + 1;
+            const uint32_t px = w[i].tx / 2, py = w[i].ty / 2;
+            if (cached(c, k, px, py) || find_want(w + b, n - b, k, px, py) >= 0)
+                continue;
+            if (n == max || n == cap) {
+                free(w);
+                return -1;
+            }
+            w[n++] = (struct want){k, px, py, NULL, 0};
+        }
+    *out = w;
+    return (long)n;
+}
+
+int gv_gpu_cache_prepare(struct gv_gpu_cache *c, int level, uint32_t t0x,
+                         uint32_t t0y, uint32_t t1x, uint32_t t1y,
+                         struct gv_error *err)
+{
+    const struct gv_geometry *g = &c->geo;
+    if (level < 0 || level >= g->root)
+        return 0;
+    const struct gv_level *l = &g->level[level];
+    if (t1x >= l->tiles_x)
+        t1x = l->tiles_x - 1;
+    if (t1y >= l->tiles_y)
+        t1y = l->tiles_y - 1;
+    if (t0x > t1x || t0y > t1y)
+        return 0;
+    /* The root tile first, if it is needed and missing (an upload). */
+    uint32_t root_h;
+    if (gv_gpu_cache_get(c, g->root, 0, 0, &root_h, err) < 0)
+        return -1;
+    const size_t max = c->budget / GV_GPU_TILE_BYTES;
+    struct want *w = NULL;
+    const long n = missing_tiles(c, level, t0x, t0y, t1x, t1y, max, &w);
+    if (n <= 0) {
+        free(w);
+        return 0;
+    }
+    struct gv_gpu_tile_job *jobs = calloc((size_t)n, sizeof *jobs);
+    int rc = jobs ? 0 : gv_fail(err, GV_ENOMEM, "gpu cache: out of memory");
+    /* Jobs top level first: w[] backwards. */
+    for (long j = 0; j < n && rc == 0; j++) {
+        struct want *t = &w[n - 1 - j];
+        c->st.fetches++;
+        if (c->fetch(c->ctx, t->level, t->tx, t->ty, &t->buf, &t->len, err) < 0) {
+            rc = -1;
+            break;
+        }
+        long pj = find_want(w, (size_t)n, t->level + 1, t->tx / 2, t->ty / 2);
+        struct entry *pe = pj >= 0 ? NULL : lookup(c, t->level + 1, t->tx / 2, t->ty / 2);
+        jobs[j] = (struct gv_gpu_tile_job){
+            .buf = t->buf, .len = t->len, .parent = pe ? pe->handle : 0,
+            .parent_job = pj >= 0 ? n - 1 - pj : -1,
+            .qx = (int)(t->tx & 1), .qy = (int)(t->ty & 1)};
+    }
+    if (rc == 0)
+        rc = gv_gpu_decode_batch(c->dec, jobs, (size_t)n, err);
+    for (long j = 0; j < n && rc == 0; j++) {
+        const struct want *t = &w[n - 1 - j];
+        c->st.decodes++;
+        if (insert(c, t->level, t->tx, t->ty, jobs[j].handle, err) < 0) {
+            /* insert released this one; the rest were never cached */
+            for (long k = j + 1; k < n; k++)
+                gv_gpu_release(c->dec, jobs[k].handle);
+            rc = -1;
+        }
+    }
+    for (long j = 0; j < n; j++)
+        free(w[j].buf);
+    free(w);
+    free(jobs);
+    return rc;
+}
+
 int gv_gpu_cache_read(struct gv_gpu_cache *c, int level, uint32_t tx,
                       uint32_t ty, uint8_t *pixels, struct gv_error *err)
 {
-    uint32_t h;
+    uint32_t h = 0;
     if (gv_gpu_cache_get(c, level, tx, ty, &h, err) < 0)
         return -1;
     return gv_gpu_read_tile(c->dec, h, 0, pixels, err);

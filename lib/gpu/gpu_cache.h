@@ -72,6 +72,19 @@ void gv_gpu_cache_free(struct gv_gpu_cache *c);
 int gv_gpu_cache_get(struct gv_gpu_cache *c, int level, uint32_t tx,
                      uint32_t ty, uint32_t *handle, struct gv_error *err);
 
+/*
+ * Decode in one batch (gv_gpu_decode_batch) every tile of `level` in
+ * [t0x..t1x] x [t0y..t1y] (clipped to the grid) that is not cached, with
+ * its missing ancestors, parents before children, so that the following
+ * gv_gpu_cache_get / _read calls on them are hits.  Does nothing when they
+ * would not all fit in the budget (the calls then decode tile by tile).
+ * Returns 0, or -1 with *err (a fetch or a decode failed; the tiles
+ * decoded so far are not kept, and the cache stays usable).
+ */
+int gv_gpu_cache_prepare(struct gv_gpu_cache *c, int level, uint32_t t0x,
+                         uint32_t t0y, uint32_t t1x, uint32_t t1y,
+                         struct gv_error *err);
+
 /* gv_gpu_cache_get, then read mip 0 back into pixels (513x513xC). */
 int gv_gpu_cache_read(struct gv_gpu_cache *c, int level, uint32_t tx,
                       uint32_t ty, uint8_t *pixels, struct gv_error *err);
