@@ -7,8 +7,9 @@
  *
  * Parents are random bytes, extremes (0/255 patterns that drive the sum
  * past both ends of the clamp) and smooth ramps; every quadrant, 1 and 3
- * channels, fixed-layout and entropy-coded buffers at random rates, on the
- * SIMD path and on the portable one.  Every sample must be identical.
+ * channels, fixed-layout and entropy-coded buffers at random rates, on
+ * every SIMD path the CPU has and on the portable one.  Every sample must
+ * be identical.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -127,8 +128,16 @@ int main(void)
     int8_t *book = malloc(((size_t)1 << GV_MAX_RATE) * 12);
     uint16_t *idx = malloc(GV_NBLOCKS * sizeof *idx);
     struct gv_error err;
-    const int simd = gv_predict_simd(1);
-    printf("# SIMD path on this CPU: %s\n", simd ? "yes" : "no");
+    /* The paths this CPU has, widest first, down to the portable one. */
+    static const char *path_name[3] = {"portable", "AVX2", "AVX-512BW"};
+    int paths[3], npaths = 0;
+    for (int level = 2; level >= 0; level--)
+        if (gv_predict_simd(level) == level)
+            paths[npaths++] = level;
+    printf("# paths on this CPU:");
+    for (int i = 0; i < npaths; i++)
+        printf(" %s", path_name[paths[i]]);
+    printf("\n");
 
     for (int C = 1; C <= 3; C += 2)
         for (int kind = 0; kind < NKINDS; kind++) {
@@ -137,13 +146,13 @@ int main(void)
             for (int q = 0; q < 4; q++) {
                 const int qx = q & 1, qy = q >> 1;
                 reference_decode(P, C, qx, qy, NULL, NULL, want);
-                for (int path = 1; path >= 0; path--) {
-                    gv_predict_simd(path);
+                for (int i = 0; i < npaths; i++) {
+                    gv_predict_simd(paths[i]);
                     gv_predict(P, C, qx, qy, got);
                     check(count_diff(got, want, n) == 0,
                           "gv_predict, %d channel(s), %s parent, quadrant (%d,%d), "
                           "%s path: %d samples differ", C, kind_name[kind], qx, qy,
-                          path ? "SIMD" : "portable", count_diff(got, want, n));
+                          path_name[paths[i]], count_diff(got, want, n));
                 }
                 /* Rows out of order: the ring of filtered parent rows must
                  * refilter what it dropped. */
@@ -158,7 +167,7 @@ int main(void)
                 check(bad == 0, "200 rows in random order, %d channel(s), %s parent, "
                       "quadrant (%d,%d): %d samples differ", C, kind_name[kind],
                       qx, qy, bad);
-                gv_predict_simd(1);
+                gv_predict_simd(2);
             }
         }
 
@@ -184,16 +193,16 @@ int main(void)
         layouts[entropy]++;
         reference_decode(P, C, qx, qy, book, idx, want);
         const size_t n = gv_tile_bytes(C);
-        for (int path = 1; path >= 0; path--) {
-            gv_predict_simd(path);
+        for (int i = 0; i < npaths; i++) {
+            gv_predict_simd(paths[i]);
             int rc = gv_tile_decode(buf, len, C, P, qx, qy, got, &err);
             check(rc == 0 && count_diff(got, want, n) == 0,
                   "tile %d: %d channel(s), rate %d, %s layout, quadrant (%d,%d), "
                   "%s path: decode == reference (%d samples differ)", t, C, rate,
                   entropy ? "entropy-coded" : "fixed", qx, qy,
-                  path ? "SIMD" : "portable", rc == 0 ? count_diff(got, want, n) : -1);
+                  path_name[paths[i]], rc == 0 ? count_diff(got, want, n) : -1);
         }
-        gv_predict_simd(1);
+        gv_predict_simd(2);
     }
     check(layouts[0] > 0 && layouts[1] > 0, "both layouts tested (%d fixed, %d "
           "entropy-coded)", layouts[0], layouts[1]);

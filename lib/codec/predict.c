@@ -31,13 +31,14 @@
  *   16-bit integer; the rows are kept that way (half the memory traffic),
  *   and as the vertical weights sum to 128 the offset comes back as the
  *   constant 128*16384 in the 32-bit vertical sum.
- * - No clamping inside the loops: the parent pixels a quadrant reads are
- *   copied once per row into a segment padded by clamping at its ends, so
- *   the even and odd children are two straight 4-tap filters over it.
- * - The vertical sum runs on AVX2 where the CPU has it (pairs of rows
- *   interleaved into VPMADDWD, the clamp done by the saturating packs,
- *   which equals clamping before the shift since the shift is a floor);
- *   elsewhere a plain C loop the compiler vectorizes.
+ * - No clamping inside the loops: the even and odd children are two
+ *   straight 4-tap filters over the parent row, and only the two children
+ *   at the tile's edge whose taps leave it are done apart, clamped.
+ * - The vertical sum runs on AVX-512BW or AVX2 where the CPU has them
+ *   (pairs of rows interleaved into VPMADDWD, the clamp done by the
+ *   saturating packs, which equals clamping before the shift since the
+ *   shift is a floor); elsewhere a plain C loop the compiler vectorizes.
+ *   The residual addition uses AVX2's saturating byte arithmetic.
  */
 #include <string.h>
 
@@ -59,22 +60,33 @@ static const int W_ODD[4] = {-9, 111, 29, -3};   /* taps at p-1 .. p+2 */
 #define ROUND (8192 + 128 * OFFSET)
 #define SUM_MAX (255 * 16384 + 16383)
 
-static int simd_allowed = 1;
+static int simd_allowed = 2;
 
-int gv_predict_simd(int allow)
+int gv_predict_simd(int level)
 {
-    simd_allowed = allow;
+    simd_allowed = level;
 #if HAVE_AVX2_PATH
-    return allow && __builtin_cpu_supports("avx2");
-#else
-    return 0;
+    if (level >= 2 && __builtin_cpu_supports("avx512bw"))
+        return 2;
+    if (level >= 1 && __builtin_cpu_supports("avx2"))
+        return 1;
 #endif
+    return 0;
 }
 
 static inline int use_avx2(void)
 {
 #if HAVE_AVX2_PATH
-    return simd_allowed && __builtin_cpu_supports("avx2");
+    return simd_allowed >= 1 && __builtin_cpu_supports("avx2");
+#else
+    return 0;
+#endif
+}
+
+static inline int use_avx512(void)
+{
+#if HAVE_AVX2_PATH
+    return simd_allowed >= 2 && __builtin_cpu_supports("avx512bw");
 #else
     return 0;
 #endif
@@ -101,43 +113,58 @@ static inline int first_tap(int q, int u)
 #define HOT_LOOP
 #endif
 
-/* Parent pixels a quadrant reads: 256*q - 2 .. 256*q + 257 (260), padded. */
-#define SEG 262
-
-/* Copy parent pixels base .. base+SEG-1 of one row, clamped to the tile:
- * only the few at the ends are clamped, the rest is one copy. */
-static void load_segment(const uint8_t *src, int C, int base, uint8_t *seg)
+/* Even and odd horizontal sums (minus OFFSET) of children k0 <= k < k1,
+ * whose taps all lie inside the row: parent pixels p0 + k - k0 onwards,
+ * p0 = 256*qx - 2 + k0.  Exact in wrapping 16-bit arithmetic because the
+ * true value fits. */
+HOT_LOOP static void filter_interior(const uint8_t *restrict src, int C,
+                                     uint16_t *restrict even,
+                                     uint16_t *restrict odd, int n)
 {
-    const int lo = base < 0 ? -base : 0;                  /* clamped to 0 */
-    const int hi = GV_TILE - base < SEG ? GV_TILE - base : SEG; /* direct up to */
-    for (int i = 0; i < lo; i++)
-        memcpy(seg + i * C, src, (size_t)C);
-    memcpy(seg + lo * C, src + (size_t)(base + lo) * C, (size_t)(hi - lo) * C);
-    for (int i = hi; i < SEG; i++)
-        memcpy(seg + i * C, src + (size_t)(GV_TILE - 1) * C, (size_t)C);
-}
-
-/*
- * Horizontal sums (minus OFFSET) of one parent row for every child column
- * u = 0..512 of quadrant qx, interleaved as dst[u * C + c].  Child 2k reads
- * segment pixels k..k+3 and child 2k+1 pixels k+1..k+4.  The sums are
- * exact in wrapping 16-bit arithmetic because the true value fits.
- */
-HOT_LOOP static void filter_row(const uint8_t *src, int C, int qx,
-                                int16_t *dst)
-{
-    uint8_t seg[SEG * 3];
-    uint16_t even[257 * 3 + 4], odd[257 * 3 + 4];
-    load_segment(src, C, 256 * qx - 2, seg);
-    const int n = 257 * C;
-    const uint8_t *s0 = seg, *s1 = seg + C, *s2 = seg + 2 * C,
-                  *s3 = seg + 3 * C, *s4 = seg + 4 * C;
+    const uint8_t *s0 = src, *s1 = src + C, *s2 = src + 2 * C,
+                  *s3 = src + 3 * C, *s4 = src + 4 * C;
     for (int i = 0; i < n; i++) {
         even[i] = (uint16_t)(W_EVEN[0] * s0[i] + W_EVEN[1] * s1[i] +
                              W_EVEN[2] * s2[i] + W_EVEN[3] * s3[i] - OFFSET);
         odd[i] = (uint16_t)(W_ODD[0] * s1[i] + W_ODD[1] * s2[i] +
                             W_ODD[2] * s3[i] + W_ODD[3] * s4[i] - OFFSET);
     }
+}
+
+/* The same for one child k near the tile's edge, every tap clamped. */
+static void filter_edge(const uint8_t *src, int C, int base, int k,
+                        uint16_t *even, uint16_t *odd)
+{
+    for (int c = 0; c < C; c++) {
+        int e = 0, o = 0;
+        for (int j = 0; j < 4; j++) {
+            e += W_EVEN[j] * src[clamp_tile(base + k + j) * C + c];
+            o += W_ODD[j] * src[clamp_tile(base + k + 1 + j) * C + c];
+        }
+        even[k * C + c] = (uint16_t)(e - OFFSET);
+        odd[k * C + c] = (uint16_t)(o - OFFSET);
+    }
+}
+
+/*
+ * Horizontal sums (minus OFFSET) of one parent row for every child column
+ * u = 0..512 of quadrant qx, interleaved as dst[u * C + c].  Child 2k
+ * ("even") reads parent pixels base+k .. base+k+3 and child 2k+1 ("odd")
+ * base+k+1 .. base+k+4, base = 256*qx - 2: only children 0 and 1 (qx = 0)
+ * or 255 and 256 (qx = 1) reach outside the tile and are clamped; the
+ * rest is a straight filter over the row.
+ */
+static void filter_row(const uint8_t *src, int C, int qx, int16_t *dst)
+{
+    uint16_t even[257 * 3 + 4], odd[257 * 3 + 4];
+    const int base = 256 * qx - 2;
+    const int k0 = qx ? 0 : 2, k1 = qx ? 255 : 257;   /* interior [k0, k1) */
+    filter_interior(src + (size_t)(base + k0) * C, C, even + k0 * C,
+                    odd + k0 * C, (k1 - k0) * C);
+    for (int k = 0; k < k0; k++)
+        filter_edge(src, C, base, k, even, odd);
+    for (int k = k1; k < 257; k++)
+        filter_edge(src, C, base, k, even, odd);
     /* Interleave: child 2k from even[k], 2k+1 from odd[k]. */
     if (C == 1) {
         for (int k = 0; k < 256; k++) {
@@ -219,6 +246,45 @@ vertical_avx2(const int16_t *h0, const int16_t *h1, const int16_t *h2,
     if (i < n)
         vertical_c(h0 + i, h1 + i, h2 + i, h3 + i, w, n - i, out + i);
 }
+
+/* The same 64 samples at a time with AVX-512BW (same arithmetic; the
+ * packs work within 128-bit lanes, so the 64-bit groups are put back in
+ * order at the end). */
+__attribute__((target("avx512bw"))) static void
+vertical_avx512(const int16_t *h0, const int16_t *h1, const int16_t *h2,
+                const int16_t *h3, const int *w, size_t n, uint8_t *out)
+{
+    const __m512i w01 = _mm512_set1_epi32((int32_t)((uint32_t)(uint16_t)w[0] |
+                                                    (uint32_t)w[1] << 16));
+    const __m512i w23 = _mm512_set1_epi32((int32_t)((uint32_t)(uint16_t)w[2] |
+                                                    (uint32_t)(uint16_t)w[3] << 16));
+    const __m512i rnd = _mm512_set1_epi32(ROUND);
+    const __m512i order = _mm512_set_epi64(7, 5, 3, 1, 6, 4, 2, 0);
+    size_t i = 0;
+    for (; i + 64 <= n; i += 64) {
+        __m512i p[2];
+        for (int k = 0; k < 2; k++) {
+            const size_t j = i + 32 * (size_t)k;
+            __m512i a0 = _mm512_loadu_si512((const void *)(h0 + j));
+            __m512i a1 = _mm512_loadu_si512((const void *)(h1 + j));
+            __m512i a2 = _mm512_loadu_si512((const void *)(h2 + j));
+            __m512i a3 = _mm512_loadu_si512((const void *)(h3 + j));
+            __m512i lo = _mm512_add_epi32(
+                _mm512_madd_epi16(_mm512_unpacklo_epi16(a0, a1), w01),
+                _mm512_madd_epi16(_mm512_unpacklo_epi16(a2, a3), w23));
+            __m512i hi = _mm512_add_epi32(
+                _mm512_madd_epi16(_mm512_unpackhi_epi16(a0, a1), w01),
+                _mm512_madd_epi16(_mm512_unpackhi_epi16(a2, a3), w23));
+            lo = _mm512_srai_epi32(_mm512_add_epi32(lo, rnd), 14);
+            hi = _mm512_srai_epi32(_mm512_add_epi32(hi, rnd), 14);
+            p[k] = _mm512_packs_epi32(lo, hi);
+        }
+        __m512i b = _mm512_permutexvar_epi64(order, _mm512_packus_epi16(p[0], p[1]));
+        _mm512_storeu_si512((void *)(out + i), b);
+    }
+    if (i < n)
+        vertical_avx2(h0 + i, h1 + i, h2 + i, h3 + i, w, n - i, out + i);
+}
 #endif
 
 void gv_predictor_init(struct gv_predictor *p, const uint8_t *parent,
@@ -249,6 +315,10 @@ void gv_predictor_row(struct gv_predictor *p, int v, uint8_t *row)
     }
     const size_t n = (size_t)GV_TILE * C;
 #if HAVE_AVX2_PATH
+    if (use_avx512()) {
+        vertical_avx512(h[0], h[1], h[2], h[3], w, n, row);
+        return;
+    }
     if (use_avx2()) {
         vertical_avx2(h[0], h[1], h[2], h[3], w, n, row);
         return;

@@ -5,9 +5,9 @@
  *
  * gv_predict (tile.h) is this predictor run over all 513 rows.  The rows
  * are bit for bit those of the double sum of FORMAT.md section 3; where the
- * CPU has AVX2 the hot loops use it (chosen at run time), with a portable
- * C path that gives the same bytes (tests/test_predict.c compares both with
- * a direct implementation of the formulas).
+ * CPU has AVX2 or AVX-512BW the hot loops use them (chosen at run time),
+ * with a portable C path that gives the same bytes (tests/test_predict.c
+ * compares every path with a direct implementation of the formulas).
  */
 #ifndef GV_PREDICT_H
 #define GV_PREDICT_H
@@ -47,9 +47,10 @@ void gv_predictor_row(struct gv_predictor *p, int v, uint8_t *row);
 void gv_add_residual_row(uint8_t *row, const int8_t *book,
                          const uint16_t *ids, int channels, int half);
 
-/* For tests and benchmarks: 0 forces the portable C loops, 1 (the
- * default) lets the run-time choice use SIMD.  Not thread-safe: set it
- * before decoding.  Returns whether SIMD is now in use. */
-int gv_predict_simd(int allow);
+/* For tests and benchmarks: the widest SIMD the run-time choice may use,
+ * 0 (the portable C loops), 1 (AVX2) or 2 (AVX-512BW, the default).  Not
+ * thread-safe: set it before decoding.  Returns the level now in use on
+ * this CPU (at most the one asked for). */
+int gv_predict_simd(int level);
 
 #endif
