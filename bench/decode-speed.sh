@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # decode-speed.sh - tile decoding speed in one run on the same store: the
-# CPU reference decoder (1 thread, every core), the GPU decoder through EGL
-# (llvmpipe here; the vendor driver on a GPU machine) and libjpeg-turbo
+# CPU reference decoder (1 thread, every core, and its prediction alone),
+# the GPU decoder through EGL (llvmpipe here; the vendor driver on a GPU
+# machine) one call per tile and batched per level, and libjpeg-turbo
 # decoding the same level-0 tiles as JPEG at the quality of equal PSNR
-# (bench/decode_bench.c).  Prints figures and ratios; asserts nothing.
+# (bench/decode_bench.c).  Single-thread speeds also per CPU-second, for a
+# loaded machine.  Prints figures and ratios; asserts nothing.
 #
 #   bench/decode-speed.sh [BUILD-DIR] [IMAGE...]
 #
