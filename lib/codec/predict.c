@@ -146,6 +146,34 @@ static void filter_edge(const uint8_t *src, int C, int base, int k,
     }
 }
 
+#if HAVE_AVX2_PATH
+/* Interleave three-sample pixels: dst = even pixel 0, odd pixel 0, even
+ * pixel 1, ... for 256 pairs, then even pixel 256.  Eight pairs (48
+ * samples) per step, as two-source word permutes; the loads read up to 8
+ * samples past the 24 they use (the arrays have room). */
+__attribute__((target("avx512bw"))) static void
+interleave3_avx512(const uint16_t *even, const uint16_t *odd, int16_t *dst)
+{
+    /* Output sample j of the 48: pair j/6, its r = j%6: r < 3 from even
+     * lane 3*(j/6) + r, else odd (index | 32) lane 3*(j/6) + r - 3. */
+    static const uint16_t lanes[48] = {
+        0, 1, 2, 32, 33, 34, 3, 4, 5, 35, 36, 37, 6, 7, 8, 38, 39, 40,
+        9, 10, 11, 41, 42, 43, 12, 13, 14, 44, 45, 46, 15, 16, 17, 47,
+        48, 49, 18, 19, 20, 50, 51, 52, 21, 22, 23, 53, 54, 55};
+    const __m512i idx0 = _mm512_loadu_si512((const void *)lanes);
+    const __m512i idx1 = _mm512_castsi256_si512(
+        _mm256_loadu_si256((const __m256i *)(lanes + 32)));
+    for (int k = 0; k < 256; k += 8) {
+        const __m512i a = _mm512_loadu_si512((const void *)(even + 3 * k));
+        const __m512i b = _mm512_loadu_si512((const void *)(odd + 3 * k));
+        _mm512_storeu_si512((void *)(dst + 6 * k), _mm512_permutex2var_epi16(a, idx0, b));
+        _mm256_storeu_si256((__m256i *)(dst + 6 * k + 32),
+                            _mm512_castsi512_si256(_mm512_permutex2var_epi16(a, idx1, b)));
+    }
+    memcpy(dst + 6 * 256, even + 3 * 256, 3 * sizeof *dst);
+}
+#endif
+
 /*
  * Horizontal sums (minus OFFSET) of one parent row for every child column
  * u = 0..512 of quadrant qx, interleaved as dst[u * C + c].  Child 2k
@@ -156,7 +184,7 @@ static void filter_edge(const uint8_t *src, int C, int base, int k,
  */
 static void filter_row(const uint8_t *src, int C, int qx, int16_t *dst)
 {
-    uint16_t even[257 * 3 + 4], odd[257 * 3 + 4];
+    uint16_t even[257 * 3 + 16], odd[257 * 3 + 16];   /* spare for wide loads */
     const int base = 256 * qx - 2;
     const int k0 = qx ? 0 : 2, k1 = qx ? 255 : 257;   /* interior [k0, k1) */
     filter_interior(src + (size_t)(base + k0) * C, C, even + k0 * C,
@@ -174,6 +202,12 @@ static void filter_row(const uint8_t *src, int C, int qx, int16_t *dst)
         dst[512] = (int16_t)even[256];
         return;
     }
+#if HAVE_AVX2_PATH
+    if (use_avx512()) {
+        interleave3_avx512(even, odd, dst);
+        return;
+    }
+#endif
     /* Three samples per pixel: copies of four, each spare sample
      * overwritten by the next copy (even[] and odd[] have spare room). */
     for (int k = 0; k < 256; k++) {
@@ -374,11 +408,18 @@ void gv_add_residual_row(uint8_t *row, const int8_t *book,
 {
     /* The residual row, gathered from the codevectors (the last block's
      * second pixel lands in the spare bytes and is not added). */
-    int8_t res[GV_BLOCKS * 6];
-    if (channels == 3) {
-        const int8_t *b = book + 6 * half;
+    int8_t buf[2 + GV_BLOCKS * 6 + 2], *res = buf + 2;
+    if (channels == 3 && half == 0) {
+        /* Bytes 0..7 of each codevector: its 6 and 2 spare, which the next
+         * block's copy overwrites. */
         for (int bx = 0; bx < GV_BLOCKS; bx++)
-            memcpy(res + 6 * bx, b + (size_t)ids[bx] * 12, 6);
+            memcpy(res + 6 * bx, book + (size_t)ids[bx] * 12, 8);
+    } else if (channels == 3) {
+        /* Bytes 4..11 (2 spare, then its 6) placed 2 early, last block
+         * first, so each spare lands where an earlier block writes next;
+         * no copy reads past its codevector. */
+        for (int bx = GV_BLOCKS - 1; bx >= 0; bx--)
+            memcpy(res + 6 * bx - 2, book + (size_t)ids[bx] * 12 + 4, 8);
     } else {
         const int8_t *b = book + 2 * half;
         for (int bx = 0; bx < GV_BLOCKS; bx++)
