@@ -108,7 +108,7 @@ static inline int first_tap(int q, int u)
  * for AVX2, chosen at load time.  The integers are the same on every
  * path. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define HOT_LOOP __attribute__((target_clones("avx2", "default")))
+#define HOT_LOOP __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
 #else
 #define HOT_LOOP
 #endif
