@@ -45,7 +45,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     check_path(gpu, input, out, GV_GPU_PATH_SSBO);
     check_path(gpu, input, out, GV_GPU_PATH_WEBGL2);
     /* The gray synthetic store five times over (65 tiles): a batch longer
-     * than one upload group, parents in the previous group. */
+     * than a group, parents in earlier groups. */
     const int copies = strcmp(input, "synth:1100x1500:gray") == 0 ? 5 : 1;
     check_batch(gpu, input, out, GV_GPU_PATH_SSBO, copies);
     check_batch(gpu, input, out, GV_GPU_PATH_WEBGL2, 1);

@@ -11,11 +11,11 @@
  * on the CPU into an R16UI texture, as the browser does.
  *
  * A single tile is a batch of one.  A batch (gv_gpu_decode_batch) runs in
- * one call on the GL thread: on the SSBO path, groups of up to 64 tiles
- * share one upload of their buffers (each tile bound as a range of it) and
- * one index buffer, their rANS passes run back to back before a single
- * memory barrier, and then each tile's two draws follow.  Nothing in a
- * batch waits for the GPU; a read-back or the next call does.
+ * one call on the GL thread: on the SSBO path, in small groups of
+ * tiles, each with its own tile and index buffer, whose rANS passes run
+ * back to back before a single memory barrier, and then each tile's two
+ * draws follow.  Only a group waits, for the one before the previous to
+ * finish with the buffers it reuses.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,16 +32,23 @@
 
 #define WORDS_WIDTH 1024   /* texels per row of the WebGL2 words texture */
 
+/* Tiles per group on the SSBO path, each with its own tile buffer and
+ * index buffer in the group's set (16 x 145 KiB and 16 x 258 KiB at most
+ * per set).  On llvmpipe the group size changed nothing measurable: the
+ * CPU work per tile was the same (0.95 to 1.01x) with groups of 2 and 64
+ * (decode_bench, Dragonfly store). */
+#define GROUP 16
+
 struct gv_gpu_decoder {
     struct gv_gpu *gpu;
     int channels;
     enum gv_gpu_path path;
     GLuint decode, quarter, rans, fbo, vao;
-    /* Two sets of storage buffers (tile buffers, rANS indices), used by
-     * alternate groups of tiles; a set is refilled only once the fence
-     * after its last group's draws has passed. */
-    GLuint ssbo[2], indices[2];
-    size_t indices_cap[2];             /* tiles each index buffer holds */
+    /* Two sets of storage buffers, a tile buffer and an index buffer per
+     * tile of a group, used by alternate groups of tiles; a set is
+     * refilled only once the fence after its last group's draws has
+     * passed. */
+    GLuint ssbo[2][GROUP], indices[2][GROUP];
     GLsync fence[2];
     int set;
     GLuint words_tex, indices_tex;     /* WebGL2 path */
@@ -116,15 +123,16 @@ static int setup(void *arg, struct gv_error *err)
     }
     d->rans_rate = glGetUniformLocation(d->rans, "u_rate");
     d->rans_tables = glGetUniformLocation(d->rans, "u_tables");
-    glGenBuffers(2, d->ssbo);
-    glGenBuffers(2, d->indices);
-    /* The index buffers must exist even for a fixed-layout tile, whose
-     * decode pass has one bound but never reads it. */
+    /* The index buffers exist even for a fixed-layout tile, whose decode
+     * pass has one bound but never reads it. */
     for (int k = 0; k < 2; k++) {
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices[k]);
-        glBufferData(GL_SHADER_STORAGE_BUFFER, GV_NBLOCKS * sizeof(GLuint), NULL,
-                     GL_DYNAMIC_COPY);
-        d->indices_cap[k] = 1;
+        glGenBuffers(GROUP, d->ssbo[k]);
+        glGenBuffers(GROUP, d->indices[k]);
+        for (int i = 0; i < GROUP; i++) {
+            glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices[k][i]);
+            glBufferData(GL_SHADER_STORAGE_BUFFER, GV_NBLOCKS * sizeof(GLuint), NULL,
+                         GL_DYNAMIC_COPY);
+        }
     }
     return gl_failed(err, "decoder set-up");
 }
@@ -166,10 +174,12 @@ static int teardown(void *arg, struct gv_error *err)
     if (d->rans)
         glDeleteProgram(d->rans);
     for (int k = 0; k < 2; k++) {
-        if (d->indices[k])
-            glDeleteBuffers(1, &d->indices[k]);
-        if (d->ssbo[k])
-            glDeleteBuffers(1, &d->ssbo[k]);
+        for (int i = 0; i < GROUP; i++) {
+            if (d->indices[k][i])
+                glDeleteBuffers(1, &d->indices[k][i]);
+            if (d->ssbo[k][i])
+                glDeleteBuffers(1, &d->ssbo[k][i]);
+        }
         if (d->fence[k])
             glDeleteSync(d->fence[k]);
     }
@@ -353,36 +363,19 @@ static int decode_webgl2(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *jobs,
     return 0;
 }
 
-static size_t align_up(size_t v, size_t a)
-{
-    return (v + a - 1) / a * a;
-}
-
-/* Tiles per group on the SSBO path: bounds the staging buffers (at most
- * 64 x 145 KiB of tile buffers and 64 x 258 KiB of indices). */
-#define GROUP 64
 
 /*
- * SSBO path, a group of at most GROUP tiles: every tile buffer in one
- * storage buffer (one upload), the indices of every entropy-coded tile in
- * one index buffer, all rANS compute passes, one barrier, then the two
- * draws of each tile in order (a parent earlier in the group is rendered
- * before its children read it).  Nothing waits for the GPU.
+ * SSBO path, a group of at most GROUP tiles: every tile buffer uploaded to
+ * its own storage buffer, all rANS compute passes, one barrier, then the
+ * two draws of each tile in order (a parent earlier in the batch is
+ * rendered before its children read it).  Nothing waits for the GPU
+ * except for the set's previous group.
  */
 static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
                         size_t first, size_t n, struct gv_error *err)
 {
+    (void)err;
     struct gv_gpu_tile_job *jobs = all + first;
-    GLint al = 4;
-    glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &al);
-    const size_t align = al > 4 ? (size_t)al : 4;
-    const size_t idx_bytes = align_up(GV_NBLOCKS * sizeof(GLuint), align);
-    size_t off[GROUP], idx_off[GROUP], total = 0, nidx = 0;
-    for (size_t i = 0; i < n; i++) {
-        off[i] = total;
-        total = align_up(total + jobs[i].len, align);
-        idx_off[i] = (jobs[i].buf[0] & GV_TILE_ENTROPY) ? idx_bytes * nidx++ : 0;
-    }
     /* This group's set of buffers, once the GPU is done with its previous
      * group: shader storage is not ordered after earlier draws' reads
      * (llvmpipe, which runs compute passes at once but defers draws, showed
@@ -396,32 +389,23 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
         glDeleteSync(d->fence[set]);
         d->fence[set] = 0;
     }
-    const GLuint ssbo = d->ssbo[set], indices = d->indices[set];
-    uint8_t *staging = malloc(total);
-    if (!staging)
-        return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
-    for (size_t i = 0; i < n; i++)
-        memcpy(staging + off[i], jobs[i].buf, jobs[i].len);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, ssbo);
-    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)total, staging, GL_STREAM_DRAW);
-    free(staging);
-    if (nidx > d->indices_cap[set]) {
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, indices);
-        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(idx_bytes * nidx), NULL,
-                     GL_DYNAMIC_COPY);
-        d->indices_cap[set] = nidx;
+    const GLuint *ssbo = d->ssbo[set], *indices = d->indices[set];
+    int entropy = 0;
+    for (size_t i = 0; i < n; i++) {
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, ssbo[i]);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)jobs[i].len, jobs[i].buf,
+                     GL_STREAM_DRAW);
+        entropy |= (jobs[i].buf[0] & GV_TILE_ENTROPY) != 0;
     }
     /* Entropy-coded indices: one compute invocation per row of blocks. */
-    if (nidx) {
+    if (entropy) {
         glUseProgram(d->rans);
         for (size_t i = 0; i < n; i++) {
             if (!(jobs[i].buf[0] & GV_TILE_ENTROPY))
                 continue;
             const int rate = jobs[i].buf[0] & 0x0f;
-            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, ssbo, (GLintptr)off[i],
-                              (GLsizeiptr)jobs[i].len);
-            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, indices,
-                              (GLintptr)idx_off[i], GV_NBLOCKS * sizeof(GLuint));
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo[i]);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, indices[i]);
             glUniform1i(d->rans_rate, rate);
             glUniform1i(d->rans_tables, (GLint)gv_rans_tables_offset(rate, d->channels));
             glDispatchCompute((GV_BLOCKS + 63) / 64, 1, 1);
@@ -433,10 +417,8 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
         GLuint tex = new_tile_texture(), parent = parent_of(all, first + i);
         jobs[i].handle = tex;
         draw_quarter(d, tex, parent, jobs[i].qx, jobs[i].qy);
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, ssbo, (GLintptr)off[i],
-                          (GLsizeiptr)jobs[i].len);
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, indices,
-                          (GLintptr)idx_off[i], GV_NBLOCKS * sizeof(GLuint));
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo[i]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, indices[i]);
         draw_decode(d, tex, parent, jobs[i].qx, jobs[i].qy);
     }
     d->fence[set] = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);

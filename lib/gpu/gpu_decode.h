@@ -73,9 +73,10 @@ struct gv_gpu_tile_job {
  * Decode n tiles in one call to the GL thread, as gv_gpu_decode_tile would
  * one by one, in order (a tile may name an earlier job as its parent, so a
  * pyramid can be decoded level by level in one batch).  On the SSBO path
- * the tile buffers go up in one storage buffer per group of tiles, every
- * rANS pass of the group runs before one barrier, and no call waits for
- * the GPU.  Every buffer is checked with gv_tilebuf_check first.  Returns
+ * tiles go in groups: every rANS pass of a group runs before one barrier,
+ * and nothing waits for the GPU but a group for the one before the
+ * previous (whose buffers it reuses).  Every buffer is checked with
+ * gv_tilebuf_check first.  Returns
  * 0 with every jobs[i].handle set, or -1 with *err and no texture made
  * (GV_EINVAL: a parent_job not earlier than its job).
  */
