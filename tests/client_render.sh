@@ -248,7 +248,7 @@ class H(http.server.BaseHTTPRequestHandler):
         if tile and mode == "500":
             status, body = 500, b'{"error":{"status":500,"code":"io_error","message":"injected"}}'
         if tile and mode == "slow":
-            time.sleep(3)
+            time.sleep(30)
         if tile and mode == "short":
             body = body[:len(body) // 2]
         if tile and mode == "flip":
@@ -299,13 +299,11 @@ if [ -z "$no_gpu" ]; then
         500) pat="HTTP 500: injected";;
         slow) pat="within 1000 ms";;
         esac
-        start=$(date +%s)
+        # 'slow' stalls each tile for 30 s: a render that waited it out would
+        # succeed, so the failure with the timeout message is the proof that
+        # --timeout gave up (no wall-clock check, which load would break).
         fails "stub '$m': tile responses damaged" "$pat" "$STUB" --image x --level 0 \
             --region 0,0,600,600 --no-cache --timeout 1
-        # Generous: the 3 s stall must not be waited out (valgrind is slow).
-        if [ $m = slow ] && ! under_valgrind && [ $(($(date +%s) - start)) -gt 2 ]; then
-            not_ok "--timeout 1 gives up before the stub answers (took $(($(date +%s) - start)) s)"
-        fi
         stub_stop
     done
     # The stub passes everything through untouched in any other mode.
