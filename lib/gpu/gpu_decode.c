@@ -322,7 +322,7 @@ static int decode(void *arg, struct gv_error *err)
         const int rate = j->buf[0] & 0x0f;
         glUseProgram(d->rans);
         glUniform1i(d->rans_rate, rate);
-        glUniform1i(d->rans_tables, (GLint)gv_rans_tables_offset(rate, d->channels));
+        glUniform1i(d->rans_tables, (GLint)gv_rans_tables_at(j->buf, d->channels));
         glDispatchCompute((GV_BLOCKS + 63) / 64, 1, 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }

@@ -46,10 +46,10 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
     if (memcmp(in, GV_MAGIC, 8) != 0)
         return gv_fail(err, GV_EFORMAT, "store: not a gigaview store (bad magic)");
     h->version = gv_get16(in + 8);
-    if (h->version != GV_VERSION)
+    if (h->version < GV_VERSION_MIN || h->version > GV_VERSION)
         return gv_fail(err, GV_EFORMAT, "store: format version %u is not "
-                       "supported (this build reads version %d)",
-                       h->version, GV_VERSION);
+                       "supported (this build reads versions %d to %d)",
+                       h->version, GV_VERSION_MIN, GV_VERSION);
     if (gv_get32(in + 124) != gv_crc32(0, in, 124))
         return gv_fail(err, GV_ECORRUPT, "store: header CRC mismatch");
     if (gv_get16(in + 10) != GV_HEADER_SIZE || gv_get16(in + 24) != GV_TILE ||

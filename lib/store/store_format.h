@@ -1,5 +1,7 @@
 /*
- * store_format.h - byte layout of a gigaview store file (format version 1).
+ * store_format.h - byte layout of a gigaview store file (format version 2;
+ * version 1 differs only in that its tiles never use the context-coded
+ * layout, so it is read by the same code).
  *
  * Shared by the reader and the writer; docs/FORMAT.md is the normative
  * description.  All integers are little-endian.  The file is:
@@ -25,7 +27,8 @@
 #include "store/geometry.h"
 
 #define GV_MAGIC "GIGAVIEW"
-#define GV_VERSION 1
+#define GV_VERSION 2       /* what the writer writes */
+#define GV_VERSION_MIN 1   /* the oldest version the reader reads */
 #define GV_HEADER_SIZE 128
 #define GV_INDEX_ENTRY 16
 #define GV_PAGE_MAGIC "GVPG"
