@@ -83,6 +83,21 @@ uint64_t gv_root_pixels_size(uint32_t w, uint32_t h, int channels);
 int gv_root_pack(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
                  uint8_t **out, size_t *len, struct gv_error *err);
 
+/* The near-lossless setting of the root for a target PSNR q (dB):
+ * 5q - 100 clamped to 0..100, so lossless from q = 40 on (docs/FORMAT.md
+ * section 6). */
+int gv_root_near_lossless(double target_psnr);
+
+/*
+ * Replace the root's pixels (w*h*channels) with what a near-lossless WebP
+ * encoding of them decodes to, at libwebp's near_lossless setting (0..99;
+ * 100 or more leaves them unchanged).  Deterministic; the result packs
+ * losslessly (gv_root_pack) to about the near-lossless size.  Returns 0,
+ * or -1 with *err filled (pixels unspecified then).
+ */
+int gv_root_approx(uint8_t *pixels, uint32_t w, uint32_t h, int channels,
+                   int near_lossless, struct gv_error *err);
+
 /* Inverse of gv_root_pack into out (w*h*channels bytes).  Fails unless the
  * data is a WebP image of exactly w x h. */
 int gv_root_unpack(const uint8_t *in, size_t len, uint32_t w, uint32_t h,
