@@ -295,9 +295,10 @@ static void check_attacks(struct gv_tile_workspace *ws, const uint8_t *orig,
 
 /* Pack and unpack indices of chosen statistics in both entropy-coded
  * layouts: every index the same (a model of one certain symbol, whose
- * frequency is the whole 2^15), a skewed run, and uniform at rate 12
- * (an escape for nearly every block: streams of up to 516 words).  Then
- * hostile EX headers. */
+ * frequency is the whole 2^15), a skewed run, and every fourth block row
+ * uniform at rate 12 (escapes: two coding steps a block).  Uniform
+ * indices in every row make longer buffers than the fixed layout, which
+ * the check refuses.  Then hostile EX headers. */
 static void check_context_layout(const uint8_t *parent)
 {
     struct gv_error err;
@@ -310,14 +311,14 @@ static void check_context_layout(const uint8_t *parent)
     for (size_t i = 0; i < ((size_t)12 << GV_MAX_RATE); i++)
         book[i] = (int8_t)(i * 37 % 251 - 125);
     static const struct { int rate; const char *what; } cases[] = {
-        {3, "every index 5"}, {8, "skewed"}, {12, "uniform"},
+        {3, "every index 5"}, {8, "skewed"}, {12, "uniform rows"},
     };
     for (int c = 0; c < 3; c++) {
         const int rate = cases[c].rate;
         for (uint32_t i = 0; i < GV_NBLOCKS; i++) {
             uint32_t r = next_rand();
             idx[i] = c == 0 ? 5 : c == 1 ? (uint16_t)((r % 16 ? r % 4 : r % 256) ^ 3)
-                                        : (uint16_t)(r % 4096);
+                                        : (uint16_t)(i / GV_BLOCKS % 4 ? 0 : r % 4096);
         }
         for (int ctx = 0; ctx < 2; ctx++) {
             size_t len = ctx ? gv_rans_pack_ctx(idx, rate, 3, book, buf, cap)
@@ -331,6 +332,17 @@ static void check_context_layout(const uint8_t *parent)
                   "%s, rate %d, %s layout: %zu bytes, every block's codevector comes back",
                   cases[c].what, rate, ctx ? "EX" : "E", len);
         }
+    }
+    for (uint32_t i = 0; i < GV_NBLOCKS; i++)
+        idx[i] = (uint16_t)(next_rand() % 4096);
+    for (int ctx = 0; ctx < 2; ctx++) {
+        size_t len = ctx ? gv_rans_pack_ctx(idx, 12, 3, book, buf, cap)
+                         : gv_rans_pack(idx, 12, 3, book, buf, cap);
+        char want[128];
+        snprintf(want, sizeof want, "tile: entropy-coded buffer of %zu bytes, longer than "
+                 "the fixed layout's %d", len, GV_TILEBUF_MAX);
+        check_str(refusal(gv_tilebuf_check(buf, len, 3, &err), &err), want,
+                  "uniform indices at rate 12, %s layout: refused", ctx ? "EX" : "E");
     }
     /* The commonest codevector first: index 0 of the skewed case. */
     for (uint32_t i = 0; i < GV_NBLOCKS; i++)

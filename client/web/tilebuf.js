@@ -101,7 +101,14 @@ function checkStreams(buf, lengths, maxWords) {
 /** gv_rans_check: tables and stream lengths of an entropy-coded buffer. */
 export function ransCheck(buf, rate, channels) {
     const len = buf.length;
+    // Never longer than the fixed layout (so never past TILEBUF_MAX).
+    const checkLength = () => {
+        const fixed = tileBufferSize(rate, channels);
+        if (len > fixed)
+            throw corrupt(`entropy-coded buffer of ${len} bytes, longer than the fixed layout's ${fixed}`);
+    };
     if (!(buf[0] & CONTEXT)) {
+        checkLength();
         const l = ransLayout(buf, rate, channels);
         if (len < l.streams || (len & 3))
             throw corrupt(`entropy-coded buffer of ${len} bytes is too short for rate ${rate}`);
@@ -112,6 +119,7 @@ export function ransCheck(buf, rate, channels) {
     }
     if (rate < 3)
         throw corrupt(`context-coded indices at rate ${rate} (3 is the least)`);
+    checkLength();
     if (len < 4 || (len & 3))
         throw corrupt(`context-coded buffer of ${len} bytes`);
     const l = ransLayout(buf, rate, channels);

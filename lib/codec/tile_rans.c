@@ -436,9 +436,23 @@ static int check_streams(const uint8_t *buf, size_t len, size_t lengths,
     return 0;
 }
 
+/* An entropy-coded buffer is never longer than the fixed layout at its
+ * rate (the encoder writes it only when smaller), so no tile buffer
+ * exceeds GV_TILEBUF_MAX. */
+static int check_length(size_t len, int rate, int channels, struct gv_error *err)
+{
+    const size_t fixed = gv_tilebuf_size(rate, channels);
+    if (len > fixed)
+        return gv_fail(err, GV_ECORRUPT, "tile: entropy-coded buffer of %zu "
+                       "bytes, longer than the fixed layout's %zu", len, fixed);
+    return 0;
+}
+
 static int check_e(const uint8_t *buf, size_t len, int rate, int channels,
                    struct gv_error *err)
 {
+    if (check_length(len, rate, channels, err) < 0)
+        return -1;
     const int k = 1 << rate;
     const size_t tables = gv_rans_tables_offset(rate, channels);
     const size_t lengths = tables + 2 * (size_t)k;
@@ -457,6 +471,8 @@ static int check_ex(const uint8_t *buf, size_t len, int rate, int channels,
     if (rate < 3)
         return gv_fail(err, GV_ECORRUPT, "tile: context-coded indices at "
                        "rate %d (3 is the least)", rate);
+    if (check_length(len, rate, channels, err) < 0)
+        return -1;
     if (len < 4 || (len & 3))
         return gv_fail(err, GV_ECORRUPT, "tile: context-coded buffer of %zu "
                        "bytes", len);
