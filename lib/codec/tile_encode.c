@@ -13,7 +13,8 @@
  * the target unless it is at the cap.  In rate-distortion mode
  * (params->lambda > 0) every rate is coded instead, and the one with the
  * least SSE + lambda * bits wins.  Either way the buffer is written in the
- * smaller of the fixed and the entropy-coded layouts.
+ * smallest of the fixed, the entropy-coded and the context-coded layouts
+ * (tile_rans.c), each sized exactly.
  *
  * Sampling uses a per-tile seed, and the search is exact, so the output
  * does not depend on thread count or CPU.
