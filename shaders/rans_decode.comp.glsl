@@ -1,9 +1,10 @@
 // rans_decode.comp.glsl - decode the 257 rANS index streams of an
-// entropy-coded tile buffer (docs/FORMAT.md, section 4.1), one invocation
-// per row of blocks, into one uint per index.  Bit for bit what
+// entropy-coded tile buffer (docs/FORMAT.md, sections 4.1 and 4.2), one
+// invocation per row of blocks, into one uint per index.  Bit for bit what
 // lib/codec/tile_rans.c gv_rans_unpack produces for a well-formed buffer (the
-// CPU checks the buffer before it is uploaded).  Needs compute shaders and
-// storage buffers: GLSL ES 3.10 or GLSL 4.30.
+// CPU checks the buffer before it is uploaded; a damaged stream still gives
+// indices inside the codebook).  Needs compute shaders and storage
+// buffers: GLSL ES 3.10 or GLSL 4.30.
 
 precision highp int;
 
@@ -13,11 +14,29 @@ layout(std430, binding = 0) readonly buffer TileWords { uint words[]; };
 layout(std430, binding = 1) writeonly buffer Indices { uint indices[]; };
 
 uniform int u_rate;        // r, 1..12
-uniform int u_tables;      // byte offset of the cumulative frequencies
+uniform int u_tables;      // byte offset of the model over all indices
+                           // (gv_rans_tables_at: E's cum[], EX's escape model)
 
 uint u16_at(int byte_offset)
 {
     return (words[byte_offset >> 2] >> uint(8 * (byte_offset & 2))) & 0xffffu;
+}
+
+// The last symbol of the k-symbol model at byte offset `tables` whose
+// cumulative frequency is <= slot: (symbol, cum, frequency).
+ivec3 find_symbol(int tables, int k, uint slot)
+{
+    int lo = 0, hi = k - 1;
+    while (lo < hi) {
+        int mid = (lo + hi + 1) >> 1;
+        if (u16_at(tables + 2 * mid) <= slot)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    uint c = u16_at(tables + 2 * lo);
+    uint c1 = lo + 1 < k ? u16_at(tables + 2 * (lo + 1)) : 32768u;
+    return ivec3(lo, int(c), int(c1 - c));
 }
 
 void main()
@@ -25,30 +44,61 @@ void main()
     int row = int(gl_GlobalInvocationID.x);
     if (row >= 257)
         return;
-    int k = 1 << u_rate;
-    int lengths = u_tables + 2 * k;
+    uint b0 = words[0] & 0xffu;
+    bool ctx = (b0 & 64u) != 0u;
+    // E: k = 2^r symbols, lengths after cum[].  EX (byte 1: contexts,
+    // bytes 2-3: N): the escape model's N symbols, then the context map
+    // (4-aligned, 8 bytes), 8 u16 per context model, then the lengths.
+    int k = ctx ? int(u16_at(2)) : 1 << u_rate;
+    int map_at = ((u_tables + 2 * k + 3) >> 2) << 2;
+    int models = map_at + 8;
+    int lengths = ctx ? models + 16 * int((words[0] >> 8) & 0xffu) : u_tables + 2 * k;
     int at = lengths + 516;            // 257 u16 lengths, padded to 4
     for (int i = 0; i < row; i++)
         at += 2 * int(u16_at(lengths + 2 * i));
     uint x = u16_at(at) | (u16_at(at + 2) << 16);
     int next = at + 4;
+    int a = 0, b = 0;                  // EX: classes of the two blocks before
     for (int i = 0; i < 257; i++) {
-        uint slot = x & 0x7fffu;
-        int lo = 0, hi = k - 1;
-        while (lo < hi) {
-            int mid = (lo + hi + 1) >> 1;
-            if (u16_at(u_tables + 2 * mid) <= slot)
-                lo = mid;
-            else
-                hi = mid - 1;
+        int idx;
+        if (ctx) {
+            int p = 4 * a + b;
+            int m = int((words[(map_at + (p >> 1)) >> 2] >> uint(8 * ((p >> 1) & 3) + 4 * (p & 1))) & 15u);
+            int cum = models + 16 * m;
+            uint slot = x & 0x7fffu;
+            int s = 0;
+            while (s < 7 && u16_at(cum + 2 * (s + 1)) <= slot)
+                s++;
+            uint c = u16_at(cum + 2 * s);
+            uint c1 = s < 7 ? u16_at(cum + 2 * (s + 1)) : 32768u;
+            x = (c1 - c) * (x >> 15) + slot - c;
+            if (x < 65536u) {
+                x = (x << 16) | u16_at(next);
+                next += 2;
+            }
+            idx = s;
+            if (s == 7) {
+                slot = x & 0x7fffu;
+                ivec3 e = find_symbol(u_tables, k, slot);
+                idx = e.x;
+                x = uint(e.z) * (x >> 15) + slot - uint(e.y);
+                if (x < 65536u) {
+                    x = (x << 16) | u16_at(next);
+                    next += 2;
+                }
+            }
+            b = a;
+            a = s == 0 ? 0 : (s <= 2 ? 1 : (s <= 6 ? 2 : 3));
+        } else {
+            uint slot = x & 0x7fffu;
+            ivec3 e = find_symbol(u_tables, k, slot);
+            idx = e.x;
+            x = uint(e.z) * (x >> 15) + slot - uint(e.y);
+            if (x < 65536u) {
+                x = (x << 16) | u16_at(next);
+                next += 2;
+            }
         }
-        uint c = u16_at(u_tables + 2 * lo);
-        uint c1 = lo + 1 < k ? u16_at(u_tables + 2 * (lo + 1)) : 32768u;
-        indices[row * 257 + i] = uint(lo);
-        x = (c1 - c) * (x >> 15) + slot - c;
-        if (x < 65536u) {
-            x = (x << 16) | u16_at(next);
-            next += 2;
-        }
+        indices[row * 257 + i] = uint(idx);
     }
 }

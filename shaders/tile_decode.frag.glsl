@@ -97,7 +97,8 @@ void main()
 #endif
         else
             idx = bits_at(8 * (1 + (1 << r) * dim) + block * r, r);
-        int at = 1 + idx * dim + ((uv.y & 1) * 2 + (uv.x & 1)) * u_channels;
+        int book = (byte_at(0) & 64) != 0 ? 4 : 1;   // EX layout: after N
+        int at = book + idx * dim + ((uv.y & 1) * 2 + (uv.x & 1)) * u_channels;
         for (int c = 0; c < 3; c++) {
             if (c < u_channels) {
                 int v = byte_at(at + c);

@@ -1,7 +1,9 @@
 /*
  * test_gpu_decode.c - the GPU decoder (EGL; llvmpipe in CI) against the CPU
  * reference decoder, bit for bit, on every tile of several stores: RGB and
- * gray, a real photograph and procedural images, rates from 0 to 12.  Tiles
+ * gray, a real photograph and procedural images, rates from 0 to 12, every
+ * tile layout (fixed, E, the context-coded EX), and a store of format
+ * version 1.  Tiles
  * are decoded top-down entirely on the GPU (each from its GPU-decoded
  * parent), so an error anywhere would propagate and be seen: one call per
  * tile, and the whole pyramid as one batch (gv_gpu_decode_batch, each tile
@@ -76,7 +78,7 @@ static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
     above = malloc(sizeof *above);
     if (gv_gpu_upload_tile(gd, root, &above[0], &err) < 0)
         fail("upload: %s", err.text);
-    int tiles = 0, mismatched = 0, quarter_bad = 0, rates[16] = {0}, coded = 0;
+    int tiles = 0, mismatched = 0, quarter_bad = 0, rates[16] = {0}, coded = 0, ctx = 0;
     for (int k = g->root - 1; k >= 0; k--) {
         const struct gv_level *l = &g->level[k];
         cur = malloc(sizeof *cur * l->tiles_x * l->tiles_y);
@@ -91,6 +93,7 @@ static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
                     fail("tile %d/%u/%u: %s", k, tx, ty, err.text);
                 rates[buf[0] & 0x0f]++;
                 coded += (buf[0] & 0x80) != 0;
+                ctx += (buf[0] & 0x40) != 0;
                 uint32_t h;
                 if (gv_gpu_decode_tile(gd, buf, tlen, above[(ty / 2) * above_w + tx / 2],
                                        (int)(tx & 1), (int)(ty & 1), &h, &err) < 0)
@@ -136,10 +139,10 @@ static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
             snprintf(rs + strlen(rs), sizeof rs - strlen(rs), " r%d:%d", q, rates[q]);
     const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
     check(mismatched == 0 && quarter_bad == 0 && tiles > 0,
-          "%s, %s: %d tiles (%s; %d entropy-coded) decode identically on the GPU "
-          "(%d differ, %d mip-1 rows differ)", name,
+          "%s, %s: %d tiles (%s; %d entropy-coded, %d of them context-coded) decode "
+          "identically on the GPU (%d differ, %d mip-1 rows differ)", name,
           path == GV_GPU_PATH_SSBO ? "GLSL ES 3.10 + compute" : "GLSL ES 3.00 (WebGL2)",
-          tiles, rs + 1, coded, mismatched, quarter_bad);
+          tiles, rs + 1, coded, ctx, mismatched, quarter_bad);
     free(px);
     free(quarter);
     gv_gpu_decoder_free(gd);
@@ -283,6 +286,11 @@ int main(int argc, char **argv)
     check_store(gpu, "synth:1100x1500:gray", 33.0, 10);
     check_store(gpu, "synth:2100x900", 20.0, 3);       /* low rates, r = 0 */
     check_store(gpu, "synth:600x600:gray", 99.0, 12);
+    /* A store of format version 1 (E layout and rate 0 only). */
+    char v1[512];
+    snprintf(v1, sizeof v1, "%s/v1-picos-530x516.gv", data);
+    check_path(gpu, v1, v1, GV_GPU_PATH_SSBO);
+    check_path(gpu, v1, v1, GV_GPU_PATH_WEBGL2);
     rmdir(dir);
     gv_gpu_close(gpu);
     return tap_done();

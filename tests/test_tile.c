@@ -178,6 +178,214 @@ static void check_biased_search(void)
     free(dist);
 }
 
+/* Offset of the stream lengths n[] of an entropy-coded buffer, read from
+ * its header as docs/FORMAT.md lays it out (sections 4.1 and 4.2). */
+static size_t lengths_offset(const uint8_t *buf, int channels)
+{
+    const int rate = buf[0] & 15, dim = 4 * channels;
+    if (!(buf[0] & 0x40))
+        return ((1 + ((size_t)dim << rate) + 3) & ~(size_t)3) + ((size_t)2 << rate);
+    const size_t n = gv_get16(buf + 2), contexts = buf[1];
+    const size_t map = (4 + n * dim + 2 * n + 3) & ~(size_t)3;
+    return map + 8 + 16 * contexts;
+}
+
+/* Single-byte changes (every 7th byte after the codebook) to one
+ * entropy-coded buffer.  A change to the tables, the context map or the
+ * stream lengths is refused by the layout check, or (EX) touches a byte
+ * no block uses (a map entry of a class pair that never occurs, a model
+ * nothing is coded with) and decodes to the same pixels.  A change inside
+ * the streams is refused when a stream then ends early or not in its
+ * final state; the streams carry no checksum, so a changed word can still
+ * end cleanly and decode, in bounds (ASan checks), to other indices: only
+ * a few may.  Then truncation, and byte 0 with reserved bits. */
+static void attack(const uint8_t *buf, size_t len, const uint8_t *parent,
+                   const char *name)
+{
+    const size_t tb = gv_tile_bytes(3);
+    struct gv_error err;
+    uint8_t *copy = malloc(len), *dec = malloc(tb), *want_px = malloc(tb);
+    if (!copy || !dec || !want_px)
+        fail("out of memory");
+    if (gv_tile_decode(buf, len, 3, parent, 0, 0, want_px, &err) < 0)
+        fail("%s: %s", name, err.text);
+    const int rate = buf[0] & 15;
+    const size_t book = buf[0] & 0x40 ? 4 + (size_t)12 * gv_get16(buf + 2)
+                                      : 1 + ((size_t)12 << rate);
+    const size_t lengths = lengths_offset(buf, 3);
+    const size_t streams = lengths + ((2 * GV_BLOCKS + 3) & ~(size_t)3);
+    size_t words = 0;
+    for (int row = 0; row < GV_BLOCKS; row++)
+        words += gv_get16(buf + lengths + 2 * (size_t)row);
+    int tables_changed = 0, tables_refused = 0, tables_same = 0,
+        streams_changed = 0, streams_refused = 0;
+    for (size_t pos = book; pos < len; pos += 7) {
+        memcpy(copy, buf, len);
+        copy[pos] ^= 0x24;
+        int refused = gv_tile_decode(copy, len, 3, parent, 0, 0, dec, &err) < 0;
+        if (pos < streams) {
+            tables_changed++;
+            tables_refused += refused;
+            tables_same += !refused && memcmp(dec, want_px, tb) == 0;
+        } else {
+            streams_changed++;
+            streams_refused += refused;
+        }
+    }
+    check(tables_changed > 0 && tables_refused + tables_same == tables_changed &&
+          (buf[0] & 0x40 || tables_same == 0),
+          "%s: every damaged table or stream length is refused (%d of %d; %d touch "
+          "nothing used)", name, tables_refused, tables_changed, tables_same);
+    check(streams_changed > 1000 && streams_changed - streams_refused <= streams_changed / 100,
+          "%s: damaged streams: at most 1%% decode (%d of %d)", name,
+          streams_changed - streams_refused, streams_changed);
+    char want[128];
+    snprintf(want, sizeof want, "tile: streams need %zu bytes, the buffer has %zu",
+             2 * words, len - 4 - streams);
+    check_str(refusal(gv_tile_decode(buf, len - 4, 3, parent, 0, 0, dec, &err), &err),
+              want, "%s: a truncated buffer is refused", name);
+    memcpy(copy, buf, len);
+    copy[0] = (uint8_t)(buf[0] & 0xc0);
+    snprintf(want, sizeof want, "tile: bad rate byte 0x%02x", copy[0]);
+    check_str(refusal(gv_tilebuf_check(copy, len, 3, &err), &err), want,
+              "%s: entropy flag at rate 0 is refused", name);
+    copy[0] = (uint8_t)(buf[0] | 0x10);
+    snprintf(want, sizeof want, "tile: bad rate byte 0x%02x", copy[0]);
+    check_str(refusal(gv_tilebuf_check(copy, len, 3, &err), &err), want,
+              "%s: reserved bits are refused", name);
+    free(copy);
+    free(dec);
+    free(want_px);
+}
+
+/* The encoder's buffer for a smooth tile with a little noise is context-
+ * coded (EX); the same indices and codebook packed in the E layout decode
+ * to the same pixels.  Both are attacked. */
+static void check_attacks(struct gv_tile_workspace *ws, const uint8_t *orig,
+                          const uint8_t *parent, uint8_t *buf)
+{
+    const size_t tb = gv_tile_bytes(3);
+    struct gv_error err;
+    struct gv_tile_params prm = {.target_mse = 0.01, .max_rate = 6, .seed = 3};
+    struct gv_tile_stats st;
+    uint8_t *recon = malloc(tb), *dec = malloc(tb), *e = malloc(GV_TILEBUF_MAX);
+    uint16_t *idx = malloc(sizeof *idx * GV_NBLOCKS);
+    int8_t book[64 * 12];
+    if (!recon || !dec || !e || !idx)
+        fail("out of memory");
+    size_t len = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &prm, recon, buf, &st);
+    const uint32_t n = gv_get16(buf + 2);
+    check(buf[0] == 0xc6 && st.rate == 6 && n >= 8 && n <= 64 && buf[1] >= 1 && buf[1] <= 8,
+          "the attacked tile is context-coded at rate 6 (byte 0: 0x%02x, %u codevectors, "
+          "%d context models)", buf[0], n, buf[1]);
+    memset(book, 0, sizeof book);
+    memcpy(book, buf + 4, (size_t)n * 12);
+    int unpacked = gv_rans_unpack(buf, len, 6, 3, idx, &err) == 0;
+    size_t elen = gv_rans_pack(idx, 6, 3, book, e, GV_TILEBUF_MAX);
+    check(unpacked && elen > len && gv_tile_decode(e, elen, 3, parent, 0, 0, dec, &err) == 0 &&
+          memcmp(dec, recon, tb) == 0, "the same indices in the E layout: %zu bytes rather "
+          "than %zu, the same pixels", elen, len);
+    attack(buf, len, parent, "EX");
+    attack(e, elen, parent, "E");
+    free(recon);
+    free(dec);
+    free(e);
+    free(idx);
+}
+
+/* Pack and unpack indices of chosen statistics in both entropy-coded
+ * layouts: every index the same (a model of one certain symbol, whose
+ * frequency is the whole 2^15), a skewed run, and every fourth block row
+ * uniform at rate 12 (escapes: two coding steps a block).  Uniform
+ * indices in every row make longer buffers than the fixed layout, which
+ * the check refuses.  Then hostile EX headers. */
+static void check_context_layout(const uint8_t *parent)
+{
+    struct gv_error err;
+    const size_t cap = 2 * GV_TILEBUF_MAX;
+    uint16_t *idx = malloc(sizeof *idx * GV_NBLOCKS), *back = malloc(sizeof *back * GV_NBLOCKS);
+    uint8_t *buf = malloc(cap), *copy = malloc(cap), *dec = malloc(gv_tile_bytes(3));
+    int8_t *book = malloc((size_t)12 << GV_MAX_RATE);
+    if (!idx || !back || !buf || !copy || !dec || !book)
+        fail("out of memory");
+    for (size_t i = 0; i < ((size_t)12 << GV_MAX_RATE); i++)
+        book[i] = (int8_t)(i * 37 % 251 - 125);
+    static const struct { int rate; const char *what; } cases[] = {
+        {3, "every index 5"}, {8, "skewed"}, {12, "uniform rows"},
+    };
+    for (int c = 0; c < 3; c++) {
+        const int rate = cases[c].rate;
+        for (uint32_t i = 0; i < GV_NBLOCKS; i++) {
+            uint32_t r = next_rand();
+            idx[i] = c == 0 ? 5 : c == 1 ? (uint16_t)((r % 16 ? r % 4 : r % 256) ^ 3)
+                                        : (uint16_t)(i / GV_BLOCKS % 4 ? 0 : r % 4096);
+        }
+        for (int ctx = 0; ctx < 2; ctx++) {
+            size_t len = ctx ? gv_rans_pack_ctx(idx, rate, 3, book, buf, cap)
+                             : gv_rans_pack(idx, rate, 3, book, buf, cap);
+            int ok = len > 0 && gv_rans_unpack(buf, len, rate, 3, back, &err) == 0;
+            /* EX reorders the codebook: compare codevectors, not indices. */
+            const size_t bo = ctx ? 4 : 1;
+            for (uint32_t i = 0; ok && i < GV_NBLOCKS; i++)
+                ok = memcmp(buf + bo + (size_t)back[i] * 12, book + (size_t)idx[i] * 12, 12) == 0;
+            check(ok && gv_tile_decode(buf, len, 3, parent, 1, 0, dec, &err) == 0,
+                  "%s, rate %d, %s layout: %zu bytes, every block's codevector comes back",
+                  cases[c].what, rate, ctx ? "EX" : "E", len);
+        }
+    }
+    for (uint32_t i = 0; i < GV_NBLOCKS; i++)
+        idx[i] = (uint16_t)(next_rand() % 4096);
+    for (int ctx = 0; ctx < 2; ctx++) {
+        size_t len = ctx ? gv_rans_pack_ctx(idx, 12, 3, book, buf, cap)
+                         : gv_rans_pack(idx, 12, 3, book, buf, cap);
+        char want[128];
+        snprintf(want, sizeof want, "tile: entropy-coded buffer of %zu bytes, longer than "
+                 "the fixed layout's %d", len, GV_TILEBUF_MAX);
+        check_str(refusal(gv_tilebuf_check(buf, len, 3, &err), &err), want,
+                  "uniform indices at rate 12, %s layout: refused", ctx ? "EX" : "E");
+    }
+    /* The commonest codevector first: index 0 of the skewed case. */
+    for (uint32_t i = 0; i < GV_NBLOCKS; i++)
+        idx[i] = (uint16_t)(i % 9 == 0 ? 200 + i % 50 : 77);
+    size_t len = gv_rans_pack_ctx(idx, 8, 3, book, buf, cap);
+    int zero = gv_rans_unpack(buf, len, 8, 3, back, &err) == 0;
+    for (uint32_t i = 0; zero && i < GV_NBLOCKS; i++)
+        zero = (back[i] == 0) == (idx[i] == 77);
+    check(zero && gv_get16(buf + 2) == 51 && memcmp(buf + 4, book + 77 * 12, 12) == 0,
+          "EX: the commonest codevector is index 0, the 51 used ones are kept (N = %u)",
+          gv_get16(buf + 2));
+    check(gv_rans_pack_ctx(idx, 2, 3, book, buf, cap) == 0, "EX needs rate 3 or more");
+    /* Hostile headers of that buffer. */
+    len = gv_rans_pack_ctx(idx, 8, 3, book, buf, cap);
+    const size_t map = (4 + 51 * 12 + 2 * 51 + 3) & ~(size_t)3;
+    static const struct { size_t at; uint8_t val; const char *want; } bad[] = {
+        {0, 0x42, "tile: bad rate byte 0x42"},
+        {0, 0xc2, "tile: context-coded indices at rate 2 (3 is the least)"},
+        {2, 7, "tile: 7 codevectors at rate 8"},
+        {3, 1, "tile: 307 codevectors at rate 8"},
+        {1, 0, "tile: 0 context models"},
+        {1, 9, "tile: 9 context models"},
+        {map, 0xff, NULL},
+    };
+    for (size_t b = 0; b < sizeof bad / sizeof bad[0]; b++) {
+        char want[128];
+        if (bad[b].want)
+            snprintf(want, sizeof want, "%s", bad[b].want);
+        else
+            snprintf(want, sizeof want, "tile: context map entry 0 is 15 of %d models", buf[1]);
+        memcpy(copy, buf, len);
+        copy[bad[b].at] = bad[b].val;
+        check_str(refusal(gv_tilebuf_check(copy, len, 3, &err), &err), want,
+                  "EX, hostile header: %s", want);
+    }
+    free(idx);
+    free(back);
+    free(buf);
+    free(copy);
+    free(dec);
+    free(book);
+}
+
 /* Code lengths: vq_log2_q16 is log2 in 16.16 fixed point, to one unit. */
 static void check_log2(void)
 {
@@ -425,61 +633,10 @@ int main(void)
     check(entropy_seen > 0 && fixed_seen > 0, "both layouts occur (%d entropy-coded, %d fixed)",
           entropy_seen, fixed_seen);
 
-    /* Entropy-coded buffers under attack: a single-byte change (every 7th
-     * byte after the codebook).  Every change to the padding, the
-     * cumulative frequencies or the stream lengths is refused, by the table
-     * and length checks.  A change inside the streams is refused when a
-     * stream then ends early or not in its final state; but the streams
-     * carry no checksum, so a changed word can still end cleanly and
-     * decode, in bounds (ASan checks), to other indices: only a few may. */
-    {
-        make_tile(orig, 3, 6);
-        struct gv_tile_params prm = {.target_mse = 0.01, .max_rate = 6, .seed = 3};
-        struct gv_tile_stats st;
-        size_t len = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &prm, recon, buf, &st);
-        const size_t tables = gv_rans_tables_offset(6, 3);
-        const size_t lengths = tables + 2 * 64;
-        const size_t streams = lengths + ((2 * GV_BLOCKS + 3) & ~(size_t)3);
-        size_t words = 0;
-        for (int row = 0; row < GV_BLOCKS; row++)
-            words += gv_get16(buf + lengths + 2 * (size_t)row);
-        uint8_t *copy = malloc(len);
-        int tables_changed = 0, tables_refused = 0, streams_changed = 0,
-            streams_refused = 0;
-        for (size_t pos = 1 + 64 * 12; pos < len; pos += 7) {
-            memcpy(copy, buf, len);
-            copy[pos] ^= 0x24;
-            int refused = gv_tile_decode(copy, len, 3, parent, 0, 0, dec, &err) < 0;
-            if (pos < streams) {
-                tables_changed++;
-                tables_refused += refused;
-            } else {
-                streams_changed++;
-                streams_refused += refused;
-            }
-        }
-        check((buf[0] & 0x8f) == 0x86 && st.rate == 6,
-              "the attacked tile is entropy-coded at rate 6 (byte 0: 0x%02x)", buf[0]);
-        check(tables_changed > 0 && tables_refused == tables_changed,
-              "every damaged table or stream length is refused (%d of %d)",
-              tables_refused, tables_changed);
-        check(streams_changed > 1000 && streams_changed - streams_refused <= streams_changed / 100,
-              "damaged streams: at most 1%% decode (%d of %d)",
-              streams_changed - streams_refused, streams_changed);
-        char want[128];
-        snprintf(want, sizeof want, "tile: streams need %zu bytes, the buffer has %zu",
-                 2 * words, len - 4 - streams);
-        check_str(refusal(gv_tile_decode(buf, len - 4, 3, parent, 0, 0, dec, &err), &err),
-                  want, "a truncated entropy-coded buffer is refused");
-        memcpy(copy, buf, len);
-        copy[0] = 0x80;
-        check_str(refusal(gv_tilebuf_check(copy, len, 3, &err), &err),
-                  "tile: bad rate byte 0x80", "entropy flag at rate 0 is refused");
-        copy[0] = 0x96;
-        check_str(refusal(gv_tilebuf_check(copy, len, 3, &err), &err),
-                  "tile: bad rate byte 0x96", "reserved bits are refused");
-        free(copy);
-    }
+    /* Entropy-coded buffers under attack, in both layouts. */
+    make_tile(orig, 3, 6);
+    check_attacks(ws, orig, parent, buf);
+    check_context_layout(parent);
     gv_predict(parent, 3, 0, 1, orig);
     {
         struct gv_tile_params prm = {.target_mse = 1.0, .max_rate = 8, .seed = 1};

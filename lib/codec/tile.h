@@ -10,12 +10,16 @@
  * codebook (FORMAT.md section 4):
  *
  *   byte 0          r, the index width in bits (0..GV_MAX_RATE), in bits
- *                   0-3; bit 7 is the layout flag E (tile_rans.h)
+ *                   0-3; bit 7 is the layout flag E, bit 6 the flag X
+ *                   (tile_rans.h)
  *   bytes 1..       2^r codevectors of 4*channels signed bytes
  *   then, E = 0     257*257 indices of r bits, LSB-first, then zero
  *                   padding to a multiple of 4 bytes
  *   then, E = 1     the indices as 257 rANS streams, one per block row
  *                   (FORMAT.md section 4.1)
+ *   or, E = X = 1   (format version 2) bytes 1-3 hold the number of
+ *                   context models and N, then N codevectors sorted by
+ *                   use, then context-coded rANS streams (section 4.2)
  *
  * The decoder uses integer arithmetic only, so that every GPU decoder can
  * reproduce it bit for bit.  Every function is thread-safe.

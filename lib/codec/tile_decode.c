@@ -7,7 +7,9 @@
  * (b >> 5), the view a GPU takes.  The stream starts right after the
  * codebook, at bit 8 * (1 + 2^r * 4 * channels).  Entropy-coded buffers
  * are decoded one block row at a time (tile_rans.h), as fixed ones are, so
- * the decoder needs no array of all the indices.
+ * the decoder needs no array of all the indices.  The codebook starts at
+ * byte 1, or at byte 4 in the context-coded layout (EX, which stores its
+ * context count in byte 1 and codevector count in bytes 2-3).
  */
 #include "codec/tile_layout.h"
 #include "codec/predict.h"
@@ -32,7 +34,8 @@ int gv_tilebuf_check(const uint8_t *buf, size_t len, int channels,
         return gv_fail(err, GV_ECORRUPT, "tile: buffer of %zu bytes is not a "
                        "positive multiple of 4", len);
     int rate = buf[0] & 0x0f;
-    if ((buf[0] & 0x70) || rate > GV_MAX_RATE || (rate == 0 && buf[0]))
+    const int ctx_without_e = (buf[0] & GV_TILE_CONTEXT) && !(buf[0] & GV_TILE_ENTROPY);
+    if ((buf[0] & 0x30) || ctx_without_e || rate > GV_MAX_RATE || (rate == 0 && buf[0]))
         return gv_fail(err, GV_ECORRUPT, "tile: bad rate byte 0x%02x", buf[0]);
     if (buf[0] & GV_TILE_ENTROPY)
         return gv_rans_check(buf, len, rate, channels, err) < 0 ? -1 : rate;
@@ -79,7 +82,7 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
     struct gv_rans_rows rows;
     if (entropy)
         gv_rans_rows_begin(&rows, buf, rate, channels);
-    const int8_t *book = (const int8_t *)(buf + 1);
+    const int8_t *book = (const int8_t *)(buf + gv_tilebuf_book_offset(buf[0]));
     const size_t row = (size_t)GV_TILE * channels;
     /* Row by row of blocks: the 257 indices (rANS-decoded, or unpacked
      * from the fixed layout), then for each of the block row's two pixel

@@ -13,7 +13,8 @@
  * the target unless it is at the cap.  In rate-distortion mode
  * (params->lambda > 0) every rate is coded instead, and the one with the
  * least SSE + lambda * bits wins.  Either way the buffer is written in the
- * smaller of the fixed and the entropy-coded layouts.
+ * smallest of the fixed, the entropy-coded and the context-coded layouts
+ * (tile_rans.c), each sized exactly.
  *
  * Sampling uses a per-tile seed, and the search is exact, so the output
  * does not depend on thread count or CPU.
@@ -49,6 +50,7 @@ struct gv_tile_workspace {
     uint16_t best_idx[GV_NBLOCKS];   /* rate-distortion mode: best so far */
     int8_t best_book[VQ_MAXK * VQ_MAXDIM];
     uint8_t scratch[GV_TILEBUF_MAX]; /* sizing candidate rates (--rd) */
+    uint8_t alt[GV_TILEBUF_MAX];     /* pack_best: the second layout */
     struct vq_trainer trainer;
     struct vq_trainer ecvq;          /* --rd: the entropy-constrained book */
 };
@@ -161,16 +163,23 @@ static void pack_buffer(uint8_t *buf, size_t len, int rate, int channels,
     }
 }
 
-/* Write the smaller of the two layouts (fixed-width or entropy-coded
- * indices) into buf; returns its length. */
-static size_t pack_best(uint8_t *buf, int rate, int channels,
-                        const int8_t *book, const uint16_t *idx)
+/* Write the smallest layout of the indices into buf: context-coded (EX),
+ * entropy-coded (E) or fixed; returns its length.  ws->alt holds the E
+ * candidate while EX is in buf. */
+static size_t pack_best(struct gv_tile_workspace *ws, uint8_t *buf, int rate,
+                        int channels, const int8_t *book, const uint16_t *idx)
 {
     size_t fixed = gv_tilebuf_size(rate, channels);
     if (rate > 0) {
-        size_t coded = gv_rans_pack(idx, rate, channels, book, buf, fixed - 4);
-        if (coded)
-            return coded;
+        size_t ex = gv_rans_pack_ctx(idx, rate, channels, book, buf, fixed - 4);
+        size_t e = gv_rans_pack(idx, rate, channels, book, ws->alt,
+                                (ex ? ex : fixed) - 4);
+        if (e) {
+            memcpy(buf, ws->alt, e);
+            return e;
+        }
+        if (ex)
+            return ex;
     }
     pack_buffer(buf, fixed, rate, channels, book, idx);
     return fixed;
@@ -359,7 +368,7 @@ static void polish(struct gv_tile_workspace *ws, const uint8_t *orig,
         assign_all(ws, e, valid_w, valid_h);
         uint64_t sse = reconstruct(ws, orig, e->book, best->rate, channels,
                                    valid_w, valid_h, recon);
-        size_t bytes = pack_best(ws->scratch, best->rate, channels, e->book,
+        size_t bytes = pack_best(ws, ws->scratch, best->rate, channels, e->book,
                                  ws->idx);
         double j = (double)sse + lambda * 8.0 * (double)bytes;
         if (!(j < best->j))
@@ -406,7 +415,7 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
             sse = code_all(ws, orig, rate, channels, valid_w, valid_h, recon);
             book = ws->trainer.book;
         }
-        size_t bytes = pack_best(ws->scratch, rate, channels, book, ws->idx);
+        size_t bytes = pack_best(ws, ws->scratch, rate, channels, book, ws->idx);
         double j = (double)sse + lambda * 8.0 * (double)bytes;
         if (j < best.j) {
             keep_best(ws, &best, rate, dim, book, sse, j);
@@ -422,7 +431,7 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
                 recon);
     stats->rate = best.rate;
     stats->sse = best.sse;
-    return pack_best(buf, best.rate, channels, ws->best_book, ws->idx);
+    return pack_best(ws, buf, best.rate, channels, ws->best_book, ws->idx);
 }
 
 /*
@@ -494,7 +503,7 @@ static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
         if ((double)sse <= budget || rate == max_rate) {
             stats->rate = rate;
             stats->sse = sse;
-            return pack_best(buf, rate, channels, book, ws->idx);
+            return pack_best(ws, buf, rate, channels, book, ws->idx);
         }
     }
 }

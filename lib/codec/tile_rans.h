@@ -1,6 +1,15 @@
 /*
  * tile_rans.h - entropy-coded index streams of a tile buffer (internal to
- * the tile codec; docs/FORMAT.md section 4.1 is the normative layout).
+ * the tile codec; docs/FORMAT.md sections 4.1 and 4.2 are the normative
+ * layouts).
+ *
+ * Two layouts code the 257x257 indices as 257 rANS streams, one per block
+ * row, so that a GPU decodes a tile with one thread per row:
+ *   E  (byte 0 = 0x80 | r): one static model over the 2^r indices;
+ *   EX (byte 0 = 0xC0 | r, format version 2): an explicit count N of
+ *      codevectors, sorted by use, and up to 8 small models of 8 symbols
+ *      (indices 0..6 and an escape to a model over all N), the model of a
+ *      block chosen by the classes of the two blocks before it in its row.
  */
 #ifndef GV_TILE_RANS_H
 #define GV_TILE_RANS_H
@@ -10,21 +19,46 @@
 
 #include "base/error.h"
 
-/* Flag in byte 0 of a tile buffer: indices are rANS-coded (low 4 bits: r). */
-#define GV_TILE_ENTROPY 0x80
+/* Flags in byte 0 of a tile buffer (low 4 bits: r). */
+#define GV_TILE_ENTROPY 0x80   /* indices are rANS-coded */
+#define GV_TILE_CONTEXT 0x40   /* ... with context models (only with 0x80) */
 
-/* Byte offset of the cumulative-frequency table: after the codebook,
- * rounded up to 4. */
+#define GV_RANS_SYMBOLS 8      /* symbols of a context model: 0..6, escape */
+#define GV_RANS_ESCAPE 7       /* the escape symbol */
+#define GV_RANS_CONTEXTS 8     /* most context models in a buffer */
+#define GV_RANS_MIN_ENTRIES 8  /* fewest codevectors of an EX buffer */
+
+/* Byte offset of the codebook in a buffer whose byte 0 is b0: 4 for EX,
+ * else 1. */
+static inline size_t gv_tilebuf_book_offset(uint8_t b0)
+{
+    return (b0 & GV_TILE_CONTEXT) ? 4 : 1;
+}
+
+/* Byte offset of the cumulative-frequency table of the E layout: after
+ * the codebook, rounded up to 4. */
 size_t gv_rans_tables_offset(int rate, int channels);
 
-/* Write the entropy-coded buffer for 257^2 indices at `rate` with codebook
- * `book` into buf.  Returns its length, or 0 if it would not fit in cap
- * bytes (then the fixed-width layout is the smaller one).  Thread-safe. */
+/* Byte offset of the model over all codevectors (cum[], the escape model
+ * of EX) of an entropy-coded buffer of either layout that passed
+ * gv_rans_check. */
+size_t gv_rans_tables_at(const uint8_t *buf, int channels);
+
+/* Write the E buffer for 257^2 indices at `rate` with codebook `book`
+ * into buf.  Returns its length, or 0 if it would not fit in cap bytes.
+ * Thread-safe. */
 size_t gv_rans_pack(const uint16_t *idx, int rate, int channels,
                     const int8_t *book, uint8_t *buf, size_t cap);
 
-/* Check the layout of an entropy-coded buffer (tables and stream lengths);
- * the streams themselves are checked while decoding. */
+/* Write the EX buffer for the same (the codebook reordered by use, unused
+ * codevectors past the first GV_RANS_MIN_ENTRIES dropped, the context map
+ * that the indices' statistics favour).  Returns its length, or 0 if rate
+ * is below 3 or it would not fit in cap bytes.  Thread-safe. */
+size_t gv_rans_pack_ctx(const uint16_t *idx, int rate, int channels,
+                        const int8_t *book, uint8_t *buf, size_t cap);
+
+/* Check the layout of an entropy-coded buffer of either kind (tables and
+ * stream lengths); the streams themselves are checked while decoding. */
 int gv_rans_check(const uint8_t *buf, size_t len, int rate, int channels,
                   struct gv_error *err);
 
@@ -39,7 +73,10 @@ struct gv_rans_rows {
     const uint8_t *buf;
     size_t tables, lengths;   /* offsets of cum[] and n[] */
     size_t at;                /* offset of the next stream */
-    int k, row;               /* 2^r; the next block row */
+    int k, row;               /* symbols of cum[]; the next block row */
+    int context;              /* EX layout: the fields below are used */
+    uint8_t map[16];          /* context of class pair 4a + b */
+    uint32_t cum[GV_RANS_CONTEXTS][GV_RANS_SYMBOLS + 1];
 };
 
 /* Start at block row 0 of a buffer that passed gv_rans_check. */

@@ -611,6 +611,10 @@ static int load_root(struct encoder *e)
     if (gv_spill_read(e->spill, e->root, rbytes, e->orig_base[e->g.root],
                       e->err) < 0)
         return -1;
+    if (e->g.root > 0 &&
+        gv_root_approx(e->root, rl->width, rl->height, e->c,
+                       gv_root_near_lossless(e->opts->target_psnr), e->err) < 0)
+        return -1;
     gv_root_tile(e->root, rl->width, rl->height, e->c, e->root_tile);
     if (e->sharded && gv_shard_writer_root(e->shard, e->root, e->err) < 0)
         return -1;

@@ -407,7 +407,7 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo[i]);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, indices[i]);
             glUniform1i(d->rans_rate, rate);
-            glUniform1i(d->rans_tables, (GLint)gv_rans_tables_offset(rate, d->channels));
+            glUniform1i(d->rans_tables, (GLint)gv_rans_tables_at(jobs[i].buf, d->channels));
             glDispatchCompute((GV_BLOCKS + 63) / 64, 1, 1);
         }
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);

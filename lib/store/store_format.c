@@ -3,6 +3,7 @@
  * box filter that defines every pyramid level (see store_format.h and
  * docs/FORMAT.md).
  */
+#include <math.h>
 #include <stdlib.h>
 
 #include <webp/decode.h>
@@ -46,10 +47,10 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
     if (memcmp(in, GV_MAGIC, 8) != 0)
         return gv_fail(err, GV_EFORMAT, "store: not a gigaview store (bad magic)");
     h->version = gv_get16(in + 8);
-    if (h->version != GV_VERSION)
+    if (h->version < GV_VERSION_MIN || h->version > GV_VERSION)
         return gv_fail(err, GV_EFORMAT, "store: format version %u is not "
-                       "supported (this build reads version %d)",
-                       h->version, GV_VERSION);
+                       "supported (this build reads versions %d to %d)",
+                       h->version, GV_VERSION_MIN, GV_VERSION);
     if (gv_get32(in + 124) != gv_crc32(0, in, 124))
         return gv_fail(err, GV_ECORRUPT, "store: header CRC mismatch");
     if (gv_get16(in + 10) != GV_HEADER_SIZE || gv_get16(in + 24) != GV_TILE ||
@@ -116,9 +117,10 @@ void gv_box_reduce(const uint8_t *src, uint32_t sw, uint32_t sh, int channels,
 
 /* The root as RGB rows: gray roots are widened to three equal channels
  * (WebP has no gray mode; its lossless transforms make the copies nearly
- * free). */
-int gv_root_pack(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
-                 uint8_t **out, size_t *len, struct gv_error *err)
+ * free).  near_lossless is libwebp's setting: 100 is lossless. */
+static int root_webp(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
+                     int near_lossless, uint8_t **out, size_t *len,
+                     struct gv_error *err)
 {
     const uint8_t *rgb = pixels;
     uint8_t *wide = NULL;
@@ -139,7 +141,10 @@ int gv_root_pack(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
         free(wide);
         return gv_fail(err, GV_EFORMAT, "store: libwebp version mismatch");
     }
-    cfg.exact = 1;
+    /* exact (keep RGB under transparent pixels: there are none) would
+     * switch the near-lossless quantization off. */
+    cfg.exact = near_lossless >= 100;
+    cfg.near_lossless = near_lossless;
     pic.use_argb = 1;
     pic.width = (int)w;
     pic.height = (int)h;
@@ -157,6 +162,35 @@ int gv_root_pack(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
     *out = wr.mem;   /* allocated by libwebp with malloc; freed with free() */
     *len = wr.size;
     return 0;
+}
+
+int gv_root_pack(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
+                 uint8_t **out, size_t *len, struct gv_error *err)
+{
+    return root_webp(pixels, w, h, channels, 100, out, len, err);
+}
+
+int gv_root_near_lossless(double target_psnr)
+{
+    /* Measured on two photographs in --rd mode (docs/FORMAT.md section
+     * 6): q 28 -> 40, 32 -> 60, 36 -> 80 gain 0 to 1.6 dB at equal bytes;
+     * one step lower loses up to 0.5 dB at q 36 and above. */
+    long level = lround(5.0 * target_psnr - 100.0);
+    return level < 0 ? 0 : (level > 100 ? 100 : (int)level);
+}
+
+int gv_root_approx(uint8_t *pixels, uint32_t w, uint32_t h, int channels,
+                   int near_lossless, struct gv_error *err)
+{
+    if (near_lossless >= 100)
+        return 0;
+    uint8_t *z;
+    size_t zlen;
+    if (root_webp(pixels, w, h, channels, near_lossless, &z, &zlen, err) < 0)
+        return -1;
+    int rc = gv_root_unpack(z, zlen, w, h, channels, pixels, err);
+    free(z);
+    return rc;
 }
 
 int gv_root_unpack(const uint8_t *in, size_t len, uint32_t w, uint32_t h,

@@ -1,5 +1,7 @@
 /*
- * store_format.h - byte layout of a gigaview store file (format version 1).
+ * store_format.h - byte layout of a gigaview store file (format version 2;
+ * version 1 differs only in that its tiles never use the context-coded
+ * layout, so it is read by the same code).
  *
  * Shared by the reader and the writer; docs/FORMAT.md is the normative
  * description.  All integers are little-endian.  The file is:
@@ -25,7 +27,8 @@
 #include "store/geometry.h"
 
 #define GV_MAGIC "GIGAVIEW"
-#define GV_VERSION 1
+#define GV_VERSION 2       /* what the writer writes */
+#define GV_VERSION_MIN 1   /* the oldest version the reader reads */
 #define GV_HEADER_SIZE 128
 #define GV_INDEX_ENTRY 16
 #define GV_PAGE_MAGIC "GVPG"
@@ -79,6 +82,21 @@ uint64_t gv_root_pixels_size(uint32_t w, uint32_t h, int channels);
  */
 int gv_root_pack(const uint8_t *pixels, uint32_t w, uint32_t h, int channels,
                  uint8_t **out, size_t *len, struct gv_error *err);
+
+/* The near-lossless setting of the root for a target PSNR q (dB):
+ * 5q - 100 clamped to 0..100, so lossless from q = 40 on (docs/FORMAT.md
+ * section 6). */
+int gv_root_near_lossless(double target_psnr);
+
+/*
+ * Replace the root's pixels (w*h*channels) with what a near-lossless WebP
+ * encoding of them decodes to, at libwebp's near_lossless setting (0..99;
+ * 100 or more leaves them unchanged).  Deterministic; the result packs
+ * losslessly (gv_root_pack) to about the near-lossless size.  Returns 0,
+ * or -1 with *err filled (pixels unspecified then).
+ */
+int gv_root_approx(uint8_t *pixels, uint32_t w, uint32_t h, int channels,
+                   int near_lossless, struct gv_error *err);
 
 /* Inverse of gv_root_pack into out (w*h*channels bytes).  Fails unless the
  * data is a WebP image of exactly w x h. */

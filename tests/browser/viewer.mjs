@@ -787,7 +787,7 @@ async function sabotaged(c) {
     } else if (opt.sabotage === 'rans') {
         await pg.route(`${base}/web/tilebuf.js`, async (route) => {
             const r = await route.fetch();
-            const src = (await r.text()).replace('idx[base + i] = lo;', 'idx[base + i] = lo ^ 1;');
+            const src = (await r.text()).replace('idx[base + i] = v;', 'idx[base + i] = v ^ 1;');
             await route.fulfill({ response: r, body: src });
         });
         // The workers load tilebuf.js outside the page's routes: prepare

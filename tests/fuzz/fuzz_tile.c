@@ -8,7 +8,10 @@
  * gv_tilebuf_check accepts must decode, and its indices must all be
  * readable (an entropy-coded one may still fail in its streams, which only
  * decoding validates); one it rejects must be rejected by gv_tile_decode
- * too.
+ * too.  For an entropy-coded buffer of either layout (E, or the context-
+ * coded EX of format version 2), the whole-tile unpacker must agree with
+ * the row-by-row decoder, and every index it gives must lie inside the
+ * codebook.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -21,6 +24,7 @@
 static uint8_t parent[GV_TILE * GV_TILE * 3];
 static uint8_t out[GV_TILE * GV_TILE * 3];
 static volatile uint32_t sink;
+static uint16_t idx[GV_NBLOCKS];
 
 static void init_parent(void)
 {
@@ -55,6 +59,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (rate >= 0 && entropy) {
         /* The check covers an entropy-coded buffer's layout; its streams
          * are validated while decoding, which may still refuse them. */
+        int unpacked = gv_rans_unpack(buf, len, rate, channels, idx, &err) == 0;
+        if (unpacked != (rc == 0))
+            abort();  /* the two decoders disagree on the streams */
+        const uint32_t entries = buf[0] & GV_TILE_CONTEXT
+                                     ? (uint32_t)buf[2] | (uint32_t)buf[3] << 8
+                                     : 1u << rate;
+        for (uint32_t k = 0; unpacked && k < GV_NBLOCKS; k++)
+            if (idx[k] >= entries)
+                abort();  /* an index past the codebook */
         if (rc == 0)
             sink += out[0] + out[sizeof out / 3 * (size_t)channels - 1];
     } else if (rate >= 0) {

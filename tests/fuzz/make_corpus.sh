@@ -7,7 +7,8 @@
 # levels, tiled and root-only) plus truncated, bit-flipped and
 # header- and index-damaged variants of one of them.  Needs oiiotool.  tile/: tile buffers taken from those stores
 # at several rates, each prefixed with fuzz_tile's selector byte (bit 0:
-# 3 channels; bits 1-2: quadrant), plus a few malformed ones.  The
+# 3 channels; bits 1-2: quadrant), plus a few malformed ones, and
+# context-coded (EX) tiles of a photograph with hostile variants.  The
 # encoder is deterministic, so rerunning gives the same files.
 set -eu
 gv=${1:?usage: make_corpus.sh GIGAVIEW-BINARY}
@@ -35,6 +36,10 @@ oiiotool --pattern fill:topleft=0:topright=1:bottomleft=0.5:bottomright=0.2 1100
 "$gv" encode synth:514x514:gray -r 5 -q 40 --quiet -o "$tmp/r5.gv"
 "$gv" encode synth:514x514 -r 7 -q 45 --quiet -o "$tmp/r7.gv"
 "$gv" encode synth:514x514:gray -r 12 -q 60 --quiet -o "$tmp/r12.gv"
+# Context-coded (EX) tiles: a photograph at a middle rate, RGB and gray.
+"$gv" encode "$here/../data/picos-1100x700.jpg" -q 34 --quiet -o "$tmp/ex.gv"
+oiiotool "$here/../data/picos-1100x700.jpg" --ch R -o "$tmp/picos-gray.png"
+"$gv" encode "$tmp/picos-gray.png" -q 38 --rd --quiet -o "$tmp/exg.gv"
 
 python3 - "$tmp" "$here/corpus" <<'PY'
 import os, struct, sys, zlib
@@ -103,6 +108,35 @@ for name in ["r1", "r5", "r7", "r12"]:
             # The same bytes read as the other channel count.
             save("tile", "%s-c%d-as-c%d" % (name, c, 4 - c),
                  bytes([sel ^ 1]) + t)
+# EX tiles and hostile variants of one: each header field out of range,
+# a context map entry past the models, a stream length past 516 words, a
+# flipped stream word, truncation.
+def ex_tiles(name):
+    return [(c, t) for c, t in tiles(os.path.join(tmp, name + ".gv")) if t[0] & 0x40]
+for name in ["ex", "exg"]:
+    for k, (c, t) in enumerate(ex_tiles(name)[:2]):
+        sel = (1 if c == 3 else 0) | (k % 4) << 1
+        save("tile", "%s-c%d-%d" % (name, c, k), bytes([sel]) + t)
+c, t = ex_tiles("ex")[0]
+sel = 1 if c == 3 else 0
+n, contexts = struct.unpack_from("<H", t, 2)[0], t[1]
+mapat = (4 + n * 4 * c + 2 * n + 3) & ~3
+lengths = mapat + 8 + 16 * contexts
+def variant(label, edits, cut=None):
+    b = bytearray(t)
+    for at, val in edits:
+        b[at] = val
+    save("tile", "ex-" + label, bytes([sel]) + bytes(b[:cut] if cut else b))
+variant("rate2", [(0, 0xc2)])
+variant("no-e", [(0, 0x40 | (t[0] & 15))])
+variant("n7", [(2, 7), (3, 0)])
+variant("n-huge", [(3, 0xff)])
+variant("contexts0", [(1, 0)])
+variant("contexts9", [(1, 9)])
+variant("map-past", [(mapat, 0xff)])
+variant("stream-517", [(lengths, 517 & 255), (lengths + 1, 517 >> 8)])
+variant("word-flip", [(lengths + 516 + 9, t[lengths + 516 + 9] ^ 0x5a)])
+variant("trunc", [], cut=len(t) // 2 & ~3)
 save("tile", "empty", bytes([0]))
 save("tile", "rate0-gray", bytes([0, 0, 0, 0, 0]))
 save("tile", "rate0-rgb", bytes([1, 0, 0, 0, 0]))
