@@ -55,6 +55,8 @@
 #   PERTILE=1        also the per-tile mode (gv-pertile rows)
 #   RESULTS=FILE     copy the table of every point (image codec setting bpp
 #                    psnr ssim, tab separated) to FILE, e.g. for plot-rd.sh
+#   SUMMARIZE=FILE   encode nothing: print the summaries of such a table
+#                    (e.g. two runs' tables concatenated)
 #   RATES="2.0 1.0 0.5"  rates of the key comparison
 #   ASTC=0           skip ASTC (it is the slowest part: -thorough)
 #   DZ=0             skip the dzsave pyramid-cost rows
@@ -69,7 +71,7 @@ while [ $# -gt 0 ]; do
 	case $1 in
 	--gigaview) gv_arg=$2; shift 2 ;;
 	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,62p' "$0"; exit 0 ;;
+	-h|--help) sed -n '2,64p' "$0"; exit 0 ;;
 	*) images+=("$1"); shift ;;
 	esac
 done
@@ -152,7 +154,14 @@ dz_bytes() {
 
 printf '%-26s %-9s %6s %8s %8s %7s\n' image codec set bpp "PSNR dB" SSIM-Y
 t_start=$(now)
-for img in "${images[@]}"; do
+if [ -n "${SUMMARIZE:-}" ]; then
+	cp "$SUMMARIZE" "$results"
+	mapfile -t images < <(awk -F'\t' '!s[$1]++ { print $1 }' "$results")
+	images_to_run=()
+else
+	images_to_run=("${images[@]}")
+fi
+for img in "${images_to_run[@]}"; do
 	name=$(basename "$img")
 	# the source every codec reads: a metadata-free PNG, JPEG sources halved
 	src=$work/src.png
