@@ -51,7 +51,7 @@ declare -A style=(
 
 n=${#images[@]}
 {
-	echo "set terminal pngcairo size $WIDTH,$((n * ROW_HEIGHT + 40)) font 'DejaVu Sans,10'"
+	echo "set terminal pngcairo noenhanced size $WIDTH,$((n * ROW_HEIGHT + 40)) font 'DejaVu Sans,10'"
 	echo "set output '$out'"
 	echo "set multiplot layout $n,2 title '$title'"
 	echo "set grid; set key bottom right font ',8'; set xrange [0:$XMAX]"
@@ -72,7 +72,7 @@ n=${#images[@]}
 				plots="$plots${plots:+, }'$f' using 1:$col with $with ${style[$c]} title '${label[$c]}'"
 			done
 			if [ "$metric" = 5 ]; then
-				echo "set ylabel 'level-0 PSNR, dB (RGB)'; set title '$img: PSNR'"
+				echo "set ylabel 'level-0 PSNR, dB (RGB, or gray)'; set title '$img: PSNR'"
 				echo "set yrange [*:*]"
 			else
 				echo "set ylabel 'SSIM-Y'; set title '$img: SSIM-Y'"
