@@ -86,10 +86,10 @@ echo "# gigaview encode speed vs vips dzsave (same inputs, same run)"
 echo "# $(date '+%F %T %Z'); $(machine_line)"
 echo "# $(describe_build "$GV_SRC")"
 echo "# vips $(vips --version | awk '{print $1}' | sed 's/^vips-//'); anchor: vips dzsave IN OUT.zip --container zip --suffix '.jpg[Q=85]'"
-echo "# gigaview: encode IN -o OUT.gv (defaults: -q 36, -r 10, every CPU); best of $REPS wall-clock runs each, alternating"
+echo "# gigaview: encode IN -o OUT.gv (defaults: -q 40 whole-image PSNR, -r 10, every CPU); best of $REPS wall-clock runs each, alternating"
 echo "# MP/s = source megapixels / best wall time (decode of the input included for both);"
 echo "# bpp = output bytes * 8 / source pixels (zip of every JPEG tile level; store of every level);"
-echo "#   the two run at different qualities (JPEG Q85 vs -q 36), so the bpp columns are not a rate-distortion comparison"
+echo "#   the two run at different qualities (JPEG Q85 vs -q 40), so the bpp columns are not a rate-distortion comparison"
 echo
 
 fmt='%-40s %7s %8s %8s %9s %8s %8s %8s %8s\n'

@@ -13,7 +13,8 @@
 # sources are used as they are. The row names carry "/2" when halved.
 #
 # Then, per image:
-#   gigaview  encode -q Q for each Q in GV_QS; bpp = store bytes * 8 / source
+#   gigaview  encode -q Q for each Q in GV_QS (-q: the whole level 0's PSNR to
+#             aim for, the default equal-slope mode); bpp = store bytes * 8 / source
 #             pixels (the store holds every pyramid level, every codebook and
 #             the root); quality = level 0 exported to PNG, against the input.
 #   jpeg      cjpeg (libjpeg-turbo) -quality Q -optimize, 4:2:0, one JPEG of
@@ -27,6 +28,7 @@
 #             quality cost", which is what gigaview's bpp counts.
 #   webp      cwebp -q Q -m 6 (one file of the full image), decoded by dwebp.
 #   webp-dz   as jpeg-dz, with .webp tiles (Q, effort 6) and the webp PSNR.
+#   gv-pertile with PERTILE=1: the per-tile mode, --min-tile-psnr Q, same Qs.
 #   gv-noroot diagnostic only: the same stores less the root level, which
 #             gigaview keeps as raw pixels with a mip chain (32 bpp at root
 #             resolution); shows how much of the rate the root takes on
@@ -39,18 +41,23 @@
 # reference being the 8-bit input as vips decodes it.
 #
 # Then: averages over images per setting, and the key figures: each codec's
-# PSNR interpolated at exactly RATES bpp (default "2.0 1.0"; linear in bpp
+# PSNR interpolated at exactly RATES bpp (default "2.0 1.0 0.5"; linear in bpp
 # between the two settings that bracket the rate, per image, then averaged),
-# and the difference "gigaview vs X" in dB over the images where both reach
-# the rate.
+# and the difference "gigaview vs X" in dB and in SSIM-Y over the images
+# where both reach the rate.
 #
 # Environment:
 #   GIGAVIEW=PATH    binary (default ../gigaview next to bench/, or on PATH)
 #   QUICK=1          2 images, fewer settings, no ASTC 6x6 (about 1 minute)
 #   PREP=auto|half|none   source preparation (see above; default auto)
 #   GV_QS, JPEG_QS, WEBP_QS   settings lists (space separated)
-#   GV_ARGS          extra options for gigaview encode, e.g. --rd
-#   RATES="2.0 1.0"  rates of the key comparison
+#   GV_ARGS          extra options for gigaview encode, e.g. -r 8
+#   PERTILE=1        also the per-tile mode (gv-pertile rows)
+#   RESULTS=FILE     copy the table of every point (image codec setting bpp
+#                    psnr ssim, tab separated) to FILE, e.g. for plot-rd.sh
+#   SUMMARIZE=FILE   encode nothing: print the summaries of such a table
+#                    (e.g. two runs' tables concatenated)
+#   RATES="2.0 1.0 0.5"  rates of the key comparison
 #   ASTC=0           skip ASTC (it is the slowest part: -thorough)
 #   DZ=0             skip the dzsave pyramid-cost rows
 #   TMPDIR=DIR       scratch space (default /tmp)
@@ -64,7 +71,7 @@ while [ $# -gt 0 ]; do
 	case $1 in
 	--gigaview) gv_arg=$2; shift 2 ;;
 	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,55p' "$0"; exit 0 ;;
+	-h|--help) sed -n '2,64p' "$0"; exit 0 ;;
 	*) images+=("$1"); shift ;;
 	esac
 done
@@ -89,21 +96,21 @@ GV_SRC=$(find_gigaview "$gv_arg")
 QUICK=${QUICK:-0}
 P=$DATA_DIR/photos
 if [ "$QUICK" = 1 ]; then
-	: "${GV_QS:=24 32 40 48}"
-	: "${JPEG_QS:=50 70 90 98}"
+	: "${GV_QS:=34 38 42 46 50}"
+	: "${JPEG_QS:=30 50 70 90 98}"
 	: "${WEBP_QS:=50 80 95 100}"
 	ASTC_BLOCKS="8x8"
 	[ ${#images[@]} -gt 0 ] || images=("$P/Dragonfly_by_Bolly.jpg" "$P/picosdeeuropa_by_Aitzol_Berasategi.jpg")
 else
-	: "${GV_QS:=20 24 28 32 36 40 44 48}"
-	: "${JPEG_QS:=50 60 70 80 90 95 98 100}"
+	: "${GV_QS:=32 35 38 41 44 47 50}"
+	: "${JPEG_QS:=30 40 50 60 70 80 90 95 98}"
 	: "${WEBP_QS:=50 70 80 90 95 100}"
 	ASTC_BLOCKS="8x8 6x6"
 	[ ${#images[@]} -gt 0 ] || images=("$P/Dragonfly_by_Bolly.jpg"
 		"$P/picosdeeuropa_by_Aitzol_Berasategi.jpg" "$P/sunset_by_Aitzol_Berasategi.jpg"
 		"$P/seeding_by_Clements_Engelhardt.jpg" "$P/flowers.png")
 fi
-: "${RATES:=2.0 1.0}"
+: "${RATES:=2.0 1.0 0.5}"
 : "${PREP:=auto}"
 case $PREP in auto|half|none) ;; *) die "PREP must be auto, half or none" ;; esac
 for f in "${images[@]}"; do [ -r "$f" ] || die "cannot read image $f"; done
@@ -147,7 +154,14 @@ dz_bytes() {
 
 printf '%-26s %-9s %6s %8s %8s %7s\n' image codec set bpp "PSNR dB" SSIM-Y
 t_start=$(now)
-for img in "${images[@]}"; do
+if [ -n "${SUMMARIZE:-}" ]; then
+	cp "$SUMMARIZE" "$results"
+	mapfile -t images < <(awk -F'\t' '!s[$1]++ { print $1 }' "$results")
+	images_to_run=()
+else
+	images_to_run=("${images[@]}")
+fi
+for img in "${images_to_run[@]}"; do
 	name=$(basename "$img")
 	# the source every codec reads: a metadata-free PNG, JPEG sources halved
 	src=$work/src.png
@@ -172,6 +186,13 @@ for img in "${images[@]}"; do
 		# diagnostic: the same store less its root level (raw pixels + mips)
 		rbytes=$("$GV" info "$work/x.gv" --json | sed 's/},{/\n/g' | grep '"tiles_x":0,' | sed 's/.*"bytes":\([0-9]*\).*/\1/' || true)
 		row "$name" gv-noroot "q$q" "$((gbytes - ${rbytes:-0}))" "$px" "$ps" "$ss"
+		if [ "${PERTILE:-0}" = 1 ]; then
+			# shellcheck disable=SC2086
+			"$GV" encode "$src" -o "$work/x.gv" --min-tile-psnr "$q" --quiet ${GV_ARGS:-}
+			"$GV" export "$work/x.gv" --level 0 -o "$work/x.png" >/dev/null
+			read -r ps ss < <(cmp_pnm "$ref" "$work/x.png")
+			row "$name" gv-pertile "q$q" "$(stat -c %s "$work/x.gv")" "$px" "$ps" "$ss"
+		fi
 	done
 	for q in $JPEG_QS; do
 		cjpeg -quality "$q" -optimize -outfile "$work/x.jpg" "$ref"
@@ -202,6 +223,7 @@ for img in "${images[@]}"; do
 	fi
 done
 elapsed=$(awk -v a="$t_start" -v b="$(now)" 'BEGIN { printf "%.0f", b - a }')
+[ -z "${RESULTS:-}" ] || cp "$results" "$RESULTS"
 
 # ---- summaries -----------------------------------------------------------
 nimg=${#images[@]}
@@ -247,17 +269,17 @@ for rate in $RATES; do
 		# images where gigaview and every JPEG/WebP series bracket R
 		for (k = 1; k <= ni; k++) { im = imgs[k]; ok = 1
 			for (j = 1; j <= nc; j++) { c = codecs[j]
-				if (c == "gv-noroot" || c ~ /^astc/) continue
+				if (c == "gv-noroot" || c == "gv-pertile" || c ~ /^astc/) continue
 				if (!interp(im, c, R)) ok = 0 }
 			common[im] = ok; ncom += ok; comlist = comlist (ok ? " " imgs[k] : "") }
 		printf "\n-- at %.2f bpp -- common images: %d of %d:%s\n", R, ncom, ni, comlist
-		printf "%-13s %9s %8s %10s   %s\n", "codec", "PSNR dB", "SSIM-Y", "gv - codec", "gv - codec pairwise, dB [per image, in image order]"
-		printf "%-13s %9s %8s %10s\n", "", "(common)", "(common)", "(common)"
+		printf "%-13s %9s %8s %10s %9s   %s\n", "codec", "PSNR dB", "SSIM-Y", "gv - codec", "SSIM diff", "gv - codec pairwise: dB [per image, in image order]; SSIM-Y"
+		printf "%-13s %9s %8s %10s %9s\n", "", "(common)", "(common)", "(common)", "(common)"
 		for (j = 1; j <= nc; j++) { c = codecs[j]
 			if (c == "gigaview" || c == "gv-noroot") continue
 			for (m = 0; m <= (c ~ /^astc/ ? 1 : 0); m++) {
 				if (c ~ /^astc/ && R + 0 != 2.0) continue
-				sp = ss = sd = n = 0; nd = pd = 0; per = ""
+				sp = ss = sd = n = 0; nd = pd = 0; per = ""; sdS = pdS = 0
 				for (k = 1; k <= ni; k++) { im = imgs[k]
 					if (c ~ /^astc/) {
 						if (cnt[im, c] < 1) { per = per " -"; continue }
@@ -266,13 +288,13 @@ for rate in $RATES; do
 						have = interp(im, c, R); cp = IP; cs = IS; x = R
 					}
 					g = have ? interp(im, "gigaview", x) : 0
-					if (g) { nd++; pd += IP - cp; per = per sprintf(" %+.2f", IP - cp) } else per = per " n/a"
-					if (common[im] && have && g) { n++; sp += cp; ss += cs; sd += IP - cp }
+					if (g) { nd++; pd += IP - cp; pdS += IS - cs; per = per sprintf(" %+.2f", IP - cp) } else per = per " n/a"
+					if (common[im] && have && g) { n++; sp += cp; ss += cs; sd += IP - cp; sdS += IS - cs }
 				}
 				lab = c (m ? "+mips" : "")
-				if (n) printf "%-13s %9.2f %8.4f %+10.2f", lab, sp / n, ss / n, sd / n
-				else printf "%-13s %9s %8s %10s", lab, "n/a", "n/a", "n/a"
-				if (nd) printf "   %+.2f over %d image(s) [%s ]\n", pd / nd, nd, per
+				if (n) printf "%-13s %9.2f %8.4f %+10.2f %+9.4f", lab, sp / n, ss / n, sd / n, sdS / n
+				else printf "%-13s %9s %8s %10s %9s", lab, "n/a", "n/a", "n/a", "n/a"
+				if (nd) printf "   %+.2f over %d image(s) [%s ]; SSIM %+.4f\n", pd / nd, nd, per, pdS / nd
 				else printf "   n/a [%s ]\n", per
 			}
 		}

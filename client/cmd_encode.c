@@ -3,7 +3,9 @@
  *
  * Parses options into struct gv_encode_opts, draws the progress bar on a
  * terminal, and prints a summary: size, levels, tiles, rates, the bits
- * per source pixel of the whole file and the PSNR of level 0.  With
+ * per source pixel of the whole file and the PSNR of level 0 against the
+ * target.  -q is the whole image's level-0 PSNR (the default equal-slope
+ * mode); --min-tile-psnr picks the per-tile mode instead.  With
  * --shard I/N it writes one shard file instead (docs/OPERATIONS.md,
  * "Encoding on many machines"), which `gigaview merge` assembles.
  */
@@ -28,6 +30,8 @@ struct encode_args {
     struct gv_encode_opts o;
     const char *output;
     int progress, quiet;
+    double psnr, min_tile_psnr;   /* -q, --min-tile-psnr; 0 = not given */
+    int rd;                       /* --rd: the default mode, accepted */
 };
 
 /* --mosaic COLSxROWS */
@@ -78,9 +82,17 @@ static const struct opt_spec encode_opts[] = {
     {.name = "output", .short_name = 'o', .kind = OPT_STRING, .arg = "STORE",
      .field = F(output), .help = "store file to write (replaced atomically)"},
     {.name = "psnr", .short_name = 'q', .kind = OPT_DOUBLE, .arg = "DB",
-     .field = F(o.target_psnr), .min = 0, .max = 99, .flags = OPT_MIN_OPEN,
+     .field = F(psnr), .min = 0, .max = 99, .flags = OPT_MIN_OPEN,
      .wants = "a number of dB in (0, 99]",
-     .help = "per-tile quality target in dB (default " OPT_STR(GV_DEFAULT_PSNR) ")"},
+     .help = "quality: the PSNR of the whole image (level 0)\n"
+             "to aim for, in dB (default " OPT_STR(GV_DEFAULT_PSNR) "); lands within\n"
+             "2.5 dB on photographs (docs/FORMAT.md 8)"},
+    {.name = "min-tile-psnr", .kind = OPT_DOUBLE, .arg = "DB",
+     .field = F(min_tile_psnr), .min = 0, .max = 99, .flags = OPT_MIN_OPEN,
+     .wants = "a number of dB in (0, 99]",
+     .help = "per-tile mode instead of -q: every tile at\n"
+             "least DB (unless at the rate cap); about 1 dB\n"
+             "worse than the default at equal size"},
     {.name = "max-rate", .short_name = 'r', .kind = OPT_INT, .arg = "R",
      .field = F(o.max_rate), .min = 1, .max = GV_MAX_RATE,
      .wants = "1.." OPT_STR(GV_MAX_RATE),
@@ -103,9 +115,9 @@ static const struct opt_spec encode_opts[] = {
     {.name = "progress", .kind = OPT_FLAG, .field = F(progress),
      .help = "draw the progress bar even off a terminal"},
     {.name = "quiet", .kind = OPT_FLAG, .field = F(quiet), .help = "no summary"},
-    {.name = "rd", .kind = OPT_FLAG, .field = F(o.rd),
-     .help = "rate-distortion mode: spend bits where they\n"
-             "lower the error most, at the slope of -q"},
+    {.name = "rd", .kind = OPT_FLAG, .field = F(rd),
+     .help = "equal-slope allocation, the default mode\n"
+             "(accepted for older scripts)"},
     {.name = "shard", .kind = OPT_CUSTOM, .arg = "I/N", .parse = parse_shard,
      .wants = "I/N with 0 <= I < N <= " OPT_STR(GV_SHARD_MAX),
      .help = "encode only shard I of N (0 <= I < N) into a\n"
@@ -128,6 +140,23 @@ static const struct opt_command encode_command = {
     .opts = encode_opts,
     .nopts = sizeof encode_opts / sizeof encode_opts[0],
 };
+
+/* The mode and its target from -q, --min-tile-psnr and --rd.  Returns
+ * OPT_GO_ON, or 2 after a message. */
+static int pick_mode(struct encode_args *a)
+{
+    if (a->min_tile_psnr > 0 && (a->psnr > 0 || a->rd)) {
+        fprintf(stderr, ME ": --min-tile-psnr is a mode of its own: "
+                "give it without -q or --rd\n");
+        return 2;
+    }
+    a->o.per_tile = a->min_tile_psnr > 0;
+    if (a->o.per_tile)
+        a->o.target_psnr = a->min_tile_psnr;
+    else if (a->psnr > 0)
+        a->o.target_psnr = a->psnr;
+    return OPT_GO_ON;
+}
 
 /* Check the operands (ninputs of them) against -o and --mosaic.  Returns
  * OPT_GO_ON, or 2 after a message. */
@@ -191,7 +220,8 @@ int cmd_encode(int argc, char **argv)
     if (rc != OPT_GO_ON)
         return rc;
     const int ninputs = argc - first;
-    if ((rc = check_inputs(&a, ninputs)) != OPT_GO_ON)
+    if ((rc = check_inputs(&a, ninputs)) != OPT_GO_ON ||
+        (rc = pick_mode(&a)) != OPT_GO_ON)
         return rc;
     struct gv_encode_result r;
     if (encode_with_progress(&a, (const char *const *)argv + first, ninputs, &r) < 0)

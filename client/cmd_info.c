@@ -128,7 +128,7 @@ static void print_text(struct gv_store *s, const char *path)
            g->channels == 1 ? "gray" : "RGB");
     printf("source       %d-bit%s, %s\n", h->src_bits, h->src_float ? " float" : "",
            tone_name(h->tone));
-    printf("encoding     target %.1f dB per tile, rate cap %u, level-0 PSNR %.2f dB\n",
+    printf("encoding     target %.1f dB, rate cap %u, level-0 PSNR %.2f dB reached\n",
            h->target_mpsnr / 1000.0, h->max_rate, h->psnr0_mdb / 1000.0);
     printf("levels       %d (0..%d; %d is the root, with %d mips)\n", g->root + 1,
            g->root, g->root, g->root_mips);

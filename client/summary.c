@@ -28,8 +28,12 @@ void print_store_summary(const char *output, const struct gv_encode_result *r,
                (unsigned long long)r->below_target, target);
     printf("size       %llu bytes, %.3f bits per source pixel\n",
            (unsigned long long)r->file_bytes, r->bpp);
-    printf("psnr       %.2f dB at level 0 (target %.1f dB per tile)\n", r->psnr0,
-           target);
+    if (r->per_tile)
+        printf("psnr       %.2f dB at level 0 (every tile at least %.1f dB)\n",
+               r->psnr0, target);
+    else
+        printf("psnr       %.2f dB at level 0 (target %.1f dB, %+.2f)\n", r->psnr0,
+               target, r->psnr0 - target);
     printf("time       %.2f s, %.2f MP/s\n", r->seconds,
            r->seconds > 0 ? mp / r->seconds : 0.0);
 }

@@ -9,7 +9,7 @@
 
 /* Print the store summary of *r for `output` on stdout: size, levels,
  * tiles by rate, bits per source pixel, level-0 PSNR against `target`
- * (dB), time. */
+ * (dB: the whole image's, or every tile's when r->per_tile), time. */
 void print_store_summary(const char *output, const struct gv_encode_result *r,
                          double target);
 

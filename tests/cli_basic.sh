@@ -49,6 +49,10 @@ for spec in \
     check "encode $f: stderr empty off a terminal" test ! -s "$T/err"
     check "encode $f: summary names the size" \
         grep -q "^image  *$w x $h, $kind" "$T/out"
+    # The PSNR reached, against the whole-image target of -q (default 40).
+    p0=$(sed -n 's/^psnr  *\([0-9.]*\) dB at level 0 (target 40.0 dB, \([-+][0-9.]*\))$/\1 \2/p' "$T/out")
+    check "encode $f: summary gives the PSNR reached and its distance to -q ($p0)" \
+        awk -v a="${p0% *}" -v d="${p0#* }" 'BEGIN { exit !(a != "" && (a - 40 - d) ^ 2 < 0.0001) }'
     check "encode $f: store exists" test -s "$s"
 
     run info "$s"
@@ -292,6 +296,11 @@ usage_case "encode -q 100" "$E --psnr wants a number of dB in (0, 99], not '100'
     encode -q 100 synth:10x10 -o u.gv
 usage_case "encode -q 30dB" "$E --psnr wants a number of dB in (0, 99], not '30dB'" \
     encode -q 30dB synth:10x10 -o u.gv
+usage_case "encode -q with --min-tile-psnr" \
+    "$E --min-tile-psnr is a mode of its own: give it without -q or --rd" \
+    encode -q 35 --min-tile-psnr 35 synth:10x10 -o u.gv
+usage_case "encode --min-tile-psnr 0" "$E --min-tile-psnr wants a number of dB in (0, 99], not '0'" \
+    encode --min-tile-psnr 0 synth:10x10 -o u.gv
 usage_case "encode --mosaic 2" "$E --mosaic wants COLSxROWS, not '2'" \
     encode --mosaic 2 synth:10x10 -o u.gv
 usage_case "encode --mosaic 0x1" "$E --mosaic wants COLSxROWS, not '0x1'" \

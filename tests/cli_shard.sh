@@ -4,13 +4,15 @@
 # A real photograph (tests/data/picos-1100x700.jpg) is encoded whole, then
 # as 2, 3 and 4 shards run as concurrent local processes and merged (the
 # shard files listed in reverse order): each merged store must equal the
-# whole one byte for byte.  The same for --rd on a PNG, for a multi-page
+# whole one byte for byte (the default mode: one slope for the whole
+# image, from a model of every row, which every shard reads).  The same
+# for the per-tile mode (--min-tile-psnr) on a PNG, for a multi-page
 # gray image, and for an image that is all root.  The merge must refuse,
 # writing nothing, a missing, duplicated, foreign or damaged shard; a
 # killed shard leaves no file.  conf/slurm-encode.sh (its shard and merge
 # modes, as the array tasks run them) and conf/parallel-encode.sh (when
 # GNU parallel is installed) must give the same store too.  Under
-# valgrind (make check VALGRIND=1) only the 2-shard, --rd and failure
+# valgrind (make check VALGRIND=1) only the 2-shard, per-tile and failure
 # cases run: every encode is some 40 times slower there.
 . "$(dirname "$0")/lib.sh"
 
@@ -66,11 +68,16 @@ done
 run info "$d/m2.gv"
 expect_rc "the merged store validates (gigaview info)" 0
 
-# --rd: the rate choice uses a slope fixed by -q, no global information.
-run encode --quiet -j 2 --rd -q 33 "$TESTDATA/seeding-700x520.png" -o "$d/rd.gv"
-expect_rc "single --rd encode" 0
-shards 3 "$d/rd3.gv" "$TESTDATA/seeding-700x520.png" --rd -q 33
-same "--rd, 3 shards = single encode" "$d/rd.gv" "$d/rd3.gv"
+# --rd names the default mode: the same store.
+run encode --quiet -j 1 --rd "$src" -o "$d/rd.gv"
+expect_rc "encode --rd" 0
+same "--rd = the default mode, byte for byte" "$d/whole.gv" "$d/rd.gv"
+
+# The per-tile mode: each tile's rate from its own target alone.
+run encode --quiet -j 2 --min-tile-psnr 33 "$TESTDATA/seeding-700x520.png" -o "$d/pt.gv"
+expect_rc "single --min-tile-psnr encode" 0
+shards 3 "$d/pt3.gv" "$TESTDATA/seeding-700x520.png" --min-tile-psnr 33
+same "--min-tile-psnr, 3 shards = single encode" "$d/pt.gv" "$d/pt3.gv"
 
 # Several pages per level and 5 levels, gray, more shards than cores.
 if ! under_valgrind; then

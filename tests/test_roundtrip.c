@@ -1,11 +1,12 @@
 /*
  * test_roundtrip.c - encode real photographs (and procedural images) with
  * gv_encode, then check every tile of every level independently: the
- * original pyramid is rebuilt here from the input rows, each tile is
- * decoded by the reference decoder, and its PSNR over the pixels inside
- * the image must reach the target unless the tile sits at the rate cap.
- * Regions must agree with tiles, and the PSNR the encoder recorded for
- * level 0 must be the one measured here.
+ * original pyramid is rebuilt here from the input rows and each tile is
+ * decoded by the reference decoder.  In the per-tile mode its PSNR over
+ * the pixels inside the image must reach the target unless the tile sits
+ * at the rate cap; in the default mode, the whole level 0 must land within
+ * WHOLE_TOL dB of the target.  Regions must agree with tiles, and the PSNR
+ * the encoder recorded for level 0 must be the one measured here.
  */
 #include <math.h>
 #include <stdio.h>
@@ -22,6 +23,14 @@
 #include "util.h"
 
 static char dir[] = "/tmp/gv-test-roundtrip-XXXXXX";
+
+/* Default mode: |level-0 PSNR - target| at most PHOTO_TOL dB on the
+ * photographs, SYNTH_TOL on the procedural image, whose hard edges the
+ * model of lambda_model.h was not fitted on.  Measured: +0.33
+ * (seeding-640x480 at 40), +0.09 (picos at 40), -0.69 (seeding-700x520
+ * at 50), -3.51 (synth:1500x1100 at 40). */
+#define PHOTO_TOL 1.5
+#define SYNTH_TOL 4.0
 
 /* The whole input as 8-bit rows, and its box pyramid. */
 struct pyramid {
@@ -61,16 +70,18 @@ static void free_pyramid(struct pyramid *p)
         free(p->px[k]);
 }
 
-/* Encode `input` at `psnr` and check it.  Returns the number of failed
- * checks it reported. */
-static void roundtrip(const char *input, double psnr, int max_rate)
+/* Encode `input` at `psnr` (per tile, or for the whole image) and check
+ * it. */
+static void roundtrip(const char *input, double psnr, int max_rate, int per_tile)
 {
+    const double whole_tol = strncmp(input, "synth:", 6) ? PHOTO_TOL : SYNTH_TOL;
     char out[256];
     snprintf(out, sizeof out, "%s/rt.gv", dir);
     struct gv_encode_opts o;
     gv_encode_opts_default(&o);
     o.target_psnr = psnr;
     o.max_rate = max_rate;
+    o.per_tile = per_tile;
     struct gv_encode_result r;
     struct gv_error err;
     const char *in[1] = {input};
@@ -132,9 +143,14 @@ static void roundtrip(const char *input, double psnr, int max_rate)
                 }
             }
     }
-    check(errors == 0 && missed == 0,
-          "%s: %d tiles meet %.0f dB (worst %.2f, %d at the cap, %d missed)", name,
-          tiles, psnr, worst, capped, missed);
+    if (per_tile)
+        check(errors == 0 && missed == 0,
+              "%s: %d tiles meet %.0f dB (worst %.2f, %d at the cap, %d missed)", name,
+              tiles, psnr, worst, capped, missed);
+    else
+        check(errors == 0 && fabs(r.psnr0 - psnr) <= whole_tol && r.lambda > 0,
+              "%s: %d tiles, level 0 at %.2f dB for a %.0f dB target (lambda %.1f)",
+              name, tiles, r.psnr0, psnr, r.lambda);
 
     /* Level 0 through the region path, against the input. */
     uint8_t *region = malloc((size_t)g->width * g->height * c);
@@ -196,20 +212,26 @@ int main(void)
     snprintf(b, sizeof b, "%s/seeding-700x520.png", data);
     snprintf(c, sizeof c, "%s/etopo-600x400-u16.png", data);
     snprintf(d, sizeof d, "%s/picos-1100x700.jpg", data);
-    roundtrip(a, 34.0, 10);
-    roundtrip(d, 36.0, 10);   /* a busy mountain scene, two tiled levels */
-    roundtrip(d, 30.0, 6);
-    roundtrip(b, 38.0, 10);
-    roundtrip(b, 30.0, 4);
-    roundtrip(c, 40.0, 10);
-    roundtrip("synth:1500x1100", 36.0, 10);
-    roundtrip("synth:1100x1500:gray", 33.0, 8);
-    roundtrip("synth:2100x700", 45.0, 3);   /* a cap that binds */
+    /* The default mode: one slope for the whole image. */
+    roundtrip(a, 40.0, 10, 0);
+    roundtrip(d, 40.0, 10, 0);
+    roundtrip(b, 50.0, 10, 0);   /* smooth: 47.8 dB with no bits at all */
+    roundtrip("synth:1500x1100", 40.0, 10, 0);
+    /* The per-tile mode. */
+    roundtrip(a, 34.0, 10, 1);
+    roundtrip(d, 36.0, 10, 1);   /* a busy mountain scene, two tiled levels */
+    roundtrip(d, 30.0, 6, 1);
+    roundtrip(b, 38.0, 10, 1);
+    roundtrip(b, 30.0, 4, 1);
+    roundtrip(c, 40.0, 10, 1);
+    roundtrip("synth:1500x1100", 36.0, 10, 1);
+    roundtrip("synth:1100x1500:gray", 33.0, 8, 1);
+    roundtrip("synth:2100x700", 45.0, 3, 1);   /* a cap that binds */
     /* Widths whose last tile's parent exists only because a level has at
      * least half the tiles of the level below (1026: 3 tiles over a level
      * of 513 pixels; 2050: 5 tiles, then 3 and 2). */
-    roundtrip("synth:1026x600", 36.0, 10);
-    roundtrip("synth:600x2050:gray", 36.0, 10);
+    roundtrip("synth:1026x600", 36.0, 10, 1);
+    roundtrip("synth:600x2050:gray", 36.0, 10, 1);
     rmdir(dir);
     return tap_done();
 }

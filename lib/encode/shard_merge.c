@@ -218,6 +218,7 @@ static int describe_source(struct merge *m)
     res->source.src_bits = h->src_bits;
     res->source.src_float = h->src_float;
     res->source.tone = (enum gv_tone_rule)h->tone;
+    res->per_tile = !(m->info->flags & GV_SHARD_FLAG_RD);
     return 0;
 }
 

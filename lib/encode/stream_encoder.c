@@ -26,6 +26,7 @@
 #include "base/spill.h"
 #include "codec/tile.h"
 #include "encode/encode_int.h"
+#include "encode/lambda_model.h"
 #include "encode/shard_file.h"
 #include "encode/shard_plan.h"
 #include "encode/stream_encoder.h"
@@ -46,6 +47,8 @@ void gv_encode_opts_default(struct gv_encode_opts *o)
 struct encoder {
     const struct gv_encode_opts *opts;
     double target_mse;        /* gv_psnr_to_mse(opts->target_psnr) */
+    double lambda;            /* equal-slope mode: the price of a bit */
+    struct gv_lambda_model model[GV_MAX_LEVELS]; /* levels' detail, pass 1 */
     struct gv_geometry g;
     int c;
     struct gv_spill *spill;
@@ -145,6 +148,8 @@ static int emit_reduced(struct encoder *e, int k, const uint8_t *r0,
 {
     const struct gv_level *l = &e->g.level[k];
     gv_box_reduce_row(r0, r1, l->width, e->c, e->reduced[k + 1]);
+    if (!e->opts->per_tile)
+        gv_lambda_model_rows(&e->model[k], r0, r1, e->reduced[k + 1]);
     return push_row(e, k + 1, e->reduced[k + 1]);
 }
 
@@ -289,7 +294,7 @@ static void encode_tile(void *ctx, size_t slot, int worker)
         .target_mse = e->target_mse,
         .max_rate = e->opts->max_rate,
         .seed = tile_seed(e->level, tx, ty),
-        .lambda = e->opts->rd ? gv_rd_lambda(e->target_mse) : 0.0,
+        .lambda = e->opts->per_tile ? 0.0 : e->lambda,
     };
     e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
                                    (int)(ty & 1), c, valid_w, valid_h, &params,
@@ -387,7 +392,7 @@ static void account_page(struct encoder *e, uint64_t *sse0)
         e->res->rate_tiles[e->stats[s].rate]++;
         e->res->level_bytes[e->level] += e->lens[s];
         double mse = (double)e->stats[s].sse / (double)e->stats[s].samples;
-        if (!e->opts->rd && mse > e->target_mse)
+        if (e->opts->per_tile && mse > e->target_mse)
             e->res->below_target++;
         e->work_done += (double)e->stats[s].samples;
         if (e->level == 0)
@@ -525,6 +530,8 @@ static void teardown(struct encoder *e)
     }
     free(e->root);
     free(e->root_tile);
+    for (int k = 0; k < GV_MAX_LEVELS; k++)
+        gv_lambda_model_free(&e->model[k]);
     gv_spill_free(e->spill);
 }
 
@@ -567,6 +574,9 @@ static int open_output(struct encoder *e, const char *output)
     res->geometry = e->g;
     struct gv_header h;
     make_header(e, &h);
+    for (int k = 0; k < e->g.root && !opts->per_tile; k++)
+        if (gv_lambda_model_init(&e->model[k], e->g.level[k].width, e->c) < 0)
+            return gv_fail(e->err, GV_ENOMEM, "encode: out of memory for the rate model");
     if (opts->shard_count <= 0) {
         e->writer = gv_store_writer_new(output, &h, e->err);
         return e->writer ? 0 : -1;
@@ -577,7 +587,7 @@ static int open_output(struct encoder *e, const char *output)
     e->sharded = 1;
     e->shard = gv_shard_writer_new(output, &h, opts->shard_index,
                                    opts->shard_count,
-                                   opts->rd ? GV_SHARD_FLAG_RD : 0, e->err);
+                                   opts->per_tile ? 0 : GV_SHARD_FLAG_RD, e->err);
     return e->shard ? 0 : -1;
 }
 
@@ -670,7 +680,14 @@ int gv_encode(const char *const *inputs, int n, const char *output,
     gv_source_free(src);
     src = NULL;
     uint64_t sse0 = 0, samples0 = 1;
-    if (load_root(&e) < 0 || pass2(&e, &sse0, &samples0) < 0)
+    if (load_root(&e) < 0)
+        goto out;
+    for (int k = 0; k < e.g.root; k++)
+        gv_lambda_model_finish(&e.model[k]);
+    e.lambda = gv_lambda_model_lambda(e.model, e.g.root, e.target_mse);
+    res->per_tile = opts->per_tile;
+    res->lambda = opts->per_tile ? 0.0 : e.lambda;
+    if (pass2(&e, &sse0, &samples0) < 0)
         goto out;
     if ((e.sharded ? finish_shard(&e)
                    : finish_store(&e, output, sse0, samples0)) < 0)

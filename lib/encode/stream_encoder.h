@@ -24,7 +24,7 @@
 #include "store/geometry.h"
 #include "encode/source.h"
 
-#define GV_DEFAULT_PSNR 36.0     /* dB per tile: ~2 bpp on photographs */
+#define GV_DEFAULT_PSNR 40.0     /* dB, level 0 of the whole image */
 #define GV_DEFAULT_MAX_RATE 10   /* 1024 codevectors */
 
 struct gv_encode_progress {
@@ -36,11 +36,15 @@ struct gv_encode_progress {
 };
 
 struct gv_encode_opts {
-    double target_psnr;       /* per-tile PSNR target in dB */
+    double target_psnr;       /* PSNR target in dB: of the whole image's
+                               * level 0 (equal-slope mode, the default),
+                               * or of every tile (per_tile) */
     int max_rate;             /* cap on the index width r (1..12) */
-    int rd;                   /* 1: rate-distortion mode (see FORMAT.md 8):
-                               * spend bits where they buy the most error,
-                               * at the slope of the target PSNR */
+    int per_tile;             /* 1: every tile meets target_psnr (or the
+                               * cap) at the first rate that does; 0:
+                               * equal-slope allocation (FORMAT.md 8), one
+                               * price of a bit for every tile, found by
+                               * lambda_model.h for the whole-image target */
     int threads;              /* workers; 0 = every CPU */
     int shard_index;          /* with shard_count > 0: write shard */
     int shard_count;          /* shard_index of shard_count (0-based) to
@@ -62,7 +66,11 @@ struct gv_encode_result {
     uint64_t tiles;
     uint64_t rate_tiles[GV_MAX_RATE + 1]; /* tiles per chosen rate */
     uint64_t level_bytes[GV_MAX_LEVELS];
-    uint64_t below_target;    /* tiles at the cap that missed the target */
+    uint64_t below_target;    /* per_tile: tiles at the cap that missed
+                               * the target */
+    int per_tile;             /* the mode it was encoded in (opts) */
+    double lambda;            /* equal-slope mode: the price of a bit in
+                               * squared error (0 in per_tile mode) */
     double seconds;
 };
 

@@ -1,0 +1,73 @@
+/*
+ * lambda_model.h - the slope of the default encoding mode, from a model
+ * of the whole image, so that level 0 lands near its PSNR target.
+ *
+ * Equal-slope allocation codes every tile at one price lambda of a bit in
+ * squared error.  How much error a given lambda leaves depends on the
+ * image (at one lambda, the level-0 PSNR of the bench photos spans 10 dB:
+ * smooth regions come out nearly exact), so -q, the whole image's level-0
+ * PSNR, cannot fix lambda by a formula alone.  The model is reverse water
+ * filling over 2x2 blocks: a block whose detail (the squared error per
+ * sample of a prediction from level 1, bilinear from the box means around
+ * it) is below the water level theta keeps that detail as error, a busier
+ * block is coded down to theta, so D(theta) = mean over blocks of
+ * min(detail, theta).  Each level below the root has such a histogram,
+ * fed by pass 1 with every 2x2 block; a level's blocks also carry a
+ * share of the error its parent level is left with (the root is exact).
+ * theta is the level at which level 0's D is the target, and
+ * lambda = K * 2 ln 2 * theta, with K and the share of a parent's error
+ * that its children inherit measured on photographs
+ * (docs/FORMAT.md section 8).
+ *
+ * Integer counts over every row of the image, in row order: the same
+ * lambda for any thread count and in every shard of a sharded encode
+ * (each reads the whole input in pass 1).
+ */
+#ifndef GV_LAMBDA_MODEL_H
+#define GV_LAMBDA_MODEL_H
+
+#include <stdint.h>
+
+#define GV_LM_BINS 256   /* 8 per octave of the block's detail */
+
+struct gv_lambda_model {
+    int channels;
+    uint32_t width;               /* of level 0 */
+    int have;                     /* block rows buffered: 0, 1 or 2 */
+    uint8_t *pair[2];             /* the pending block row's two rows */
+    uint8_t *mean[3];             /* level-1 rows above, at, below it */
+    uint64_t blocks;
+    uint64_t count[GV_LM_BINS];   /* blocks per bin of detail */
+    uint64_t sum[GV_LM_BINS];     /* ... and their detail, summed */
+};
+
+/* Start an empty model for a level 0 of `width` pixels of `channels`
+ * (1 or 3) channels.  Returns 0, or -1 out of memory. */
+int gv_lambda_model_init(struct gv_lambda_model *m, uint32_t width,
+                         int channels);
+
+/* Feed level-0 rows 2j and 2j+1 and row j of level 1 (their box
+ * reduction, (width + 1) / 2 pixels); the blocks of row j - 1 are added
+ * now, those of the last row by gv_lambda_model_finish. */
+void gv_lambda_model_rows(struct gv_lambda_model *m, const uint8_t *r0,
+                          const uint8_t *r1, const uint8_t *reduced);
+
+/* Add the last block row (the level-1 row below it repeats the last). */
+void gv_lambda_model_finish(struct gv_lambda_model *m);
+
+/* Release the row buffers (the histogram stays usable). */
+void gv_lambda_model_free(struct gv_lambda_model *m);
+
+/* The water level theta (squared error per sample, at most 255^2) at
+ * which level 0's modelled error is target_mse, given the models of
+ * levels 0 .. n-1 (the levels below the root); 0 if level 0's is empty. */
+double gv_lambda_model_theta(const struct gv_lambda_model *lv, int n,
+                             double target_mse);
+
+/* The price of a bit for a level-0 MSE of target_mse: K * 2 ln 2 * theta
+ * (at least gv_rd_lambda(target_mse) / 64, so that a flat image still has
+ * a positive price). */
+double gv_lambda_model_lambda(const struct gv_lambda_model *lv, int n,
+                              double target_mse);
+
+#endif
