@@ -352,6 +352,7 @@ void image_decoder_put(struct image *img, struct gv_decoder *d)
 {
     if (!d)
         return;
+    gv_decoder_idle(d); /* pooled decoders pin no tile */
     struct catalog *c = img->cat;
     pthread_mutex_lock(&c->lock);
     if (!img->pool)

@@ -351,7 +351,8 @@ int main(int argc, char **argv)
     srv.pages = page_cache_new(cfg.cache_bytes);
     if (start_rendering(&srv) < 0)
         return 1;
-    srv.catalog = catalog_new(cfg.store_dir, srv.tiles, (int)cfg.threads);
+    srv.catalog = catalog_new(cfg.store_dir, srv.tiles,
+                              (int)(cfg.threads + cfg.render_threads));
     if (!srv.pages || !srv.catalog) {
         log_msg(LOG_ERROR, "main", "out of memory");
         return 1;

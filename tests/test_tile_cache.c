@@ -292,6 +292,21 @@ static void test_decoders(void)
     free(b);
     gv_decoder_free(big);
     gv_tile_cache_free(c);
+
+    /* A decoder pins the tile it returned last, and nothing else; idle, it
+     * pins nothing. */
+    c = gv_tile_cache_new(0);
+    d = gv_decoder_new_shared(s, c, 1);
+    const uint8_t *px;
+    int rc = gv_decoder_tile(d, 0, 2, 1, &px, &err);
+    st = stats(c);
+    check(rc == 0 && st.bytes == tb && st.misses == (uint64_t)g->root + 1,
+          "budget 0: only the returned tile is held (%llu bytes, %llu decodes)",
+          (unsigned long long)st.bytes, (unsigned long long)st.misses);
+    gv_decoder_idle(d);
+    check(stats(c).bytes == 0 && stats(c).entries == 0, "idle: nothing held");
+    gv_decoder_free(d);
+    gv_tile_cache_free(c);
     gv_store_close(s);
 }
 

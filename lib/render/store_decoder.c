@@ -67,6 +67,12 @@ void gv_decoder_free(struct gv_decoder *d)
     free(d);
 }
 
+void gv_decoder_idle(struct gv_decoder *d)
+{
+    gv_tile_cache_release(d->cache, d->held);
+    d->held = NULL;
+}
+
 const struct gv_store *gv_decoder_store(const struct gv_decoder *d)
 {
     return d->store;

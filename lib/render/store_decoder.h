@@ -38,6 +38,10 @@ struct gv_decoder *gv_decoder_new_shared(const struct gv_store *s,
 /* Free.  NULL does nothing. */
 void gv_decoder_free(struct gv_decoder *d);
 
+/* Unpin the tile gv_decoder_tile returned last (its pixels are no longer
+ * valid), so that an idle decoder holds nothing the cache could evict. */
+void gv_decoder_idle(struct gv_decoder *d);
+
 /* The store d reads (as given to gv_decoder_new). */
 const struct gv_store *gv_decoder_store(const struct gv_decoder *d);
 
