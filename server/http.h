@@ -97,6 +97,10 @@ struct req {
      * route_filters.c; renders: render_call.c); the handler runs again
      * when it is resumed, and frees this before answering. */
     void *async;
+    /* Frees async if the request ends without its handler running again
+     * (the client closed the connection while it was suspended); NULL:
+     * nothing to free. */
+    void (*async_free)(void *async);
     unsigned status;
     uint64_t bytes;
     struct timespec t0;

@@ -28,11 +28,19 @@ struct render_call {
 
 static void call_free(struct render_call *c)
 {
+    if (!c)
+        return;
     image_put(c->img);
     free(c->spec.arg);
     free(c->key);
     free(c->out);
     free(c);
+}
+
+/* A resumed call whose client went away (http.c frees it). */
+static void async_free(void *c)
+{
+    call_free(c);
 }
 
 /* On a render thread: render, keep a success, resume the connection. */
@@ -91,6 +99,7 @@ static enum MHD_Result queue(struct req *r, struct image *img,
     c->spec.key = c->key;
     c->spec.etag = c->etag;
     r->async = c;
+    r->async_free = async_free;
     MHD_suspend_connection(r->conn); /* before the job can resume it */
     render_pool_submit(r->srv->render, &c->job);
     return MHD_YES;
@@ -126,6 +135,7 @@ enum MHD_Result render_call_finish(struct req *r)
 {
     struct render_call *c = r->async;
     r->async = NULL;
+    r->async_free = NULL;
     enum MHD_Result ret;
     if (c->rc < 0) {
         http_page_error(c->img, c->spec.module, "", &c->err);

@@ -8,6 +8,9 @@
 #   - If-None-Match with the ETag is 304 without a render or a lookup;
 #   - every render went through the render pool (its wait histogram counts
 #     exactly the misses), and the tile cache reports its budget;
+#   - while a render runs, the only HTTP thread keeps answering (/metrics
+#     shows the render running; skipped if the render ends before it can
+#     be seen);
 #   - the output cache keeps to output_cache_bytes: a sequence of regions
 #     of known sizes through a budget of about three of them evicts exactly
 #     what an LRU model of it predicts, and the bytes stay within it.
@@ -91,6 +94,25 @@ check "tile cache: tiles were decoded into it" \
     test "$(metric gigaview_tile_cache_misses_total)" -gt 0
 check "output cache: limit is output_cache_bytes" \
     test "$(metric gigaview_output_cache_limit_bytes)" = 67108864
+
+# A long render (the whole level 0 as PNG) does not hold the only HTTP
+# thread: /metrics answers while it runs, and says so.
+curl -sS --max-time 120 -o big.png "$(url '/v1/images/x/region?level=0&x=0&y=0&w=3000&h=2000')" &
+bigpid=$!
+seen=
+while kill -0 $bigpid 2>/dev/null; do
+    if [ "$(metric gigaview_render_running)" = 1 ]; then
+        seen=1
+        break
+    fi
+done
+wait $bigpid
+if [ -n "$seen" ]; then
+    ok "/metrics answered by the only HTTP thread while a render ran"
+else
+    skip "the render ended before /metrics could see it" "long render"
+fi
+check "the long render's answer is a 3000x2000 PNG"     test "$(python3 -c 'import struct,sys; d=open(sys.argv[1],"rb").read(24); print(*struct.unpack(">II", d[16:24]))' big.png)" = "3000 2000"
 
 # Five regions, their sizes measured here (the bytes are deterministic).
 rurl() {
