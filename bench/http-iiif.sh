@@ -291,7 +291,7 @@ awk -v a="$(best_of "$res" gigaviewd | cut -d' ' -f2)" -v b="$iip_best" -v pa="$
 	-v ca="$(cpu_of "$res" gigaviewd)" -v cb="$(cpu_of "$res" iipsrv)" 'BEGIN {
 	printf "- **warm: gigaviewd / iipsrv %.2fx req/s** (goal >= 2.0); **p99 %.1f ms against %.1f ms** (goal: no worse); server CPU per request %.2fx iipsrv+nginx'"'"'s\n", (b > 0 ? a / b : 0), pa, pb, (cb > 0 ? ca / cb : 0) }'
 st=$(awk 'index($1, "gigaview_http_requests_total{route=\"iiif_image\"") == 1 {
-	match($1, /status="[0-9]+"/); c[substr($1, RSTART + 8, 3)] += $2 }
+	match($1, /status="[^"]*"/); c[substr($1, RSTART + 8, RLENGTH - 9)] += $2 }
 	END { for (k in c) printf "%s%s: %d", (n++ ? ", " : ""), k, c[k] }' <<<"$gv_metrics")
 lw=$(grep -acE ' (warn|error) ' "$WORK/gigaviewd.log" || true)
 echo "- gigaviewd at the end: output cache $(metric "$gv_metrics" gigaview_output_cache_hits_total) hits, $(metric "$gv_metrics" gigaview_output_cache_misses_total) misses, $(mib "$(metric "$gv_metrics" gigaview_output_cache_bytes)") MiB held; tile cache $(mib "$(metric "$gv_metrics" gigaview_tile_cache_bytes)") MiB held, $(metric "$gv_metrics" gigaview_tile_cache_misses_total) decodes in all; page cache $(mib "$(metric "$gv_metrics" gigaview_page_cache_bytes)") MiB; renders refused (503): $(metric "$gv_metrics" gigaview_render_rejected_total); iiif_image responses by status: ${st:-none}; $lw warn/error log line(s)."
