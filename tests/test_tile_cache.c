@@ -211,6 +211,77 @@ static void *decode_thread(void *arg)
     return NULL;
 }
 
+/* Threads decoding random tiles of levels 0 and 1 through one small
+ * shared cache, each compared with the reference pixels. */
+struct stress_job {
+    struct gv_decoder *d;
+    const struct gv_geometry *g;
+    uint8_t **ref;           /* [level * 64 + ty * 8 + tx] */
+    size_t bytes;
+    unsigned seed;
+    int bad;
+};
+
+static void *stress_thread(void *arg)
+{
+    struct stress_job *j = arg;
+    struct gv_error err;
+    for (int i = 0; i < 300; i++) {
+        int level = rand_r(&j->seed) % 2;
+        uint32_t tx = (uint32_t)rand_r(&j->seed) % j->g->level[level].tiles_x;
+        uint32_t ty = (uint32_t)rand_r(&j->seed) % j->g->level[level].tiles_y;
+        const uint8_t *px;
+        if (gv_decoder_tile(j->d, level, tx, ty, &px, &err) < 0 ||
+            memcmp(px, j->ref[level * 64 + ty * 8 + tx], j->bytes))
+            j->bad++;
+    }
+    return NULL;
+}
+
+static void test_stress(struct gv_store *s)
+{
+    const struct gv_geometry *g = &gv_store_info(s)->geometry;
+    const size_t tb = gv_tile_bytes(g->channels);
+    uint8_t *ref[128] = {0};
+    struct gv_decoder *r = gv_decoder_new(s, 64u << 20);
+    struct gv_error err;
+    for (int k = 0; k < 2; k++)
+        for (uint32_t ty = 0; ty < g->level[k].tiles_y; ty++)
+            for (uint32_t tx = 0; tx < g->level[k].tiles_x; tx++) {
+                const uint8_t *px;
+                if (gv_decoder_tile(r, k, tx, ty, &px, &err) < 0)
+                    fail("reference: %s", err.text);
+                ref[k * 64 + ty * 8 + tx] = malloc(tb);
+                memcpy(ref[k * 64 + ty * 8 + tx], px, tb);
+            }
+    gv_decoder_free(r);
+    struct gv_tile_cache *c = gv_tile_cache_new(3 * tb);
+    struct stress_job j[4];
+    pthread_t th[4];
+    for (int i = 0; i < 4; i++) {
+        j[i] = (struct stress_job){.d = gv_decoder_new_shared(s, c, 5), .g = g,
+                                   .ref = ref, .bytes = tb, .seed = 17u + (unsigned)i};
+        if (!j[i].d || pthread_create(&th[i], NULL, stress_thread, &j[i]) != 0)
+            fail("stress thread");
+    }
+    int bad = 0;
+    for (int i = 0; i < 4; i++) {
+        pthread_join(th[i], NULL);
+        bad += j[i].bad;
+        gv_decoder_free(j[i].d);
+    }
+    struct gv_tile_cache_stats st = stats(c);
+    check(bad == 0, "4 threads x 300 random tiles through a 3-tile cache: all "
+          "exact (%d wrong; %llu decodes, %llu hits, %llu waits, %llu evictions)",
+          bad, (unsigned long long)st.misses, (unsigned long long)st.hits,
+          (unsigned long long)st.waits, (unsigned long long)st.evictions);
+    check(st.bytes <= 3 * tb && st.waiting == 0,
+          "after them: within the budget, nobody waiting");
+    gv_tile_cache_free(c);
+    for (int i = 0; i < 128; i++)
+        free(ref[i]);
+}
+
 static struct gv_store *make_store(const char *input, const char *name)
 {
     char out[256];
@@ -307,6 +378,7 @@ static void test_decoders(void)
     check(stats(c).bytes == 0 && stats(c).entries == 0, "idle: nothing held");
     gv_decoder_free(d);
     gv_tile_cache_free(c);
+    test_stress(s);
     gv_store_close(s);
 }
 
