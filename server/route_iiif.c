@@ -9,7 +9,8 @@
  * function); this file builds info.json and describes each image request
  * (its canonical path, ETag and render function) to render_call.c, which
  * answers from If-None-Match or the output cache, or renders with
- * gv_render on a render thread (the connection suspended meanwhile).  Every response carries
+ * gv_render on a render thread (the connection suspended meanwhile).
+ * Every response carries
  * Access-Control-Allow-Origin: * (the IIIF routes ignore cors_origin), and
  * errors use the statuses the specification lists (400, 404, 501; limits
  * are 400, since the specification knows no 413).  Image responses carry

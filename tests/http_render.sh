@@ -11,6 +11,8 @@
 #   - while a render runs, the only HTTP thread keeps answering (/metrics
 #     shows the render running; skipped if the render ends before it can
 #     be seen);
+#   - with render_queue = 1 full, a render is refused: 503 busy with
+#     Retry-After (skipped if the queue empties first);
 #   - a client that closes its connection while its render is queued
 #     leaves nothing behind (the render runs; its state is freed);
 #   - the output cache keeps to output_cache_bytes: a sequence of regions
@@ -186,6 +188,7 @@ no_sanitizer_report
 # under valgrind or ASan a leak fails the exit status or the log check.
 # One render thread, held by a long render, so the second one queues.
 conf 0 1
+echo "render_queue = 1" >>"$T/r.conf"
 start_daemon "$T/r.conf"
 long() {
     curl -sS --max-time 120 -o "$1" "$(url "/v1/images/x/region?level=0&x=0&y=0&w=3000&h=$2")"
@@ -193,12 +196,16 @@ long() {
 long a.png 2000 &
 apid=$!
 queued=
+busy=
 while kill -0 $apid 2>/dev/null; do
     if [ "$(metric gigaview_render_running)" = 1 ]; then
         long b.png 1999 &
         bpid=$!
         while kill -0 $apid 2>/dev/null && kill -0 $bpid 2>/dev/null; do
             if [ "$(metric gigaview_render_queue_depth)" = 1 ]; then
+                # render_queue = 1 is full: a third render is refused.
+                busy=$(curl -sS --max-time 30 -o busy.json -D busy.h -w '%{http_code}' \
+                    "$(url '/v1/images/x/region?level=2&x=0&y=0&w=10&h=10')")
                 kill $bpid
                 queued=1
                 break
@@ -209,6 +216,14 @@ while kill -0 $apid 2>/dev/null; do
     fi
 done
 wait $apid
+if [ -n "$queued" ] && [ "$busy" = 503 ]; then
+    ok "render_queue full: 503"
+    check "503: code busy, Retry-After: 1" sh -c "grep -q '\"code\":\"busy\"' busy.json &&
+        tr -d '\r' <busy.h | grep -qi '^Retry-After: 1\$'"
+    check "503: counted as refused" test "$(metric gigaview_render_rejected_total)" = 1
+else
+    skip "render_queue full: 503" "the queued render started before the third request"
+fi
 if [ -n "$queued" ]; then
     ok "a queued render's client closed its connection"
     # Every render ends: nothing queued, nothing running, two renders done.
