@@ -16,15 +16,22 @@
 # write JPEG at quality 90 (gigaviewd's jpeg_quality default; iipsrv's
 # JPEG_QUALITY is set to 90).
 #
-# gigaviewd runs once per decoder_cache_bytes value in GV_DECODER_CACHES
-# (default "16M 512M": the shipped default, and enough to hold every decoded
-# tile of the default inputs), each as its own process. wrk GETs random URLs
-# of the list (same seeds, so the same sequence for every server) at CONNS
-# connections for DURATION seconds per run, REPS rounds alternating between
-# the servers after a short warm-up. It reports the best req/s of each, the
-# ratio gigaviewd/iipsrv (the project's goal is >= 1.0), p50/p99/max
-# latency, errors (non-2xx/3xx and socket errors, all runs), server CPU time
-# per request, and peak RSS. Nothing is asserted: the script only reports.
+# gigaviewd runs at its default configuration (only listen, port,
+# store_dir and access_log are set; GV_CONF adds lines, e.g.
+# GV_CONF="output_cache_bytes = 0" to see the renders alone). First the
+# cold pass: each server freshly started, every URL of the list requested
+# exactly once, in one shuffled order (the same for both), over COLD_CONNS
+# keep-alive connections (bench/iiif_cold.py): req/s, p50/p99/max. Then the
+# warm runs: wrk GETs random URLs of the list (same seeds, so the same
+# sequence for every server) at CONNS connections for DURATION seconds per
+# run, REPS rounds alternating between the servers after a short warm-up.
+# It reports the best req/s of each, the ratio gigaviewd/iipsrv (the
+# project's goal is >= 2.0 warm, with a p99 no worse than iipsrv's),
+# p50/p99/max latency, errors (non-2xx/3xx and socket errors, all runs),
+# server CPU time per request, gigaviewd's cache counters, and peak RSS
+# beside the memory budget the configuration documents (cache_bytes +
+# decoder_cache_bytes + output_cache_bytes). Nothing is asserted: the
+# script only reports.
 #
 # Environment:
 #   GIGAVIEW, GIGAVIEWD  binaries (default: next to bench/, or on PATH)
@@ -32,9 +39,9 @@
 #   DURATION=S     seconds per wrk run (default 30)
 #   REPS=N         rounds (default 2)
 #   CONNS=N        wrk connections (default 64); WRK_THREADS (default 2)
-#   THREADS=N      gigaviewd threads and iipsrv FastCGI processes (default 2)
-#   CACHE=SIZE     gigaviewd cache_bytes (default 256M)
-#   GV_DECODER_CACHES="16M 512M"  gigaviewd decoder_cache_bytes values
+#   COLD_CONNS=N   connections of the cold pass (default 16)
+#   THREADS=N      iipsrv FastCGI processes (default 2)
+#   GV_CONF="k = v"  a line added to gigaviewd's configuration (default none)
 #   IIP_CACHE_MB=N iipsrv MAX_IMAGE_CACHE_SIZE in MB (default 10, its default)
 #   SCALES="1 2 4 8"  IIIF scale factors in the URL list
 #   TMPDIR=DIR     scratch space (default /tmp)
@@ -50,7 +57,7 @@ while [ $# -gt 0 ]; do
 	--gigaview=*) gv_arg=${1#*=}; shift ;;
 	--gigaviewd) gvd_arg=$2; shift 2 ;;
 	--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,44p' "$0"; exit 0 ;;
+	-h|--help) sed -n '2,52p' "$0"; exit 0 ;;
 	*) inputs+=("$1"); shift ;;
 	esac
 done
@@ -76,8 +83,8 @@ REPS=${REPS:-2}
 CONNS=${CONNS:-64}
 WRK_THREADS=${WRK_THREADS:-2}
 THREADS=${THREADS:-2}
-CACHE=${CACHE:-256M}
-GV_DECODER_CACHES=${GV_DECODER_CACHES:-16M 512M}
+COLD_CONNS=${COLD_CONNS:-16}
+GV_CONF=${GV_CONF:-}
 IIP_CACHE_MB=${IIP_CACHE_MB:-10}
 SCALES=${SCALES:-1 2 4 8}
 export CONNS WRK_THREADS
@@ -121,25 +128,26 @@ done
 chmod -R a+rX "$WORK/tif"
 nurls=$(wc -l <"$urls")
 
-# gigaviewd, one process per decoder cache size.
-gv_labels=() gv_pids=() gv_ports=()
-for dc in $GV_DECODER_CACHES; do
-	cat >"$WORK/gigaviewd-$dc.conf" <<EOF
+# gigaviewd at its default configuration.
+cat >"$WORK/gigaviewd.conf" <<EOF
 listen = "127.0.0.1"
 port = 0
-threads = $THREADS
 store_dir = "$WORK/stores"
-cache_bytes = $CACHE
-decoder_cache_bytes = $dc
-jpeg_quality = 90
-log_level = info
 access_log = "off"
+$GV_CONF
 EOF
-	"$GVD" -t -c "$WORK/gigaviewd-$dc.conf" >/dev/null || die "gigaviewd rejects the configuration"
-	start_gigaviewd "$GVD" "$WORK/gigaviewd-$dc.conf" "$WORK/gigaviewd-$dc.log"
-	gv_labels+=("gigaviewd-dc$dc"); gv_pids+=("$GVD_PID"); gv_ports+=("$GVD_PORT")
-	echo "# gigaviewd (decoder_cache_bytes $dc) pid $GVD_PID on 127.0.0.1:$GVD_PORT" >&2
-done
+"$GVD" -t -c "$WORK/gigaviewd.conf" >/dev/null || die "gigaviewd rejects the configuration"
+# gv_key KEY: its value in force (the file's, else the default), in bytes
+# for sizes.
+gv_key() {
+	local v
+	v=$(sed -n "s/^$1 = //p" "$WORK/gigaviewd.conf" | tail -1)
+	[ -n "$v" ] || v=$("$GVD" -S | sed -n "s/^#* *$1 = \([^ ]*\).*/\1/p" | tail -1)
+	numfmt --from=iec "${v//\"/}"
+}
+start_gigaviewd "$GVD" "$WORK/gigaviewd.conf" "$WORK/gigaviewd.log"
+gv_labels=(gigaviewd) gv_pids=("$GVD_PID") gv_ports=("$GVD_PORT")
+echo "# gigaviewd (defaults${GV_CONF:+ + $GV_CONF}) pid $GVD_PID on 127.0.0.1:$GVD_PORT" >&2
 
 # iipsrv: THREADS FastCGI processes sharing one socket (spawn-fcgi -F), behind nginx.
 FPORT=$(free_port)
@@ -170,6 +178,16 @@ EOF
 start_nginx "$WORK/nginx/nginx.conf" "$WORK/nginx" "$NPORT"
 echo "# iipsrv pids ${IIP_PIDS[*]} on 127.0.0.1:$FPORT behind nginx $NGX_PID (workers $NGX_WORKERS) on 127.0.0.1:$NPORT" >&2
 port_free 11211 || echo "# note: something listens on 127.0.0.1:11211 (memcached?); iipsrv may cache its output there" >&2
+
+# The cold pass: both servers were just started, nothing has been asked.
+shuf --random-source=<(yes) "$urls" >"$WORK/cold.urls"
+declare -A cold
+for s in iipsrv gigaviewd; do
+	[ "$s" = iipsrv ] && p=$NPORT || p=$GVD_PORT
+	cold[$s]=$(python3 "$(dirname "${BASH_SOURCE[0]}")/iiif_cold.py" "http://127.0.0.1:$p" "$WORK/cold.urls" "$COLD_CONNS")
+	echo "# cold pass $s: ${cold[$s]}" >&2
+done
+gv_cold_metrics=$(curl -sf "http://127.0.0.1:$GVD_PORT/metrics" || true)
 
 # Check a sample of URLs: 200, image/jpeg, the same pixel size from every server.
 check() { # LABEL PORT URL -> prints "WxH bytes"
@@ -228,6 +246,12 @@ row() {
 }
 iip_best=$(best_of "$res" iipsrv | cut -d' ' -f2)
 
+# metric TEXT NAME: the value of sample NAME in the /metrics TEXT.
+metric() { awk -v n="$2" '$1 == n { print $2 }' <<<"$1"; }
+gv_metrics=$(curl -sf "http://127.0.0.1:$GVD_PORT/metrics" || true)
+mib() { echo $(($1 / 1048576)); }
+budget=$(($(gv_key cache_bytes) + $(gv_key decoder_cache_bytes) + $(gv_key output_cache_bytes)))
+
 echo "## http-iiif.sh, $(date '+%F %H:%M %Z')"
 echo
 echo "- $(machine_line); load average at the end: $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -235,28 +259,42 @@ echo "- $(describe_build "$GV_SRC")"
 echo "- gigaviewd $GVD_SRC (md5 $(md5sum "$GVD_SRC" | cut -c1-12)); iipsrv $(dpkg-query -W -f '${Version}' iipimage-server 2>/dev/null || echo '?') ($IIPSRV); $(nginx -v 2>&1 | sed 's/^nginx version: //'); $(wrk -v 2>&1 | head -1 | cut -d' ' -f1-2); vips $(vips --version | sed 's/^vips-//')"
 echo "- inputs: ${inputs[*]}"
 echo "- $nurls IIIF tile URLs (scale factors $SCALES, 512-px tiles, JPEG); stores $(du -cb "$WORK"/stores/*.gv | tail -1 | cut -f1) bytes, pyramid TIFFs $(du -cb "$WORK"/tif/*.tif | tail -1 | cut -f1) bytes"
-echo "- wrk -t$WRK_THREADS -c$CONNS -d${DURATION}s --latency --timeout 10s, random URL of the list per request, ${WARM}s warm-up, $REPS rounds alternating, best run shown"
-echo "- gigaviewd: threads = $THREADS, cache_bytes = $CACHE, jpeg_quality = 90, access_log off; iipsrv: $THREADS FastCGI processes (spawn-fcgi -F $THREADS), JPEG_QUALITY=90, MAX_IMAGE_CACHE_SIZE=$IIP_CACHE_MB MB, behind nginx (2 workers, fastcgi_pass, no upstream keepalive)"
+echo "- gigaviewd at its defaults${GV_CONF:+ plus '$GV_CONF'}: threads = $(gv_key threads), render_threads = $(gv_key render_threads), render_queue = $(gv_key render_queue), cache_bytes = $(mib "$(gv_key cache_bytes)") MiB, decoder_cache_bytes = $(mib "$(gv_key decoder_cache_bytes)") MiB, output_cache_bytes = $(mib "$(gv_key output_cache_bytes)") MiB, jpeg_quality = $(gv_key jpeg_quality); iipsrv: $THREADS FastCGI processes (spawn-fcgi -F $THREADS), JPEG_QUALITY=90, MAX_IMAGE_CACHE_SIZE=$IIP_CACHE_MB MB, behind nginx (2 workers, fastcgi_pass, no upstream keepalive)"
+echo
+echo "**Cold** (each server just started; every URL once, the same shuffled order, $COLD_CONNS keep-alive connections, bench/iiif_cold.py):"
+echo
+echo "| server | requests | ok | errors | seconds | req/s | p50 ms | p99 ms | max ms |"
+echo "|---|---|---|---|---|---|---|---|---|"
+for s in gigaviewd iipsrv; do
+	echo "| $s | $(tr ' ' '\n' <<<"${cold[$s]}" | paste -sd'|' | sed 's/|/ | /g') |"
+done
+echo
+awk -v a="$(cut -d' ' -f5 <<<"${cold[gigaviewd]}")" -v b="$(cut -d' ' -f5 <<<"${cold[iipsrv]}")" \
+	-v pa="$(cut -d' ' -f7 <<<"${cold[gigaviewd]}")" -v pb="$(cut -d' ' -f7 <<<"${cold[iipsrv]}")" 'BEGIN {
+	printf "- **cold: gigaviewd / iipsrv %.2fx req/s**, p99 %.0f ms against %.0f ms\n", (b > 0 ? a / b : 0), pa, pb }'
+echo "- gigaviewd after the cold pass: tile cache $(metric "$gv_cold_metrics" gigaview_tile_cache_misses_total) decodes, $(metric "$gv_cold_metrics" gigaview_tile_cache_hits_total) hits, $(metric "$gv_cold_metrics" gigaview_tile_cache_waits_total) waits for another request's decode, $(metric "$gv_cold_metrics" gigaview_tile_cache_evictions_total) evictions; render queue wait: $(metric "$gv_cold_metrics" gigaview_render_queue_wait_seconds_count) renders, $(awk -v s="$(metric "$gv_cold_metrics" gigaview_render_queue_wait_seconds_sum)" -v n="$(metric "$gv_cold_metrics" gigaview_render_queue_wait_seconds_count)" 'BEGIN { printf "%.1f", n ? 1000 * s / n : 0 }') ms mean"
+echo
+echo "**Warm** (wrk -t$WRK_THREADS -c$CONNS -d${DURATION}s --latency --timeout 10s, random URL of the list per request, ${WARM}s warm-up, $REPS rounds alternating, best run shown):"
 echo
 echo "| server | req/s (best) | runs | p50 ms | p99 ms | max ms | errors (all runs) | server CPU ms/req | bytes/resp |"
 echo "|---|---|---|---|---|---|---|---|---|"
-for s in "${gv_labels[@]}"; do row "gigaviewd, decoder_cache_bytes ${s#gigaviewd-dc}" "$s"; done
+row "gigaviewd (defaults)" gigaviewd
 row "iipsrv + nginx" iipsrv
 echo
-for s in "${gv_labels[@]}"; do
-	awk -v dc="${s#gigaviewd-dc}" -v a="$(best_of "$res" "$s" | cut -d' ' -f2)" -v b="$iip_best" \
-		-v ca="$(cpu_of "$res" "$s")" -v cb="$(cpu_of "$res" iipsrv)" 'BEGIN {
-		printf "- **gigaviewd (decoder_cache_bytes %s) / iipsrv: %.2fx req/s** (goal >= 1.0); server CPU per request %.2fx iipsrv+nginx'"'"'s\n", dc, (b > 0 ? a / b : 0), (cb > 0 ? ca / cb : 0) }'
-done
-echo
-for i in "${!gv_labels[@]}"; do
-	s=${gv_labels[$i]} p=${gv_pids[$i]}
-	metrics=$(curl -sf "http://127.0.0.1:${gv_ports[$i]}/metrics" || true)
-	st=$(awk 'index($1, "gigaview_http_requests_total{route=\"iiif_image\"") == 1 {
-		match($1, /status="[0-9]+"/); c[substr($1, RSTART + 8, 3)] += $2 }
-		END { for (k in c) printf "%s%s: %d", (n++ ? ", " : ""), k, c[k] }' <<<"$metrics")
-	lw=$(grep -acE ' (warn|error) ' "$WORK/gigaviewd-${s#gigaviewd-dc}.log" || true)
-	echo "- ${s}: peak RSS (VmHWM) $(($(status_kb VmHWM "$p") / 1024)) MiB (cache_bytes = $CACHE, decoder_cache_bytes = ${s#gigaviewd-dc} per decoder); VmRSS after each run (MiB):${rss_runs[$s]}; worker threads' CPU share per run (%):${split_runs[$s]}; iiif_image responses by status: ${st:-none}; $lw warn/error log line(s)."
-done
+# shellcheck disable=SC2046
+set -- $(best_of "$res" gigaviewd)
+gp99=$4
+# shellcheck disable=SC2046
+set -- $(best_of "$res" iipsrv)
+ip99=$4
+awk -v a="$(best_of "$res" gigaviewd | cut -d' ' -f2)" -v b="$iip_best" -v pa="$gp99" -v pb="$ip99" \
+	-v ca="$(cpu_of "$res" gigaviewd)" -v cb="$(cpu_of "$res" iipsrv)" 'BEGIN {
+	printf "- **warm: gigaviewd / iipsrv %.2fx req/s** (goal >= 2.0); **p99 %.1f ms against %.1f ms** (goal: no worse); server CPU per request %.2fx iipsrv+nginx'"'"'s\n", (b > 0 ? a / b : 0), pa, pb, (cb > 0 ? ca / cb : 0) }'
+st=$(awk 'index($1, "gigaview_http_requests_total{route=\"iiif_image\"") == 1 {
+	match($1, /status="[^"]*"/); c[substr($1, RSTART + 8, RLENGTH - 9)] += $2 }
+	END { for (k in c) printf "%s%s: %d", (n++ ? ", " : ""), k, c[k] }' <<<"$gv_metrics")
+lw=$(grep -acE ' (warn|error) ' "$WORK/gigaviewd.log" || true)
+echo "- gigaviewd at the end: output cache $(metric "$gv_metrics" gigaview_output_cache_hits_total) hits, $(metric "$gv_metrics" gigaview_output_cache_misses_total) misses, $(mib "$(metric "$gv_metrics" gigaview_output_cache_bytes)") MiB held; tile cache $(mib "$(metric "$gv_metrics" gigaview_tile_cache_bytes)") MiB held, $(metric "$gv_metrics" gigaview_tile_cache_misses_total) decodes in all; page cache $(mib "$(metric "$gv_metrics" gigaview_page_cache_bytes)") MiB; renders refused (503): $(metric "$gv_metrics" gigaview_render_rejected_total); iiif_image responses by status: ${st:-none}; $lw warn/error log line(s)."
+echo "- gigaviewd peak RSS (VmHWM) **$(($(status_kb VmHWM "$GVD_PID") / 1024)) MiB** against the documented budget of $(mib "$budget") MiB (cache_bytes + decoder_cache_bytes + output_cache_bytes, plus about 125 MiB of libraries); VmRSS after each run (MiB):${rss_runs[gigaviewd]}; HTTP threads' CPU share per run (%):${split_runs[gigaviewd]}."
 # shellcheck disable=SC2086
 echo "- iipsrv: peak RSS $(($(status_kb VmHWM "${IIP_PIDS[@]}") / 1024)) MiB over its $THREADS processes; nginx workers $(($(status_kb VmHWM $NGX_WORKERS) / 1024)) MiB."

@@ -22,8 +22,9 @@
 # refusals by configured limits (413, 429, 503 with Retry-After: busy
 # filter queue).  The daemon's RSS (VmRSS of gigaviewd, and of its filter
 # workers separately) is sampled every INTERVAL seconds and compared with
-# the configured bound: cache_bytes + images x threads x
-# decoder_cache_bytes + the RSS measured after start-up (libraries, EGL) +
+# the configured bound: cache_bytes + decoder_cache_bytes (one tile cache
+# for every thread and image) + output_cache_bytes + the RSS measured
+# after start-up (libraries, EGL) +
 # PER_CONN for each connection of the largest phase: the working memory
 # of requests in flight (responses waiting to be sent and the pages they
 # point into, output images, encoder state, malloc arenas); 512 KiB by
@@ -34,7 +35,7 @@
 #
 # Environment: CACHE (page cache, default 4M: smaller than the stores'
 # 11 MB of pages, so that it evicts), DECODER_CACHE (default
-# 16M), THREADS (default 4), PER_CONN (default 512K), INTERVAL (RSS
+# 16M), OUTPUT_CACHE (default 16M), THREADS (default 4), PER_CONN (default 512K), INTERVAL (RSS
 # sampling, default 10 s), WORK
 # (scratch directory, default a new one under /tmp, removed at the end).
 set -euo pipefail
@@ -55,6 +56,7 @@ while [ $# -gt 0 ]; do
 done
 CACHE=${CACHE:-4M}
 DECODER_CACHE=${DECODER_CACHE:-16M}
+OUTPUT_CACHE=${OUTPUT_CACHE:-16M}
 THREADS=${THREADS:-4}
 PER_CONN=${PER_CONN:-512K}
 INTERVAL=${INTERVAL:-10}
@@ -94,6 +96,7 @@ store_dir = "$WORK/stores"
 threads = $THREADS
 cache_bytes = $CACHE
 decoder_cache_bytes = $DECODER_CACHE
+output_cache_bytes = $OUTPUT_CACHE
 connection_limit = 1024
 access_log = off
 log_level = info
@@ -170,15 +173,15 @@ workers_kb() {
 base_kb=$(rss_kb "$GVD_PID")
 nimg=$(ls "$WORK/stores" | wc -l)
 maxc=$(echo "$CONNS" | tr ' ' '\n' | sort -n | tail -n 1)
-bound_kb=$(( ($(to_bytes "$CACHE") + nimg * THREADS * $(to_bytes "$DECODER_CACHE") +
+bound_kb=$(( ($(to_bytes "$CACHE") + $(to_bytes "$DECODER_CACHE") + $(to_bytes "$OUTPUT_CACHE") +
 	maxc * $(to_bytes "$PER_CONN")) / 1024 + base_kb ))
 
 echo "# $(machine_line)"
 echo "# $(describe_build "$GV")"
-echo "# gigaviewd $GVD: threads $THREADS, cache_bytes $CACHE, decoder_cache_bytes $DECODER_CACHE, $nimg images, filters $filters"
+echo "# gigaviewd $GVD: threads $THREADS, cache_bytes $CACHE, decoder_cache_bytes $DECODER_CACHE, output_cache_bytes $OUTPUT_CACHE, $nimg images, filters $filters"
 echo "# duration ${DURATION}s over connections: $CONNS; RSS every ${INTERVAL}s"
 echo "# load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-echo "# RSS after start-up $((base_kb / 1024)) MiB; bound = start-up + cache + $nimg x $THREADS x decoder cache + $maxc x $PER_CONN = $((bound_kb / 1024)) MiB"
+echo "# RSS after start-up $((base_kb / 1024)) MiB; bound = start-up + cache + decoder cache + output cache + $maxc x $PER_CONN = $((bound_kb / 1024)) MiB"
 
 nphase=$(echo "$CONNS" | wc -w)
 per=$((DURATION / nphase))

@@ -23,7 +23,7 @@
 
 struct catalog {
     char *dir;
-    size_t decoder_cache;
+    struct gv_tile_cache *tiles;
     int pool_max;
     pthread_mutex_t lock;     /* guards items, n, every image's refs */
     pthread_mutex_t scan_lock;/* one scan at a time */
@@ -48,7 +48,8 @@ int catalog_id_valid(const char *id)
     return 1;
 }
 
-struct catalog *catalog_new(const char *dir, size_t decoder_cache, int pool_max)
+struct catalog *catalog_new(const char *dir, struct gv_tile_cache *tiles,
+                            int pool_max)
 {
     struct catalog *c = calloc(1, sizeof *c);
     if (!c)
@@ -58,7 +59,7 @@ struct catalog *catalog_new(const char *dir, size_t decoder_cache, int pool_max)
         free(c);
         return NULL;
     }
-    c->decoder_cache = decoder_cache;
+    c->tiles = tiles;
     c->pool_max = pool_max > 0 ? pool_max : 1;
     c->next_serial = 1;
     pthread_mutex_init(&c->lock, NULL);
@@ -77,6 +78,8 @@ static void image_destroy(struct image *img)
     for (int i = 0; i < img->npool; i++)
         gv_decoder_free(img->pool[i]);
     free(img->pool);
+    if (img->cat)
+        gv_tile_cache_forget(img->cat->tiles, img->serial);
     if (img->cat && img->cat->on_close)
         img->cat->on_close(img->serial, img->cat->on_close_arg);
     gv_store_close(img->store);
@@ -341,7 +344,7 @@ struct gv_decoder *image_decoder_get(struct image *img)
         d = img->pool[--img->npool];
     pthread_mutex_unlock(&c->lock);
     if (!d)
-        d = gv_decoder_new(img->store, c->decoder_cache);
+        d = gv_decoder_new_shared(img->store, c->tiles, img->serial);
     return d;
 }
 
@@ -349,6 +352,7 @@ void image_decoder_put(struct image *img, struct gv_decoder *d)
 {
     if (!d)
         return;
+    gv_decoder_idle(d); /* pooled decoders pin no tile */
     struct catalog *c = img->cat;
     pthread_mutex_lock(&c->lock);
     if (!img->pool)

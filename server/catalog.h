@@ -13,7 +13,9 @@
  * a decoder is single-threaded and borrows the store): a request takes
  * one with image_decoder_get and returns it with image_decoder_put before
  * it drops its image reference, so every decoder is freed before its
- * store is closed.
+ * store is closed.  Every decoder of every image keeps its decoded tiles
+ * in the catalog's one tile cache (lib/render/tile_cache.h), under the
+ * image's serial; an image's tiles are forgotten when it is closed.
  *
  * Every function is thread-safe.
  */
@@ -45,9 +47,10 @@ struct image {
 
 struct catalog;
 
-/* A catalog over `dir` with decoders caching decoder_cache bytes each and
- * at most pool_max idle decoders per image.  Does not scan yet. */
-struct catalog *catalog_new(const char *dir, size_t decoder_cache,
+/* A catalog over `dir` whose decoders share `tiles` (borrowed: it must
+ * outlive the catalog), with at most pool_max idle decoders per image.
+ * Does not scan yet. */
+struct catalog *catalog_new(const char *dir, struct gv_tile_cache *tiles,
                             int pool_max);
 
 /* Free (every image must have been put back).  NULL does nothing. */

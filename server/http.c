@@ -494,6 +494,8 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
                (unsigned long long)r->bytes, (unsigned long long)usec);
     metrics_record(metrics_id(r->route), status, usec, r->bytes);
     atomic_fetch_sub(&metrics.in_flight, 1);
+    if (r->async && r->async_free)
+        r->async_free(r->async);
     free(r->segbuf);
     free(r->body);
     free(r->path);

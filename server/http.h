@@ -36,6 +36,9 @@
 #include "page_cache.h"
 
 struct gv_gpu;
+struct gv_tile_cache;
+struct output_cache;
+struct render_pool;
 struct filter_jobs;
 struct filter_store;
 
@@ -65,6 +68,12 @@ struct server {
     enum gv_code filter_code; /* the error then: GV_EUNAVAIL (503), or
                                  GV_EFORMAT (501) in a build configured
                                  --without-gpu */
+    /* IIIF images and regions: the decoded-tile cache every decoder
+     * shares, the threads that render, and the encoded outputs kept by
+     * canonical request.  Set before http_start; all thread-safe. */
+    struct gv_tile_cache *tiles;
+    struct render_pool *render;
+    struct output_cache *outputs;
 };
 
 #define HTTP_MAX_PARAMS 8
@@ -85,9 +94,13 @@ struct req {
     int body_over;            /* body exceeded the cap (discarded) */
     int responded;
     /* A handler's state while its connection is suspended (filter jobs:
-     * route_filters.c); the handler runs again when it is resumed, and
-     * frees this before answering. */
+     * route_filters.c; renders: render_call.c); the handler runs again
+     * when it is resumed, and frees this before answering. */
     void *async;
+    /* Frees async if the request ends without its handler running again
+     * (the client closed the connection while it was suspended); NULL:
+     * nothing to free. */
+    void (*async_free)(void *async);
     unsigned status;
     uint64_t bytes;
     struct timespec t0;

@@ -44,6 +44,9 @@
 #include "http.h"
 #include "log.h"
 #include "page_cache.h"
+#include "output_cache.h"
+#include "render_pool.h"
+#include "render/tile_cache.h"
 #include "settings.h"
 
 static void usage(FILE *out)
@@ -271,6 +274,31 @@ static int configure(int argc, char **argv, struct settings *cfg)
     return -1;
 }
 
+/* The decoded-tile cache every decoder shares, the render threads and the
+ * encoded-output cache (the IIIF and region routes).  Call with the
+ * signals blocked.  0, or -1 (logged). */
+static int start_rendering(struct server *srv)
+{
+    const struct settings *cfg = srv->cfg;
+    srv->tiles = gv_tile_cache_new((size_t)cfg->decoder_cache_bytes);
+    srv->outputs = output_cache_new((size_t)cfg->output_cache_bytes);
+    srv->render = render_pool_new((int)cfg->render_threads,
+                                  (int)cfg->render_queue);
+    if (!srv->tiles || !srv->outputs || !srv->render) {
+        log_msg(LOG_ERROR, "main", "cannot start the render threads and caches");
+        return -1;
+    }
+    return 0;
+}
+
+/* After the drain (the catalog is freed: no decoder uses the tiles). */
+static void stop_rendering(struct server *srv)
+{
+    render_pool_free(srv->render);
+    output_cache_free(srv->outputs);
+    gv_tile_cache_free(srv->tiles);
+}
+
 /* Serve until SIGTERM or SIGINT (blocked in every thread, taken here with
  * sigwait); SIGHUP rescans the stores and the filter graphs. */
 static void wait_for_stop(struct server *srv, const sigset_t *set)
@@ -321,8 +349,10 @@ int main(int argc, char **argv)
     memset(&srv, 0, sizeof srv);
     srv.cfg = &cfg;
     srv.pages = page_cache_new(cfg.cache_bytes);
-    srv.catalog = catalog_new(cfg.store_dir, (size_t)cfg.decoder_cache_bytes,
-                              (int)cfg.threads);
+    if (start_rendering(&srv) < 0)
+        return 1;
+    srv.catalog = catalog_new(cfg.store_dir, srv.tiles,
+                              (int)(cfg.threads + cfg.render_threads));
     if (!srv.pages || !srv.catalog) {
         log_msg(LOG_ERROR, "main", "out of memory");
         return 1;
@@ -348,11 +378,13 @@ int main(int argc, char **argv)
      * every job's end (done or cancelled) resumes it before the HTTP
      * drain. */
     filter_jobs_stop(srv.filters, (unsigned)cfg.drain_timeout * 1000u);
+    render_pool_stop(srv.render); /* runs what is queued: resumes them all */
     http_drain_and_stop(&srv, (unsigned)cfg.drain_timeout);
     filter_jobs_free(srv.filters);
     filter_store_free(srv.filter_store);
     close_gpu(&srv);
     catalog_free(srv.catalog);
+    stop_rendering(&srv);
     page_cache_free(srv.pages);
     log_msg(LOG_INFO, "main", "stopped");
     log_close();

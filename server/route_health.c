@@ -11,6 +11,9 @@
 #include "filter_jobs.h"
 #include "gpu/gpu.h"
 #include "metrics.h"
+#include "output_cache.h"
+#include "render_pool.h"
+#include "render/tile_cache.h"
 #include "routes.h"
 
 /* The start-up GPU context: {"available": true, "platform", "api",
@@ -84,12 +87,40 @@ static void write_server(struct prom *p, struct server *srv)
                 "%.3f", http_uptime(srv));
 }
 
+/* The decoded-tile cache, the render pool and the output cache. */
+static void write_rendering(struct prom *p, struct server *srv)
+{
+    struct gv_tile_cache_stats st;
+    gv_tile_cache_stats(srv->tiles, &st);
+    prom_metric(p, "gigaview_tile_cache_hits_total", "counter",
+                "Decoded tiles found in the shared tile cache.", "%llu",
+                (unsigned long long)st.hits);
+    prom_metric(p, "gigaview_tile_cache_misses_total", "counter",
+                "Tiles decoded into the shared tile cache (one decode each).",
+                "%llu", (unsigned long long)st.misses);
+    prom_metric(p, "gigaview_tile_cache_waits_total", "counter",
+                "Requests for a tile that waited for another thread's decode "
+                "of it.", "%llu", (unsigned long long)st.waits);
+    prom_metric(p, "gigaview_tile_cache_evictions_total", "counter",
+                "Decoded tiles evicted.", "%llu",
+                (unsigned long long)st.evictions);
+    prom_metric(p, "gigaview_tile_cache_bytes", "gauge",
+                "Bytes of decoded tiles held.", "%llu",
+                (unsigned long long)st.bytes);
+    prom_metric(p, "gigaview_tile_cache_limit_bytes", "gauge",
+                "The tile cache bound (decoder_cache_bytes).", "%llu",
+                (unsigned long long)st.limit);
+    render_pool_metrics(srv->render, p);
+    output_cache_metrics(srv->outputs, p);
+}
+
 enum MHD_Result route_metrics(struct req *r)
 {
     struct prom p = {0};
     metrics_write(&p);
     write_server(&p, r->srv);
     filter_jobs_metrics(r->srv->filters, &p);
+    write_rendering(&p, r->srv);
     if (p.failed) {
         free(p.s);
         return http_send_errorf(r, GV_ENOMEM, "metrics: out of memory");

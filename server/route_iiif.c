@@ -6,8 +6,11 @@
  *   GET /iiif/3/{id}/{region}/{size}/{rotation}/{quality}.{format}
  *
  * Parsing and validation are iiif_parse's (server/iiif.c, a pure
- * function); this file builds info.json, renders with gv_render on a
- * pooled CPU decoder and encodes.  Every response carries
+ * function); this file builds info.json and describes each image request
+ * (its canonical path, ETag and render function) to render_call.c, which
+ * answers from If-None-Match or the output cache, or renders with
+ * gv_render on a render thread (the connection suspended meanwhile).
+ * Every response carries
  * Access-Control-Allow-Origin: * (the IIIF routes ignore cors_origin), and
  * errors use the statuses the specification lists (400, 404, 501; limits
  * are 400, since the specification knows no 413).  Image responses carry
@@ -18,6 +21,8 @@
 #include <string.h>
 
 #include "iiif.h"
+#include "output_cache.h"
+#include "render_call.h"
 #include "imageio/imageio.h"
 #include "imageio/output_format.h"
 #include "render/region.h"
@@ -150,15 +155,14 @@ static const char *quality_name(enum gv_quality q)
     }
 }
 
-/* The canonical URI of a parsed request (spec 4.7) and the compliance
- * profile, as a Link header value, into buf. */
-static void links(struct req *r, const struct image *img,
-                  const struct iiif_request *q, char *buf, size_t size)
+/* The canonical path of a parsed request after the identifier (spec 4.7):
+ * "{region}/{size}/{rotation}/{quality}.{format}", into buf. */
+static void canonical_path(const struct image *img, const struct iiif_request *q,
+                           char *buf, size_t size)
 {
     const struct gv_render_req *p = &q->render;
     const struct gv_geometry *g = &img->info->geometry;
-    char id[600], region[64], sz[48];
-    service_id(r, img, id, sizeof id);
+    char region[64], sz[48];
     if (p->x == 0 && p->y == 0 && p->w == g->width && p->h == g->height)
         snprintf(region, sizeof region, "full");
     else
@@ -169,69 +173,100 @@ static void links(struct req *r, const struct image *img,
         snprintf(sz, sizeof sz, "%s%u,%u",
                  p->out_w > p->w || p->out_h > p->h ? "^" : "", p->out_w,
                  p->out_h);
-    snprintf(buf, size, "<%s/%s/%s/%s%d/%s.%s>;rel=\"canonical\", "
-             IIIF_PROFILE_LINK, id, region, sz, p->mirror ? "!" : "",
+    snprintf(buf, size, "%s/%s/%s%d/%s.%s", region, sz, p->mirror ? "!" : "",
              p->rotation, quality_name(p->quality), q->format);
 }
 
-/* Parse the request for img, render and encode it: *out (malloc'ed) of
- * *len bytes.  0, or -1 with *err. */
-static int render(struct req *r, struct image *img, struct iiif_request *q,
-                  uint8_t **out, size_t *len, struct gv_error *err)
+/* A request being rendered (render_call.h's arg). */
+struct iiif_call {
+    struct iiif_request q;
+    int jpeg_quality;
+    char link[1024];   /* canonical URI and profile, as a Link header */
+};
+
+/* On a render thread: render and encode c's request of img. */
+static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
+                  struct gv_error *err)
 {
-    const struct gv_geometry *g = &img->info->geometry;
-    struct iiif_limits lim;
-    limits_of(r->srv->cfg, &lim);
-    if (iiif_parse(r->param[1], r->param[2], r->param[3], r->param[4],
-                   g->width, g->height, &lim, q, err) < 0)
-        return -1;
-    /* gv_render decodes at most 2x oversampled, so a request within
-     * maxArea decodes at most about 4 x maxArea pixels (plus a pixel of
-     * rounding per edge); /region's max_region_pixels does not apply, or
-     * info.json would advertise sizes the server refuses. */
-    q->render.max_decode_pixels = 4 * (r->srv->cfg->max_output_pixels +
-                                       2 * r->srv->cfg->max_output_side + 1);
+    struct iiif_call *c = arg;
     struct gv_decoder *d = image_decoder_get(img);
     if (!d)
         return gv_fail(err, GV_ENOMEM, "iiif: out of memory");
     uint8_t *pix = NULL;
     uint32_t w, h;
-    int c;
-    int rc = gv_render(d, &q->render, &pix, &w, &h, &c, err) < 0 ||
-                     gv_image_encode(q->format, w, h, c, pix,
-                                     (int)r->srv->cfg->jpeg_quality, out, len,
-                                     err) < 0
+    int ch;
+    int rc = gv_render(d, &c->q.render, &pix, &w, &h, &ch, err) < 0 ||
+                     gv_image_encode(c->q.format, w, h, ch, pix, c->jpeg_quality,
+                                     out, len, err) < 0
                  ? -1 : 0;
     image_decoder_put(img, d);
     free(pix);
     return rc;
 }
 
+static void add_headers(void *arg, struct req *r, struct image *img,
+                        struct MHD_Response *resp)
+{
+    (void)r;
+    (void)img;
+    struct iiif_call *c = arg;
+    MHD_add_response_header(resp, "Link", c->link);
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
+                            "public, max-age=86400");
+}
+
+/* Parse r's request for img into c.  0, or -1 with *err. */
+static int parse(struct req *r, const struct image *img, struct iiif_call *c,
+                 struct gv_error *err)
+{
+    const struct gv_geometry *g = &img->info->geometry;
+    struct iiif_limits lim;
+    limits_of(r->srv->cfg, &lim);
+    if (iiif_parse(r->param[1], r->param[2], r->param[3], r->param[4],
+                   g->width, g->height, &lim, &c->q, err) < 0)
+        return -1;
+    /* gv_render decodes at most 2x oversampled, so a request within
+     * maxArea decodes at most about 4 x maxArea pixels (plus a pixel of
+     * rounding per edge); /region's max_region_pixels does not apply, or
+     * info.json would advertise sizes the server refuses. */
+    c->q.render.max_decode_pixels = 4 * (r->srv->cfg->max_output_pixels +
+                                         2 * r->srv->cfg->max_output_side + 1);
+    c->jpeg_quality = (int)r->srv->cfg->jpeg_quality;
+    return 0;
+}
+
 enum MHD_Result route_iiif_image(struct req *r)
 {
+    if (render_call_resumed(r))
+        return render_call_finish(r);
     enum MHD_Result ret;
     struct image *img = http_image(r, &ret);
     if (!img)
         return ret;
-    struct iiif_request q;
     struct gv_error err;
-    uint8_t *out;
-    size_t len;
-    if (render(r, img, &q, &out, &len, &err) < 0) {
-        http_page_error(img, "iiif", "", &err);
-        ret = http_send_error(r, &err);
-    } else {
-        struct MHD_Response *resp =
-            http_response_owned(out, len, gv_output_format_image(q.format)->mime);
-        if (resp) {
-            char link[1024];
-            links(r, img, &q, link, sizeof link);
-            MHD_add_response_header(resp, "Link", link);
-            MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
-                                    "public, max-age=86400");
-        }
-        ret = http_send(r, 200, resp, len);
+    struct iiif_call *c = calloc(1, sizeof *c);
+    if (!c) {
+        image_put(img);
+        return http_send_errorf(r, GV_ENOMEM, "iiif: out of memory");
     }
-    image_put(img);
-    return ret;
+    if (parse(r, img, c, &err) < 0) {
+        free(c);
+        image_put(img);
+        return http_send_error(r, &err);
+    }
+    char id[600], path[200], canon[900], key[920], etag[48];
+    service_id(r, img, id, sizeof id);
+    canonical_path(img, &c->q, path, sizeof path);
+    snprintf(c->link, sizeof c->link, "<%s/%s>;rel=\"canonical\", "
+             IIIF_PROFILE_LINK, id, path);
+    /* The ETag and the cache key name the image, not the host it was
+     * asked through: the bytes do not depend on it. */
+    snprintf(canon, sizeof canon, "iiif/%s/%s q%d", img->id, path, c->jpeg_quality);
+    snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);
+    output_cache_etag(img->tag, canon, etag, sizeof etag);
+    struct render_spec spec = {
+        .module = "iiif", .key = key, .etag = etag,
+        .mime = gv_output_format_image(c->q.format)->mime,
+        .render = render, .headers = add_headers, .arg = c};
+    return render_call_serve(r, img, &spec);
 }

@@ -6,7 +6,9 @@
  * levels above the root are the root's mips), decoded by the CPU reference
  * decoder exactly as `gigaview export --level --region` does, and encoded
  * as png (default), jpeg, webp or tiff.  w*h is capped by
- * max_region_pixels (413 beyond).
+ * max_region_pixels (413 beyond).  The query is checked here; the render
+ * runs on a render thread, and the answer is kept in the output cache
+ * with a strong ETag (render_call.h).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,6 +16,8 @@
 
 #include "imageio/imageio.h"
 #include "imageio/output_format.h"
+#include "output_cache.h"
+#include "render_call.h"
 #include "routes.h"
 #include "store/geometry.h"
 
@@ -57,10 +61,9 @@ static int parse_query(struct req *r, struct region_query *q,
     return 0;
 }
 
-/* Decode q's rectangle of img and encode it: *out (malloc'ed) of *len
- * bytes.  0, or -1 with *err. */
-static int render(struct image *img, const struct region_query *q,
-                  uint8_t **out, size_t *len, struct gv_error *err)
+/* Check q against img's level sizes.  0, or -1 with *err. */
+static int place(const struct image *img, const struct region_query *q,
+                 struct gv_error *err)
 {
     const struct gv_geometry *g = &img->info->geometry;
     uint32_t lw, lh;
@@ -70,6 +73,16 @@ static int render(struct image *img, const struct region_query *q,
     if ((uint64_t)q->x + q->w > lw || (uint64_t)q->y + q->h > lh)
         return gv_fail(err, GV_EINVAL, "region: %u,%u,%u,%u outside level %u "
                        "(%ux%u)", q->x, q->y, q->w, q->h, q->level, lw, lh);
+    return 0;
+}
+
+/* On a render thread: decode q's rectangle of img and encode it: *out
+ * (malloc'ed) of *len bytes.  0, or -1 with *err. */
+static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
+                  struct gv_error *err)
+{
+    const struct region_query *q = arg;
+    const struct gv_geometry *g = &img->info->geometry;
     uint8_t *pix = malloc((size_t)q->w * q->h * (size_t)g->channels);
     struct gv_decoder *d = image_decoder_get(img);
     int rc = -1;
@@ -85,8 +98,20 @@ static int render(struct image *img, const struct region_query *q,
     return rc;
 }
 
+static void add_headers(void *arg, struct req *r, struct image *img,
+                        struct MHD_Response *resp)
+{
+    (void)arg;
+    (void)r;
+    (void)img;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
+                            "public, max-age=86400");
+}
+
 enum MHD_Result route_region(struct req *r)
 {
+    if (render_call_resumed(r))
+        return render_call_finish(r);
     enum MHD_Result ret;
     struct gv_error err;
     struct region_query q;
@@ -95,18 +120,22 @@ enum MHD_Result route_region(struct req *r)
     struct image *img = http_image(r, &ret);
     if (!img)
         return ret;
-    uint8_t *out;
-    size_t len;
-    if (render(img, &q, &out, &len, &err) < 0) {
-        http_page_error(img, "region", "", &err);
-        ret = http_send_error(r, &err);
-    } else {
-        struct MHD_Response *resp = http_response_owned(out, len, q.format->mime);
-        if (resp)
-            MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
-                                    "public, max-age=86400");
-        ret = http_send(r, 200, resp, len);
+    struct region_query *arg = malloc(sizeof *arg);
+    if (!arg || place(img, &q, &err) < 0) {
+        free(arg);
+        image_put(img);
+        if (!arg)
+            return http_send_errorf(r, GV_ENOMEM, "region: out of memory");
+        return http_send_error(r, &err);
     }
-    image_put(img);
-    return ret;
+    *arg = q;
+    char canon[400], key[420], etag[48];
+    snprintf(canon, sizeof canon, "region/%s/%u/%u,%u,%u,%u.%s q%u", img->id,
+             q.level, q.x, q.y, q.w, q.h, q.format->name, q.quality);
+    snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);
+    output_cache_etag(img->tag, canon, etag, sizeof etag);
+    struct render_spec spec = {
+        .module = "region", .key = key, .etag = etag, .mime = q.format->mime,
+        .render = render, .headers = add_headers, .arg = arg};
+    return render_call_serve(r, img, &spec);
 }

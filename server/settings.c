@@ -47,7 +47,7 @@ static const struct settings_key keys[] = {
     {"cache_bytes", T_SIZE, F(cache_bytes), "256M", 0, 1e15,
      "page cache bound in bytes (K, M, G suffixes); 0 disables caching"},
     {"decoder_cache_bytes", T_SIZE, F(decoder_cache_bytes), "128M", 0, 1e12,
-     "decoded-tile cache of each CPU decoder (one per thread and store)"},
+     "the one decoded-tile cache, shared by every thread and store"},
     {"max_region_pixels", T_SIZE, F(max_region_pixels), "64M", 1, 1e15,
      "largest region decoded for one request, in pixels (413 beyond)"},
     {"max_output_pixels", T_SIZE, F(max_output_pixels), "16M", 1, 1e15,
@@ -110,6 +110,13 @@ static const struct settings_key keys[] = {
      "largest GLSL body of one module in bytes"},
     {"filter_max_padding", T_UINT, F(filter_max_padding), "512", 0, 16384,
      "largest region padding per side in pixels (sum of supports)"},
+    /* IIIF and region rendering (render_pool.h, output_cache.h) */
+    {"render_threads", T_UINT, F(render_threads), "4", 1, 256,
+     "threads that render IIIF images and regions (off the HTTP threads)"},
+    {"render_queue", T_UINT, F(render_queue), "64", 1, 65536,
+     "renders waiting for a render thread; more get 503 with Retry-After"},
+    {"output_cache_bytes", T_SIZE, F(output_cache_bytes), "64M", 0, 1e12,
+     "encoded IIIF images and regions kept by canonical request; 0 disables"},
 };
 
 #define NKEYS (sizeof keys / sizeof keys[0])

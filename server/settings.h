@@ -28,7 +28,7 @@ struct settings {
     char store_dir[SETTINGS_PATH];
     uint64_t threads;              /* libmicrohttpd thread pool size */
     uint64_t cache_bytes;          /* page cache bound */
-    uint64_t decoder_cache_bytes;  /* decoded-tile cache per decoder */
+    uint64_t decoder_cache_bytes;  /* the shared decoded-tile cache */
     uint64_t max_region_pixels;    /* decoded pixels per region request */
     uint64_t max_output_pixels;    /* IIIF maxArea */
     uint64_t max_output_side;      /* IIIF maxWidth = maxHeight */
@@ -60,6 +60,10 @@ struct settings {
     uint64_t filter_max_modules;
     uint64_t filter_max_glsl_bytes;
     uint64_t filter_max_padding;
+    /* IIIF and region rendering */
+    uint64_t render_threads;       /* render pool threads */
+    uint64_t render_queue;         /* renders waiting; 503 beyond */
+    uint64_t output_cache_bytes;   /* encoded-output cache bound */
 };
 
 /* Fill *c with every default.  Cannot fail. */

@@ -29,6 +29,10 @@
  * gv_decode_region at level 0, and a render at exactly level k's size of
  * a level-aligned region identical to gv_decode_region at level k.
  *
+ * When both axes map each output pixel onto one decoded pixel (a tile at
+ * its level's own size), the decoded rectangle is the scaled image as it
+ * is, and resampling is skipped.
+ *
  * Then quality (gray = (299 R + 587 G + 114 B + 500) / 1000, bitonal =
  * gray >= 128 ? 255 : 0, colour of a gray store replicates), the mirror
  * and the clockwise rotation, all in one pass over the scaled image.
@@ -163,6 +167,18 @@ static int axis_is_copy(const struct axis *a)
     for (uint32_t i = 0; i < a->n; i++)
         if (a->count[i] != 1 || a->w[(size_t)i * a->taps] != WONE ||
             a->first[i] != a->first[0] + i)
+            return 0;
+    return 1;
+}
+
+/* 1 if axis a maps output pixel i onto source pixel i alone, for every i
+ * of a source of `len` pixels: resampling along it changes nothing. */
+static int axis_identity(const struct axis *a, uint32_t len)
+{
+    if (a->n != len)
+        return 0;
+    for (uint32_t i = 0; i < a->n; i++)
+        if (a->count[i] != 1 || a->first[i] != i)
             return 0;
     return 1;
 }
@@ -390,8 +406,13 @@ int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
     if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, dec, err) != 0)
         goto out;
 
-    scaled = malloc((size_t)out_px * sc);
-    if (!scaled || resample(dec, f.w, sc, &ax, &ay, scaled) != 0) {
+    if (axis_identity(&ax, f.w) && axis_identity(&ay, f.h)) {
+        /* Level-aligned at the level's own size (an IIIF tile): each output
+         * pixel is one decoded pixel, which resample would copy unchanged. */
+        scaled = dec;
+        dec = NULL;
+    } else if (!(scaled = malloc((size_t)out_px * sc)) ||
+               resample(dec, f.w, sc, &ax, &ay, scaled) != 0) {
         gv_fail(err, GV_ENOMEM, "render: out of memory scaling to %ux%u",
                 req->out_w, req->out_h);
         goto out;

@@ -1,10 +1,12 @@
 /*
- * store_decoder.c - recursive tile decoding with an LRU cache (see store_decoder.h).
+ * store_decoder.c - recursive tile decoding over a tile cache (see
+ * store_decoder.h).
  *
- * The cache is a small array scanned linearly: it holds decoded tiles of a
- * few hundred KiB each, so even a 1 GiB budget is only ~1300 entries and a
- * scan costs far less than one tile decode.  A page read for one tile is
- * kept while its neighbours are decoded.
+ * A tile is taken from the cache or claimed there (tile_cache.h): the
+ * claimer pins the parent (decoding it the same way first), reads the
+ * page, decodes into the claimed entry and publishes it, so other threads
+ * that want the same tile wait for this decode instead of repeating it.
+ * A page read for one tile is kept while its neighbours are decoded.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -12,29 +14,23 @@
 #include "render/store_decoder.h"
 #include "codec/tile.h"
 
-#define MIN_ENTRIES 8   /* enough for a tile and its whole parent chain */
-
-struct cache_entry {
-    int level;
-    uint32_t tx, ty;
-    uint64_t stamp;      /* 0: empty */
-    uint8_t *pixels;
-};
-
 struct gv_decoder {
     const struct gv_store *store;
     const struct gv_store_info *info;
     int channels;
-    size_t nentries;
-    struct cache_entry *entries;
-    uint64_t clock;
+    struct gv_tile_cache *cache;
+    int owns_cache;
+    uint64_t store_key;
+    struct gv_tile_entry *held;   /* the tile gv_decoder_tile returned last */
     uint8_t *page;       /* last page read */
     size_t page_len;
     int page_level;
     uint32_t page_px, page_py;
 };
 
-struct gv_decoder *gv_decoder_new(const struct gv_store *s, size_t cache_bytes)
+struct gv_decoder *gv_decoder_new_shared(const struct gv_store *s,
+                                         struct gv_tile_cache *cache,
+                                         uint64_t store_key)
 {
     struct gv_decoder *d = calloc(1, sizeof *d);
     if (!d)
@@ -42,16 +38,21 @@ struct gv_decoder *gv_decoder_new(const struct gv_store *s, size_t cache_bytes)
     d->store = s;
     d->info = gv_store_info(s);
     d->channels = d->info->geometry.channels;
-    size_t n = cache_bytes / gv_tile_bytes(d->channels);
-    if (n < MIN_ENTRIES)
-        n = MIN_ENTRIES;
-    d->nentries = n;
-    d->entries = calloc(n, sizeof *d->entries);
-    if (!d->entries) {
-        free(d);
+    d->cache = cache;
+    d->store_key = store_key;
+    d->page_level = -1;
+    return d;
+}
+
+struct gv_decoder *gv_decoder_new(const struct gv_store *s, size_t cache_bytes)
+{
+    struct gv_tile_cache *c = gv_tile_cache_new(cache_bytes);
+    struct gv_decoder *d = c ? gv_decoder_new_shared(s, c, 0) : NULL;
+    if (!d) {
+        gv_tile_cache_free(c);
         return NULL;
     }
-    d->page_level = -1;
+    d->owns_cache = 1;
     return d;
 }
 
@@ -59,11 +60,17 @@ void gv_decoder_free(struct gv_decoder *d)
 {
     if (!d)
         return;
-    for (size_t i = 0; i < d->nentries; i++)
-        free(d->entries[i].pixels);
-    free(d->entries);
+    gv_tile_cache_release(d->cache, d->held);
+    if (d->owns_cache)
+        gv_tile_cache_free(d->cache);
     free(d->page);
     free(d);
+}
+
+void gv_decoder_idle(struct gv_decoder *d)
+{
+    gv_tile_cache_release(d->cache, d->held);
+    d->held = NULL;
 }
 
 const struct gv_store *gv_decoder_store(const struct gv_decoder *d)
@@ -84,37 +91,6 @@ void gv_root_tile(const uint8_t *root, uint32_t w, uint32_t h, int channels,
     }
 }
 
-static struct cache_entry *lookup(struct gv_decoder *d, int level, uint32_t tx,
-                                  uint32_t ty)
-{
-    for (size_t i = 0; i < d->nentries; i++) {
-        struct cache_entry *e = &d->entries[i];
-        if (e->stamp && e->level == level && e->tx == tx && e->ty == ty) {
-            e->stamp = ++d->clock;
-            return e;
-        }
-    }
-    return NULL;
-}
-
-/* A free or least recently used slot, excluding `keep` (the parent being
- * decoded from). */
-static struct cache_entry *victim(struct gv_decoder *d,
-                                  const struct cache_entry *keep)
-{
-    struct cache_entry *best = NULL;
-    for (size_t i = 0; i < d->nentries; i++) {
-        struct cache_entry *e = &d->entries[i];
-        if (e == keep)
-            continue;
-        if (!e->stamp)
-            return e;
-        if (!best || e->stamp < best->stamp)
-            best = e;
-    }
-    return best;
-}
-
 static int load_page(struct gv_decoder *d, int level, uint32_t px, uint32_t py,
                      struct gv_error *err)
 {
@@ -131,67 +107,76 @@ static int load_page(struct gv_decoder *d, int level, uint32_t px, uint32_t py,
     return 0;
 }
 
-static struct cache_entry *decode_entry(struct gv_decoder *d, int level,
+static struct gv_tile_entry *tile_entry(struct gv_decoder *d, int level,
+                                        uint32_t tx, uint32_t ty,
+                                        struct gv_error *err);
+
+/* Fill the claimed entry `out` with tile (tx,ty) of `level` (a tiled level
+ * below the root): decode it from its parent.  0 or -1. */
+static int decode_into(struct gv_decoder *d, int level, uint32_t tx,
+                       uint32_t ty, uint8_t *out, struct gv_error *err)
+{
+    struct gv_tile_entry *parent = tile_entry(d, level + 1, tx / 2, ty / 2, err);
+    if (!parent)
+        return -1;
+    const uint8_t *buf;
+    size_t len;
+    int rc = -1;
+    if (load_page(d, level, tx / GV_PAGE_TILES, ty / GV_PAGE_TILES, err) == 0 &&
+        gv_page_tile(d->page, d->page_len, d->channels, (int)(tx % GV_PAGE_TILES),
+                     (int)(ty % GV_PAGE_TILES), &buf, &len, err) == 0 &&
+        gv_tile_decode(buf, len, d->channels, gv_tile_entry_pixels(parent),
+                       (int)(tx & 1), (int)(ty & 1), out, err) == 0)
+        rc = 0;
+    gv_tile_cache_release(d->cache, parent);
+    return rc;
+}
+
+/* Tile (tx,ty) of `level`, pinned in the cache (release it), or NULL. */
+static struct gv_tile_entry *tile_entry(struct gv_decoder *d, int level,
                                         uint32_t tx, uint32_t ty,
                                         struct gv_error *err)
 {
     const struct gv_geometry *g = &d->info->geometry;
-    struct cache_entry *e = lookup(d, level, tx, ty);
-    if (e)
-        return e;
     if (level == g->root) {
         if (tx || ty) {
             gv_fail(err, GV_ENOTFOUND, "decode: no root tile %u,%u", tx, ty);
             return NULL;
         }
-        e = victim(d, NULL);
-        if (!e->pixels && !(e->pixels = malloc(gv_tile_bytes(d->channels)))) {
-            gv_fail(err, GV_ENOMEM, "decode: out of memory");
-            return NULL;
-        }
+    } else if (level < 0 || level > g->root || tx >= g->level[level].tiles_x ||
+               ty >= g->level[level].tiles_y) {
+        gv_fail(err, GV_ENOTFOUND, "decode: no tile %d/%u/%u", level, tx, ty);
+        return NULL;
+    }
+    struct gv_tile_key k = {d->store_key, level, tx, ty};
+    struct gv_tile_entry *e;
+    int rc = gv_tile_cache_acquire(d->cache, &k, gv_tile_bytes(d->channels), &e, err);
+    if (rc != 0)
+        return rc > 0 ? e : NULL;
+    uint8_t *px = gv_tile_entry_pixels(e);
+    if (level == g->root) {
         uint32_t w, h;
         const uint8_t *root = gv_store_root(d->store, 0, &w, &h);
-        gv_root_tile(root, w, h, d->channels, e->pixels);
-    } else {
-        if (level < 0 || level > g->root || tx >= g->level[level].tiles_x ||
-            ty >= g->level[level].tiles_y) {
-            gv_fail(err, GV_ENOTFOUND, "decode: no tile %d/%u/%u", level, tx, ty);
-            return NULL;
-        }
-        struct cache_entry *parent = decode_entry(d, level + 1, tx / 2, ty / 2, err);
-        if (!parent)
-            return NULL;
-        if (load_page(d, level, tx / GV_PAGE_TILES, ty / GV_PAGE_TILES, err) < 0)
-            return NULL;
-        const uint8_t *buf;
-        size_t len;
-        if (gv_page_tile(d->page, d->page_len, d->channels, (int)(tx % GV_PAGE_TILES),
-                         (int)(ty % GV_PAGE_TILES), &buf, &len, err) < 0)
-            return NULL;
-        e = victim(d, parent);
-        if (!e->pixels && !(e->pixels = malloc(gv_tile_bytes(d->channels)))) {
-            gv_fail(err, GV_ENOMEM, "decode: out of memory");
-            return NULL;
-        }
-        e->stamp = 0;
-        if (gv_tile_decode(buf, len, d->channels, parent->pixels, (int)(tx & 1),
-                           (int)(ty & 1), e->pixels, err) < 0)
-            return NULL;
+        gv_root_tile(root, w, h, d->channels, px);
+    } else if (decode_into(d, level, tx, ty, px, err) < 0) {
+        gv_tile_cache_fail(d->cache, e, err);
+        return NULL;
     }
-    e->level = level;
-    e->tx = tx;
-    e->ty = ty;
-    e->stamp = ++d->clock;
+    gv_tile_cache_publish(d->cache, e);
     return e;
 }
 
 int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
                     const uint8_t **pixels, struct gv_error *err)
 {
-    struct cache_entry *e = decode_entry(d, level, tx, ty, err);
+    /* The new tile is pinned before the old one is let go, so asking for
+     * the same tile again never decodes it again. */
+    struct gv_tile_entry *e = tile_entry(d, level, tx, ty, err);
+    gv_tile_cache_release(d->cache, d->held);
+    d->held = e;
     if (!e)
         return -1;
-    *pixels = e->pixels;
+    *pixels = gv_tile_entry_pixels(e);
     return 0;
 }
 

@@ -2,9 +2,13 @@
  * store_decoder.h - the CPU reference decoder over a store: tiles at any level,
  * with their ancestors pulled recursively (section 7.5), and regions.
  *
- * Decoded tiles are kept in an LRU cache bounded in bytes, so decoding the
- * tiles of a region in order touches each ancestor once.  A decoder is not
- * thread-safe: use one per thread (they may share the store).
+ * Decoded tiles live in a gv_tile_cache (render/tile_cache.h), bounded in
+ * bytes, so decoding the tiles of a region in order touches each ancestor
+ * once.  The cache is either the decoder's own (gv_decoder_new) or one
+ * shared by many decoders over many stores (gv_decoder_new_shared: a
+ * server's threads then decode each tile once between them).  A decoder
+ * is not thread-safe: use one per thread (they may share the store and
+ * the cache).
  */
 #ifndef GV_STORE_DECODER_H
 #define GV_STORE_DECODER_H
@@ -13,17 +17,30 @@
 #include <stdint.h>
 
 #include "base/error.h"
+#include "render/tile_cache.h"
 #include "store/store_read.h"
 
 struct gv_decoder;
 
-/* New decoder over s (borrowed; it must outlive the decoder), caching at
- * most cache_bytes of decoded tiles (but always room for 8, a tile and
- * its chain of ancestors).  Returns NULL on allocation failure. */
+/* New decoder over s (borrowed; it must outlive the decoder) with a
+ * private tile cache of at most cache_bytes (beyond the tiles in use: the
+ * one returned last and, while decoding, its chain of ancestors).
+ * Returns NULL on allocation failure. */
 struct gv_decoder *gv_decoder_new(const struct gv_store *s, size_t cache_bytes);
+
+/* New decoder over s keeping its tiles in `cache` (borrowed, shared, it
+ * must outlive the decoder) under the store number `store_key`, unique to
+ * s among the stores that use the cache.  NULL on allocation failure. */
+struct gv_decoder *gv_decoder_new_shared(const struct gv_store *s,
+                                         struct gv_tile_cache *cache,
+                                         uint64_t store_key);
 
 /* Free.  NULL does nothing. */
 void gv_decoder_free(struct gv_decoder *d);
+
+/* Unpin the tile gv_decoder_tile returned last (its pixels are no longer
+ * valid), so that an idle decoder holds nothing the cache could evict. */
+void gv_decoder_idle(struct gv_decoder *d);
 
 /* The store d reads (as given to gv_decoder_new). */
 const struct gv_store *gv_decoder_store(const struct gv_decoder *d);
@@ -31,8 +48,8 @@ const struct gv_store *gv_decoder_store(const struct gv_decoder *d);
 /*
  * Decode tile (tx,ty) of `level` (0 <= level <= root; level root is the
  * single tile (0,0), the root image clamp-padded to 513x513).  *pixels
- * points at 513x513xC bytes owned by the decoder, valid until the next
- * call.  Returns 0, or -1 with *err filled (GV_ENOTFOUND for a tile
+ * points at 513x513xC bytes owned by the cache, pinned by the decoder
+ * until its next call (or gv_decoder_free).  Returns 0, or -1 with *err filled (GV_ENOTFOUND for a tile
  * outside the level; a corrupt page or tile, or I/O, as the store reports
  * it).
  */

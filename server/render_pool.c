@@ -1,0 +1,196 @@
+/*
+ * render_pool.c - a fixed set of threads over one FIFO of render jobs
+ * (see render_pool.h).  One mutex guards the queue and the counters; the
+ * wait histogram uses the request histogram's bounds (metrics.h).
+ */
+#include <pthread.h>
+#include <stdlib.h>
+
+#include "metrics.h"
+#include "render_pool.h"
+
+struct render_pool {
+    pthread_mutex_t lock;
+    pthread_cond_t work;
+    struct render_job *head, *tail;
+    int max_queue;
+    int reserved;          /* places held: reserved or queued, not running */
+    int queued;
+    int running;
+    int stopping;
+    int nthreads;
+    pthread_t *threads;
+    uint64_t jobs, rejected;
+    uint64_t wait_bucket[METRICS_BUCKETS]; /* non-cumulative */
+    double wait_sum;
+};
+
+static double since(const struct timespec *t0)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)(t.tv_sec - t0->tv_sec) + (double)(t.tv_nsec - t0->tv_nsec) / 1e9;
+}
+
+/* Account a job that waited `sec` seconds.  Caller holds the lock. */
+static void record_wait(struct render_pool *p, double sec)
+{
+    p->jobs++;
+    p->wait_sum += sec;
+    for (int i = 0; i < METRICS_BUCKETS; i++)
+        if (sec <= metrics_bucket_le[i]) {
+            p->wait_bucket[i]++;
+            break;
+        }
+}
+
+/* The next job, or NULL once stopping with an empty queue. */
+static struct render_job *take(struct render_pool *p)
+{
+    pthread_mutex_lock(&p->lock);
+    while (!p->head && !p->stopping)
+        pthread_cond_wait(&p->work, &p->lock);
+    struct render_job *j = p->head;
+    if (j) {
+        p->head = j->next;
+        if (!p->head)
+            p->tail = NULL;
+        p->queued--;
+        p->reserved--;
+        p->running++;
+        record_wait(p, since(&j->queued));
+    }
+    pthread_mutex_unlock(&p->lock);
+    return j;
+}
+
+static void *worker(void *arg)
+{
+    struct render_pool *p = arg;
+    struct render_job *j;
+    while ((j = take(p)) != NULL) {
+        j->run(j);
+        pthread_mutex_lock(&p->lock);
+        p->running--;
+        pthread_mutex_unlock(&p->lock);
+    }
+    return NULL;
+}
+
+struct render_pool *render_pool_new(int threads, int max_queue)
+{
+    struct render_pool *p = calloc(1, sizeof *p);
+    if (!p)
+        return NULL;
+    p->threads = calloc((size_t)threads, sizeof *p->threads);
+    if (!p->threads) {
+        free(p);
+        return NULL;
+    }
+    pthread_mutex_init(&p->lock, NULL);
+    pthread_cond_init(&p->work, NULL);
+    p->max_queue = max_queue;
+    for (int i = 0; i < threads; i++) {
+        if (pthread_create(&p->threads[i], NULL, worker, p) != 0)
+            break;
+        p->nthreads++;
+    }
+    if (p->nthreads == 0) {
+        render_pool_free(p);
+        return NULL;
+    }
+    return p;
+}
+
+int render_pool_reserve(struct render_pool *p)
+{
+    pthread_mutex_lock(&p->lock);
+    int ok = !p->stopping && p->reserved < p->max_queue;
+    if (ok)
+        p->reserved++;
+    else
+        p->rejected++;
+    pthread_mutex_unlock(&p->lock);
+    return ok ? 0 : -1;
+}
+
+void render_pool_unreserve(struct render_pool *p)
+{
+    pthread_mutex_lock(&p->lock);
+    p->reserved--;
+    pthread_mutex_unlock(&p->lock);
+}
+
+void render_pool_submit(struct render_pool *p, struct render_job *j)
+{
+    clock_gettime(CLOCK_MONOTONIC, &j->queued);
+    j->next = NULL;
+    pthread_mutex_lock(&p->lock);
+    if (p->tail)
+        p->tail->next = j;
+    else
+        p->head = j;
+    p->tail = j;
+    p->queued++;
+    pthread_cond_signal(&p->work);
+    pthread_mutex_unlock(&p->lock);
+}
+
+void render_pool_stop(struct render_pool *p)
+{
+    if (!p)
+        return;
+    pthread_mutex_lock(&p->lock);
+    p->stopping = 1;
+    pthread_cond_broadcast(&p->work);
+    pthread_mutex_unlock(&p->lock);
+    for (int i = 0; i < p->nthreads; i++)
+        pthread_join(p->threads[i], NULL);
+    p->nthreads = 0;
+}
+
+void render_pool_free(struct render_pool *p)
+{
+    if (!p)
+        return;
+    render_pool_stop(p);
+    pthread_mutex_destroy(&p->lock);
+    pthread_cond_destroy(&p->work);
+    free(p->threads);
+    free(p);
+}
+
+void render_pool_metrics(struct render_pool *p, struct prom *out)
+{
+    if (!p)
+        return;
+    pthread_mutex_lock(&p->lock);
+    int queued = p->queued, running = p->running;
+    uint64_t jobs = p->jobs, rejected = p->rejected;
+    uint64_t bucket[METRICS_BUCKETS];
+    for (int i = 0; i < METRICS_BUCKETS; i++)
+        bucket[i] = p->wait_bucket[i];
+    double sum = p->wait_sum;
+    pthread_mutex_unlock(&p->lock);
+    prom_metric(out, "gigaview_render_queue_depth", "gauge",
+                "IIIF and region renders waiting for a render thread.", "%d",
+                queued);
+    prom_metric(out, "gigaview_render_running", "gauge",
+                "IIIF and region renders running.", "%d", running);
+    prom_metric(out, "gigaview_render_rejected_total", "counter",
+                "Renders refused with 503 because render_queue were waiting.",
+                "%llu", (unsigned long long)rejected);
+    const char *name = "gigaview_render_queue_wait_seconds";
+    prom_family(out, name, "histogram",
+                "Time a render waited in the queue before a thread took it.");
+    uint64_t cum = 0;
+    for (int i = 0; i < METRICS_BUCKETS; i++) {
+        cum += bucket[i];
+        prom_printf(out, "%s_bucket{le=\"%g\"} %llu\n", name,
+                    metrics_bucket_le[i], (unsigned long long)cum);
+    }
+    prom_printf(out, "%s_bucket{le=\"+Inf\"} %llu\n", name,
+                (unsigned long long)jobs);
+    prom_printf(out, "%s_sum %.6f\n%s_count %llu\n", name, sum, name,
+                (unsigned long long)jobs);
+}
