@@ -53,6 +53,7 @@ import http.server, sys, time, urllib.request, urllib.error
 delay, upstream, portfile = float(sys.argv[1]) / 1000, sys.argv[2], sys.argv[3]
 class H(http.server.BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
+    disable_nagle_algorithm = True     # else 40 ms delayed-ACK stalls
     def log_message(self, *a): pass
     def do_POST(self):
         self.do_GET(self.rfile.read(int(self.headers.get("Content-Length", 0))))
@@ -68,8 +69,8 @@ class H(http.server.BaseHTTPRequestHandler):
         for k in ("Content-Type", "ETag", "Cache-Control"):
             if h.get(k): self.send_header(k, h.get(k))
         self.send_header("Content-Length", str(len(body)))
-        self.end_headers()
-        self.wfile.write(body)
+        self._headers_buffer.append(b"\r\n" + body)  # end_headers, and the
+        self.flush_headers()                          # body in the same write
 s = http.server.ThreadingHTTPServer(("127.0.0.1", 0), H)
 s.daemon_threads = True
 open(portfile, "w").write(str(s.server_address[1]))
