@@ -94,10 +94,13 @@ elif [ ! -f "$unit" ]; then
 else
     mkdir "$T/unit"
     sed "s|/usr/local/bin/gigaviewd|$GIGAVIEWD|g" "$unit" >"$T/unit/gigaviewd.service"
+    # The service requires its socket unit: verify the pair.
+    cp "$srcroot/conf/gigaviewd.socket" "$T/unit/"
     rc=0
-    systemd-analyze verify "$T/unit/gigaviewd.service" >"$T/unit.out" 2>&1 || rc=$?
+    systemd-analyze verify "$T/unit/gigaviewd.socket" "$T/unit/gigaviewd.service" \
+        >"$T/unit.out" 2>&1 || rc=$?
     if [ "$rc" -eq 0 ] && [ ! -s "$T/unit.out" ]; then
-        ok "systemd-analyze verify conf/gigaviewd.service"
+        ok "systemd-analyze verify conf/gigaviewd.service (and its socket unit)"
     elif grep -qi "system has not been booted\|failed to connect to bus\|Failed to initialize manager" "$T/unit.out"; then
         skip "systemd-analyze verify conf/gigaviewd.service" "systemd cannot run here"
     else
