@@ -22,7 +22,10 @@
 //   2. every decoded tile texture, read back, equals the region endpoint
 //      over the tile's 513 x 513 pixels (inside the level), for both tile
 //      layouts: the shared decode shader and the JavaScript rANS decoder
-//      are bit-exact in the browser;
+//      are bit-exact in the browser; also after an eviction tour at a
+//      16 MiB texture budget, and for a prefetch that must make room
+//      while the parent it decodes from is the least recently used tile
+//      (checkPrefetchEviction: that parent must not be the one evicted);
 //   3. each metric rejects the reference moved by one pixel, so it cannot
 //      pass by accident;
 //   4. scripted input: a mouse drag pans by exactly its distance, "+"
