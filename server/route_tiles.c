@@ -280,7 +280,8 @@ static int batch_tile(struct req *r, const struct image *img, struct batch *b,
     /* Consecutive frame headers stay one iovec when a tile is empty and
      * they lie back to back (GVB1 frames do). */
     const struct MHD_IoVec *last = y->n ? &y->iov[y->n - 1] : NULL;
-    if (y->last_frames && (const uint8_t *)last->iov_base + last->iov_len == f) {
+    if (y->last_frames && last &&
+        (const uint8_t *)last->iov_base + last->iov_len == f) {
         y->iov[y->n - 1].iov_len += head;
         y->total += head;
     } else {
