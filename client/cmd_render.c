@@ -55,7 +55,7 @@
 struct render_args {
     const char *image, *region, *center, *size, *output, *cache_dir;
     int level;             /* -1: not given (the region form then uses 0) */
-    int no_cache, verbose;
+    int no_cache, no_batch, verbose;
     double zoom;           /* NAN: not given */
     double rotate, timeout, gpu_mib;
     uint64_t max_pixels;
@@ -92,6 +92,9 @@ static const struct opt_spec render_opts[] = {
              "or ~/.cache/gigaview)"},
     {.name = "no-cache", .kind = OPT_FLAG, .field = F(no_cache),
      .help = "do not use the tile cache"},
+    {.name = "no-batch", .kind = OPT_FLAG, .field = F(no_batch),
+     .help = "fetch each tile with a request of its own\n"
+             "(default: batches of up to 64, one request each)"},
     {.name = "gpu-cache", .kind = OPT_DOUBLE, .arg = "MIB", .field = F(gpu_mib),
      .min = 0, .max = HUGE_VAL, .flags = OPT_FINITE,
      .help = "GPU memory for decoded tiles (default 256)"},
@@ -663,6 +666,7 @@ static int session_open(struct session *s, const char *url, const struct render_
         fprintf(stderr, ME ": %s\n", err.text);
         return -1;
     }
+    gv_http_use_batches(s->http, !a->no_batch);
     if (gv_geometry_init(&s->geo, s->img.width, s->img.height, s->img.channels) < 0 ||
         s->geo.root != s->img.levels_tiled ||
         s->geo.level[s->geo.root].width != s->img.root_w ||
@@ -769,10 +773,11 @@ static void print_stats(const struct session *s)
     struct gv_http_stats hs;
     gv_http_stats(s->http, &hs);
     fprintf(stderr, "render: %zu tiles needed (ancestors included); http: %llu "
-            "requests, %llu tiles downloaded, %llu revalidated (304), %llu bytes\n",
+            "requests, %llu tiles downloaded, %llu revalidated (304), %llu bytes, "
+            "%.1f ms waited\n",
             s->nd.n, (unsigned long long)hs.requests,
             (unsigned long long)hs.downloaded, (unsigned long long)hs.revalidated,
-            (unsigned long long)hs.bytes);
+            (unsigned long long)hs.bytes, (double)hs.wait_us / 1000.0);
     if (!s->cache)
         return;
     struct gv_gpu_cache_stats gs;

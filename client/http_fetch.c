@@ -4,27 +4,42 @@
  * One curl multi handle lives as long as the struct gv_http, so its
  * connection cache keeps connections alive across calls; a batch of
  * transfers runs concurrently on up to MAX_CONNS connections.
+ *
+ * Tiles come in batch requests of up to BATCH_TILES (POST .../batch?etag=1),
+ * which run concurrently like any transfers.  Each lists in If-None-Match
+ * the ETags of its tiles found in the disk cache, and the answer's GVB2
+ * frames (batch_frames.h) carry each tile's ETag (200) or confirm a cached
+ * one (304): a warm cache costs one small request per BATCH_TILES tiles
+ * instead of one request per tile.  A batch the server refuses (a smaller
+ * batch_max_tiles: 413) is fetched tile by tile instead.
  */
 #include <ctype.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <time.h>
 
 #include <curl/curl.h>
 #include <jansson.h>
 
 #include "config.h"
+#include "batch_frames.h"
 #include "http_fetch.h"
 #include "codec/tile.h"
 
 #define MAX_CONNS 8
 #define MAX_BODY (64u << 20)
+/* Tiles per batch request: a few views' worth, far below the server's
+ * default batch_max_tiles (256), and headers of a few KiB. */
+#define BATCH_TILES 64
+#define ETAG_CAP 160
 
 struct gv_http {
     char base[1024];
     long timeout_ms;
     int verbose;
+    int batches;            /* gv_http_use_batches */
     CURLM *multi;
     struct gv_http_stats st;
 };
@@ -36,7 +51,8 @@ struct xfer {
     uint8_t *body;
     size_t len, cap;
     int too_big;
-    char etag[160];
+    char etag[ETAG_CAP];
+    int post;               /* a POST (for the log) */
     long status;
     CURLcode result;
     char errbuf[CURL_ERROR_SIZE];
@@ -74,6 +90,7 @@ struct gv_http *gv_http_new(const char *base, long timeout_ms, int verbose,
         h->base[--n] = 0;
     h->timeout_ms = timeout_ms;
     h->verbose = verbose;
+    h->batches = 1;
     curl_multi_setopt(h->multi, CURLMOPT_MAX_HOST_CONNECTIONS, (long)MAX_CONNS);
     curl_multi_setopt(h->multi, CURLMOPT_MAX_TOTAL_CONNECTIONS, (long)MAX_CONNS);
     return h;
@@ -85,6 +102,11 @@ void gv_http_free(struct gv_http *h)
         return;
     curl_multi_cleanup(h->multi);
     free(h);
+}
+
+void gv_http_use_batches(struct gv_http *h, int on)
+{
+    h->batches = on;
 }
 
 const char *gv_http_base(const struct gv_http *h)
@@ -162,14 +184,38 @@ static int xfer_init(struct gv_http *h, struct xfer *x, const char *path,
 #endif
     curl_easy_setopt(x->e, CURLOPT_PRIVATE, x);
     if (if_none_match && *if_none_match) {
-        char hdr[200];
-        snprintf(hdr, sizeof hdr, "If-None-Match: %s", if_none_match);
+        size_t cap = strlen(if_none_match) + 32;
+        char *hdr = malloc(cap);
+        if (!hdr)
+            return -1;
+        snprintf(hdr, cap, "If-None-Match: %s", if_none_match);
         x->hdrs = curl_slist_append(NULL, hdr);
+        free(hdr);
         if (!x->hdrs)
             return -1;
         curl_easy_setopt(x->e, CURLOPT_HTTPHEADER, x->hdrs);
     }
     return 0;
+}
+
+/* Make x (after xfer_init) a POST of the JSON text json (copied).  0 or
+ * -1 when memory runs out. */
+static int xfer_post_json(struct xfer *x, const char *json)
+{
+    struct curl_slist *l = curl_slist_append(x->hdrs,
+                                             "Content-Type: application/json");
+    if (!l)
+        return -1;
+    x->hdrs = l;
+    /* No "Expect: 100-continue" (curl's default past 1 KiB of body): a
+     * round trip for nothing, the body is small. */
+    if (!(l = curl_slist_append(x->hdrs, "Expect:")))
+        return -1;
+    x->hdrs = l;
+    x->post = 1;
+    curl_easy_setopt(x->e, CURLOPT_HTTPHEADER, x->hdrs);
+    curl_easy_setopt(x->e, CURLOPT_POSTFIELDSIZE, (long)strlen(json));
+    return curl_easy_setopt(x->e, CURLOPT_COPYPOSTFIELDS, json) == CURLE_OK ? 0 : -1;
 }
 
 static void xfer_done(struct xfer *x)
@@ -187,9 +233,17 @@ static void xfer_done(struct xfer *x)
  * IN_FLIGHT at a time (so that --timeout bounds each request, not its
  * wait in a queue).  Statuses and results land in each xfer. */
 #define IN_FLIGHT (2 * MAX_CONNS)
+static uint64_t now_us(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
+}
+
 static int run_all(struct gv_http *h, struct xfer *x, size_t n,
                    struct gv_error *err)
 {
+    uint64_t t0 = now_us();
     size_t next = 0, active = 0;
     CURLMcode mc = CURLM_OK;
     while (next < n || active > 0) {
@@ -215,11 +269,12 @@ static int run_all(struct gv_http *h, struct xfer *x, size_t n,
                 h->st.requests++;
                 h->st.bytes += t->len;
                 if (h->verbose) {
+                    const char *verb = t->post ? "POST" : "GET";
                     if (t->result == CURLE_OK)
-                        fprintf(stderr, "http: GET %s -> %ld (%zu bytes)\n", t->url,
-                                t->status, t->len);
+                        fprintf(stderr, "http: %s %s -> %ld (%zu bytes)\n", verb,
+                                t->url, t->status, t->len);
                     else
-                        fprintf(stderr, "http: GET %s -> failed: %s\n", t->url,
+                        fprintf(stderr, "http: %s %s -> failed: %s\n", verb, t->url,
                                 t->errbuf[0] ? t->errbuf
                                              : curl_easy_strerror(t->result));
                 }
@@ -231,6 +286,7 @@ static int run_all(struct gv_http *h, struct xfer *x, size_t n,
 out:
     for (size_t i = 0; i < next; i++)
         curl_multi_remove_handle(h->multi, x[i].e);   /* no-op when done */
+    h->st.wait_us += now_us() - t0;
     if (mc != CURLM_OK)
         return gv_fail(err, GV_EIO, "http: %s", curl_multi_strerror(mc));
     return 0;
@@ -463,9 +519,10 @@ int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
     return 0;
 }
 
-int gv_http_tiles(struct gv_http *h, const struct gv_remote_image *img,
-                  struct gv_tile_want *t, size_t n, struct gv_disk_cache *dc,
-                  struct gv_error *err)
+/* Fetch t[0..n) with one request each (If-None-Match from dc). */
+static int tiles_one_by_one(struct gv_http *h, const struct gv_remote_image *img,
+                            struct gv_tile_want *t, size_t n,
+                            struct gv_disk_cache *dc, struct gv_error *err)
 {
     if (n == 0)
         return 0;
@@ -523,5 +580,168 @@ out:
     free(x);
     free(cached);
     free(clen);
+    return rc;
+}
+
+/* The disk cache entry of a tile, if it passes gv_tilebuf_check: *data
+ * (malloc'ed) and etag, else *data NULL. */
+static void cached_tile(struct gv_disk_cache *dc, const struct gv_remote_image *img,
+                        const struct gv_tile_want *t, uint8_t **data,
+                        size_t *len, char *etag)
+{
+    char name[64];
+    snprintf(name, sizeof name, "%d-%u-%u", t->level, t->tx, t->ty);
+    etag[0] = 0;
+    if (gv_disk_cache_get(dc, name, data, len, etag, ETAG_CAP) < 0) {
+        *data = NULL;
+    } else if (gv_tilebuf_check(*data, *len, img->channels, NULL) < 0) {
+        free(*data);   /* damaged entry: fetch afresh */
+        *data = NULL;
+    }
+}
+
+/* One batch request: tiles t[0..n) (n <= BATCH_TILES) with their cache
+ * entries, and its transfer. */
+struct batch_req {
+    struct gv_tile_want *t;
+    size_t n;
+    uint8_t **cached;
+    size_t *clen;
+    char (*etag)[ETAG_CAP];
+    struct xfer *x;         /* in the array run_all runs */
+};
+
+/* Set up b's transfer: POST {"tiles": [...]} to .../batch?etag=1 with the
+ * cached ETags in If-None-Match.  0 or -1 (out of memory). */
+static int batch_init(struct gv_http *h, const struct gv_remote_image *img,
+                      struct batch_req *b)
+{
+    size_t jcap = 32 + b->n * 40, icap = 1 + b->n * (ETAG_CAP + 2), jl = 0, il = 0;
+    char *json = malloc(jcap), *inm = malloc(icap);
+    int rc = -1;
+    if (!json || !inm)
+        goto out;
+    jl += (size_t)snprintf(json + jl, jcap - jl, "{\"tiles\":[");
+    inm[0] = 0;
+    for (size_t i = 0; i < b->n; i++) {
+        jl += (size_t)snprintf(json + jl, jcap - jl, "%s[%d,%u,%u]", i ? "," : "",
+                               b->t[i].level, b->t[i].tx, b->t[i].ty);
+        if (b->cached[i] && b->etag[i][0])
+            il += (size_t)snprintf(inm + il, icap - il, "%s%s", il ? ", " : "",
+                                   b->etag[i]);
+    }
+    snprintf(json + jl, jcap - jl, "]}");
+    char path[400];
+    snprintf(path, sizeof path, "/v1/images/%s/batch?etag=1", img->id);
+    if (xfer_init(h, b->x, path, inm) == 0 && xfer_post_json(b->x, json) == 0)
+        rc = 0;
+out:
+    free(json);
+    free(inm);
+    return rc;
+}
+
+/* Tile i of b from its frame: a 200 is checked and goes to the disk cache
+ * with its ETag; a 304 takes the cached entry.  0 or -1. */
+static int batch_take(struct gv_http *h, const struct gv_remote_image *img,
+                      struct gv_disk_cache *dc, struct batch_req *b, size_t i,
+                      const struct gv_batch_frame *f, struct gv_error *err)
+{
+    struct gv_tile_want *t = &b->t[i];
+    char what[96], name[64], etag[ETAG_CAP];
+    snprintf(what, sizeof what, "tile %d/%u/%u", t->level, t->tx, t->ty);
+    snprintf(name, sizeof name, "%d-%u-%u", t->level, t->tx, t->ty);
+    if (f->level != (uint32_t)t->level || f->tx != t->tx || f->ty != t->ty)
+        return gv_fail(err, GV_ECORRUPT, "%s: the batch answered tile %u/%u/%u "
+                       "in its place", what, f->level, f->tx, f->ty);
+    if (f->status == 304 && b->cached[i]) {
+        t->buf = b->cached[i];
+        t->len = b->clen[i];
+        b->cached[i] = NULL;
+        h->st.revalidated++;
+        return 0;
+    }
+    if (f->status != 200)
+        return gv_fail(err, f->status == 404 ? GV_ENOTFOUND : GV_EIO,
+                       "%s: the server answered HTTP %u in a batch", what,
+                       f->status);
+    if (!(t->buf = malloc(f->len ? f->len : 1)))
+        return gv_fail(err, GV_ENOMEM, "http: out of memory");
+    memcpy(t->buf, f->data, f->len);
+    t->len = f->len;
+    struct gv_error te;
+    if (gv_tilebuf_check(t->buf, t->len, img->channels, &te) < 0)
+        return gv_fail(err, GV_ECORRUPT, "%s from %s is corrupt (%zu bytes): %s",
+                       what, h->base, t->len, te.text);
+    h->st.downloaded++;
+    size_t el = f->etag_len < ETAG_CAP ? f->etag_len : 0;
+    memcpy(etag, f->etag, el);
+    etag[el] = 0;
+    gv_disk_cache_put(dc, name, t->buf, t->len, etag);
+    return 0;
+}
+
+/* The answer to batch b: its frames into b's tiles; a 413 (the server
+ * allows fewer tiles per batch) fetches them one by one.  0 or -1. */
+static int batch_settle(struct gv_http *h, const struct gv_remote_image *img,
+                        struct gv_disk_cache *dc, struct batch_req *b,
+                        struct gv_error *err)
+{
+    if (b->x->result == CURLE_OK && b->x->status == 413)
+        return tiles_one_by_one(h, img, b->t, b->n, dc, err);
+    if (xfer_check(h, b->x, "batch", 0, err) < 0)
+        return -1;
+    struct gv_batch_frame *f = calloc(b->n, sizeof *f);
+    if (!f)
+        return gv_fail(err, GV_ENOMEM, "http: out of memory");
+    int rc = gv_batch_frames_parse(b->x->body, b->x->len, b->n, f, err);
+    for (size_t i = 0; i < b->n && rc == 0; i++)
+        rc = batch_take(h, img, dc, b, i, &f[i], err);
+    free(f);
+    return rc;
+}
+
+int gv_http_tiles(struct gv_http *h, const struct gv_remote_image *img,
+                  struct gv_tile_want *t, size_t n, struct gv_disk_cache *dc,
+                  struct gv_error *err)
+{
+    if (n == 0)
+        return 0;
+    if (!h->batches)
+        return tiles_one_by_one(h, img, t, n, dc, err);
+    size_t nb = (n + BATCH_TILES - 1) / BATCH_TILES;
+    struct batch_req *b = calloc(nb, sizeof *b);
+    struct xfer *x = calloc(nb, sizeof *x);
+    uint8_t **cached = calloc(n, sizeof *cached);
+    size_t *clen = calloc(n, sizeof *clen);
+    char (*etag)[ETAG_CAP] = calloc(n, sizeof *etag);
+    int rc = 0;
+    if (!b || !x || !cached || !clen || !etag) {
+        rc = gv_fail(err, GV_ENOMEM, "http: out of memory");
+        goto out;
+    }
+    for (size_t i = 0; i < n; i++)
+        cached_tile(dc, img, &t[i], &cached[i], &clen[i], etag[i]);
+    for (size_t j = 0; j < nb && rc == 0; j++) {
+        size_t i0 = j * BATCH_TILES;
+        b[j] = (struct batch_req){&t[i0], n - i0 < BATCH_TILES ? n - i0 : BATCH_TILES,
+                                  &cached[i0], &clen[i0], &etag[i0], &x[j]};
+        if (batch_init(h, img, &b[j]) < 0)
+            rc = gv_fail(err, GV_ENOMEM, "http: out of memory");
+    }
+    if (rc == 0)
+        rc = run_all(h, x, nb, err);
+    for (size_t j = 0; j < nb && rc == 0; j++)
+        rc = batch_settle(h, img, dc, &b[j], err);
+out:
+    for (size_t j = 0; x && j < nb; j++)
+        xfer_done(&x[j]);
+    for (size_t i = 0; cached && i < n; i++)
+        free(cached[i]);
+    free(b);
+    free(x);
+    free(cached);
+    free(clen);
+    free(etag);
     return rc;
 }

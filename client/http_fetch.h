@@ -25,6 +25,7 @@ struct gv_http_stats {
     uint64_t downloaded;   /* tiles that came with a body (200) */
     uint64_t revalidated;  /* tiles confirmed by 304 from the disk cache */
     uint64_t bytes;        /* body bytes received */
+    uint64_t wait_us;      /* wall time spent waiting for transfers */
 };
 
 /* A client of the server at base: "http://host:port" or "https://..."
@@ -35,6 +36,10 @@ struct gv_http_stats {
 struct gv_http *gv_http_new(const char *base, long timeout_ms, int verbose,
                             struct gv_error *err);
 void gv_http_free(struct gv_http *h);
+
+/* on (the default): gv_http_tiles fetches in batch requests; off: one
+ * request per tile. */
+void gv_http_use_batches(struct gv_http *h, int on);
 
 /* The base URL requests go to (without its trailing '/'s). */
 const char *gv_http_base(const struct gv_http *h);
@@ -81,7 +86,9 @@ struct gv_tile_want {
 };
 
 /* Fetch every tile of t[0..n) in parallel, through dc (may be NULL):
- * cached entries are revalidated with If-None-Match.  Each buffer is
+ * cached entries are revalidated with If-None-Match, in batch requests
+ * of up to 64 tiles (304 frames) unless gv_http_use_batches said no, or
+ * a batch is refused (413: then one request per tile).  Each buffer is
  * checked with gv_tilebuf_check.  On failure the buffers already filled
  * stay filled (the caller frees them all). */
 int gv_http_tiles(struct gv_http *h, const struct gv_remote_image *img,

@@ -574,6 +574,34 @@ out:
     return rc;
 }
 
+#ifdef GV_TEST_HOOKS
+#include <fcntl.h>
+/* Test builds only (tests/gigaview-filter-worker-hooks): with
+ * GV_TEST_WORKER_SYSCALL set, each job first makes that call, which the
+ * seccomp filter answers: socket and execve kill the process (SIGSYS),
+ * open-write (openat for writing) fails with EPERM.  A call that returns
+ * fails the job with what it returned. */
+static int test_forbidden_call(struct gv_error *jerr)
+{
+    const char *call = getenv("GV_TEST_WORKER_SYSCALL");
+    long rc;
+    if (!call || !*call)
+        return 0;
+    if (!strcmp(call, "socket")) {
+        rc = socket(AF_INET, SOCK_STREAM, 0);
+    } else if (!strcmp(call, "execve")) {
+        char *argv[] = {(char *)"/bin/true", NULL};
+        rc = execve("/bin/true", argv, argv + 1);
+    } else if (!strcmp(call, "open-write")) {
+        rc = open("/dev/null", O_WRONLY);
+    } else {
+        return gv_fail(jerr, GV_EINVAL, "test hook: unknown call %s", call);
+    }
+    return gv_fail(jerr, GV_EINVAL, "test hook: %s returned %ld (%s)", call, rc,
+                   rc < 0 ? strerror(errno) : "no error");
+}
+#endif
+
 int gv_worker_serve(int fd, struct gv_gpu *gpu, const char *hello_text,
                     uint64_t max_pixels, struct gv_error *err)
 {
@@ -595,6 +623,10 @@ int gv_worker_serve(int fd, struct gv_gpu *gpu, const char *hello_text,
         float *out = NULL;
         struct gv_filter_stats st;
         memset(&st, 0, sizeof st);
+#ifdef GV_TEST_HOOKS
+        if (jerr.code == GV_OK)
+            test_forbidden_call(&jerr);
+#endif
         if (jerr.code == GV_OK && run_job(gpu, &job, &out, &st, &jerr) == 0)
             rc = send_done(fd, &job, out, &st, err);
         else

@@ -20,9 +20,11 @@
  *     signal mask and dispositions are reset.
  *
  * Then it opens its own EGL context (lib/gpu/gpu.h) on PLATFORM (auto,
- * device, surfaceless or default: gigaviewd passes its gpu_platform), says
- * hello (the platform, API and renderer, or why there is no context) and
- * answers jobs until the socket closes.
+ * device, surfaceless or default: gigaviewd passes its gpu_platform),
+ * installs its seccomp filter (worker_seccomp.h: from here on a new
+ * socket, a program or a process kills it), says hello (the platform, API
+ * and renderer, or why there is no context) and answers jobs until the
+ * socket closes.
  * Time limits are the server's business: it SIGKILLs a worker that
  * overruns one.
  */
@@ -37,6 +39,18 @@
 
 #include "gpu/gpu.h"
 #include "worker.h"
+#include "worker_seccomp.h"
+
+#ifdef __SANITIZE_ADDRESS__
+/* LeakSanitizer's check at exit stops the threads with a clone of its own
+ * and ptrace, which the seccomp filter kills: no leak check here (the
+ * job protocol is leak-checked under fuzz_worker's corpus replay). */
+int __lsan_is_turned_off(void);
+int __lsan_is_turned_off(void)
+{
+    return 1;
+}
+#endif
 
 static void usage(void)
 {
@@ -73,6 +87,14 @@ static void close_others(int keep)
     if (keep > 3)
         close_range(3, (unsigned)keep - 1, 0);
     close_range((unsigned)keep + 1, ~0u, 0);
+}
+
+/* Does the context draw in software (no kernel GPU driver, no ioctl)? */
+static int software_renderer(const struct gv_gpu *gpu)
+{
+    const char *r = gpu ? gv_gpu_info(gpu)->renderer : "";
+    return !gpu || strstr(r, "llvmpipe") || strstr(r, "softpipe") ||
+           strstr(r, "SwiftShader");
 }
 
 static void reset_signals(void)
@@ -153,6 +175,11 @@ int main(int argc, char **argv)
     } else {
         snprintf(hello, sizeof hello, "%s", err.text[0] ? err.text
                                                         : "gpu: no EGL context");
+    }
+    if (gv_worker_seccomp(!software_renderer(gpu), &err) < 0) {
+        say("stopping", err.text);
+        gv_gpu_close(gpu);
+        return 1;
     }
     int rc = gv_worker_serve((int)fd, gpu, hello, max_pixels, &err);
     if (rc < 0)

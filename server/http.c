@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "http.h"
+#include "listen_fds.h"
 #include "log.h"
 #include "metrics.h"
 #include "router.h"
@@ -529,6 +530,42 @@ static void mhd_logger(void *cls, const char *fmt, va_list ap)
 }
 #pragma GCC diagnostic pop
 
+/* Where the daemon listens, as libmicrohttpd options in opt[0..1]: the
+ * socket systemd passed (listen_fds.h; its port into *port), else a
+ * socket of its own bound to ss (listen, port).  0, or -1 after a
+ * message. */
+static int listen_options(struct sockaddr_storage *ss, struct MHD_OptionItem *opt,
+                          uint16_t *port)
+{
+    struct gv_error err;
+    int fd = listen_fds_take(&err);
+    if (fd == -2) {
+        log_msg(LOG_ERROR, "http", "%s", err.text);
+        return -1;
+    }
+    opt[0] = (struct MHD_OptionItem){MHD_OPTION_SOCK_ADDR, 0, ss};
+    opt[1] = (struct MHD_OptionItem){MHD_OPTION_END, 0, NULL};
+    if (fd < 0)
+        return 0;
+    struct sockaddr_storage at;
+    socklen_t len = sizeof at;
+    char host[INET6_ADDRSTRLEN] = "?";
+    int named = getsockname(fd, (struct sockaddr *)&at, &len) == 0;
+    if (named && at.ss_family == AF_INET) {
+        const struct sockaddr_in *a = (const struct sockaddr_in *)&at;
+        inet_ntop(AF_INET, &a->sin_addr, host, sizeof host);
+        *port = ntohs(a->sin_port);
+    } else if (named && at.ss_family == AF_INET6) {
+        const struct sockaddr_in6 *a = (const struct sockaddr_in6 *)&at;
+        inet_ntop(AF_INET6, &a->sin6_addr, host, sizeof host);
+        *port = ntohs(a->sin6_port);
+    }
+    log_msg(LOG_INFO, "http", "listening on the socket systemd passed (fd %d, %s "
+            "port %u); listen and port are not used", fd, host, *port);
+    opt[0] = (struct MHD_OptionItem){MHD_OPTION_LISTEN_SOCKET, fd, NULL};
+    return 0;
+}
+
 int http_start(struct server *srv)
 {
     const struct settings *cfg = srv->cfg;
@@ -564,10 +601,14 @@ int http_start(struct server *srv)
                 cfg->listen);
         return -1;
     }
+    struct MHD_OptionItem where[2];
+    uint16_t passed_port = 0;
+    if (listen_options(&ss, where, &passed_port) < 0)
+        return -1;
     srv->daemon = MHD_start_daemon(
         flags, (uint16_t)cfg->port, NULL, NULL, on_request, srv,
         MHD_OPTION_EXTERNAL_LOGGER, mhd_logger, NULL, /* first, MHD insists */
-        MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
+        MHD_OPTION_ARRAY, where,
         MHD_OPTION_THREAD_POOL_SIZE, (unsigned)cfg->threads,
         MHD_OPTION_CONNECTION_LIMIT, (unsigned)cfg->connection_limit,
         MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)cfg->connection_timeout,
@@ -583,7 +624,7 @@ int http_start(struct server *srv)
     }
     const union MHD_DaemonInfo *di =
         MHD_get_daemon_info(srv->daemon, MHD_DAEMON_INFO_BIND_PORT);
-    srv->port = di ? di->port : (uint16_t)cfg->port;
+    srv->port = passed_port ? passed_port : di ? di->port : (uint16_t)cfg->port;
     return 0;
 }
 

@@ -17,6 +17,13 @@
  * All integers little-endian.  A tile that fails has the status the error
  * table (http.c) gives its failure (404 outside the grid, 500 corrupt
  * page) and length 0; the others still serve.
+ * With ?etag=1 the body is "GVB2": the same frames, but the byte after
+ * the level holds the length of the tile's ETag, which follows the 20
+ * header bytes (zero-padded to 4) before the tile bytes; and a tile whose
+ * ETag the request's If-None-Match lists is a frame of status 304 with no
+ * bytes (and no page read), so a client with a disk cache revalidates a
+ * whole view in one request.  A GVB2 reader reads GVB1 as well (ETag
+ * length 0); a client that does not ask never sees GVB2.
  * The body is an iovec over the cached pages: no copy either.  The tile
  * list itself is parsed by batch_request.c (fuzzed on its own).
  */
@@ -30,6 +37,24 @@
 #include "store/store_format.h"
 
 #define IMMUTABLE "public, max-age=31536000, immutable"
+#define ETAG_MAX 64 /* a tile ETag: quotes, 16 hex digits, 3 numbers (< 48) */
+#define FRAME_HEAD 20
+
+/* Tile (level, tx, ty)'s strong ETag into etag (ETAG_MAX bytes): the
+ * store's tag, the page CRC and the coordinates.  Returns its length. */
+static size_t tile_etag(char *etag, const struct image *img, uint32_t crc,
+                        uint32_t level, uint32_t tx, uint32_t ty)
+{
+    int n = snprintf(etag, ETAG_MAX, "\"%08x%08x-%u-%u-%u\"", img->tag, crc,
+                     level, tx, ty);
+    return n > 0 && n < ETAG_MAX ? (size_t)n : 0;
+}
+
+/* Does If-None-Match value inm (may be NULL) list etag (or "*")? */
+static int etag_listed(const char *inm, const char *etag)
+{
+    return inm && (strstr(inm, etag) || !strcmp(inm, "*"));
+}
 
 static void release_page(void *cls)
 {
@@ -108,11 +133,9 @@ enum MHD_Result route_tile(struct req *r)
         ret = http_send_error(r, &err);
         goto out;
     }
-    char etag[64];
-    snprintf(etag, sizeof etag, "\"%08x%08x-%u-%u-%u\"", img->tag, crc, level,
-             tx, ty);
-    const char *inm = http_header(r, "If-None-Match");
-    if (inm && (strstr(inm, etag) || !strcmp(inm, "*"))) {
+    char etag[ETAG_MAX];
+    tile_etag(etag, img, crc, level, tx, ty);
+    if (etag_listed(http_header(r, "If-None-Match"), etag)) {
         struct MHD_Response *resp = MHD_create_response_from_buffer(
             0, (void *)"", MHD_RESPMEM_PERSISTENT);
         if (resp) {
@@ -153,7 +176,10 @@ struct batch {
     size_t n;
     struct page **pages;      /* distinct pages referenced */
     size_t npages;
-    uint8_t *frames;          /* 8 + 20 per tile header bytes */
+    int etags;                /* GVB2: frames carry ETags */
+    const char *inm;          /* If-None-Match (GVB2 only), or NULL */
+    size_t slot;              /* bytes per frame in `frames` */
+    uint8_t *frames;          /* 8 + slot per tile header bytes */
 };
 
 static void batch_free(void *cls)
@@ -175,10 +201,17 @@ static struct page *batch_page(struct batch *b, const struct page *p)
     return NULL;
 }
 
-/* The tile list of a GET (?t=) or POST (JSON) batch into b.  0 or -1. */
+/* The tile list of a GET (?t=) or POST (JSON) batch into b, and whether
+ * it asks for ETags (?etag=1, either method).  0 or -1. */
 static int batch_parse(struct req *r, struct batch *b, struct gv_error *err)
 {
     size_t max = (size_t)r->srv->cfg->batch_max_tiles;
+    const char *e = http_query(r, "etag");
+    if (e && strcmp(e, "0") && strcmp(e, "1"))
+        return gv_fail(err, GV_EINVAL, "batch: etag must be 0 or 1");
+    b->etags = e && !strcmp(e, "1");
+    b->inm = b->etags ? http_header(r, "If-None-Match") : NULL;
+    b->slot = FRAME_HEAD + (b->etags ? ETAG_MAX : 0);
     if (!strcmp(r->method, "POST"))
         return batch_parse_json(r->body, r->body_len, max, &b->want, &b->n, err);
     const char *t = http_query(r, "t");
@@ -203,21 +236,27 @@ static void body_add(struct body *y, const void *p, size_t len)
     y->total += len;
 }
 
-/* Tile i of b: its 20-byte frame (status 200, or the table's status of
- * its failure) and its bytes.  Returns 1 if the tile failed, else 0. */
+/* Tile i of b: its frame (status 200, 304 for an ETag the client listed,
+ * or the table's status of its failure; in GVB2 its ETag) and its bytes.
+ * Returns 1 if the frame is not a 200, else 0. */
 static int batch_tile(struct req *r, const struct image *img, struct batch *b,
                       size_t i, struct body *y)
 {
     static const uint8_t zeros[4];
     uint32_t level = b->want[i].level, tx = b->want[i].tx, ty = b->want[i].ty;
-    uint8_t *f = b->frames + 8 + 20 * i;
+    uint8_t *f = b->frames + 8 + b->slot * i;
     uint32_t crc, status = 200;
     const uint8_t *tile = NULL;
-    size_t len = 0;
+    size_t len = 0, elen = 0;
     struct page *p = NULL;
     struct gv_error err;
-    if (locate(img, level, tx, ty, &crc, &err) < 0 ||
-        fetch(r->srv, img, level, tx, ty, &p, &tile, &len, &err) < 0) {
+    int found = locate(img, level, tx, ty, &crc, &err) == 0;
+    if (found && b->etags)
+        elen = tile_etag((char *)f + FRAME_HEAD, img, crc, level, tx, ty);
+    if (found && b->etags && etag_listed(b->inm, (char *)f + FRAME_HEAD)) {
+        status = 304;
+    } else if (!found ||
+               fetch(r->srv, img, level, tx, ty, &p, &tile, &len, &err) < 0) {
         log_page_error(img, level, tx, ty, &err);
         status = http_error_status(r, err.code);
         tile = NULL;
@@ -227,17 +266,26 @@ static int batch_tile(struct req *r, const struct image *img, struct batch *b,
     } else {
         b->pages[b->npages++] = p;
     }
+    if (elen && status != 200 && status != 304) {
+        memset(f + FRAME_HEAD, 0, ETAG_MAX); /* a failed tile has no ETag */
+        elen = 0;
+    }
+    size_t head = FRAME_HEAD + (elen + 3) / 4 * 4; /* etag zero-padded */
     f[0] = (uint8_t)level;
+    f[1] = (uint8_t)elen;
     gv_put32(f + 4, tx);
     gv_put32(f + 8, ty);
     gv_put32(f + 12, status);
     gv_put32(f + 16, (uint32_t)len);
-    /* Consecutive frame headers stay one iovec when a tile is empty. */
-    if (y->last_frames) {
-        y->iov[y->n - 1].iov_len += 20;
-        y->total += 20;
+    /* Consecutive frame headers stay one iovec when a tile is empty and
+     * they lie back to back (GVB1 frames do). */
+    const struct MHD_IoVec *last = y->n ? &y->iov[y->n - 1] : NULL;
+    if (y->last_frames && last &&
+        (const uint8_t *)last->iov_base + last->iov_len == f) {
+        y->iov[y->n - 1].iov_len += head;
+        y->total += head;
     } else {
-        body_add(y, f, 20);
+        body_add(y, f, head);
     }
     y->last_frames = 1;
     if (len) {
@@ -265,7 +313,7 @@ enum MHD_Result route_batch(struct req *r)
         batch_free(b);
         return ret;
     }
-    b->frames = calloc(1, 8 + 20 * b->n);
+    b->frames = calloc(1, 8 + b->slot * b->n);
     b->pages = calloc(b->n, sizeof *b->pages);
     struct body y = {calloc(3 * b->n + 1, sizeof *y.iov), 0, 0, 1};
     if (!b->frames || !b->pages || !y.iov) {
@@ -274,12 +322,12 @@ enum MHD_Result route_batch(struct req *r)
         image_put(img);
         return http_send_errorf(r, GV_ENOMEM, "batch: out of memory");
     }
-    memcpy(b->frames, "GVB1", 4);
+    memcpy(b->frames, b->etags ? "GVB2" : "GVB1", 4);
     gv_put32(b->frames + 4, (uint32_t)b->n);
     body_add(&y, b->frames, 8);
-    int failures = 0;
+    int not200 = 0;
     for (size_t i = 0; i < b->n; i++)
-        failures += batch_tile(r, img, b, i, &y);
+        not200 += batch_tile(r, img, b, i, &y);
     struct MHD_Response *resp = MHD_create_response_from_iovec(y.iov, y.n,
                                                                batch_free, b);
     free(y.iov);
@@ -289,7 +337,7 @@ enum MHD_Result route_batch(struct req *r)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
                                 "application/x-gigaview-batch");
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
-                                strcmp(r->method, "POST") && !failures
+                                strcmp(r->method, "POST") && !not200
                                     ? IMMUTABLE : "no-store");
     }
     ret = http_send(r, 200, resp, y.total);

@@ -12,7 +12,9 @@
 # the canvas against the region endpoint (the CPU reference decoder; mean
 # absolute difference <= 1 per channel, measured 0: the shared decode
 # shader and the JavaScript rANS decoder are bit-exact in the browser),
-# every decoded tile against the same endpoint, mouse, keyboard, wheel,
+# every decoded tile against the same endpoint (also after an eviction
+# tour, and for a prefetch that must make room while the parent it
+# decodes from is the least recently used tile), mouse, keyboard, wheel,
 # touch and gamepad input checked for the view they reach and against
 # `gigaview render` of that view, the URL hash round trip, the fallback
 # without WebGL2, the image list, and no console errors.  Then the filter

@@ -7,12 +7,15 @@
 # decoded on the GPU) is pixel-identical to `gigaview export` for regions
 # of tiled levels, the root and a root mip, RGB and gray, and the view form
 # at an integer zoom equals the matching region; a fractional zoom with a
-# rotation renders; a second run revalidates every tile with 304 (client
+# rotation renders; tiles come in one batch request (?etag=1) and a second
+# run revalidates every tile in that one request, as 304 frames (client
 # --verbose and the daemon's access log); a damaged disk-cache entry is
-# ignored; errors exit 1 with a clear message and leave any existing
+# ignored; a server that refuses the batch (413) gets the tiles one by
+# one; errors exit 1 with a clear message and leave any existing
 # output untouched: unreachable server, unknown image, region and level
-# out of range, truncated bodies (cut connection and short body), a 500,
-# and a response slower than --timeout; GIGAVIEW_GPU_PLATFORM forces the
+# out of range, truncated bodies (cut connection, a short tile in a
+# consistent batch, a batch cut between frames), a 500, and a response
+# slower than --timeout; GIGAVIEW_GPU_PLATFORM forces the
 # EGL platform.  Render checks skip when no EGL context can be made; a
 # build configured --without-gpu only checks that render refuses.  Needs
 # curl, python3, oiiotool and idiff.
@@ -159,16 +162,21 @@ if [ -z "$no_gpu" ]; then
     run render "$BASE" --image x --level 0 --region 0,0,1100,600 -o c1.png -v
     down=$(sed -n 's/.* \([0-9]*\) tiles downloaded, \([0-9]*\) revalidated.*/\1 \2/p' "$T/err")
     before=$(grep -c '" 304 ' "$T/daemon.log")
+    batches=$(grep -c '"POST /v1/images/x/batch" 200 ' "$T/daemon.log")
     run render "$BASE" --image x --level 0 --region 0,0,1100,600 -o c2.png -v
     again=$(sed -n 's/.* \([0-9]*\) tiles downloaded, \([0-9]*\) revalidated.*/\1 \2/p' "$T/err")
     after=$(grep -c '" 304 ' "$T/daemon.log")
+    batches=$(($(grep -c '"POST /v1/images/x/batch" 200 ' "$T/daemon.log") - batches))
     n=${down%% *}
-    # 1100x600 at level 0: 6 tiles there, 2 at level 1, 1 at level 2.
+    # 1100x600 at level 0: 6 tiles there, 2 at level 1, 1 at level 2; the
+    # requests: the metadata, the batch and the root (a 304).
     if [ "$rc" -eq 0 ] && [ "$down" = "9 0" ] && [ "$again" = "0 $n" ] &&
-        [ $((after - before)) -eq $((n + 1)) ] && cmp -s c1.png c2.png; then
-        ok "second run revalidates all $n tiles and the root with 304 and renders the same"
+        [ $((after - before)) -eq 1 ] && [ "$batches" -eq 1 ] &&
+        grep -q "^render: $n tiles needed (ancestors included); http: 3 requests," "$T/err" &&
+        cmp -s c1.png c2.png; then
+        ok "second run revalidates all $n tiles in one batch (304 frames) and the root with a 304, and renders the same"
     else
-        not_ok "disk cache revalidation (first '$down', second '$again', 304s $before -> $after)" \
+        not_ok "disk cache revalidation (first '$down', second '$again', 304s $before -> $after, $batches batches)" \
             "$(cat "$T/err")"
     fi
     # A damaged entry is ignored and fetched afresh.
@@ -185,9 +193,10 @@ if [ -z "$no_gpu" ]; then
         not_ok "cache entry 0-0-0 exists under \$XDG_CACHE_HOME/gigaview" "$(find "$T/cache")"
     fi
     run render "$BASE" --image x --level 0 --region 0,0,600,600 -o c4.png -v --no-cache
-    # 4 tiles at level 0, 1 at level 1, 1 at level 2; the metadata and the
-    # root are the other requests (the byte count varies with the port).
-    if [ "$rc" -eq 0 ] && grep -q '^render: 6 tiles needed (ancestors included); http: 8 requests, 6 tiles downloaded, 0 revalidated (304), ' "$T/err"; then
+    # 4 tiles at level 0, 1 at level 1, 1 at level 2 in one batch; the
+    # metadata and the root are the other requests (the byte count varies
+    # with the port).
+    if [ "$rc" -eq 0 ] && grep -q '^render: 6 tiles needed (ancestors included); http: 3 requests, 6 tiles downloaded, 0 revalidated (304), ' "$T/err"; then
         ok "--no-cache downloads everything"
     else
         not_ok "--no-cache (exit $rc)" "$(cat "$T/err")"
@@ -228,31 +237,60 @@ run info "http://127.0.0.1:$dead"
 expect_rc "info on an unreachable server" 1
 
 # ---------------------------------------------------------------- fault stub
-# A proxy in front of gigaviewd that damages tile responses.  MODE: cut
-# (Content-Length of the whole tile, half the bytes, connection closed),
-# short (a consistent but truncated body), flip (right length, a corrupt
-# rate byte), 500, slow (3 s before answering).
+# A proxy in front of gigaviewd that damages tile and batch responses.
+# MODE: cut (Content-Length of the whole body, half the bytes, connection
+# closed), short (a consistent but truncated tile: in a batch, the first
+# tile's frame says half its length), flip (right length, a corrupt rate
+# byte), 500, slow (3 s before answering), frames (a batch cut after its
+# first frame), 413 (every batch refused as too large), none.
 cat >"$T/stub.py" <<'PY'
-import http.server, sys, time, urllib.request, urllib.error
+import http.server, struct, sys, time, urllib.request, urllib.error
 mode, upstream, portfile = sys.argv[1], sys.argv[2], sys.argv[3]
+
+def first_tile(body, edit):
+    # The batch body with edit(tile) in place of its first 200 tile.
+    v2 = body[:4] == b'GVB2'
+    off = 8
+    for i in range(struct.unpack_from('<I', body, 4)[0]):
+        elen = body[off + 1]
+        status, length = struct.unpack_from('<II', body, off + 12)
+        data = off + 20 + (elen + 3) // 4 * 4
+        if status == 200:
+            tile = edit(body[data:data + length])
+            head = body[off:off + 16] + struct.pack('<I', len(tile))
+            rest = body[data + (length + 3) // 4 * 4:]
+            pad = b'\0' * (-len(tile) % 4)
+            return body[:off] + head + body[off + 20:data] + tile + pad + rest
+        off = data + (length + 3) // 4 * 4
+    return body
+
 class H(http.server.BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
     def log_message(self, *a): pass
-    def do_GET(self):
-        try:
-            with urllib.request.urlopen(upstream + self.path) as r:
-                status, body, ctype = r.status, r.read(), r.headers.get("Content-Type")
-        except urllib.error.HTTPError as e:
-            status, body, ctype = e.code, e.read(), e.headers.get("Content-Type")
-        tile = "/tiles/" in self.path and status == 200
+    def do_POST(self):
+        self.do_GET(self.rfile.read(int(self.headers.get("Content-Length", 0))))
+    def do_GET(self, data=None):
+        hdrs = {k: self.headers[k] for k in ("Content-Type", "If-None-Match") if self.headers[k]}
+        batch = "/batch" in self.path
+        if batch and mode == "413":
+            status, body, ctype = 413, b'{"error":{"status":413,"code":"too_large","message":"injected"}}', "application/json"
+        else:
+            try:
+                with urllib.request.urlopen(urllib.request.Request(upstream + self.path, data, hdrs)) as r:
+                    status, body, ctype = r.status, r.read(), r.headers.get("Content-Type")
+            except urllib.error.HTTPError as e:
+                status, body, ctype = e.code, e.read(), e.headers.get("Content-Type")
+        tile = ("/tiles/" in self.path or batch) and status == 200
         if tile and mode == "500":
             status, body = 500, b'{"error":{"status":500,"code":"io_error","message":"injected"}}'
         if tile and mode == "slow":
             time.sleep(30)
         if tile and mode == "short":
-            body = body[:len(body) // 2]
+            body = first_tile(body, lambda t: t[:len(t) // 2 // 4 * 4]) if batch else body[:len(body) // 2]
         if tile and mode == "flip":
-            body = bytes([0x0f]) + body[1:]
+            body = first_tile(body, lambda t: bytes([0x0f]) + t[1:]) if batch else bytes([0x0f]) + body[1:]
+        if tile and batch and mode == "frames":
+            body = body[:8 + 20]
         self.send_response(status)
         self.send_header("Content-Type", ctype or "application/octet-stream")
         self.send_header("Content-Length", str(len(body)))
@@ -291,13 +329,14 @@ stub_start() {
     STUB="http://127.0.0.1:$(cat "$T/stub.port")"
 }
 if [ -z "$no_gpu" ]; then
-    for m in cut short flip 500 slow; do
+    for m in cut short flip 500 slow frames; do
         stub_start $m
         case $m in
         cut) pat="truncated response";;
         short|flip) pat="tile [0-9]+/[0-9]+/[0-9]+ from .* is corrupt";;
         500) pat="HTTP 500: injected";;
         slow) pat="within 1000 ms";;
+        frames) pat="batch: frame 0 \\(tile [0-9/]+\\) cut short";;
         esac
         # 'slow' stalls each tile for 30 s: a render that waited it out would
         # succeed, so the failure with the timeout message is the proof that
@@ -312,6 +351,14 @@ if [ -z "$no_gpu" ]; then
     run export "$S/x.gv" --level 0 --region 0,0,600,600 -o se.png
     check "through the stub untouched, render still equals export" \
         sh -c 'idiff -a s.png se.png >/dev/null 2>&1'
+    stub_stop
+    # A server that refuses the batch (a smaller batch_max_tiles): the
+    # tiles come one by one, and the picture is the same.
+    stub_start 413
+    run render "$STUB" --image x --level 0 --region 0,0,600,600 --no-cache -o s413.png -v
+    check "a batch refused with 413: the 6 tiles come one by one, render still equals export" \
+        sh -c "[ $rc -eq 0 ] && grep -q '^render: 6 tiles needed (ancestors included); http: 9 requests, 6 tiles downloaded' '$T/err' &&
+            idiff -a s413.png se.png >/dev/null 2>&1"
     stub_stop
 else
     skip "fault injection" "no GPU context"

@@ -94,10 +94,13 @@ elif [ ! -f "$unit" ]; then
 else
     mkdir "$T/unit"
     sed "s|/usr/local/bin/gigaviewd|$GIGAVIEWD|g" "$unit" >"$T/unit/gigaviewd.service"
+    # The service requires its socket unit: verify the pair.
+    cp "$srcroot/conf/gigaviewd.socket" "$T/unit/"
     rc=0
-    systemd-analyze verify "$T/unit/gigaviewd.service" >"$T/unit.out" 2>&1 || rc=$?
+    systemd-analyze verify "$T/unit/gigaviewd.socket" "$T/unit/gigaviewd.service" \
+        >"$T/unit.out" 2>&1 || rc=$?
     if [ "$rc" -eq 0 ] && [ ! -s "$T/unit.out" ]; then
-        ok "systemd-analyze verify conf/gigaviewd.service"
+        ok "systemd-analyze verify conf/gigaviewd.service (and its socket unit)"
     elif grep -qi "system has not been booted\|failed to connect to bus\|Failed to initialize manager" "$T/unit.out"; then
         skip "systemd-analyze verify conf/gigaviewd.service" "systemd cannot run here"
     else
@@ -201,20 +204,23 @@ curl -s -o t210 "$(url /v1/images/x/tiles/2/1/0)"
 cat >parse_batch.py <<'PY'
 import struct, sys
 b = open(sys.argv[1], 'rb').read()
-assert b[:4] == b'GVB1', 'magic'
+assert b[:4] in (b'GVB1', b'GVB2'), 'magic'
 n, = struct.unpack_from('<I', b, 4)
 off, out = 8, []
 for i in range(n):
-    level, = struct.unpack_from('<B', b, off)
-    assert b[off+1:off+4] == b'\0\0\0', 'pad'
+    level, elen = struct.unpack_from('<BB', b, off)
+    assert b[off+2:off+4] == b'\0\0' and (elen == 0 or b[:4] == b'GVB2'), 'pad'
     tx, ty, status, length = struct.unpack_from('<IIII', b, off + 4)
     off += 20
+    etag = b[off:off+elen].decode()
+    assert b[off+elen:off+(elen + 3) // 4 * 4].strip(b'\0') == b'', 'etag pad'
+    off += (elen + 3) // 4 * 4
     data = b[off:off+length]
     off += (length + 3) // 4 * 4
-    out.append((level, tx, ty, status, data))
+    out.append((level, tx, ty, status, data, etag))
 assert off == len(b), 'trailing bytes %d != %d' % (off, len(b))
-for level, tx, ty, status, data in out:
-    print(level, tx, ty, status, len(data))
+for level, tx, ty, status, data, etag in out:
+    print(level, tx, ty, status, len(data), *([etag] if b[:4] == b'GVB2' else []))
     if len(sys.argv) > 2 and status == 200:
         open('b_%d_%d_%d' % (level, tx, ty), 'wb').write(data)
 PY
@@ -232,6 +238,31 @@ check "batch GET: immutable" test "$(header Cache-Control)" = "public, max-age=3
 cp "$T/b" batch2.bin
 check "batch GET framing" test "$(python3 parse_batch.py batch2.bin)" = "0 5 3 200 $(wc -c <t053 | tr -d ' ')
 2 1 0 200 $(wc -c <t210 | tr -d ' ')"
+# ?etag=1: GVB2 frames carry each tile's ETag (the single tile's), and
+# a tile whose ETag If-None-Match lists is a 304 frame without bytes.
+e053=$(curl -s -D - -o /dev/null "$(url /v1/images/x/tiles/0/5/3)" | sed -n 's/^ETag: *//Ip' | tr -d '\r')
+e210=$(curl -s -D - -o /dev/null "$(url /v1/images/x/tiles/2/1/0)" | sed -n 's/^ETag: *//Ip' | tr -d '\r')
+expect_status "batch with etag=1" 200 "/v1/images/x/batch?t=0,5,3;2,1,0;0,99,0&etag=1"
+cp "$T/b" batch3.bin
+check "batch etag=1: GVB2 frames with each tile's ETag, none for a 404" \
+    test "$(python3 parse_batch.py batch3.bin)" = "0 5 3 200 $(wc -c <t053 | tr -d ' ') $e053
+2 1 0 200 $(wc -c <t210 | tr -d ' ') $e210
+0 99 0 404 0 "
+expect_status "batch etag=1 POST with If-None-Match" 200 "/v1/images/x/batch?etag=1" -X POST \
+    -H "If-None-Match: $e053, \"0000000000000000-2-1-0\"" --data '{"tiles":[[0,5,3],[2,1,0]]}'
+cp "$T/b" batch4.bin
+check "batch etag=1: a listed ETag is a 304 frame without bytes, a stale one a 200" \
+    test "$(python3 parse_batch.py batch4.bin)" = "0 5 3 304 0 $e053
+2 1 0 200 $(wc -c <t210 | tr -d ' ') $e210"
+expect_status "batch GET etag=1 with If-None-Match" 200 "/v1/images/x/batch?t=0,5,3&etag=1" \
+    -H "If-None-Match: $e053"
+check "batch GET with a 304 frame: not cacheable" test "$(header Cache-Control)" = "no-store"
+expect_status "batch without etag=1 ignores If-None-Match (GVB1)" 200 "/v1/images/x/batch?t=0,5,3" \
+    -H "If-None-Match: $e053"
+cp "$T/b" batch5.bin
+check "batch without etag=1: GVB1 with the tile" test "$(head -c 4 batch5.bin)$(python3 parse_batch.py batch5.bin)" = \
+    "GVB10 5 3 200 $(wc -c <t053 | tr -d ' ')"
+expect_status "batch: etag=2" 400 "/v1/images/x/batch?t=0,5,3&etag=2"
 expect_status "batch: bad JSON" 400 /v1/images/x/batch -X POST --data '{"tiles":[[0,0,0]'
 check "batch: bad JSON message has line and column" test "$(json_get 'j["error"]["message"]')" = "batch: bad JSON at line 1, column 17: ']' expected near end of file"
 expect_status "batch: not triples" 400 /v1/images/x/batch -X POST --data '{"tiles":[[0,0]]}'

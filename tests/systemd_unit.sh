@@ -1,25 +1,42 @@
 #!/bin/sh
 # systemd_unit.sh - conf/gigaviewd.service lets gigaviewd and its filter
-# workers make every system call they make, and its exposure score does
-# not regress.
+# workers make every system call they make, gigaviewd runs from the socket
+# conf/gigaviewd.socket passes (socket activation, so the service can run
+# with PrivateNetwork=yes), and the exposure score does not regress.
+#
+# Socket activation: the units agree (the socket listens where
+# conf/gigaviewd.conf says, the service requires it and has
+# PrivateNetwork=yes and RestrictAddressFamilies=AF_UNIX); a launcher
+# (python) binds a socket on a free port and execs gigaviewd with it as
+# descriptor 3, LISTEN_FDS=1 and LISTEN_PID, as systemd does, with `port`
+# in the configuration set to another free port: requests through the
+# passed socket are served, the configured port stays closed; LISTEN_FDS=2,
+# a descriptor 3 that is no socket, or one that is not listening are
+# refused (exit 1, with the reason), and a LISTEN_PID of another process
+# is ignored (gigaviewd binds its own port).
 #
 # The unit's SystemCallFilter= lines are expanded with systemd-analyze
 # syscall-filter into the set of allowed calls (allow list, then the
 # "~" lines taken out, later allow lines added back, @default always in).
-# gigaviewd then runs under strace -f with the EGL context opened at
-# start (gpu = auto) and two filter workers, and serves tiles, a batch, a
+# gigaviewd then runs under strace -f, socket-activated as above, with
+# the EGL context opened at start (gpu = auto) and two filter workers,
+# and serves tiles, a batch, a
 # region, an IIIF image, metrics, two filter jobs (Mesa compiles and runs
 # them), a SIGHUP rescan and a SIGTERM drain.  Every system call any of
 # the processes made must be in the allowed set: one that is not would
 # kill the service with SIGSYS in production (where there is no strace to
-# show why).  Finally `systemd-analyze security --offline=yes` must rate
-# the unit at most 1.2 (docs/OPERATIONS.md records the score and why each
-# remaining point stays).  Skipped without systemd-analyze or strace, and
+# show why); and every socket any of them creates is AF_UNIX (what
+# RestrictAddressFamilies allows), with no bind or listen.  Finally
+# `systemd-analyze security --offline=yes` must rate the unit at most 0.3
+# (docs/OPERATIONS.md records the score and why each remaining point
+# stays).  Skipped without systemd-analyze or strace, and
 # under valgrind; the traced run is skipped for a sanitizer build.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
 
 unit="$(cd "$(dirname "$0")/.." && pwd)/conf/gigaviewd.service"
+sock_unit="$(cd "$(dirname "$0")/.." && pwd)/conf/gigaviewd.socket"
+conf_file="$(cd "$(dirname "$0")/.." && pwd)/conf/gigaviewd.conf"
 for t in systemd-analyze strace; do
     if ! command -v "$t" >/dev/null 2>&1; then
         echo "1..0 # SKIP $t is not installed"
@@ -30,7 +47,91 @@ if under_valgrind; then
     echo "1..0 # SKIP strace and valgrind do not mix"
     exit 0
 fi
-[ -f "$unit" ] || bail "no $unit"
+[ -f "$unit" ] && [ -f "$sock_unit" ] || bail "no $unit or $sock_unit"
+
+# ---------------------------------------------------------------- the units
+want=$(sed -n 's/^listen *= *"\(.*\)"/\1/p' "$conf_file"):$(sed -n 's/^port *= *\([0-9]*\).*/\1/p' "$conf_file")
+check "gigaviewd.socket listens where gigaviewd.conf says ($want)" \
+    test "$(sed -n 's/^ListenStream=//p' "$sock_unit")" = "$want"
+check "the service requires the socket, runs after it, with PrivateNetwork=yes and AF_UNIX only" \
+    sh -c "grep -qx 'Requires=gigaviewd.socket' '$unit' && grep -qx 'After=gigaviewd.socket' '$unit' &&
+        grep -qx 'PrivateNetwork=yes' '$unit' && grep -qx 'RestrictAddressFamilies=AF_UNIX' '$unit'"
+
+# ---------------------------------------------------------------- activation
+# launch.py MODE PORTFILE PROGRAM ARGS...: what systemd does for a socket
+# unit, then exec PROGRAM.  MODE ok: a listening socket on a free port as
+# descriptor 3, LISTEN_FDS=1, LISTEN_PID=this process (exec keeps it); two:
+# LISTEN_FDS=2; file: descriptor 3 a file; unlistened: a socket bound but
+# not listening; otherpid: LISTEN_PID of another process.
+cat >"$T/launch.py" <<'PY'
+import os, socket, sys
+mode, portfile, prog = sys.argv[1], sys.argv[2], sys.argv[3]
+s = socket.socket()
+s.bind(("127.0.0.1", 0))
+if mode != "unlistened":
+    s.listen(128)
+fd = os.open("/dev/null", os.O_RDONLY) if mode == "file" else s.fileno()
+os.dup2(fd, 3)
+os.set_inheritable(3, True)
+open(portfile + ".tmp", "w").write(str(s.getsockname()[1]))
+os.rename(portfile + ".tmp", portfile)
+pid = os.getpid() + (1 if mode == "otherpid" else 0)
+env = dict(os.environ, LISTEN_FDS="2" if mode == "two" else "1", LISTEN_PID=str(pid))
+os.execve(prog, [prog] + sys.argv[4:], env)
+PY
+free_port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
+mkdir "$T/act" || bail "mkdir"
+run encode synth:600x400 -o "$T/act/a.gv"
+[ "$rc" -eq 0 ] || bail "encode: $(cat "$T/err")"
+cat >"$T/act.conf" <<EOF2
+listen = 127.0.0.1
+port = $free_port
+store_dir = "$T/act"
+threads = 2
+access_log = off
+gpu = off
+EOF2
+real_gvd=$GIGAVIEWD
+cat >"$T/activated" <<EOF2
+#!/bin/sh
+exec python3 "$T/launch.py" \$LAUNCH_MODE "$T/act.port" "$real_gvd" "\$@"
+EOF2
+chmod +x "$T/activated"
+GIGAVIEWD=$T/activated
+LAUNCH_MODE=ok
+export LAUNCH_MODE
+rm -f "$T/act.port"
+start_daemon "$T/act.conf"
+check "socket-activated: gigaviewd serves on the passed socket's port ($PORT)" \
+    test "$PORT" = "$(cat "$T/act.port" 2>/dev/null)"
+expect_status "socket-activated: GET /v1/images/a through the passed socket" 200 /v1/images/a
+code=$(curl -s -o /dev/null -w '%{http_code}' --max-time 5 "http://127.0.0.1:$free_port/healthz") || true
+check "socket-activated: the configured port $free_port stays closed (curl: $code)" test "$code" = 000
+check "socket-activated: the log says where it listens" \
+    grep -q "http: listening on the socket systemd passed (fd 3, 127.0.0.1 port $PORT)" "$T/daemon.log"
+stop_daemon
+check "socket-activated: SIGTERM, exit 0" test "$drc" -eq 0
+# refused MODE MESSAGE: gigaviewd exits 1 saying MESSAGE.
+refused() {
+    LAUNCH_MODE=$1
+    rm -f "$T/act.port"
+    drc=0
+    "$T/activated" -c "$T/act.conf" >"$T/act.out" 2>&1 || drc=$?
+    if [ "$drc" -eq 1 ] && grep -q "$2" "$T/act.out"; then
+        ok "socket activation, $1: refused (exit 1: $2)"
+    else
+        not_ok "socket activation, $1: refused with '$2' (exit $drc)" "$(tail -n 5 "$T/act.out")"
+    fi
+}
+refused two "LISTEN_FDS=2: gigaviewd takes exactly one listening socket"
+refused file "LISTEN_FDS=1 but descriptor 3 is not a socket"
+refused unlistened "socket 3 is not listening"
+LAUNCH_MODE=otherpid
+start_daemon "$T/act.conf"
+check "socket activation meant for another process: ignored, gigaviewd binds a port of its own ($PORT)" \
+    sh -c "[ -n '$PORT' ] && [ '$PORT' != '$(cat "$T/act.port")' ]"
+stop_daemon
+GIGAVIEWD=$real_gvd
 
 # ---------------------------------------------------------------- allowed set
 python3 - "$unit" >"$T/allowed" 2>"$T/allowed.err" <<'PY' || bail "expanding the filter: $(cat "$T/allowed.err")"
@@ -107,11 +208,12 @@ filter_workers = 2
 filter_dir = "$T/stored"
 filter_library_dir = "$T/lib"
 EOF2
-# start_daemon runs "$GIGAVIEWD"; run it under strace instead.
-real_gvd=$GIGAVIEWD
+# start_daemon runs "$GIGAVIEWD"; run it socket-activated under strace
+# instead (the launcher's own calls, before it execs gigaviewd, are left
+# out of the trace below).
 cat >"$T/traced" <<EOF2
 #!/bin/sh
-exec strace -f -qq -o "$T/trace" "$real_gvd" "\$@"
+exec strace -f -qq -o "$T/trace" python3 "$T/launch.py" ok "$T/u.port" "$real_gvd" "\$@"
 EOF2
 chmod +x "$T/traced"
 GIGAVIEWD=$T/traced
@@ -132,6 +234,15 @@ done
 # $DPID is strace; the daemon is its child.  strace exits with the
 # daemon's status.
 gvpid=$(pgrep -P "$DPID" | head -n 1)
+# The workers started after gigaviewd took the socket: no LISTEN_* for them
+# (/proc/PID/environ of gigaviewd itself shows its environment at exec).
+wk=$(pgrep -P "$gvpid" | head -n 1)
+if [ -n "$wk" ]; then
+    check "socket-activated: its filter workers ($wk) get no LISTEN_FDS or LISTEN_PID" \
+        sh -c "! tr '\\0' '\\n' </proc/$wk/environ | grep -q '^LISTEN_'"
+else
+    skip "socket-activated: the workers' environment" "no filter workers here"
+fi
 kill -HUP "$gvpid"
 sleep 1
 expect_status "traced: after SIGHUP" 200 /healthz
@@ -140,6 +251,11 @@ drc=0
 wait "$DPID" || drc=$?
 DPID=
 check "traced: SIGTERM, exit 0" test "$drc" -eq 0
+# The launcher's calls up to its execve of gigaviewd are not gigaviewd's.
+lpid=$(awk 'NR == 1 { print $1 }' "$T/trace")
+awk -v l="$lpid" '$1 != l || seen { print; next } /execve\("[^"]*gigaviewd"/ { seen = 1; print }' \
+    "$T/trace" >"$T/trace.gv"
+mv "$T/trace.gv" "$T/trace"
 awk '{ s = $2; if (s ~ /^[a-z_0-9]+\(/) { sub(/\(.*/, "", s); print s } }' "$T/trace" |
     sort -u >"$T/used"
 diag "$(wc -l <"$T/used" | tr -d ' ') distinct system calls made by $(awk '{print $1}' "$T/trace" | sort -u | wc -l | tr -d ' ') processes and threads"
@@ -152,10 +268,18 @@ else
 fi
 fi # the traced run
 
+inet=$(grep -E ' (socket|socketpair)\(' "$T/trace" | grep -v 'AF_UNIX' | head -n 3)
+bl=$(grep -E ' (bind|listen)\(' "$T/trace" | head -n 3)
+if [ -z "$inet$bl" ] && grep -q ' accept4\?(3,' "$T/trace"; then
+    ok "socket-activated: every socket made is AF_UNIX, none is bound or listens, connections are accepted on descriptor 3"
+else
+    not_ok "socket-activated: only AF_UNIX sockets, no bind or listen" "$inet" "$bl"
+fi
+
 # ---------------------------------------------------------------- exposure score
 score=$(systemd-analyze security --offline=yes "$unit" 2>/dev/null |
     sed -n 's/.*Overall exposure level for [^:]*: \([0-9.]*\).*/\1/p')
 diag "systemd-analyze security: $score"
-check "exposure score at most 1.2 (is ${score:-none})" \
-    awk -v s="${score:-99}" 'BEGIN { exit !(s <= 1.2) }'
+check "exposure score at most 0.3 (is ${score:-none})" \
+    awk -v s="${score:-99}" 'BEGIN { exit !(s <= 0.3) }'
 done_testing

@@ -15,28 +15,32 @@ export function batchUrl(imageUrl, tiles) {
 }
 
 /**
- * Parse a GVB1 response (an ArrayBuffer).  Returns [{level, tx, ty,
- * status, tile}], tile a Uint8Array view of the buffer (empty unless
- * status is 200).  Throws on a malformed body.
+ * Parse a GVB1 or GVB2 response (an ArrayBuffer; GVB2 frames also carry
+ * the tile's ETag, docs/API.md).  Returns [{level, tx, ty, status, tile,
+ * etag}], tile a Uint8Array view of the buffer (empty unless status is
+ * 200), etag '' in GVB1.  Throws on a malformed body.
  */
 export function parseBatch(buf) {
     const dv = new DataView(buf);
-    if (buf.byteLength < 8 || dv.getUint32(0, false) !== 0x47564231)   // "GVB1"
-        throw new Error('batch: not a GVB1 body');
+    const magic = buf.byteLength < 8 ? 0 : dv.getUint32(0, false);
+    if (magic !== 0x47564231 && magic !== 0x47564232)   // "GVB1", "GVB2"
+        throw new Error('batch: not a GVB1 or GVB2 body');
     const n = dv.getUint32(4, true), out = [];
     let off = 8;
     for (let i = 0; i < n; i++) {
         if (off + 20 > buf.byteLength)
             throw new Error(`batch: frame ${i} of ${n} is cut short`);
-        const len = dv.getUint32(off + 16, true);
-        if (off + 20 + len > buf.byteLength)
+        const e = dv.getUint8(off + 1), len = dv.getUint32(off + 16, true);
+        const at = off + 20 + ((e + 3) & ~3);
+        if (at + len > buf.byteLength)
             throw new Error(`batch: tile ${i} of ${n} is cut short`);
         out.push({
             level: dv.getUint8(off), tx: dv.getUint32(off + 4, true),
             ty: dv.getUint32(off + 8, true), status: dv.getUint32(off + 12, true),
-            tile: new Uint8Array(buf, off + 20, len),
+            tile: new Uint8Array(buf, at, len),
+            etag: new TextDecoder().decode(new Uint8Array(buf, off + 20, e)),
         });
-        off += 20 + ((len + 3) & ~3);
+        off = at + ((len + 3) & ~3);
     }
     return out;
 }

@@ -21,7 +21,10 @@
 // parent pulling).  Then tiles are decoded, each right after its parent,
 // until the time slice is spent.  Only when every needed tile is resident
 // or on its way does the prefetch circle get fetched and decoded, and then
-// only into free room or room taken by tiles outside view and circle.
+// only into free room or room taken by tiles outside view and circle,
+// never by the parent the tile is about to be decoded from (a prefetched
+// tile's parent is often outside both; evicting it left a tile decoded
+// from no texture, drawn wrong once the view reached it).
 
 import { TILE_BYTES } from './gpu_decode.js';
 import { TILE } from './tilebuf.js';
@@ -281,9 +284,12 @@ export class TileCache {
                     break;                      // waits for its data
                 if (n > 0 && (performance.now() - t0 >= budgetMs || this.frameDecodes >= DECODES_PER_FRAME))
                     return n;
-                if (max !== null && !this.makeRoom(keep))
-                    return n;
+                // The parent is what this decode reads: making room must
+                // not evict it (it need not be in `keep`: a prefetched
+                // tile's parent is often outside the view's chains).
                 const [k, x, y] = c;
+                if (max !== null && !this.makeRoom(keep, key(k + 1, x >> 1, y >> 1)))
+                    return n;
                 const parent = this.get(k + 1, x >> 1, y >> 1);
                 const d0 = performance.now();
                 const tex = this.dec.decode(p.prep, parent, x & 1, y & 1);
@@ -306,17 +312,19 @@ export class TileCache {
     }
 
     // For prefetching: is there room for one more tile, evicting only
-    // tiles outside `keep`?
-    makeRoom(keep) {
+    // tiles outside `keep` and other than `spare`?
+    makeRoom(keep, spare) {
         if (this.texBytes + TILE_BYTES <= this.budget)
             return true;
-        return this.evictOne(keep);
+        return this.evictOne(keep, spare);
     }
 
-    evictOne(keep) {
+    // Evict the least recently used tile that is neither fixed, in `keep`
+    // nor `spare`; false when there is none.
+    evictOne(keep, spare = null) {
         let old = null;
         for (const [kk, e] of this.tex)
-            if (!e.fixed && !keep.has(kk) && (!old || e.used < old[1].used))
+            if (!e.fixed && !keep.has(kk) && kk !== spare && (!old || e.used < old[1].used))
                 old = [kk, e];
         if (!old)
             return false;
