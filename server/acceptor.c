@@ -39,6 +39,7 @@ struct acceptor {
     atomic_uint *per_daemon;  /* open connections by daemon */
     atomic_int *busy;         /* by daemon: its thread is in a handler */
     atomic_int waiting;       /* the thread waits for an idle daemon */
+    int warned;               /* starved of descriptors, said so */
 };
 
 int acceptor_listen(const char *addr, unsigned port, uint16_t *bound,
@@ -133,13 +134,15 @@ static int accept_one(struct acceptor *a)
     if (fd < 0) {
         if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS ||
             errno == ENOMEM) {
-            log_msg(LOG_WARN, "http", "accept: %s (%u connections open); "
-                    "waiting for one to close", strerror(errno),
-                    atomic_load(&a->open));
+            if (!a->warned++) /* once until an accept succeeds */
+                log_msg(LOG_WARN, "http", "accept: %s (%u connections open); "
+                        "waiting for one to close", strerror(errno),
+                        atomic_load(&a->open));
             return -1;
         }
         return 0; /* EAGAIN, a client gone before accept, a signal */
     }
+    a->warned = 0;
     int i = least_loaded(a, 1);
     if (i < 0) /* they all turned busy since the poll: the fewest then */
         i = least_loaded(a, 0);
