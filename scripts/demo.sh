@@ -16,5 +16,6 @@ echo "gigaview: serving stores/ at http://127.0.0.1:$port/"
 echo "  image list    http://127.0.0.1:$port/v1/images"
 echo "  IIIF          http://127.0.0.1:$port/iiif/3/seeding/info.json"
 echo "  a region      http://127.0.0.1:$port/iiif/3/seeding/full/1024,/0/default.jpg"
+echo "  filters       http://127.0.0.1:$port/v1/filters (the tree's filters/library)"
 echo "  (Ctrl-C stops the server)"
 exec build/gigaviewd -l 127.0.0.1 -p "$port" -d stores

@@ -1,6 +1,10 @@
 #!/bin/sh
-# install-deps.sh - install the Debian 12 packages gigaview builds, tests and
-# runs with.  Installs only what is missing; needs root (or sudo).
+# install-deps.sh [--bench] [--print] - install the Debian 12 packages
+# gigaview builds, tests and runs with.  Installs only what is missing;
+# needs root (or sudo).
+#   --bench  also what the benchmarks (bench/) and the conf/ examples run:
+#            the anchors they measure against and their load generators
+#   --print  print the missing packages, one a line, and install nothing
 set -eu
 
 PACKAGES="build-essential autoconf automake libtool pkg-config
@@ -9,15 +13,46 @@ PACKAGES="build-essential autoconf automake libtool pkg-config
   libcurl4-openssl-dev time valgrind python3
   chromium nodejs"
 
+# bench/*.sh and conf/: nginx (http-tiles, http-iiif), wrk, curl and jq
+# (http-*), iipsrv behind spawn-fcgi (http-iiif), vips (encode-speed,
+# rate-distortion, browser-bytes, http-iiif), cjpeg/djpeg and cwebp/dwebp
+# (rate-distortion, browser-bytes), astcenc (rate-distortion), OpenCV and
+# SciPy (edt-speed), GNU parallel (conf/parallel-encode.sh).
+BENCH_PACKAGES="nginx-light wrk curl jq iipimage-server spawn-fcgi
+  libvips-tools libjpeg-turbo-progs webp astcenc
+  python3-opencv python3-scipy parallel"
+
+bench=0 print=0
+for arg in "$@"; do
+    case $arg in
+    --bench) bench=1 ;;
+    --print) print=1 ;;
+    *) echo "usage: install-deps.sh [--bench] [--print]" >&2; exit 2 ;;
+    esac
+done
+wanted=$PACKAGES
+[ "$bench" = 1 ] && wanted="$wanted $BENCH_PACKAGES"
+
 missing=""
-for p in $PACKAGES; do
+for p in $wanted; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" ||
         missing="$missing $p"
 done
+# nginx-light provides nginx: a machine with another nginx flavour
+# (nginx, nginx-full) has what the benchmarks run.
+case " $missing " in
+*" nginx-light "*)
+    command -v nginx >/dev/null 2>&1 &&
+        missing=$(echo "$missing" | sed 's/ nginx-light//') ;;
+esac
 # npm for the browser test (tests/browser): Debian's nodejs comes without
 # it, but a nodejs that bundles its own (NodeSource's) conflicts with
 # Debian's npm package, so ask for it only when there is no npm at all.
 command -v npm >/dev/null 2>&1 || missing="$missing npm"
+if [ "$print" = 1 ]; then
+    for p in $missing; do echo "$p"; done
+    exit 0
+fi
 [ -z "$missing" ] && exit 0
 
 SUDO=""

@@ -2,13 +2,17 @@
  * http.c - libmicrohttpd set-up, routing, per-request state, responses
  * and the error table (see http.h).
  *
- * The daemon runs MHD's internal threads: a pool of cfg->threads threads,
- * each with its own epoll set, so a handler may block (a page read, a
- * region render) without stalling other connections on other threads.
- * MHD_USE_ITC is required by MHD_quiesce_daemon, which SIGTERM uses to
- * stop accepting while requests in flight finish.
+ * cfg->threads libmicrohttpd daemons, each one internal thread with its
+ * own epoll set and no listen socket, so a handler may block (a page read,
+ * a region render) without stalling connections on other threads.
+ * acceptor.c accepts on the one listen socket and hands each connection
+ * to the daemon with the fewest (MHD_add_connection, which needs
+ * MHD_USE_ITC to wake the daemon's thread); SIGTERM stops the acceptor,
+ * so no connection is accepted while requests in flight finish.
  */
 #include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
 #include <netinet/in.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -17,6 +21,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "acceptor.h"
 #include "http.h"
 #include "listen_fds.h"
 #include "log.h"
@@ -418,10 +423,26 @@ static enum MHD_Result send_too_large(struct req *r)
                             (unsigned long long)r->srv->cfg->max_request_bytes);
 }
 
-static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
-                                  const char *url, const char *method,
-                                  const char *version, const char *upload,
-                                  size_t *upload_size, void **req_cls)
+/* The daemons, one per thread, and what their callbacks need to tell the
+ * acceptor which one a connection left or is busy. */
+struct http_threads {
+    int n;
+    struct MHD_Daemon **daemon;
+    struct http_thread {
+        struct http_threads *all;
+        int index;
+    } *thread;
+    struct acceptor *acceptor;
+};
+
+/* The daemon this thread runs: set by its first connection's start,
+ * which comes before any of its requests. */
+static _Thread_local struct http_thread *this_thread;
+
+static enum MHD_Result handle_request(void *cls, struct MHD_Connection *conn,
+                                      const char *url, const char *method,
+                                      const char *version, const char *upload,
+                                      size_t *upload_size, void **req_cls)
 {
     (void)version;
     struct req *r = *req_cls;
@@ -475,6 +496,23 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
     return dispatch(r);
 }
 
+/* The access handler: handle_request, with the acceptor told that this
+ * thread is busy meanwhile. */
+static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
+                                  const char *url, const char *method,
+                                  const char *version, const char *upload,
+                                  size_t *upload_size, void **req_cls)
+{
+    struct http_thread *th = this_thread;
+    if (th)
+        acceptor_busy(th->all->acceptor, th->index, 1);
+    enum MHD_Result ret = handle_request(cls, conn, url, method, version,
+                                         upload, upload_size, req_cls);
+    if (th)
+        acceptor_busy(th->all->acceptor, th->index, 0);
+    return ret;
+}
+
 static void on_completed(void *cls, struct MHD_Connection *conn,
                          void **req_cls, enum MHD_RequestTerminationCode why)
 {
@@ -503,16 +541,20 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
     free(r);
 }
 
+
 static void on_connection(void *cls, struct MHD_Connection *conn,
                           void **socket_ctx, enum MHD_ConnectionNotificationCode t)
 {
-    (void)cls;
+    struct http_thread *th = cls;
     (void)conn;
     (void)socket_ctx;
-    if (t == MHD_CONNECTION_NOTIFY_STARTED)
-        atomic_fetch_add(&metrics.open_connections, 1);
-    else
-        atomic_fetch_sub(&metrics.open_connections, 1);
+    this_thread = th;
+    /* The acceptor first: once /metrics shows a connection closed, the
+     * acceptor has counted it out too (tests/http_metrics.sh relies on
+     * it). */
+    if (t != MHD_CONNECTION_NOTIFY_STARTED)
+        acceptor_closed(th->all->acceptor, th->index);
+    metrics_connection(t == MHD_CONNECTION_NOTIFY_STARTED);
 }
 
 #pragma GCC diagnostic push
@@ -530,12 +572,10 @@ static void mhd_logger(void *cls, const char *fmt, va_list ap)
 }
 #pragma GCC diagnostic pop
 
-/* Where the daemon listens, as libmicrohttpd options in opt[0..1]: the
- * socket systemd passed (listen_fds.h; its port into *port), else a
- * socket of its own bound to ss (listen, port).  0, or -1 after a
- * message. */
-static int listen_options(struct sockaddr_storage *ss, struct MHD_OptionItem *opt,
-                          uint16_t *port)
+/* The socket to accept on: the one systemd passed (listen_fds.h; made
+ * non-blocking, its port into *port), else a socket of our own bound to
+ * listen:port (acceptor_listen).  Returns it, or -1 after a message. */
+static int open_listen_socket(const struct settings *cfg, uint16_t *port)
 {
     struct gv_error err;
     int fd = listen_fds_take(&err);
@@ -543,10 +583,18 @@ static int listen_options(struct sockaddr_storage *ss, struct MHD_OptionItem *op
         log_msg(LOG_ERROR, "http", "%s", err.text);
         return -1;
     }
-    opt[0] = (struct MHD_OptionItem){MHD_OPTION_SOCK_ADDR, 0, ss};
-    opt[1] = (struct MHD_OptionItem){MHD_OPTION_END, 0, NULL};
-    if (fd < 0)
-        return 0;
+    if (fd < 0) {
+        fd = acceptor_listen(cfg->listen, (unsigned)cfg->port, port, &err);
+        if (fd < 0)
+            log_msg(LOG_ERROR, "http", "%s", err.text);
+        return fd;
+    }
+    int fl = fcntl(fd, F_GETFL);
+    if (fl < 0 || fcntl(fd, F_SETFL, fl | O_NONBLOCK) < 0) {
+        log_msg(LOG_ERROR, "http", "the socket systemd passed: %s", strerror(errno));
+        close(fd);
+        return -1;
+    }
     struct sockaddr_storage at;
     socklen_t len = sizeof at;
     char host[INET6_ADDRSTRLEN] = "?";
@@ -562,8 +610,40 @@ static int listen_options(struct sockaddr_storage *ss, struct MHD_OptionItem *op
     }
     log_msg(LOG_INFO, "http", "listening on the socket systemd passed (fd %d, %s "
             "port %u); listen and port are not used", fd, host, *port);
-    opt[0] = (struct MHD_OptionItem){MHD_OPTION_LISTEN_SOCKET, fd, NULL};
-    return 0;
+    return fd;
+}
+
+/* Stop the daemons started so far and free them (the acceptor stopped). */
+static void stop_threads(struct http_threads *h)
+{
+    for (int i = 0; i < h->n; i++)
+        if (h->daemon[i])
+            MHD_stop_daemon(h->daemon[i]);
+    acceptor_free(h->acceptor);
+    free(h->daemon);
+    free(h->thread);
+    free(h);
+}
+
+/* One daemon without a listen socket, on its own internal thread. */
+static struct MHD_Daemon *start_daemon(struct server *srv, struct http_thread *th)
+{
+    const struct settings *cfg = srv->cfg;
+    /* MHD_ALLOW_SUSPEND_RESUME: filter requests wait for their worker
+     * suspended, not blocking a thread (route_filters.c).  The acceptor
+     * keeps connection_limit over all daemons, so none refuses one. */
+    unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL |
+                     MHD_USE_ITC | MHD_USE_ERROR_LOG | MHD_ALLOW_SUSPEND_RESUME |
+                     MHD_USE_NO_LISTEN_SOCKET;
+    return MHD_start_daemon(
+        flags, 0, NULL, NULL, on_request, srv,
+        MHD_OPTION_EXTERNAL_LOGGER, mhd_logger, NULL, /* first, MHD insists */
+        MHD_OPTION_CONNECTION_LIMIT, (unsigned)cfg->connection_limit,
+        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)cfg->connection_timeout,
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, srv,
+        MHD_OPTION_NOTIFY_CONNECTION, on_connection, th,
+        MHD_OPTION_UNESCAPE_CALLBACK, unescape, NULL,
+        MHD_OPTION_END);
 }
 
 int http_start(struct server *srv)
@@ -579,60 +659,53 @@ int http_start(struct server *srv)
     }
     metrics_init(names, ROUTE_COUNT);
     clock_gettime(CLOCK_MONOTONIC, &srv->started);
-    srv->listen_fd = -1;
 
-    struct sockaddr_storage ss;
-    memset(&ss, 0, sizeof ss);
-    /* MHD_ALLOW_SUSPEND_RESUME: filter requests wait for their worker
-     * suspended, not blocking a pool thread (route_filters.c). */
-    unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL |
-                     MHD_USE_ITC | MHD_USE_ERROR_LOG | MHD_ALLOW_SUSPEND_RESUME;
-    struct sockaddr_in *in4 = (struct sockaddr_in *)&ss;
-    struct sockaddr_in6 *in6 = (struct sockaddr_in6 *)&ss;
-    if (inet_pton(AF_INET, cfg->listen, &in4->sin_addr) == 1) {
-        in4->sin_family = AF_INET;
-        in4->sin_port = htons((uint16_t)cfg->port);
-    } else if (inet_pton(AF_INET6, cfg->listen, &in6->sin6_addr) == 1) {
-        in6->sin6_family = AF_INET6;
-        in6->sin6_port = htons((uint16_t)cfg->port);
-        flags |= MHD_USE_IPv6;
-    } else {
-        log_msg(LOG_ERROR, "http", "listen: '%s' is not an IPv4 or IPv6 address",
-                cfg->listen);
+    struct gv_error err;
+    srv->listen_fd = open_listen_socket(cfg, &srv->port);
+    if (srv->listen_fd < 0)
+        return -1;
+    int n = (int)cfg->threads;
+    struct http_threads *h = calloc(1, sizeof *h);
+    if (!h || !(h->daemon = calloc((size_t)n, sizeof *h->daemon)) ||
+        !(h->thread = calloc((size_t)n, sizeof *h->thread))) {
+        if (h)
+            free(h->daemon);
+        free(h);
+        log_msg(LOG_ERROR, "http", "out of memory");
+        close(srv->listen_fd);
+        srv->listen_fd = -1;
         return -1;
     }
-    struct MHD_OptionItem where[2];
-    uint16_t passed_port = 0;
-    if (listen_options(&ss, where, &passed_port) < 0)
-        return -1;
-    srv->daemon = MHD_start_daemon(
-        flags, (uint16_t)cfg->port, NULL, NULL, on_request, srv,
-        MHD_OPTION_EXTERNAL_LOGGER, mhd_logger, NULL, /* first, MHD insists */
-        MHD_OPTION_ARRAY, where,
-        MHD_OPTION_THREAD_POOL_SIZE, (unsigned)cfg->threads,
-        MHD_OPTION_CONNECTION_LIMIT, (unsigned)cfg->connection_limit,
-        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)cfg->connection_timeout,
-        MHD_OPTION_NOTIFY_COMPLETED, on_completed, srv,
-        MHD_OPTION_NOTIFY_CONNECTION, on_connection, srv,
-        MHD_OPTION_UNESCAPE_CALLBACK, unescape, NULL,
-        MHD_OPTION_END);
-    if (!srv->daemon) {
-        log_msg(LOG_ERROR, "http", "cannot listen on %s port %llu (in use, or "
-                "not a local address?)", cfg->listen,
-                (unsigned long long)cfg->port);
+    h->n = n;
+    for (int i = 0; i < n; i++) {
+        h->thread[i].all = h;
+        h->thread[i].index = i;
+        if (!(h->daemon[i] = start_daemon(srv, &h->thread[i]))) {
+            log_msg(LOG_ERROR, "http", "cannot start HTTP thread %d of %d", i + 1, n);
+            stop_threads(h);
+            close(srv->listen_fd);
+            srv->listen_fd = -1;
+            return -1;
+        }
+    }
+    h->acceptor = acceptor_start(srv->listen_fd, h->daemon, n,
+                                 (unsigned)cfg->connection_limit, &err);
+    if (!h->acceptor) {
+        log_msg(LOG_ERROR, "http", "%s", err.text);
+        stop_threads(h);
+        close(srv->listen_fd);
+        srv->listen_fd = -1;
         return -1;
     }
-    const union MHD_DaemonInfo *di =
-        MHD_get_daemon_info(srv->daemon, MHD_DAEMON_INFO_BIND_PORT);
-    srv->port = passed_port ? passed_port : di ? di->port : (uint16_t)cfg->port;
+    srv->http = h;
     return 0;
 }
 
 void http_drain_and_stop(struct server *srv, unsigned timeout_s)
 {
-    if (!srv->daemon)
+    if (!srv->http)
         return;
-    srv->listen_fd = MHD_quiesce_daemon(srv->daemon);
+    acceptor_stop(srv->http->acceptor);
     struct timespec t0, now;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     int waited = 0;
@@ -649,8 +722,8 @@ void http_drain_and_stop(struct server *srv, unsigned timeout_s)
         struct timespec ts = {0, 20 * 1000 * 1000};
         nanosleep(&ts, NULL);
     }
-    MHD_stop_daemon(srv->daemon);
-    srv->daemon = NULL;
+    stop_threads(srv->http);
+    srv->http = NULL;
     if (srv->listen_fd >= 0)
         close(srv->listen_fd);
     srv->listen_fd = -1;

@@ -1,8 +1,9 @@
 /*
  * http.h - the HTTP layer of gigaviewd over libmicrohttpd.
  *
- * http.c owns the daemon (thread pool over epoll, connection limit and
- * timeout), the access handler that matches a request against the route
+ * http.c owns the daemons (one libmicrohttpd daemon over epoll per
+ * thread, fed by acceptor.c's one accepting thread, which keeps the
+ * connection limit; the idle timeout), the access handler that matches a request against the route
  * table (routes.c) and the per-request state (struct req, kept in
  * libmicrohttpd's *req_cls and freed in the completion callback, which
  * also writes the access line and the metrics).  It also owns the one
@@ -41,13 +42,14 @@ struct output_cache;
 struct render_pool;
 struct filter_jobs;
 struct filter_store;
+struct http_threads;
 
 struct server {
     const struct settings *cfg;
     struct catalog *catalog;
     struct page_cache *pages;
-    struct MHD_Daemon *daemon;
-    int listen_fd;            /* after quiesce: closed after stop */
+    struct http_threads *http; /* http.c: the daemons and the acceptor */
+    int listen_fd;            /* closed after the daemons stop */
     uint16_t port;
     struct timespec started;  /* CLOCK_MONOTONIC */
     /* The EGL context opened at start-up (gpu = auto), closed after the

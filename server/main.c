@@ -215,9 +215,10 @@ static int start_filters(struct server *srv)
             return -1;
         }
         log_msg(LOG_INFO, "filter", "%d workers (%s), %llu ms per job, memory "
-                "limit %llu bytes", (int)cfg->filter_workers, path,
-                (unsigned long long)cfg->filter_timeout_ms,
-                (unsigned long long)cfg->filter_memory_limit);
+                "limit %llu bytes, stock graphs in %s", (int)cfg->filter_workers,
+                path, (unsigned long long)cfg->filter_timeout_ms,
+                (unsigned long long)cfg->filter_memory_limit,
+                cfg->filter_library_dir);
         return 0;
     }
     log_msg(LOG_INFO, "filter", "%s", srv->filter_reason + 8 /* "filter: " */);
@@ -267,6 +268,7 @@ static int configure(int argc, char **argv, struct settings *cfg)
                 errno ? strerror(errno) : "not a directory");
         return 1;
     }
+    settings_resolve(cfg);
     if (test) {
         printf("gigaviewd: configuration %s is valid\n", file ? file : "(defaults)");
         return 0;

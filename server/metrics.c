@@ -16,9 +16,9 @@ const double metrics_bucket_le[METRICS_BUCKETS] = {
     0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05,
     0.1, 0.25, 0.5, 1, 2.5, 5, 10};
 
-const unsigned metrics_status_codes[METRICS_STATUSES] = {
-    200, 204, 303, 304, 400, 401, 403, 404, 405, 413, 415, 500, 501, 503,
-    507, 416};
+/* This thread's slot in the per-thread counters; -1 until its first
+ * connection. */
+static _Thread_local int thread_slot = -1;
 
 void metrics_init(const char *const *names, int n)
 {
@@ -37,10 +37,9 @@ void metrics_record(int route, unsigned status, uint64_t usec, uint64_t bytes)
     if (route < 0)
         return;
     struct metrics_route *r = &metrics.route[route];
-    int s = METRICS_STATUSES;
-    for (int i = 0; i < METRICS_STATUSES; i++)
-        if (metrics_status_codes[i] == status)
-            s = i;
+    int s = METRICS_STATUSES; /* "other" */
+    if (status >= METRICS_STATUS_MIN && status <= METRICS_STATUS_MAX)
+        s = (int)(status - METRICS_STATUS_MIN);
     atomic_fetch_add(&r->by_status[s], 1);
     double sec = (double)usec / 1e6;
     for (int i = 0; i < METRICS_BUCKETS; i++)
@@ -51,6 +50,22 @@ void metrics_record(int route, unsigned status, uint64_t usec, uint64_t bytes)
     atomic_fetch_add(&r->count, 1);
     atomic_fetch_add(&r->usec_sum, usec);
     atomic_fetch_add(&metrics.bytes_sent, bytes);
+}
+
+void metrics_connection(int opened)
+{
+    if (thread_slot < 0) {
+        int n = atomic_fetch_add(&metrics.nthreads, 1);
+        thread_slot = n < METRICS_THREADS ? n : METRICS_THREADS - 1;
+    }
+    if (opened) {
+        atomic_fetch_add(&metrics.open_connections, 1);
+        atomic_fetch_add(&metrics.thread_open[thread_slot], 1);
+        atomic_fetch_add(&metrics.thread_connections[thread_slot], 1);
+    } else {
+        atomic_fetch_sub(&metrics.open_connections, 1);
+        atomic_fetch_sub(&metrics.thread_open[thread_slot], 1);
+    }
 }
 
 /* ------------------------------------------------------- Prometheus text */
@@ -128,8 +143,8 @@ static void write_requests(struct prom *p, const struct metrics_route *m)
         if (!v)
             continue;
         if (s < METRICS_STATUSES)
-            prom_printf(p, "gigaview_http_requests_total{route=\"%s\",status=\"%u\"} "
-                        "%llu\n", m->name, metrics_status_codes[s],
+            prom_printf(p, "gigaview_http_requests_total{route=\"%s\",status=\"%d\"} "
+                        "%llu\n", m->name, METRICS_STATUS_MIN + s,
                         (unsigned long long)v);
         else
             prom_printf(p, "gigaview_http_requests_total{route=\"%s\",status=\"other\"} "
@@ -155,6 +170,26 @@ static void write_durations(struct prom *p, const struct metrics_route *m)
                 (unsigned long long)count);
 }
 
+/* Connections by thread: how evenly the thread pool shares them. */
+static void write_threads(struct prom *p)
+{
+    int n = atomic_load(&metrics.nthreads);
+    if (n > METRICS_THREADS)
+        n = METRICS_THREADS;
+    prom_family(p, "gigaview_http_thread_connections_total", "counter",
+                "Connections started, by the libmicrohttpd thread serving "
+                "them (numbered as they first had one).");
+    for (int t = 0; t < n; t++)
+        prom_printf(p, "gigaview_http_thread_connections_total{thread=\"%d\"} "
+                    "%llu\n", t, (unsigned long long)atomic_load(
+                        &metrics.thread_connections[t]));
+    prom_family(p, "gigaview_http_thread_open_connections", "gauge",
+                "Open connections, by the libmicrohttpd thread serving them.");
+    for (int t = 0; t < n; t++)
+        prom_printf(p, "gigaview_http_thread_open_connections{thread=\"%d\"} %d\n",
+                    t, atomic_load(&metrics.thread_open[t]));
+}
+
 void metrics_write(struct prom *p)
 {
     prom_family(p, "gigaview_http_requests_total", "counter",
@@ -167,4 +202,5 @@ void metrics_write(struct prom *p)
     for (int i = 0; i < metrics.nroutes; i++)
         if (first_of_name(i))
             write_durations(p, &metrics.route[i]);
+    write_threads(p);
 }

@@ -2,7 +2,11 @@
  * metrics.h - request counters and latency histograms for /metrics.
  *
  * Counters are C11 atomics indexed by route (the route table's order) and
- * by status code, so recording a request takes no lock.  The one writer
+ * by status code, so recording a request takes no lock.  Every status
+ * from 100 to 599 has its own counter, so whatever gigaviewd sends (the
+ * error table's, 201, 303, 304, 499 for a client gone before the answer)
+ * is counted under its own label; connections are also counted per
+ * libmicrohttpd thread, to show how evenly the pool shares them.  The one writer
  * of the Prometheus text format 0.0.4 is here too (struct prom): these
  * counters, the page cache's and the filter pool's are all written with
  * it, and route_health.c serves the text at /metrics.
@@ -19,9 +23,14 @@
  * a large region render. */
 #define METRICS_BUCKETS 14
 extern const double metrics_bucket_le[METRICS_BUCKETS];
-/* Status codes counted one by one; anything else counts as "other". */
-#define METRICS_STATUSES 16
-extern const unsigned metrics_status_codes[METRICS_STATUSES];
+/* Status codes METRICS_STATUS_MIN..MAX are counted one by one; anything
+ * else (never sent) would count as "other". */
+#define METRICS_STATUS_MIN 100
+#define METRICS_STATUS_MAX 599
+#define METRICS_STATUSES (METRICS_STATUS_MAX - METRICS_STATUS_MIN + 1)
+/* Threads whose connections are counted one by one (the settings' largest
+ * thread pool); connections of further threads count under the last. */
+#define METRICS_THREADS 256
 
 struct metrics_route {
     const char *name;
@@ -35,6 +44,11 @@ struct metrics {
     struct metrics_route route[METRICS_ROUTES];
     int nroutes;
     atomic_int open_connections;
+    /* By thread, numbered in the order the threads first had a
+     * connection: connections started, and open now. */
+    atomic_uint_fast64_t thread_connections[METRICS_THREADS];
+    atomic_int thread_open[METRICS_THREADS];
+    atomic_int nthreads;      /* slots numbered so far */
     atomic_int in_flight;
     atomic_uint_fast64_t page_errors;   /* answers (tiles, batch entries,
                                            regions, IIIF images) that failed
@@ -49,6 +63,12 @@ void metrics_init(const char *const *names, int n);
 
 /* Record one finished request of route `route` (-1: no route matched). */
 void metrics_record(int route, unsigned status, uint64_t usec, uint64_t bytes);
+
+/* A connection started (opened 1) or closed (opened 0) on the calling
+ * thread: the open-connection gauges, and the per-thread counters.  Call
+ * it on the thread that serves the connection (libmicrohttpd's connection
+ * notifications are). */
+void metrics_connection(int opened);
 
 /*
  * A Prometheus text being written: s holds len bytes (malloc'ed, the
@@ -77,7 +97,8 @@ void prom_metric(struct prom *p, const char *name, const char *type,
     __attribute__((format(printf, 5, 6)));
 
 /* The request counters by route and status and the latency histograms by
- * route, each route name once (routes that share a name share counters). */
+ * route, each route name once (routes that share a name share counters),
+ * and the connections by thread. */
 void metrics_write(struct prom *p);
 
 #endif

@@ -7,10 +7,12 @@
  * outside [min, max] are errors, never silently clamped.
  */
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "settings.h"
 #include "log.h"
@@ -18,6 +20,15 @@
 /* Where `make install` puts the stock filter graphs (Makefile.am). */
 #ifndef GV_FILTER_LIBRARY_DIR
 #define GV_FILTER_LIBRARY_DIR "/usr/local/share/gigaview/filters"
+#endif
+/* The build directory this gigaviewd was built in and the stock graphs
+ * of its source tree (Makefile.am); "" in other builds (the fuzz
+ * targets), which then always use the installed graphs. */
+#ifndef GV_BUILD_DIR
+#define GV_BUILD_DIR ""
+#endif
+#ifndef GV_SOURCE_FILTER_LIBRARY_DIR
+#define GV_SOURCE_FILTER_LIBRARY_DIR ""
 #endif
 
 enum settings_type { T_STR, T_UINT, T_SIZE, T_DOUBLE, T_LEVEL, T_GPU,
@@ -43,7 +54,7 @@ static const struct settings_key keys[] = {
     {"store_dir", T_STR, F(store_dir), "/var/lib/gigaview/stores", 0, 0,
      "directory of *.gv stores; the id is the file name without .gv"},
     {"threads", T_UINT, F(threads), "4", 1, 256,
-     "worker threads (libmicrohttpd thread pool, epoll)"},
+     "HTTP threads (one libmicrohttpd daemon each, epoll), fed by one accepting thread"},
     {"cache_bytes", T_SIZE, F(cache_bytes), "256M", 0, 1e15,
      "page cache bound in bytes (K, M, G suffixes); 0 disables caching"},
     {"decoder_cache_bytes", T_SIZE, F(decoder_cache_bytes), "128M", 0, 1e12,
@@ -57,7 +68,7 @@ static const struct settings_key keys[] = {
     {"max_upscale", T_DOUBLE, F(max_upscale), "4", 1, 64,
      "largest IIIF ^ upscaling factor"},
     {"connection_limit", T_UINT, F(connection_limit), "1024", 1, 1000000,
-     "simultaneous connections; further ones are refused"},
+     "simultaneous connections; further ones wait in the accept queue"},
     {"connection_timeout", T_UINT, F(connection_timeout), "30", 1, 86400,
      "seconds a connection may stay idle (slow clients are closed)"},
     {"drain_timeout", T_UINT, F(drain_timeout), "10", 0, 3600,
@@ -98,8 +109,10 @@ static const struct settings_key keys[] = {
      "the gigaview-filter-worker program (\"\": next to gigaviewd, else installed)"},
     {"filter_dir", T_STR, F(filter_dir), "/var/lib/gigaview-filters", 0, 0,
      "directory of graphs stored with POST /v1/filters (\"\": storing disabled)"},
-    {"filter_library_dir", T_STR, F(filter_library_dir), GV_FILTER_LIBRARY_DIR, 0, 0,
-     "directory of the stock filter graphs (*.json)"},
+    {"filter_library_dir", T_STR, F(filter_library_dir), "", 0, 0,
+     "directory of the stock filter graphs (*.json) (\"\": the source tree's "
+     "filters/library when gigaviewd runs from its build tree, else the "
+     "installed ones)"},
     {"filter_max_json_bytes", T_SIZE, F(filter_max_json_bytes), "64K", 64, 1048576,
      "largest filter graph document in bytes"},
     {"filter_max_json_depth", T_UINT, F(filter_max_json_depth), "16", 4, 64,
@@ -298,6 +311,33 @@ int settings_load(struct settings *c, const char *path, struct gv_error *err)
         rc = gv_fail_errno(err, errno, "%s: read error", path);
     fclose(f);
     return rc;
+}
+
+/* 1 if this process's executable lies in directory `dir` (both resolved
+ * with realpath, so symbolic links and ".." compare equal). */
+static int running_from(const char *dir)
+{
+    char exe[PATH_MAX], want[PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (!dir[0] || n <= 0 || !realpath(dir, want))
+        return 0;
+    exe[n] = '\0';
+    char *slash = strrchr(exe, '/');
+    if (!slash)
+        return 0;
+    *slash = '\0';
+    char here[PATH_MAX];
+    return realpath(exe[0] ? exe : "/", here) && !strcmp(here, want);
+}
+
+void settings_resolve(struct settings *c)
+{
+    if (c->filter_library_dir[0])
+        return;
+    const char *dir = GV_FILTER_LIBRARY_DIR;
+    if (GV_SOURCE_FILTER_LIBRARY_DIR[0] && running_from(GV_BUILD_DIR))
+        dir = GV_SOURCE_FILTER_LIBRARY_DIR;
+    snprintf(c->filter_library_dir, sizeof c->filter_library_dir, "%s", dir);
 }
 
 void settings_print_sample(void)

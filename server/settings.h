@@ -54,7 +54,8 @@ struct settings {
     uint64_t max_filter_pixels;    /* padded region of one filter request */
     char filter_worker[SETTINGS_PATH];      /* program; "" finds it */
     char filter_dir[SETTINGS_PATH];         /* stored graphs; "" none */
-    char filter_library_dir[SETTINGS_PATH]; /* stock graphs */
+    char filter_library_dir[SETTINGS_PATH]; /* stock graphs; "" finds
+                                               them (settings_resolve) */
     uint64_t filter_max_json_bytes;
     uint64_t filter_max_json_depth;
     uint64_t filter_max_modules;
@@ -79,6 +80,16 @@ int settings_load(struct settings *c, const char *path, struct gv_error *err);
  * messages.  Returns 0 or -1 with *err. */
 int settings_set(struct settings *c, const char *key, const char *value,
                const char *where, struct gv_error *err);
+
+/*
+ * Fill in the values whose default depends on where gigaviewd runs, after
+ * the file and the overrides: filter_library_dir "" becomes the source
+ * tree's filters/library when this executable lies in the build directory
+ * it was built in (a daemon run from its build tree, as scripts/demo.sh
+ * and the tests do), else the installed $(pkgdatadir)/filters.  A value
+ * set in the file is kept as it is.
+ */
+void settings_resolve(struct settings *c);
 
 /* Print every key with its default and help, as a sample file. */
 void settings_print_sample(void);

@@ -108,8 +108,8 @@ sed -e 's/^cache_bytes = .*/cache_bytes = 0/' "$T/d.conf" >"$T/d2.conf"
 echo 'decoder_cache_bytes = 1M' >>"$T/d2.conf"
 start_daemon "$T/d2.conf"
 cat >load.py <<'PY'
-# Client threads request URLs of store k until the file `stop` appears;
-# then print "STATUS COUNT" lines, "reset N" (connection failures) and
+# Client threads request URLs of store k until the file `stop` appears
+# (the first answer creates the file `answered`); then print "STATUS COUNT" lines, "reset N" (connection failures) and
 # "badbody N" (errors without the JSON error body).
 import http.client, json, os, sys, threading, time
 port, nthreads = int(sys.argv[1]), int(sys.argv[2])
@@ -148,6 +148,8 @@ def worker(k):
                 ok = False
         with lock:
             counts[r.status] = counts.get(r.status, 0) + 1
+            if not os.path.exists('answered'):
+                open('answered', 'w').close()
             if not ok:
                 badbody[0] += 1
 ts = [threading.Thread(target=worker, args=(k,)) for k in range(nthreads)]
@@ -158,13 +160,19 @@ print('reset', reset[0])
 print('badbody', badbody[0])
 PY
 
-# load_start / load_stop PHASE: run the clients; load_stop leaves the
-# summary in $T/w/PHASE.out and sets $statuses (e.g. "200 404").
+# load_start / load_stop PHASE: run the clients (load_start returns once
+# they have an answer, however long they take to start on a loaded
+# machine); load_stop leaves the summary in $T/w/PHASE.out and sets
+# $statuses (e.g. "200 404").
 load_start() {
-    rm -f stop
+    rm -f stop answered
     python3 load.py "$PORT" 6 >"$1.out" 2>"$1.err" &
     LPID=$!
-    sleep 0.5
+    i=0
+    while [ ! -e answered ] && [ $i -lt 600 ] && kill -0 "$LPID" 2>/dev/null; do
+        sleep 0.05
+        i=$((i + 1))
+    done
 }
 load_stop() {
     touch stop

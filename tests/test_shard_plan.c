@@ -6,8 +6,8 @@
  * and their ancestors (so the shards together cover every tile, and each
  * has the parent of everything it encodes), at most one tile per level is
  * shared per cut, and the level-0 pixels are split evenly to within one
- * tile.  Also the I/N parser and the refusal of sizes whose tiles do not
- * form a quadtree.
+ * tile.  Also the I/N parser and the sizes whose parents need the third
+ * term of the tiles_x rule (1026 wide), which shard like any other.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -90,6 +90,7 @@ int main(void)
     static const struct { uint32_t w, h; } sizes[] = {
         {1100, 700}, {4700, 1100}, {513, 513}, {600, 600}, {70000, 1},
         {1, 70000}, {40000, 20000}, {9000, 9000}, {3000, 20000},
+        {1026, 2050}, {4098, 1026},
     };
     static const int counts[] = {1, 2, 3, 4, 7, 16, 100};
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {

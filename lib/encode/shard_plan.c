@@ -60,14 +60,6 @@ int gv_shard_plan_init(struct gv_shard_plan *p, const struct gv_geometry *g,
     p->count = count;
     if (g->root == 0)
         return 0;   /* no tiles: the root is the whole store */
-    for (int k = 0; k + 1 < g->root; k++) {
-        /* Each tile needs its parent tile (tx/2, ty/2) one level up. */
-        const struct gv_level *l = &g->level[k], *u = &g->level[k + 1];
-        if ((l->tiles_x - 1) / 2 >= u->tiles_x || (l->tiles_y - 1) / 2 >= u->tiles_y)
-            return gv_fail(err, GV_EINVAL, "shard: level %d of a %ux%u image has "
-                           "tiles without a parent tile; this size cannot be "
-                           "sharded", k, g->width, g->height);
-    }
     for (int k = 0; k < g->root; k++) {
         const struct gv_level *l = &g->level[k];
         p->want[k] = calloc((size_t)l->tiles_x * l->tiles_y, 1);
@@ -85,7 +77,8 @@ int gv_shard_plan_init(struct gv_shard_plan *p, const struct gv_geometry *g,
     while ((1ull << s) < l0->tiles_x || (1ull << s) < l0->tiles_y)
         s++;
     walk(&w, 0, 0, s);
-    /* Ancestors: a wanted tile wants its parent. */
+    /* Ancestors: a wanted tile wants its parent, which exists by the
+     * tiles_x rule of docs/FORMAT.md section 2 (geometry.c). */
     for (int k = 0; k + 1 < g->root; k++) {
         const struct gv_level *l = &g->level[k], *u = &g->level[k + 1];
         for (uint32_t ty = 0; ty < l->tiles_y; ty++)

@@ -46,9 +46,9 @@ struct gv_shard_plan {
 /*
  * Plan shard `index` (0-based) of `count` (1..GV_SHARD_MAX) for geometry
  * *g.  A shard may own no tile (more shards than level-0 tiles); its plan
- * is then empty.  Returns 0, or -1 with *err filled (bad index or count,
- * no memory, or a geometry whose tiles do not form a quadtree).  Free
- * with gv_shard_plan_free.
+ * is then empty.  Every geometry plans: every tile has a parent
+ * (docs/FORMAT.md section 2).  Returns 0, or -1 with *err filled (bad
+ * index or count, no memory).  Free with gv_shard_plan_free.
  */
 int gv_shard_plan_init(struct gv_shard_plan *p, const struct gv_geometry *g,
                        int index, int count, struct gv_error *err);
