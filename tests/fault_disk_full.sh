@@ -49,7 +49,7 @@ used_kb() {
     df -k --output=used "$M" | tail -n 1 | tr -d ' '
 }
 
-# A 3000x3000 store is about 1.5 MB (at -r 3 -q 32); its scratch file is
+# A 3000x3000 store is about 1.1 MB (at -r 3 -q 32); its scratch file is
 # about 2 x 3 bytes per pixel, 54 MB.
 img=synth:3000x3000
 args="-r 3 -q 32 --quiet"
@@ -101,8 +101,15 @@ run encode $img $args -o "$M/x.gv"
 full_case "neither fits (8 MiB, scratch beside the output)" "$no_space_spill" \
     "$no_space_store"
 
-# Room for the old store (1.5 MB) but not for a second, larger one.
-with_mount 3m
+# Room for the old store but not for a second, larger one: the mount holds
+# the old store and half of the new one (both sizes measured, so no codec
+# change can make the new store fit).
+run encode synth:4000x4000 $args -o "$T/big.gv"
+[ "$rc" -eq 0 ] || bail "larger encode: $(cat "$T/err")"
+old_kb=$(( ($(wc -c <"$T/ref.gv") + 1023) / 1024 ))
+big_kb=$(( ($(wc -c <"$T/big.gv") + 1023) / 1024 ))
+rm -f "$T/big.gv"
+with_mount "$((old_kb + big_kb / 2 + 64))k"
 cp "$T/ref.gv" "$M/x.gv"
 before=$(used_kb)
 run encode synth:4000x4000 $args --tmpdir "$T/elsewhere" -o "$M/x.gv"
