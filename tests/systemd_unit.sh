@@ -266,7 +266,6 @@ else
     not_ok "system calls the unit would kill the service for: $denied" \
         "$(for s in $denied; do grep -m 2 " $s(" "$T/trace"; done)"
 fi
-fi # the traced run
 
 inet=$(grep -E ' (socket|socketpair)\(' "$T/trace" | grep -v 'AF_UNIX' | head -n 3)
 bl=$(grep -E ' (bind|listen)\(' "$T/trace" | head -n 3)
@@ -275,6 +274,7 @@ if [ -z "$inet$bl" ] && grep -q ' accept4\?(3,' "$T/trace"; then
 else
     not_ok "socket-activated: only AF_UNIX sockets, no bind or listen" "$inet" "$bl"
 fi
+fi # the traced run
 
 # ---------------------------------------------------------------- exposure score
 score=$(systemd-analyze security --offline=yes "$unit" 2>/dev/null |
