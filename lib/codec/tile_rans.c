@@ -513,6 +513,19 @@ int gv_rans_check(const uint8_t *buf, size_t len, int rate, int channels,
 
 /* ---- decoding ---- */
 
+/* Fill it->first[] from the k-symbol model at it->tables (cum[0] = 0,
+ * non-decreasing: checked). */
+static void index_buckets(struct gv_rans_rows *it)
+{
+    int s = 0;
+    for (uint32_t j = 0; j < GV_RANS_BUCKETS; j++) {
+        const uint32_t slot = j << GV_RANS_BUCKET_SHIFT;
+        while (s + 1 < it->k && gv_get16(it->buf + it->tables + 2 * (size_t)(s + 1)) <= slot)
+            s++;
+        it->first[j] = (uint16_t)s;
+    }
+}
+
 void gv_rans_rows_begin(struct gv_rans_rows *it, const uint8_t *buf,
                         int rate, int channels)
 {
@@ -524,6 +537,7 @@ void gv_rans_rows_begin(struct gv_rans_rows *it, const uint8_t *buf,
         it->tables = gv_rans_tables_offset(rate, channels);
         it->lengths = it->tables + 2 * (size_t)it->k;
         it->at = it->lengths + LENGTHS_BYTES;
+        index_buckets(it);
         return;
     }
     struct ex_layout l;
@@ -539,25 +553,23 @@ void gv_rans_rows_begin(struct gv_rans_rows *it, const uint8_t *buf,
             it->cum[c][s] = gv_get16(buf + l.models + 2 * (GV_RANS_SYMBOLS * c + s));
         it->cum[c][GV_RANS_SYMBOLS] = PROB_SCALE;
     }
+    index_buckets(it);
 }
 
-/* The last symbol of the k-symbol model at `tables` whose cumulative
- * frequency is <= slot; its cum and frequency in *c, *f. */
-static int find_symbol(const uint8_t *buf, size_t tables, int k, uint32_t slot,
+/* The last symbol of the rows' k-symbol model whose cumulative frequency
+ * is <= slot; its cum and frequency in *c, *f.  The walk starts at the
+ * slot's bucket (index_buckets), so it takes a few steps. */
+static int find_symbol(const struct gv_rans_rows *it, uint32_t slot,
                        uint32_t *c, uint32_t *f)
 {
-    int lo = 0, hi = k - 1;
-    while (lo < hi) {
-        int mid = (lo + hi + 1) / 2;
-        if (gv_get16(buf + tables + 2 * mid) <= slot)
-            lo = mid;
-        else
-            hi = mid - 1;
-    }
-    *c = gv_get16(buf + tables + 2 * lo);
-    uint32_t c1 = lo + 1 < k ? gv_get16(buf + tables + 2 * (lo + 1)) : PROB_SCALE;
+    const uint8_t *cum = it->buf + it->tables;
+    int s = it->first[slot >> GV_RANS_BUCKET_SHIFT];
+    uint32_t c1;
+    while ((c1 = s + 1 < it->k ? gv_get16(cum + 2 * (size_t)(s + 1)) : PROB_SCALE) <= slot)
+        s++;
+    *c = gv_get16(cum + 2 * (size_t)s);
     *f = c1 - *c;
-    return lo;
+    return s;
 }
 
 /* One row's stream: state, words, position. */
@@ -584,7 +596,7 @@ static int next_row_e(struct gv_rans_rows *it, struct stream *st, uint16_t *idx,
 {
     for (int i = 0; i < GV_BLOCKS; i++) {
         uint32_t slot = st->x & (PROB_SCALE - 1), c, f;
-        int s = find_symbol(it->buf, it->tables, it->k, slot, &c, &f);
+        int s = find_symbol(it, slot, &c, &f);
         if (f == 0 || st->x < RANS_L)
             return gv_fail(err, GV_ECORRUPT, "tile: stream %d is corrupt", it->row);
         idx[i] = (uint16_t)s;
@@ -613,7 +625,7 @@ static int next_row_ex(struct gv_rans_rows *it, struct stream *st, uint16_t *idx
             if (st->x < RANS_L)
                 return gv_fail(err, GV_ECORRUPT, "tile: stream %d is corrupt", it->row);
             slot = st->x & (PROB_SCALE - 1);
-            idx[i] = (uint16_t)find_symbol(it->buf, it->tables, it->k, slot, &c, &f);
+            idx[i] = (uint16_t)find_symbol(it, slot, &c, &f);
             if (advance(st, c, f, slot) < 0)
                 return gv_fail(err, GV_ECORRUPT, "tile: stream %d ends early", it->row);
         } else {

@@ -26,6 +26,8 @@
 #define GV_RANS_SYMBOLS 8      /* symbols of a context model: 0..6, escape */
 #define GV_RANS_ESCAPE 7       /* the escape symbol */
 #define GV_RANS_CONTEXTS 8     /* most context models in a buffer */
+#define GV_RANS_BUCKET_SHIFT 5 /* slots per search bucket: 32 */
+#define GV_RANS_BUCKETS (32768 >> GV_RANS_BUCKET_SHIFT)
 #define GV_RANS_MIN_ENTRIES 8  /* fewest codevectors of an EX buffer */
 
 /* Byte offset of the codebook in a buffer whose byte 0 is b0: 4 for EX,
@@ -77,6 +79,11 @@ struct gv_rans_rows {
     int context;              /* EX layout: the fields below are used */
     uint8_t map[16];          /* context of class pair 4a + b */
     uint32_t cum[GV_RANS_CONTEXTS][GV_RANS_SYMBOLS + 1];
+    /* first[j]: the last symbol of the k-symbol model at `tables` whose
+     * cumulative frequency is <= j << GV_RANS_BUCKET_SHIFT, where the
+     * search for a slot in bucket j starts (a few steps, not a binary
+     * search over k). */
+    uint16_t first[GV_RANS_BUCKETS];
 };
 
 /* Start at block row 0 of a buffer that passed gv_rans_check. */
