@@ -33,12 +33,17 @@ start_daemon "$T/m.conf"
 
 # Connections by thread first, while nothing else is open: one keep-alive
 # connection waits until /metrics shows it alone open (the others closed
-# and counted out), then 12 more connect at once, each answered once, and
-# the first reads /metrics again.  The acceptor gives each new one to the
-# thread with the fewest, so the 13 sit 4, 3, 3, 3.
-python3 - "$PORT" >spread.out <<'PY' || bail "the 13 connections failed"
-import http.client, socket, sys, time
-port = int(sys.argv[1])
+# and counted out), then 12 more connect at once, and only once the daemon
+# holds all 12 (its descriptors, seen in /proc) does each send one request;
+# then the first reads /metrics again.  No handler runs while they are
+# handed over, so every thread is idle and the acceptor gives each new one
+# to the thread with the fewest: the 13 sit 4, 3, 3, 3, however loaded the
+# machine (a request in flight would make its thread busy and skipped).
+python3 - "$PORT" "$DPID" >spread.out <<'PY' || bail "the 13 connections failed"
+import http.client, os, socket, sys, time
+port, pid = int(sys.argv[1]), sys.argv[2]
+def fds():
+    return len(os.listdir("/proc/%s/fd" % pid))
 def metric(conn, prefix):
     conn.request("GET", "/metrics")
     text = conn.getresponse().read().decode()
@@ -48,7 +53,12 @@ for i in range(600):
     if metric(first, "gigaview_open_connections ") == ["1"]:
         break
     time.sleep(0.05)
+base = fds()
 socks = [socket.create_connection(("127.0.0.1", port)) for _ in range(12)]
+for i in range(3000):
+    if fds() >= base + 12:
+        break
+    time.sleep(0.01)
 for s in socks:
     s.sendall(b"GET /healthz HTTP/1.1\r\nHost: t\r\n\r\n")
 for s in socks:

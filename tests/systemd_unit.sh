@@ -236,7 +236,20 @@ done
 gvpid=$(pgrep -P "$DPID" | head -n 1)
 # The workers started after gigaviewd took the socket: no LISTEN_* for them
 # (/proc/PID/environ of gigaviewd itself shows its environment at exec).
-wk=$(pgrep -P "$gvpid" | head -n 1)
+# Only a child that has run exec is a worker: one forked a moment ago
+# still shows the daemon's environment block from before its unsetenv.
+# (The filter runs above left workers; wait for one past its exec.)
+wk=
+i=0
+while [ -z "$wk" ] && [ $i -lt 100 ]; do
+    for c in $(pgrep -P "$gvpid"); do
+        case $(readlink "/proc/$c/exe" 2>/dev/null) in
+        *filter-worker*) wk=$c; break;;
+        esac
+    done
+    [ -n "$wk" ] || sleep 0.1
+    i=$((i + 1))
+done
 if [ -n "$wk" ]; then
     check "socket-activated: its filter workers ($wk) get no LISTEN_FDS or LISTEN_PID" \
         sh -c "! tr '\\0' '\\n' </proc/$wk/environ | grep -q '^LISTEN_'"
