@@ -706,6 +706,10 @@ void http_drain_and_stop(struct server *srv, unsigned timeout_s)
     if (!srv->http)
         return;
     acceptor_stop(srv->http->acceptor);
+    /* New clients are refused from here on, not left in the backlog. */
+    if (srv->listen_fd >= 0)
+        close(srv->listen_fd);
+    srv->listen_fd = -1;
     struct timespec t0, now;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     int waited = 0;
@@ -724,7 +728,4 @@ void http_drain_and_stop(struct server *srv, unsigned timeout_s)
     }
     stop_threads(srv->http);
     srv->http = NULL;
-    if (srv->listen_fd >= 0)
-        close(srv->listen_fd);
-    srv->listen_fd = -1;
 }

@@ -655,10 +655,16 @@ i=0
 while [ ! -s started ] && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
 sleep 0.3
 kill -TERM "$DPID"
-sleep 0.3
+# The drain has stopped accepting once it logs what it waits for.
+i=0
+while ! grep -q 'waiting for 1 requests in flight' "$T/daemon.log" && [ $i -lt 300 ]; do
+    sleep 0.1
+    i=$((i + 1))
+done
 rc=0
 curl -s -o /dev/null --max-time 2 "$(url /healthz)" || rc=$?
-check "SIGTERM: new connections refused while draining" test "$rc" -ne 0
+check "SIGTERM: new connections refused while draining (curl exit $rc, 7 = refused)" \
+    test "$rc" -eq 7
 wait "$spid"
 check "SIGTERM: the request in flight is answered" grep -q '^HTTP/1.1 200' slow.out
 drc=0
