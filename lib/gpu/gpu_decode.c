@@ -39,6 +39,10 @@
  * (decode_bench, Dragonfly store). */
 #define GROUP 16
 
+/* Released tile textures a decoder keeps for reuse (8 MiB of GPU memory at
+ * most; gpu_cache.c evicts and refills tiles in steady state). */
+#define SPARE_MAX 8
+
 struct gv_gpu_decoder {
     struct gv_gpu *gpu;
     int channels;
@@ -48,9 +52,16 @@ struct gv_gpu_decoder {
      * tile of a group, used by alternate groups of tiles; a set is
      * refilled only once the fence after its last group's draws has
      * passed. */
-    GLuint ssbo[2][GROUP], indices[2][GROUP];
+    GLuint ssbo[2], indices[2][GROUP];
     GLsync fence[2];
     int set;
+    GLint ssbo_align;                  /* offset alignment of ssbo ranges */
+    uint8_t *staging;                  /* a group's tile buffers, packed */
+    size_t staging_size;
+    /* Released tile textures kept for reuse: allocating a 514x514 texture
+     * with its mip is the costliest call of a tile on the H100's driver. */
+    GLuint spare[SPARE_MAX];
+    int spares;
     GLuint words_tex, indices_tex;     /* WebGL2 path */
     GLint dec_parent, dec_quadrant, dec_channels, q_parent, q_quadrant;
     GLint rans_rate, rans_tables;
@@ -125,8 +136,11 @@ static int setup(void *arg, struct gv_error *err)
     d->rans_tables = glGetUniformLocation(d->rans, "u_tables");
     /* The index buffers exist even for a fixed-layout tile, whose decode
      * pass has one bound but never reads it. */
+    glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &d->ssbo_align);
+    if (d->ssbo_align < 4)
+        d->ssbo_align = 4;
     for (int k = 0; k < 2; k++) {
-        glGenBuffers(GROUP, d->ssbo[k]);
+        glGenBuffers(1, &d->ssbo[k]);
         glGenBuffers(GROUP, d->indices[k]);
         for (int i = 0; i < GROUP; i++) {
             glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices[k][i]);
@@ -174,12 +188,11 @@ static int teardown(void *arg, struct gv_error *err)
     if (d->rans)
         glDeleteProgram(d->rans);
     for (int k = 0; k < 2; k++) {
-        for (int i = 0; i < GROUP; i++) {
+        for (int i = 0; i < GROUP; i++)
             if (d->indices[k][i])
                 glDeleteBuffers(1, &d->indices[k][i]);
-            if (d->ssbo[k][i])
-                glDeleteBuffers(1, &d->ssbo[k][i]);
-        }
+        if (d->ssbo[k])
+            glDeleteBuffers(1, &d->ssbo[k]);
         if (d->fence[k])
             glDeleteSync(d->fence[k]);
     }
@@ -187,6 +200,9 @@ static int teardown(void *arg, struct gv_error *err)
         glDeleteTextures(1, &d->words_tex);
     if (d->indices_tex)
         glDeleteTextures(1, &d->indices_tex);
+    if (d->spares)
+        glDeleteTextures(d->spares, d->spare);
+    d->spares = 0;
     if (d->fbo)
         glDeleteFramebuffers(1, &d->fbo);
     if (d->vao)
@@ -201,6 +217,7 @@ void gv_gpu_decoder_free(struct gv_gpu_decoder *d)
     struct job j = {.d = d};
     gv_gpu_call(d->gpu, teardown, &j, NULL);
     free(d->cpu_indices);
+    free(d->staging);
     free(d);
 }
 
@@ -210,8 +227,14 @@ void gv_gpu_decoder_free(struct gv_gpu_decoder *d)
  * 513 of level 0 are never written or read. */
 #define TEX_SIZE (GV_TILE + 1)
 
-static GLuint new_tile_texture(void)
+/* A tile texture: a released one when `reuse` and one is kept, else a new
+ * one.  Only draws reuse: a CPU upload (glTexSubImage2D) into a texture
+ * whose earlier rendering was still queued lost against that rendering on
+ * llvmpipe (test_gpu_cache saw a re-uploaded root overwritten). */
+static GLuint new_tile_texture(struct gv_gpu_decoder *d, int reuse)
 {
+    if (reuse && d->spares > 0)
+        return d->spare[--d->spares];
     GLuint tex;
     glGenTextures(1, &tex);
     glBindTexture(GL_TEXTURE_2D, tex);
@@ -240,7 +263,7 @@ static int upload(void *arg, struct gv_error *err)
     if (!rgba)
         return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
     to_rgba(j->pixels_in, j->d->channels, n, rgba);
-    GLuint tex = new_tile_texture();
+    GLuint tex = new_tile_texture(j->d, 0);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GV_TILE, GV_TILE, GL_RGBA_INTEGER,
                     GL_UNSIGNED_BYTE, rgba);
@@ -349,7 +372,7 @@ static int decode_webgl2(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *jobs,
 {
     glBindVertexArray(d->vao);
     for (size_t i = 0; i < n; i++) {
-        GLuint tex = new_tile_texture(), parent = parent_of(jobs, i);
+        GLuint tex = new_tile_texture(d, 1), parent = parent_of(jobs, i);
         jobs[i].handle = tex;
         draw_quarter(d, tex, parent, jobs[i].qx, jobs[i].qy);
         if (upload_webgl2(d, jobs[i].buf, jobs[i].len, err) < 0)
@@ -371,10 +394,14 @@ static int decode_webgl2(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *jobs,
  * rendered before its children read it).  Nothing waits for the GPU
  * except for the set's previous group.
  */
+static size_t align_up(size_t n, size_t a)
+{
+    return (n + a - 1) / a * a;
+}
+
 static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
                         size_t first, size_t n, struct gv_error *err)
 {
-    (void)err;
     struct gv_gpu_tile_job *jobs = all + first;
     /* This group's set of buffers, once the GPU is done with its previous
      * group: shader storage is not ordered after earlier draws' reads
@@ -389,14 +416,34 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
         glDeleteSync(d->fence[set]);
         d->fence[set] = 0;
     }
-    const GLuint *ssbo = d->ssbo[set], *indices = d->indices[set];
-    int entropy = 0;
+    /* The group's tile buffers packed into one storage buffer, each at an
+     * aligned offset: one upload instead of one buffer per tile. */
+    size_t off[GROUP], total = 0;
     for (size_t i = 0; i < n; i++) {
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, ssbo[i]);
-        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)jobs[i].len, jobs[i].buf,
-                     GL_STREAM_DRAW);
-        entropy |= (jobs[i].buf[0] & GV_TILE_ENTROPY) != 0;
+        off[i] = total;
+        total = align_up(total + jobs[i].len, (size_t)d->ssbo_align);
     }
+    if (total > d->staging_size) {
+        uint8_t *p = realloc(d->staging, total);
+        if (!p)
+            return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        d->staging = p;
+        d->staging_size = total;
+    }
+    int entropy = 0, inner = 0;
+    for (size_t i = 0; i < n; i++) {
+        memcpy(d->staging + off[i], jobs[i].buf, jobs[i].len);
+        entropy |= (jobs[i].buf[0] & GV_TILE_ENTROPY) != 0;
+        inner |= jobs[i].parent_job >= (long)first;
+    }
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->ssbo[set]);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)total, d->staging,
+                 GL_STREAM_DRAW);
+#define BIND_TILE(i)                                                         \
+    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo[set],             \
+                      (GLintptr)off[i],                                      \
+                      (GLsizeiptr)align_up(jobs[i].len, 4))
+    const GLuint *indices = d->indices[set];
     /* Entropy-coded indices: one compute invocation per row of blocks. */
     if (entropy) {
         glUseProgram(d->rans);
@@ -404,7 +451,7 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
             if (!(jobs[i].buf[0] & GV_TILE_ENTROPY))
                 continue;
             const int rate = jobs[i].buf[0] & 0x0f;
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo[i]);
+            BIND_TILE(i);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, indices[i]);
             glUniform1i(d->rans_rate, rate);
             glUniform1i(d->rans_tables, (GLint)gv_rans_tables_at(jobs[i].buf, d->channels));
@@ -413,14 +460,27 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
     glBindVertexArray(d->vao);
+    for (size_t i = 0; i < n; i++)
+        jobs[i].handle = new_tile_texture(d, 1);
+    /* With no parent inside the group, every quarter pass first and then
+     * every decode pass: two program switches per group, not per tile.
+     * Otherwise tile by tile, a parent rendered before its children. */
     for (size_t i = 0; i < n; i++) {
-        GLuint tex = new_tile_texture(), parent = parent_of(all, first + i);
-        jobs[i].handle = tex;
+        const GLuint tex = jobs[i].handle, parent = parent_of(all, first + i);
         draw_quarter(d, tex, parent, jobs[i].qx, jobs[i].qy);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo[i]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, indices[i]);
-        draw_decode(d, tex, parent, jobs[i].qx, jobs[i].qy);
+        if (inner) {
+            BIND_TILE(i);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, indices[i]);
+            draw_decode(d, tex, parent, jobs[i].qx, jobs[i].qy);
+        }
     }
+    for (size_t i = 0; i < n && !inner; i++) {
+        BIND_TILE(i);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, indices[i]);
+        draw_decode(d, jobs[i].handle, parent_of(all, first + i), jobs[i].qx,
+                    jobs[i].qy);
+    }
+#undef BIND_TILE
     d->fence[set] = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
     return 0;
 }
@@ -519,8 +579,12 @@ int gv_gpu_read_tile(struct gv_gpu_decoder *d, uint32_t handle, int mip,
 static int release(void *arg, struct gv_error *err)
 {
     (void)err;
-    GLuint tex = ((struct job *)arg)->handle;
-    glDeleteTextures(1, &tex);
+    struct job *j = arg;
+    GLuint tex = j->handle;
+    if (j->d->spares < SPARE_MAX)
+        j->d->spare[j->d->spares++] = tex;
+    else
+        glDeleteTextures(1, &tex);
     return 0;
 }
 
