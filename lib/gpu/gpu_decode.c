@@ -37,11 +37,20 @@
  * per set).  On llvmpipe the group size changed nothing measurable: the
  * CPU work per tile was the same (0.95 to 1.01x) with groups of 2 and 64
  * (decode_bench, Dragonfly store). */
-#define GROUP 16
+#ifndef GV_GPU_GROUP
+#define GV_GPU_GROUP 16
+#endif
+#define GROUP GV_GPU_GROUP
 
-/* Released tile textures a decoder keeps for reuse (8 MiB of GPU memory at
- * most; gpu_cache.c evicts and refills tiles in steady state). */
-#define SPARE_MAX 8
+/* Released tile textures a decoder keeps for reuse (32: 45 MiB of GPU
+ * memory at most; gpu_cache.c evicts and refills tiles in steady state).
+ * On an H100 (bench/README.md) reusing every texture decoded 1.22 to 1.27x
+ * the tiles per second of allocating each; the group size (16, 32, 64)
+ * changed nothing there. */
+#ifndef GV_GPU_SPARES
+#define GV_GPU_SPARES 32
+#endif
+#define SPARE_MAX GV_GPU_SPARES
 
 struct gv_gpu_decoder {
     struct gv_gpu *gpu;
@@ -59,7 +68,7 @@ struct gv_gpu_decoder {
     uint8_t *staging;                  /* a group's tile buffers, packed */
     size_t staging_size;
     /* Released tile textures kept for reuse: allocating a 514x514 texture
-     * with its mip is the costliest call of a tile on the H100's driver. */
+     * with its mip costs the H100's driver a fifth of a tile's time. */
     GLuint spare[SPARE_MAX];
     int spares;
     GLuint words_tex, indices_tex;     /* WebGL2 path */
