@@ -1,6 +1,9 @@
-// rans_decode.comp.glsl - decode the 257 rANS index streams of an
-// entropy-coded tile buffer (docs/FORMAT.md, sections 4.1 and 4.2), one
-// invocation per row of blocks, into one uint per index.  Bit for bit what
+// rans_decode.comp.glsl - decode the 257 rANS index streams of each
+// entropy-coded tile buffer of a group (docs/FORMAT.md, sections 4.1 and
+// 4.2), one invocation per row of blocks and one row of work groups per
+// tile (gl_WorkGroupID.y), into one uint per index.  All the group's tiles
+// in one dispatch: each row is a serial chain, so a tile alone (257
+// invocations) leaves a large GPU nearly idle.  Bit for bit what
 // lib/codec/tile_rans.c gv_rans_unpack produces for a well-formed buffer (the
 // CPU checks the buffer before it is uploaded; a damaged stream still gives
 // indices inside the codebook).  Needs compute shaders and storage
@@ -12,14 +15,16 @@ layout(local_size_x = 64) in;
 
 layout(std430, binding = 0) readonly buffer TileWords { uint words[]; };
 layout(std430, binding = 1) writeonly buffer Indices { uint indices[]; };
+// Per tile of the dispatch: (first word of its buffer in words[], r (1..12),
+// byte offset of the model over all indices (gv_rans_tables_at: E's cum[],
+// EX's escape model), first index of its output in indices[]).
+layout(std430, binding = 2) readonly buffer Tiles { ivec4 tiles[]; };
 
-uniform int u_rate;        // r, 1..12
-uniform int u_tables;      // byte offset of the model over all indices
-                           // (gv_rans_tables_at: E's cum[], EX's escape model)
+int base;                  // this tile's first word in words[]
 
 uint u16_at(int byte_offset)
 {
-    return (words[byte_offset >> 2] >> uint(8 * (byte_offset & 2))) & 0xffffu;
+    return (words[base + (byte_offset >> 2)] >> uint(8 * (byte_offset & 2))) & 0xffffu;
 }
 
 // The last symbol of the k-symbol model at byte offset `tables` whose
@@ -44,7 +49,10 @@ void main()
     int row = int(gl_GlobalInvocationID.x);
     if (row >= 257)
         return;
-    uint b0 = words[0] & 0xffu;
+    ivec4 t = tiles[gl_WorkGroupID.y];
+    base = t.x;
+    int u_rate = t.y, u_tables = t.z, out_at = t.w;
+    uint b0 = words[base] & 0xffu;
     bool ctx = (b0 & 64u) != 0u;
     // E: k = 2^r symbols, lengths after cum[].  EX (byte 1: contexts,
     // bytes 2-3: N): the escape model's N symbols, then the context map
@@ -52,7 +60,7 @@ void main()
     int k = ctx ? int(u16_at(2)) : 1 << u_rate;
     int map_at = ((u_tables + 2 * k + 3) >> 2) << 2;
     int models = map_at + 8;
-    int lengths = ctx ? models + 16 * int((words[0] >> 8) & 0xffu) : u_tables + 2 * k;
+    int lengths = ctx ? models + 16 * int((words[base] >> 8) & 0xffu) : u_tables + 2 * k;
     int at = lengths + 516;            // 257 u16 lengths, padded to 4
     for (int i = 0; i < row; i++)
         at += 2 * int(u16_at(lengths + 2 * i));
@@ -63,7 +71,7 @@ void main()
         int idx;
         if (ctx) {
             int p = 4 * a + b;
-            int m = int((words[(map_at + (p >> 1)) >> 2] >> uint(8 * ((p >> 1) & 3) + 4 * (p & 1))) & 15u);
+            int m = int((words[base + ((map_at + (p >> 1)) >> 2)] >> uint(8 * ((p >> 1) & 3) + 4 * (p & 1))) & 15u);
             int cum = models + 16 * m;
             uint slot = x & 0x7fffu;
             int s = 0;
@@ -99,6 +107,6 @@ void main()
                 next += 2;
             }
         }
-        indices[row * 257 + i] = uint(idx);
+        indices[out_at + row * 257 + i] = uint(idx);
     }
 }

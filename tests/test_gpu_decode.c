@@ -155,6 +155,36 @@ static const char *path_name(enum gv_gpu_path path)
     return path == GV_GPU_PATH_SSBO ? "GLSL ES 3.10 + compute" : "GLSL ES 3.00 (WebGL2)";
 }
 
+struct tile_where {
+    int level;
+    uint32_t tx, ty;
+};
+
+/* Tiles of jobs[0..n) read back from the GPU that differ from the CPU
+ * decoder's, each listed. */
+static int count_mismatches(struct gv_decoder *cpu, struct gv_gpu_decoder *gd,
+                            const struct gv_gpu_tile_job *jobs,
+                            const struct tile_where *where, size_t n, int c)
+{
+    struct gv_error err;
+    const size_t tb = gv_tile_bytes(c);
+    uint8_t *px = malloc(tb);
+    int mismatched = 0;
+    for (size_t i = 0; i < n; i++) {
+        const uint8_t *ref;
+        if (gv_decoder_tile(cpu, where[i].level, where[i].tx, where[i].ty, &ref, &err) < 0 ||
+            gv_gpu_read_tile(gd, jobs[i].handle, 0, px, &err) < 0)
+            fail("read %d/%u/%u: %s", where[i].level, where[i].tx, where[i].ty, err.text);
+        if (memcmp(px, ref, tb) != 0) {
+            mismatched++;
+            printf("# batch: job %zu, tile %d/%u/%u (byte 0 0x%02x) differs\n", i,
+                   where[i].level, where[i].tx, where[i].ty, jobs[i].buf[0]);
+        }
+    }
+    free(px);
+    return mismatched;
+}
+
 /* Every tile of the store in one gv_gpu_decode_batch, top level first,
  * each naming its parent's job (the root tile uploaded), then read back
  * and compared with the CPU decoder; `copies` times over in the batch. */
@@ -177,7 +207,7 @@ static void check_batch(struct gv_gpu *gpu, const char *input, const char *out,
     const size_t n = one * (size_t)copies;
     struct gv_gpu_tile_job *jobs = calloc(n ? n : 1, sizeof *jobs);
     uint8_t **pages = calloc(n ? n : 1, sizeof *pages);
-    struct { int level; uint32_t tx, ty; } *where = calloc(n ? n : 1, sizeof *where);
+    struct tile_where *where = calloc(n ? n : 1, sizeof *where);
     const uint8_t *root;
     uint32_t root_h;
     if (gv_decoder_tile(cpu, g->root, 0, 0, &root, &err) < 0 ||
@@ -222,32 +252,39 @@ static void check_batch(struct gv_gpu *gpu, const char *input, const char *out,
     }
     if (gv_gpu_decode_batch(gd, jobs, n, &err) < 0)
         fail("batch of %zu tiles: %s", n, err.text);
-    const size_t tb = gv_tile_bytes(c);
-    uint8_t *px = malloc(tb);
-    int mismatched = 0, distinct = 1;
-    for (size_t i = 0; i < n; i++) {
-        const uint8_t *ref;
-        if (gv_decoder_tile(cpu, where[i].level, where[i].tx, where[i].ty, &ref, &err) < 0 ||
-            gv_gpu_read_tile(gd, jobs[i].handle, 0, px, &err) < 0)
-            fail("read %d/%u/%u: %s", where[i].level, where[i].tx, where[i].ty, err.text);
-        if (memcmp(px, ref, tb) != 0) {
-            mismatched++;
-            printf("# batch: job %zu, tile %d/%u/%u (byte 0 0x%02x) differs\n", i,
-                   where[i].level, where[i].tx, where[i].ty, jobs[i].buf[0]);
-        }
+    const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
+    int distinct = 1;
+    for (size_t i = 0; i < n; i++)
         distinct &= jobs[i].handle != 0 && jobs[i].handle != root_h &&
                     (i == 0 || jobs[i].handle != jobs[i - 1].handle);
-    }
-    const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
+    int mismatched = count_mismatches(cpu, gd, jobs, where, n, c);
     check(mismatched == 0 && distinct && n > 0, "%s, %s: all %zu tiles in one batch "
           "(the store %d time(s)) decode identically on the GPU (%d differ)", name,
           path_name(path), n, copies, mismatched);
+    /* Again one batch per level, parents given as handles (so the grouped
+     * passes run: every quarter pass, then every decode pass), into
+     * textures reserved up front and the ones just released. */
+    for (size_t i = 0; i < n; i++)
+        gv_gpu_release(gd, jobs[i].handle);
+    if (gv_gpu_reserve(gd, n, &err) < 0)
+        fail("reserve: %s", err.text);
+    for (size_t a = 0, b; a < n; a = b) {
+        for (b = a; b < n && where[b].level == where[a].level; b++)
+            if (jobs[b].parent_job >= 0) {
+                jobs[b].parent = jobs[jobs[b].parent_job].handle;
+                jobs[b].parent_job = -1;
+            }
+        if (gv_gpu_decode_batch(gd, jobs + a, b - a, &err) < 0)
+            fail("level batch: %s", err.text);
+    }
+    mismatched = count_mismatches(cpu, gd, jobs, where, n, c);
+    check(mismatched == 0 && n > 0, "%s, %s: one batch per level into reserved "
+          "textures decodes identically (%d differ)", name, path_name(path), mismatched);
     for (size_t i = 0; i < n; i++) {
         gv_gpu_release(gd, jobs[i].handle);
         free(pages[i]);
     }
     gv_gpu_release(gd, root_h);
-    free(px);
     free(jobs);
     free(pages);
     free(where);

@@ -32,11 +32,11 @@
 
 #define WORDS_WIDTH 1024   /* texels per row of the WebGL2 words texture */
 
-/* Tiles per group on the SSBO path, each with its own tile buffer and
- * index buffer in the group's set (16 x 145 KiB and 16 x 258 KiB at most
- * per set).  On llvmpipe the group size changed nothing measurable: the
- * CPU work per tile was the same (0.95 to 1.01x) with groups of 2 and 64
- * (decode_bench, Dragonfly store). */
+/* Tiles per group on the SSBO path: the group's tile buffers share one
+ * storage buffer and their indices another (16 x 145 KiB and 16 x 258 KiB
+ * at most per set).  On llvmpipe the group size changed nothing
+ * measurable: the CPU work per tile was the same (0.95 to 1.01x) with
+ * groups of 2 and 64 (decode_bench, Dragonfly store). */
 #ifndef GV_GPU_GROUP
 #define GV_GPU_GROUP 16
 #endif
@@ -61,7 +61,8 @@ struct gv_gpu_decoder {
      * tile of a group, used by alternate groups of tiles; a set is
      * refilled only once the fence after its last group's draws has
      * passed. */
-    GLuint ssbo[2], indices[2][GROUP];
+    GLuint ssbo[2], indices[2], tiles[2];
+    size_t index_stride;               /* bytes of a tile's indices, aligned */
     GLsync fence[2];
     int set;
     GLint ssbo_align;                  /* offset alignment of ssbo ranges */
@@ -69,11 +70,10 @@ struct gv_gpu_decoder {
     size_t staging_size;
     /* Released tile textures kept for reuse: allocating a 514x514 texture
      * with its mip costs the H100's driver a fifth of a tile's time. */
-    GLuint spare[SPARE_MAX];
-    int spares;
+    GLuint *spare;
+    size_t spares, spare_cap;          /* cap: SPARE_MAX or as reserved */
     GLuint words_tex, indices_tex;     /* WebGL2 path */
     GLint dec_parent, dec_quadrant, dec_channels, q_parent, q_quadrant;
-    GLint rans_rate, rans_tables;
     GLint dec_words, dec_words_width, dec_indices;
     uint16_t *cpu_indices;             /* WebGL2 path: rANS decoded here */
 };
@@ -87,6 +87,11 @@ struct job {
     uint32_t parent, handle;
     int qx, qy, mip;
 };
+
+static size_t align_up(size_t n, size_t a)
+{
+    return (n + a - 1) / a * a;
+}
 
 static int gl_failed(struct gv_error *err, const char *what)
 {
@@ -141,21 +146,19 @@ static int setup(void *arg, struct gv_error *err)
             return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
         return gl_failed(err, "decoder set-up");
     }
-    d->rans_rate = glGetUniformLocation(d->rans, "u_rate");
-    d->rans_tables = glGetUniformLocation(d->rans, "u_tables");
     /* The index buffers exist even for a fixed-layout tile, whose decode
      * pass has one bound but never reads it. */
     glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &d->ssbo_align);
     if (d->ssbo_align < 4)
         d->ssbo_align = 4;
+    d->index_stride = align_up(GV_NBLOCKS * sizeof(GLuint), (size_t)d->ssbo_align);
     for (int k = 0; k < 2; k++) {
         glGenBuffers(1, &d->ssbo[k]);
-        glGenBuffers(GROUP, d->indices[k]);
-        for (int i = 0; i < GROUP; i++) {
-            glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices[k][i]);
-            glBufferData(GL_SHADER_STORAGE_BUFFER, GV_NBLOCKS * sizeof(GLuint), NULL,
-                         GL_DYNAMIC_COPY);
-        }
+        glGenBuffers(1, &d->tiles[k]);
+        glGenBuffers(1, &d->indices[k]);
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices[k]);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(GROUP * d->index_stride),
+                     NULL, GL_DYNAMIC_COPY);
     }
     return gl_failed(err, "decoder set-up");
 }
@@ -178,6 +181,13 @@ struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
     d->gpu = g;
     d->channels = channels;
     d->path = path;
+    d->spare_cap = SPARE_MAX;
+    d->spare = malloc(SPARE_MAX * sizeof *d->spare);
+    if (!d->spare) {
+        free(d);
+        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        return NULL;
+    }
     struct job j = {.d = d};
     if (gv_gpu_call(g, setup, &j, err) < 0) {
         gv_gpu_decoder_free(d);
@@ -197,9 +207,10 @@ static int teardown(void *arg, struct gv_error *err)
     if (d->rans)
         glDeleteProgram(d->rans);
     for (int k = 0; k < 2; k++) {
-        for (int i = 0; i < GROUP; i++)
-            if (d->indices[k][i])
-                glDeleteBuffers(1, &d->indices[k][i]);
+        if (d->indices[k])
+            glDeleteBuffers(1, &d->indices[k]);
+        if (d->tiles[k])
+            glDeleteBuffers(1, &d->tiles[k]);
         if (d->ssbo[k])
             glDeleteBuffers(1, &d->ssbo[k]);
         if (d->fence[k])
@@ -210,7 +221,7 @@ static int teardown(void *arg, struct gv_error *err)
     if (d->indices_tex)
         glDeleteTextures(1, &d->indices_tex);
     if (d->spares)
-        glDeleteTextures(d->spares, d->spare);
+        glDeleteTextures((GLsizei)d->spares, d->spare);
     d->spares = 0;
     if (d->fbo)
         glDeleteFramebuffers(1, &d->fbo);
@@ -227,6 +238,7 @@ void gv_gpu_decoder_free(struct gv_gpu_decoder *d)
     gv_gpu_call(d->gpu, teardown, &j, NULL);
     free(d->cpu_indices);
     free(d->staging);
+    free(d->spare);
     free(d);
 }
 
@@ -240,10 +252,8 @@ void gv_gpu_decoder_free(struct gv_gpu_decoder *d)
  * one.  Only draws reuse: a CPU upload (glTexSubImage2D) into a texture
  * whose earlier rendering was still queued lost against that rendering on
  * llvmpipe (test_gpu_cache saw a re-uploaded root overwritten). */
-static GLuint new_tile_texture(struct gv_gpu_decoder *d, int reuse)
+static GLuint new_tile_texture_fresh(void)
 {
-    if (reuse && d->spares > 0)
-        return d->spare[--d->spares];
     GLuint tex;
     glGenTextures(1, &tex);
     glBindTexture(GL_TEXTURE_2D, tex);
@@ -252,6 +262,13 @@ static GLuint new_tile_texture(struct gv_gpu_decoder *d, int reuse)
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 1);
     return tex;
+}
+
+static GLuint new_tile_texture(struct gv_gpu_decoder *d, int reuse)
+{
+    if (reuse && d->spares > 0)
+        return d->spare[--d->spares];
+    return new_tile_texture_fresh();
 }
 
 /* Expand C-channel rows to RGBA (gray replicated, alpha 255). */
@@ -397,17 +414,12 @@ static int decode_webgl2(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *jobs,
 
 
 /*
- * SSBO path, a group of at most GROUP tiles: every tile buffer uploaded to
- * its own storage buffer, all rANS compute passes, one barrier, then the
- * two draws of each tile in order (a parent earlier in the batch is
- * rendered before its children read it).  Nothing waits for the GPU
- * except for the set's previous group.
+ * SSBO path, a group of at most GROUP tiles: the tile buffers uploaded
+ * together into the set's storage buffer, one rANS compute dispatch for
+ * all entropy-coded tiles, one barrier, then the two draws of each tile
+ * (a parent earlier in the batch is rendered before its children read
+ * it).  Nothing waits for the GPU except for the set's previous group.
  */
-static size_t align_up(size_t n, size_t a)
-{
-    return (n + a - 1) / a * a;
-}
-
 static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
                         size_t first, size_t n, struct gv_error *err)
 {
@@ -448,24 +460,38 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->ssbo[set]);
     glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)total, d->staging,
                  GL_STREAM_DRAW);
+    /* A tile's buffer and its indices, for the decode pass. */
 #define BIND_TILE(i)                                                         \
-    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo[set],             \
-                      (GLintptr)off[i],                                      \
-                      (GLsizeiptr)align_up(jobs[i].len, 4))
-    const GLuint *indices = d->indices[set];
-    /* Entropy-coded indices: one compute invocation per row of blocks. */
+    do {                                                                     \
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo[set],         \
+                          (GLintptr)off[i],                                  \
+                          (GLsizeiptr)align_up(jobs[i].len, 4));             \
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, d->indices[set],      \
+                          (GLintptr)((i) * d->index_stride),                 \
+                          (GLsizeiptr)(GV_NBLOCKS * sizeof(GLuint)));         \
+    } while (0)
+    /* Entropy-coded indices: every such tile of the group in one dispatch,
+     * one invocation per row of blocks, one row of work groups per tile. */
     if (entropy) {
-        glUseProgram(d->rans);
+        GLint params[GROUP][4];
+        GLuint m = 0;
         for (size_t i = 0; i < n; i++) {
             if (!(jobs[i].buf[0] & GV_TILE_ENTROPY))
                 continue;
-            const int rate = jobs[i].buf[0] & 0x0f;
-            BIND_TILE(i);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, indices[i]);
-            glUniform1i(d->rans_rate, rate);
-            glUniform1i(d->rans_tables, (GLint)gv_rans_tables_at(jobs[i].buf, d->channels));
-            glDispatchCompute((GV_BLOCKS + 63) / 64, 1, 1);
+            params[m][0] = (GLint)(off[i] / 4);
+            params[m][1] = jobs[i].buf[0] & 0x0f;
+            params[m][2] = (GLint)gv_rans_tables_at(jobs[i].buf, d->channels);
+            params[m][3] = (GLint)(i * d->index_stride / sizeof(GLuint));
+            m++;
         }
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->tiles[set]);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(m * sizeof params[0]),
+                     params, GL_STREAM_DRAW);
+        glUseProgram(d->rans);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo[set]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->indices[set]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, d->tiles[set]);
+        glDispatchCompute((GV_BLOCKS + 63) / 64, m, 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
     glBindVertexArray(d->vao);
@@ -479,13 +505,11 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
         draw_quarter(d, tex, parent, jobs[i].qx, jobs[i].qy);
         if (inner) {
             BIND_TILE(i);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, indices[i]);
             draw_decode(d, tex, parent, jobs[i].qx, jobs[i].qy);
         }
     }
     for (size_t i = 0; i < n && !inner; i++) {
         BIND_TILE(i);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, indices[i]);
         draw_decode(d, jobs[i].handle, parent_of(all, first + i), jobs[i].qx,
                     jobs[i].qy);
     }
@@ -590,11 +614,36 @@ static int release(void *arg, struct gv_error *err)
     (void)err;
     struct job *j = arg;
     GLuint tex = j->handle;
-    if (j->d->spares < SPARE_MAX)
+    if (j->d->spares < j->d->spare_cap)
         j->d->spare[j->d->spares++] = tex;
     else
         glDeleteTextures(1, &tex);
     return 0;
+}
+
+static int reserve(void *arg, struct gv_error *err)
+{
+    struct job *j = arg;
+    struct gv_gpu_decoder *d = j->d;
+    const size_t want = j->handle;
+    if (want > d->spare_cap) {
+        GLuint *p = realloc(d->spare, want * sizeof *p);
+        if (!p)
+            return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        d->spare = p;
+        d->spare_cap = want;
+    }
+    while (d->spares < want)
+        d->spare[d->spares++] = new_tile_texture_fresh();
+    return gl_failed(err, "texture reserve");
+}
+
+int gv_gpu_reserve(struct gv_gpu_decoder *d, size_t tiles, struct gv_error *err)
+{
+    if (tiles > UINT32_MAX)
+        return gv_fail(err, GV_ELIMIT, "gpu: cannot reserve %zu tiles", tiles);
+    struct job j = {.d = d, .handle = (uint32_t)tiles};
+    return gv_gpu_call(d->gpu, reserve, &j, err);
 }
 
 void gv_gpu_release(struct gv_gpu_decoder *d, uint32_t handle)
