@@ -22,10 +22,7 @@
 static uint64_t rng = 88172645463325252ull;
 static uint32_t next_rand(void)
 {
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return (uint32_t)rng;
+    return test_rand(&rng);
 }
 
 /* The prediction written out from docs/FORMAT.md, independently: the
