@@ -65,8 +65,8 @@ struct filter_jobs {
     pthread_mutex_t lock;
     pthread_cond_t wake;        /* slots: a job was queued, or stop */
     pthread_cond_t idle;        /* stop: queued + running reached 0 */
-    struct filter_job *head, *tail;
-    int queued, running, reserved;
+    struct job_queue queue;
+    int running, reserved;
     int ready;                  /* slots whose worker said hello */
     int draining, stop;
     int nslots;
@@ -377,7 +377,7 @@ static void *slot_main(void *arg)
     start_worker(s);
     pthread_mutex_lock(&p->lock);
     for (;;) {
-        if (p->stop && !p->head)
+        if (p->stop && !p->queue.head)
             break;
         if (s->pid <= 0 && !p->stop && gv_worker_now_ms() >= s->retry_at) {
             pthread_mutex_unlock(&p->lock);
@@ -385,7 +385,7 @@ static void *slot_main(void *arg)
             pthread_mutex_lock(&p->lock);
             continue;
         }
-        if (!p->head || (s->pid <= 0 && p->ready > 0 && !p->stop)) {
+        if (!p->queue.head || (s->pid <= 0 && p->ready > 0 && !p->stop)) {
             if (s->pid <= 0 && !p->stop) {
                 struct timespec ts = at_ms(s->retry_at);
                 pthread_cond_timedwait(&p->wake, &p->lock, &ts);
@@ -394,11 +394,8 @@ static void *slot_main(void *arg)
             }
             continue;
         }
-        struct filter_job *j = p->head;
-        p->head = j->next;
-        if (!p->head)
-            p->tail = NULL;
-        p->queued--;
+        struct filter_job *j =
+            job_queue_entry(job_queue_pop(&p->queue), struct filter_job, link);
         p->running++;
         pthread_mutex_unlock(&p->lock);
 
@@ -408,7 +405,7 @@ static void *slot_main(void *arg)
         pthread_mutex_lock(&p->lock);
         p->running--;
         p->reserved--;
-        if (p->queued == 0 && p->running == 0)
+        if (p->queue.count == 0 && p->running == 0)
             pthread_cond_broadcast(&p->idle);
         int stopping = p->stop;
         pthread_mutex_unlock(&p->lock);
@@ -486,16 +483,10 @@ void filter_jobs_unreserve(struct filter_jobs *p)
 
 void filter_jobs_submit(struct filter_jobs *p, struct filter_job *j)
 {
-    j->next = NULL;
     memset(&j->res, 0, sizeof j->res);
     gv_error_clear(&j->err);
     pthread_mutex_lock(&p->lock);
-    if (p->tail)
-        p->tail->next = j;
-    else
-        p->head = j;
-    p->tail = j;
-    p->queued++;
+    job_queue_push(&p->queue, &j->link);
     pthread_cond_broadcast(&p->wake); /* slots waiting out a back-off
                                          pass jobs on */
     pthread_mutex_unlock(&p->lock);
@@ -515,24 +506,22 @@ void filter_jobs_stop(struct filter_jobs *p, unsigned timeout_ms)
     }
     pthread_mutex_lock(&p->lock);
     p->draining = 1;
-    if (p->queued || p->running)
-        log_msg(LOG_INFO, "filter", "waiting for %d filter jobs", p->queued + p->running);
-    while ((p->queued || p->running) &&
+    if (p->queue.count || p->running)
+        log_msg(LOG_INFO, "filter", "waiting for %d filter jobs", p->queue.count + p->running);
+    while ((p->queue.count || p->running) &&
            pthread_cond_timedwait(&p->idle, &p->lock, &until) == 0)
         ;
     p->stop = 1;
-    struct filter_job *cancelled = p->head;
-    p->head = p->tail = NULL;
-    p->reserved -= p->queued;
-    p->queued = 0;
+    p->reserved -= p->queue.count;
+    struct job_link *cancelled = job_queue_take_all(&p->queue);
     for (int i = 0; i < p->nslots; i++)
         if (p->slot[i].fd >= 0)
             shutdown(p->slot[i].fd, SHUT_RDWR);
     pthread_cond_broadcast(&p->wake);
     pthread_mutex_unlock(&p->lock);
     while (cancelled) {
-        struct filter_job *j = cancelled;
-        cancelled = j->next;
+        struct filter_job *j = job_queue_entry(cancelled, struct filter_job, link);
+        cancelled = cancelled->next;
         j->status = FILTER_JOB_CANCELLED;
         gv_fail(&j->err, GV_EUNAVAIL, "filter: cancelled: the server is stopping");
         atomic_fetch_add(&p->n_cancelled, 1);
@@ -573,7 +562,7 @@ void filter_jobs_metrics(struct filter_jobs *p, struct prom *out)
             v[i] = atomic_load(c[i]);
         pthread_mutex_lock(&p->lock);
         ready = p->ready;
-        queued = p->queued;
+        queued = p->queue.count;
         running = p->running;
         pthread_mutex_unlock(&p->lock);
     }

@@ -31,6 +31,7 @@
 #include <stdint.h>
 
 #include "base/error.h"
+#include "job_queue.h"
 #include "worker.h"
 
 struct filter_jobs;
@@ -67,7 +68,7 @@ struct filter_job {
                                          GV_EUNAVAIL (unavailable,
                                          cancelled) */
     double worker_ms;                 /* send to answer */
-    struct filter_job *next;          /* private */
+    struct job_link link;             /* private */
 };
 
 /*

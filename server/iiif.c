@@ -436,12 +436,15 @@ static int check_exact(const char *size, uint64_t ow, uint64_t oh, uint32_t rw,
                            "allowed %gx", SHOW(size), (unsigned long long)ow,
                            (unsigned long long)oh, rw, rh, c->up);
     }
-    if (!within(ow, oh, c))
+    if (!within(ow, oh, c)) {
+        char area[40] = ""; /* no maxArea without an area limit */
+        if (c->area != UINT64_MAX)
+            snprintf(area, sizeof area, ", maxArea %llu", (unsigned long long)c->area);
         return gv_fail(err, GV_ELIMIT, "iiif: size \"%s\": %llux%llu is past "
-                       "the limits (maxWidth %llu, maxHeight %llu, maxArea "
-                       "%llu)", SHOW(size), (unsigned long long)ow,
-                       (unsigned long long)oh, (unsigned long long)c->mw,
-                       (unsigned long long)c->mh, (unsigned long long)c->area);
+                       "the limits (maxWidth %llu, maxHeight %llu%s)", SHOW(size),
+                       (unsigned long long)ow, (unsigned long long)oh,
+                       (unsigned long long)c->mw, (unsigned long long)c->mh, area);
+    }
     return 0;
 }
 

@@ -6,16 +6,16 @@
 #include <pthread.h>
 #include <stdlib.h>
 
+#include "job_queue.h"
 #include "metrics.h"
 #include "render_pool.h"
 
 struct render_pool {
     pthread_mutex_t lock;
     pthread_cond_t work;
-    struct render_job *head, *tail;
+    struct job_queue queue;
     int max_queue;
     int reserved;          /* places held: reserved or queued, not running */
-    int queued;
     int running;
     int stopping;
     int nthreads;
@@ -48,14 +48,11 @@ static void record_wait(struct render_pool *p, double sec)
 static struct render_job *take(struct render_pool *p)
 {
     pthread_mutex_lock(&p->lock);
-    while (!p->head && !p->stopping)
+    while (!p->queue.head && !p->stopping)
         pthread_cond_wait(&p->work, &p->lock);
-    struct render_job *j = p->head;
+    struct job_link *l = job_queue_pop(&p->queue);
+    struct render_job *j = l ? job_queue_entry(l, struct render_job, link) : NULL;
     if (j) {
-        p->head = j->next;
-        if (!p->head)
-            p->tail = NULL;
-        p->queued--;
         p->reserved--;
         p->running++;
         record_wait(p, since(&j->queued));
@@ -124,14 +121,8 @@ void render_pool_unreserve(struct render_pool *p)
 void render_pool_submit(struct render_pool *p, struct render_job *j)
 {
     clock_gettime(CLOCK_MONOTONIC, &j->queued);
-    j->next = NULL;
     pthread_mutex_lock(&p->lock);
-    if (p->tail)
-        p->tail->next = j;
-    else
-        p->head = j;
-    p->tail = j;
-    p->queued++;
+    job_queue_push(&p->queue, &j->link);
     pthread_cond_signal(&p->work);
     pthread_mutex_unlock(&p->lock);
 }
@@ -165,7 +156,7 @@ void render_pool_metrics(struct render_pool *p, struct prom *out)
     if (!p)
         return;
     pthread_mutex_lock(&p->lock);
-    int queued = p->queued, running = p->running;
+    int queued = p->queue.count, running = p->running;
     uint64_t jobs = p->jobs, rejected = p->rejected;
     uint64_t bucket[METRICS_BUCKETS];
     for (int i = 0; i < METRICS_BUCKETS; i++)

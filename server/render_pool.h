@@ -19,6 +19,8 @@
 #include <stdint.h>
 #include <time.h>
 
+#include "job_queue.h"
+
 struct render_pool;
 struct prom;
 
@@ -26,7 +28,7 @@ struct render_job {
     void (*run)(struct render_job *j);  /* on a pool thread, once */
     /* private */
     struct timespec queued;
-    struct render_job *next;
+    struct job_link link;
 };
 
 /* Start `threads` threads (>= 1) with at most `max_queue` jobs waiting.

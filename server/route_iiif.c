@@ -80,8 +80,9 @@ static json_t *sizes_json(const struct image *img, const struct iiif_limits *lim
     }
     for (int k = g->root; k >= 0; k--) {
         uint32_t w = g->level[k].width, h = g->level[k].height;
-        if (w > lim->max_width || h > lim->max_height ||
-            (uint64_t)w * h > lim->max_area)
+        if ((lim->max_width && w > lim->max_width) ||
+            (lim->max_height && h > lim->max_height) ||
+            (lim->max_area && (uint64_t)w * h > lim->max_area))
             break;
         json_array_append_new(sizes, size_json(w, h));
     }
@@ -99,21 +100,28 @@ static json_t *info_json(struct req *r, const struct image *img)
     json_t *factors = json_array();
     for (int k = 0; k <= g->root; k++)
         json_array_append_new(factors, json_integer((json_int_t)1 << k));
-    return json_pack(
-        "{s:s,s:s,s:s,s:s,s:s,s:I,s:I,s:I,s:I,s:I,s:o,"
+    /* Image API 3.0 section 5.3: maxWidth, maxHeight and maxArea are
+     * optional, an absent one meaning no such limit; a limit of 0 is
+     * "none" (iiif.h), so it is left out rather than sent as 0. */
+    json_t *info = json_pack(
+        "{s:s,s:s,s:s,s:s,s:s,s:I,s:I,s:o,"
         "s:[{s:i,s:i,s:o}],s:[s,s],s:[s,s,s],s:[s,s,s,s,s]}",
         "@context", IIIF_CONTEXT, "id", id, "type", "ImageService3",
         "protocol", "http://iiif.io/api/image", "profile", "level2",
         "width", (json_int_t)g->width, "height", (json_int_t)g->height,
-        "maxWidth", (json_int_t)lim.max_width,
-        "maxHeight", (json_int_t)lim.max_height,
-        "maxArea", (json_int_t)lim.max_area,
         "sizes", sizes_json(img, &lim),
         "tiles", "width", 512, "height", 512, "scaleFactors", factors,
         "extraFormats", "webp", "tif",
         "extraQualities", "color", "gray", "bitonal",
         "extraFeatures", "mirroring", "rotationBy90s", "sizeUpscaling",
         "canonicalLinkHeader", "profileLinkHeader");
+    const struct { const char *key; uint64_t v; } max[3] = {
+        {"maxWidth", lim.max_width}, {"maxHeight", lim.max_height},
+        {"maxArea", lim.max_area}};
+    for (int i = 0; info && i < 3; i++)
+        if (max[i].v)
+            json_object_set_new(info, max[i].key, json_integer((json_int_t)max[i].v));
+    return info;
 }
 
 enum MHD_Result route_iiif_info(struct req *r)

@@ -25,15 +25,7 @@ if under_valgrind; then
     echo "1..0 # SKIP the worker is not run under valgrind"
     exit 0
 fi
-S=$T/stores
-mkdir "$S" "$T/lib" || bail "mkdir"
-run encode synth:600x400 -o "$S/x.gv"
-[ "$rc" -eq 0 ] || bail "encode: $(cat "$T/err")"
-cat >"$T/lib/negate.json" <<'EOF'
-{"name": "negate", "output": "neg", "output_channels": 3,
- "modules": [{"id": "neg", "template": "point", "inputs": ["source"],
-              "glsl": "vec4 v = $(FilterInput1)(rel_pos);\nreturn vec4(1.0 - v.rgb, v.a);"}]}
-EOF
+filter_setup 600x400
 cat >"$T/d.conf" <<EOF
 listen = 127.0.0.1
 port = 0

@@ -145,3 +145,25 @@ image_size() {
     oiiotool --info "$1" 2>/dev/null |
         sed -n 's/.*: *\([0-9]*\) x *\([0-9]*\), \([0-9]*\) channel.*/\1 \2 \3/p'
 }
+
+# filter_setup SIZE: the set-up of the filter-worker tests
+# (filter_seccomp.sh, systemd_unit.sh): S=$T/stores holding x.gv, encoded
+# from synth:SIZE, and a filter library in $T/lib with negate (1 - v per
+# RGB channel) and blur (a 3x3 box).
+filter_setup() {
+    S=$T/stores
+    mkdir "$S" "$T/lib" || bail "mkdir"
+    run encode "synth:$1" -o "$S/x.gv"
+    [ "$rc" -eq 0 ] || bail "encode: $(cat "$T/err")"
+    cat >"$T/lib/negate.json" <<'EOF_NEGATE'
+{"name": "negate", "output": "neg", "output_channels": 3,
+ "modules": [{"id": "neg", "template": "point", "inputs": ["source"],
+              "glsl": "vec4 v = $(FilterInput1)(rel_pos);\nreturn vec4(1.0 - v.rgb, v.a);"}]}
+EOF_NEGATE
+    cat >"$T/lib/blur.json" <<'EOF_BLUR'
+{"name": "blur", "output": "b",
+ "modules": [{"id": "b", "template": "point", "inputs": ["source"],
+              "kernel": {"width": 3, "height": 3, "weights": [1,1,1,1,1,1,1,1,1],
+                         "scale": 0.1111111111111111}}]}
+EOF_BLUR
+}

@@ -184,21 +184,8 @@ ldd "$GIGAVIEWD" 2>/dev/null | grep -q 'libasan\|libubsan\|libtsan' && sanitized
 if [ -n "$sanitized" ]; then
     skip "the traced run" "a sanitizer build"
 else
-S=$T/stores
-mkdir "$S" "$T/lib" "$T/stored" || bail "mkdir"
-run encode synth:1500x1000 -o "$S/x.gv"
-[ "$rc" -eq 0 ] || bail "encode: $(cat "$T/err")"
-cat >"$T/lib/negate.json" <<'EOF'
-{"name": "negate", "output": "neg", "output_channels": 3,
- "modules": [{"id": "neg", "template": "point", "inputs": ["source"],
-              "glsl": "vec4 v = $(FilterInput1)(rel_pos);\nreturn vec4(1.0 - v.rgb, v.a);"}]}
-EOF
-cat >"$T/lib/blur.json" <<'EOF'
-{"name": "blur", "output": "b",
- "modules": [{"id": "b", "template": "point", "inputs": ["source"],
-              "kernel": {"width": 3, "height": 3, "weights": [1,1,1,1,1,1,1,1,1],
-                         "scale": 0.1111111111111111}}]}
-EOF
+filter_setup 1500x1000
+mkdir "$T/stored" || bail "mkdir"
 cat >"$T/u.conf" <<EOF2
 store_dir = "$S"
 threads = 2

@@ -19,6 +19,7 @@
 #include "gpu/gpu.h"
 #include "gpu/gpu_decode.h"
 #include "store/store_read.h"
+#include "store_fixture.h"
 #include "util.h"
 
 static char dir[] = "/tmp/gv-test-gpu-XXXXXX";
@@ -39,11 +40,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     gv_encode_opts_default(&o);
     o.target_psnr = psnr;
     o.max_rate = max_rate;
-    struct gv_encode_result r;
-    struct gv_error err;
-    const char *in[1] = {input};
-    if (gv_encode(in, 1, out, &o, &r, &err) < 0)
-        fail("encode %s: %s", input, err.text);
+    fixture_encode(out, input, &o);
     check_path(gpu, input, out, GV_GPU_PATH_SSBO);
     check_path(gpu, input, out, GV_GPU_PATH_WEBGL2);
     /* The gray synthetic store five times over (65 tiles): a batch longer
@@ -54,19 +51,31 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     unlink(out);
 }
 
+/* The store `out`, open, with its CPU decoder (*cpu) and a GPU decoder on
+ * `path` (returned). */
+static struct gv_gpu_decoder *open_decoders(struct gv_gpu *gpu, const char *out,
+                                            enum gv_gpu_path path, struct gv_store **s,
+                                            struct gv_decoder **cpu)
+{
+    struct gv_error err;
+    *s = fixture_open(out);
+    *cpu = gv_decoder_new(*s, 64u << 20);
+    struct gv_gpu_decoder *gd =
+        gv_gpu_decoder_new_path(gpu, gv_store_info(*s)->geometry.channels, path, &err);
+    if (!*cpu || !gd)
+        fail("decoders: %s", *cpu ? err.text : "no CPU decoder");
+    return gd;
+}
+
 static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
                        enum gv_gpu_path path)
 {
     struct gv_error err;
-    struct gv_store *s = gv_store_open(out, &err);
-    if (!s)
-        fail("open: %s", err.text);
+    struct gv_store *s;
+    struct gv_decoder *cpu;
+    struct gv_gpu_decoder *gd = open_decoders(gpu, out, path, &s, &cpu);
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     const int c = g->channels;
-    struct gv_decoder *cpu = gv_decoder_new(s, 64u << 20);
-    struct gv_gpu_decoder *gd = gv_gpu_decoder_new_path(gpu, c, path, &err);
-    if (!gd)
-        fail("gpu decoder: %s", err.text);
     const size_t tb = gv_tile_bytes(c);
     uint8_t *px = malloc(tb), *quarter = malloc((size_t)257 * 257 * c);
     /* Handles of the level above, row-major. */
@@ -85,12 +94,9 @@ static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
         for (uint32_t ty = 0; ty < l->tiles_y; ty++)
             for (uint32_t tx = 0; tx < l->tiles_x; tx++) {
                 uint8_t *page;
-                size_t plen, tlen;
+                size_t tlen;
                 const uint8_t *buf;
-                if (gv_store_read_page(s, k, tx / 8, ty / 8, &page, &plen, &err) < 0 ||
-                    gv_page_tile(page, plen, c, (int)(tx % 8), (int)(ty % 8), &buf,
-                                 &tlen, &err) < 0)
-                    fail("tile %d/%u/%u: %s", k, tx, ty, err.text);
+                fixture_tile(s, k, tx, ty, &page, &buf, &tlen);
                 rates[buf[0] & 0x0f]++;
                 coded += (buf[0] & 0x80) != 0;
                 ctx += (buf[0] & 0x40) != 0;
@@ -192,15 +198,11 @@ static void check_batch(struct gv_gpu *gpu, const char *input, const char *out,
                         enum gv_gpu_path path, int copies)
 {
     struct gv_error err;
-    struct gv_store *s = gv_store_open(out, &err);
-    if (!s)
-        fail("open: %s", err.text);
+    struct gv_store *s;
+    struct gv_decoder *cpu;
+    struct gv_gpu_decoder *gd = open_decoders(gpu, out, path, &s, &cpu);
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     const int c = g->channels;
-    struct gv_decoder *cpu = gv_decoder_new(s, 64u << 20);
-    struct gv_gpu_decoder *gd = gv_gpu_decoder_new_path(gpu, c, path, &err);
-    if (!gd)
-        fail("gpu decoder: %s", err.text);
     size_t one = 0;
     for (int k = 0; k < g->root; k++)
         one += (size_t)g->level[k].tiles_x * g->level[k].tiles_y;
@@ -222,11 +224,7 @@ static void check_batch(struct gv_gpu *gpu, const char *input, const char *out,
         level_start = at;
         for (uint32_t ty = 0; ty < l->tiles_y; ty++)
             for (uint32_t tx = 0; tx < l->tiles_x; tx++, at++) {
-                size_t plen;
-                if (gv_store_read_page(s, k, tx / 8, ty / 8, &pages[at], &plen, &err) < 0 ||
-                    gv_page_tile(pages[at], plen, c, (int)(tx % 8), (int)(ty % 8),
-                                 &jobs[at].buf, &jobs[at].len, &err) < 0)
-                    fail("tile %d/%u/%u: %s", k, tx, ty, err.text);
+                fixture_tile(s, k, tx, ty, &pages[at], &jobs[at].buf, &jobs[at].len);
                 jobs[at].qx = (int)(tx & 1);
                 jobs[at].qy = (int)(ty & 1);
                 if (k + 1 == g->root) {

@@ -26,10 +26,7 @@
 static uint64_t rng = 0x9e3779b97f4a7c15ull;
 static uint32_t next_rand(void)
 {
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return (uint32_t)rng;
+    return test_rand(&rng);
 }
 
 static int clampi(int v, int lo, int hi)

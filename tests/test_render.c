@@ -24,6 +24,7 @@
 #include "imageio/imageio.h"
 #include "render/region.h"
 #include "store/store_read.h"
+#include "store_fixture.h"
 #include "util.h"
 
 static char dir[] = "/tmp/gv-test-render-XXXXXX";
@@ -524,30 +525,12 @@ static void check_encode(struct gv_decoder *d)
     img_free(&sm);
 }
 
-static struct gv_store *make_store(const char *input, const char *name)
-{
-    char out[256];
-    snprintf(out, sizeof out, "%s/%s", dir, name);
-    struct gv_encode_opts o;
-    gv_encode_opts_default(&o);
-    o.threads = 2;
-    struct gv_encode_result res;
-    struct gv_error err;
-    const char *in[1] = {input};
-    if (gv_encode(in, 1, out, &o, &res, &err) != 0)
-        fail("encode %s: %s", input, err.text);
-    struct gv_store *s = gv_store_open(out, &err);
-    if (!s)
-        fail("open %s: %s", out, err.text);
-    return s;
-}
-
 int main(void)
 {
     if (!mkdtemp(dir))
         fail("mkdtemp");
-    struct gv_store *s = make_store("synth:1500x1100", "rgb.gv");
-    struct gv_store *sg = make_store("synth:700x600:gray", "gray.gv");
+    struct gv_store *s = fixture_store(dir, "rgb.gv", "synth:1500x1100", 0);
+    struct gv_store *sg = fixture_store(dir, "gray.gv", "synth:700x600:gray", 0);
     struct gv_decoder *d = gv_decoder_new(s, 64u << 20);
     struct gv_decoder *dg = gv_decoder_new(sg, 64u << 20);
     if (!d || !dg)

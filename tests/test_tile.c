@@ -22,10 +22,7 @@
 static uint64_t rng = 88172645463325252ull;
 static uint32_t next_rand(void)
 {
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return (uint32_t)rng;
+    return test_rand(&rng);
 }
 
 /* The prediction written out from docs/FORMAT.md, independently: the
@@ -387,6 +384,84 @@ static void check_context_layout(const uint8_t *parent)
 }
 
 /* Code lengths: vq_log2_q16 is log2 in 16.16 fixed point, to one unit. */
+/* Offset of the stream lengths n[] of an entropy-coded buffer
+ * (FORMAT.md 4.1, 4.2). */
+static size_t lengths_at(const uint8_t *buf, int channels)
+{
+    const size_t tables = gv_rans_tables_at(buf, channels);
+    if (!(buf[0] & GV_TILE_CONTEXT))
+        return tables + 2 * ((size_t)1 << (buf[0] & 0x0f));
+    const size_t n = gv_get16(buf + 2);
+    const size_t map = (tables + 2 * n + 3) & ~(size_t)3;
+    return map + 8 + 2 * GV_RANS_SYMBOLS * (size_t)buf[1];
+}
+
+/* Start of row r's stream: after n[] (padded to 4 bytes), the streams of
+ * the rows before, n[row] 16-bit words each. */
+static size_t stream_at(const uint8_t *buf, int channels, int r)
+{
+    const size_t lengths = lengths_at(buf, channels);
+    size_t at = lengths + ((2 * GV_BLOCKS + 3) & ~(size_t)3);
+    for (int row = 0; row < r; row++)
+        at += 2 * (size_t)gv_get16(buf + lengths + 2 * row);
+    return at;
+}
+
+/* The block rows' streams are independent: a damaged stream is reported
+ * as its own row, and every row before it decodes as it was (a decoder
+ * that works on several rows at once must keep both). */
+static void check_damaged_rows(void)
+{
+    struct gv_error err;
+    const size_t cap = 2 * GV_TILEBUF_MAX;
+    uint16_t *idx = malloc(sizeof *idx * GV_NBLOCKS), *want = malloc(sizeof *want * GV_NBLOCKS),
+             *back = malloc(sizeof *back * GV_NBLOCKS);
+    uint8_t *buf = malloc(cap), *copy = malloc(cap);
+    int8_t *book = malloc((size_t)12 << 8);
+    if (!idx || !want || !back || !buf || !copy || !book)
+        fail("out of memory");
+    for (size_t i = 0; i < ((size_t)12 << 8); i++)
+        book[i] = (int8_t)(i * 37 % 251 - 125);
+    for (uint32_t i = 0; i < GV_NBLOCKS; i++) {
+        uint32_t r = next_rand();
+        idx[i] = (uint16_t)(r % 8 ? r % 5 : r % 256);
+    }
+    static const int rows[] = {0, 1, 2, 3, 4, 6, 127, 254, 255, 256};
+    for (int ctx = 0; ctx < 2; ctx++) {
+        const size_t len = ctx ? gv_rans_pack_ctx(idx, 8, 3, book, buf, cap)
+                               : gv_rans_pack(idx, 8, 3, book, buf, cap);
+        if (len == 0 || gv_rans_unpack(buf, len, 8, 3, want, &err) < 0)
+            fail("pack/unpack: %s", err.text);
+        int wrong = 0;
+        for (size_t k = 0; k < sizeof rows / sizeof rows[0]; k++) {
+            const int r = rows[k];
+            memcpy(copy, buf, len);
+            const size_t at = stream_at(copy, 3, r);
+            const uint32_t n = gv_get16(copy + lengths_at(copy, 3) + 2 * (size_t)r);
+            copy[at + 2 * (n / 2)] ^= 0x5a;
+            copy[at + 2 * (n / 2) + 1] ^= 0xa5;
+            memset(back, 0xff, sizeof *back * GV_NBLOCKS);
+            char named[32];
+            snprintf(named, sizeof named, "tile: stream %d ", r);
+            const int rc = gv_rans_unpack(copy, len, 8, 3, back, &err);
+            const int same = memcmp(back, want, sizeof *back * GV_BLOCKS * (size_t)r) == 0;
+            if (rc == 0 || strncmp(err.text, named, strlen(named)) != 0 || !same) {
+                wrong++;
+                printf("# %s, row %d damaged: rc %d, \"%s\", rows before %s\n",
+                       ctx ? "EX" : "E", r, rc, rc ? err.text : "", same ? "same" : "differ");
+            }
+        }
+        check(wrong == 0, "%s layout: a damaged stream is reported as its own row (%zu rows "
+              "tried), the rows before it decoded unchanged", ctx ? "EX" : "E", sizeof rows / sizeof rows[0]);
+    }
+    free(idx);
+    free(want);
+    free(back);
+    free(buf);
+    free(copy);
+    free(book);
+}
+
 static void check_log2(void)
 {
     int wrong = 0;
@@ -637,6 +712,7 @@ int main(void)
     make_tile(orig, 3, 6);
     check_attacks(ws, orig, parent, buf);
     check_context_layout(parent);
+    check_damaged_rows();
     gv_predict(parent, 3, 0, 1, orig);
     {
         struct gv_tile_params prm = {.target_mse = 1.0, .max_rate = 8, .seed = 1};

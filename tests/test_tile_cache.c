@@ -19,6 +19,7 @@
 #include "encode/stream_encoder.h"
 #include "render/store_decoder.h"
 #include "render/tile_cache.h"
+#include "store_fixture.h"
 #include "util.h"
 
 #define NTHREADS 6
@@ -282,28 +283,9 @@ static void test_stress(struct gv_store *s)
         free(ref[i]);
 }
 
-static struct gv_store *make_store(const char *input, const char *name)
-{
-    char out[256];
-    snprintf(out, sizeof out, "%s/%s", dir, name);
-    struct gv_encode_opts o;
-    gv_encode_opts_default(&o);
-    o.threads = 1;
-    struct gv_encode_result res;
-    struct gv_error err;
-    const char *in[1] = {input};
-    if (gv_encode(in, 1, out, &o, &res, &err) != 0)
-        fail("encode %s: %s", input, err.text);
-    struct gv_store *s = gv_store_open(out, &err);
-    if (!s)
-        fail("open %s: %s", out, err.text);
-    unlink(out);
-    return s;
-}
-
 static void test_decoders(void)
 {
-    struct gv_store *s = make_store("synth:1500x1100", "rgb.gv");
+    struct gv_store *s = fixture_store(dir, "rgb.gv", "synth:1500x1100", 1);
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     const size_t tb = gv_tile_bytes(g->channels);
     struct gv_tile_cache *c = gv_tile_cache_new(64u << 20);

@@ -13,11 +13,25 @@
 #define GV_TESTS_UTIL_H
 
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 static int tap_count, tap_failed;
+
+/* test_rand(&state): the next number of a xorshift64 generator (Marsaglia,
+ * "Xorshift RNGs", 2003: shifts 13, 7, 17), its low 32 bits; the random
+ * fills of the tests, the same on every machine for a given non-zero seed. */
+static inline uint32_t test_rand(uint64_t *state)
+{
+    uint64_t x = *state;
+    x ^= x << 13;
+    x ^= x >> 7;
+    x ^= x << 17;
+    *state = x;
+    return (uint32_t)x;
+}
 
 /* One "ok"/"not ok" line; the checks below and check() come here. */
 __attribute__((format(printf, 4, 0))) static inline int

@@ -160,25 +160,15 @@ static int axis_bilinear(struct axis *a, uint64_t len, uint32_t n)
     return 0;
 }
 
-/* Whether every output pixel of the axis is one source pixel, the
- * next one each time: a plain copy from first[0] on. */
+/* Whether each output pixel of the axis is one source pixel, the next one
+ * each time: resampling along it is a plain copy from first[0] on.  When
+ * a->n is the source's length, such a copy can only start at 0: it is the
+ * whole source, unchanged. */
 static int axis_is_copy(const struct axis *a)
 {
     for (uint32_t i = 0; i < a->n; i++)
         if (a->count[i] != 1 || a->w[(size_t)i * a->taps] != WONE ||
             a->first[i] != a->first[0] + i)
-            return 0;
-    return 1;
-}
-
-/* 1 if axis a maps output pixel i onto source pixel i alone, for every i
- * of a source of `len` pixels: resampling along it changes nothing. */
-static int axis_identity(const struct axis *a, uint32_t len)
-{
-    if (a->n != len)
-        return 0;
-    for (uint32_t i = 0; i < a->n; i++)
-        if (a->count[i] != 1 || a->first[i] != i)
             return 0;
     return 1;
 }
@@ -406,7 +396,7 @@ int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
     if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, dec, err) != 0)
         goto out;
 
-    if (axis_identity(&ax, f.w) && axis_identity(&ay, f.h)) {
+    if (ax.n == f.w && ay.n == f.h && axis_is_copy(&ax) && axis_is_copy(&ay)) {
         /* Level-aligned at the level's own size (an IIIF tile): each output
          * pixel is one decoded pixel, which resample would copy unchanged. */
         scaled = dec;

@@ -4,7 +4,7 @@
 #   tests/fuzz/campaign.sh BUILDDIR [SECONDS-PER-TARGET] [JOBS]
 #
 # FUZZ_TARGETS picks targets (default: store tile iiif router filter_graph
-# worker settings batch imageio batch_frames).
+# worker settings batch imageio batch_frames listen_fds).
 # BUILDDIR was configured with --enable-fuzzing CC=clang CXX=clang++ (the
 # targets are built here if needed).  Each target starts from a copy of
 # its seed corpus (tests/fuzz/corpus/*, left untouched) in a work
@@ -21,16 +21,27 @@
 # instrumented, so AddressSanitizer misses a stray write inside them that
 # does not crash, and valgrind sees it.  Its errors count as findings
 # (the log names the input: run_corpus prints each file's name first).
+# BUILDDIR and PLAINBUILD may be relative (to the current directory).
+# Exit 2 when a target could not be built or ran no input at all (the
+# log's last lines are printed): a campaign that fuzzed nothing fails.
 set -u
 build=${1:?usage: campaign.sh BUILDDIR [SECONDS] [JOBS]}
+# Absolute: the targets run from their findings directory.
+build=$(cd "$build" 2>/dev/null && pwd) ||
+    { echo "campaign: no build directory $1" >&2; exit 2; }
+if [ -n "${VALGRIND_REPLAY:-}" ]; then
+    VALGRIND_REPLAY=$(cd "$VALGRIND_REPLAY" 2>/dev/null && pwd) ||
+        { echo "campaign: no build directory $VALGRIND_REPLAY" >&2; exit 2; }
+fi
 secs=${2:-60}
 jobs=${3:-1}
 here=$(cd "$(dirname "$0")" && pwd)
 work=${FUZZ_WORK:-$(mktemp -d "${TMPDIR:-/tmp}/gvfuzz.XXXXXX")}
-targets=${FUZZ_TARGETS:-store tile iiif router filter_graph worker settings batch imageio batch_frames}
+targets=${FUZZ_TARGETS:-store tile iiif router filter_graph worker settings batch imageio batch_frames listen_fds}
 make -C "$build" $(for t in $targets; do printf 'tests/fuzz/fuzz_%s ' "$t"; done) >/dev/null ||
     { echo "campaign: cannot build the fuzz targets in $build" >&2; exit 2; }
 found=0
+idle=0
 for t in $targets; do
     mkdir -p "$work/$t/corpus" "$work/$t/findings"
     cp "$here/corpus/$t/"* "$work/$t/corpus/"
@@ -50,6 +61,11 @@ for t in $targets; do
     after=$(ls "$work/$t/corpus" | wc -l)
     findings=$(ls "$work/$t/findings" | grep -E '^(crash|leak|timeout|oom|slow-unit)-' || true)
     echo "fuzz_$t: ${secs}s, $execs executions (${speed:-?}/s), corpus $before -> $after"
+    if [ "$execs" -eq 0 ]; then
+        idle=1
+        echo "  NOTHING RAN: $work/$t/log ends:"
+        tail -n 5 "$work/$t/log" | sed 's/^/    /'
+    fi
     if [ -n "$findings" ]; then
         found=1
         for f in $findings; do
@@ -76,4 +92,5 @@ for t in $targets; do
     fi
 done
 echo "logs and corpora in $work"
+[ "$idle" -eq 0 ] || exit 2
 exit $found

@@ -1,7 +1,7 @@
 #!/bin/sh
 # make_corpus_inputs.sh - regenerates the seed corpora of the input-parser
-# targets: tests/fuzz/corpus/settings, batch and imageio (make_corpus.sh
-# does store and tile).
+# targets: tests/fuzz/corpus/settings, batch, imageio and listen_fds
+# (make_corpus.sh does store and tile).
 #
 #   tests/fuzz/make_corpus_inputs.sh
 #
@@ -20,7 +20,7 @@ top=$(cd "$here/../.." && pwd)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 # Past findings (finding-*) stay: make check replays them forever.
-for d in settings batch imageio; do
+for d in settings batch imageio listen_fds; do
     mkdir -p "$here/corpus/$d"
     find "$here/corpus/$d" -type f ! -name 'finding-*' -delete
 done
@@ -181,4 +181,46 @@ echo 'listen = "' >"$s/lone-quote.conf"
 python3 -c 'print("listen = " + "x" * 300)' >"$s/string-too-long.conf"
 python3 -c 'print("# " + "y" * 5000)' >"$s/line-too-long.conf"
 printf 'port = 1\n\0 = 2\n' >"$s/nul.conf"
+
+# ------------------------------------------------------------- listen_fds
+# fuzz_listen_fds inputs: a byte saying which of LISTEN_PID, LISTEN_FDS,
+# LISTEN_FDNAMES are set (bits 0-2), then their values on three lines; an
+# '@' in LISTEN_PID is the replaying process's pid.  Valid activations,
+# other processes', and hostile numbers (signs, spaces, hex, overflow).
+l=$here/corpus/listen_fds
+lf() { printf "$2" >"$l/$1"; }
+lf ok '\007@\n1\nhttp'
+lf ok-no-names '\003@\n1\n'
+lf leading-zeros '\003000@\n0001\n'
+lf two '\007@\n2\nhttp:admin'
+lf zero '\003@\n0\n'
+lf empty-fds '\003@\n\n'
+lf no-fds '\005@\n\nx'
+lf no-pid '\006\n1\nhttp'
+lf empty-pid '\003\n1\n'
+lf other-pid '\0031\n1\n'
+lf pid-suffix '\003@0\n1\n'
+lf pid-twice '\003@@\n1\n'
+lf pid-sign '\003+@\n1\n'
+lf pid-minus '\003-@\n1\n'
+lf pid-space '\003 @\n1\n'
+lf pid-trailing-space '\003@ \n1\n'
+lf pid-hex '\0030x1\n1\n'
+lf pid-overflow '\003@99999999999999999999999999\n1\n'
+lf pid-2to31 '\0032147483648\n1\n'
+lf fds-sign '\003@\n+1\n'
+lf fds-minus '\003@\n-1\n'
+lf fds-space '\003@\n 1\n'
+lf fds-newline '\003@\n1\n\n'
+lf fds-hex '\003@\n0x1\n'
+lf fds-overflow '\003@\n99999999999999999999999999999999\n'
+lf fds-2to31 '\003@\n2147483648\n'
+lf fds-max '\003@\n2147483647\n'
+lf fds-long "\\003@\\n$(python3 -c 'print("7" * 100, end="")')\\n"
+lf fds-nul '\003@\n1\0002\n'
+lf names-long "\\007@\\n1\\n$(python3 -c 'print("n:" * 2000, end="")')"
+lf names-only '\004\n\nhttp'
+lf nothing-set '\000@\n1\nhttp'
+lf garbage '\377\377\377\n\377\n\377'
+du -sh "$l"
 du -sh "$here/corpus/settings" "$here/corpus/batch" "$here/corpus/imageio"
