@@ -25,14 +25,25 @@
  * in int32 and below the cost of any padding lane. */
 #define VQ_BIAS_MAX (1 << 30)
 
-/* A codebook prepared for searching: pairs of dimensions packed into int32
- * lanes, [dim/2][k] (structure of arrays), and the per-codevector biases
- * (0 in the padding lanes). */
+/* A codebook prepared for searching.  The codevectors are sorted by the
+ * sum of their components (stable, so equal sums keep index order), and
+ * their pairs of dimensions packed into int32 lanes, [dim/2][kpad] in that
+ * order (structure of arrays); orig[p] is the index of the codevector at
+ * position p, bias[p] its bias (0 in the padding lanes).  For each run
+ * of 16 positions, the least and greatest sum and the least bias bound
+ * the cost of its codevectors from below (Cauchy-Schwarz:
+ * dim * |x - c|^2 >= (sum x - sum c)^2), so the SIMD searches skip runs
+ * that cannot hold the answer. */
 struct vq_search {
     int k, dim;
     int kpad;               /* k rounded up to 16: the SIMD row stride */
     int32_t pairs[VQ_MAXDIM / 2 * VQ_MAXK];
     int32_t bias[VQ_MAXK];
+    int32_t orig[VQ_MAXK];  /* position -> index; padding: INT32_MAX */
+    int32_t run_smin[VQ_MAXK / 16], run_smax[VQ_MAXK / 16];
+    int32_t run_bmin[VQ_MAXK / 16];
+    uint16_t run_at[256 * VQ_MAXDIM + 1]; /* sum + 128 * VQ_MAXDIM -> the
+                                           * first run reaching it (or the last) */
 };
 
 /* Prepare `book` (k entries of dim signed bytes) for vq_nearest, with
