@@ -146,7 +146,9 @@ static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
  * SMALL_RUNS runs visit them all: there the branches cost more than the
  * runs they would skip.
  */
+#ifndef SMALL_RUNS
 #define SMALL_RUNS 4
+#endif
 
 #ifdef VQ_HAVE_X86
 /* One run of 16 codevectors for nearest_avx2_dim, as two halves of 8:
@@ -361,10 +363,64 @@ nearest_avx512_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
     }
 }
 
+/* Small codebooks the other way round: sixteen vectors at a time, one
+ * per lane (their pairs gathered), against every codevector in turn, so
+ * that no lane needs reducing.  The same costs and the same rule for ties
+ * as the other kernels.  Returns how many vectors it did (a multiple of
+ * 16); the rest are left to nearest_avx512_dim. */
+__attribute__((target("avx512f,avx512bw"), always_inline)) static inline size_t
+nearest_avx512_lanes(const struct vq_search *s, const int16_t *vecs, size_t n,
+                     uint16_t *idx, uint32_t *dist, const int pairs)
+{
+    const int k = s->k, kp = s->kpad;
+    const __m512i rows = _mm512_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56, 64,
+                                           72, 80, 88, 96, 104, 112, 120);
+    size_t i = 0;
+    for (; i + 16 <= n; i += 16) {
+        const int32_t *base = (const int32_t *)(const void *)(vecs + i * VQ_STRIDE);
+        __m512i xp[VQ_MAXDIM / 2];
+        for (int j = 0; j < pairs; j++)
+            xp[j] = _mm512_i32gather_epi32(
+                _mm512_add_epi32(rows, _mm512_set1_epi32(j)), base, 4);
+        __m512i best = _mm512_set1_epi32(INT_MAX);
+        __m512i besti = _mm512_set1_epi32(INT_MAX);
+        for (int p = 0; p < k; p++) {
+            __m512i acc = _mm512_set1_epi32(s->bias[p]);
+            for (int j = 0; j < pairs; j++) {
+                __m512i d = _mm512_sub_epi16(xp[j], _mm512_set1_epi32(s->pairs[j * kp + p]));
+                acc = _mm512_add_epi32(acc, _mm512_madd_epi16(d, d));
+            }
+            const __m512i oi = _mm512_set1_epi32(s->orig[p]);
+            __mmask16 lt = _mm512_cmpgt_epi32_mask(best, acc) |
+                           (_mm512_cmpeq_epi32_mask(best, acc) &
+                            _mm512_cmpgt_epi32_mask(besti, oi));
+            best = _mm512_mask_mov_epi32(best, lt, acc);
+            besti = _mm512_mask_mov_epi32(besti, lt, oi);
+        }
+        _mm256_storeu_si256((__m256i *)(void *)(idx + i), _mm512_cvtepi32_epi16(besti));
+        if (dist)
+            _mm512_storeu_si512(dist + i, best);
+    }
+    return i;
+}
+
+/* Codebooks of at most this many entries go to nearest_avx512_lanes. */
+#define LANES_MAXK 32
+
 __attribute__((target("avx512f,avx512bw"))) static void
 nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
                uint16_t *idx, uint32_t *dist)
 {
+    size_t done = 0;
+    if (s->k <= LANES_MAXK)
+        done = s->dim == 12 ? nearest_avx512_lanes(s, vecs, n, idx, dist, 6) :
+               s->dim == 4 ? nearest_avx512_lanes(s, vecs, n, idx, dist, 2) :
+               nearest_avx512_lanes(s, vecs, n, idx, dist, s->dim / 2);
+    vecs += done * VQ_STRIDE;
+    idx += done;
+    if (dist)
+        dist += done;
+    n -= done;
     if (s->dim == 12)
         nearest_avx512_dim(s, vecs, n, idx, dist, 6);
     else if (s->dim == 4)
@@ -447,29 +503,26 @@ void vq_train_init(struct vq_trainer *t, int dim, const int16_t *sample,
     }
 }
 
-/* Principal axis of the vectors assigned to cell c by power iteration;
- * returns the variance along it and the unit axis in e. */
+/* Principal axis of the m vectors of a cell (sample rows members[0..m),
+ * in increasing order) by power iteration; returns the variance along it
+ * and the unit axis in e. */
 static double principal_axis(const struct vq_trainer *t, const int16_t *sample,
-                             size_t n, const uint16_t *idx, int c, double *e)
+                             const uint32_t *members, size_t m, double *e)
 {
     const int dim = t->dim;
     double cov[VQ_MAXDIM * VQ_MAXDIM] = {0}, mean[VQ_MAXDIM] = {0};
-    size_t m = 0;
     /* Start (and fallback for cells too small to have an axis): a fixed
      * direction with unequal weights, so it is not orthogonal to the axis
      * of typical residuals. */
     for (int a = 0; a < dim; a++)
         e[a] = 1.0 / sqrt((double)dim) * (a % 3 == 0 ? 1.0 : 0.9);
-    for (size_t i = 0; i < n; i++) {
-        if (idx[i] != c)
-            continue;
-        const int16_t *x = sample + i * VQ_STRIDE;
+    for (size_t i = 0; i < m; i++) {
+        const int16_t *x = sample + (size_t)members[i] * VQ_STRIDE;
         for (int a = 0; a < dim; a++) {
             mean[a] += x[a];
             for (int b = 0; b <= a; b++)
                 cov[a * dim + b] += (double)x[a] * x[b];
         }
-        m++;
     }
     if (m < 2)
         return 0.0;
@@ -508,9 +561,23 @@ static void split_cells(struct vq_trainer *t, const int16_t *sample, size_t n,
     const int dim = t->dim, k = t->k;
     vq_search_prepare(&t->search, t->book, k, dim);
     vq_nearest(&t->search, sample, n, idx, NULL);
+    /* The members of every cell in sample order (a stable counting sort),
+     * so each cell's sums run in the same order as a scan would. */
+    memset(t->count, 0, sizeof(uint32_t) * (size_t)k);
+    for (size_t i = 0; i < n; i++)
+        t->count[idx[i]]++;
+    uint32_t start = 0;
+    for (int c = 0; c < k; c++) {
+        uint32_t m = t->count[c];
+        t->count[c] = start;
+        start += m;
+    }
+    for (size_t i = 0; i < n; i++)
+        t->members[t->count[idx[i]]++] = (uint32_t)i;
     for (int c = 0; c < k; c++) {
         double e[VQ_MAXDIM];
-        double var = principal_axis(t, sample, n, idx, c, e);
+        const uint32_t end = t->count[c], first = c ? t->count[c - 1] : 0;
+        double var = principal_axis(t, sample, t->members + first, end - first, e);
         double s = 0.8 * sqrt(var);
         if (s < 1.0)
             s = 1.0;

@@ -72,6 +72,9 @@ int vq_nearest_path(enum vq_path path, const struct vq_search *s,
                     const int16_t *vecs, size_t n, uint16_t *idx,
                     uint32_t *dist);
 
+/* The largest training sample (a tile's blocks). */
+#define VQ_TRAIN_MAXN (257 * 257)
+
 /* Scratch for vq_train: sized for VQ_MAXK entries. */
 struct vq_trainer {
     int dim, k;
@@ -79,6 +82,7 @@ struct vq_trainer {
     int64_t sum[VQ_MAXK * VQ_MAXDIM];
     uint32_t count[VQ_MAXK];
     int32_t bias[VQ_MAXK];  /* vq_train_ecvq: lambda * code length */
+    uint32_t members[VQ_TRAIN_MAXN]; /* splitting: sample rows by cell */
     struct vq_search search;
 };
 
@@ -91,7 +95,7 @@ void vq_train_init(struct vq_trainer *t, int dim, const int16_t *sample,
  * (PCA split, section 2.7), then refine with LBG on the sample until the
  * distortion improves by less than 0.5% or max_iters assignments pass.
  * Empty cells are reseeded with the worst-coded sample vectors.  idx and
- * dist are caller scratch of n entries.  Returns the sample distortion of
+ * dist are caller scratch of n entries; n is at most VQ_TRAIN_MAXN.  Returns the sample distortion of
  * the last assignment.
  */
 uint64_t vq_train_double(struct vq_trainer *t, const int16_t *sample, size_t n,
