@@ -22,6 +22,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "codec/tile_layout.h"
 #include "codec/tile.h"
@@ -43,6 +46,8 @@
 struct gv_tile_workspace {
     uint8_t pred[GV_TILE * GV_TILE * 3];
     int16_t vecs[GV_NBLOCKS * VQ_STRIDE];
+    uint8_t pblk[GV_NBLOCKS * VQ_STRIDE]; /* the prediction, laid out as vecs */
+    int16_t wide[VQ_MAXK * VQ_STRIDE];    /* a codebook widened for block_sse */
     uint32_t order[GV_NBLOCKS];      /* shuffled valid blocks */
     int16_t sample[GV_NBLOCKS * VQ_STRIDE];
     uint16_t idx[GV_NBLOCKS];
@@ -94,14 +99,18 @@ static void make_vectors(struct gv_tile_workspace *ws, const uint8_t *orig,
     for (int by = 0; by < GV_BLOCKS; by++)
         for (int bx = 0; bx < GV_BLOCKS; bx++) {
             int16_t *v = ws->vecs + ((size_t)by * GV_BLOCKS + bx) * VQ_STRIDE;
+            uint8_t *p = ws->pblk + ((size_t)by * GV_BLOCKS + bx) * VQ_STRIDE;
             memset(v, 0, VQ_STRIDE * sizeof *v);
+            memset(p, 0, VQ_STRIDE);
             for (int j = 0; j < 4; j++) {
                 int x = 2 * bx + (j & 1), y = 2 * by + (j >> 1);
                 if (x > GV_TILE - 1) x = GV_TILE - 1;
                 if (y > GV_TILE - 1) y = GV_TILE - 1;
                 size_t o = (size_t)y * row + (size_t)x * channels;
-                for (int c = 0; c < channels; c++)
+                for (int c = 0; c < channels; c++) {
                     v[j * channels + c] = (int16_t)(orig[o + c] - ws->pred[o + c]);
+                    p[j * channels + c] = ws->pred[o + c];
+                }
             }
         }
 }
@@ -140,6 +149,90 @@ static uint64_t reconstruct(const struct gv_tile_workspace *ws,
         for (uint32_t i = 0; i < vw * (uint32_t)channels; i++) {
             int d = a[i] - b[i];
             sse += (uint64_t)(d * d);
+        }
+    }
+    return sse;
+}
+
+/* Squared error of one block coded with the widened codevector w: the
+ * original (x + p) against the clamped reconstruction, lane by lane;
+ * unused lanes are 0 in x, p and w.  Integer sums, so the SSE2 form (in
+ * every x86-64) and the portable one agree exactly. */
+#if defined(__SSE2__)
+static inline uint32_t block_sse(const int16_t *x, const uint8_t *p,
+                                 const int16_t *w)
+{
+    const __m128i zero = _mm_setzero_si128(), top = _mm_set1_epi16(255);
+    const __m128i pb = _mm_loadu_si128((const __m128i *)p);
+    __m128i acc = zero;
+    for (int h = 0; h < 2; h++) {
+        __m128i pw = h ? _mm_unpackhi_epi8(pb, zero) : _mm_unpacklo_epi8(pb, zero);
+        __m128i xw = _mm_loadu_si128((const __m128i *)(x + 8 * h));
+        __m128i ww = _mm_loadu_si128((const __m128i *)(w + 8 * h));
+        __m128i r = _mm_min_epi16(_mm_max_epi16(_mm_add_epi16(pw, ww), zero), top);
+        __m128i e = _mm_sub_epi16(_mm_add_epi16(xw, pw), r);
+        acc = _mm_add_epi32(acc, _mm_madd_epi16(e, e));
+    }
+    acc = _mm_add_epi32(acc, _mm_shuffle_epi32(acc, 0x4e));
+    acc = _mm_add_epi32(acc, _mm_shuffle_epi32(acc, 0xb1));
+    return (uint32_t)_mm_cvtsi128_si32(acc);
+}
+#else
+static inline uint32_t block_sse(const int16_t *x, const uint8_t *p,
+                                 const int16_t *w)
+{
+    uint32_t acc = 0;
+    for (int l = 0; l < VQ_STRIDE; l++) {
+        int r = p[l] + w[l];
+        r = r < 0 ? 0 : (r > 255 ? 255 : r);
+        int e = x[l] + p[l] - r;
+        acc += (uint32_t)(e * e);
+    }
+    return acc;
+}
+#endif
+
+/* What reconstruct() returns for `book` and ws->idx, without writing the
+ * reconstruction: the same clamped sums, pixel by pixel, summed by
+ * blocks (integers, so the order does not matter). */
+static uint64_t coded_sse(struct gv_tile_workspace *ws, const int8_t *book,
+                          int rate, int channels, uint32_t vw, uint32_t vh)
+{
+    const int dim = 4 * channels, k = 1 << rate;
+    for (int c = 0; c < k; c++) {
+        int16_t *w = ws->wide + (size_t)c * VQ_STRIDE;
+        for (int d = 0; d < VQ_STRIDE; d++)
+            w[d] = d < dim ? book[c * dim + d] : 0;
+    }
+    const uint32_t fbx = vw / 2, fby = vh / 2;        /* whole blocks */
+    const uint32_t vbx = (vw + 1) / 2, vby = (vh + 1) / 2;
+    uint64_t sse = 0;
+    for (uint32_t by = 0; by < vby; by++) {
+        const size_t b0 = (size_t)by * GV_BLOCKS;
+        const uint32_t whole = by < fby ? fbx : 0;
+        uint32_t row = 0;
+        for (uint32_t bx = 0; bx < whole; bx++) {
+            const size_t b = b0 + bx;
+            row += block_sse(ws->vecs + b * VQ_STRIDE, ws->pblk + b * VQ_STRIDE,
+                             ws->wide + (size_t)ws->idx[b] * VQ_STRIDE);
+        }
+        sse += row;
+        /* Blocks the valid region cuts: their valid pixels only. */
+        for (uint32_t bx = whole; bx < vbx; bx++) {
+            const size_t b = b0 + bx;
+            const int16_t *x = ws->vecs + b * VQ_STRIDE, *w = ws->wide +
+                               (size_t)ws->idx[b] * VQ_STRIDE;
+            const uint8_t *p = ws->pblk + b * VQ_STRIDE;
+            for (int j = 0; j < 4; j++) {
+                if (2 * bx + (j & 1) >= vw || 2 * by + (j >> 1) >= vh)
+                    continue;
+                for (int c = j * channels; c < (j + 1) * channels; c++) {
+                    int r = p[c] + w[c];
+                    r = r < 0 ? 0 : (r > 255 ? 255 : r);
+                    int e = x[c] + p[c] - r;
+                    sse += (uint64_t)(e * e);
+                }
+            }
         }
     }
     return sse;
@@ -243,18 +336,15 @@ static uint64_t train_rate(struct gv_tile_workspace *ws, int rate, int dim,
                            ws->dist);
 }
 
-/* Assign every block exactly to the trained codebook (ws->idx) and
- * reconstruct into recon; returns the squared error over the valid
- * region. */
-static uint64_t code_all(struct gv_tile_workspace *ws, const uint8_t *orig,
-                         int rate, int channels, uint32_t valid_w,
-                         uint32_t valid_h, uint8_t *recon)
+/* Assign every block exactly to the trained codebook (ws->idx); returns
+ * the squared error of the reconstruction over the valid region. */
+static uint64_t code_all(struct gv_tile_workspace *ws, int rate, int channels,
+                         uint32_t valid_w, uint32_t valid_h)
 {
     struct vq_trainer *t = &ws->trainer;
     vq_search_prepare(&t->search, t->book, t->k, 4 * channels);
     vq_nearest(&t->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
-    return reconstruct(ws, orig, t->book, rate, channels, valid_w, valid_h,
-                       recon);
+    return coded_sse(ws, t->book, rate, channels, valid_w, valid_h);
 }
 
 /* Blocks wholly outside the valid region cost only their index: give them
@@ -315,20 +405,18 @@ static void assign_all(struct gv_tile_workspace *ws, struct vq_trainer *e,
  * ws->trainer is refined on the sample under J = distortion + lambda *
  * bits (ECVQ_ROUNDS rounds), every block is assigned by the same cost and
  * the book refit to the whole tile.  The book is left in ws->ecvq, the
- * indices in ws->idx, the reconstruction in recon; returns the squared
- * error over the valid region. */
-static uint64_t code_all_ecvq(struct gv_tile_workspace *ws, const uint8_t *orig,
-                              int rate, int channels, uint32_t valid_w,
-                              uint32_t valid_h, size_t nsample, double lambda,
-                              uint8_t *recon)
+ * indices in ws->idx; returns the squared error of the reconstruction
+ * over the valid region. */
+static uint64_t code_all_ecvq(struct gv_tile_workspace *ws, int rate,
+                              int channels, uint32_t valid_w, uint32_t valid_h,
+                              size_t nsample, double lambda)
 {
     struct vq_trainer *e = &ws->ecvq;
     vq_train_from(e, ws->trainer.book, ws->trainer.k, 4 * channels);
     vq_train_ecvq(e, ws->sample, nsample, lambda, ECVQ_ROUNDS, ws->idx,
                   ws->dist);
     assign_all(ws, e, valid_w, valid_h);
-    return reconstruct(ws, orig, e->book, rate, channels, valid_w, valid_h,
-                       recon);
+    return coded_sse(ws, e->book, rate, channels, valid_w, valid_h);
 }
 
 /* The best candidate of the rate-distortion search so far. */
@@ -354,9 +442,9 @@ static void keep_best(struct gv_tile_workspace *ws, struct rd_best *best,
  * assignment's counts (every block, as the rANS model counts them),
  * biased assignment of every block, refit; a round is kept while J
  * falls, and the first that does not lower it ends the polish. */
-static void polish(struct gv_tile_workspace *ws, const uint8_t *orig,
-                   int channels, uint32_t valid_w, uint32_t valid_h,
-                   double lambda, struct rd_best *best, uint8_t *recon)
+static void polish(struct gv_tile_workspace *ws, int channels,
+                   uint32_t valid_w, uint32_t valid_h, double lambda,
+                   struct rd_best *best)
 {
     struct vq_trainer *e = &ws->ecvq;
     const int dim = 4 * channels, k = 1 << best->rate;
@@ -366,8 +454,8 @@ static void polish(struct gv_tile_workspace *ws, const uint8_t *orig,
         vq_search_prepare(&e->search, e->book, k, dim);
         vq_search_set_bias(&e->search, e->bias);
         assign_all(ws, e, valid_w, valid_h);
-        uint64_t sse = reconstruct(ws, orig, e->book, best->rate, channels,
-                                   valid_w, valid_h, recon);
+        uint64_t sse = coded_sse(ws, e->book, best->rate, channels, valid_w,
+                                 valid_h);
         size_t bytes = pack_best(ws, ws->scratch, best->rate, channels, e->book,
                                  ws->idx);
         double j = (double)sse + lambda * 8.0 * (double)bytes;
@@ -407,12 +495,12 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
         const int8_t *book;
         if (ecvq) {
             train_rate(ws, rate, dim, nvalid, RD_LBG_ITERS, &nsample);
-            sse = code_all_ecvq(ws, orig, rate, channels, valid_w, valid_h,
-                                nsample, lambda, recon);
+            sse = code_all_ecvq(ws, rate, channels, valid_w, valid_h, nsample,
+                                lambda);
             book = ws->ecvq.book;
         } else {
             train_rate(ws, rate, dim, nvalid, TARGET_LBG_ITERS, &nsample);
-            sse = code_all(ws, orig, rate, channels, valid_w, valid_h, recon);
+            sse = code_all(ws, rate, channels, valid_w, valid_h);
             book = ws->trainer.book;
         }
         size_t bytes = pack_best(ws, ws->scratch, rate, channels, book, ws->idx);
@@ -425,7 +513,7 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
         }
     }
     if (ecvq)
-        polish(ws, orig, channels, valid_w, valid_h, lambda, &best, recon);
+        polish(ws, channels, valid_w, valid_h, lambda, &best);
     memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
     reconstruct(ws, orig, ws->best_book, best.rate, channels, valid_w, valid_h,
                 recon);
@@ -440,23 +528,20 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
  * coding has less error, and is taken if it meets the budget, so that no
  * tile misses a target the nearest codevectors would meet.  Otherwise the
  * entropy-constrained coding stays.  Returns the error of the coding left
- * in ws->idx, *book and recon.
+ * in ws->idx and *book.
  */
-static uint64_t nearest_at_cap(struct gv_tile_workspace *ws, const uint8_t *orig,
-                               int rate, int channels, uint32_t valid_w,
+static uint64_t nearest_at_cap(struct gv_tile_workspace *ws, int rate,
+                               int channels, uint32_t valid_w,
                                uint32_t valid_h, double budget,
-                               uint64_t ecvq_sse, uint8_t *recon,
-                               const int8_t **book)
+                               uint64_t ecvq_sse, const int8_t **book)
 {
     memcpy(ws->best_idx, ws->idx, sizeof ws->idx);
-    uint64_t sse = code_all(ws, orig, rate, channels, valid_w, valid_h, recon);
+    uint64_t sse = code_all(ws, rate, channels, valid_w, valid_h);
     if ((double)sse <= budget) {
         *book = ws->trainer.book;
         return sse;
     }
     memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
-    reconstruct(ws, orig, ws->ecvq.book, rate, channels, valid_w, valid_h,
-                recon);
     *book = ws->ecvq.book;
     return ecvq_sse;
 }
@@ -490,17 +575,18 @@ static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
         uint64_t sse;
         const int8_t *book;
         if (ecvq) {
-            sse = code_all_ecvq(ws, orig, rate, channels, valid_w, valid_h,
-                                nsample, lambda, recon);
+            sse = code_all_ecvq(ws, rate, channels, valid_w, valid_h, nsample,
+                                lambda);
             book = ws->ecvq.book;
             if (rate == max_rate && (double)sse > budget)
-                sse = nearest_at_cap(ws, orig, rate, channels, valid_w,
-                                     valid_h, budget, sse, recon, &book);
+                sse = nearest_at_cap(ws, rate, channels, valid_w, valid_h,
+                                     budget, sse, &book);
         } else {
-            sse = code_all(ws, orig, rate, channels, valid_w, valid_h, recon);
+            sse = code_all(ws, rate, channels, valid_w, valid_h);
             book = ws->trainer.book;
         }
         if ((double)sse <= budget || rate == max_rate) {
+            reconstruct(ws, orig, book, rate, channels, valid_w, valid_h, recon);
             stats->rate = rate;
             stats->sse = sse;
             return pack_best(ws, buf, rate, channels, book, ws->idx);

@@ -41,29 +41,72 @@ static inline int32_t pack_pair(int a, int b)
  * chosen and every path returns what the portable loop returns. */
 #define PAD_VALUE (-32000)
 
+/* The sum of a codevector's components ranges over SUM_LO .. -SUM_LO. */
+#define SUM_LO (-128 * VQ_MAXDIM)
+#define SUM_SPAN (256 * VQ_MAXDIM)
+
 void vq_search_prepare(struct vq_search *s, const int8_t *book, int k, int dim)
 {
     s->k = k;
     s->dim = dim;
     s->kpad = (k + 15) & ~15;
-    for (int j = 0; j < dim / 2; j++) {
-        for (int i = 0; i < k; i++)
-            s->pairs[j * s->kpad + i] =
-                pack_pair(book[i * dim + 2 * j], book[i * dim + 2 * j + 1]);
-        for (int i = k; i < s->kpad; i++)
-            s->pairs[j * s->kpad + i] = j == 0 ? pack_pair(PAD_VALUE, PAD_VALUE) : 0;
+    /* Counting sort by sum: stable, so equal sums stay in index order. */
+    uint32_t start[SUM_SPAN + 1] = {0};
+    int32_t sum[VQ_MAXK];
+    for (int i = 0; i < k; i++) {
+        int t = 0;
+        for (int d = 0; d < dim; d++)
+            t += book[i * dim + d];
+        sum[i] = t;
+        start[t - SUM_LO + 1]++;
     }
-    memset(s->bias, 0, sizeof(int32_t) * (size_t)s->kpad);
+    for (int v = 0; v < SUM_SPAN; v++)
+        start[v + 1] += start[v];
+    for (int i = 0; i < k; i++)
+        s->orig[start[sum[i] - SUM_LO]++] = i;
+    for (int j = 0; j < dim / 2; j++) {
+        for (int p = 0; p < k; p++) {
+            const int8_t *cv = book + s->orig[p] * dim;
+            s->pairs[j * s->kpad + p] = pack_pair(cv[2 * j], cv[2 * j + 1]);
+        }
+        for (int p = k; p < s->kpad; p++)
+            s->pairs[j * s->kpad + p] = j == 0 ? pack_pair(PAD_VALUE, PAD_VALUE) : 0;
+    }
+    for (int p = k; p < s->kpad; p++)
+        s->orig[p] = INT32_MAX;
+    /* Runs of 16: the sums of their real codevectors (the padding never
+     * wins, so it need not be bounded). */
+    for (int r = 0; r < s->kpad / 16; r++) {
+        s->run_smin[r] = sum[s->orig[16 * r]];
+        int last = 16 * r + 15 < k ? 16 * r + 15 : k - 1;
+        s->run_smax[r] = sum[s->orig[last]];
+    }
+    for (int v = 0, r = 0, last = s->kpad / 16 - 1; v <= SUM_SPAN; v++) {
+        while (r < last && s->run_smax[r] < v + SUM_LO)
+            r++;
+        s->run_at[v] = (uint16_t)r;
+    }
+    vq_search_set_bias(s, NULL);
 }
 
 void vq_search_set_bias(struct vq_search *s, const int32_t *bias)
 {
-    for (int i = 0; i < s->k; i++) {
-        int32_t b = bias ? bias[i] : 0;
-        s->bias[i] = b < 0 ? 0 : (b > VQ_BIAS_MAX ? VQ_BIAS_MAX : b);
+    for (int p = 0; p < s->k; p++) {
+        int32_t b = bias ? bias[s->orig[p]] : 0;
+        s->bias[p] = b < 0 ? 0 : (b > VQ_BIAS_MAX ? VQ_BIAS_MAX : b);
+    }
+    for (int p = s->k; p < s->kpad; p++)
+        s->bias[p] = 0;
+    for (int r = 0; r < s->kpad / 16; r++) {
+        int32_t m = VQ_BIAS_MAX;
+        for (int p = 16 * r; p < 16 * r + 16 && p < s->k; p++)
+            m = s->bias[p] < m ? s->bias[p] : m;
+        s->run_bmin[r] = m;
     }
 }
 
+/* The exhaustive search: the least cost, and among equal costs the least
+ * original index.  The SIMD paths must return exactly this. */
 static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
                              size_t n, uint16_t *idx, uint32_t *dist)
 {
@@ -71,18 +114,18 @@ static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
     for (size_t i = 0; i < n; i++) {
         const int16_t *x = vecs + i * VQ_STRIDE;
         uint32_t best = UINT32_MAX;
-        int besti = 0;
-        for (int c = 0; c < k; c++) {
-            uint32_t d = (uint32_t)s->bias[c];
+        int32_t besti = INT32_MAX;
+        for (int p = 0; p < k; p++) {
+            uint32_t d = (uint32_t)s->bias[p];
             for (int j = 0; j < pairs; j++) {
-                int32_t p = s->pairs[j * stride + c];
-                int d0 = x[2 * j] - (int16_t)(p & 0xffff);
-                int d1 = x[2 * j + 1] - (int16_t)((uint32_t)p >> 16);
+                int32_t pr = s->pairs[j * stride + p];
+                int d0 = x[2 * j] - (int16_t)(pr & 0xffff);
+                int d1 = x[2 * j + 1] - (int16_t)((uint32_t)pr >> 16);
                 d += (uint32_t)(d0 * d0 + d1 * d1);
             }
-            if (d < best) {
+            if (d < best || (d == best && s->orig[p] < besti)) {
                 best = d;
-                besti = c;
+                besti = s->orig[p];
             }
         }
         idx[i] = (uint16_t)besti;
@@ -91,39 +134,105 @@ static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
     }
 }
 
+/*
+ * The pruned order of the SIMD searches, for one vector whose components
+ * sum to sx: the run where sx falls first (run_at), then the runs above
+ * it, then those below it.  A run is skipped when even its best case, its
+ * least bias plus ceil(gap^2 / dim) (gap: from sx to the run's sums),
+ * exceeds the best cost found so far, and a direction ends when the gap
+ * alone does (farther runs only have larger gaps).  Skipped runs cannot
+ * hold the answer, not even a tie, so the result is the exhaustive one.
+ * With integers, ceil(a / dim) > t is a > dim * t.  Searches of at most
+ * SMALL_RUNS runs visit them all: there the branches cost more than the
+ * runs they would skip.
+ */
+#ifndef SMALL_RUNS
+#define SMALL_RUNS 4
+#endif
+
 #ifdef VQ_HAVE_X86
-/* The search eight codevectors at a time.  nearest_avx512 repeats this
- * loop on purpose, with 16 lanes and mask registers: one generic kernel
- * would need the width and the compare-and-blend as parameters and would
- * no longer compile to either instruction set's best form.  A change to
- * one kernel must be made to the other, and to nearest_portable, which
- * both must match exactly. */
-__attribute__((target("avx2"))) static void
-nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
-             uint16_t *idx, uint32_t *dist)
+/* One run of 16 codevectors for nearest_avx2_dim, as two halves of 8:
+ * the costs, kept per lane where less than the lane's best (or equal
+ * with a lower index); with ub, *ub is lowered to the least best when
+ * some cost fell below it. */
+__attribute__((target("avx2"), always_inline)) static inline void
+run8x2(const struct vq_search *s, int r, const __m256i *xp, int pairs,
+       __m256i *best, __m256i *besti, int64_t *ub)
 {
-    const int k = s->kpad, pairs = s->dim / 2;
-    const __m256i step = _mm256_set1_epi32(8);
+    const int k = s->kpad;
+    __m256i any = _mm256_setzero_si256();
+    const __m256i ubv = _mm256_set1_epi32(ub ? (int32_t)*ub : 0);
+    for (int c = 16 * r; c < 16 * r + 16; c += 8) {
+        __m256i acc = _mm256_loadu_si256((const __m256i *)(s->bias + c));
+        for (int j = 0; j < pairs; j++) {
+            __m256i cv = _mm256_loadu_si256((const __m256i *)(s->pairs + j * k + c));
+            __m256i d = _mm256_sub_epi16(xp[j], cv);
+            acc = _mm256_add_epi32(acc, _mm256_madd_epi16(d, d));
+        }
+        __m256i oi = _mm256_loadu_si256((const __m256i *)(s->orig + c));
+        __m256i lt = _mm256_or_si256(
+            _mm256_cmpgt_epi32(*best, acc),
+            _mm256_and_si256(_mm256_cmpeq_epi32(*best, acc),
+                             _mm256_cmpgt_epi32(*besti, oi)));
+        *best = _mm256_blendv_epi8(*best, acc, lt);
+        *besti = _mm256_blendv_epi8(*besti, oi, lt);
+        if (ub)
+            any = _mm256_or_si256(any, _mm256_cmpgt_epi32(ubv, acc));
+    }
+    if (ub && !_mm256_testz_si256(any, any)) {
+        __m256i m = _mm256_min_epi32(*best, _mm256_shuffle_epi32(*best, 0x4e));
+        m = _mm256_min_epi32(m, _mm256_shuffle_epi32(m, 0xb1));
+        m = _mm256_min_epi32(m, _mm256_permute2x128_si256(m, m, 1));
+        *ub = _mm256_cvtsi256_si32(m);
+    }
+}
+
+/* The search eight codevectors at a time, over the runs the pruned order
+ * gives.  nearest_avx512_dim repeats this loop on purpose, with 16 lanes
+ * and mask registers: one generic kernel would need the width and the
+ * compare-and-blend as parameters and would no longer compile to either
+ * instruction set's best form.  A change to one kernel must be made to the
+ * other, and to nearest_portable, which both must match exactly; `pairs`
+ * is a constant in each caller, so the inner loops unroll. */
+__attribute__((target("avx2"), always_inline)) static inline void
+nearest_avx2_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
+                 uint16_t *idx, uint32_t *dist, const int pairs)
+{
+    const int64_t dim = 2 * pairs;
+    const int nruns = s->kpad / 16;
     for (size_t i = 0; i < n; i++) {
         const int16_t *x = vecs + i * VQ_STRIDE;
         __m256i xp[VQ_MAXDIM / 2];
-        for (int j = 0; j < pairs; j++)
+        int sx = 0;
+        for (int j = 0; j < pairs; j++) {
             xp[j] = _mm256_set1_epi32(pack_pair(x[2 * j], x[2 * j + 1]));
+            sx += x[2 * j] + x[2 * j + 1];
+        }
         __m256i best = _mm256_set1_epi32(INT_MAX);
-        __m256i besti = _mm256_setzero_si256();
-        __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-        for (int c = 0; c < k; c += 8) {
-            __m256i acc = _mm256_loadu_si256((const __m256i *)(s->bias + c));
-            for (int j = 0; j < pairs; j++) {
-                __m256i cv = _mm256_loadu_si256(
-                    (const __m256i *)(s->pairs + j * k + c));
-                __m256i d = _mm256_sub_epi16(xp[j], cv);
-                acc = _mm256_add_epi32(acc, _mm256_madd_epi16(d, d));
+        __m256i besti = _mm256_set1_epi32(INT_MAX);
+        if (nruns <= SMALL_RUNS) {
+            for (int r = 0; r < nruns; r++)
+                run8x2(s, r, xp, pairs, &best, &besti, NULL);
+        } else {
+            int64_t ub = INT_MAX;
+            const int r0 = s->run_at[sx - SUM_LO];
+            run8x2(s, r0, xp, pairs, &best, &besti, &ub);
+            for (int r = r0 + 1; r < nruns; r++) {
+                const int64_t gap = s->run_smin[r] - sx;
+                const int64_t g2 = gap > 0 ? gap * gap : 0;
+                if (g2 > dim * ub)
+                    break;
+                if (g2 <= dim * (ub - s->run_bmin[r]))
+                    run8x2(s, r, xp, pairs, &best, &besti, &ub);
             }
-            __m256i lt = _mm256_cmpgt_epi32(best, acc);
-            best = _mm256_blendv_epi8(best, acc, lt);
-            besti = _mm256_blendv_epi8(besti, lane, lt);
-            lane = _mm256_add_epi32(lane, step);
+            for (int r = r0 - 1; r >= 0; r--) {
+                const int64_t gap = sx - s->run_smax[r];
+                const int64_t g2 = gap > 0 ? gap * gap : 0;
+                if (g2 > dim * ub)
+                    break;
+                if (g2 <= dim * (ub - s->run_bmin[r]))
+                    run8x2(s, r, xp, pairs, &best, &besti, &ub);
+            }
         }
         int32_t bd[8], bi[8];
         _mm256_storeu_si256((__m256i *)bd, best);
@@ -139,47 +248,185 @@ nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
             dist[i] = (uint32_t)m;
     }
 }
+
+__attribute__((target("avx2"))) static void
+nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
+             uint16_t *idx, uint32_t *dist)
+{
+    if (s->dim == 12)
+        nearest_avx2_dim(s, vecs, n, idx, dist, 6);
+    else if (s->dim == 4)
+        nearest_avx2_dim(s, vecs, n, idx, dist, 2);
+    else
+        nearest_avx2_dim(s, vecs, n, idx, dist, s->dim / 2);
+}
 #endif
 
 #ifdef VQ_HAVE_X86
-/* The same search sixteen codevectors at a time: a deliberate repeat of
- * nearest_avx2 for AVX-512 (see there why), returning exactly what it and
- * nearest_portable return. */
-__attribute__((target("avx512f,avx512bw"))) static void
-nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
-               uint16_t *idx, uint32_t *dist)
+/* One run of 16 codevectors for nearest_avx512_dim: the costs, kept
+ * per lane where less than the lane's best (or equal with a lower index);
+ * *ub is lowered to the least best when some cost fell below it. */
+__attribute__((target("avx512f,avx512bw"), always_inline)) static inline void
+run16(const struct vq_search *s, int r, const __m512i *xp, int pairs,
+      __m512i *best, __m512i *besti, int64_t *ub)
 {
-    const int k = s->kpad, pairs = s->dim / 2;
-    const __m512i step = _mm512_set1_epi32(16);
-    const __m512i first = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
-                                            11, 12, 13, 14, 15);
+    const int c = 16 * r, k = s->kpad;
+    __m512i acc = _mm512_loadu_si512(s->bias + c);
+    for (int j = 0; j < pairs; j++) {
+        __m512i d = _mm512_sub_epi16(xp[j], _mm512_loadu_si512(s->pairs + j * k + c));
+        acc = _mm512_add_epi32(acc, _mm512_madd_epi16(d, d));
+    }
+    __m512i oi = _mm512_loadu_si512(s->orig + c);
+    __mmask16 lt = _mm512_cmpgt_epi32_mask(*best, acc) |
+                   (_mm512_cmpeq_epi32_mask(*best, acc) &
+                    _mm512_cmpgt_epi32_mask(*besti, oi));
+    *best = _mm512_mask_mov_epi32(*best, lt, acc);
+    *besti = _mm512_mask_mov_epi32(*besti, lt, oi);
+    if (_mm512_cmplt_epi32_mask(acc, _mm512_set1_epi32((int32_t)*ub)))
+        *ub = _mm512_reduce_min_epi32(*best);
+}
+
+/* run16 without the bound: for searches that visit every run. */
+__attribute__((target("avx512f,avx512bw"), always_inline)) static inline void
+run16_all(const struct vq_search *s, int r, const __m512i *xp, int pairs,
+          __m512i *best, __m512i *besti)
+{
+    const int c = 16 * r, k = s->kpad;
+    __m512i acc = _mm512_loadu_si512(s->bias + c);
+    for (int j = 0; j < pairs; j++) {
+        __m512i d = _mm512_sub_epi16(xp[j], _mm512_loadu_si512(s->pairs + j * k + c));
+        acc = _mm512_add_epi32(acc, _mm512_madd_epi16(d, d));
+    }
+    __m512i oi = _mm512_loadu_si512(s->orig + c);
+    __mmask16 lt = _mm512_cmpgt_epi32_mask(*best, acc) |
+                   (_mm512_cmpeq_epi32_mask(*best, acc) &
+                    _mm512_cmpgt_epi32_mask(*besti, oi));
+    *best = _mm512_mask_mov_epi32(*best, lt, acc);
+    *besti = _mm512_mask_mov_epi32(*besti, lt, oi);
+}
+
+/* The same search sixteen codevectors (one run) at a time: a deliberate
+ * repeat of nearest_avx2 for AVX-512 (see there why), returning exactly
+ * what it and nearest_portable return; `pairs` is a constant in each
+ * caller, so the inner loops unroll. */
+__attribute__((target("avx512f,avx512bw"), always_inline)) static inline void
+nearest_avx512_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
+                   uint16_t *idx, uint32_t *dist, const int pairs)
+{
+    const int64_t dim = 2 * pairs;
+    const int nruns = s->kpad / 16;
     for (size_t i = 0; i < n; i++) {
         const int16_t *x = vecs + i * VQ_STRIDE;
         __m512i xp[VQ_MAXDIM / 2];
-        for (int j = 0; j < pairs; j++)
+        int sx = 0;
+        for (int j = 0; j < pairs; j++) {
             xp[j] = _mm512_set1_epi32(pack_pair(x[2 * j], x[2 * j + 1]));
-        __m512i best = _mm512_set1_epi32(INT_MAX);
-        __m512i besti = _mm512_setzero_si512();
-        __m512i lane = first;
-        for (int c = 0; c < k; c += 16) {
-            __m512i acc = _mm512_loadu_si512(s->bias + c);
-            for (int j = 0; j < pairs; j++) {
-                __m512i cv = _mm512_loadu_si512(s->pairs + j * k + c);
-                __m512i d = _mm512_sub_epi16(xp[j], cv);
-                acc = _mm512_add_epi32(acc, _mm512_madd_epi16(d, d));
-            }
-            __mmask16 lt = _mm512_cmpgt_epi32_mask(best, acc);
-            best = _mm512_mask_mov_epi32(best, lt, acc);
-            besti = _mm512_mask_mov_epi32(besti, lt, lane);
-            lane = _mm512_add_epi32(lane, step);
+            sx += x[2 * j] + x[2 * j + 1];
         }
-        /* Smallest distance, then the lowest index among lanes holding it. */
+        __m512i best = _mm512_set1_epi32(INT_MAX);
+        __m512i besti = _mm512_set1_epi32(INT_MAX);
+        int64_t ub = INT_MAX;
+        if (nruns <= SMALL_RUNS) {
+            for (int r = 0; r < nruns; r++)
+                run16_all(s, r, xp, pairs, &best, &besti);
+            int32_t m = _mm512_reduce_min_epi32(best);
+            __mmask16 at = _mm512_cmpeq_epi32_mask(best, _mm512_set1_epi32(m));
+            idx[i] = (uint16_t)_mm512_mask_reduce_min_epi32(at, besti);
+            if (dist)
+                dist[i] = (uint32_t)m;
+            continue;
+        }
+        const int r0 = s->run_at[sx - SUM_LO];
+        run16(s, r0, xp, pairs, &best, &besti, &ub);
+        for (int r = r0 + 1; r < nruns; r++) {
+            const int64_t gap = s->run_smin[r] - sx;
+            const int64_t g2 = gap > 0 ? gap * gap : 0;
+            if (g2 > dim * ub)
+                break;
+            if (g2 <= dim * (ub - s->run_bmin[r]))
+                run16(s, r, xp, pairs, &best, &besti, &ub);
+        }
+        for (int r = r0 - 1; r >= 0; r--) {
+            const int64_t gap = sx - s->run_smax[r];
+            const int64_t g2 = gap > 0 ? gap * gap : 0;
+            if (g2 > dim * ub)
+                break;
+            if (g2 <= dim * (ub - s->run_bmin[r]))
+                run16(s, r, xp, pairs, &best, &besti, &ub);
+        }
+        /* Smallest cost, then the lowest index among lanes holding it. */
         int32_t m = _mm512_reduce_min_epi32(best);
         __mmask16 at = _mm512_cmpeq_epi32_mask(best, _mm512_set1_epi32(m));
         idx[i] = (uint16_t)_mm512_mask_reduce_min_epi32(at, besti);
         if (dist)
             dist[i] = (uint32_t)m;
     }
+}
+
+/* Small codebooks the other way round: sixteen vectors at a time, one
+ * per lane (their pairs gathered), against every codevector in turn, so
+ * that no lane needs reducing.  The same costs and the same rule for ties
+ * as the other kernels.  Returns how many vectors it did (a multiple of
+ * 16); the rest are left to nearest_avx512_dim. */
+__attribute__((target("avx512f,avx512bw"), always_inline)) static inline size_t
+nearest_avx512_lanes(const struct vq_search *s, const int16_t *vecs, size_t n,
+                     uint16_t *idx, uint32_t *dist, const int pairs)
+{
+    const int k = s->k, kp = s->kpad;
+    const __m512i rows = _mm512_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56, 64,
+                                           72, 80, 88, 96, 104, 112, 120);
+    size_t i = 0;
+    for (; i + 16 <= n; i += 16) {
+        const int32_t *base = (const int32_t *)(const void *)(vecs + i * VQ_STRIDE);
+        __m512i xp[VQ_MAXDIM / 2];
+        for (int j = 0; j < pairs; j++)
+            xp[j] = _mm512_i32gather_epi32(
+                _mm512_add_epi32(rows, _mm512_set1_epi32(j)), base, 4);
+        __m512i best = _mm512_set1_epi32(INT_MAX);
+        __m512i besti = _mm512_set1_epi32(INT_MAX);
+        for (int p = 0; p < k; p++) {
+            __m512i acc = _mm512_set1_epi32(s->bias[p]);
+            for (int j = 0; j < pairs; j++) {
+                __m512i d = _mm512_sub_epi16(xp[j], _mm512_set1_epi32(s->pairs[j * kp + p]));
+                acc = _mm512_add_epi32(acc, _mm512_madd_epi16(d, d));
+            }
+            const __m512i oi = _mm512_set1_epi32(s->orig[p]);
+            __mmask16 lt = _mm512_cmpgt_epi32_mask(best, acc) |
+                           (_mm512_cmpeq_epi32_mask(best, acc) &
+                            _mm512_cmpgt_epi32_mask(besti, oi));
+            best = _mm512_mask_mov_epi32(best, lt, acc);
+            besti = _mm512_mask_mov_epi32(besti, lt, oi);
+        }
+        _mm256_storeu_si256((__m256i *)(void *)(idx + i), _mm512_cvtepi32_epi16(besti));
+        if (dist)
+            _mm512_storeu_si512(dist + i, best);
+    }
+    return i;
+}
+
+/* Codebooks of at most this many entries go to nearest_avx512_lanes. */
+#define LANES_MAXK 32
+
+__attribute__((target("avx512f,avx512bw"))) static void
+nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
+               uint16_t *idx, uint32_t *dist)
+{
+    size_t done = 0;
+    if (s->k <= LANES_MAXK)
+        done = s->dim == 12 ? nearest_avx512_lanes(s, vecs, n, idx, dist, 6) :
+               s->dim == 4 ? nearest_avx512_lanes(s, vecs, n, idx, dist, 2) :
+               nearest_avx512_lanes(s, vecs, n, idx, dist, s->dim / 2);
+    vecs += done * VQ_STRIDE;
+    idx += done;
+    if (dist)
+        dist += done;
+    n -= done;
+    if (s->dim == 12)
+        nearest_avx512_dim(s, vecs, n, idx, dist, 6);
+    else if (s->dim == 4)
+        nearest_avx512_dim(s, vecs, n, idx, dist, 2);
+    else
+        nearest_avx512_dim(s, vecs, n, idx, dist, s->dim / 2);
 }
 #endif
 
@@ -256,29 +503,26 @@ void vq_train_init(struct vq_trainer *t, int dim, const int16_t *sample,
     }
 }
 
-/* Principal axis of the vectors assigned to cell c by power iteration;
- * returns the variance along it and the unit axis in e. */
+/* Principal axis of the m vectors of a cell (sample rows members[0..m),
+ * in increasing order) by power iteration; returns the variance along it
+ * and the unit axis in e. */
 static double principal_axis(const struct vq_trainer *t, const int16_t *sample,
-                             size_t n, const uint16_t *idx, int c, double *e)
+                             const uint32_t *members, size_t m, double *e)
 {
     const int dim = t->dim;
     double cov[VQ_MAXDIM * VQ_MAXDIM] = {0}, mean[VQ_MAXDIM] = {0};
-    size_t m = 0;
     /* Start (and fallback for cells too small to have an axis): a fixed
      * direction with unequal weights, so it is not orthogonal to the axis
      * of typical residuals. */
     for (int a = 0; a < dim; a++)
         e[a] = 1.0 / sqrt((double)dim) * (a % 3 == 0 ? 1.0 : 0.9);
-    for (size_t i = 0; i < n; i++) {
-        if (idx[i] != c)
-            continue;
-        const int16_t *x = sample + i * VQ_STRIDE;
+    for (size_t i = 0; i < m; i++) {
+        const int16_t *x = sample + (size_t)members[i] * VQ_STRIDE;
         for (int a = 0; a < dim; a++) {
             mean[a] += x[a];
             for (int b = 0; b <= a; b++)
                 cov[a * dim + b] += (double)x[a] * x[b];
         }
-        m++;
     }
     if (m < 2)
         return 0.0;
@@ -317,9 +561,23 @@ static void split_cells(struct vq_trainer *t, const int16_t *sample, size_t n,
     const int dim = t->dim, k = t->k;
     vq_search_prepare(&t->search, t->book, k, dim);
     vq_nearest(&t->search, sample, n, idx, NULL);
+    /* The members of every cell in sample order (a stable counting sort),
+     * so each cell's sums run in the same order as a scan would. */
+    memset(t->count, 0, sizeof(uint32_t) * (size_t)k);
+    for (size_t i = 0; i < n; i++)
+        t->count[idx[i]]++;
+    uint32_t start = 0;
+    for (int c = 0; c < k; c++) {
+        uint32_t m = t->count[c];
+        t->count[c] = start;
+        start += m;
+    }
+    for (size_t i = 0; i < n; i++)
+        t->members[t->count[idx[i]]++] = (uint32_t)i;
     for (int c = 0; c < k; c++) {
         double e[VQ_MAXDIM];
-        double var = principal_axis(t, sample, n, idx, c, e);
+        const uint32_t end = t->count[c], first = c ? t->count[c - 1] : 0;
+        double var = principal_axis(t, sample, t->members + first, end - first, e);
         double s = 0.8 * sqrt(var);
         if (s < 1.0)
             s = 1.0;

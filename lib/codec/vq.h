@@ -25,14 +25,25 @@
  * in int32 and below the cost of any padding lane. */
 #define VQ_BIAS_MAX (1 << 30)
 
-/* A codebook prepared for searching: pairs of dimensions packed into int32
- * lanes, [dim/2][k] (structure of arrays), and the per-codevector biases
- * (0 in the padding lanes). */
+/* A codebook prepared for searching.  The codevectors are sorted by the
+ * sum of their components (stable, so equal sums keep index order), and
+ * their pairs of dimensions packed into int32 lanes, [dim/2][kpad] in that
+ * order (structure of arrays); orig[p] is the index of the codevector at
+ * position p, bias[p] its bias (0 in the padding lanes).  For each run
+ * of 16 positions, the least and greatest sum and the least bias bound
+ * the cost of its codevectors from below (Cauchy-Schwarz:
+ * dim * |x - c|^2 >= (sum x - sum c)^2), so the SIMD searches skip runs
+ * that cannot hold the answer. */
 struct vq_search {
     int k, dim;
     int kpad;               /* k rounded up to 16: the SIMD row stride */
     int32_t pairs[VQ_MAXDIM / 2 * VQ_MAXK];
     int32_t bias[VQ_MAXK];
+    int32_t orig[VQ_MAXK];  /* position -> index; padding: INT32_MAX */
+    int32_t run_smin[VQ_MAXK / 16], run_smax[VQ_MAXK / 16];
+    int32_t run_bmin[VQ_MAXK / 16];
+    uint16_t run_at[256 * VQ_MAXDIM + 1]; /* sum + 128 * VQ_MAXDIM -> the
+                                           * first run reaching it (or the last) */
 };
 
 /* Prepare `book` (k entries of dim signed bytes) for vq_nearest, with
@@ -61,6 +72,9 @@ int vq_nearest_path(enum vq_path path, const struct vq_search *s,
                     const int16_t *vecs, size_t n, uint16_t *idx,
                     uint32_t *dist);
 
+/* The largest training sample (a tile's blocks). */
+#define VQ_TRAIN_MAXN (257 * 257)
+
 /* Scratch for vq_train: sized for VQ_MAXK entries. */
 struct vq_trainer {
     int dim, k;
@@ -68,6 +82,7 @@ struct vq_trainer {
     int64_t sum[VQ_MAXK * VQ_MAXDIM];
     uint32_t count[VQ_MAXK];
     int32_t bias[VQ_MAXK];  /* vq_train_ecvq: lambda * code length */
+    uint32_t members[VQ_TRAIN_MAXN]; /* splitting: sample rows by cell */
     struct vq_search search;
 };
 
@@ -80,7 +95,7 @@ void vq_train_init(struct vq_trainer *t, int dim, const int16_t *sample,
  * (PCA split, section 2.7), then refine with LBG on the sample until the
  * distortion improves by less than 0.5% or max_iters assignments pass.
  * Empty cells are reseeded with the worst-coded sample vectors.  idx and
- * dist are caller scratch of n entries.  Returns the sample distortion of
+ * dist are caller scratch of n entries; n is at most VQ_TRAIN_MAXN.  Returns the sample distortion of
  * the last assignment.
  */
 uint64_t vq_train_double(struct vq_trainer *t, const int16_t *sample, size_t n,

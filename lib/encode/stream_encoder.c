@@ -79,6 +79,8 @@ struct encoder {
     uint8_t *bufs[GV_PAGE_SLOTS];
     size_t lens[GV_PAGE_SLOTS];
     struct gv_tile_stats stats[GV_PAGE_SLOTS];
+    uint8_t *tile_rate[GV_MAX_LEVELS]; /* levels >= 1: each tile's rate */
+    uint8_t order[GV_PAGE_SLOTS];      /* the page's slots, likely slowest first */
     uint64_t canon_sse[GV_PAGE_SLOTS];
     uint8_t *origs;           /* per-worker 513^2 x C original tile */
     /* progress */
@@ -299,9 +301,43 @@ static void encode_tile(void *ctx, size_t slot, int worker)
     e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
                                    (int)(ty & 1), c, valid_w, valid_h, &params,
                                    e->recon[slot], e->bufs[slot], &e->stats[slot]);
+    if (e->tile_rate[e->level])
+        e->tile_rate[e->level][(size_t)ty * l->tiles_x + tx] = (uint8_t)e->stats[slot].rate;
     if (e->level == 0)
         e->canon_sse[slot] = level0_sse(e, tx, ty, valid_w, valid_h, orig,
                                         e->recon[slot]);
+}
+
+/* Pool job: the i-th slot of the page's order. */
+static void encode_ordered(void *ctx, size_t i, int worker)
+{
+    struct encoder *e = ctx;
+    encode_tile(ctx, e->order[i], worker);
+}
+
+/* Order the page's slots for the pool: by the rate of the parent tile,
+ * highest first (a tile takes longer the higher the rates its search
+ * codes, and a child's rate follows its parent's), slot order among
+ * equals.  The workers claim slots in this order, so the slow tiles start
+ * first and fewer wait at the end of the page.  Which worker codes which
+ * tile never changes the bytes. */
+static void order_page(struct encoder *e)
+{
+    const struct gv_level *l = &e->g.level[e->level];
+    const uint8_t *up = e->level + 1 < GV_MAX_LEVELS ? e->tile_rate[e->level + 1] : NULL;
+    const uint32_t upw = up ? e->g.level[e->level + 1].tiles_x : 0;
+    uint8_t key[GV_PAGE_SLOTS];
+    for (int s = 0; s < GV_PAGE_SLOTS; s++) {
+        uint32_t tx = e->px * GV_PAGE_TILES + (uint32_t)(s % GV_PAGE_TILES);
+        uint32_t ty = e->py * GV_PAGE_TILES + (uint32_t)(s / GV_PAGE_TILES);
+        key[s] = up && tx < l->tiles_x && ty < l->tiles_y ?
+                 up[(size_t)(ty / 2) * upw + tx / 2] : 0;
+    }
+    int n = 0;
+    for (int r = 255; r >= 0; r--)
+        for (int s = 0; s < GV_PAGE_SLOTS; s++)
+            if (key[s] == r)
+                e->order[n++] = (uint8_t)s;
 }
 
 static int load_window(struct encoder *e)
@@ -410,7 +446,8 @@ static int encode_page(struct encoder *e, uint32_t px, uint32_t py,
     e->py = py;
     if (load_window(e) < 0 || load_parents(e, e->root_tile) < 0)
         return -1;
-    gv_pool_run(e->pool, encode_tile, e, GV_PAGE_SLOTS);
+    order_page(e);
+    gv_pool_run(e->pool, encode_ordered, e, GV_PAGE_SLOTS);
     if (emit_page(e) < 0)
         return -1;
     if (e->level > 0 && store_recon(e) < 0)
@@ -498,6 +535,10 @@ static int start_workers(struct encoder *e)
     for (int i = 0; i < n; i++)
         if (!(e->ws[i] = gv_tile_workspace_new()))
             return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
+    for (int k = 1; k < e->g.root; k++)
+        if (!(e->tile_rate[k] = calloc((size_t)e->g.level[k].tiles_x *
+                                       e->g.level[k].tiles_y, 1)))
+            return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
     size_t maxbuf = gv_tilebuf_size(e->opts->max_rate, c);
     for (int s = 0; s < 16; s++)
         if (!(e->parents[s] = malloc(gv_tile_bytes(c))))
@@ -527,6 +568,7 @@ static void teardown(struct encoder *e)
     for (int k = 0; k < GV_MAX_LEVELS; k++) {
         free(e->pending[k]);
         free(e->reduced[k]);
+        free(e->tile_rate[k]);
     }
     free(e->root);
     free(e->root_tile);
