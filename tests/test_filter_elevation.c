@@ -256,7 +256,7 @@ static struct worst {
 } worst[NGRAPH];
 
 static void gpu_vs_ref(struct gv_gpu *gpu, int gi, const struct dem *d, int rx, int ry,
-                       const char *given, const char *where)
+                       const char *given, int set, const char *where)
 {
     const struct graph *gr = &graphs[gi];
     double p[5] = {0};
@@ -299,9 +299,9 @@ static void gpu_vs_ref(struct gv_gpu *gpu, int gi, const struct dem *d, int rx, 
         wo->lsb = lsb > wo->lsb ? lsb : wo->lsb;
         wo->decided += bad;
         wo->ambiguous += amb;
-        check(bad == 0, "%s, %s ROI %dx%d at (%d,%d)%s: max %d LSB, %ld pixels differ, "
-              "%ld set aside as ambiguous", gr->file, where, ROI_W, ROI_H, rx, ry,
-              given ? ", other parameters" : "", lsb, bad, amb);
+        check(bad == 0, "%s, %s ROI %dx%d at (%d,%d), %s%.0d: max %d LSB, %ld pixels "
+              "differ, %ld set aside as ambiguous", gr->file, where, ROI_W, ROI_H, rx, ry,
+              set ? "parameter set " : "default parameters", set, lsb, bad, amb);
     }
     free(ref);
     free(out);
@@ -726,9 +726,9 @@ int main(void)
         for (int i = 0; i < NGRAPH; i++)
             for (int s = 0; s < 3; s++) {
                 const char *given = s ? graphs[i].given[s - 1] : NULL;
-                gpu_vs_ref(gpu, i, &d, 0, 0, given, "top-left");
-                gpu_vs_ref(gpu, i, &d, d.w - ROI_W, d.h - ROI_H, given, "bottom-right");
-                gpu_vs_ref(gpu, i, &d, mx, my, given, "middle");
+                gpu_vs_ref(gpu, i, &d, 0, 0, given, s, "top-left");
+                gpu_vs_ref(gpu, i, &d, d.w - ROI_W, d.h - ROI_H, given, s, "bottom-right");
+                gpu_vs_ref(gpu, i, &d, mx, my, given, s, "middle");
             }
         printf("# summary: graph, runs, worst LSB, decisions differing, set aside as "
                "ambiguous\n");
