@@ -14,6 +14,8 @@
  *    library's), and for aspect and contours the same decision on every
  *    pixel (flat or not; on a line or not), except pixels whose decision
  *    hangs on float rounding (ref_elevation_ambiguous), which are counted.
+ *    Then every parameter at its minimum, its maximum and alternately:
+ *    finite results that still agree with the reference.
  * 2. Known answers on synthetic DEMs: planes of known slope and aspect,
  *    a cone whose aspects point outward, a flat field, a ramp whose
  *    contours fall on known columns.
@@ -306,6 +308,50 @@ static void gpu_vs_ref(struct gv_gpu *gpu, int gi, const struct dem *d, int rx, 
     free(ref);
     free(out);
     free(values);
+}
+
+/* Every parameter at its minimum, then at its maximum, then alternating:
+ * the result stays finite (no division by zero, no NaN) and agrees with
+ * the reference within 1 LSB. */
+static void extremes(struct gv_gpu *gpu, int gi, const struct dem *d)
+{
+    const struct gv_filter_graph *g = parsed[gi];
+    const int m = gv_filter_graph_find(g, graphs[gi].file);
+    for (int mode = 0; mode < 3; mode++) {
+        char given[1024];
+        size_t n = (size_t)snprintf(given, sizeof given, "{\"%s\": {", graphs[gi].file);
+        for (int q = 0; q < g->module[m].nparams; q++) {
+            const struct gv_filter_param *pa = &g->module[m].param[q];
+            const int hi = mode == 2 ? q % 2 : mode;
+            n += (size_t)snprintf(given + n, sizeof given - n, "%s\"%s\": %.17g", q ? ", " : "",
+                                  pa->name, hi ? pa->max : pa->min);
+        }
+        snprintf(given + n, sizeof given - n, "}}");
+        double p[5] = {0};
+        double *values = params_of(gi, given, p);
+        float *out = run_gpu(gpu, gi, d, 100, 100, ROI_W, ROI_H, values, NULL);
+        free(values);
+        if (!out)
+            continue;
+        float *ref = malloc(sizeof *ref * ROI_W * ROI_H * 4);
+        const struct ref_region rr = whole(d, 100, 100, ROI_W, ROI_H);
+        if (!ref || graphs[gi].ref(&rr, p, ref, NULL) < 0)
+            fail("out of memory");
+        long nonfinite = 0, bad = 0;
+        for (size_t k = 0; k < (size_t)ROI_W * ROI_H * 4; k += 4) {
+            nonfinite += !isfinite(out[k]);
+            if (abs(png8(out[k]) - png8(ref[k])) > 1 &&
+                !ref_elevation_ambiguous(graphs[gi].ref, &rr, p, (int)(k / 4 % ROI_W),
+                                         (int)(k / 4 / ROI_W)))
+                bad++;
+        }
+        check(nonfinite == 0 && bad == 0, "%s with every parameter at its %s: finite (%ld "
+              "not), the reference within 1 LSB (%ld differ)", graphs[gi].file,
+              mode == 0 ? "minimum" : mode == 1 ? "maximum" : "minimum or maximum, alternating",
+              nonfinite, bad);
+        free(out);
+        free(ref);
+    }
 }
 
 /* ------------------------------------------------ 2. known answers */
@@ -735,6 +781,8 @@ int main(void)
         for (int i = 0; i < NGRAPH; i++)
             printf("# %-10s %d  %d LSB  %ld  %ld\n", graphs[i].file, worst[i].runs,
                    worst[i].lsb, worst[i].decided, worst[i].ambiguous);
+        for (int i = 0; i < NGRAPH; i++)
+            extremes(gpu, i, &d);
         known_answers(gpu);
         gdal_compare(gpu, &d, 40, 8000, "etopo-600x400-u16.png --range 1360:11560", 1);
         dem_free(&d);
