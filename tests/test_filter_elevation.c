@@ -606,7 +606,9 @@ static void gdal_compare(struct gv_gpu *gpu, const struct dem *d, double mpl, do
         tap_skip("gdaldem not installed (Debian gdal-bin)", "comparison with GDAL");
         return;
     }
-    char dir[] = "/tmp/gv-elev-XXXXXX", path[512], cmd[1536];
+    char dir[256], path[512], cmd[1536];
+    snprintf(dir, sizeof dir, "%s/gv-elev-XXXXXX",
+             getenv("TMPDIR") && *getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
     if (!mkdtemp(dir))
         fail("mkdtemp: %s", strerror(errno));
     snprintf(path, sizeof path, "%s/dem.asc", dir);
