@@ -12,6 +12,9 @@ PACKAGES="build-essential autoconf automake libtool pkg-config
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri zlib1g-dev libwebp-dev
   libcurl4-openssl-dev time valgrind python3
   chromium nodejs"
+# gdaldem, the anchor of tests/test_filter_elevation (skipped without it)
+# and bench/elevation-filters.sh.
+PACKAGES="$PACKAGES gdal-bin"
 
 # bench/*.sh and conf/: nginx (http-tiles, http-iiif), wrk, curl and jq
 # (http-*), iipsrv behind spawn-fcgi (http-iiif), vips (encode-speed,

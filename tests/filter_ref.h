@@ -88,6 +88,33 @@ int ref_voronoi_knn(const struct ref_region *r, const double *p, float *out,
                     uint32_t *state);                /* density, scale */
 
 /*
+ * Elevation (docs/FILTERS.md section 8.5; tests/filter_ref_elevation.c):
+ * the region's red channel is a DEM in 8-bit gray levels.
+ */
+int ref_hillshade(const struct ref_region *r, const double *p, float *out,
+                  uint32_t *state);
+            /* azimuth, altitude, z_factor, metres_per_level, pixel_size */
+int ref_slope(const struct ref_region *r, const double *p, float *out,
+              uint32_t *state);
+            /* percent, full_scale, metres_per_level, pixel_size */
+int ref_aspect(const struct ref_region *r, const double *p, float *out,
+               uint32_t *state);
+            /* flat_slope, metres_per_level, pixel_size */
+int ref_contours(const struct ref_region *r, const double *p, float *out,
+                 uint32_t *state);
+            /* interval, offset, base, metres_per_level, show_dem */
+
+/*
+ * Whether the GPU may decide ROI pixel (i, j) of elevation reference
+ * `which` differently for float rounding alone: a contour band boundary
+ * within 1e-5 (relative) of a height of the pixel or a 4-neighbour, or a
+ * slope within 0.001 degree of aspect's flat_slope (when it is not 0).
+ * 0 for the other references.
+ */
+int ref_elevation_ambiguous(ref_fn which, const struct ref_region *r, const double *p,
+                            int i, int j);
+
+/*
  * The feature mask of the distance transforms: 1 where the channel
  * (0 R, 1 G, 2 B, 3 BT.709 luma) of the 8-bit value of px (an RGBA float
  * texel) is >= threshold, flipped when invert >= 0.5.
