@@ -133,7 +133,7 @@ static void compare_brute(uint32_t w, uint32_t h, int kind, double e,
                           uint32_t maxt, int border)
 {
     float *f = field(w, h, kind, 99 + (uint32_t)kind);
-    struct gv_tin_params p = {e, maxt, border};
+    struct gv_tin_params p = {e, maxt, border, 0};
     struct gv_tin a, b;
     struct gv_error err;
     int ra = gv_tin_build(f, w, h, w, &p, &a, &err);
@@ -212,7 +212,7 @@ static void crack_free(void)
             if (x > 0 && x < 40 && y > 0 && y < H - 1)
                 g[(size_t)y * 41 + x] += (float)(30 * sin(x * y * 0.3));
         }
-    struct gv_tin_params p = {1.5, 0, 1};
+    struct gv_tin_params p = {1.5, 0, 1, 0};
     struct gv_tin a, b, c;
     struct gv_error err;
     int ok = gv_tin_build(f, 41, H, W, &p, &a, &err) == 0 &&
@@ -253,7 +253,7 @@ static void edge_cases(void)
         flat[i] = 7;
     struct gv_tin t;
     struct gv_error err;
-    struct gv_tin_params p = {0, 0, 1};
+    struct gv_tin_params p = {0, 0, 1, 0};
     check(gv_tin_build(flat, 16, 9, 16, &p, &t, &err) == 0 && t.ntris == 2 &&
           t.nverts == 4 && t.max_error == 0, "a flat grid is two triangles");
     gv_tin_free(&t);
@@ -268,14 +268,14 @@ static void edge_cases(void)
     check(gv_tin_build(flat, 16, 9, 16, &p, &t, &err) < 0 &&
           err.code == GV_EINVAL, "a NaN height: refused (%s)", err.text);
     float *g = field(33, 21, 0, 99);
-    struct gv_tin_params lim = {0.5, 60, 1};
+    struct gv_tin_params lim = {0.5, 60, 1, 0};
     check(gv_tin_build(g, 33, 21, 33, &lim, &t, &err) < 0 &&
           err.code == GV_ELIMIT, "border beyond the triangle limit: refused "
           "(%s)", err.text);
     free(g);
     /* E = 0 reproduces every sample exactly */
     float *f = field(23, 19, 1, 3);
-    struct gv_tin_params z = {0, 0, 1};
+    struct gv_tin_params z = {0, 0, 1, 0};
     int built = gv_tin_build(f, 23, 19, 23, &z, &t, &err) == 0;
     check(built && t.max_error == 0 && independent_error(f, &t) == 0,
           "E = 0 is lossless (%u of %u samples)", t.nverts, 23 * 19);

@@ -31,6 +31,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 __extension__ typedef __int128 gv_i128;
 
@@ -256,10 +257,17 @@ static void plane_of(const struct tin *m, int32_t t, struct plane *pl)
     pl->gy = (dx1 * dz2 - dx2 * dz1) / det;
 }
 
+/* The plane's value on row y at x = 0; plane_at adds gx * x.  Scan
+ * conversion hoists row_at out of its inner loop, and every other caller
+ * goes through plane_at, so all see the same bits. */
+static inline double row_at(const struct plane *pl, int32_t y)
+{
+    return pl->z0 + pl->gy * (double)(y - pl->y0) - pl->gx * (double)pl->x0;
+}
+
 static inline double plane_at(const struct plane *pl, int32_t x, int32_t y)
 {
-    return pl->z0 + pl->gx * (double)(x - pl->x0) +
-           pl->gy * (double)(y - pl->y0);
+    return row_at(pl, y) + pl->gx * (double)x;
 }
 
 static inline int64_t floordiv(int64_t a, int64_t b)
@@ -316,16 +324,19 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
         }
         const float *row = m->h + (size_t)y * m->stride;
         const uint8_t *urow = m->used + (size_t)y * m->w;
+        double zr = row_at(&pl, (int32_t)y), gx = pl.gx;
+        int64_t bx = -1;
         for (int64_t x = lo; x <= hi; x++) {
             if (!all && urow[x])
                 continue;
-            double e = fabs((double)row[x] - plane_at(&pl, (int32_t)x,
-                                                      (int32_t)y));
+            double e = fabs((double)row[x] - (zr + gx * (double)x));
             if (e > be) {
                 be = e;
-                bi = y * (int64_t)m->w + x;
+                bx = x;
             }
         }
+        if (bx >= 0)
+            bi = y * (int64_t)m->w + bx;
     }
     *best_err = be;
     *best_idx = bi;
@@ -711,7 +722,20 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
     }
     flush(&m, !brute);
 
-    for (;;) {
+    struct timespec t0s;
+    clock_gettime(CLOCK_MONOTONIC, &t0s);
+    for (uint32_t step = 1;; step++) {
+        if (p->time_limit > 0 && step % 1024 == 0) {
+            struct timespec now;
+            clock_gettime(CLOCK_MONOTONIC, &now);
+            double el = (double)(now.tv_sec - t0s.tv_sec) +
+                        (double)(now.tv_nsec - t0s.tv_nsec) * 1e-9;
+            if (el > p->time_limit) {
+                gv_fail(err, GV_ETIMEOUT, "mesh: over the time limit of "
+                        "%g s after %u vertices", p->time_limit, m.nv);
+                goto out;
+            }
+        }
         double be;
         int64_t bi;
         int32_t bt;

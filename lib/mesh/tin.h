@@ -41,6 +41,7 @@ struct gv_tin_params {
                                 triangles; 0: no limit */
     int border_first;        /* choose border vertices from the border alone
                                 (needs max_error >= 0): crack-free tiles */
+    double time_limit;       /* seconds of wall time; 0: none */
 };
 
 struct gv_tin {
@@ -65,7 +66,7 @@ struct gv_tin {
  * are 2 .. GV_TIN_MAX_SIDE.  Heights must be finite.  *out is filled
  * (free with gv_tin_free).  Returns 0, or -1: GV_EINVAL for bad sizes or
  * goals, GV_ELIMIT when border_first's border vertices alone make more
- * than max_triangles triangles, GV_ENOMEM.  Thread-safe (no shared state).
+ * than max_triangles triangles, GV_ETIMEOUT past time_limit, GV_ENOMEM.  Thread-safe (no shared state).
  */
 int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
                  const struct gv_tin_params *p, struct gv_tin *out,
