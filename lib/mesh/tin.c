@@ -327,10 +327,10 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
         double zr = row_at(&pl, (int32_t)y), gx = pl.gx;
         int64_t bx = -1;
         for (int64_t x = lo; x <= hi; x++) {
-            if (!all && urow[x])
-                continue;
             double e = fabs((double)row[x] - (zr + gx * (double)x));
-            if (e > be) {
+            /* used samples are skipped only where they would win: the
+             * same maximum, one load and branch less per sample */
+            if (e > be && (all || !urow[x])) {
                 be = e;
                 bx = x;
             }
