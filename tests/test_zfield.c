@@ -250,7 +250,7 @@ static void check_case(const char *name, const float *z, uint32_t n, const struc
           "activated ones and their ancestors", name, on);
     check(!memcmp(sweep, coarse, cells), "%s: the coarse phase enables the same vertices", name);
     struct gv_tin t;
-    if (gv_zfield_mesh(z, n, sweep, &t, &err) < 0)
+    if (gv_zfield_mesh(z, n, sweep, 1, &t, &err) < 0)
         fail("%s: mesh: %s", name, err.text);
     if (check_mesh) {
         char why[160] = "";
@@ -267,7 +267,7 @@ static void check_case(const char *name, const float *z, uint32_t n, const struc
         for (size_t i = 0; i < cells; i++)
             differ += g[i] != sweep[i];
         struct gv_tin tg;
-        if (gv_zfield_mesh(z, n, g, &tg, &err) < 0)
+        if (gv_zfield_mesh(z, n, g, 0, &tg, &err) < 0)
             fail("%s: gpu mesh: %s", name, err.text);
         check(differ == 0 && same_mesh(&t, &tg), "%s: the GPU enables the same vertices "
               "(%zu differ) and gives the same mesh, triangle for triangle", name, differ);
@@ -306,7 +306,7 @@ int main(void)
     uint8_t *en = malloc(65 * 65);
     gv_zfield_enable(pl, 65, &(struct gv_zfield_params){.threshold = 0.0f}, en, &err);
     struct gv_tin t;
-    gv_zfield_mesh(pl, 65, en, &t, &err);
+    gv_zfield_mesh(pl, 65, en, 1, &t, &err);
     check(t.ntris == 2 && t.nverts == 4 && t.max_error < 1e-3, "a plane at threshold 0: two "
           "triangles, four vertices (%u, %u), error %g", t.ntris, t.nverts, t.max_error);
     gv_tin_free(&t);

@@ -508,7 +508,7 @@ static double measure(const float *z, uint32_t n, const struct gv_tin *t)
     return worst;
 }
 
-int gv_zfield_mesh(const float *z, uint32_t n, const uint8_t *enabled,
+int gv_zfield_mesh(const float *z, uint32_t n, const uint8_t *enabled, int measure_error,
                    struct gv_tin *out, struct gv_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -538,6 +538,6 @@ int gv_zfield_mesh(const float *z, uint32_t n, const uint8_t *enabled,
         out->zmin = out->vz[i] < out->zmin ? out->vz[i] : out->zmin;
         out->zmax = out->vz[i] > out->zmax ? out->vz[i] : out->zmax;
     }
-    out->max_error = measure(z, n, out);
+    out->max_error = measure_error ? measure(z, n, out) : -1;
     return 0;
 }

@@ -84,11 +84,12 @@ int gv_zfield_enable(const float *z, uint32_t n, const struct gv_zfield_params *
  * The mesh of the enabled vertices: the bintree cut where the hypotenuse
  * midpoint is disabled, triangles in depth-first order from the root
  * triangles, vertices numbered by first use.  Fills *out like
- * gv_tin_build (vx, vy, vz, tris counter-clockwise, max_error measured
- * against every sample; free with gv_tin_free).  Returns 0, or -1 with
- * *err (GV_ENOMEM, GV_EINVAL).
+ * gv_tin_build (vx, vy, vz, tris counter-clockwise; free with
+ * gv_tin_free); max_error is measured against every sample when
+ * `measure` (a pass over the grid), else -1 (per-frame use).  Returns 0,
+ * or -1 with *err (GV_ENOMEM, GV_EINVAL).
  */
-int gv_zfield_mesh(const float *z, uint32_t n, const uint8_t *enabled,
+int gv_zfield_mesh(const float *z, uint32_t n, const uint8_t *enabled, int measure,
                    struct gv_tin *out, struct gv_error *err);
 
 /*
