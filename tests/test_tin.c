@@ -284,6 +284,58 @@ static void edge_cases(void)
     gv_tin_free(NULL);
 }
 
+/* Tiles: the bound, crack-free joins (every vertex once, the triangles
+ * tile the rectangle counter-clockwise), the same mesh for any thread
+ * count, and the tiles' vertices on their shared edges. */
+static void tiled(void)
+{
+    uint32_t W = 90, H = 61;
+    float *f = field(W, H, 0, 11);
+    struct gv_tin_params p = {2.0, 0, 1, 0};
+    struct gv_tin a, b, one;
+    struct gv_error err;
+    int ok = gv_tin_build_tiled(f, W, H, W, &p, 32, 1, &a, &err) == 0 &&
+             gv_tin_build_tiled(f, W, H, W, &p, 32, 3, &b, &err) == 0 &&
+             gv_tin_build(f, 33, 33, W, &p, &one, &err) == 0;
+    check(ok, "tiled: built with 1 and 3 threads");
+    check(same_mesh(&a, &b), "tiled: the same mesh for 1 and 3 threads (%u "
+          "triangles)", a.ntris);
+    double ie = independent_error(f, &a);
+    check(ie <= 2.0 + 1e-9 && fabs(ie - a.max_error) <= 1e-9 * (1 + ie),
+          "tiled: bound on every sample (%.6g, measured %.6g)", ie,
+          a.max_error);
+    int64_t area = 0;
+    int uniq = 1;
+    for (uint32_t k = 0; k < a.ntris; k++) {
+        const uint32_t *v = a.tris + 3 * k;
+        area += orient(a.vx[v[0]], a.vy[v[0]], a.vx[v[1]], a.vy[v[1]],
+                       a.vx[v[2]], a.vy[v[2]]);
+    }
+    for (uint32_t i = 0; i < a.nverts && uniq; i++)
+        for (uint32_t k = i + 1; k < a.nverts; k++)
+            if (a.vx[i] == a.vx[k] && a.vy[i] == a.vy[k])
+                uniq = 0;
+    check(uniq && area == 2 * (int64_t)(W - 1) * (H - 1),
+          "tiled: each vertex once, the triangles tile the rectangle");
+    /* the first tile is the mesh of samples 0..32 built alone */
+    int first = 1;
+    for (uint32_t i = 0; i < one.nverts; i++) {
+        int found = 0;
+        for (uint32_t k = 0; k < a.nverts && !found; k++)
+            found = a.vx[k] == one.vx[i] && a.vy[k] == one.vy[i];
+        first &= found;
+    }
+    check(first, "tiled: tile (0,0) holds the vertices of its region alone");
+    gv_tin_free(&a);
+    p.max_error = -1;
+    p.max_triangles = 100;
+    check(gv_tin_build_tiled(f, W, H, W, &p, 32, 1, &a, &err) < 0,
+          "tiled: a triangle limit is refused");
+    gv_tin_free(&b);
+    gv_tin_free(&one);
+    free(f);
+}
+
 int main(void)
 {
     edge_brute();
@@ -305,6 +357,7 @@ int main(void)
         compare_brute(cases[i].w, cases[i].h, cases[i].kind, cases[i].e,
                       cases[i].maxt, cases[i].border);
     crack_free();
+    tiled();
     edge_cases();
     return tap_done();
 }

@@ -72,6 +72,19 @@ int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
                  const struct gv_tin_params *p, struct gv_tin *out,
                  struct gv_error *err);
 
+/*
+ * The TIN of the same grid as tiles of `tile` x `tile` cells, each built by
+ * gv_tin_build with border-first insertion on a pool of `threads` threads,
+ * joined without cracks into one mesh (vertices on tile borders merged;
+ * tin_tiled.c).  Needs max_error >= 0 and no max_triangles.  The result
+ * is the same for any thread count; it is not the single-tile mesh (the
+ * tile borders force their own vertices, and the union is Delaunay within
+ * each tile only).  Returns 0, or -1 as gv_tin_build.
+ */
+int gv_tin_build_tiled(const float *h, uint32_t w, uint32_t hgt, size_t stride,
+                       const struct gv_tin_params *p, uint32_t tile,
+                       int threads, struct gv_tin *out, struct gv_error *err);
+
 /* Free the arrays of *t and zero it.  gv_tin_free(NULL) does nothing. */
 void gv_tin_free(struct gv_tin *t);
 
