@@ -326,8 +326,9 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
         const uint8_t *urow = m->used + (size_t)y * m->w;
         double zr = row_at(&pl, (int32_t)y), gx = pl.gx;
         int64_t bx = -1;
-        for (int64_t x = lo; x <= hi; x++) {
-            double e = fabs((double)row[x] - (zr + gx * (double)x));
+        double xd = (double)lo; /* exact: x < 2^16 */
+        for (int64_t x = lo; x <= hi; x++, xd += 1.0) {
+            double e = fabs((double)row[x] - (zr + gx * xd));
             /* used samples are skipped only where they would win: the
              * same maximum, one load and branch less per sample */
             if (e > be && (all || !urow[x])) {
@@ -342,9 +343,10 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
     *best_idx = bi;
 }
 
+/* Queue triangle t for a scan.  It may stay in the heap with a stale key
+ * until flush() updates it: nothing is selected in between. */
 static void mark(struct tin *m, int32_t t)
 {
-    heap_remove(m, t);
     if (!m->pflag[t]) {
         m->pflag[t] = 1;
         m->pend[m->npend++] = t;
@@ -360,8 +362,16 @@ static void flush(struct tin *m, int use_heap)
         if (!use_heap)
             continue;
         scan_tri(m, t, 0, &m->cerr[t], &m->cidx[t]);
-        if (m->cidx[t] >= 0 && m->cerr[t] > 0)
-            heap_push(m, t);
+        int has = m->cidx[t] >= 0 && m->cerr[t] > 0;
+        if (m->hpos[t] < 0) {
+            if (has)
+                heap_push(m, t);
+        } else if (!has) {
+            heap_remove(m, t);
+        } else { /* the new key, either way */
+            heap_up(m, (uint32_t)m->hpos[t]);
+            heap_down(m, (uint32_t)m->hpos[t]);
+        }
     }
     m->npend = 0;
 }
