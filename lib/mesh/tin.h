@@ -92,11 +92,12 @@ void gv_tin_free(struct gv_tin *t);
  * The 1D greedy insertion along one edge of samples s[0 .. n-1] (n >= 2):
  * the endpoints, then repeatedly the sample farthest from the polyline
  * (ties: the smaller position) until none is off by more than max_error.
- * Writes the chosen interior positions, in insertion order, to pos (room
- * for n) and returns their count.  Both neighbours of a shared edge call
- * it on the same samples and get the same positions.
+ * Writes the chosen interior positions, sorted, to pos (room for n) and
+ * their count to *count.  Returns 0, or -1 when out of memory.  Both
+ * neighbours of a shared edge call it on the same samples and get the
+ * same positions.
  */
-uint32_t gv_tin_edge_greedy(const float *s, size_t step, uint32_t n,
-                            double max_error, uint32_t *pos);
+int gv_tin_edge_greedy(const float *s, size_t step, uint32_t n,
+                       double max_error, uint32_t *pos, uint32_t *count);
 
 #endif
