@@ -30,6 +30,12 @@
 #include "options.h"
 #include "region_arg.h"
 #include "render/height_region.h"
+#include "mesh/zfield.h"
+#include "config.h" /* autoconf: GV_HAVE_GPU */
+#ifdef GV_HAVE_GPU
+#include "gpu/gpu.h"
+#include "gpu/gpu_zfield.h"
+#endif
 #include "render/store_decoder.h"
 #include "store/store_read.h"
 
@@ -42,7 +48,8 @@ struct mesh_args {
     const char *region, *output, *format, *geo;
     double max_error, scale, offset, xy_scale;
     uint64_t max_triangles;
-    int gzip, no_border, tile, threads;
+    int gzip, no_border, tile, threads, gpu;
+    const char *method;
 };
 
 #define F(field) offsetof(struct mesh_args, field)
@@ -82,6 +89,12 @@ static const struct opt_spec mesh_opts[] = {
      .min = 1, .max = GV_TIN_MAX_SIDE,
      .help = "with --max-error: mesh tiles of TxT cells in parallel and\n"
              "join them without cracks (default: one tile)"},
+    {.name = "method", .kind = OPT_STRING, .arg = "M", .field = F(method),
+     .help = "greedy (insertion, default) or zfield (the block hierarchy of\n"
+             "Lindstrom et al.: a (2^k+1)x(2^k+1) grid, --max-error the\n"
+             "vertical threshold of each removed vertex)"},
+    {.name = "gpu", .kind = OPT_FLAG, .field = F(gpu),
+     .help = "zfield: decide the vertices on the GPU (EGL; the same mesh)"},
     {.name = "threads", .short_name = 'j', .kind = OPT_INT, .arg = "N",
      .field = F(threads), .min = 1, .max = 1024,
      .help = "threads for --tile (default: every core)"},
@@ -91,7 +104,8 @@ static const struct opt_spec mesh_opts[] = {
 static const struct opt_command mesh_command = {
     .me = ME,
     .synopsis = "usage: gigaview mesh INPUT [--level L] [--region X,Y,W,H]\n"
-                "       (--max-error E | --max-triangles N) [--format F] -o OUT\n"
+                "       (--max-error E | --max-triangles N) [--format F]\n"
+                "       [--method greedy|zfield [--gpu]] -o OUT\n"
                 "INPUT: a height store, or a one-channel image file (level 0)\n",
     .opts = mesh_opts,
     .nopts = sizeof mesh_opts / sizeof mesh_opts[0],
@@ -224,6 +238,39 @@ static int parse_geo(const char *s, struct gv_mesh_place *pl)
     return 0;
 }
 
+/* --method zfield: the enabled vertices on the CPU or the GPU, the mesh
+ * and its measured error on the CPU (lib/mesh/zfield.h). */
+static int zfield_build(const float *h, uint32_t w, uint32_t hgt, double threshold,
+                        int use_gpu, struct gv_tin *t, struct gv_error *err)
+{
+    if (w != hgt || !gv_zfield_side_ok(w))
+        return gv_fail(err, GV_EINVAL, "--method zfield needs a square grid of "
+                       "2^k+1 samples (a region of 2^k x 2^k cells), not %ux%u", w, hgt);
+    uint8_t *en = malloc((size_t)w * w);
+    if (!en)
+        return gv_fail(err, GV_ENOMEM, "out of memory");
+    const struct gv_zfield_params p = {.threshold = (float)threshold};
+    int rc;
+    if (use_gpu) {
+#ifdef GV_HAVE_GPU
+        struct gv_gpu *g = gv_gpu_open(GV_GPU_PLATFORM_AUTO, err);
+        struct gv_gpu_zfield *zf = g ? gv_gpu_zfield_new(g, err) : NULL;
+        rc = zf && gv_gpu_zfield_heights(zf, h, w, err) == 0 &&
+                     gv_gpu_zfield_enable(zf, &p, en, err) == 0 ? 0 : -1;
+        gv_gpu_zfield_free(zf);
+        gv_gpu_close(g);
+#else
+        rc = gv_fail(err, GV_EFORMAT, "this gigaview was built without the GPU");
+#endif
+    } else {
+        rc = gv_zfield_enable(h, w, &p, en, err);
+    }
+    if (rc == 0)
+        rc = gv_zfield_mesh(h, w, en, 1, t, err);
+    free(en);
+    return rc;
+}
+
 int cmd_mesh(int argc, char **argv)
 {
     struct mesh_args a = {.max_error = -1, .scale = 1, .xy_scale = 1};
@@ -255,6 +302,20 @@ int cmd_mesh(int argc, char **argv)
     }
     if (a.max_triangles > UINT32_MAX)
         a.max_triangles = UINT32_MAX;
+    const int zfield = a.method && !strcmp(a.method, "zfield");
+    if (a.method && !zfield && strcmp(a.method, "greedy")) {
+        fprintf(stderr, ME ": unknown method '%s' (greedy, zfield)\n", a.method);
+        return 2;
+    }
+    if (zfield && (a.max_error < 0 || a.max_triangles || a.tile)) {
+        fprintf(stderr, ME ": --method zfield needs --max-error, without "
+                "--max-triangles or --tile\n");
+        return 2;
+    }
+    if (a.gpu && !zfield) {
+        fprintf(stderr, ME ": --gpu is for --method zfield\n");
+        return 2;
+    }
 
     struct gv_error err;
     struct region r;
@@ -293,10 +354,15 @@ int cmd_mesh(int argc, char **argv)
         rc = 2;
         goto out;
     }
-    if ((a.tile ? gv_tin_build_tiled(h, gw, gh, gw, &p, (uint32_t)a.tile,
-                                     a.threads ? a.threads : gv_cpu_count(),
-                                     &t, &err)
-                : gv_tin_build(h, gw, gh, gw, &p, &t, &err)) < 0) {
+    int built;
+    if (zfield)
+        built = zfield_build(h, gw, gh, a.max_error, a.gpu, &t, &err);
+    else if (a.tile)
+        built = gv_tin_build_tiled(h, gw, gh, gw, &p, (uint32_t)a.tile,
+                                   a.threads ? a.threads : gv_cpu_count(), &t, &err);
+    else
+        built = gv_tin_build(h, gw, gh, gw, &p, &t, &err);
+    if (built < 0) {
         fprintf(stderr, ME ": %s\n", err.text);
         goto out;
     }

@@ -25,6 +25,7 @@
 #include "mesh/mesh_write.h"
 #include "mesh/tin.h"
 #include "output_cache.h"
+#include "mesh/zfield.h"
 #include "render/height_region.h"
 #include "render_call.h"
 #include "routes.h"
@@ -36,6 +37,7 @@ struct mesh_query {
     uint32_t max_triangles;  /* 0: not given */
     enum gv_mesh_format format;
     const char *format_name;
+    int zfield;              /* method=zfield (lib/mesh/zfield.h) */
     /* from the configuration, copied on the HTTP thread */
     uint64_t max_samples, limit_triangles;
     double time_limit;
@@ -91,6 +93,17 @@ static int parse_query(struct req *r, struct mesh_query *q,
         return gv_fail(err, GV_ELIMIT, "mesh: %u triangles asked, at most "
                        "%llu (max_mesh_triangles)", q->max_triangles,
                        (unsigned long long)cfg->max_mesh_triangles);
+    s = http_query(r, "method");
+    if (s && strcmp(s, "greedy") && strcmp(s, "zfield"))
+        return gv_fail(err, GV_EINVAL, "mesh: method must be greedy or zfield");
+    q->zfield = s && !strcmp(s, "zfield");
+    if (q->zfield && (q->max_error < 0 || q->max_triangles))
+        return gv_fail(err, GV_EINVAL, "mesh: method=zfield takes max_error "
+                       "(each removed vertex's vertical threshold), not "
+                       "max_triangles");
+    if (q->zfield && (q->w != q->h || !gv_zfield_side_ok(q->w + 1)))
+        return gv_fail(err, GV_EINVAL, "mesh: method=zfield needs a square "
+                       "region of 2^k x 2^k cells, not %ux%u", q->w, q->h);
     s = http_query(r, "format");
     q->format_name = s ? s : "glb";
     if (gv_mesh_format_parse(q->format_name, &q->format) < 0)
@@ -163,6 +176,23 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
     for (size_t i = 0; i < (size_t)gw * gh; i++)
         h[i] = (float)(codes[i] * hm.scale + hm.offset);
     uint32_t limit = (uint32_t)q->limit_triangles;
+    if (q->zfield) {
+        uint8_t *en = malloc((size_t)gw * gh);
+        const struct gv_zfield_params zp = {.threshold = (float)q->max_error};
+        if (!en)
+            gv_fail(err, GV_ENOMEM, "mesh: out of memory");
+        const int zrc = en && gv_zfield_enable(h, gw, &zp, en, err) == 0 &&
+                                gv_zfield_mesh(h, gw, en, 1, &t, err) == 0 ? 0 : -1;
+        free(en);
+        if (zrc < 0)
+            goto out;
+        if (t.ntris > limit) {
+            gv_fail(err, GV_ELIMIT, "mesh: threshold %g gives %u triangles, more "
+                    "than %u (max_mesh_triangles)", q->max_error, t.ntris, limit);
+            goto out;
+        }
+        goto encode;
+    }
     struct gv_tin_params p = {
         .max_error = q->max_error,
         .max_triangles = q->max_triangles ? q->max_triangles : limit,
@@ -180,6 +210,7 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
                 "triangles (max_mesh_triangles)", q->max_error, limit);
         goto out;
     }
+encode:;
     struct gv_mesh_place pl = {.x0 = q->x, .y0 = q->y, .level = q->level};
     rc = gv_mesh_encode(q->format, &t, &pl, out, len, err);
 out:
@@ -251,9 +282,10 @@ enum MHD_Result route_mesh(struct req *r)
     }
     *arg = q;
     char canon[400], key[420], etag[48];
-    snprintf(canon, sizeof canon, "mesh/%s/%u/%u,%u,%u,%u e%.17g n%u l%llu.%s",
+    snprintf(canon, sizeof canon, "mesh/%s/%u/%u,%u,%u,%u e%.17g n%u l%llu%s.%s",
              img->id, q.level, q.x, q.y, q.w, q.h, q.max_error,
              q.max_triangles, (unsigned long long)q.limit_triangles,
+             q.zfield ? " zfield" : "",
              gv_mesh_format_ext(q.format));
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);
     output_cache_etag(img->tag, canon, etag, sizeof etag);

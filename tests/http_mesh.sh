@@ -82,6 +82,22 @@ check "413 names max_mesh_samples" grep -q max_mesh_samples "$T/b"
 expect_status "max_triangles over the key" 413 "/v1/images/dem/mesh?region=0,0,10,10&max_triangles=50001"
 expect_status "max_error needing more triangles" 413 "/v1/images/dem/mesh?region=0,0,198,198&max_error=0"
 check "413 names max_mesh_triangles" grep -q max_mesh_triangles "$T/b"
+
+# method=zfield (lib/mesh/zfield.h): the bytes of gigaview mesh --method
+# zfield, also with its --gpu where EGL works; square 2^k regions only
+run mesh "$S/dem.gv" --region 128,64,128,128 --max-error 20 --method zfield -o "$T/zc.ply"
+[ "$rc" -eq 0 ] || not_ok "gigaview mesh --method zfield" "$(cat "$T/err")"
+req "$(url "/v1/images/dem/mesh?region=128,64,128,128&max_error=20&method=zfield&format=ply")"
+check "zfield: 200, the bytes of gigaview mesh" sh -c "[ $code = 200 ] && cmp -s '$T/b' '$T/zc.ply'"
+run mesh "$S/dem.gv" --region 128,64,128,128 --max-error 20 --method zfield --gpu -o "$T/zg.ply"
+if [ "$rc" -eq 0 ]; then
+    check "zfield --gpu: the same mesh as the CPU" cmp -s "$T/zg.ply" "$T/zc.ply"
+else
+    skip "zfield --gpu: $(cat "$T/err")"
+fi
+expect_status "zfield: a region of 100x128 cells" 400 "/v1/images/dem/mesh?region=0,0,100,128&max_error=5&method=zfield"
+expect_status "zfield: max_triangles" 400 "/v1/images/dem/mesh?region=0,0,128,128&max_triangles=50&method=zfield"
+expect_status "unknown method" 400 "/v1/images/dem/mesh?region=0,0,128,128&max_error=5&method=rtin"
 stop_daemon
 check "daemon exits 0" test "$drc" = 0
 
