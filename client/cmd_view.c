@@ -252,8 +252,7 @@ static void take_result(struct app *app, struct vf_result *r, double now)
         vi_set_image(&app->in, iw, ih);
     }
     if (app->a->verbose)
-        fprintf(stderr, "view: image %s %gx%g, %d atlas layers\n", vt_image(t), iw, ih,
-                app->st.layers);
+        fprintf(stderr, "view: image %s %gx%g\n", vt_image(t), iw, ih);
 }
 
 /* A screenshot file name that does not exist yet. */
@@ -508,21 +507,21 @@ static void write_shot(struct app *app)
 
 static void record(struct app *app, double ms, int moving)
 {
-    if (app->stats) {
+    if (app->stats)
         fprintf(app->stats, "%llu\t%.3f\t%d\t%zu\t%zu\t%llu\n",
                 (unsigned long long)app->frames, ms, moving, app->st.needed,
                 app->st.missing, (unsigned long long)app->st.decodes);
-        if (app->nft == app->capft) {
-            size_t cap = app->capft ? 2 * app->capft : 1024;
-            double *n = realloc(app->ft, cap * sizeof *n);
-            if (!n)
-                return;
-            app->ft = n;
-            app->capft = cap;
-        }
-        if (moving)
-            app->ft[app->nft++] = ms;
+    if (!moving)
+        return;
+    if (app->nft == app->capft) {
+        size_t cap = app->capft ? 2 * app->capft : 1024;
+        double *n = realloc(app->ft, cap * sizeof *n);
+        if (!n)
+            return;
+        app->ft = n;
+        app->capft = cap;
     }
+    app->ft[app->nft++] = ms;
 }
 
 /* One frame.  Returns whether anything is still to do (animation,
@@ -564,7 +563,6 @@ static int frame(struct app *app, double *last)
                  app->fetch, t0, &app->st);
         if (p.visible)
             vd_draw(app->draw, app->tiles, &p, &app->in.cur, app->w, app->h);
-        if (getenv("GV_VIEW_DEBUG")) { unsigned char px[4]; glReadPixels(app->w/2, app->h/2, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, px); fprintf(stderr, "dbg err %x px %d %d %d vis %d f %d miss %zu\n", glGetError(), px[0], px[1], px[2], p.visible, p.f, app->st.missing); }
     }
     if (app->shot_path && app->tiles)
         write_shot(app);
@@ -685,11 +683,15 @@ static void summary(struct app *app, double elapsed)
     double p99 = app->nft ? app->ft[(size_t)((app->nft - 1) * 0.99)] : 0;
     double mx = app->nft ? app->ft[app->nft - 1] : 0;
     fprintf(stderr, "view: %llu frames in %.2f s, %zu while moving: p50 %.2f ms, "
-            "p99 %.2f ms, max %.2f ms; %llu tiles decoded (%.1f/s); http: %llu "
+            "p99 %.2f ms, max %.2f ms; %llu tiles decoded (%.1f/s), %llu "
+            "prefetched, %llu atlas evictions, %llu failed fetches; http: %llu "
             "requests, %llu bytes; renderer %s\n",
             (unsigned long long)app->frames, elapsed, app->nft, p50, p99, mx,
             (unsigned long long)app->st.decodes,
             elapsed > 0 ? app->st.decodes / elapsed : 0,
+            (unsigned long long)app->st.prefetched,
+            (unsigned long long)app->st.evictions,
+            (unsigned long long)app->st.failures,
             (unsigned long long)hs.requests, (unsigned long long)hs.bytes,
             gv_gpu_info(app->gpu)->renderer);
 }
@@ -780,7 +782,7 @@ int cmd_view(int argc, char **argv)
                     SDL_Delay((Uint32)(left * 1000));
             }
         }
-        if (app->stats)
+        if (app->stats || a.verbose)
             summary(app, now_s() - t0);
         rc = app->rc;
     }
