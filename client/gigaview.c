@@ -26,6 +26,11 @@ static const struct command commands[] = {
 #else
     {"render", cmd_render, "needs GPU support, which this build lacks (--without-gpu)"},
 #endif
+#if defined(GV_HAVE_GPU) && defined(GV_HAVE_SDL2)
+    {"view", cmd_view, "a window on gigaviewd's images: pan, zoom, rotate (GPU, SDL2)"},
+#else
+    {"view", cmd_view, "needs GPU and SDL2 support, which this build lacks"},
+#endif
 };
 
 static void usage(FILE *out)

@@ -10,7 +10,7 @@ set -eu
 PACKAGES="build-essential autoconf automake libtool pkg-config
   libmicrohttpd-dev libopenimageio-dev openimageio-tools libjansson-dev
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri zlib1g-dev libwebp-dev
-  libcurl4-openssl-dev time valgrind python3
+  libcurl4-openssl-dev libsdl2-dev time valgrind python3
   chromium nodejs"
 # gdaldem, the anchor of tests/test_filter_elevation (skipped without it)
 # and bench/elevation-filters.sh.

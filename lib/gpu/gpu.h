@@ -64,7 +64,22 @@ struct gv_gpu_info {
  */
 struct gv_gpu *gv_gpu_open(enum gv_gpu_platform platform, struct gv_error *err);
 
-/* Stop the GL thread and destroy the context.  NULL does nothing.  Not on
+/*
+ * Adopt the GL context current on the calling thread (made by someone
+ * else: SDL's window context in `gigaview view`), which must be OpenGL ES
+ * 3.1+ or OpenGL 4.3+ (the decoder needs compute shaders and storage
+ * buffers).  No thread is started: gv_gpu_call runs its function at once,
+ * on the calling thread, which must be the adopting thread (else -1 with
+ * GV_EINVAL), and the GL state the function leaves (bound framebuffer,
+ * program, textures, viewport) is the caller's to reset.  info's platform
+ * is "external".  gv_gpu_close frees the wrapper and leaves the context
+ * alone.  Returns NULL with GV_EUNAVAIL when no context is current, or
+ * GV_ENOMEM.
+ */
+struct gv_gpu *gv_gpu_adopt(struct gv_error *err);
+
+/* Stop the GL thread and destroy the context (an adopted one: only free
+ * the wrapper).  NULL does nothing.  Not on
  * the GL thread itself, and not while another thread is in gv_gpu_call. */
 void gv_gpu_close(struct gv_gpu *g);
 

@@ -32,6 +32,8 @@ struct gv_gpu {
     int job_rc;
     EGLDisplay dpy;
     EGLContext ctx;
+    int adopted;                  /* gv_gpu_adopt: no thread of our own */
+    pthread_t owner;              /* gv_gpu_adopt: the caller's thread */
     struct gv_gpu_info info;
     struct gv_error open_err;
 };
@@ -317,10 +319,41 @@ struct gv_gpu *gv_gpu_open(enum gv_gpu_platform platform, struct gv_error *err)
     return g;
 }
 
+struct gv_gpu *gv_gpu_adopt(struct gv_error *err)
+{
+    const char *version = (const char *)glGetString(GL_VERSION);
+    if (!version) {
+        gv_fail(err, GV_EUNAVAIL, "gpu: no current GL context to adopt");
+        return NULL;
+    }
+    struct gv_gpu *g = calloc(1, sizeof *g);
+    if (!g) {
+        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        return NULL;
+    }
+    g->adopted = 1;
+    g->owner = pthread_self();
+    g->dpy = EGL_NO_DISPLAY;
+    g->ctx = EGL_NO_CONTEXT;
+    struct gv_gpu_info *in = &g->info;
+    in->es = !strncmp(version, "OpenGL ES", 9);
+    snprintf(in->platform, sizeof in->platform, "external");
+    snprintf(in->api, sizeof in->api, "%s", in->es ? "OpenGL ES" : "OpenGL");
+    snprintf(in->vendor, sizeof in->vendor, "%s", (const char *)glGetString(GL_VENDOR));
+    snprintf(in->renderer, sizeof in->renderer, "%s", (const char *)glGetString(GL_RENDERER));
+    snprintf(in->version, sizeof in->version, "%s", version);
+    in->ssbo = 1;
+    return g;
+}
+
 void gv_gpu_close(struct gv_gpu *g)
 {
     if (!g)
         return;
+    if (g->adopted) {
+        free(g);
+        return;
+    }
     pthread_mutex_lock(&g->lock);
     g->stop = 1;
     pthread_cond_broadcast(&g->wake);
@@ -336,6 +369,12 @@ const struct gv_gpu_info *gv_gpu_info(const struct gv_gpu *g)
 int gv_gpu_call(struct gv_gpu *g, int (*fn)(void *arg, struct gv_error *err),
                 void *arg, struct gv_error *err)
 {
+    if (g->adopted) {
+        if (!pthread_equal(pthread_self(), g->owner))
+            return gv_fail(err, GV_EINVAL, "gpu: an adopted context is called "
+                           "from another thread than its own");
+        return fn(arg, err);
+    }
     pthread_mutex_lock(&g->call_lock);
     pthread_mutex_lock(&g->lock);
     g->job = fn;

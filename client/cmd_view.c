@@ -1,0 +1,810 @@
+/*
+ * cmd_view.c - `gigaview view URL`: the native viewer.  A window (SDL2,
+ * with an OpenGL ES 3.2 context, else OpenGL 4.3 core, made through EGL
+ * where SDL can) shows an image of gigaviewd at URL that you pan, zoom and
+ * rotate smoothly at the display's rate: tiles are fetched on a thread of
+ * their own (view_fetch.h), decoded on this machine's GPU with the shared
+ * decode shader (lib/gpu, whose context here is the window's:
+ * gv_gpu_adopt) and drawn from the resident set (view_tiles.h) by one
+ * full-window pass that blends two levels of detail (view_draw.h).
+ *
+ * The frame loop: events (view_input.h) and the script's commands
+ * (view_script.h), results from the fetch thread, the view's animation,
+ * the tiles' work for this frame (a bounded number of decodes; never a
+ * wait for the network), the draw, a screenshot if one is due, the
+ * overlay (view_overlay.h), the swap (vsync where the driver has it).
+ * At rest with nothing to do it sleeps in SDL_WaitEventTimeout.
+ *
+ * A build without SDL2 (or --without-gpu) has a cmd_view that says so.
+ */
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "config.h" /* GV_HAVE_GPU, GV_HAVE_SDL2 */
+
+#include "commands.h"
+
+#define ME "gigaview view"
+
+#if defined(GV_HAVE_GPU) && defined(GV_HAVE_SDL2)
+
+#include <SDL.h>
+#include <GLES3/gl32.h>
+
+#include "gpu/gpu.h"
+#include "http_fetch.h"
+#include "imageio/imageio.h"
+#include "options.h"
+#include "view_draw.h"
+#include "view_fetch.h"
+#include "view_geom.h"
+#include "view_input.h"
+#include "view_overlay.h"
+#include "view_script.h"
+#include "view_tiles.h"
+
+struct view_args {
+    const char *image, *size, *view, *script, *cache_dir, *stats;
+    int fullscreen, no_cache, no_batch, no_prefetch, no_vsync, no_overlay, verbose;
+    int budget;
+    double timeout, gpu_mib;
+};
+
+#define F(field) offsetof(struct view_args, field)
+static const struct opt_spec view_opts[] = {
+    {.name = "image", .short_name = 'i', .kind = OPT_STRING, .arg = "ID",
+     .field = F(image), .help = "the image to show first (default: the view's,\n"
+                                "else the server's first)"},
+    {.name = "size", .short_name = 's', .kind = OPT_STRING, .arg = "WxH",
+     .field = F(size), .help = "window size (default 1280x720)"},
+    {.name = "fullscreen", .kind = OPT_FLAG, .field = F(fullscreen),
+     .help = "start fullscreen (F toggles)"},
+    {.name = "view", .kind = OPT_STRING, .arg = "SPEC", .field = F(view),
+     .help = "start at CX,CY,ZOOM[,ROT] (level-0 centre, level of\n"
+             "detail, degrees clockwise) or a browser link's\n"
+             "#image=ID&x=..&y=..&z=..&r=.. (default: the whole image)"},
+    {.name = "script", .kind = OPT_STRING, .arg = "FILE", .field = F(script),
+     .help = "replay the input in FILE, then exit (docs/VIEWER.md)"},
+    {.name = "timeout", .short_name = 't', .kind = OPT_DOUBLE, .arg = "SEC",
+     .field = F(timeout), .min = 0, .max = 86400, .flags = OPT_FINITE | OPT_MIN_OPEN,
+     .help = "limit for each HTTP request (default 10)"},
+    {.name = "cache-dir", .kind = OPT_STRING, .arg = "DIR", .field = F(cache_dir),
+     .help = "tile cache (default $XDG_CACHE_HOME/gigaview\n"
+             "or ~/.cache/gigaview)"},
+    {.name = "no-cache", .kind = OPT_FLAG, .field = F(no_cache),
+     .help = "do not use the tile cache"},
+    {.name = "no-batch", .kind = OPT_FLAG, .field = F(no_batch),
+     .help = "fetch each tile with a request of its own"},
+    {.name = "gpu-cache", .kind = OPT_DOUBLE, .arg = "MIB", .field = F(gpu_mib),
+     .min = 16, .max = 65536, .flags = OPT_FINITE,
+     .help = "GPU memory for decoded tiles (default 256)"},
+    {.name = "budget", .kind = OPT_INT, .arg = "N", .field = F(budget), .min = 1,
+     .max = 4096, .help = "tile decodes per frame at most (default 4)"},
+    {.name = "no-prefetch", .kind = OPT_FLAG, .field = F(no_prefetch),
+     .help = "no prefetching ahead of the motion"},
+    {.name = "no-vsync", .kind = OPT_FLAG, .field = F(no_vsync),
+     .help = "do not wait for the display's refresh"},
+    {.name = "no-overlay", .kind = OPT_FLAG, .field = F(no_overlay),
+     .help = "start with the overlay hidden (O toggles)"},
+    {.name = "stats", .kind = OPT_STRING, .arg = "FILE", .field = F(stats),
+     .help = "write each frame's time and work to FILE (TSV)\n"
+             "and a summary to stderr at exit"},
+    {.name = "verbose", .short_name = 'v', .kind = OPT_FLAG, .field = F(verbose),
+     .help = "log requests, failures and statistics to stderr"},
+};
+#undef F
+
+static const struct opt_command view_command = {
+    .me = ME,
+    .synopsis =
+        "usage: gigaview view URL [--image ID] [--size WxH] [--fullscreen]\n"
+        "                         [--view CX,CY,ZOOM[,ROT]] [--script FILE]\n"
+        "\n"
+        "Show the images of the gigaviewd at URL in a window: drag to pan, wheel\n"
+        "to zoom, R to rotate, Esc to quit (docs/VIEWER.md lists every key).\n"
+        "Tiles are decoded on this machine's GPU.  SDL_VIDEODRIVER=offscreen\n"
+        "runs without a display (with --script).\n",
+    .opts = view_opts,
+    .nopts = sizeof view_opts / sizeof view_opts[0],
+};
+
+#define MAX_IMAGES 256
+
+/* Everything the loop works on. */
+struct app {
+    const struct view_args *a;
+    SDL_Window *win;
+    SDL_GLContext glc;
+    struct gv_gpu *gpu;
+    struct vd *draw;
+    struct vo *overlay;
+    struct vf *fetch;
+    struct vt *tiles;            /* NULL until the image has come */
+    struct vi in;
+    char ids[MAX_IMAGES][129];
+    int nids, cur_id;
+    char want_image[129];        /* asked of the fetch thread */
+    int have_start_view;
+    struct vg_view start_view;
+    int show_overlay, show_list, fullscreen, quit, rc, vsync;
+    int w, h;
+    char message[VO_LINE];       /* last error worth showing */
+    uint64_t frames;
+    double t_start;
+    /* script */
+    struct vs_script script;
+    size_t pc;                   /* next command */
+    double pc_since;             /* when the current command started */
+    uint64_t pc_frame;
+    const char *shot_path;       /* due at the next draw */
+    int shot_done, shot_no;
+    /* stats */
+    FILE *stats;
+    double *ft;
+    size_t nft, capft;
+    uint64_t decodes0;
+    double moving_time;
+    struct vt_stats st;
+};
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + ts.tv_nsec / 1e9;
+}
+
+/* The server's image ids (GET /v1/images, through the table that
+ * gv_http_print_images prints). */
+static int list_images(struct app *app, const char *url, struct gv_error *err)
+{
+    struct gv_http *h = gv_http_new(url, (long)(app->a->timeout * 1000), 0, err);
+    if (!h)
+        return -1;
+    char *text = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&text, &len);
+    int rc = f ? gv_http_print_images(h, f, err) : gv_fail(err, GV_ENOMEM, "out of memory");
+    if (f)
+        fclose(f);
+    gv_http_free(h);
+    int table = 0;
+    for (char *line = text, *next; rc == 0 && line && *line; line = next) {
+        next = strchr(line, '\n');
+        if (next)
+            *next++ = 0;
+        char id[129];
+        if (sscanf(line, "%128s", id) != 1)
+            continue;
+        if (!table) {
+            table = !strcmp(id, "id");
+            continue;
+        }
+        if (app->nids < MAX_IMAGES)
+            snprintf(app->ids[app->nids++], sizeof app->ids[0], "%s", id);
+    }
+    free(text);
+    return rc;
+}
+
+static void open_image(struct app *app, const char *id)
+{
+    snprintf(app->want_image, sizeof app->want_image, "%s", id);
+    for (int i = 0; i < app->nids; i++)
+        if (!strcmp(app->ids[i], id))
+            app->cur_id = i;
+    vf_open(app->fetch, id);
+}
+
+/* A result of the fetch thread. */
+static void take_result(struct app *app, struct vf_result *r, double now)
+{
+    if (r->kind == VF_TILE) {
+        if (app->tiles)
+            vt_take(app->tiles, r, now);
+        else
+            vf_result_free(r);
+        return;
+    }
+    struct gv_error err;
+    if (!r->ok) {
+        fprintf(stderr, ME ": %s\n", r->msg);
+        snprintf(app->message, sizeof app->message, "%.90s", r->msg);
+        vf_result_free(r);
+        if (!app->tiles) {       /* nothing to show */
+            app->quit = 1;
+            app->rc = 1;
+        }
+        return;
+    }
+    struct vt_options o = {
+        .atlas_bytes = (size_t)(app->a->gpu_mib * 1048576.0 * 0.75),
+        .decode_bytes = (size_t)(app->a->gpu_mib * 1048576.0 * 0.25),
+        .buffer_bytes = (size_t)256 << 20,
+        .budget = app->a->budget,
+        .prefetch = !app->a->no_prefetch,
+        .verbose = app->a->verbose,
+    };
+    double iw = r->img.width, ih = r->img.height;
+    struct vt *t = vt_new(app->gpu, r, &o, &err);
+    vf_result_free(r);
+    if (!t) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        snprintf(app->message, sizeof app->message, "%.90s", err.text);
+        if (!app->tiles) {
+            app->quit = 1;
+            app->rc = 1;
+        }
+        return;
+    }
+    vt_free(app->tiles);
+    app->tiles = t;
+    app->message[0] = 0;
+    if (app->have_start_view) {
+        vi_init(&app->in, &app->start_view, iw, ih, app->w, app->h);
+        app->have_start_view = 0;
+    } else {
+        vi_set_image(&app->in, iw, ih);
+    }
+    if (app->a->verbose)
+        fprintf(stderr, "view: image %s %gx%g\n", vt_image(t), iw, ih);
+}
+
+/* A screenshot file name that does not exist yet. */
+static void shot_name(struct app *app, char *out, size_t cap)
+{
+    do
+        snprintf(out, cap, "gigaview-%s-%03d.png", app->want_image, ++app->shot_no);
+    while (access(out, F_OK) == 0 && app->shot_no < 999);
+}
+
+static void copy_view(struct app *app)
+{
+    char link[512];
+    vg_format_hash(app->want_image, &app->in.goal, link, sizeof link);
+    printf("%s\n", link);
+    fflush(stdout);
+    SDL_SetClipboardText(link);
+}
+
+static void toggle_fullscreen(struct app *app)
+{
+    app->fullscreen = !app->fullscreen;
+    SDL_SetWindowFullscreen(app->win, app->fullscreen ? SDL_WINDOW_FULLSCREEN_DESKTOP : 0);
+}
+
+static void act(struct app *app, enum vi_action a)
+{
+    switch (a) {
+    case VI_QUIT: app->quit = 1; break;
+    case VI_FULLSCREEN: toggle_fullscreen(app); break;
+    case VI_SCREENSHOT: {
+        static char name[300];
+        shot_name(app, name, sizeof name);
+        app->shot_path = name;
+        break;
+    }
+    case VI_NEXT_IMAGE:
+    case VI_PREV_IMAGE:
+        if (app->nids > 1)
+            open_image(app, app->ids[(app->cur_id + (a == VI_NEXT_IMAGE ? 1 : app->nids - 1)) %
+                                     app->nids]);
+        break;
+    case VI_TOGGLE_OVERLAY: app->show_overlay = !app->show_overlay; break;
+    case VI_TOGGLE_LIST: app->show_list = !app->show_list; break;
+    case VI_COPY_VIEW: copy_view(app); break;
+    case VI_ROI: case VI_PARAM_UP: case VI_PARAM_DOWN: case VI_ROI_CLEAR:
+        snprintf(app->message, sizeof app->message, "filters: not in this build yet");
+        break;
+    case VI_NONE: break;
+    }
+}
+
+/* ---------------------------------------------------------------- script */
+
+static void script_fail(struct app *app, const struct vs_cmd *c, const char *what)
+{
+    fprintf(stderr, ME ": %s:%d: %s\n", app->a->script, c->line, what);
+    app->quit = 1;
+    app->rc = 1;
+}
+
+static void fake_button(struct app *app, int down, double x, double y, int shift)
+{
+    SDL_Event e;
+    memset(&e, 0, sizeof e);
+    e.type = down ? SDL_MOUSEBUTTONDOWN : SDL_MOUSEBUTTONUP;
+    e.button.button = SDL_BUTTON_LEFT;
+    e.button.clicks = 1;
+    e.button.x = (int)lround(x);
+    e.button.y = (int)lround(y);
+    SDL_SetModState(shift ? KMOD_LSHIFT : KMOD_NONE);
+    act(app, vi_event(&app->in, &e));
+    SDL_SetModState(KMOD_NONE);
+}
+
+static void fake_move(struct app *app, double x, double y)
+{
+    SDL_Event e;
+    memset(&e, 0, sizeof e);
+    e.type = SDL_MOUSEMOTION;
+    e.motion.x = (int)lround(x);
+    e.motion.y = (int)lround(y);
+    act(app, vi_event(&app->in, &e));
+}
+
+/* Whether the picture is final: at rest, the image the script asked for,
+ * and every tile the view needs resident. */
+static int settled(const struct app *app)
+{
+    return app->tiles && !strcmp(vt_image(app->tiles), app->want_image) &&
+           !memcmp(&app->in.cur, &app->in.goal, sizeof app->in.cur) &&
+           app->st.missing == 0 && app->frames > app->pc_frame + 1;
+}
+
+/* Run script commands until one has to wait for later frames. */
+static void script_step(struct app *app, double now)
+{
+    while (app->pc < app->script.n && !app->quit) {
+        const struct vs_cmd *c = &app->script.cmd[app->pc];
+        double waited = (now - app->pc_since) * 1000;
+        switch (c->op) {
+        case VS_WAIT:
+            if (waited < c->a[0])
+                return;
+            break;
+        case VS_FRAMES:
+            if (app->frames < app->pc_frame + (uint64_t)c->a[0])
+                return;
+            break;
+        case VS_SETTLE:
+            if (!settled(app)) {
+                if (waited > c->a[0])
+                    script_fail(app, c, "the view did not settle in time");
+                return;
+            }
+            break;
+        case VS_WAIT_FILE:
+            if (access(c->text, F_OK) != 0) {
+                if (waited > c->a[0])
+                    script_fail(app, c, "the file did not appear in time");
+                return;
+            }
+            break;
+        case VS_SHOT:
+            if (!app->shot_done) {
+                app->shot_path = c->text;
+                return;          /* written by the next draw */
+            }
+            app->shot_done = 0;
+            break;
+        case VS_KEY: {
+            SDL_Event e;
+            memset(&e, 0, sizeof e);
+            e.type = SDL_KEYDOWN;
+            e.key.state = SDL_PRESSED;
+            e.key.keysym.sym = c->keycode;
+            e.key.keysym.mod = (Uint16)((c->shift ? KMOD_LSHIFT : 0) |
+                                        (c->ctrl ? KMOD_LCTRL : 0));
+            act(app, vi_event(&app->in, &e));
+            break;
+        }
+        case VS_DOWN: fake_button(app, 1, c->a[0], c->a[1], c->shift); break;
+        case VS_MOVE: fake_move(app, c->a[0], c->a[1]); break;
+        case VS_UP: fake_button(app, 0, c->a[0], c->a[1], 0); break;
+        case VS_DRAG: {
+            int n = (int)c->a[4];
+            fake_button(app, 1, c->a[0], c->a[1], 0);
+            for (int i = 1; i <= n; i++)
+                fake_move(app, c->a[0] + (c->a[2] - c->a[0]) * i / n,
+                          c->a[1] + (c->a[3] - c->a[1]) * i / n);
+            fake_button(app, 0, c->a[2], c->a[3], 0);
+            break;
+        }
+        case VS_WHEEL: {
+            fake_move(app, c->a[0], c->a[1]);
+            SDL_Event e;
+            memset(&e, 0, sizeof e);
+            e.type = SDL_MOUSEWHEEL;
+            e.wheel.y = (Sint32)c->a[2];
+            e.wheel.preciseY = (float)c->a[2];
+            act(app, vi_event(&app->in, &e));
+            break;
+        }
+        case VS_VIEW:
+            if (c->view_image[0] && strcmp(c->view_image, app->want_image))
+                open_image(app, c->view_image);
+            if (!app->tiles || strcmp(vt_image(app->tiles), app->want_image)) {
+                /* Taken when the image comes. */
+                app->have_start_view = 1;
+                app->start_view = c->view;
+            } else {
+                vi_jump(&app->in, &c->view);
+            }
+            break;
+        case VS_IMAGE: open_image(app, c->text); break;
+        case VS_PRINT: {
+            char link[512];
+            vg_format_hash(app->want_image, &app->in.cur, link, sizeof link);
+            printf("%s %s\n", c->text, link);
+            fflush(stdout);
+            break;
+        }
+        case VS_QUIT: app->quit = 1; break;
+        }
+        app->pc++;
+        app->pc_since = now;
+        app->pc_frame = app->frames;
+    }
+    if (app->pc >= app->script.n)
+        app->quit = 1;
+}
+
+/* ---------------------------------------------------------------- frames */
+
+static void overlay_content(struct app *app, const struct vt_plan *p,
+                            struct vo_content *c)
+{
+    memset(c, 0, sizeof *c);
+    const struct vg_view *v = &app->in.cur;
+    const struct gv_gpu_info *gi = gv_gpu_info(app->gpu);
+    double mag = exp2(-v->zoom);
+    snprintf(c->bottom[0], VO_LINE, "ZOOM %s%.3g  LEVEL %d%s  ROT %.1f",
+             mag >= 1 ? "" : "1:", mag >= 1 ? mag : 1 / mag, p->f,
+             p->t > 0 ? "+" : "", vg_norm_rot(v->rot));
+    if (app->tiles) {
+        const struct gv_geometry *g = vt_geometry(app->tiles);
+        snprintf(c->bottom[1], VO_LINE, "%.40s  %ux%u  [%d/%d]", vt_image(app->tiles),
+                 g->width, g->height, app->cur_id + 1, app->nids);
+    }
+    size_t flight = vf_in_flight(app->fetch);
+    if (!app->tiles || app->st.missing || flight) {
+        static const char spin[] = "|/-*";
+        snprintf(c->bottom[2], VO_LINE, "LOADING %c %zu TILES", spin[(app->frames / 8) % 4],
+                 app->st.missing + flight);
+    }
+    snprintf(c->bottom[3], VO_LINE, "%.80s", gi->renderer);
+    if (app->message[0])
+        snprintf(c->bottom[4], VO_LINE, "%.90s", app->message);
+    vo_scale_bar(v->zoom, app->w / 5.0, &c->bar_px, c->bar_label, sizeof c->bar_label);
+    if (app->show_list) {
+        snprintf(c->panel[c->npanel++], VO_LINE, "IMAGES (TAB: NEXT)");
+        for (int i = 0; i < app->nids && c->npanel < VO_LINES; i++)
+            snprintf(c->panel[c->npanel++], VO_LINE, "%s %.60s",
+                     i == app->cur_id ? ">" : " ", app->ids[i]);
+    }
+}
+
+static void write_shot(struct app *app)
+{
+    const int ch = app->tiles ? vt_geometry(app->tiles)->channels : 3;
+    uint8_t *px = malloc((size_t)app->w * app->h * ch);
+    struct gv_error err;
+    if (!px) {
+        fprintf(stderr, ME ": out of memory for a screenshot\n");
+    } else {
+        vd_read(app->w, app->h, ch, px);
+        if (gv_image_write(app->shot_path, (uint32_t)app->w, (uint32_t)app->h, ch, px,
+                           &err) < 0) {
+            fprintf(stderr, ME ": %s\n", err.text);
+            if (app->script.n) {
+                app->quit = 1;
+                app->rc = 1;
+            }
+        } else if (app->a->verbose || !app->script.n) {
+            fprintf(stderr, "view: wrote %s\n", app->shot_path);
+        }
+    }
+    free(px);
+    app->shot_path = NULL;
+    app->shot_done = 1;
+}
+
+static void record(struct app *app, double ms, int moving)
+{
+    if (app->stats)
+        fprintf(app->stats, "%llu\t%.3f\t%d\t%zu\t%zu\t%llu\n",
+                (unsigned long long)app->frames, ms, moving, app->st.needed,
+                app->st.missing, (unsigned long long)app->st.decodes);
+    if (!moving)
+        return;
+    if (app->nft == app->capft) {
+        size_t cap = app->capft ? 2 * app->capft : 1024;
+        double *n = realloc(app->ft, cap * sizeof *n);
+        if (!n)
+            return;
+        app->ft = n;
+        app->capft = cap;
+    }
+    app->ft[app->nft++] = ms;
+}
+
+/* One frame.  Returns whether anything is still to do (animation,
+ * tiles, a script): the loop sleeps otherwise. */
+static int frame(struct app *app, double *last)
+{
+    const double t0 = now_s();
+    double dt = t0 - *last;
+    *last = t0;
+    SDL_Event e;
+    while (SDL_PollEvent(&e)) {
+        if (e.type == SDL_WINDOWEVENT && e.window.event == SDL_WINDOWEVENT_EXPOSED)
+            continue;
+        act(app, vi_event(&app->in, &e));
+    }
+    if (app->script.n)
+        script_step(app, t0);
+    struct vf_result r;
+    while (vf_poll(app->fetch, &r))
+        take_result(app, &r, t0);
+    if (app->quit)
+        return 0;
+    int ww, wh;
+    SDL_GL_GetDrawableSize(app->win, &app->w, &app->h);
+    SDL_GetWindowSize(app->win, &ww, &wh);
+    app->in.w = app->w;
+    app->in.h = app->h;
+    app->in.ratio = ww > 0 ? (double)app->w / ww : 1;
+    const struct vg_view before = app->in.cur;
+    int moving = vi_step(&app->in, dt > 0.1 ? 0.1 : dt);
+    struct vt_plan p = {0};
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, app->w, app->h);
+    glClearColor(0, 0, 0, 1);
+    glClear(GL_COLOR_BUFFER_BIT);
+    if (app->tiles) {
+        vt_plan_view(app->tiles, &app->in.cur, app->w, app->h, &p);
+        vt_frame(app->tiles, &p, app->in.cur.cx - before.cx, app->in.cur.cy - before.cy,
+                 app->fetch, t0, &app->st);
+        if (p.visible)
+            vd_draw(app->draw, app->tiles, &p, &app->in.cur, app->w, app->h);
+    }
+    if (app->shot_path && app->tiles)
+        write_shot(app);
+    if (app->show_overlay) {
+        struct vo_content c;
+        overlay_content(app, &p, &c);
+        vo_draw(app->overlay, app->w, app->h, &c);
+    }
+    SDL_GL_SwapWindow(app->win);
+    if (app->stats)
+        glFinish();
+    app->frames++;
+    record(app, (now_s() - t0) * 1000, moving);
+    if (moving)
+        app->moving_time += dt;
+    return moving || !app->tiles || app->st.missing || app->st.wanted ||
+           vf_in_flight(app->fetch) || app->script.n || app->shot_path;
+}
+
+/* ---------------------------------------------------------------- setup */
+
+static int parse_size(const char *s, int *w, int *h)
+{
+    char x;
+    int n = 0;
+    if (sscanf(s, "%d%c%d%n", w, &x, h, &n) != 3 || x != 'x' || s[n] || *w < 16 ||
+        *h < 16 || *w > 16384 || *h > 16384)
+        return -1;
+    return 0;
+}
+
+/* The window and its GL context: OpenGL ES 3.2, else OpenGL 4.3 core. */
+static int open_window(struct app *app, int w, int h)
+{
+    static const int want[][3] = {{SDL_GL_CONTEXT_PROFILE_ES, 3, 2},
+                                  {SDL_GL_CONTEXT_PROFILE_CORE, 4, 3}};
+    SDL_SetHint(SDL_HINT_VIDEO_X11_FORCE_EGL, "1");
+    SDL_SetHint(SDL_HINT_VIDEO_HIGHDPI_DISABLED, "0");
+    if (SDL_Init(SDL_INIT_VIDEO | SDL_INIT_EVENTS) != 0) {
+        fprintf(stderr, ME ": cannot start SDL video: %s\n", SDL_GetError());
+        return -1;
+    }
+    if (SDL_InitSubSystem(SDL_INIT_GAMECONTROLLER) != 0 && app->a->verbose)
+        fprintf(stderr, "view: no gamepad support: %s\n", SDL_GetError());
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
+        SDL_GL_ResetAttributes();
+        SDL_GL_SetAttribute(SDL_GL_CONTEXT_PROFILE_MASK, want[i][0]);
+        SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, want[i][1]);
+        SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, want[i][2]);
+        SDL_GL_SetAttribute(SDL_GL_DOUBLEBUFFER, 1);
+        SDL_GL_SetAttribute(SDL_GL_RED_SIZE, 8);
+        SDL_GL_SetAttribute(SDL_GL_GREEN_SIZE, 8);
+        SDL_GL_SetAttribute(SDL_GL_BLUE_SIZE, 8);
+        Uint32 flags = SDL_WINDOW_OPENGL | SDL_WINDOW_RESIZABLE | SDL_WINDOW_ALLOW_HIGHDPI |
+                       (app->fullscreen ? SDL_WINDOW_FULLSCREEN_DESKTOP : 0);
+        app->win = SDL_CreateWindow("gigaview", SDL_WINDOWPOS_CENTERED,
+                                    SDL_WINDOWPOS_CENTERED, w, h, flags);
+        if (app->win && (app->glc = SDL_GL_CreateContext(app->win)))
+            break;
+        if (app->win)
+            SDL_DestroyWindow(app->win);
+        app->win = NULL;
+    }
+    if (!app->win) {
+        fprintf(stderr, ME ": no window with OpenGL ES 3.2 or OpenGL 4.3: %s\n",
+                SDL_GetError());
+        return -1;
+    }
+    app->vsync = !app->a->no_vsync && SDL_GL_SetSwapInterval(1) == 0;
+    if (!app->vsync)
+        SDL_GL_SetSwapInterval(0);
+    struct gv_error err;
+    if (!(app->gpu = gv_gpu_adopt(&err)) || !(app->draw = vd_new(app->gpu, &err)) ||
+        !(app->overlay = vo_new(app->gpu, &err))) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return -1;
+    }
+    SDL_SetWindowTitle(app->win, "gigaview");
+    if (app->a->verbose)
+        fprintf(stderr, "view: %s, %s%s\n", gv_gpu_info(app->gpu)->renderer,
+                gv_gpu_info(app->gpu)->version, app->vsync ? ", vsync" : "");
+    return 0;
+}
+
+static void close_app(struct app *app)
+{
+    vf_free(app->fetch);         /* first: no more results */
+    vt_free(app->tiles);
+    vo_free(app->overlay);
+    vd_free(app->draw);
+    gv_gpu_close(app->gpu);
+    if (app->in.pad)
+        SDL_GameControllerClose(app->in.pad);
+    if (app->glc)
+        SDL_GL_DeleteContext(app->glc);
+    if (app->win)
+        SDL_DestroyWindow(app->win);
+    SDL_Quit();
+    vs_free(&app->script);
+    if (app->stats)
+        fclose(app->stats);
+    free(app->ft);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* --stats: the summary of the frames drawn while the view moved. */
+static void summary(struct app *app, double elapsed)
+{
+    struct gv_http_stats hs;
+    vf_stats(app->fetch, &hs);
+    qsort(app->ft, app->nft, sizeof *app->ft, cmp_double);
+    double p50 = app->nft ? app->ft[app->nft / 2] : 0;
+    double p99 = app->nft ? app->ft[(size_t)((app->nft - 1) * 0.99)] : 0;
+    double mx = app->nft ? app->ft[app->nft - 1] : 0;
+    fprintf(stderr, "view: %llu frames in %.2f s, %zu while moving: p50 %.2f ms, "
+            "p99 %.2f ms, max %.2f ms; %llu tiles decoded (%.1f/s), %llu "
+            "prefetched, %llu atlas evictions, %llu failed fetches; http: %llu "
+            "requests, %llu bytes; renderer %s\n",
+            (unsigned long long)app->frames, elapsed, app->nft, p50, p99, mx,
+            (unsigned long long)app->st.decodes,
+            elapsed > 0 ? app->st.decodes / elapsed : 0,
+            (unsigned long long)app->st.prefetched,
+            (unsigned long long)app->st.evictions,
+            (unsigned long long)app->st.failures,
+            (unsigned long long)hs.requests, (unsigned long long)hs.bytes,
+            gv_gpu_info(app->gpu)->renderer);
+}
+
+static int start(struct app *app, const char *url, struct view_args *a)
+{
+    struct gv_error err;
+    int w = 1280, h = 720;
+    if (a->size && parse_size(a->size, &w, &h) < 0) {
+        fprintf(stderr, ME ": --size wants WxH (16 to 16384 each), not '%s'\n", a->size);
+        return 2;
+    }
+    char view_image[129] = "";
+    if (a->view) {
+        if (vg_parse(a->view, &app->start_view, view_image, sizeof view_image) < 0) {
+            fprintf(stderr, ME ": --view wants CX,CY,ZOOM[,ROT] or a browser link's "
+                    "#image=ID&x=..&y=..&z=..&r=.., not '%s'\n", a->view);
+            return 2;
+        }
+        app->have_start_view = 1;
+    }
+    if (a->script && vs_load(a->script, &app->script, &err) < 0) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return 2;
+    }
+    if (a->stats && !(app->stats = fopen(a->stats, "w"))) {
+        fprintf(stderr, ME ": cannot write %s\n", a->stats);
+        return 1;
+    }
+    if (app->stats)
+        fprintf(app->stats, "frame\tms\tmoving\tneeded\tmissing\tdecodes\n");
+    if (list_images(app, url, &err) < 0) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return 1;
+    }
+    const char *id = a->image ? a->image : view_image[0] ? view_image : app->nids ? app->ids[0] : NULL;
+    if (!id) {
+        fprintf(stderr, ME ": the server at %s has no images\n", url);
+        return 1;
+    }
+    struct vf_options fo = {.url = url, .timeout_ms = (long)(a->timeout * 1000),
+                            .cache_dir = a->cache_dir, .no_cache = a->no_cache,
+                            .no_batch = a->no_batch, .verbose = a->verbose};
+    if (!(app->fetch = vf_new(&fo, &err))) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return 1;
+    }
+    if (open_window(app, w, h) < 0)
+        return 1;
+    SDL_GL_GetDrawableSize(app->win, &app->w, &app->h);
+    struct vg_view v0 = {0, 0, 0, 0};
+    vi_init(&app->in, &v0, 1, 1, app->w, app->h);
+    open_image(app, id);
+    return OPT_GO_ON;
+}
+
+int cmd_view(int argc, char **argv)
+{
+    struct view_args a = {.timeout = 10, .gpu_mib = 256, .budget = 4};
+    int first, rc = opt_parse(&view_command, argc, argv, &a, &first);
+    if (rc != OPT_GO_ON)
+        return rc;
+    if (argc - first != 1) {
+        opt_usage(&view_command, stderr);
+        return 2;
+    }
+    struct app *app = calloc(1, sizeof *app);
+    if (!app) {
+        fprintf(stderr, ME ": out of memory\n");
+        return 1;
+    }
+    app->a = &a;
+    app->show_overlay = !a.no_overlay;
+    app->fullscreen = a.fullscreen;
+    rc = start(app, argv[first], &a);
+    if (rc == OPT_GO_ON) {
+        double t0 = now_s(), last = t0;
+        app->t_start = t0;
+        app->pc_since = t0;
+        while (!app->quit) {
+            int busy = frame(app, &last);
+            if (!busy && !app->quit)
+                SDL_WaitEventTimeout(NULL, 100);
+            else if (!app->vsync && !app->quit) {
+                /* No vsync: pace at about 60 frames a second. */
+                double left = 1.0 / 60 - (now_s() - last);
+                if (left > 0)
+                    SDL_Delay((Uint32)(left * 1000));
+            }
+        }
+        if (app->stats || a.verbose)
+            summary(app, now_s() - t0);
+        rc = app->rc;
+    }
+    close_app(app);
+    free(app);
+    return rc;
+}
+
+#else /* no GPU or no SDL2 */
+
+int cmd_view(int argc, char **argv)
+{
+    (void)argc;
+    (void)argv;
+#ifndef GV_HAVE_GPU
+    fprintf(stderr, ME ": needs a build with GPU support (this gigaview was "
+            "configured --without-gpu)\n");
+#else
+    fprintf(stderr, ME ": needs a build with SDL2 (this gigaview was built without "
+            "it: install libsdl2-dev and configure again)\n");
+#endif
+    return 1;
+}
+
+#endif

@@ -1,0 +1,199 @@
+/*
+ * view_draw.c - the display pass of `gigaview view` (view_draw.h).
+ *
+ * The arithmetic follows cmd_render.c's compose_view and sample() in
+ * single precision: at 1:1 every product is exact (powers of two, a
+ * cosine of 1 and a sine of 0, half-integer coordinates below 2^23), so
+ * the frame equals `gigaview render`'s picture bit for bit; at fractional
+ * zooms and rotations a weight may round differently in the last bit.
+ * The rounded value is nudged by a quarter step before the conversion to
+ * 8 bits, so a GPU that truncates there writes the same byte as one that
+ * rounds (as display.frag.glsl does in the browser).
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include <GLES3/gl32.h>
+
+#include "view_draw.h"
+
+static const char vertex_src[] =
+    "void main()\n"
+    "{\n"
+    "    vec2 p = vec2(float((gl_VertexID & 1) * 4 - 1), float((gl_VertexID & 2) * 2 - 1));\n"
+    "    gl_Position = vec4(p, 0.0, 1.0);\n"
+    "}\n";
+
+static const char fragment_src[] =
+    "precision highp float;\n"
+    "precision highp int;\n"
+    "precision highp usampler2D;\n"
+    "precision highp usampler2DArray;\n"
+    "uniform usampler2DArray u_atlas;\n"
+    "uniform usampler2D u_pt;\n"
+    "uniform ivec4 u_lv[40];\n"
+    "uniform int u_row[40];\n"
+    "uniform int u_f, u_top, u_root, u_sabotage;\n"
+    "uniform float u_t, u_scale, u_cs, u_sn;\n"
+    "uniform vec2 u_c, u_win, u_img;\n"
+    "out vec4 o_color;\n"
+    "\n"
+    "vec3 tap(int k, ivec2 p, inout bool ok)\n"
+    "{\n"
+    "    ivec4 L = u_lv[k];\n"
+    "    ivec2 t = min(p / 512, L.zw - 1);\n"
+    "    uint s = texelFetch(u_pt, ivec2(t.x, u_row[k] + t.y), 0).r;\n"
+    "    if (s == 0u) {\n"
+    "        ok = false;\n"
+    "        return vec3(0.0);\n"
+    "    }\n"
+    "    ivec2 q = p - t * 512;\n"
+    "    uvec4 v = texelFetch(u_atlas, ivec3(q, int(s) - 1), 0);\n"
+    "    if (u_sabotage == 1 && k < u_root && q == ivec2(100))\n"
+    "        v ^= uvec4(1u);\n"
+    "    return vec3(v.rgb);\n"
+    "}\n"
+    "\n"
+    "vec3 level_sample(int k, vec2 p, out bool ok)\n"
+    "{\n"
+    "    float u = ldexp(p.x, -k) - 0.5, v = ldexp(p.y, -k) - 0.5;\n"
+    "    float fu = floor(u), fv = floor(v);\n"
+    "    float au = u - fu, av = v - fv;\n"
+    "    ivec2 m = u_lv[k].xy - 1;\n"
+    "    ivec2 a = clamp(ivec2(int(fu), int(fv)), ivec2(0), m);\n"
+    "    ivec2 b = clamp(ivec2(int(fu) + 1, int(fv) + 1), ivec2(0), m);\n"
+    "    ok = true;\n"
+    "    vec3 p00 = tap(k, a, ok), p10 = tap(k, ivec2(b.x, a.y), ok);\n"
+    "    vec3 p01 = tap(k, ivec2(a.x, b.y), ok), p11 = tap(k, b, ok);\n"
+    "    return (1.0 - av) * ((1.0 - au) * p00 + au * p10) +\n"
+    "           av * ((1.0 - au) * p01 + au * p11);\n"
+    "}\n"
+    "\n"
+    "void main()\n"
+    "{\n"
+    "    float dx = (gl_FragCoord.x - u_win.x * 0.5) * u_scale;\n"
+    "    float dy = ((u_win.y - gl_FragCoord.y) - u_win.y * 0.5) * u_scale;\n"
+    "    vec2 p = vec2(u_c.x + dx * u_cs - dy * u_sn, u_c.y + dx * u_sn + dy * u_cs);\n"
+    "    if (p.x < 0.0 || p.y < 0.0 || p.x >= u_img.x || p.y >= u_img.y) {\n"
+    "        o_color = vec4(0.0, 0.0, 0.0, 1.0);\n"
+    "        return;\n"
+    "    }\n"
+    "    bool ok0, ok1 = false, done = true;\n"
+    "    vec3 c = level_sample(u_f, p, ok0);\n"
+    "    if (u_t > 0.0) {\n"
+    "        vec3 b = level_sample(u_f + 1, p, ok1);\n"
+    "        if (ok0 && ok1)\n"
+    "            c = (1.0 - u_t) * c + u_t * b;\n"
+    "        else if (ok1)\n"
+    "            c = b;\n"
+    "        else\n"
+    "            done = ok0;\n"
+    "    } else {\n"
+    "        done = ok0;\n"
+    "    }\n"
+    "    for (int k = u_f + 1; !done && k <= u_top; k++)\n"
+    "        c = level_sample(k, p, done);\n"
+    "    c = floor(c + 0.5) + 0.25;\n"
+    "    o_color = vec4(c / 255.0, 1.0);\n"
+    "}\n";
+
+struct vd {
+    unsigned prog, vao;
+    int sabotage;
+    GLint u_atlas, u_pt, u_lv, u_row, u_f, u_top, u_root, u_sabotage, u_t, u_scale,
+        u_cs, u_sn, u_c, u_win, u_img;
+};
+
+struct vd *vd_new(struct gv_gpu *g, struct gv_error *err)
+{
+    struct vd *d = calloc(1, sizeof *d);
+    if (!d) {
+        gv_fail(err, GV_ENOMEM, "out of memory");
+        return NULL;
+    }
+    char *listing = NULL;
+    if (!(d->prog = gv_gpu_program(g, vertex_src, fragment_src, &listing, err))) {
+        if (listing)
+            fprintf(stderr, "%s\n", listing);
+        free(listing);
+        free(d);
+        return NULL;
+    }
+    const char *sab = getenv("GIGAVIEW_VIEW_SABOTAGE");
+    d->sabotage = sab && !strcmp(sab, "decode");
+#define U(name) d->name = glGetUniformLocation(d->prog, #name)
+    U(u_atlas); U(u_pt); U(u_lv); U(u_row); U(u_f); U(u_top); U(u_root);
+    U(u_sabotage); U(u_t); U(u_scale); U(u_cs); U(u_sn); U(u_c); U(u_win); U(u_img);
+#undef U
+    glGenVertexArrays(1, &d->vao);
+    return d;
+}
+
+void vd_free(struct vd *d)
+{
+    if (!d)
+        return;
+    glDeleteProgram(d->prog);
+    glDeleteVertexArrays(1, &d->vao);
+    free(d);
+}
+
+void vd_draw(struct vd *d, const struct vt *t, const struct vt_plan *p,
+             const struct vg_view *v, int w, int h)
+{
+    const struct vt_gl *gl = vt_gl(t);
+    const struct gv_geometry *g = vt_geometry(t);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, w, h);
+    glDisable(GL_BLEND);
+    glDisable(GL_SCISSOR_TEST);
+    glDisable(GL_DEPTH_TEST);
+    glUseProgram(d->prog);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, gl->atlas);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, gl->page_table);
+    glActiveTexture(GL_TEXTURE0);
+    glUniform1i(d->u_atlas, 0);
+    glUniform1i(d->u_pt, 1);
+    glUniform4iv(d->u_lv, gl->nlevels, &gl->lv[0][0]);
+    glUniform1iv(d->u_row, gl->nlevels, gl->row);
+    glUniform1i(d->u_f, p->f);
+    glUniform1i(d->u_top, gl->nlevels - 1);
+    glUniform1i(d->u_root, gl->root);
+    glUniform1i(d->u_sabotage, d->sabotage);
+    glUniform1f(d->u_t, (float)p->t);
+    glUniform1f(d->u_scale, (float)p->scale);
+    glUniform1f(d->u_cs, (float)p->cs);
+    glUniform1f(d->u_sn, (float)p->sn);
+    glUniform2f(d->u_c, (float)v->cx, (float)v->cy);
+    glUniform2f(d->u_win, (float)w, (float)h);
+    glUniform2f(d->u_img, (float)g->width, (float)g->height);
+    glBindVertexArray(d->vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+}
+
+void vd_read(int w, int h, int channels, uint8_t *px)
+{
+    uint8_t *rgba = malloc((size_t)w * h * 4);
+    if (!rgba) {
+        memset(px, 0, (size_t)w * h * channels);
+        return;
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glPixelStorei(GL_PACK_ROW_LENGTH, 0);
+    glPixelStorei(GL_PACK_SKIP_ROWS, 0);
+    glPixelStorei(GL_PACK_SKIP_PIXELS, 0);
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+    for (int j = 0; j < h; j++) {
+        const uint8_t *src = rgba + (size_t)(h - 1 - j) * w * 4;
+        uint8_t *dst = px + (size_t)j * w * channels;
+        for (int i = 0; i < w; i++)
+            for (int c = 0; c < channels; c++)
+                dst[i * channels + c] = src[i * 4 + c];
+    }
+    free(rgba);
+}

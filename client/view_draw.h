@@ -1,0 +1,45 @@
+/*
+ * view_draw.h - drawing a view of `gigaview view` from the resident tiles
+ * (view_tiles.h) with one full-window pass, and reading a frame back.
+ *
+ * The display shader samples, for every window pixel, levels f and f + 1
+ * bilinearly at the pixel's centre and blends them by the fraction of the
+ * zoom, exactly as `gigaview render` composes a view (client/cmd_render.c)
+ * and the browser draws one (client/web/display.frag.glsl): each tap is
+ * read from the tile that owns its pixel, through the page table, so
+ * there are no seams; a pixel whose taps are not all resident at a level
+ * takes the nearest coarser level that has them, down to the pinned root
+ * mips.  Outside the image is black.  At 1:1 (an integer zoom, no
+ * rotation, pixel centres on texel centres) the weights are 0 and 1 and
+ * every pixel is a decoded texel, bit for bit.
+ *
+ * GIGAVIEW_VIEW_SABOTAGE=decode (for tests only) flips the low bit of
+ * texel (100, 100) of every tiled level's tile as the shader reads it, so
+ * that a test can show that its comparison catches a wrong decode.
+ * GL thread only.
+ */
+#ifndef GV_VIEW_DRAW_H
+#define GV_VIEW_DRAW_H
+
+#include <stdint.h>
+
+#include "base/error.h"
+#include "gpu/gpu.h"
+#include "view_geom.h"
+#include "view_tiles.h"
+
+struct vd;
+
+/* Compile the display program.  Returns NULL with *err. */
+struct vd *vd_new(struct gv_gpu *g, struct gv_error *err);
+void vd_free(struct vd *d);
+
+/* Draw plan p of view v (tiles of t) into the bound framebuffer, w x h. */
+void vd_draw(struct vd *d, const struct vt *t, const struct vt_plan *p,
+             const struct vg_view *v, int w, int h);
+
+/* Read the w x h framebuffer back as `channels`-channel rows, top row
+ * first, into px (w * h * channels bytes). */
+void vd_read(int w, int h, int channels, uint8_t *px);
+
+#endif

@@ -1,0 +1,70 @@
+/*
+ * view_script.h - `gigaview view --script FILE`: timed input replayed into
+ * the viewer, and frames written to PNG, for tests and benchmarks (under
+ * SDL_VIDEODRIVER=offscreen no window is shown).
+ *
+ * One command a line; '#' starts a comment; numbers are decimal; X Y are
+ * window pixels from the top left.  Commands run in order, each as soon
+ * as the one before is done; the program exits 0 after the last one (1
+ * when a limit below runs out, with a message naming the line).
+ *
+ *   wait MS                 let MS milliseconds of frames pass
+ *   frames N                let N frames be drawn
+ *   key NAME                press and release a key: an SDL key name
+ *                           ("Right", "+", "Home", "R"), optionally after
+ *                           "shift+" and/or "ctrl+"
+ *   down X Y [shift]        left button pressed at (X, Y)
+ *   move X Y                the pointer moved to (X, Y)
+ *   up X Y                  left button released at (X, Y)
+ *   drag X0 Y0 X1 Y1 [N]    down, N moves (default 8) and up
+ *   wheel X Y N             N wheel notches at (X, Y), positive zooms in
+ *   view SPEC               jump to a view: CX,CY,ZOOM[,ROT] or a
+ *                           browser link's "#image=..." hash
+ *   image ID                switch to image ID
+ *   settle [MS]             wait until the view is at rest and every tile
+ *                           it needs is drawn (at most MS, default 60000)
+ *   shot FILE               write the picture (no overlay) to FILE
+ *   wait-file PATH [MS]     wait until PATH exists (default 60000)
+ *   print TEXT              print TEXT and the view's link on stdout
+ *   quit                    exit now
+ */
+#ifndef GV_VIEW_SCRIPT_H
+#define GV_VIEW_SCRIPT_H
+
+#include <stddef.h>
+
+#include "base/error.h"
+#include "view_geom.h"
+
+enum vs_op {
+    VS_WAIT, VS_FRAMES, VS_KEY, VS_DOWN, VS_MOVE, VS_UP, VS_DRAG, VS_WHEEL,
+    VS_VIEW, VS_IMAGE, VS_SETTLE, VS_SHOT, VS_WAIT_FILE, VS_PRINT, VS_QUIT
+};
+
+struct vs_cmd {
+    enum vs_op op;
+    int line;
+    double a[5];                 /* numbers, in the order of the syntax */
+    int shift, ctrl;             /* key, down */
+    int keycode;                 /* key: SDL_Keycode */
+    char *text;                  /* shot, wait-file, image, print (malloc'ed) */
+    struct vg_view view;         /* view */
+    char view_image[129];        /* view: the hash's image, "" if none */
+};
+
+struct vs_script {
+    struct vs_cmd *cmd;
+    size_t n;
+};
+
+/* Read and check the whole script at path.  Returns 0, or -1 with *err
+ * ("FILE:LINE: what is wrong"); vs_free frees *s either way. */
+int vs_load(const char *path, struct vs_script *s, struct gv_error *err);
+
+/* The same from text (NUL-terminated), `name` used in messages. */
+int vs_parse(const char *text, const char *name, struct vs_script *s,
+             struct gv_error *err);
+
+void vs_free(struct vs_script *s);
+
+#endif

@@ -1,0 +1,377 @@
+#!/bin/sh
+# client_view.sh - the native viewer (`gigaview view`) under SDL's
+# offscreen video driver (EGL surfaceless on llvmpipe where there is no
+# GPU), driven by --script files, against gigaviewd started on port 0 over
+# a scratch store directory and against a small fault-injecting proxy.
+#
+# Covers: frames at 1:1 equal `gigaview render` of the same view bit for
+# bit, for views across tile edges, at levels 0 and 1, RGB and gray (the
+# gray one opened from a browser link's hash), and again after the atlas
+# evicted tiles (a small --gpu-cache; the daemon's log shows evictions);
+# a decoder sabotaged with GIGAVIEW_VIEW_SABOTAGE=decode fails that check;
+# scripted drag, arrow key, wheel, rotation and Home reach the views the
+# browser's geometry predicts, printed as browser links, and the frame
+# after the drag equals render; faults: a tile answered 500 until a gate
+# file appears, a server that holds tile answers until a gate opens
+# (frames go on meanwhile: the script draws 30 frames and writes one
+# while the request hangs), and gigaviewd stopped mid-pan and started
+# again on its port: the window keeps drawing (ancestors) and the final
+# frame equals render.  A bad script is a usage error naming its line.
+# Skips when the build has no viewer (it then only checks the refusal)
+# or no EGL/SDL window can be made.  Needs python3, oiiotool and idiff.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/http_util.sh"
+need_tool oiiotool idiff
+
+S=$T/stores
+mkdir "$S" "$T/w" "$T/cache" || bail "mkdir"
+cd "$T/w" || bail "cd"
+XDG_CACHE_HOME=$T/cache
+SDL_VIDEODRIVER=offscreen
+export XDG_CACHE_HOME SDL_VIDEODRIVER
+
+run encode synth:3000x2000 -o "$S/x.gv"
+[ "$rc" -eq 0 ] || bail "encode x: $(cat "$T/err")"
+run encode -q 40 synth:1300x1100:gray -o "$S/g.gv"
+[ "$rc" -eq 0 ] || bail "encode g: $(cat "$T/err")"
+
+cat >"$T/d.conf" <<EOF2
+listen = 127.0.0.1
+port = 0
+store_dir = "$S"
+threads = 4
+cache_bytes = 16M
+connection_timeout = 10
+log_level = info
+EOF2
+start_daemon "$T/d.conf"
+
+# ---------------------------------------------------------------- built?
+printf 'quit\n' >"$T/quit.txt"
+run view "$BASE" --script "$T/quit.txt" --size 64x64
+if grep -q 'needs a build with' "$T/err"; then
+    check "not built: view exits 1 and says what it needs" test "$rc" -eq 1
+    stop_daemon
+    done_testing
+fi
+if [ "$rc" -ne 0 ]; then
+    skip "gigaview view" "no window: $(head -c 300 "$T/err")"
+    stop_daemon
+    done_testing
+fi
+ok "view opens a window and quits (exit 0)"
+
+# same_as_render DESC SHOT IMAGE CX,CY ZOOM [ROT]: the shot equals render.
+same_as_render() {
+    rm -f r.png
+    run render "$BASE" --image "$3" --center "$4" --zoom "$5" --rotate "${6:-0}" \
+        --size 640x480 -o r.png
+    if [ "$rc" -ne 0 ]; then
+        not_ok "$1 (render exit $rc)" "$(cat "$T/err")"
+    elif [ ! -f "$2" ]; then
+        not_ok "$1 (no $2)" "$(cat "$T/view.err" 2>/dev/null)"
+    elif idiff -a "$2" r.png >"$T/idiff" 2>&1; then
+        ok "$1"
+    else
+        not_ok "$1" "$(tail -n 4 "$T/idiff")"
+    fi
+}
+
+# ---------------------------------------------------------------- bit for bit
+cat >"$T/views.txt" <<'EOF2'
+# level 0 across the tile corner at (512, 512) and the image's last tile
+view 512,512,0
+settle
+shot v1.png
+view 2700,1850,0
+settle
+shot v2.png
+# level 1 at 1:1 (centre on texel centres), the middle of the image
+view 1500,1000,1
+settle
+shot v3.png
+# the gray image, from a browser link
+view http://host/#image=g&x=650&y=550&z=0&r=0
+settle
+shot v4.png
+# back to x, through an image switch
+view #image=x&x=1100&y=900&z=0&r=0
+settle
+shot v5.png
+EOF2
+run view "$BASE" --image x --size 640x480 --script "$T/views.txt" -v
+cp "$T/err" "$T/view.err"
+expect_rc "the views script runs" 0
+same_as_render "level 0 across a tile corner equals render" v1.png x 512,512 0
+same_as_render "level 0, the last tiles equal render" v2.png x 2700,1850 0
+same_as_render "level 1 at 1:1 equals render" v3.png x 1500,1000 1
+same_as_render "gray image opened from a link equals render" v4.png g 650,550 0
+same_as_render "after switching back to x, equals render" v5.png x 1100,900 0
+
+# After evictions: 16 MiB of GPU memory leaves the atlas a few layers, so
+# the later views evict the tiles of the first, which is drawn again.
+cat >"$T/evict.txt" <<'EOF2'
+view 512,512,0
+settle
+view 2700,1850,0
+settle
+view 300,1800,0
+settle
+view 2600,300,0
+settle
+view 512,512,0
+settle
+shot e1.png
+view 2700,1850,0
+settle
+shot e2.png
+EOF2
+run view "$BASE" --image x --size 640x480 --gpu-cache 16 --script "$T/evict.txt" -v
+cp "$T/err" "$T/view.err"
+expect_rc "the eviction script runs" 0
+ev=$(sed -n 's/.* \([0-9][0-9]*\) atlas evictions.*/\1/p' "$T/err")
+check "the small atlas evicted tiles (${ev:-none})" test "${ev:-0}" -gt 0
+same_as_render "after evictions, a view equals render" e1.png x 512,512 0
+same_as_render "after evictions, another view equals render" e2.png x 2700,1850 0
+
+# A sabotaged decode must fail the comparison.
+GIGAVIEW_VIEW_SABOTAGE=decode
+export GIGAVIEW_VIEW_SABOTAGE
+run view "$BASE" --image x --size 640x480 --script "$T/views.txt"
+unset GIGAVIEW_VIEW_SABOTAGE
+run render "$BASE" --image x --center 512,512 --zoom 0 --size 640x480 -o r.png
+if idiff -a v1.png r.png >/dev/null 2>&1; then
+    not_ok "a sabotaged decode differs from render" "the comparison cannot fail"
+else
+    ok "a sabotaged decode differs from render"
+fi
+
+# ---------------------------------------------------------------- input
+# From 1500,1000 at 1:1: a drag by (-100, -100) moves the centre by
+# (100, 100); Right pans a fifth of the window (128); a wheel notch at the
+# centre zooms in half a level about it; R turns 15 degrees; Home shows
+# the whole image (3000x2000 in 640x480: zoom log2(3000/640)).
+cat >"$T/input.txt" <<'EOF2'
+view 1500,1000,0
+settle
+drag 320 240 220 140
+settle
+shot i1.png
+print drag
+key Right
+settle
+print right
+wheel 320 240 1
+settle
+print wheel
+key R
+settle
+print rotate
+key shift+R
+key Home
+settle
+print home
+EOF2
+run view "$BASE" --image x --size 640x480 --script "$T/input.txt"
+cp "$T/err" "$T/view.err"
+expect_rc "the input script runs" 0
+check "drag pans with the pointer" grep -qx 'drag #image=x&x=1600&y=1100&z=0&r=0' "$T/out"
+check "Right pans a fifth of the window" grep -qx 'right #image=x&x=1728&y=1100&z=0&r=0' "$T/out"
+check "a wheel notch zooms in half a level about the pointer" \
+    grep -qx 'wheel #image=x&x=1728&y=1100&z=-0.5&r=0' "$T/out"
+check "R turns 15 degrees" grep -qx 'rotate #image=x&x=1728&y=1100&z=-0.5&r=15' "$T/out"
+check "Home shows the whole image" grep -qx 'home #image=x&x=1500&y=1000&z=2.2288&r=0' "$T/out"
+same_as_render "the frame after the drag equals render" i1.png x 1600,1100 0
+
+# ---------------------------------------------------------------- bad script
+printf 'view 1,2,0\nsettle\nfly 3\n' >"$T/bad.txt"
+run view "$BASE" --image x --script "$T/bad.txt"
+expect_rc "an unknown script command is a usage error" 2
+expect_err "the message names the line" 'bad.txt:3: unknown command'
+
+# ---------------------------------------------------------------- faults
+# A proxy: MODE fail (tiles answered 500) or hold (tile answers held),
+# either until the file GATE exists; everything else passes through.
+cat >"$T/proxy.py" <<'PY'
+import http.server, os, sys, time, urllib.request, urllib.error
+mode, upstream, portfile, gate = sys.argv[1:5]
+class H(http.server.BaseHTTPRequestHandler):
+    protocol_version = "HTTP/1.1"
+    def log_message(self, *a): pass
+    def do_POST(self):
+        self.do_GET(self.rfile.read(int(self.headers.get("Content-Length", 0))))
+    def do_GET(self, data=None):
+        tile = "/tiles/" in self.path or "/batch" in self.path
+        if tile and mode == "hold":
+            while not os.path.exists(gate):
+                time.sleep(0.05)
+        if tile and mode == "fail" and not os.path.exists(gate):
+            status, ctype = 500, "application/json"
+            body = b'{"error":{"status":500,"code":"io_error","message":"injected"}}'
+        else:
+            hdrs = {k: self.headers[k] for k in ("Content-Type", "If-None-Match") if self.headers[k]}
+            try:
+                with urllib.request.urlopen(urllib.request.Request(upstream + self.path, data, hdrs)) as r:
+                    status, body, ctype = r.status, r.read(), r.headers.get("Content-Type")
+            except urllib.error.HTTPError as e:
+                status, body, ctype = e.code, e.read(), e.headers.get("Content-Type")
+        self.send_response(status)
+        self.send_header("Content-Type", ctype or "application/octet-stream")
+        self.send_header("Content-Length", str(len(body)))
+        self.end_headers()
+        self.wfile.write(body)
+s = http.server.ThreadingHTTPServer(("127.0.0.1", 0), H)
+s.daemon_threads = True
+open(portfile + ".tmp", "w").write(str(s.server_address[1]))
+os.rename(portfile + ".tmp", portfile)
+s.serve_forever()
+PY
+PPID_=
+VPID=
+proxy_stop() {
+    [ -n "$PPID_" ] && kill "$PPID_" 2>/dev/null && wait "$PPID_" 2>/dev/null
+    PPID_=
+}
+view_stop() {
+    [ -n "$VPID" ] && kill "$VPID" 2>/dev/null && wait "$VPID" 2>/dev/null
+    VPID=
+}
+trap 'view_stop; proxy_stop; http_cleanup' EXIT
+proxy_start() {
+    rm -f "$T/proxy.port"
+    python3 "$T/proxy.py" "$1" "$BASE" "$T/proxy.port" "$2" 2>"$T/proxy.log" &
+    PPID_=$!
+    i=0
+    while [ ! -s "$T/proxy.port" ] && [ $i -lt 300 ]; do
+        sleep 0.1
+        i=$((i + 1))
+    done
+    [ -s "$T/proxy.port" ] || bail "proxy did not start: $(cat "$T/proxy.log")"
+    PROXY="http://127.0.0.1:$(cat "$T/proxy.port")"
+}
+# wait_for FILE PATTERN: until a line of FILE matches (or the viewer ended).
+wait_for() {
+    i=0
+    while ! grep -q "$2" "$1" 2>/dev/null && [ $i -lt 1200 ]; do
+        kill -0 "$VPID" 2>/dev/null || break
+        sleep 0.1
+        i=$((i + 1))
+    done
+    grep -q "$2" "$1" 2>/dev/null
+}
+# view_bg URL SCRIPT ARGS...: the viewer in the background, output in
+# $T/vout and $T/verr; view_wait: its exit status in $vrc.
+view_bg() {
+    u=$1 s=$2
+    shift 2
+    gv view "$u" --image x --size 640x480 --no-cache --script "$s" -v "$@" \
+        >"$T/vout" 2>"$T/verr" &
+    VPID=$!
+}
+view_wait() {
+    vrc=0
+    wait "$VPID" || vrc=$?
+    VPID=
+    cp "$T/verr" "$T/view.err"
+}
+
+# A tile answered 500: the window draws the ancestors (the root mips come
+# through), asks again, and recovers once the server answers.
+rm -f "$T/gate"
+proxy_start fail "$T/gate"
+cat >"$T/f500.txt" <<EOF2
+view 1100,900,0
+frames 20
+shot f1.png
+wait-file $T/gate
+settle
+shot f2.png
+EOF2
+view_bg "$PROXY" "$T/f500.txt"
+if wait_for "$T/verr" 'HTTP 500'; then
+    ok "500: the viewer saw the failure"
+else
+    not_ok "500: the viewer saw the failure" "$(tail -n 5 "$T/verr")"
+fi
+touch "$T/gate"
+view_wait
+proxy_stop
+check "500: the window kept drawing (a frame during the failures, exit $vrc)" \
+    test "$vrc" -eq 0 -a -f f1.png
+same_as_render "500: after recovery the frame equals render" f2.png x 1100,900 0
+
+# A server that holds tile answers: frames go on (30 of them, and one
+# written) while the request hangs, then the view completes.
+rm -f "$T/gate"
+proxy_start hold "$T/gate"
+cat >"$T/hold.txt" <<EOF2
+view 1700,1100,0
+frames 30
+shot h1.png
+print held
+wait-file $T/gate
+settle
+shot h2.png
+EOF2
+view_bg "$PROXY" "$T/hold.txt"
+if wait_for "$T/vout" '^held'; then
+    ok "slow server: 30 frames drawn while the tiles were held"
+else
+    not_ok "slow server: 30 frames drawn while the tiles were held" "$(tail -n 5 "$T/verr")"
+fi
+touch "$T/gate"
+view_wait
+proxy_stop
+check "slow server: the view completes (exit $vrc)" test "$vrc" -eq 0
+same_as_render "slow server: the final frame equals render" h2.png x 1700,1100 0
+if [ -f h1.png ] && ! idiff -a h1.png h2.png >/dev/null 2>&1; then
+    ok "slow server: the held frame was drawn from ancestors"
+else
+    not_ok "slow server: the held frame was drawn from ancestors" "no h1.png, or it is final"
+fi
+
+# gigaviewd stopped mid-pan and started again on the same port.
+cat >"$T/down.txt" <<EOF2
+view 600,600,0
+settle
+print ready
+wait-file $T/stopped
+drag 600 240 40 240 4
+frames 20
+shot d1.png
+print panned
+wait-file $T/restarted
+settle
+shot d2.png
+EOF2
+rm -f "$T/stopped" "$T/restarted"
+view_bg "$BASE" "$T/down.txt"
+wait_for "$T/vout" '^ready' || not_ok "server down: the first view settles" "$(tail -n 5 "$T/verr")"
+OLDPORT=$PORT
+stop_daemon
+touch "$T/stopped"
+if wait_for "$T/verr" 'view: tile '; then
+    ok "server down: the viewer saw the failures"
+else
+    not_ok "server down: the viewer saw the failures" "$(tail -n 5 "$T/verr")"
+fi
+wait_for "$T/vout" '^panned' || true
+sed "s/^port = 0/port = $OLDPORT/" "$T/d.conf" >"$T/d2.conf"
+: >"$T/daemon.log"
+(gvd -c "$T/d2.conf") 2>>"$T/daemon.log" &
+DPID=$!
+i=0
+while ! grep -q 'listening on' "$T/daemon.log" && [ $i -lt 300 ]; do
+    sleep 0.1
+    i=$((i + 1))
+done
+touch "$T/restarted"
+view_wait
+check "server down: the window kept drawing while it was down (exit $vrc)" \
+    test "$vrc" -eq 0 -a -f d1.png
+pan=$(sed -n 's/^panned #image=x&x=\([0-9.]*\)&y=\([0-9.]*\)&.*/\1,\2/p' "$T/vout")
+check "server down: the pan moved the view (${pan:-?})" test "$pan" = "1160,600"
+same_as_render "server down: after the restart the frame equals render" d2.png x 1160,600 0
+
+stop_daemon
+done_testing
