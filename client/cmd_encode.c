@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "encode/height_encode.h"
 #include "encode/shard_plan.h"
 #include "encode/stream_encoder.h"
 #include "options.h"
@@ -32,7 +33,26 @@ struct encode_args {
     int progress, quiet;
     double psnr, min_tile_psnr;   /* -q, --min-tile-psnr; 0 = not given */
     int rd;                       /* --rd: the default mode, accepted */
+    int height;                   /* --height: a height store */
+    double max_error;             /* --max-error, source units */
+    const char *unit;             /* --unit */
+    double hscale, hoffset;       /* --scale, --offset (0 scale: not given) */
+    int hoffset_given;
 };
+
+/* --offset O (any finite number, 0 included) */
+static int parse_offset(const char *arg, void *fields, const char **wants)
+{
+    struct encode_args *a = fields;
+    char *end;
+    double v = strtod(arg, &end);
+    *wants = "a finite number";
+    if (end == arg || *end || !isfinite(v))
+        return -1;
+    a->hoffset = v;
+    a->hoffset_given = 1;
+    return 0;
+}
 
 /* --mosaic COLSxROWS */
 static int parse_mosaic(const char *arg, void *fields, const char **wants)
@@ -125,6 +145,20 @@ static const struct opt_spec encode_opts[] = {
              "with the same input and options, then\n"
              "'gigaview merge -o STORE SHARD...' writes the\n"
              "store, identical to an unsharded encode"},
+    {.name = "height", .kind = OPT_FLAG, .field = F(height),
+     .help = "write a height store: one 16-bit or float\n"
+             "channel of elevations (docs/FORMAT.md 9)"},
+    {.name = "max-error", .kind = OPT_DOUBLE, .arg = "E", .field = F(max_error),
+     .min = 0, .max = 1e30, .flags = OPT_FINITE, .wants = "a number >= 0",
+     .help = "--height: largest error in source units\n(default 0: lossless)"},
+    {.name = "unit", .kind = OPT_STRING, .arg = "NAME", .field = F(unit),
+     .help = "--height: unit of the values, e.g. m"},
+    {.name = "scale", .kind = OPT_DOUBLE, .arg = "S", .field = F(hscale),
+     .min = 0, .max = 1e30, .flags = OPT_MIN_OPEN | OPT_FINITE,
+     .wants = "a number > 0",
+     .help = "--height, integer input: value = code*S + O\n(default 1)"},
+    {.name = "offset", .kind = OPT_CUSTOM, .arg = "O", .parse = parse_offset,
+     .wants = "a finite number", .help = "--height, integer input: O (default 0)"},
 };
 #undef F
 
@@ -136,7 +170,9 @@ static const struct opt_command encode_command = {
         "INPUT is an image in TIFF/BigTIFF, JPEG, PNG, OpenEXR, WebP, JPEG 2000,\n"
         "PNM, BMP, Targa, HDR, PSD, FITS or GIF (16-bit and float included),\n"
         "several images with --mosaic, or\n"
-        "synth:WIDTHxHEIGHT[:gray] for a procedural test image.\n",
+        "synth:WIDTHxHEIGHT[:gray] for a procedural test image.\n"
+        "With --height, one single-channel INPUT (PNG-16, TIFF, EXR...) or\n"
+        "synth-height:WIDTHxHEIGHT (fractal terrain) gives a height store.\n",
     .opts = encode_opts,
     .nopts = sizeof encode_opts / sizeof encode_opts[0],
 };
@@ -212,6 +248,37 @@ static void print_shard_summary(const struct encode_args *a,
     printf("time       %.2f s\n", r->seconds);
 }
 
+/* encode --height: one input, no image options.  Returns the exit code. */
+static int encode_height(const struct encode_args *a, const char *input)
+{
+    struct gv_height_opts ho = {.max_error = a->max_error,
+                                .mapped = a->hscale > 0 || a->hoffset_given,
+                                .scale = a->hscale > 0 ? a->hscale : 1,
+                                .offset = a->hoffset, .unit = a->unit,
+                                .max_pixels = a->o.source.max_pixels};
+    struct gv_height_result r;
+    struct gv_error err;
+    gv_error_clear(&err);
+    if (gv_height_encode(input, a->output, &ho, &r, &err) < 0) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return 1;
+    }
+    if (a->quiet)
+        return 0;
+    printf("height     %u x %u, %d levels -> %s\n", r.geometry.width,
+           r.geometry.height, r.geometry.root + r.geometry.root_mips, a->output);
+    printf("values     %.9g .. %.9g %s (code * %.9g + %.9g)\n", r.min, r.max,
+           a->unit ? a->unit : "", r.scale, r.offset);
+    printf("max error  %.9g (%d codes%s)\n", r.max_error, r.e,
+           r.src_float ? " + float quantization" : "");
+    printf("tiles      %llu\n", (unsigned long long)r.tiles);
+    printf("size       %llu bytes, %.3f bits per sample\n",
+           (unsigned long long)r.file_bytes,
+           8.0 * (double)r.file_bytes / ((double)r.geometry.width * r.geometry.height));
+    printf("time       %.2f s\n", r.seconds);
+    return 0;
+}
+
 int cmd_encode(int argc, char **argv)
 {
     struct encode_args a = {.output = NULL};
@@ -220,6 +287,20 @@ int cmd_encode(int argc, char **argv)
     if (rc != OPT_GO_ON)
         return rc;
     const int ninputs = argc - first;
+    if (a.height) {
+        if (!a.output || ninputs != 1 || a.o.source.mosaic_cols ||
+            a.o.shard_count > 0 || a.psnr > 0 || a.min_tile_psnr > 0) {
+            fprintf(stderr, ME ": --height takes one INPUT and -o STORE "
+                    "(not -q, --mosaic or --shard)\n");
+            return 2;
+        }
+        return encode_height(&a, argv[first]);
+    }
+    if (a.max_error > 0 || a.unit || a.hscale > 0 || a.hoffset_given) {
+        fprintf(stderr, ME ": --max-error, --unit, --scale and --offset "
+                "need --height\n");
+        return 2;
+    }
     if ((rc = check_inputs(&a, ninputs)) != OPT_GO_ON ||
         (rc = pick_mode(&a)) != OPT_GO_ON)
         return rc;

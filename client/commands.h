@@ -11,5 +11,6 @@ int cmd_info(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_merge(int argc, char **argv);
+int cmd_mesh(int argc, char **argv);
 
 #endif

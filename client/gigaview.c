@@ -20,6 +20,7 @@ static const struct command commands[] = {
     {"merge", cmd_merge, "assemble the shard files of 'encode --shard' into a store"},
     {"info", cmd_info, "describe a store: size, levels, tiles, bits per pixel"},
     {"export", cmd_export, "decode a region of a store to PNG, TIFF or JPEG"},
+    {"mesh", cmd_mesh, "the TIN of a region of a height field: GLB, quantized-mesh, PLY, OBJ"},
 #ifdef GV_HAVE_GPU
     {"render", cmd_render, "fetch tiles from gigaviewd, decode them on the GPU, write an image"},
 #else

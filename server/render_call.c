@@ -64,6 +64,8 @@ static enum MHD_Result send_body(struct req *r, struct image *img,
         MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, spec->etag);
         if (spec->headers)
             spec->headers(spec->arg, r, img, resp);
+        if (spec->body_headers)
+            spec->body_headers(body, len, resp);
     }
     return http_send(r, 200, resp, len);
 }

@@ -32,6 +32,10 @@ struct render_spec {
     /* Add the route's headers to a 200 (may be NULL). */
     void (*headers)(void *arg, struct req *r, struct image *img,
                     struct MHD_Response *resp);
+    /* Add headers read from the body of a 200, rendered or cached (may
+     * be NULL; the mesh route puts the measured error in a header). */
+    void (*body_headers)(const uint8_t *body, size_t len,
+                         struct MHD_Response *resp);
     void *arg;            /* malloc'ed, owned by the call from here on:
                              freed (free) once answered */
 };

@@ -39,6 +39,7 @@ enum route_id {
     ROUTE_FILTER,
     ROUTE_FILTER_DELETE,
     ROUTE_IMAGE_FILTER,
+    ROUTE_MESH,
     ROUTE_WEB,
     ROUTE_COUNT
 };

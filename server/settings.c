@@ -61,6 +61,13 @@ static const struct settings_key keys[] = {
      "the one decoded-tile cache, shared by every thread and store"},
     {"max_region_pixels", T_SIZE, F(max_region_pixels), "64M", 1, 1e15,
      "largest region decoded for one request, in pixels (413 beyond)"},
+    /* meshes of height stores (route_mesh.c) */
+    {"max_mesh_samples", T_SIZE, F(max_mesh_samples), "4M", 4, 4294836225.0,
+     "largest grid of height samples meshed for one request (413 beyond)"},
+    {"max_mesh_triangles", T_SIZE, F(max_mesh_triangles), "2M", 2, 4294967295.0,
+     "most triangles of one mesh (413 beyond)"},
+    {"mesh_time_limit", T_DOUBLE, F(mesh_time_limit), "10", 0.01, 3600,
+     "seconds of meshing for one request (504 beyond)"},
     {"max_output_pixels", T_SIZE, F(max_output_pixels), "16M", 1, 1e15,
      "largest output image in pixels (IIIF maxArea)"},
     {"max_output_side", T_UINT, F(max_output_side), "16384", 1, 2147483647,

@@ -30,6 +30,9 @@ struct settings {
     uint64_t cache_bytes;          /* page cache bound */
     uint64_t decoder_cache_bytes;  /* the shared decoded-tile cache */
     uint64_t max_region_pixels;    /* decoded pixels per region request */
+    uint64_t max_mesh_samples;     /* height samples per mesh request */
+    uint64_t max_mesh_triangles;   /* triangles per mesh */
+    double mesh_time_limit;        /* seconds of meshing per request */
     uint64_t max_output_pixels;    /* IIIF maxArea */
     uint64_t max_output_side;      /* IIIF maxWidth = maxHeight */
     double max_upscale;            /* largest IIIF '^' factor */

@@ -85,9 +85,9 @@ int main(void)
     check(gv_header_unpack(hb, &back, &err) < 0 && err.code == GV_ECORRUPT,
           "header CRC catches a flipped bit: %s", err.text);
     hb[13] ^= 1;
-    hb[8] = GV_VERSION + 1;
+    hb[8] = GV_VERSION_MAX + 1;
     check(gv_header_unpack(hb, &back, &err) < 0 && err.code == GV_EFORMAT,
-          "version %d is refused: %s", GV_VERSION + 1, err.text);
+          "version %d is refused: %s", GV_VERSION_MAX + 1, err.text);
     hb[8] = GV_VERSION_MIN - 1;
     check(gv_header_unpack(hb, &back, &err) < 0 && err.code == GV_EFORMAT,
           "version %d is refused: %s", GV_VERSION_MIN - 1, err.text);

@@ -595,7 +595,7 @@ static const char *format_for(const std::string &ext)
  * and the image appears under its name only when complete.
  */
 static int write_impl(const char *path, uint32_t width, uint32_t height,
-                      int channels, const uint8_t *pixels,
+                      int channels, enum gv_sample sample, const void *pixels,
                       struct gv_error *err)
 {
     std::string p(path);
@@ -613,8 +613,8 @@ static int write_impl(const char *path, uint32_t width, uint32_t height,
     uint8_t *bytes = NULL;
     size_t len = 0;
     /* 90: visually transparent for JPEG and WebP (lossy formats only). */
-    if (gv_image_encode(format, width, height, channels, pixels, 90, &bytes,
-                        &len, err) != 0)
+    if (gv_image_encode_typed(format, width, height, channels, sample, pixels,
+                              &bytes, &len, err) != 0)
         return -1;
     std::unique_ptr<uint8_t, void (*)(void *)> hold(bytes, free);
     struct gv_atomic_opts opts = {};
@@ -627,7 +627,8 @@ extern "C" int gv_image_write(const char *path, uint32_t width,
                               const uint8_t *pixels, struct gv_error *err)
 {
     try {
-        return write_impl(path, width, height, channels, pixels, err);
+        return write_impl(path, width, height, channels, GV_SAMPLE_U8, pixels,
+                          err);
     } catch (const std::bad_alloc &) {
         return gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
     } catch (const std::exception &e) {
@@ -648,9 +649,11 @@ extern "C" int gv_image_write(const char *path, uint32_t width,
  * given to open() only carries the extension; no file is created.
  */
 static int encode_impl(const char *format, uint32_t width, uint32_t height,
-                       int channels, const uint8_t *pixels, int quality,
-                       uint8_t **out, size_t *len, struct gv_error *err)
+                       int channels, const void *pixels_in, TypeDesc type,
+                       int quality, uint8_t **out, size_t *len,
+                       struct gv_error *err)
 {
+    const uint8_t *pixels = static_cast<const uint8_t *>(pixels_in);
     set_threads_once();
     const struct gv_output_format *f = gv_output_format_image(format);
     const char *oiio_name = f ? f->oiio : NULL;
@@ -684,6 +687,12 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
      * a pixel whatever the channel count (a 1-channel image made it read
      * past the buffer and crash): write gray as RGB with equal channels. */
     std::vector<uint8_t> rgb;
+    if (type != TypeDesc::UINT8 && fmt != "png" && fmt != "tiff")
+        return gv_fail(err, GV_EFORMAT, "imageio: %s holds only 8-bit "
+                       "samples", format);
+    if (type == TypeDesc::FLOAT && fmt != "tiff")
+        return gv_fail(err, GV_EFORMAT, "imageio: %s holds no float samples",
+                       format);
     if (fmt == "webp" && channels == 1) {
         rgb.resize((size_t)width * height * 3);
         for (size_t i = 0; i < (size_t)width * height; i++)
@@ -693,7 +702,7 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
     }
     std::vector<unsigned char> buf;
     OIIO::Filesystem::IOVecOutput vec(buf);
-    ImageSpec spec((int)width, (int)height, channels, TypeDesc::UINT8);
+    ImageSpec spec((int)width, (int)height, channels, type);
     if (fmt == "jpeg" || fmt == "webp")
         spec.attribute("CompressionQuality", quality);
     /* OIIO 2.4.7 with libtiff 4.5 records "failed TIFFWriteCustomDirectory()
@@ -706,7 +715,7 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
         return gv_fail(err, GV_EIO, "imageio: encoding %s: %s", format,
                        first_line(msg.empty() ? "open failed" : msg).c_str());
     }
-    bool ok = o->write_image(TypeDesc::UINT8, pixels);
+    bool ok = o->write_image(type, pixels);
     ok = o->close() && ok;
     if (!ok || o->has_error()) {
         std::string msg = o->geterror();
@@ -733,7 +742,45 @@ extern "C" int gv_image_encode(const char *format, uint32_t width,
                                struct gv_error *err)
 {
     try {
-        return encode_impl(format, width, height, channels, pixels, quality,
+        return encode_impl(format, width, height, channels, pixels,
+                           TypeDesc::UINT8, quality, out, len, err);
+    } catch (const std::bad_alloc &) {
+        return gv_fail(err, GV_ENOMEM, "imageio: out of memory encoding");
+    } catch (const std::exception &e) {
+        return gv_fail(err, GV_EIO, "imageio: encoding: %s", e.what());
+    } catch (...) {
+        return gv_fail(err, GV_EIO, "imageio: unknown encoder exception");
+    }
+}
+
+extern "C" int gv_image_write_typed(const char *path, uint32_t width,
+                                    uint32_t height, int channels,
+                                    enum gv_sample sample, const void *pixels,
+                                    struct gv_error *err)
+{
+    try {
+        return write_impl(path, width, height, channels, sample, pixels, err);
+    } catch (const std::bad_alloc &) {
+        return gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+    } catch (const std::exception &e) {
+        return gv_fail(err, GV_EIO, "imageio: %s: %s", path, e.what());
+    } catch (...) {
+        return gv_fail(err, GV_EIO, "imageio: %s: unknown encoder exception",
+                       path);
+    }
+}
+
+extern "C" int gv_image_encode_typed(const char *format, uint32_t width,
+                                     uint32_t height, int channels,
+                                     enum gv_sample sample, const void *pixels,
+                                     uint8_t **out, size_t *len,
+                                     struct gv_error *err)
+{
+    TypeDesc t = sample == GV_SAMPLE_U16 ? TypeDesc::UINT16
+               : sample == GV_SAMPLE_F32 ? TypeDesc::FLOAT : TypeDesc::UINT8;
+    try {
+        /* 90: visually transparent for JPEG and WebP (8-bit only). */
+        return encode_impl(format, width, height, channels, pixels, t, 90,
                            out, len, err);
     } catch (const std::bad_alloc &) {
         return gv_fail(err, GV_ENOMEM, "imageio: out of memory encoding");

@@ -12,12 +12,15 @@
 #include <string.h>
 
 #include "render/store_decoder.h"
+#include "render/height_region.h"
+#include "codec/height_tile.h"
 #include "codec/tile.h"
 
 struct gv_decoder {
     const struct gv_store *store;
     const struct gv_store_info *info;
-    int channels;
+    int channels;        /* bytes per pixel: 2 for a height store's codes */
+    int height;          /* a height store (docs/FORMAT.md section 9) */
     struct gv_tile_cache *cache;
     int owns_cache;
     uint64_t store_key;
@@ -37,7 +40,8 @@ struct gv_decoder *gv_decoder_new_shared(const struct gv_store *s,
         return NULL;
     d->store = s;
     d->info = gv_store_info(s);
-    d->channels = d->info->geometry.channels;
+    d->height = d->info->header.kind == GV_KIND_HEIGHT;
+    d->channels = d->height ? 2 : d->info->geometry.channels;
     d->cache = cache;
     d->store_key = store_key;
     d->page_level = -1;
@@ -125,8 +129,13 @@ static int decode_into(struct gv_decoder *d, int level, uint32_t tx,
     if (load_page(d, level, tx / GV_PAGE_TILES, ty / GV_PAGE_TILES, err) == 0 &&
         gv_page_tile(d->page, d->page_len, d->channels, (int)(tx % GV_PAGE_TILES),
                      (int)(ty % GV_PAGE_TILES), &buf, &len, err) == 0 &&
-        gv_tile_decode(buf, len, d->channels, gv_tile_entry_pixels(parent),
-                       (int)(tx & 1), (int)(ty & 1), out, err) == 0)
+        (d->height
+             ? gv_height_tile_decode(buf, len,
+                                     (const uint16_t *)(void *)gv_tile_entry_pixels(parent),
+                                     (int)(tx & 1), (int)(ty & 1),
+                                     (uint16_t *)(void *)out, err)
+             : gv_tile_decode(buf, len, d->channels, gv_tile_entry_pixels(parent),
+                              (int)(tx & 1), (int)(ty & 1), out, err)) == 0)
         rc = 0;
     gv_tile_cache_release(d->cache, parent);
     return rc;
@@ -186,6 +195,8 @@ int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
 {
     const struct gv_geometry *g = &d->info->geometry;
     const int c = d->channels;
+    if (d->height)   /* 8-bit gray through the documented mapping */
+        return gv_height_region_gray(d, level, x, y, w, h, out, err);
     if (level < 0 || level >= g->root + g->root_mips)
         return gv_fail(err, GV_EINVAL, "decode: no level %d (levels 0..%d)",
                        level, g->root + g->root_mips - 1);

@@ -48,7 +48,8 @@ const struct gv_store *gv_decoder_store(const struct gv_decoder *d);
 /*
  * Decode tile (tx,ty) of `level` (0 <= level <= root; level root is the
  * single tile (0,0), the root image clamp-padded to 513x513).  *pixels
- * points at 513x513xC bytes owned by the cache, pinned by the decoder
+ * points at 513x513xC bytes owned by the cache (for a height store
+ * 513x513 host-order uint16_t codes, 2-byte aligned), pinned by the decoder
  * until its next call (or gv_decoder_free).  Returns 0, or -1 with *err filled (GV_ENOTFOUND for a tile
  * outside the level; a corrupt page or tile, or I/O, as the store reports
  * it).
@@ -58,7 +59,8 @@ int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
 
 /*
  * Decode the region [x, x+w) x [y, y+h) of `level` into out (w*h*C bytes,
- * rows packed).  Levels root..root+root_mips-1 read the stored root mips.
+ * rows packed; a height store gives one 8-bit gray channel, its codes
+ * mapped by gv_height_gray, and gv_height_region gives the codes).  Levels root..root+root_mips-1 read the stored root mips.
  * Pixel (x,y) of a tiled level comes from tile min(x/512, tiles_x-1) (same
  * for y), so each pixel has exactly one source.  Returns 0 or -1 (region
  * outside the level, or a decoding failure).

@@ -8,10 +8,39 @@
 
 #include <webp/decode.h>
 #include <webp/encode.h>
+#include <zlib.h>
 
 #include "base/error.h"
 #include "store/geometry.h"
 #include "store/store_format.h"
+
+/* IEEE 754 doubles and floats, little-endian like every other field. */
+static void gv_put_f64(uint8_t *p, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, 8);
+    gv_put64(p, u);
+}
+static void gv_put_f32(uint8_t *p, float v)
+{
+    uint32_t u;
+    memcpy(&u, &v, 4);
+    gv_put32(p, u);
+}
+static double gv_get_f64(const uint8_t *p)
+{
+    uint64_t u = gv_get64(p);
+    double v;
+    memcpy(&v, &u, 8);
+    return v;
+}
+static float gv_get_f32(const uint8_t *p)
+{
+    uint32_t u = gv_get32(p);
+    float v;
+    memcpy(&v, &u, 4);
+    return v;
+}
 
 void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE])
 {
@@ -38,6 +67,17 @@ void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE])
     gv_put64(out + 56, h->index_offset);
     gv_put64(out + 64, h->pages);
     gv_put64(out + 72, h->file_size);
+    if (h->kind == GV_KIND_HEIGHT) {
+        out[80] = h->kind;
+        out[81] = h->height_float;
+        gv_put16(out + 82, h->height_e);
+        gv_put_f64(out + 84, h->height_scale);
+        gv_put_f64(out + 92, h->height_offset);
+        gv_put_f64(out + 100, h->height_max_error);
+        gv_put_f32(out + 108, h->height_min);
+        gv_put_f32(out + 112, h->height_max);
+        memcpy(out + 116, h->height_unit, strnlen(h->height_unit, GV_HEIGHT_UNIT));
+    }
     gv_put32(out + 124, gv_crc32(0, out, 124));
 }
 
@@ -47,10 +87,10 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
     if (memcmp(in, GV_MAGIC, 8) != 0)
         return gv_fail(err, GV_EFORMAT, "store: not a gigaview store (bad magic)");
     h->version = gv_get16(in + 8);
-    if (h->version < GV_VERSION_MIN || h->version > GV_VERSION)
+    if (h->version < GV_VERSION_MIN || h->version > GV_VERSION_MAX)
         return gv_fail(err, GV_EFORMAT, "store: format version %u is not "
                        "supported (this build reads versions %d to %d)",
-                       h->version, GV_VERSION_MIN, GV_VERSION);
+                       h->version, GV_VERSION_MIN, GV_VERSION_MAX);
     if (gv_get32(in + 124) != gv_crc32(0, in, 124))
         return gv_fail(err, GV_ECORRUPT, "store: header CRC mismatch");
     if (gv_get16(in + 10) != GV_HEADER_SIZE || gv_get16(in + 24) != GV_TILE ||
@@ -73,6 +113,36 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
     h->index_offset = gv_get64(in + 56);
     h->pages = gv_get64(in + 64);
     h->file_size = gv_get64(in + 72);
+    h->kind = GV_KIND_IMAGE;
+    h->height_float = 0;
+    h->height_e = 0;
+    h->height_scale = 1;
+    h->height_offset = h->height_max_error = 0;
+    h->height_min = h->height_max = 0;
+    memset(h->height_unit, 0, sizeof h->height_unit);
+    if (h->version >= GV_VERSION_HEIGHT) {
+        /* Version 3 is the height store: one channel, finite mapping. */
+        h->kind = in[80];
+        h->height_float = in[81];
+        h->height_e = gv_get16(in + 82);
+        h->height_scale = gv_get_f64(in + 84);
+        h->height_offset = gv_get_f64(in + 92);
+        h->height_max_error = gv_get_f64(in + 100);
+        h->height_min = gv_get_f32(in + 108);
+        h->height_max = gv_get_f32(in + 112);
+        memcpy(h->height_unit, in + 116, GV_HEIGHT_UNIT);
+        int bad_unit = 0;
+        for (int i = 0; i < GV_HEIGHT_UNIT; i++)
+            bad_unit |= h->height_unit[i] && (h->height_unit[i] < 0x21 ||
+                                              h->height_unit[i] > 0x7e);
+        if (bad_unit || h->kind != GV_KIND_HEIGHT || h->channels != 1 || in[81] > 1 ||
+            h->height_e > 32767 || !isfinite(h->height_scale) ||
+            !(h->height_scale > 0) || !isfinite(h->height_offset) ||
+            !isfinite(h->height_max_error) || h->height_max_error < 0 ||
+            !isfinite(h->height_min) || !isfinite(h->height_max) ||
+            h->height_min > h->height_max)
+            return gv_fail(err, GV_ECORRUPT, "store: bad height store header");
+    }
     return 0;
 }
 
@@ -226,5 +296,71 @@ void gv_root_build_mips(uint8_t *buf, uint32_t w, uint32_t h, int channels)
         cur = next;
         w = (w + 1) / 2;
         h = (h + 1) / 2;
+    }
+}
+
+int gv_height_root_pack(const uint16_t *codes, uint32_t w, uint32_t h,
+                        uint8_t **out, size_t *len, struct gv_error *err)
+{
+    const size_t n = (size_t)w * h;
+    uint8_t *raw = malloc(2 * n);
+    uLongf zlen = compressBound((uLong)(2 * n));
+    uint8_t *z = malloc(zlen);
+    if (!raw || !z) {
+        free(raw);
+        free(z);
+        return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
+    }
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++) {
+            size_t i = (size_t)y * w + x;
+            gv_put16(raw + 2 * i, (uint16_t)(codes[i] - (x ? codes[i - 1] : 0)));
+        }
+    int zr = compress2(z, &zlen, raw, (uLong)(2 * n), 9);
+    free(raw);
+    if (zr != Z_OK) {
+        free(z);
+        return gv_fail(err, GV_ENOMEM, "store: deflate of the root failed");
+    }
+    *out = z;
+    *len = zlen;
+    return 0;
+}
+
+int gv_height_root_unpack(const uint8_t *in, size_t len, uint32_t w,
+                          uint32_t h, uint16_t *out, struct gv_error *err)
+{
+    const size_t n = (size_t)w * h;
+    uint8_t *raw = malloc(2 * n + 1);
+    if (!raw)
+        return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
+    uLongf got = (uLongf)(2 * n + 1);
+    int zr = uncompress(raw, &got, in, (uLong)len);
+    if (zr != Z_OK || got != 2 * n) {
+        free(raw);
+        return gv_fail(err, GV_ECORRUPT, "store: the height root does not "
+                       "inflate to %ux%u codes", w, h);
+    }
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++) {
+            size_t i = (size_t)y * w + x;
+            out[i] = (uint16_t)(gv_get16(raw + 2 * i) + (x ? out[i - 1] : 0));
+        }
+    free(raw);
+    return 0;
+}
+
+void gv_height_box_reduce(const uint16_t *src, uint32_t sw, uint32_t sh,
+                          uint16_t *dst)
+{
+    const uint32_t dw = (sw + 1) / 2, dh = (sh + 1) / 2;
+    for (uint32_t y = 0; y < dh; y++) {
+        const uint16_t *r0 = src + (size_t)(2 * y) * sw;
+        const uint16_t *r1 = 2 * y + 1 < sh ? r0 + sw : r0;
+        for (uint32_t x = 0; x < dw; x++) {
+            uint32_t a = 2 * x, b = 2 * x + 1 < sw ? 2 * x + 1 : 2 * x;
+            dst[(size_t)y * dw + x] =
+                (uint16_t)((r0[a] + r0[b] + r1[a] + r1[b] + 2u) >> 2);
+        }
     }
 }

@@ -27,8 +27,15 @@
 #include "store/geometry.h"
 
 #define GV_MAGIC "GIGAVIEW"
-#define GV_VERSION 2       /* what the writer writes */
+#define GV_VERSION 2       /* what the writer writes for an image store */
+#define GV_VERSION_HEIGHT 3 /* what it writes for a height store */
+#define GV_VERSION_MAX 3   /* the newest version the reader reads */
 #define GV_VERSION_MIN 1   /* the oldest version the reader reads */
+
+/* Store kinds (header byte 80, format version 3 only). */
+#define GV_KIND_IMAGE 0
+#define GV_KIND_HEIGHT 1   /* 16-bit codes of a height field (section 9) */
+#define GV_HEIGHT_UNIT 8   /* bytes of the unit name, NUL-padded */
 #define GV_HEADER_SIZE 128
 #define GV_INDEX_ENTRY 16
 #define GV_PAGE_MAGIC "GVPG"
@@ -52,6 +59,16 @@ struct gv_header {
     uint64_t root_offset, root_size;   /* root_size includes its CRC */
     uint64_t index_offset, pages;
     uint64_t file_size;
+    /* Height stores (kind GV_KIND_HEIGHT, version 3): value = code *
+     * height_scale + height_offset, every decoded code within height_e
+     * codes of its level's exact code, every level-0 value within
+     * height_max_error source units of the input. */
+    uint8_t kind;
+    uint8_t height_float;    /* the input was floating point */
+    uint16_t height_e;
+    double height_scale, height_offset, height_max_error;
+    float height_min, height_max;   /* range of the input values */
+    char height_unit[GV_HEIGHT_UNIT + 1];
 };
 
 /* Serialize h into 128 bytes, CRC included. */
@@ -62,6 +79,21 @@ struct gv_error;
  * -1 with *err filled. */
 int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
                      struct gv_error *err);
+
+/*
+ * The root of a height store: w x h codes, stored as zlib (deflate) of the
+ * codes' differences from their left neighbours (mod 2^16, the first of
+ * a row from 0), u16 little-endian.  *out is malloc'ed.  0 or -1.
+ */
+int gv_height_root_pack(const uint16_t *codes, uint32_t w, uint32_t h,
+                        uint8_t **out, size_t *len, struct gv_error *err);
+/* Inverse of gv_height_root_pack: exactly w*h codes or GV_ECORRUPT. */
+int gv_height_root_unpack(const uint8_t *in, size_t len, uint32_t w,
+                          uint32_t h, uint16_t *out, struct gv_error *err);
+/* The u16 box filter of section 1 for height levels (odd edges
+ * replicated): src sw x sh -> dst ceil(sw/2) x ceil(sh/2). */
+void gv_height_box_reduce(const uint16_t *src, uint32_t sw, uint32_t sh,
+                          uint16_t *dst);
 
 /* Bytes of every mip of a w x h root, channels interleaved (what a reader
  * holds in memory). */

@@ -14,6 +14,7 @@
 
 #include "base/file_io.h"
 #include "store/store_read.h"
+#include "codec/height_tile.h"
 #include "codec/tile.h"
 
 struct gv_store {
@@ -92,14 +93,29 @@ static int open_file(struct gv_store *s, const char *path, uint64_t *size,
     return 0;
 }
 
+/* Build the mips of a height root in place (codes, as gv_root_build_mips
+ * does for 8-bit samples). */
+static void height_mips(uint16_t *buf, uint32_t w, uint32_t h)
+{
+    while (w > 1 || h > 1) {
+        uint16_t *next = buf + (size_t)w * h;
+        gv_height_box_reduce(buf, w, h, next);
+        buf = next;
+        w = (w + 1) / 2;
+        h = (h + 1) / 2;
+    }
+}
+
 /* Read, check and decompress the root, and derive its mips. */
 static int load_root(struct gv_store *s, struct gv_error *err)
 {
     const struct gv_header *h = &s->info.header;
     const struct gv_geometry *g = &s->info.geometry;
+    const int height = h->kind == GV_KIND_HEIGHT;
+    const int bpp = height ? 2 : g->channels;   /* bytes per pixel */
     uint32_t w = g->level[g->root].width, hh = g->level[g->root].height;
     uint8_t *packed = malloc(h->root_size);
-    s->root = malloc(gv_root_pixels_size(w, hh, g->channels));
+    s->root = malloc(gv_root_pixels_size(w, hh, bpp));
     if (!packed || !s->root) {
         free(packed);
         return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
@@ -107,16 +123,22 @@ static int load_root(struct gv_store *s, struct gv_error *err)
     if (read_exact(s->fd, packed, h->root_size, h->root_offset, "root", err) < 0 ||
         (gv_crc32(0, packed, h->root_size - 4) != gv_get32(packed + h->root_size - 4) &&
          gv_fail(err, GV_ECORRUPT, "store: root CRC mismatch")) ||
-        gv_root_unpack(packed, h->root_size - 4, w, hh, g->channels, s->root, err) < 0) {
+        (height ? gv_height_root_unpack(packed, h->root_size - 4, w, hh,
+                                        (uint16_t *)(void *)s->root, err)
+                : gv_root_unpack(packed, h->root_size - 4, w, hh, g->channels,
+                                 s->root, err)) < 0) {
         free(packed);
         return -1;
     }
     free(packed);
-    gv_root_build_mips(s->root, w, hh, g->channels);
+    if (height)
+        height_mips((uint16_t *)(void *)s->root, w, hh);
+    else
+        gv_root_build_mips(s->root, w, hh, g->channels);
     uint64_t off = 0;
     for (int m = 0; m < g->root_mips; m++) {
         s->root_mip_off[m] = off;
-        off += (uint64_t)w * hh * g->channels;
+        off += (uint64_t)w * hh * bpp;
         w = (w + 1) / 2;
         hh = (hh + 1) / 2;
     }
@@ -252,7 +274,9 @@ int gv_page_check(const struct gv_store *s, const uint8_t *page, size_t len,
                 return gv_fail(err, GV_ECORRUPT, "store: tile %d/%u/%u lies "
                                "outside its page", level, tx, ty);
             struct gv_error why;
-            if (gv_tilebuf_check(page + to, ts, g->channels, &why) < 0)
+            if ((s->info.header.kind == GV_KIND_HEIGHT
+                     ? gv_height_tile_check(page + to, ts, &why)
+                     : gv_tilebuf_check(page + to, ts, g->channels, &why)) < 0)
                 /* why, not err: snprintf must not read the buffer it
                  * writes (found by fuzz_store's valgrind replay). */
                 return gv_fail(err, GV_ECORRUPT, "store: tile %d/%u/%u: %s",

@@ -37,7 +37,9 @@ void gv_store_close(struct gv_store *s);
 const struct gv_store_info *gv_store_info(const struct gv_store *s);
 
 /* Root mip `mip` (0 = the root level itself): its pixels (read-only, valid
- * until close) and size.  NULL if mip is out of range. */
+ * until close) and size.  NULL if mip is out of range.  In a height store
+ * (header.kind GV_KIND_HEIGHT) the pixels are w*h host-order uint16_t
+ * codes (2-byte aligned), not bytes. */
 const uint8_t *gv_store_root(const struct gv_store *s, int mip, uint32_t *w,
                              uint32_t *h);
 

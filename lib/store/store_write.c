@@ -48,7 +48,7 @@ struct gv_store_writer *gv_store_writer_new(const char *path,
     }
     w->f.fd = -1;
     w->h = *h;
-    w->h.version = GV_VERSION;
+    w->h.version = h->kind == GV_KIND_HEIGHT ? GV_VERSION_HEIGHT : GV_VERSION;
     if (gv_geometry_init(&w->g, h->width, h->height, h->channels) < 0) {
         gv_fail(err, GV_EINVAL, "store: bad dimensions %ux%u", h->width, h->height);
         goto fail;
@@ -126,7 +126,11 @@ int gv_store_writer_root(struct gv_store_writer *w, const uint8_t *pixels,
     const struct gv_level *r = &w->g.level[w->g.root];
     uint8_t *z;
     size_t zlen;
-    if (gv_root_pack(pixels, r->width, r->height, w->g.channels, &z, &zlen, err) < 0)
+    if ((w->h.kind == GV_KIND_HEIGHT
+             ? gv_height_root_pack((const uint16_t *)(const void *)pixels,
+                                   r->width, r->height, &z, &zlen, err)
+             : gv_root_pack(pixels, r->width, r->height, w->g.channels, &z,
+                            &zlen, err)) < 0)
         return -1;
     uint8_t crc[4];
     gv_put32(crc, gv_crc32(0, z, zlen));

@@ -1,0 +1,238 @@
+/*
+ * mesh_qmesh.c - a TIN as a Cesium quantized-mesh-1.0 tile.
+ *
+ * Layout (the quantized-mesh-1.0 specification, all little endian): an
+ * 88-byte header (center, min and max height, bounding sphere, horizon
+ * occlusion point, in Earth-centred fixed WGS84 metres); the vertex count
+ * and three arrays u, v, height of 16-bit values in 0..32767, each stored
+ * as zig-zag coded deltas; the triangle count and the indices, 16-bit (32
+ * when over 65536 vertices, after padding to 4 bytes) in high-water-mark
+ * coding, which needs the vertices numbered in order of first use; then the
+ * indices of the vertices on the west, south, east and north edges (plain,
+ * each list sorted along its edge), which Cesium uses to join tiles with
+ * skirts.  Last, the metadata extension (id 4) holds JSON with the measured
+ * error.  u runs west to east, v south to north, so grid row 0 is v = 32767
+ * and triangles are written reversed, counter-clockwise in (u, v).
+ *
+ * Without has_geo the grid is not on the globe: the header then holds the
+ * bounding sphere in grid units and the occlusion point at its centre.
+ */
+#include <math.h>
+
+#include "mesh/mesh_buf.h"
+#include "mesh/mesh_write.h"
+
+#define QMAX 32767.0
+
+static uint16_t zigzag(int32_t d)
+{
+    return (uint16_t)(((uint32_t)d << 1) ^ (uint32_t)(d >> 31));
+}
+
+/* WGS84 geodetic (degrees, metres) to Earth-centred fixed metres. */
+static void ecef(double lon, double lat, double h, double o[3])
+{
+    const double a = 6378137.0, e2 = 6.69437999014e-3;
+    double la = lat * M_PI / 180, lo = lon * M_PI / 180;
+    double n = a / sqrt(1 - e2 * sin(la) * sin(la));
+    o[0] = (n + h) * cos(la) * cos(lo);
+    o[1] = (n + h) * cos(la) * sin(lo);
+    o[2] = (n * (1 - e2) + h) * sin(la);
+}
+
+/* Cesium's EllipsoidalOccluder.computeMagnitude, in scaled space. */
+static double occl_magnitude(const double p[3], const double dir[3])
+{
+    const double r[3] = {6378137.0, 6378137.0, 6356752.3142451793};
+    double s[3] = {p[0] / r[0], p[1] / r[1], p[2] / r[2]};
+    double m2 = s[0] * s[0] + s[1] * s[1] + s[2] * s[2];
+    double m = sqrt(m2);
+    double d[3] = {s[0] / m, s[1] / m, s[2] / m};
+    if (m2 < 1) m2 = 1;
+    if (m < 1) m = 1;
+    double cosa = d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2];
+    double cx = d[1] * dir[2] - d[2] * dir[1];
+    double cy = d[2] * dir[0] - d[0] * dir[2];
+    double cz = d[0] * dir[1] - d[1] * dir[0];
+    double sina = sqrt(cx * cx + cy * cy + cz * cz);
+    double cosb = 1 / m, sinb = sqrt(m2 - 1) * cosb;
+    return 1 / (cosa * cosb - sina * sinb);
+}
+
+static void put_index(struct mbuf *b, uint32_t i, int wide)
+{
+    if (wide)
+        mb_u32(b, i);
+    else
+        mb_u16(b, (uint16_t)i);
+}
+
+int mesh_write_qmesh(struct mbuf *b, const struct gv_tin *t,
+                     const struct gv_mesh_place *pl, const char **why)
+{
+    uint32_t nv = t->nverts, W = t->width - 1, H = t->height - 1;
+    uint32_t *newi = malloc((size_t)nv * sizeof *newi);
+    uint32_t *old = malloc((size_t)nv * sizeof *old);
+    uint16_t *q = malloc((size_t)nv * 3 * sizeof *q);
+    int rc = 0;
+    if (!newi || !old || !q) {
+        b->oom = 1;
+        goto out;
+    }
+    /* number the vertices in order of first use (high-water mark) */
+    for (uint32_t i = 0; i < nv; i++)
+        newi[i] = UINT32_MAX;
+    uint32_t k = 0;
+    for (uint32_t i = 0; i < 3 * t->ntris; i++) {
+        uint32_t v = t->tris[i - i % 3 + (3 - i % 3) % 3];
+        if (newi[v] == UINT32_MAX) {
+            newi[v] = k;
+            old[k++] = v;
+        }
+    }
+    for (uint32_t i = 0; i < nv; i++)
+        if (newi[i] == UINT32_MAX) {
+            newi[i] = k;
+            old[k++] = i;
+        }
+    double zr = (double)t->zmax - t->zmin;
+    for (uint32_t i = 0; i < nv; i++) {
+        uint32_t v = old[i];
+        q[i] = (uint16_t)lround((double)t->vx[v] / W * QMAX);
+        q[nv + i] = (uint16_t)lround((double)(H - t->vy[v]) / H * QMAX);
+        q[2 * nv + i] = zr > 0 ? (uint16_t)lround(((double)t->vz[v] - t->zmin)
+                                                  / zr * QMAX) : 0;
+    }
+
+    /* header */
+    double center[3], sphere[3], radius = 0, occl[3];
+    if (pl->has_geo) {
+        double lon0 = pl->west, lat0 = pl->north;
+        double dlon = (pl->east - pl->west) / W;
+        double dlat = (pl->south - pl->north) / H;
+        ecef((pl->west + pl->east) / 2, (pl->south + pl->north) / 2,
+             ((double)t->zmin + t->zmax) / 2, center);
+        const double r[3] = {6378137.0, 6378137.0, 6356752.3142451793};
+        double dir[3] = {center[0] / r[0], center[1] / r[1], center[2] / r[2]};
+        double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+        double mag = 0;
+        int bad = 0;
+        for (int j = 0; j < 3; j++)
+            dir[j] /= dl;
+        for (uint32_t i = 0; i < nv; i++) {
+            double p[3];
+            ecef(lon0 + dlon * t->vx[i], lat0 + dlat * t->vy[i], t->vz[i], p);
+            double dx = p[0] - center[0], dy = p[1] - center[1];
+            double dz = p[2] - center[2];
+            double d = sqrt(dx * dx + dy * dy + dz * dz);
+            if (d > radius) radius = d;
+            double mm = occl_magnitude(p, dir);
+            if (!(mm > 0) || !isfinite(mm)) bad = 1;
+            else if (mm > mag) mag = mm;
+        }
+        if (bad) /* over a hemisphere or so: nothing occludes it */
+            mag = 1e3;
+        for (int j = 0; j < 3; j++) {
+            sphere[j] = center[j];
+            occl[j] = dir[j] * mag;
+        }
+    } else {
+        center[0] = (pl->x0 + W / 2.0);
+        center[1] = (pl->y0 + H / 2.0);
+        center[2] = ((double)t->zmin + t->zmax) / 2;
+        for (uint32_t i = 0; i < nv; i++) {
+            double dx = pl->x0 + (double)t->vx[i] - center[0];
+            double dy = pl->y0 + (double)t->vy[i] - center[1];
+            double dz = t->vz[i] - center[2];
+            double d = sqrt(dx * dx + dy * dy + dz * dz);
+            if (d > radius) radius = d;
+        }
+        for (int j = 0; j < 3; j++)
+            sphere[j] = occl[j] = center[j];
+    }
+    for (int j = 0; j < 3; j++)
+        mb_f64(b, center[j]);
+    mb_f32(b, t->zmin);
+    mb_f32(b, t->zmax);
+    for (int j = 0; j < 3; j++)
+        mb_f64(b, sphere[j]);
+    mb_f64(b, radius);
+    for (int j = 0; j < 3; j++)
+        mb_f64(b, occl[j]);
+
+    /* vertex data */
+    mb_u32(b, nv);
+    for (int a = 0; a < 3; a++) {
+        int32_t prev = 0;
+        for (uint32_t i = 0; i < nv; i++) {
+            int32_t cur = q[(size_t)a * nv + i];
+            mb_u16(b, zigzag(cur - prev));
+            prev = cur;
+        }
+    }
+
+    /* indices, high-water mark */
+    int wide = nv > 65536;
+    if (wide)
+        while (b->n % 4)
+            mb_u8(b, 0);
+    mb_u32(b, t->ntris);
+    uint32_t highest = 0;
+    for (uint32_t i = 0; i < 3 * t->ntris; i++) {
+        uint32_t v = newi[t->tris[i - i % 3 + (3 - i % 3) % 3]];
+        put_index(b, highest - v, wide);
+        if (v == highest)
+            highest++;
+    }
+
+    /* edges: west (x = 0), south (y = H), east (x = W), north (y = 0);
+     * west and east sorted by v (south to north), south and north by u:
+     * one slot per sample along the edge, filled in one pass */
+    uint32_t side = W > H ? W : H;
+    uint32_t *slot = malloc(((size_t)side + 1) * sizeof *slot);
+    if (!slot) {
+        b->oom = 1;
+        goto out;
+    }
+    for (int e = 0; e < 4; e++) {
+        uint32_t len = (e == 0 || e == 2) ? H : W, cnt = 0;
+        for (uint32_t s = 0; s <= len; s++)
+            slot[s] = UINT32_MAX;
+        for (uint32_t i = 0; i < nv; i++) {
+            uint32_t v = old[i], x = t->vx[v], y = t->vy[v];
+            if (e == 0 && x == 0) slot[H - y] = i;
+            else if (e == 1 && y == H) slot[x] = i;
+            else if (e == 2 && x == W) slot[H - y] = i;
+            else if (e == 3 && y == 0) slot[x] = i;
+        }
+        for (uint32_t s = 0; s <= len; s++)
+            cnt += slot[s] != UINT32_MAX;
+        mb_u32(b, cnt);
+        for (uint32_t s = 0; s <= len; s++)
+            if (slot[s] != UINT32_MAX)
+                put_index(b, slot[s], wide);
+    }
+    free(slot);
+
+    /* metadata extension (id 4): JSON */
+    char json[256];
+    int jn = snprintf(json, sizeof json,
+                      "{\"maxError\":%.9g,\"level\":%u,"
+                      "\"region\":[%u,%u,%u,%u]}",
+                      t->max_error, pl->level, pl->x0, pl->y0, t->width,
+                      t->height);
+    if (jn < 0 || (size_t)jn >= sizeof json) {
+        *why = "metadata too long";
+        rc = -1;
+        goto out;
+    }
+    mb_u8(b, 4);
+    mb_u32(b, 4 + (uint32_t)jn);
+    mb_u32(b, (uint32_t)jn);
+    mb_put(b, json, (size_t)jn);
+out:
+    free(newi);
+    free(old);
+    free(q);
+    return rc;
+}

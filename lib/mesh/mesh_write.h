@@ -1,0 +1,52 @@
+/*
+ * mesh_write.h - a TIN (mesh/tin.h) as a file: glTF 2.0 binary (GLB),
+ * Cesium quantized-mesh-1.0, PLY (binary little endian) or OBJ.
+ *
+ * Every format is written to memory, for files and HTTP bodies alike, and
+ * carries the measured maximum error: glTF in asset.extras, quantized-mesh
+ * in its metadata extension (id 4), PLY and OBJ in comments.  Positions:
+ * glTF is +Y up, so a vertex is (x, height, y), with x east and y south in
+ * samples of the level times xy_scale; PLY and OBJ are +Z up: (x, -y,
+ * height).  Triangles face up (counter-clockwise seen from above) in every
+ * format.  docs/MESHES.md is the normative description.
+ */
+#ifndef GV_MESH_WRITE_H
+#define GV_MESH_WRITE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+#include "mesh/tin.h"
+
+enum gv_mesh_format { GV_MESH_GLB, GV_MESH_QMESH, GV_MESH_PLY, GV_MESH_OBJ };
+
+/* Where the mesh lies.  Zero-initialise, then set what is known. */
+struct gv_mesh_place {
+    uint32_t x0, y0;     /* the grid's first sample in the level */
+    uint32_t level;      /* the level (recorded in the metadata only) */
+    double xy_scale;     /* units per sample step in x and y; 0 means 1 */
+    int has_geo;         /* quantized-mesh: the grid spans these bounds in
+                            degrees (WGS84), corner samples on the corners */
+    double west, south, east, north;
+    int gzip;            /* quantized-mesh: gzip the whole file */
+};
+
+/* "glb", "qmesh" (or "terrain"), "ply", "obj" -> *f.  Returns 0, or -1
+ * for another name. */
+int gv_mesh_format_parse(const char *name, enum gv_mesh_format *f);
+
+/* The media type and the file extension (without dot) of a format. */
+const char *gv_mesh_format_mime(enum gv_mesh_format f);
+const char *gv_mesh_format_ext(enum gv_mesh_format f);
+
+/*
+ * Encode t as format f.  *out is malloc'ed (the caller frees it with
+ * free()) and *len set.  Returns 0, or -1 with *err: GV_ENOMEM, GV_EINVAL
+ * (quantized-mesh over 2^32-1 vertices, gzip failing).  Thread-safe.
+ */
+int gv_mesh_encode(enum gv_mesh_format f, const struct gv_tin *t,
+                   const struct gv_mesh_place *pl, uint8_t **out, size_t *len,
+                   struct gv_error *err);
+
+#endif

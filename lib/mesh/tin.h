@@ -1,0 +1,89 @@
+/*
+ * tin.h - triangulated irregular networks (TINs) of a height grid by greedy
+ * insertion (Garland & Heckbert, "Fast Polygonal Approximation of Terrains
+ * and Height Fields", CMU-CS-95-181: section 4.4, algorithm III).
+ *
+ * The grid is W x H samples of float heights in source units.  The mesh
+ * starts as two triangles over the corners; the point of largest vertical
+ * error (section 3.1) is inserted, the Delaunay triangulation is updated
+ * incrementally (section 4.2.1), and only the triangles that changed are
+ * scanned again for their candidate, kept in a heap (section 4.3).
+ *
+ * Crack-free neighbours: with a maximum error, the border vertices are
+ * chosen first, by 1D greedy insertion along each of the four edges from
+ * the border samples alone, to the same error.  Two regions that share an
+ * edge of samples therefore choose the same vertices on it, whatever lies
+ * inside them.  Interior points are inserted after, and border samples are
+ * never interior candidates (the hull edges are never flipped, so the
+ * border of the mesh is exactly the 1D polylines).
+ *
+ * Determinism: coordinates are integers and every orientation and circle
+ * test is exact (64/128-bit integers); an error tie goes to the smaller
+ * sample index (y * W + x), and cocircular quadrilaterals are not flipped.
+ * The same grid and parameters give the same mesh on every machine.
+ */
+#ifndef GV_MESH_TIN_H
+#define GV_MESH_TIN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+
+/* The largest side of a grid: coordinates stay exact in the 128-bit
+ * circle test and sample indices in 32 bits. */
+#define GV_TIN_MAX_SIDE 65535u
+
+struct gv_tin_params {
+    double max_error;        /* stop once no sample is off by more than
+                                this (source units); < 0: no error goal */
+    uint32_t max_triangles;  /* stop before the mesh would exceed this many
+                                triangles; 0: no limit */
+    int border_first;        /* choose border vertices from the border alone
+                                (needs max_error >= 0): crack-free tiles */
+    double time_limit;       /* seconds of wall time; 0: none */
+};
+
+struct gv_tin {
+    uint32_t width, height;  /* the grid */
+    uint32_t nverts;         /* vertices in insertion order (the corners
+                                first: (0,0), (W-1,0), (W-1,H-1), (0,H-1)) */
+    uint32_t *vx, *vy;       /* grid coordinates of each vertex */
+    float *vz;               /* height of each vertex */
+    uint32_t ntris;
+    uint32_t *tris;          /* 3 vertex indices per triangle, counter-
+                                clockwise in (x, y) with y as a math axis:
+                                orient(a, b, c) > 0 */
+    double max_error;        /* measured: max over every sample of
+                                |height - mesh| */
+    float zmin, zmax;        /* range of the vertex heights */
+};
+
+/*
+ * Build the TIN of a W x H grid of heights (row i at h + i * stride
+ * floats).  At least one goal must be set (max_error >= 0 or
+ * max_triangles > 0); both may be, and the first reached stops.  W and H
+ * are 2 .. GV_TIN_MAX_SIDE.  Heights must be finite.  *out is filled
+ * (free with gv_tin_free).  Returns 0, or -1: GV_EINVAL for bad sizes or
+ * goals, GV_ELIMIT when border_first's border vertices alone make more
+ * than max_triangles triangles, GV_ETIMEOUT past time_limit, GV_ENOMEM.  Thread-safe (no shared state).
+ */
+int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
+                 const struct gv_tin_params *p, struct gv_tin *out,
+                 struct gv_error *err);
+
+/* Free the arrays of *t and zero it.  gv_tin_free(NULL) does nothing. */
+void gv_tin_free(struct gv_tin *t);
+
+/*
+ * The 1D greedy insertion along one edge of samples s[0 .. n-1] (n >= 2):
+ * the endpoints, then repeatedly the sample farthest from the polyline
+ * (ties: the smaller position) until none is off by more than max_error.
+ * Writes the chosen interior positions, in insertion order, to pos (room
+ * for n) and returns their count.  Both neighbours of a shared edge call
+ * it on the same samples and get the same positions.
+ */
+uint32_t gv_tin_edge_greedy(const float *s, size_t step, uint32_t n,
+                            double max_error, uint32_t *pos);
+
+#endif

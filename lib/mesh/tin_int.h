@@ -1,0 +1,20 @@
+/*
+ * tin_int.h - what tin.c shares with the tests but not with callers.
+ *
+ * gv_tin_build_brute is Garland & Heckbert's algorithm I (section 4.1):
+ * after every insertion it evaluates every unused sample, locating it by a
+ * linear search over all triangles.  It uses the same mesh code and the same
+ * plane of each triangle as gv_tin_build, so on the same input both must
+ * insert the same vertices in the same order; tests/test_tin.c checks it.
+ * O(m^2 n): small grids only.
+ */
+#ifndef GV_MESH_TIN_INT_H
+#define GV_MESH_TIN_INT_H
+
+#include "mesh/tin.h"
+
+int gv_tin_build_brute(const float *h, uint32_t w, uint32_t hgt,
+                       size_t stride, const struct gv_tin_params *p,
+                       struct gv_tin *out, struct gv_error *err);
+
+#endif
