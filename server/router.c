@@ -28,6 +28,9 @@ const struct router_route router_routes[ROUTE_COUNT] = {
     [ROUTE_FILTER_DELETE] = {"DELETE", "/v1/filters/*", "filter", 0},
     [ROUTE_IMAGE_FILTER] = {"POST", "/v1/images/*/filter", "image_filter", 0},
     [ROUTE_MESH] = {"GET", "/v1/images/*/mesh", "mesh", 0},
+    [ROUTE_TERRAIN_LAYER] = {"GET", "/v1/images/*/terrain/layer.json",
+                             "terrain_layer", 0},
+    [ROUTE_TERRAIN_TILE] = {"GET", "/v1/images/*/terrain/*/*/*", "terrain", 0},
     [ROUTE_WEB] = {"GET", "/web/*", "web", 0},
 };
 

@@ -40,6 +40,8 @@ enum route_id {
     ROUTE_FILTER_DELETE,
     ROUTE_IMAGE_FILTER,
     ROUTE_MESH,
+    ROUTE_TERRAIN_LAYER, /* route_terrain.c */
+    ROUTE_TERRAIN_TILE,
     ROUTE_WEB,
     ROUTE_COUNT
 };

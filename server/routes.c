@@ -24,5 +24,7 @@ const route_fn route_handlers[ROUTE_COUNT] = {
     [ROUTE_FILTER_DELETE] = route_filter_delete,
     [ROUTE_IMAGE_FILTER] = route_image_filter,
     [ROUTE_MESH] = route_mesh,
+    [ROUTE_TERRAIN_LAYER] = route_terrain_layer,
+    [ROUTE_TERRAIN_TILE] = route_terrain_tile,
     [ROUTE_WEB] = route_static,
 };

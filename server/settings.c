@@ -68,6 +68,9 @@ static const struct settings_key keys[] = {
      "most triangles of one mesh (413 beyond)"},
     {"mesh_time_limit", T_DOUBLE, F(mesh_time_limit), "10", 0.01, 3600,
      "seconds of meshing for one request (504 beyond)"},
+    /* terrain tiles (route_terrain.c) */
+    {"terrain_error_scale", T_DOUBLE, F(terrain_error_scale), "0.03125", 0, 1000,
+     "terrain tile error bound of level z: this times 77067 m / 2^z"},
     {"max_output_pixels", T_SIZE, F(max_output_pixels), "16M", 1, 1e15,
      "largest output image in pixels (IIIF maxArea)"},
     {"max_output_side", T_UINT, F(max_output_side), "16384", 1, 2147483647,

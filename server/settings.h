@@ -33,6 +33,7 @@ struct settings {
     uint64_t max_mesh_samples;     /* height samples per mesh request */
     uint64_t max_mesh_triangles;   /* triangles per mesh */
     double mesh_time_limit;        /* seconds of meshing per request */
+    double terrain_error_scale;    /* terrain tiles: times Cesium's level error */
     uint64_t max_output_pixels;    /* IIIF maxArea */
     uint64_t max_output_side;      /* IIIF maxWidth = maxHeight */
     double max_upscale;            /* largest IIIF '^' factor */
