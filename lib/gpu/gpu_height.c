@@ -183,8 +183,10 @@ static int decode(void *arg, struct gv_error *err)
     GLuint tex = new_texture();
     if (coded && h->path == GV_GPU_PATH_WEBGL2) {
         int e;
-        if (gv_height_tile_residuals(j->buf, j->len, h->cpu_q, &e, err) < 0)
+        if (gv_height_tile_residuals(j->buf, j->len, h->cpu_q, &e, err) < 0) {
+            glDeleteTextures(1, &tex);
             return -1;
+        }
         glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, h->qtex);
         glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
