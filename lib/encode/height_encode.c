@@ -56,13 +56,13 @@ static int64_t octave(uint32_t x, uint32_t y, int shift, uint32_t o)
 
 /* Terrain code at (x, y): 11 octaves from 2048-pixel cells down to 2,
  * amplitude halving (fractal dimension about 2.0 + 0.5), ridged a little
- * by folding, in metres 0..about 8000. */
+ * by folding, in metres, about 0 .. 7000. */
 static uint16_t synth_height(uint32_t x, uint32_t y)
 {
     int64_t s = 0;
     for (int k = 11, amp = 1024; k >= 1; k--, amp = amp * 5 / 9)
         s += octave(x, y, k, (uint32_t)k) * amp;
-    s >>= 13;                       /* about -9000 .. 9000 */
+    s >>= 11;                       /* about -6000 .. 6000 */
     int64_t v = s < 0 ? -s / 4 : s; /* shallow "sea floor" below 0 */
     v += 1000;
     return (uint16_t)(v < 0 ? 0 : (v > 65535 ? 65535 : v));
