@@ -8,7 +8,8 @@
 #   - region format=png16 is the codes, within the bound of the input;
 #     format=tiff32 the values (code * scale + offset) as floats;
 #     png16 of an image store is 400;
-#   - IIIF serves the gray mapping (a gray JPEG) and the root a 16-bit PNG.
+#   - IIIF serves the gray mapping (a gray JPEG) and the root a 16-bit PNG;
+#   - the native client (`gigaview render`) refuses it clearly.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
 need_tool oiiotool
@@ -81,6 +82,10 @@ cp "$T/b" root.png
 check "the root PNG is 16-bit" sh -c "oiiotool --info -v root.png | grep -q '1 channel, uint16 png'"
 expect_status "the root raw: 2 bytes a sample" 200 '/v1/images/dem/root?format=raw'
 check "raw root is 258 x 75 x 2 bytes" test "$(wc -c <"$T/b")" = $((258 * 75 * 2))
+
+run render "$BASE" --image dem -o "$T/w/r.png"
+expect_rc "gigaview render refuses a height store" 1
+expect_err "... saying why" "is a height store"
 
 stop_daemon
 check "the daemon stops cleanly" test "$drc" = 0

@@ -87,7 +87,7 @@ static int read_input(const char *input, const struct gv_height_opts *o,
                       struct gv_height_result *m, int *e,
                       struct gv_error *err)
 {
-    uint64_t limit = o->max_pixels ? o->max_pixels : (1ull << 32);
+    uint64_t limit = o->max_pixels ? o->max_pixels : GV_HEIGHT_MAX_PIXELS;
     *codes = NULL;
     m->scale = o->mapped ? o->scale : 1;
     m->offset = o->mapped ? o->offset : 0;

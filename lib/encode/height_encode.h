@@ -22,12 +22,16 @@
 #include "base/error.h"
 #include "store/geometry.h"
 
+/* Default cap on width x height: 2^30 samples (about 2.9 GB of memory
+ * for 16-bit input, 7 GB for float) since the encoder holds them all. */
+#define GV_HEIGHT_MAX_PIXELS (1ull << 30)
+
 struct gv_height_opts {
     double max_error;      /* E in source units; 0 = lossless */
     int mapped;            /* integer input: use scale/offset below */
     double scale, offset;  /* value = code * scale + offset */
     const char *unit;      /* up to 8 printable characters, or NULL */
-    uint64_t max_pixels;   /* refuse larger inputs (0: 2^32) */
+    uint64_t max_pixels;   /* refuse larger inputs (0: GV_HEIGHT_MAX_PIXELS) */
 };
 
 struct gv_height_result {
