@@ -32,6 +32,7 @@ struct gv_height_opts {
     double scale, offset;  /* value = code * scale + offset */
     const char *unit;      /* up to 8 printable characters, or NULL */
     uint64_t max_pixels;   /* refuse larger inputs (0: GV_HEIGHT_MAX_PIXELS) */
+    int threads;           /* workers; 0 = every CPU */
 };
 
 struct gv_height_result {
@@ -57,11 +58,12 @@ int gv_height_encode(const char *input, const char *output,
 /*
  * Encode w x h codes already mapped (the core of gv_height_encode, and
  * what tests use): e is the half-step in codes; scale, offset, min, max,
- * max_error, unit and src_float go to the header as given.
+ * max_error, unit and src_float go to the header as given; `threads`
+ * workers (0: every CPU).
  */
 int gv_height_encode_codes(const uint16_t *codes, uint32_t w, uint32_t h,
                            int e, const struct gv_height_result *meta,
-                           const char *unit, const char *output,
+                           const char *unit, int threads, const char *output,
                            struct gv_height_result *r, struct gv_error *err);
 
 #endif
