@@ -422,7 +422,7 @@ int gv_http_image(struct gv_http *h, const char *id,
                          "levels_tiled", &img->levels_tiled, "root", "width", &rw,
                          "height", &rh, "mip_count", &img->root_mips);
     /* A height store (docs/FORMAT.md section 12) has tiles of another codec. */
-    int height_store = json_object_get(j, "height") != NULL;
+    int height_store = json_object_get(j, "elevation") != NULL;
     json_decref(j);
     if (height_store)
         return gv_fail(err, GV_EFORMAT, "%s is a height store, which this client "

@@ -96,7 +96,7 @@ enum MHD_Result route_image_info(struct req *r)
         "links", "self", self, "tiles", tiles, "batch", batch, "root", root,
         "region", region, "iiif", iiif);
     if (j && h->kind == GV_KIND_HEIGHT)   /* docs/FORMAT.md section 12 */
-        json_object_set_new(j, "height", json_pack(
+        json_object_set_new(j, "elevation", json_pack(
             "{s:s,s:f,s:f,s:f,s:f,s:f,s:i,s:b}", "unit", h->height_unit,
             "scale", h->height_scale, "offset", h->height_offset,
             "min", (double)h->height_min, "max", (double)h->height_max,

@@ -3,7 +3,7 @@
 # line and over HTTP (docs/API.md):
 #
 #   - `gigaview encode --height` and `gigaview info` (unit, range, bound);
-#   - /v1/images/{id} has the height object; tiles are served as stored
+#   - /v1/images/{id} has the elevation object (an image store has none); tiles are served as stored
 #     (mode and e in the buffer's first bytes);
 #   - region format=png16 is the codes, within the bound of the input;
 #     format=tiff32 the values (code * scale + offset) as floats;
@@ -42,8 +42,12 @@ EOF2
 start_daemon "$T/h.conf"
 
 expect_status "image info" 200 /v1/images/dem
-check "image info has the height object" test \
-    "$(json_get "j['height']['unit'], j['height']['max_error'], j['height']['offset'], j['height']['min']")" = "m 2.0 -11000.0 -8103.0"
+check "image info has the elevation object" test \
+    "$(json_get "j['elevation']['unit'], j['elevation']['max_error'], j['elevation']['offset'], j['elevation']['min']")" = "m 2.0 -11000.0 -8103.0"
+check "... beside the image's own width and height" test \
+    "$(json_get "j['width'], j['height']")" = "1030 300"
+expect_status "an image store's info" 200 /v1/images/img
+check "an image store has no elevation object" test "$(json_get "'elevation' in j")" = False
 
 expect_status "a tile as stored" 200 /v1/images/dem/tiles/0/1/0
 check "the tile is a coded height buffer with e = 2" python3 -c "

@@ -29,7 +29,7 @@ async function loadRoot(url, info) {
     try {
         // A height store's root holds 16-bit codes: show its gray mapping
         // (docs/API.md) through the region endpoint instead.
-        const r = await fetch(info.height
+        const r = await fetch(info.elevation
             ? `${url}/region?level=${info.root.level}&x=0&y=0&w=${w}&h=${h}&format=png`
             : `${url}/root`);
         if (!r.ok)
@@ -147,7 +147,7 @@ export class Viewer {
         // Height stores (docs/FORMAT.md 12) are drawn from the server's gray
         // regions: the tile decoder here is the image one
         // (height_decode.js decodes their codes).
-        if (this.opts.renderer !== 'region' && !info.height) {
+        if (this.opts.renderer !== 'region' && !info.elevation) {
             const gl = this.gl || (this.gl = webgl2(this.canvas));
             if (gl)
                 backend = await GlBackend.create(gl, image, { ...this.opts, onChange });

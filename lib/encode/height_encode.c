@@ -200,10 +200,12 @@ static int read_input(const char *input, const struct gv_height_opts *o,
     }
     *e = ec < 0 ? 0 : (ec > GV_HT_MAX_E ? GV_HT_MAX_E : (int)ec);
     m->e = *e;
-    /* Float input: quantizing adds scale/2 (and a relative 1e-9 for the
-     * double arithmetic of the mapping). */
-    m->max_error = m->src_float ? m->scale * (*e + 0.5) * (1 + 1e-9)
-                                : m->scale * *e;
+    /* Float input: quantizing adds scale/2, and the double arithmetic of
+     * the mapping a few ulps of the values (1e-12 of the largest
+     * magnitude covers it with room to spare). */
+    m->max_error = m->src_float
+        ? m->scale * (*e + 0.5) + 1e-12 * fmax(fabs(m->min), fabs(m->max))
+        : m->scale * *e;
     return 0;
 }
 
