@@ -255,7 +255,8 @@ static int encode_height(const struct encode_args *a, const char *input)
                                 .mapped = a->hscale > 0 || a->hoffset_given,
                                 .scale = a->hscale > 0 ? a->hscale : 1,
                                 .offset = a->hoffset, .unit = a->unit,
-                                .max_pixels = a->o.source.max_pixels};
+                                .max_pixels = a->o.source.max_pixels,
+                                .threads = a->o.threads};
     struct gv_height_result r;
     struct gv_error err;
     gv_error_clear(&err);

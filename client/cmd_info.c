@@ -71,6 +71,19 @@ static uint64_t tile_count(const struct gv_geometry *g)
     return tiles;
 }
 
+/* The JSON members of a height store (after a comma), or nothing. */
+static void print_height_json(const struct gv_header *h)
+{
+    if (h->kind != GV_KIND_HEIGHT)
+        return;
+    printf("\"kind\":\"height\",\"unit\":\"%s\",\"scale\":%.17g,"
+           "\"offset\":%.17g,\"min\":%.9g,\"max\":%.9g,\"max_error\":%.17g,"
+           "\"error_codes\":%u,\"float_source\":%s,", h->height_unit,
+           h->height_scale, h->height_offset, (double)h->height_min,
+           (double)h->height_max, h->height_max_error, h->height_e,
+           h->height_float ? "true" : "false");
+}
+
 static void print_json(struct gv_store *s)
 {
     const struct gv_header *h = &gv_store_info(s)->header;
@@ -79,12 +92,14 @@ static void print_json(struct gv_store *s)
     printf("{\"width\":%u,\"height\":%u,\"channels\":%d,\"version\":%u,"
            "\"levels\":%d,\"root_level\":%d,\"root_mips\":%d,\"tiles\":%llu,"
            "\"pages\":%llu,\"bytes\":%llu,\"bpp\":%.6f,\"psnr0\":%.3f,"
-           "\"target_psnr\":%.3f,\"max_rate\":%u,\"level\":[",
+           "\"target_psnr\":%.3f,\"max_rate\":%u,",
            g->width, g->height, g->channels, h->version, g->root + 1, g->root,
            g->root_mips, (unsigned long long)tile_count(g),
            (unsigned long long)h->pages, (unsigned long long)h->file_size,
            8.0 * h->file_size / src_px, h->psnr0_mdb / 1000.0,
            h->target_mpsnr / 1000.0, h->max_rate);
+    print_height_json(h);
+    printf("\"level\":[");
     for (int k = 0; k <= g->root; k++) {
         const struct gv_level *l = &g->level[k];
         uint64_t b = k == g->root ? h->root_size : gv_store_level_bytes(s, k);
@@ -106,9 +121,10 @@ static void print_levels(struct gv_store *s)
         const struct gv_level *l = &g->level[k];
         double lp = (double)l->width * l->height;
         if (k == g->root) {
-            printf("%5d %10u %10u   root, lossless WebP             %12llu %6.3f\n",
-                   k, l->width, l->height, (unsigned long long)h->root_size,
-                   8.0 * h->root_size / lp);
+            printf("%5d %10u %10u   root, lossless %-15s %12llu %6.3f\n",
+                   k, l->width, l->height,
+                   h->kind == GV_KIND_HEIGHT ? "deflate" : "WebP",
+                   (unsigned long long)h->root_size, 8.0 * h->root_size / lp);
             continue;
         }
         uint64_t b = gv_store_level_bytes(s, k);
@@ -124,6 +140,27 @@ static void print_text(struct gv_store *s, const char *path)
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     double src_px = (double)g->width * g->height;
     printf("store        %s (format version %u)\n", path, h->version);
+    if (h->kind == GV_KIND_HEIGHT) {
+        const char *u = h->height_unit;
+        printf("height field %u x %u, 16-bit codes: value = code * %.9g + %.9g%s%s\n",
+               g->width, g->height, h->height_scale, h->height_offset,
+               *u ? " " : "", u);
+        printf("source       %d-bit%s, range %.9g .. %.9g%s%s\n", h->src_bits,
+               h->height_float ? " float" : "", (double)h->height_min,
+               (double)h->height_max, *u ? " " : "", u);
+        printf("max error    %.9g%s%s (%u codes%s)%s\n", h->height_max_error,
+               *u ? " " : "", u, h->height_e,
+               h->height_float ? " + float quantization" : "",
+               h->height_max_error == 0 ? ", lossless" : "");
+        printf("levels       %d (0..%d; %d is the root, with %d mips)\n", g->root + 1,
+               g->root, g->root, g->root_mips);
+        printf("tiles        %llu in %llu pages\n", (unsigned long long)tile_count(g),
+               (unsigned long long)h->pages);
+        printf("size         %llu bytes, %.3f bits per source sample\n",
+               (unsigned long long)h->file_size, 8.0 * h->file_size / src_px);
+        print_levels(s);
+        return;
+    }
     printf("image        %u x %u, %s\n", g->width, g->height,
            g->channels == 1 ? "gray" : "RGB");
     printf("source       %d-bit%s, %s\n", h->src_bits, h->src_float ? " float" : "",

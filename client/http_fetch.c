@@ -421,7 +421,12 @@ int gv_http_image(struct gv_http *h, const char *id,
                          "height", &hh, "channels", &img->channels,
                          "levels_tiled", &img->levels_tiled, "root", "width", &rw,
                          "height", &rh, "mip_count", &img->root_mips);
+    /* A height store (docs/FORMAT.md section 12) has tiles of another codec. */
+    int height_store = json_object_get(j, "elevation") != NULL;
     json_decref(j);
+    if (height_store)
+        return gv_fail(err, GV_EFORMAT, "%s is a height store, which this client "
+                       "does not draw (its regions: format=png16 or tiff32)", what);
     if (rc < 0 || w <= 0 || hh <= 0 || w > 0x7fffffff || hh > 0x7fffffff ||
         (img->channels != 1 && img->channels != 3) || rw <= 0 || rh <= 0 ||
         rw > 512 || rh > 512 || img->levels_tiled < 0 || img->root_mips < 1)

@@ -95,6 +95,13 @@ enum MHD_Result route_image_info(struct req *r)
         "levels", levels,
         "links", "self", self, "tiles", tiles, "batch", batch, "root", root,
         "region", region, "iiif", iiif);
+    if (j && h->kind == GV_KIND_HEIGHT)   /* docs/FORMAT.md section 12 */
+        json_object_set_new(j, "elevation", json_pack(
+            "{s:s,s:f,s:f,s:f,s:f,s:f,s:i,s:b}", "unit", h->height_unit,
+            "scale", h->height_scale, "offset", h->height_offset,
+            "min", (double)h->height_min, "max", (double)h->height_max,
+            "max_error", h->height_max_error, "error_codes", (int)h->height_e,
+            "float_source", (int)h->height_float));
     image_put(img);
     if (!j)
         return http_send_errorf(r, GV_ENOMEM, "images: cannot build JSON");
@@ -110,15 +117,21 @@ static int root_response(const struct image *img, const uint8_t *px,
                          struct gv_error *err)
 {
     int c = img->info->geometry.channels;
+    /* A height store's root holds 16-bit codes (host order, which is
+     * little-endian on every supported host): raw gives them, png a
+     * 16-bit PNG. */
+    int height = img->info->header.kind == GV_KIND_HEIGHT;
     const struct gv_output_format *f = gv_output_format_find(raw ? "raw" : "png");
-    *len = (size_t)w * h * (size_t)c;
+    *len = (size_t)w * h * (size_t)c * (height ? 2 : 1);
     if (raw) { /* The pixels live as long as the store; copy, since the
                 * store may be closed (rescan) before the response is sent. */
         *resp = http_response_copy(px, *len, f->mime);
         return 0;
     }
     uint8_t *png;
-    if (gv_image_encode(f->name, w, h, c, px, 0, &png, len, err) < 0)
+    if ((height ? gv_image_encode_typed(f->name, w, h, c, GV_SAMPLE_U16, px,
+                                        &png, len, err)
+                : gv_image_encode(f->name, w, h, c, px, 0, &png, len, err)) < 0)
         return -1;
     *resp = http_response_owned(png, *len, f->mime);
     return 0;

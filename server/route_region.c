@@ -5,7 +5,9 @@
  * [x, x+w) x [y, y+h) of pyramid level `level` (0 = full resolution; the
  * levels above the root are the root's mips), decoded by the CPU reference
  * decoder exactly as `gigaview export --level --region` does, and encoded
- * as png (default), jpeg, webp or tiff.  w*h is capped by
+ * as png (default), jpeg, webp or tiff.  A height store (docs/FORMAT.md
+ * section 12) gives its gray mapping in those, and also png16 (its 16-bit
+ * codes) and tiff32 (float values in its unit).  w*h is capped by
  * max_region_pixels (413 beyond).  The query is checked here; the render
  * runs on a render thread, and the answer is kept in the output cache
  * with a strong ETag (render_call.h).
@@ -16,6 +18,7 @@
 
 #include "imageio/imageio.h"
 #include "imageio/output_format.h"
+#include "render/height_region.h"
 #include "output_cache.h"
 #include "render_call.h"
 #include "routes.h"
@@ -25,7 +28,11 @@
 struct region_query {
     uint32_t level, x, y, w, h, quality;
     const struct gv_output_format *format;
+    int height;            /* HEIGHT_PNG16 or HEIGHT_TIFF32, else 0 */
 };
+
+/* The formats of height stores only. */
+enum { HEIGHT_PNG16 = 1, HEIGHT_TIFF32 = 2 };
 
 /* Parse and check the query against the limits (not yet the image).  0,
  * or -1 with *err. */
@@ -45,10 +52,13 @@ static int parse_query(struct req *r, struct region_query *q,
     if (q->w == 0 || q->h == 0)
         return gv_fail(err, GV_EINVAL, "region: w and h must be at least 1");
     const char *fs = http_query(r, "format");
-    q->format = gv_output_format_find(fs ? fs : "png");
+    q->height = fs && !strcmp(fs, "png16") ? HEIGHT_PNG16
+              : fs && !strcmp(fs, "tiff32") ? HEIGHT_TIFF32 : 0;
+    q->format = gv_output_format_find(q->height == HEIGHT_TIFF32 ? "tif"
+                                      : q->height ? "png" : fs ? fs : "png");
     if (!q->format || !q->format->oiio)
         return gv_fail(err, GV_EINVAL, "region: format must be png, jpeg, webp "
-                       "or tiff");
+                       "or tiff (png16 or tiff32 for a height store)");
     q->quality = (uint32_t)r->srv->cfg->jpeg_quality;
     const char *qs = http_query(r, "quality");
     if (qs && (http_parse_u32(qs, 100, &q->quality) < 0 || q->quality == 0))
@@ -73,7 +83,38 @@ static int place(const struct image *img, const struct region_query *q,
     if ((uint64_t)q->x + q->w > lw || (uint64_t)q->y + q->h > lh)
         return gv_fail(err, GV_EINVAL, "region: %u,%u,%u,%u outside level %u "
                        "(%ux%u)", q->x, q->y, q->w, q->h, q->level, lw, lh);
+    if (q->height && img->info->header.kind != GV_KIND_HEIGHT)
+        return gv_fail(err, GV_EINVAL, "region: png16 and tiff32 are for "
+                       "height stores; this image is not one");
     return 0;
+}
+
+/* Render a height format: the codes (png16) or the values as floats
+ * (tiff32).  0, or -1 with *err. */
+static int render_height(const struct region_query *q, struct gv_decoder *d,
+                         uint8_t **out, size_t *len, struct gv_error *err)
+{
+    struct gv_height_meta m;
+    const size_t n = (size_t)q->w * q->h;
+    uint16_t *codes = malloc(sizeof *codes * n);
+    float *values = q->height == HEIGHT_TIFF32 ? malloc(sizeof *values * n) : NULL;
+    int rc = -1;
+    if (!codes || (q->height == HEIGHT_TIFF32 && !values))
+        gv_fail(err, GV_ENOMEM, "region: out of memory");
+    else if (gv_height_meta_get(d, &m) &&
+             gv_height_region(d, (int)q->level, q->x, q->y, q->w, q->h, codes,
+                              err) == 0) {
+        if (values)
+            for (size_t i = 0; i < n; i++)
+                values[i] = (float)(codes[i] * m.scale + m.offset);
+        rc = values ? gv_image_encode_typed("tif", q->w, q->h, 1, GV_SAMPLE_F32,
+                                            values, out, len, err)
+                    : gv_image_encode_typed("png", q->w, q->h, 1, GV_SAMPLE_U16,
+                                            codes, out, len, err);
+    }
+    free(codes);
+    free(values);
+    return rc;
 }
 
 /* On a render thread: decode q's rectangle of img and encode it: *out
@@ -83,8 +124,13 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
 {
     const struct region_query *q = arg;
     const struct gv_geometry *g = &img->info->geometry;
-    uint8_t *pix = malloc((size_t)q->w * q->h * (size_t)g->channels);
     struct gv_decoder *d = image_decoder_get(img);
+    if (q->height && d) {
+        int hrc = render_height(q, d, out, len, err);
+        image_decoder_put(img, d);
+        return hrc;
+    }
+    uint8_t *pix = malloc((size_t)q->w * q->h * (size_t)g->channels);
     int rc = -1;
     if (!pix || !d)
         gv_fail(err, GV_ENOMEM, "region: out of memory");
@@ -131,7 +177,9 @@ enum MHD_Result route_region(struct req *r)
     *arg = q;
     char canon[400], key[420], etag[48];
     snprintf(canon, sizeof canon, "region/%s/%u/%u,%u,%u,%u.%s q%u", img->id,
-             q.level, q.x, q.y, q.w, q.h, q.format->name, q.quality);
+             q.level, q.x, q.y, q.w, q.h,
+             q.height == HEIGHT_PNG16 ? "png16"
+             : q.height == HEIGHT_TIFF32 ? "tiff32" : q.format->name, q.quality);
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);
     output_cache_etag(img->tag, canon, etag, sizeof etag);
     struct render_spec spec = {

@@ -154,7 +154,7 @@ static void test_synth(void)
 {
     char out[1200];
     snprintf(out, sizeof out, "%s/synth.gv", dir);
-    struct gv_height_opts o = {.max_error = 2};
+    struct gv_height_opts o = {.max_error = 2, .threads = 1};
     struct gv_height_result r;
     struct gv_error err;
     if (gv_height_encode("synth-height:2100x1100", out, &o, &r, &err) < 0)
@@ -183,6 +183,16 @@ static void test_synth(void)
     }
     check(hi - lo > 1000, "synth: terrain spans %u..%u", lo, hi);
     free(codes);
+    /* Any number of threads writes the same bytes. */
+    char out3[1200];
+    snprintf(out3, sizeof out3, "%s/synth-j3.gv", dir);
+    o.max_error = 2;
+    o.threads = 3;
+    if (gv_height_encode("synth-height:2100x1100", out3, &o, &r, &err) < 0)
+        fail("synth -j3: %s", err.text);
+    char cmd[2600];
+    snprintf(cmd, sizeof cmd, "cmp -s %s %s", out, out3);
+    check(system(cmd) == 0, "synth: 3 threads write the same store as 1");
 }
 
 /* A float field: the bound holds against the float input itself. */

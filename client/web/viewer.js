@@ -27,7 +27,11 @@ const TAU_MS = 90;            // time constant of animated moves
 async function loadRoot(url, info) {
     const w = info.root.width, h = info.root.height, c = info.channels;
     try {
-        const r = await fetch(`${url}/root`);
+        // A height store's root holds 16-bit codes: show its gray mapping
+        // (docs/API.md) through the region endpoint instead.
+        const r = await fetch(info.elevation
+            ? `${url}/region?level=${info.root.level}&x=0&y=0&w=${w}&h=${h}&format=png`
+            : `${url}/root`);
         if (!r.ok)
             throw new Error(`HTTP ${r.status}`);
         const b = await createImageBitmap(await r.blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
@@ -140,7 +144,10 @@ export class Viewer {
         this.timing = { openStart: t0, metaMs: performance.now() - t0, firstCompleteMs: null };
         const onChange = () => this.schedule();
         let backend = null;
-        if (this.opts.renderer !== 'region') {
+        // Height stores (docs/FORMAT.md 12) are drawn from the server's gray
+        // regions: the tile decoder here is the image one
+        // (height_decode.js decodes their codes).
+        if (this.opts.renderer !== 'region' && !info.elevation) {
             const gl = this.gl || (this.gl = webgl2(this.canvas));
             if (gl)
                 backend = await GlBackend.create(gl, image, { ...this.opts, onChange });

@@ -13,6 +13,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "base/pool.h"
 #include "codec/height_tile.h"
 #include "encode/height_encode.h"
 #include "imageio/imageio.h"
@@ -56,13 +57,13 @@ static int64_t octave(uint32_t x, uint32_t y, int shift, uint32_t o)
 
 /* Terrain code at (x, y): 11 octaves from 2048-pixel cells down to 2,
  * amplitude halving (fractal dimension about 2.0 + 0.5), ridged a little
- * by folding, in metres 0..about 8000. */
+ * by folding, in metres, about 0 .. 7000. */
 static uint16_t synth_height(uint32_t x, uint32_t y)
 {
     int64_t s = 0;
     for (int k = 11, amp = 1024; k >= 1; k--, amp = amp * 5 / 9)
         s += octave(x, y, k, (uint32_t)k) * amp;
-    s >>= 13;                       /* about -9000 .. 9000 */
+    s >>= 11;                       /* about -6000 .. 6000 */
     int64_t v = s < 0 ? -s / 4 : s; /* shallow "sea floor" below 0 */
     v += 1000;
     return (uint16_t)(v < 0 ? 0 : (v > 65535 ? 65535 : v));
@@ -87,7 +88,7 @@ static int read_input(const char *input, const struct gv_height_opts *o,
                       struct gv_height_result *m, int *e,
                       struct gv_error *err)
 {
-    uint64_t limit = o->max_pixels ? o->max_pixels : (1ull << 32);
+    uint64_t limit = o->max_pixels ? o->max_pixels : GV_HEIGHT_MAX_PIXELS;
     *codes = NULL;
     m->scale = o->mapped ? o->scale : 1;
     m->offset = o->mapped ? o->offset : 0;
@@ -199,10 +200,12 @@ static int read_input(const char *input, const struct gv_height_opts *o,
     }
     *e = ec < 0 ? 0 : (ec > GV_HT_MAX_E ? GV_HT_MAX_E : (int)ec);
     m->e = *e;
-    /* Float input: quantizing adds scale/2 (and a relative 1e-9 for the
-     * double arithmetic of the mapping). */
-    m->max_error = m->src_float ? m->scale * (*e + 0.5) * (1 + 1e-9)
-                                : m->scale * *e;
+    /* Float input: quantizing adds scale/2, and the double arithmetic of
+     * the mapping a few ulps of the values (1e-12 of the largest
+     * magnitude covers it with room to spare). */
+    m->max_error = m->src_float
+        ? m->scale * (*e + 0.5) + 1e-12 * fmax(fabs(m->min), fabs(m->max))
+        : m->scale * *e;
     return 0;
 }
 
@@ -222,6 +225,40 @@ static void extract(const uint16_t *lv, uint32_t w, uint32_t h, uint32_t tx,
     }
 }
 
+/* One page of level k: its tiles are coded in parallel (each from its
+ * parent, all of the level above done), then written in order. */
+struct page_job {
+    const struct gv_level *l;
+    const uint16_t *lv;           /* level k's exact codes */
+    uint16_t **dec, **dec_up;     /* decoded tiles of level k and k+1 */
+    uint32_t up_tx, px, py;
+    int e;
+    uint8_t **bufs;               /* per slot */
+    size_t *lens;                 /* per slot; 0 on failure */
+    uint16_t **orig;              /* per worker */
+};
+
+static void encode_slot(void *ctx, size_t item, int worker)
+{
+    struct page_job *pj = ctx;
+    const struct gv_level *l = pj->l;
+    uint32_t tx = pj->px * GV_PAGE_TILES + (uint32_t)(item % GV_PAGE_TILES);
+    uint32_t ty = pj->py * GV_PAGE_TILES + (uint32_t)(item / GV_PAGE_TILES);
+    pj->lens[item] = 0;
+    if (tx >= l->tiles_x || ty >= l->tiles_y)
+        return;
+    size_t ti = (size_t)ty * l->tiles_x + tx;
+    if (!(pj->dec[ti] = malloc(sizeof **pj->dec * GV_HT_SAMPLES)))
+        return;
+    uint16_t *orig = pj->orig[worker];
+    extract(pj->lv, l->width, l->height, tx, ty, orig);
+    uint32_t vw = l->width - tx * GV_STEP, vh = l->height - ty * GV_STEP;
+    pj->lens[item] = gv_height_tile_encode(
+        orig, pj->dec_up[(size_t)(ty / 2) * pj->up_tx + tx / 2], (int)(tx & 1),
+        (int)(ty & 1), pj->e, vw < GV_TILE ? (int)vw : GV_TILE,
+        vh < GV_TILE ? (int)vh : GV_TILE, pj->bufs[item], pj->dec[ti]);
+}
+
 static void free_tiles(uint16_t **t, size_t n)
 {
     if (!t)
@@ -233,7 +270,7 @@ static void free_tiles(uint16_t **t, size_t n)
 
 int gv_height_encode_codes(const uint16_t *codes, uint32_t w, uint32_t h,
                            int e, const struct gv_height_result *meta,
-                           const char *unit, const char *output,
+                           const char *unit, int threads, const char *output,
                            struct gv_height_result *r, struct gv_error *err)
 {
     struct timespec t0, t1;
@@ -263,13 +300,22 @@ int gv_height_encode_codes(const uint16_t *codes, uint32_t w, uint32_t h,
     uint16_t *lv[GV_MAX_LEVELS] = {0};
     uint16_t **dec_up = NULL, **dec = NULL;   /* decoded tiles: above, this */
     uint8_t *bufs[GV_PAGE_SLOTS] = {0};
-    uint16_t *orig = malloc(sizeof *orig * GV_HT_SAMPLES);
     lv[0] = (uint16_t *)(uintptr_t)codes;   /* read only, not copied */
     struct gv_store_writer *wr = NULL;
     uint64_t tiles = 0;
     size_t up_n = 0, cur_n = 0;
-    if (!orig)
+    /* More workers than a page has tiles would idle. */
+    if (threads <= 0)
+        threads = gv_cpu_count();
+    if (threads > GV_PAGE_SLOTS)
+        threads = GV_PAGE_SLOTS;
+    struct gv_pool *pool = gv_pool_new(threads);
+    uint16_t *orig[GV_PAGE_SLOTS] = {0};
+    if (!pool)
         goto nomem;
+    for (int i = 0; i < gv_pool_size(pool); i++)
+        if (!(orig[i] = malloc(sizeof *orig[i] * GV_HT_SAMPLES)))
+            goto nomem;
     /* The code pyramid: lv[0] is the input. */
     for (int k = 1; k <= g.root; k++) {
         lv[k] = malloc(sizeof **lv * (size_t)g.level[k].width * g.level[k].height);
@@ -303,30 +349,19 @@ int gv_height_encode_codes(const uint16_t *codes, uint32_t w, uint32_t h,
             for (uint32_t px = 0; px < l->pages_x; px++) {
                 const uint8_t *tb[GV_PAGE_SLOTS] = {0};
                 size_t lens[GV_PAGE_SLOTS] = {0};
-                for (int j = 0; j < GV_PAGE_TILES; j++)
-                    for (int i = 0; i < GV_PAGE_TILES; i++) {
-                        uint32_t tx = px * GV_PAGE_TILES + (uint32_t)i;
-                        uint32_t ty = py * GV_PAGE_TILES + (uint32_t)j;
-                        if (tx >= l->tiles_x || ty >= l->tiles_y)
-                            continue;
-                        size_t ti = (size_t)ty * l->tiles_x + tx;
-                        if (!(dec[ti] = malloc(sizeof **dec * GV_HT_SAMPLES)))
-                            goto nomem;
-                        extract(lv[k], l->width, l->height, tx, ty, orig);
-                        const uint16_t *parent =
-                            dec_up[(size_t)(ty / 2) * up_tx + tx / 2];
-                        int s = j * GV_PAGE_TILES + i;
-                        uint32_t vw = l->width - tx * GV_STEP;
-                        uint32_t vh = l->height - ty * GV_STEP;
-                        lens[s] = gv_height_tile_encode(
-                            orig, parent, (int)(tx & 1), (int)(ty & 1), e,
-                            vw < GV_TILE ? (int)vw : GV_TILE,
-                            vh < GV_TILE ? (int)vh : GV_TILE, bufs[s], dec[ti]);
-                        if (!lens[s])
-                            goto nomem;
-                        tb[s] = bufs[s];
-                        tiles++;
-                    }
+                struct page_job pj = {l, lv[k], dec, dec_up, up_tx, px, py, e,
+                                      bufs, lens, orig};
+                gv_pool_run(pool, encode_slot, &pj, GV_PAGE_SLOTS);
+                for (int sl = 0; sl < GV_PAGE_SLOTS; sl++) {
+                    uint32_t tx = px * GV_PAGE_TILES + (uint32_t)(sl % GV_PAGE_TILES);
+                    uint32_t ty = py * GV_PAGE_TILES + (uint32_t)(sl / GV_PAGE_TILES);
+                    if (tx >= l->tiles_x || ty >= l->tiles_y)
+                        continue;
+                    if (!lens[sl])
+                        goto nomem;
+                    tb[sl] = bufs[sl];
+                    tiles++;
+                }
                 if (gv_store_writer_page(wr, k, px, py, tb, lens, err) < 0)
                     goto out;
             }
@@ -361,7 +396,9 @@ out:
      * root tile), dec those of the level in progress. */
     free_tiles(dec_up, up_n);
     free_tiles(dec, cur_n);
-    free(orig);
+    for (int i = 0; i < GV_PAGE_SLOTS; i++)
+        free(orig[i]);
+    gv_pool_free(pool);
     for (int k = 1; k <= g.root; k++)
         free(lv[k]);
     for (int s = 0; s < GV_PAGE_SLOTS; s++)
@@ -385,7 +422,8 @@ int gv_height_encode(const char *input, const char *output,
                        "digits or -_.^/%%", GV_HEIGHT_UNIT);
     if (read_input(input, o, &codes, &w, &h, &m, &e, err) < 0)
         return -1;
-    int rc = gv_height_encode_codes(codes, w, h, e, &m, o->unit, output, r, err);
+    int rc = gv_height_encode_codes(codes, w, h, e, &m, o->unit, o->threads,
+                                    output, r, err);
     free(codes);
     return rc;
 }

@@ -22,12 +22,17 @@
 #include "base/error.h"
 #include "store/geometry.h"
 
+/* Default cap on width x height: 2^30 samples (about 2.9 GB of memory
+ * for 16-bit input, 7 GB for float) since the encoder holds them all. */
+#define GV_HEIGHT_MAX_PIXELS (1ull << 30)
+
 struct gv_height_opts {
     double max_error;      /* E in source units; 0 = lossless */
     int mapped;            /* integer input: use scale/offset below */
     double scale, offset;  /* value = code * scale + offset */
     const char *unit;      /* up to 8 printable characters, or NULL */
-    uint64_t max_pixels;   /* refuse larger inputs (0: 2^32) */
+    uint64_t max_pixels;   /* refuse larger inputs (0: GV_HEIGHT_MAX_PIXELS) */
+    int threads;           /* workers; 0 = every CPU */
 };
 
 struct gv_height_result {
@@ -53,11 +58,12 @@ int gv_height_encode(const char *input, const char *output,
 /*
  * Encode w x h codes already mapped (the core of gv_height_encode, and
  * what tests use): e is the half-step in codes; scale, offset, min, max,
- * max_error, unit and src_float go to the header as given.
+ * max_error, unit and src_float go to the header as given; `threads`
+ * workers (0: every CPU).
  */
 int gv_height_encode_codes(const uint16_t *codes, uint32_t w, uint32_t h,
                            int e, const struct gv_height_result *meta,
-                           const char *unit, const char *output,
+                           const char *unit, int threads, const char *output,
                            struct gv_height_result *r, struct gv_error *err);
 
 #endif

@@ -101,11 +101,9 @@ int gv_height_region_gray(struct gv_decoder *d, int level, uint32_t x,
     if (!codes)
         return gv_fail(err, GV_ENOMEM, "height: out of memory for a region");
     int rc = gv_height_region(d, level, x, y, w, h, codes, err);
-    if (rc == 0) {
-        /* One table for the whole region: 65536 codes at most. */
+    if (rc == 0)
         for (size_t i = 0; i < (size_t)w * h; i++)
             out[i] = gv_height_gray(&m, codes[i]);
-    }
     free(codes);
     return rc;
 }

@@ -1,0 +1,283 @@
+/*
+ * gpu_height.c - the GPU height tile decoder (see gpu_height.h).
+ *
+ * One tile per call.  On the SSBO path the storage buffers are reused
+ * from tile to tile, so each decode waits for a fence after its draw:
+ * shader storage is not ordered after earlier draws' reads (the image
+ * decoder, gpu_decode.c, found llvmpipe deferring draws past a later
+ * compute pass).  Height tiles are few next to image tiles in a view;
+ * batching can come when a client needs it.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <GLES3/gl31.h>
+
+#include "base/byteorder.h"
+#include "codec/height_tile.h"
+#include "gpu/gpu_height.h"
+#include "shaders.h"
+
+struct gv_gpu_height {
+    struct gv_gpu *gpu;
+    enum gv_gpu_path path;
+    GLuint decode, rans, fbo, vao, words, qbuf, qtex;
+    GLint u_parent, u_quadrant, u_e, u_coded, u_q;
+    int32_t *cpu_q;                    /* WebGL2 path */
+};
+
+struct job {
+    struct gv_gpu_height *h;
+    const uint8_t *buf;
+    size_t len;
+    const uint16_t *codes_in;
+    uint16_t *codes_out;
+    uint32_t parent, handle;
+    int qx, qy;
+};
+
+static int gl_failed(struct gv_error *err, const char *what)
+{
+    GLenum e = glGetError();
+    if (e == GL_NO_ERROR)
+        return 0;
+    return gv_fail(err, GV_EIO, "gpu: %s failed (GL error 0x%x)", what, e);
+}
+
+static int setup(void *arg, struct gv_error *err)
+{
+    struct gv_gpu_height *h = ((struct job *)arg)->h;
+    char *listing = NULL;
+    const int webgl2 = h->path == GV_GPU_PATH_WEBGL2;
+    h->decode = (webgl2 ? gv_gpu_program_es300 : gv_gpu_program)(
+        h->gpu, gv_shader_fullscreen_vert, gv_shader_height_decode_frag,
+        &listing, err);
+    if (h->decode && !webgl2)
+        h->rans = gv_gpu_compute_program(h->gpu, gv_shader_height_rans_comp,
+                                         &listing, err);
+    if (!h->decode || (!webgl2 && !h->rans)) {
+        if (listing)
+            fprintf(stderr, "%s", listing);
+        free(listing);
+        return -1;
+    }
+    h->u_parent = glGetUniformLocation(h->decode, "u_parent");
+    h->u_quadrant = glGetUniformLocation(h->decode, "u_quadrant");
+    h->u_e = glGetUniformLocation(h->decode, "u_e");
+    h->u_coded = glGetUniformLocation(h->decode, "u_coded");
+    glGenFramebuffers(1, &h->fbo);
+    glGenVertexArrays(1, &h->vao);
+    if (webgl2) {
+        h->u_q = glGetUniformLocation(h->decode, "u_q");
+        glGenTextures(1, &h->qtex);
+        glBindTexture(GL_TEXTURE_2D, h->qtex);
+        glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32I, GV_HT_SIDE, GV_HT_SIDE);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        h->cpu_q = malloc(sizeof *h->cpu_q * GV_HT_SAMPLES);
+        if (!h->cpu_q)
+            return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+    } else {
+        glGenBuffers(1, &h->words);
+        glGenBuffers(1, &h->qbuf);
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, h->qbuf);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, GV_HT_SAMPLES * sizeof(GLint), NULL,
+                     GL_DYNAMIC_COPY);
+    }
+    return gl_failed(err, "height decoder set-up");
+}
+
+struct gv_gpu_height *gv_gpu_height_new(struct gv_gpu *g, enum gv_gpu_path path,
+                                        struct gv_error *err)
+{
+    struct gv_gpu_height *h = calloc(1, sizeof *h);
+    if (!h) {
+        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        return NULL;
+    }
+    h->gpu = g;
+    h->path = path;
+    if (path == GV_GPU_PATH_WEBGL2 && !gv_gpu_info(g)->es) {
+        gv_fail(err, GV_EFORMAT, "gpu: the WebGL2 path needs OpenGL ES");
+        free(h);
+        return NULL;
+    }
+    struct job j = {.h = h};
+    if (gv_gpu_call(g, setup, &j, err) < 0) {
+        gv_gpu_height_free(h);
+        return NULL;
+    }
+    return h;
+}
+
+static int teardown(void *arg, struct gv_error *err)
+{
+    (void)err;
+    struct gv_gpu_height *h = ((struct job *)arg)->h;
+    if (h->decode)
+        glDeleteProgram(h->decode);
+    if (h->rans)
+        glDeleteProgram(h->rans);
+    if (h->words)
+        glDeleteBuffers(1, &h->words);
+    if (h->qbuf)
+        glDeleteBuffers(1, &h->qbuf);
+    if (h->qtex)
+        glDeleteTextures(1, &h->qtex);
+    if (h->fbo)
+        glDeleteFramebuffers(1, &h->fbo);
+    if (h->vao)
+        glDeleteVertexArrays(1, &h->vao);
+    return 0;
+}
+
+void gv_gpu_height_free(struct gv_gpu_height *h)
+{
+    if (!h)
+        return;
+    struct job j = {.h = h};
+    gv_gpu_call(h->gpu, teardown, &j, NULL);
+    free(h->cpu_q);
+    free(h);
+}
+
+static GLuint new_texture(void)
+{
+    GLuint tex;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_R16UI, GV_HT_SIDE, GV_HT_SIDE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    return tex;
+}
+
+static int upload(void *arg, struct gv_error *err)
+{
+    struct job *j = arg;
+    GLuint tex = new_texture();
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 2);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GV_HT_SIDE, GV_HT_SIDE,
+                    GL_RED_INTEGER, GL_UNSIGNED_SHORT, j->codes_in);
+    j->handle = tex;
+    return gl_failed(err, "height tile upload");
+}
+
+int gv_gpu_height_upload(struct gv_gpu_height *h, const uint16_t *codes,
+                         uint32_t *handle, struct gv_error *err)
+{
+    struct job j = {.h = h, .codes_in = codes};
+    if (gv_gpu_call(h->gpu, upload, &j, err) < 0)
+        return -1;
+    *handle = j.handle;
+    return 0;
+}
+
+static int decode(void *arg, struct gv_error *err)
+{
+    struct job *j = arg;
+    struct gv_gpu_height *h = j->h;
+    const int coded = j->buf[0] == 1;
+    /* The target first: new_texture binds it on the active unit. */
+    GLuint tex = new_texture();
+    if (coded && h->path == GV_GPU_PATH_WEBGL2) {
+        int e;
+        if (gv_height_tile_residuals(j->buf, j->len, h->cpu_q, &e, err) < 0) {
+            glDeleteTextures(1, &tex);
+            return -1;
+        }
+        glActiveTexture(GL_TEXTURE1);
+        glBindTexture(GL_TEXTURE_2D, h->qtex);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GV_HT_SIDE, GV_HT_SIDE,
+                        GL_RED_INTEGER, GL_INT, h->cpu_q);
+    } else if (coded) {
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, h->words);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)j->len, j->buf,
+                     GL_STREAM_DRAW);
+        glUseProgram(h->rans);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, h->words);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, h->qbuf);
+        glDispatchCompute((GV_HT_STREAMS + 63) / 64, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+
+    glBindVertexArray(h->vao);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, j->parent);
+    glUseProgram(h->decode);
+    glUniform1i(h->u_parent, 0);
+    glUniform2i(h->u_quadrant, j->qx, j->qy);
+    glUniform1i(h->u_e, gv_get16(j->buf + 2));
+    glUniform1i(h->u_coded, coded);
+    if (h->path == GV_GPU_PATH_WEBGL2)
+        glUniform1i(h->u_q, 1);
+    else
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, h->qbuf);
+    glBindFramebuffer(GL_FRAMEBUFFER, h->fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                           tex, 0);
+    glViewport(0, 0, GV_HT_SIDE, GV_HT_SIDE);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    /* The next tile reuses the buffers: wait for this draw. */
+    GLsync fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    while (glClientWaitSync(fence, GL_SYNC_FLUSH_COMMANDS_BIT, 1000000000) ==
+           GL_TIMEOUT_EXPIRED)
+        ;
+    glDeleteSync(fence);
+    j->handle = tex;
+    return gl_failed(err, "height tile decode");
+}
+
+int gv_gpu_height_decode(struct gv_gpu_height *h, const uint8_t *buf,
+                         size_t len, uint32_t parent, int qx, int qy,
+                         uint32_t *handle, struct gv_error *err)
+{
+    if (gv_height_tile_check(buf, len, err) < 0)
+        return -1;
+    struct job j = {.h = h, .buf = buf, .len = len, .parent = parent,
+                    .qx = qx, .qy = qy};
+    if (gv_gpu_call(h->gpu, decode, &j, err) < 0)
+        return -1;
+    *handle = j.handle;
+    return 0;
+}
+
+static int readback(void *arg, struct gv_error *err)
+{
+    struct job *j = arg;
+    GLuint *rgba = malloc(sizeof *rgba * 4 * GV_HT_SAMPLES);
+    if (!rgba)
+        return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+    glBindFramebuffer(GL_FRAMEBUFFER, j->h->fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                           j->handle, 0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadPixels(0, 0, GV_HT_SIDE, GV_HT_SIDE, GL_RGBA_INTEGER, GL_UNSIGNED_INT, rgba);
+    for (int i = 0; i < GV_HT_SAMPLES; i++)
+        j->codes_out[i] = (uint16_t)rgba[4 * i];
+    free(rgba);
+    return gl_failed(err, "height tile read-back");
+}
+
+int gv_gpu_height_read(struct gv_gpu_height *h, uint32_t handle,
+                       uint16_t *codes, struct gv_error *err)
+{
+    struct job j = {.h = h, .handle = handle, .codes_out = codes};
+    return gv_gpu_call(h->gpu, readback, &j, err);
+}
+
+static int release(void *arg, struct gv_error *err)
+{
+    (void)err;
+    GLuint tex = ((struct job *)arg)->handle;
+    glDeleteTextures(1, &tex);
+    return 0;
+}
+
+void gv_gpu_height_release(struct gv_gpu_height *h, uint32_t handle)
+{
+    struct job j = {.h = h, .handle = handle};
+    gv_gpu_call(h->gpu, release, &j, NULL);
+}

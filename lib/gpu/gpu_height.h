@@ -1,0 +1,55 @@
+/*
+ * gpu_height.h - decoding height tiles on the GPU (docs/FORMAT.md section
+ * 12), bit for bit what lib/codec/height_tile.c does.
+ *
+ * A decoded height tile lives on the GPU as a 513x513 R16UI texture named
+ * by a handle.  On the SSBO path (GLSL ES 3.10 / GL 4.30) a compute pass
+ * (shaders/height_rans.comp.glsl, one invocation per stream) entropy-
+ * decodes the buffer into a storage buffer of q, then a fragment pass
+ * (shaders/height_decode.frag.glsl) predicts from the parent texture and
+ * adds q (2e + 1).  On the WebGL2 path (GLSL ES 3.00, as the browser) the
+ * CPU entropy-decodes into an R32I texture for the same fragment pass.
+ * Every function may be called from any thread but the GPU's own (the
+ * work runs there, through gv_gpu_call).
+ */
+#ifndef GV_GPU_HEIGHT_H
+#define GV_GPU_HEIGHT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+#include "gpu/gpu.h"
+#include "gpu/gpu_decode.h"
+
+struct gv_gpu_height;
+
+/* Compile the programs of `path` (GV_GPU_PATH_WEBGL2 needs an ES
+ * context).  g is borrowed.  NULL with *err on failure (a shader that
+ * does not compile is listed on stderr). */
+struct gv_gpu_height *gv_gpu_height_new(struct gv_gpu *g, enum gv_gpu_path path,
+                                        struct gv_error *err);
+
+/* Free every texture and program.  NULL does nothing. */
+void gv_gpu_height_free(struct gv_gpu_height *h);
+
+/* Upload 513x513 codes (the root tile) as a new texture: 0 with *handle,
+ * or -1. */
+int gv_gpu_height_upload(struct gv_gpu_height *h, const uint16_t *codes,
+                         uint32_t *handle, struct gv_error *err);
+
+/* Decode buffer buf (checked with gv_height_tile_check first) against the
+ * parent texture and quadrant (qx,qy) into a new texture: 0 with
+ * *handle, or -1 with *err. */
+int gv_gpu_height_decode(struct gv_gpu_height *h, const uint8_t *buf,
+                         size_t len, uint32_t parent, int qx, int qy,
+                         uint32_t *handle, struct gv_error *err);
+
+/* Read a tile back as 513x513 codes.  0 or -1. */
+int gv_gpu_height_read(struct gv_gpu_height *h, uint32_t handle,
+                       uint16_t *codes, struct gv_error *err);
+
+/* Delete a texture made by this decoder. */
+void gv_gpu_height_release(struct gv_gpu_height *h, uint32_t handle);
+
+#endif

@@ -1,0 +1,142 @@
+/*
+ * test_gpu_height.c - the GPU height decoder (lib/gpu/gpu_height.c and
+ * shaders/height_*.glsl) gives, on both shader paths, exactly the codes of
+ * the CPU reference decoder for every tile of every level of height
+ * stores: ETOPO5 lossless and at 2 m, and synthetic terrain at e = 1 (on
+ * llvmpipe in CI).  The WebGL2 path is the browser's: its fragment shader
+ * compiled as GLSL ES 3.00, q decoded on the CPU.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "codec/height_tile.h"
+#include "encode/height_encode.h"
+#include "gpu/gpu.h"
+#include "gpu/gpu_height.h"
+#include "render/store_decoder.h"
+#include "store/store_read.h"
+#include "util.h"
+
+static char dir[] = "/tmp/gv-test-gpu-height-XXXXXX";
+
+/* Decode every tile of `path` on the GPU, level by level from the
+ * uploaded root tile, and compare each with the CPU decoder. */
+static void check_path(struct gv_gpu *gpu, const char *path, const char *name,
+                       enum gv_gpu_path gp)
+{
+    const char *pn = gp == GV_GPU_PATH_SSBO ? "ssbo" : "webgl2";
+    struct gv_error err;
+    struct gv_gpu_height *gh = gv_gpu_height_new(gpu, gp, &err);
+    if (!gh) {
+        if (err.code == GV_EFORMAT) {
+            tap_skip("no OpenGL ES context", "%s %s", name, pn);
+            return;
+        }
+        check(0, "%s %s: decoder: %s", name, pn, err.text);
+        return;
+    }
+    struct gv_store *s = gv_store_open(path, &err);
+    if (!s)
+        fail("open %s: %s", path, err.text);
+    const struct gv_geometry *g = &gv_store_info(s)->geometry;
+    struct gv_decoder *cpu = gv_decoder_new(s, 256u << 20);
+    uint16_t *got = malloc(sizeof *got * GV_HT_SAMPLES);
+    const uint8_t *px;
+    uint32_t *up = calloc(1, sizeof *up), *cur = NULL;
+    uint32_t up_tx = 1;
+    size_t up_n = 1;
+    if (gv_decoder_tile(cpu, g->root, 0, 0, &px, &err) < 0 ||
+        gv_gpu_height_upload(gh, (const uint16_t *)(const void *)px, &up[0], &err) < 0)
+        fail("%s: root: %s", name, err.text);
+    long tiles = 0, same = 0;
+    for (int k = g->root - 1; k >= 0; k--) {
+        const struct gv_level *l = &g->level[k];
+        size_t n = (size_t)l->tiles_x * l->tiles_y;
+        cur = calloc(n, sizeof *cur);
+        for (uint32_t ty = 0; ty < l->tiles_y; ty++)
+            for (uint32_t tx = 0; tx < l->tiles_x; tx++) {
+                uint8_t *page;
+                size_t plen, tlen;
+                const uint8_t *tb;
+                if (gv_store_read_page(s, k, tx / 8, ty / 8, &page, &plen, &err) < 0 ||
+                    gv_page_tile(page, plen, 1, (int)(tx % 8), (int)(ty % 8), &tb,
+                                 &tlen, &err) < 0)
+                    fail("%s: page: %s", name, err.text);
+                uint32_t *h = &cur[(size_t)ty * l->tiles_x + tx];
+                if (gv_gpu_height_decode(gh, tb, tlen, up[(ty / 2) * up_tx + tx / 2],
+                                         (int)(tx & 1), (int)(ty & 1), h, &err) < 0 ||
+                    gv_gpu_height_read(gh, *h, got, &err) < 0)
+                    fail("%s %s: GPU decode %d/%u/%u: %s", name, pn, k, tx, ty, err.text);
+                free(page);
+                if (gv_decoder_tile(cpu, k, tx, ty, &px, &err) < 0)
+                    fail("%s: CPU decode: %s", name, err.text);
+                tiles++;
+                if (memcmp(got, px, sizeof *got * GV_HT_SAMPLES) == 0) {
+                    same++;
+                } else {
+                    const uint16_t *c = (const uint16_t *)(const void *)px;
+                    for (int i = 0; i < GV_HT_SAMPLES; i++)
+                        if (got[i] != c[i]) {
+                            printf("# %s %s tile %d/%u/%u first differs at (%d,%d): "
+                                   "GPU %u, CPU %u\n", name, pn, k, tx, ty,
+                                   i % 513, i / 513, got[i], c[i]);
+                            break;
+                        }
+                }
+            }
+        for (size_t i = 0; i < up_n; i++)
+            gv_gpu_height_release(gh, up[i]);
+        free(up);
+        up = cur;
+        up_n = n;
+        up_tx = l->tiles_x;
+    }
+    for (size_t i = 0; i < up_n; i++)
+        gv_gpu_height_release(gh, up[i]);
+    free(up);
+    check(tiles > 0 && same == tiles, "%s %s: %ld of %ld tiles bit-exact", name,
+          pn, same, tiles);
+    free(got);
+    gv_decoder_free(cpu);
+    gv_store_close(s);
+    gv_gpu_height_free(gh);
+}
+
+static void check_store(struct gv_gpu *gpu, const char *input, double e,
+                        const char *name)
+{
+    char out[256];
+    snprintf(out, sizeof out, "%s/h.gv", dir);
+    struct gv_height_opts o = {.max_error = e};
+    struct gv_height_result r;
+    struct gv_error err;
+    if (gv_height_encode(input, out, &o, &r, &err) < 0)
+        fail("encode %s: %s", input, err.text);
+    check_path(gpu, out, name, GV_GPU_PATH_SSBO);
+    check_path(gpu, out, name, GV_GPU_PATH_WEBGL2);
+    unlink(out);
+}
+
+int main(void)
+{
+    struct gv_error err;
+    struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
+    if (!gpu)
+        return tap_skip_all("no EGL context: %s", err.text);
+    const struct gv_gpu_info *in = gv_gpu_info(gpu);
+    printf("# EGL %s platform, %s: %s / %s\n", in->platform, in->api, in->vendor,
+           in->renderer);
+    if (!mkdtemp(dir))
+        fail("mkdtemp");
+    const char *data = getenv("TESTDATA") ? getenv("TESTDATA") : "tests/data";
+    char dem[512];
+    snprintf(dem, sizeof dem, "%s/etopo5-himalaya-1030x300-u16.png", data);
+    check_store(gpu, dem, 0, "etopo lossless");
+    check_store(gpu, dem, 2, "etopo e=2");
+    check_store(gpu, "synth-height:1100x1030", 1, "synth e=1");
+    rmdir(dir);
+    gv_gpu_close(gpu);
+    return tap_done();
+}
