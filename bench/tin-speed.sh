@@ -12,6 +12,7 @@
 # bench/results/tin-DATE.tsv and, with gnuplot, bench/tin-DATE.png.
 #
 #   bench/tin-speed.sh [E...]        (default: 10 50 200, metres)
+#   bench/tin-speed.sh --plot TSV PNG   (only the plot of an earlier run)
 #
 # Environment: GIGAVIEW (default: ../gigaview, see lib.sh), DATA_DIR,
 # REPS (best of, default 3).  The npm anchors come from bench/package.json
@@ -21,6 +22,50 @@ set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 # shellcheck source=bench/lib.sh
 . "$here/lib.sh"
+
+# plot_tsv TSV PNG: triangles over delatin's, and CPU time, per case
+# (wall times on a shared machine are too noisy to plot).
+plot_tsv() {
+	command -v gnuplot >/dev/null 2>&1 || { echo "no gnuplot: no plot"; return 0; }
+	local pw
+	pw=$(mktemp -d)
+	for tool in gigaview gigaview-plain gigaview-tiles64 delatin martini; do
+		awk -F'\t' -v t="$tool" 'NR > 1 { c = $1 "/" $2; if (!(c in seen)) { seen[c] = 1; cs[++n] = c }
+			tri[c, $3] = $4; cpu[c, $3] = $6 }
+			END { for (i = 1; i <= n; i++) print i, cs[i], tri[cs[i], t] / tri[cs[i], "delatin"], cpu[cs[i], t] }' "$1" >"$pw/$tool.dat"
+	done
+	gnuplot <<GP
+set terminal pngcairo size 1100,460 font ",10"
+set output "$2"
+set multiplot layout 1,2 title "TINs of ETOPO5 regions (1025^2 samples) at max error E (region/E), one thread"
+set style data linespoints
+set xtics rotate by -30
+set key top right
+set ylabel "triangles / delatin's"
+set title "triangles at equal max error (goal <= 1)"
+plot "$pw/gigaview.dat" using 1:3:xtic(2) title "gigaview (crack-free)", \\
+     "$pw/gigaview-plain.dat" using 1:3 title "gigaview (plain)", \\
+     "$pw/gigaview-tiles64.dat" using 1:3 title "gigaview (64^2 tiles)", \\
+     "$pw/delatin.dat" using 1:3 title "delatin", \\
+     "$pw/martini.dat" using 1:3 title "martini"
+set logscale y
+set ylabel "CPU ms"
+set title "meshing time (CPU)"
+plot "$pw/gigaview.dat" using 1:4:xtic(2) title "gigaview (crack-free)", \\
+     "$pw/gigaview-plain.dat" using 1:4 title "gigaview (plain)", \\
+     "$pw/gigaview-tiles64.dat" using 1:4 title "gigaview (64^2 tiles)", \\
+     "$pw/delatin.dat" using 1:4 title "delatin", \\
+     "$pw/martini.dat" using 1:4 title "martini"
+unset multiplot
+GP
+	rm -rf "$pw"
+	echo "plot: $2"
+}
+
+if [ "${1:-}" = --plot ]; then
+	plot_tsv "$2" "$3"
+	exit 0
+fi
 
 errs=("$@")
 [ ${#errs[@]} -gt 0 ] || errs=(10 50 200)
@@ -108,35 +153,4 @@ echo "/delatin: triangles over delatin's at the same max error (goal <= 1.0); sp
 echo "(best of $reps; goal >= 10 single-threaded); cpu x: the same in CPU time, which the load of a shared machine disturbs less"
 echo "table: $tsv"
 
-if command -v gnuplot >/dev/null 2>&1; then
-	png=$here/tin-$day.png
-	awk -F'\t' 'NR > 1 { print $1 "/" $2, $3, $4, $5 }' "$tsv" >"$work/plot.dat"
-	for tool in gigaview gigaview-plain gigaview-tiles64 delatin martini; do
-		awk -v t="$tool" '$2 == t { print NR, $1, $3, $4 }' "$work/plot.dat" | awk '{ $1 = ++i; print }' >"$work/$tool.dat"
-	done
-	gnuplot <<GP
-set terminal pngcairo size 1100,460 font ",10"
-set output "$png"
-set multiplot layout 1,2 title "TINs of ETOPO5 regions (1025^2 samples) at max error E, one thread"
-set style data linespoints
-set logscale y
-set xtics rotate by -30
-set key top right
-set ylabel "triangles"
-set title "triangles at equal max error"
-plot "$work/gigaview.dat" using 1:3:xtic(2) title "gigaview (crack-free)", \
-     "$work/gigaview-plain.dat" using 1:3 title "gigaview (plain)", \
-     "$work/gigaview-tiles64.dat" using 1:3 title "gigaview (64^2 tiles)", \
-     "$work/delatin.dat" using 1:3 title "delatin", \
-     "$work/martini.dat" using 1:3 title "martini"
-set ylabel "ms"
-set title "meshing time"
-plot "$work/gigaview.dat" using 1:4:xtic(2) title "gigaview (crack-free)", \
-     "$work/gigaview-plain.dat" using 1:4 title "gigaview (plain)", \
-     "$work/gigaview-tiles64.dat" using 1:4 title "gigaview (64^2 tiles, 1 thread)", \
-     "$work/delatin.dat" using 1:4 title "delatin", \
-     "$work/martini.dat" using 1:4 title "martini"
-unset multiplot
-GP
-	echo "plot: $png"
-fi
+plot_tsv "$tsv" "$here/tin-$day.png"
