@@ -560,6 +560,8 @@ static int frame(struct app *app, double *last)
     app->in.ratio = ww > 0 ? (double)app->w / ww : 1;
     const struct vg_view before = app->in.cur;
     int moving = vi_step(&app->in, dt > 0.1 ? 0.1 : dt);
+    /* A drag moves the view without an animation. */
+    moving |= memcmp(&before, &app->in.cur, sizeof before) != 0;
     struct vt_plan p = {0};
     if (app->tiles) {
         vt_plan_view(app->tiles, &app->in.cur, app->w, app->h, &p);
