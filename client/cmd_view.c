@@ -537,6 +537,7 @@ static int frame(struct app *app, double *last)
     const double t0 = now_s();
     double dt = t0 - *last;
     *last = t0;
+    const struct vg_view before = app->in.cur;   /* events and the script move it */
     SDL_Event e;
     while (SDL_PollEvent(&e)) {
         if (e.type == SDL_WINDOWEVENT) {
@@ -558,7 +559,6 @@ static int frame(struct app *app, double *last)
     app->in.w = app->w;
     app->in.h = app->h;
     app->in.ratio = ww > 0 ? (double)app->w / ww : 1;
-    const struct vg_view before = app->in.cur;
     int moving = vi_step(&app->in, dt > 0.1 ? 0.1 : dt);
     /* A drag moves the view without an animation. */
     moving |= memcmp(&before, &app->in.cur, sizeof before) != 0;
