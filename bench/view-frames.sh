@@ -99,6 +99,14 @@ t1=$(date +%s%N)
 render_ms=$(( (t1 - t0) / 1000000 ))
 
 awk -F'\t' 'NR > 1 && $3 == 1 { print $2 }' "$work/frames.tsv" | sort -g >"$work/moving.txt"
+# Frames that decoded a tile against those that only drew: what decoding
+# adds to a frame, apart from drawing.
+awk -F'\t' 'NR > 1 && $3 == 1 { d = $6 > prev; print d, $2 } NR > 1 { prev = $6 }' \
+	"$work/frames.tsv" >"$work/split.txt"
+for d in 0 1; do
+	awk -v d=$d '$1 == d { print $2 }' "$work/split.txt" | sort -g |
+		awk -v d=$d '{ t[++n] = $1 } END { if (n) printf "frames %s  %d, p50 %.2f ms, longest %.2f ms\n", d ? "that decoded" : "only drawn  ", n, t[int(n * 0.5) + 1], t[n] }'
+done
 awk -v r="$render_ms" -v s="$summary" '
 	{ t[++n] = $1; if ($1 > 16.7) o16++; if ($1 > 50) o50++ }
 	END {
