@@ -9,7 +9,8 @@
 # once into $TMPDIR (kept there for the next run).  The path (generated below): a drag that pans level 0
 # right at 16 window pixels a frame for 300 frames, then down for 150,
 # then half a level out and right again for 150, at $SIZE (default
-# 1280x720), --budget $BUDGET decodes a frame (default 4), no vsync (the
+# 1280x720), --budget $BUDGET decodes a frame (default 4; and the viewer's
+# default --budget-ms), no vsync (the
 # driver has none), a cold tile cache.  It reports, for the frames drawn
 # while the view moved: p50, p99 and the longest frame time (the frame's
 # whole work: events, decodes within the budget, the draw, glFinish), the

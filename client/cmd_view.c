@@ -52,7 +52,7 @@ struct view_args {
     const char *image, *size, *view, *script, *cache_dir, *stats;
     int fullscreen, no_cache, no_batch, no_prefetch, no_vsync, no_overlay, verbose;
     int budget;
-    double timeout, gpu_mib;
+    double timeout, gpu_mib, budget_ms;
 };
 
 #define F(field) offsetof(struct view_args, field)
@@ -85,6 +85,10 @@ static const struct opt_spec view_opts[] = {
      .help = "GPU memory for decoded tiles (default 256)"},
     {.name = "budget", .kind = OPT_INT, .arg = "N", .field = F(budget), .min = 1,
      .max = 4096, .help = "tile decodes per frame at most (default 4)"},
+    {.name = "budget-ms", .kind = OPT_DOUBLE, .arg = "MS", .field = F(budget_ms),
+     .min = 0, .max = 10000, .flags = OPT_FINITE,
+     .help = "no new decode once a frame's decoding took this\n"
+             "long (default 6; one decode always runs)"},
     {.name = "no-prefetch", .kind = OPT_FLAG, .field = F(no_prefetch),
      .help = "no prefetching ahead of the motion"},
     {.name = "no-vsync", .kind = OPT_FLAG, .field = F(no_vsync),
@@ -233,6 +237,7 @@ static void take_result(struct app *app, struct vf_result *r, double now)
         .decode_bytes = (size_t)(app->a->gpu_mib * 1048576.0 * 0.25),
         .buffer_bytes = (size_t)256 << 20,
         .budget = app->a->budget,
+        .budget_ms = app->a->budget_ms,
         .prefetch = !app->a->no_prefetch,
         .verbose = app->a->verbose,
     };
@@ -782,7 +787,7 @@ static int start(struct app *app, const char *url, struct view_args *a)
 
 int cmd_view(int argc, char **argv)
 {
-    struct view_args a = {.timeout = 10, .gpu_mib = 256, .budget = 4};
+    struct view_args a = {.timeout = 10, .gpu_mib = 256, .budget = 4, .budget_ms = 6};
     int first, rc = opt_parse(&view_command, argc, argv, &a, &first);
     if (rc != OPT_GO_ON)
         return rc;
