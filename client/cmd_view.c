@@ -52,7 +52,7 @@ struct view_args {
     const char *image, *size, *view, *script, *cache_dir, *stats;
     int fullscreen, no_cache, no_batch, no_prefetch, no_vsync, no_overlay, verbose;
     int budget;
-    double timeout, gpu_mib;
+    double timeout, gpu_mib, budget_ms;
 };
 
 #define F(field) offsetof(struct view_args, field)
@@ -85,6 +85,10 @@ static const struct opt_spec view_opts[] = {
      .help = "GPU memory for decoded tiles (default 256)"},
     {.name = "budget", .kind = OPT_INT, .arg = "N", .field = F(budget), .min = 1,
      .max = 4096, .help = "tile decodes per frame at most (default 4)"},
+    {.name = "budget-ms", .kind = OPT_DOUBLE, .arg = "MS", .field = F(budget_ms),
+     .min = 0, .max = 10000, .flags = OPT_FINITE,
+     .help = "no new decode once a frame's decoding took this\n"
+             "long (default 6; one decode always runs)"},
     {.name = "no-prefetch", .kind = OPT_FLAG, .field = F(no_prefetch),
      .help = "no prefetching ahead of the motion"},
     {.name = "no-vsync", .kind = OPT_FLAG, .field = F(no_vsync),
@@ -143,6 +147,12 @@ struct app {
     uint64_t pc_frame;
     const char *shot_path;       /* due at the next draw */
     int shot_done, shot_no;
+    /* what the last drawn frame showed */
+    const struct vt *drawn_tiles;
+    struct vg_view drawn_view;
+    uint64_t drawn_decodes, draws;
+    int drawn_w, drawn_h, drawn_overlay, force_draw;
+    struct vo_content drawn_content;
     /* stats */
     FILE *stats;
     double *ft;
@@ -227,6 +237,7 @@ static void take_result(struct app *app, struct vf_result *r, double now)
         .decode_bytes = (size_t)(app->a->gpu_mib * 1048576.0 * 0.25),
         .buffer_bytes = (size_t)256 << 20,
         .budget = app->a->budget,
+        .budget_ms = app->a->budget_ms,
         .prefetch = !app->a->no_prefetch,
         .verbose = app->a->verbose,
     };
@@ -531,10 +542,13 @@ static int frame(struct app *app, double *last)
     const double t0 = now_s();
     double dt = t0 - *last;
     *last = t0;
+    const struct vg_view before = app->in.cur;   /* events and the script move it */
     SDL_Event e;
     while (SDL_PollEvent(&e)) {
-        if (e.type == SDL_WINDOWEVENT && e.window.event == SDL_WINDOWEVENT_EXPOSED)
+        if (e.type == SDL_WINDOWEVENT) {
+            app->force_draw = 1;     /* exposed, resized, shown */
             continue;
+        }
         act(app, vi_event(&app->in, &e));
     }
     if (app->script.n)
@@ -550,30 +564,50 @@ static int frame(struct app *app, double *last)
     app->in.w = app->w;
     app->in.h = app->h;
     app->in.ratio = ww > 0 ? (double)app->w / ww : 1;
-    const struct vg_view before = app->in.cur;
     int moving = vi_step(&app->in, dt > 0.1 ? 0.1 : dt);
+    /* A drag moves the view without an animation. */
+    moving |= memcmp(&before, &app->in.cur, sizeof before) != 0;
     struct vt_plan p = {0};
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glViewport(0, 0, app->w, app->h);
-    glClearColor(0, 0, 0, 1);
-    glClear(GL_COLOR_BUFFER_BIT);
     if (app->tiles) {
         vt_plan_view(app->tiles, &app->in.cur, app->w, app->h, &p);
         vt_frame(app->tiles, &p, app->in.cur.cx - before.cx, app->in.cur.cy - before.cy,
                  app->fetch, t0, &app->st);
-        if (p.visible)
-            vd_draw(app->draw, app->tiles, &p, &app->in.cur, app->w, app->h);
     }
-    if (app->shot_path && app->tiles)
-        write_shot(app);
-    if (app->show_overlay) {
-        struct vo_content c;
+    struct vo_content c;
+    if (app->show_overlay)
         overlay_content(app, &p, &c);
-        vo_draw(app->overlay, app->w, app->h, &c);
+    /* Draw only what changed: the view, the resident tiles, the image,
+     * the window, the overlay, or a screenshot due. */
+    int dirty = app->force_draw || app->shot_path || app->tiles != app->drawn_tiles ||
+                memcmp(&app->in.cur, &app->drawn_view, sizeof app->drawn_view) ||
+                app->st.decodes != app->drawn_decodes || app->w != app->drawn_w ||
+                app->h != app->drawn_h || app->show_overlay != app->drawn_overlay ||
+                (app->show_overlay && memcmp(&c, &app->drawn_content, sizeof c));
+    if (dirty) {
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glViewport(0, 0, app->w, app->h);
+        glClearColor(0, 0, 0, 1);
+        glClear(GL_COLOR_BUFFER_BIT);
+        if (app->tiles && p.visible)
+            vd_draw(app->draw, app->tiles, &p, &app->in.cur, app->w, app->h);
+        if (app->shot_path && app->tiles)
+            write_shot(app);
+        if (app->show_overlay)
+            vo_draw(app->overlay, app->w, app->h, &c);
+        SDL_GL_SwapWindow(app->win);
+        if (app->stats)
+            glFinish();          /* time the frame's GPU work too */
+        app->drawn_tiles = app->tiles;
+        app->drawn_view = app->in.cur;
+        app->drawn_decodes = app->st.decodes;
+        app->drawn_w = app->w;
+        app->drawn_h = app->h;
+        app->drawn_overlay = app->show_overlay;
+        if (app->show_overlay)
+            app->drawn_content = c;
+        app->force_draw = 0;
+        app->draws++;
     }
-    SDL_GL_SwapWindow(app->win);
-    if (app->stats)
-        glFinish();
     app->frames++;
     record(app, (now_s() - t0) * 1000, moving);
     if (moving)
@@ -631,7 +665,9 @@ static int open_window(struct app *app, int w, int h)
                 SDL_GetError());
         return -1;
     }
-    app->vsync = !app->a->no_vsync && SDL_GL_SetSwapInterval(1) == 0;
+    /* The offscreen driver accepts a swap interval but never waits. */
+    app->vsync = !app->a->no_vsync && SDL_GL_SetSwapInterval(1) == 0 &&
+                 strcmp(SDL_GetCurrentVideoDriver(), "offscreen") != 0;
     if (!app->vsync)
         SDL_GL_SetSwapInterval(0);
     struct gv_error err;
@@ -682,11 +718,12 @@ static void summary(struct app *app, double elapsed)
     double p50 = app->nft ? app->ft[app->nft / 2] : 0;
     double p99 = app->nft ? app->ft[(size_t)((app->nft - 1) * 0.99)] : 0;
     double mx = app->nft ? app->ft[app->nft - 1] : 0;
-    fprintf(stderr, "view: %llu frames in %.2f s, %zu while moving: p50 %.2f ms, "
+    fprintf(stderr, "view: %llu frames (%llu drawn) in %.2f s, %zu while moving: p50 %.2f ms, "
             "p99 %.2f ms, max %.2f ms; %llu tiles decoded (%.1f/s), %llu "
             "prefetched, %llu atlas evictions, %llu failed fetches; http: %llu "
             "requests, %llu bytes; renderer %s\n",
-            (unsigned long long)app->frames, elapsed, app->nft, p50, p99, mx,
+            (unsigned long long)app->frames, (unsigned long long)app->draws, elapsed,
+            app->nft, p50, p99, mx,
             (unsigned long long)app->st.decodes,
             elapsed > 0 ? app->st.decodes / elapsed : 0,
             (unsigned long long)app->st.prefetched,
@@ -750,7 +787,7 @@ static int start(struct app *app, const char *url, struct view_args *a)
 
 int cmd_view(int argc, char **argv)
 {
-    struct view_args a = {.timeout = 10, .gpu_mib = 256, .budget = 4};
+    struct view_args a = {.timeout = 10, .gpu_mib = 256, .budget = 4, .budget_ms = 6};
     int first, rc = opt_parse(&view_command, argc, argv, &a, &first);
     if (rc != OPT_GO_ON)
         return rc;

@@ -71,8 +71,8 @@ struct vg_view vg_clamp(const struct vg_view *v, double iw, double ih, double w,
 static int number(const char *s, size_t n, double *out)
 {
     char buf[64], *end;
-    if (n == 0 || n >= sizeof buf)
-        return -1;
+    if (n == 0 || n >= sizeof buf || s[0] == ' ' || (s[0] >= '\t' && s[0] <= '\r'))
+        return -1;                      /* strtod would skip the space */
     memcpy(buf, s, n);
     buf[n] = 0;
     double x = strtod(buf, &end);

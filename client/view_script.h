@@ -9,7 +9,8 @@
  * when a limit below runs out, with a message naming the line).
  *
  *   wait MS                 let MS milliseconds of frames pass
- *   frames N                let N frames be drawn
+ *   frames N                let N frame ticks pass (a tick draws only
+ *                           when something changed)
  *   key NAME                press and release a key: an SDL key name
  *                           ("Right", "+", "Home", "R"), optionally after
  *                           "shift+" and/or "ctrl+"

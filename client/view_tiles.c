@@ -24,6 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <GLES3/gl32.h>
 
@@ -401,6 +402,23 @@ static void tile_range(const struct vt *t, int k, const double *b, uint32_t *r)
     if (r[1] > r[3]) r[1] = r[3];
 }
 
+static double seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + ts.tv_nsec / 1e9;
+}
+
+/* Whether the frame's decode budget is spent: the count, or the time
+ * since `since` once one decode ran. */
+static int spent(struct vt *t, uint64_t d0, double since)
+{
+    struct gv_gpu_cache_stats cs;
+    gv_gpu_cache_stats(t->cache, &cs);
+    return cs.decodes - d0 >= (uint64_t)t->o.budget ||
+           (cs.decodes > d0 && (seconds() - since) * 1000 >= t->o.budget_ms);
+}
+
 static int push_need(struct vt *t, struct entry *e)
 {
     if (t->nneed == t->capneed) {
@@ -580,6 +598,7 @@ void vt_frame(struct vt *t, const struct vt_plan *p, double vx, double vy,
     struct gv_gpu_cache_stats cs;
     gv_gpu_cache_stats(t->cache, &cs);
     const uint64_t d0 = cs.decodes;
+    const double since = seconds();
     size_t missing = 0;
     const size_t nview = t->nneed;
     /* Touch the resident tiles first, so that no layer this frame draws
@@ -595,10 +614,7 @@ void vt_frame(struct vt *t, const struct vt_plan *p, double vx, double vy,
         if (e->slot >= 0)
             continue;
         missing++;
-        if (!chain_ready(t, e, now))
-            continue;
-        gv_gpu_cache_stats(t->cache, &cs);
-        if (cs.decodes - d0 >= (uint64_t)t->o.budget)
+        if (!chain_ready(t, e, now) || spent(t, d0, since))
             continue;
         if (make_resident(t, e, t->frame, now) == 0)
             missing--;
@@ -625,10 +641,7 @@ void vt_frame(struct vt *t, const struct vt_plan *p, double vx, double vy,
                 struct entry *e = t->need[i];
                 if (e->slot >= 0 || e->used == t->frame)
                     continue;
-                if (!chain_ready(t, e, now))
-                    continue;
-                gv_gpu_cache_stats(t->cache, &cs);
-                if (cs.decodes - d0 >= (uint64_t)t->o.budget)
+                if (!chain_ready(t, e, now) || spent(t, d0, since))
                     continue;
                 uint64_t before = t->frame > 60 ? t->frame - 60 : 0;
                 if (make_resident(t, e, before, now) == 0) {

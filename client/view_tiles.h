@@ -45,6 +45,8 @@ struct vt_options {
     size_t decode_bytes;       /* the decoder's own cache (parents) */
     size_t buffer_bytes;       /* compressed tile buffers kept in memory */
     int budget;                /* tile decodes per frame */
+    double budget_ms;          /* and no new decode after this much of a
+                                  frame's decoding (one always runs) */
     int prefetch;              /* 0: no prefetching */
     int verbose;
 };

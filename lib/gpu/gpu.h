@@ -9,8 +9,10 @@
  * Every GL call happens on that thread: other threads hand it work with
  * gv_gpu_call and wait for the result, so GL objects never cross threads.
  *
- * This header includes no GL header, and only lib/gpu/gpu_*.c and
- * filters/run_gpu.c include EGL or GL headers: everything else talks to
+ * This header includes no GL header, and only lib/gpu/gpu_*.c,
+ * filters/run_gpu.c and the native viewer's window code (client/view_*.c,
+ * client/cmd_view.c, on a context it adopts) include EGL or GL headers:
+ * everything else talks to
  * the GPU through this API, gpu_decode.h, gpu_cache.h and filter.h.  The
  * whole of lib/gpu is left out of a build configured --without-gpu
  * (config.h then lacks GV_HAVE_GPU), and its callers say so instead.
