@@ -125,26 +125,29 @@ int main(int argc, char **argv)
     const float k = gv_zfield_k(1080, 60.0 * M_PI / 180.0);
     printf("== view-dependent refinement, %ux%u fractal (10 m grid), 1 px at 1080 px, "
            "60 deg, %d frames\n", side, side, frames);
-    struct series cpu = {0}, cpu_sweep = {0}, gpu = {0};
-    for (int pass = 0; pass < 3; pass++) {
+    struct series cpu = {0}, cpu_sweep = {0}, gpu = {0}, gpu_frag = {0};
+    for (int pass = 0; pass < 4; pass++) {
 #ifndef GV_ZFIELD_BENCH_EGL
-        if (pass == 2)
+        if (pass >= 2)
             break;
 #endif
-        struct series *s = pass == 0 ? &cpu : pass == 1 ? &cpu_sweep : &gpu;
+        struct series *s = pass == 0 ? &cpu : pass == 1 ? &cpu_sweep : pass == 2 ? &gpu
+                                                                                  : &gpu_frag;
 #ifdef GV_ZFIELD_BENCH_EGL
         struct gv_gpu *g = NULL;
         struct gv_gpu_zfield *zf = NULL;
-        if (pass == 2) {
+        if (pass >= 2) {
             if (!want_gpu)
                 break;
             g = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
-            if (!g || !(zf = gv_gpu_zfield_new(g, &err)) ||
+            if (!g || !(zf = gv_gpu_zfield_new_path(g, pass == 2 ? GV_ZFIELD_COMPUTE
+                                                                 : GV_ZFIELD_FRAGMENT, &err)) ||
                 gv_gpu_zfield_heights(zf, z, side, &err) < 0) {
                 printf("GPU: unavailable: %s\n", err.text);
                 break;
             }
-            printf("# GPU: %s\n", gv_gpu_info(g)->renderer);
+            if (pass == 2)
+                printf("# GPU: %s\n", gv_gpu_info(g)->renderer);
         }
 #endif
         for (int f = 0; f < frames; f++) {
@@ -156,7 +159,7 @@ int main(int argc, char **argv)
             const double t0 = now();
             int rc;
 #ifdef GV_ZFIELD_BENCH_EGL
-            if (pass == 2)
+            if (pass >= 2)
                 rc = gv_gpu_zfield_enable(zf, &p, en, &err);
             else
 #endif
@@ -178,7 +181,9 @@ int main(int argc, char **argv)
     report("CPU, 1 thread, coarse phase + sweep", &cpu, NULL);
     report("CPU, 1 thread, plain level sweep", &cpu_sweep, NULL);
     if (gpu.n) {
-        report("GPU sweep (EGL) + mesh on the CPU", &gpu, NULL);
+        report("GPU sweep (EGL), compute + mesh", &gpu, NULL);
+        if (gpu_frag.n)
+            report("GPU sweep (EGL), fragment + mesh", &gpu_frag, NULL);
         printf("ratio GPU / CPU (frames per second): %.2fx against the coarse phase, "
                "%.2fx against the plain sweep\n", cpu.t[cpu.n / 2] / gpu.t[gpu.n / 2],
                cpu_sweep.t[cpu_sweep.n / 2] / gpu.t[gpu.n / 2]);

@@ -226,7 +226,8 @@ static int same_mesh(const struct gv_tin *a, const struct gv_tin *b)
 }
 
 #ifdef GV_TEST_GPU
-static struct gv_gpu_zfield *gzf;
+static struct gv_gpu_zfield *gzf[2];   /* compute, fragment (WebGL2's) */
+static const char *path_name[2] = {"compute", "fragment (GLSL ES 3.00)"};
 #endif
 
 static void check_case(const char *name, const float *z, uint32_t n, const struct gv_zfield_params *p,
@@ -258,10 +259,12 @@ static void check_case(const char *name, const float *z, uint32_t n, const struc
               "the square, use every enabled vertex %s", name, t.ntris, why);
     }
 #ifdef GV_TEST_GPU
-    if (gzf) {
+    for (int path = 0; path < 2; path++) {
+        if (!gzf[path])
+            continue;
         uint8_t *g = malloc(cells);
-        if (gv_gpu_zfield_heights(gzf, z, n, &err) < 0 ||
-            gv_gpu_zfield_enable(gzf, p, g, &err) < 0)
+        if (gv_gpu_zfield_heights(gzf[path], z, n, &err) < 0 ||
+            gv_gpu_zfield_enable(gzf[path], p, g, &err) < 0)
             fail("%s: gpu: %s", name, err.text);
         size_t differ = 0;
         for (size_t i = 0; i < cells; i++)
@@ -269,8 +272,9 @@ static void check_case(const char *name, const float *z, uint32_t n, const struc
         struct gv_tin tg;
         if (gv_zfield_mesh(z, n, g, 0, &tg, &err) < 0)
             fail("%s: gpu mesh: %s", name, err.text);
-        check(differ == 0 && same_mesh(&t, &tg), "%s: the GPU enables the same vertices "
-              "(%zu differ) and gives the same mesh, triangle for triangle", name, differ);
+        check(differ == 0 && same_mesh(&t, &tg), "%s: the GPU, %s, enables the same "
+              "vertices (%zu differ) and gives the same mesh, triangle for triangle", name,
+              path_name[path], differ);
         gv_tin_free(&tg);
         free(g);
     }
@@ -286,8 +290,12 @@ int main(void)
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu)
         printf("# no EGL context (%s): CPU checks only\n", err.text);
-    else if (!(gzf = gv_gpu_zfield_new(gpu, &err)))
-        fail("gpu zfield: %s", err.text);
+    else if (!(gzf[0] = gv_gpu_zfield_new_path(gpu, GV_ZFIELD_COMPUTE, &err)))
+        fail("gpu zfield, compute: %s", err.text);
+    else if (!gv_gpu_info(gpu)->es)
+        printf("# not an ES context: the fragment (WebGL2) variant is not run\n");
+    else if (!(gzf[1] = gv_gpu_zfield_new_path(gpu, GV_ZFIELD_FRAGMENT, &err)))
+        fail("gpu zfield, fragment: %s", err.text);
     if (gpu)
         printf("# EGL: %s\n", gv_gpu_info(gpu)->renderer);
 #endif
@@ -345,7 +353,8 @@ int main(void)
                                           .eye = {300, -200, 400}}, 1);
     free(big);
 #ifdef GV_TEST_GPU
-    gv_gpu_zfield_free(gzf);
+    gv_gpu_zfield_free(gzf[0]);
+    gv_gpu_zfield_free(gzf[1]);
     gv_gpu_close(gpu);
 #endif
     return tap_done();
