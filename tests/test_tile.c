@@ -146,6 +146,10 @@ static void check_biased_search(void)
                             r == 0 ? 255 : r == 1 ? -255 : (int)(next_rand() % 161) - 80);
                     }
                 }
+                for (int d = 0; d < dim && !clustered; d++) {   /* sums beyond any codevector's */
+                    vecs[d] = 255;
+                    vecs[VQ_STRIDE + d] = -255;
+                }
                 vq_search_prepare(s, book, k, dim);
                 vq_search_set_bias(s, bias);
                 if (vq_nearest_path(path, s, vecs, n, idx, dist) < 0) {
