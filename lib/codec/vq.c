@@ -6,10 +6,14 @@
  * codevector needs dim/2 (6 for RGB) load-subtract-madd-add steps.  An
  * AVX-512 kernel (16 codevectors at once) or the AVX2 one is chosen at run
  * time (GIGAVIEW_NO_AVX512 in the environment rules out the first), and
- * each returns exactly what the portable loop returns (strictly-less
- * comparison in index order, ties to the lowest index), so stores do not
- * depend on the CPU that wrote them.  A per-codevector bias is where each
- * cost starts: every path adds it before the first pair, in int32.
+ * each returns exactly what the portable loop returns (the least cost,
+ * ties to the lowest index), so stores do not depend on the CPU that
+ * wrote them.  A per-codevector bias is where each cost starts: every
+ * path adds it before the first pair, in int32.  The codevectors are kept
+ * sorted by the sum of their components, in runs of 16; the SIMD kernels
+ * skip the runs that a Cauchy-Schwarz bound on that sum rules out (exact,
+ * in integers: see the pruned order below), and search codebooks of up
+ * to 32 entries sixteen vectors at a time instead.
  *
  * Training is LBG (vq_train_double) and, for the rate-distortion mode,
  * entropy-constrained refinement (vq_train_ecvq: Chou, Lookabaugh and
