@@ -11,7 +11,9 @@
 # write their output into the same scratch directory. Each command runs REPS
 # times (default 3), alternating between the two, and the best (least) wall
 # time is kept. Speeds are source megapixels per
-# second of wall time. Peak RSS (maximum resident set, from GNU time) is
+# second of wall time; the least CPU time (user + system) of each is
+# printed too, since on a shared machine it moves less than wall time.
+# Peak RSS (maximum resident set, from GNU time) is
 # printed for both tools, the largest over the runs. With --baseline, an
 # older gigaview binary runs too, in the same alternation, and its speed
 # and RSS are printed beside the new one's (before/after in one run); the
@@ -90,15 +92,16 @@ if [ "$MOSAIC" != 0 ]; then
 	inputs+=("$m")
 fi
 
-# time_cmd: runs "$@" once and prints the wall time in seconds and the
-# peak RSS in MiB.
+# time_cmd: runs "$@" once and prints the wall time in seconds, the peak
+# RSS in MiB and the CPU time (user + system) in seconds.
 time_cmd() {
 	local t0 t1 rss
 	t0=$(now)
-	/usr/bin/time -f %M -o "$work/rss" "$@" >/dev/null 2>&1 || { echo "FAILED: $*" >&2; return 1; }
+	/usr/bin/time -f '%M %U %S' -o "$work/rss" "$@" >/dev/null 2>&1 || { echo "FAILED: $*" >&2; return 1; }
 	t1=$(now)
-	rss=$(tail -1 "$work/rss")
-	awk -v a="$t0" -v b="$t1" -v r="$rss" 'BEGIN { printf "%.3f %.0f\n", b - a, r / 1024 }'
+	read -r rss us ss < <(tail -1 "$work/rss")
+	awk -v a="$t0" -v b="$t1" -v r="$rss" -v u="$us" -v s="$ss" \
+		'BEGIN { printf "%.3f %.0f %.2f\n", b - a, r / 1024, u + s }'
 }
 maxof() { printf '%s\n' "$@" | sort -g | tail -1; }
 
@@ -128,19 +131,20 @@ if [ -n "$BASE" ]; then
 fi
 tot_mp=0 tot_v=0 tot_g=0 tot_b=0
 bpp_lines=()
+cpu_lines=()
 for f in "${inputs[@]}"; do
 	w=$(img_w "$f"); h=$(img_h "$f"); b=$(img_bands "$f")
 	mp=$(awk -v w="$w" -v h="$h" 'BEGIN { printf "%.2f", w * h / 1e6 }')
-	tv=(); tg=(); tb=(); rv=(); rg=(); rb=()
+	tv=(); tg=(); tb=(); rv=(); rg=(); rb=(); cv=(); cg=(); cb=()
 	for ((r = 0; r < REPS; r++)); do
 		rm -rf "$work/dz" "$work/dz.zip" "$work/out.gv" "$work/base.gv"
-		read -r t m < <(time_cmd vips dzsave "$f" "$work/dz.zip" --container zip --suffix '.jpg[Q=85]')
-		tv+=("$t"); rv+=("$m")
-		read -r t m < <(time_cmd "$GV" encode "$f" -o "$work/out.gv" --quiet)
-		tg+=("$t"); rg+=("$m")
+		read -r t m u < <(time_cmd vips dzsave "$f" "$work/dz.zip" --container zip --suffix '.jpg[Q=85]')
+		tv+=("$t"); rv+=("$m"); cv+=("$u")
+		read -r t m u < <(time_cmd "$GV" encode "$f" -o "$work/out.gv" --quiet)
+		tg+=("$t"); rg+=("$m"); cg+=("$u")
 		if [ -n "$BASE" ]; then
-			read -r t m < <(time_cmd "$BASE" encode "$f" -o "$work/base.gv" --quiet)
-			tb+=("$t"); rb+=("$m")
+			read -r t m u < <(time_cmd "$BASE" encode "$f" -o "$work/base.gv" --quiet)
+			tb+=("$t"); rb+=("$m"); cb+=("$u")
 		fi
 	done
 	zip=$work/dz.zip; [ -f "$zip" ] || zip=$work/dz
@@ -151,6 +155,10 @@ for f in "${inputs[@]}"; do
 	name=$(basename "$f")
 	[ "$b" = 1 ] && name="$name (gray)"
 	printf "$fmt" "${name:0:34}" "$mp" "$bv" "$sv" "$(maxof "${rv[@]}")" "$bg" "$sg" "$(maxof "${rg[@]}")" "${ratio}x"
+	bcv=$(best "${cv[@]}"); bcg=$(best "${cg[@]}")
+	cpu_lines+=("$(printf '%-34s %7s %8s %8s %8s' "${name:0:34}" "$mp" "$bcv" "$bcg" \
+		"$(awk -v v="$bcv" -v g="$bcg" 'BEGIN { printf "%.2fx", v / g }')")$( [ -n "$BASE" ] && \
+		awk -v b="$(best "${cb[@]}")" -v g="$bcg" 'BEGIN { printf " %8s %9.2fx", b, b / g }')")
 	if [ -n "$BASE" ]; then
 		bb=$(best "${tb[@]}")
 		same=identical; cmp -s "$work/out.gv" "$work/base.gv" || same=DIFFERENT
@@ -179,6 +187,11 @@ if [ -n "$BASE" ]; then
 		printf "baseline / vips dzsave speed, all inputs: %.2fx (baseline %.1f MP/s); new / baseline: %.2fx\n",
 			v / b, mp / b, b / g }'
 fi
+echo
+printf '%-34s %7s %8s %8s %8s' "CPU seconds (user + sys, least)" MP vips gv gv/vips
+[ -n "$BASE" ] && printf ' %8s %10s' base new/base
+echo
+printf '%s\n' "${cpu_lines[@]}"
 echo "context only (other input): CODEC-NOTES quotes vips dzsave JPEG Q85 into one .zip at 59 MP/s on a 264 MP mosaic."
 echo
 printf '%-34s %7s %10s %10s\n' "output size" MP "vips bpp" "gv bpp"

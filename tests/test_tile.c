@@ -101,7 +101,9 @@ static void reference_nearest(const int8_t *book, const int32_t *bias, int k,
 
 /* Every search path against reference_nearest on random codebooks, biases
  * (some out of range, some equal over duplicated codevectors, so that
- * ties occur) and residuals (some at +-255, the extremes). */
+ * ties occur) and residuals (some at +-255, the extremes), and on
+ * residuals close to the codevectors (clustered), where the SIMD paths
+ * skip most runs of their search (vq.c: pruning by component sums). */
 static void check_biased_search(void)
 {
     static const int ks[] = {1, 5, 16, 37, 256, 1000};
@@ -117,6 +119,7 @@ static void check_biased_search(void)
         fail("out of memory");
     for (int path = VQ_PATH_PORTABLE; path <= VQ_PATH_AVX512; path++) {
         int wrong = 0, ties = 0, runs = 0, have = 1;
+        for (int clustered = 0; clustered < 2 && have; clustered++)
         for (int dim = 4; dim <= 12 && have; dim += 8)
             for (size_t ki = 0; ki < sizeof ks / sizeof ks[0] && have; ki++) {
                 const int k = ks[ki];
@@ -131,12 +134,19 @@ static void check_biased_search(void)
                     memcpy(book + c * dim, book + (c - 1) * dim, (size_t)dim);
                     bias[c] = bias[c - 1];
                 }
-                for (size_t i = 0; i < n; i++)
+                for (size_t i = 0; i < n; i++) {
+                    const int c = (int)(next_rand() % (uint32_t)k);
                     for (int d = 0; d < dim; d++) {
                         uint32_t r = next_rand() % 16;
-                        vecs[i * VQ_STRIDE + d] = (int16_t)(r == 0 ? 255 : r == 1 ? -255 :
-                                                            (int)(next_rand() % 161) - 80);
+                        vecs[i * VQ_STRIDE + d] = (int16_t)(
+                            clustered ? book[c * dim + d] + (int)(next_rand() % 7) - 3 :
+                            r == 0 ? 255 : r == 1 ? -255 : (int)(next_rand() % 161) - 80);
                     }
+                }
+                for (int d = 0; d < dim && !clustered; d++) {   /* sums beyond any codevector's */
+                    vecs[d] = 255;
+                    vecs[VQ_STRIDE + d] = -255;
+                }
                 vq_search_prepare(s, book, k, dim);
                 vq_search_set_bias(s, bias);
                 if (vq_nearest_path(path, s, vecs, n, idx, dist) < 0) {

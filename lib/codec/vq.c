@@ -6,10 +6,14 @@
  * codevector needs dim/2 (6 for RGB) load-subtract-madd-add steps.  An
  * AVX-512 kernel (16 codevectors at once) or the AVX2 one is chosen at run
  * time (GIGAVIEW_NO_AVX512 in the environment rules out the first), and
- * each returns exactly what the portable loop returns (strictly-less
- * comparison in index order, ties to the lowest index), so stores do not
- * depend on the CPU that wrote them.  A per-codevector bias is where each
- * cost starts: every path adds it before the first pair, in int32.
+ * each returns exactly what the portable loop returns (the least cost,
+ * ties to the lowest index), so stores do not depend on the CPU that
+ * wrote them.  A per-codevector bias is where each cost starts: every
+ * path adds it before the first pair, in int32.  The codevectors are kept
+ * sorted by the sum of their components, in runs of 16; the SIMD kernels
+ * skip the runs that a Cauchy-Schwarz bound on that sum rules out (exact,
+ * in integers: see the pruned order below), and search codebooks of up
+ * to 32 entries sixteen vectors at a time instead.
  *
  * Training is LBG (vq_train_double) and, for the rate-distortion mode,
  * entropy-constrained refinement (vq_train_ecvq: Chou, Lookabaugh and
@@ -146,9 +150,16 @@ static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
  * SMALL_RUNS runs visit them all: there the branches cost more than the
  * runs they would skip.
  */
-#ifndef SMALL_RUNS
 #define SMALL_RUNS 4
-#endif
+
+/* The run_at entry for a vector whose components sum to sx: residuals
+ * reach +-255 per component, beyond the codevectors' sums, and there
+ * the first run (below) or the last (above) is the start. */
+static inline int run_key(int sx)
+{
+    int v = sx - SUM_LO;
+    return v < 0 ? 0 : (v > SUM_SPAN ? SUM_SPAN : v);
+}
 
 #ifdef VQ_HAVE_X86
 /* One run of 16 codevectors for nearest_avx2_dim, as two halves of 8:
@@ -215,7 +226,7 @@ nearest_avx2_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
                 run8x2(s, r, xp, pairs, &best, &besti, NULL);
         } else {
             int64_t ub = INT_MAX;
-            const int r0 = s->run_at[sx - SUM_LO];
+            const int r0 = s->run_at[run_key(sx)];
             run8x2(s, r0, xp, pairs, &best, &besti, &ub);
             for (int r = r0 + 1; r < nruns; r++) {
                 const int64_t gap = s->run_smin[r] - sx;
@@ -336,7 +347,7 @@ nearest_avx512_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
                 dist[i] = (uint32_t)m;
             continue;
         }
-        const int r0 = s->run_at[sx - SUM_LO];
+        const int r0 = s->run_at[run_key(sx)];
         run16(s, r0, xp, pairs, &best, &besti, &ub);
         for (int r = r0 + 1; r < nruns; r++) {
             const int64_t gap = s->run_smin[r] - sx;
