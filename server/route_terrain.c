@@ -30,7 +30,7 @@
  * terrain_error_scale x 77067 m / 2^z: the scale times Cesium's own
  * geometric error of a level (its levelZeroMaximumGeometricError for two
  * root tiles of 65 samples); the measured error is in the tile's metadata
- * extension (id 4, JSON "maxError").
+ * extension (JSON "maxError"), under id 0x67 (TERRAIN_METADATA_ID).
  *
  * Levels: 0 .. maxzoom, the first level whose grid spacing reaches the
  * store's level-0 spacing (Cesium upsamples beyond).  Tiles are gzipped
@@ -57,6 +57,11 @@
  * maximumRadius * 2 pi * 0.25 / (65 * 2 root tiles), metres. */
 #define LEVEL0_ERROR (6378137.0 * 2 * M_PI * 0.25 / (65.0 * 2))
 #define TERRAIN_MIME "application/vnd.quantized-mesh"
+/* The id of the tiles' metadata extension (JSON: maxError, level, region).
+ * Not 4: CesiumJS parses an extension 4 whatever the layer declares and
+ * then expects metadataAvailability (tile availability in the metadata),
+ * which this service does not use; readers skip unknown ids. */
+#define TERRAIN_METADATA_ID 0x67
 
 /* The store's frame: level 0 is W x H; global stores wrap in x. */
 struct frame {
@@ -334,7 +339,7 @@ static int render_tile(void *arg, struct image *img, uint8_t **out,
         .x0 = q->x * TERRAIN_STEPS, .y0 = q->y * TERRAIN_STEPS, .level = q->z,
         .has_geo = 1, .west = -180.0 + q->x * side, .east = -180.0 + (q->x + 1) * side,
         .south = -90.0 + q->y * side, .north = -90.0 + (q->y + 1) * side,
-        .gzip = q->gzip};
+        .gzip = q->gzip, .metadata_id = TERRAIN_METADATA_ID};
     rc = gv_mesh_encode(GV_MESH_QMESH, &t, &pl, out, len, err);
 out:
     gv_tin_free(&t);

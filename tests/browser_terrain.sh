@@ -1,2 +1,103 @@
 #!/bin/sh
-echo "1..0 # SKIP not yet"
+# browser_terrain.sh - terrain in headless Chromium (Debian's
+# /usr/bin/chromium with WebGL on SwiftShader, driven by playwright-core):
+#   1. CesiumJS from npm (tests/browser/node_modules/cesium), unchanged,
+#      loads gigaviewd's terrain service (tests/browser/terrain_cesium.mjs
+#      lists its checks): layer.json and the quantized-mesh tiles load and
+#      parse with no failed request and no console error, sampled heights
+#      are those of the store, the screenshot shows relief where the
+#      ellipsoid alone is flat, and without skirts no crack shows;
+#   2. the viewer's 3D terrain mode (client/web/terrain*.js;
+#      tests/browser/terrain_viewer.mjs lists its checks).
+#
+# Encodes tests/data/etopo5-720x361-u16.png (the globe every half degree;
+# its column 0 is at Greenwich, hence lon0=0) as the height store
+# "world", and tests/data/picos-1100x700.jpg as an image store to drape.
+#
+# Skipped when /usr/bin/chromium, node or tests/browser/node_modules (with
+# cesium) is missing (scripts/install-deps.sh installs chromium and
+# nodejs; scripts/check.sh runs `npm ci` in tests/browser), and under
+# valgrind.  Needs curl and python3 (http_util.sh).
+. "$(dirname "$0")/lib.sh"
+
+: "${CHROMIUM:=/usr/bin/chromium}"
+srcdir=${top_srcdir:-$(dirname "$0")/..}
+BROWSER_DIR=$(cd "$srcdir/tests/browser" && pwd)
+if [ ! -x "$CHROMIUM" ]; then
+    echo "1..0 # SKIP $CHROMIUM not installed (apt-get install chromium)"
+    exit 0
+fi
+if ! command -v node >/dev/null 2>&1; then
+    echo "1..0 # SKIP node not installed (apt-get install nodejs npm)"
+    exit 0
+fi
+node_major=$(node -p 'process.versions.node.split(".")[0]' 2>/dev/null || echo 0)
+if [ "$node_major" -lt 20 ]; then
+    echo "1..0 # SKIP node $node_major is too old for playwright-core (needs 20)"
+    exit 0
+fi
+if [ ! -d "$BROWSER_DIR/node_modules/playwright-core" ] ||
+    [ ! -f "$BROWSER_DIR/node_modules/cesium/Build/Cesium/Cesium.js" ]; then
+    echo "1..0 # SKIP no tests/browser/node_modules with cesium (cd tests/browser && npm ci)"
+    exit 0
+fi
+if under_valgrind; then
+    echo "1..0 # SKIP browser timings are not meant for valgrind (http_terrain.sh covers the routes)"
+    exit 0
+fi
+. "$(dirname "$0")/http_util.sh"
+
+S=$T/stores
+mkdir "$S" || bail "mkdir"
+run encode --height --max-error 2 --unit m --offset -11000 \
+    "$TESTDATA/etopo5-720x361-u16.png" -o "$S/world.gv"
+[ "$rc" -eq 0 ] || bail "encode world: $(cat "$T/err")"
+run encode "$TESTDATA/picos-1100x700.jpg" -o "$S/picos.gv"
+[ "$rc" -eq 0 ] || bail "encode picos: $(cat "$T/err")"
+
+cat >"$T/t.conf" <<EOF2
+listen = 127.0.0.1
+port = 0
+store_dir = "$S"
+threads = 4
+access_log = off
+EOF2
+start_daemon "$T/t.conf"
+
+# tap_of FILE: PASS/FAIL/# lines of a browser script as TAP.
+tap_of() {
+    while IFS= read -r line; do
+        case $line in
+        "PASS "*) ok "${line#PASS }" ;;
+        "FAIL "*) not_ok "${line#FAIL }" ;;
+        "#"*) printf '%s\n' "$line" ;;
+        *) diag "$line" ;;
+        esac
+    done <"$1"
+}
+
+# 1. CesiumJS
+crc=0
+timeout 90 node "$BROWSER_DIR/terrain_cesium.mjs" --base "$BASE" --id world \
+    --lon0 0 --chromium "$CHROMIUM" --out "$T/shots" >"$T/cesium.out" 2>&1 || crc=$?
+tap_of "$T/cesium.out"
+if [ "$crc" -ne 0 ] && ! grep -q '^FAIL ' "$T/cesium.out"; then
+    not_ok "terrain_cesium.mjs ran (exit $crc)" "$(tail -n 20 "$T/cesium.out")"
+fi
+
+# 2. the viewer's terrain mode
+if [ -f "$BROWSER_DIR/terrain_viewer.mjs" ]; then
+    vrc=0
+    timeout 90 node "$BROWSER_DIR/terrain_viewer.mjs" --base "$BASE" --id world \
+        --drape picos --chromium "$CHROMIUM" --out "$T/shots" >"$T/viewer.out" 2>&1 || vrc=$?
+    tap_of "$T/viewer.out"
+    if [ "$vrc" -ne 0 ] && ! grep -q '^FAIL ' "$T/viewer.out"; then
+        not_ok "terrain_viewer.mjs ran (exit $vrc)" "$(tail -n 20 "$T/viewer.out")"
+    fi
+fi
+
+stop_daemon
+if [ "$drc" -eq 0 ]; then ok "gigaviewd exits 0 on SIGTERM"; else
+    not_ok "gigaviewd exits 0 on SIGTERM (exit $drc)" "$(tail -n 20 "$T/daemon.log")"
+fi
+done_testing

@@ -118,7 +118,7 @@ def decode(b):
     while p < len(b):
         eid, ln = struct.unpack_from("<BI", b, p)
         p += 5
-        if eid == 4:
+        if eid == 0x67:   # the service's metadata (id 4 stops CesiumJS)
             jl = struct.unpack_from("<I", b, p)[0]
             t["meta"] = json.loads(b[p + 4:p + 4 + jl])
         p += ln

@@ -15,6 +15,7 @@ import { attachInput } from './input.js';
 import { Overlay } from './overlay.js';
 import { formatHash, imageToScreen, parseHash, screenToImage } from './view.js';
 import { FilterRunner } from './roi_filter.js';
+import { TerrainMode } from './terrain.js';
 import { Viewer } from './viewer.js';
 
 const $ = (id) => document.getElementById(id);
@@ -30,6 +31,7 @@ const viewer = new Viewer($('view'), {
 const runner = new FilterRunner(viewer, { box: $('roi-box'), canvas: $('view') });
 const panel = new FilterPanel(viewer, runner);
 const modes = { roi: runner.roiTool };
+const terrain = new TerrainMode(viewer, $('terrain'), $('terrain-btn'));
 attachInput(viewer, $('view'), modes);
 new Overlay(viewer, {
     mini: $('mini'), zoom: $('zoom'), scale: $('scale'), scaleText: $('scale-text'),
@@ -76,9 +78,10 @@ async function routeFilter(st) {
 // Show what the hash says.
 async function route() {
     const st = parseHash(location.hash);
-    viewer.extra = { roi: viewer.extra.roi, filter: panel.id, params: runner.params };
+    viewer.extra = { roi: viewer.extra.roi, filter: panel.id, params: runner.params, terrain: terrain.source };
     $('status').hidden = !st.image;
     if (!st.image) {
+        terrain.set(null);
         viewer.close();
         $('images').hidden = false;
         $('mini').hidden = true;
@@ -89,6 +92,7 @@ async function route() {
     if (viewer.image && viewer.image.id === st.image) {
         if (st.view && formatHash({ image: st.image, view: st.view }) !== formatHash({ image: st.image, view: viewer.view }))
             viewer.animateTo(st.view);
+        terrain.set(st.terrain);
         await routeFilter(st);
         return;
     }
@@ -108,8 +112,10 @@ async function route() {
     await p;
     if (opening === p)
         opening = null;
-    if (viewer.image)
+    if (viewer.image) {
+        terrain.set(st.terrain);
         await routeFilter(st);
+    }
 }
 
 $('picker').addEventListener('change', (e) => {
@@ -126,7 +132,7 @@ window.addEventListener('keydown', (e) => {
 window.addEventListener('hashchange', route);
 
 window.gigaview = {
-    viewer, modes, errors, parseHash, formatHash, screenToImage, imageToScreen, runner, panel,
+    viewer, modes, errors, terrain, parseHash, formatHash, screenToImage, imageToScreen, runner, panel,
     /** Resolves once the image named in the hash is open (or failed). */
     ready: (async () => { await Promise.all([loadList(), panel.load()]); await route(); })(),
 };

@@ -14,7 +14,7 @@
 //
 // and a pixel's sample is taken at its centre (i + 0.5, j + 0.5).
 //
-// The hash: #image=ID&x=CX&y=CY&z=ZOOM&r=DEG[&roi=X,Y,W,H][&filter=FID]
+// The hash: #image=ID&x=CX&y=CY&z=ZOOM&r=DEG[&roi=X,Y,W,H][&filter=FID][&terrain=hillshade|ID]
 // [&p=MODULE.PARAM:VALUE,...].  The ROI is in CSS pixels relative to the
 // viewport centre (so it stays put when the window is resized).
 
@@ -81,6 +81,8 @@ export function formatHash(st) {
         q.set('roi', st.roi.map((x) => fmt(x, 1)).join(','));
     if (st.filter)
         q.set('filter', st.filter);
+    if (st.terrain)
+        q.set('terrain', st.terrain);
     if (st.params && Object.keys(st.params).length)
         q.set('p', Object.entries(st.params).map(([k, v]) => `${k}:${fmt(v, 6)}`).join(','));
     return '#' + q.toString();
@@ -97,7 +99,8 @@ export function parseHash(hash) {
         const v = Number(s);
         return Number.isFinite(v) ? v : null;
     };
-    const st = { image: q.get('image') || null, view: null, roi: null, filter: q.get('filter') || null, params: {} };
+    const st = { image: q.get('image') || null, view: null, roi: null, filter: q.get('filter') || null, params: {},
+        terrain: q.get('terrain') || null };
     const x = num('x'), y = num('y'), z = num('z'), r = num('r');
     if (x !== null && y !== null && z !== null)
         st.view = { cx: x, cy: y, zoom: z, rot: r === null ? 0 : r };

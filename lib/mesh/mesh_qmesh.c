@@ -226,7 +226,7 @@ int mesh_write_qmesh(struct mbuf *b, const struct gv_tin *t,
         rc = -1;
         goto out;
     }
-    mb_u8(b, 4);
+    mb_u8(b, pl->metadata_id ? pl->metadata_id : 4);
     mb_u32(b, 4 + (uint32_t)jn);
     mb_u32(b, (uint32_t)jn);
     mb_put(b, json, (size_t)jn);

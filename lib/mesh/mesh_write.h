@@ -30,6 +30,10 @@ struct gv_mesh_place {
                             degrees (WGS84), corner samples on the corners */
     double west, south, east, north;
     int gzip;            /* quantized-mesh: gzip the whole file */
+    uint8_t metadata_id; /* quantized-mesh: the metadata extension's id;
+                            0 means 4, the standard one (the terrain route
+                            uses another: CesiumJS reads id 4 only with
+                            metadataAvailability in layer.json) */
 };
 
 /* "glb", "qmesh" (or "terrain"), "ply", "obj" -> *f.  Returns 0, or -1
