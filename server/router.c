@@ -28,6 +28,7 @@ const struct router_route router_routes[ROUTE_COUNT] = {
     [ROUTE_FILTER_DELETE] = {"DELETE", "/v1/filters/*", "filter", 0},
     [ROUTE_IMAGE_FILTER] = {"POST", "/v1/images/*/filter", "image_filter", 0},
     [ROUTE_MESH] = {"GET", "/v1/images/*/mesh", "mesh", 0},
+    [ROUTE_MESH_SIMPLIFY] = {"POST", "/v1/meshes/simplify", "mesh_simplify", 0},
     [ROUTE_WEB] = {"GET", "/web/*", "web", 0},
 };
 

@@ -40,6 +40,7 @@ enum route_id {
     ROUTE_FILTER_DELETE,
     ROUTE_IMAGE_FILTER,
     ROUTE_MESH,
+    ROUTE_MESH_SIMPLIFY,   /* issue 15 part 2 */
     ROUTE_WEB,
     ROUTE_COUNT
 };

@@ -24,5 +24,6 @@ const route_fn route_handlers[ROUTE_COUNT] = {
     [ROUTE_FILTER_DELETE] = route_filter_delete,
     [ROUTE_IMAGE_FILTER] = route_image_filter,
     [ROUTE_MESH] = route_mesh,
+    [ROUTE_MESH_SIMPLIFY] = route_mesh_simplify,
     [ROUTE_WEB] = route_static,
 };

@@ -29,6 +29,8 @@ enum MHD_Result route_batch(struct req *r);
 enum MHD_Result route_region(struct req *r);
 /* route_mesh.c */
 enum MHD_Result route_mesh(struct req *r);
+/* route_mesh_simplify.c */
+enum MHD_Result route_mesh_simplify(struct req *r);
 /* route_iiif.c */
 enum MHD_Result route_iiif_base(struct req *r);
 enum MHD_Result route_iiif_info(struct req *r);
