@@ -240,10 +240,7 @@ static int header_lines(char *hdr, struct elem *el, int *nel, int *ascii,
                  strcmp(pname, "vertex_index") == 0) &&
                 p->t != T_F32 && p->t != T_F64)
                 p->role = 4;
-        } else {
-            return gv_fail(err, GV_ECORRUPT, "mesh: ply: unknown header line "
-                           "'%.32s'", w[0]);
-        }
+        }   /* other lines (some writers add free text) are skipped */
     }
     if (!have_format)
         return gv_fail(err, GV_ECORRUPT, "mesh: ply: no format line");
