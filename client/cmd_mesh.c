@@ -11,8 +11,9 @@
  * than the region, clamped to the level), so regions that tile the level
  * share their border samples; with --max-error the border vertices are
  * chosen from those samples alone, and neighbours join without cracks
- * (docs/MESHES.md).  The measured error goes into the file and onto
- * stdout, with the time the meshing took.
+ * (docs/MESHES.md).  --tile T meshes tiles of the region in parallel and
+ * joins them (tin_tiled.c).  The measured error goes into the file and
+ * onto stdout, with the time the meshing took.
  */
 #include <stddef.h>
 #include <stdio.h>
@@ -21,6 +22,7 @@
 #include <time.h>
 
 #include "base/atomic_file.h"
+#include "base/pool.h"
 #include "commands.h"
 #include "imageio/imageio.h"
 #include "mesh/mesh_write.h"
@@ -40,7 +42,7 @@ struct mesh_args {
     const char *region, *output, *format, *geo;
     double max_error, scale, offset, xy_scale;
     uint64_t max_triangles;
-    int gzip, no_border;
+    int gzip, no_border, tile, threads;
 };
 
 #define F(field) offsetof(struct mesh_args, field)
@@ -76,6 +78,13 @@ static const struct opt_spec mesh_opts[] = {
      .help = "qmesh: gzip the file"},
     {.name = "no-border-first", .kind = OPT_FLAG, .field = F(no_border),
      .help = "insert border samples with the interior (not crack-free)"},
+    {.name = "tile", .kind = OPT_INT, .arg = "T", .field = F(tile),
+     .min = 1, .max = GV_TIN_MAX_SIDE,
+     .help = "with --max-error: mesh tiles of TxT cells in parallel and\n"
+             "join them without cracks (default: one tile)"},
+    {.name = "threads", .short_name = 'j', .kind = OPT_INT, .arg = "N",
+     .field = F(threads), .min = 1, .max = 1024,
+     .help = "threads for --tile (default: every core)"},
 };
 #undef F
 
@@ -278,7 +287,16 @@ int cmd_mesh(int argc, char **argv)
     rc = 1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
-    if (gv_tin_build(h, gw, gh, gw, &p, &t, &err) < 0) {
+    if (a.tile && (a.max_error < 0 || a.max_triangles || a.no_border)) {
+        fprintf(stderr, ME ": --tile needs --max-error, without "
+                "--max-triangles or --no-border-first\n");
+        rc = 2;
+        goto out;
+    }
+    if ((a.tile ? gv_tin_build_tiled(h, gw, gh, gw, &p, (uint32_t)a.tile,
+                                     a.threads ? a.threads : gv_cpu_count(),
+                                     &t, &err)
+                : gv_tin_build(h, gw, gh, gw, &p, &t, &err)) < 0) {
         fprintf(stderr, ME ": %s\n", err.text);
         goto out;
     }

@@ -9,6 +9,9 @@
 # two regions that share an edge, and refuse with the JSON error shape:
 # bad queries (400), an image store (400), max_mesh_samples and
 # max_mesh_triangles (413, asked or needed), mesh_time_limit (504).
+# Last, `gigaview mesh` alone: an image file meshes as its lossless height
+# store, --tile gives the same file on any thread count, and bad
+# arguments are refused.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
 
@@ -93,4 +96,26 @@ EOF2
 start_daemon "$T/t.conf"
 expect_status "mesh_time_limit" 504 "/v1/images/dem/mesh?region=0,0,599,399&max_error=0"
 stop_daemon
+
+# gigaview mesh: an image file gives the mesh of its lossless height store
+run encode --height --offset -11000 "$TESTDATA/etopo-600x400-u16.png" -o "$S/dem0.gv"
+[ "$rc" -eq 0 ] || bail "encode lossless: $(cat "$T/err")"
+run mesh "$S/dem0.gv" --region 10,20,200,150 --max-error 12 -o "$T/store.ply"
+check "mesh of a lossless store" test "$rc" = 0
+run mesh "$TESTDATA/etopo-600x400-u16.png" --offset -11000 --region 10,20,200,150 \
+    --max-error 12 -o "$T/image.ply"
+check "mesh of the image: the same file" cmp -s "$T/store.ply" "$T/image.ply"
+run mesh "$S/dem0.gv" --region 0,0,599,399 --max-error 12 --tile 64 -j 3 -o "$T/t3.obj"
+run mesh "$S/dem0.gv" --region 0,0,599,399 --max-error 12 --tile 64 -j 1 -o "$T/t1.obj"
+check "--tile: the same mesh on 1 and 3 threads" cmp -s "$T/t1.obj" "$T/t3.obj"
+run mesh "$S/dem0.gv" --region 0,0,10,10 -o "$T/x.obj"
+check "no goal: usage (2)" test "$rc" = 2
+run mesh "$S/dem0.gv" --max-triangles 100 --tile 8 -o "$T/x.obj"
+check "--tile with --max-triangles: usage (2)" test "$rc" = 2
+run mesh "$S/dem0.gv" --max-error 1 -o "$T/x.stl"
+check "unknown format: usage (2)" test "$rc" = 2
+run mesh "$TESTDATA/etopo-600x400-u16.png" --level 1 --max-error 1 -o "$T/x.obj"
+check "an image has only level 0 (1)" test "$rc" = 1
+run mesh "$S/img.gv" --max-error 1 -o "$T/x.obj"
+check "an image store is refused (1)" sh -c "[ $rc = 1 ] && grep -q 'not a height store' '$T/err'"
 done_testing

@@ -161,7 +161,7 @@ static void compare_brute(uint32_t w, uint32_t h, int kind, double e,
     free(f);
 }
 
-/* 1D greedy against a direct O(n k) version. */
+/* 1D greedy against a direct O(n k) greedy insertion. */
 static void edge_brute(void)
 {
     float s[200];
@@ -169,7 +169,8 @@ static void edge_brute(void)
     for (int i = 0; i < 200; i++)
         s[i] = (float)(50 * sin(i * 0.07) + 10 * frand());
     uint32_t pos[200], ref[200], nref = 0;
-    uint32_t n = gv_tin_edge_greedy(s, 1, 200, 2.0, pos);
+    uint32_t n = 0;
+    int got = gv_tin_edge_greedy(s, 1, 200, 2.0, pos, &n);
     uint8_t chosen[200] = {0};
     chosen[0] = chosen[199] = 1;
     for (;;) {
@@ -194,9 +195,15 @@ static void edge_brute(void)
         chosen[bi] = 1;
         ref[nref++] = bi;
     }
-    check(n == nref && memcmp(pos, ref, n * sizeof *pos) == 0,
-          "1D greedy: %u positions, the brute force's %u in the same order",
-          n, nref);
+    /* the set, sorted: greedy order does not change it */
+    for (uint32_t i = 1; i < nref; i++)
+        for (uint32_t k = i; k > 0 && ref[k - 1] > ref[k]; k--) {
+            uint32_t t = ref[k];
+            ref[k] = ref[k - 1];
+            ref[k - 1] = t;
+        }
+    check(got == 0 && n == nref && memcmp(pos, ref, n * sizeof *pos) == 0,
+          "1D greedy: %u positions, the brute force's %u", n, nref);
 }
 
 /* Two regions sharing the column x = 40 of one grid, the right one with a
@@ -284,6 +291,58 @@ static void edge_cases(void)
     gv_tin_free(NULL);
 }
 
+/* Tiles: the bound, crack-free joins (every vertex once, the triangles
+ * tile the rectangle counter-clockwise), the same mesh for any thread
+ * count, and the tiles' vertices on their shared edges. */
+static void tiled(void)
+{
+    uint32_t W = 90, H = 61;
+    float *f = field(W, H, 0, 11);
+    struct gv_tin_params p = {2.0, 0, 1, 0};
+    struct gv_tin a, b, one;
+    struct gv_error err;
+    int ok = gv_tin_build_tiled(f, W, H, W, &p, 32, 1, &a, &err) == 0 &&
+             gv_tin_build_tiled(f, W, H, W, &p, 32, 3, &b, &err) == 0 &&
+             gv_tin_build(f, 33, 33, W, &p, &one, &err) == 0;
+    check(ok, "tiled: built with 1 and 3 threads");
+    check(same_mesh(&a, &b), "tiled: the same mesh for 1 and 3 threads (%u "
+          "triangles)", a.ntris);
+    double ie = independent_error(f, &a);
+    check(ie <= 2.0 + 1e-9 && fabs(ie - a.max_error) <= 1e-9 * (1 + ie),
+          "tiled: bound on every sample (%.6g, measured %.6g)", ie,
+          a.max_error);
+    int64_t area = 0;
+    int uniq = 1;
+    for (uint32_t k = 0; k < a.ntris; k++) {
+        const uint32_t *v = a.tris + 3 * k;
+        area += orient(a.vx[v[0]], a.vy[v[0]], a.vx[v[1]], a.vy[v[1]],
+                       a.vx[v[2]], a.vy[v[2]]);
+    }
+    for (uint32_t i = 0; i < a.nverts && uniq; i++)
+        for (uint32_t k = i + 1; k < a.nverts; k++)
+            if (a.vx[i] == a.vx[k] && a.vy[i] == a.vy[k])
+                uniq = 0;
+    check(uniq && area == 2 * (int64_t)(W - 1) * (H - 1),
+          "tiled: each vertex once, the triangles tile the rectangle");
+    /* the first tile is the mesh of samples 0..32 built alone */
+    int first = 1;
+    for (uint32_t i = 0; i < one.nverts; i++) {
+        int found = 0;
+        for (uint32_t k = 0; k < a.nverts && !found; k++)
+            found = a.vx[k] == one.vx[i] && a.vy[k] == one.vy[i];
+        first &= found;
+    }
+    check(first, "tiled: tile (0,0) holds the vertices of its region alone");
+    gv_tin_free(&a);
+    p.max_error = -1;
+    p.max_triangles = 100;
+    check(gv_tin_build_tiled(f, W, H, W, &p, 32, 1, &a, &err) < 0,
+          "tiled: a triangle limit is refused");
+    gv_tin_free(&b);
+    gv_tin_free(&one);
+    free(f);
+}
+
 int main(void)
 {
     edge_brute();
@@ -305,6 +364,7 @@ int main(void)
         compare_brute(cases[i].w, cases[i].h, cases[i].kind, cases[i].e,
                       cases[i].maxt, cases[i].border);
     crack_free();
+    tiled();
     edge_cases();
     return tap_done();
 }

@@ -44,6 +44,7 @@ struct tin {
     uint32_t nv, capv;
     int32_t *vx, *vy;
     float *vz;
+    int32_t *vhe;            /* a half-edge starting at each vertex */
     uint32_t nt, capt;
     int32_t *tv, *he;        /* 3 per triangle */
     double *cerr;            /* candidate error per triangle */
@@ -154,6 +155,10 @@ static int add_vertex(struct tin *m, int32_t x, int32_t y)
         if (!vz)
             return -1;
         m->vz = vz;
+        int32_t *vhe = realloc(m->vhe, (size_t)c * sizeof *vhe);
+        if (!vhe)
+            return -1;
+        m->vhe = vhe;
         m->capv = c;
     }
     m->vx[m->nv] = x;
@@ -326,8 +331,9 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
         const uint8_t *urow = m->used + (size_t)y * m->w;
         double zr = row_at(&pl, (int32_t)y), gx = pl.gx;
         int64_t bx = -1;
-        for (int64_t x = lo; x <= hi; x++) {
-            double e = fabs((double)row[x] - (zr + gx * (double)x));
+        double xd = (double)lo; /* exact: x < 2^16 */
+        for (int64_t x = lo; x <= hi; x++, xd += 1.0) {
+            double e = fabs((double)row[x] - (zr + gx * xd));
             /* used samples are skipped only where they would win: the
              * same maximum, one load and branch less per sample */
             if (e > be && (all || !urow[x])) {
@@ -342,9 +348,10 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
     *best_idx = bi;
 }
 
+/* Queue triangle t for a scan.  It may stay in the heap with a stale key
+ * until flush() updates it: nothing is selected in between. */
 static void mark(struct tin *m, int32_t t)
 {
-    heap_remove(m, t);
     if (!m->pflag[t]) {
         m->pflag[t] = 1;
         m->pend[m->npend++] = t;
@@ -360,8 +367,16 @@ static void flush(struct tin *m, int use_heap)
         if (!use_heap)
             continue;
         scan_tri(m, t, 0, &m->cerr[t], &m->cidx[t]);
-        if (m->cidx[t] >= 0 && m->cerr[t] > 0)
-            heap_push(m, t);
+        int has = m->cidx[t] >= 0 && m->cerr[t] > 0;
+        if (m->hpos[t] < 0) {
+            if (has)
+                heap_push(m, t);
+        } else if (!has) {
+            heap_remove(m, t);
+        } else { /* the new key, either way */
+            heap_up(m, (uint32_t)m->hpos[t]);
+            heap_down(m, (uint32_t)m->hpos[t]);
+        }
     }
     m->npend = 0;
 }
@@ -387,6 +402,11 @@ static int add_tri(struct tin *m, int32_t a, int32_t b, int32_t c, int ab,
     if (ab >= 0) m->he[ab] = e;
     if (bc >= 0) m->he[bc] = e + 1;
     if (ca >= 0) m->he[ca] = e + 2;
+    /* every split and flip rewrites each vertex it touches, so these stay
+     * valid */
+    m->vhe[a] = e;
+    m->vhe[b] = e + 1;
+    m->vhe[c] = e + 2;
     mark(m, e / 3);
     return e;
 }
@@ -501,84 +521,64 @@ static int insert_point(struct tin *m, int32_t t, int32_t x, int32_t y)
     return 0;
 }
 
-/* The triangle holding a hull half-edge through (x, y), for border
- * vertices: a linear search, only over the few border triangles. */
-static int32_t find_hull(const struct tin *m, int32_t x, int32_t y)
+/* The hull half-edge leaving hull vertex v: turn around v across the
+ * half-edges that leave it until one has no twin. */
+static int hull_out(const struct tin *m, int32_t v)
 {
-    for (uint32_t e = 0; e < 3 * m->nt; e++) {
-        if (m->he[e] >= 0)
-            continue;
-        int32_t a = m->tv[e], b = m->tv[next_he((int)e)];
-        if (orient(m->vx[a], m->vy[a], m->vx[b], m->vy[b], x, y) != 0)
-            continue;
-        int32_t lo = m->vx[a] < m->vx[b] ? m->vx[a] : m->vx[b];
-        int32_t hi = m->vx[a] < m->vx[b] ? m->vx[b] : m->vx[a];
-        int32_t ylo = m->vy[a] < m->vy[b] ? m->vy[a] : m->vy[b];
-        int32_t yhi = m->vy[a] < m->vy[b] ? m->vy[b] : m->vy[a];
-        if (x >= lo && x <= hi && y >= ylo && y <= yhi)
-            return (int32_t)(e / 3);
-    }
-    return -1;
+    int e = m->vhe[v];
+    while (m->he[e] >= 0)
+        e = next_he(m->he[e]);
+    return e;
 }
 
 /* ------------------------------------------------------------ 1D border */
 
-uint32_t gv_tin_edge_greedy(const float *s, size_t step, uint32_t n,
-                            double max_error, uint32_t *pos)
+static int cmp_u32(const void *a, const void *b)
 {
-    /* nxt[l]: the chosen position after chosen l; se[l] / si[l]: the
-     * candidate of the segment starting at l (se < 0: to scan again). */
-    uint32_t *nxt = malloc((size_t)n * sizeof *nxt);
-    double *se = malloc((size_t)n * sizeof *se);
-    uint32_t *si = malloc((size_t)n * sizeof *si);
-    uint32_t count = 0;
-    if (!nxt || !se || !si)
-        goto out;
-    nxt[0] = n - 1;
-    nxt[n - 1] = n - 1;
-    se[0] = -1;
-    for (;;) {
-        /* rescan stale segments */
-        for (uint32_t l = 0; l != n - 1; l = nxt[l]) {
-            if (se[l] >= 0)
-                continue;
-            uint32_t r = nxt[l];
-            double zl = s[(size_t)l * step], zr = s[(size_t)r * step];
-            double be = 0;
-            uint32_t bi = 0;
-            for (uint32_t i = l + 1; i < r; i++) {
-                double z = zl + (zr - zl) * (double)(i - l) / (double)(r - l);
-                double e = fabs((double)s[(size_t)i * step] - z);
-                if (e > be) {
-                    be = e;
-                    bi = i;
-                }
-            }
-            se[l] = be;
-            si[l] = bi;
-        }
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+int gv_tin_edge_greedy(const float *s, size_t step, uint32_t n,
+                       double max_error, uint32_t *pos, uint32_t *count_out)
+{
+    /* Greedy insertion on a polyline splits a segment at its sample of
+     * largest error, and no insertion elsewhere changes that segment: the
+     * chosen set is the recursive split of every segment whose largest
+     * error exceeds max_error, whatever the order.  A stack of segments
+     * (at most one per chosen sample, plus one) finds it. */
+    uint32_t *stk = malloc(2 * ((size_t)n + 1) * sizeof *stk);
+    uint32_t count = 0, top = 0;
+    *count_out = 0;
+    if (!stk)
+        return -1;
+    stk[top++] = 0;
+    stk[top++] = n - 1;
+    while (top) {
+        uint32_t r = stk[--top], l = stk[--top];
+        double zl = s[(size_t)l * step], zr = s[(size_t)r * step];
         double be = 0;
-        uint32_t bl = 0, bi = 0;
-        for (uint32_t l = 0; l != n - 1; l = nxt[l]) {
-            if (se[l] > be) { /* in position order: ties keep the first */
-                be = se[l];
-                bi = si[l];
-                bl = l;
+        uint32_t bi = 0;
+        for (uint32_t i = l + 1; i < r; i++) {
+            double z = zl + (zr - zl) * (double)(i - l) / (double)(r - l);
+            double e = fabs((double)s[(size_t)i * step] - z);
+            if (e > be) { /* in position order: ties keep the first */
+                be = e;
+                bi = i;
             }
         }
         if (be <= max_error || be == 0)
-            break;
+            continue;
         pos[count++] = bi;
-        nxt[bi] = nxt[bl];
-        nxt[bl] = bi;
-        se[bl] = -1;
-        se[bi] = -1;
+        stk[top++] = l;
+        stk[top++] = bi;
+        stk[top++] = bi;
+        stk[top++] = r;
     }
-out:
-    free(nxt);
-    free(se);
-    free(si);
-    return count;
+    free(stk);
+    qsort(pos, count, sizeof *pos, cmp_u32);
+    *count_out = count;
+    return 0;
 }
 
 /* ------------------------------------------------------------ driver */
@@ -589,6 +589,7 @@ static void tin_release(struct tin *m)
     free(m->vx);
     free(m->vy);
     free(m->vz);
+    free(m->vhe);
     free(m->tv);
     free(m->he);
     free(m->cerr);
@@ -686,27 +687,36 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
     add_tri(&m, 0, 2, 3, t0 + 2, -1, -1, -1);
 
     if (p->border_first) {
-        /* top, right, bottom, left: each in increasing coordinate */
+        /* Each side in the hull's direction (counter-clockwise: +x along
+         * the top, +y down the right, -x along the bottom, -y up the
+         * left), from its first corner: each sample lies on the hull edge
+         * leaving the one inserted before it. */
         struct {
             const float *s;
             size_t step;
             uint32_t n;
             int32_t x0, y0, dx, dy;
+            int reverse;
+            int32_t corner;
         } edge[4] = {
-            {h, 1, w, 0, 0, 1, 0},
-            {h + W, stride, hgt, W, 0, 0, 1},
-            {h + (size_t)H * stride, 1, w, 0, H, 1, 0},
-            {h, stride, hgt, 0, 0, 0, 1},
+            {h, 1, w, 0, 0, 1, 0, 0, 0},
+            {h + W, stride, hgt, W, 0, 0, 1, 0, 1},
+            {h + (size_t)H * stride, 1, w, 0, H, 1, 0, 1, 2},
+            {h, stride, hgt, 0, 0, 0, 1, 1, 3},
         };
         for (int k = 0; k < 4; k++) {
-            uint32_t n = gv_tin_edge_greedy(edge[k].s, edge[k].step, edge[k].n,
-                                            goal, bpos);
+            uint32_t n;
+            if (gv_tin_edge_greedy(edge[k].s, edge[k].step, edge[k].n, goal,
+                                   bpos, &n) < 0)
+                goto nomem;
+            int32_t prev = edge[k].corner;
             for (uint32_t i = 0; i < n; i++) {
-                int32_t x = edge[k].x0 + edge[k].dx * (int32_t)bpos[i];
-                int32_t y = edge[k].y0 + edge[k].dy * (int32_t)bpos[i];
-                int32_t t = find_hull(&m, x, y);
-                if (t < 0 || insert_point(&m, t, x, y) < 0)
+                uint32_t q = bpos[edge[k].reverse ? n - 1 - i : i];
+                int32_t x = edge[k].x0 + edge[k].dx * (int32_t)q;
+                int32_t y = edge[k].y0 + edge[k].dy * (int32_t)q;
+                if (insert_point(&m, hull_out(&m, prev) / 3, x, y) < 0)
                     goto nomem;
+                prev = (int32_t)m.nv - 1;
             }
         }
         if (p->max_triangles && m.nt > p->max_triangles) {

@@ -72,6 +72,19 @@ int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
                  const struct gv_tin_params *p, struct gv_tin *out,
                  struct gv_error *err);
 
+/*
+ * The TIN of the same grid as tiles of `tile` x `tile` cells, each built by
+ * gv_tin_build with border-first insertion on a pool of `threads` threads,
+ * joined without cracks into one mesh (vertices on tile borders merged;
+ * tin_tiled.c).  Needs max_error >= 0 and no max_triangles.  The result
+ * is the same for any thread count; it is not the single-tile mesh (the
+ * tile borders force their own vertices, and the union is Delaunay within
+ * each tile only).  Returns 0, or -1 as gv_tin_build.
+ */
+int gv_tin_build_tiled(const float *h, uint32_t w, uint32_t hgt, size_t stride,
+                       const struct gv_tin_params *p, uint32_t tile,
+                       int threads, struct gv_tin *out, struct gv_error *err);
+
 /* Free the arrays of *t and zero it.  gv_tin_free(NULL) does nothing. */
 void gv_tin_free(struct gv_tin *t);
 
@@ -79,11 +92,12 @@ void gv_tin_free(struct gv_tin *t);
  * The 1D greedy insertion along one edge of samples s[0 .. n-1] (n >= 2):
  * the endpoints, then repeatedly the sample farthest from the polyline
  * (ties: the smaller position) until none is off by more than max_error.
- * Writes the chosen interior positions, in insertion order, to pos (room
- * for n) and returns their count.  Both neighbours of a shared edge call
- * it on the same samples and get the same positions.
+ * Writes the chosen interior positions, sorted, to pos (room for n) and
+ * their count to *count.  Returns 0, or -1 when out of memory.  Both
+ * neighbours of a shared edge call it on the same samples and get the
+ * same positions.
  */
-uint32_t gv_tin_edge_greedy(const float *s, size_t step, uint32_t n,
-                            double max_error, uint32_t *pos);
+int gv_tin_edge_greedy(const float *s, size_t step, uint32_t n,
+                       double max_error, uint32_t *pos, uint32_t *count);
 
 #endif
