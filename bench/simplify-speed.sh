@@ -72,9 +72,12 @@ for m in "${meshes[@]}"; do
 		cmp -s "$work/ours.ply" "$work/ours-gpu.ply" || echo "simplify-speed: GPU file differs from CPU file" >&2
 		ms[ours-select]=$(echo "$line" | sed 's/.*select \([0-9.]*\) ms.*/\1/')
 		faces[ours-select]=${faces[ours-cpu]}
-		read -r _ _ ms[sloppy] _ faces[sloppy] < <("$anchor" sloppy "$m" "$asked" "$work/sloppy.ply")
-		read -r _ _ ms[quadric] _ faces[quadric] < <("$anchor" quadric "$m" "$asked" "$work/quadric.ply")
-		read -r _ _ ms[open3d] _ faces[open3d] _ _ < <($py "$here/simplify_open3d.py" "$m" "$asked" "$work/open3d.ply")
+		out=$("$anchor" sloppy "$m" "$asked" "$work/sloppy.ply" | grep '^sloppy ms')
+		read -r _ _ ms[sloppy] _ faces[sloppy] <<<"$out"
+		out=$("$anchor" quadric "$m" "$asked" "$work/quadric.ply" | grep '^quadric ms')
+		read -r _ _ ms[quadric] _ faces[quadric] <<<"$out"
+		out=$($py "$here/simplify_open3d.py" "$m" "$asked" "$work/open3d.ply" 2>/dev/null | grep '^open3d ms')
+		read -r _ _ ms[open3d] _ faces[open3d] _ _ <<<"$out"
 		for meth in ours-cpu ours-gpu ours-select sloppy open3d quadric; do
 			case $meth in
 			ours-cpu) out=$work/ours.ply ;;
@@ -83,7 +86,8 @@ for m in "${meshes[@]}"; do
 			esac
 			h=- rm=-
 			if [ -n "$out" ]; then
-				read -r _ hd _ rr _ _ _ _ _ dg < <("$dist" "$work/in.ply" "$out" "$samples")
+				dl=$("$dist" "$work/in.ply" "$out" "$samples")
+				read -r _ hd _ rr _ _ _ _ _ dg <<<"$dl"
 				h=$(python3 -c "print('%.3f' % (100 * $hd / $dg))")
 				rm=$(python3 -c "print('%.3f' % (100 * $rr / $dg))")
 			fi
