@@ -24,6 +24,8 @@ PACKAGES="$PACKAGES gdal-bin"
 BENCH_PACKAGES="nginx-light wrk curl jq iipimage-server spawn-fcgi
   libvips-tools libjpeg-turbo-progs webp astcenc
   python3-opencv python3-scipy parallel"
+# bench/simplify-speed.sh (mesh simplification, issue 15 part 2)
+BENCH_PACKAGES="$BENCH_PACKAGES libmeshoptimizer-dev python3-open3d assimp-testmodels"
 
 bench=0 print=0
 for arg in "$@"; do

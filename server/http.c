@@ -414,13 +414,28 @@ static void remote_address(struct MHD_Connection *conn, char *buf, size_t size)
                   (socklen_t)size);
 }
 
-/* 413 for a body over max_request_bytes (announced or received): no
+/* The body cap: max_request_bytes, or simplify_max_bytes for a mesh
+ * POSTed to /v1/meshes/simplify (route_mesh_simplify.c). */
+static int is_simplify(const struct req *r)
+{
+    return !strcmp(r->path, "/v1/meshes/simplify") &&
+           !strcmp(r->method, "POST");
+}
+
+static uint64_t body_cap(const struct req *r)
+{
+    return is_simplify(r) ? r->srv->cfg->simplify_max_bytes
+                          : r->srv->cfg->max_request_bytes;
+}
+
+/* 413 for a body over the cap (announced or received): no
  * route has matched yet, so this is never an IIIF 400. */
 static enum MHD_Result send_too_large(struct req *r)
 {
     return http_send_errorf(r, GV_ELIMIT, "request body larger than %llu bytes "
-                            "(max_request_bytes)",
-                            (unsigned long long)r->srv->cfg->max_request_bytes);
+                            "(%s)", (unsigned long long)body_cap(r),
+                            is_simplify(r) ? "simplify_max_bytes"
+                                           : "max_request_bytes");
 }
 
 /* The daemons, one per thread, and what their callbacks need to tell the
@@ -468,8 +483,7 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *conn,
         const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
                                                      "Content-Length");
         uint32_t n;
-        if (cl && (http_parse_u32(cl, (uint32_t)r->srv->cfg->max_request_bytes,
-                                  &n) < 0))
+        if (cl && (http_parse_u32(cl, (uint32_t)body_cap(r), &n) < 0))
             return send_too_large(r);
         return MHD_YES;
     }
@@ -478,7 +492,7 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *conn,
     if (*upload_size) {
         size_t n = *upload_size;
         *upload_size = 0;
-        if (r->body_over || r->body_len + n > r->srv->cfg->max_request_bytes) {
+        if (r->body_over || r->body_len + n > body_cap(r)) {
             r->body_over = 1;
             return MHD_YES;
         }

@@ -31,6 +31,7 @@ const struct router_route router_routes[ROUTE_COUNT] = {
     [ROUTE_TERRAIN_LAYER] = {"GET", "/v1/images/*/terrain/layer.json",
                              "terrain_layer", 0},
     [ROUTE_TERRAIN_TILE] = {"GET", "/v1/images/*/terrain/*/*/*", "terrain", 0},
+    [ROUTE_MESH_SIMPLIFY] = {"POST", "/v1/meshes/simplify", "mesh_simplify", 0},
     [ROUTE_WEB] = {"GET", "/web/*", "web", 0},
 };
 

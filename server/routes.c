@@ -26,5 +26,6 @@ const route_fn route_handlers[ROUTE_COUNT] = {
     [ROUTE_MESH] = route_mesh,
     [ROUTE_TERRAIN_LAYER] = route_terrain_layer,
     [ROUTE_TERRAIN_TILE] = route_terrain_tile,
+    [ROUTE_MESH_SIMPLIFY] = route_mesh_simplify,
     [ROUTE_WEB] = route_static,
 };

@@ -32,6 +32,8 @@ enum MHD_Result route_mesh(struct req *r);
 /* route_terrain.c: Cesium quantized-mesh tiles of height stores */
 enum MHD_Result route_terrain_layer(struct req *r);
 enum MHD_Result route_terrain_tile(struct req *r);
+/* route_mesh_simplify.c */
+enum MHD_Result route_mesh_simplify(struct req *r);
 /* route_iiif.c */
 enum MHD_Result route_iiif_base(struct req *r);
 enum MHD_Result route_iiif_info(struct req *r);

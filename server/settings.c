@@ -71,6 +71,13 @@ static const struct settings_key keys[] = {
     /* terrain tiles (route_terrain.c) */
     {"terrain_error_scale", T_DOUBLE, F(terrain_error_scale), "0.03125", 0, 1000,
      "terrain tile error bound of level z: this times 77067 m / 2^z"},
+    /* mesh simplification (route_mesh_simplify.c) */
+    {"simplify_max_bytes", T_SIZE, F(simplify_max_bytes), "64M", 1024, 4294967295.0,
+     "largest mesh file POSTed to /v1/meshes/simplify (413 beyond)"},
+    {"simplify_max_faces", T_SIZE, F(simplify_max_faces), "4M", 1, 268435456,
+     "most triangles of a mesh to simplify, and of a request (413 beyond)"},
+    {"simplify_time_limit", T_DOUBLE, F(simplify_time_limit), "10", 0.01, 3600,
+     "seconds of octree building for one simplification (504 beyond)"},
     {"max_output_pixels", T_SIZE, F(max_output_pixels), "16M", 1, 1e15,
      "largest output image in pixels (IIIF maxArea)"},
     {"max_output_side", T_UINT, F(max_output_side), "16384", 1, 2147483647,

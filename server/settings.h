@@ -34,6 +34,9 @@ struct settings {
     uint64_t max_mesh_triangles;   /* triangles per mesh */
     double mesh_time_limit;        /* seconds of meshing per request */
     double terrain_error_scale;    /* terrain tiles: times Cesium's level error */
+    uint64_t simplify_max_bytes;   /* mesh upload to /v1/meshes/simplify */
+    uint64_t simplify_max_faces;   /* its triangles, in and asked */
+    double simplify_time_limit;    /* seconds of octree building */
     uint64_t max_output_pixels;    /* IIIF maxArea */
     uint64_t max_output_side;      /* IIIF maxWidth = maxHeight */
     double max_upscale;            /* largest IIIF '^' factor */

@@ -37,7 +37,7 @@ secs=${2:-60}
 jobs=${3:-1}
 here=$(cd "$(dirname "$0")" && pwd)
 work=${FUZZ_WORK:-$(mktemp -d "${TMPDIR:-/tmp}/gvfuzz.XXXXXX")}
-targets=${FUZZ_TARGETS:-store tile iiif router filter_graph worker settings batch imageio batch_frames listen_fds}
+targets=${FUZZ_TARGETS:-store tile iiif router filter_graph worker settings batch imageio batch_frames listen_fds mesh_read}
 make -C "$build" $(for t in $targets; do printf 'tests/fuzz/fuzz_%s ' "$t"; done) >/dev/null ||
     { echo "campaign: cannot build the fuzz targets in $build" >&2; exit 2; }
 found=0

@@ -1,0 +1,31 @@
+/*
+ * mesh_read_int.h - what the mesh readers share (private to lib/mesh): a
+ * growing mesh under the limits, and the polygon fan.
+ */
+#ifndef GV_MESH_READ_INT_H
+#define GV_MESH_READ_INT_H
+
+#include "mesh/mesh_read.h"
+
+struct mesh_grow {
+    struct gv_trimesh *m;
+    const struct gv_mesh_limits *lim;
+    uint32_t vcap, tcap;
+};
+
+/* Append a vertex / a triangle; -1 with *err (GV_ELIMIT, GV_ENOMEM). */
+int mesh_grow_vert(struct mesh_grow *g, float x, float y, float z,
+                   struct gv_error *err);
+int mesh_grow_tri(struct mesh_grow *g, uint32_t a, uint32_t b, uint32_t c,
+                  struct gv_error *err);
+
+/* Reserve room for nv more vertices and nt more triangles after checking
+ * the limits (readers that know their counts up front). */
+int mesh_grow_reserve(struct mesh_grow *g, uint64_t nv, uint64_t nt,
+                      struct gv_error *err);
+
+/* Check every index < nverts: 0, or -1 with GV_ECORRUPT. */
+int mesh_check_indices(const struct gv_trimesh *m, const char *fmt_name,
+                       struct gv_error *err);
+
+#endif

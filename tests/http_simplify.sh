@@ -1,0 +1,84 @@
+#!/bin/sh
+# http_simplify.sh - POST /v1/meshes/simplify against `gigaview simplify`
+# on the same mesh, with the limits of its keys.
+#
+# A 70x70 grid surface (9800 triangles) is written as OBJ.  The route must
+# answer every format with the bytes the command writes for the same
+# request (the server may select on its GPU, the command on another
+# context or the CPU: the file is the same), put the counts in X-Faces and
+# X-Faces-Asked, and refuse with the JSON error shape: bad queries and
+# malformed files (400), big-endian PLY (501), faces asked or in the file
+# over simplify_max_faces and a body over simplify_max_bytes (413), another
+# method (405).  simplify_time_limit (504) is not tested: no mesh small
+# enough for a test takes a known time to build.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/http_util.sh"
+
+mkdir "$T/s" "$T/w" || bail "mkdir"
+cd "$T/w" || bail "cd"
+grid() {   # grid N FILE: an N x N cell surface as OBJ
+    python3 - "$1" "$2" <<'PY'
+import math, sys
+n = int(sys.argv[1])
+with open(sys.argv[2], "w") as f:
+    for j in range(n + 1):
+        for i in range(n + 1):
+            f.write("v %d %d %.4f\n" % (i, j, 4 * math.sin(i / 9.0) * math.cos(j / 7.0)))
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i + 1
+            f.write("f %d %d %d\nf %d %d %d\n" % (a, a + 1, a + n + 2, a, a + n + 2, a + n + 1))
+PY
+}
+grid 70 in.obj || bail "grid"
+grid 120 big.obj || bail "grid"
+cat >"$T/m.conf" <<EOF2
+store_dir = "$T/s"
+threads = 2
+access_log = off
+simplify_max_bytes = 600K
+simplify_max_faces = 20000
+simplify_time_limit = 60
+EOF2
+start_daemon "$T/m.conf"
+
+for f in glb ply obj; do
+    run simplify in.obj --faces 1000 -o "cli.$f"
+    [ "$rc" -eq 0 ] || not_ok "gigaview simplify $f" "$(cat "$T/err")"
+    req --data-binary @in.obj "$(url "/v1/meshes/simplify?faces=1000&format=$f")"
+    check "$f: 200" test "$code" = 200
+    check "$f: the bytes of gigaview simplify" cmp -s "$T/b" "cli.$f"
+done
+check "content type of obj" test "$(header Content-Type)" = "model/obj"
+n=$(grep -c '^f ' "$T/b")
+check "X-Faces = the file's $n triangles" test "$(header X-Faces)" = "$n"
+check "X-Faces-Asked 1000" test "$(header X-Faces-Asked)" = 1000
+check "faces $n within 2% of 1000" test "$n" -ge 980 -a "$n" -le 1020
+req --data-binary @in.obj "$(url "/v1/meshes/simplify?ratio=0.25&format=ply")"
+check "ratio=0.25: 200, asked 2450" test "$code" = 200 -a "$(header X-Faces-Asked)" = 2450
+check "ply: starts with ply" test "$(head -c 3 "$T/b")" = "ply"
+run simplify "$T/b" --ratio 1 -o again.obj
+check "the answer reads back" test "$rc" -eq 0
+req --data-binary @in.obj "$(url "/v1/meshes/simplify?faces=500&interp=paper")"
+check "interp=paper: 200" test "$code" = 200
+
+D="--data-binary @in.obj"
+expect_status "no faces or ratio" 400 "/v1/meshes/simplify" $D
+expect_status "both faces and ratio" 400 "/v1/meshes/simplify?faces=5&ratio=0.5" $D
+expect_status "ratio 2" 400 "/v1/meshes/simplify?ratio=2" $D
+expect_status "faces 0" 400 "/v1/meshes/simplify?faces=0" $D
+expect_status "format qmesh" 400 "/v1/meshes/simplify?faces=9&format=qmesh" $D
+expect_status "empty body" 400 "/v1/meshes/simplify?faces=9" --data-binary ""
+printf 'v 0 0 0\nf 1 2 3\n' >bad.obj
+expect_status "index past the vertices" 400 "/v1/meshes/simplify?faces=9" --data-binary @bad.obj
+printf 'ply\nformat binary_big_endian 1.0\nend_header\n' >be.ply
+expect_status "big-endian PLY" 501 "/v1/meshes/simplify?faces=9" --data-binary @be.ply
+expect_status "faces over simplify_max_faces" 413 "/v1/meshes/simplify?faces=20001" $D
+head -c 300000 big.obj | sed '$d' >bigv.obj
+grep '^f ' big.obj | head -n 20001 | awk '{print "f 1 2 3"}' >>bigv.obj
+expect_status "a file over simplify_max_faces" 413 "/v1/meshes/simplify?faces=9" --data-binary @bigv.obj
+expect_status "a body over simplify_max_bytes" 413 "/v1/meshes/simplify?faces=9" --data-binary @big.obj
+expect_status "GET" 405 "/v1/meshes/simplify?faces=9"
+stop_daemon
+check "daemon exited cleanly" test "$drc" -eq 0
+done_testing
