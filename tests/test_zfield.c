@@ -216,6 +216,7 @@ static int mesh_ok(const struct gv_tin *t, uint32_t n, const uint8_t *en, char *
     return ok;
 }
 
+#ifdef GV_TEST_GPU
 static int same_mesh(const struct gv_tin *a, const struct gv_tin *b)
 {
     if (a->nverts != b->nverts || a->ntris != b->ntris)
@@ -224,6 +225,7 @@ static int same_mesh(const struct gv_tin *a, const struct gv_tin *b)
            !memcmp(a->vy, b->vy, a->nverts * sizeof *a->vy) &&
            !memcmp(a->tris, b->tris, (size_t)a->ntris * 3 * sizeof *a->tris);
 }
+#endif
 
 #ifdef GV_TEST_GPU
 static struct gv_gpu_zfield *gzf[2];   /* compute, fragment (WebGL2's) */
