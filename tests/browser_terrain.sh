@@ -11,7 +11,8 @@
 #      tests/browser/terrain_viewer.mjs lists its checks);
 #   3. z-field simplification in the browser (client/web/zfield*.js;
 #      tests/browser/zfield.mjs lists its checks): the WebGL2 sweep gives
-#      gigaviewd's CPU mesh triangle for triangle, and the terrain mode's
+#      gigaviewd's CPU mesh triangle for triangle (and, in the
+#      view-dependent mode, tests/zfield_states's), and the terrain mode's
 #      `refine=zfield` refines the mesh per frame as the camera orbits.
 #
 # Encodes tests/data/etopo5-720x361-u16.png (the globe every half degree;
@@ -101,10 +102,13 @@ if [ -f "$BROWSER_DIR/terrain_viewer.mjs" ]; then
 fi
 
 # 3. z-field simplification in the browser
+# (tests/zfield_states, a check program, gives lib/mesh/zfield.c's states)
+: "${ZFIELD_STATES:=./tests/zfield_states}"
 if [ -f "$BROWSER_DIR/zfield.mjs" ]; then
     zrc=0
-    timeout 90 node "$BROWSER_DIR/zfield.mjs" --base "$BASE" --id world \
-        --chromium "$CHROMIUM" --out "$T/shots" >"$T/zfield.out" 2>&1 || zrc=$?
+    set -- --base "$BASE" --id world --chromium "$CHROMIUM" --out "$T/shots"
+    [ -x "$ZFIELD_STATES" ] && set -- "$@" --helper "$ZFIELD_STATES"
+    timeout 90 node "$BROWSER_DIR/zfield.mjs" "$@" >"$T/zfield.out" 2>&1 || zrc=$?
     tap_of "$T/zfield.out"
     if [ "$zrc" -ne 0 ] && ! grep -q '^FAIL ' "$T/zfield.out"; then
         not_ok "zfield.mjs ran (exit $zrc)" "$(tail -n 20 "$T/zfield.out")"

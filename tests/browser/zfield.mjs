@@ -3,7 +3,7 @@
 // playwright-core, against gigaviewd serving a height store.
 //
 //   node zfield.mjs --base http://127.0.0.1:PORT --id HEIGHT_ID
-//        [--chromium /usr/bin/chromium] [--out DIR]
+//        [--helper tests/zfield_states] [--chromium /usr/bin/chromium] [--out DIR]
 //
 // Checks, one a line as "PASS text" or "FAIL text" (details start with
 // "#"; tests/browser_terrain.sh turns them into TAP):
@@ -14,9 +14,11 @@
 //      vertices in the same order, the same triangles in the same order,
 //      at two thresholds;
 //   2. in the view-dependent mode (screen-space error in pixels) for
-//      three cameras, the GPU's enabled states equal the CPU sweep's
-//      (zfieldEnableCpu, the float32 port of zfield.c's), and the counts
-//      differ between the cameras;
+//      three cameras, the GPU's enabled states equal the CPU's: those of
+//      lib/mesh/zfield.c itself through the helper tests/zfield_states
+//      (--helper; without it the check says so and is skipped) and those
+//      of zfieldEnableCpu (the float32 port of zfield.c's sweep); the
+//      meshes differ between the cameras;
 //   3. the terrain mode with `&refine=zfield` draws the refined mesh: the
 //      mesh drawn equals the CPU's for the camera of that frame, and
 //      orbiting (a drag) refines it again (more frames) with a different
@@ -26,17 +28,18 @@
 import { mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
+import { execFileSync } from 'node:child_process';
 import { chromium } from 'playwright-core';
 
 const W = 480, H = 320;
 const GRID = { level: 0, x: 100, y: 50, side: 256 };   // inside a 720 x 361 store
 
-const opt = { chromium: '/usr/bin/chromium', out: '', base: '', id: '' };
+const opt = { chromium: '/usr/bin/chromium', out: '', base: '', id: '', helper: '' };
 const argv = process.argv.slice(2);
 for (let i = 0; i < argv.length; i += 2) {
     const k = argv[i].replace(/^--/, ''), v = argv[i + 1];
     if (v === undefined || !(k in opt)) {
-        console.error('usage: node zfield.mjs --base URL --id ID [--out DIR] [--chromium PATH]');
+        console.error('usage: node zfield.mjs --base URL --id ID [--helper PATH] [--out DIR] [--chromium PATH]');
         process.exit(2);
     }
     opt[k] = v;
@@ -119,15 +122,23 @@ try {
         const zr = el.max - el.min, k = zf.zfieldK(320, Math.PI / 4);
         const cams = [[50 * n, -100 * n, zr], [-50 * n, 50 * n, zr / 2], [50 * n, 50 * n, 3 * zr]];
         for (const eye of cams) {
-            const p = { mode: 'screen', threshold: 1.5, eye, k, xyScale: 100 };
+            const p = { mode: 'screen', threshold: 1.5, eye: eye.map(Math.fround), k, xyScale: 100 };
             const en = sweep.enable(p), ref = zf.zfieldEnableCpu(z, n, p);
             let diff = 0, on = 0;
             for (let i = 0; i < en.length; i++) {
                 diff += en[i] !== ref[i];
                 on += en[i];
             }
-            out.screen.push({ eye, enabled: on, diff, tris: zf.zfieldMesh(z, n, en).tris.length / 3 });
+            const t0 = performance.now();
+            const tris = zf.zfieldMesh(z, n, sweep.enable(p)).tris.length / 3;
+            out.screen.push({ p, enabled: on, diff, tris, ms: performance.now() - t0,
+                en: Array.from(en) });
         }
+        const zb = new Uint8Array(z.buffer);
+        let s = '';
+        for (let i = 0; i < zb.length; i += 8192)
+            s += String.fromCharCode(...zb.subarray(i, i + 8192));
+        out.z = btoa(s);
         return out;
     }, { id: opt.id, g: GRID });
     note(`grid ${r.n} x ${r.n} (png16 ${r.png.join('x')}), heights ${r.range.join('..')}`);
@@ -137,10 +148,28 @@ try {
             `vertical mode, threshold ${v.thr}: the WebGL2 mesh is gigaviewd's CPU mesh triangle for triangle (${v.gpuTris} triangles)`);
         check(v.sameAsJsCpu, `vertical mode, threshold ${v.thr}: the float32 CPU port decides the same states`);
     }
-    for (const s of r.screen)
-        note(`screen eye ${s.eye.map((x) => x.toFixed(0)).join(',')}: ${s.enabled} enabled, ${s.tris} triangles, ${s.diff} states differ`);
+    const zbuf = Buffer.from(r.z, 'base64');
+    for (const s of r.screen) {
+        const p = s.p;
+        note(`screen eye ${p.eye.map((x) => x.toFixed(0)).join(',')}: ${s.enabled} enabled, ${s.tris} triangles, ` +
+            `${s.diff} states differ from the float32 port; sweep and mesh ${s.ms.toFixed(1)} ms`);
+        if (opt.helper) {
+            const c = execFileSync(opt.helper, [String(r.n), 'screen', String(p.threshold),
+                ...p.eye.map(String), String(p.k), String(p.xyScale)], { input: zbuf, maxBuffer: 1 << 26 });
+            let d = c.length === s.en.length ? 0 : -1;
+            for (let i = 0; d >= 0 && i < c.length; i++)
+                d += c[i] !== s.en[i];
+            s.diffC = d;
+            note(`  lib/mesh/zfield.c (${opt.helper}): ${d} states differ`);
+        }
+    }
     check(r.screen.every((s) => s.diff === 0 && s.enabled > 4),
-        'view-dependent mode: the WebGL2 states equal the CPU sweep\'s for three cameras');
+        'view-dependent mode: the WebGL2 states equal the float32 CPU port\'s for three cameras');
+    if (opt.helper)
+        check(r.screen.every((s) => s.diffC === 0),
+            'view-dependent mode: the WebGL2 states equal lib/mesh/zfield.c\'s for three cameras');
+    else
+        note('SKIP no --helper: the view-dependent states are not compared with lib/mesh/zfield.c');
     check(new Set(r.screen.map((s) => s.tris)).size === 3,
         `view-dependent mode: the cameras give different meshes (${r.screen.map((s) => s.tris).join(', ')} triangles)`);
 
