@@ -8,7 +8,12 @@
 #      are those of the store, the screenshot shows relief where the
 #      ellipsoid alone is flat, and without skirts no crack shows;
 #   2. the viewer's 3D terrain mode (client/web/terrain*.js;
-#      tests/browser/terrain_viewer.mjs lists its checks).
+#      tests/browser/terrain_viewer.mjs lists its checks);
+#   3. z-field simplification in the browser (client/web/zfield*.js;
+#      tests/browser/zfield.mjs lists its checks): the WebGL2 sweep gives
+#      gigaviewd's CPU mesh triangle for triangle (and, in the
+#      view-dependent mode, tests/zfield_states's), and the terrain mode's
+#      `refine=zfield` refines the mesh per frame as the camera orbits.
 #
 # Encodes tests/data/etopo5-720x361-u16.png (the globe every half degree;
 # its column 0 is at Greenwich, hence lon0=0) as the height store
@@ -93,6 +98,20 @@ if [ -f "$BROWSER_DIR/terrain_viewer.mjs" ]; then
     tap_of "$T/viewer.out"
     if [ "$vrc" -ne 0 ] && ! grep -q '^FAIL ' "$T/viewer.out"; then
         not_ok "terrain_viewer.mjs ran (exit $vrc)" "$(tail -n 20 "$T/viewer.out")"
+    fi
+fi
+
+# 3. z-field simplification in the browser
+# (tests/zfield_states, a check program, gives lib/mesh/zfield.c's states)
+: "${ZFIELD_STATES:=./tests/zfield_states}"
+if [ -f "$BROWSER_DIR/zfield.mjs" ]; then
+    zrc=0
+    set -- --base "$BASE" --id world --chromium "$CHROMIUM" --out "$T/shots"
+    [ -x "$ZFIELD_STATES" ] && set -- "$@" --helper "$ZFIELD_STATES"
+    timeout 90 node "$BROWSER_DIR/zfield.mjs" "$@" >"$T/zfield.out" 2>&1 || zrc=$?
+    tap_of "$T/zfield.out"
+    if [ "$zrc" -ne 0 ] && ! grep -q '^FAIL ' "$T/zfield.out"; then
+        not_ok "zfield.mjs ran (exit $zrc)" "$(tail -n 20 "$T/zfield.out")"
     fi
 fi
 

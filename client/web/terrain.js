@@ -17,8 +17,17 @@
 // window.gigaview.terrain is this object (tests, console): ready()
 // resolves once the mesh for the current view is drawn; info holds the
 // last mesh request ({level, region, triangles, maxError, url}).
+//
+// `refine=zfield` in the link (read when the mode turns on) or the `z` key
+// in 3D switches to view-dependent refinement on the client's GPU
+// (zfield_gl.js): the height grid of the view is fetched once (a
+// (2^k+1)-square, k <= 8, of codes from /region?format=png16) and
+// simplified again in every frame as the camera orbits; info then has
+// method 'zfield', triangles and frames (the refinements so far).
 
 import { TerrainGl, parseGlb } from './terrain_gl.js';
+import { decodePng16, heightsOf, loadZfieldSources } from './zfield.js';
+import { ZFieldTerrain } from './zfield_gl.js';
 
 const GRID = 256;             // samples a side, at most, of a mesh
 const REST_MS = 200;          // the view rests this long before a refetch
@@ -41,6 +50,8 @@ export class TerrainMode {
         this.waiters = [];
         this.timer = 0;
         this.lastView = '';
+        this.refine = /[#&]refine=zfield(&|$)/.test(location.hash) ? 'zfield' : null;
+        this.zf = null;
         viewer.on('frame', () => this.viewMoved());
         button.addEventListener('click', () => this.toggle());
         window.addEventListener('keydown', (e) => {
@@ -48,6 +59,8 @@ export class TerrainMode {
                 return;
             if (e.key === 't' && this.viewer.image)
                 this.toggle();
+            else if (e.key === 'z' && this.source)
+                this.setRefine(this.refine ? null : 'zfield');
         });
         this.attachOrbit();
         new ResizeObserver(() => this.resize()).observe(canvas);
@@ -58,6 +71,8 @@ export class TerrainMode {
     /** Turn the mode on with `source` ('hillshade' or an image id) or off
      * (null), and say so in the link. */
     set(source) {
+        if (source && !this.refine && /[#&]refine=zfield(&|$)/.test(location.hash))
+            this.setRefine('zfield');
         if ((source || null) === this.source)
             return;
         this.source = source || null;
@@ -71,6 +86,14 @@ export class TerrainMode {
             this.resize();
             this.refresh();
         }
+    }
+
+    /** View-dependent refinement: 'zfield' or null (the server's mesh). */
+    setRefine(mode) {
+        this.refine = mode || null;
+        this.key = '';
+        if (this.source)
+            this.refresh();
     }
 
     toggle() {
@@ -95,8 +118,18 @@ export class TerrainMode {
     }
 
     draw() {
-        if (this.gl && this.source)
-            this.gl.draw(this.az, this.el, this.dist);
+        if (!this.gl || !this.source)
+            return;
+        if (this.zf && this.zf.active && this.info) {
+            try {
+                this.info.triangles = this.zf.refine(this.az, this.el, this.dist);
+                this.info.frames = this.zf.frames;
+            } catch (e) {
+                console.error(`gigaview: terrain: ${e.message}`);
+                this.zf.active = false;
+            }
+        }
+        this.gl.draw(this.az, this.el, this.dist);
     }
 
     /** Orbit by daz degrees of azimuth and del of elevation (clamped to
@@ -161,7 +194,7 @@ export class TerrainMode {
         const rw = Math.max(1, Math.min(Math.ceil(x1 / s), lw - 1) - rx);
         const rh = Math.max(1, Math.min(Math.ceil(y1 / s), lh - 1) - ry);
         const region = [rx, ry, rw, rh];
-        const key = `${im.id} ${L} ${region.join(',')} ${this.source}`;
+        const key = `${im.id} ${L} ${region.join(',')} ${this.source} ${this.refine || ''}`;
         return { level: L, region, key };
     }
 
@@ -191,6 +224,10 @@ export class TerrainMode {
                 const g = (await lr.json()).gigaview;
                 this.range = { id: im.id, min: g.heightMin, max: g.heightMax };
             }
+            if (this.refine === 'zfield')
+                return await this.refreshZfield(rq, base, seq);
+            if (this.zf)
+                this.zf.active = false;
             const err = Math.max((this.range.max - this.range.min) / 500, 1e-6);
             const url = `${base}/mesh?level=${rq.level}&region=${rq.region.join(',')}&max_error=${err}&format=glb`;
             const r = await fetch(url);
@@ -221,6 +258,42 @@ export class TerrainMode {
             for (const w of this.waiters.splice(0))
                 w.reject(e);
         }
+    }
+
+    /** refresh() for refine=zfield: the grid of the view, refined per
+     * frame from now on (draw()). */
+    async refreshZfield(rq, base, seq) {
+        const im = this.viewer.image, lv = im.levels[rq.level];
+        const k = Math.floor(Math.log2(Math.min(GRID, lv.w - 1, lv.h - 1)));
+        if (!(k >= 1))
+            throw new Error(`terrain: level ${rq.level} is too small for refine=zfield`);
+        const side = 2 ** k, [rx, ry, rw, rh] = rq.region;
+        const x0 = Math.max(0, Math.min(Math.round(rx + rw / 2 - side / 2), lv.w - 1 - side));
+        const y0 = Math.max(0, Math.min(Math.round(ry + rh / 2 - side / 2), lv.h - 1 - side));
+        const url = `${base}/region?level=${rq.level}&x=${x0}&y=${y0}&w=${side + 1}&h=${side + 1}&format=png16`;
+        let el = im.info.elevation;
+        if (!el)
+            el = (await (await fetch(base)).json()).elevation;
+        const r = await fetch(url);
+        if (!r.ok)
+            throw new Error(`terrain: height grid: HTTP ${r.status}`);
+        const png = await decodePng16(await r.arrayBuffer());
+        const grid = { level: rq.level, region: [x0, y0, side, side] };
+        let drape = null;
+        if (this.source !== 'hillshade')
+            drape = await this.fetchDrape(this.source, im.info, grid);
+        const src = this.zf ? null : await loadZfieldSources();
+        if (seq !== this.seq)
+            return;                         // a later view won
+        if (!this.zf)
+            this.zf = new ZFieldTerrain(this.gl, src);
+        this.zf.setGrid(heightsOf(png.codes, el.scale, el.offset), side + 1, x0, y0, rq.level);
+        this.gl.setDrape(drape && drape.bitmap, drape && drape.rect);
+        this.info = { level: rq.level, region: grid.region, triangles: 0, maxError: -1, url,
+            drape: drape ? drape.url : null, method: 'zfield', tau: this.zf.tau, frames: 0 };
+        this.draw();
+        this.busy = false;
+        this.settle();
     }
 
     settle() {

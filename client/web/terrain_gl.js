@@ -175,6 +175,14 @@ export class TerrainGl {
         this.drape = rect;
     }
 
+    /** The eye in the world frame for azimuth az, elevation el (degrees)
+     * at dist mesh sizes from the centre (a mesh must be set). */
+    eye(az, el, dist) {
+        const a = az * Math.PI / 180, e = el * Math.PI / 180, d = dist * this.mesh.size;
+        // az 0: the camera south of the centre, looking north (-z)
+        return [d * Math.cos(e) * Math.sin(a), d * Math.sin(e), d * Math.cos(e) * Math.cos(a)];
+    }
+
     /** Draw from azimuth az (degrees, 0: looking north), elevation el
      * (degrees above the horizon), at dist mesh sizes from the centre. */
     draw(az, el, dist) {
@@ -186,9 +194,7 @@ export class TerrainGl {
             return;
         gl.enable(gl.DEPTH_TEST);
         gl.useProgram(this.prog);
-        const a = az * Math.PI / 180, e = el * Math.PI / 180, d = dist * m.size;
-        // az 0: the camera south of the centre, looking north (-z)
-        const eye = [d * Math.cos(e) * Math.sin(a), d * Math.sin(e), d * Math.cos(e) * Math.cos(a)];
+        const d = dist * m.size, eye = this.eye(az, el, dist);
         const mvp = mul(perspective(Math.PI / 4, c.width / c.height, d / 100, d * 4), lookAt(eye, [0, 0, 0], [0, 1, 0]));
         gl.uniformMatrix4fv(this.u.u_mvp, false, mvp);
         gl.uniform4f(this.u.u_xy, m.s, m.cx, m.cy, 0);
