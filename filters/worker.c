@@ -1,6 +1,7 @@
 /*
  * worker.c - the filter job protocol (worker.h): framing, both ends'
- * encoders and validating decoders, and the worker's loop.
+ * encoders and validating decoders, and the worker's loop (filter graphs
+ * and mesh simplification jobs).
  *
  * The server's end is non-blocking and every read or write waits in
  * poll() for what is left of the job's deadline, so a worker that stops
@@ -19,7 +20,11 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "config.h"
 #include "worker.h"
+#ifdef GV_HAVE_GPU
+#include "gpu/gpu_cluster.h"
+#endif
 
 /* Largest graph document a frame may carry, whatever the limits say: the
  * configured max_json_bytes is far below (64 KiB by default). */
@@ -231,6 +236,9 @@ static void copy_text(char *dst, size_t size, const uint8_t *src, size_t n)
 /* Body size of a job, or 0 if it cannot be framed. */
 static uint64_t job_body_len(const struct gv_worker_job *job)
 {
+    if (job->op == GV_WORKER_SIMPLIFY)
+        return job->mesh_len > GV_WORKER_MESH_MAX
+                   ? 0 : GV_WORKER_SIMPLIFY_FIXED + (uint64_t)job->mesh_len;
     if (job->doc_len > DOC_MAX)
         return 0;
     uint64_t n = LIMITS_BYTES + 4 + job->doc_len;
@@ -256,12 +264,28 @@ int gv_worker_send_job(int fd, const struct gv_worker_job *job,
                        int64_t deadline, struct gv_error *err)
 {
     uint64_t len = job_body_len(job);
-    if (len == 0 || (job->op != GV_WORKER_COMPILE && job->op != GV_WORKER_RUN)) {
+    if (len == 0 || (job->op != GV_WORKER_COMPILE && job->op != GV_WORKER_RUN &&
+                     job->op != GV_WORKER_SIMPLIFY)) {
         gv_fail(err, GV_EINVAL, "worker: job cannot be framed");
         return GV_WORKER_BAD;
     }
     struct wbuf w = {.n = 0};
     put_header(&w, (enum gv_worker_msg)job->op, len);
+    if (job->op == GV_WORKER_SIMPLIFY) {
+        const struct gv_simplify_opts *o = &job->simplify;
+        put_u64(&w, o->faces);
+        put_f64(&w, o->ratio);
+        put_u32(&w, (uint32_t)o->mode);
+        put_u32(&w, (uint32_t)o->format);
+        put_u64(&w, o->lim.max_bytes);
+        put_u32(&w, o->lim.max_verts);
+        put_u32(&w, o->lim.max_tris);
+        put_u32(&w, o->max_faces);
+        put_f64(&w, o->time_limit);
+        put_u64(&w, (uint64_t)job->mesh_len);
+        int rc = io_write(fd, w.b, w.n, deadline, err);
+        return rc ? rc : io_write(fd, job->mesh, job->mesh_len, deadline, err);
+    }
     put_limits(&w, &job->lim);
     put_u32(&w, (uint32_t)job->doc_len);
     int rc = io_write(fd, w.b, w.n, deadline, err);
@@ -329,6 +353,60 @@ int gv_worker_recv_hello(int fd, int64_t deadline, int *ok, char *text,
     return 0;
 }
 
+/* The DONE answer to a SIMPLIFY job (header read: type, len): counts
+ * within the job's limits and a file of at most job->max_out bytes. */
+static int recv_simplified(int fd, const struct gv_worker_job *job,
+                           uint32_t type, uint64_t len, int64_t deadline,
+                           struct gv_worker_result *res, struct gv_error *err)
+{
+    if (type != GV_WORKER_DONE || len < GV_WORKER_SIMPLIFIED_FIXED ||
+        len - GV_WORKER_SIMPLIFIED_FIXED > job->max_out ||
+        len - GV_WORKER_SIMPLIFIED_FIXED > SIZE_MAX - 1) {
+        gv_fail(err, GV_EIO, "worker: unexpected frame (type %u, %llu bytes)",
+                type, (unsigned long long)len);
+        return GV_WORKER_BAD;
+    }
+    uint8_t b[GV_WORKER_SIMPLIFIED_FIXED];
+    int rc = io_read(fd, b, sizeof b, deadline, err);
+    if (rc)
+        return rc;
+    struct rbuf r = {b, sizeof b, 0, 0};
+    struct gv_simplify_stats *st = &res->sstats;
+    st->in_verts = get_u32(&r);
+    st->in_tris = get_u32(&r);
+    st->out_verts = get_u32(&r);
+    st->out_tris = get_u32(&r);
+    st->asked = get_u64(&r);
+    st->level = get_u32(&r);
+    st->nnodes = get_u32(&r);
+    double *ms[4] = {&st->read_ms, &st->build_ms, &st->select_ms, &st->write_ms};
+    for (int i = 0; i < 4; i++) {
+        double v = get_f64(&r);
+        *ms[i] = isfinite(v) && v >= 0 ? v : 0;
+    }
+    uint64_t n = get_u64(&r);
+    const struct gv_mesh_limits *lim = &job->simplify.lim;
+    if (n != len - GV_WORKER_SIMPLIFIED_FIXED || st->in_tris > lim->max_tris ||
+        st->in_verts > lim->max_verts || st->out_tris > st->in_tris ||
+        st->out_verts > st->in_verts) {
+        gv_fail(err, GV_EIO, "worker: malformed simplification answer");
+        return GV_WORKER_BAD;
+    }
+    res->mesh = malloc(n ? (size_t)n : 1);
+    if (!res->mesh) {
+        gv_fail(err, GV_ENOMEM, "worker: out of memory for a mesh of %llu bytes",
+                (unsigned long long)n);
+        return GV_WORKER_BAD;
+    }
+    if ((rc = io_read(fd, res->mesh, (size_t)n, deadline, err))) {
+        free(res->mesh);
+        res->mesh = NULL;
+        return rc;
+    }
+    res->mesh_len = (size_t)n;
+    return 0;
+}
+
 int gv_worker_recv_result(int fd, const struct gv_worker_job *job,
                           int64_t deadline, struct gv_worker_result *res,
                           struct gv_error *err)
@@ -358,6 +436,8 @@ int gv_worker_recv_result(int fd, const struct gv_worker_job *job,
         copy_text(res->err.text, sizeof res->err.text, b + 8, n);
         return 0;
     }
+    if (job->op == GV_WORKER_SIMPLIFY)
+        return recv_simplified(fd, job, type, len, deadline, res, err);
     uint64_t want = 0;
     if (job->op == GV_WORKER_RUN)
         want = STATS_BYTES + (uint64_t)job->in.roi_w * job->in.roi_h * 16;
@@ -429,6 +509,28 @@ static int send_failed(int fd, const struct gv_error *e, struct gv_error *err)
     return rc ? rc : io_write(fd, e->text, n, -1, err);
 }
 
+static int send_simplified(int fd, const uint8_t *mesh, size_t n,
+                           const struct gv_simplify_stats *st,
+                           struct gv_error *err)
+{
+    struct wbuf w = {.n = 0};
+    put_header(&w, GV_WORKER_DONE, GV_WORKER_SIMPLIFIED_FIXED + (uint64_t)n);
+    put_u32(&w, st->in_verts);
+    put_u32(&w, st->in_tris);
+    put_u32(&w, st->out_verts);
+    put_u32(&w, st->out_tris);
+    put_u64(&w, st->asked);
+    put_u32(&w, st->level);
+    put_u32(&w, st->nnodes);
+    put_f64(&w, st->read_ms);
+    put_f64(&w, st->build_ms);
+    put_f64(&w, st->select_ms);
+    put_f64(&w, st->write_ms);
+    put_u64(&w, (uint64_t)n);
+    int rc = io_write(fd, w.b, w.n, -1, err);
+    return rc ? rc : io_write(fd, mesh, n, -1, err);
+}
+
 static int send_done(int fd, const struct gv_worker_job *job, const float *out,
                      const struct gv_filter_stats *st, struct gv_error *err)
 {
@@ -450,6 +552,61 @@ static int send_done(int fd, const struct gv_worker_job *job, const float *out,
     return rc ? rc : io_write(fd, out, nbytes, -1, err);
 }
 
+/* Read a body of len bytes into *body (malloc'ed; free it whatever is
+ * returned).  The buffer grows with what arrives, so a header that
+ * announces more than is sent costs what was sent, not what it said. */
+static int read_body(int fd, size_t len, uint8_t **body, struct gv_error *err)
+{
+    size_t cap = len < 65536 ? len : 65536, got = 0;
+    *body = malloc(cap ? cap : 1);
+    while (*body) {
+        int rc = io_read(fd, *body + got, cap - got, -1, err);
+        if (rc || cap == len)
+            return rc;
+        got = cap;
+        cap = len - cap < cap ? len : 2 * cap;
+        uint8_t *b = realloc(*body, cap);
+        if (!b)
+            break;
+        *body = b;
+    }
+    gv_fail(err, GV_ENOMEM, "worker: out of memory for a job of %zu bytes", len);
+    return GV_WORKER_BAD;
+}
+
+/* The body of a SIMPLIFY job (r) into job; a request the options reject
+ * (an unknown mode or format) is 0 with jerr set. */
+static int decode_simplify(struct rbuf *r, struct gv_worker_job *job,
+                           struct gv_error *jerr, struct gv_error *err)
+{
+    struct gv_simplify_opts *o = &job->simplify;
+    o->faces = get_u64(r);
+    o->ratio = get_f64(r);
+    uint32_t mode = get_u32(r), format = get_u32(r);
+    o->lim.max_bytes = get_u64(r);
+    o->lim.max_verts = get_u32(r);
+    o->lim.max_tris = get_u32(r);
+    o->max_faces = get_u32(r);
+    o->time_limit = get_f64(r);
+    uint64_t n = get_u64(r);
+    if (r->bad || n != r->n - r->off) {
+        gv_fail(err, GV_EIO, "worker: malformed simplification job");
+        return GV_WORKER_BAD;
+    }
+    job->mesh = take(r, (size_t)n);
+    job->mesh_len = (size_t)n;
+    o->mode = mode == GV_CLUSTER_PAPER ? GV_CLUSTER_PAPER : GV_CLUSTER_EXACT;
+    o->format = (enum gv_mesh_format)format;
+    if (mode > GV_CLUSTER_PAPER ||
+        (format != GV_MESH_GLB && format != GV_MESH_PLY && format != GV_MESH_OBJ))
+        gv_fail(jerr, GV_EINVAL, "worker: simplification mode %u, format %u",
+                mode, format);
+    else if (!isfinite(o->time_limit) || o->time_limit < 0)
+        gv_fail(jerr, GV_EINVAL, "worker: simplification time limit %g",
+                o->time_limit);
+    return 0;
+}
+
 /*
  * Read one job into *job; its pointers point into *body (free it) and
  * *params.  Returns 0, GV_WORKER_EOF at a clean end, or an error.
@@ -469,22 +626,20 @@ static int recv_job(int fd, uint64_t max_pixels, struct gv_worker_job *job,
         return rc;
     uint64_t cap = LIMITS_BYTES + 4 + DOC_MAX + 4 + 8 * PARAMS_MAX +
                    GEOMETRY_BYTES + max_pixels * 4;
-    if ((type != GV_WORKER_COMPILE && type != GV_WORKER_RUN) || len > cap ||
-        len > SIZE_MAX) {
+    if (type == GV_WORKER_SIMPLIFY)
+        cap = GV_WORKER_SIMPLIFY_FIXED + GV_WORKER_MESH_MAX;
+    if ((type != GV_WORKER_COMPILE && type != GV_WORKER_RUN &&
+         type != GV_WORKER_SIMPLIFY) || len > cap || len > SIZE_MAX) {
         gv_fail(err, GV_EIO, "worker: bad job frame (type %u, %llu bytes)", type,
                 (unsigned long long)len);
         return GV_WORKER_BAD;
     }
-    *body = malloc(len ? (size_t)len : 1);
-    if (!*body) {
-        gv_fail(err, GV_ENOMEM, "worker: out of memory for a job of %llu bytes",
-                (unsigned long long)len);
-        return GV_WORKER_BAD;
-    }
-    if ((rc = io_read(fd, *body, (size_t)len, -1, err)))
+    if ((rc = read_body(fd, (size_t)len, body, err)))
         return rc;
     struct rbuf r = {*body, (size_t)len, 0, 0};
     job->op = (int)type;
+    if (type == GV_WORKER_SIMPLIFY)
+        return decode_simplify(&r, job, jerr, err);
     job->lim.max_json_bytes = (size_t)get_u64(&r);
     job->lim.max_json_depth = (int)(get_u32(&r) & INT_MAX);
     job->lim.max_modules = (int)(get_u32(&r) & INT_MAX);
@@ -535,6 +690,51 @@ static int recv_job(int fd, uint64_t max_pixels, struct gv_worker_job *job,
         return GV_WORKER_BAD;
     }
     return 0;
+}
+
+#ifdef GV_TEST_HOOKS
+#include <signal.h>
+/* Test builds only: with GV_TEST_WORKER_SIMPLIFY set, a mesh file that
+ * starts with "#gv-test:crash" kills the worker with SIGSEGV (as a reader
+ * bug would), one that starts with "#gv-test:hang" never ends (as a mesh
+ * that loops a reader would): tests/http_simplify.sh. */
+static void test_hostile_mesh(const struct gv_worker_job *job)
+{
+    const char *on = getenv("GV_TEST_WORKER_SIMPLIFY");
+    if (!on || !*on)
+        return;
+    if (job->mesh_len >= 14 && !memcmp(job->mesh, "#gv-test:crash", 14))
+        raise(SIGSEGV);
+    if (job->mesh_len >= 13 && !memcmp(job->mesh, "#gv-test:hang", 13)) {
+        for (;;) {
+            struct timespec ts = {1, 0};
+            nanosleep(&ts, NULL);
+        }
+    }
+}
+#endif
+
+/* Run a SIMPLIFY job: on the worker's context when it has one, else on
+ * the CPU (the same file).  0 with *mesh, *len and *st, or -1 with *jerr. */
+static int run_simplify(struct gv_gpu *gpu, const struct gv_worker_job *job,
+                        uint8_t **mesh, size_t *len,
+                        struct gv_simplify_stats *st, struct gv_error *jerr)
+{
+    struct gv_simplify_opts o = job->simplify;
+    o.select = NULL;
+    o.select_ctx = NULL;
+#ifdef GV_HAVE_GPU
+    if (gpu) {
+        o.select = gv_gpu_cluster_run;
+        o.select_ctx = gpu;
+    }
+#else
+    (void)gpu;
+#endif
+#ifdef GV_TEST_HOOKS
+    test_hostile_mesh(job);
+#endif
+    return gv_simplify(job->mesh, job->mesh_len, &o, mesh, len, st, jerr);
 }
 
 /* Run one decoded job; 0 with *out (RUN) or -1 with *jerr. */
@@ -621,17 +821,25 @@ int gv_worker_serve(int fd, struct gv_gpu *gpu, const char *hello_text,
             break;
         }
         float *out = NULL;
+        uint8_t *mesh = NULL;
+        size_t mesh_len = 0;
         struct gv_filter_stats st;
+        struct gv_simplify_stats sst;
         memset(&st, 0, sizeof st);
 #ifdef GV_TEST_HOOKS
         if (jerr.code == GV_OK)
             test_forbidden_call(&jerr);
 #endif
-        if (jerr.code == GV_OK && run_job(gpu, &job, &out, &st, &jerr) == 0)
+        if (jerr.code == GV_OK && job.op == GV_WORKER_SIMPLIFY)
+            rc = run_simplify(gpu, &job, &mesh, &mesh_len, &sst, &jerr) == 0
+                     ? send_simplified(fd, mesh, mesh_len, &sst, err)
+                     : send_failed(fd, &jerr, err);
+        else if (jerr.code == GV_OK && run_job(gpu, &job, &out, &st, &jerr) == 0)
             rc = send_done(fd, &job, out, &st, err);
         else
             rc = send_failed(fd, &jerr, err);
         free(out);
+        free(mesh);
         free(body);
         if (rc)
             break;

@@ -1,6 +1,7 @@
 /*
  * worker_main.c - gigaview-filter-worker, the sandboxed process that runs
- * filter graphs for gigaviewd (worker.h, docs/FILTERS.md section 9).
+ * filter graphs, and reads and simplifies uploaded meshes, for gigaviewd
+ * (worker.h, docs/FILTERS.md section 9).
  *
  *   gigaview-filter-worker --fd N [--parent PID] [--memory-limit BYTES]
  *                          [--max-pixels N] [--gpu-platform PLATFORM]

@@ -74,7 +74,15 @@ struct filter_jobs {
     atomic_uint_fast64_t n_ok, n_error, n_timeout, n_crash, n_unavailable,
         n_cancelled, n_rejected, n_starts, n_restarts, n_start_failures,
         worker_usec;
+    atomic_uint_fast64_t n_kind[3];  /* jobs sent to a worker: compile, run,
+                                        simplify */
 };
+
+/* The index of a job kind in n_kind. */
+static int kind_index(int op)
+{
+    return op == GV_WORKER_SIMPLIFY ? 2 : op == GV_WORKER_RUN ? 1 : 0;
+}
 
 static double now_s(void)
 {
@@ -302,7 +310,9 @@ static int run_job(struct slot *s, struct filter_job *j)
     struct gv_error err;
     gv_error_clear(&err);
     double t0 = now_s();
-    int64_t deadline = gv_worker_now_ms() + p->cfg.timeout_ms;
+    int timeout_ms = j->timeout_ms > 0 ? j->timeout_ms : p->cfg.timeout_ms;
+    int64_t deadline = gv_worker_now_ms() + timeout_ms;
+    atomic_fetch_add(&p->n_kind[kind_index(j->job.op)], 1);
     int rc = gv_worker_send_job(s->fd, &j->job, deadline, &err);
     if (!rc)
         rc = gv_worker_recv_result(s->fd, &j->job, deadline, &j->res, &err);
@@ -336,20 +346,21 @@ static int run_job(struct slot *s, struct filter_job *j)
         atomic_fetch_add(&p->n_cancelled, 1);
         return 0;
     }
+    const char *what = j->job.op == GV_WORKER_SIMPLIFY ? "simplify" : "filter";
     if (rc == GV_WORKER_TIMEOUT) {
         j->status = FILTER_JOB_TIMEOUT;
-        gv_fail(&j->err, GV_ETIMEOUT, "filter: the job ran past the time limit of "
-                "%d ms (filter_timeout_ms); its worker was killed",
-                p->cfg.timeout_ms);
+        gv_fail(&j->err, GV_ETIMEOUT, "%s: the job ran past the time limit of "
+                "%d ms (%s); its worker was killed", what, timeout_ms,
+                j->timeout_key ? j->timeout_key : "filter_timeout_ms");
         atomic_fetch_add(&p->n_timeout, 1);
     } else {
         j->status = FILTER_JOB_CRASHED;
         if (rc == GV_WORKER_EOF)
-            gv_fail(&j->err, GV_ECRASH, "filter: the worker process died during "
-                    "the job (%s)", why);
+            gv_fail(&j->err, GV_ECRASH, "%s: the worker process died during "
+                    "the job (%s)", what, why);
         else
-            gv_fail(&j->err, GV_ECRASH, "filter: the worker broke the protocol "
-                    "(%s) and was killed", err.text);
+            gv_fail(&j->err, GV_ECRASH, "%s: the worker broke the protocol "
+                    "(%s) and was killed", what, err.text);
         atomic_fetch_add(&p->n_crash, 1);
     }
     log_msg(LOG_WARN, "filter", "slot %d: worker %ld %s after %.0f ms: %s",
@@ -574,6 +585,14 @@ void filter_jobs_metrics(struct filter_jobs *p, struct prom *out)
     for (int i = 0; i < 6; i++)
         prom_printf(out, "gigaview_filter_jobs_total{result=\"%s\"} %llu\n",
                     results[i], (unsigned long long)v[i]);
+    static const char *const kinds[] = {"compile", "run", "simplify"};
+    prom_family(out, "gigaview_worker_jobs_total", "counter",
+                "Jobs sent to a filter worker process, by kind: compile (POST "
+                "/v1/filters), run (a filter graph over a region), simplify "
+                "(POST /v1/meshes/simplify).");
+    for (int i = 0; i < 3; i++)
+        prom_printf(out, "gigaview_worker_jobs_total{kind=\"%s\"} %llu\n", kinds[i],
+                    p ? (unsigned long long)atomic_load(&p->n_kind[i]) : 0ull);
     prom_metric(out, "gigaview_filter_jobs_rejected_total", "counter",
                 "Filter requests refused with 503 because filter_max_jobs were "
                 "queued or running.", "%llu", (unsigned long long)v[6]);

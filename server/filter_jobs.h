@@ -22,6 +22,9 @@
  * uses it to resume the suspended connection, so no HTTP thread ever
  * blocks on a filter.
  *
+ * The same pool runs mesh simplifications (POST /v1/meshes/simplify,
+ * GV_WORKER_SIMPLIFY jobs) under their own time limit (timeout_ms).
+ *
  * Every function is thread-safe.
  */
 #ifndef GV_SERVER_FILTER_JOBS_H
@@ -58,6 +61,10 @@ enum filter_job_status {
 
 struct filter_job {
     struct gv_worker_job job;         /* in: pointers borrowed until done */
+    int timeout_ms;                   /* in: this job's time limit; 0: the
+                                         pool's (filter_timeout_ms) */
+    const char *timeout_key;          /* in: the setting a timeout's message
+                                         names; NULL: filter_timeout_ms */
     void (*done)(struct filter_job *j, void *arg);
     void *arg;
     /* out, valid in done() and after */

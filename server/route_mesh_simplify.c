@@ -5,32 +5,67 @@
  * The body is a triangle mesh (PLY ascii or binary, OBJ, GLB; sniffed);
  * the answer is the same mesh simplified by vertex clustering with
  * face-count control (Kanaya et al.; lib/mesh/cluster.h), exactly what
- * `gigaview simplify` writes.  The selection runs on the server's GPU
- * context when it has one (the same mesh as the CPU's, byte for byte).
- * X-Faces-Asked, X-Faces and X-Vertices tell the counts.
+ * `gigaview simplify` writes.  X-Faces-Asked, X-Faces and X-Vertices tell
+ * the counts.
+ *
+ * Reading the file and simplifying it are a job for the sandboxed filter
+ * worker processes (server/filter_jobs.c, GV_WORKER_SIMPLIFY in
+ * filters/worker.h): the readers parse what a client sent, so they run
+ * under the workers' seccomp filter and memory limit, and a reader that
+ * crashes or loops costs a worker, not gigaviewd.  The handler checks the
+ * query, holds an admission place (503 busy as for filters), suspends the
+ * connection and queues the job with the body, borrowed until the job is
+ * done; the pool's callback resumes the connection, and the handler,
+ * called again, answers.  The worker selects on its own EGL context (the
+ * same mesh as the CPU's, byte for byte).  With no worker pool (gpu =
+ * off, no EGL, filter_workers = 0) the answer is the filters' 503, and
+ * 501 in a build without the GPU.
  *
  * Limits, each a configuration key: the body (simplify_max_bytes, 413,
  * refused before reading when announced), the input's triangles and the
  * faces asked (simplify_max_faces, 413; vertices up to three times that),
- * and the octree's building time (simplify_time_limit, 504).  A malformed
- * file is 400 with the reader's message, an unsupported variant (big-endian
- * PLY, external glTF buffers) 501.
- *
- * The work runs on the HTTP thread that received the body, inside
- * gigaviewd: not in the sandboxed filter worker processes (see
- * docs/API.md, "Mesh simplification", for this gap).
+ * and the job's time in the worker (simplify_time_limit, 504: the octree
+ * build stops at it, and the worker is killed if the job as a whole runs
+ * past it).  A malformed file is 400 with the reader's message, an
+ * unsupported variant (big-endian PLY, external glTF buffers) 501, a
+ * worker that dies during the job 500.
  */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "config.h"
+#include "filter_jobs.h"
 #include "mesh/cluster_run.h"
 #include "routes.h"
-#ifdef GV_HAVE_GPU
-#include "gpu/gpu_cluster.h"
-#endif
+
+/* A request waiting for a worker (r->async). */
+struct call {
+    struct filter_job fj;
+    struct MHD_Connection *conn;
+};
+
+static void call_free(struct call *c)
+{
+    if (!c)
+        return;
+    free(c->fj.res.mesh);
+    free(c->fj.res.out);
+    free(c);
+}
+
+/* r->async_free: the client went away while the job ran. */
+static void call_free_any(void *c)
+{
+    call_free(c);
+}
+
+static void call_done(struct filter_job *j, void *arg)
+{
+    (void)j;
+    struct call *c = arg;
+    MHD_resume_connection(c->conn);
+}
 
 static int parse(struct req *r, struct gv_simplify_opts *o,
                  struct gv_error *err)
@@ -77,26 +112,14 @@ static int parse(struct req *r, struct gv_simplify_opts *o,
     o->lim.max_tris = (uint32_t)mf;
     o->lim.max_verts = 3 * mf > UINT32_MAX ? UINT32_MAX : (uint32_t)(3 * mf);
     o->time_limit = cfg->simplify_time_limit;
-#ifdef GV_HAVE_GPU
-    if (r->srv->gpu) {
-        o->select = gv_gpu_cluster_run;
-        o->select_ctx = r->srv->gpu;
-    }
-#endif
     return 0;
 }
 
-enum MHD_Result route_mesh_simplify(struct req *r)
+/* The worker's verdict on a failed job, or what became of the job. */
+static enum MHD_Result send_job_error(struct req *r, struct filter_job *j)
 {
-    struct gv_error err;
-    struct gv_simplify_opts o;
-    if (parse(r, &o, &err) < 0)
-        return http_send_error(r, &err);
-    uint8_t *out = NULL;
-    size_t len = 0;
-    struct gv_simplify_stats st;
-    if (gv_simplify((const uint8_t *)r->body, r->body_len, &o, &out, &len,
-                    &st, &err) < 0) {
+    if (j->status == FILTER_JOB_DONE) {
+        struct gv_error err = j->res.err;
         if (err.code == GV_ELIMIT && strstr(err.text, "limit"))
             strncat(err.text, " (simplify_max_faces or simplify_max_bytes)",
                     sizeof err.text - strlen(err.text) - 1);
@@ -104,15 +127,89 @@ enum MHD_Result route_mesh_simplify(struct req *r)
             err.code = GV_EINVAL;
         return http_send_error(r, &err);
     }
-    struct MHD_Response *resp =
-        http_response_owned(out, len, gv_mesh_format_mime(o.format));
+    if (j->status == FILTER_JOB_UNAVAILABLE || j->status == FILTER_JOB_CANCELLED)
+        return http_send_fail(r, j->err.code, j->err.text, "Retry-After", "5");
+    return http_send_error(r, &j->err);
+}
+
+static enum MHD_Result finish(struct req *r, struct call *c)
+{
+    struct filter_job *j = &c->fj;
+    if (j->status != FILTER_JOB_DONE || j->res.failed)
+        return send_job_error(r, j);
+    const struct gv_simplify_stats *st = &j->res.sstats;
+    size_t len = j->res.mesh_len;
+    struct MHD_Response *resp = http_response_owned(
+        j->res.mesh, len, gv_mesh_format_mime(j->job.simplify.format));
+    j->res.mesh = NULL; /* the response's now, or freed */
     if (!resp)
         return http_send_errorf(r, GV_ENOMEM, "simplify: out of memory");
-    http_header_int(resp, "X-Faces-Asked", (long long)st.asked);
-    http_header_int(resp, "X-Faces", st.out_tris);
-    http_header_int(resp, "X-Vertices", st.out_verts);
+    char ms[32];
+    http_header_int(resp, "X-Faces-Asked", (long long)st->asked);
+    http_header_int(resp, "X-Faces", st->out_tris);
+    http_header_int(resp, "X-Vertices", st->out_verts);
+    snprintf(ms, sizeof ms, "%.3f", j->worker_ms);
+    MHD_add_response_header(resp, "X-Gigaview-Worker-Ms", ms);
     MHD_add_response_header(resp, "Access-Control-Expose-Headers",
-                            "X-Faces-Asked, X-Faces, X-Vertices");
+                            "X-Faces-Asked, X-Faces, X-Vertices, "
+                            "X-Gigaview-Worker-Ms");
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
     return http_send(r, 200, resp, len);
+}
+
+enum MHD_Result route_mesh_simplify(struct req *r)
+{
+    enum MHD_Result ret;
+    struct call *c = r->async;
+    if (c) { /* resumed: the worker has answered, or the job failed */
+        r->async = NULL;
+        r->async_free = NULL;
+        ret = finish(r, c);
+        call_free(c);
+        return ret;
+    }
+    struct gv_error err;
+    struct gv_simplify_opts o;
+    if (parse(r, &o, &err) < 0)
+        return http_send_error(r, &err);
+    if (o.faces > o.max_faces) /* refused before it reaches a worker */
+        return http_send_errorf(r, GV_ELIMIT, "simplify: %llu faces asked, "
+                                "the limit is %u (simplify_max_faces or "
+                                "simplify_max_bytes)",
+                                (unsigned long long)o.faces, o.max_faces);
+    if (!r->srv->filters)
+        return http_send_fail(r, r->srv->filter_code, r->srv->filter_reason,
+                              NULL, NULL);
+    if (filter_jobs_reserve(r->srv->filters) < 0) {
+        char msg[160];
+        snprintf(msg, sizeof msg, "simplify: %llu filter or simplify jobs are "
+                 "queued or running (filter_max_jobs), or the server is "
+                 "stopping; try again",
+                 (unsigned long long)r->srv->cfg->filter_max_jobs);
+        return http_send_fail(r, GV_EBUSY, msg, "Retry-After", "1");
+    }
+    c = calloc(1, sizeof *c);
+    if (!c) {
+        filter_jobs_unreserve(r->srv->filters);
+        return http_send_errorf(r, GV_ENOMEM, "simplify: out of memory");
+    }
+    struct gv_worker_job *job = &c->fj.job;
+    job->op = GV_WORKER_SIMPLIFY;
+    job->mesh = (const uint8_t *)r->body; /* lives as long as r */
+    job->mesh_len = r->body_len;
+    job->simplify = o;
+    /* The answer's cap: a text vertex or triangle takes well under 64
+     * bytes (OBJ with %.9g coordinates). */
+    job->max_out = 65536 + 64 * ((uint64_t)o.lim.max_verts + o.lim.max_tris);
+    double ms = ceil(r->srv->cfg->simplify_time_limit * 1000);
+    c->fj.timeout_ms = ms > 3600000 ? 3600000 : (int)ms;
+    c->fj.timeout_key = "simplify_time_limit";
+    c->fj.done = call_done;
+    c->fj.arg = c;
+    c->conn = r->conn;
+    r->async = c;
+    r->async_free = call_free_any;
+    MHD_suspend_connection(r->conn); /* before the job can resume it */
+    filter_jobs_submit(r->srv->filters, &c->fj);
+    return MHD_YES;
 }

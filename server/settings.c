@@ -77,7 +77,7 @@ static const struct settings_key keys[] = {
     {"simplify_max_faces", T_SIZE, F(simplify_max_faces), "4M", 1, 268435456,
      "most triangles of a mesh to simplify, and of a request (413 beyond)"},
     {"simplify_time_limit", T_DOUBLE, F(simplify_time_limit), "10", 0.01, 3600,
-     "seconds of octree building for one simplification (504 beyond)"},
+     "seconds one simplification may take in its filter worker (504 beyond)"},
     {"max_output_pixels", T_SIZE, F(max_output_pixels), "16M", 1, 1e15,
      "largest output image in pixels (IIIF maxArea)"},
     {"max_output_side", T_UINT, F(max_output_side), "16384", 1, 2147483647,

@@ -36,7 +36,7 @@ struct settings {
     double terrain_error_scale;    /* terrain tiles: times Cesium's level error */
     uint64_t simplify_max_bytes;   /* mesh upload to /v1/meshes/simplify */
     uint64_t simplify_max_faces;   /* its triangles, in and asked */
-    double simplify_time_limit;    /* seconds of octree building */
+    double simplify_time_limit;    /* seconds of one job in its worker */
     uint64_t max_output_pixels;    /* IIIF maxArea */
     uint64_t max_output_side;      /* IIIF maxWidth = maxHeight */
     double max_upscale;            /* largest IIIF '^' factor */

@@ -9,8 +9,18 @@
 # X-Faces-Asked, and refuse with the JSON error shape: bad queries and
 # malformed files (400), big-endian PLY (501), faces asked or in the file
 # over simplify_max_faces and a body over simplify_max_bytes (413), another
-# method (405).  simplify_time_limit (504) is not tested: no mesh small
-# enough for a test takes a known time to build.
+# method (405).
+#
+# The work runs in the filter worker processes: /metrics counts each job
+# that reached one (gigaview_worker_jobs_total{kind="simplify"}) and the
+# answer carries X-Gigaview-Worker-Ms.  With the test worker
+# (tests/gigaview-filter-worker-hooks, GV_TEST_WORKER_SIMPLIFY=1) a mesh
+# that starts with "#gv-test:crash" kills its worker with SIGSEGV (500)
+# and one that starts with "#gv-test:hang" never ends (504 at
+# simplify_time_limit, the worker killed); the next mesh after each gets
+# the same bytes as before from a new worker.  Skipped where gigaviewd has
+# no worker pool (no EGL, a build without the GPU: the 503 or 501 of the
+# filters is checked instead).
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
 
@@ -41,6 +51,17 @@ simplify_max_faces = 20000
 simplify_time_limit = 60
 EOF2
 start_daemon "$T/m.conf"
+
+req --data-binary @in.obj "$(url "/v1/meshes/simplify?faces=1000")"
+if [ "$code" = 503 ] || [ "$code" = 501 ]; then
+    check "no worker pool: the filters' JSON error ($code)" error_body_ok "$code"
+    skip "simplification in the workers" "no filter workers here: $(head -c 200 "$T/b")"
+    stop_daemon
+    done_testing
+    exit 0
+fi
+check "X-Gigaview-Worker-Ms: the job ran in a worker" \
+    test -n "$(header X-Gigaview-Worker-Ms)"
 
 for f in glb ply obj; do
     run simplify in.obj --faces 1000 -o "cli.$f"
@@ -79,6 +100,57 @@ grep '^f ' big.obj | head -n 20001 | awk '{print "f 1 2 3"}' >>bigv.obj
 expect_status "a file over simplify_max_faces" 413 "/v1/meshes/simplify?faces=9" --data-binary @bigv.obj
 expect_status "a body over simplify_max_bytes" 413 "/v1/meshes/simplify?faces=9" --data-binary @big.obj
 expect_status "GET" 405 "/v1/meshes/simplify?faces=9"
+# Jobs that reached a worker: the first request, three formats, ratio,
+# paper, and the bad index, big-endian and over-the-limit files (the
+# query errors, faces=20001 and the oversized body are refused before).
+curl -s "$(url /metrics)" >metrics.txt
+check "metrics: 9 simplify jobs sent to workers" \
+    grep -qx 'gigaview_worker_jobs_total{kind="simplify"} 9' metrics.txt
 stop_daemon
+check "daemon exited cleanly" test "$drc" -eq 0
+
+# ------------------------------------------------- hostile meshes (hooks)
+hooks=$(dirname "$GIGAVIEW")/tests/gigaview-filter-worker-hooks
+if [ ! -x "$hooks" ]; then
+    skip "hostile meshes" "no $hooks"
+    done_testing
+    exit 0
+fi
+cat >"$T/h.conf" <<EOF2
+store_dir = "$T/s"
+threads = 2
+access_log = off
+log_level = info
+filter_workers = 1
+filter_worker = "$hooks"
+simplify_time_limit = 4
+drain_timeout = 1
+EOF2
+GV_TEST_WORKER_SIMPLIFY=1
+export GV_TEST_WORKER_SIMPLIFY
+start_daemon "$T/h.conf"
+{ echo "#gv-test:crash"; cat in.obj; } >crash.obj
+{ echo "#gv-test:hang"; cat in.obj; } >hang.obj
+req --data-binary @crash.obj "$(url "/v1/meshes/simplify?faces=1000&format=obj")"
+check "a mesh that crashes its worker: 500" test "$code" = 500
+check "500: the worker died of SIGSEGV" test "$(json_get 'j["error"]["message"]')" = \
+    "simplify: the worker process died during the job (killed by signal 11 (SIGSEGV))"
+req --data-binary @in.obj "$(url "/v1/meshes/simplify?faces=1000&format=obj")"
+check "after the crash: 200, the bytes of gigaview simplify" \
+    sh -c "[ $code = 200 ] && cmp -s '$T/b' cli.obj"
+req --data-binary @hang.obj "$(url "/v1/meshes/simplify?faces=1000&format=obj")"
+check "a mesh that never ends: 504" test "$code" = 504
+check "504: the time limit's message" test "$(json_get 'j["error"]["message"]')" = \
+    "simplify: the job ran past the time limit of 4000 ms (simplify_time_limit); its worker was killed"
+req --data-binary @in.obj "$(url "/v1/meshes/simplify?faces=1000&format=obj")"
+check "after the timeout: 200, the bytes of gigaview simplify" \
+    sh -c "[ $code = 200 ] && cmp -s '$T/b' cli.obj"
+curl -s "$(url /metrics)" >metrics.txt
+check "metrics: one crash, one timeout, two workers replaced" sh -c \
+    "grep -qx 'gigaview_filter_jobs_total{result=\"crash\"} 1' metrics.txt &&
+     grep -qx 'gigaview_filter_jobs_total{result=\"timeout\"} 1' metrics.txt &&
+     grep -qx 'gigaview_filter_worker_restarts_total 2' metrics.txt"
+stop_daemon
+unset GV_TEST_WORKER_SIMPLIFY
 check "daemon exited cleanly" test "$drc" -eq 0
 done_testing

@@ -9,10 +9,16 @@
  *   0  the server reading a worker's hello;
  *   1  the server reading the answer to a 3x2-ROI run job;
  *   2  the server reading the answer to a compile job;
- *   3  the worker's loop (with no GPU: every job it decodes is answered
- *      "no GPU context"), its answers drained and discarded.
+ *   3  the worker's loop (with no GPU: every compile and run job it
+ *      decodes is answered "no GPU context", a simplify job runs on the
+ *      CPU, through the mesh readers), its answers left unread;
+ *   4  the server reading the answer to a simplify job (limits 64
+ *      triangles, 192 vertices, an answer file of at most 4 KiB).
+ * Byte 0's values 5..7 are mode 4 too (0..3 as before, so the seeds
+ * keep their meaning).
  * Invariants: a reader returns one of the documented codes; a result it
- * accepts has exactly the ROI's floats and a known error code with a
+ * accepts has exactly the ROI's floats, or a mesh of at most max_out
+ * bytes with counts within the limits, and a known error code with a
  * printable message; hello text is printable.  Inputs are capped at
  * 16 KiB so that the worker's answers fit in the socket's buffer.
  */
@@ -43,7 +49,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 1 || size > 16384)
         return 0;
-    int mode = data[0] & 3;
+    int mode = data[0] & 7;
+    if (mode > 4)
+        mode = 4;
     int sv[2];
     if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) < 0)
         return 0;
@@ -74,6 +82,38 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 abort();
             check_text(text);
         }
+    } else if (mode == 4) {
+        struct gv_worker_job job;
+        memset(&job, 0, sizeof job);
+        job.op = GV_WORKER_SIMPLIFY;
+        job.mesh = (const uint8_t *)"ply";
+        job.mesh_len = 3;
+        job.simplify.faces = 10;
+        job.simplify.format = GV_MESH_PLY;
+        job.simplify.lim.max_bytes = 16384;
+        job.simplify.lim.max_tris = 64;
+        job.simplify.lim.max_verts = 192;
+        job.max_out = 4096;
+        struct gv_worker_result res;
+        int rc = gv_worker_recv_result(sv[0], &job, deadline, &res, &err);
+        check_rc(rc);
+        if (rc == 0 && res.failed) {
+            if (res.err.code <= GV_OK || res.err.code > GV_CODE_MAX || res.mesh)
+                abort();
+            check_text(res.err.text);
+        } else if (rc == 0) {
+            if (!res.mesh || res.mesh_len > job.max_out || res.out ||
+                res.sstats.in_tris > 64 || res.sstats.in_verts > 192 ||
+                res.sstats.out_tris > res.sstats.in_tris)
+                abort();
+            volatile uint8_t sum = 0;
+            for (size_t i = 0; i < res.mesh_len; i++) /* all there (ASan) */
+                sum ^= res.mesh[i];
+            (void)sum;
+        } else if (res.mesh) {
+            abort();
+        }
+        free(res.mesh);
     } else {
         static const uint8_t rgba[4 * 4 * 4];
         static const double params[1] = {0};
