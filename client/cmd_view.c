@@ -13,6 +13,9 @@
  * the tiles' work for this frame (a bounded number of decodes; never a
  * wait for the network), the draw, a screenshot if one is due, the
  * overlay (view_overlay.h), the swap (vsync where the driver has it).
+ * Filter graphs run on a thread of their own as well (view_filter.h):
+ * a Shift-drag asks the server to filter that region, and the result is
+ * drawn over the picture in place (view_roi.h) until cleared.
  * At rest with nothing to do it sleeps in SDL_WaitEventTimeout.
  *
  * A build without SDL2 (or --without-gpu) has a cmd_view that says so.
@@ -42,9 +45,11 @@
 #include "options.h"
 #include "view_draw.h"
 #include "view_fetch.h"
+#include "view_filter.h"
 #include "view_geom.h"
 #include "view_input.h"
 #include "view_overlay.h"
+#include "view_roi.h"
 #include "view_script.h"
 #include "view_tiles.h"
 
@@ -130,6 +135,16 @@ struct app {
     struct vf *fetch;
     struct vt *tiles;            /* NULL until the image has come */
     struct vi in;
+    /* filters */
+    struct vx *filt;
+    struct vr *roi;
+    struct vx_graph graphs[VX_MAX_GRAPHS];
+    int ngraphs, graph;          /* graph: index into graphs, -1 none chosen */
+    struct vx_graph named;       /* a graph chosen by id that is not listed */
+    int use_named, have_job, have_roi;
+    struct vx_job job;           /* the last job asked for */
+    double params[VX_MAX_GRAPHS + 1]; /* each graph's parameter (last: named) */
+    int param_set[VX_MAX_GRAPHS + 1];
     char ids[MAX_IMAGES][129];
     int nids, cur_id;
     char want_image[129];        /* asked of the fetch thread */
@@ -204,6 +219,9 @@ static int list_images(struct app *app, const char *url, struct gv_error *err)
 
 static void open_image(struct app *app, const char *id)
 {
+    if (app->roi)                /* a filtered region is of one image */
+        vr_clear(app->roi);
+    app->have_roi = app->have_job = 0;
     snprintf(app->want_image, sizeof app->want_image, "%s", id);
     for (int i = 0; i < app->nids; i++)
         if (!strcmp(app->ids[i], id))
@@ -289,6 +307,170 @@ static void toggle_fullscreen(struct app *app)
     SDL_SetWindowFullscreen(app->win, app->fullscreen ? SDL_WINDOW_FULLSCREEN_DESKTOP : 0);
 }
 
+/* ---------------------------------------------------------------- filters */
+
+/* The graph list, once the filter thread has it. */
+static void filter_graphs(struct app *app)
+{
+    if (!app->ngraphs)
+        app->ngraphs = vx_graphs(app->filt, app->graphs, VX_MAX_GRAPHS);
+}
+
+/* The chosen graph (the stock "negate" until one is chosen), or NULL. */
+static const struct vx_graph *filter_graph(struct app *app, int *slot)
+{
+    filter_graphs(app);
+    if (app->use_named) {
+        *slot = VX_MAX_GRAPHS;
+        return &app->named;
+    }
+    if (app->graph < 0)
+        for (int i = 0; i < app->ngraphs; i++)
+            if (!strcmp(app->graphs[i].id, "negate"))
+                app->graph = i;
+    if (app->graph < 0 && app->ngraphs)
+        app->graph = 0;
+    *slot = app->graph;
+    return app->graph >= 0 ? &app->graphs[app->graph] : NULL;
+}
+
+/* Ask for the chosen graph over the last region (app->job's). */
+static void filter_send(struct app *app)
+{
+    int slot;
+    const struct vx_graph *g = filter_graph(app, &slot);
+    if (!g) {
+        snprintf(app->message, sizeof app->message, "FILTER: THE SERVER LISTS NO GRAPHS");
+        return;
+    }
+    if (!app->param_set[slot]) {
+        app->params[slot] = g->def;
+        app->param_set[slot] = 1;
+    }
+    app->job.g = *g;
+    app->job.param = app->params[slot];
+    snprintf(app->job.image, sizeof app->job.image, "%s", app->want_image);
+    app->have_job = 1;
+    app->message[0] = 0;
+    if (app->a->verbose)
+        fprintf(stderr, "view: filter %s level %d region %u,%u,%u,%u param %s=%g\n", g->id,
+                app->job.level, app->job.x, app->job.y, app->job.w, app->job.h,
+                g->has_param ? g->name : "-", g->has_param ? app->job.param : 0.0);
+    vx_run(app->filt, &app->job);
+}
+
+/* A Shift-drag ended: filter the level the view shows, over the region
+ * of the image under the rectangle (its bounding box when turned). */
+static void filter_region(struct app *app)
+{
+    if (!app->tiles)
+        return;
+    const struct gv_geometry *g = vt_geometry(app->tiles);
+    const double *r = app->in.sel;
+    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    for (int i = 0; i < 4; i++) {
+        double px, py;
+        vg_screen_to_image(&app->in.cur, app->w, app->h, r[(i & 1) * 2], r[1 + (i >> 1) * 2],
+                           &px, &py);
+        x0 = fmin(x0, px), y0 = fmin(y0, py), x1 = fmax(x1, px), y1 = fmax(y1, py);
+    }
+    int level = (int)floor(app->in.cur.zoom + 1e-9);
+    if (level < 0)
+        level = 0;
+    if (level > vt_top(app->tiles))
+        level = vt_top(app->tiles);
+    uint32_t lw, lh;
+    if (gv_level_size(g, level, &lw, &lh) < 0)
+        return;
+    const double s = exp2(level);
+    double a = fmax(0, floor(x0 / s)), b = fmax(0, floor(y0 / s));
+    double c = fmin(lw, ceil(x1 / s)), d = fmin(lh, ceil(y1 / s));
+    if (c <= a || d <= b) {
+        snprintf(app->message, sizeof app->message, "FILTER: THE REGION IS OUTSIDE THE IMAGE");
+        return;
+    }
+    app->job.level = level;
+    app->job.x = (uint32_t)a;
+    app->job.y = (uint32_t)b;
+    app->job.w = (uint32_t)(c - a);
+    app->job.h = (uint32_t)(d - b);
+    filter_send(app);
+}
+
+/* Step the chosen graph's first parameter by a tenth of its range (up:
+ * +1 or -1) and filter the last region again. */
+static void filter_param(struct app *app, int up)
+{
+    int slot;
+    const struct vx_graph *g = filter_graph(app, &slot);
+    if (!g || !g->has_param) {
+        snprintf(app->message, sizeof app->message, "FILTER %.60s HAS NO PARAMETER",
+                 g ? g->id : "");
+        return;
+    }
+    double p = app->param_set[slot] ? app->params[slot] : g->def;
+    p += up * (g->max - g->min) / 10;
+    app->params[slot] = fmin(g->max, fmax(g->min, p));
+    app->param_set[slot] = 1;
+    if (app->have_job)
+        filter_send(app);
+}
+
+/* The next graph of the server's list; the region is filtered again. */
+static void filter_next(struct app *app)
+{
+    int slot;
+    filter_graph(app, &slot);
+    app->use_named = 0;
+    if (app->ngraphs)
+        app->graph = (app->graph + 1) % app->ngraphs;
+    if (app->have_job)
+        filter_send(app);
+}
+
+/* Choose graph `id` (script): a listed one, else one the list lacks
+ * (whose job the server then refuses or runs); the region is filtered
+ * again. */
+static void filter_choose(struct app *app, const char *id)
+{
+    filter_graphs(app);
+    app->use_named = 1;
+    for (int i = 0; i < app->ngraphs; i++)
+        if (!strcmp(app->graphs[i].id, id)) {
+            app->graph = i;
+            app->use_named = 0;
+        }
+    if (app->use_named) {
+        memset(&app->named, 0, sizeof app->named);
+        snprintf(app->named.id, sizeof app->named.id, "%s", id);
+        app->param_set[VX_MAX_GRAPHS] = 0;
+    }
+    if (app->have_job)
+        filter_send(app);
+}
+
+/* A result of the filter thread. */
+static void filter_take(struct app *app, struct vx_result *r)
+{
+    if (!app->have_job || strcmp(r->job.image, app->want_image)) {
+        free(r->rgba);           /* cleared, or another image since */
+        return;
+    }
+    if (!r->ok) {
+        fprintf(stderr, ME ": %s\n", r->msg);
+        snprintf(app->message, sizeof app->message, "%.90s", r->msg);
+    } else {
+        const double s = exp2(r->job.level);
+        vr_set(app->roi, r->rgba, r->w, r->h, r->job.x * s, r->job.y * s,
+               (r->job.x + r->w) * s, (r->job.y + r->h) * s);
+        app->have_roi = 1;
+        if (app->a->verbose)
+            fprintf(stderr, "view: filter %s: %ux%u shown\n", r->job.g.id, r->w, r->h);
+    }
+    free(r->rgba);
+    app->force_draw = 1;
+}
+
 static void act(struct app *app, enum vi_action a)
 {
     switch (a) {
@@ -309,8 +491,14 @@ static void act(struct app *app, enum vi_action a)
     case VI_TOGGLE_OVERLAY: app->show_overlay = !app->show_overlay; break;
     case VI_TOGGLE_LIST: app->show_list = !app->show_list; break;
     case VI_COPY_VIEW: copy_view(app); break;
-    case VI_ROI: case VI_PARAM_UP: case VI_PARAM_DOWN: case VI_ROI_CLEAR:
-        snprintf(app->message, sizeof app->message, "filters: not in this build yet");
+    case VI_ROI: filter_region(app); break;
+    case VI_PARAM_UP: filter_param(app, 1); break;
+    case VI_PARAM_DOWN: filter_param(app, -1); break;
+    case VI_NEXT_FILTER: filter_next(app); break;
+    case VI_ROI_CLEAR:
+        vr_clear(app->roi);
+        app->have_roi = app->have_job = 0;
+        app->force_draw = 1;
         break;
     case VI_NONE: break;
     }
@@ -355,7 +543,8 @@ static int settled(const struct app *app)
 {
     return app->tiles && !strcmp(vt_image(app->tiles), app->want_image) &&
            !memcmp(&app->in.cur, &app->in.goal, sizeof app->in.cur) &&
-           app->st.missing == 0 && app->frames > app->pc_frame + 1;
+           app->st.missing == 0 && app->frames > app->pc_frame + 1 &&
+           !vx_busy(app->filt);
 }
 
 /* Run script commands until one has to wait for later frames. */
@@ -447,6 +636,79 @@ static void script_step(struct app *app, double now)
             break;
         }
         case VS_QUIT: app->quit = 1; break;
+        case VS_MESSAGE:
+            printf("%s %s\n", c->text, app->message);
+            fflush(stdout);
+            break;
+        case VS_FILTER:
+            app->in.sel[0] = c->a[0] * app->in.ratio;
+            app->in.sel[1] = c->a[1] * app->in.ratio;
+            app->in.sel[2] = c->a[2] * app->in.ratio;
+            app->in.sel[3] = c->a[3] * app->in.ratio;
+            filter_region(app);
+            break;
+        case VS_GRAPH:
+            if (!strcmp(c->text, "next"))
+                filter_next(app);
+            else
+                filter_choose(app, c->text);
+            break;
+        case VS_PARAM: filter_param(app, c->a[0] > 0 ? 1 : -1); break;
+        case VS_PAD_AXIS:
+        case VS_PAD_BUTTON: {
+            SDL_Event e;
+            memset(&e, 0, sizeof e);
+            if (c->op == VS_PAD_AXIS) {
+                e.type = SDL_CONTROLLERAXISMOTION;
+                e.caxis.axis = (Uint8)c->code;
+                e.caxis.value = (Sint16)lround(c->a[0] * 32767);
+                act(app, vi_event(&app->in, &e));
+            } else {
+                e.type = SDL_CONTROLLERBUTTONDOWN;
+                e.cbutton.button = (Uint8)c->code;
+                e.cbutton.state = SDL_PRESSED;
+                act(app, vi_event(&app->in, &e));
+                e.type = SDL_CONTROLLERBUTTONUP;
+                e.cbutton.state = SDL_RELEASED;
+                act(app, vi_event(&app->in, &e));
+            }
+            break;
+        }
+        case VS_PINCH: {
+            SDL_Event e;
+            memset(&e, 0, sizeof e);
+            e.type = SDL_MULTIGESTURE;
+            e.mgesture.x = (float)(c->a[0] * app->in.ratio / app->w);
+            e.mgesture.y = (float)(c->a[1] * app->in.ratio / app->h);
+            e.mgesture.dDist = (float)c->a[2];
+            e.mgesture.dTheta = (float)(c->a[3] * M_PI / 180);
+            e.mgesture.numFingers = 2;
+            act(app, vi_event(&app->in, &e));
+            break;
+        }
+        case VS_TOUCH: {
+            /* One finger down at (a0, a1), N moves to (a2, a3), up. */
+            SDL_Event e;
+            memset(&e, 0, sizeof e);
+            const double ww = app->w / app->in.ratio, wh = app->h / app->in.ratio;
+            int n = (int)c->a[4];
+            e.type = SDL_FINGERDOWN;
+            e.tfinger.x = (float)(c->a[0] / ww);
+            e.tfinger.y = (float)(c->a[1] / wh);
+            act(app, vi_event(&app->in, &e));
+            for (int i = 1; i <= n; i++) {
+                e.type = SDL_FINGERMOTION;
+                e.tfinger.dx = (float)((c->a[2] - c->a[0]) / n / ww);
+                e.tfinger.dy = (float)((c->a[3] - c->a[1]) / n / wh);
+                e.tfinger.x = (float)((c->a[0] + (c->a[2] - c->a[0]) * i / n) / ww);
+                e.tfinger.y = (float)((c->a[1] + (c->a[3] - c->a[1]) * i / n) / wh);
+                act(app, vi_event(&app->in, &e));
+            }
+            e.type = SDL_FINGERUP;
+            e.tfinger.dx = e.tfinger.dy = 0;
+            act(app, vi_event(&app->in, &e));
+            break;
+        }
         }
         app->pc++;
         app->pc_since = now;
@@ -482,6 +744,14 @@ static void overlay_content(struct app *app, const struct vt_plan *p,
     snprintf(c->bottom[3], VO_LINE, "%.80s", gi->renderer);
     if (app->message[0])
         snprintf(c->bottom[4], VO_LINE, "%.90s", app->message);
+    if (app->have_job) {
+        const struct vx_graph *g = &app->job.g;
+        char prm[100] = "";
+        if (g->has_param)
+            snprintf(prm, sizeof prm, "  %.30s %.4g (PGUP/PGDN)", g->name, app->job.param);
+        snprintf(c->bottom[5], VO_LINE, "FILTER %.30s%s%s", g->id, prm,
+                 vx_busy(app->filt) ? "  RUNNING" : "");
+    }
     vo_scale_bar(v->zoom, app->w / 5.0, &c->bar_px, c->bar_label, sizeof c->bar_label);
     if (app->show_list) {
         snprintf(c->panel[c->npanel++], VO_LINE, "IMAGES (TAB: NEXT)");
@@ -556,6 +826,9 @@ static int frame(struct app *app, double *last)
     struct vf_result r;
     while (vf_poll(app->fetch, &r))
         take_result(app, &r, t0);
+    struct vx_result fr;
+    while (vx_poll(app->filt, &fr))
+        filter_take(app, &fr);
     if (app->quit)
         return 0;
     int ww, wh;
@@ -590,6 +863,8 @@ static int frame(struct app *app, double *last)
         glClear(GL_COLOR_BUFFER_BIT);
         if (app->tiles && p.visible)
             vd_draw(app->draw, app->tiles, &p, &app->in.cur, app->w, app->h);
+        if (app->tiles && app->have_roi)
+            vr_draw(app->roi, &app->in.cur, app->w, app->h);
         if (app->shot_path && app->tiles)
             write_shot(app);
         if (app->show_overlay)
@@ -613,7 +888,8 @@ static int frame(struct app *app, double *last)
     if (moving)
         app->moving_time += dt;
     return moving || !app->tiles || app->st.missing || app->st.wanted ||
-           vf_in_flight(app->fetch) || app->script.n || app->shot_path;
+           vf_in_flight(app->fetch) || app->script.n || app->shot_path ||
+           vx_busy(app->filt);
 }
 
 /* ---------------------------------------------------------------- setup */
@@ -672,7 +948,7 @@ static int open_window(struct app *app, int w, int h)
         SDL_GL_SetSwapInterval(0);
     struct gv_error err;
     if (!(app->gpu = gv_gpu_adopt(&err)) || !(app->draw = vd_new(app->gpu, &err)) ||
-        !(app->overlay = vo_new(app->gpu, &err))) {
+        !(app->overlay = vo_new(app->gpu, &err)) || !(app->roi = vr_new(app->gpu, &err))) {
         fprintf(stderr, ME ": %s\n", err.text);
         return -1;
     }
@@ -686,6 +962,8 @@ static int open_window(struct app *app, int w, int h)
 static void close_app(struct app *app)
 {
     vf_free(app->fetch);         /* first: no more results */
+    vx_free(app->filt);
+    vr_free(app->roi);
     vt_free(app->tiles);
     vo_free(app->overlay);
     vd_free(app->draw);
@@ -776,6 +1054,11 @@ static int start(struct app *app, const char *url, struct view_args *a)
         fprintf(stderr, ME ": %s\n", err.text);
         return 1;
     }
+    if (!(app->filt = vx_new(url, (long)(a->timeout * 1000), a->verbose, &err))) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return 1;
+    }
+    app->graph = -1;
     if (open_window(app, w, h) < 0)
         return 1;
     SDL_GL_GetDrawableSize(app->win, &app->w, &app->h);

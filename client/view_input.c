@@ -11,10 +11,12 @@
  * fullscreen; P (F12) screenshot; C prints the view as a browser link;
  * Tab / Shift-Tab the next / previous image; I the image list; O the
  * overlay; Shift-drag a region to filter, Delete clears it, and Page Up /
- * Page Down change its first parameter; Esc quits.  A gamepad (SDL
- * GameController): left stick pans, right stick zooms (up/down) and
- * rotates (left/right), shoulders rotate by 15 degrees, A / B zoom in /
- * out, Start goes home, with a dead zone.
+ * Page Down change its first parameter, G chooses the next graph; Esc
+ * quits.  A gamepad (SDL GameController): left stick pans, right stick
+ * zooms (up/down) and rotates (left/right), the right / left trigger
+ * zooms in / out, shoulders rotate by 15 degrees, A / B zoom in / out,
+ * Start goes home, with a dead zone.  The sticks are read from the axis
+ * events (not polled), so that a script's synthetic events drive them.
  */
 #include <math.h>
 #include <string.h>
@@ -36,8 +38,11 @@ static void clamp_goal(struct vi *s)
 void vi_init(struct vi *s, const struct vg_view *v, double iw, double ih, int w, int h)
 {
     SDL_GameController *pad = s->pad;
+    double ax[SDL_CONTROLLER_AXIS_MAX];
+    memcpy(ax, s->axis, sizeof ax);
     memset(s, 0, sizeof *s);
     s->pad = pad;
+    memcpy(s->axis, ax, sizeof ax);
     s->iw = iw;
     s->ih = ih;
     s->w = w;
@@ -109,6 +114,7 @@ static enum vi_action key(struct vi *s, const SDL_KeyboardEvent *k)
     case SDLK_PAGEUP: return VI_PARAM_UP;
     case SDLK_PAGEDOWN: return VI_PARAM_DOWN;
     case SDLK_DELETE: return VI_ROI_CLEAR;
+    case SDLK_g: return VI_NEXT_FILTER;
     default:
         if (c >= SDLK_1 && c <= SDLK_9) {
             int n = (int)(c - SDLK_0);
@@ -226,7 +232,12 @@ enum vi_action vi_event(struct vi *s, const SDL_Event *e)
                           e->cdevice.which) {
             SDL_GameControllerClose(s->pad);
             s->pad = NULL;
+            memset(s->axis, 0, sizeof s->axis);
         }
+        return VI_NONE;
+    case SDL_CONTROLLERAXISMOTION:
+        if (e->caxis.axis < SDL_CONTROLLER_AXIS_MAX)
+            s->axis[e->caxis.axis] = e->caxis.value / 32767.0;
         return VI_NONE;
     case SDL_CONTROLLERBUTTONDOWN:
         switch (e->cbutton.button) {
@@ -245,10 +256,11 @@ enum vi_action vi_event(struct vi *s, const SDL_Event *e)
     }
 }
 
-/* A stick axis in [-1, 1] with the dead zone removed. */
-static double axis(SDL_GameController *p, SDL_GameControllerAxis a)
+/* A stick axis in [-1, 1] (a trigger in [0, 1]) with the dead zone
+ * removed. */
+static double axis(const struct vi *s, SDL_GameControllerAxis a)
 {
-    double v = SDL_GameControllerGetAxis(p, a) / 32767.0;
+    double v = fmax(-1, fmin(1, s->axis[a]));
     if (fabs(v) < DEAD)
         return 0;
     return (v - copysign(DEAD, v)) / (1 - DEAD);
@@ -256,15 +268,17 @@ static double axis(SDL_GameController *p, SDL_GameControllerAxis a)
 
 int vi_step(struct vi *s, double dt)
 {
-    if (s->pad) {
-        double lx = axis(s->pad, SDL_CONTROLLER_AXIS_LEFTX);
-        double ly = axis(s->pad, SDL_CONTROLLER_AXIS_LEFTY);
-        double rx = axis(s->pad, SDL_CONTROLLER_AXIS_RIGHTX);
-        double ry = axis(s->pad, SDL_CONTROLLER_AXIS_RIGHTY);
-        if (lx || ly || rx || ry) {
+    {
+        double lx = axis(s, SDL_CONTROLLER_AXIS_LEFTX);
+        double ly = axis(s, SDL_CONTROLLER_AXIS_LEFTY);
+        double rx = axis(s, SDL_CONTROLLER_AXIS_RIGHTX);
+        double ry = axis(s, SDL_CONTROLLER_AXIS_RIGHTY);
+        double tz = axis(s, SDL_CONTROLLER_AXIS_TRIGGERLEFT) -
+                    axis(s, SDL_CONTROLLER_AXIS_TRIGGERRIGHT);
+        if (lx || ly || rx || ry || tz) {
             /* A window per second at full deflection, a level per second. */
             pan_by(&s->goal, s->w, s->h, lx * s->w * dt, ly * s->h * dt);
-            s->goal.zoom += ry * dt;
+            s->goal.zoom += (ry + tz) * dt;
             s->goal.rot += rx * 90 * dt;
             clamp_goal(s);
             s->cur = s->goal;

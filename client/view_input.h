@@ -18,7 +18,7 @@
 enum vi_action {
     VI_NONE, VI_QUIT, VI_FULLSCREEN, VI_SCREENSHOT, VI_NEXT_IMAGE, VI_PREV_IMAGE,
     VI_TOGGLE_OVERLAY, VI_TOGGLE_LIST, VI_COPY_VIEW, VI_ROI, VI_PARAM_UP,
-    VI_PARAM_DOWN, VI_ROI_CLEAR
+    VI_PARAM_DOWN, VI_ROI_CLEAR, VI_NEXT_FILTER
 };
 
 struct vi {
@@ -32,6 +32,7 @@ struct vi {
     struct vg_view preset[10];
     int have_preset[10];
     SDL_GameController *pad;
+    double axis[SDL_CONTROLLER_AXIS_MAX]; /* last axis events, -1..1 (triggers 0..1) */
     int fingers;
 };
 

@@ -31,6 +31,10 @@ static const struct {
     {"settle", VS_SETTLE, 0, 1},     {"shot", VS_SHOT, -1, -1},
     {"wait-file", VS_WAIT_FILE, -1, -1}, {"print", VS_PRINT, -1, -1},
     {"quit", VS_QUIT, 0, 0},
+    {"filter", VS_FILTER, 4, 4},     {"graph", VS_GRAPH, -1, -1},
+    {"param", VS_PARAM, -1, -1},     {"pad-axis", VS_PAD_AXIS, -1, -1},
+    {"pad-button", VS_PAD_BUTTON, -1, -1}, {"pinch", VS_PINCH, 4, 4},
+    {"touch", VS_TOUCH, 4, 5},       {"message", VS_MESSAGE, -1, -1},
 };
 
 void vs_free(struct vs_script *s)
@@ -125,10 +129,32 @@ static int parse_line(char *line, struct vs_cmd *c, const char **why)
         }
         return 1;
     }
+    if (c->op == VS_PARAM) {
+        char *sgn = word(&p);
+        if (!sgn || word(&p) || (strcmp(sgn, "+") && strcmp(sgn, "-"))) {
+            *why = "param wants + or -";
+            return -1;
+        }
+        c->a[0] = *sgn == '+' ? 1 : -1;
+        return 1;
+    }
+    if (c->op == VS_PAD_AXIS || c->op == VS_PAD_BUTTON) {
+        char *name = word(&p), *v = c->op == VS_PAD_AXIS ? word(&p) : NULL;
+        c->code = c->op == VS_PAD_AXIS ? (int)SDL_GameControllerGetAxisFromString(name ? name : "")
+                                       : (int)SDL_GameControllerGetButtonFromString(name ? name : "");
+        if (!name || c->code < 0 || word(&p) ||
+            (c->op == VS_PAD_AXIS && (!v || num(v, &c->a[0]) < 0 || fabs(c->a[0]) > 1))) {
+            *why = c->op == VS_PAD_AXIS ? "pad-axis wants an SDL axis name and -1..1"
+                                        : "pad-button wants an SDL button name";
+            return -1;
+        }
+        return 1;
+    }
     if (c->op == VS_SHOT || c->op == VS_IMAGE || c->op == VS_WAIT_FILE ||
-        c->op == VS_PRINT) {
-        char *t = c->op == VS_PRINT ? p + strspn(p, " \t") : word(&p);
-        if (!t || (!*t && c->op != VS_PRINT)) {
+        c->op == VS_PRINT || c->op == VS_GRAPH || c->op == VS_MESSAGE) {
+        const int rest = c->op == VS_PRINT || c->op == VS_MESSAGE;
+        char *t = rest ? p + strspn(p, " \t") : word(&p);
+        if (!t || (!*t && !rest)) {
             *why = "a name is missing";
             return -1;
         }
@@ -140,7 +166,7 @@ static int parse_line(char *line, struct vs_cmd *c, const char **why)
                 return -1;
             }
         }
-        if (c->op != VS_PRINT && word(&p)) {
+        if (!rest && word(&p)) {
             *why = "too many arguments";
             return -1;
         }
@@ -153,7 +179,7 @@ static int parse_line(char *line, struct vs_cmd *c, const char **why)
     int n = 0;
     if (c->op == VS_SETTLE)
         c->a[0] = 60000;
-    if (c->op == VS_DRAG)
+    if (c->op == VS_DRAG || c->op == VS_TOUCH)
         c->a[4] = 8;
     while ((w = word(&p))) {
         if (c->op == VS_DOWN && n == 2 && !strcmp(w, "shift")) {
@@ -174,8 +200,12 @@ static int parse_line(char *line, struct vs_cmd *c, const char **why)
         *why = "a negative count";
         return -1;
     }
-    if (c->op == VS_DRAG && (c->a[4] < 1 || c->a[4] > 1000)) {
-        *why = "drag takes 1 to 1000 moves";
+    if ((c->op == VS_DRAG || c->op == VS_TOUCH) && (c->a[4] < 1 || c->a[4] > 1000)) {
+        *why = "drag and touch take 1 to 1000 moves";
+        return -1;
+    }
+    if (c->op == VS_PINCH && (c->a[2] <= -0.25)) {
+        *why = "pinch's DDIST must be above -0.25";
         return -1;
     }
     return 1;

@@ -27,7 +27,28 @@
  *   shot FILE               write the picture (no overlay) to FILE
  *   wait-file PATH [MS]     wait until PATH exists (default 60000)
  *   print TEXT              print TEXT and the view's link on stdout
+ *   message TEXT            print TEXT and the overlay's error line
  *   quit                    exit now
+ *
+ * Filters (a region filtered by the server, shown in place):
+ *   filter X0 Y0 X1 Y1      as a Shift-drag from (X0, Y0) to (X1, Y1)
+ *   graph ID|next           choose graph ID (one the server may lack),
+ *                           or the next of GET /v1/filters (as G)
+ *   param +|-               step the graph's first parameter (as Page
+ *                           Up / Page Down)
+ *   settle also waits for the filter job in flight.
+ *
+ * Gamepad and touch (synthetic SDL events, handled as real ones):
+ *   pad-axis NAME V         an SDL_CONTROLLERAXISMOTION of axis NAME
+ *                           (SDL's names: leftx, lefty, rightx, righty,
+ *                           lefttrigger, righttrigger) to V in [-1, 1];
+ *                           it stays there until the next pad-axis
+ *   pad-button NAME         press and release button NAME (a, b, start,
+ *                           leftshoulder, rightshoulder, ...)
+ *   pinch X Y DDIST DDEG    an SDL_MULTIGESTURE about (X, Y): the
+ *                           fingers' distance grew by DDIST (of the
+ *                           window's size) and turned DDEG degrees
+ *   touch X0 Y0 X1 Y1 [N]   one finger down, N moves (default 8), up
  */
 #ifndef GV_VIEW_SCRIPT_H
 #define GV_VIEW_SCRIPT_H
@@ -39,7 +60,8 @@
 
 enum vs_op {
     VS_WAIT, VS_FRAMES, VS_KEY, VS_DOWN, VS_MOVE, VS_UP, VS_DRAG, VS_WHEEL,
-    VS_VIEW, VS_IMAGE, VS_SETTLE, VS_SHOT, VS_WAIT_FILE, VS_PRINT, VS_QUIT
+    VS_VIEW, VS_IMAGE, VS_SETTLE, VS_SHOT, VS_WAIT_FILE, VS_PRINT, VS_QUIT,
+    VS_FILTER, VS_GRAPH, VS_PARAM, VS_PAD_AXIS, VS_PAD_BUTTON, VS_PINCH, VS_TOUCH, VS_MESSAGE
 };
 
 struct vs_cmd {
@@ -48,7 +70,8 @@ struct vs_cmd {
     double a[5];                 /* numbers, in the order of the syntax */
     int shift, ctrl;             /* key, down */
     int keycode;                 /* key: SDL_Keycode */
-    char *text;                  /* shot, wait-file, image, print (malloc'ed) */
+    int code;                    /* pad-axis, pad-button: SDL's axis or button */
+    char *text;                  /* shot, wait-file, image, print, message, graph (malloc'ed) */
     struct vg_view view;         /* view */
     char view_image[129];        /* view: the hash's image, "" if none */
 };

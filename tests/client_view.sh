@@ -17,6 +17,12 @@
 # while the request hangs), and gigaviewd stopped mid-pan and started
 # again on its port: the window keeps drawing (ancestors) and the final
 # frame equals render.  A bad script is a usage error naming its line.
+# Gamepad and touch (synthetic SDL events from the script): shoulders
+# turn, a finger pans, a pinch zooms, a stick pans and a trigger zooms.
+# Filters: a region filtered by the server (negate) is drawn in place
+# equal to the endpoint's answer, another graph and a stepped parameter
+# redraw it, Delete clears it, a refused graph is an error the window
+# survives.
 # Skips when the build has no viewer (it then only checks the refusal)
 # or no EGL/SDL window can be made.  Needs python3, oiiotool and idiff.
 . "$(dirname "$0")/lib.sh"
@@ -182,6 +188,138 @@ check "a wheel notch zooms in half a level about the pointer" \
 check "R turns 15 degrees" grep -qx 'rotate #image=x&x=1728&y=1100&z=-0.5&r=15' "$T/out"
 check "Home shows the whole image" grep -qx 'home #image=x&x=1500&y=1000&z=2.2288&r=0' "$T/out"
 same_as_render "the frame after the drag equals render" i1.png x 1600,1100 0
+
+# ---------------------------------------------------------------- gamepad, touch
+# Synthetic SDL events from the script.  From 1500,1000 at 1:1: the right
+# shoulder turns 15 degrees, the left one back (twice: -15); a finger
+# dragged by (-100, -100) pans like the mouse; a pinch whose fingers move
+# apart by a quarter of the window (log2(1 + 4 * 0.25) = 1) zooms in one
+# level about their midpoint; the left stick held right pans right and
+# the right trigger zooms in (by amounts that depend on the frame times:
+# only their direction is checked).
+cat >"$T/pad.txt" <<'EOF2'
+view 1500,1000,0
+settle
+pad-button rightshoulder
+settle
+print rshoulder
+pad-button leftshoulder
+pad-button leftshoulder
+settle
+print lshoulder
+view 1500,1000,0
+settle
+touch 320 240 220 140
+settle
+print touch
+view 1500,1000,0
+settle
+pinch 320 240 0.25 0
+settle
+print pinch
+view 1500,1000,0
+settle
+pad-axis leftx 1
+frames 10
+pad-axis leftx 0
+settle
+print stick
+view 1500,1000,0
+settle
+pad-axis righttrigger 1
+frames 10
+pad-axis righttrigger 0
+settle
+print trigger
+EOF2
+run view "$BASE" --image x --size 640x480 --script "$T/pad.txt"
+cp "$T/err" "$T/view.err"
+expect_rc "the gamepad and touch script runs" 0
+check "the right shoulder turns 15 degrees" grep -qx 'rshoulder #image=x&x=1500&y=1000&z=0&r=15' "$T/out"
+check "the left shoulder turns back" grep -qx 'lshoulder #image=x&x=1500&y=1000&z=0&r=-15' "$T/out"
+check "a finger drag pans with the finger" grep -qx 'touch #image=x&x=1600&y=1100&z=0&r=0' "$T/out"
+check "a pinch zooms in a level about the fingers" grep -qx 'pinch #image=x&x=1500&y=1000&z=-1&r=0' "$T/out"
+check "the left stick pans right" awk -F'[=&]' '/^stick /{ok = $4 > 1500 && $6 == 1000 && $8 == 0} END{exit !ok}' "$T/out"
+check "the right trigger zooms in" awk -F'[=&]' '/^trigger /{ok = $4 == 1500 && $6 == 1000 && $8 < 0} END{exit !ok}' "$T/out"
+
+# ---------------------------------------------------------------- filters
+# A region filtered by the server, drawn in place.  From 1500,1000 at 1:1
+# in 640x480, window pixels (100, 100)-(300, 250) show level-0 pixels
+# (1280, 860) to (1480, 1010): the frame's pixels there equal the
+# server's negate of that region; the gamma graph, and its parameter
+# stepped (Page Up), give other pixels; Delete clears; a Shift-drag does
+# what `filter` does; a graph the server lacks is a 404 shown as an error
+# while the window goes on.
+code=$(curl -s -o neg.png -w '%{http_code}' -H 'Content-Type: application/json' \
+    -d '{"filter":"negate","level":0,"region":[1280,860,200,150]}' "$BASE/v1/images/x/filter")
+if [ "$code" != 200 ]; then
+    skip "filters in the viewer" "the server runs no filters here (HTTP $code)"
+else
+    cat >"$T/filt.txt" <<'EOF2'
+view 1500,1000,0
+settle
+shot n0.png
+filter 100 100 300 250
+settle
+shot n1.png
+graph gamma
+settle
+shot n2.png
+param +
+settle
+shot n3.png
+key Delete
+settle
+shot n4.png
+graph negate
+down 100 100 shift
+move 200 200
+up 300 250
+settle
+shot n5.png
+graph no-such-graph
+filter 100 100 300 250
+settle
+message after-error
+EOF2
+    run view "$BASE" --image x --size 640x480 --script "$T/filt.txt" -v
+    cp "$T/err" "$T/view.err"
+    expect_rc "the filter script runs on after a refused graph" 0
+    check "the filter asked for the region under the rectangle" \
+        grep -q 'view: filter negate level 0 region 1280,860,200,150' "$T/err"
+    cut_eq() {  # cut_eq DESC SHOT REF: SHOT's region equals REF
+        if oiiotool "$2" --cut 200x150+100+100 -o "c-$2" >/dev/null 2>&1 &&
+            idiff -a "c-$2" "$3" >"$T/idiff" 2>&1; then
+            ok "$1"
+        else
+            not_ok "$1" "$(tail -n 4 "$T/idiff" 2>/dev/null)"
+        fi
+    }
+    differ() {  # differ DESC A B: the shots differ
+        if [ -f "$2" ] && [ -f "$3" ] && ! idiff -a "$2" "$3" >/dev/null 2>&1; then
+            ok "$1"
+        else
+            not_ok "$1" "no $2 or $3, or they are equal"
+        fi
+    }
+    cut_eq "the filtered region equals the server's negate, in place" n1.png neg.png
+    differ "the region changed" n0.png n1.png
+    check "choosing the gamma graph ran it again with its default" \
+        grep -q 'view: filter gamma level 0 region 1280,860,200,150 param gamma=0.5$' "$T/err"
+    differ "gamma draws other pixels than negate" n1.png n2.png
+    check "Page Up stepped the parameter a tenth of its range" \
+        grep -q 'view: filter gamma .* param gamma=1.49$' "$T/err"
+    differ "the stepped parameter draws other pixels" n2.png n3.png
+    if idiff -a n4.png n0.png >/dev/null 2>&1; then
+        ok "Delete clears the result"
+    else
+        not_ok "Delete clears the result" "n4.png differs from the unfiltered frame"
+    fi
+    cut_eq "a Shift-drag filters the same region" n5.png neg.png
+    check "a refused graph shows the server's error" grep -q 'filter: HTTP 4[0-9][0-9]' "$T/err"
+    check "the overlay shows the error, and the window went on" \
+        grep -q '^after-error filter: HTTP 4[0-9][0-9]' "$T/out"
+fi
 
 # ---------------------------------------------------------------- bad script
 printf 'view 1,2,0\nsettle\nfly 3\n' >"$T/bad.txt"
