@@ -25,31 +25,7 @@
 # valgrind.  Needs curl and python3 (http_util.sh).
 . "$(dirname "$0")/lib.sh"
 
-: "${CHROMIUM:=/usr/bin/chromium}"
-srcdir=${top_srcdir:-$(dirname "$0")/..}
-BROWSER_DIR=$(cd "$srcdir/tests/browser" && pwd)
-if [ ! -x "$CHROMIUM" ]; then
-    echo "1..0 # SKIP $CHROMIUM not installed (apt-get install chromium)"
-    exit 0
-fi
-if ! command -v node >/dev/null 2>&1; then
-    echo "1..0 # SKIP node not installed (apt-get install nodejs npm)"
-    exit 0
-fi
-node_major=$(node -p 'process.versions.node.split(".")[0]' 2>/dev/null || echo 0)
-if [ "$node_major" -lt 20 ]; then
-    echo "1..0 # SKIP node $node_major is too old for playwright-core (needs 20)"
-    exit 0
-fi
-if [ ! -d "$BROWSER_DIR/node_modules/playwright-core" ] ||
-    [ ! -f "$BROWSER_DIR/node_modules/cesium/Build/Cesium/Cesium.js" ]; then
-    echo "1..0 # SKIP no tests/browser/node_modules with cesium (cd tests/browser && npm ci)"
-    exit 0
-fi
-if under_valgrind; then
-    echo "1..0 # SKIP browser timings are not meant for valgrind (http_terrain.sh covers the routes)"
-    exit 0
-fi
+browser_preflight cesium/Build/Cesium/Cesium.js "http_terrain.sh covers the routes"
 . "$(dirname "$0")/http_util.sh"
 
 S=$T/stores

@@ -65,6 +65,41 @@ under_valgrind() {
     [ -n "$VALGRIND" ] && [ "$VALGRIND" != 0 ]
 }
 
+# browser_preflight [NEEDED] [COVERED]: set CHROMIUM (default
+# /usr/bin/chromium), srcdir and BROWSER_DIR (tests/browser) for a headless
+# Chromium test, or skip the whole test (TAP "1..0 # SKIP", exit 0) when
+# chromium, node 20 or later, tests/browser/node_modules/playwright-core
+# or tests/browser/node_modules/NEEDED (a file or folder, if given) is
+# missing, and under valgrind (COVERED says which test covers the server
+# there).
+browser_preflight() {
+    : "${CHROMIUM:=/usr/bin/chromium}"
+    srcdir=${top_srcdir:-$(dirname "$0")/..}
+    BROWSER_DIR=$(cd "$srcdir/tests/browser" && pwd)
+    if [ ! -x "$CHROMIUM" ]; then
+        echo "1..0 # SKIP $CHROMIUM not installed (apt-get install chromium)"
+        exit 0
+    fi
+    if ! command -v node >/dev/null 2>&1; then
+        echo "1..0 # SKIP node not installed (apt-get install nodejs npm)"
+        exit 0
+    fi
+    node_major=$(node -p 'process.versions.node.split(".")[0]' 2>/dev/null || echo 0)
+    if [ "$node_major" -lt 20 ]; then
+        echo "1..0 # SKIP node $node_major is too old for playwright-core (needs 20)"
+        exit 0
+    fi
+    if [ ! -d "$BROWSER_DIR/node_modules/playwright-core" ] ||
+        { [ -n "${1:-}" ] && [ ! -e "$BROWSER_DIR/node_modules/$1" ]; }; then
+        echo "1..0 # SKIP no tests/browser/node_modules${1:+ with $1} (cd tests/browser && npm ci)"
+        exit 0
+    fi
+    if under_valgrind; then
+        echo "1..0 # SKIP browser timings are not meant for valgrind (${2:-gigaviewd is covered by http_api.sh})"
+        exit 0
+    fi
+}
+
 # gv ARGS...: run gigaview (under valgrind when asked).
 gv() {
     if under_valgrind; then
