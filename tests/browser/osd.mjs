@@ -37,6 +37,7 @@ import { dirname, join } from 'node:path';
 import { tmpdir } from 'node:os';
 import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
+import { pass, fail, note, failed } from './report.mjs';
 
 // Thresholds (see tests/browser_osd.sh for why these values).
 const MIN_STDDEV = 10;  // luma standard deviation, 8-bit units
@@ -65,14 +66,6 @@ const base = opt.base.replace(/\/+$/, '');
 const infoUrl = `${base}/iiif/3/${encodeURIComponent(opt.id)}/info.json`;
 const W = opt.width, H = opt.height;
 
-let failed = 0;
-const pass = (t) => console.log(`PASS ${t}`);
-const fail = (t, ...detail) => {
-    failed++;
-    console.log(`FAIL ${t}`);
-    for (const d of detail) console.log(`# ${d}`);
-};
-const note = (t) => console.log(`# ${t}`);
 
 // ------------------------------------------------------------ page server
 const osdDir = join(here, 'node_modules', 'openseadragon', 'build', 'openseadragon');

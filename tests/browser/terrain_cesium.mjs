@@ -40,6 +40,7 @@ import { dirname, extname, join, normalize } from 'node:path';
 import { tmpdir } from 'node:os';
 import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
+import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 
 const MIN_STDDEV = 12;       // luma, 8-bit units, terrain
 const MIN_COLOURS = 50;      // distinct RGB values, terrain
@@ -48,33 +49,12 @@ const W = 480, H = 320;
 
 const here = dirname(fileURLToPath(import.meta.url));
 const opt = { chromium: '/usr/bin/chromium', out: '', base: '', id: '', lon0: '' };
-const argv = process.argv.slice(2);
-for (let i = 0; i < argv.length; i += 2) {
-    const k = argv[i].replace(/^--/, ''), v = argv[i + 1];
-    if (v === undefined || !(k in opt)) {
-        console.error('usage: node terrain_cesium.mjs --base URL --id ID [--lon0 L] [--out DIR] [--chromium PATH]');
-        process.exit(2);
-    }
-    opt[k] = v;
-}
-if (!opt.base || !opt.id) {
-    console.error('terrain_cesium.mjs: --base and --id are required');
-    process.exit(2);
-}
+parseArgs(opt, 'usage: node terrain_cesium.mjs --base URL --id ID [--lon0 L] [--out DIR] [--chromium PATH]', 'terrain_cesium.mjs', ['base', 'id']);
 const base = opt.base.replace(/\/+$/, '');
 // CesiumTerrainProvider.fromUrl takes the directory of layer.json
 const layerUrl = `${base}/v1/images/${encodeURIComponent(opt.id)}/terrain/` +
     (opt.lon0 ? `?lon0=${encodeURIComponent(opt.lon0)}` : '');
 
-let failed = 0;
-const pass = (t) => console.log(`PASS ${t}`);
-const fail = (t, ...detail) => {
-    failed++;
-    console.log(`FAIL ${t}`);
-    for (const d of detail) console.log(`# ${d}`);
-};
-const note = (t) => console.log(`# ${t}`);
-const check = (ok, t, ...detail) => (ok ? pass(t) : fail(t, ...detail));
 
 // ------------------------------------------------------------ page server
 const cesiumDir = join(here, 'node_modules', 'cesium', 'Build', 'Cesium');

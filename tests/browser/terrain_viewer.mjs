@@ -27,6 +27,7 @@ import { mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { chromium } from 'playwright-core';
+import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 
 const MIN_STDDEV = 20;       // luma, 8-bit units
 const MIN_GRAYS = 40;        // distinct luma values
@@ -35,32 +36,11 @@ const MIN_CHROMA = 5;        // 8-bit units, over the mesh's pixels
 const W = 480, H = 320;
 
 const opt = { chromium: '/usr/bin/chromium', out: '', base: '', id: '', drape: '' };
-const argv = process.argv.slice(2);
-for (let i = 0; i < argv.length; i += 2) {
-    const k = argv[i].replace(/^--/, ''), v = argv[i + 1];
-    if (v === undefined || !(k in opt)) {
-        console.error('usage: node terrain_viewer.mjs --base URL --id ID --drape ID [--out DIR] [--chromium PATH]');
-        process.exit(2);
-    }
-    opt[k] = v;
-}
-if (!opt.base || !opt.id || !opt.drape) {
-    console.error('terrain_viewer.mjs: --base, --id and --drape are required');
-    process.exit(2);
-}
+parseArgs(opt, 'usage: node terrain_viewer.mjs --base URL --id ID --drape ID [--out DIR] [--chromium PATH]', 'terrain_viewer.mjs', ['base', 'id', 'drape']);
 const base = opt.base.replace(/\/+$/, '');
 
-let failed = 0;
-const pass = (t) => console.log(`PASS ${t}`);
-const fail = (t, ...detail) => {
-    failed++;
-    console.log(`FAIL ${t}`);
-    for (const d of detail) console.log(`# ${d}`);
-};
 const t0 = Date.now();
-const note = (t) => console.log(`# ${t}`);
 const lap = (t) => note(`time: ${t} at ${Date.now() - t0} ms`);
-const check = (ok, t, ...detail) => (ok ? pass(t) : fail(t, ...detail));
 
 const scratch = mkdtempSync(join(tmpdir(), 'gv-terrain-'));
 const consoleErrors = [], requests = [];

@@ -52,38 +52,18 @@ import { mkdtempSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'nod
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { chromium } from 'playwright-core';
+import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 
 const MAX_MAD = 1;      // mean absolute difference per channel, 8-bit units
 const W = 800, H = 500;
 
 const opt = { chromium: '/usr/bin/chromium', out: '', sabotage: '', only: '', base: '', gigaview: '', filters: '0', token: '' };
-const argv = process.argv.slice(2);
-for (let i = 0; i < argv.length; i += 2) {
-    const k = argv[i].replace(/^--/, ''), v = argv[i + 1];
-    if (v === undefined || !(k in opt)) {
-        console.error('usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans] [--filters 1 --token TOKEN]');
-        process.exit(2);
-    }
-    opt[k] = v;
-}
-if (!opt.base || !opt.gigaview) {
-    console.error('viewer.mjs: --base and --gigaview are required');
-    process.exit(2);
-}
+parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
 const base = opt.base.replace(/\/+$/, '');
 
-let failed = 0;
-const pass = (t) => console.log(`PASS ${t}`);
-const fail = (t, ...detail) => {
-    failed++;
-    console.log(`FAIL ${t}`);
-    for (const d of detail) console.log(`# ${d}`);
-};
-const note = (t) => console.log(`# ${t}`);
 let lapT = Date.now();
 // lap(what): how long the checks since the last lap took.
 const lap = (what) => { note(`time: ${what} ${Date.now() - lapT} ms`); lapT = Date.now(); };
-const check = (ok, t, ...detail) => (ok ? pass(t) : fail(t, ...detail));
 const scratch = mkdtempSync(join(tmpdir(), 'gv-viewer-'));
 const consoleErrors = [];
 // Errors a flow provokes on purpose: Chrome logs every HTTP error status

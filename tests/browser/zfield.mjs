@@ -30,35 +30,15 @@ import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { execFileSync } from 'node:child_process';
 import { chromium } from 'playwright-core';
+import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 
 const W = 480, H = 320;
 const GRID = { level: 0, x: 100, y: 50, side: 256 };   // inside a 720 x 361 store
 
 const opt = { chromium: '/usr/bin/chromium', out: '', base: '', id: '', helper: '' };
-const argv = process.argv.slice(2);
-for (let i = 0; i < argv.length; i += 2) {
-    const k = argv[i].replace(/^--/, ''), v = argv[i + 1];
-    if (v === undefined || !(k in opt)) {
-        console.error('usage: node zfield.mjs --base URL --id ID [--helper PATH] [--out DIR] [--chromium PATH]');
-        process.exit(2);
-    }
-    opt[k] = v;
-}
-if (!opt.base || !opt.id) {
-    console.error('zfield.mjs: --base and --id are required');
-    process.exit(2);
-}
+parseArgs(opt, 'usage: node zfield.mjs --base URL --id ID [--helper PATH] [--out DIR] [--chromium PATH]', 'zfield.mjs', ['base', 'id']);
 const base = opt.base.replace(/\/+$/, '');
 
-let failed = 0;
-const pass = (t) => console.log(`PASS ${t}`);
-const fail = (t, ...detail) => {
-    failed++;
-    console.log(`FAIL ${t}`);
-    for (const d of detail) console.log(`# ${d}`);
-};
-const note = (t) => console.log(`# ${t}`);
-const check = (ok, t, ...detail) => (ok ? pass(t) : fail(t, ...detail));
 
 const scratch = mkdtempSync(join(tmpdir(), 'gv-zfield-'));
 const consoleErrors = [];
