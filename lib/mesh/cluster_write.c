@@ -1,8 +1,9 @@
 /*
  * cluster_write.c - a general triangle mesh (mesh_read.h) as GLB, PLY or
- * OBJ, for the simplifier: the same layouts as hB's TIN writers
- * (mesh_write.c, mesh_glb.c), on the shared byte buffer (mesh_buf.h), but
- * with float positions kept in the file's own axes.
+ * OBJ, for the simplifier: the same layouts as the TIN writers
+ * (mesh_write.c, mesh_glb.c, whose mesh_glb_finish ends both GLBs), on the
+ * shared byte buffer (mesh_buf.h), but with float positions kept in the
+ * file's own axes.
  */
 #include <float.h>
 
@@ -63,45 +64,12 @@ static int put_glb(struct mbuf *b, const struct gv_trimesh *m)
     size_t pos_len = bin.n;
     for (size_t i = 0; i < 3 * (size_t)m->ntris; i++)
         mb_u32(&bin, m->tris[i]);
-    size_t idx_len = bin.n - pos_len;
     mb_printf(&js, "{\"asset\":{\"version\":\"2.0\",\"generator\":"
                    "\"gigaview simplify\"},\"scene\":0,"
                    "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
                    "\"meshes\":[{\"primitives\":[{\"attributes\":"
                    "{\"POSITION\":0},\"indices\":1,\"mode\":4}]}],");
-    mb_printf(&js, "\"buffers\":[{\"byteLength\":%zu}],", bin.n);
-    mb_printf(&js, "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,"
-                   "\"byteLength\":%zu,\"target\":34962},"
-                   "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu,"
-                   "\"target\":34963}],", pos_len, pos_len, idx_len);
-    mb_printf(&js, "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,"
-                   "\"count\":%u,\"type\":\"VEC3\","
-                   "\"min\":[%.9g,%.9g,%.9g],\"max\":[%.9g,%.9g,%.9g]},",
-              m->nverts, (double)mn[0], (double)mn[1], (double)mn[2],
-              (double)mx[0], (double)mx[1], (double)mx[2]);
-    mb_printf(&js, "{\"bufferView\":1,\"componentType\":5125,\"count\":%u,"
-                   "\"type\":\"SCALAR\"}]}", 3 * m->ntris);
-    while (js.n % 4)
-        mb_u8(&js, ' ');
-    int rc = 0;
-    if (js.oom || bin.oom) {
-        b->oom = 1;
-    } else if (12 + 8 + js.n + 8 + bin.n > UINT32_MAX) {
-        rc = -1;
-    } else {
-        mb_u32(b, 0x46546C67u);   /* "glTF" */
-        mb_u32(b, 2);
-        mb_u32(b, (uint32_t)(12 + 8 + js.n + 8 + bin.n));
-        mb_u32(b, (uint32_t)js.n);
-        mb_u32(b, 0x4E4F534Au);   /* "JSON" */
-        mb_put(b, js.p, js.n);
-        mb_u32(b, (uint32_t)bin.n);
-        mb_u32(b, 0x004E4942u);   /* "BIN\0" */
-        mb_put(b, bin.p, bin.n);
-    }
-    free(js.p);
-    free(bin.p);
-    return rc;
+    return mesh_glb_finish(b, &js, &bin, pos_len, m->nverts, m->ntris, mn, mx);
 }
 
 int gv_trimesh_encode(enum gv_mesh_format f, const struct gv_trimesh *m,

@@ -99,4 +99,17 @@ int mesh_write_glb(struct mbuf *b, const struct gv_tin *t,
 int mesh_write_qmesh(struct mbuf *b, const struct gv_tin *t,
                      const struct gv_mesh_place *pl, const char **why);
 
+/*
+ * The end of a one-primitive GLB (mesh_glb.c), shared by the TIN writer
+ * and the simplifier's (cluster_write.c): *js holds the JSON up to its
+ * buffers, *bin nverts float VEC3 positions (the first pos_len bytes, with
+ * their min mn and max mx) and then the uint32 indices.  Appends the
+ * buffers, bufferViews and accessors, closes the JSON, and writes the GLB
+ * container to *b; frees js and bin.  Returns 0, or -1 past GLB's 4 GiB;
+ * b->oom is set when a chunk ran out of memory.
+ */
+int mesh_glb_finish(struct mbuf *b, struct mbuf *js, struct mbuf *bin,
+                    size_t pos_len, uint32_t nverts, uint32_t ntris,
+                    const float mn[3], const float mx[3]);
+
 #endif
