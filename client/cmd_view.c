@@ -49,6 +49,7 @@
 #include "view_geom.h"
 #include "view_input.h"
 #include "view_overlay.h"
+#include "view_select.h"
 #include "view_roi.h"
 #include "view_script.h"
 #include "view_tiles.h"
@@ -138,6 +139,7 @@ struct app {
     /* filters */
     struct vx *filt;
     struct vr *roi;
+    struct vsel *sel;            /* the Shift-drag being made */
     struct vx_graph graphs[VX_MAX_GRAPHS];
     int ngraphs, graph;          /* graph: index into graphs, -1 none chosen */
     struct vx_graph named;       /* a graph chosen by id that is not listed */
@@ -360,40 +362,23 @@ static void filter_send(struct app *app)
 }
 
 /* A Shift-drag ended: filter the level the view shows, over the region
- * of the image under the rectangle (its bounding box when turned). */
+ * of the image under the rectangle (its bounding box when turned), as
+ * vsel_region finds it and vsel_draw showed it during the drag. */
 static void filter_region(struct app *app)
 {
     if (!app->tiles)
         return;
-    const struct gv_geometry *g = vt_geometry(app->tiles);
-    const double *r = app->in.sel;
-    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-    for (int i = 0; i < 4; i++) {
-        double px, py;
-        vg_screen_to_image(&app->in.cur, app->w, app->h, r[(i & 1) * 2], r[1 + (i >> 1) * 2],
-                           &px, &py);
-        x0 = fmin(x0, px), y0 = fmin(y0, py), x1 = fmax(x1, px), y1 = fmax(y1, py);
-    }
-    int level = (int)floor(app->in.cur.zoom + 1e-9);
-    if (level < 0)
-        level = 0;
-    if (level > vt_top(app->tiles))
-        level = vt_top(app->tiles);
-    uint32_t lw, lh;
-    if (gv_level_size(g, level, &lw, &lh) < 0)
-        return;
-    const double s = exp2(level);
-    double a = fmax(0, floor(x0 / s)), b = fmax(0, floor(y0 / s));
-    double c = fmin(lw, ceil(x1 / s)), d = fmin(lh, ceil(y1 / s));
-    if (c <= a || d <= b) {
+    struct vsel_region r;
+    if (vsel_region(&app->in.cur, app->w, app->h, app->in.sel, vt_geometry(app->tiles),
+                    vt_top(app->tiles), &r) < 0) {
         snprintf(app->message, sizeof app->message, "FILTER: THE REGION IS OUTSIDE THE IMAGE");
         return;
     }
-    app->job.level = level;
-    app->job.x = (uint32_t)a;
-    app->job.y = (uint32_t)b;
-    app->job.w = (uint32_t)(c - a);
-    app->job.h = (uint32_t)(d - b);
+    app->job.level = r.level;
+    app->job.x = r.x;
+    app->job.y = r.y;
+    app->job.w = r.w;
+    app->job.h = r.h;
     filter_send(app);
 }
 
@@ -491,7 +476,8 @@ static void act(struct app *app, enum vi_action a)
     case VI_TOGGLE_OVERLAY: app->show_overlay = !app->show_overlay; break;
     case VI_TOGGLE_LIST: app->show_list = !app->show_list; break;
     case VI_COPY_VIEW: copy_view(app); break;
-    case VI_ROI: filter_region(app); break;
+    case VI_ROI: filter_region(app); app->force_draw = 1; break;
+    case VI_REDRAW: app->force_draw = 1; break;
     case VI_PARAM_UP: filter_param(app, 1); break;
     case VI_PARAM_DOWN: filter_param(app, -1); break;
     case VI_NEXT_FILTER: filter_next(app); break;
@@ -865,6 +851,11 @@ static int frame(struct app *app, double *last)
             vd_draw(app->draw, app->tiles, &p, &app->in.cur, app->w, app->h);
         if (app->tiles && app->have_roi)
             vr_draw(app->roi, &app->in.cur, app->w, app->h);
+        struct vsel_region sr;
+        if (app->tiles && app->in.selecting &&
+            vsel_region(&app->in.cur, app->w, app->h, app->in.sel, vt_geometry(app->tiles),
+                        vt_top(app->tiles), &sr) == 0)
+            vsel_draw(app->sel, &app->in.cur, app->w, app->h, &sr);
         if (app->shot_path && app->tiles)
             write_shot(app);
         if (app->show_overlay)
@@ -948,7 +939,8 @@ static int open_window(struct app *app, int w, int h)
         SDL_GL_SetSwapInterval(0);
     struct gv_error err;
     if (!(app->gpu = gv_gpu_adopt(&err)) || !(app->draw = vd_new(app->gpu, &err)) ||
-        !(app->overlay = vo_new(app->gpu, &err)) || !(app->roi = vr_new(app->gpu, &err))) {
+        !(app->overlay = vo_new(app->gpu, &err)) || !(app->roi = vr_new(app->gpu, &err)) ||
+        !(app->sel = vsel_new(app->gpu, &err))) {
         fprintf(stderr, ME ": %s\n", err.text);
         return -1;
     }
@@ -964,6 +956,7 @@ static void close_app(struct app *app)
     vf_free(app->fetch);         /* first: no more results */
     vx_free(app->filt);
     vr_free(app->roi);
+    vsel_free(app->sel);
     vt_free(app->tiles);
     vo_free(app->overlay);
     vd_free(app->draw);

@@ -12,8 +12,15 @@
  * one (304): a warm cache costs one small request per BATCH_TILES tiles
  * instead of one request per tile.  A batch the server refuses (a smaller
  * batch_max_tiles: 413) is fetched tile by tile instead.
+ *
+ * gv_http_abort (any thread) sets a flag that run_all reads between two
+ * curl_multi_poll calls, and wakes the poll with curl_multi_wakeup: the
+ * transfers on the wire are removed from the multi handle (curl closes
+ * their connections) and the call fails at once, instead of waiting out
+ * --timeout on a server that holds its answer.
  */
 #include <ctype.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,6 +48,7 @@ struct gv_http {
     int verbose;
     int batches;            /* gv_http_use_batches */
     CURLM *multi;
+    atomic_int aborted;     /* gv_http_abort */
     struct gv_http_stats st;
 };
 
@@ -102,6 +110,12 @@ void gv_http_free(struct gv_http *h)
         return;
     curl_multi_cleanup(h->multi);
     free(h);
+}
+
+void gv_http_abort(struct gv_http *h)
+{
+    atomic_store(&h->aborted, 1);
+    curl_multi_wakeup(h->multi);
 }
 
 void gv_http_use_batches(struct gv_http *h, int on)
@@ -246,7 +260,10 @@ static int run_all(struct gv_http *h, struct xfer *x, size_t n,
     uint64_t t0 = now_us();
     size_t next = 0, active = 0;
     CURLMcode mc = CURLM_OK;
+    int aborted = 0;
     while (next < n || active > 0) {
+        if ((aborted = atomic_load(&h->aborted)))
+            goto out;
         while (next < n && active < IN_FLIGHT) {
             if ((mc = curl_multi_add_handle(h->multi, x[next].e)) != CURLM_OK)
                 goto out;
@@ -287,6 +304,8 @@ out:
     for (size_t i = 0; i < next; i++)
         curl_multi_remove_handle(h->multi, x[i].e);   /* no-op when done */
     h->st.wait_us += now_us() - t0;
+    if (aborted)
+        return gv_fail(err, GV_EIO, "http: stopped (the client is closing)");
     if (mc != CURLM_OK)
         return gv_fail(err, GV_EIO, "http: %s", curl_multi_strerror(mc));
     return 0;

@@ -37,6 +37,13 @@ struct gv_http *gv_http_new(const char *base, long timeout_ms, int verbose,
                             struct gv_error *err);
 void gv_http_free(struct gv_http *h);
 
+/* Make every call in progress on h (on another thread) and every later
+ * one fail at once with "http: stopped": their transfers are dropped.
+ * The only function that may be called from any thread, while another
+ * uses h; for shutting a client down without waiting out the request
+ * timeout (gv_http_free still comes after the other thread is done). */
+void gv_http_abort(struct gv_http *h);
+
 /* on (the default): gv_http_tiles fetches in batch requests; off: one
  * request per tile. */
 void gv_http_use_batches(struct gv_http *h, int on);

@@ -7,7 +7,8 @@
  * outside the lock, and queues one result per tile.  A key in flight or
  * queued is filtered out of every new wanted list, so a tile is never
  * asked for twice at once.  Each image open bumps a generation; results
- * of an older generation are freed instead of queued.
+ * of an older generation are freed instead of queued.  vf_free does not
+ * wait for the round trip in progress: gv_http_abort drops it.
  */
 #include <pthread.h>
 #include <stdio.h>
@@ -228,6 +229,7 @@ void vf_free(struct vf *f)
     f->stop = 1;
     pthread_cond_broadcast(&f->wake);
     pthread_mutex_unlock(&f->lock);
+    gv_http_abort(f->http);      /* a hanging request ends now */
     pthread_join(f->thread, NULL);
     while (f->head) {
         struct rnode *n = f->head;

@@ -60,9 +60,9 @@ struct vf;
  * (a bad URL, no memory, no thread). */
 struct vf *vf_new(const struct vf_options *o, struct gv_error *err);
 
-/* Stop the thread (after the round trip in progress, which the request
- * timeout bounds) and free everything, results not polled included.
- * NULL does nothing. */
+/* Stop the thread and free everything, results not polled included.
+ * The round trip in progress is dropped (gv_http_abort), so this never
+ * waits for the network.  NULL does nothing. */
 void vf_free(struct vf *f);
 
 /* Ask for image `id` (its metadata and root mips): the tile list is

@@ -1,15 +1,18 @@
 /*
  * view_filter.c - the filter thread of `gigaview view` (view_filter.h).
  *
- * A plain pthread with blocking libcurl easy requests: a filter job is one
- * request that the server may take seconds over, and there is at most one
- * at a time, so curl multi (view_fetch.c's) buys nothing here.  The PNG
+ * A plain pthread, one request at a time: a filter job is one request
+ * that the server may take seconds over.  Each request runs on the
+ * thread's own curl multi handle, only so that vx_free can end it at once
+ * (a flag, and curl_multi_wakeup to break the poll) rather than wait out
+ * the request timeout on a server that holds its answer.  The PNG
  * answer is written to a private temporary file and decoded there with
  * the OpenImageIO bridge (lib/imageio reads files only).  Server answers
  * are outside input: sizes are bounded (max_pixels below) and every JSON
  * field is checked for its type.
  */
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -30,6 +33,8 @@ struct vx {
     long timeout_ms;
     int verbose;
     pthread_t thread;
+    CURLM *multi;                /* the thread's requests run on it */
+    atomic_int abort;            /* vx_free: end the request in progress */
     pthread_mutex_t mu;
     pthread_cond_t cv;
     int stop, listing;
@@ -92,8 +97,30 @@ static long request(struct vx *x, const char *path, const char *json, struct bod
         curl_easy_setopt(e, CURLOPT_COPYPOSTFIELDS, json);
     }
     long status = 0;
-    CURLcode rc = curl_easy_perform(e);
-    if (rc != CURLE_OK)
+    CURLcode rc = CURLE_OK;
+    CURLMcode mc = curl_multi_add_handle(x->multi, e);
+    for (int done = 0; mc == CURLM_OK && !done;) {
+        if (atomic_load(&x->abort)) {
+            rc = CURLE_ABORTED_BY_CALLBACK;
+            snprintf(errbuf, sizeof errbuf, "stopped (the viewer is closing)");
+            break;
+        }
+        int running;
+        mc = curl_multi_perform(x->multi, &running);
+        CURLMsg *m;
+        int left;
+        while ((m = curl_multi_info_read(x->multi, &left)))
+            if (m->msg == CURLMSG_DONE) {
+                rc = m->data.result;
+                done = 1;
+            }
+        if (!done && mc == CURLM_OK)
+            mc = curl_multi_poll(x->multi, NULL, 0, 1000, NULL);
+    }
+    curl_multi_remove_handle(x->multi, e);
+    if (mc != CURLM_OK)
+        snprintf(msg, cap, "filter: %.100s: %.180s", url, curl_multi_strerror(mc));
+    else if (rc != CURLE_OK)
         snprintf(msg, cap, "filter: %.100s: %.180s", url, errbuf[0] ? errbuf : curl_easy_strerror(rc));
     else
         curl_easy_getinfo(e, CURLINFO_RESPONSE_CODE, &status);
@@ -305,11 +332,17 @@ struct vx *vx_new(const char *url, long timeout_ms, int verbose, struct gv_error
     x->timeout_ms = timeout_ms;
     x->verbose = verbose;
     x->listing = 1;
+    if (!(x->multi = curl_multi_init())) {
+        free(x);
+        gv_fail(err, GV_ENOMEM, "filter: no curl multi handle");
+        return NULL;
+    }
     pthread_mutex_init(&x->mu, NULL);
     pthread_cond_init(&x->cv, NULL);
     if (pthread_create(&x->thread, NULL, thread_main, x) != 0) {
         pthread_mutex_destroy(&x->mu);
         pthread_cond_destroy(&x->cv);
+        curl_multi_cleanup(x->multi);
         free(x);
         gv_fail(err, GV_EIO, "filter: cannot start a thread");
         return NULL;
@@ -325,7 +358,10 @@ void vx_free(struct vx *x)
     x->stop = 1;
     pthread_cond_signal(&x->cv);
     pthread_mutex_unlock(&x->mu);
+    atomic_store(&x->abort, 1);  /* a request the server holds ends now */
+    curl_multi_wakeup(x->multi);
     pthread_join(x->thread, NULL);
+    curl_multi_cleanup(x->multi);
     if (x->have_out)
         free(x->out.rgba);
     pthread_mutex_destroy(&x->mu);

@@ -50,8 +50,8 @@ struct vx;
  * Returns NULL with *err (no memory, no thread). */
 struct vx *vx_new(const char *url, long timeout_ms, int verbose, struct gv_error *err);
 
-/* Stop the thread (after the request in progress, which the timeout
- * bounds) and free everything.  NULL does nothing. */
+/* Stop the thread and free everything.  A request in progress is
+ * dropped, so this never waits for the server.  NULL does nothing. */
 void vx_free(struct vx *x);
 
 /* The graphs listed so far into out[0..max): returns their count (0

@@ -12,7 +12,8 @@
  * Tab / Shift-Tab the next / previous image; I the image list; O the
  * overlay; Shift-drag a region to filter, Delete clears it, and Page Up /
  * Page Down change its first parameter, G chooses the next graph; Esc
- * quits.  A gamepad (SDL GameController): left stick pans, right stick
+ * quits, except during a Shift-drag, which it cancels (the button's
+ * release then filters nothing).  A gamepad (SDL GameController): left stick pans, right stick
  * zooms (up/down) and rotates (left/right), the right / left trigger
  * zooms in / out, shoulders rotate by 15 degrees, A / B zoom in / out,
  * Start goes home, with a dead zone.  The sticks are read from the axis
@@ -91,7 +92,12 @@ static enum vi_action key(struct vi *s, const SDL_KeyboardEvent *k)
     const SDL_Keycode c = k->keysym.sym;
     const double step = shift ? 0.5 : 0.2;
     switch (c) {
-    case SDLK_ESCAPE: return VI_QUIT;
+    case SDLK_ESCAPE:
+        if (s->selecting) {
+            s->selecting = 0;
+            return VI_REDRAW;
+        }
+        return VI_QUIT;
     case SDLK_LEFT: pan_by(&s->goal, s->w, s->h, -s->w * step, 0); break;
     case SDLK_RIGHT: pan_by(&s->goal, s->w, s->h, s->w * step, 0); break;
     case SDLK_UP: pan_by(&s->goal, s->w, s->h, 0, -s->h * step); break;
@@ -155,9 +161,9 @@ static enum vi_action mouse_button(struct vi *s, const SDL_MouseButtonEvent *b)
             s->selecting = 1;
             s->sel[0] = s->sel[2] = s->mx;
             s->sel[1] = s->sel[3] = s->my;
-        } else {
-            s->dragging = 1;
+            return VI_REDRAW;
         }
+        s->dragging = 1;
         return VI_NONE;
     }
     s->dragging = 0;
@@ -167,11 +173,12 @@ static enum vi_action mouse_button(struct vi *s, const SDL_MouseButtonEvent *b)
         s->sel[3] = s->my;
         if (fabs(s->sel[2] - s->sel[0]) >= 4 && fabs(s->sel[3] - s->sel[1]) >= 4)
             return VI_ROI;
+        return VI_REDRAW;        /* too small to filter: just hide it */
     }
     return VI_NONE;
 }
 
-static void mouse_motion(struct vi *s, const SDL_MouseMotionEvent *m)
+static enum vi_action mouse_motion(struct vi *s, const SDL_MouseMotionEvent *m)
 {
     double x = m->x * s->ratio, y = m->y * s->ratio;
     if (s->dragging) {
@@ -180,12 +187,14 @@ static void mouse_motion(struct vi *s, const SDL_MouseMotionEvent *m)
         s->cur = vg_clamp(&s->cur, s->iw, s->ih, s->w, s->h);
         s->goal = s->cur;
     }
-    if (s->selecting) {
-        s->sel[2] = x;
-        s->sel[3] = y;
-    }
     s->mx = x;
     s->my = y;
+    if (s->selecting && (s->sel[2] != x || s->sel[3] != y)) {
+        s->sel[2] = x;
+        s->sel[3] = y;
+        return VI_REDRAW;
+    }
+    return VI_NONE;
 }
 
 enum vi_action vi_event(struct vi *s, const SDL_Event *e)
@@ -195,7 +204,7 @@ enum vi_action vi_event(struct vi *s, const SDL_Event *e)
     case SDL_KEYDOWN: return key(s, &e->key);
     case SDL_MOUSEBUTTONDOWN:
     case SDL_MOUSEBUTTONUP: return mouse_button(s, &e->button);
-    case SDL_MOUSEMOTION: mouse_motion(s, &e->motion); return VI_NONE;
+    case SDL_MOUSEMOTION: return mouse_motion(s, &e->motion);
     case SDL_MOUSEWHEEL: {
         double dy = e->wheel.preciseY != 0 ? e->wheel.preciseY : e->wheel.y;
         if (e->wheel.direction == SDL_MOUSEWHEEL_FLIPPED)

@@ -18,7 +18,8 @@
 enum vi_action {
     VI_NONE, VI_QUIT, VI_FULLSCREEN, VI_SCREENSHOT, VI_NEXT_IMAGE, VI_PREV_IMAGE,
     VI_TOGGLE_OVERLAY, VI_TOGGLE_LIST, VI_COPY_VIEW, VI_ROI, VI_PARAM_UP,
-    VI_PARAM_DOWN, VI_ROI_CLEAR, VI_NEXT_FILTER
+    VI_PARAM_DOWN, VI_ROI_CLEAR, VI_NEXT_FILTER,
+    VI_REDRAW                    /* the selection changed: draw again */
 };
 
 struct vi {
@@ -26,7 +27,7 @@ struct vi {
     double iw, ih;               /* the image (level 0) */
     int w, h;                    /* the window (drawable pixels) */
     double ratio;                /* drawable pixels per window coordinate */
-    int dragging, selecting;
+    int dragging, selecting;     /* selecting: a Shift-drag in progress */
     double mx, my;               /* pointer (drawable pixels) */
     double sel[4];               /* Shift-drag rectangle: x0, y0, x1, y1 */
     struct vg_view preset[10];

@@ -132,6 +132,22 @@ static void block(struct vo *o, int x, int y, const char (*lines)[VO_LINE], int 
             text(o, x + PAD, y + PAD + CH * r++, lines[i]);
 }
 
+int vo_label(const char *s, uint8_t **rgba, int *w, int *h)
+{
+    const int len = (int)strlen(s);
+    if (!len || len > VO_LINE)
+        return -1;
+    struct vo o = {.cw = len * CW + 2 * PAD, .ch = CH + 2 * PAD - SCALE * 2};
+    if (!(o.canvas = malloc((size_t)o.cw * o.ch * 4)))
+        return -1;
+    fill(&o, 0, 0, o.cw, o.ch, BOX);
+    text(&o, PAD, PAD, s);
+    *rgba = o.canvas;
+    *w = o.cw;
+    *h = o.ch;
+    return 0;
+}
+
 static void compose(struct vo *o, const struct vo_content *c)
 {
     memset(o->canvas, 0, (size_t)o->cw * o->ch * 4);

@@ -9,6 +9,8 @@
 #ifndef GV_VIEW_OVERLAY_H
 #define GV_VIEW_OVERLAY_H
 
+#include <stdint.h>
+
 #include "base/error.h"
 #include "gpu/gpu.h"
 
@@ -30,6 +32,11 @@ void vo_free(struct vo *o);
 
 /* Draw c over the bound w x h framebuffer. */
 void vo_draw(struct vo *o, int w, int h, const struct vo_content *c);
+
+/* Text s on a box, as the overlay draws its lines: a malloc'ed RGBA
+ * canvas (rows top first, not premultiplied) into *rgba, its size into
+ * *w x *h.  Returns 0, or -1 when s is empty or memory runs out. */
+int vo_label(const char *s, uint8_t **rgba, int *w, int *h);
 
 /* The rows of character c (7, top first, bit 4 leftmost), or NULL for a
  * space or a character the font lacks.  Small letters give capitals. */

@@ -517,5 +517,267 @@ pan=$(sed -n 's/^panned #image=x&x=\([0-9.]*\)&y=\([0-9.]*\)&.*/\1,\2/p' "$T/vou
 check "server down: the pan moved the view (${pan:-?})" test "$pan" = "1160,600"
 same_as_render "server down: after the restart the frame equals render" d2.png x 1160,600 0
 
+# ================================================================
+# Selection drawn while Shift-dragging, and a prompt quit while a request
+# hangs (issue 16 follow-up; this block is self-contained: it only uses
+# $BASE, the helpers above, and files of its own).
+# ================================================================
+
+# ---------------------------------------------------------------- selection
+# px.py: pixel checks on screenshots (converted to PPM by oiiotool).
+#   px.py FILE X Y R G B      the pixel is exactly that colour
+#   px.py same A B X Y        A's pixel equals B's
+#   px.py fill A B X Y        A's pixel is B's blended with white at 0.25 (+-1)
+#   px.py ink A B X0 Y0 X1 Y1 A has 20 more pure white pixels there than B
+#   px.py edge A B Y X0 X1    along row Y from X0 towards X1 of A: B's
+#                             pixels, then black, then white, then B's
+#                             blended (fill)
+cat >"$T/px.py" <<'PY'
+import os, subprocess, sys
+def load(f):
+    ppm = f + ".ppm"
+    if not os.path.exists(ppm):
+        subprocess.run(["oiiotool", f, "--ch", "R,G,B", "-o", ppm], check=True,
+                       stdout=subprocess.DEVNULL)
+    b = open(ppm, "rb").read()
+    parts, i = [], 0
+    while len(parts) < 4:
+        while b[i:i+1].isspace(): i += 1
+        j = i
+        while not b[j:j+1].isspace(): j += 1
+        parts.append(b[i:j]); i = j
+    w, h = int(parts[1]), int(parts[2])
+    return w, b[i+1:]
+def px(img, x, y):
+    w, d = img
+    o = (y * w + x) * 3
+    return tuple(d[o:o+3])
+def blend(p):
+    return tuple(v + (255 - v) * 0.25 for v in p)
+def is_fill(a, b):
+    return all(abs(u - v) <= 1.01 for u, v in zip(a, blend(b)))
+a = sys.argv[1:]
+if a[0] == "same":
+    A, B = load(a[1]), load(a[2]); x, y = int(a[3]), int(a[4])
+    ok = px(A, x, y) == px(B, x, y); why = (px(A, x, y), px(B, x, y))
+elif a[0] == "fill":
+    A, B = load(a[1]), load(a[2]); x, y = int(a[3]), int(a[4])
+    ok = is_fill(px(A, x, y), px(B, x, y)); why = (px(A, x, y), px(B, x, y))
+elif a[0] == "ink":
+    A, B = load(a[1]), load(a[2]); x0, y0, x1, y1 = map(int, a[3:7])
+    n = lambda I: sum(px(I, x, y) == (255, 255, 255) for x in range(x0, x1) for y in range(y0, y1))
+    ok = n(A) >= n(B) + 20; why = (n(A), n(B))
+elif a[0] == "edge":
+    A, B = load(a[1]), load(a[2]); y, x0, x1 = map(int, a[3:6])
+    step = 1 if x1 > x0 else -1
+    row = [(px(A, x, y), px(B, x, y)) for x in range(x0, x1, step)]
+    k = 0
+    while k < len(row) and row[k][0] == row[k][1]: k += 1
+    dark = k
+    while k < len(row) and row[k][0] == (0, 0, 0): k += 1
+    light = k
+    while k < len(row) and row[k][0] == (255, 255, 255): k += 1
+    rest = row[k:]
+    ok = 0 < dark < light < k < len(row) and all(is_fill(p, q) for p, q in rest)
+    why = ("outside to", x0 + step * dark, "dark to", x0 + step * light,
+           "light to", x0 + step * k, row)
+else:
+    A = load(a[0]); x, y = int(a[1]), int(a[2])
+    want = tuple(map(int, a[3:6]))
+    ok = px(A, x, y) == want; why = (px(A, x, y), "wanted", want)
+if not ok:
+    print("#  ", why)
+sys.exit(0 if ok else 1)
+PY
+# From 1500,1000 at 1:1 in 640x480 a Shift-drag from (100, 100) is shot
+# mid-way at (200, 200) and at (300, 250): the region's edges lie between
+# a black outline just outside (column 99, row 99, ...) and a white one
+# just inside (column 100, ...); inside is the picture blended with white;
+# everything else equals the frame without a drag; the size label
+# ("200 X 150 PX") is drawn below.  Esc cancels the drag (the frame is
+# the plain one again, and the release filters nothing); a release
+# filters the region drawn (a graph the server lacks, so nothing is drawn
+# after it) and the outline goes.  Turned by 45 degrees, a 200x200 drag
+# about the centre selects its image-space bounding box, 284 pixels wide
+# (floor/ceil of 1500 -+ 141.42): drawn as a diamond with corners 200.8
+# window pixels from the centre, which holds the dragged square.
+cat >"$T/sel.txt" <<'EOF2'
+graph no-such-graph
+view 1500,1000,0
+settle
+shot s0.png
+down 100 100 shift
+move 200 200
+shot s1.png
+move 300 250
+shot s2.png
+key Escape
+shot s3.png
+up 300 250
+frames 3
+shot s4.png
+print after-escape
+down 100 100 shift
+move 300 250
+up 300 250
+settle
+shot s5.png
+view 1500,1000,0,45
+settle
+shot r0.png
+down 220 140 shift
+move 420 340
+shot r1.png
+up 420 340
+settle
+shot r2.png
+EOF2
+run view "$BASE" --image x --size 640x480 --script "$T/sel.txt" -v
+cp "$T/err" "$T/view.err"
+expect_rc "selection: the drag script runs, Esc does not quit it" 0
+pxc() {  # pxc DESC ARGS...: a px.py check
+    d=$1
+    shift
+    if python3 "$T/px.py" "$@" >"$T/px.out" 2>&1; then ok "$d"; else not_ok "$d" "$(cat "$T/px.out")"; fi
+}
+pxc "selection mid-drag: black outline left of the region" s1.png 99 150 0 0 0
+pxc "selection mid-drag: white outline on its first column" s1.png 100 150 255 255 255
+pxc "selection mid-drag: white outline on its last column" s1.png 199 150 255 255 255
+pxc "selection mid-drag: black outline right of it" s1.png 200 150 0 0 0
+pxc "selection mid-drag: black outline above" s1.png 150 99 0 0 0
+pxc "selection mid-drag: white outline on its first row" s1.png 150 100 255 255 255
+pxc "selection mid-drag: white outline on its last row" s1.png 150 199 255 255 255
+pxc "selection mid-drag: black outline below" s1.png 150 200 0 0 0
+pxc "selection mid-drag: black corner" s1.png 99 99 0 0 0
+pxc "selection mid-drag: inside is the picture with a light fill" fill s1.png s0.png 150 150
+pxc "selection mid-drag: the fill reaches the white outline" fill s1.png s0.png 101 198
+pxc "selection mid-drag: left of it is the plain picture" same s1.png s0.png 98 150
+pxc "selection mid-drag: right of it is the plain picture" same s1.png s0.png 201 150
+pxc "selection mid-drag: above it is the plain picture" same s1.png s0.png 150 98
+pxc "selection mid-drag: far away is the plain picture" same s1.png s0.png 500 100
+pxc "selection follows the pointer: new right edge" s2.png 300 150 0 0 0
+pxc "selection follows the pointer: new bottom edge" s2.png 150 250 0 0 0
+pxc "selection follows the pointer: white inside the new edge" s2.png 299 249 255 255 255
+pxc "selection follows the pointer: the old edge is gone (fill)" fill s2.png s0.png 200 150
+pxc "selection follows the pointer: outside the new edge is plain" same s2.png s0.png 301 150
+pxc "selection: its size is labelled below it" ink s2.png s0.png 100 254 300 284
+check "selection: Esc gives back the plain frame" idiff -a s3.png s0.png
+check "selection: a release after Esc filters nothing" idiff -a s4.png s0.png
+check "selection: the script went on after Esc" grep -qx 'after-escape #image=x&x=1500&y=1000&z=0&r=0' "$T/out"
+check "selection: the release asked for the region drawn" \
+    grep -q 'view: filter no-such-graph level 0 region 1280,860,200,150 ' "$T/err"
+check "selection: the release after Esc asked for nothing" \
+    test "$(grep -c 'view: filter no-such-graph level' "$T/err")" -eq 2
+check "selection: after the release the outline is gone" idiff -a s5.png s0.png
+check "selection turned: the release asked for the bounding box" \
+    grep -q 'view: filter no-such-graph level 0 region 1358,858,284,284 ' "$T/err"
+pxc "selection turned: the upper left edge crosses row 200 near x=159" edge r1.png r0.png 200 140 181
+pxc "selection turned: the upper right edge crosses row 200 near x=481" edge r1.png r0.png 200 501 460
+pxc "selection turned: filled above the dragged square (bounding box)" fill r1.png r0.png 320 100
+pxc "selection turned: filled near the top corner" fill r1.png r0.png 320 45
+pxc "selection turned: plain above the top corner" same r1.png r0.png 320 30
+pxc "selection turned: plain right of the right corner" same r1.png r0.png 530 240
+check "selection turned: after the release the outline is gone" idiff -a r2.png r0.png
+
+# ---------------------------------------------------------------- prompt quit
+# hang.py MODE UPSTREAM PORTFILE MARK: a proxy that holds every tile
+# request (MODE tiles) or filter job (MODE filter) for ever, after
+# creating the file MARK; everything else passes through.  The viewer runs
+# with a request timeout of 1000 s under `timeout 120`: quitting while
+# the request hangs must end it by itself with status 0 (124 would be
+# the wrapper's kill: the quit waited on the request).
+cat >"$T/hang.py" <<'PY'
+import http.server, os, sys, time, urllib.request, urllib.error
+mode, upstream, portfile, mark = sys.argv[1:5]
+class H(http.server.BaseHTTPRequestHandler):
+    protocol_version = "HTTP/1.1"
+    def log_message(self, *a): pass
+    def do_POST(self):
+        self.do_GET(self.rfile.read(int(self.headers.get("Content-Length", 0))))
+    def do_GET(self, data=None):
+        tile = "/tiles/" in self.path or "/batch" in self.path
+        job = data is not None and self.path.endswith("/filter")
+        if (mode == "tiles" and tile) or (mode == "filter" and job):
+            open(mark, "w").close()
+            while True:
+                time.sleep(1)
+        hdrs = {k: self.headers[k] for k in ("Content-Type", "If-None-Match") if self.headers[k]}
+        try:
+            with urllib.request.urlopen(urllib.request.Request(upstream + self.path, data, hdrs)) as r:
+                status, body, ctype = r.status, r.read(), r.headers.get("Content-Type")
+        except urllib.error.HTTPError as e:
+            status, body, ctype = e.code, e.read(), e.headers.get("Content-Type")
+        self.send_response(status)
+        self.send_header("Content-Type", ctype or "application/octet-stream")
+        self.send_header("Content-Length", str(len(body)))
+        self.end_headers()
+        self.wfile.write(body)
+s = http.server.ThreadingHTTPServer(("127.0.0.1", 0), H)
+s.daemon_threads = True
+open(portfile + ".tmp", "w").write(str(s.server_address[1]))
+os.rename(portfile + ".tmp", portfile)
+s.serve_forever()
+PY
+HPID=
+hang_start() {  # hang_start MODE: the proxy at $HANG, marking $T/held
+    rm -f "$T/hang.port" "$T/held"
+    python3 "$T/hang.py" "$1" "$BASE" "$T/hang.port" "$T/held" 2>"$T/hang.log" &
+    HPID=$!
+    i=0
+    while [ ! -s "$T/hang.port" ] && [ $i -lt 300 ]; do
+        sleep 0.1
+        i=$((i + 1))
+    done
+    [ -s "$T/hang.port" ] || bail "hang proxy did not start: $(cat "$T/hang.log")"
+    HANG="http://127.0.0.1:$(cat "$T/hang.port")"
+}
+hang_stop() {
+    [ -n "$HPID" ] && kill "$HPID" 2>/dev/null && wait "$HPID" 2>/dev/null
+    HPID=
+}
+trap 'view_stop; proxy_stop; hang_stop; http_cleanup' EXIT
+# hang_view SCRIPT: the viewer at $HANG under `timeout 120` (valgrind too
+# when the suite runs under it), in the background as VPID.
+hang_view() {
+    vg=
+    if under_valgrind; then vg="valgrind -q --error-exitcode=99"; fi
+    timeout 120 $vg "$GIGAVIEW" view "$HANG" --image x --size 640x480 --no-cache \
+        --timeout 1000 --script "$1" -v >"$T/vout" 2>"$T/verr" &
+    VPID=$!
+}
+
+# Quit (the script's, as Esc or closing the window) while tiles hang.
+hang_start tiles
+printf 'view 1700,1100,0\nwait-file %s 100000\nquit\n' "$T/held" >"$T/hq.txt"
+hang_view "$T/hq.txt"
+view_wait
+check "quit while a tile request hangs: exits by itself (exit $vrc)" test "$vrc" -eq 0
+check "quit while a tile request hangs: it was held" test -f "$T/held"
+hang_stop
+
+# Ctrl+C (SIGINT) while tiles hang: SDL turns it into a quit.
+hang_start tiles
+printf 'view 1700,1100,0\nwait-file %s/never 600000\n' "$T" >"$T/hi.txt"
+hang_view "$T/hi.txt"
+i=0
+while [ ! -f "$T/held" ] && [ $i -lt 1200 ] && kill -0 "$VPID" 2>/dev/null; do
+    sleep 0.1
+    i=$((i + 1))
+done
+kill -INT "$VPID" 2>/dev/null
+view_wait
+check "Ctrl+C while a tile request hangs: exits by itself (exit $vrc)" test "$vrc" -eq 0
+hang_stop
+
+# Quit while the filter job's POST hangs (tiles come through).
+hang_start filter
+printf 'view 1500,1000,0\nsettle\nfilter 100 100 300 250\nwait-file %s 100000\nquit\n' \
+    "$T/held" >"$T/hf.txt"
+hang_view "$T/hf.txt"
+view_wait
+check "quit while a filter job hangs: exits by itself (exit $vrc)" test "$vrc" -eq 0
+check "quit while a filter job hangs: it was held" test -f "$T/held"
+hang_stop
+
 stop_daemon
 done_testing
