@@ -741,7 +741,7 @@ trap 'view_stop; proxy_stop; hang_stop; http_cleanup' EXIT
 hang_view() {
     vg=
     if under_valgrind; then vg="valgrind -q --error-exitcode=99"; fi
-    timeout 120 $vg "$GIGAVIEW" view "$HANG" --image x --size 640x480 --no-cache \
+    timeout -k 5 120 $vg "$GIGAVIEW" view "$HANG" --image x --size 640x480 --no-cache \
         --timeout 1000 --script "$1" -v >"$T/vout" 2>"$T/verr" &
     VPID=$!
 }
