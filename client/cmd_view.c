@@ -49,9 +49,9 @@
 #include "view_geom.h"
 #include "view_input.h"
 #include "view_overlay.h"
-#include "view_select.h"
 #include "view_roi.h"
 #include "view_script.h"
+#include "view_select.h"
 #include "view_tiles.h"
 
 struct view_args {
