@@ -90,11 +90,12 @@ static const struct opt_spec view_opts[] = {
      .min = 16, .max = 65536, .flags = OPT_FINITE,
      .help = "GPU memory for decoded tiles (default 256)"},
     {.name = "budget", .kind = OPT_INT, .arg = "N", .field = F(budget), .min = 1,
-     .max = 4096, .help = "tile decodes per frame at most (default 4)"},
+     .max = 4096, .help = "tile decodes in flight at most (default 4; in\n"
+                          "the frame: decodes per frame)"},
     {.name = "budget-ms", .kind = OPT_DOUBLE, .arg = "MS", .field = F(budget_ms),
      .min = 0, .max = 10000, .flags = OPT_FINITE,
-     .help = "no new decode once a frame's decoding took this\n"
-             "long (default 6; one decode always runs)"},
+     .help = "no new decode once a frame's decode work took this\n"
+             "long (default 6; one decode always starts)"},
     {.name = "no-decode-thread", .kind = OPT_FLAG, .field = F(no_decode_thread),
      .help = "decode tiles in the frame, on the render thread\n"
              "(default: on a thread of their own, on a GL\n"
