@@ -389,7 +389,7 @@ struct gv_gpu *gv_gpu_open_shared(struct gv_error *err)
     EGLContext share = eglGetCurrentContext();
     if (dpy == EGL_NO_DISPLAY || share == EGL_NO_CONTEXT) {
         gv_fail(err, GV_EUNAVAIL, "gpu: no current EGL context to share with "
-                "(the window's context is not EGL's)");
+                "(none is current, or it is not EGL's)");
         return NULL;
     }
     if (!gv_has_extension(eglQueryString(dpy, EGL_EXTENSIONS),
