@@ -167,6 +167,12 @@ awk -v lt="$lt" -v lf="$lf" -v dt="$dt" -v df="$df" 'BEGIN {
 	printf "longest decode work in a frame: %.2f ms with the thread, %.1f ms in the frame: %.0fx shorter\n", dt, df, df / (dt > 0 ? dt : 0.001)
 	printf "goal: no frame stalls over 50 ms from decoding on llvmpipe: %s\n", dt <= 50 ? "met (decode work)" : "MISSED"
 }'
+# The first moving frame is the jump to the path's start, the first draw
+# (llvmpipe compiles the display shader then): the longest frame without it.
+l2() { awk -F'\t' 'NR > 1 && $3 == 1 && seen++ { print $2 }' "$work/frames-$1.tsv" |
+	sort -g | tail -n 1; }
+awk -v lt="$(l2 thread)" -v lf="$(l2 frame)" 'BEGIN {
+	printf "longest frame after the first draw: %.1f ms with the thread, %.1f ms in the frame: %.2fx shorter\n", lt, lf, lf / lt }'
 p50=$(sort -g "$work/ms-thread.txt" | awk '{ t[++n] = $1 } END { print t[int(n * 0.5) + 1] }')
 awk -v r="$render_ms" -v p="$p50" 'BEGIN { printf "anchor: render, one view, cold  %d ms  (%.0fx the viewer p50 with the thread)\n", r, r / p }'
 for mode in thread frame; do
