@@ -600,7 +600,7 @@ fail:
 
 /* Publish a finished job whose fence signalled: the page table names its
  * layer from now on.  The atlas is bound again, so that this context sees
- * what the decode context wrote (OpenGL ES 3.2 section 5.3.3, rule 4; the
+ * what the decode context wrote (OpenGL ES 3.2 section 5.3.3, "Rules"; the
  * display pass binds it for every draw as well). */
 static void publish(struct vt *t, const struct vdt_done *r)
 {

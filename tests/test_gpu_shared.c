@@ -6,8 +6,9 @@
  * Without a current context it is refused (GV_EUNAVAIL).  Called on a
  * context's own thread (inside gv_gpu_call) it opens a context reported as
  * "shared", on the same driver; a tile uploaded there and read back there
- * (a readback completes the commands before it: OpenGL ES 3.2 section 5.3)
- * reads back the same from the first context under the same name.
+ * (glReadPixels into client memory returns once the upload is complete)
+ * reads back the same from the first context under the same name (bound
+ * there afresh to a framebuffer: OpenGL ES 3.2 section 5.3).
  * Checks that need EGL are skipped (TAP SKIP) where no context can be made.
  */
 #include <stdio.h>

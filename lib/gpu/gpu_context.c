@@ -434,7 +434,7 @@ struct gv_gpu *gv_gpu_open_shared(struct gv_error *err)
     glGetIntegerv(GL_MINOR_VERSION, &minor);
     if (type == EGL_OPENGL_API) {
         glGetIntegerv(GV_GL_CONTEXT_PROFILE_MASK, &profile);
-        /* EGL's profile bits are GL's (EGL 1.5 section 3.7.1.1). */
+        /* EGL's profile bits are GL's (EGL_KHR_create_context). */
         profile &= EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT |
                    EGL_CONTEXT_OPENGL_COMPATIBILITY_PROFILE_BIT;
     }
