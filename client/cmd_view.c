@@ -57,6 +57,7 @@
 struct view_args {
     const char *image, *size, *view, *script, *cache_dir, *stats;
     int fullscreen, no_cache, no_batch, no_prefetch, no_vsync, no_overlay, verbose;
+    int no_decode_thread;
     int budget;
     double timeout, gpu_mib, budget_ms;
 };
@@ -90,11 +91,16 @@ static const struct opt_spec view_opts[] = {
      .min = 16, .max = 65536, .flags = OPT_FINITE,
      .help = "GPU memory for decoded tiles (default 256)"},
     {.name = "budget", .kind = OPT_INT, .arg = "N", .field = F(budget), .min = 1,
-     .max = 4096, .help = "tile decodes per frame at most (default 4)"},
+     .max = 4096, .help = "tile decodes in flight at most (default 4; in\n"
+                          "the frame: decodes per frame)"},
     {.name = "budget-ms", .kind = OPT_DOUBLE, .arg = "MS", .field = F(budget_ms),
      .min = 0, .max = 10000, .flags = OPT_FINITE,
-     .help = "no new decode once a frame's decoding took this\n"
-             "long (default 6; one decode always runs)"},
+     .help = "no new decode once a frame's decode work took this\n"
+             "long (default 6; one decode always starts)"},
+    {.name = "no-decode-thread", .kind = OPT_FLAG, .field = F(no_decode_thread),
+     .help = "decode tiles in the frame, on the render thread\n"
+             "(default: on a thread of their own, on a GL\n"
+             "context shared with the window's, where EGL can)"},
     {.name = "no-prefetch", .kind = OPT_FLAG, .field = F(no_prefetch),
      .help = "no prefetching ahead of the motion"},
     {.name = "no-vsync", .kind = OPT_FLAG, .field = F(no_vsync),
@@ -131,6 +137,7 @@ struct app {
     SDL_Window *win;
     SDL_GLContext glc;
     struct gv_gpu *gpu;
+    struct gv_gpu *dgpu;         /* the decode thread's shared context, or NULL */
     struct vd *draw;
     struct vo *overlay;
     struct vf *fetch;
@@ -167,7 +174,7 @@ struct app {
     /* what the last drawn frame showed */
     const struct vt *drawn_tiles;
     struct vg_view drawn_view;
-    uint64_t drawn_decodes, draws;
+    uint64_t drawn_published, draws;
     int drawn_w, drawn_h, drawn_overlay, force_draw;
     struct vo_content drawn_content;
     /* stats */
@@ -176,6 +183,8 @@ struct app {
     size_t nft, capft;
     uint64_t decodes0;
     double moving_time;
+    double decode_ms;            /* render-thread time on decode work, in all */
+    uint64_t errors_shown;       /* decode errors of app->tiles on the overlay */
     struct vt_stats st;
 };
 
@@ -260,6 +269,7 @@ static void take_result(struct app *app, struct vf_result *r, double now)
         .budget_ms = app->a->budget_ms,
         .prefetch = !app->a->no_prefetch,
         .verbose = app->a->verbose,
+        .decode_gpu = app->dgpu,
     };
     double iw = r->img.width, ih = r->img.height;
     struct vt *t = vt_new(app->gpu, r, &o, &err);
@@ -276,6 +286,7 @@ static void take_result(struct app *app, struct vf_result *r, double now)
     vt_free(app->tiles);
     app->tiles = t;
     app->message[0] = 0;
+    app->errors_shown = 0;
     if (app->have_start_view) {
         vi_init(&app->in, &app->start_view, iw, ih, app->w, app->h);
         app->have_start_view = 0;
@@ -727,7 +738,8 @@ static void overlay_content(struct app *app, const struct vt_plan *p,
         snprintf(c->bottom[2], VO_LINE, "LOADING %c %zu TILES", spin[(app->frames / 8) % 4],
                  app->st.missing + flight);
     }
-    snprintf(c->bottom[3], VO_LINE, "%.80s", gi->renderer);
+    snprintf(c->bottom[3], VO_LINE, "%.70s  DECODE %s", gi->renderer,
+             app->dgpu ? "THREAD" : "IN FRAME");
     if (app->message[0])
         snprintf(c->bottom[4], VO_LINE, "%.90s", app->message);
     if (app->have_job) {
@@ -775,9 +787,11 @@ static void write_shot(struct app *app)
 static void record(struct app *app, double ms, int moving)
 {
     if (app->stats)
-        fprintf(app->stats, "%llu\t%.3f\t%d\t%zu\t%zu\t%llu\n",
+        fprintf(app->stats, "%llu\t%.3f\t%d\t%zu\t%zu\t%llu\t%.3f\t%llu\t%d\n",
                 (unsigned long long)app->frames, ms, moving, app->st.needed,
-                app->st.missing, (unsigned long long)app->st.decodes);
+                app->st.missing, (unsigned long long)app->st.decodes,
+                app->st.decode_ms, (unsigned long long)app->st.published,
+                app->st.inflight);
     if (!moving)
         return;
     if (app->nft == app->capft) {
@@ -831,6 +845,10 @@ static int frame(struct app *app, double *last)
         vt_plan_view(app->tiles, &app->in.cur, app->w, app->h, &p);
         vt_frame(app->tiles, &p, app->in.cur.cx - before.cx, app->in.cur.cy - before.cy,
                  app->fetch, t0, &app->st);
+        app->decode_ms += app->st.decode_ms;
+        if (app->st.errors > app->errors_shown)   /* as fetch errors are */
+            snprintf(app->message, sizeof app->message, "%.90s", app->st.error);
+        app->errors_shown = app->st.errors;
     }
     struct vo_content c;
     if (app->show_overlay)
@@ -839,7 +857,7 @@ static int frame(struct app *app, double *last)
      * the window, the overlay, or a screenshot due. */
     int dirty = app->force_draw || app->shot_path || app->tiles != app->drawn_tiles ||
                 memcmp(&app->in.cur, &app->drawn_view, sizeof app->drawn_view) ||
-                app->st.decodes != app->drawn_decodes || app->w != app->drawn_w ||
+                app->st.published != app->drawn_published || app->w != app->drawn_w ||
                 app->h != app->drawn_h || app->show_overlay != app->drawn_overlay ||
                 (app->show_overlay && memcmp(&c, &app->drawn_content, sizeof c));
     if (dirty) {
@@ -865,7 +883,7 @@ static int frame(struct app *app, double *last)
             glFinish();          /* time the frame's GPU work too */
         app->drawn_tiles = app->tiles;
         app->drawn_view = app->in.cur;
-        app->drawn_decodes = app->st.decodes;
+        app->drawn_published = app->st.published;
         app->drawn_w = app->w;
         app->drawn_h = app->h;
         app->drawn_overlay = app->show_overlay;
@@ -878,7 +896,7 @@ static int frame(struct app *app, double *last)
     record(app, (now_s() - t0) * 1000, moving);
     if (moving)
         app->moving_time += dt;
-    return moving || !app->tiles || app->st.missing || app->st.wanted ||
+    return moving || !app->tiles || app->st.missing || app->st.wanted || app->st.inflight ||
            vf_in_flight(app->fetch) || app->script.n || app->shot_path ||
            vx_busy(app->filt);
 }
@@ -944,6 +962,12 @@ static int open_window(struct app *app, int w, int h)
         fprintf(stderr, ME ": %s\n", err.text);
         return -1;
     }
+    /* The decode thread's context, sharing the window's objects; where
+     * none can be made (no EGL behind the window, no surfaceless
+     * contexts), tiles are decoded in the frame. */
+    if (!app->a->no_decode_thread && !(app->dgpu = gv_gpu_open_shared(&err)))
+        fprintf(stderr, "view: decoding tiles in the frame (no decode thread): %s\n",
+                err.text);
     SDL_SetWindowTitle(app->win, "gigaview");
     if (app->a->verbose)
         fprintf(stderr, "view: %s, %s%s\n", gv_gpu_info(app->gpu)->renderer,
@@ -960,6 +984,7 @@ static void close_app(struct app *app)
     vt_free(app->tiles);
     vo_free(app->overlay);
     vd_free(app->draw);
+    gv_gpu_close(app->dgpu);     /* after vt_free joined the decode thread */
     gv_gpu_close(app->gpu);
     if (app->in.pad)
         SDL_GameControllerClose(app->in.pad);
@@ -991,7 +1016,8 @@ static void summary(struct app *app, double elapsed)
     double mx = app->nft ? app->ft[app->nft - 1] : 0;
     fprintf(stderr, "view: %llu frames (%llu drawn) in %.2f s, %zu while moving: p50 %.2f ms, "
             "p99 %.2f ms, max %.2f ms; %llu tiles decoded (%.1f/s), %llu "
-            "prefetched, %llu atlas evictions, %llu failed fetches; http: %llu "
+            "prefetched, %llu atlas evictions, %llu failed fetches; decode %s, "
+            "%.1f ms of it on the render thread; http: %llu "
             "requests, %llu bytes; renderer %s\n",
             (unsigned long long)app->frames, (unsigned long long)app->draws, elapsed,
             app->nft, p50, p99, mx,
@@ -1000,6 +1026,7 @@ static void summary(struct app *app, double elapsed)
             (unsigned long long)app->st.prefetched,
             (unsigned long long)app->st.evictions,
             (unsigned long long)app->st.failures,
+            app->dgpu ? "thread" : "in frame", app->decode_ms,
             (unsigned long long)hs.requests, (unsigned long long)hs.bytes,
             gv_gpu_info(app->gpu)->renderer);
 }
@@ -1030,7 +1057,8 @@ static int start(struct app *app, const char *url, struct view_args *a)
         return 1;
     }
     if (app->stats)
-        fprintf(app->stats, "frame\tms\tmoving\tneeded\tmissing\tdecodes\n");
+        fprintf(app->stats, "frame\tms\tmoving\tneeded\tmissing\tdecodes\t"
+                "decode_ms\tpublished\tinflight\n");
     if (list_images(app, url, &err) < 0) {
         fprintf(stderr, ME ": %s\n", err.text);
         return 1;

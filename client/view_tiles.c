@@ -19,6 +19,15 @@
  * motion (or grown by a quarter on every side at rest) are fetched, and
  * decoded into layers no frame drew for a second, within what is left of
  * the budget.
+ *
+ * With the decode thread (view_decode.h) a tile's layer is reserved when
+ * its job is posted (the slot is busy: never drawn, never taken) and its
+ * old tile leaves the page table at once; a fence made then on the window's
+ * context (and flushed) lets the decode context wait on the GPU for the
+ * draws that still read the old tile.  Results are polled each frame and
+ * published once their fence has signalled (glClientWaitSync with a
+ * timeout of 0: the render thread never waits); a fence not signalled yet
+ * is tested again next frame.
  */
 #include <math.h>
 #include <stdio.h>
@@ -30,6 +39,7 @@
 
 #include "gpu/gpu_cache.h"
 #include "gpu/gpu_decode.h"
+#include "view_decode.h"
 #include "view_tiles.h"
 
 #define TILE_TEX_BYTES ((size_t)GV_TILE * GV_TILE * 4)
@@ -43,6 +53,7 @@ struct entry {
     size_t len;
     int state, fails;
     int slot;                 /* atlas layer, -1 */
+    int pending;              /* its decode job is in flight (slot reserved) */
     uint64_t used;            /* frame that last needed it (or an offspring) */
     uint64_t listed;          /* frame that last put it on a list */
     double retry_at;
@@ -52,12 +63,19 @@ struct slot {
     struct entry *e;          /* NULL: free (or pinned when pinned) */
     uint64_t used;
     int pinned;
+    int busy;                 /* reserved by a decode job in flight */
 };
 
 struct vt {
     struct gv_gpu *gpu;
     struct gv_gpu_decoder *dec;
     struct gv_gpu_cache *cache;
+    struct vdt *dt;           /* the decode thread, or NULL */
+    int dt_broken;            /* it failed to start: nothing more is posted */
+    struct vdt_done *pend;    /* results whose fence has not signalled */
+    size_t npend, cappend;
+    double frame_t0;          /* when this frame's decode work began */
+    int posted;               /* jobs posted this frame */
     struct gv_geometry geo;
     struct gv_remote_image img;
     int top;
@@ -283,6 +301,18 @@ struct vt *vt_new(struct gv_gpu *g, struct vf_result *res,
     t->top = t->geo.root + im->root_mips - 1;
     if (gl_setup(t, res, err) < 0)
         goto fail;
+    if (o->decode_gpu) {
+        /* The atlas must be complete before the decode context writes to
+         * it: every job waits for a fence made after this. */
+        glFlush();
+        t->dt = vdt_new(o->decode_gpu, &t->geo, res->mip[0], res->mip_w[0],
+                        res->mip_h[0], o->decode_bytes, t->gl.atlas, err);
+        if (!t->dt)
+            goto fail;
+        t->st.threaded = 1;
+        vf_result_free(res);
+        return t;
+    }
     if (!(t->dec = gv_gpu_decoder_new(g, im->channels, err)))
         goto fail;
     t->cache = gv_gpu_cache_new(t->dec, &t->geo, res->mip[0], res->mip_w[0],
@@ -300,6 +330,10 @@ void vt_free(struct vt *t)
 {
     if (!t)
         return;
+    vdt_free(t->dt);          /* joined: nothing writes the atlas any more */
+    for (size_t i = 0; i < t->npend; i++)
+        glDeleteSync((GLsync)t->pend[i].fence);
+    free(t->pend);
     gv_gpu_cache_free(t->cache);
     gv_gpu_decoder_free(t->dec);
     if (t->gl.atlas)
@@ -413,6 +447,9 @@ static double seconds(void)
  * since `since` once one decode ran. */
 static int spent(struct vt *t, uint64_t d0, double since)
 {
+    if (t->dt)                /* jobs in flight, and the frame's decode work */
+        return t->dt_broken || t->st.inflight >= t->o.budget ||
+               (t->posted > 0 && (seconds() - t->frame_t0) * 1000 >= t->o.budget_ms);
     struct gv_gpu_cache_stats cs;
     gv_gpu_cache_stats(t->cache, &cs);
     return cs.decodes - d0 >= (uint64_t)t->o.budget ||
@@ -480,7 +517,7 @@ static int take_slot(struct vt *t, uint64_t before)
     int best = -1;
     for (int i = 0; i < t->nslots; i++) {
         struct slot *s = &t->slots[i];
-        if (s->pinned)
+        if (s->pinned || s->busy)
             continue;
         if (!s->e)
             return i;
@@ -497,23 +534,165 @@ static int take_slot(struct vt *t, uint64_t before)
     return best;
 }
 
-/* Decode e into a layer taken with take_slot(before).  Returns 0, or -1
- * (no layer free, or the decode failed: then e is fetched again later). */
+/* A decode of e failed: say so, drop its buffer (it is fetched again
+ * after a second). */
+static void decode_failed(struct vt *t, struct entry *e, const char *msg, double now)
+{
+    fprintf(stderr, "view: tile %d/%u/%u: %s\n", e->level, e->tx, e->ty, msg);
+    snprintf(t->st.error, sizeof t->st.error, "tile %d/%u/%u: %.160s", e->level,
+             e->tx, e->ty, msg);
+    t->st.errors++;
+    free(e->buf);
+    t->buf_bytes -= e->len;
+    e->buf = NULL;
+    e->len = 0;
+    e->state = E_FAILED;
+    e->retry_at = now + 1;
+    e->fails++;
+}
+
+/* Post e's decode job for a layer taken with take_slot(before): copies of
+ * the buffers of e and its tiled ancestors (chain_ready said they are all
+ * here), and a fence after the page table stopped naming the layer's old
+ * tile.  Returns 0 (e is pending), or -1 (no layer free, no memory). */
+static int post_job(struct vt *t, struct entry *e, uint64_t before)
+{
+    struct vdt_job j = {.level = e->level, .tx = e->tx, .ty = e->ty};
+    for (int k = e->level; k < t->geo.root; k++) {
+        uint32_t sh = (uint32_t)(k - e->level);
+        struct entry *a = k == e->level ? e : lookup(t, k, e->tx >> sh, e->ty >> sh, 0);
+        if (!a || a->state != E_HAVE)
+            goto fail;
+        struct vdt_buf *b = &j.chain[j.nchain];
+        *b = (struct vdt_buf){.level = k, .tx = a->tx, .ty = a->ty, .len = a->len};
+        if (!(b->buf = malloc(a->len ? a->len : 1)))
+            goto fail;
+        memcpy(b->buf, a->buf, a->len);
+        j.nchain++;
+    }
+    int s = take_slot(t, before);
+    if (s < 0)
+        goto fail;
+    j.slot = s;
+    j.fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    glFlush();                /* else the decode context may wait forever */
+    t->slots[s].e = e;
+    t->slots[s].busy = 1;
+    t->slots[s].used = t->frame;
+    e->slot = s;
+    e->pending = 1;
+    t->st.inflight++;
+    t->posted++;
+    if (vdt_post(t->dt, &j) < 0) {
+        t->slots[s].e = NULL;
+        t->slots[s].busy = 0;
+        e->slot = -1;
+        e->pending = 0;
+        t->st.inflight--;
+        return -1;
+    }
+    return 0;
+fail:
+    for (int i = 0; i < j.nchain; i++)
+        free(j.chain[i].buf);
+    return -1;
+}
+
+/* Publish a finished job whose fence signalled: the page table names its
+ * layer from now on.  The atlas is bound again, so that this context sees
+ * what the decode context wrote (OpenGL ES 3.2 section 5.3.3, "Rules"; the
+ * display pass binds it for every draw as well). */
+static void publish(struct vt *t, const struct vdt_done *r)
+{
+    glDeleteSync((GLsync)r->fence);
+    struct entry *e = lookup(t, r->level, r->tx, r->ty, 0);
+    struct slot *sl = &t->slots[r->slot];
+    sl->busy = 0;
+    t->st.inflight--;
+    if (r->decodes > t->st.decodes)
+        t->st.decodes = r->decodes;
+    if (!e || sl->e != e || !e->pending)
+        return;               /* cannot happen: the layer was reserved */
+    e->pending = 0;
+    glBindTexture(GL_TEXTURE_2D_ARRAY, t->gl.atlas);
+    pt_set(t, e->level, e->tx, e->ty, (unsigned)r->slot + 1);
+    t->st.published++;
+}
+
+/* Whether r's fence has signalled, without waiting. */
+static int signalled(const struct vdt_done *r)
+{
+    GLenum w = glClientWaitSync((GLsync)r->fence, 0, 0);
+    return w == GL_ALREADY_SIGNALED || w == GL_CONDITION_SATISFIED ||
+           w == GL_WAIT_FAILED;     /* a lost fence: never wait for it */
+}
+
+/* Take the decode thread's results: publish those whose fence signalled,
+ * keep the others for the next frame, free the layers of failed ones. */
+static void take_results(struct vt *t, double now)
+{
+    size_t k = 0;
+    for (size_t i = 0; i < t->npend; i++) {
+        if (signalled(&t->pend[i]))
+            publish(t, &t->pend[i]);
+        else
+            t->pend[k++] = t->pend[i];
+    }
+    t->npend = k;
+    struct vdt_done r;
+    while (vdt_poll(t->dt, &r)) {
+        if (r.slot < 0) {         /* the thread has no decoder */
+            snprintf(t->st.error, sizeof t->st.error, "%.190s", r.msg);
+            t->st.errors++;
+            t->dt_broken = 1;
+            fprintf(stderr, "view: the decode thread failed: %s\n", r.msg);
+            continue;
+        }
+        if (!r.ok) {
+            struct entry *e = lookup(t, r.level, r.tx, r.ty, 0);
+            t->slots[r.slot].busy = 0;
+            t->slots[r.slot].e = NULL;
+            t->st.inflight--;
+            if (e) {
+                e->slot = -1;
+                e->pending = 0;
+                decode_failed(t, e, r.msg, now);
+            }
+            continue;
+        }
+        if (signalled(&r)) {
+            publish(t, &r);
+            continue;
+        }
+        if (t->npend == t->cappend) {
+            size_t cap = t->cappend ? 2 * t->cappend : 16;
+            struct vdt_done *n = realloc(t->pend, cap * sizeof *n);
+            if (!n) {             /* keep the order of GL: wait here, rarely */
+                glWaitSync((GLsync)r.fence, 0, GL_TIMEOUT_IGNORED);
+                publish(t, &r);
+                continue;
+            }
+            t->pend = n;
+            t->cappend = cap;
+        }
+        t->pend[t->npend++] = r;
+    }
+}
+
+/* Decode e into a layer taken with take_slot(before), in the frame or on
+ * the decode thread.  Returns 0 (resident, or pending on the thread), or
+ * -1 (no layer free, or the decode failed: then e is fetched again later). */
 static int make_resident(struct vt *t, struct entry *e, uint64_t before, double now)
 {
+    if (t->dt)
+        return post_job(t, e, before);
     struct gv_error err;
     uint32_t h;
     int s = take_slot(t, before);
     if (s < 0)
         return -1;
     if (gv_gpu_cache_get(t->cache, e->level, e->tx, e->ty, &h, &err) < 0) {
-        fprintf(stderr, "view: tile %d/%u/%u: %s\n", e->level, e->tx, e->ty, err.text);
-        free(e->buf);
-        t->buf_bytes -= e->len;
-        e->buf = NULL;
-        e->state = E_FAILED;
-        e->retry_at = now + 1;
-        e->fails++;
+        decode_failed(t, e, err.text, now);
         return -1;
     }
     glCopyImageSubData(h, GL_TEXTURE_2D, 0, 0, 0, 0, t->gl.atlas, GL_TEXTURE_2D_ARRAY,
@@ -522,6 +701,7 @@ static int make_resident(struct vt *t, struct entry *e, uint64_t before, double 
     t->slots[s].used = t->frame;
     e->slot = s;
     pt_set(t, e->level, e->tx, e->ty, (unsigned)s + 1);
+    t->st.published++;
     return 0;
 }
 
@@ -595,10 +775,19 @@ void vt_frame(struct vt *t, const struct vt_plan *p, double vx, double vy,
         if (p->f < t->geo.root)
             list_level(t, p->f, p->box, cx, cy);
     }
-    struct gv_gpu_cache_stats cs;
-    gv_gpu_cache_stats(t->cache, &cs);
-    const uint64_t d0 = cs.decodes;
     const double since = seconds();
+    t->frame_t0 = since;
+    t->posted = 0;
+    uint64_t d0 = 0;
+    double work = 0;          /* seconds of decode work in this frame */
+    if (t->dt) {
+        take_results(t, now);
+        work += seconds() - since;
+    } else {
+        struct gv_gpu_cache_stats cs;
+        gv_gpu_cache_stats(t->cache, &cs);
+        d0 = cs.decodes;
+    }
     size_t missing = 0;
     const size_t nview = t->nneed;
     /* Touch the resident tiles first, so that no layer this frame draws
@@ -611,13 +800,17 @@ void vt_frame(struct vt *t, const struct vt_plan *p, double vx, double vy,
     }
     for (size_t i = 0; i < nview; i++) {
         struct entry *e = t->need[i];
-        if (e->slot >= 0)
+        if (e->slot >= 0 && !e->pending)
             continue;
         missing++;
+        if (e->pending)           /* on the decode thread */
+            continue;
         if (!chain_ready(t, e, now) || spent(t, d0, since))
             continue;
-        if (make_resident(t, e, t->frame, now) == 0)
+        double w0 = seconds();
+        if (make_resident(t, e, t->frame, now) == 0 && !e->pending)
             missing--;
+        work += seconds() - w0;
     }
     /* Prefetch ahead of the motion once the view is complete. */
     if (p->visible && !missing && t->o.prefetch && p->f < t->geo.root) {
@@ -644,19 +837,25 @@ void vt_frame(struct vt *t, const struct vt_plan *p, double vx, double vy,
                 if (!chain_ready(t, e, now) || spent(t, d0, since))
                     continue;
                 uint64_t before = t->frame > 60 ? t->frame - 60 : 0;
+                double w0 = seconds();
                 if (make_resident(t, e, before, now) == 0) {
                     t->slots[e->slot].used = t->frame - 1;
                     t->st.prefetched++;
                 }
+                work += seconds() - w0;
             }
         }
     }
     vf_want(f, t->want, t->nwant);
     trim_buffers(t);
-    gv_gpu_cache_stats(t->cache, &cs);
+    if (!t->dt) {
+        struct gv_gpu_cache_stats cs;
+        gv_gpu_cache_stats(t->cache, &cs);
+        t->st.decodes = cs.decodes;
+    }
     t->st.needed = nview;
     t->st.missing = missing;
     t->st.wanted = t->nwant;
-    t->st.decodes = cs.decodes;
+    t->st.decode_ms = work * 1000;
     *st = t->st;
 }

@@ -13,8 +13,16 @@
  * same rule as `gigaview render`, hence no seams) and fall back per pixel
  * to the nearest resident ancestor.  The levels above the tiled ones (the
  * root and its mips) are uploaded once and pinned: a picture never has a
- * hole.  Everything here runs on the render thread, which owns the GL
- * context.
+ * hole.
+ *
+ * Decoding runs on the decode thread (view_decode.h), on a GL context
+ * sharing the atlas with the window's, when vt_options.decode_gpu is
+ * given: the render thread reserves a layer, posts the job, and publishes
+ * the layer in the page table once the job's fence has signalled; at most
+ * `budget` jobs are in flight.  Without it (no shared context could be
+ * made, or --decode-thread off) tiles are decoded in the frame, as many as
+ * `budget` a frame.  Everything here but the decode thread runs on the
+ * render thread, which owns the window's GL context.
  */
 #ifndef GV_VIEW_TILES_H
 #define GV_VIEW_TILES_H
@@ -44,9 +52,13 @@ struct vt_options {
     size_t atlas_bytes;        /* resident tiles (the atlas) */
     size_t decode_bytes;       /* the decoder's own cache (parents) */
     size_t buffer_bytes;       /* compressed tile buffers kept in memory */
-    int budget;                /* tile decodes per frame */
-    double budget_ms;          /* and no new decode after this much of a
-                                  frame's decoding (one always runs) */
+    int budget;                /* tile decodes per frame (in the frame), or
+                                  decode jobs in flight (decode thread) */
+    double budget_ms;          /* and no new decode (job) after this much of
+                                  a frame's decode work (one always runs) */
+    struct gv_gpu *decode_gpu; /* a context sharing the window's
+                                  (gv_gpu_open_shared), borrowed: decode on
+                                  the decode thread; NULL: in the frame */
     int prefetch;              /* 0: no prefetching */
     int verbose;
 };
@@ -59,6 +71,14 @@ struct vt_stats {
     uint64_t evictions;        /* atlas layers reused */
     int layers;                /* atlas layers */
     uint64_t prefetched;       /* tiles decoded ahead of the view */
+    uint64_t published;        /* tiles made resident (page table set) */
+    int threaded;              /* decoding on the decode thread */
+    int inflight;              /* decode jobs posted, not yet published */
+    double decode_ms;          /* this frame's render-thread time on decode
+                                  work: decodes (in the frame), or posting
+                                  jobs, testing fences, publishing */
+    uint64_t errors;           /* decode failures so far */
+    char error[200];           /* the last one */
 };
 
 struct vt;

@@ -9,6 +9,9 @@
 # gray one opened from a browser link's hash), and again after the atlas
 # evicted tiles (a small --gpu-cache; the daemon's log shows evictions);
 # a decoder sabotaged with GIGAVIEW_VIEW_SABOTAGE=decode fails that check;
+# tiles decode on the decode thread (a GL context shared with the
+# window's), and --no-decode-thread (decoding in the frame) gives the same
+# frames bit for bit; quitting with decodes in flight exits cleanly;
 # scripted drag, arrow key, wheel, rotation and Home reach the views the
 # browser's geometry predicts, printed as browser links, and the frame
 # after the drag equals render; faults: a tile answered 500 until a gate
@@ -111,7 +114,8 @@ view #image=x&x=1100&y=900&z=0&r=0
 settle
 shot v5.png
 EOF2
-run view "$BASE" --image x --size 640x480 --script "$T/views.txt" -v
+run view "$BASE" --image x --size 640x480 --script "$T/views.txt" -v \
+    --stats "$T/views.tsv"
 cp "$T/err" "$T/view.err"
 expect_rc "the views script runs" 0
 same_as_render "level 0 across a tile corner equals render" v1.png x 512,512 0
@@ -119,6 +123,37 @@ same_as_render "level 0, the last tiles equal render" v2.png x 2700,1850 0
 same_as_render "level 1 at 1:1 equals render" v3.png x 1500,1000 1
 same_as_render "gray image opened from a link equals render" v4.png g 650,550 0
 same_as_render "after switching back to x, equals render" v5.png x 1100,900 0
+
+# Those frames came from the decode thread (a GL context sharing the
+# window's: jobs in flight show in --stats' ninth column); without it
+# (--no-decode-thread: decoding in the frame) they are the same bit for
+# bit.  Where no shared context can be made the viewer says so and
+# decodes in the frame.
+if grep -q 'no decode thread' "$T/view.err"; then
+    skip "the decode thread" "$(grep -m1 'no decode thread' "$T/view.err")"
+else
+    check "the views were decoded on the decode thread" \
+        grep -q '; decode thread, ' "$T/view.err"
+    check "decode jobs were in flight between frames" \
+        awk -F'\t' 'NR > 1 && $9 > 0 { f = 1 } END { exit !f }' "$T/views.tsv"
+fi
+mkdir thread && mv v1.png v2.png v3.png v4.png v5.png thread/ || bail "mv"
+run view "$BASE" --image x --size 640x480 --script "$T/views.txt" -v \
+    --no-decode-thread --stats "$T/views.tsv"
+expect_rc "the views script runs with --no-decode-thread" 0
+check "--no-decode-thread decodes in the frame" grep -q '; decode in frame, ' "$T/err"
+check "--no-decode-thread: no job is ever in flight" \
+    awk -F'\t' 'NR > 1 && $9 > 0 { f = 1 } END { exit f }' "$T/views.tsv"
+same=0
+for v in 1 2 3 4 5; do
+    cmp -s "thread/v$v.png" "v$v.png" && same=$((same + 1))
+done
+check "the same five frames with and without the decode thread ($same)" test "$same" -eq 5
+# Quitting (and switching images) while decodes are in flight joins the
+# decode thread cleanly.
+printf 'view 1500,1000,1\nframes 2\nkey Tab\nframes 2\nquit\n' >"$T/busy.txt"
+run view "$BASE" --image x --size 640x480 --script "$T/busy.txt"
+expect_rc "quitting with decodes in flight" 0
 
 # After evictions: 16 MiB of GPU memory leaves the atlas a few layers, so
 # the later views evict the tiles of the first, which is drawn again.

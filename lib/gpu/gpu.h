@@ -80,6 +80,23 @@ struct gv_gpu *gv_gpu_open(enum gv_gpu_platform platform, struct gv_error *err);
  */
 struct gv_gpu *gv_gpu_adopt(struct gv_error *err);
 
+/*
+ * Open a context that shares its objects (textures, buffers, sync objects)
+ * with the EGL context current on the calling thread (`gigaview view`:
+ * its window's, so that tiles decode off the render thread into textures
+ * the window draws).  Same display, config, client API and version; it
+ * lives on a GL thread of its own as gv_gpu_open's does, current without
+ * a surface, and is used the same way (gv_gpu_call from any thread but
+ * that one).  info's platform is "shared".  The caller synchronises the
+ * two contexts (fences: OpenGL ES 3.2 section 5.3).  Close it with
+ * gv_gpu_close before destroying the context it shares with; the display
+ * is left initialised.  Returns NULL with GV_EUNAVAIL when no EGL context
+ * is current (GLX, say), the display lacks EGL_KHR_surfaceless_context,
+ * or EGL refuses the context; GV_ENOMEM.  Needs the caller's context
+ * current for the call.
+ */
+struct gv_gpu *gv_gpu_open_shared(struct gv_error *err);
+
 /* Stop the GL thread and destroy the context (an adopted one: only free
  * the wrapper).  NULL does nothing.  Not on
  * the GL thread itself, and not while another thread is in gv_gpu_call. */

@@ -7,6 +7,13 @@
  * platform forced, only that platform is tried, and a missing extension
  * or device counts as a failed attempt (with auto it merely skips the
  * platform).  Extensions are matched as whole words (gv_has_extension).
+ *
+ * gv_gpu_open_shared takes the display, config, client API and version of
+ * the EGL context current on the caller's thread and makes, on a GL thread
+ * of its own, a context on that display sharing its objects (EGL 1.5
+ * section 3.7.1, share_context), current without a surface
+ * (EGL_KHR_surfaceless_context): the native viewer decodes there into
+ * textures its window's context draws.
  */
 #include <pthread.h>
 #include <stdarg.h>
@@ -34,6 +41,11 @@ struct gv_gpu {
     EGLContext ctx;
     int adopted;                  /* gv_gpu_adopt: no thread of our own */
     pthread_t owner;              /* gv_gpu_adopt: the caller's thread */
+    /* gv_gpu_open_shared: the context to share with and how to match it */
+    EGLContext share;
+    EGLConfig share_cfg;
+    EGLenum share_api;
+    EGLint share_major, share_minor, share_profile;
     struct gv_gpu_info info;
     struct gv_error open_err;
 };
@@ -224,9 +236,46 @@ static int try_default(struct gv_gpu *g, char *log, size_t cap)
     return try_display(g, eglGetDisplay(EGL_DEFAULT_DISPLAY), "default", log, cap);
 }
 
+/* A context sharing g->share's objects, on its display, with its config,
+ * client API and version, current without a surface. */
+static int create_shared(struct gv_gpu *g)
+{
+    if (!eglBindAPI(g->share_api))
+        return gv_fail(&g->open_err, GV_EUNAVAIL, "gpu: shared context: "
+                       "eglBindAPI failed (0x%x)", (unsigned)eglGetError());
+    const int es = g->share_api == EGL_OPENGL_ES_API;
+    EGLint attrs[] = {EGL_CONTEXT_MAJOR_VERSION, g->share_major,
+                      EGL_CONTEXT_MINOR_VERSION, g->share_minor,
+                      es || !g->share_profile ? EGL_NONE : EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                      g->share_profile, EGL_NONE};
+    g->ctx = eglCreateContext(g->dpy, g->share_cfg, g->share, attrs);
+    if (g->ctx == EGL_NO_CONTEXT)
+        return gv_fail(&g->open_err, GV_EUNAVAIL, "gpu: shared context: "
+                       "eglCreateContext failed (0x%x)", (unsigned)eglGetError());
+    if (!eglMakeCurrent(g->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, g->ctx)) {
+        gv_fail(&g->open_err, GV_EUNAVAIL, "gpu: shared context: eglMakeCurrent "
+                "without a surface failed (0x%x)", (unsigned)eglGetError());
+        eglDestroyContext(g->dpy, g->ctx);
+        g->ctx = EGL_NO_CONTEXT;
+        return -1;
+    }
+    struct gv_gpu_info *in = &g->info;
+    snprintf(in->platform, sizeof in->platform, "shared");
+    snprintf(in->api, sizeof in->api, "%s %d.%d", es ? "OpenGL ES" : "OpenGL",
+             (int)g->share_major, (int)g->share_minor);
+    snprintf(in->vendor, sizeof in->vendor, "%s", (const char *)glGetString(GL_VENDOR));
+    snprintf(in->renderer, sizeof in->renderer, "%s", (const char *)glGetString(GL_RENDERER));
+    snprintf(in->version, sizeof in->version, "%s", (const char *)glGetString(GL_VERSION));
+    in->es = es;
+    in->ssbo = 1;
+    return 0;
+}
+
 static int create_context(struct gv_gpu *g)
 {
     char log[1024] = "";
+    if (g->share != EGL_NO_CONTEXT)
+        return create_shared(g);
     const enum gv_gpu_platform w = g->want;
     if ((w == GV_GPU_PLATFORM_AUTO || w == GV_GPU_PLATFORM_DEVICE) &&
         try_device(g, log, sizeof log) == 0)
@@ -286,22 +335,20 @@ static void join_and_free(struct gv_gpu *g)
     free(g);
 }
 
-struct gv_gpu *gv_gpu_open(enum gv_gpu_platform platform, struct gv_error *err)
+/* Start g's GL thread and wait until its context is made.  Returns g, or
+ * NULL with *err (g freed). */
+static struct gv_gpu *start_thread(struct gv_gpu *g, struct gv_error *err)
 {
-    struct gv_gpu *g = calloc(1, sizeof *g);
-    if (!g) {
-        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
-        return NULL;
-    }
-    g->want = platform;
-    g->dpy = EGL_NO_DISPLAY;
-    g->ctx = EGL_NO_CONTEXT;
     pthread_mutex_init(&g->lock, NULL);
     pthread_mutex_init(&g->call_lock, NULL);
     pthread_cond_init(&g->wake, NULL);
     pthread_cond_init(&g->done, NULL);
     if (pthread_create(&g->thread, NULL, gl_thread, g) != 0) {
         gv_fail(err, GV_ENOMEM, "gpu: cannot start the GL thread");
+        pthread_mutex_destroy(&g->lock);
+        pthread_mutex_destroy(&g->call_lock);
+        pthread_cond_destroy(&g->wake);
+        pthread_cond_destroy(&g->done);
         free(g);
         return NULL;
     }
@@ -317,6 +364,86 @@ struct gv_gpu *gv_gpu_open(enum gv_gpu_platform platform, struct gv_error *err)
         return NULL;
     }
     return g;
+}
+
+struct gv_gpu *gv_gpu_open(enum gv_gpu_platform platform, struct gv_error *err)
+{
+    struct gv_gpu *g = calloc(1, sizeof *g);
+    if (!g) {
+        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        return NULL;
+    }
+    g->want = platform;
+    g->dpy = EGL_NO_DISPLAY;
+    g->ctx = EGL_NO_CONTEXT;
+    g->share = EGL_NO_CONTEXT;
+    return start_thread(g, err);
+}
+
+/* Desktop GL's GL_CONTEXT_PROFILE_MASK (not in the ES headers). */
+#define GV_GL_CONTEXT_PROFILE_MASK 0x9126
+
+struct gv_gpu *gv_gpu_open_shared(struct gv_error *err)
+{
+    EGLDisplay dpy = eglGetCurrentDisplay();
+    EGLContext share = eglGetCurrentContext();
+    if (dpy == EGL_NO_DISPLAY || share == EGL_NO_CONTEXT) {
+        gv_fail(err, GV_EUNAVAIL, "gpu: no current EGL context to share with "
+                "(none is current, or it is not EGL's)");
+        return NULL;
+    }
+    if (!gv_has_extension(eglQueryString(dpy, EGL_EXTENSIONS),
+                          "EGL_KHR_surfaceless_context")) {
+        gv_fail(err, GV_EUNAVAIL, "gpu: the window's EGL display has no "
+                "EGL_KHR_surfaceless_context");
+        return NULL;
+    }
+    EGLint cfg_id = 0, type = 0, n = 0;
+    EGLConfig cfg = (EGLConfig)0;
+    if (!eglQueryContext(dpy, share, EGL_CONTEXT_CLIENT_TYPE, &type) ||
+        (type != EGL_OPENGL_ES_API && type != EGL_OPENGL_API)) {
+        gv_fail(err, GV_EUNAVAIL, "gpu: the window's context is neither OpenGL "
+                "ES nor OpenGL (0x%x)", (unsigned)type);
+        return NULL;
+    }
+    eglQueryContext(dpy, share, EGL_CONFIG_ID, &cfg_id);
+    if (cfg_id > 0) {
+        const EGLint attrs[] = {EGL_CONFIG_ID, cfg_id, EGL_NONE};
+        if (!eglChooseConfig(dpy, attrs, &cfg, 1, &n) || n < 1) {
+            gv_fail(err, GV_EUNAVAIL, "gpu: the window's EGL config %d is not "
+                    "found (0x%x)", (int)cfg_id, (unsigned)eglGetError());
+            return NULL;
+        }
+    } else if (!gv_has_extension(eglQueryString(dpy, EGL_EXTENSIONS),
+                                 "EGL_KHR_no_config_context")) {
+        gv_fail(err, GV_EUNAVAIL, "gpu: the window's context has no EGL config");
+        return NULL;
+    }
+    struct gv_gpu *g = calloc(1, sizeof *g);
+    if (!g) {
+        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        return NULL;
+    }
+    g->dpy = dpy;
+    g->ctx = EGL_NO_CONTEXT;
+    g->share = share;
+    g->share_cfg = cfg;
+    g->share_api = (EGLenum)type;
+    GLint major = 0, minor = 0, profile = 0;
+    glGetIntegerv(GL_MAJOR_VERSION, &major);
+    glGetIntegerv(GL_MINOR_VERSION, &minor);
+    if (type == EGL_OPENGL_API) {
+        glGetIntegerv(GV_GL_CONTEXT_PROFILE_MASK, &profile);
+        /* EGL's profile bits are GL's (EGL_KHR_create_context). */
+        profile &= EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT |
+                   EGL_CONTEXT_OPENGL_COMPATIBILITY_PROFILE_BIT;
+    }
+    while (glGetError() != GL_NO_ERROR)
+        ;
+    g->share_major = major;
+    g->share_minor = minor;
+    g->share_profile = profile;
+    return start_thread(g, err);
 }
 
 struct gv_gpu *gv_gpu_adopt(struct gv_error *err)
