@@ -219,7 +219,9 @@ async function runGigaview(prefetch) {
 // The native viewer along the same path: a --script of the same views,
 // each followed by `settle` (every tile of the view drawn, as the
 // browser's settled()) and the browser's wait; `print` marks each step
-// on stdout, where the access log's offset is taken.
+// on stdout, where the access log's offset is taken, and the viewer
+// waits (`wait-file`) until it was, so no request of the next step is
+// counted in this one.
 async function runNative(prefetch) {
     const dir = mkdtempSync(join(tmpdir(), 'gv-view-bytes-'));
     try {
@@ -227,7 +229,7 @@ async function runNative(prefetch) {
         path.forEach(([, f], i) => {
             const v = f();
             lines.push(`view ${v.cx},${v.cy},${v.zoom}`, 'settle 600000', `wait ${prefetch ? 1500 : 300}`,
-                `print step ${i + 1}`);
+                `print step ${i + 1}`, `wait-file ${join(dir, `ack${i + 1}`)} 600000`);
         });
         lines.push('quit');
         writeFileSync(join(dir, 'path.txt'), lines.join('\n') + '\n');
@@ -244,8 +246,10 @@ async function runNative(prefetch) {
         let err = '';
         child.stderr.on('data', (d) => { err += d; });
         createInterface({ input: child.stdout }).on('line', (l) => {
-            if (/^step \d+ /.test(l))
+            if (/^step \d+ /.test(l)) {
                 marks.push(logAt());
+                writeFileSync(join(dir, `ack${marks.length}`), '');
+            }
         });
         const code = await new Promise((ok) => child.on('close', ok));
         if (code !== 0 || marks.length !== path.length)
