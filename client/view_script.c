@@ -253,8 +253,8 @@ int vs_parse(const char *text, const char *name, struct vs_script *s,
         if (rc == 0)
             continue;
         if (s->n == cap) {
-            /* Grown by half: the command limit is reached without a
-             * doubling far past it. */
+            /* Grown by half, so that a script near the limit holds
+             * little spare room. */
             size_t nc = cap ? cap + cap / 2 : 32;
             struct vs_cmd *m = realloc(s->cmd, nc * sizeof *m);
             if (!m) {
