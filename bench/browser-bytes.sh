@@ -1,8 +1,11 @@
 #!/bin/bash
 # browser-bytes.sh: bytes transferred for a scripted pan and zoom path in
 # the browser, the gigaview viewer against OpenSeadragon on IIIF JPEG tiles
-# of equal PSNR, in the same run (bench/browser-bytes.mjs has the path and
-# what is counted).
+# of equal PSNR, and the native window client (`gigaview view`, under
+# SDL's offscreen driver: llvmpipe where there is no GPU) along the same
+# path, in the same run (bench/browser-bytes.mjs has the path and what is
+# counted; the native viewer is left out, with a note, when this gigaview
+# was built without SDL2 or NATIVE=0).
 #
 #   bench/browser-bytes.sh [--gigaview PATH] [--gigaviewd PATH] [IMAGE]
 #
@@ -19,7 +22,7 @@
 # viewport.  Nothing is asserted: the script only reports.
 #
 # Environment: GIGAVIEW, GIGAVIEWD; GV_ARGS (encoder options, default
-# --rd); SIZE=WxH (default 1280x800);
+# --rd); SIZE=WxH (default 1280x800); NATIVE=0 (no native viewer);
 # TMPDIR (scratch, default /tmp).  Needs vips, cjpeg/djpeg, cc, node.
 set -euo pipefail
 
@@ -92,8 +95,17 @@ port = 0
 store_dir = "$WORK/stores"
 threads = 2
 log_level = info
-access_log = "off"
+access_log = "$WORK/access.log"
 EOF
+# The native viewer, when this gigaview has its window (SDL2).
+native=()
+if [ "${NATIVE:-1}" = 0 ]; then
+	echo "# native viewer: left out (NATIVE=0)"
+elif "$GV" view --help >/dev/null 2>&1; then
+	native=(--gigaview "$GV" --access-log "$WORK/access.log")
+else
+	echo "# native viewer: left out ($("$GV" view --help 2>&1 | head -n 1))"
+fi
 start_gigaviewd "$GVD" "$WORK/gv.conf" "$WORK/gigaviewd.log"
 node "$BENCH_DIR/browser-bytes.mjs" --base "http://127.0.0.1:$GVD_PORT" --id "$id" \
-	--iiif "$WORK/iiif/$id" --size "${SIZE:-1280x800}"
+	--iiif "$WORK/iiif/$id" --size "${SIZE:-1280x800}" "${native[@]}"

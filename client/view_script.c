@@ -14,8 +14,9 @@
 
 #include "view_script.h"
 
-#define MAX_LINE 4096
-#define MAX_CMDS 100000
+#define VS_STR_(x) #x
+#define VS_STR(x) VS_STR_(x)
+
 #define MAX_SIZE (16 << 20)
 
 static const struct {
@@ -59,9 +60,13 @@ static char *word(char **p)
     return s;
 }
 
+/* A decimal number ("-12", "0.5", "1e3"): strtod alone would also take
+ * leading white space, hex, "infinity" and "nan". */
 static int num(const char *w, double *out)
 {
     char *end;
+    if (w[strspn(w, "0123456789+-.eE")])
+        return -1;
     errno = 0;
     double x = strtod(w, &end);
     if (end == w || *end || !isfinite(x) || fabs(x) > 1e9)
@@ -117,7 +122,8 @@ static int parse_line(char *line, struct vs_cmd *c, const char **why)
             *why = "view wants CX,CY,ZOOM[,ROT] or a #image=... hash";
             return -1;
         }
-        return word(&p) ? (*why = "view takes one argument", -1) : 1;
+        char *more = word(&p);
+        return more && *more != '#' ? (*why = "view takes one argument", -1) : 1;
     }
     if (hash)
         *hash = 0;
@@ -182,7 +188,7 @@ static int parse_line(char *line, struct vs_cmd *c, const char **why)
     if (c->op == VS_DRAG || c->op == VS_TOUCH)
         c->a[4] = 8;
     while ((w = word(&p))) {
-        if (c->op == VS_DOWN && n == 2 && !strcmp(w, "shift")) {
+        if (c->op == VS_DOWN && n == 2 && !c->shift && !strcmp(w, "shift")) {
             c->shift = 1;
             continue;
         }
@@ -200,7 +206,12 @@ static int parse_line(char *line, struct vs_cmd *c, const char **why)
         *why = "a negative count";
         return -1;
     }
-    if ((c->op == VS_DRAG || c->op == VS_TOUCH) && (c->a[4] < 1 || c->a[4] > 1000)) {
+    if (c->op == VS_FRAMES && c->a[0] != floor(c->a[0])) {
+        *why = "frames wants a whole number";
+        return -1;
+    }
+    if ((c->op == VS_DRAG || c->op == VS_TOUCH) &&
+        (c->a[4] < 1 || c->a[4] > 1000 || c->a[4] != floor(c->a[4]))) {
         *why = "drag and touch take 1 to 1000 moves";
         return -1;
     }
@@ -220,35 +231,40 @@ int vs_parse(const char *text, const char *name, struct vs_script *s,
     for (const char *p = text; *p;) {
         size_t len = strcspn(p, "\n");
         lineno++;
-        if (len >= MAX_LINE)
+        if (len >= VS_MAX_LINE)
             return gv_fail(err, GV_EINVAL, "%s:%d: line too long", name, lineno);
-        char line[MAX_LINE];
+        char line[VS_MAX_LINE];
         memcpy(line, p, len);
         line[len] = 0;
         if (len && line[len - 1] == '\r')
             line[len - 1] = 0;
         p += len + (p[len] == '\n');
-        if (s->n == cap) {
-            if (cap >= MAX_CMDS)
-                return gv_fail(err, GV_EINVAL, "%s:%d: more than %d commands", name,
-                               lineno, MAX_CMDS);
-            size_t nc = cap ? 2 * cap : 32;
-            struct vs_cmd *c = realloc(s->cmd, nc * sizeof *c);
-            if (!c)
-                return gv_fail(err, GV_ENOMEM, "out of memory");
-            s->cmd = c;
-            cap = nc;
-        }
-        struct vs_cmd *c = &s->cmd[s->n];
-        memset(c, 0, sizeof *c);
-        c->line = lineno;
+        struct vs_cmd c;
+        memset(&c, 0, sizeof c);
+        c.line = lineno;
         const char *why = NULL;
-        int rc = parse_line(line, c, &why);
+        int rc = parse_line(line, &c, &why);
+        if (rc > 0 && s->n == VS_MAX_CMDS)
+            rc = -1, why = "more than " VS_STR(VS_MAX_CMDS) " commands";
         if (rc < 0) {
-            free(c->text);
+            free(c.text);
             return gv_fail(err, GV_EINVAL, "%s:%d: %s", name, lineno, why);
         }
-        s->n += rc;
+        if (rc == 0)
+            continue;
+        if (s->n == cap) {
+            /* Grown by half, so that a script near the limit holds
+             * little spare room. */
+            size_t nc = cap ? cap + cap / 2 : 32;
+            struct vs_cmd *m = realloc(s->cmd, nc * sizeof *m);
+            if (!m) {
+                free(c.text);
+                return gv_fail(err, GV_ENOMEM, "out of memory");
+            }
+            s->cmd = m;
+            cap = nc;
+        }
+        s->cmd[s->n++] = c;
     }
     return 0;
 }
@@ -259,23 +275,46 @@ int vs_load(const char *path, struct vs_script *s, struct gv_error *err)
     FILE *f = fopen(path, "rb");
     if (!f)
         return gv_fail(err, GV_EIO, "%s: %s", path, strerror(errno));
-    char *buf = malloc(MAX_SIZE + 1);
-    if (!buf) {
-        fclose(f);
-        return gv_fail(err, GV_ENOMEM, "out of memory");
+    /* Read in a buffer that grows to what the file holds (a script is
+     * usually a few KiB), one byte past the limit to see it exceeded. */
+    char *buf = NULL;
+    size_t n = 0, cap = 0;
+    int rc = 0;
+    for (;;) {
+        if (n == cap) {
+            size_t nc = cap ? 2 * cap : 1 << 16;
+            if (nc > MAX_SIZE + 1)
+                nc = MAX_SIZE + 1;
+            char *m = nc > cap ? realloc(buf, nc + 1) : NULL;
+            if (!m) {
+                rc = nc > cap ? gv_fail(err, GV_ENOMEM, "out of memory")
+                              : gv_fail(err, GV_EINVAL, "%s: larger than 16 MiB", path);
+                goto done;
+            }
+            buf = m;
+            cap = nc;
+        }
+        size_t got = fread(buf + n, 1, cap - n, f);
+        n += got;
+        if (got == 0)
+            break;
     }
-    size_t n = fread(buf, 1, MAX_SIZE + 1, f);
-    fclose(f);
+    if (ferror(f)) {
+        rc = gv_fail(err, GV_EIO, "%s: %s", path, strerror(errno));
+        goto done;
+    }
     if (n > MAX_SIZE) {
-        free(buf);
-        return gv_fail(err, GV_EINVAL, "%s: larger than 16 MiB", path);
+        rc = gv_fail(err, GV_EINVAL, "%s: larger than 16 MiB", path);
+        goto done;
     }
     buf[n] = 0;
     if (memchr(buf, 0, n)) {
-        free(buf);
-        return gv_fail(err, GV_EINVAL, "%s: not a text file", path);
+        rc = gv_fail(err, GV_EINVAL, "%s: not a text file", path);
+        goto done;
     }
-    int rc = vs_parse(buf, path, s, err);
+    rc = vs_parse(buf, path, s, err);
+done:
+    fclose(f);
     free(buf);
     return rc;
 }

@@ -3,8 +3,10 @@
  * the viewer, and frames written to PNG, for tests and benchmarks (under
  * SDL_VIDEODRIVER=offscreen no window is shown).
  *
- * One command a line; '#' starts a comment; numbers are decimal; X Y are
- * window pixels from the top left.  Commands run in order, each as soon
+ * One command a line; '#' starts a comment (view's SPEC may hold one:
+ * there a comment is a later word starting with '#'); numbers are decimal,
+ * finite and at most 1e9 in size (counts: whole numbers); X Y are window
+ * pixels from the top left; lines end in LF or CRLF.  Commands run in order, each as soon
  * as the one before is done; the program exits 0 after the last one (1
  * when a limit below runs out, with a message naming the line).
  *
@@ -75,6 +77,12 @@ struct vs_cmd {
     struct vg_view view;         /* view */
     char view_image[129];        /* view: the hash's image, "" if none */
 };
+
+/* Limits on a script: bytes a line (its '\n' not counted) and commands
+ * (comment and blank lines not counted); vs_load also takes files of at
+ * most 16 MiB. */
+#define VS_MAX_LINE 4096
+#define VS_MAX_CMDS 100000
 
 struct vs_script {
     struct vs_cmd *cmd;
