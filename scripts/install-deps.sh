@@ -15,6 +15,9 @@ PACKAGES="build-essential autoconf automake libtool pkg-config
 # gdaldem, the anchor of tests/test_filter_elevation (skipped without it)
 # and bench/elevation-filters.sh.
 PACKAGES="$PACKAGES gdal-bin"
+# Xvfb and weston: tests/client_view_wsi.sh runs the native viewer on X11
+# and on Wayland (weston nested in Xvfb), not only SDL's offscreen driver.
+PACKAGES="$PACKAGES xvfb weston"
 
 # bench/*.sh and conf/: nginx (http-tiles, http-iiif), wrk, curl and jq
 # (http-*), iipsrv behind spawn-fcgi (http-iiif), vips (encode-speed,
