@@ -11,8 +11,10 @@
  * error of the clamped reconstruction decides; the first rate that meets
  * the target (or the cap) wins.  So every tile the encoder writes meets
  * the target unless it is at the cap.  In rate-distortion mode
- * (params->lambda > 0) every rate is coded instead, and the one with the
- * least SSE + lambda * bits wins.  Either way the buffer is written in the
+ * (params->lambda > 0) the rate with the least SSE + lambda * bits wins:
+ * J is estimated for each rate on the sample, and only the rates around
+ * the estimate's minimum are coded over the whole tile (encode_rd_ecvq).
+ * Either way the buffer is written in the
  * smallest of the fixed, the entropy-coded and the context-coded layouts
  * (tile_rans.c), each sized exactly.
  *
