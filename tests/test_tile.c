@@ -103,7 +103,10 @@ static void reference_nearest(const int8_t *book, const int32_t *bias, int k,
  * (some out of range, some equal over duplicated codevectors, so that
  * ties occur) and residuals (some at +-255, the extremes), and on
  * residuals close to the codevectors (clustered), where the SIMD paths
- * skip most runs of their search (vq.c: pruning by component sums). */
+ * skip most runs of their search (vq.c: pruning by component sums).
+ * Each path is also started from guesses (vq_nearest_warm_path): the
+ * answer itself, a random index, and an equal-cost duplicate of higher
+ * index than the answer, which must not win the tie. */
 static void check_biased_search(void)
 {
     static const int ks[] = {1, 5, 16, 37, 256, 1000};
@@ -118,7 +121,7 @@ static void check_biased_search(void)
     if (!s || !book || !bias || !vecs || !idx || !dist)
         fail("out of memory");
     for (int path = VQ_PATH_PORTABLE; path <= VQ_PATH_AVX512; path++) {
-        int wrong = 0, ties = 0, runs = 0, have = 1;
+        int wrong = 0, ties = 0, runs = 0, have = 1, wrong_warm = 0, tie_guesses = 0;
         for (int clustered = 0; clustered < 2 && have; clustered++)
         for (int dim = 4; dim <= 12 && have; dim += 8)
             for (size_t ki = 0; ki < sizeof ks / sizeof ks[0] && have; ki++) {
@@ -159,6 +162,22 @@ static void check_biased_search(void)
                     wrong += idx[i] != ridx || dist[i] != rcost;
                     ties += ridx % 3 == 0 && ridx + 1 < k;
                 }
+                /* Warm starts: guesses from the reference answers. */
+                for (size_t i = 0; i < n; i++) {
+                    reference_nearest(book, bias, k, dim, vecs + i * VQ_STRIDE, &ridx, &rcost);
+                    if (i % 3 == 0 && ridx % 3 == 0 && ridx + 1 < k) {
+                        idx[i] = (uint16_t)(ridx + 1);   /* its duplicate */
+                        tie_guesses++;
+                    } else {
+                        idx[i] = i % 3 == 1 ? ridx : (uint16_t)(next_rand() % (uint32_t)k);
+                    }
+                }
+                if (vq_nearest_warm_path(path, s, vecs, n, idx, dist) < 0)
+                    fail("warm search refused on a path the cold one took");
+                for (size_t i = 0; i < n; i++) {
+                    reference_nearest(book, bias, k, dim, vecs + i * VQ_STRIDE, &ridx, &rcost);
+                    wrong_warm += idx[i] != ridx || dist[i] != rcost;
+                }
             }
         if (!have) {
             check(1, "biased search, %s path # SKIP not on this CPU", names[path]);
@@ -166,6 +185,9 @@ static void check_biased_search(void)
         }
         check(wrong == 0 && ties > 0, "biased search, %s path: %d of %zu answers differ from "
               "the reference (%d could tie)", names[path], wrong, runs * n, ties);
+        check(wrong_warm == 0 && tie_guesses > 0, "biased search from guesses, %s path: %d of "
+              "%zu answers differ from the reference (%d guesses tie the answer from above)",
+              names[path], wrong_warm, runs * n, tie_guesses);
     }
     /* NULL biases: the plain nearest search, the same on the dispatched path. */
     vq_search_set_bias(s, NULL);

@@ -11,8 +11,10 @@
  * error of the clamped reconstruction decides; the first rate that meets
  * the target (or the cap) wins.  So every tile the encoder writes meets
  * the target unless it is at the cap.  In rate-distortion mode
- * (params->lambda > 0) every rate is coded instead, and the one with the
- * least SSE + lambda * bits wins.  Either way the buffer is written in the
+ * (params->lambda > 0) the rate with the least SSE + lambda * bits wins:
+ * J is estimated for each rate on the sample, and only the rates around
+ * the estimate's minimum are coded over the whole tile (encode_rd_ecvq).
+ * Either way the buffer is written in the
  * smallest of the fixed, the entropy-coded and the context-coded layouts
  * (tile_rans.c), each sized exactly.
  *
@@ -56,8 +58,14 @@ struct gv_tile_workspace {
     int8_t best_book[VQ_MAXK * VQ_MAXDIM];
     uint8_t scratch[GV_TILEBUF_MAX]; /* sizing candidate rates (--rd) */
     uint8_t alt[GV_TILEBUF_MAX];     /* pack_best: the second layout */
+    uint8_t best_buf[GV_TILEBUF_MAX]; /* the best candidate, packed */
     struct vq_trainer trainer;
     struct vq_trainer ecvq;          /* --rd: the entropy-constrained book */
+    /* Rate-distortion mode: each trained rate's sample ECVQ book and
+     * biases (rate r at entry (2^r - 2)), and its estimated J. */
+    int8_t rate_book[(2 * VQ_MAXK - 2) * VQ_MAXDIM];
+    int32_t rate_bias[2 * VQ_MAXK - 2];
+    double jest[GV_MAX_RATE + 1];
 };
 
 struct gv_tile_workspace *gv_tile_workspace_new(void)
@@ -394,9 +402,12 @@ static void refit_cells(struct gv_tile_workspace *ws, struct vq_trainer *e,
  * outside the image to the cheapest index, then refit e's book to the
  * whole tile. */
 static void assign_all(struct gv_tile_workspace *ws, struct vq_trainer *e,
-                       uint32_t valid_w, uint32_t valid_h)
+                       uint32_t valid_w, uint32_t valid_h, int warm)
 {
-    vq_nearest(&e->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
+    if (warm)
+        vq_nearest_warm(&e->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
+    else
+        vq_nearest(&e->search, ws->vecs, GV_NBLOCKS, ws->idx, NULL);
     cheapest_outside(ws->idx, e->bias, e->k, valid_w, valid_h);
     refit_cells(ws, e, valid_w, valid_h);
 }
@@ -413,9 +424,9 @@ static uint64_t code_all_ecvq(struct gv_tile_workspace *ws, int rate,
 {
     struct vq_trainer *e = &ws->ecvq;
     vq_train_from(e, ws->trainer.book, ws->trainer.k, 4 * channels);
-    vq_train_ecvq(e, ws->sample, nsample, lambda, ECVQ_ROUNDS, ws->idx,
+    vq_train_ecvq(e, ws->sample, nsample, lambda, ECVQ_ROUNDS, 1, ws->idx,
                   ws->dist);
-    assign_all(ws, e, valid_w, valid_h);
+    assign_all(ws, e, valid_w, valid_h, 0);
     return coded_sse(ws, e->book, rate, channels, valid_w, valid_h);
 }
 
@@ -424,18 +435,36 @@ struct rd_best {
     int rate;
     uint64_t sse;
     double j;
+    size_t bytes;   /* its buffer's length (ws->best_buf; rate > 0) */
 };
 
-/* Keep the current candidate (ws->idx and `book`) as the best. */
+/* Keep the current candidate (ws->idx and `book`, packed by pack_best
+ * into ws->scratch in `bytes`) as the best. */
 static void keep_best(struct gv_tile_workspace *ws, struct rd_best *best,
                       int rate, int dim, const int8_t *book, uint64_t sse,
-                      double j)
+                      double j, size_t bytes)
 {
     best->rate = rate;
     best->sse = sse;
     best->j = j;
+    best->bytes = bytes;
     memcpy(ws->best_idx, ws->idx, sizeof ws->idx);
     memcpy(ws->best_book, book, ((size_t)1 << rate) * dim);
+    memcpy(ws->best_buf, ws->scratch, bytes);
+}
+
+/* Write the best candidate's buffer into buf (packed already when it was
+ * kept); returns its length. */
+static size_t write_best(const struct gv_tile_workspace *ws,
+                         const struct rd_best *best, int channels, uint8_t *buf)
+{
+    if (best->rate == 0) {
+        size_t len = gv_tilebuf_size(0, channels);
+        pack_buffer(buf, len, 0, channels, NULL, NULL);
+        return len;
+    }
+    memcpy(buf, ws->best_buf, best->bytes);
+    return best->bytes;
 }
 
 /* Whole-tile ECVQ rounds at the chosen rate: code lengths from the best
@@ -453,7 +482,8 @@ static void polish(struct gv_tile_workspace *ws, int channels,
         vq_set_biases(e, ws->best_idx, GV_NBLOCKS, lambda);
         vq_search_prepare(&e->search, e->book, k, dim);
         vq_search_set_bias(&e->search, e->bias);
-        assign_all(ws, e, valid_w, valid_h);
+        memcpy(ws->idx, ws->best_idx, sizeof ws->idx);   /* the guesses */
+        assign_all(ws, e, valid_w, valid_h, 1);
         uint64_t sse = coded_sse(ws, e->book, best->rate, channels, valid_w,
                                  valid_h);
         size_t bytes = pack_best(ws, ws->scratch, best->rate, channels, e->book,
@@ -461,23 +491,166 @@ static void polish(struct gv_tile_workspace *ws, int channels,
         double j = (double)sse + lambda * 8.0 * (double)bytes;
         if (!(j < best->j))
             break;
-        keep_best(ws, best, best->rate, dim, e->book, sse, j);
+        keep_best(ws, best, best->rate, dim, e->book, sse, j, bytes);
+    }
+}
+
+/* Where rate r's book and biases start in ws->rate_book / rate_bias. */
+static size_t rate_at(int rate)
+{
+    return ((size_t)1 << rate) - 2;
+}
+
+/* Train `rate` on the sample (LBG from the previous rate's book, then
+ * ECVQ_ROUNDS entropy-constrained rounds), keep its book and biases for
+ * code_rate, and estimate J over the tile: the sample's last biased cost
+ * (squared error + lambda * code lengths) scaled to the valid blocks,
+ * plus lambda times the codebook's bits. */
+static double sample_rate(struct gv_tile_workspace *ws, int rate, int channels,
+                          uint32_t nvalid, size_t *nsample, double lambda)
+{
+    const int dim = 4 * channels, k = 1 << rate;
+    struct vq_trainer *e = &ws->ecvq;
+    train_rate(ws, rate, dim, nvalid, RD_LBG_ITERS, nsample);
+    vq_train_from(e, ws->trainer.book, ws->trainer.k, dim);
+    /* ws->idx holds LBG's assignment of the sample: ECVQ starts from it. */
+    uint64_t cost = vq_train_ecvq(e, ws->sample, *nsample, lambda, ECVQ_ROUNDS,
+                                  1, ws->idx, ws->dist);
+    memcpy(ws->rate_book + rate_at(rate) * dim, e->book, (size_t)k * dim);
+    memcpy(ws->rate_bias + rate_at(rate), e->bias, sizeof(int32_t) * (size_t)k);
+    return (double)cost * nvalid / (double)*nsample +
+           lambda * 8.0 * (1.0 + (double)k * dim);
+}
+
+/* Code every block at a trained rate with the book and biases that
+ * sample_rate kept: what code_all_ecvq gives, without training again.
+ * Leaves the indices in ws->idx and the refit book in ws->ecvq; returns
+ * the squared error.  With warm, ws->idx holds indices below 2^rate on
+ * entry (the rate below's coding), which start the search. */
+static uint64_t code_rate(struct gv_tile_workspace *ws, int rate, int channels,
+                          uint32_t valid_w, uint32_t valid_h, int warm)
+{
+    const int dim = 4 * channels, k = 1 << rate;
+    struct vq_trainer *e = &ws->ecvq;
+    vq_train_from(e, ws->rate_book + rate_at(rate) * dim, k, dim);
+    memcpy(e->bias, ws->rate_bias + rate_at(rate), sizeof(int32_t) * (size_t)k);
+    vq_search_prepare(&e->search, e->book, k, dim);
+    vq_search_set_bias(&e->search, e->bias);
+    assign_all(ws, e, valid_w, valid_h, warm);
+    return coded_sse(ws, e->book, rate, channels, valid_w, valid_h);
+}
+
+/* Code `rate` over the whole tile (it must be trained) and keep it if it
+ * lowers J. */
+static void try_rate(struct gv_tile_workspace *ws, int rate, int channels,
+                     uint32_t valid_w, uint32_t valid_h, double lambda,
+                     int warm, struct rd_best *best)
+{
+    uint64_t sse = code_rate(ws, rate, channels, valid_w, valid_h, warm);
+    size_t bytes = pack_best(ws, ws->scratch, rate, channels, ws->ecvq.book,
+                             ws->idx);
+    double j = (double)sse + lambda * 8.0 * (double)bytes;
+    if (j < best->j)
+        keep_best(ws, best, rate, 4 * channels, ws->ecvq.book, sse, j, bytes);
+}
+
+/* The estimates of the rates trained so far, and how far. */
+struct rd_sample {
+    uint32_t nvalid;
+    size_t nsample;
+    int trained;
+};
+
+/* Train every rate up to `rate` that is not trained yet. */
+static void train_up_to(struct gv_tile_workspace *ws, struct rd_sample *sm,
+                        int rate, int channels, double lambda)
+{
+    while (sm->trained < rate) {
+        sm->trained++;
+        ws->jest[sm->trained] = sample_rate(ws, sm->trained, channels,
+                                            sm->nvalid, &sm->nsample, lambda);
     }
 }
 
 /*
- * Rate-distortion mode: every rate is coded (entropy-constrained, above)
- * and the one minimizing J = SSE + lambda * bits wins.  The search stops
- * once J has risen for two rates in a row, or for one from CONVEX_FROM on
- * (J is close to convex in r there); then the winner is polished.  With
- * params->nearest_only, LBG codebooks and nearest assignment instead, two
- * rises always, no polish.
+ * Rate-distortion mode with entropy-constrained VQ.  The codebooks grow
+ * rate by rate (each split from the last), so every rate is trained on
+ * the sample in turn, and J is estimated there (sample_rate), until the
+ * estimate has risen twice in a row, or once from CONVEX_FROM on.  Only
+ * the rates around the estimate's least J, r*, are coded over the whole
+ * tile, the costly step: r* - 1 to r* + 1; then upwards while the exact J
+ * has not risen twice since the best (once from CONVEX_FROM on: the
+ * stopping rule of a search that codes every rate from 1), and downwards
+ * while the best is the lowest rate coded.  The winner is then polished.
+ * Consecutive rates are coded upwards, each search started from the
+ * rate below's indices.
  */
-static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
-                        int channels, uint32_t valid_w, uint32_t valid_h,
-                        const struct gv_tile_params *params, int max_rate,
-                        uint64_t sse0, uint8_t *recon, uint8_t *buf,
-                        struct gv_tile_stats *stats)
+static size_t encode_rd_ecvq(struct gv_tile_workspace *ws, const uint8_t *orig,
+                             int channels, uint32_t valid_w, uint32_t valid_h,
+                             const struct gv_tile_params *params, int max_rate,
+                             uint64_t sse0, uint8_t *recon, uint8_t *buf,
+                             struct gv_tile_stats *stats)
+{
+    const double lambda = params->lambda;
+    struct rd_best best = {
+        .rate = 0, .sse = sse0,
+        .j = (double)sse0 + lambda * 8.0 * gv_tilebuf_size(0, channels),
+    };
+    struct rd_sample sm = {
+        .nvalid = start_training(ws, orig, channels, valid_w, valid_h,
+                                 params->seed),
+    };
+    int rstar = 0, rises = 0;
+    double jmin = best.j;
+    for (int rate = 1; rate <= max_rate; rate++) {
+        train_up_to(ws, &sm, rate, channels, lambda);
+        if (ws->jest[rate] < jmin) {
+            jmin = ws->jest[rate];
+            rstar = rate;
+            rises = 0;
+        } else if (++rises == 2 || rate >= CONVEX_FROM) {
+            break;
+        }
+    }
+    int lo = rstar > 1 ? rstar - 1 : 1;
+    int hi = rstar + 1 < max_rate ? rstar + 1 : max_rate;
+    for (int rate = lo; rate <= hi; rate++) {
+        train_up_to(ws, &sm, rate, channels, lambda);
+        try_rate(ws, rate, channels, valid_w, valid_h, lambda, rate > lo, &best);
+    }
+    rises = hi - (best.rate > lo - 1 ? best.rate : lo - 1);
+    while (hi < max_rate && rises < 2 && !(rises == 1 && hi >= CONVEX_FROM)) {
+        hi++;
+        train_up_to(ws, &sm, hi, channels, lambda);
+        try_rate(ws, hi, channels, valid_w, valid_h, lambda, 1, &best);
+        rises = best.rate == hi ? 0 : rises + 1;
+    }
+    while (best.rate <= lo && lo > 1) {
+        lo--;
+        try_rate(ws, lo, channels, valid_w, valid_h, lambda, 0, &best);
+    }
+    polish(ws, channels, valid_w, valid_h, lambda, &best);
+    memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
+    reconstruct(ws, orig, ws->best_book, best.rate, channels, valid_w, valid_h,
+                recon);
+    stats->rate = best.rate;
+    stats->sse = best.sse;
+    return write_best(ws, &best, channels, buf);
+}
+
+/*
+ * Rate-distortion mode with params->nearest_only (LBG codebooks, nearest
+ * assignment; the encoder before entropy-constrained VQ, kept for
+ * comparisons): every rate is coded in turn and the one minimizing
+ * J = SSE + lambda * bits wins; the search stops once J has risen for
+ * two rates in a row.
+ */
+static size_t encode_rd_nearest(struct gv_tile_workspace *ws,
+                                const uint8_t *orig, int channels,
+                                uint32_t valid_w, uint32_t valid_h,
+                                const struct gv_tile_params *params,
+                                int max_rate, uint64_t sse0, uint8_t *recon,
+                                uint8_t *buf, struct gv_tile_stats *stats)
 {
     const int dim = 4 * channels;
     const double lambda = params->lambda;
@@ -489,37 +662,25 @@ static size_t encode_rd(struct gv_tile_workspace *ws, const uint8_t *orig,
                                      params->seed);
     size_t nsample = 0;
     int rises = 0;
-    const int ecvq = !params->nearest_only;
     for (int rate = 1; rate <= max_rate; rate++) {
-        uint64_t sse;
-        const int8_t *book;
-        if (ecvq) {
-            train_rate(ws, rate, dim, nvalid, RD_LBG_ITERS, &nsample);
-            sse = code_all_ecvq(ws, rate, channels, valid_w, valid_h, nsample,
-                                lambda);
-            book = ws->ecvq.book;
-        } else {
-            train_rate(ws, rate, dim, nvalid, TARGET_LBG_ITERS, &nsample);
-            sse = code_all(ws, rate, channels, valid_w, valid_h);
-            book = ws->trainer.book;
-        }
-        size_t bytes = pack_best(ws, ws->scratch, rate, channels, book, ws->idx);
+        train_rate(ws, rate, dim, nvalid, TARGET_LBG_ITERS, &nsample);
+        uint64_t sse = code_all(ws, rate, channels, valid_w, valid_h);
+        size_t bytes = pack_best(ws, ws->scratch, rate, channels,
+                                 ws->trainer.book, ws->idx);
         double j = (double)sse + lambda * 8.0 * (double)bytes;
         if (j < best.j) {
-            keep_best(ws, &best, rate, dim, book, sse, j);
+            keep_best(ws, &best, rate, dim, ws->trainer.book, sse, j, bytes);
             rises = 0;
-        } else if (++rises == 2 || (ecvq && rate >= CONVEX_FROM)) {
+        } else if (++rises == 2) {
             break;
         }
     }
-    if (ecvq)
-        polish(ws, channels, valid_w, valid_h, lambda, &best);
     memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
     reconstruct(ws, orig, ws->best_book, best.rate, channels, valid_w, valid_h,
                 recon);
     stats->rate = best.rate;
     stats->sse = best.sse;
-    return pack_best(ws, buf, best.rate, channels, ws->best_book, ws->idx);
+    return write_best(ws, &best, channels, buf);
 }
 
 /*
@@ -609,8 +770,11 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
     stats->samples = samples;
 
     uint64_t sse = reconstruct(ws, orig, NULL, 0, channels, valid_w, valid_h, recon);
+    if (params->lambda > 0 && !params->nearest_only)
+        return encode_rd_ecvq(ws, orig, channels, valid_w, valid_h, params,
+                              max_rate, sse, recon, buf, stats);
     if (params->lambda > 0)
-        return encode_rd(ws, orig, channels, valid_w, valid_h, params, max_rate,
+        return encode_rd_nearest(ws, orig, channels, valid_w, valid_h, params, max_rate,
                          sse, recon, buf, stats);
     if ((double)sse <= budget) {
         stats->rate = 0;

@@ -13,7 +13,11 @@
  * sorted by the sum of their components, in runs of 16; the SIMD kernels
  * skip the runs that a Cauchy-Schwarz bound on that sum rules out (exact,
  * in integers: see the pruned order below), and search codebooks of up
- * to 32 entries sixteen vectors at a time instead.
+ * to 32 entries sixteen vectors at a time instead.  vq_nearest_warm
+ * starts each search with the cost of a guessed index (a previous
+ * assignment) as the bound, and takes the guess at the end only if
+ * nothing visited costs less, or as much at a lower index: the same
+ * answers, fewer runs visited.
  *
  * Training is LBG (vq_train_double) and, for the rate-distortion mode,
  * entropy-constrained refinement (vq_train_ecvq: Chou, Lookabaugh and
@@ -68,6 +72,8 @@ void vq_search_prepare(struct vq_search *s, const int8_t *book, int k, int dim)
         start[v + 1] += start[v];
     for (int i = 0; i < k; i++)
         s->orig[start[sum[i] - SUM_LO]++] = i;
+    for (int p = 0; p < k; p++)
+        s->pos[s->orig[p]] = p;
     for (int j = 0; j < dim / 2; j++) {
         for (int p = 0; p < k; p++) {
             const int8_t *cv = book + s->orig[p] * dim;
@@ -161,6 +167,22 @@ static inline int run_key(int sx)
     return v < 0 ? 0 : (v > SUM_SPAN ? SUM_SPAN : v);
 }
 
+/* The cost of codevector g for x (as every kernel computes it: bias plus
+ * the squared differences, in int32 with no overflow), for warm starts. */
+static inline int64_t guess_cost(const struct vq_search *s, const int16_t *x,
+                                 int g, int pairs)
+{
+    const int p = s->pos[g];
+    int32_t d = s->bias[p];
+    for (int j = 0; j < pairs; j++) {
+        int32_t pr = s->pairs[j * s->kpad + p];
+        int d0 = x[2 * j] - (int16_t)(pr & 0xffff);
+        int d1 = x[2 * j + 1] - (int16_t)((uint32_t)pr >> 16);
+        d += d0 * d0 + d1 * d1;
+    }
+    return d;
+}
+
 #ifdef VQ_HAVE_X86
 /* One run of 16 codevectors for nearest_avx2_dim, as two halves of 8:
  * the costs, kept per lane where less than the lane's best (or equal
@@ -207,7 +229,7 @@ run8x2(const struct vq_search *s, int r, const __m256i *xp, int pairs,
  * is a constant in each caller, so the inner loops unroll. */
 __attribute__((target("avx2"), always_inline)) static inline void
 nearest_avx2_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
-                 uint16_t *idx, uint32_t *dist, const int pairs)
+                 uint16_t *idx, uint32_t *dist, const int pairs, int warm)
 {
     const int64_t dim = 2 * pairs;
     const int nruns = s->kpad / 16;
@@ -221,11 +243,15 @@ nearest_avx2_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
         }
         __m256i best = _mm256_set1_epi32(INT_MAX);
         __m256i besti = _mm256_set1_epi32(INT_MAX);
+        const int g = warm ? idx[i] : 0;
+        int64_t gc = INT64_MAX;   /* the guess's cost, when it was used */
         if (nruns <= SMALL_RUNS) {
             for (int r = 0; r < nruns; r++)
                 run8x2(s, r, xp, pairs, &best, &besti, NULL);
         } else {
             int64_t ub = INT_MAX;
+            if (warm)
+                ub = gc = guess_cost(s, x, g, pairs);
             const int r0 = s->run_at[run_key(sx)];
             run8x2(s, r0, xp, pairs, &best, &besti, &ub);
             for (int r = r0 + 1; r < nruns; r++) {
@@ -254,6 +280,10 @@ nearest_avx2_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
                 m = bd[l];
                 mi = bi[l];
             }
+        if (gc < m || (gc == m && g < mi)) {
+            m = (int32_t)gc;
+            mi = g;
+        }
         idx[i] = (uint16_t)mi;
         if (dist)
             dist[i] = (uint32_t)m;
@@ -262,14 +292,14 @@ nearest_avx2_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
 
 __attribute__((target("avx2"))) static void
 nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
-             uint16_t *idx, uint32_t *dist)
+             uint16_t *idx, uint32_t *dist, int warm)
 {
     if (s->dim == 12)
-        nearest_avx2_dim(s, vecs, n, idx, dist, 6);
+        nearest_avx2_dim(s, vecs, n, idx, dist, 6, warm);
     else if (s->dim == 4)
-        nearest_avx2_dim(s, vecs, n, idx, dist, 2);
+        nearest_avx2_dim(s, vecs, n, idx, dist, 2, warm);
     else
-        nearest_avx2_dim(s, vecs, n, idx, dist, s->dim / 2);
+        nearest_avx2_dim(s, vecs, n, idx, dist, s->dim / 2, warm);
 }
 #endif
 
@@ -322,7 +352,7 @@ run16_all(const struct vq_search *s, int r, const __m512i *xp, int pairs,
  * caller, so the inner loops unroll. */
 __attribute__((target("avx512f,avx512bw"), always_inline)) static inline void
 nearest_avx512_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
-                   uint16_t *idx, uint32_t *dist, const int pairs)
+                   uint16_t *idx, uint32_t *dist, const int pairs, int warm)
 {
     const int64_t dim = 2 * pairs;
     const int nruns = s->kpad / 16;
@@ -347,6 +377,10 @@ nearest_avx512_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
                 dist[i] = (uint32_t)m;
             continue;
         }
+        const int g = warm ? idx[i] : 0;
+        int64_t gc = INT64_MAX;   /* the guess's cost, when it was used */
+        if (warm)
+            ub = gc = guess_cost(s, x, g, pairs);
         const int r0 = s->run_at[run_key(sx)];
         run16(s, r0, xp, pairs, &best, &besti, &ub);
         for (int r = r0 + 1; r < nruns; r++) {
@@ -365,10 +399,17 @@ nearest_avx512_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
             if (g2 <= dim * (ub - s->run_bmin[r]))
                 run16(s, r, xp, pairs, &best, &besti, &ub);
         }
-        /* Smallest cost, then the lowest index among lanes holding it. */
+        /* Smallest cost, then the lowest index among lanes holding it;
+         * then the guess, which the search may have skipped (only when
+         * something visited costs no more). */
         int32_t m = _mm512_reduce_min_epi32(best);
         __mmask16 at = _mm512_cmpeq_epi32_mask(best, _mm512_set1_epi32(m));
-        idx[i] = (uint16_t)_mm512_mask_reduce_min_epi32(at, besti);
+        int32_t mi = _mm512_mask_reduce_min_epi32(at, besti);
+        if (gc < m || (gc == m && g < mi)) {
+            m = (int32_t)gc;
+            mi = g;
+        }
+        idx[i] = (uint16_t)mi;
         if (dist)
             dist[i] = (uint32_t)m;
     }
@@ -420,7 +461,7 @@ nearest_avx512_lanes(const struct vq_search *s, const int16_t *vecs, size_t n,
 
 __attribute__((target("avx512f,avx512bw"))) static void
 nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
-               uint16_t *idx, uint32_t *dist)
+               uint16_t *idx, uint32_t *dist, int warm)
 {
     size_t done = 0;
     if (s->k <= LANES_MAXK)
@@ -433,17 +474,17 @@ nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
         dist += done;
     n -= done;
     if (s->dim == 12)
-        nearest_avx512_dim(s, vecs, n, idx, dist, 6);
+        nearest_avx512_dim(s, vecs, n, idx, dist, 6, warm);
     else if (s->dim == 4)
-        nearest_avx512_dim(s, vecs, n, idx, dist, 2);
+        nearest_avx512_dim(s, vecs, n, idx, dist, 2, warm);
     else
-        nearest_avx512_dim(s, vecs, n, idx, dist, s->dim / 2);
+        nearest_avx512_dim(s, vecs, n, idx, dist, s->dim / 2, warm);
 }
 #endif
 
-int vq_nearest_path(enum vq_path path, const struct vq_search *s,
-                    const int16_t *vecs, size_t n, uint16_t *idx,
-                    uint32_t *dist)
+static int search_path(enum vq_path path, const struct vq_search *s,
+                       const int16_t *vecs, size_t n, uint16_t *idx,
+                       uint32_t *dist, int warm)
 {
     switch (path) {
     case VQ_PATH_PORTABLE:
@@ -453,40 +494,62 @@ int vq_nearest_path(enum vq_path path, const struct vq_search *s,
     case VQ_PATH_AVX2:
         if (!__builtin_cpu_supports("avx2"))
             return -1;
-        nearest_avx2(s, vecs, n, idx, dist);
+        nearest_avx2(s, vecs, n, idx, dist, warm);
         return 0;
     case VQ_PATH_AVX512:
         if (!__builtin_cpu_supports("avx512f") || !__builtin_cpu_supports("avx512bw"))
             return -1;
-        nearest_avx512(s, vecs, n, idx, dist);
+        nearest_avx512(s, vecs, n, idx, dist, warm);
         return 0;
 #endif
     default:
+        (void)warm;
         return -1;
     }
+}
+
+int vq_nearest_path(enum vq_path path, const struct vq_search *s,
+                    const int16_t *vecs, size_t n, uint16_t *idx,
+                    uint32_t *dist)
+{
+    return search_path(path, s, vecs, n, idx, dist, 0);
+}
+
+int vq_nearest_warm_path(enum vq_path path, const struct vq_search *s,
+                         const int16_t *vecs, size_t n, uint16_t *idx,
+                         uint32_t *dist)
+{
+    return search_path(path, s, vecs, n, idx, dist, 1);
+}
+
+/* The best path this CPU has (chosen once). */
+static enum vq_path best_path(void)
+{
+    static int path = -1;
+    if (path < 0) {
+        int p = VQ_PATH_PORTABLE;
+#ifdef VQ_HAVE_X86
+        if (__builtin_cpu_supports("avx512f") &&
+            __builtin_cpu_supports("avx512bw") && !getenv("GIGAVIEW_NO_AVX512"))
+            p = VQ_PATH_AVX512;
+        else if (__builtin_cpu_supports("avx2"))
+            p = VQ_PATH_AVX2;
+#endif
+        path = p;
+    }
+    return (enum vq_path)path;
 }
 
 void vq_nearest(const struct vq_search *s, const int16_t *vecs, size_t n,
                 uint16_t *idx, uint32_t *dist)
 {
-#ifdef VQ_HAVE_X86
-    static int have_avx2 = -1, have_avx512 = -1;
-    if (have_avx2 < 0) {
-        have_avx512 = __builtin_cpu_supports("avx512f") &&
-                      __builtin_cpu_supports("avx512bw") &&
-                      !getenv("GIGAVIEW_NO_AVX512");
-        have_avx2 = __builtin_cpu_supports("avx2") ? 1 : 0;
-    }
-    if (have_avx512) {
-        nearest_avx512(s, vecs, n, idx, dist);
-        return;
-    }
-    if (have_avx2) {
-        nearest_avx2(s, vecs, n, idx, dist);
-        return;
-    }
-#endif
-    nearest_portable(s, vecs, n, idx, dist);
+    search_path(best_path(), s, vecs, n, idx, dist, 0);
+}
+
+void vq_nearest_warm(const struct vq_search *s, const int16_t *vecs, size_t n,
+                     uint16_t *idx, uint32_t *dist)
+{
+    search_path(best_path(), s, vecs, n, idx, dist, 1);
 }
 
 static inline int8_t clamp_s8(long v)
@@ -645,8 +708,9 @@ uint64_t vq_train_double(struct vq_trainer *t, const int16_t *sample, size_t n,
     split_cells(t, sample, n, idx);
     uint64_t prev = UINT64_MAX, total = 0;
     for (int it = 0; it < max_iters; it++) {
+        /* idx holds the last assignment (the split's, first): a guess. */
         vq_search_prepare(&t->search, t->book, t->k, t->dim);
-        vq_nearest(&t->search, sample, n, idx, dist);
+        vq_nearest_warm(&t->search, sample, n, idx, dist);
         total = 0;
         for (size_t i = 0; i < n; i++)
             total += dist[i];
@@ -719,14 +783,18 @@ static void move_used_cells(struct vq_trainer *t, const int16_t *sample,
 }
 
 uint64_t vq_train_ecvq(struct vq_trainer *t, const int16_t *sample, size_t n,
-                       double lambda, int iters, uint16_t *idx, uint32_t *dist)
+                       double lambda, int iters, int warm, uint16_t *idx,
+                       uint32_t *dist)
 {
     uint64_t total = 0;
     memset(t->bias, 0, sizeof(int32_t) * (size_t)t->k);
     for (int it = 0;; it++) {
         vq_search_prepare(&t->search, t->book, t->k, t->dim);
         vq_search_set_bias(&t->search, t->bias);
-        vq_nearest(&t->search, sample, n, idx, dist);
+        if (it || warm)
+            vq_nearest_warm(&t->search, sample, n, idx, dist);
+        else
+            vq_nearest(&t->search, sample, n, idx, dist);
         total = 0;
         for (size_t i = 0; i < n; i++)
             total += dist[i];

@@ -40,6 +40,7 @@ struct vq_search {
     int32_t pairs[VQ_MAXDIM / 2 * VQ_MAXK];
     int32_t bias[VQ_MAXK];
     int32_t orig[VQ_MAXK];  /* position -> index; padding: INT32_MAX */
+    int32_t pos[VQ_MAXK];   /* index -> position */
     int32_t run_smin[VQ_MAXK / 16], run_smax[VQ_MAXK / 16];
     int32_t run_bmin[VQ_MAXK / 16];
     uint16_t run_at[256 * VQ_MAXDIM + 1]; /* sum + 128 * VQ_MAXDIM -> the
@@ -63,6 +64,16 @@ void vq_search_set_bias(struct vq_search *s, const int32_t *bias);
 void vq_nearest(const struct vq_search *s, const int16_t *vecs, size_t n,
                 uint16_t *idx, uint32_t *dist);
 
+/*
+ * vq_nearest started from a guess: idx[i] holds, on entry, an index below
+ * s->k for vector i (a previous assignment, say).  Its cost bounds the
+ * search from the start, so the SIMD paths skip more runs of
+ * codevectors.  The answers (and dist) are exactly vq_nearest's, whatever
+ * the guesses.
+ */
+void vq_nearest_warm(const struct vq_search *s, const int16_t *vecs, size_t n,
+                     uint16_t *idx, uint32_t *dist);
+
 /* The search paths, for tests: each gives what VQ_PATH_PORTABLE gives. */
 enum vq_path { VQ_PATH_PORTABLE, VQ_PATH_AVX2, VQ_PATH_AVX512 };
 
@@ -71,6 +82,11 @@ enum vq_path { VQ_PATH_PORTABLE, VQ_PATH_AVX2, VQ_PATH_AVX512 };
 int vq_nearest_path(enum vq_path path, const struct vq_search *s,
                     const int16_t *vecs, size_t n, uint16_t *idx,
                     uint32_t *dist);
+
+/* vq_nearest_warm on one given path (idx holds the guesses on entry). */
+int vq_nearest_warm_path(enum vq_path path, const struct vq_search *s,
+                         const int16_t *vecs, size_t n, uint16_t *idx,
+                         uint32_t *dist);
 
 /* The largest training sample (a tile's blocks). */
 #define VQ_TRAIN_MAXN (257 * 257)
@@ -116,10 +132,15 @@ void vq_train_from(struct vq_trainer *t, const int8_t *book, int k, int dim);
  * biases, ready for vq_nearest.  Integer arithmetic apart from IEEE
  * divisions (the means) and one multiplication per bias, so the result
  * is the same on every CPU.
+ * With warm, idx holds on entry an assignment of the sample to indices
+ * below t->k (the LBG one, say) that starts the first search
+ * (vq_nearest_warm); that changes only the time taken.  Each later round
+ * starts from the previous round's assignment.
  * Returns the sample's last biased cost (distortion + lambda * bits).
  */
 uint64_t vq_train_ecvq(struct vq_trainer *t, const int16_t *sample, size_t n,
-                       double lambda, int iters, uint16_t *idx, uint32_t *dist);
+                       double lambda, int iters, int warm, uint16_t *idx,
+                       uint32_t *dist);
 
 /* Count the assignment idx (n entries) into t->count and set t->bias[c]
  * to round(lambda * len_c), len_c = -log2(count_c / n) in 16.16 fixed
