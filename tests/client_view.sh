@@ -369,8 +369,11 @@ expect_rc "an unknown script command is a usage error" 2
 expect_err "the message names the line" 'bad.txt:3: unknown command'
 
 # ---------------------------------------------------------------- faults
-# A proxy: MODE fail (tiles answered 500) or hold (tile answers held),
-# either until the file GATE exists; everything else passes through.
+# proxy.py MODE UPSTREAM PORTFILE GATE: a proxy.  MODE fail (tiles
+# answered 500) or hold (tile answers held), either until the file GATE
+# exists; hang-tiles or hang-filter: every tile request, or the filter
+# job's POST, held for ever after creating the file GATE (the prompt-quit
+# checks below).  Everything else passes through.
 cat >"$T/proxy.py" <<'PY'
 import http.server, os, sys, time, urllib.request, urllib.error
 mode, upstream, portfile, gate = sys.argv[1:5]
@@ -381,6 +384,11 @@ class H(http.server.BaseHTTPRequestHandler):
         self.do_GET(self.rfile.read(int(self.headers.get("Content-Length", 0))))
     def do_GET(self, data=None):
         tile = "/tiles/" in self.path or "/batch" in self.path
+        job = data is not None and self.path.endswith("/filter")
+        if (mode == "hang-tiles" and tile) or (mode == "hang-filter" and job):
+            open(gate, "w").close()
+            while True:
+                time.sleep(1)
         if tile and mode == "hold":
             while not os.path.exists(gate):
                 time.sleep(0.05)
@@ -715,62 +723,17 @@ pxc "selection turned: plain right of the right corner" same r1.png r0.png 530 2
 check "selection turned: after the release the outline is gone" idiff -a r2.png r0.png
 
 # ---------------------------------------------------------------- prompt quit
-# hang.py MODE UPSTREAM PORTFILE MARK: a proxy that holds every tile
-# request (MODE tiles) or filter job (MODE filter) for ever, after
-# creating the file MARK; everything else passes through.  The viewer runs
+# The proxy above in its hang modes holds every tile request, or the
+# filter job's POST, for ever after creating $T/held.  The viewer runs
 # with a request timeout of 1000 s under `timeout 120`: quitting while
 # the request hangs must end it by itself with status 0 (124 would be
 # the wrapper's kill: the quit waited on the request).
-cat >"$T/hang.py" <<'PY'
-import http.server, os, sys, time, urllib.request, urllib.error
-mode, upstream, portfile, mark = sys.argv[1:5]
-class H(http.server.BaseHTTPRequestHandler):
-    protocol_version = "HTTP/1.1"
-    def log_message(self, *a): pass
-    def do_POST(self):
-        self.do_GET(self.rfile.read(int(self.headers.get("Content-Length", 0))))
-    def do_GET(self, data=None):
-        tile = "/tiles/" in self.path or "/batch" in self.path
-        job = data is not None and self.path.endswith("/filter")
-        if (mode == "tiles" and tile) or (mode == "filter" and job):
-            open(mark, "w").close()
-            while True:
-                time.sleep(1)
-        hdrs = {k: self.headers[k] for k in ("Content-Type", "If-None-Match") if self.headers[k]}
-        try:
-            with urllib.request.urlopen(urllib.request.Request(upstream + self.path, data, hdrs)) as r:
-                status, body, ctype = r.status, r.read(), r.headers.get("Content-Type")
-        except urllib.error.HTTPError as e:
-            status, body, ctype = e.code, e.read(), e.headers.get("Content-Type")
-        self.send_response(status)
-        self.send_header("Content-Type", ctype or "application/octet-stream")
-        self.send_header("Content-Length", str(len(body)))
-        self.end_headers()
-        self.wfile.write(body)
-s = http.server.ThreadingHTTPServer(("127.0.0.1", 0), H)
-s.daemon_threads = True
-open(portfile + ".tmp", "w").write(str(s.server_address[1]))
-os.rename(portfile + ".tmp", portfile)
-s.serve_forever()
-PY
-HPID=
-hang_start() {  # hang_start MODE: the proxy at $HANG, marking $T/held
-    rm -f "$T/hang.port" "$T/held"
-    python3 "$T/hang.py" "$1" "$BASE" "$T/hang.port" "$T/held" 2>"$T/hang.log" &
-    HPID=$!
-    i=0
-    while [ ! -s "$T/hang.port" ] && [ $i -lt 300 ]; do
-        sleep 0.1
-        i=$((i + 1))
-    done
-    [ -s "$T/hang.port" ] || bail "hang proxy did not start: $(cat "$T/hang.log")"
-    HANG="http://127.0.0.1:$(cat "$T/hang.port")"
+# hang_start MODE: the proxy in mode hang-MODE at $HANG, marking $T/held.
+hang_start() {
+    rm -f "$T/held"
+    proxy_start "hang-$1" "$T/held"
+    HANG=$PROXY
 }
-hang_stop() {
-    [ -n "$HPID" ] && kill "$HPID" 2>/dev/null && wait "$HPID" 2>/dev/null
-    HPID=
-}
-trap 'view_stop; proxy_stop; hang_stop; http_cleanup' EXIT
 # hang_view SCRIPT: the viewer at $HANG under `timeout 120` (valgrind too
 # when the suite runs under it), in the background as VPID.
 hang_view() {
@@ -788,7 +751,7 @@ hang_view "$T/hq.txt"
 view_wait
 check "quit while a tile request hangs: exits by itself (exit $vrc)" test "$vrc" -eq 0
 check "quit while a tile request hangs: it was held" test -f "$T/held"
-hang_stop
+proxy_stop
 
 # Ctrl+C (SIGINT) while tiles hang: SDL turns it into a quit.
 hang_start tiles
@@ -802,7 +765,7 @@ done
 kill -INT "$VPID" 2>/dev/null
 view_wait
 check "Ctrl+C while a tile request hangs: exits by itself (exit $vrc)" test "$vrc" -eq 0
-hang_stop
+proxy_stop
 
 # Quit while the filter job's POST hangs (tiles come through).
 hang_start filter
@@ -812,7 +775,7 @@ hang_view "$T/hf.txt"
 view_wait
 check "quit while a filter job hangs: exits by itself (exit $vrc)" test "$vrc" -eq 0
 check "quit while a filter job hangs: it was held" test -f "$T/held"
-hang_stop
+proxy_stop
 
 stop_daemon
 done_testing
