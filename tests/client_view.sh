@@ -128,6 +128,8 @@ nwebp=$(grep -c 'GET [^ ]*/v1/images/[^/ ]*/root?format=webp -> [23]0[04]' "$T/v
 check "the root came as WebP, one request per image opened ($nwebp for $nopen)" \
     test "$nwebp" -ge 3 -a "$nwebp" = "$nopen"
 check "no raw root mip was fetched" sh -c "! grep -q 'format=raw' '$T/view.err'"
+check "x opened again: its WebP root revalidated from the disk cache (304)" \
+    grep -q 'GET [^ ]*/v1/images/x/root?format=webp -> 304' "$T/view.err"
 same_as_render "level 0 across a tile corner equals render" v1.png x 512,512 0
 same_as_render "level 0, the last tiles equal render" v2.png x 2700,1850 0
 same_as_render "level 1 at 1:1 equals render" v3.png x 1500,1000 1
