@@ -102,9 +102,9 @@ void vf_result_free(struct vf_result *r)
 
 /* The root mips of r->img from the root level as the store keeps it (a
  * lossless WebP; a gray root has three equal channels, channel 0 is kept),
- * with the format's 2x2 box filter (gv_root_build_mips): the samples the
- * raw mips of the server are, bit for bit, for a tenth of the requests and
- * about a third of the bytes. */
+ * with the format's 2x2 box filter (gv_root_build_mips): the samples of
+ * the server's raw mips, bit for bit, in one request instead of one per
+ * mip and in under half their bytes (bench/README.md, browser-bytes). */
 static int mips_from_webp(struct vf_result *r, const uint8_t *webp, size_t len,
                           struct gv_error *err)
 {
