@@ -168,7 +168,7 @@ function served(from, to) {
         if (/\/(batch|tiles\/)/.test(r[2])) {
             m.tiles += n;
             m.tileRequests++;
-        } else if (/\/root$/.test(r[2])) {
+        } else if (/\/root(\?|$)/.test(r[2])) {   // every form: PNG, WebP, raw mips
             m.root += n;
         } else {
             m.other += n;

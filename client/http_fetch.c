@@ -495,21 +495,21 @@ void gv_remote_mip_size(const struct gv_remote_image *img, int mip, uint32_t *w,
     }
 }
 
-int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
-                 struct gv_disk_cache *dc, uint8_t **pixels, uint32_t *w,
-                 uint32_t *hh, struct gv_error *err)
+/* GET path through the disk cache entry `name` of dc (may be NULL): a
+ * cached entry (of want bytes, when want > 0) is revalidated with its
+ * ETag, a 200 replaces it.  0 with *out (malloc'ed) and *len, or -1 with
+ * *err; *status is the HTTP status (0 when there was none). */
+static int get_cached(struct gv_http *h, const char *path, const char *name,
+                      const char *what, size_t want, struct gv_disk_cache *dc,
+                      uint8_t **out, size_t *len, long *status,
+                      struct gv_error *err)
 {
-    uint32_t mw, mh;
-    gv_remote_mip_size(img, mip, &mw, &mh);
-    const size_t want = (size_t)mw * mh * img->channels;
-    char path[400], name[32], etag[160] = "", what[64];
-    snprintf(path, sizeof path, "/v1/images/%s/root?mip=%d&format=raw", img->id, mip);
-    snprintf(name, sizeof name, "root-%d", mip);
-    snprintf(what, sizeof what, "root mip %d", mip);
+    char etag[160] = "";
     uint8_t *cached = NULL;
     size_t clen = 0;
+    *status = 0;
     if (gv_disk_cache_get(dc, name, &cached, &clen, etag, sizeof etag) < 0 ||
-        clen != want) {
+        (want && clen != want)) {
         free(cached);
         cached = NULL;
         etag[0] = 0;
@@ -520,27 +520,66 @@ int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
         free(cached);
         return gv_fail(err, GV_ENOMEM, "http: out of memory");
     }
-    uint8_t *out = NULL;
-    size_t len = 0;
+    *out = NULL;
+    *len = 0;
     int rc = run_all(h, &x, 1, err);
-    if (rc == 0)
-        rc = settle(h, &x, what, &cached, clen, &out, &len, err);
-    if (rc >= 0 && len != want) {
+    if (rc == 0) {
+        *status = x.status;
+        rc = settle(h, &x, what, &cached, clen, out, len, err);
+    }
+    if (rc >= 0 && want && *len != want) {
         rc = gv_fail(err, GV_ECORRUPT, "%s: %zu bytes from the server, expected "
-                     "%zu (%ux%ux%d)", what, len, want, mw, mh, img->channels);
+                     "%zu", what, *len, want);
     } else if (rc == 0) {
-        gv_disk_cache_put(dc, name, out, len, x.etag);
+        gv_disk_cache_put(dc, name, *out, *len, x.etag);
     }
     xfer_done(&x);
     free(cached);
     if (rc < 0) {
-        free(out);
+        free(*out);
+        *out = NULL;
         return -1;
     }
-    *pixels = out;
+    return 0;
+}
+
+int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
+                 struct gv_disk_cache *dc, uint8_t **pixels, uint32_t *w,
+                 uint32_t *hh, struct gv_error *err)
+{
+    uint32_t mw, mh;
+    gv_remote_mip_size(img, mip, &mw, &mh);
+    const size_t want = (size_t)mw * mh * img->channels;
+    char path[400], name[32], what[64];
+    snprintf(path, sizeof path, "/v1/images/%s/root?mip=%d&format=raw", img->id, mip);
+    snprintf(name, sizeof name, "root-%d", mip);
+    snprintf(what, sizeof what, "root mip %d (%ux%ux%d)", mip, mw, mh,
+             img->channels);
+    size_t len;
+    long status;
+    if (get_cached(h, path, name, what, want, dc, pixels, &len, &status, err) < 0)
+        return -1;
     *w = mw;
     *hh = mh;
     return 0;
+}
+
+int gv_http_root_webp(struct gv_http *h, const struct gv_remote_image *img,
+                      struct gv_disk_cache *dc, uint8_t **webp, size_t *len,
+                      struct gv_error *err)
+{
+    char path[400];
+    snprintf(path, sizeof path, "/v1/images/%s/root?format=webp", img->id);
+    long status;
+    struct gv_error e;
+    if (get_cached(h, path, "root-webp", "root (WebP)", 0, dc, webp, len,
+                   &status, &e) == 0)
+        return 0;
+    if (status == 400 || status == 404)
+        return 1;
+    if (err)
+        *err = e;
+    return -1;
 }
 
 /* Fetch t[0..n) with one request each (If-None-Match from dc). */

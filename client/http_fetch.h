@@ -1,8 +1,9 @@
 /*
  * http_fetch.h - the native client's side of the gigaviewd API
  * (docs/API.md) over libcurl: image list and metadata (JSON), the root
- * level as raw samples, and compressed tiles fetched in parallel (curl
- * multi, keep-alive) with the on-disk cache and ETag revalidation.
+ * level as the store's lossless WebP or as raw samples, and compressed
+ * tiles fetched in parallel (curl multi, keep-alive) with the on-disk
+ * cache and ETag revalidation.
  *
  * Every failure becomes a one-line message in *err: the server cannot be
  * reached, a transfer timed out or was cut short, the server answered an
@@ -84,6 +85,17 @@ void gv_remote_mip_size(const struct gv_remote_image *img, int mip, uint32_t *w,
 int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
                  struct gv_disk_cache *dc, uint8_t **pixels, uint32_t *w,
                  uint32_t *hh, struct gv_error *err);
+
+/* The root level as the store keeps it: a lossless WebP (docs/API.md,
+ * GET .../root?format=webp; a gray root has three equal channels), the
+ * bytes malloc'ed into *webp (the caller's; not decoded here), through the
+ * disk cache dc (may be NULL) with ETag revalidation.  Returns 0; 1 when
+ * the server answers 400 or 404, as a server older than that form does
+ * (the caller fetches gv_http_root's raw mips instead); -1 with *err on
+ * any other failure. */
+int gv_http_root_webp(struct gv_http *h, const struct gv_remote_image *img,
+                      struct gv_disk_cache *dc, uint8_t **webp, size_t *len,
+                      struct gv_error *err);
 
 struct gv_tile_want {
     int level;

@@ -5,7 +5,8 @@
  * Location: DIR/<server>/<image>/ where DIR is --cache-dir, else
  * $XDG_CACHE_HOME/gigaview, else ~/.cache/gigaview; <server> is the base
  * URL with every character outside [A-Za-z0-9.-] replaced by '_'.  One file
- * per entry, named L-X-Y (tiles) or root-M (root mips):
+ * per entry, named L-X-Y (tiles), root-M (root mips) or root-webp (the
+ * root level as the store's lossless WebP):
  *
  *   "GVC1"  u32 etag length  etag  u64 data length  data  u32 CRC32 of all before
  *

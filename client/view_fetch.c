@@ -9,6 +9,11 @@
  * asked for twice at once.  Each image open bumps a generation; results
  * of an older generation are freed instead of queued.  vf_free does not
  * wait for the round trip in progress: gv_http_abort drops it.
+ *
+ * An image's root mips come from one request, the root level as the
+ * store's lossless WebP (docs/API.md), decoded and box-filtered here as
+ * the store reader does (docs/FORMAT.md section 6); a server without that
+ * form answers 400, and the raw mips are fetched one by one instead.
  */
 #include <pthread.h>
 #include <stdio.h>
@@ -16,6 +21,7 @@
 #include <string.h>
 
 #include "http_fetch.h"
+#include "store/store_format.h"
 #include "tile_cache_disk.h"
 #include "view_fetch.h"
 
@@ -94,7 +100,50 @@ void vf_result_free(struct vf_result *r)
     }
 }
 
-/* Open image id on the thread: metadata, disk cache, root mips. */
+/* The root mips of r->img from the root level as the store keeps it (a
+ * lossless WebP; a gray root has three equal channels, channel 0 is kept),
+ * with the format's 2x2 box filter (gv_root_build_mips): the samples of
+ * the server's raw mips, bit for bit, in one request instead of one per
+ * mip and in under half their bytes (bench/README.md, browser-bytes). */
+static int mips_from_webp(struct vf_result *r, const uint8_t *webp, size_t len,
+                          struct gv_error *err)
+{
+    const struct gv_remote_image *im = &r->img;
+    const int c = im->channels;
+    int count = 1;
+    for (uint32_t w = im->root_w, h = im->root_h; w > 1 || h > 1; count++) {
+        w = (w + 1) / 2;
+        h = (h + 1) / 2;
+    }
+    if (im->root_mips > count)
+        return gv_fail(err, GV_ECORRUPT, "image '%s': %d root mips for a %ux%u "
+                       "root", im->id, im->root_mips, im->root_w, im->root_h);
+    uint8_t *all = malloc(gv_root_pixels_size(im->root_w, im->root_h, c));
+    if (!all)
+        return gv_fail(err, GV_ENOMEM, "view: out of memory for the root");
+    struct gv_error e;
+    if (gv_root_unpack(webp, len, im->root_w, im->root_h, c, all, &e) < 0) {
+        free(all);
+        return gv_fail(err, e.code, "root (WebP) from the server: %s", e.text);
+    }
+    gv_root_build_mips(all, im->root_w, im->root_h, c);
+    size_t off = 0;
+    for (int m = 0; m < im->root_mips; m++) {
+        gv_remote_mip_size(im, m, &r->mip_w[m], &r->mip_h[m]);
+        size_t n = (size_t)r->mip_w[m] * r->mip_h[m] * c;
+        if (!(r->mip[m] = malloc(n))) {
+            free(all);
+            return gv_fail(err, GV_ENOMEM, "view: out of memory for the root");
+        }
+        memcpy(r->mip[m], all + off, n);
+        off += n;
+    }
+    free(all);
+    return 0;
+}
+
+/* Open image id on the thread: metadata, disk cache, root mips (from the
+ * root's WebP, or as raw samples from a server without that form). */
 static void do_open(struct vf *f, const char *id, unsigned gen)
 {
     struct vf_result r;
@@ -112,10 +161,19 @@ static void do_open(struct vf *f, const char *id, unsigned gen)
     }
     if (!f->o.no_cache)
         f->dc = gv_disk_cache_open(f->cache_dir, gv_http_base(f->http), id);
-    for (int m = 0; m < r.img.root_mips; m++)
-        if (gv_http_root(f->http, &r.img, m, f->dc, &r.mip[m], &r.mip_w[m],
-                         &r.mip_h[m], &err) < 0)
-            goto fail;
+    uint8_t *webp = NULL;
+    size_t wlen = 0;
+    int rc = gv_http_root_webp(f->http, &r.img, f->dc, &webp, &wlen, &err);
+    if (rc == 0) {
+        rc = mips_from_webp(&r, webp, wlen, &err);
+        free(webp);
+    } else if (rc > 0) {
+        for (int m = 0; m < r.img.root_mips && rc >= 0; m++)
+            rc = gv_http_root(f->http, &r.img, m, f->dc, &r.mip[m], &r.mip_w[m],
+                              &r.mip_h[m], &err);
+    }
+    if (rc < 0)
+        goto fail;
     f->img = r.img;
     f->have_img = 1;
     r.ok = 1;

@@ -2,7 +2,8 @@
  * route_images.c - GET /v1/images (the list), GET /v1/images/{id} (one
  * image's metadata: geometry, tile grid per level, sizes, links) and
  * GET /v1/images/{id}/root (the lossless root level or one of its mips,
- * as PNG or raw samples for GPU clients).
+ * as PNG or raw samples for GPU clients; the root level also as the
+ * lossless WebP the store keeps, the fewest bytes).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -108,19 +109,32 @@ enum MHD_Result route_image_info(struct req *r)
     return http_send_json(r, 200, j);
 }
 
+/* The forms of GET .../root (docs/API.md). */
+enum root_form { ROOT_PNG, ROOT_RAW, ROOT_WEBP };
+
 /* A response with the root mip px (w x h) of img as raw samples or as
- * PNG: 0 with *resp (NULL on allocation failure) and *len, or -1 with
- * *err when the PNG encoder fails. */
+ * PNG, or the root level as the store keeps it (the lossless WebP of
+ * docs/FORMAT.md section 6, read from the file: nothing is encoded): 0
+ * with *resp (NULL on allocation failure) and *len, or -1 with *err when
+ * the PNG encoder or the store read fails. */
 static int root_response(const struct image *img, const uint8_t *px,
-                         uint32_t w, uint32_t h, int raw,
+                         uint32_t w, uint32_t h, enum root_form form,
                          struct MHD_Response **resp, size_t *len,
                          struct gv_error *err)
 {
     int c = img->info->geometry.channels;
+    if (form == ROOT_WEBP) {
+        uint8_t *webp;
+        if (gv_store_read_root_webp(img->store, &webp, len, err) < 0)
+            return -1;
+        *resp = http_response_owned(webp, *len, "image/webp");
+        return 0;
+    }
     /* A height store's root holds 16-bit codes (host order, which is
      * little-endian on every supported host): raw gives them, png a
      * 16-bit PNG. */
     int height = img->info->header.kind == GV_KIND_HEIGHT;
+    int raw = form == ROOT_RAW;
     const struct gv_output_format *f = gv_output_format_find(raw ? "raw" : "png");
     *len = (size_t)w * h * (size_t)c * (height ? 2 : 1);
     if (raw) { /* The pixels live as long as the store; copy, since the
@@ -139,6 +153,7 @@ static int root_response(const struct image *img, const uint8_t *px,
 
 enum MHD_Result route_image_root(struct req *r)
 {
+    static const char *const form_name[] = {"png", "raw", "webp"};
     enum MHD_Result ret;
     struct image *img = http_image(r, &ret);
     if (!img)
@@ -147,13 +162,31 @@ enum MHD_Result route_image_root(struct req *r)
     uint32_t mip = 0, w, h;
     const char *ms = http_query(r, "mip");
     const char *fmt = http_query(r, "format");
+    enum root_form form = ROOT_PNG;
     if (ms && http_parse_u32(ms, 64, &mip) < 0) {
         ret = http_send_errorf(r, GV_EINVAL, "root: mip must be 0..%d",
                                g->root_mips - 1);
         goto out;
     }
-    if (fmt && strcmp(fmt, "png") && strcmp(fmt, "raw")) {
-        ret = http_send_errorf(r, GV_EINVAL, "root: format must be png or raw");
+    if (fmt && !strcmp(fmt, "raw"))
+        form = ROOT_RAW;
+    else if (fmt && !strcmp(fmt, "webp"))
+        form = ROOT_WEBP;
+    else if (fmt && strcmp(fmt, "png")) {
+        ret = http_send_errorf(r, GV_EINVAL, "root: format must be png, raw "
+                               "or webp");
+        goto out;
+    }
+    if (form == ROOT_WEBP && mip != 0) {
+        ret = http_send_errorf(r, GV_EINVAL, "root: format=webp is the root "
+                               "level only (mip 0); its mips are the 2x2 box "
+                               "filter of it (or format=raw&mip=%u)", mip);
+        goto out;
+    }
+    if (form == ROOT_WEBP && img->info->header.kind == GV_KIND_HEIGHT) {
+        ret = http_send_errorf(r, GV_EINVAL, "root: a height store's root "
+                               "holds 16-bit codes and has no WebP form: "
+                               "use format=png (16-bit) or raw");
         goto out;
     }
     const uint8_t *px = gv_store_root(img->store, (int)mip, &w, &h);
@@ -163,9 +196,8 @@ enum MHD_Result route_image_root(struct req *r)
         goto out;
     }
     char etag[64];
-    int raw = fmt && !strcmp(fmt, "raw");
     snprintf(etag, sizeof etag, "\"%08x-root-%u-%s\"", img->tag, mip,
-             raw ? "raw" : "png");
+             form_name[form]);
     const char *inm = http_header(r, "If-None-Match");
     if (inm && strstr(inm, etag)) {
         ret = http_send_empty(r, 304, "ETag", etag);
@@ -174,7 +206,7 @@ enum MHD_Result route_image_root(struct req *r)
     struct MHD_Response *resp;
     size_t len;
     struct gv_error err;
-    if (root_response(img, px, w, h, raw, &resp, &len, &err) < 0) {
+    if (root_response(img, px, w, h, form, &resp, &len, &err) < 0) {
         ret = http_send_error(r, &err);
         goto out;
     }

@@ -17,15 +17,18 @@
 # decodes from is the least recently used tile), mouse, keyboard, wheel,
 # touch and gamepad input checked for the view they reach and against
 # `gigaview render` of that view, the URL hash round trip, the fallback
-# without WebGL2, the image list, and no console errors.  Then the filter
-# flows: an ROI and a graph from a link, ROI drag-select, a slider
+# without WebGL2, the image list, and no console errors; the root fetched
+# once, as the store's lossless WebP (never as PNG or raw samples).  Then
+# the filter flows: an ROI and a graph from a link, ROI drag-select, a slider
 # (debounced, stale requests aborted), re-running after a pan with the
 # stale result in place meanwhile, the graph view, a GLSL compile error at
 # its line, saving; every ROI picture bit for bit the filter endpoint's.
 #
 # Negative controls of the whole pipeline, each must FAIL the 1:1 match:
 # a decode shader with one prediction weight changed (29/111 to 30/110),
-# and a rANS decoder that flips the lowest bit of every index.
+# a rANS decoder that flips the lowest bit of every index, and a root
+# (as the viewer decoded it) with the lowest bit of every 97th sample
+# flipped.
 #
 # Skipped when /usr/bin/chromium, node or tests/browser/node_modules is
 # missing (scripts/install-deps.sh installs chromium and nodejs;
@@ -126,6 +129,7 @@ expect_mismatch() {
 }
 expect_mismatch "a decode shader with one weight changed" --sabotage shader
 expect_mismatch "a rANS decoder that flips index bits" --sabotage rans
+expect_mismatch "a root with a bit flipped in every 97th sample" --sabotage root
 
 stop_daemon
 if [ "$drc" -eq 0 ]; then ok "gigaviewd exits 0 on SIGTERM"; else

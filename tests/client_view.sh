@@ -6,7 +6,9 @@
 #
 # Covers: frames at 1:1 equal `gigaview render` of the same view bit for
 # bit, for views across tile edges, at levels 0 and 1, RGB and gray (the
-# gray one opened from a browser link's hash), and again after the atlas
+# gray one opened from a browser link's hash), with the root fetched as
+# the store's lossless WebP (one request per image opened, no raw mip;
+# from a server without that form, the raw mips and the same frame), and again after the atlas
 # evicted tiles (a small --gpu-cache; the daemon's log shows evictions);
 # a decoder sabotaged with GIGAVIEW_VIEW_SABOTAGE=decode fails that check;
 # tiles decode on the decode thread (a GL context shared with the
@@ -118,6 +120,16 @@ run view "$BASE" --image x --size 640x480 --script "$T/views.txt" -v \
     --stats "$T/views.tsv"
 cp "$T/err" "$T/view.err"
 expect_rc "the views script runs" 0
+# Each image opened (one metadata request) fetched its root in one
+# request, the store's lossless WebP (200, or 304 from the disk cache),
+# and never the raw mips; the frames below show it decoded exactly.
+nopen=$(grep -c 'GET [^ ]*/v1/images/[^/ ]* -> 200' "$T/view.err")
+nwebp=$(grep -c 'GET [^ ]*/v1/images/[^/ ]*/root?format=webp -> [23]0[04]' "$T/view.err")
+check "the root came as WebP, one request per image opened ($nwebp for $nopen)" \
+    test "$nwebp" -ge 3 -a "$nwebp" = "$nopen"
+check "no raw root mip was fetched" sh -c "! grep -q 'format=raw' '$T/view.err'"
+check "x opened again: its WebP root revalidated from the disk cache (304)" \
+    grep -q 'GET [^ ]*/v1/images/x/root?format=webp -> 304' "$T/view.err"
 same_as_render "level 0 across a tile corner equals render" v1.png x 512,512 0
 same_as_render "level 0, the last tiles equal render" v2.png x 2700,1850 0
 same_as_render "level 1 at 1:1 equals render" v3.png x 1500,1000 1
@@ -371,9 +383,10 @@ expect_err "the message names the line" 'bad.txt:3: unknown command'
 # ---------------------------------------------------------------- faults
 # proxy.py MODE UPSTREAM PORTFILE GATE: a proxy.  MODE fail (tiles
 # answered 500) or hold (tile answers held), either until the file GATE
-# exists; hang-tiles or hang-filter: every tile request, or the filter
-# job's POST, held for ever after creating the file GATE (the prompt-quit
-# checks below).  Everything else passes through.
+# exists; oldroot: the root's WebP form answered 400, as a server older
+# than it does; hang-tiles or hang-filter: every tile request, or the
+# filter job's POST, held for ever after creating the file GATE (the
+# prompt-quit checks below).  Everything else passes through.
 cat >"$T/proxy.py" <<'PY'
 import http.server, os, sys, time, urllib.request, urllib.error
 mode, upstream, portfile, gate = sys.argv[1:5]
@@ -395,6 +408,9 @@ class H(http.server.BaseHTTPRequestHandler):
         if tile and mode == "fail" and not os.path.exists(gate):
             status, ctype = 500, "application/json"
             body = b'{"error":{"status":500,"code":"io_error","message":"injected"}}'
+        elif mode == "oldroot" and "/root?" in self.path and "format=webp" in self.path:
+            status, ctype = 400, "application/json"
+            body = b'{"error":{"status":400,"code":"bad_request","message":"root: format must be png or raw"}}'
         else:
             hdrs = {k: self.headers[k] for k in ("Content-Type", "If-None-Match") if self.headers[k]}
             try:
@@ -486,6 +502,19 @@ proxy_stop
 check "500: the window kept drawing (a frame during the failures, exit $vrc)" \
     test "$vrc" -eq 0 -a -f f1.png
 same_as_render "500: after recovery the frame equals render" f2.png x 1100,900 0
+
+# A server without the root's WebP form (400): the viewer fetches the raw
+# mips instead, one request each, and draws the same frame.
+proxy_start oldroot ""
+printf 'view 512,512,0\nsettle\nshot o1.png\n' >"$T/old.txt"
+view_bg "$PROXY" "$T/old.txt"
+view_wait
+proxy_stop
+check "old server: the viewer asked for the WebP root once, got 400 (exit $vrc)" \
+    test "$(grep -c 'root?format=webp -> 400' "$T/view.err")" = 1
+check "old server: ... then the 10 raw root mips, one request each" \
+    test "$(grep -c 'root?mip=[0-9]*&format=raw -> 200' "$T/view.err")" = 10
+same_as_render "old server: the frame from the raw root mips equals render" o1.png x 512,512 0
 
 # A server that holds tile answers: frames go on (30 of them, and one
 # written) while the request hangs, then the view completes.

@@ -4,7 +4,9 @@
 #
 # Covers: the image list and metadata, tiles (bytes, strong ETag, immutable
 # Cache-Control, 304, HEAD, CORS), batches (POST JSON and GET, framing
-# parsed), the root, regions (pixel-equal to `gigaview export`), IIIF
+# parsed), the root (PNG, raw, and the lossless WebP, which decodes to
+# exactly the raw samples; ETags, 304), regions (pixel-equal to
+# `gigaview export`), IIIF
 # (303, info.json, a dozen request forms pixel-compared with `gigaview
 # export` plus oiiotool rotations and flips), /healthz, /metrics, /, every
 # error case (400, 404, 405, 413, 501, traversal ids), a corrupt page (500
@@ -292,6 +294,28 @@ expect_status "root mip 1" 200 "/v1/images/x/root?mip=1&format=raw"
 check "root mip 1 is 188x125" test "$(header X-Width)x$(header X-Height)" = "188x125"
 expect_status "root: mip out of range" 404 "/v1/images/x/root?mip=10"
 expect_status "root: bad format" 400 "/v1/images/x/root?format=gif"
+# The root level as the store keeps it: a lossless WebP that decodes to
+# exactly the raw samples, with a validator of its own.
+expect_status "root raw (mip 0)" 200 "/v1/images/x/root?format=raw&mip=0"
+cp "$T/b" root.raw
+raw_etag=$(header ETag)
+expect_status "root PNG, for its ETag" 200 /v1/images/x/root
+png_etag=$(header ETag)
+expect_status "root WebP" 200 "/v1/images/x/root?format=webp"
+cp "$T/b" root.webp
+webp_etag=$(header ETag)
+check "root WebP: image/webp, cacheable, headers" test "$(header Content-Type) $(header Cache-Control) $(header X-Width)x$(header X-Height)x$(header X-Channels)" = "image/webp public, max-age=3600 375x250x3"
+check "root WebP: smaller than the raw samples" test "$(wc -c <root.webp)" -lt "$(wc -c <root.raw)"
+check "root WebP decodes to exactly the raw root" webp_is_raw root.webp root.raw 3
+check "root WebP: an ETag of its own ($webp_etag)" sh -c "[ -n '$webp_etag' ] &&
+    [ '$webp_etag' != '$raw_etag' ] && [ '$webp_etag' != '$png_etag' ]"
+req -H "If-None-Match: $webp_etag" "$(url "/v1/images/x/root?format=webp")"
+check "root WebP: If-None-Match gets 304" test "$code $(header ETag)" = "304 $webp_etag"
+req -H "If-None-Match: $raw_etag" "$(url "/v1/images/x/root?format=webp")"
+check "root WebP: the raw root's ETag does not match" test "$code" = 200
+expect_status "root WebP with mip=0" 200 "/v1/images/x/root?format=webp&mip=0"
+expect_status "root WebP of a mip is 400" 400 "/v1/images/x/root?format=webp&mip=1"
+check "... saying it is the root level only" grep -q 'root level only' "$T/b"
 
 # ---------------------------------------------------------------- region
 for f in jpeg webp tiff; do

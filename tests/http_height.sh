@@ -9,6 +9,7 @@
 #     format=tiff32 the values (code * scale + offset) as floats;
 #     png16 of an image store is 400;
 #   - IIIF serves the gray mapping (a gray JPEG) and the root a 16-bit PNG;
+#     the root as WebP is 400 (a gray image store's decodes to its raw root);
 #   - the native client (`gigaview render`) refuses it clearly.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
@@ -22,6 +23,8 @@ run encode --height --unit m --offset -11000 --max-error 2 "$DEM" -o "$S/dem.gv"
 expect_rc "encode --height" 0
 run encode synth:600x400 -o "$S/img.gv"
 expect_rc "encode an image store beside it" 0
+run encode -q 40 synth:700x500:gray -o "$S/gray.gv"
+expect_rc "encode a gray image store beside it" 0
 run encode --max-error 2 "$DEM" -o "$S/bad.gv"
 expect_rc "--max-error without --height is a usage error" 2
 run info "$S/dem.gv"
@@ -86,6 +89,19 @@ cp "$T/b" root.png
 check "the root PNG is 16-bit" sh -c "oiiotool --info -v root.png | grep -q '1 channel, uint16 png'"
 expect_status "the root raw: 2 bytes a sample" 200 '/v1/images/dem/root?format=raw'
 check "raw root is 258 x 75 x 2 bytes" test "$(wc -c <"$T/b")" = $((258 * 75 * 2))
+
+# The root as a lossless WebP: a height store has none (its root holds
+# 16-bit codes); a gray image store's decodes to three channels, each
+# exactly the raw root.
+expect_status "the root of a height store as WebP is 400" 400 '/v1/images/dem/root?format=webp'
+check "... saying why" grep -q 'no WebP form' "$T/b"
+expect_status "a gray store's raw root" 200 '/v1/images/gray/root?format=raw'
+cp "$T/b" gray.raw
+check "the gray raw root is 350 x 250 x 1 bytes" test "$(wc -c <gray.raw)" = $((350 * 250))
+expect_status "a gray store's root as WebP" 200 '/v1/images/gray/root?format=webp'
+cp "$T/b" gray.webp
+check "its three channels are each the raw root" webp_is_raw gray.webp gray.raw 1
+check "its headers say gray (X-Channels 1)" test "$(header Content-Type) $(header X-Channels)" = "image/webp 1"
 
 run render "$BASE" --image dem -o "$T/w/r.png"
 expect_rc "gigaview render refuses a height store" 1

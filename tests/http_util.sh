@@ -105,3 +105,33 @@ e = json.load(open(sys.argv[1]))["error"]
 assert e["status"] == int(sys.argv[2]) and e["code"] and e["message"]
 PY
 }
+
+# webp_is_raw WEBP RAW CHANNELS: the WebP decodes (oiiotool) to exactly the
+# raw samples RAW (CHANNELS a pixel; a gray one's three channels must each
+# equal it).
+webp_is_raw() {
+    oiiotool "$1" --ch R,G,B -d uint8 -o "$1.ppm" >/dev/null 2>&1 || return 1
+    python3 - "$1.ppm" "$2" "$3" <<'PY'
+import sys
+d = open(sys.argv[1], 'rb').read()
+tok, i = [], 0
+while len(tok) < 4:        # P6 width height maxval, '#' comments skipped
+    while d[i:i + 1].isspace():
+        i += 1
+    if d[i:i + 1] == b'#':
+        i = d.index(b'\n', i)
+        continue
+    j = i
+    while not d[j:j + 1].isspace():
+        j += 1
+    tok.append(d[i:j])
+    i = j
+px, raw, c = d[i + 1:], open(sys.argv[2], 'rb').read(), int(sys.argv[3])
+assert tok[0] == b'P6' and tok[3] == b'255', tok
+assert len(px) == int(tok[1]) * int(tok[2]) * 3, (tok, len(px))
+if c == 3:
+    assert px == raw, 'the RGB samples differ'
+else:
+    assert all(px[k::3] == raw for k in range(3)), 'a channel differs'
+PY
+}

@@ -2,7 +2,8 @@
  * test_store.c - the store file: write, reopen, read pages and regions,
  * and refuse damaged files (bad CRCs, truncation, versions, hostile
  * offsets) without crashing or reading out of bounds.  Run under ASan or
- * valgrind this is also the memory-safety check of the reader.  Also the
+ * valgrind this is also the memory-safety check of the reader (the root
+ * section read again as stored included).  Also the
  * contract of base/atomic_file.h that the writer publishes through.
  */
 #include <errno.h>
@@ -190,6 +191,17 @@ int main(void)
     const uint8_t *mip = gv_store_root(s, in->geometry.root_mips - 1, &w, &h);
     check(mip && w == 1 && h == 1 && !gv_store_root(s, in->geometry.root_mips, &w, &h),
           "root mips end at 1x1");
+    /* The root section as stored (GET .../root?format=webp sends it): a
+     * lossless WebP that decodes to the root level (gray: channel 0). */
+    uint8_t *webp = NULL, *dec = malloc(275 * 150);
+    size_t wlen = 0;
+    check(dec && gv_store_read_root_webp(s, &webp, &wlen, &err) == 0 &&
+          wlen + 4 == in->header.root_size &&
+          gv_root_unpack(webp, wlen, 275, 150, 1, dec, &err) == 0 &&
+          memcmp(dec, gv_store_root(s, 0, &w, &h), 275 * 150) == 0,
+          "the root's WebP as stored decodes to the root level");
+    free(webp);
+    free(dec);
     uint8_t *page;
     size_t plen;
     check(gv_store_read_page(s, 0, 0, 0, &page, &plen, &err) == 0, "read page 0/0/0");

@@ -19,44 +19,52 @@ import { anchored, clampView, formatHash, homeView, normRot, screenToImage } fro
 const TAU_MS = 90;            // time constant of animated moves
 
 /**
- * The root level's samples ({px, w, h}, `channels` bytes a pixel): every
- * decode starts from them, so they must be exact.  The lossless PNG form
- * (less than half the bytes of the raw one), decoded without colour
- * management into a canvas; the raw samples where that fails.
+ * The root level's samples ({px, w, h, via}, `channels` bytes a pixel):
+ * every decode starts from them, so they must be exact.  Tried in order of
+ * size: the lossless WebP the store keeps (root?format=webp; a gray root
+ * has three equal channels), the lossless PNG, each decoded without colour
+ * management or premultiplication into a canvas (exact for lossless
+ * images with no transparency), then the raw samples.  `via` names the
+ * form used.  A height store's root holds 16-bit codes: its gray mapping
+ * (docs/API.md) comes through the region endpoint instead.
  */
 async function loadRoot(url, info) {
     const w = info.root.width, h = info.root.height, c = info.channels;
-    try {
-        // A height store's root holds 16-bit codes: show its gray mapping
-        // (docs/API.md) through the region endpoint instead.
-        const r = await fetch(info.elevation
-            ? `${url}/region?level=${info.root.level}&x=0&y=0&w=${w}&h=${h}&format=png`
-            : `${url}/root`);
-        if (!r.ok)
-            throw new Error(`HTTP ${r.status}`);
-        const b = await createImageBitmap(await r.blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
-        if (b.width !== w || b.height !== h)
-            throw new Error(`${b.width}x${b.height}`);
-        const cv = document.createElement('canvas');
-        cv.width = w;
-        cv.height = h;
-        const g = cv.getContext('2d', { willReadFrequently: true });
-        g.drawImage(b, 0, 0);
-        b.close();
-        const rgba = g.getImageData(0, 0, w, h).data, px = new Uint8Array(w * h * c);
-        for (let i = 0; i < w * h; i++)
-            for (let k = 0; k < c; k++)
-                px[i * c + k] = rgba[4 * i + k];
-        return { px, w, h };
-    } catch (e) {
-        const rr = await fetch(`${url}/root?format=raw`);
-        if (!rr.ok)
-            throw new Error(`cannot load the root: HTTP ${rr.status}`);
-        const px = new Uint8Array(await rr.arrayBuffer());
-        if (px.length !== w * h * c)
-            throw new Error(`root: ${px.length} bytes for ${w}x${h}x${c}`);
-        return { px, w, h };
+    const forms = info.elevation
+        ? [['region', `${url}/region?level=${info.root.level}&x=0&y=0&w=${w}&h=${h}&format=png`]]
+        : [['webp', `${url}/root?format=webp`], ['png', `${url}/root`]];
+    for (const [via, src] of forms) {
+        try {
+            const r = await fetch(src);
+            if (!r.ok)
+                throw new Error(`HTTP ${r.status}`);
+            const b = await createImageBitmap(await r.blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+            if (b.width !== w || b.height !== h) {
+                b.close();
+                throw new Error(`${b.width}x${b.height}`);
+            }
+            const cv = document.createElement('canvas');
+            cv.width = w;
+            cv.height = h;
+            const g = cv.getContext('2d', { willReadFrequently: true });
+            g.drawImage(b, 0, 0);
+            b.close();
+            const rgba = g.getImageData(0, 0, w, h).data, px = new Uint8Array(w * h * c);
+            for (let i = 0; i < w * h; i++)
+                for (let k = 0; k < c; k++)
+                    px[i * c + k] = rgba[4 * i + k];
+            return { px, w, h, via };
+        } catch (e) {
+            /* the next form */
+        }
     }
+    const rr = await fetch(`${url}/root?format=raw`);
+    if (!rr.ok)
+        throw new Error(`cannot load the root: HTTP ${rr.status}`);
+    const px = new Uint8Array(await rr.arrayBuffer());
+    if (px.length !== w * h * c)
+        throw new Error(`root: ${px.length} bytes for ${w}x${h}x${c}`);
+    return { px, w, h, via: 'raw' };
 }
 const HASH_REST_MS = 250;     // the view rests this long before the hash follows
 

@@ -224,6 +224,28 @@ const uint8_t *gv_store_root(const struct gv_store *s, int mip, uint32_t *w,
     return s->root + s->root_mip_off[mip];
 }
 
+int gv_store_read_root_webp(const struct gv_store *s, uint8_t **data,
+                            size_t *len, struct gv_error *err)
+{
+    const struct gv_header *h = &s->info.header;
+    if (h->kind == GV_KIND_HEIGHT)
+        return gv_fail(err, GV_EFORMAT, "store: a height store's root is not "
+                       "a WebP image");
+    /* root_size (5 .. about 1.5 MiB, its CRC included) was checked at open. */
+    uint8_t *b = malloc(h->root_size);
+    if (!b)
+        return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
+    if (read_exact(s->fd, b, h->root_size, h->root_offset, "root", err) < 0 ||
+        (gv_crc32(0, b, h->root_size - 4) != gv_get32(b + h->root_size - 4) &&
+         gv_fail(err, GV_ECORRUPT, "store: root CRC mismatch"))) {
+        free(b);
+        return -1;
+    }
+    *data = b;
+    *len = h->root_size - 4;
+    return 0;
+}
+
 int gv_store_page_extent(const struct gv_store *s, uint64_t page,
                          uint64_t *offset, uint32_t *size, uint32_t *crc)
 {

@@ -43,6 +43,18 @@ const struct gv_store_info *gv_store_info(const struct gv_store *s);
 const uint8_t *gv_store_root(const struct gv_store *s, int mip, uint32_t *w,
                              uint32_t *h);
 
+/*
+ * The root section's WebP bytes as stored (docs/FORMAT.md section 6: a
+ * lossless WebP whose decode is the root level; a gray root has three
+ * equal channels), read from the file again and checked against the
+ * section's CRC, into a new malloc'ed buffer (*data, caller frees): what a
+ * client can decode itself instead of fetching raw samples.  Returns 0, or
+ * -1 with GV_EFORMAT for a height store (its root is zlib of 16-bit
+ * codes, section 12), GV_ECORRUPT (CRC), GV_EIO or GV_ENOMEM.
+ */
+int gv_store_read_root_webp(const struct gv_store *s, uint8_t **data,
+                            size_t *len, struct gv_error *err);
+
 /* Extent of page number `page` in the file, from the page index (checked
  * at open to lie inside the file).  Returns 0, or -1 past the last page. */
 int gv_store_page_extent(const struct gv_store *s, uint64_t page,

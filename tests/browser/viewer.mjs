@@ -3,7 +3,7 @@
 // playwright-core.
 //
 //   node viewer.mjs --base http://127.0.0.1:PORT --gigaview PATH
-//        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans] [--only eviction]
+//        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans|root] [--only eviction]
 //
 // Needs stores "picos" (tests/data/picos-1100x700.jpg: two tiled levels,
 // every tile entropy-coded) and "synth" (synth:3000x2000: three tiled
@@ -18,7 +18,8 @@
 //      decoder) bit for bit: every pixel identical (so also the mean
 //      absolute difference <= MAX_MAD per channel that the viewer's goal
 //      asks for); on levels 0 and 1 of picos and synth, across tile edges, and
-//      with the image smaller than the canvas (black outside);
+//      with the image smaller than the canvas (black outside); the root
+//      they start from came in one request, the store's lossless WebP;
 //   2. every decoded tile texture, read back, equals the region endpoint
 //      over the tile's 513 x 513 pixels (inside the level), for both tile
 //      layouts: the shared decode shader and the JavaScript rANS decoder
@@ -44,7 +45,8 @@
 //      the console as an error.
 // --sabotage shader serves a decode shader with one prediction weight
 // changed, --sabotage rans a rANS decoder that flips the lowest bit of
-// every index: check 1 must then FAIL (tests/browser_viewer.sh expects
+// every index, --sabotage root a root whose every 97th sample has its
+// lowest bit flipped: check 1 must then FAIL (tests/browser_viewer.sh expects
 // that: negative controls of the whole pipeline); only check 1 runs.
 // Exit status 0 when everything passed, 1 otherwise, 2 on a usage error.
 import { execFileSync } from 'node:child_process';
@@ -58,7 +60,7 @@ const MAX_MAD = 1;      // mean absolute difference per channel, 8-bit units
 const W = 800, H = 500;
 
 const opt = { chromium: '/usr/bin/chromium', out: '', sabotage: '', only: '', base: '', gigaview: '', filters: '0', token: '' };
-parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
+parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|root] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
 const base = opt.base.replace(/\/+$/, '');
 
 let lapT = Date.now();
@@ -348,6 +350,12 @@ async function run(c) {
     note(`first complete view ${st.firstCompleteMs.toFixed(0)} ms after open (page load to complete ${Date.now() - t0} ms); ` +
         `${st.tilesFetched} tiles in ${st.batches} batches, ${st.bytes} bytes; tiles prepared in ${st.fetchMode}`);
     check(r0.complete && r0.level === 0 && r0.t === 0, 'picos opens complete at level 0', JSON.stringify(r0));
+    // Every decode starts from the root (the 1:1 matches show it exact):
+    // it comes in one request, as the store's lossless WebP.
+    const roots = await pg.evaluate(() => [window.gigaview.viewer.image.root.via,
+        performance.getEntriesByType('resource').map((e) => e.name).filter((u) => /\/root(\?|$)/.test(u))]);
+    check(roots[0] === 'webp' && roots[1].length === 1 && roots[1][0].endsWith('/v1/images/picos/root?format=webp'),
+        "the root came as the store's lossless WebP, in one request (not as PNG, not raw)", JSON.stringify(roots));
     await checkRegion(pg, 'picos level 0 1:1', 0, 150, 100, W, H, 0, 0);
     await shot(pg, 'picos-level0');
     // Level 1 (550 x 350) is smaller than the canvas: it sits at (125, 75).
@@ -838,6 +846,15 @@ async function sabotaged(c) {
         });
         // The workers load tilebuf.js outside the page's routes: prepare
         // tiles on the main thread.
+    } else if (opt.sabotage === 'root') {
+        // The root as decoded by loadRoot, every 97th sample's lowest bit
+        // flipped: every decode starts from it.
+        await pg.route(`${base}/web/viewer.js`, async (route) => {
+            const r = await route.fetch();
+            const src = (await r.text()).replace('px[i * c + k] = rgba[4 * i + k];',
+                'px[i * c + k] = rgba[4 * i + k] ^ ((i * c + k) % 97 === 0 ? 1 : 0);');
+            await route.fulfill({ response: r, body: src });
+        });
     } else {
         fail(`unknown sabotage ${opt.sabotage}`);
         return;
