@@ -453,11 +453,20 @@ static void keep_best(struct gv_tile_workspace *ws, struct rd_best *best,
     memcpy(ws->best_buf, ws->scratch, bytes);
 }
 
-/* Write the best candidate's buffer into buf (packed already when it was
- * kept); returns its length. */
-static size_t write_best(const struct gv_tile_workspace *ws,
-                         const struct rd_best *best, int channels, uint8_t *buf)
+/* The end of a rate-distortion search: the best candidate's indices back
+ * in ws->idx, its reconstruction in recon, its rate and error in stats,
+ * and its buffer (packed already when it was kept) written into buf;
+ * returns the buffer's length. */
+static size_t finish_best(struct gv_tile_workspace *ws, const uint8_t *orig,
+                          const struct rd_best *best, int channels,
+                          uint32_t valid_w, uint32_t valid_h, uint8_t *recon,
+                          struct gv_tile_stats *stats, uint8_t *buf)
 {
+    memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
+    reconstruct(ws, orig, ws->best_book, best->rate, channels, valid_w, valid_h,
+                recon);
+    stats->rate = best->rate;
+    stats->sse = best->sse;
     if (best->rate == 0) {
         size_t len = gv_tilebuf_size(0, channels);
         pack_buffer(buf, len, 0, channels, NULL, NULL);
@@ -630,12 +639,8 @@ static size_t encode_rd_ecvq(struct gv_tile_workspace *ws, const uint8_t *orig,
         try_rate(ws, lo, channels, valid_w, valid_h, lambda, 0, &best);
     }
     polish(ws, channels, valid_w, valid_h, lambda, &best);
-    memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
-    reconstruct(ws, orig, ws->best_book, best.rate, channels, valid_w, valid_h,
-                recon);
-    stats->rate = best.rate;
-    stats->sse = best.sse;
-    return write_best(ws, &best, channels, buf);
+    return finish_best(ws, orig, &best, channels, valid_w, valid_h, recon,
+                       stats, buf);
 }
 
 /*
@@ -675,12 +680,8 @@ static size_t encode_rd_nearest(struct gv_tile_workspace *ws,
             break;
         }
     }
-    memcpy(ws->idx, ws->best_idx, sizeof ws->idx);
-    reconstruct(ws, orig, ws->best_book, best.rate, channels, valid_w, valid_h,
-                recon);
-    stats->rate = best.rate;
-    stats->sse = best.sse;
-    return write_best(ws, &best, channels, buf);
+    return finish_best(ws, orig, &best, channels, valid_w, valid_h, recon,
+                       stats, buf);
 }
 
 /*
