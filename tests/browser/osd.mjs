@@ -36,7 +36,7 @@ import { readFileSync, mkdirSync, writeFileSync, mkdtempSync, rmSync } from 'nod
 import { dirname, join } from 'node:path';
 import { tmpdir } from 'node:os';
 import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { launchChromium } from './chromium.mjs';
 import { pass, fail, note, failed } from './report.mjs';
 
 // Thresholds (see tests/browser_osd.sh for why these values).
@@ -128,17 +128,7 @@ const pageUrl = `http://127.0.0.1:${server.address().port}/`;
 const profile = mkdtempSync(join(tmpdir(), 'gv-chromium-'));
 let browser;
 try {
-    browser = await chromium.launchPersistentContext(profile, {
-        executablePath: opt.chromium,
-        headless: true,
-        viewport: { width: W, height: H },
-        deviceScaleFactor: 1,
-        timeout: 30000,
-        args: ['--headless=new', '--no-sandbox', '--disable-gpu',
-            '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-            '--disable-background-networking', '--disable-component-update',
-            '--disable-sync', '--no-first-run', '--force-color-profile=srgb'],
-    });
+    browser = await launchChromium(profile, opt.chromium, W, H, ['--disable-gpu']);
     await run(browser);
 } catch (e) {
     fail('browser run', String(e && e.stack || e));

@@ -39,7 +39,7 @@ import { mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { dirname, extname, join, normalize } from 'node:path';
 import { tmpdir } from 'node:os';
 import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { launchChromium } from './chromium.mjs';
 import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 
 const MIN_STDDEV = 12;       // luma, 8-bit units, terrain
@@ -185,16 +185,7 @@ async function render(layer, name) {
 }
 
 try {
-    ctx = await chromium.launchPersistentContext(join(scratch, 'profile'), {
-        executablePath: opt.chromium,
-        headless: true,
-        viewport: { width: W, height: H },
-        deviceScaleFactor: 1,
-        timeout: 30000,
-        args: ['--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-            '--disable-background-networking', '--disable-component-update', '--disable-sync',
-            '--no-first-run', '--force-color-profile=srgb'],
-    });
+    ctx = await launchChromium(join(scratch, 'profile'), opt.chromium, W, H);
     const t0 = Date.now();
     const a = await render(layerUrl, 'terrain');
     pass(`CesiumTerrainProvider.fromUrl opened layer.json and the globe loaded its tiles (${Date.now() - t0} ms)`);

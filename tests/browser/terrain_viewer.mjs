@@ -26,7 +26,7 @@
 import { mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { chromium } from 'playwright-core';
+import { launchChromium } from './chromium.mjs';
 import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 
 const MIN_STDDEV = 20;       // luma, 8-bit units
@@ -87,16 +87,7 @@ async function shot(pg, name) {
 const ready = (pg) => pg.evaluate(() => window.gigaview.terrain.ready());
 
 try {
-    ctx = await chromium.launchPersistentContext(join(scratch, 'profile'), {
-        executablePath: opt.chromium,
-        headless: true,
-        viewport: { width: W, height: H },
-        deviceScaleFactor: 1,
-        timeout: 30000,
-        args: ['--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-            '--disable-background-networking', '--disable-component-update', '--disable-sync',
-            '--no-first-run', '--force-color-profile=srgb'],
-    });
+    ctx = await launchChromium(join(scratch, 'profile'), opt.chromium, W, H);
     const pg = await ctx.newPage();
     pg.setDefaultTimeout(45000);
     pg.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(`${m.text()} (${m.location().url})`); });

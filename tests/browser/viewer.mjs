@@ -53,7 +53,7 @@ import { execFileSync } from 'node:child_process';
 import { mkdtempSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { chromium } from 'playwright-core';
+import { launchChromium } from './chromium.mjs';
 import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 
 const MAX_MAD = 1;      // mean absolute difference per channel, 8-bit units
@@ -880,16 +880,7 @@ async function evictionOnly(c) {
 const profile = join(scratch, 'profile');
 let ctx;
 try {
-    ctx = await chromium.launchPersistentContext(profile, {
-        executablePath: opt.chromium,
-        headless: true,
-        viewport: { width: W, height: H },
-        deviceScaleFactor: 1,
-        timeout: 30000,
-        args: ['--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-            '--disable-background-networking', '--disable-component-update', '--disable-sync',
-            '--no-first-run', '--force-color-profile=srgb'],
-    });
+    ctx = await launchChromium(profile, opt.chromium, W, H);
     if (opt.sabotage)
         await sabotaged(ctx);
     else if (opt.only === 'eviction')
