@@ -33,6 +33,7 @@ struct encode_args {
     int progress, quiet;
     double psnr, min_tile_psnr;   /* -q, --min-tile-psnr; 0 = not given */
     int rd;                       /* --rd: the default mode, accepted */
+    int dct, vq_only;             /* --dct, --vq-only: layout D or not */
     int height;                   /* --height: a height store */
     double max_error;             /* --max-error, source units */
     const char *unit;             /* --unit */
@@ -138,6 +139,12 @@ static const struct opt_spec encode_opts[] = {
     {.name = "rd", .kind = OPT_FLAG, .field = F(rd),
      .help = "equal-slope allocation, the default mode\n"
              "(accepted for older scripts)"},
+    {.name = "dct", .kind = OPT_FLAG, .field = F(dct),
+     .help = "also code tiles as 8x8 transforms where that\n"
+             "costs less (layout D; a format version 4 store)"},
+    {.name = "vq-only", .kind = OPT_FLAG, .field = F(vq_only),
+     .help = "VQ tiles only: a format version 2 store, for\n"
+             "readers older than layout D"},
     {.name = "shard", .kind = OPT_CUSTOM, .arg = "I/N", .parse = parse_shard,
      .wants = "I/N with 0 <= I < N <= " OPT_STR(GV_SHARD_MAX),
      .help = "encode only shard I of N (0 <= I < N) into a\n"
@@ -186,7 +193,12 @@ static int pick_mode(struct encode_args *a)
                 "give it without -q or --rd\n");
         return 2;
     }
+    if (a->dct && a->vq_only) {
+        fprintf(stderr, ME ": --dct and --vq-only exclude each other\n");
+        return 2;
+    }
     a->o.per_tile = a->min_tile_psnr > 0;
+    a->o.dct = a->dct || (GV_DEFAULT_DCT && !a->vq_only);
     if (a->o.per_tile)
         a->o.target_psnr = a->min_tile_psnr;
     else if (a->psnr > 0)

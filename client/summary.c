@@ -17,9 +17,12 @@ void print_store_summary(const char *output, const struct gv_encode_result *r,
            g->level[g->root].width, g->level[g->root].height);
     printf("tiles      %llu", (unsigned long long)r->tiles);
     const char *sep = " (rate:tiles";
-    for (int k = 0; k <= GV_MAX_RATE; k++)
+    for (int k = 0; k <= GV_RATE_DCT; k++)
         if (r->rate_tiles[k]) {
-            printf("%s %d:%llu", sep, k, (unsigned long long)r->rate_tiles[k]);
+            if (k == GV_RATE_DCT)
+                printf("%s D:%llu", sep, (unsigned long long)r->rate_tiles[k]);
+            else
+                printf("%s %d:%llu", sep, k, (unsigned long long)r->rate_tiles[k]);
             sep = "";
         }
     printf("%s\n", r->tiles ? ")" : "");

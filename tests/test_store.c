@@ -249,7 +249,7 @@ int main(void)
     copy[8] = 9;
     spit(bad, copy, len);
     check(!gv_store_open(bad, &err) && err.code == GV_EFORMAT, "bad version: GV_EFORMAT");
-    check_str(err.text, "store: format version 9 is not supported (this build reads versions 1 to 3)",
+    check_str(err.text, "store: format version 9 is not supported (this build reads versions 1 to 4)",
               "bad version: the message");
 
     char want[512];

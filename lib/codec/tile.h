@@ -99,10 +99,17 @@ struct gv_tile_params {
                           * (nearest codevector, LBG codebooks): the
                           * encoder before it, kept for comparisons */
     uint64_t seed;       /* deterministic sampling seed for this tile */
+    int dct;             /* rate-distortion modes (lambda > 0, not
+                          * nearest_only): also code the tile in layout D
+                          * (FORMAT.md 4.3, format version 4) and keep it
+                          * when its SSE + lambda * bits is lower */
 };
 
+/* gv_tile_stats.rate of a tile written in layout D. */
+#define GV_RATE_DCT (GV_MAX_RATE + 1)
+
 struct gv_tile_stats {
-    int rate;            /* chosen r */
+    int rate;            /* chosen r, or GV_RATE_DCT */
     uint64_t sse;        /* squared error over the valid samples */
     uint64_t samples;    /* valid pixels x channels */
 };

@@ -14,6 +14,7 @@
 #include "codec/tile_layout.h"
 #include "codec/predict.h"
 #include "codec/tile.h"
+#include "codec/tile_dct.h"
 #include "codec/tile_rans.h"
 
 size_t gv_tilebuf_size(int rate, int channels)
@@ -33,6 +34,8 @@ int gv_tilebuf_check(const uint8_t *buf, size_t len, int channels,
     if (len < 4 || (len & 3))
         return gv_fail(err, GV_ECORRUPT, "tile: buffer of %zu bytes is not a "
                        "positive multiple of 4", len);
+    if (buf[0] == GV_TILE_DCT)
+        return gv_dct_check(buf, len, channels, err) < 0 ? -1 : 0;
     int rate = buf[0] & 0x0f;
     const int ctx_without_e = (buf[0] & GV_TILE_CONTEXT) && !(buf[0] & GV_TILE_ENTROPY);
     if ((buf[0] & 0x30) || ctx_without_e || rate > GV_MAX_RATE || (rate == 0 && buf[0]))
@@ -70,6 +73,8 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
     int rate = gv_tilebuf_check(buf, len, channels, err);
     if (rate < 0)
         return -1;
+    if (buf[0] == GV_TILE_DCT)
+        return gv_dct_decode(buf, len, channels, parent, qx, qy, out, err);
     if (rate == 0) {
         gv_predict(parent, channels, qx, qy, out);
         return 0;

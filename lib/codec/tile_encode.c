@@ -30,6 +30,7 @@
 
 #include "codec/tile_layout.h"
 #include "codec/tile.h"
+#include "codec/tile_dct.h"
 #include "codec/tile_rans.h"
 #include "codec/vq.h"
 
@@ -66,15 +67,24 @@ struct gv_tile_workspace {
     int8_t rate_book[(2 * VQ_MAXK - 2) * VQ_MAXDIM];
     int32_t rate_bias[2 * VQ_MAXK - 2];
     double jest[GV_MAX_RATE + 1];
+    struct gv_dct_workspace *dct;    /* layout D's encoder */
+    uint8_t dct_recon[GV_TILE * GV_TILE * 3];
 };
 
 struct gv_tile_workspace *gv_tile_workspace_new(void)
 {
-    return calloc(1, sizeof(struct gv_tile_workspace));
+    struct gv_tile_workspace *ws = calloc(1, sizeof(struct gv_tile_workspace));
+    if (ws && !(ws->dct = gv_dct_workspace_new())) {
+        free(ws);
+        return NULL;
+    }
+    return ws;
 }
 
 void gv_tile_workspace_free(struct gv_tile_workspace *ws)
 {
+    if (ws)
+        gv_dct_workspace_free(ws->dct);
     free(ws);
 }
 
@@ -756,6 +766,30 @@ static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
     }
 }
 
+/* Layout D for the same tile: kept instead of the VQ buffer (len bytes,
+ * stats, recon) when its SSE + lambda * bits is lower.  It must fit where
+ * the VQ buffer at the cap would.  Returns the length kept. */
+static size_t try_dct(struct gv_tile_workspace *ws, const uint8_t *orig,
+                      const uint8_t *parent, int qx, int qy, int channels,
+                      uint32_t valid_w, uint32_t valid_h, double lambda,
+                      int max_rate, size_t len, uint8_t *recon, uint8_t *buf,
+                      struct gv_tile_stats *stats)
+{
+    size_t cap = gv_tilebuf_size(max_rate, channels);
+    uint64_t dsse;
+    size_t dlen = gv_dct_encode(ws->dct, orig, ws->pred, parent, qx, qy,
+                                channels, valid_w, valid_h, lambda, ws->alt,
+                                cap, ws->dct_recon, &dsse);
+    if (!dlen || (double)dsse + lambda * 8.0 * (double)dlen >=
+                 (double)stats->sse + lambda * 8.0 * (double)len)
+        return len;
+    memcpy(buf, ws->alt, dlen);
+    memcpy(recon, ws->dct_recon, (size_t)GV_TILE * GV_TILE * channels);
+    stats->rate = GV_RATE_DCT;
+    stats->sse = dsse;
+    return dlen;
+}
+
 size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
                       const uint8_t *parent, int qx, int qy, int channels,
                       uint32_t valid_w, uint32_t valid_h,
@@ -771,9 +805,14 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
     stats->samples = samples;
 
     uint64_t sse = reconstruct(ws, orig, NULL, 0, channels, valid_w, valid_h, recon);
-    if (params->lambda > 0 && !params->nearest_only)
-        return encode_rd_ecvq(ws, orig, channels, valid_w, valid_h, params,
-                              max_rate, sse, recon, buf, stats);
+    if (params->lambda > 0 && !params->nearest_only) {
+        size_t len = encode_rd_ecvq(ws, orig, channels, valid_w, valid_h,
+                                    params, max_rate, sse, recon, buf, stats);
+        if (params->dct)
+            len = try_dct(ws, orig, parent, qx, qy, channels, valid_w, valid_h,
+                          params->lambda, max_rate, len, recon, buf, stats);
+        return len;
+    }
     if (params->lambda > 0)
         return encode_rd_nearest(ws, orig, channels, valid_w, valid_h, params, max_rate,
                          sse, recon, buf, stats);

@@ -136,7 +136,7 @@ struct gv_shard_writer *gv_shard_writer_new(const char *path,
     w->flags = flags;
     /* The template: what gv_store_writer_new would start from. */
     struct gv_header t = *h;
-    t.version = GV_VERSION;
+    t.version = h->version == GV_VERSION_DCT ? GV_VERSION_DCT : GV_VERSION;
     t.root = (uint8_t)w->g.root;
     t.root_mips = (uint8_t)w->g.root_mips;
     t.pages = w->g.pages;
@@ -392,7 +392,7 @@ int gv_shard_next(struct gv_shard_reader *r, struct gv_shard_record *rec,
     rec->offset = r->next_off + GV_SHARD_RECORD;
     uint64_t padded = ((uint64_t)rec->len + 3) & ~(uint64_t)3;
     if (rec->level >= r->g.root || rec->tx >= r->g.level[rec->level].tiles_x ||
-        rec->ty >= r->g.level[rec->level].tiles_y || rec->rate > GV_MAX_RATE ||
+        rec->ty >= r->g.level[rec->level].tiles_y || rec->rate > GV_RATE_DCT ||
         rec->len == 0 || rec->len > GV_TILEBUF_MAX ||
         rec->offset + padded > r->info.file_size)
         return gv_fail(err, GV_ECORRUPT, "shard: %s: record %llu is out of range",

@@ -297,6 +297,7 @@ static void encode_tile(void *ctx, size_t slot, int worker)
         .max_rate = e->opts->max_rate,
         .seed = tile_seed(e->level, tx, ty),
         .lambda = e->opts->per_tile ? 0.0 : e->lambda,
+        .dct = e->opts->dct,
     };
     e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
                                    (int)(ty & 1), c, valid_w, valid_h, &params,
@@ -601,6 +602,7 @@ static void make_header(const struct encoder *e, struct gv_header *h)
     h->src_float = (uint8_t)src->src_float;
     h->tone = (uint8_t)src->tone;
     h->target_mpsnr = (uint32_t)lround(e->opts->target_psnr * 1000.0);
+    h->version = e->opts->dct && !e->opts->per_tile ? GV_VERSION_DCT : GV_VERSION;
 }
 
 /* The geometry of the opened source, and the output: a shard file (with
@@ -726,7 +728,7 @@ int gv_encode(const char *const *inputs, int n, const char *output,
         goto out;
     for (int k = 0; k < e.g.root; k++)
         gv_lambda_model_finish(&e.model[k]);
-    e.lambda = gv_lambda_model_lambda(e.model, e.g.root, e.target_mse);
+    e.lambda = gv_lambda_model_lambda(e.model, e.g.root, e.target_mse, opts->dct);
     res->per_tile = opts->per_tile;
     res->lambda = opts->per_tile ? 0.0 : e.lambda;
     if (pass2(&e, &sse0, &samples0) < 0)

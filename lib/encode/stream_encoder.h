@@ -22,8 +22,10 @@
 
 #include "base/error.h"
 #include "store/geometry.h"
+#include "codec/tile.h"
 #include "encode/source.h"
 
+#define GV_DEFAULT_DCT 0         /* layout D unless --vq-only */
 #define GV_DEFAULT_PSNR 40.0     /* dB, level 0 of the whole image */
 #define GV_DEFAULT_MAX_RATE 10   /* 1024 codevectors */
 
@@ -45,6 +47,9 @@ struct gv_encode_opts {
                                * equal-slope allocation (FORMAT.md 8), one
                                * price of a bit for every tile, found by
                                * lambda_model.h for the whole-image target */
+    int dct;                  /* equal-slope mode: tiles may also be coded in
+                               * layout D (FORMAT.md 4.3); the store is then
+                               * format version 4 */
     int threads;              /* workers; 0 = every CPU */
     int shard_index;          /* with shard_count > 0: write shard */
     int shard_count;          /* shard_index of shard_count (0-based) to
@@ -64,7 +69,7 @@ struct gv_encode_result {
     double bpp;               /* file bits per source pixel */
     double psnr0;             /* level 0 against the (8-bit) input, dB */
     uint64_t tiles;
-    uint64_t rate_tiles[GV_MAX_RATE + 1]; /* tiles per chosen rate */
+    uint64_t rate_tiles[GV_RATE_DCT + 1]; /* tiles per chosen rate (D last) */
     uint64_t level_bytes[GV_MAX_LEVELS];
     uint64_t below_target;    /* per_tile: tiles at the cap that missed
                                * the target */

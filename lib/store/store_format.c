@@ -120,7 +120,7 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
     h->height_offset = h->height_max_error = 0;
     h->height_min = h->height_max = 0;
     memset(h->height_unit, 0, sizeof h->height_unit);
-    if (h->version >= GV_VERSION_HEIGHT) {
+    if (h->version == GV_VERSION_HEIGHT) {
         /* Version 3 is the height store: one channel, finite mapping. */
         h->kind = in[80];
         h->height_float = in[81];

@@ -48,7 +48,10 @@ struct gv_store_writer *gv_store_writer_new(const char *path,
     }
     w->f.fd = -1;
     w->h = *h;
-    w->h.version = h->kind == GV_KIND_HEIGHT ? GV_VERSION_HEIGHT : GV_VERSION;
+    /* An image store is version 2 unless the caller asks for 4 (tiles in
+     * layout D). */
+    w->h.version = h->kind == GV_KIND_HEIGHT ? GV_VERSION_HEIGHT :
+                   h->version == GV_VERSION_DCT ? GV_VERSION_DCT : GV_VERSION;
     if (gv_geometry_init(&w->g, h->width, h->height, h->channels) < 0) {
         gv_fail(err, GV_EINVAL, "store: bad dimensions %ux%u", h->width, h->height);
         goto fail;

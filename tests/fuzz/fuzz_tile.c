@@ -11,7 +11,9 @@
  * too.  For an entropy-coded buffer of either layout (E, or the context-
  * coded EX of format version 2), the whole-tile unpacker must agree with
  * the row-by-row decoder, and every index it gives must lie inside the
- * codebook.
+ * codebook.  A layout D buffer (format version 4) that passes the check
+ * may still fail in its streams; the coefficient unpacker must agree with
+ * the decoder on that.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -19,12 +21,14 @@
 #include "fuzz.h"
 #include "store/geometry.h"
 #include "codec/tile.h"
+#include "codec/tile_dct.h"
 #include "codec/tile_rans.h"
 
 static uint8_t parent[GV_TILE * GV_TILE * 3];
 static uint8_t out[GV_TILE * GV_TILE * 3];
 static volatile uint32_t sink;
 static uint16_t idx[GV_NBLOCKS];
+static int16_t plane[GV_DCT_PLANE * GV_DCT_PLANE * 4];
 
 static void init_parent(void)
 {
@@ -56,7 +60,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     int rate = gv_tilebuf_check(buf, len, channels, &err);
     int rc = gv_tile_decode(buf, len, channels, parent, qx, qy, out, &err);
     const int entropy = len > 0 && (buf[0] & GV_TILE_ENTROPY);
-    if (rate >= 0 && entropy) {
+    const int dct = len > 0 && buf[0] == GV_TILE_DCT;
+    if (rate >= 0 && dct) {
+        if ((gv_dct_unpack(buf, len, channels, plane, &err) == 0) != (rc == 0))
+            abort();  /* the unpacker and the decoder disagree */
+        if (rc == 0)
+            sink += out[0] + out[sizeof out / 3 * (size_t)channels - 1];
+    } else if (rate >= 0 && entropy) {
         /* The check covers an entropy-coded buffer's layout; its streams
          * are validated while decoding, which may still refuse them. */
         int unpacked = gv_rans_unpack(buf, len, rate, channels, idx, &err) == 0;
