@@ -3,11 +3,12 @@
 // playwright-core.
 //
 //   node viewer.mjs --base http://127.0.0.1:PORT --gigaview PATH
-//        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans|root] [--only eviction]
+//        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans|dct|root] [--only eviction|dct]
 //
 // Needs stores "picos" (tests/data/picos-1100x700.jpg: two tiled levels,
-// every tile entropy-coded) and "synth" (synth:3000x2000: three tiled
-// levels at -q 30, fixed-layout and entropy-coded tiles) on the server.  The page
+// every tile entropy-coded), "synth" (synth:3000x2000: three tiled
+// levels at -q 30, fixed-layout and entropy-coded tiles), "picosd" and
+// "grayd" (layout-D tiles, RGB and gray) on the server.  The page
 // is 800 x 500 CSS pixels at device scale 1.
 //
 // Checks, one a line as "PASS text" or "FAIL text" (details start with
@@ -27,6 +28,8 @@
 //      16 MiB texture budget, and for a prefetch that must make room
 //      while the parent it decodes from is the least recently used tile
 //      (checkPrefetchEviction: that parent must not be the one evicted);
+//   2b. the same two checks on the stores picosd and grayd, among whose
+//      decoded tiles there must be layout-D ones (checkDctStores);
 //   3. each metric rejects the reference moved by one pixel, so it cannot
 //      pass by accident;
 //   4. scripted input: a mouse drag pans by exactly its distance, "+"
@@ -45,8 +48,9 @@
 //      the console as an error.
 // --sabotage shader serves a decode shader with one prediction weight
 // changed, --sabotage rans a rANS decoder that flips the lowest bit of
-// every index, --sabotage root a root whose every 97th sample has its
-// lowest bit flipped: check 1 must then FAIL (tests/browser_viewer.sh expects
+// every index, --sabotage dct a layout-D unpacking with the zigzag order
+// transposed (on picosd), --sabotage root a root whose every 97th sample
+// has its lowest bit flipped: check 1 must then FAIL (tests/browser_viewer.sh expects
 // that: negative controls of the whole pipeline); only check 1 runs.
 // Exit status 0 when everything passed, 1 otherwise, 2 on a usage error.
 import { execFileSync } from 'node:child_process';
@@ -60,7 +64,7 @@ const MAX_MAD = 1;      // mean absolute difference per channel, 8-bit units
 const W = 800, H = 500;
 
 const opt = { chromium: '/usr/bin/chromium', out: '', sabotage: '', only: '', base: '', gigaview: '', filters: '0', token: '' };
-parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|root] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
+parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|dct|root] [--only eviction|dct] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
 const base = opt.base.replace(/\/+$/, '');
 
 let lapT = Date.now();
@@ -236,7 +240,7 @@ async function shot(pg, name) {
 async function checkTiles(pg, label) {
     const r = await pg.evaluate(async () => {
         const v = window.gigaview.viewer, b = v.backend, info = v.image.info;
-        const out = { exact: 0, entropy: 0, fixed: 0, bad: [] };
+        const out = { exact: 0, entropy: 0, fixed: 0, dct: 0, bad: [] };
         for (const t of b.tiles()) {
             // The pixels the tile is the source of (FORMAT.md section 2):
             // its last row and column belong to the next tile, if any,
@@ -253,12 +257,13 @@ async function checkTiles(pg, label) {
                         if (px[c * (j * 513 + i) + k] !== ref.px[4 * (j * w + i) + k]) diff++;
             if (diff === 0) out.exact++; else out.bad.push(`${t.level}/${t.tx}/${t.ty}: ${diff} samples differ`);
             if (t.entropy) out.entropy++; else out.fixed++;
+            if (t.dct) out.dct++;
         }
         return out;
     });
     const n = r.entropy + r.fixed;
     check(n > 0 && r.exact === n,
-        `${label}: all ${n} decoded tiles equal the CPU decoder bit for bit (${r.entropy} entropy-coded, ${r.fixed} fixed layout)`,
+        `${label}: all ${n} decoded tiles equal the CPU decoder bit for bit (${r.entropy} entropy-coded, ${r.dct} of them layout D; ${r.fixed} fixed layout)`,
         ...r.bad.slice(0, 8));
     return r;
 }
@@ -337,6 +342,26 @@ async function checkPrefetchEviction(pg) {
 }
 
 // ------------------------------------------------------------ the run
+
+// Layout D (FORMAT.md 4.3): "picosd" (RGB) and "grayd" (gray), encoded
+// with transform-coded tiles, each decoded in the browser (tile_dct.js
+// unpacks, the shader's u_coefs path transforms) at 1:1 on level 0 and
+// every decoded tile against the CPU decoder; some must really be D (the
+// encoder keeps VQ where that costs less).
+async function checkDctStores(c) {
+    const pg = await newPage(c);
+    for (const [id, kind] of [['picosd', 'RGB'], ['grayd', 'gray']]) {
+        await open(pg, `#image=${id}&x=550&y=350&z=0&r=0`);
+        await installCompare(pg);
+        check((await pg.evaluate(() => window.gigaview.viewer.stats.kind)) === 'webgl2',
+            `${id}: the viewer opened with WebGL2`);
+        await checkRegion(pg, `${id} (layout D, ${kind}) level 0 1:1`, 0, 150, 100, W, H, 0, 0, false);
+        const r = await checkTiles(pg, `${id} (layout D, ${kind})`);
+        const n = r.entropy + r.fixed;
+        check(r.dct > 0, `${id}: layout-D tiles were decoded (${r.dct} of ${n})`);
+    }
+    await pg.close();
+}
 
 async function run(c) {
     const pg = await newPage(c);
@@ -846,6 +871,17 @@ async function sabotaged(c) {
         });
         // The workers load tilebuf.js outside the page's routes: prepare
         // tiles on the main thread.
+    } else if (opt.sabotage === 'dct') {
+        // Layout D's zigzag order transposed (coefficient (v, u) stored at
+        // (u, v)), on picosd: every 1:1 view must fail.
+        await pg.route(`${base}/web/tile_dct.js`, async (route) => {
+            const r = await route.fetch(), orig = await r.text();
+            const src = orig.replace('const v = d & 1 ? i : d - i, u = d - v;',
+                'const v = d & 1 ? d - i : i, u = d - v;');
+            if (src === orig)
+                fail('sabotage dct: the zigzag line is not in tile_dct.js');
+            await route.fulfill({ response: r, body: src });
+        });
     } else if (opt.sabotage === 'root') {
         // The root as decoded by loadRoot, every 97th sample's lowest bit
         // flipped: every decode starts from it.
@@ -860,10 +896,11 @@ async function sabotaged(c) {
         return;
     }
     note(`sabotage: ${opt.sabotage}`);
-    await open(pg, '#image=picos&x=550&y=350&z=0&r=0', opt.sabotage === 'rans' ? '?workers=0' : '');
+    const id = opt.sabotage === 'dct' ? 'picosd' : 'picos';
+    await open(pg, `#image=${id}&x=550&y=350&z=0&r=0`, opt.sabotage === 'rans' || opt.sabotage === 'dct' ? '?workers=0' : '');
     await installCompare(pg);
     check((await pg.evaluate(() => window.gigaview.viewer.stats.kind)) === 'webgl2', 'the viewer opened with WebGL2');
-    await checkRegion(pg, 'picos level 0 1:1', 0, 150, 100, W, H, 0, 0, false);
+    await checkRegion(pg, `${id} level 0 1:1`, 0, 150, 100, W, H, 0, 0, false);
 }
 
 // --only eviction: the eviction checks alone (quicker to iterate on).
@@ -885,6 +922,8 @@ try {
         await sabotaged(ctx);
     else if (opt.only === 'eviction')
         await evictionOnly(ctx);
+    else if (opt.only === 'dct')
+        await checkDctStores(ctx);
     else
         await run(ctx);
 } catch (e) {

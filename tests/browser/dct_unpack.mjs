@@ -1,0 +1,189 @@
+// dct_unpack.mjs - the browser's layout-D unpacking (client/web/tile_dct.js,
+// docs/FORMAT.md section 4.3) against the CPU reference decoder's
+// (gv_dct_unpack, through tests/dct_coefs), in node: no browser needed.
+//
+//   node dct_unpack.mjs --base http://127.0.0.1:PORT --helper PATH --images ID[,ID...]
+//
+// Fetches every tile of every tiled level of the images (GET batches,
+// client/web/batch.js's parser), keeps the layout-D ones (there must be
+// some in each image), and checks for each, intact and damaged in seven
+// deterministic ways (a byte of the header, models or lengths changed, a
+// byte of the streams changed, 4 bytes cut off, 4 zero bytes added, a
+// stored model's mask bit cleared, mask bit 30 set, the other channel
+// count), that tile_dct.js accepts exactly the buffers the C decoder
+// accepts and then produces the same coefficient plane (its FNV-1a hash
+// and nonzero count), and refuses the others with the same message.  Negative control: a plane with one coefficient
+// changed must not match.  Exit 0 when every check passed, 1 otherwise,
+// 2 on a usage error.
+import { spawnSync } from 'node:child_process';
+import { parseBatch } from '../../client/web/batch.js';
+import { DCT, DCT_PLANE, dctUnpack } from '../../client/web/tile_dct.js';
+import { check, fail, failed, note, parseArgs } from './report.mjs';
+
+const opt = { base: '', helper: '', images: '' };
+parseArgs(opt, 'usage: node dct_unpack.mjs --base URL --helper PATH --images ID[,ID...]',
+    'dct_unpack.mjs', ['base', 'helper', 'images']);
+const base = opt.base.replace(/\/+$/, '');
+const BATCH = 64;
+
+// FNV-1a over the plane's int16s as little-endian bytes (as dct_coefs).
+function digest(coefs) {
+    let h = 0x811c9dc5, nonzero = 0;
+    for (let i = 0; i < coefs.length; i++) {
+        const v = coefs[i] & 0xffff;
+        h = Math.imul(h ^ (v & 0xff), 16777619);
+        h = Math.imul(h ^ (v >> 8), 16777619);
+        if (v) nonzero++;
+    }
+    return `${(h >>> 0).toString(16).padStart(8, '0')} ${nonzero}`;
+}
+
+// A small deterministic generator (mulberry32).
+function rng(seed) {
+    let a = seed >>> 0;
+    return () => {
+        a = (a + 0x6d2b79f5) >>> 0;
+        let t = a;
+        t = Math.imul(t ^ (t >>> 15), t | 1);
+        t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
+        return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
+    };
+}
+
+// Where the streams of a (well-formed) D buffer start: 12 + the stored
+// models (65 bytes below model 6, 16 from it), even, + 130.
+function streamsAt(buf) {
+    const mask = (buf[8] | buf[9] << 8 | buf[10] << 16 | buf[11] << 24) >>> 0;
+    let off = 12;
+    for (let m = 0; m < 30; m++)
+        if (mask & (1 << m))
+            off += m < 6 ? 65 : 16;
+    return ((off + 1) & ~1) + 130;
+}
+
+// The damaged variants of one buffer: [what, buffer, channels].
+function variants(buf, channels, rand) {
+    const out = [['intact', buf, channels]];
+    const at = (lo, hi) => lo + Math.floor(rand() * (hi - lo));
+    const flip = (what, lo, hi) => {
+        const b = buf.slice(), i = at(lo, hi);
+        b[i] ^= 1 + Math.floor(rand() * 255);
+        out.push([`${what} (byte ${i})`, b, channels]);
+    };
+    const s = streamsAt(buf);
+    flip('a header, model or length byte changed', 0, s);
+    flip('a stream byte changed', s, buf.length);
+    out.push(['4 bytes cut off', buf.slice(0, buf.length - 4), channels]);
+    const longer = new Uint8Array(buf.length + 4);
+    longer.set(buf);
+    out.push(['4 zero bytes added', longer, channels]);
+    const mask = (buf[8] | buf[9] << 8 | buf[10] << 16 | buf[11] << 24) >>> 0;
+    const set = [];
+    for (let m = 0; m < 30; m++)
+        if (mask & (1 << m)) set.push(m);
+    if (set.length) {
+        const m = set[Math.floor(rand() * set.length)], b = buf.slice();
+        b[8 + (m >> 3)] &= ~(1 << (m & 7));
+        out.push([`mask bit ${m} cleared`, b, channels]);
+    }
+    const b30 = buf.slice();
+    b30[11] |= 0x40;
+    out.push(['mask bit 30 set', b30, channels]);
+    out.push(['the other channel count', buf, channels === 3 ? 1 : 3]);
+    return out;
+}
+
+async function json(url) {
+    const r = await fetch(url);
+    if (!r.ok) throw new Error(`${url}: HTTP ${r.status}`);
+    return r.json();
+}
+
+// Every tile of every tiled level of image `id`: [{key, buf}].
+async function tilesOf(id) {
+    const info = await json(`${base}/v1/images/${id}`);
+    const want = [];
+    for (const L of info.levels)
+        for (let y = 0; y < L.tiles_y; y++)
+            for (let x = 0; x < L.tiles_x; x++)
+                want.push([L.level, x, y]);
+    const out = [];
+    for (let i = 0; i < want.length; i += BATCH) {
+        const part = want.slice(i, i + BATCH);
+        const url = `${base}/v1/images/${id}/batch?t=${part.map((t) => t.join(',')).join(';')}`;
+        const r = await fetch(url);
+        if (!r.ok) throw new Error(`${url}: HTTP ${r.status}`);
+        for (const f of parseBatch(await r.arrayBuffer())) {
+            if (f.status !== 200) throw new Error(`${id} ${f.level}/${f.tx}/${f.ty}: HTTP ${f.status}`);
+            out.push({ key: `${id} ${f.level}/${f.tx}/${f.ty}`, buf: new Uint8Array(f.tile) });
+        }
+    }
+    return { channels: info.channels, tiles: out };
+}
+
+try {
+    const cases = [];
+    for (const id of opt.images.split(',')) {
+        const { channels, tiles } = await tilesOf(id);
+        const d = tiles.filter((t) => t.buf[0] === DCT);
+        check(d.length > 0, `${id}: ${d.length} of its ${tiles.length} tiles are layout D (${channels === 3 ? 'RGB' : 'gray'})`);
+        const rand = rng(12 + d.length);
+        for (const t of d)
+            for (const [what, buf, c] of variants(t.buf, channels, rand))
+                cases.push({ key: `${t.key}: ${what}`, buf, channels: c, intact: what === 'intact' });
+    }
+    // One run of the helper for all of them.
+    const parts = [];
+    for (const c of cases) {
+        const h = Buffer.alloc(5);
+        h.writeUInt32LE(c.buf.length, 0);
+        h[4] = c.channels;
+        parts.push(h, Buffer.from(c.buf.buffer, c.buf.byteOffset, c.buf.length));
+    }
+    const r = spawnSync(opt.helper, [], { input: Buffer.concat(parts), maxBuffer: 64 << 20 });
+    if (r.status !== 0)
+        throw new Error(`${opt.helper}: exit ${r.status}: ${r.stderr}`);
+    const lines = r.stdout.toString().split('\n').filter((l) => l);
+    if (lines.length !== cases.length)
+        throw new Error(`${opt.helper}: ${lines.length} lines for ${cases.length} buffers`);
+    const coefs = new Int16Array(DCT_PLANE);
+    let intact = 0, refused = 0, accepted = 0, control = null;
+    const bad = [], badIntact = [];
+    cases.forEach((c, i) => {
+        const cpu = lines[i];
+        let js;
+        try {
+            dctUnpack(c.buf, c.channels, coefs);
+            js = `ok ${digest(coefs)}`;
+        } catch (e) {
+            if (e.code !== 'corrupt') throw e;
+            js = `corrupt ${e.message}`;   // "tile: ..." as the C decoder's
+        }
+        const same = js === cpu;   // the same coefficients, or the same message
+        if (!same)
+            (c.intact ? badIntact : bad).push(`${c.key}: C "${cpu}", JavaScript "${js}"`);
+        if (c.intact) {
+            intact += cpu.startsWith('ok ') && same;
+            if (control === null && cpu.startsWith('ok ')) {
+                coefs[4 * (520 * 3 + 5)] ^= 1;   // texel (5, 3), channel 0
+                control = `ok ${digest(coefs)}` !== cpu;
+            }
+        } else if (cpu.startsWith('ok ')) {
+            accepted++;
+        } else {
+            refused++;
+        }
+    });
+    const nIntact = cases.filter((c) => c.intact).length;
+    check(intact === nIntact && nIntact > 0,
+        `all ${nIntact} layout-D tiles: tile_dct.js unpacks the same coefficients as gv_dct_unpack`,
+        ...badIntact.slice(0, 8));
+    check(bad.length === 0,
+        `${cases.length - nIntact} damaged buffers: both refuse the same ${refused} with the same message, both accept the same ${accepted} with the same coefficients`,
+        ...bad.slice(0, 8));
+    check(control === true, 'negative control: a plane with one coefficient changed does not match');
+    note(`${cases.length} buffers compared`);
+} catch (e) {
+    fail('dct_unpack.mjs ran', String(e && e.stack || e));
+}
+process.exit(failed ? 1 : 0);
