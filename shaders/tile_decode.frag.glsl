@@ -11,11 +11,17 @@
 // texelFetch, so no filtering or float rounding takes part.  Entropy-coded
 // tiles (byte 0 bit 7) need their indices decoded first: by
 // rans_decode.comp.glsl where there are compute shaders, on the CPU
-// otherwise (WebGL2), uploaded as a texture.
+// otherwise (WebGL2), uploaded as a texture.  Transform-coded tiles
+// (layout D, byte 0 = 0x20, FORMAT.md 4.3) likewise need their 520x520
+// coefficient plane: from dct_decode.comp.glsl (two uints per texel) or,
+// in WebGL2, as the RGBA16I texture u_coefs (channel c in component c,
+// from the CPU's gv_dct_unpack); this shader takes the inverse transform
+// of the pixel's 8x8 block and the inverse colour transform.
 
 precision highp float;
 precision highp int;
 precision highp usampler2D;
+precision highp isampler2D;
 
 uniform usampler2D u_parent;   // decoded parent tile, 513x513, RGBA8UI
 uniform ivec2 u_quadrant;      // (tx & 1, ty & 1)
@@ -24,8 +30,15 @@ uniform int u_channels;        // 1 (gray: R, replicated on output) or 3
 #ifdef GV_SSBO
 layout(std430, binding = 0) readonly buffer TileWords { uint words[]; };
 uint word_at(int i) { return words[i]; }
-// Indices of an entropy-coded tile, decoded by rans_decode.comp.glsl.
+// Indices of an entropy-coded tile, decoded by rans_decode.comp.glsl, or
+// the coefficient plane of a transform-coded one, by dct_decode.comp.glsl.
 layout(std430, binding = 1) readonly buffer Indices { uint indices[]; };
+ivec3 coef_at(int x, int y)
+{
+    int w = 2 * (y * 520 + x);
+    int a = int(indices[w]), b = int(indices[w + 1]);
+    return ivec3((a << 16) >> 16, a >> 16, (b << 16) >> 16);
+}
 #else
 uniform usampler2D u_words;    // tile buffer as R32UI, u_words_width wide
 uniform int u_words_width;
@@ -33,6 +46,10 @@ uint word_at(int i) { return texelFetch(u_words, ivec2(i % u_words_width, i / u_
 // Indices of an entropy-coded tile, decoded on the CPU (no compute shaders
 // here) and uploaded as a 257x257 R16UI texture.
 uniform usampler2D u_indices;
+// Coefficients of a transform-coded tile, decoded on the CPU
+// (gv_dct_unpack) and uploaded as a 520x520 RGBA16I texture.
+uniform isampler2D u_coefs;
+ivec3 coef_at(int x, int y) { return texelFetch(u_coefs, ivec2(x, y), 0).rgb; }
 #endif
 
 out uvec4 o_color;
@@ -67,6 +84,49 @@ int first_tap(int q, int u)
     return (u & 1) == 1 ? p - 1 : p - 2;
 }
 
+// The rounding offsets of the two inverse-transform passes (FORMAT.md
+// 4.3); only a test changes them, to see that a wrong one is caught.
+#ifndef GV_DCT_ROUND_ROWS
+#define GV_DCT_ROUND_ROWS 64
+#endif
+#ifndef GV_DCT_ROUND_COLS
+#define GV_DCT_ROUND_COLS 1024
+#endif
+
+// The 8x8 integer DCT basis K[u][i] of FORMAT.md 4.3, row-major.
+const int K[64] = int[64](
+    64,  64,  64,  64,  64,  64,  64,  64,
+    89,  75,  50,  18, -18, -50, -75, -89,
+    83,  36, -36, -83, -83, -36,  36,  83,
+    75, -18, -89, -50,  50,  89,  18, -75,
+    64, -64, -64,  64,  64, -64, -64,  64,
+    50, -89,  18,  75, -75, -18,  89, -50,
+    36, -83,  83, -36, -36,  83, -83,  36,
+    18, -50,  75, -89,  89, -75,  50, -18);
+
+// Residual of pixel uv of a transform-coded tile: the inverse transform of
+// its block, rows then columns, each rounded by an arithmetic shift (>> on
+// a signed int), then YCoCg-R back to RGB (C = 3) or gray as is.
+ivec3 dct_residual(ivec2 uv)
+{
+    ivec2 b = (uv >> 3) << 3;
+    int i = uv.x & 7, j = uv.y & 7;
+    ivec3 e = ivec3(0);
+    for (int v = 0; v < 8; v++) {
+        ivec3 acc = ivec3(0);
+        for (int u = 0; u < 8; u++)
+            acc += K[8 * u + i] * coef_at(b.x + u, b.y + v);
+        e += K[8 * v + j] * ((acc + GV_DCT_ROUND_ROWS) >> 7);
+    }
+    e = (e + GV_DCT_ROUND_COLS) >> 11;
+    if (u_channels == 1)
+        return ivec3(e.x);
+    int t = e.x - (e.z >> 1);
+    int g = e.z + t;
+    int bl = t - (e.y >> 1);
+    return ivec3(bl + e.y, g, bl);
+}
+
 void main()
 {
     ivec2 uv = ivec2(gl_FragCoord.xy);   // 0..512 each
@@ -85,7 +145,9 @@ void main()
 
     ivec3 res = ivec3(0);
     int r = byte_at(0) & 15;
-    if (r > 0) {
+    if (byte_at(0) == 0x20) {
+        res = dct_residual(uv);
+    } else if (r > 0) {
         int dim = 4 * u_channels;
         int block = (uv.y >> 1) * 257 + (uv.x >> 1);
         int idx;

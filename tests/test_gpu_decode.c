@@ -20,19 +20,24 @@
 #include "gpu/gpu_decode.h"
 #include "store/store_read.h"
 #include "store_fixture.h"
+#include "dct_fixture.h"
+#include "codec/tile.h"
+#include "codec/tile_dct.h"
 #include "util.h"
 
 static char dir[] = "/tmp/gv-test-gpu-XXXXXX";
 
-static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
-                       enum gv_gpu_path path);
+static int check_path(struct gv_gpu *gpu, const char *input, const char *out,
+                      enum gv_gpu_path path);
 static void check_batch(struct gv_gpu *gpu, const char *input, const char *out,
                         enum gv_gpu_path path, int copies);
 
 /* Encode `input` and check it on both shader paths: storage buffers with
- * the compute pass, and WebGL2's GLSL ES 3.00 with textures. */
+ * the compute pass, and WebGL2's GLSL ES 3.00 with textures.  With `dct`
+ * the encoder may write layout D (FORMAT.md 4.3), and the store must hold
+ * some D tiles. */
 static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
-                        int max_rate)
+                        int max_rate, int dct)
 {
     char out[256];
     snprintf(out, sizeof out, "%s/g.gv", dir);
@@ -40,9 +45,15 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     gv_encode_opts_default(&o);
     o.target_psnr = psnr;
     o.max_rate = max_rate;
+    o.dct = dct;
     fixture_encode(out, input, &o);
-    check_path(gpu, input, out, GV_GPU_PATH_SSBO);
+    const int d = check_path(gpu, input, out, GV_GPU_PATH_SSBO);
     check_path(gpu, input, out, GV_GPU_PATH_WEBGL2);
+    if (dct) {
+        const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
+        check(d > 0, "%s at %.0f dB with --dct: the store holds %d layout-D tiles",
+              name, psnr, d);
+    }
     /* The gray synthetic store five times over (65 tiles): a batch longer
      * than a group, parents in earlier groups. */
     const int copies = strcmp(input, "synth:1100x1500:gray") == 0 ? 5 : 1;
@@ -67,8 +78,11 @@ static struct gv_gpu_decoder *open_decoders(struct gv_gpu *gpu, const char *out,
     return gd;
 }
 
-static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
-                       enum gv_gpu_path path)
+/* Decode every tile of the store `out` top-down on `path`, each from its
+ * GPU-decoded parent, against the CPU.  Returns the number of layout-D
+ * tiles. */
+static int check_path(struct gv_gpu *gpu, const char *input, const char *out,
+                      enum gv_gpu_path path)
 {
     struct gv_error err;
     struct gv_store *s;
@@ -88,6 +102,7 @@ static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
     if (gv_gpu_upload_tile(gd, root, &above[0], &err) < 0)
         fail("upload: %s", err.text);
     int tiles = 0, mismatched = 0, quarter_bad = 0, rates[16] = {0}, coded = 0, ctx = 0;
+    int dct = 0;
     for (int k = g->root - 1; k >= 0; k--) {
         const struct gv_level *l = &g->level[k];
         cur = malloc(sizeof *cur * l->tiles_x * l->tiles_y);
@@ -97,7 +112,8 @@ static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
                 size_t tlen;
                 const uint8_t *buf;
                 fixture_tile(s, k, tx, ty, &page, &buf, &tlen);
-                rates[buf[0] & 0x0f]++;
+                dct += buf[0] == GV_TILE_DCT;
+                rates[buf[0] == GV_TILE_DCT ? 0 : buf[0] & 0x0f] += buf[0] != GV_TILE_DCT;
                 coded += (buf[0] & 0x80) != 0;
                 ctx += (buf[0] & 0x40) != 0;
                 uint32_t h;
@@ -143,6 +159,8 @@ static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
     for (int q = 0; q < 16; q++)
         if (rates[q])
             snprintf(rs + strlen(rs), sizeof rs - strlen(rs), " r%d:%d", q, rates[q]);
+    if (dct)
+        snprintf(rs + strlen(rs), sizeof rs - strlen(rs), " D:%d", dct);
     const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
     check(mismatched == 0 && quarter_bad == 0 && tiles > 0,
           "%s, %s: %d tiles (%s; %d entropy-coded, %d of them context-coded) decode "
@@ -154,6 +172,7 @@ static void check_path(struct gv_gpu *gpu, const char *input, const char *out,
     gv_gpu_decoder_free(gd);
     gv_decoder_free(cpu);
     gv_store_close(s);
+    return dct;
 }
 
 static const char *path_name(enum gv_gpu_path path)
@@ -291,6 +310,178 @@ static void check_batch(struct gv_gpu *gpu, const char *input, const char *out,
     gv_store_close(s);
 }
 
+/*
+ * Layout D (FORMAT.md 4.3) on buffers written by dct_fixture.h rather than
+ * the encoder: typical sparse blocks with escapes over their whole range,
+ * steps of 4095 whose products clamp to 16 bits and pixels that clamp,
+ * every coefficient of every block coded (the longest streams), and no
+ * coefficient at all.  Each decoded on both paths, one call per tile and
+ * all in one batch (one compute dispatch for all on the SSBO path), against
+ * gv_tile_decode.  Then the negative controls: the decode shader with a
+ * wrong rounding offset in either pass of the inverse transform, and a
+ * buffer whose quantizer step was changed after the CPU decoded it, must
+ * each be caught.
+ */
+enum { DCT_CASES = 4 };
+
+static uint64_t rng_state = 0x9e3779b97f4a7c15u;
+
+static uint32_t rng(void)
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return (uint32_t)(rng_state >> 16);
+}
+
+/* Quantized coefficients and steps of synthetic case k for C channels. */
+static void dct_case(int k, int channels, int *q, int S[3])
+{
+    static const int steps[DCT_CASES][3] = {
+        {12, 7, 30}, {4095, 4095, 4095}, {3, 5, 9}, {1, 1, 1}};
+    memcpy(S, steps[k], sizeof steps[k]);
+    for (int c = 0; c < channels; c++)
+        for (int i = 0; i < 520 * 520; i++) {
+            const int uv = (i % 520 % 8) + (i / 520 % 8);
+            const uint32_t r = rng();
+            int v = 0;
+            if (k == 0 || k == 1) {
+                if (uv == 0)
+                    v = (int)(r % 41) - 20;
+                else if (r % 256 < 60u / (unsigned)(1 + uv))
+                    v = (int)(r / 256 % 7) - 3;
+                if (r / 4096 % 300 == 0)       /* escapes, -2048..2047 */
+                    v = (int)(r / 256 % 4096) - 2048;
+                if (k == 1 && r % 97 == 0)     /* the ends of the range */
+                    v = r / 97 % 2 ? 2047 : -2048;
+            } else if (k == 2) {
+                v = r % 2 ? 1 : -1;             /* all 64 of every block */
+            }
+            q[(size_t)c * 520 * 520 + i] = v;
+        }
+}
+
+struct dct_tile {
+    uint8_t *buf;
+    size_t len;
+    int qx, qy;
+    uint8_t *ref;        /* gv_tile_decode's tile */
+};
+
+/* Tiles of t[0..n) decoded by `gd` from the parent `ph` (one call each, or
+ * one batch) that differ from their CPU decoding. */
+static int dct_mismatches(struct gv_gpu_decoder *gd, uint32_t ph, struct dct_tile *t,
+                          int n, int batch, int channels)
+{
+    struct gv_error err;
+    struct gv_gpu_tile_job jobs[DCT_CASES];
+    for (int i = 0; i < n; i++)
+        jobs[i] = (struct gv_gpu_tile_job){.buf = t[i].buf, .len = t[i].len, .parent = ph,
+                                           .parent_job = -1, .qx = t[i].qx, .qy = t[i].qy};
+    if (batch) {
+        if (gv_gpu_decode_batch(gd, jobs, (size_t)n, &err) < 0)
+            fail("dct batch: %s", err.text);
+    } else {
+        for (int i = 0; i < n; i++)
+            if (gv_gpu_decode_tile(gd, t[i].buf, t[i].len, ph, t[i].qx, t[i].qy,
+                                   &jobs[i].handle, &err) < 0)
+                fail("dct tile %d: %s", i, err.text);
+    }
+    uint8_t *px = malloc(gv_tile_bytes(channels));
+    int bad = 0;
+    for (int i = 0; i < n; i++) {
+        if (gv_gpu_read_tile(gd, jobs[i].handle, 0, px, &err) < 0)
+            fail("dct read: %s", err.text);
+        bad += memcmp(px, t[i].ref, gv_tile_bytes(channels)) != 0;
+        gv_gpu_release(gd, jobs[i].handle);
+    }
+    free(px);
+    return bad;
+}
+
+static void check_dct_synthetic(struct gv_gpu *gpu, int channels)
+{
+    struct gv_error err;
+    const size_t tb = gv_tile_bytes(channels);
+    uint8_t *parent = malloc(tb);
+    for (size_t i = 0; i < tb; i++) {
+        const size_t p = i / (size_t)channels;
+        parent[i] = (uint8_t)(p % 513 / 3 + p / 513 / 4 + rng() % 8 + 40 * (i % 3));
+    }
+    int *q = malloc(sizeof *q * 3 * 520 * 520);
+    struct dct_tile t[DCT_CASES];
+    int clamped = 0;
+    for (int k = 0; k < DCT_CASES; k++) {
+        int S[3];
+        dct_case(k, channels, q, S);
+        t[k].buf = malloc(2u << 20);
+        t[k].len = dct_fixture_write(q, S, channels, t[k].buf);
+        t[k].qx = k & 1;
+        t[k].qy = k >> 1 & 1;
+        t[k].ref = malloc(tb);
+        if (gv_tile_decode(t[k].buf, t[k].len, channels, parent, t[k].qx, t[k].qy,
+                           t[k].ref, &err) < 0)
+            fail("CPU decode of synthetic D buffer %d (%zu bytes): %s", k, t[k].len,
+                 err.text);
+        for (size_t i = 0; i < tb; i++)
+            clamped += t[k].ref[i] == 0 || t[k].ref[i] == 255;
+    }
+    for (int path = GV_GPU_PATH_SSBO; path <= GV_GPU_PATH_WEBGL2; path++) {
+        struct gv_gpu_decoder *gd = gv_gpu_decoder_new_path(gpu, channels, path, &err);
+        if (!gd)
+            fail("decoder: %s", err.text);
+        uint32_t ph;
+        if (gv_gpu_upload_tile(gd, parent, &ph, &err) < 0)
+            fail("upload: %s", err.text);
+        const int one = dct_mismatches(gd, ph, t, DCT_CASES, 0, channels);
+        const int all = dct_mismatches(gd, ph, t, DCT_CASES, 1, channels);
+        check(one == 0 && all == 0 && clamped > 0,
+              "C=%d, %s: %d synthetic D buffers (%zu to %zu bytes; escapes, clamped "
+              "products, all 64 coefficients, none; %d clamped samples) decode "
+              "identically, one call each (%d differ) and in one batch (%d differ)",
+              channels, path_name(path), DCT_CASES, t[3].len, t[2].len, clamped,
+              one, all);
+        gv_gpu_release(gd, ph);
+        gv_gpu_decoder_free(gd);
+        /* Negative controls: a wrong rounding offset in the row pass (63
+         * for 64) or the column pass (1023 for 1024) of the inverse
+         * transform. */
+        static const char *const wrong[2] = {"#define GV_DCT_ROUND_ROWS 63\n",
+                                             "#define GV_DCT_ROUND_COLS 1023\n"};
+        for (int w = 0; w < 2; w++) {
+            gd = gv_gpu_decoder_new_defines(gpu, channels, path, wrong[w], &err);
+            if (!gd || gv_gpu_upload_tile(gd, parent, &ph, &err) < 0)
+                fail("control decoder: %s", err.text);
+            const int bad = dct_mismatches(gd, ph, t, DCT_CASES, 1, channels);
+            check(bad > 0, "C=%d, %s: negative control, %s rounding of the %s pass: "
+                  "%d of %d synthetic D tiles differ", channels, path_name(path),
+                  w ? "1023/2048" : "63/128", w ? "column" : "row", bad, DCT_CASES);
+            gv_gpu_release(gd, ph);
+            gv_gpu_decoder_free(gd);
+        }
+    }
+    /* Negative control: the first buffer with another quantizer step for
+     * channel 0 than the one its CPU decoding saw. */
+    t[0].buf[2] ^= 1;
+    for (int path = GV_GPU_PATH_SSBO; path <= GV_GPU_PATH_WEBGL2; path++) {
+        struct gv_gpu_decoder *gd = gv_gpu_decoder_new_path(gpu, channels, path, &err);
+        uint32_t ph;
+        if (!gd || gv_gpu_upload_tile(gd, parent, &ph, &err) < 0)
+            fail("decoder: %s", err.text);
+        const int bad = dct_mismatches(gd, ph, t, 1, 0, channels);
+        check(bad == 1, "C=%d, %s: negative control, a D buffer whose step S[0] "
+              "changed after the CPU decoded it differs", channels, path_name(path));
+        gv_gpu_release(gd, ph);
+        gv_gpu_decoder_free(gd);
+    }
+    for (int k = 0; k < DCT_CASES; k++) {
+        free(t[k].buf);
+        free(t[k].ref);
+    }
+    free(q);
+    free(parent);
+}
+
 int main(int argc, char **argv)
 {
     struct gv_error err;
@@ -310,17 +501,23 @@ int main(int argc, char **argv)
         /* Explicit inputs (used to check a machine without the test data,
          * e.g. one with a real GPU): INPUT PSNR MAXRATE triples. */
         for (int i = 1; i + 2 < argc; i += 3)
-            check_store(gpu, argv[i], atof(argv[i + 1]), atoi(argv[i + 2]));
+            check_store(gpu, argv[i], atof(argv[i + 1]), atoi(argv[i + 2]),
+                        getenv("GV_TEST_DCT") != NULL);
         rmdir(dir);
         gv_gpu_close(gpu);
         return tap_done();
     }
-    check_store(gpu, picos, 36.0, 10);
-    check_store(gpu, picos, 41.0, 10);                  /* rates 8 to 10 */
-    check_store(gpu, "synth:1500x1100", 60.0, 12);     /* rates up to the cap */
-    check_store(gpu, "synth:1100x1500:gray", 33.0, 10);
-    check_store(gpu, "synth:2100x900", 20.0, 3);       /* low rates, r = 0 */
-    check_store(gpu, "synth:600x600:gray", 99.0, 12);
+    check_dct_synthetic(gpu, 3);
+    check_dct_synthetic(gpu, 1);
+    check_store(gpu, picos, 36.0, 10, 0);
+    check_store(gpu, picos, 41.0, 10, 0);               /* rates 8 to 10 */
+    check_store(gpu, "synth:1500x1100", 60.0, 12, 0);  /* rates up to the cap */
+    check_store(gpu, "synth:1100x1500:gray", 33.0, 10, 0);
+    check_store(gpu, "synth:2100x900", 20.0, 3, 0);    /* low rates, r = 0 */
+    check_store(gpu, "synth:600x600:gray", 99.0, 12, 0);
+    /* Layout D (FORMAT.md 4.3) where the encoder finds it cheaper. */
+    check_store(gpu, picos, 40.0, 10, 1);
+    check_store(gpu, "synth:1100x1500:gray", 40.0, 10, 1);
     /* A store of format version 1 (E layout and rate 0 only). */
     char v1[512];
     snprintf(v1, sizeof v1, "%s/v1-picos-530x516.gv", data);

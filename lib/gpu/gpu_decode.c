@@ -8,7 +8,11 @@
  * buffer is a shader storage buffer of 32-bit words, and an entropy-coded
  * tile's indices are first decoded by a compute pass (rans_decode); on the
  * WebGL2 path the buffer is an R32UI texture and the indices are decoded
- * on the CPU into an R16UI texture, as the browser does.
+ * on the CPU into an R16UI texture, as the browser does.  A transform-coded
+ * tile (layout D, FORMAT.md 4.3) goes the same way with its coefficient
+ * streams: decoded by a compute pass (dct_decode) into a coefficient buffer
+ * bound where the indices would be, or on the CPU (gv_dct_unpack) into a
+ * 520x520 RGBA16I texture; the decode shader takes the inverse transform.
  *
  * A single tile is a batch of one.  A batch (gv_gpu_decode_batch) runs in
  * one call on the GL thread: on the SSBO path, in small groups of
@@ -29,6 +33,7 @@
 #include "store/store_format.h"
 #include "codec/tile.h"
 #include "codec/tile_rans.h"
+#include "codec/tile_dct.h"
 
 #define WORDS_WIDTH 1024   /* texels per row of the WebGL2 words texture */
 
@@ -52,17 +57,25 @@
 #endif
 #define SPARE_MAX GV_GPU_SPARES
 
+/* A layout-D coefficient plane on the SSBO path: 520x520 texels of two
+ * uints (dct_decode.comp.glsl). */
+#define COEF_BYTES ((size_t)GV_DCT_PLANE * GV_DCT_PLANE * 2 * sizeof(GLuint))
+
 struct gv_gpu_decoder {
     struct gv_gpu *gpu;
     int channels;
     enum gv_gpu_path path;
-    GLuint decode, quarter, rans, fbo, vao;
+    GLuint decode, quarter, rans, dct, fbo, vao;
     /* Two sets of storage buffers, a tile buffer and an index buffer per
      * tile of a group, used by alternate groups of tiles; a set is
      * refilled only once the fence after its last group's draws has
      * passed. */
     GLuint ssbo[2], indices[2], tiles[2];
     size_t index_stride;               /* bytes of a tile's indices, aligned */
+    /* Layout D: per set, the coefficient planes of up to coef_cap[set]
+     * tiles (grown on demand, 2 MiB each) and the dispatch's parameters. */
+    GLuint coefs[2], dct_tiles[2];
+    size_t coef_cap[2], coef_stride;
     GLsync fence[2];
     int set;
     GLint ssbo_align;                  /* offset alignment of ssbo ranges */
@@ -72,10 +85,12 @@ struct gv_gpu_decoder {
      * with its mip costs the H100's driver a fifth of a tile's time. */
     GLuint *spare;
     size_t spares, spare_cap;          /* cap: SPARE_MAX or as reserved */
-    GLuint words_tex, indices_tex;     /* WebGL2 path */
+    GLuint words_tex, indices_tex, coefs_tex;   /* WebGL2 path */
     GLint dec_parent, dec_quadrant, dec_channels, q_parent, q_quadrant;
-    GLint dec_words, dec_words_width, dec_indices;
+    GLint dec_words, dec_words_width, dec_indices, dec_coefs;
     uint16_t *cpu_indices;             /* WebGL2 path: rANS decoded here */
+    int16_t *cpu_coefs;                /* WebGL2 path: layout D's plane */
+    const char *defines;               /* prepended to the decode shader */
 };
 
 struct job {
@@ -109,15 +124,22 @@ static int setup(void *arg, struct gv_error *err)
     unsigned (*program)(const struct gv_gpu *, const char *, const char *,
                         char **, struct gv_error *) =
         webgl2 ? gv_gpu_program_es300 : gv_gpu_program;
-    d->decode = program(d->gpu, gv_shader_fullscreen_vert,
-                        gv_shader_tile_decode_frag, &listing, err);
+    char *frag = malloc(strlen(d->defines) + strlen(gv_shader_tile_decode_frag) + 1);
+    if (!frag)
+        return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+    strcat(strcpy(frag, d->defines), gv_shader_tile_decode_frag);
+    d->decode = program(d->gpu, gv_shader_fullscreen_vert, frag, &listing, err);
+    free(frag);
     if (d->decode)
         d->quarter = program(d->gpu, gv_shader_fullscreen_vert,
                              gv_shader_quarter_copy_frag, &listing, err);
     if (d->quarter && !webgl2)
         d->rans = gv_gpu_compute_program(d->gpu, gv_shader_rans_decode_comp,
                                          &listing, err);
-    if (!d->decode || !d->quarter || (!webgl2 && !d->rans)) {
+    if (d->rans)
+        d->dct = gv_gpu_compute_program(d->gpu, gv_shader_dct_decode_comp,
+                                        &listing, err);
+    if (!d->decode || !d->quarter || (!webgl2 && !d->dct)) {
         /* Our own shader failing is a bug or a broken driver: show why. */
         if (listing)
             fprintf(stderr, "%s", listing);
@@ -135,14 +157,22 @@ static int setup(void *arg, struct gv_error *err)
         d->dec_words = glGetUniformLocation(d->decode, "u_words");
         d->dec_words_width = glGetUniformLocation(d->decode, "u_words_width");
         d->dec_indices = glGetUniformLocation(d->decode, "u_indices");
+        d->dec_coefs = glGetUniformLocation(d->decode, "u_coefs");
         glGenTextures(1, &d->words_tex);
         glGenTextures(1, &d->indices_tex);
         glBindTexture(GL_TEXTURE_2D, d->indices_tex);
         glTexStorage2D(GL_TEXTURE_2D, 1, GL_R16UI, GV_BLOCKS, GV_BLOCKS);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glGenTextures(1, &d->coefs_tex);
+        glBindTexture(GL_TEXTURE_2D, d->coefs_tex);
+        glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA16I, GV_DCT_PLANE, GV_DCT_PLANE);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
         d->cpu_indices = malloc(GV_NBLOCKS * sizeof *d->cpu_indices);
-        if (!d->cpu_indices)
+        d->cpu_coefs = malloc((size_t)GV_DCT_PLANE * GV_DCT_PLANE * 4 *
+                              sizeof *d->cpu_coefs);
+        if (!d->cpu_indices || !d->cpu_coefs)
             return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
         return gl_failed(err, "decoder set-up");
     }
@@ -152,9 +182,12 @@ static int setup(void *arg, struct gv_error *err)
     if (d->ssbo_align < 4)
         d->ssbo_align = 4;
     d->index_stride = align_up(GV_NBLOCKS * sizeof(GLuint), (size_t)d->ssbo_align);
+    d->coef_stride = align_up(COEF_BYTES, (size_t)d->ssbo_align);
     for (int k = 0; k < 2; k++) {
         glGenBuffers(1, &d->ssbo[k]);
         glGenBuffers(1, &d->tiles[k]);
+        glGenBuffers(1, &d->dct_tiles[k]);
+        glGenBuffers(1, &d->coefs[k]);
         glGenBuffers(1, &d->indices[k]);
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->indices[k]);
         glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(GROUP * d->index_stride),
@@ -173,6 +206,14 @@ struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
                                                enum gv_gpu_path path,
                                                struct gv_error *err)
 {
+    return gv_gpu_decoder_new_defines(g, channels, path, "", err);
+}
+
+struct gv_gpu_decoder *gv_gpu_decoder_new_defines(struct gv_gpu *g, int channels,
+                                                  enum gv_gpu_path path,
+                                                  const char *defines,
+                                                  struct gv_error *err)
+{
     struct gv_gpu_decoder *d = calloc(1, sizeof *d);
     if (!d) {
         gv_fail(err, GV_ENOMEM, "gpu: out of memory");
@@ -181,6 +222,7 @@ struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
     d->gpu = g;
     d->channels = channels;
     d->path = path;
+    d->defines = defines;
     d->spare_cap = SPARE_MAX;
     d->spare = malloc(SPARE_MAX * sizeof *d->spare);
     if (!d->spare) {
@@ -206,7 +248,13 @@ static int teardown(void *arg, struct gv_error *err)
         glDeleteProgram(d->quarter);
     if (d->rans)
         glDeleteProgram(d->rans);
+    if (d->dct)
+        glDeleteProgram(d->dct);
     for (int k = 0; k < 2; k++) {
+        if (d->coefs[k])
+            glDeleteBuffers(1, &d->coefs[k]);
+        if (d->dct_tiles[k])
+            glDeleteBuffers(1, &d->dct_tiles[k]);
         if (d->indices[k])
             glDeleteBuffers(1, &d->indices[k]);
         if (d->tiles[k])
@@ -220,6 +268,8 @@ static int teardown(void *arg, struct gv_error *err)
         glDeleteTextures(1, &d->words_tex);
     if (d->indices_tex)
         glDeleteTextures(1, &d->indices_tex);
+    if (d->coefs_tex)
+        glDeleteTextures(1, &d->coefs_tex);
     if (d->spares)
         glDeleteTextures((GLsizei)d->spares, d->spare);
     d->spares = 0;
@@ -237,6 +287,7 @@ void gv_gpu_decoder_free(struct gv_gpu_decoder *d)
     struct job j = {.d = d};
     gv_gpu_call(d->gpu, teardown, &j, NULL);
     free(d->cpu_indices);
+    free(d->cpu_coefs);
     free(d->staging);
     free(d->spare);
     free(d);
@@ -326,7 +377,8 @@ static void draw_into(GLuint fbo, GLuint tex, int mip, int size)
 }
 
 /* WebGL2 path: the tile buffer as an R32UI texture (texture unit 1) and,
- * for an entropy-coded tile, its indices decoded here as R16UI (unit 2). */
+ * for an entropy-coded tile, its indices decoded here as R16UI (unit 2),
+ * for a transform-coded one its coefficients as RGBA16I (unit 3). */
 static int upload_webgl2(struct gv_gpu_decoder *d, const uint8_t *buf,
                          size_t len, struct gv_error *err)
 {
@@ -353,6 +405,15 @@ static int upload_webgl2(struct gv_gpu_decoder *d, const uint8_t *buf,
         glPixelStorei(GL_UNPACK_ALIGNMENT, 2);
         glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GV_BLOCKS, GV_BLOCKS,
                         GL_RED_INTEGER, GL_UNSIGNED_SHORT, d->cpu_indices);
+    }
+    glActiveTexture(GL_TEXTURE3);
+    glBindTexture(GL_TEXTURE_2D, d->coefs_tex);
+    if (buf[0] == GV_TILE_DCT) {
+        if (gv_dct_unpack(buf, len, d->channels, d->cpu_coefs, err) < 0)
+            return -1;
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 2);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GV_DCT_PLANE, GV_DCT_PLANE,
+                        GL_RGBA_INTEGER, GL_SHORT, d->cpu_coefs);
     }
     return 0;
 }
@@ -407,6 +468,7 @@ static int decode_webgl2(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *jobs,
         glUniform1i(d->dec_words, 1);
         glUniform1i(d->dec_words_width, WORDS_WIDTH);
         glUniform1i(d->dec_indices, 2);
+        glUniform1i(d->dec_coefs, 3);
         draw_decode(d, tex, parent, jobs[i].qx, jobs[i].qy);
     }
     return 0;
@@ -452,23 +514,32 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
         d->staging_size = total;
     }
     int entropy = 0, inner = 0;
+    long dslot[GROUP];                 /* layout D: the tile's coefficient plane */
+    size_t nd = 0;
     for (size_t i = 0; i < n; i++) {
         memcpy(d->staging + off[i], jobs[i].buf, jobs[i].len);
         entropy |= (jobs[i].buf[0] & GV_TILE_ENTROPY) != 0;
         inner |= jobs[i].parent_job >= (long)first;
+        dslot[i] = jobs[i].buf[0] == GV_TILE_DCT ? (long)nd++ : -1;
     }
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->ssbo[set]);
     glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)total, d->staging,
                  GL_STREAM_DRAW);
-    /* A tile's buffer and its indices, for the decode pass. */
+    /* A tile's buffer and its indices (or coefficients), for the decode
+     * pass. */
 #define BIND_TILE(i)                                                         \
     do {                                                                     \
         glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo[set],         \
                           (GLintptr)off[i],                                  \
                           (GLsizeiptr)align_up(jobs[i].len, 4));             \
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, d->indices[set],      \
-                          (GLintptr)((i) * d->index_stride),                 \
-                          (GLsizeiptr)(GV_NBLOCKS * sizeof(GLuint)));         \
+        if (dslot[i] >= 0)                                                   \
+            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, d->coefs[set],    \
+                              (GLintptr)((size_t)dslot[i] * d->coef_stride), \
+                              (GLsizeiptr)COEF_BYTES);                       \
+        else                                                                 \
+            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, d->indices[set],  \
+                              (GLintptr)((i) * d->index_stride),             \
+                              (GLsizeiptr)(GV_NBLOCKS * sizeof(GLuint)));     \
     } while (0)
     /* Entropy-coded indices: every such tile of the group in one dispatch,
      * one invocation per row of blocks, one row of work groups per tile. */
@@ -492,8 +563,36 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->indices[set]);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, d->tiles[set]);
         glDispatchCompute((GV_BLOCKS + 63) / 64, m, 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
+    /* Transform-coded tiles: every such tile's 65 coefficient streams in
+     * one dispatch, one invocation per row of 8x8 blocks. */
+    if (nd > 0) {
+        if (nd > d->coef_cap[set]) {
+            glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->coefs[set]);
+            glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(nd * d->coef_stride),
+                         NULL, GL_DYNAMIC_COPY);
+            d->coef_cap[set] = nd;
+        }
+        GLint params[GROUP][4];
+        for (size_t i = 0; i < n; i++) {
+            if (dslot[i] < 0)
+                continue;
+            params[dslot[i]][0] = (GLint)(off[i] / 4);
+            params[dslot[i]][1] = (GLint)jobs[i].len;
+            params[dslot[i]][2] = (GLint)((size_t)dslot[i] * d->coef_stride / sizeof(GLuint));
+            params[dslot[i]][3] = d->channels;
+        }
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->dct_tiles[set]);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(nd * sizeof params[0]),
+                     params, GL_STREAM_DRAW);
+        glUseProgram(d->dct);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo[set]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->coefs[set]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, d->dct_tiles[set]);
+        glDispatchCompute(1, (GLuint)nd, 1);
+    }
+    if (entropy || nd > 0)
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     glBindVertexArray(d->vao);
     for (size_t i = 0; i < n; i++)
         jobs[i].handle = new_tile_texture(d, 1);

@@ -23,9 +23,10 @@
 struct gv_gpu_decoder;
 
 /* How the shader reads a tile buffer: from a shader storage buffer, with
- * rANS streams decoded by a compute pass (GLSL ES 3.10 / GL 4.30), or as
- * WebGL2 does (GLSL ES 3.00): the buffer as an R32UI texture and rANS
- * streams decoded on the CPU into an R16UI index texture. */
+ * rANS streams (indices, or layout D's coefficients) decoded by a compute
+ * pass (GLSL ES 3.10 / GL 4.30), or as WebGL2 does (GLSL ES 3.00): the
+ * buffer as an R32UI texture and rANS streams decoded on the CPU into an
+ * R16UI index texture or a 520x520 RGBA16I coefficient texture. */
 enum gv_gpu_path { GV_GPU_PATH_SSBO, GV_GPU_PATH_WEBGL2 };
 
 /* Compile the decode programs for tiles of `channels` channels (1 or 3)
@@ -40,6 +41,15 @@ struct gv_gpu_decoder *gv_gpu_decoder_new(struct gv_gpu *g, int channels,
 struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
                                                enum gv_gpu_path path,
                                                struct gv_error *err);
+
+/* The same with `defines` (#define lines, borrowed for the decoder's
+ * life) put before the decode shader's source: tests use it to change the
+ * transform's rounding (GV_DCT_ROUND_ROWS, GV_DCT_ROUND_COLS in
+ * shaders/tile_decode.frag.glsl) and see the comparison fail. */
+struct gv_gpu_decoder *gv_gpu_decoder_new_defines(struct gv_gpu *g, int channels,
+                                                  enum gv_gpu_path path,
+                                                  const char *defines,
+                                                  struct gv_error *err);
 
 /* Free every texture and program.  NULL does nothing. */
 void gv_gpu_decoder_free(struct gv_gpu_decoder *d);
