@@ -163,6 +163,7 @@ expect_mismatch() {
 }
 expect_mismatch "a decode shader with one weight changed" --sabotage shader
 expect_mismatch "a rANS decoder that flips index bits" --sabotage rans
+expect_mismatch "a layout-D unpacking with the zigzag order transposed" --sabotage dct
 expect_mismatch "a root with a bit flipped in every 97th sample" --sabotage root
 
 stop_daemon

@@ -541,6 +541,8 @@ async function run(c) {
     note(`synth: ${s2.decoded} tiles decoded, ${s2.resident} textures resident (${(s2.textureBytes / 1048576).toFixed(1)} MiB), ${s2.evicted} evicted`);
 
     lap('synth 1:1 views, tiles, prefetch');
+    await checkDctStores(c);
+    lap('layout D stores');
     // A 16 MiB texture cache (15 tiles) on a tour of synth's 24 level-0
     // tiles: least recently used tiles go, the budget holds, and coming
     // back gives the same exact picture.
