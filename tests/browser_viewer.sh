@@ -28,8 +28,9 @@
 #
 # Layout D's unpacking is also checked in node against the C decoder's
 # (tests/browser/dct_unpack.mjs with the tests/dct_coefs helper): every D
-# tile intact and damaged seven ways, accepted and refused alike and
-# unpacked to the same coefficients.
+# tile and the helper's synthetic buffers, intact, with a step changed and
+# damaged, refused alike (same message) or unpacked to the same
+# coefficients.
 #
 # Negative controls of the whole pipeline, each must FAIL the 1:1 match:
 # a decode shader with one prediction weight changed (29/111 to 30/110),

@@ -6,26 +6,95 @@
  * (client/web/tile_dct.js) against them, intact buffers and damaged ones.
  *
  *   dct_coefs < RECORDS > LINES
+ *   dct_coefs --fixtures > RECORDS
  *
  * RECORDS: any number of [u32 length, little-endian][u8 channels][length
  * bytes of buffer].  LINES: one per record, "ok HASH NONZERO" (HASH the
  * 32-bit FNV-1a, 8 hex digits, of the 520 x 520 x 4 int16 plane as
  * little-endian bytes; NONZERO its count of nonzero coefficients) or
- * "corrupt MESSAGE" when gv_dct_unpack refuses the buffer.  Exit 0, or 1
- * with a message on stderr on a malformed record stream.
+ * "corrupt MESSAGE" when gv_dct_unpack refuses the buffer.  --fixtures
+ * writes the buffers an encoder rarely makes, from tests/dct_fixture.h
+ * (written from the format's text, not from lib/codec), for gray and RGB:
+ * escapes over their whole range, steps of 4095 whose products clamp to
+ * 16 bits, every coefficient of every block coded, none at all.  Exit 0,
+ * or 1 with a message on stderr on a malformed record stream.
  */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "base/error.h"
 #include "codec/tile_dct.h"
+#include "dct_fixture.h"
 
 #define PLANE (520u * 520u * 4u)
 #define MAX_RECORD (16u << 20)
 
-int main(void)
+enum { FIXTURES = 4 };
+
+/* Quantized coefficients q (3 planes of 520 x 520) and steps of fixture k. */
+static void fixture(int k, int channels, uint64_t *seed, int *q, int S[3])
 {
+    static const int steps[FIXTURES][3] = {
+        {12, 7, 30}, {4095, 4095, 4095}, {3, 5, 9}, {1, 1, 1}};
+    memcpy(S, steps[k], sizeof steps[k]);
+    memset(q, 0, sizeof *q * 3 * 520 * 520);
+    for (int c = 0; c < channels; c++)
+        for (int i = 0; i < 520 * 520; i++) {
+            const int uv = i % 520 % 8 + i / 520 % 8;
+            const uint32_t r = test_rand(seed);
+            int v = 0;
+            if (k < 2) {                          /* sparse, with escapes */
+                if (uv == 0)
+                    v = (int)(r % 41) - 20;
+                else if (r % 256 < 60u / (unsigned)(1 + uv))
+                    v = (int)(r / 256 % 7) - 3;
+                if (r / 4096 % 300 == 0)
+                    v = (int)(r / 256 % 4096) - 2048;
+                if (k == 1 && r % 97 == 0)        /* the ends of the range */
+                    v = r / 97 % 2 ? 2047 : -2048;
+            } else if (k == 2) {
+                v = r % 2 ? 1 : -1;               /* all 64 of every block */
+            }
+            q[(size_t)c * 520 * 520 + i] = v;
+        }
+}
+
+static int write_fixtures(void)
+{
+    int *q = malloc(sizeof *q * 3 * 520 * 520);
+    uint8_t *buf = malloc(2u << 20);
+    uint64_t seed = 0x9e3779b97f4a7c15u;
+    if (!q || !buf) {
+        fprintf(stderr, "dct_coefs: out of memory\n");
+        free(q);
+        free(buf);
+        return 1;
+    }
+    for (int channels = 1; channels <= 3; channels += 2)
+        for (int k = 0; k < FIXTURES; k++) {
+            int S[3];
+            fixture(k, channels, &seed, q, S);
+            const size_t len = dct_fixture_write(q, S, channels, buf);
+            const uint8_t head[5] = {(uint8_t)len, (uint8_t)(len >> 8), (uint8_t)(len >> 16),
+                                     (uint8_t)(len >> 24), (uint8_t)channels};
+            fwrite(head, 1, sizeof head, stdout);
+            fwrite(buf, 1, len, stdout);
+        }
+    free(q);
+    free(buf);
+    return fflush(stdout) == 0 ? 0 : 1;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc == 2 && strcmp(argv[1], "--fixtures") == 0)
+        return write_fixtures();
+    if (argc != 1) {
+        fprintf(stderr, "usage: dct_coefs [--fixtures]\n");
+        return 1;
+    }
     int rc = 1;
     int16_t *coefs = malloc(PLANE * sizeof *coefs);
     uint8_t *buf = malloc(MAX_RECORD);

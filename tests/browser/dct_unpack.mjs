@@ -6,11 +6,17 @@
 //
 // Fetches every tile of every tiled level of the images (GET batches,
 // client/web/batch.js's parser), keeps the layout-D ones (there must be
-// some in each image), and checks for each, intact and damaged in seven
-// deterministic ways (a byte of the header, models or lengths changed, a
-// byte of the streams changed, 4 bytes cut off, 4 zero bytes added, a
-// stored model's mask bit cleared, mask bit 30 set, the other channel
-// count), that tile_dct.js accepts exactly the buffers the C decoder
+// some in each image), adds the buffers of `dct_coefs --fixtures` (what
+// an encoder rarely writes: escapes over their whole range, products
+// clamped to 16 bits, every coefficient coded, none), and checks for
+// each, intact, with a quantizer step changed (still well-formed) and, for
+// the tiles, damaged in deterministic ways (a random byte of the header,
+// models or lengths changed, a random byte of the streams changed; each
+// rule of the layout check broken once: steps of 0, 4096 and one for an
+// absent channel, byte 1, a model's first frequency, a decreasing model,
+// a stream of 1 word, nonzero padding, 4 bytes cut off, 4 zero bytes
+// added, a stored model's mask bit cleared, mask bit 30 set; the other
+// channel count), that tile_dct.js accepts exactly the buffers the C decoder
 // accepts and then produces the same coefficient plane (its FNV-1a hash
 // and nonzero count), and refuses the others with the same message.  Negative control: a plane with one coefficient
 // changed must not match.  Exit 0 when every check passed, 1 otherwise,
@@ -50,39 +56,76 @@ function rng(seed) {
     };
 }
 
-// Where the streams of a (well-formed) D buffer start: 12 + the stored
-// models (65 bytes below model 6, 16 from it), even, + 130.
-function streamsAt(buf) {
+// Where the parts of a (well-formed) D buffer lie: the stored models
+// [m, offset, symbols] (65 symbols below model 6, 16 from it), the stream
+// lengths (after them, even), the streams (130 bytes on) and their end.
+function partsOf(buf) {
     const mask = (buf[8] | buf[9] << 8 | buf[10] << 16 | buf[11] << 24) >>> 0;
+    const models = [];
     let off = 12;
     for (let m = 0; m < 30; m++)
-        if (mask & (1 << m))
+        if (mask & (1 << m)) {
+            models.push([m, off, m < 6 ? 65 : 16]);
             off += m < 6 ? 65 : 16;
-    return ((off + 1) & ~1) + 130;
+        }
+    const lengths = (off + 1) & ~1;
+    let end = lengths + 130;
+    for (let i = 0; i < 65; i++)
+        end += 2 * (buf[lengths + 2 * i] | buf[lengths + 2 * i + 1] << 8);
+    return { mask, models, lengths, streams: lengths + 130, end };
 }
 
-// The damaged variants of one buffer: [what, buffer, channels].
+// A buffer with quantizer step 0 changed (to 4095, or 1 where it is
+// 4095): still well-formed, other coefficients (clamped at 4095).
+function restepped(buf) {
+    const b = buf.slice(), s = b[2] | b[3] << 8, t = s === 4095 ? 1 : 4095;
+    b[2] = t & 255;
+    b[3] = t >> 8;
+    return b;
+}
+
+// The variants of one buffer: [what, buffer, channels], intact first.
 function variants(buf, channels, rand) {
-    const out = [['intact', buf, channels]];
+    const out = [['intact', buf, channels], ['quantizer step 0 changed', restepped(buf), channels]];
     const at = (lo, hi) => lo + Math.floor(rand() * (hi - lo));
     const flip = (what, lo, hi) => {
         const b = buf.slice(), i = at(lo, hi);
         b[i] ^= 1 + Math.floor(rand() * 255);
         out.push([`${what} (byte ${i})`, b, channels]);
     };
-    const s = streamsAt(buf);
+    const p = partsOf(buf), s = p.streams;
+    const set = (what, ...pairs) => {
+        const b = buf.slice();
+        for (let i = 0; i < pairs.length; i += 2)
+            b[pairs[i]] = pairs[i + 1];
+        out.push([what, b, channels]);
+    };
     flip('a header, model or length byte changed', 0, s);
     flip('a stream byte changed', s, buf.length);
+    set('quantizer step 0 of 0', 2, 0, 3, 0);
+    set('quantizer step 0 of 4096', 2, 0, 3, 16);
+    if (channels === 1)
+        set('quantizer step 1 of 1 in a gray buffer', 4, 1);
+    else
+        set('quantizer step 2 of 0', 6, 0, 7, 0);
+    set('byte 1 not 0', 1, 1);
+    if (p.models.length) {
+        const [m, mo, k] = p.models[0];
+        set(`model ${m} starting at 1`, mo, 1);
+        let top = k - 1;             // a symbol after a nonzero one: made to decrease
+        while (top > 1 && buf[mo + top - 1] === 0) top--;
+        if (buf[mo + top - 1] > 0)
+            set(`model ${m} decreasing at symbol ${top}`, mo + top, buf[mo + top - 1] - 1);
+    }
+    set('stream 0 of 1 word', p.lengths, 1, p.lengths + 1, 0);
+    if (p.end < buf.length)
+        set('nonzero padding', buf.length - 1, 1);
     out.push(['4 bytes cut off', buf.slice(0, buf.length - 4), channels]);
     const longer = new Uint8Array(buf.length + 4);
     longer.set(buf);
     out.push(['4 zero bytes added', longer, channels]);
-    const mask = (buf[8] | buf[9] << 8 | buf[10] << 16 | buf[11] << 24) >>> 0;
-    const set = [];
-    for (let m = 0; m < 30; m++)
-        if (mask & (1 << m)) set.push(m);
-    if (set.length) {
-        const m = set[Math.floor(rand() * set.length)], b = buf.slice();
+    if (p.models.length) {
+        const m = p.models[Math.floor(rand() * p.models.length)][0], b = buf.slice();
         b[8 + (m >> 3)] &= ~(1 << (m & 7));
         out.push([`mask bit ${m} cleared`, b, channels]);
     }
@@ -130,8 +173,23 @@ try {
         const rand = rng(12 + d.length);
         for (const t of d)
             for (const [what, buf, c] of variants(t.buf, channels, rand))
-                cases.push({ key: `${t.key}: ${what}`, buf, channels: c, intact: what === 'intact' });
+                cases.push({ key: `${t.key}: ${what}`, buf, channels: c, intact: what === 'intact',
+                    tile: what === 'intact' });
     }
+    // The helper's fixtures (escapes, clamps, full and empty blocks;
+    // gray, then RGB), each also with a changed step.
+    const fx = spawnSync(opt.helper, ['--fixtures'], { maxBuffer: 64 << 20 });
+    if (fx.status !== 0)
+        throw new Error(`${opt.helper} --fixtures: exit ${fx.status}: ${fx.stderr}`);
+    let nfix = 0;
+    for (let at = 0; at < fx.stdout.length; nfix++) {
+        const len = fx.stdout.readUInt32LE(at), channels = fx.stdout[at + 4];
+        const buf = new Uint8Array(fx.stdout.subarray(at + 5, at + 5 + len));
+        cases.push({ key: `fixture ${nfix} (${channels === 3 ? 'RGB' : 'gray'})`, buf, channels, intact: true });
+        cases.push({ key: `fixture ${nfix}: quantizer step 0 changed`, buf: restepped(buf), channels, intact: false });
+        at += 5 + len;
+    }
+    check(nfix === 8, `dct_coefs --fixtures wrote ${nfix} buffers (4 kinds, gray and RGB)`);
     // One run of the helper for all of them.
     const parts = [];
     for (const c of cases) {
@@ -147,13 +205,18 @@ try {
     if (lines.length !== cases.length)
         throw new Error(`${opt.helper}: ${lines.length} lines for ${cases.length} buffers`);
     const coefs = new Int16Array(DCT_PLANE);
-    let intact = 0, refused = 0, accepted = 0, control = null;
+    let intact = 0, refused = 0, accepted = 0, control = null, unpackMs = 0, unpacked = 0;
     const bad = [], badIntact = [];
     cases.forEach((c, i) => {
         const cpu = lines[i];
         let js;
         try {
+            const t0 = performance.now();
             dctUnpack(c.buf, c.channels, coefs);
+            if (c.tile) {
+                unpackMs += performance.now() - t0;
+                unpacked++;
+            }
             js = `ok ${digest(coefs)}`;
         } catch (e) {
             if (e.code !== 'corrupt') throw e;
@@ -176,13 +239,13 @@ try {
     });
     const nIntact = cases.filter((c) => c.intact).length;
     check(intact === nIntact && nIntact > 0,
-        `all ${nIntact} layout-D tiles: tile_dct.js unpacks the same coefficients as gv_dct_unpack`,
+        `all ${nIntact} layout-D buffers (the stores' tiles and ${nfix} fixtures): tile_dct.js unpacks the same coefficients as gv_dct_unpack`,
         ...badIntact.slice(0, 8));
     check(bad.length === 0,
-        `${cases.length - nIntact} damaged buffers: both refuse the same ${refused} with the same message, both accept the same ${accepted} with the same coefficients`,
+        `${cases.length - nIntact} changed or damaged buffers: both refuse the same ${refused} with the same message, both accept the same ${accepted} with the same coefficients`,
         ...bad.slice(0, 8));
     check(control === true, 'negative control: a plane with one coefficient changed does not match');
-    note(`${cases.length} buffers compared`);
+    note(`${cases.length} buffers compared; tile_dct.js unpacked the ${unpacked} intact store tiles in ${unpackMs.toFixed(0)} ms (a measurement, not a check)`);
 } catch (e) {
     fail('dct_unpack.mjs ran', String(e && e.stack || e));
 }
