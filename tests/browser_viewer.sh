@@ -26,7 +26,9 @@
 # stale result in place meanwhile, the graph view, a GLSL compile error at
 # its line, saving; every ROI picture bit for bit the filter endpoint's.
 #
-# Layout D's unpacking is also checked in node against the C decoder's
+# With the tests/dct_coefs helper, viewer.mjs also decodes its synthetic
+# layout-D tiles (escapes, clamps, full and empty blocks) in the page
+# against gv_tile_decode.  Layout D's unpacking is also checked in node against the C decoder's
 # (tests/browser/dct_unpack.mjs with the tests/dct_coefs helper): every D
 # tile and the helper's synthetic buffers, intact, with a step changed and
 # damaged, refused alike (same message) or unpacked to the same
@@ -107,12 +109,15 @@ else
     skip "ROI filter flows" "no filter graphs on this server (HTTP $code: $(head -c 200 "$T/b"))"
 fi
 
+# The layout-D helper (a check program): synthetic tiles for viewer.mjs,
+# coefficient planes for dct_unpack.mjs.
+: "${DCT_COEFS:=./tests/dct_coefs}"
 # viewer [ARGS...]: run viewer.mjs (timeout 400 s); output in
 # $T/viewer.out, status in $vrc.
 viewer() {
     vrc=0
     timeout 400 node "$BROWSER_DIR/viewer.mjs" --base "$BASE" --gigaview "$GIGAVIEW" \
-        --chromium "$CHROMIUM" "$@" >"$T/viewer.out" 2>&1 || vrc=$?
+        --chromium "$CHROMIUM" --dctcoefs "$DCT_COEFS" "$@" >"$T/viewer.out" 2>&1 || vrc=$?
 }
 # shellcheck disable=SC2086
 viewer $filters
@@ -130,7 +135,6 @@ fi
 
 # Layout D's unpacking in JavaScript against the C decoder's, tile by
 # tile, intact and damaged (node only: tests/browser/dct_unpack.mjs).
-: "${DCT_COEFS:=./tests/dct_coefs}"
 urc=0
 timeout 120 node "$BROWSER_DIR/dct_unpack.mjs" --base "$BASE" --helper "$DCT_COEFS" \
     --images picosd,grayd >"$T/dct.out" 2>&1 || urc=$?

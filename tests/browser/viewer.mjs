@@ -4,6 +4,7 @@
 //
 //   node viewer.mjs --base http://127.0.0.1:PORT --gigaview PATH
 //        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans|dct|root] [--only eviction|dct]
+//        [--dctcoefs tests/dct_coefs]
 //
 // Needs stores "picos" (tests/data/picos-1100x700.jpg: two tiled levels,
 // every tile entropy-coded), "synth" (synth:3000x2000: three tiled
@@ -29,7 +30,11 @@
 //      while the parent it decodes from is the least recently used tile
 //      (checkPrefetchEviction: that parent must not be the one evicted);
 //   2b. the same two checks on the stores picosd and grayd, among whose
-//      decoded tiles there must be layout-D ones (checkDctStores);
+//      decoded tiles there must be layout-D ones (checkDctStores); with
+//      --dctcoefs, the synthetic layout-D tiles of `dct_coefs
+//      --fixture-tiles` (escapes, clamped coefficients and pixels, full
+//      and empty blocks) decoded by the page's own GpuDecoder equal
+//      gv_tile_decode's, and one with a changed step does not;
 //   3. each metric rejects the reference moved by one pixel, so it cannot
 //      pass by accident;
 //   4. scripted input: a mouse drag pans by exactly its distance, "+"
@@ -63,8 +68,8 @@ import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 const MAX_MAD = 1;      // mean absolute difference per channel, 8-bit units
 const W = 800, H = 500;
 
-const opt = { chromium: '/usr/bin/chromium', out: '', sabotage: '', only: '', base: '', gigaview: '', filters: '0', token: '' };
-parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|dct|root] [--only eviction|dct] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
+const opt = { chromium: '/usr/bin/chromium', out: '', sabotage: '', only: '', base: '', gigaview: '', filters: '0', token: '', dctcoefs: '' };
+parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|dct|root] [--only eviction|dct] [--dctcoefs PATH] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
 const base = opt.base.replace(/\/+$/, '');
 
 let lapT = Date.now();
@@ -359,8 +364,54 @@ async function checkDctStores(c) {
         const r = await checkTiles(pg, `${id} (layout D, ${kind})`);
         const n = r.entropy + r.fixed;
         check(r.dct > 0, `${id}: layout-D tiles were decoded (${r.dct} of ${n})`);
+        if (opt.dctcoefs)
+            await checkDctFixtures(pg, id, kind === 'RGB' ? 3 : 1);
     }
     await pg.close();
+}
+
+// The synthetic layout-D tiles of `dct_coefs --fixture-tiles C` decoded
+// by the page's GpuDecoder (its parent uploaded as the root is) against
+// gv_tile_decode's tiles, bit for bit; the first also with quantizer step
+// 0 changed, which must differ (the comparison can fail).
+async function checkDctFixtures(pg, id, channels) {
+    const raw = execFileSync(opt.dctcoefs, ['--fixture-tiles', String(channels)], { maxBuffer: 64 << 20 });
+    const recs = [], tb = 513 * 513 * channels;
+    for (let at = 0; at < raw.length;) {
+        const len = raw.readUInt32LE(at), qx = raw[at + 5], qy = raw[at + 6], b = at + 9;
+        recs.push({ qx, qy, buf: raw.subarray(b, b + len).toString('base64'),
+            parent: raw.subarray(b + len, b + len + tb).toString('base64'),
+            out: raw.subarray(b + len + tb, b + len + 2 * tb).toString('base64') });
+        at = b + len + 2 * tb;
+    }
+    const r = await pg.evaluate(async ({ recs, channels }) => {
+        const { prepareTile } = await import(new URL('web/tilebuf.js', document.baseURI));
+        const bytes = (s) => Uint8Array.from(atob(s), (ch) => ch.charCodeAt(0));
+        const d = window.gigaview.viewer.backend.decoder;
+        const decode = (buf, parent, qx, qy) => {
+            const ptex = d.upload(parent, 513, 513);
+            const tex = d.decode(prepareTile(buf, channels), ptex, qx, qy);
+            const px = d.read(tex, 513, 513);
+            d.release(tex);
+            d.release(ptex);
+            return px;
+        };
+        const differ = (a, b) => { let n = 0; for (let i = 0; i < a.length; i++) if (a[i] !== b[i]) n++; return n; };
+        const out = { diffs: [], control: -1 };
+        for (const [i, rec] of recs.entries()) {
+            const buf = bytes(rec.buf), parent = bytes(rec.parent), ref = bytes(rec.out);
+            out.diffs.push(differ(decode(buf, parent, rec.qx, rec.qy), ref));
+            if (i === 0) {
+                buf[2] ^= 1;     // quantizer step 0, still 1..4095
+                out.control = differ(decode(buf, parent, rec.qx, rec.qy), ref);
+            }
+        }
+        return out;
+    }, { recs, channels });
+    check(r.diffs.length === 4 && r.diffs.every((n) => n === 0),
+        `${id}: the 4 synthetic layout-D tiles of dct_coefs (escapes, clamps, full and empty blocks) decode in WebGL2 as gv_tile_decode's, bit for bit`,
+        `samples that differ, per tile: ${r.diffs.join(', ')}`);
+    check(r.control > 0, `${id}: negative control: the first with quantizer step 0 changed differs (${r.control} samples)`);
 }
 
 async function run(c) {
