@@ -33,7 +33,7 @@ struct encode_args {
     int progress, quiet;
     double psnr, min_tile_psnr;   /* -q, --min-tile-psnr; 0 = not given */
     int rd;                       /* --rd: the default mode, accepted */
-    int dct, vq_only;             /* --dct, --vq-only: layout D or not */
+    int layouts_given;            /* --layouts was given */
     int height;                   /* --height: a height store */
     double max_error;             /* --max-error, source units */
     const char *unit;             /* --unit */
@@ -67,6 +67,23 @@ static int parse_mosaic(const char *arg, void *fields, const char **wants)
         return -1;
     src->mosaic_cols = cols;
     src->mosaic_rows = rows;
+    return 0;
+}
+
+/* --layouts d|all|vq */
+static int parse_layouts(const char *arg, void *fields, const char **wants)
+{
+    struct encode_args *a = fields;
+    (void)wants;
+    if (!strcmp(arg, "d"))
+        a->o.dct = GV_LAYOUTS_D;
+    else if (!strcmp(arg, "all"))
+        a->o.dct = GV_LAYOUTS_ALL;
+    else if (!strcmp(arg, "vq"))
+        a->o.dct = GV_LAYOUTS_VQ;
+    else
+        return -1;
+    a->layouts_given = 1;
     return 0;
 }
 
@@ -139,12 +156,12 @@ static const struct opt_spec encode_opts[] = {
     {.name = "rd", .kind = OPT_FLAG, .field = F(rd),
      .help = "equal-slope allocation, the default mode\n"
              "(accepted for older scripts)"},
-    {.name = "dct", .kind = OPT_FLAG, .field = F(dct),
-     .help = "also code tiles as 8x8 transforms where that\n"
-             "costs less (layout D; a format version 4 store)"},
-    {.name = "vq-only", .kind = OPT_FLAG, .field = F(vq_only),
-     .help = "VQ tiles only: a format version 2 store, for\n"
-             "readers older than layout D"},
+    {.name = "layouts", .kind = OPT_CUSTOM, .arg = "d|all|vq",
+     .parse = parse_layouts, .wants = "d, all or vq",
+     .help = "tile layouts: d, 8x8 transforms or the\n"
+             "prediction alone; all, also VQ (slower, a few\n"
+             "tiles smaller); vq, VQ only: a format version 2\n"
+             "store for older readers (default " GV_DEFAULT_LAYOUTS ")"},
     {.name = "shard", .kind = OPT_CUSTOM, .arg = "I/N", .parse = parse_shard,
      .wants = "I/N with 0 <= I < N <= " OPT_STR(GV_SHARD_MAX),
      .help = "encode only shard I of N (0 <= I < N) into a\n"
@@ -193,12 +210,14 @@ static int pick_mode(struct encode_args *a)
                 "give it without -q or --rd\n");
         return 2;
     }
-    if (a->dct && a->vq_only) {
-        fprintf(stderr, ME ": --dct and --vq-only exclude each other\n");
+    a->o.per_tile = a->min_tile_psnr > 0;
+    if (a->o.per_tile && a->layouts_given && a->o.dct != GV_LAYOUTS_VQ) {
+        fprintf(stderr, ME ": --min-tile-psnr codes VQ tiles only: "
+                "give it without --layouts (or with --layouts vq)\n");
         return 2;
     }
-    a->o.per_tile = a->min_tile_psnr > 0;
-    a->o.dct = a->dct || (GV_DEFAULT_DCT && !a->vq_only);
+    if (!a->layouts_given)
+        a->o.dct = a->o.per_tile ? GV_LAYOUTS_VQ : GV_DEFAULT_DCT;
     if (a->o.per_tile)
         a->o.target_psnr = a->min_tile_psnr;
     else if (a->psnr > 0)

@@ -41,9 +41,16 @@ const int32_t gv_dct_matrix[8][8] = {
     {18, -50, 75, -89, 89, -75, 50, -18},
 };
 
+/* floor(a / 2^s).  GCC and Clang define >> of a negative number as the
+ * arithmetic shift (and vectorize it); anything else gets the portable
+ * form. */
 static inline int32_t asr(int32_t a, int s)
 {
+#if defined(__GNUC__)
+    return a >> s;
+#else
     return a >= 0 ? a >> s : ~(~a >> s);
+#endif
 }
 
 static inline int model_symbols(int m)
@@ -154,11 +161,12 @@ struct dct_stream {
     uint32_t x, n, next;
 };
 
-/* One step with model m: the symbol, or -1 for a damaged stream. */
+/* One step with model m: the symbol, or -1 for a damaged stream.  The
+ * state stays >= RANS_L from a valid start (checked once per stream):
+ * after a step it is at least f * 256 with f >= 1, and a renormalization
+ * takes it past 2^24. */
 static inline int step(struct dct_stream *st, const struct dct_models *md, int m)
 {
-    if (st->x < RANS_L)
-        return -1;
     const uint32_t slot = st->x & 255;
     const int s = md->sym[m][slot];
     const uint32_t c = md->cum[m][s], f = md->cum[m][s + 1] - c;
@@ -176,8 +184,6 @@ static inline int step(struct dct_stream *st, const struct dct_models *md, int m
 /* A uniform 6-bit step. */
 static inline int step_uniform(struct dct_stream *st)
 {
-    if (st->x < RANS_L)
-        return -1;
     const uint32_t slot = st->x & 255;
     st->x = 4 * (st->x >> 8) + (slot & 3);
     if (st->x < RANS_L) {
@@ -188,6 +194,15 @@ static inline int step_uniform(struct dct_stream *st)
     return (int)(slot >> 2);
 }
 
+/* 3 * band of zigzag position k: 0 for k = 0, 1 for 1..2, 2 for 3..9,
+ * 3 for 10..63. */
+static const uint8_t band_model[64] = {
+    0, 3, 3, 6, 6, 6, 6, 6, 6, 6, 9, 9, 9, 9, 9, 9,
+    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
+    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
+    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
+};
+
 static inline int mag_class(int q)
 {
     int a = q < 0 ? -q : q;
@@ -197,25 +212,30 @@ static inline int mag_class(int q)
 /* A row's coefficients: co[c][v][X], X = 8 * bx + u. */
 typedef int16_t dct_row[3][8][GV_DCT_PLANE];
 
-/* Decode stream `row` (at `at`, n words) into co.  Returns 0 or -1. */
+/* Decode stream `row` (at `at`, n words) into co, which must be all
+ * zero (only coded coefficients are written), and each block's count of
+ * coded coefficients into eobs.  Returns 0 or -1. */
 static int decode_row(const uint8_t *buf, size_t at, unsigned n, int row,
                       int channels, const struct dct_models *md,
-                      const int32_t *steps, dct_row co, struct gv_error *err)
+                      const int32_t *steps, dct_row co,
+                      uint8_t eobs[3][GV_DCT_BLOCKS], struct gv_error *err)
 {
     struct dct_stream st = {buf + at, 0, n, 2};
     st.x = gv_get16(st.w) | (uint32_t)gv_get16(st.w + 2) << 16;
-    memset(co, 0, sizeof(int16_t) * 3 * 8 * GV_DCT_PLANE);
+    if (st.x < RANS_L)
+        goto bad;
     int pe[3] = {0, 0, 0}, dcp[3] = {0, 0, 0};
     for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
         for (int c = 0; c < channels; c++) {
             const int cc = c > 0;
+            const int tok_base = GV_DCT_EOB_MODELS + 12 * cc;
             const int eob = step(&st, md, 3 * cc + pe[c]);
             if (eob < 0)
                 goto bad;
+            eobs[c][bx] = (uint8_t)eob;
             int p = dcp[c], q0 = 0;
             for (int k = 0; k < eob; k++) {
-                const int band = k == 0 ? 0 : (k <= 2 ? 1 : (k <= 9 ? 2 : 3));
-                const int t = step(&st, md, GV_DCT_EOB_MODELS + 3 * (4 * cc + band) + p);
+                const int t = step(&st, md, tok_base + band_model[k] + p);
                 if (t < 0)
                     goto bad;
                 int q;
@@ -271,10 +291,12 @@ static int rows_begin(struct dct_rows *it, const uint8_t *buf, size_t len,
 }
 
 static int rows_next(struct dct_rows *it, const uint8_t *buf, int row,
-                     int channels, dct_row co, struct gv_error *err)
+                     int channels, dct_row co, uint8_t eobs[3][GV_DCT_BLOCKS],
+                     struct gv_error *err)
 {
     unsigned n = gv_get16(buf + it->l.lengths + 2 * row);
-    if (decode_row(buf, it->at, n, row, channels, &it->md, it->steps, co, err) < 0)
+    if (decode_row(buf, it->at, n, row, channels, &it->md, it->steps, co,
+                   eobs, err) < 0)
         return -1;
     it->at += 2 * (size_t)n;
     return 0;
@@ -285,10 +307,12 @@ int gv_dct_unpack(const uint8_t *buf, size_t len, int channels,
 {
     struct dct_rows it;
     static _Thread_local dct_row co;
+    uint8_t eobs[3][GV_DCT_BLOCKS];
     if (rows_begin(&it, buf, len, channels, err) < 0)
         return -1;
     for (int by = 0; by < GV_DCT_BLOCKS; by++) {
-        if (rows_next(&it, buf, by, channels, co, err) < 0)
+        memset(co, 0, sizeof co);
+        if (rows_next(&it, buf, by, channels, co, eobs, err) < 0)
             return -1;
         for (int v = 0; v < 8; v++) {
             int16_t *dst = coefs + (size_t)4 * (8 * by + v) * GV_DCT_PLANE;
@@ -327,6 +351,57 @@ void gv_dct_inverse(const int16_t *d, int32_t *e)
         }
 }
 
+/* The rows and columns that the first n coefficients in zigzag order
+ * reach: zz_rows[n] = 1 + the largest v, zz_cols[n] = 1 + the largest u. */
+static uint8_t zz_rows[65], zz_cols[65];
+
+static void init_zz_extent(void)
+{
+    int v = 0, u = 0;
+    zz_rows[0] = zz_cols[0] = 0;
+    for (int n = 1; n <= 64; n++) {
+        int z = gv_dct_zigzag[n - 1];
+        v = (z >> 3) + 1 > v ? (z >> 3) + 1 : v;
+        u = (z & 7) + 1 > u ? (z & 7) + 1 : u;
+        zz_rows[n] = (uint8_t)v;
+        zz_cols[n] = (uint8_t)u;
+    }
+}
+
+/* gv_dct_inverse of a block whose coefficients past the first n in
+ * zigzag order are zero (n >= 1), read from row-major storage with
+ * `stride` between rows: the terms left out are zero, so the integers are
+ * the same. */
+static void inverse_sparse(const int16_t *d, size_t stride, int n, int32_t *e)
+{
+    const int rows = zz_rows[n], cols = zz_cols[n];
+    if (n == 1) {
+        const int32_t t = asr(64 * d[0] + 64, 7), v = asr(64 * t + 1024, 11);
+        for (int k = 0; k < 64; k++)
+            e[k] = v;
+        return;
+    }
+    int32_t t[8][8];   /* t[v][i], rows v < `rows` */
+    /* Loops over i innermost, eight lanes, so that they vectorize. */
+    for (int v = 0; v < rows; v++) {
+        const int16_t *dv = d + (size_t)v * stride;
+        int32_t acc[8] = {64, 64, 64, 64, 64, 64, 64, 64};
+        for (int u = 0; u < cols; u++)
+            for (int i = 0; i < 8; i++)
+                acc[i] += gv_dct_matrix[u][i] * dv[u];
+        for (int i = 0; i < 8; i++)
+            t[v][i] = asr(acc[i], 7);
+    }
+    for (int j = 0; j < 8; j++) {
+        int32_t acc[8] = {1024, 1024, 1024, 1024, 1024, 1024, 1024, 1024};
+        for (int v = 0; v < rows; v++)
+            for (int i = 0; i < 8; i++)
+                acc[i] += gv_dct_matrix[v][j] * t[v][i];
+        for (int i = 0; i < 8; i++)
+            e[8 * j + i] = asr(acc[i], 11);
+    }
+}
+
 static inline uint8_t clamp_u8(int32_t v)
 {
     return (uint8_t)(v < 0 ? 0 : (v > 255 ? 255 : v));
@@ -338,49 +413,68 @@ int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
 {
     struct dct_rows it;
     dct_row co;
+    uint8_t eobs[3][GV_DCT_BLOCKS];
     struct gv_predictor pred;
+    if (!zz_rows[64])
+        init_zz_extent();
     if (rows_begin(&it, buf, len, channels, err) < 0)
         return -1;
     gv_predictor_init(&pred, parent, channels, qx, qy);
+    /* co stays zero between rows: each block's coded coefficients are
+     * cleared again once used. */
+    memset(co, 0, sizeof co);
     const size_t stride = (size_t)GV_TILE * channels;
     for (int by = 0; by < GV_DCT_BLOCKS; by++) {
-        if (rows_next(&it, buf, by, channels, co, err) < 0)
+        if (rows_next(&it, buf, by, channels, co, eobs, err) < 0)
             return -1;
         const int y0 = 8 * by, rows = y0 + 8 <= GV_TILE ? 8 : GV_TILE - y0;
         for (int j = 0; j < rows; j++)
             gv_predictor_row(&pred, y0 + j, out + (size_t)(y0 + j) * stride);
         for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
             int32_t e[3][64];
-            int any = 0;
-            for (int c = 0; c < channels; c++) {
-                int16_t d[64];
-                int nz = 0;
-                for (int v = 0; v < 8; v++)
-                    for (int u = 0; u < 8; u++)
-                        nz |= d[8 * v + u] = co[c][v][8 * bx + u];
-                if (nz)
-                    gv_dct_inverse(d, e[c]);
-                else
-                    memset(e[c], 0, sizeof e[c]);
-                any |= nz;
+            int n[3] = {eobs[0][bx], 0, 0};
+            if (channels == 3) {
+                n[1] = eobs[1][bx];
+                n[2] = eobs[2][bx];
             }
-            if (!any)
+            if (!(n[0] | n[1] | n[2]))
                 continue;
+            for (int c = 0; c < channels; c++) {
+                int16_t *d = &co[c][0][8 * bx];
+                if (!n[c]) {
+                    /* Zeros only where another channel needs them. */
+                    if (c > 0 || n[1] | n[2])
+                        memset(e[c], 0, sizeof e[c]);
+                    continue;
+                }
+                inverse_sparse(d, GV_DCT_PLANE, n[c], e[c]);
+                for (int k = 0; k < n[c]; k++) {
+                    const int z = gv_dct_zigzag[k];
+                    d[(size_t)(z >> 3) * GV_DCT_PLANE + (z & 7)] = 0;
+                }
+            }
             const int x0 = 8 * bx, cols = x0 + 8 <= GV_TILE ? 8 : GV_TILE - x0;
+            const int gray_residual = channels == 1 || !(n[1] | n[2]);
             for (int j = 0; j < rows; j++) {
                 uint8_t *px = out + (size_t)(y0 + j) * stride + (size_t)x0 * channels;
-                for (int i = 0; i < cols; i++, px += channels) {
-                    const int k = 8 * j + i;
-                    if (channels == 1) {
-                        px[0] = clamp_u8(px[0] + e[0][k]);
-                        continue;
+                const int32_t *ey = e[0] + 8 * j;
+                if (channels == 1) {
+                    for (int i = 0; i < cols; i++)
+                        px[i] = clamp_u8(px[i] + ey[i]);
+                } else if (gray_residual) {
+                    /* Co = Cg = 0: YCoCg-R gives R = G = B = Y. */
+                    for (int i = 0; i < 3 * cols; i++)
+                        px[i] = clamp_u8(px[i] + ey[i / 3]);
+                } else {
+                    for (int i = 0; i < cols; i++, px += 3) {
+                        const int k = 8 * j + i;
+                        const int32_t y = e[0][k], co_ = e[1][k], cg = e[2][k];
+                        const int32_t t = y - asr(cg, 1);
+                        const int32_t g = cg + t, b = t - asr(co_, 1), r = b + co_;
+                        px[0] = clamp_u8(px[0] + r);
+                        px[1] = clamp_u8(px[1] + g);
+                        px[2] = clamp_u8(px[2] + b);
                     }
-                    const int32_t y = e[0][k], co_ = e[1][k], cg = e[2][k];
-                    const int32_t t = y - asr(cg, 1);
-                    const int32_t g = cg + t, b = t - asr(co_, 1), r = b + co_;
-                    px[0] = clamp_u8(px[0] + r);
-                    px[1] = clamp_u8(px[1] + g);
-                    px[2] = clamp_u8(px[2] + b);
                 }
             }
         }

@@ -805,6 +805,15 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
     stats->samples = samples;
 
     uint64_t sse = reconstruct(ws, orig, NULL, 0, channels, valid_w, valid_h, recon);
+    if (params->lambda > 0 && !params->nearest_only &&
+        params->dct == GV_LAYOUTS_D) {
+        stats->rate = 0;
+        stats->sse = sse;
+        size_t len = gv_tilebuf_size(0, channels);
+        pack_buffer(buf, len, 0, channels, NULL, NULL);
+        return try_dct(ws, orig, parent, qx, qy, channels, valid_w, valid_h,
+                       params->lambda, max_rate, len, recon, buf, stats);
+    }
     if (params->lambda > 0 && !params->nearest_only) {
         size_t len = encode_rd_ecvq(ws, orig, channels, valid_w, valid_h,
                                     params, max_rate, sse, recon, buf, stats);

@@ -602,7 +602,8 @@ static void make_header(const struct encoder *e, struct gv_header *h)
     h->src_float = (uint8_t)src->src_float;
     h->tone = (uint8_t)src->tone;
     h->target_mpsnr = (uint32_t)lround(e->opts->target_psnr * 1000.0);
-    h->version = e->opts->dct && !e->opts->per_tile ? GV_VERSION_DCT : GV_VERSION;
+    h->version = e->opts->dct != GV_LAYOUTS_VQ && !e->opts->per_tile ?
+                 GV_VERSION_DCT : GV_VERSION;
 }
 
 /* The geometry of the opened source, and the output: a shard file (with
@@ -728,7 +729,8 @@ int gv_encode(const char *const *inputs, int n, const char *output,
         goto out;
     for (int k = 0; k < e.g.root; k++)
         gv_lambda_model_finish(&e.model[k]);
-    e.lambda = gv_lambda_model_lambda(e.model, e.g.root, e.target_mse, opts->dct);
+    e.lambda = gv_lambda_model_lambda(e.model, e.g.root, e.target_mse,
+                                      opts->dct != GV_LAYOUTS_VQ);
     res->per_tile = opts->per_tile;
     res->lambda = opts->per_tile ? 0.0 : e.lambda;
     if (pass2(&e, &sse0, &samples0) < 0)

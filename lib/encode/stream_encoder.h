@@ -25,7 +25,8 @@
 #include "codec/tile.h"
 #include "encode/source.h"
 
-#define GV_DEFAULT_DCT 0         /* layout D unless --vq-only */
+#define GV_DEFAULT_DCT GV_LAYOUTS_VQ  /* tile layouts (tile.h GV_LAYOUTS_*) */
+#define GV_DEFAULT_LAYOUTS "vq"       /* ... as --layouts names them */
 #define GV_DEFAULT_PSNR 40.0     /* dB, level 0 of the whole image */
 #define GV_DEFAULT_MAX_RATE 10   /* 1024 codevectors */
 
@@ -47,9 +48,9 @@ struct gv_encode_opts {
                                * equal-slope allocation (FORMAT.md 8), one
                                * price of a bit for every tile, found by
                                * lambda_model.h for the whole-image target */
-    int dct;                  /* equal-slope mode: tiles may also be coded in
-                               * layout D (FORMAT.md 4.3); the store is then
-                               * format version 4 */
+    int dct;                  /* equal-slope mode: GV_LAYOUTS_* (tile.h);
+                               * with layout D the store is format
+                               * version 4 */
     int threads;              /* workers; 0 = every CPU */
     int shard_index;          /* with shard_count > 0: write shard */
     int shard_count;          /* shard_index of shard_count (0-based) to
