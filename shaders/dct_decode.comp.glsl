@@ -2,9 +2,13 @@
 // transform-coded tile buffer of a group (layout D, docs/FORMAT.md section
 // 4.3), one invocation per row of 8x8 blocks and one row of work groups per
 // tile (gl_WorkGroupID.y), into the tile's 520x520 coefficient plane: two
-// uints per texel, (D_0 & 0xffff) | D_1 << 16 and D_2 & 0xffff, the texel
-// the WebGL2 path uploads as RGBA16I.  tile_decode.frag.glsl then takes
-// the inverse transform per pixel.  Bit for bit what lib/codec/tile_dct.c
+// uints per texel, (D_0 & 0xffff) | D_1 << 16 and (D_2 & 0xffff) | A << 16,
+// the texel the WebGL2 path uploads as RGBA16I.  A is 0 but in the first
+// texel of each block, where it bounds the block's nonzero coefficients:
+// rows (v) in bits 0-3 and columns (u) in bits 4-7, 1 to 8 each, so that
+// tile_decode.frag.glsl, which takes the inverse transform per pixel,
+// reads no more of the block than it must (zero rows and columns add
+// nothing to its sums; WebGL2's A = 0 reads all 8 x 8).  Bit for bit what lib/codec/tile_dct.c
 // gv_dct_unpack produces for a well-formed buffer (the CPU checks the
 // layout before it is uploaded; a damaged stream or a missing model still
 // reads nothing past the tile's buffer and writes only its own block row).
@@ -123,6 +127,7 @@ void main()
     for (int i = 0; i < 192; i++)
         blk[i] = 0;
     for (int bx = 0; bx < 65; bx++) {
+        int rows = 1, cols = 1;    // of the block's nonzero coefficients
         for (int c = 0; c < channels; c++) {
             int cc = c == 0 ? 0 : 1;
             int n = min(rans_step(model_at[3 * cc + pe[c]], 65), 64);
@@ -144,7 +149,12 @@ void main()
                 if (k == 0)
                     dcp[c] = class_of(q);
                 prev = q;
-                blk[64 * c + ZZ[k]] = clamp(q * step_q[c], -32768, 32767);
+                int z = ZZ[k], d = clamp(q * step_q[c], -32768, 32767);
+                blk[64 * c + z] = d;
+                if (d != 0) {
+                    rows = max(rows, (z >> 3) + 1);
+                    cols = max(cols, (z & 7) + 1);
+                }
             }
             pe[c] = n == 0 ? 0 : (n <= 4 ? 1 : 2);
             if (n == 0)
@@ -153,11 +163,13 @@ void main()
         // The block into the plane: texel (8 bx + u, 8 by + v).
         for (int i = 0; i < 64; i++) {
             int w = out_at + 2 * ((8 * by + (i >> 3)) * 520 + 8 * bx + (i & 7));
+            uint a = i == 0 ? uint(rows | cols << 4) << 16 : 0u;
             if (channels == 3) {
                 coefs[w] = (uint(blk[i]) & 0xffffu) | (uint(blk[64 + i]) << 16);
-                coefs[w + 1] = uint(blk[128 + i]) & 0xffffu;
+                coefs[w + 1] = (uint(blk[128 + i]) & 0xffffu) | a;
             } else {
                 coefs[w] = uint(blk[i]) & 0xffffu;
+                coefs[w + 1] = a;
             }
             blk[i] = 0;
             blk[64 + i] = 0;

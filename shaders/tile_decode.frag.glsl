@@ -39,6 +39,9 @@ ivec3 coef_at(int x, int y)
     int a = int(indices[w]), b = int(indices[w + 1]);
     return ivec3((a << 16) >> 16, a >> 16, (b << 16) >> 16);
 }
+// The fourth component of texel (x, y): 0, or in a block's first texel
+// the bounds of its nonzero coefficients (dct_decode.comp.glsl).
+int coef_bounds(int x, int y) { return int(indices[2 * (y * 520 + x) + 1] >> 16); }
 #else
 uniform usampler2D u_words;    // tile buffer as R32UI, u_words_width wide
 uniform int u_words_width;
@@ -50,6 +53,7 @@ uniform usampler2D u_indices;
 // (gv_dct_unpack) and uploaded as a 520x520 RGBA16I texture.
 uniform isampler2D u_coefs;
 ivec3 coef_at(int x, int y) { return texelFetch(u_coefs, ivec2(x, y), 0).rgb; }
+int coef_bounds(int x, int y) { return texelFetch(u_coefs, ivec2(x, y), 0).a; }
 #endif
 
 out uvec4 o_color;
@@ -106,15 +110,21 @@ const int K[64] = int[64](
 
 // Residual of pixel uv of a transform-coded tile: the inverse transform of
 // its block, rows then columns, each rounded by an arithmetic shift (>> on
-// a signed int), then YCoCg-R back to RGB (C = 3) or gray as is.
+// a signed int), then YCoCg-R back to RGB (C = 3) or gray as is.  Rows and
+// columns past the block's bounds (its first texel's fourth component, 0
+// meaning all 8 of each) hold zeros, which change no sum: a zero row's
+// t[v] is (0 + 64) >> 7 = 0.
 ivec3 dct_residual(ivec2 uv)
 {
     ivec2 b = (uv >> 3) << 3;
     int i = uv.x & 7, j = uv.y & 7;
+    int bounds = coef_bounds(b.x, b.y);
+    int rows = (bounds & 15) == 0 ? 8 : bounds & 15;
+    int cols = (bounds >> 4 & 15) == 0 ? 8 : bounds >> 4 & 15;
     ivec3 e = ivec3(0);
-    for (int v = 0; v < 8; v++) {
+    for (int v = 0; v < rows; v++) {
         ivec3 acc = ivec3(0);
-        for (int u = 0; u < 8; u++)
+        for (int u = 0; u < cols; u++)
             acc += K[8 * u + i] * coef_at(b.x + u, b.y + v);
         e += K[8 * v + j] * ((acc + GV_DCT_ROUND_ROWS) >> 7);
     }
