@@ -60,9 +60,9 @@ run encode -q 30 synth:3000x2000 -o "$S/synth.gv"
 [ "$rc" -eq 0 ] || bail "encode synth: $(cat "$T/err")"
 # Layout D (FORMAT.md 4.3): the same photo and a gray synthetic image
 # with transform-coded tiles.
-run encode --dct "$TESTDATA/picos-1100x700.jpg" -o "$S/picosd.gv"
+run encode --layouts d "$TESTDATA/picos-1100x700.jpg" -o "$S/picosd.gv"
 [ "$rc" -eq 0 ] || bail "encode picosd: $(cat "$T/err")"
-run encode --dct synth:1100x700:gray -o "$S/grayd.gv"
+run encode --layouts all synth:1100x700:gray -o "$S/grayd.gv"
 [ "$rc" -eq 0 ] || bail "encode grayd: $(cat "$T/err")"
 
 absrc=$(cd "$srcdir" && pwd)

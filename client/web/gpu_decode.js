@@ -10,7 +10,8 @@
 // entropy-coded tile's indices, decoded on the CPU (tilebuf.js), go in a
 // 257 x 257 R16UI texture (u_indices); a layout-D tile's dequantized
 // coefficients, unpacked on the CPU too (tile_dct.js), in a 520 x 520
-// RGBA16I texture (u_coefs, channel c in component c), from which the
+// RGBA16I texture (u_coefs, channel c in component c, a block's bounds in
+// its first texel's fourth, as dct_decode.comp.glsl has them), from which the
 // shader does the inverse transform and colour transform.  Both textures
 // stay bound for every tile; a tile of another layout leaves their old
 // contents there, which its shader path never reads.  Unlike lib/gpu/gpu_decode.c no second mip level

@@ -131,8 +131,13 @@ const cls = (v) => (v === 0 ? 0 : v === 1 ? 1 : 2);
  * 520 x 520 plane at 4 (520 Y + X), channel c in element c, element 3
  * (and 1, 2 for gray) zero.  Each stream is validated (a model it needs
  * is stored, no read past its end, clean final state).  Throws on damage.
+ * With `bounds`, element 3 of each block's first texel holds what
+ * dct_decode.comp.glsl puts there: the rows (bits 0-3) and columns (bits
+ * 4-7) that the block's nonzero coefficients reach, 1 to 8 each, so that
+ * the decode shader reads no more of the block than it must (0, as
+ * gv_dct_unpack leaves it, reads all 8 x 8: the same pixels either way).
  */
-export function dctUnpack(buf, channels, coefs) {
+export function dctUnpack(buf, channels, coefs, bounds = false) {
     const l = dctLayout(buf, channels);
     const step = [u16(buf, 2), u16(buf, 4), u16(buf, 6)];
     // load_models: per model cum (k + 1 entries, cum[k] = 256) and the
@@ -189,6 +194,7 @@ export function dctUnpack(buf, channels, coefs) {
         const pe = [0, 0, 0], dcp = [0, 0, 0];
         for (let bx = 0; bx < DCT_BLOCKS; bx++) {
             const origin = 4 * (8 * by * DCT_SIDE + 8 * bx);
+            let rows = 1, cols = 1;
             for (let c = 0; c < channels; c++) {
                 const cc = c === 0 ? 0 : 1;
                 const nc = dec(3 * cc + pe[c]);
@@ -212,11 +218,17 @@ export function dctUnpack(buf, channels, coefs) {
                     const z = ZIGZAG[k];
                     const v = Math.max(-32768, Math.min(32767, q * step[c]));
                     coefs[origin + 4 * ((z >> 3) * DCT_SIDE + (z & 7)) + c] = v;
+                    if (v !== 0) {
+                        rows = Math.max(rows, (z >> 3) + 1);
+                        cols = Math.max(cols, (z & 7) + 1);
+                    }
                 }
                 pe[c] = nc === 0 ? 0 : nc <= 4 ? 1 : 2;
                 if (nc === 0)
                     dcp[c] = 0;
             }
+            if (bounds)
+                coefs[origin + 3] = rows | cols << 4;
         }
         if (x !== RANS_L || next !== n)
             throw corrupt(`stream ${by} does not end cleanly`);

@@ -278,7 +278,8 @@ export const WORDS_ROWS_MAX = Math.ceil(TILEBUF_MAX / 4 / WORDS_WIDTH);
  * Everything the GPU needs for one tile buffer (a Uint8Array): the buffer
  * as 32-bit little-endian words padded to whole rows of WORDS_WIDTH, for
  * an entropy-coded tile (E, EX) its decoded indices (else null), for a
- * layout-D tile its coefficient plane (an Int16Array of DCT_PLANE, else
+ * layout-D tile its coefficient plane (an Int16Array of DCT_PLANE, with
+ * each block's bounds in its first texel's fourth component, else
  * null; its words are the first row only, which holds byte 0: the shader
  * reads nothing else of a D buffer).  Checks the buffer first; throws on
  * damage.
@@ -295,7 +296,7 @@ export function prepareTile(buf, channels) {
     let indices = null, coefs = null;
     if (dct) {
         coefs = new Int16Array(DCT_PLANE);
-        dctUnpack(buf, channels, coefs);
+        dctUnpack(buf, channels, coefs, true);   // with the blocks' bounds
     } else if (buf[0] & ENTROPY) {
         indices = new Uint16Array(NBLOCKS);
         ransUnpack(buf, rate, channels, indices);

@@ -18,7 +18,9 @@
 // added, a stored model's mask bit cleared, mask bit 30 set; the other
 // channel count), that tile_dct.js accepts exactly the buffers the C decoder
 // accepts and then produces the same coefficient plane (its FNV-1a hash
-// and nonzero count), and refuses the others with the same message.  Negative control: a plane with one coefficient
+// and nonzero count), and refuses the others with the same message;
+// and that the bounds prepareTile adds to each block bound its nonzero
+// coefficients exactly.  Negative control: a plane with one coefficient
 // changed must not match.  Exit 0 when every check passed, 1 otherwise,
 // 2 on a usage error.
 import { spawnSync } from 'node:child_process';
@@ -206,6 +208,35 @@ try {
         throw new Error(`${opt.helper}: ${lines.length} lines for ${cases.length} buffers`);
     const coefs = new Int16Array(DCT_PLANE);
     let intact = 0, refused = 0, accepted = 0, control = null, unpackMs = 0, unpacked = 0;
+    // With bounds (what prepareTile uploads): the same plane but in the
+    // fourth component of each block's first texel, which must bound the
+    // block's nonzero coefficients exactly (rows | columns << 4, 1..8).
+    const withBounds = new Int16Array(DCT_PLANE), badBounds = [];
+    const checkBounds = (c) => {
+        dctUnpack(c.buf, c.channels, withBounds, true);
+        let wrong = 0;
+        for (let Y = 0; Y < 520; Y++)
+            for (let X = 0; X < 520; X++) {
+                const i = 4 * (520 * Y + X);
+                for (let k = 0; k < 3; k++)
+                    if (withBounds[i + k] !== coefs[i + k]) wrong++;
+                if ((X & 7) || (Y & 7)) {
+                    if (withBounds[i + 3] !== 0) wrong++;
+                    continue;
+                }
+                let rows = 1, cols = 1;
+                for (let v = 0; v < 8; v++)
+                    for (let u = 0; u < 8; u++)
+                        for (let k = 0; k < 3; k++)
+                            if (coefs[i + 4 * (520 * v + u) + k]) {
+                                rows = Math.max(rows, v + 1);
+                                cols = Math.max(cols, u + 1);
+                            }
+                if (withBounds[i + 3] !== (rows | cols << 4)) wrong++;
+            }
+        if (wrong)
+            badBounds.push(`${c.key}: ${wrong} values wrong`);
+    };
     const bad = [], badIntact = [];
     cases.forEach((c, i) => {
         const cpu = lines[i];
@@ -227,6 +258,8 @@ try {
             (c.intact ? badIntact : bad).push(`${c.key}: C "${cpu}", JavaScript "${js}"`);
         if (c.intact) {
             intact += cpu.startsWith('ok ') && same;
+            if (cpu.startsWith('ok '))
+                checkBounds(c);
             if (control === null && cpu.startsWith('ok ')) {
                 coefs[4 * (520 * 3 + 5)] ^= 1;   // texel (5, 3), channel 0
                 control = `ok ${digest(coefs)}` !== cpu;
@@ -244,6 +277,9 @@ try {
     check(bad.length === 0,
         `${cases.length - nIntact} changed or damaged buffers: both refuse the same ${refused} with the same message, both accept the same ${accepted} with the same coefficients`,
         ...bad.slice(0, 8));
+    check(badBounds.length === 0 && intact > 0,
+        `the ${intact} planes with their blocks' bounds (as prepareTile uploads them) differ only there, each bounding its block's nonzero coefficients`,
+        ...badBounds.slice(0, 8));
     check(control === true, 'negative control: a plane with one coefficient changed does not match');
     note(`${cases.length} buffers compared; tile_dct.js unpacked the ${unpacked} intact store tiles in ${unpackMs.toFixed(0)} ms (a measurement, not a check)`);
 } catch (e) {
