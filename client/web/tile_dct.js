@@ -201,7 +201,7 @@ export function dctUnpack(buf, channels, coefs, bounds = false) {
                 let prev = 0;
                 for (let k = 0; k < nc; k++) {
                     const band = k === 0 ? 0 : k <= 2 ? 1 : k <= 9 ? 2 : 3;
-                    const p = k === 0 ? dcp[c] : cls(Math.abs(prev));
+                    const p = k === 0 ? dcp[c] : cls(prev < 0 ? -prev : prev);
                     const t = dec(6 + 3 * (4 * cc + band) + p);
                     let q;
                     if (t === 0)
@@ -213,14 +213,16 @@ export function dctUnpack(buf, channels, coefs, bounds = false) {
                         q = 64 * h + lo - 2048;
                     }
                     if (k === 0)
-                        dcp[c] = cls(Math.abs(q));
+                        dcp[c] = cls(q < 0 ? -q : q);
                     prev = q;
                     const z = ZIGZAG[k];
-                    const v = Math.max(-32768, Math.min(32767, q * step[c]));
+                    const d = q * step[c], v = d < -32768 ? -32768 : d > 32767 ? 32767 : d;
                     coefs[origin + 4 * ((z >> 3) * DCT_SIDE + (z & 7)) + c] = v;
                     if (v !== 0) {
-                        rows = Math.max(rows, (z >> 3) + 1);
-                        cols = Math.max(cols, (z & 7) + 1);
+                        if ((z >> 3) >= rows)
+                            rows = (z >> 3) + 1;
+                        if ((z & 7) >= cols)
+                            cols = (z & 7) + 1;
                     }
                 }
                 pe[c] = nc === 0 ? 0 : nc <= 4 ? 1 : 2;
