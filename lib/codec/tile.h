@@ -134,7 +134,8 @@ void gv_tile_workspace_free(struct gv_tile_workspace *ws);
  *           only those count in the error
  *   recon   receives the decoded tile (exactly what gv_tile_decode gives)
  *   buf     receives the tile buffer; it must hold
- *           gv_tilebuf_size(params->max_rate, channels) bytes
+ *           gv_tilebuf_size(params->max_rate, channels) bytes, or
+ *           GV_TILEBUF_MAX when params->dct is not GV_LAYOUTS_VQ
  * Returns the buffer length in bytes and fills *stats.  Cannot fail.
  */
 size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,

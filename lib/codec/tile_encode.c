@@ -767,19 +767,21 @@ static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
 }
 
 /* Layout D for the same tile: kept instead of the VQ buffer (len bytes,
- * stats, recon) when its SSE + lambda * bits is lower.  It must fit where
- * the VQ buffer at the cap would.  Returns the length kept. */
+ * stats, recon) when its SSE + lambda * bits is lower.  *fits says whether
+ * it fitted in GV_TILEBUF_MAX (at very low lambda it may not).  Returns
+ * the length kept. */
 static size_t try_dct(struct gv_tile_workspace *ws, const uint8_t *orig,
                       const uint8_t *parent, int qx, int qy, int channels,
                       uint32_t valid_w, uint32_t valid_h, double lambda,
-                      int max_rate, size_t len, uint8_t *recon, uint8_t *buf,
-                      struct gv_tile_stats *stats)
+                      size_t len, uint8_t *recon, uint8_t *buf,
+                      struct gv_tile_stats *stats, int *fits)
 {
-    size_t cap = gv_tilebuf_size(max_rate, channels);
+    size_t cap = GV_TILEBUF_MAX;
     uint64_t dsse;
     size_t dlen = gv_dct_encode(ws->dct, orig, ws->pred, parent, qx, qy,
                                 channels, valid_w, valid_h, lambda, ws->alt,
                                 cap, ws->dct_recon, &dsse);
+    *fits = dlen != 0;
     if (!dlen || (double)dsse + lambda * 8.0 * (double)dlen >=
                  (double)stats->sse + lambda * 8.0 * (double)len)
         return len;
@@ -811,15 +813,23 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
         stats->sse = sse;
         size_t len = gv_tilebuf_size(0, channels);
         pack_buffer(buf, len, 0, channels, NULL, NULL);
-        return try_dct(ws, orig, parent, qx, qy, channels, valid_w, valid_h,
-                       params->lambda, max_rate, len, recon, buf, stats);
+        int fits;
+        len = try_dct(ws, orig, parent, qx, qy, channels, valid_w, valid_h,
+                      params->lambda, len, recon, buf, stats, &fits);
+        if (fits)
+            return len;
+        /* Too fine for D's largest buffer: the VQ search instead. */
+        reconstruct(ws, orig, NULL, 0, channels, valid_w, valid_h, recon);
+        return encode_rd_ecvq(ws, orig, channels, valid_w, valid_h, params,
+                              max_rate, sse, recon, buf, stats);
     }
     if (params->lambda > 0 && !params->nearest_only) {
         size_t len = encode_rd_ecvq(ws, orig, channels, valid_w, valid_h,
                                     params, max_rate, sse, recon, buf, stats);
+        int fits;
         if (params->dct)
             len = try_dct(ws, orig, parent, qx, qy, channels, valid_w, valid_h,
-                          params->lambda, max_rate, len, recon, buf, stats);
+                          params->lambda, len, recon, buf, stats, &fits);
         return len;
     }
     if (params->lambda > 0)

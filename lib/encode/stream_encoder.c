@@ -540,7 +540,9 @@ static int start_workers(struct encoder *e)
         if (!(e->tile_rate[k] = calloc((size_t)e->g.level[k].tiles_x *
                                        e->g.level[k].tiles_y, 1)))
             return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
-    size_t maxbuf = gv_tilebuf_size(e->opts->max_rate, c);
+    /* Layout D may use up to GV_TILEBUF_MAX at any rate cap. */
+    size_t maxbuf = e->opts->dct == GV_LAYOUTS_VQ ?
+                    gv_tilebuf_size(e->opts->max_rate, c) : GV_TILEBUF_MAX;
     for (int s = 0; s < 16; s++)
         if (!(e->parents[s] = malloc(gv_tile_bytes(c))))
             return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
