@@ -3,7 +3,7 @@
  * reference decoder, bit for bit, on every tile of several stores: RGB and
  * gray, a real photograph and procedural images, rates from 0 to 12, every
  * tile layout (fixed, E, the context-coded EX, the transform-coded D of
- * stores encoded with --dct, and synthetic D buffers with negative
+ * stores encoded with --layouts all, and synthetic D buffers with negative
  * controls), and a store of format version 1.  Tiles
  * are decoded top-down entirely on the GPU (each from its GPU-decoded
  * parent), so an error anywhere would propagate and be seen: one call per
@@ -46,13 +46,13 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     gv_encode_opts_default(&o);
     o.target_psnr = psnr;
     o.max_rate = max_rate;
-    o.dct = dct;
+    o.dct = dct ? GV_LAYOUTS_ALL : GV_LAYOUTS_VQ;
     fixture_encode(out, input, &o);
     const int d = check_path(gpu, input, out, GV_GPU_PATH_SSBO);
     check_path(gpu, input, out, GV_GPU_PATH_WEBGL2);
     if (dct) {
         const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
-        check(d > 0, "%s at %.0f dB with --dct: the store holds %d layout-D tiles",
+        check(d > 0, "%s at %.0f dB with --layouts all: the store holds %d layout-D tiles",
               name, psnr, d);
     }
     /* The gray synthetic store five times over (65 tiles): a batch longer
@@ -519,6 +519,7 @@ int main(int argc, char **argv)
     /* Layout D (FORMAT.md 4.3) where the encoder finds it cheaper. */
     check_store(gpu, picos, 40.0, 10, 1);
     check_store(gpu, "synth:700x700:gray", 40.0, 10, 1);
+    check_store(gpu, "synth:900x700", 40.0, 10, 1);    /* D and EX in a group */
     /* A store of format version 1 (E layout and rate 0 only). */
     char v1[512];
     snprintf(v1, sizeof v1, "%s/v1-picos-530x516.gv", data);

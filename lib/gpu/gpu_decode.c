@@ -90,7 +90,8 @@ struct gv_gpu_decoder {
     GLint dec_words, dec_words_width, dec_indices, dec_coefs;
     uint16_t *cpu_indices;             /* WebGL2 path: rANS decoded here */
     int16_t *cpu_coefs;                /* WebGL2 path: layout D's plane */
-    const char *defines;               /* prepended to the decode shader */
+    const char *defines;               /* prepended to the decode shader
+                                        * (borrowed during set-up only) */
 };
 
 struct job {

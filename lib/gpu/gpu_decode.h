@@ -42,8 +42,8 @@ struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
                                                enum gv_gpu_path path,
                                                struct gv_error *err);
 
-/* The same with `defines` (#define lines, borrowed for the decoder's
- * life) put before the decode shader's source: tests use it to change the
+/* The same with `defines` (#define lines, read only during this call)
+ * put before the decode shader's source: tests use it to change the
  * transform's rounding (GV_DCT_ROUND_ROWS, GV_DCT_ROUND_COLS in
  * shaders/tile_decode.frag.glsl) and see the comparison fail. */
 struct gv_gpu_decoder *gv_gpu_decoder_new_defines(struct gv_gpu *g, int channels,
