@@ -6,8 +6,10 @@
 # graphs (the stock library, a token for saving).
 #
 # Encodes tests/data/picos-1100x700.jpg as store "picos" (two tiled
-# levels; every tile of it is entropy-coded) and synth:3000x2000 at -q 30 as
-# "synth" (three tiled levels, both tile layouts), starts gigaviewd on
+# levels; every tile of it is entropy-coded), synth:3000x2000 at -q 30 as
+# "synth" (three tiled levels, both tile layouts), and with layout-D
+# (transform-coded) tiles the photo again as "picosd" and
+# synth:1100x700:gray as "grayd", starts gigaviewd on
 # port 0, and runs viewer.mjs: 1:1 views of pyramid levels read back from
 # the canvas against the region endpoint (the CPU reference decoder; mean
 # absolute difference <= 1 per channel, measured 0: the shared decode
@@ -24,9 +26,18 @@
 # stale result in place meanwhile, the graph view, a GLSL compile error at
 # its line, saving; every ROI picture bit for bit the filter endpoint's.
 #
+# With the tests/dct_coefs helper, viewer.mjs also decodes its synthetic
+# layout-D tiles (escapes, clamps, full and empty blocks) in the page
+# against gv_tile_decode.  Layout D's unpacking is also checked in node against the C decoder's
+# (tests/browser/dct_unpack.mjs with the tests/dct_coefs helper): every D
+# tile and the helper's synthetic buffers, intact, with a step changed and
+# damaged, refused alike (same message) or unpacked to the same
+# coefficients.
+#
 # Negative controls of the whole pipeline, each must FAIL the 1:1 match:
 # a decode shader with one prediction weight changed (29/111 to 30/110),
-# a rANS decoder that flips the lowest bit of every index, and a root
+# a rANS decoder that flips the lowest bit of every index, a layout-D
+# unpacking with the zigzag order transposed (on picosd), and a root
 # (as the viewer decoded it) with the lowest bit of every 97th sample
 # flipped.
 #
@@ -47,6 +58,12 @@ run encode "$TESTDATA/picos-1100x700.jpg" -o "$S/picos.gv"
 # histograms at rates 1 and 2) beside entropy-coded ones.
 run encode -q 30 synth:3000x2000 -o "$S/synth.gv"
 [ "$rc" -eq 0 ] || bail "encode synth: $(cat "$T/err")"
+# Layout D (FORMAT.md 4.3): the same photo and a gray synthetic image
+# with transform-coded tiles.
+run encode --layouts d "$TESTDATA/picos-1100x700.jpg" -o "$S/picosd.gv"
+[ "$rc" -eq 0 ] || bail "encode picosd: $(cat "$T/err")"
+run encode --layouts all synth:1100x700:gray -o "$S/grayd.gv"
+[ "$rc" -eq 0 ] || bail "encode grayd: $(cat "$T/err")"
 
 absrc=$(cd "$srcdir" && pwd)
 cat >"$T/viewer.conf" <<EOF2
@@ -92,12 +109,15 @@ else
     skip "ROI filter flows" "no filter graphs on this server (HTTP $code: $(head -c 200 "$T/b"))"
 fi
 
+# The layout-D helper (a check program): synthetic tiles for viewer.mjs,
+# coefficient planes for dct_unpack.mjs.
+: "${DCT_COEFS:=./tests/dct_coefs}"
 # viewer [ARGS...]: run viewer.mjs (timeout 400 s); output in
 # $T/viewer.out, status in $vrc.
 viewer() {
     vrc=0
     timeout 400 node "$BROWSER_DIR/viewer.mjs" --base "$BASE" --gigaview "$GIGAVIEW" \
-        --chromium "$CHROMIUM" "$@" >"$T/viewer.out" 2>&1 || vrc=$?
+        --chromium "$CHROMIUM" --dctcoefs "$DCT_COEFS" "$@" >"$T/viewer.out" 2>&1 || vrc=$?
 }
 # shellcheck disable=SC2086
 viewer $filters
@@ -113,15 +133,34 @@ if [ "$vrc" -ne 0 ] && ! grep -q '^FAIL ' "$T/viewer.out"; then
     not_ok "viewer.mjs ran (exit $vrc)" "$(tail -n 20 "$T/viewer.out")"
 fi
 
+# Layout D's unpacking in JavaScript against the C decoder's, tile by
+# tile, intact and damaged (node only: tests/browser/dct_unpack.mjs).
+urc=0
+timeout 120 node "$BROWSER_DIR/dct_unpack.mjs" --base "$BASE" --helper "$DCT_COEFS" \
+    --images picosd,grayd >"$T/dct.out" 2>&1 || urc=$?
+while IFS= read -r line; do
+    case $line in
+    "PASS "*) ok "${line#PASS }" ;;
+    "FAIL "*) not_ok "${line#FAIL }" ;;
+    "#"*) printf '%s\n' "$line" ;;
+    *) diag "$line" ;;
+    esac
+done <"$T/dct.out"
+if [ "$urc" -ne 0 ] && ! grep -q '^FAIL ' "$T/dct.out"; then
+    not_ok "dct_unpack.mjs ran (exit $urc)" "$(tail -n 20 "$T/dct.out")"
+fi
+
 # expect_mismatch DESCRIPTION ARGS...: the sabotaged run must fail the
 # 1:1 match, and nothing else may have broken it.
 expect_mismatch() {
     d=$1
     shift
+    img=picos
+    [ "$2" = dct ] && img=picosd
     viewer "$@"
-    if [ "$vrc" -eq 1 ] && grep -q '^FAIL picos level 0 1:1: the canvas matches' "$T/viewer.out" &&
+    if [ "$vrc" -eq 1 ] && grep -q "^FAIL $img level 0 1:1: the canvas matches" "$T/viewer.out" &&
         grep -q '^PASS the viewer opened with WebGL2' "$T/viewer.out"; then
-        ok "negative control: $d fails the match ($(grep -A1 '^FAIL picos level 0' "$T/viewer.out" |
+        ok "negative control: $d fails the match ($(grep -A1 "^FAIL $img level 0" "$T/viewer.out" |
             sed -n 's/^# \(MAD [^,]*\).*/\1/p'))"
     else
         not_ok "negative control: $d fails the match (exit $vrc)" "$(tail -n 20 "$T/viewer.out")"
@@ -129,6 +168,7 @@ expect_mismatch() {
 }
 expect_mismatch "a decode shader with one weight changed" --sabotage shader
 expect_mismatch "a rANS decoder that flips index bits" --sabotage rans
+expect_mismatch "a layout-D unpacking with the zigzag order transposed" --sabotage dct
 expect_mismatch "a root with a bit flipped in every 97th sample" --sabotage root
 
 stop_daemon

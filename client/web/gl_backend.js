@@ -132,13 +132,13 @@ export class GlBackend {
         return tex ? this.decoder.read(tex, 513, 513) : null;
     }
 
-    /** Decoded tiles now resident: [{level, tx, ty, entropy}]. */
+    /** Decoded tiles now resident: [{level, tx, ty, entropy, dct}]. */
     tiles() {
         const out = [];
         for (const [kk, e] of this.cache.tex)
             if (!e.fixed) {
                 const [level, tx, ty] = kk.split('/').map(Number);
-                out.push({ level, tx, ty, entropy: e.entropy });
+                out.push({ level, tx, ty, entropy: e.entropy, dct: e.dct });
             }
         return out;
     }

@@ -8,11 +8,18 @@
 // filtering: integer arithmetic bit for bit as the CPU decoder) and the
 // tile buffer, uploaded as an R32UI texture 1024 words wide; an
 // entropy-coded tile's indices, decoded on the CPU (tilebuf.js), go in a
-// 257 x 257 R16UI texture.  Unlike lib/gpu/gpu_decode.c no second mip level
+// 257 x 257 R16UI texture (u_indices); a layout-D tile's dequantized
+// coefficients, unpacked on the CPU too (tile_dct.js), in a 520 x 520
+// RGBA16I texture (u_coefs, channel c in component c, a block's bounds in
+// its first texel's fourth, as dct_decode.comp.glsl has them), from which the
+// shader does the inverse transform and colour transform.  Both textures
+// stay bound for every tile; a tile of another layout leaves their old
+// contents there, which its shader path never reads.  Unlike lib/gpu/gpu_decode.c no second mip level
 // (the parent quarter) is made: the viewer blends two levels by drawing
 // the parent tile itself (renderer.js), which it keeps anyway.
 
 import { intTexture, program } from './gl_util.js';
+import { DCT_SIDE } from './tile_dct.js';
 import { BLOCKS, TILE, WORDS_ROWS_MAX, WORDS_WIDTH } from './tilebuf.js';
 
 /** GPU bytes of one decoded tile. */
@@ -30,6 +37,7 @@ export class GpuDecoder {
         this.prog = program(gl, vertSrc, decodeSrc, 'tile_decode.frag.glsl');
         this.words = intTexture(gl, gl.R32UI, WORDS_WIDTH, WORDS_ROWS_MAX);
         this.indices = intTexture(gl, gl.R16UI, BLOCKS, BLOCKS);
+        this.coefs = intTexture(gl, gl.RGBA16I, DCT_SIDE, DCT_SIDE);
         this.fbo = gl.createFramebuffer();
         this.vao = gl.createVertexArray();
         const p = this.prog;
@@ -37,6 +45,7 @@ export class GpuDecoder {
         gl.uniform1i(p.loc('u_parent'), 0);
         gl.uniform1i(p.loc('u_words'), 1);
         gl.uniform1i(p.loc('u_indices'), 2);
+        gl.uniform1i(p.loc('u_coefs'), 3);
         gl.uniform1i(p.loc('u_words_width'), WORDS_WIDTH);
         gl.uniform1i(p.loc('u_channels'), channels);
     }
@@ -59,6 +68,11 @@ export class GpuDecoder {
         if (prep.indices)
             gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, BLOCKS, BLOCKS, gl.RED_INTEGER,
                 gl.UNSIGNED_SHORT, prep.indices);
+        gl.activeTexture(gl.TEXTURE3);
+        gl.bindTexture(gl.TEXTURE_2D, this.coefs);
+        if (prep.coefs)
+            gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, DCT_SIDE, DCT_SIDE, gl.RGBA_INTEGER,
+                gl.SHORT, prep.coefs);
         gl.activeTexture(gl.TEXTURE0);
         // The target first: making it binds it to the active unit.
         const tex = intTexture(gl, gl.RGBA8UI, TILE, TILE);
@@ -114,6 +128,7 @@ export class GpuDecoder {
         gl.deleteProgram(this.prog.program);
         gl.deleteTexture(this.words);
         gl.deleteTexture(this.indices);
+        gl.deleteTexture(this.coefs);
         gl.deleteFramebuffer(this.fbo);
         gl.deleteVertexArray(this.vao);
     }

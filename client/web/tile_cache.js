@@ -67,7 +67,7 @@ export class TileCache {
         this.prepBytes = 0;
         this.disposed = false;
         this.stats = {
-            batches: 0, bytes: 0, tilesFetched: 0, decoded: 0, entropy: 0, prefetched: 0,
+            batches: 0, bytes: 0, tilesFetched: 0, decoded: 0, entropy: 0, dct: 0, prefetched: 0,
             decodeMs: 0, fetchMs: 0, prepMs: 0, evicted: 0, errors: 0, lastError: '',
         };
     }
@@ -257,7 +257,8 @@ export class TileCache {
     }
 
     putPrep(kk, prep) {
-        const bytes = prep.words.byteLength + (prep.indices ? prep.indices.byteLength : 0);
+        const bytes = prep.words.byteLength + (prep.indices ? prep.indices.byteLength : 0) +
+            (prep.coefs ? prep.coefs.byteLength : 0);
         this.prep.set(kk, { prep, used: this.clock, bytes });
         this.prepBytes += bytes;
         if (this.prepBytes > this.prepBudget) {
@@ -298,10 +299,12 @@ export class TileCache {
                 this.frameDecodes++;
                 if (p.prep.entropy)
                     this.stats.entropy++;
+                if (p.prep.dct)
+                    this.stats.dct++;
                 if (max !== null)
                     this.stats.prefetched++;
                 p.used = this.clock;
-                this.tex.set(kk, { tex, used: this.clock, fixed: false, entropy: p.prep.entropy });
+                this.tex.set(kk, { tex, used: this.clock, fixed: false, entropy: p.prep.entropy, dct: p.prep.dct });
                 this.texBytes += TILE_BYTES;
                 n++;
                 if (max !== null && n >= max)

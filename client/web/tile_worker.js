@@ -5,7 +5,8 @@
 // Messages in:  {type: 'fetch', id, imageUrl, tiles, channels}
 //               {type: 'abort', id}
 // Messages out: {type: 'done', id, result} (result as fetchPrepared,
-//               the word and index arrays transferred, not copied)
+//               the word, index and coefficient arrays transferred,
+//               not copied)
 //               {type: 'failed', id, error, aborted}
 
 import { fetchPrepared } from './batch.js';
@@ -32,6 +33,8 @@ self.onmessage = async (ev) => {
                 transfer.push(t.prep.words.buffer);
                 if (t.prep.indices)
                     transfer.push(t.prep.indices.buffer);
+                if (t.prep.coefs)
+                    transfer.push(t.prep.coefs.buffer);
             }
         self.postMessage({ type: 'done', id: m.id, result }, transfer);
     } catch (e) {

@@ -1,13 +1,18 @@
 // tilebuf.js - checking a compressed tile buffer and decoding its
-// entropy-coded indices on the CPU (docs/FORMAT.md sections 4, 4.1, 4.2).
+// entropy-coded indices on the CPU (docs/FORMAT.md sections 4, 4.1, 4.2;
+// layout D, section 4.3, in tile_dct.js).
 //
 // A port of gv_tilebuf_check (lib/codec/tile_decode.c) and gv_rans_check /
 // gv_rans_unpack (lib/codec/tile_rans.c), statement for statement, so that the
 // browser refuses exactly the buffers the C decoders refuse and produces
 // the same indices.  WebGL2 has no compute shaders, so the rANS streams of
 // an "E" tile are decoded here and uploaded as a 257x257 R16UI texture
-// (the GV_GPU_PATH_WEBGL2 variant of shaders/tile_decode.frag.glsl).
+// (the GV_GPU_PATH_WEBGL2 variant of shaders/tile_decode.frag.glsl); a
+// layout-D tile's streams likewise, into a 520x520 RGBA16I texture of
+// dequantized coefficients.
 // Everything here is pure: no DOM, no GL, so it runs in a worker too.
+
+import { DCT, DCT_PLANE, dctCheck, dctUnpack } from './tile_dct.js';
 
 export const TILE = 513;          // tile edge in pixels
 export const STEP = 512;          // distance between tile origins
@@ -144,12 +149,16 @@ export function ransCheck(buf, rate, channels) {
 /**
  * gv_tilebuf_check: throws an Error (code 'corrupt') unless buf (a
  * Uint8Array) is a well-formed tile buffer for `channels` (1 or 3).
- * Returns the rate r.
+ * Returns the rate r (0 for layout D, which has none).
  */
 export function checkTile(buf, channels) {
     const len = buf.length;
     if (len < 4 || (len & 3))
         throw corrupt(`buffer of ${len} bytes is not a positive multiple of 4`);
+    if (buf[0] === DCT) {
+        dctCheck(buf, channels);
+        return 0;
+    }
     const rate = buf[0] & 0x0f;
     const ctxWithoutE = (buf[0] & CONTEXT) && !(buf[0] & ENTROPY);
     if ((buf[0] & 0x30) || ctxWithoutE || rate > MAX_RATE || (rate === 0 && buf[0]))
@@ -267,22 +276,30 @@ export const WORDS_ROWS_MAX = Math.ceil(TILEBUF_MAX / 4 / WORDS_WIDTH);
 
 /**
  * Everything the GPU needs for one tile buffer (a Uint8Array): the buffer
- * as 32-bit little-endian words padded to whole rows of WORDS_WIDTH, and
- * for an entropy-coded tile its decoded indices (else null).  Checks the
- * buffer first; throws on damage.
+ * as 32-bit little-endian words padded to whole rows of WORDS_WIDTH, for
+ * an entropy-coded tile (E, EX) its decoded indices (else null), for a
+ * layout-D tile its coefficient plane (an Int16Array of DCT_PLANE, with
+ * each block's bounds in its first texel's fourth component, else
+ * null; its words are the first row only, which holds byte 0: the shader
+ * reads nothing else of a D buffer).  Checks the buffer first; throws on
+ * damage.
  */
 export function prepareTile(buf, channels) {
     const rate = checkTile(buf, channels);
-    const nwords = buf.length >> 2;
+    const dct = buf[0] === DCT;
+    const nwords = dct ? Math.min(buf.length >> 2, WORDS_WIDTH) : buf.length >> 2;
     const rows = Math.max(1, Math.ceil(nwords / WORDS_WIDTH));
     const words = new Uint32Array(rows * WORDS_WIDTH);
     const dv = new DataView(buf.buffer, buf.byteOffset, buf.length);
     for (let i = 0; i < nwords; i++)
         words[i] = dv.getUint32(4 * i, true);
-    let indices = null;
-    if (buf[0] & ENTROPY) {
+    let indices = null, coefs = null;
+    if (dct) {
+        coefs = new Int16Array(DCT_PLANE);
+        dctUnpack(buf, channels, coefs, true);   // with the blocks' bounds
+    } else if (buf[0] & ENTROPY) {
         indices = new Uint16Array(NBLOCKS);
         ransUnpack(buf, rate, channels, indices);
     }
-    return { rate, entropy: !!(buf[0] & ENTROPY), bytes: buf.length, rows, words, indices };
+    return { rate, entropy: dct || !!(buf[0] & ENTROPY), dct, bytes: buf.length, rows, words, indices, coefs };
 }

@@ -3,11 +3,13 @@
 // playwright-core.
 //
 //   node viewer.mjs --base http://127.0.0.1:PORT --gigaview PATH
-//        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans|root] [--only eviction]
+//        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans|dct|root] [--only eviction|dct]
+//        [--dctcoefs tests/dct_coefs]
 //
 // Needs stores "picos" (tests/data/picos-1100x700.jpg: two tiled levels,
-// every tile entropy-coded) and "synth" (synth:3000x2000: three tiled
-// levels at -q 30, fixed-layout and entropy-coded tiles) on the server.  The page
+// every tile entropy-coded), "synth" (synth:3000x2000: three tiled
+// levels at -q 30, fixed-layout and entropy-coded tiles), "picosd" and
+// "grayd" (layout-D tiles, RGB and gray) on the server.  The page
 // is 800 x 500 CSS pixels at device scale 1.
 //
 // Checks, one a line as "PASS text" or "FAIL text" (details start with
@@ -27,6 +29,12 @@
 //      16 MiB texture budget, and for a prefetch that must make room
 //      while the parent it decodes from is the least recently used tile
 //      (checkPrefetchEviction: that parent must not be the one evicted);
+//   2b. the same two checks on the stores picosd and grayd, among whose
+//      decoded tiles there must be layout-D ones (checkDctStores); with
+//      --dctcoefs, the synthetic layout-D tiles of `dct_coefs
+//      --fixture-tiles` (escapes, clamped coefficients and pixels, full
+//      and empty blocks) decoded by the page's own GpuDecoder equal
+//      gv_tile_decode's, and one with a changed step does not;
 //   3. each metric rejects the reference moved by one pixel, so it cannot
 //      pass by accident;
 //   4. scripted input: a mouse drag pans by exactly its distance, "+"
@@ -45,8 +53,9 @@
 //      the console as an error.
 // --sabotage shader serves a decode shader with one prediction weight
 // changed, --sabotage rans a rANS decoder that flips the lowest bit of
-// every index, --sabotage root a root whose every 97th sample has its
-// lowest bit flipped: check 1 must then FAIL (tests/browser_viewer.sh expects
+// every index, --sabotage dct a layout-D unpacking with the zigzag order
+// transposed (on picosd), --sabotage root a root whose every 97th sample
+// has its lowest bit flipped: check 1 must then FAIL (tests/browser_viewer.sh expects
 // that: negative controls of the whole pipeline); only check 1 runs.
 // Exit status 0 when everything passed, 1 otherwise, 2 on a usage error.
 import { execFileSync } from 'node:child_process';
@@ -59,8 +68,8 @@ import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 const MAX_MAD = 1;      // mean absolute difference per channel, 8-bit units
 const W = 800, H = 500;
 
-const opt = { chromium: '/usr/bin/chromium', out: '', sabotage: '', only: '', base: '', gigaview: '', filters: '0', token: '' };
-parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|root] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
+const opt = { chromium: '/usr/bin/chromium', out: '', sabotage: '', only: '', base: '', gigaview: '', filters: '0', token: '', dctcoefs: '' };
+parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|dct|root] [--only eviction|dct] [--dctcoefs PATH] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
 const base = opt.base.replace(/\/+$/, '');
 
 let lapT = Date.now();
@@ -236,7 +245,7 @@ async function shot(pg, name) {
 async function checkTiles(pg, label) {
     const r = await pg.evaluate(async () => {
         const v = window.gigaview.viewer, b = v.backend, info = v.image.info;
-        const out = { exact: 0, entropy: 0, fixed: 0, bad: [] };
+        const out = { exact: 0, entropy: 0, fixed: 0, dct: 0, bad: [] };
         for (const t of b.tiles()) {
             // The pixels the tile is the source of (FORMAT.md section 2):
             // its last row and column belong to the next tile, if any,
@@ -253,12 +262,13 @@ async function checkTiles(pg, label) {
                         if (px[c * (j * 513 + i) + k] !== ref.px[4 * (j * w + i) + k]) diff++;
             if (diff === 0) out.exact++; else out.bad.push(`${t.level}/${t.tx}/${t.ty}: ${diff} samples differ`);
             if (t.entropy) out.entropy++; else out.fixed++;
+            if (t.dct) out.dct++;
         }
         return out;
     });
     const n = r.entropy + r.fixed;
     check(n > 0 && r.exact === n,
-        `${label}: all ${n} decoded tiles equal the CPU decoder bit for bit (${r.entropy} entropy-coded, ${r.fixed} fixed layout)`,
+        `${label}: all ${n} decoded tiles equal the CPU decoder bit for bit (${r.entropy} entropy-coded, ${r.dct} of them layout D; ${r.fixed} fixed layout)`,
         ...r.bad.slice(0, 8));
     return r;
 }
@@ -337,6 +347,72 @@ async function checkPrefetchEviction(pg) {
 }
 
 // ------------------------------------------------------------ the run
+
+// Layout D (FORMAT.md 4.3): "picosd" (RGB) and "grayd" (gray), encoded
+// with transform-coded tiles, each decoded in the browser (tile_dct.js
+// unpacks, the shader's u_coefs path transforms) at 1:1 on level 0 and
+// every decoded tile against the CPU decoder; some must really be D (the
+// encoder keeps VQ where that costs less).
+async function checkDctStores(c) {
+    const pg = await newPage(c);
+    for (const [id, kind] of [['picosd', 'RGB'], ['grayd', 'gray']]) {
+        await open(pg, `#image=${id}&x=550&y=350&z=0&r=0`);
+        await installCompare(pg);
+        check((await pg.evaluate(() => window.gigaview.viewer.stats.kind)) === 'webgl2',
+            `${id}: the viewer opened with WebGL2`);
+        await checkRegion(pg, `${id} (layout D, ${kind}) level 0 1:1`, 0, 150, 100, W, H, 0, 0, false);
+        const r = await checkTiles(pg, `${id} (layout D, ${kind})`);
+        const n = r.entropy + r.fixed;
+        check(r.dct > 0, `${id}: layout-D tiles were decoded (${r.dct} of ${n})`);
+        if (opt.dctcoefs)
+            await checkDctFixtures(pg, id, kind === 'RGB' ? 3 : 1);
+    }
+    await pg.close();
+}
+
+// The synthetic layout-D tiles of `dct_coefs --fixture-tiles C` decoded
+// by the page's GpuDecoder (its parent uploaded as the root is) against
+// gv_tile_decode's tiles, bit for bit; the first also with quantizer step
+// 0 changed, which must differ (the comparison can fail).
+async function checkDctFixtures(pg, id, channels) {
+    const raw = execFileSync(opt.dctcoefs, ['--fixture-tiles', String(channels)], { maxBuffer: 64 << 20 });
+    const recs = [], tb = 513 * 513 * channels;
+    for (let at = 0; at < raw.length;) {
+        const len = raw.readUInt32LE(at), qx = raw[at + 5], qy = raw[at + 6], b = at + 9;
+        recs.push({ qx, qy, buf: raw.subarray(b, b + len).toString('base64'),
+            parent: raw.subarray(b + len, b + len + tb).toString('base64'),
+            out: raw.subarray(b + len + tb, b + len + 2 * tb).toString('base64') });
+        at = b + len + 2 * tb;
+    }
+    const r = await pg.evaluate(async ({ recs, channels }) => {
+        const { prepareTile } = await import(new URL('web/tilebuf.js', document.baseURI));
+        const bytes = (s) => Uint8Array.from(atob(s), (ch) => ch.charCodeAt(0));
+        const d = window.gigaview.viewer.backend.decoder;
+        const decode = (buf, parent, qx, qy) => {
+            const ptex = d.upload(parent, 513, 513);
+            const tex = d.decode(prepareTile(buf, channels), ptex, qx, qy);
+            const px = d.read(tex, 513, 513);
+            d.release(tex);
+            d.release(ptex);
+            return px;
+        };
+        const differ = (a, b) => { let n = 0; for (let i = 0; i < a.length; i++) if (a[i] !== b[i]) n++; return n; };
+        const out = { diffs: [], control: -1 };
+        for (const [i, rec] of recs.entries()) {
+            const buf = bytes(rec.buf), parent = bytes(rec.parent), ref = bytes(rec.out);
+            out.diffs.push(differ(decode(buf, parent, rec.qx, rec.qy), ref));
+            if (i === 0) {
+                buf[2] ^= 1;     // quantizer step 0, still 1..4095
+                out.control = differ(decode(buf, parent, rec.qx, rec.qy), ref);
+            }
+        }
+        return out;
+    }, { recs, channels });
+    check(r.diffs.length === 4 && r.diffs.every((n) => n === 0),
+        `${id}: the 4 synthetic layout-D tiles of dct_coefs (escapes, clamps, full and empty blocks) decode in WebGL2 as gv_tile_decode's, bit for bit`,
+        `samples that differ, per tile: ${r.diffs.join(', ')}`);
+    check(r.control > 0, `${id}: negative control: the first with quantizer step 0 changed differs (${r.control} samples)`);
+}
 
 async function run(c) {
     const pg = await newPage(c);
@@ -516,6 +592,8 @@ async function run(c) {
     note(`synth: ${s2.decoded} tiles decoded, ${s2.resident} textures resident (${(s2.textureBytes / 1048576).toFixed(1)} MiB), ${s2.evicted} evicted`);
 
     lap('synth 1:1 views, tiles, prefetch');
+    await checkDctStores(c);
+    lap('layout D stores');
     // A 16 MiB texture cache (15 tiles) on a tour of synth's 24 level-0
     // tiles: least recently used tiles go, the budget holds, and coming
     // back gives the same exact picture.
@@ -846,6 +924,17 @@ async function sabotaged(c) {
         });
         // The workers load tilebuf.js outside the page's routes: prepare
         // tiles on the main thread.
+    } else if (opt.sabotage === 'dct') {
+        // Layout D's zigzag order transposed (coefficient (v, u) stored at
+        // (u, v)), on picosd: every 1:1 view must fail.
+        await pg.route(`${base}/web/tile_dct.js`, async (route) => {
+            const r = await route.fetch(), orig = await r.text();
+            const src = orig.replace('const v = d & 1 ? i : d - i, u = d - v;',
+                'const v = d & 1 ? d - i : i, u = d - v;');
+            if (src === orig)
+                fail('sabotage dct: the zigzag line is not in tile_dct.js');
+            await route.fulfill({ response: r, body: src });
+        });
     } else if (opt.sabotage === 'root') {
         // The root as decoded by loadRoot, every 97th sample's lowest bit
         // flipped: every decode starts from it.
@@ -860,10 +949,11 @@ async function sabotaged(c) {
         return;
     }
     note(`sabotage: ${opt.sabotage}`);
-    await open(pg, '#image=picos&x=550&y=350&z=0&r=0', opt.sabotage === 'rans' ? '?workers=0' : '');
+    const id = opt.sabotage === 'dct' ? 'picosd' : 'picos';
+    await open(pg, `#image=${id}&x=550&y=350&z=0&r=0`, opt.sabotage === 'rans' || opt.sabotage === 'dct' ? '?workers=0' : '');
     await installCompare(pg);
     check((await pg.evaluate(() => window.gigaview.viewer.stats.kind)) === 'webgl2', 'the viewer opened with WebGL2');
-    await checkRegion(pg, 'picos level 0 1:1', 0, 150, 100, W, H, 0, 0, false);
+    await checkRegion(pg, `${id} level 0 1:1`, 0, 150, 100, W, H, 0, 0, false);
 }
 
 // --only eviction: the eviction checks alone (quicker to iterate on).
@@ -885,6 +975,8 @@ try {
         await sabotaged(ctx);
     else if (opt.only === 'eviction')
         await evictionOnly(ctx);
+    else if (opt.only === 'dct')
+        await checkDctStores(ctx);
     else
         await run(ctx);
 } catch (e) {
