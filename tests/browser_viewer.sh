@@ -52,11 +52,13 @@ browser_preflight
 
 S=$T/stores
 mkdir "$S" || bail "mkdir"
-run encode "$TESTDATA/picos-1100x700.jpg" -o "$S/picos.gv"
+# picos and synth keep the VQ layouts (--layouts vq), whose rANS index
+# decoder the browser runs too; picosd and grayd below are layout D.
+run encode --layouts vq "$TESTDATA/picos-1100x700.jpg" -o "$S/picos.gv"
 [ "$rc" -eq 0 ] || bail "encode picos: $(cat "$T/err")"
 # At -q 30 the synthetic image has fixed-layout tiles (near-flat index
 # histograms at rates 1 and 2) beside entropy-coded ones.
-run encode -q 30 synth:3000x2000 -o "$S/synth.gv"
+run encode --layouts vq -q 30 synth:3000x2000 -o "$S/synth.gv"
 [ "$rc" -eq 0 ] || bail "encode synth: $(cat "$T/err")"
 # Layout D (FORMAT.md 4.3): the same photo and a gray synthetic image
 # with transform-coded tiles.

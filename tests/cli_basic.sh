@@ -58,7 +58,7 @@ for spec in \
     run info "$s"
     expect_rc "info $f" 0
     check "info $f: size and kind" grep -q "^image  *$w x $h, $kind\$" "$T/out"
-    check "info $f: format version 2" grep -q "(format version 2)" "$T/out"
+    check "info $f: format version 4" grep -q "(format version 4)" "$T/out"
 
     run info --json "$s"
     expect_rc "info --json $f" 0

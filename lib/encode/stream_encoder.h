@@ -25,8 +25,8 @@
 #include "codec/tile.h"
 #include "encode/source.h"
 
-#define GV_DEFAULT_DCT GV_LAYOUTS_VQ  /* tile layouts (tile.h GV_LAYOUTS_*) */
-#define GV_DEFAULT_LAYOUTS "vq"       /* ... as --layouts names them */
+#define GV_DEFAULT_DCT GV_LAYOUTS_D   /* tile layouts (tile.h GV_LAYOUTS_*) */
+#define GV_DEFAULT_LAYOUTS "d"        /* ... as --layouts names them */
 #define GV_DEFAULT_PSNR 40.0     /* dB, level 0 of the whole image */
 #define GV_DEFAULT_MAX_RATE 10   /* 1024 codevectors */
 
