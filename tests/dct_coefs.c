@@ -39,36 +39,6 @@
 #define PLANE (520u * 520u * 4u)
 #define MAX_RECORD (16u << 20)
 
-enum { FIXTURES = 4 };
-
-/* Quantized coefficients q (3 planes of 520 x 520) and steps of fixture k. */
-static void fixture(int k, int channels, uint64_t *seed, int *q, int S[3])
-{
-    static const int steps[FIXTURES][3] = {
-        {12, 7, 30}, {4095, 4095, 4095}, {3, 5, 9}, {1, 1, 1}};
-    memcpy(S, steps[k], sizeof steps[k]);
-    memset(q, 0, sizeof *q * 3 * 520 * 520);
-    for (int c = 0; c < channels; c++)
-        for (int i = 0; i < 520 * 520; i++) {
-            const int uv = i % 520 % 8 + i / 520 % 8;
-            const uint32_t r = test_rand(seed);
-            int v = 0;
-            if (k < 2) {                          /* sparse, with escapes */
-                if (uv == 0)
-                    v = (int)(r % 41) - 20;
-                else if (r % 256 < 60u / (unsigned)(1 + uv))
-                    v = (int)(r / 256 % 7) - 3;
-                if (r / 4096 % 300 == 0)
-                    v = (int)(r / 256 % 4096) - 2048;
-                if (k == 1 && r % 97 == 0)        /* the ends of the range */
-                    v = r / 97 % 2 ? 2047 : -2048;
-            } else if (k == 2) {
-                v = r % 2 ? 1 : -1;               /* all 64 of every block */
-            }
-            q[(size_t)c * 520 * 520 + i] = v;
-        }
-}
-
 /* The fixtures as records (only = 0: gray and RGB), or as whole tiles of
  * `only` channels with a parent and their CPU decoding (--fixture-tiles). */
 static int write_fixtures(int only)
@@ -83,9 +53,9 @@ static int write_fixtures(int only)
         goto done;
     }
     for (int channels = 1; channels <= 3; channels += 2)
-        for (int k = 0; k < FIXTURES; k++) {
+        for (int k = 0; k < DCT_FIXTURE_CASES; k++) {
             int S[3];
-            fixture(k, channels, &seed, q, S);
+            dct_fixture_case(k, channels, &seed, q, S);
             if (only && channels != only)
                 continue;
             const size_t len = dct_fixture_write(q, S, channels, buf);

@@ -186,4 +186,39 @@ static inline size_t dct_fixture_write(const int *q, const int S[3], int channel
     return at;
 }
 
+/* How many synthetic cases dct_fixture_case makes. */
+enum { DCT_FIXTURE_CASES = 4 };
+
+/* Quantized coefficients q (3 planes of 520 x 520, zeroed first) and steps
+ * S of synthetic case k (0 .. DCT_FIXTURE_CASES - 1) for `channels`:
+ * 0 sparse with escapes, 1 the same with steps of 4095 and the ends of
+ * the escape range, 2 all 64 coefficients of every block, 3 none. */
+static inline void dct_fixture_case(int k, int channels, uint64_t *seed,
+                                    int *q, int S[3])
+{
+    static const int steps[DCT_FIXTURE_CASES][3] = {
+        {12, 7, 30}, {4095, 4095, 4095}, {3, 5, 9}, {1, 1, 1}};
+    memcpy(S, steps[k], sizeof steps[k]);
+    memset(q, 0, sizeof *q * 3 * 520 * 520);
+    for (int c = 0; c < channels; c++)
+        for (int i = 0; i < 520 * 520; i++) {
+            const int uv = i % 520 % 8 + i / 520 % 8;
+            const uint32_t r = test_rand(seed);
+            int v = 0;
+            if (k < 2) {                          /* sparse, with escapes */
+                if (uv == 0)
+                    v = (int)(r % 41) - 20;
+                else if (r % 256 < 60u / (unsigned)(1 + uv))
+                    v = (int)(r / 256 % 7) - 3;
+                if (r / 4096 % 300 == 0)          /* escapes, -2048..2047 */
+                    v = (int)(r / 256 % 4096) - 2048;
+                if (k == 1 && r % 97 == 0)        /* the ends of the range */
+                    v = r / 97 % 2 ? 2047 : -2048;
+            } else if (k == 2) {
+                v = r % 2 ? 1 : -1;               /* all 64 of every block */
+            }
+            q[(size_t)c * 520 * 520 + i] = v;
+        }
+}
+
 #endif

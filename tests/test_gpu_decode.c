@@ -323,7 +323,6 @@ static void check_batch(struct gv_gpu *gpu, const char *input, const char *out,
  * buffer whose quantizer step was changed after the CPU decoded it, must
  * each be caught.
  */
-enum { DCT_CASES = 4 };
 
 static uint64_t rng_state = 0x9e3779b97f4a7c15u;
 
@@ -333,33 +332,6 @@ static uint32_t rng(void)
     rng_state ^= rng_state >> 7;
     rng_state ^= rng_state << 17;
     return (uint32_t)(rng_state >> 16);
-}
-
-/* Quantized coefficients and steps of synthetic case k for C channels. */
-static void dct_case(int k, int channels, int *q, int S[3])
-{
-    static const int steps[DCT_CASES][3] = {
-        {12, 7, 30}, {4095, 4095, 4095}, {3, 5, 9}, {1, 1, 1}};
-    memcpy(S, steps[k], sizeof steps[k]);
-    for (int c = 0; c < channels; c++)
-        for (int i = 0; i < 520 * 520; i++) {
-            const int uv = (i % 520 % 8) + (i / 520 % 8);
-            const uint32_t r = rng();
-            int v = 0;
-            if (k == 0 || k == 1) {
-                if (uv == 0)
-                    v = (int)(r % 41) - 20;
-                else if (r % 256 < 60u / (unsigned)(1 + uv))
-                    v = (int)(r / 256 % 7) - 3;
-                if (r / 4096 % 300 == 0)       /* escapes, -2048..2047 */
-                    v = (int)(r / 256 % 4096) - 2048;
-                if (k == 1 && r % 97 == 0)     /* the ends of the range */
-                    v = r / 97 % 2 ? 2047 : -2048;
-            } else if (k == 2) {
-                v = r % 2 ? 1 : -1;             /* all 64 of every block */
-            }
-            q[(size_t)c * 520 * 520 + i] = v;
-        }
 }
 
 struct dct_tile {
@@ -375,7 +347,7 @@ static int dct_mismatches(struct gv_gpu_decoder *gd, uint32_t ph, struct dct_til
                           int n, int batch, int channels)
 {
     struct gv_error err;
-    struct gv_gpu_tile_job jobs[DCT_CASES];
+    struct gv_gpu_tile_job jobs[DCT_FIXTURE_CASES];
     for (int i = 0; i < n; i++)
         jobs[i] = (struct gv_gpu_tile_job){.buf = t[i].buf, .len = t[i].len, .parent = ph,
                                            .parent_job = -1, .qx = t[i].qx, .qy = t[i].qy};
@@ -410,11 +382,11 @@ static void check_dct_synthetic(struct gv_gpu *gpu, int channels)
         parent[i] = (uint8_t)(p % 513 / 3 + p / 513 / 4 + rng() % 8 + 40 * (i % 3));
     }
     int *q = malloc(sizeof *q * 3 * 520 * 520);
-    struct dct_tile t[DCT_CASES];
+    struct dct_tile t[DCT_FIXTURE_CASES];
     int clamped = 0;
-    for (int k = 0; k < DCT_CASES; k++) {
+    for (int k = 0; k < DCT_FIXTURE_CASES; k++) {
         int S[3];
-        dct_case(k, channels, q, S);
+        dct_fixture_case(k, channels, &rng_state, q, S);
         t[k].buf = malloc(2u << 20);
         t[k].len = dct_fixture_write(q, S, channels, t[k].buf);
         t[k].qx = k & 1;
@@ -434,13 +406,13 @@ static void check_dct_synthetic(struct gv_gpu *gpu, int channels)
         uint32_t ph;
         if (gv_gpu_upload_tile(gd, parent, &ph, &err) < 0)
             fail("upload: %s", err.text);
-        const int one = dct_mismatches(gd, ph, t, DCT_CASES, 0, channels);
-        const int all = dct_mismatches(gd, ph, t, DCT_CASES, 1, channels);
+        const int one = dct_mismatches(gd, ph, t, DCT_FIXTURE_CASES, 0, channels);
+        const int all = dct_mismatches(gd, ph, t, DCT_FIXTURE_CASES, 1, channels);
         check(one == 0 && all == 0 && clamped > 0,
               "C=%d, %s: %d synthetic D buffers (%zu to %zu bytes; escapes, clamped "
               "products, all 64 coefficients, none; %d clamped samples) decode "
               "identically, one call each (%d differ) and in one batch (%d differ)",
-              channels, path_name(path), DCT_CASES, t[3].len, t[2].len, clamped,
+              channels, path_name(path), DCT_FIXTURE_CASES, t[3].len, t[2].len, clamped,
               one, all);
         gv_gpu_release(gd, ph);
         gv_gpu_decoder_free(gd);
@@ -475,7 +447,7 @@ static void check_dct_synthetic(struct gv_gpu *gpu, int channels)
         gv_gpu_release(gd, ph);
         gv_gpu_decoder_free(gd);
     }
-    for (int k = 0; k < DCT_CASES; k++) {
+    for (int k = 0; k < DCT_FIXTURE_CASES; k++) {
         free(t[k].buf);
         free(t[k].ref);
     }
