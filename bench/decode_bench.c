@@ -244,7 +244,7 @@ int main(int argc, char **argv)
     decoded = calloc((size_t)cap, sizeof *decoded);
     int *first = calloc((size_t)g->root + 1, sizeof *first);
     uint64_t coded_bytes = 0;
-    int entropy = 0;
+    int entropy = 0, dct = 0;
     for (int k = g->root - 1; k >= 0; k--) {
         const struct gv_level *l = &g->level[k];
         first[k] = ntiles;
@@ -270,6 +270,7 @@ int main(int argc, char **argv)
                     first[k + 1] + (int)((ty / 2) * g->level[k + 1].tiles_x + tx / 2);
                 coded_bytes += t->len;
                 entropy += (copy[0] & 0x80) != 0;
+                dct += copy[0] == 0x20;
                 ntiles++;
             }
     }
@@ -284,8 +285,8 @@ int main(int argc, char **argv)
         memcpy(decoded[i], px, gv_tile_bytes(channels));
     }
     double psnr0 = gv_store_info(s)->header.psnr0_mdb / 1000.0;
-    printf("store %s: %ux%u, %d tiles (%d entropy-coded), %.3f bits per decoded tile pixel, level-0 PSNR %.2f dB\n",
-           argv[1], g->width, g->height, ntiles, entropy,
+    printf("store %s: %ux%u, %d tiles (%d VQ entropy-coded, %d layout D), %.3f bits per decoded tile pixel, level-0 PSNR %.2f dB\n",
+           argv[1], g->width, g->height, ntiles, entropy, dct,
            8.0 * coded_bytes / ((double)ntiles * 513 * 513), psnr0);
 
     double cpu1 = 0, cpun = 0, cpu1_c = 0;
