@@ -8,7 +8,9 @@
 // rows (v) in bits 0-3 and columns (u) in bits 4-7, 1 to 8 each, so that
 // tile_decode.frag.glsl, which takes the inverse transform per pixel,
 // reads no more of the block than it must (zero rows and columns add
-// nothing to its sums; WebGL2's A = 0 reads all 8 x 8).  Bit for bit what lib/codec/tile_dct.c
+// nothing to its sums; A = 0, as gv_dct_unpack leaves it for the C
+// WebGL2 path, reads all 8 x 8; the browser's tile_dct.js writes the same
+// bounds as here).  Bit for bit what lib/codec/tile_dct.c
 // gv_dct_unpack produces for a well-formed buffer (the CPU checks the
 // layout before it is uploaded; a damaged stream or a missing model still
 // reads nothing past the tile's buffer and writes only its own block row).
