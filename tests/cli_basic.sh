@@ -282,6 +282,18 @@ U_INFO="usage: gigaview info STORE [--json]"
 U_EXP="usage: gigaview export STORE [--level L] [--region X,Y,W,H] -o OUT"
 E="gigaview encode:"
 X="gigaview export:"
+# --layouts vq: the VQ encoder alone writes a format version 2 store, for
+# readers older than layout D; it decodes like any other.
+run encode -q 36 synth:700x600 -o "$T/d.gv"
+check "default layouts: the summary counts D tiles" grep -q "^tiles .* D:[1-9]" "$T/out"
+run encode --layouts vq -q 36 synth:700x600 -o "$T/vq.gv"
+expect_rc "encode --layouts vq" 0
+check "--layouts vq: VQ tiles only" sh -c 'grep -q "^tiles .*rate:tiles" "$1" && ! grep -q "D:" "$1"' sh "$T/out"
+run info "$T/vq.gv"
+check "--layouts vq: format version 2" grep -q "(format version 2)" "$T/out"
+run export "$T/vq.gv" -o "$T/vq.png"
+expect_rc "--layouts vq: the store exports" 0
+
 usage_case "no command" "$U_TOP"
 usage_case "unknown command" "gigaview: unknown command 'frobnicate'" frobnicate
 usage_case "encode without -o" "$U_ENC" encode synth:10x10
@@ -299,6 +311,11 @@ usage_case "encode -q 30dB" "$E --psnr wants a number of dB in (0, 99], not '30d
 usage_case "encode -q with --min-tile-psnr" \
     "$E --min-tile-psnr is a mode of its own: give it without -q or --rd" \
     encode -q 35 --min-tile-psnr 35 synth:10x10 -o u.gv
+usage_case "encode --layouts jpeg" "$E --layouts wants d, all or vq, not 'jpeg'" \
+    encode --layouts jpeg synth:10x10 -o u.gv
+usage_case "encode --min-tile-psnr with --layouts d" \
+    "$E --min-tile-psnr codes VQ tiles only: give it without --layouts (or with --layouts vq)" \
+    encode --min-tile-psnr 35 --layouts d synth:10x10 -o u.gv
 usage_case "encode --min-tile-psnr 0" "$E --min-tile-psnr wants a number of dB in (0, 99], not '0'" \
     encode --min-tile-psnr 0 synth:10x10 -o u.gv
 usage_case "encode --mosaic 2" "$E --mosaic wants COLSxROWS, not '2'" \

@@ -235,6 +235,25 @@ static void test_choice(void)
           "noise is cheaper as a transform (%zu bytes against %zu)", d, vq);
     check(gv_tile_decode(buf, d, 3, parent, 0, 0, out, &err) == 0 &&
           !memcmp(out, recon, sizeof out), "and decodes to its reconstruction");
+    /* D and the prediction alone, no VQ search (the default layouts). */
+    p.dct = GV_LAYOUTS_D;
+    make_tile(orig, 3, 6);
+    d = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &p, recon, buf, &st);
+    check(buf[0] == GV_TILE_DCT && st.rate == GV_RATE_DCT &&
+          gv_tile_decode(buf, d, 3, parent, 0, 0, out, &err) == 0 &&
+          !memcmp(out, recon, sizeof out), "layouts D: a D buffer, decoded "
+          "to its reconstruction (%zu bytes)", d);
+    /* Noise of +-40 at a price this low needs more than GV_TILEBUF_MAX
+     * in D: the VQ search codes it instead of the prediction alone. */
+    make_tile(orig, 3, 40);
+    struct gv_tile_params fine = p;
+    fine.lambda = 0.5;
+    d = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &fine, recon, buf, &st);
+    check(buf[0] != GV_TILE_DCT && st.rate >= 1 && st.rate <= GV_MAX_RATE &&
+          gv_tile_decode(buf, d, 3, parent, 0, 0, out, &err) == 0 &&
+          !memcmp(out, recon, sizeof out), "layouts D, too fine for D: VQ "
+          "at rate %d (%zu bytes), decoded to its reconstruction", st.rate, d);
+    p.dct = GV_LAYOUTS_ALL;
     /* A smooth tile the prediction already gets: nothing to code. */
     memcpy(orig, parent, sizeof orig);
     gv_predict(parent, 3, 0, 0, orig);
