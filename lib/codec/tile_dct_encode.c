@@ -35,6 +35,17 @@
 #define HEADER_BYTES 12
 #define LENGTHS_BYTES (2 * GV_DCT_BLOCKS)
 #define STEP_CANDIDATES 13      /* quarter octaves from 2^-0.5 to 2^2.5 */
+#define LN2 0.69314718055994530942
+
+/* 2^(-0.5 + 0.25 i), written out rather than computed with pow(), whose
+ * last bit may differ between C libraries: the steps, and so the stores,
+ * must not depend on the machine (sqrt is exact in IEEE arithmetic). */
+static const double step_factor[STEP_CANDIDATES] = {
+    0.70710678118654752, 0.84089641525371454, 1.0, 1.18920711500272107,
+    1.41421356237309505, 1.68179283050742908, 2.0, 2.37841423000544213,
+    2.82842712474619010, 3.36358566101485816, 4.0, 4.75682846001088427,
+    5.65685424949238020,
+};
 #define MAX_ROW_SYMBOLS (GV_DCT_BLOCKS * 3 * (1 + 64 * 3))
 
 static const double channel_weight[3] = {3.0, 0.5, 0.75};
@@ -450,7 +461,7 @@ size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
     /* High-rate optimum for channel 0: step^2 = 6 lambda / (w ln 2) in
      * orthonormal units, 8 times that in the plane's. */
     const double w0 = channels == 1 ? 1.0 : channel_weight[0];
-    const double s_opt = 8.0 * sqrt(6.0 * lambda / (w0 * log(2.0)));
+    const double s_opt = 8.0 * sqrt(6.0 * lambda / (w0 * LN2));
     /* Half octaves from 2^-0.5 to 2^2.5 times the high-rate optimum (on
      * five photographs the best was never below 2^0, and 2^1.5 was most
      * often the largest candidate then), then the quarter octaves on
@@ -461,7 +472,7 @@ size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
         for (int i = 0; i < STEP_CANDIDATES; i++) {
             if (pass == 0 ? (i & 1) : (i != best_i - 1 && i != best_i + 1))
                 continue;
-            int s0 = (int)lrint(s_opt * pow(2.0, -0.5 + 0.25 * i));
+            int s0 = (int)lrint(s_opt * step_factor[i]);
             s0 = s0 < 1 ? 1 : (s0 > GV_DCT_MAX_STEP ? GV_DCT_MAX_STEP : s0);
             int steps[3];
             chroma_steps(s0, channels, steps);
