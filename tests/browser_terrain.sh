@@ -45,36 +45,18 @@ access_log = off
 EOF2
 start_daemon "$T/t.conf"
 
-# tap_of FILE: PASS/FAIL/# lines of a browser script as TAP.
-tap_of() {
-    while IFS= read -r line; do
-        case $line in
-        "PASS "*) ok "${line#PASS }" ;;
-        "FAIL "*) not_ok "${line#FAIL }" ;;
-        "#"*) printf '%s\n' "$line" ;;
-        *) diag "$line" ;;
-        esac
-    done <"$1"
-}
-
 # 1. CesiumJS
 crc=0
 timeout 90 node "$BROWSER_DIR/terrain_cesium.mjs" --base "$BASE" --id world \
     --lon0 0 --chromium "$CHROMIUM" --out "$T/shots" >"$T/cesium.out" 2>&1 || crc=$?
-tap_of "$T/cesium.out"
-if [ "$crc" -ne 0 ] && ! grep -q '^FAIL ' "$T/cesium.out"; then
-    not_ok "terrain_cesium.mjs ran (exit $crc)" "$(tail -n 20 "$T/cesium.out")"
-fi
+browser_relay "$T/cesium.out" "$crc" terrain_cesium.mjs
 
 # 2. the viewer's terrain mode
 if [ -f "$BROWSER_DIR/terrain_viewer.mjs" ]; then
     vrc=0
     timeout 90 node "$BROWSER_DIR/terrain_viewer.mjs" --base "$BASE" --id world \
         --drape picos --chromium "$CHROMIUM" --out "$T/shots" >"$T/viewer.out" 2>&1 || vrc=$?
-    tap_of "$T/viewer.out"
-    if [ "$vrc" -ne 0 ] && ! grep -q '^FAIL ' "$T/viewer.out"; then
-        not_ok "terrain_viewer.mjs ran (exit $vrc)" "$(tail -n 20 "$T/viewer.out")"
-    fi
+    browser_relay "$T/viewer.out" "$vrc" terrain_viewer.mjs
 fi
 
 # 3. z-field simplification in the browser
@@ -85,10 +67,7 @@ if [ -f "$BROWSER_DIR/zfield.mjs" ]; then
     set -- --base "$BASE" --id world --chromium "$CHROMIUM" --out "$T/shots"
     [ -x "$ZFIELD_STATES" ] && set -- "$@" --helper "$ZFIELD_STATES"
     timeout 90 node "$BROWSER_DIR/zfield.mjs" "$@" >"$T/zfield.out" 2>&1 || zrc=$?
-    tap_of "$T/zfield.out"
-    if [ "$zrc" -ne 0 ] && ! grep -q '^FAIL ' "$T/zfield.out"; then
-        not_ok "zfield.mjs ran (exit $zrc)" "$(tail -n 20 "$T/zfield.out")"
-    fi
+    browser_relay "$T/zfield.out" "$zrc" zfield.mjs
 fi
 
 stop_daemon

@@ -121,31 +121,16 @@ viewer() {
     timeout 400 node "$BROWSER_DIR/viewer.mjs" --base "$BASE" --gigaview "$GIGAVIEW" \
         --chromium "$CHROMIUM" --dctcoefs "$DCT_COEFS" "$@" >"$T/viewer.out" 2>&1 || vrc=$?
 }
-# relay OUT RC NAME: a node script's PASS/FAIL lines as TAP, and a check
-# that it ran when it exited non-zero without saying FAIL.
-relay() {
-    while IFS= read -r line; do
-        case $line in
-        "PASS "*) ok "${line#PASS }" ;;
-        "FAIL "*) not_ok "${line#FAIL }" ;;
-        "#"*) printf '%s\n' "$line" ;;
-        *) diag "$line" ;;
-        esac
-    done <"$1"
-    if [ "$2" -ne 0 ] && ! grep -q '^FAIL ' "$1"; then
-        not_ok "$3 ran (exit $2)" "$(tail -n 20 "$1")"
-    fi
-}
 # shellcheck disable=SC2086
 viewer $filters
-relay "$T/viewer.out" "$vrc" viewer.mjs
+browser_relay "$T/viewer.out" "$vrc" viewer.mjs
 
 # Layout D's unpacking in JavaScript against the C decoder's, tile by
 # tile, intact and damaged (node only: tests/browser/dct_unpack.mjs).
 urc=0
 timeout 120 node "$BROWSER_DIR/dct_unpack.mjs" --base "$BASE" --helper "$DCT_COEFS" \
     --images picosd,grayd >"$T/dct.out" 2>&1 || urc=$?
-relay "$T/dct.out" "$urc" dct_unpack.mjs
+browser_relay "$T/dct.out" "$urc" dct_unpack.mjs
 
 # expect_mismatch DESCRIPTION ARGS...: the sabotaged run must fail the
 # 1:1 match, and nothing else may have broken it.

@@ -100,6 +100,23 @@ browser_preflight() {
     fi
 }
 
+# browser_relay OUT RC NAME: the PASS/FAIL/# lines a browser script wrote
+# to OUT as TAP, and a failed "NAME ran" check when it exited with RC != 0
+# without saying FAIL.
+browser_relay() {
+    while IFS= read -r line; do
+        case $line in
+        "PASS "*) ok "${line#PASS }" ;;
+        "FAIL "*) not_ok "${line#FAIL }" ;;
+        "#"*) printf '%s\n' "$line" ;;
+        *) diag "$line" ;;
+        esac
+    done <"$1"
+    if [ "$2" -ne 0 ] && ! grep -q '^FAIL ' "$1"; then
+        not_ok "$3 ran (exit $2)" "$(tail -n 20 "$1")"
+    fi
+}
+
 # gv ARGS...: run gigaview (under valgrind when asked).
 gv() {
     if under_valgrind; then
