@@ -483,6 +483,23 @@ static int decode_webgl2(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *jobs,
  * (a parent earlier in the batch is rendered before its children read
  * it).  Nothing waits for the GPU except for the set's previous group.
  */
+/* One compute pass over a group's entropy-coded streams (rans_decode or
+ * dct_decode): the per-tile parameters uploaded to `tiles`, the tile
+ * buffers at binding 0, the output at 1, the parameters at 2. */
+static void dispatch_streams(GLuint prog, GLuint words, GLuint out, GLuint tiles,
+                             const void *params, size_t bytes, GLuint gx,
+                             GLuint gy)
+{
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, tiles);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)bytes, params,
+                 GL_STREAM_DRAW);
+    glUseProgram(prog);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, words);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, out);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, tiles);
+    glDispatchCompute(gx, gy, 1);
+}
+
 static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
                         size_t first, size_t n, struct gv_error *err)
 {
@@ -556,14 +573,9 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
             params[m][3] = (GLint)(i * d->index_stride / sizeof(GLuint));
             m++;
         }
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->tiles[set]);
-        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(m * sizeof params[0]),
-                     params, GL_STREAM_DRAW);
-        glUseProgram(d->rans);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo[set]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->indices[set]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, d->tiles[set]);
-        glDispatchCompute((GV_BLOCKS + 63) / 64, m, 1);
+        dispatch_streams(d->rans, d->ssbo[set], d->indices[set], d->tiles[set],
+                         params, m * sizeof params[0], (GV_BLOCKS + 63) / 64,
+                         (GLuint)m);
     }
     /* Transform-coded tiles: every such tile's 65 coefficient streams in
      * one dispatch, one invocation per row of 8x8 blocks. */
@@ -583,14 +595,8 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
             params[dslot[i]][2] = (GLint)((size_t)dslot[i] * d->coef_stride / sizeof(GLuint));
             params[dslot[i]][3] = d->channels;
         }
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->dct_tiles[set]);
-        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(nd * sizeof params[0]),
-                     params, GL_STREAM_DRAW);
-        glUseProgram(d->dct);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, d->ssbo[set]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, d->coefs[set]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, d->dct_tiles[set]);
-        glDispatchCompute(1, (GLuint)nd, 1);
+        dispatch_streams(d->dct, d->ssbo[set], d->coefs[set], d->dct_tiles[set],
+                         params, (size_t)nd * sizeof params[0], 1, (GLuint)nd);
     }
     if (entropy || nd > 0)
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
