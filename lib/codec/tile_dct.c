@@ -30,6 +30,13 @@ const uint8_t gv_dct_zigzag[64] = {
     58, 59, 52, 45, 38, 31, 39, 46, 53, 60, 61, 54, 47, 55, 62, 63,
 };
 
+const uint8_t gv_dct_band_model[64] = {
+    0, 3, 3, 6, 6, 6, 6, 6, 6, 6, 9, 9, 9, 9, 9, 9,
+    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
+    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
+    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
+};
+
 const int32_t gv_dct_matrix[8][8] = {
     {64, 64, 64, 64, 64, 64, 64, 64},
     {89, 75, 50, 18, -18, -50, -75, -89},
@@ -51,11 +58,6 @@ static inline int32_t asr(int32_t a, int s)
 #else
     return a >= 0 ? a >> s : ~(~a >> s);
 #endif
-}
-
-static inline int model_symbols(int m)
-{
-    return m < GV_DCT_EOB_MODELS ? GV_DCT_EOB_SYMBOLS : GV_DCT_TOKEN_SYMBOLS;
 }
 
 /* Offsets of a checked buffer's parts. */
@@ -87,7 +89,7 @@ static int parse_layout(const uint8_t *buf, size_t len, int channels,
         l->model_at[m] = 0;
         if (!(l->mask >> m & 1))
             continue;
-        const int k = model_symbols(m);
+        const int k = gv_dct_model_symbols(m);
         if (at + (size_t)k > len)
             return gv_fail(err, GV_ECORRUPT, "tile: models pass the buffer");
         if (buf[at] != 0)
@@ -139,7 +141,7 @@ static void load_models(const uint8_t *buf, const struct dct_layout *l,
                         struct dct_models *md)
 {
     for (int m = 0; m < GV_DCT_MODELS; m++) {
-        const int k = model_symbols(m);
+        const int k = gv_dct_model_symbols(m);
         if (!l->model_at[m]) {
             memset(md->sym[m], 0, 256);
             md->cum[m][0] = 0;
@@ -194,21 +196,6 @@ static inline int step_uniform(struct dct_stream *st)
     return (int)(slot >> 2);
 }
 
-/* 3 * band of zigzag position k: 0 for k = 0, 1 for 1..2, 2 for 3..9,
- * 3 for 10..63. */
-static const uint8_t band_model[64] = {
-    0, 3, 3, 6, 6, 6, 6, 6, 6, 6, 9, 9, 9, 9, 9, 9,
-    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
-    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
-    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
-};
-
-static inline int mag_class(int q)
-{
-    int a = q < 0 ? -q : q;
-    return a > 2 ? 2 : a;
-}
-
 /* A row's coefficients: co[c][v][X], X = 8 * bx + u. */
 typedef int16_t dct_row[3][8][GV_DCT_PLANE];
 
@@ -235,7 +222,7 @@ static int decode_row(const uint8_t *buf, size_t at, unsigned n, int row,
             eobs[c][bx] = (uint8_t)eob;
             int p = dcp[c], q0 = 0;
             for (int k = 0; k < eob; k++) {
-                const int t = step(&st, md, tok_base + band_model[k] + p);
+                const int t = step(&st, md, tok_base + gv_dct_band_model[k] + p);
                 if (t < 0)
                     goto bad;
                 int q;
@@ -256,10 +243,10 @@ static int decode_row(const uint8_t *buf, size_t at, unsigned n, int row,
                 co[c][z >> 3][8 * bx + (z & 7)] = (int16_t)d;
                 if (k == 0)
                     q0 = q;
-                p = mag_class(q);
+                p = gv_dct_class(q);
             }
             pe[c] = eob == 0 ? 0 : (eob <= 4 ? 1 : 2);
-            dcp[c] = mag_class(q0);
+            dcp[c] = gv_dct_class(q0);
         }
     }
     if (st.x != RANS_L || st.next != st.n)

@@ -37,6 +37,23 @@
 /* The zigzag order: zz[k] = 8 * v + u for coefficient k (row v, column u). */
 extern const uint8_t gv_dct_zigzag[64];
 
+/* 3 * the band of zigzag position k (0 for k = 0, 1 for 1..2, 2 for 3..9,
+ * 3 for 10..63): the offset of its token models within a channel class. */
+extern const uint8_t gv_dct_band_model[64];
+
+/* The magnitude class of a quantized value: 0, 1, or 2 for |q| >= 2. */
+static inline int gv_dct_class(int q)
+{
+    const int a = q < 0 ? -q : q;
+    return a > 2 ? 2 : a;
+}
+
+/* Symbols of model m: 65 for an eob model, 16 for a token model. */
+static inline int gv_dct_model_symbols(int m)
+{
+    return m < GV_DCT_EOB_MODELS ? GV_DCT_EOB_SYMBOLS : GV_DCT_TOKEN_SYMBOLS;
+}
+
 /* The inverse transform's matrix K[u][i] (FORMAT.md 4.3). */
 extern const int32_t gv_dct_matrix[8][8];
 

@@ -28,10 +28,10 @@
 #include "codec/tile.h"
 #include "codec/tile_dct.h"
 #include "codec/tile_layout.h"
+#include "codec/tile_rans.h"
 
 #define NB (GV_DCT_BLOCKS * GV_DCT_BLOCKS)
 #define ROUND_OFFSET 0.36f      /* dead-zone rounding: floor(|x|/S + this) */
-#define RANS_L (1u << 16)
 #define HEADER_BYTES 12
 #define LENGTHS_BYTES (2 * GV_DCT_BLOCKS)
 #define STEP_CANDIDATES 13      /* quarter octaves from 2^-0.5 to 2^2.5 */
@@ -210,17 +210,6 @@ static double quantize(struct gv_dct_workspace *ws, int channels,
     return sse;
 }
 
-static inline int mag_class(int q)
-{
-    int a = q < 0 ? -q : q;
-    return a > 2 ? 2 : a;
-}
-
-static inline int model_symbols(int m)
-{
-    return m < GV_DCT_EOB_MODELS ? GV_DCT_EOB_SYMBOLS : GV_DCT_TOKEN_SYMBOLS;
-}
-
 static inline int token_of(int q)
 {
     if (q == 0)
@@ -245,18 +234,17 @@ static inline int token_of(int q)
                 EMIT(3 * cc_ + pe_[c_], n_);                                  \
                 int p_ = dcp_[c_];                                            \
                 for (int k_ = 0; k_ < n_; k_++) {                             \
-                    const int band_ = k_ == 0 ? 0 : (k_ <= 2 ? 1 : (k_ <= 9 ? 2 : 3)); \
                     const int t_ = token_of(q_[k_]);                          \
-                    EMIT(GV_DCT_EOB_MODELS + 3 * (4 * cc_ + band_) + p_, t_); \
+                    EMIT(GV_DCT_EOB_MODELS + 12 * cc_ + gv_dct_band_model[k_] + p_, t_); \
                     if (t_ == GV_DCT_ESCAPE) {                                \
                         const int e_ = q_[k_] + 2048;                         \
                         EMIT(-1, e_ >> 6);                                    \
                         EMIT(-1, e_ & 63);                                    \
                     }                                                         \
-                    p_ = mag_class(q_[k_]);                                   \
+                    p_ = gv_dct_class(q_[k_]);                                   \
                 }                                                             \
                 pe_[c_] = n_ == 0 ? 0 : (n_ <= 4 ? 1 : 2);                    \
-                dcp_[c_] = n_ ? mag_class(q_[0]) : 0;                         \
+                dcp_[c_] = n_ ? gv_dct_class(q_[0]) : 0;                         \
             }                                                                 \
         }                                                                     \
     } while (0)
@@ -328,7 +316,7 @@ static size_t build_models(struct models *md, uint32_t *mask)
     for (int m = 0; m < GV_DCT_MODELS; m++) {
         if (!md->total[m])
             continue;
-        const int k = model_symbols(m);
+        const int k = gv_dct_model_symbols(m);
         *mask |= 1u << m;
         bytes += (size_t)k;
         normalize(md->count[m], k, md->total[m], md->freq[m]);
@@ -354,23 +342,12 @@ static double estimate_bytes(const struct models *md, size_t model_bytes)
     for (int m = 0; m < GV_DCT_MODELS; m++) {
         if (!md->total[m])
             continue;
-        for (int s = 0; s < model_symbols(m); s++)
+        for (int s = 0; s < gv_dct_model_symbols(m); s++)
             if (md->count[m][s])
                 bits += md->count[m][s] * log2_table[md->freq[m][s]];
     }
     return bits / 8 + (double)model_bytes + HEADER_BYTES + LENGTHS_BYTES +
            4.0 * GV_DCT_BLOCKS;
-}
-
-static inline uint32_t rans_put(uint32_t x, uint32_t f, uint32_t c,
-                                uint16_t *words, int *n)
-{
-    const uint64_t x_max = (uint64_t)((RANS_L >> 8) << 16) * f;
-    if (x >= x_max) {
-        words[(*n)++] = (uint16_t)x;
-        x >>= 16;
-    }
-    return ((x / f) << 8) + (x % f) + c;
 }
 
 /* Write the buffer of the candidate in ws->q / ws->eob with models md.
@@ -382,7 +359,7 @@ static size_t write_buffer(struct gv_dct_workspace *ws, int channels,
     size_t at = HEADER_BYTES;
     for (int m = 0; m < GV_DCT_MODELS; m++)
         if (mask >> m & 1)
-            at += (size_t)model_symbols(m);
+            at += (size_t)gv_dct_model_symbols(m);
     const size_t lengths = (at + 1) & ~(size_t)1;
     const size_t streams = lengths + LENGTHS_BYTES;
     if (streams > cap)
@@ -396,7 +373,7 @@ static size_t write_buffer(struct gv_dct_workspace *ws, int channels,
     for (int m = 0; m < GV_DCT_MODELS; m++) {
         if (!(mask >> m & 1))
             continue;
-        for (int s = 0; s < model_symbols(m); s++)
+        for (int s = 0; s < gv_dct_model_symbols(m); s++)
             buf[at++] = (uint8_t)md->cum[m][s];
     }
     at = streams;
@@ -410,31 +387,20 @@ static size_t write_buffer(struct gv_dct_workspace *ws, int channels,
     } while (0)
         WALK_ROW(ws, channels, by, COLLECT);
 #undef COLLECT
-        uint32_t x = RANS_L;
+        uint32_t x = 1u << 16;   /* the initial and final state */
         int n = 0;
         for (int i = ns - 1; i >= 0; i--) {
             const struct sym *y = &ws->syms[i];
             if (y->model < 0)
-                x = rans_put(x, 4, 4u * (uint32_t)y->s, ws->words, &n);
+                x = gv_rans_put(x, 4, 4u * (uint32_t)y->s, 8, ws->words, &n);
             else
-                x = rans_put(x, md->freq[y->model][y->s],
-                             md->cum[y->model][y->s], ws->words, &n);
+                x = gv_rans_put(x, md->freq[y->model][y->s],
+                                md->cum[y->model][y->s], 8, ws->words, &n);
         }
-        const size_t len = 2 + (size_t)n;
-        if (len > 0xffff || at + 2 * len > cap)
+        if (!(at = gv_rans_put_stream(buf, lengths, by, at, x, ws->words, n, cap)))
             return 0;
-        gv_put16(buf + lengths + 2 * by, (uint16_t)len);
-        gv_put16(buf + at, (uint16_t)x);
-        gv_put16(buf + at + 2, (uint16_t)(x >> 16));
-        for (int w = 0; w < n; w++)
-            gv_put16(buf + at + 4 + 2 * w, ws->words[n - 1 - w]);
-        at += 2 * len;
     }
-    const size_t total = (at + 3) & ~(size_t)3;
-    if (total > cap)
-        return 0;
-    memset(buf + at, 0, total - at);
-    return total;
+    return gv_rans_finish(buf, at, cap);
 }
 
 static void chroma_steps(int s0, int channels, int *steps)

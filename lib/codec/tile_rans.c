@@ -126,28 +126,11 @@ static void accumulate(const uint32_t *freq, int k, uint32_t *cum)
         cum[s + 1] = cum[s] + freq[s];
 }
 
-/* One rANS encoding step (symbol of frequency f at cum c); may emit one
- * word.  The bound is computed in 64 bits: at f = 2^15 (a symbol that is
- * certain) it is 2^32, and the state passes unchanged. */
-static inline uint32_t rans_put(uint32_t x, uint32_t f, uint32_t c,
-                                uint16_t *words, int *n)
-{
-    const uint64_t x_max = (uint64_t)((RANS_L >> PROB_BITS) << 16) * f;
-    if (x >= x_max) {
-        words[(*n)++] = (uint16_t)x;
-        x >>= 16;
-    }
-    return ((x / f) << PROB_BITS) + (x % f) + c;
-}
-
-/* Store a finished stream (state x, n words in encoding order) at `at`;
- * its length goes to slot `row` of the table at `lengths`.  Returns the
- * offset after it, or 0 if it would pass cap. */
-static size_t put_stream(uint8_t *buf, size_t lengths, int row, size_t at,
-                         uint32_t x, const uint16_t *words, int n, size_t cap)
+size_t gv_rans_put_stream(uint8_t *buf, size_t lengths, int row, size_t at,
+                          uint32_t x, const uint16_t *words, int n, size_t cap)
 {
     size_t len = 2 + (size_t)n;
-    if (at + 2 * len > cap)
+    if (len > 0xffff || at + 2 * len > cap)
         return 0;
     gv_put16(buf + lengths + 2 * row, (uint16_t)len);
     gv_put16(buf + at, (uint16_t)x);
@@ -157,9 +140,7 @@ static size_t put_stream(uint8_t *buf, size_t lengths, int row, size_t at,
     return at + 2 * len;
 }
 
-/* Zero padding after the streams to a multiple of 4; the total length or
- * 0 past cap. */
-static size_t finish(uint8_t *buf, size_t at, size_t cap)
+size_t gv_rans_finish(uint8_t *buf, size_t at, size_t cap)
 {
     size_t total = (at + 3) & ~(size_t)3;
     if (total > cap)
@@ -197,11 +178,11 @@ size_t gv_rans_pack(const uint16_t *idx, int rate, int channels,
         uint32_t x = RANS_L;
         int n = 0;
         for (int i = GV_BLOCKS - 1; i >= 0; i--)
-            x = rans_put(x, freq[sym[i]], cum[sym[i]], words, &n);
-        if (!(at = put_stream(buf, lengths, row, at, x, words, n, cap)))
+            x = gv_rans_put(x, freq[sym[i]], cum[sym[i]], PROB_BITS, words, &n);
+        if (!(at = gv_rans_put_stream(buf, lengths, row, at, x, words, n, cap)))
             return 0;
     }
-    return finish(buf, at, cap);
+    return gv_rans_finish(buf, at, cap);
 }
 
 /* ---- EX: context models ---- */
@@ -375,14 +356,14 @@ size_t gv_rans_pack_ctx(const uint16_t *idx, int rate, int channels,
             const int s = sym[base + i], c = map[ctx[base + i]];
             if (s == GV_RANS_ESCAPE) {
                 const uint16_t r = rank[idx[base + i]];
-                x = rans_put(x, efreq[r], ecum[r], words, &nw);
+                x = gv_rans_put(x, efreq[r], ecum[r], PROB_BITS, words, &nw);
             }
-            x = rans_put(x, cfreq[c][s], ccum[c][s], words, &nw);
+            x = gv_rans_put(x, cfreq[c][s], ccum[c][s], PROB_BITS, words, &nw);
         }
-        if (!(at = put_stream(buf, lengths, row, at, x, words, nw, cap)))
+        if (!(at = gv_rans_put_stream(buf, lengths, row, at, x, words, nw, cap)))
             return 0;
     }
-    return finish(buf, at, cap);
+    return gv_rans_finish(buf, at, cap);
 }
 
 /* ---- checking ---- */

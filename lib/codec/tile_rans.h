@@ -37,6 +37,33 @@ static inline size_t gv_tilebuf_book_offset(uint8_t b0)
     return (b0 & GV_TILE_CONTEXT) ? 4 : 1;
 }
 
+/* One rANS encoding step (a symbol of frequency f at cumulative c, in
+ * prob_bits precision, 32-bit state, 16-bit words); may emit one word into
+ * words[*n].  The bound is computed in 64 bits: for a certain symbol
+ * (f = 2^prob_bits) it is 2^32, and the state passes unchanged.  Shared by
+ * the index streams (15 bits) and layout D's coefficients (8 bits). */
+static inline uint32_t gv_rans_put(uint32_t x, uint32_t f, uint32_t c,
+                                   int prob_bits, uint16_t *words, int *n)
+{
+    const uint64_t x_max = (uint64_t)(((1u << 16) >> prob_bits) << 16) * f;
+    if (x >= x_max) {
+        words[(*n)++] = (uint16_t)x;
+        x >>= 16;
+    }
+    return ((x / f) << prob_bits) + (x % f) + c;
+}
+
+/* Store a finished stream (state x, n words in encoding order) at byte
+ * `at` of buf, its length in 16-bit words in slot `row` of the u16 table at
+ * `lengths`.  Returns the offset after it, or 0 if it would pass cap or
+ * its length would not fit in 16 bits. */
+size_t gv_rans_put_stream(uint8_t *buf, size_t lengths, int row, size_t at,
+                          uint32_t x, const uint16_t *words, int n, size_t cap);
+
+/* Zero padding from `at` to a multiple of 4; the total length, or 0 past
+ * cap. */
+size_t gv_rans_finish(uint8_t *buf, size_t at, size_t cap);
+
 /* Byte offset of the cumulative-frequency table of the E layout: after
  * the codebook, rounded up to 4. */
 size_t gv_rans_tables_offset(int rate, int channels);
