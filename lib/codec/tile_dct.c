@@ -146,34 +146,94 @@ static void load_models(const uint8_t *buf, const struct dct_layout *l,
     }
 }
 
-/* One rANS step on state x with the entry table tab (a model's 256
- * entries): sets e to the slot's entry, or jumps to bad for a damaged
- * stream.  The state stays >= RANS_L from a valid start (checked once per
- * stream): after a step it is at least f * 256 with f >= 1, and a
- * renormalization takes it past 2^24. */
-#define STEP(tab, e)                                                        \
+/* The rANS decoding of a row's stream, written for lanes: each macro
+ * works on lane L's state (x##L, next##L, n##L, w##L) and jumps to bad##L
+ * on a damaged stream.  Two rows decoded in lockstep give the CPU two
+ * independent chains of dependent loads and multiplies to overlap; one
+ * row alone is the same code with one lane. */
+
+/* One step with the entry table tab (a model's 256 entries): sets e to
+ * the slot's entry.  The state stays >= RANS_L from a valid start
+ * (checked once per stream): after a step it is at least f * 256 with
+ * f >= 1, and a renormalization takes it past 2^24. */
+#define STEP(L, tab, e)                                                     \
     do {                                                                    \
-        e = (tab)[x & 255];                                                 \
+        e = (tab)[x##L & 255];                                              \
         if (!E_FREQ(e))                                                     \
-            goto bad;                                                       \
-        x = E_FREQ(e) * (x >> 8) + E_OFFSET(e);                             \
-        if (x < RANS_L) {                                                   \
-            if (next >= n)                                                  \
-                goto bad;                                                   \
-            x = x << 16 | gv_get16(w + 2 * next++);                         \
+            goto bad##L;                                                    \
+        x##L = E_FREQ(e) * (x##L >> 8) + E_OFFSET(e);                       \
+        if (x##L < RANS_L) {                                                \
+            if (next##L >= n##L)                                            \
+                goto bad##L;                                                \
+            x##L = x##L << 16 | gv_get16(w##L + 2 * next##L++);             \
         }                                                                   \
     } while (0)
 
 /* A uniform 6-bit step into h. */
-#define STEP_UNIFORM(h)                                                     \
+#define STEP_UNIFORM(L, h)                                                  \
     do {                                                                    \
-        h = (int)((x & 255) >> 2);                                          \
-        x = 4 * (x >> 8) + (x & 3);                                         \
-        if (x < RANS_L) {                                                   \
-            if (next >= n)                                                  \
-                goto bad;                                                   \
-            x = x << 16 | gv_get16(w + 2 * next++);                         \
+        h = (int)((x##L & 255) >> 2);                                       \
+        x##L = 4 * (x##L >> 8) + (x##L & 3);                                \
+        if (x##L < RANS_L) {                                                \
+            if (next##L >= n##L)                                            \
+                goto bad##L;                                                \
+            x##L = x##L << 16 | gv_get16(w##L + 2 * next##L++);             \
         }                                                                   \
+    } while (0)
+
+/* A lane's state: its stream (words at w, n of them), and the contexts
+ * of each channel (the previous block's eob class, its DC's class). */
+#define LANE(L, at, words)                                                  \
+    const uint8_t *w##L = buf + (at);                                       \
+    const uint32_t n##L = (words);                                          \
+    uint32_t x##L = gv_get16(w##L) | (uint32_t)gv_get16(w##L + 2) << 16,    \
+             next##L = 2;                                                   \
+    int pe##L[3] = {0, 0, 0}, dcp##L[3] = {0, 0, 0}, eob##L, p##L;          \
+    int16_t *dst##L;                                                        \
+    if (x##L < RANS_L)                                                      \
+        goto bad##L
+
+/* Block bx's eob of channel c (cc = c > 0) into eob##L. */
+#define BLOCK_EOB(L)                                                        \
+    do {                                                                    \
+        uint32_t e_;                                                        \
+        STEP(L, md->slot[3 * cc + pe##L[c]], e_);                           \
+        eob##L = (int)(e_ & 255);                                           \
+        eobs##L[c][bx] = (uint8_t)eob##L;                                   \
+        pe##L[c] = eob##L == 0 ? 0 : (eob##L <= 4 ? 1 : 2);                 \
+        dst##L = &co##L[c][0][8 * bx];                                      \
+        p##L = dcp##L[c];                                                   \
+        dcp##L[c] = 0;                                                      \
+    } while (0)
+
+/* Coefficient k (zigzag order) of the block. */
+#define TOKEN(L, k)                                                         \
+    do {                                                                    \
+        uint32_t e_;                                                        \
+        STEP(L, tok[gv_dct_band_model[k] + p##L], e_);                      \
+        const int t_ = (int)(e_ & 255), z_ = gv_dct_zigzag[k];              \
+        int16_t *d_ = dst##L + (size_t)(z_ >> 3) * GV_DCT_PLANE + (z_ & 7); \
+        if (t_ != GV_DCT_ESCAPE) {                                          \
+            *d_ = deq[c][t_];                                               \
+            p##L = (int)E_CLASS(e_);                                        \
+        } else {                                                            \
+            int h_, lo_;                                                    \
+            STEP_UNIFORM(L, h_);                                            \
+            STEP_UNIFORM(L, lo_);                                           \
+            const int q_ = 64 * h_ + lo_ - 2048;                            \
+            *d_ = clamp_s16(q_ * steps[c]);                                 \
+            p##L = gv_dct_class(q_);                                        \
+        }                                                                   \
+        if ((k) == 0)                                                       \
+            dcp##L[c] = p##L;                                               \
+    } while (0)
+
+/* After the last block: the state back at its start, every word read. */
+#define LANE_END(L, row)                                                    \
+    do {                                                                    \
+        if (x##L != RANS_L || next##L != n##L)                              \
+            return gv_fail(err, GV_ECORRUPT, "tile: stream %d does not "    \
+                           "end cleanly", (row));                           \
     } while (0)
 
 static inline int16_t clamp_s16(int32_t v)
@@ -181,66 +241,81 @@ static inline int16_t clamp_s16(int32_t v)
     return (int16_t)(v < -32768 ? -32768 : (v > 32767 ? 32767 : v));
 }
 
-/* Decode stream `row` (at `at`, n words) into co, which must be all
- * zero (only coded coefficients are written), and each block's count of
- * coded coefficients into eobs.  Returns 0 or -1. */
-static int decode_row(const uint8_t *buf, size_t at, unsigned n, int row,
-                      int channels, const struct dct_models *md,
-                      const int32_t *steps, gv_dct_row co,
-                      uint8_t eobs[3][GV_DCT_BLOCKS], struct gv_error *err)
+/* The dequantized tokens of each channel, clamped to 16 bits. */
+static void dequantized_tokens(const int32_t *steps, int channels,
+                               int16_t deq[3][GV_DCT_ESCAPE])
 {
-    const uint8_t *w = buf + at;
-    uint32_t x = gv_get16(w) | (uint32_t)gv_get16(w + 2) << 16, next = 2;
-    if (x < RANS_L)
-        goto bad;
-    /* The dequantized tokens of each channel, clamped to 16 bits. */
-    int16_t deq[3][GV_DCT_ESCAPE];
     for (int c = 0; c < channels; c++)
         for (int t = 0; t < GV_DCT_ESCAPE; t++)
             deq[c][t] = clamp_s16(token_value(t) * steps[c]);
-    int pe[3] = {0, 0, 0}, dcp[3] = {0, 0, 0};
-    for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
+}
+
+/* Decode the stream of row `row` (at `at`, `words` words) into coA, which must
+ * be all zero (only coded coefficients are written), and each block's
+ * count of coded coefficients into eobsA.  Returns 0 or -1. */
+static int decode_row(const uint8_t *buf, size_t at, unsigned words, int row,
+                      int channels, const struct dct_models *md,
+                      const int32_t *steps, gv_dct_row coA,
+                      uint8_t eobsA[3][GV_DCT_BLOCKS], struct gv_error *err)
+{
+    int16_t deq[3][GV_DCT_ESCAPE];
+    dequantized_tokens(steps, channels, deq);
+    LANE(A, at, words);
+    for (int bx = 0; bx < GV_DCT_BLOCKS; bx++)
         for (int c = 0; c < channels; c++) {
             const int cc = c > 0;
             const uint32_t(*tok)[256] = md->slot + GV_DCT_EOB_MODELS + 12 * cc;
-            uint32_t e;
-            STEP(md->slot[3 * cc + pe[c]], e);
-            const int eob = (int)(e & 255);
-            eobs[c][bx] = (uint8_t)eob;
-            int16_t *dst = &co[c][0][8 * bx];
-            int p = dcp[c];
-            dcp[c] = 0;
-            for (int k = 0; k < eob; k++) {
-                STEP(tok[gv_dct_band_model[k] + p], e);
-                const int t = (int)(e & 255);
-                const int z = gv_dct_zigzag[k];
-                int16_t *d = dst + (size_t)(z >> 3) * GV_DCT_PLANE + (z & 7);
-                if (t != GV_DCT_ESCAPE) {
-                    *d = deq[c][t];
-                    p = (int)E_CLASS(e);
-                } else {
-                    int h, lo;
-                    STEP_UNIFORM(h);
-                    STEP_UNIFORM(lo);
-                    const int q = 64 * h + lo - 2048;
-                    *d = clamp_s16(q * steps[c]);
-                    p = gv_dct_class(q);
-                }
-                if (k == 0)
-                    dcp[c] = p;
-            }
-            pe[c] = eob == 0 ? 0 : (eob <= 4 ? 1 : 2);
+            BLOCK_EOB(A);
+            for (int k = 0; k < eobA; k++)
+                TOKEN(A, k);
         }
-    }
-    if (x != RANS_L || next != n)
-        return gv_fail(err, GV_ECORRUPT, "tile: stream %d does not end "
-                       "cleanly", row);
+    LANE_END(A, row);
     return 0;
-bad:
+badA:
     return gv_fail(err, GV_ECORRUPT, "tile: stream %d is corrupt", row);
 }
 
-/* Walk the streams of a checked buffer: begin, then one call per row. */
+/* decode_row of rows `row` (at atA, wordsA words, into coA and eobsA)
+ * and row + 1 (at atB, wordsB words, into coB and eobsB) in lockstep. */
+static int decode_row_pair(const uint8_t *buf, size_t atA, unsigned wordsA,
+                           size_t atB, unsigned wordsB, int row, int channels,
+                           const struct dct_models *md, const int32_t *steps,
+                           gv_dct_row coA, uint8_t eobsA[3][GV_DCT_BLOCKS],
+                           gv_dct_row coB, uint8_t eobsB[3][GV_DCT_BLOCKS],
+                           struct gv_error *err)
+{
+    int16_t deq[3][GV_DCT_ESCAPE];
+    dequantized_tokens(steps, channels, deq);
+    LANE(A, atA, wordsA);
+    LANE(B, atB, wordsB);
+    for (int bx = 0; bx < GV_DCT_BLOCKS; bx++)
+        for (int c = 0; c < channels; c++) {
+            const int cc = c > 0;
+            const uint32_t(*tok)[256] = md->slot + GV_DCT_EOB_MODELS + 12 * cc;
+            BLOCK_EOB(A);
+            BLOCK_EOB(B);
+            const int both = eobA < eobB ? eobA : eobB;
+            int k = 0;
+            for (; k < both; k++) {
+                TOKEN(A, k);
+                TOKEN(B, k);
+            }
+            for (; k < eobA; k++)
+                TOKEN(A, k);
+            for (; k < eobB; k++)
+                TOKEN(B, k);
+        }
+    LANE_END(A, row);
+    LANE_END(B, row + 1);
+    return 0;
+badA:
+    return gv_fail(err, GV_ECORRUPT, "tile: stream %d is corrupt", row);
+badB:
+    return gv_fail(err, GV_ECORRUPT, "tile: stream %d is corrupt", row + 1);
+}
+
+/* Walk the streams of a checked buffer: begin, then one call per pair of
+ * rows (and one for the last row alone). */
 struct dct_rows {
     struct dct_layout l;
     struct dct_models md;
@@ -260,15 +335,26 @@ static int rows_begin(struct dct_rows *it, const uint8_t *buf, size_t len,
     return 0;
 }
 
+/* Rows `row` and, when row + 1 < 65, row + 1 into co[0], eobs[0] and
+ * co[1], eobs[1]; the rows' coefficients must be all zero before. */
 static int rows_next(struct dct_rows *it, const uint8_t *buf, int row,
-                     int channels, gv_dct_row co, uint8_t eobs[3][GV_DCT_BLOCKS],
-                     struct gv_error *err)
+                     int channels, gv_dct_row co[2],
+                     uint8_t eobs[2][3][GV_DCT_BLOCKS], struct gv_error *err)
 {
-    unsigned n = gv_get16(buf + it->l.lengths + 2 * row);
-    if (decode_row(buf, it->at, n, row, channels, &it->md, it->steps, co,
-                   eobs, err) < 0)
+    const unsigned nA = gv_get16(buf + it->l.lengths + 2 * row);
+    if (row + 1 == GV_DCT_BLOCKS) {
+        if (decode_row(buf, it->at, nA, row, channels, &it->md, it->steps,
+                       co[0], eobs[0], err) < 0)
+            return -1;
+        it->at += 2 * (size_t)nA;
+        return 0;
+    }
+    const unsigned nB = gv_get16(buf + it->l.lengths + 2 * row + 2);
+    if (decode_row_pair(buf, it->at, nA, it->at + 2 * (size_t)nA, nB, row,
+                        channels, &it->md, it->steps, co[0], eobs[0], co[1],
+                        eobs[1], err) < 0)
         return -1;
-    it->at += 2 * (size_t)n;
+    it->at += 2 * ((size_t)nA + nB);
     return 0;
 }
 
@@ -276,22 +362,23 @@ int gv_dct_unpack(const uint8_t *buf, size_t len, int channels,
                   int16_t *coefs, struct gv_error *err)
 {
     struct dct_rows it;
-    static _Thread_local gv_dct_row co;
-    uint8_t eobs[3][GV_DCT_BLOCKS];
+    static _Thread_local gv_dct_row co[2];
+    uint8_t eobs[2][3][GV_DCT_BLOCKS];
     if (rows_begin(&it, buf, len, channels, err) < 0)
         return -1;
-    for (int by = 0; by < GV_DCT_BLOCKS; by++) {
+    for (int by = 0; by < GV_DCT_BLOCKS; by += 2) {
         memset(co, 0, sizeof co);
         if (rows_next(&it, buf, by, channels, co, eobs, err) < 0)
             return -1;
-        for (int v = 0; v < 8; v++) {
-            int16_t *dst = coefs + (size_t)4 * (8 * by + v) * GV_DCT_PLANE;
-            for (int X = 0; X < GV_DCT_PLANE; X++) {
-                for (int c = 0; c < 3; c++)
-                    dst[4 * X + c] = c < channels ? co[c][v][X] : 0;
-                dst[4 * X + 3] = 0;
+        for (int r = 0; r < 2 && by + r < GV_DCT_BLOCKS; r++)
+            for (int v = 0; v < 8; v++) {
+                int16_t *dst = coefs + (size_t)4 * (8 * (by + r) + v) * GV_DCT_PLANE;
+                for (int X = 0; X < GV_DCT_PLANE; X++) {
+                    for (int c = 0; c < 3; c++)
+                        dst[4 * X + c] = c < channels ? co[r][c][v][X] : 0;
+                    dst[4 * X + 3] = 0;
+                }
             }
-        }
     }
     return 0;
 }
@@ -301,8 +388,8 @@ int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
                   struct gv_error *err)
 {
     struct dct_rows it;
-    gv_dct_row co;
-    uint8_t eobs[3][GV_DCT_BLOCKS];
+    gv_dct_row co[2];
+    uint8_t eobs[2][3][GV_DCT_BLOCKS];
     struct gv_predictor pred;
     if (rows_begin(&it, buf, len, channels, err) < 0)
         return -1;
@@ -311,13 +398,16 @@ int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
      * cleared again once used. */
     memset(co, 0, sizeof co);
     const size_t stride = (size_t)GV_TILE * channels;
-    for (int by = 0; by < GV_DCT_BLOCKS; by++) {
+    for (int by = 0; by < GV_DCT_BLOCKS; by += 2) {
         if (rows_next(&it, buf, by, channels, co, eobs, err) < 0)
             return -1;
-        const int y0 = 8 * by, rows = y0 + 8 <= GV_TILE ? 8 : GV_TILE - y0;
-        for (int j = 0; j < rows; j++)
-            gv_predictor_row(&pred, y0 + j, out + (size_t)(y0 + j) * stride);
-        gv_dct_add_row(co, eobs, channels, by, out);
+        for (int r = 0; r < 2 && by + r < GV_DCT_BLOCKS; r++) {
+            const int y0 = 8 * (by + r);
+            const int rows = y0 + 8 <= GV_TILE ? 8 : GV_TILE - y0;
+            for (int j = 0; j < rows; j++)
+                gv_predictor_row(&pred, y0 + j, out + (size_t)(y0 + j) * stride);
+            gv_dct_add_row(co[r], eobs[r], channels, by + r, out);
+        }
     }
     return 0;
 }
