@@ -313,6 +313,24 @@ static void test_hostile(void)
     MUTATE(gv_put16(b + at, gv_get16(b + at) + 1);
            gv_put16(b + at + 2, gv_get16(b + at + 2) - 1), "stream lengths shifted");
     MUTATE(gv_put16(b + at + 20, 1), "a stream of one word");
+    /* Streams 2 and 3 damaged, 3 near its start and 2 near its end: the
+     * decoder reads them in lockstep, yet names stream 2, the first in
+     * stream order, as decoding one stream at a time does. */
+    {
+        size_t s2 = at + 2 * GV_DCT_BLOCKS;
+        s2 += 2 * (size_t)(gv_get16(buf + at) + gv_get16(buf + at + 2));
+        const size_t s3 = s2 + 2 * (size_t)gv_get16(buf + at + 4);
+        memcpy(b, buf, len);
+        b[s3 - 3] ^= 0x40;
+        b[s3 + 5] ^= 0x40;
+        struct gv_error err;
+        int rc = gv_tile_decode(b, len, 3, parent, 0, 0, out, &err);
+        check(rc < 0 && strstr(err.text, "stream 2 ") != NULL,
+              "two damaged streams of a pair: the first named (%s)", err.text);
+        rc = gv_dct_unpack(b, len, 3, plane, &err);
+        check(rc < 0 && strstr(err.text, "stream 2 ") != NULL,
+              "and by the unpacking too (%s)", err.text);
+    }
     /* Clearing a model the streams use. */
     int used = -1;
     for (int m = GV_DCT_MODELS - 1; m >= 0 && used < 0; m--)

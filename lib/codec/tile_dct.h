@@ -79,7 +79,8 @@ int gv_dct_unpack(const uint8_t *buf, size_t len, int channels,
 /*
  * Decode a D buffer against its decoded parent, as gv_tile_decode does
  * (which calls this for D buffers).  Allocates nothing: its scratch
- * (about 30 KiB) is on the stack.  Returns 0 or -1 with *err.
+ * (about 110 KiB: two rows of coefficients, the models' tables and the
+ * predictor's rows) is on the stack.  Returns 0 or -1 with *err.
  */
 int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
                   const uint8_t *parent, int qx, int qy, uint8_t *out,
