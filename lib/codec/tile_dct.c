@@ -106,14 +106,17 @@ int gv_dct_check(const uint8_t *buf, size_t len, int channels,
 }
 
 /* The decoder's view of the models: one 32-bit entry per slot, so that a
- * step is one load: the symbol (bits 0-7), its frequency f (bits 8-16),
- * the slot's offset within the symbol's range (bits 17-24) and, for a
- * token model, the magnitude class of the token's value (bits 25-26; 3
- * for the escape, whose class depends on the value that follows).  An
- * absent model's entries are 0: frequency 0, which the decoder reports. */
-#define E_FREQ(e) ((e) >> 8 & 511)
-#define E_OFFSET(e) ((e) >> 17 & 255)
-#define E_CLASS(e) ((e) >> 25 & 3)
+ * step is one load: the symbol's frequency f (bits 0-8), for a token
+ * model the magnitude class of the token's value times 1024 (bits 10-11:
+ * the byte distance between the token models of successive classes, so
+ * that the next model's address takes one AND; 3 for the escape, whose
+ * class depends on the value that follows), the slot's offset within the
+ * symbol's range (bits 12-19) and the symbol (bits 20-27).  An absent
+ * model's entries are 0: frequency 0, which the decoder reports. */
+#define E_FREQ(e) ((e) & 511)
+#define E_CLASS_BYTES(e) ((e) & 0xc00)
+#define E_OFFSET(e) ((e) >> 12 & 255)
+#define E_SYMBOL(e) ((int)((e) >> 20))
 struct dct_models {
     uint32_t slot[GV_DCT_MODELS][256];
 };
@@ -141,7 +144,7 @@ static void load_models(const uint8_t *buf, const struct dct_layout *l,
             if (m >= GV_DCT_EOB_MODELS)
                 cls = s == GV_DCT_ESCAPE ? 3 : (uint32_t)gv_dct_class(token_value(s));
             for (unsigned slot = lo; slot < hi; slot++)
-                e[slot] = (uint32_t)s | (hi - lo) << 8 | (slot - lo) << 17 | cls << 25;
+                e[slot] = (hi - lo) | cls << 10 | (slot - lo) << 12 | (uint32_t)s << 20;
         }
     }
 }
@@ -191,7 +194,8 @@ static void load_models(const uint8_t *buf, const struct dct_layout *l,
     const uint32_t n##L = (words);                                          \
     uint32_t x##L = gv_get16(w##L) | (uint32_t)gv_get16(w##L + 2) << 16,    \
              next##L = 2;                                                   \
-    int pe##L[3] = {0, 0, 0}, dcp##L[3] = {0, 0, 0}, eob##L, p##L;          \
+    int pe##L[3] = {0, 0, 0}, eob##L;                                       \
+    uint32_t dcp##L[3] = {0, 0, 0}, p##L;                                   \
     int16_t *dst##L;                                                        \
     if (x##L < RANS_L)                                                      \
         goto bad##L
@@ -201,7 +205,7 @@ static void load_models(const uint8_t *buf, const struct dct_layout *l,
     do {                                                                    \
         uint32_t e_;                                                        \
         STEP(L, md->slot[3 * cc + pe##L[c]], e_);                           \
-        eob##L = (int)(e_ & 255);                                           \
+        eob##L = E_SYMBOL(e_);                                              \
         eobs##L[c][bx] = (uint8_t)eob##L;                                   \
         pe##L[c] = eob##L == 0 ? 0 : (eob##L <= 4 ? 1 : 2);                 \
         dst##L = &co##L[c][0][8 * bx];                                      \
@@ -209,23 +213,50 @@ static void load_models(const uint8_t *buf, const struct dct_layout *l,
         dcp##L[c] = 0;                                                      \
     } while (0)
 
+/* Where coefficient k in zigzag order lies in a row's coefficients,
+ * from its block's first: (v, u) at v * GV_DCT_PLANE + u. */
+#define ZZ(v, u) ((v) * GV_DCT_PLANE + (u))
+static const uint16_t zz_offset[64] = {
+    ZZ(0, 0), ZZ(0, 1), ZZ(1, 0), ZZ(2, 0), ZZ(1, 1), ZZ(0, 2), ZZ(0, 3), ZZ(1, 2),
+    ZZ(2, 1), ZZ(3, 0), ZZ(4, 0), ZZ(3, 1), ZZ(2, 2), ZZ(1, 3), ZZ(0, 4), ZZ(0, 5),
+    ZZ(1, 4), ZZ(2, 3), ZZ(3, 2), ZZ(4, 1), ZZ(5, 0), ZZ(6, 0), ZZ(5, 1), ZZ(4, 2),
+    ZZ(3, 3), ZZ(2, 4), ZZ(1, 5), ZZ(0, 6), ZZ(0, 7), ZZ(1, 6), ZZ(2, 5), ZZ(3, 4),
+    ZZ(4, 3), ZZ(5, 2), ZZ(6, 1), ZZ(7, 0), ZZ(7, 1), ZZ(6, 2), ZZ(5, 3), ZZ(4, 4),
+    ZZ(3, 5), ZZ(2, 6), ZZ(1, 7), ZZ(2, 7), ZZ(3, 6), ZZ(4, 5), ZZ(5, 4), ZZ(6, 3),
+    ZZ(7, 2), ZZ(7, 3), ZZ(6, 4), ZZ(5, 5), ZZ(4, 6), ZZ(3, 7), ZZ(4, 7), ZZ(5, 6),
+    ZZ(6, 5), ZZ(7, 4), ZZ(7, 5), ZZ(6, 6), ZZ(5, 7), ZZ(6, 7), ZZ(7, 6), ZZ(7, 7),
+};
+
+/* The byte distance from a channel class's first token model to the
+ * models of coefficient k's band: gv_dct_band_model[k] * 1024. */
+#define B(band) ((band) * 3 * 256 * 4)
+static const uint16_t band_bytes[64] = {
+    B(0), B(1), B(1), B(2), B(2), B(2), B(2), B(2), B(2), B(2), B(3), B(3),
+    B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3),
+    B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3),
+    B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3),
+    B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3), B(3),
+    B(3), B(3), B(3), B(3),
+};
+
 /* Coefficient k (zigzag order) of the block. */
 #define TOKEN(L, k)                                                         \
     do {                                                                    \
         uint32_t e_;                                                        \
-        STEP(L, tok[gv_dct_band_model[k] + p##L], e_);                      \
-        const int t_ = (int)(e_ & 255), z_ = gv_dct_zigzag[k];              \
-        int16_t *d_ = dst##L + (size_t)(z_ >> 3) * GV_DCT_PLANE + (z_ & 7); \
+        STEP(L, (const uint32_t *)((const char *)tok + band_bytes[k] +       \
+                                   p##L), e_);                              \
+        const int t_ = E_SYMBOL(e_);                                        \
+        int16_t *d_ = dst##L + zz_offset[k];                                \
         if (t_ != GV_DCT_ESCAPE) {                                          \
             *d_ = deq[c][t_];                                               \
-            p##L = (int)E_CLASS(e_);                                        \
+            p##L = E_CLASS_BYTES(e_);                                       \
         } else {                                                            \
             int h_, lo_;                                                    \
             STEP_UNIFORM(L, h_);                                            \
             STEP_UNIFORM(L, lo_);                                           \
             const int q_ = 64 * h_ + lo_ - 2048;                            \
             *d_ = clamp_s16(q_ * steps[c]);                                 \
-            p##L = gv_dct_class(q_);                                        \
+            p##L = (uint32_t)gv_dct_class(q_) << 10;                        \
         }                                                                   \
         if ((k) == 0)                                                       \
             dcp##L[c] = p##L;                                               \
