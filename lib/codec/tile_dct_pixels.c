@@ -328,6 +328,22 @@ AVX2 static inline void add8(uint8_t *px, __m128i r)
     _mm_storel_epi64((__m128i *)px, _mm_packus_epi16(s, s));
 }
 
+/* PSHUFB masks that interleave three rows of eight 16-bit values (R, G,
+ * B) into 24: rgb_interleave[k][c] moves channel c's values into output
+ * values 8k .. 8k+7 (value o is channel o mod 3 of pixel o / 3), zeros
+ * elsewhere (-1). */
+static const int8_t rgb_interleave[3][3][16] = {
+    {{0, 1, -1, -1, -1, -1, 2, 3, -1, -1, -1, -1, 4, 5, -1, -1},
+     {-1, -1, 0, 1, -1, -1, -1, -1, 2, 3, -1, -1, -1, -1, 4, 5},
+     {-1, -1, -1, -1, 0, 1, -1, -1, -1, -1, 2, 3, -1, -1, -1, -1}},
+    {{-1, -1, 6, 7, -1, -1, -1, -1, 8, 9, -1, -1, -1, -1, 10, 11},
+     {-1, -1, -1, -1, 6, 7, -1, -1, -1, -1, 8, 9, -1, -1, -1, -1},
+     {4, 5, -1, -1, -1, -1, 6, 7, -1, -1, -1, -1, 8, 9, -1, -1}},
+    {{-1, -1, -1, -1, 12, 13, -1, -1, -1, -1, 14, 15, -1, -1, -1, -1},
+     {10, 11, -1, -1, -1, -1, 12, 13, -1, -1, -1, -1, 14, 15, -1, -1},
+     {-1, -1, 10, 11, -1, -1, -1, -1, 12, 13, -1, -1, -1, -1, 14, 15}},
+};
+
 /* A full 8 x 8 block of a 1- or 3-channel tile by the AVX2 path.
  * Returns 0 when a channel needs the portable path (nothing written). */
 AVX2 static int block_avx2(const struct avx2_matrix *m, int16_t *const d[3],
@@ -370,13 +386,14 @@ AVX2 static int block_avx2(const struct avx2_matrix *m, int16_t *const d[3],
             const __m256i g = _mm256_add_epi32(cg, t);
             const __m256i b = _mm256_sub_epi32(t, _mm256_srai_epi32(co, 1));
             const __m256i r = _mm256_add_epi32(b, co);
-            int16_t rgb[3][8];
-            _mm_storeu_si128((__m128i *)rgb[0], pack16(r));
-            _mm_storeu_si128((__m128i *)rgb[1], pack16(g));
-            _mm_storeu_si128((__m128i *)rgb[2], pack16(b));
-            for (int i = 0; i < 8; i++)
+            const __m128i rgb[3] = {pack16(r), pack16(g), pack16(b)};
+            for (int k = 0; k < 3; k++) {
+                __m128i v = _mm_setzero_si128();
                 for (int c = 0; c < 3; c++)
-                    px[3 * i + c] = clamp_u8(px[3 * i + c] + rgb[c][i]);
+                    v = _mm_or_si128(v, _mm_shuffle_epi8(rgb[c], _mm_loadu_si128(
+                        (const __m128i *)rgb_interleave[k][c])));
+                add8(px + 8 * k, v);
+            }
         }
     }
     return 1;
