@@ -258,8 +258,16 @@ static const uint16_t band_bytes[64] = {
             *d_ = clamp_s16(q_ * steps[c]);                                 \
             p##L = (uint32_t)gv_dct_class(q_) << 10;                        \
         }                                                                   \
-        if ((k) == 0)                                                       \
+    } while (0)
+
+/* The block's first coefficient, when it has one: its class is the next
+ * block's DC context. */
+#define FIRST_TOKEN(L)                                                      \
+    do {                                                                    \
+        if (eob##L) {                                                       \
+            TOKEN(L, 0);                                                    \
             dcp##L[c] = p##L;                                               \
+        }                                                                   \
     } while (0)
 
 /* After the last block: the state back at its start, every word read. */
@@ -300,7 +308,8 @@ static int decode_row(const uint8_t *buf, size_t at, unsigned words, int row,
             const int cc = c > 0;
             const uint32_t(*tok)[256] = md->slot + GV_DCT_EOB_MODELS + 12 * cc;
             BLOCK_EOB(A);
-            for (int k = 0; k < eobA; k++)
+            FIRST_TOKEN(A);
+            for (int k = 1; k < eobA; k++)
                 TOKEN(A, k);
         }
     LANE_END(A, row);
@@ -330,8 +339,10 @@ static int decode_row_pair(const uint8_t *buf, size_t atA, unsigned wordsA,
             const uint32_t(*tok)[256] = md->slot + GV_DCT_EOB_MODELS + 12 * cc;
             BLOCK_EOB(A);
             BLOCK_EOB(B);
+            FIRST_TOKEN(A);
+            FIRST_TOKEN(B);
             const int both = eobA < eobB ? eobA : eobB;
-            int k = 0;
+            int k = 1;
             for (; k < both; k++) {
                 TOKEN(A, k);
                 TOKEN(B, k);
