@@ -13,10 +13,12 @@
 // rans_decode.comp.glsl where there are compute shaders, on the CPU
 // otherwise (WebGL2), uploaded as a texture.  Transform-coded tiles
 // (layout D, byte 0 = 0x20, FORMAT.md 4.3) likewise need their 520x520
-// coefficient plane: from dct_decode.comp.glsl (two uints per texel) or,
-// in WebGL2, as the RGBA16I texture u_coefs (channel c in component c,
-// from the CPU's gv_dct_unpack); this shader takes the inverse transform
-// of the pixel's 8x8 block and the inverse colour transform.
+// coefficient plane: with compute shaders, from dct_decode.comp.glsl (two
+// uints per texel), whose row pass dct_rows.comp.glsl then takes, so that
+// this shader takes the column pass (8 texels a pixel); in WebGL2, as the
+// RGBA16I texture u_coefs (channel c in component c, from the CPU's
+// gv_dct_unpack), of which this shader takes both passes (up to 64
+// texels).  Then the inverse colour transform.
 
 precision highp float;
 precision highp int;
@@ -31,17 +33,9 @@ uniform int u_channels;        // 1 (gray: R, replicated on output) or 3
 layout(std430, binding = 0) readonly buffer TileWords { uint words[]; };
 uint word_at(int i) { return words[i]; }
 // Indices of an entropy-coded tile, decoded by rans_decode.comp.glsl, or
-// the coefficient plane of a transform-coded one, by dct_decode.comp.glsl.
+// the row pass of a transform-coded one's inverse transform, by
+// dct_decode.comp.glsl and dct_rows.comp.glsl.
 layout(std430, binding = 1) readonly buffer Indices { uint indices[]; };
-ivec3 coef_at(int x, int y)
-{
-    int w = 2 * (y * 520 + x);
-    int a = int(indices[w]), b = int(indices[w + 1]);
-    return ivec3((a << 16) >> 16, a >> 16, (b << 16) >> 16);
-}
-// The fourth component of texel (x, y): 0, or in a block's first texel
-// the bounds of its nonzero coefficients (dct_decode.comp.glsl).
-int coef_bounds(int x, int y) { return int(indices[2 * (y * 520 + x) + 1] >> 16); }
 #else
 uniform usampler2D u_words;    // tile buffer as R32UI, u_words_width wide
 uniform int u_words_width;
@@ -108,12 +102,52 @@ const int K[64] = int[64](
     36, -83,  83, -36, -36,  83, -83,  36,
     18, -50,  75, -89,  89, -75,  50, -18);
 
+// The inverse colour transform of residual e: YCoCg-R back to RGB (C =
+// 3), or gray as is.
+ivec3 inverse_colour(ivec3 e)
+{
+    if (u_channels == 1)
+        return ivec3(e.x);
+    int t = e.x - (e.z >> 1);
+    int g = e.z + t;
+    int bl = t - (e.y >> 1);
+    return ivec3(bl + e.y, g, bl);
+}
+
+#ifdef GV_SSBO
+// The row pass's result t of texel words w0, w1 (dct_rows.comp.glsl):
+// three 19-bit integers.
+ivec3 row_pass_at(uint w0, uint w1)
+{
+    return ivec3(int(w0 << 13) >> 13,
+                 int(((w0 >> 19) | (w1 << 13)) << 13) >> 13,
+                 int(w1 << 7) >> 13);
+}
+
+// Residual of pixel uv of a transform-coded tile whose row pass
+// dct_rows.comp.glsl has done (the plane then holds t[v][i] per texel, and
+// the block's row count in its row 0): the column pass, rounded by an
+// arithmetic shift (>> on a signed int), then the colour transform.
+ivec3 dct_residual(ivec2 uv)
+{
+    int j = uv.y & 7;
+    int w = 2 * ((uv.y & ~7) * 520 + uv.x);
+    uint w1 = indices[w + 1];
+    int rows = int((w1 >> 25) & 15u);
+    ivec3 e = K[j] * row_pass_at(indices[w], w1);
+    for (int v = 1; v < rows; v++) {
+        w += 2 * 520;
+        e += K[8 * v + j] * row_pass_at(indices[w], indices[w + 1]);
+    }
+    return inverse_colour((e + GV_DCT_ROUND_COLS) >> 11);
+}
+#else
 // Residual of pixel uv of a transform-coded tile: the inverse transform of
 // its block, rows then columns, each rounded by an arithmetic shift (>> on
-// a signed int), then YCoCg-R back to RGB (C = 3) or gray as is.  Rows and
-// columns past the block's bounds (its first texel's fourth component, 0
-// meaning all 8 of each) hold zeros, which change no sum: a zero row's
-// t[v] is (0 + 64) >> 7 = 0.
+// a signed int), then the colour transform.  Rows and columns past the
+// block's bounds (its first texel's fourth component, 0 meaning all 8 of
+// each) hold zeros, which change no sum: a zero row's t[v] is
+// (0 + 64) >> 7 = 0.
 ivec3 dct_residual(ivec2 uv)
 {
     ivec2 b = (uv >> 3) << 3;
@@ -128,14 +162,9 @@ ivec3 dct_residual(ivec2 uv)
             acc += K[8 * u + i] * coef_at(b.x + u, b.y + v);
         e += K[8 * v + j] * ((acc + GV_DCT_ROUND_ROWS) >> 7);
     }
-    e = (e + GV_DCT_ROUND_COLS) >> 11;
-    if (u_channels == 1)
-        return ivec3(e.x);
-    int t = e.x - (e.z >> 1);
-    int g = e.z + t;
-    int bl = t - (e.y >> 1);
-    return ivec3(bl + e.y, g, bl);
+    return inverse_colour((e + GV_DCT_ROUND_COLS) >> 11);
 }
+#endif
 
 void main()
 {

@@ -11,8 +11,11 @@
  * on the CPU into an R16UI texture, as the browser does.  A transform-coded
  * tile (layout D, FORMAT.md 4.3) goes the same way with its coefficient
  * streams: decoded by a compute pass (dct_decode) into a coefficient buffer
- * bound where the indices would be, or on the CPU (gv_dct_unpack) into a
- * 520x520 RGBA16I texture; the decode shader takes the inverse transform.
+ * bound where the indices would be, whose inverse transform's row pass a
+ * second compute pass (dct_rows, one invocation per 8x8 block) takes in
+ * place, the decode shader the column pass; or on the CPU (gv_dct_unpack)
+ * into a 520x520 RGBA16I texture, of which the decode shader takes both
+ * passes.
  *
  * A single tile is a batch of one.  A batch (gv_gpu_decode_batch) runs in
  * one call on the GL thread: on the SSBO path, in small groups of
@@ -65,7 +68,7 @@ struct gv_gpu_decoder {
     struct gv_gpu *gpu;
     int channels;
     enum gv_gpu_path path;
-    GLuint decode, quarter, rans, dct, fbo, vao;
+    GLuint decode, quarter, rans, dct, dct_rows, fbo, vao;
     /* Two sets of storage buffers, a tile buffer and an index buffer per
      * tile of a group, used by alternate groups of tiles; a set is
      * refilled only once the fence after its last group's draws has
@@ -140,7 +143,15 @@ static int setup(void *arg, struct gv_error *err)
     if (d->rans)
         d->dct = gv_gpu_compute_program(d->gpu, gv_shader_dct_decode_comp,
                                         &listing, err);
-    if (!d->decode || !d->quarter || (!webgl2 && !d->dct)) {
+    if (d->dct) {
+        char *rows = malloc(strlen(d->defines) + strlen(gv_shader_dct_rows_comp) + 1);
+        if (!rows)
+            return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+        strcat(strcpy(rows, d->defines), gv_shader_dct_rows_comp);
+        d->dct_rows = gv_gpu_compute_program(d->gpu, rows, &listing, err);
+        free(rows);
+    }
+    if (!d->decode || !d->quarter || (!webgl2 && !d->dct_rows)) {
         /* Our own shader failing is a bug or a broken driver: show why. */
         if (listing)
             fprintf(stderr, "%s", listing);
@@ -251,6 +262,8 @@ static int teardown(void *arg, struct gv_error *err)
         glDeleteProgram(d->rans);
     if (d->dct)
         glDeleteProgram(d->dct);
+    if (d->dct_rows)
+        glDeleteProgram(d->dct_rows);
     for (int k = 0; k < 2; k++) {
         if (d->coefs[k])
             glDeleteBuffers(1, &d->coefs[k]);
@@ -597,6 +610,11 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
         }
         dispatch_streams(d->dct, d->ssbo[set], d->coefs[set], d->dct_tiles[set],
                          params, (size_t)nd * sizeof params[0], 1, (GLuint)nd);
+        /* The inverse transform's row pass, in place, once the planes are
+         * written: one invocation per block (same buffers bound). */
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        glUseProgram(d->dct_rows);
+        glDispatchCompute((GV_DCT_BLOCKS * GV_DCT_BLOCKS + 63) / 64, (GLuint)nd, 1);
     }
     if (entropy || nd > 0)
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
