@@ -454,6 +454,37 @@ struct http_threads {
  * which comes before any of its requests. */
 static _Thread_local struct http_thread *this_thread;
 
+/* Append one query argument to the string being built (struct query). */
+struct query {
+    char buf[1024];
+    size_t len;
+};
+
+static enum MHD_Result add_query_arg(void *cls, enum MHD_ValueKind kind,
+                                     const char *key, const char *value)
+{
+    (void)kind;
+    struct query *q = cls;
+    int n = snprintf(q->buf + q->len, sizeof q->buf - q->len, "%s%s%s%s",
+                     q->len ? "&" : "", key, value ? "=" : "", value ? value : "");
+    if (n < 0 || (size_t)n >= sizeof q->buf - q->len) {
+        q->len = sizeof q->buf - 1;   /* truncated: the log shows the rest cut */
+        return MHD_NO;
+    }
+    q->len += (size_t)n;
+    return MHD_YES;
+}
+
+/* The request's query arguments as "k=v&k2=v2" (decoded, in the order
+ * sent), malloc'ed, or NULL when there are none (or no memory). */
+static char *query_string(struct MHD_Connection *conn)
+{
+    struct query q = {.len = 0};
+    q.buf[0] = '\0';
+    MHD_get_connection_values(conn, MHD_GET_ARGUMENT_KIND, add_query_arg, &q);
+    return q.len ? strdup(q.buf) : NULL;
+}
+
 static enum MHD_Result handle_request(void *cls, struct MHD_Connection *conn,
                                       const char *url, const char *method,
                                       const char *version, const char *upload,
@@ -470,6 +501,7 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *conn,
             free(r);
             return MHD_NO;
         }
+        r->query = query_string(conn);
         r->srv = cls;
         r->conn = conn;
         r->method = method;
@@ -543,7 +575,10 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
     unsigned status = r->status;
     if (why != MHD_REQUEST_TERMINATED_COMPLETED_OK && status == 0)
         status = 499; /* closed before any response, as nginx logs it */
-    log_access(r->remote, r->method, r->path, status,
+    char target[2048];
+    snprintf(target, sizeof target, "%s%s%s", r->path, r->query ? "?" : "",
+             r->query ? r->query : "");
+    log_access(r->remote, r->method, target, status,
                (unsigned long long)r->bytes, (unsigned long long)usec);
     metrics_record(metrics_id(r->route), status, usec, r->bytes);
     atomic_fetch_sub(&metrics.in_flight, 1);
@@ -552,6 +587,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
     free(r->segbuf);
     free(r->body);
     free(r->path);
+    free(r->query);
     free(r);
 }
 

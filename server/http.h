@@ -85,6 +85,7 @@ struct req {
     struct MHD_Connection *conn;
     const char *method;       /* as received; HEAD is routed as GET */
     char *path;               /* decoded path, owned */
+    char *query;              /* "k=v&..." as decoded, for the access log; owned, NULL for none */
     int head;                 /* HEAD request: headers only */
     int route;                /* enum route_id (router.h), -1 none */
     int iiif;                 /* IIIF route: IIIF statuses, CORS "*" */

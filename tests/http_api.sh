@@ -650,6 +650,9 @@ check "replaced store: tile served with a new ETag" test "$code" = 200 -a "$(hea
 req "$(url '/v1/images/a%22b%0A%1b%E2%82%AC')"
 check "log: client strings escaped in the access line" grep -q 'access: 127.0.0.1 "GET /v1/images/a\\x22b\\x0a\\x1b\\xe2\\x82\\xac" 404' "$T/daemon.log"
 check "log: traversal path logged" grep -q 'access: 127.0.0.1 "GET /v1/images/../../etc/passwd" 404' "$T/daemon.log"
+check "log: the query string in the access line" grep -q 'access: 127.0.0.1 "GET /v1/images/x/batch?t=0,5,3&etag=1" 200' "$T/daemon.log"
+req "$(url '/v1/images/x/batch?t=%22%0a')"
+check "log: query arguments escaped too" grep -q 'access: 127.0.0.1 "GET /v1/images/x/batch?t=\\x22\\x0a" 400' "$T/daemon.log"
 check "log lines carry time pid level module" grep -Eq '^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9:]{8}Z [0-9]+ info catalog: ' "$T/daemon.log"
 
 # ---------------------------------------------------------------- SIGTERM drain
