@@ -115,6 +115,19 @@ bad_case "--max-pixels 1000 on a mosaic" \
 bad_case_re "mosaic with one damaged tile" \
     "^gigaview encode: imageio: $in/trunc\\.jpg: JPEG error: " -m 2x1 "$jpg" "$in/trunc.jpg"
 
+# ------------------------------------------------- the OpenImageIO module
+# Image files are read through gigaview-oiio.so, loaded on first use
+# (lib/imageio/imageio_loader.c): without it an image file is refused in
+# one line that says so, and what needs no image file still works.
+export GV_OIIO_MODULE="$T/no-such-module.so"
+bad_case_re "the OpenImageIO module missing" \
+    "^gigaview encode: imageio: cannot load the OpenImageIO module: .*no-such-module\\.so" "$jpg"
+run encode synth:300x200 -o "$T/synth-no-module.gv" --quiet
+expect_rc "the OpenImageIO module missing: a synthetic input needs none" 0
+GV_OIIO_MODULE="$T" bad_case_re "a directory as the OpenImageIO module" \
+    "^gigaview encode: imageio: cannot load the OpenImageIO module: " "$jpg"
+unset GV_OIIO_MODULE
+
 # ------------------------------------------------- output locations
 # A path under a non-directory: no way to create anything.
 run encode "$jpg" -o /dev/null/x.gv

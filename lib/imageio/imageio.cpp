@@ -54,6 +54,12 @@
  *
  * Thread safety: distinct gv_image_in objects may be used from different
  * threads; one object by one thread at a time.
+ *
+ * This file is built as a module of its own, gigaview-oiio.so, which
+ * imageio_loader.c opens the first time a program reads or writes an
+ * image file: OpenImageIO and the libraries it needs then load only into
+ * the processes that use them.  The module exports one table
+ * (imageio_module.h).
  */
 #include <cctype>
 #include <errno.h>
@@ -74,7 +80,18 @@
 
 #include "base/atomic_file.h"
 #include "base/error.h"
+/* The functions of imageio.h under module-private names: the program's own
+ * gv_image_* are imageio_loader.c's, which call these through the table
+ * at the end of this file. */
+#define gv_image_open oiio_image_open
+#define gv_image_read oiio_image_read
+#define gv_image_close oiio_image_close
+#define gv_image_write oiio_image_write
+#define gv_image_encode oiio_image_encode
+#define gv_image_write_typed oiio_image_write_typed
+#define gv_image_encode_typed oiio_image_encode_typed
 #include "imageio/imageio.h"
+#include "imageio/imageio_module.h"
 #include "imageio/output_format.h"
 
 using OIIO::ImageInput;
@@ -790,3 +807,12 @@ extern "C" int gv_image_encode_typed(const char *format, uint32_t width,
         return gv_fail(err, GV_EIO, "imageio: unknown encoder exception");
     }
 }
+
+/* ---- the module's table (imageio_module.h) ---- */
+
+extern "C" __attribute__((visibility("default")))
+const struct gv_imageio_module gv_imageio_module = {
+    GV_IMAGEIO_MODULE_ABI, oiio_image_open, oiio_image_read,
+    oiio_image_close, oiio_image_write, oiio_image_encode,
+    oiio_image_write_typed, oiio_image_encode_typed,
+};

@@ -1,0 +1,157 @@
+/*
+ * imageio_loader.c - the functions of imageio.h, served by the OpenImageIO
+ * module (gigaview-oiio.so, built from imageio.cpp), which this file opens
+ * with dlopen the first time a program reads or writes an image file.
+ *
+ * Why: OpenImageIO needs some 260 shared libraries, and loading and
+ * relocating them took about 0.2 s of every gigaview process's start on
+ * the benchmark machine (perf: 71 % of `gigaview encode` of a 32 x 8
+ * image in the dynamic linker), longer than `vips dzsave` takes for a
+ * whole 8-megapixel photograph.  Processes that never touch an image file
+ * (gigaview info, refused command lines, synthetic inputs, gigaviewd until
+ * its first image output) now skip it.
+ *
+ * Where the module is looked for: only $GV_OIIO_MODULE when it is set;
+ * else beside the executable (a build tree's gigaview and gigaviewd), in
+ * its parent directory (a build tree's tests/ and bench/ programs), in
+ * ../lib/gigaview beside it (an installed tree moved elsewhere, or staged
+ * with DESTDIR), and in the configured PKGLIBDIR.  A module
+ * that cannot be opened, or whose table is of another version, makes
+ * every call fail with GV_EFORMAT and one line that says where it looked.
+ */
+#include <dlfcn.h>
+#include <limits.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "imageio/imageio.h"
+#include "imageio/imageio_module.h"
+
+#ifndef PKGLIBDIR
+#define PKGLIBDIR "/usr/local/lib/gigaview"
+#endif
+
+static pthread_once_t once = PTHREAD_ONCE_INIT;
+static const struct gv_imageio_module *module;
+static char why[PATH_MAX + 256];   /* when module is NULL */
+
+/* Try one path; 1 when the module is loaded. */
+static int try_path(const char *path)
+{
+    void *h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!h) {
+        snprintf(why, sizeof why, "%s", dlerror());
+        return 0;
+    }
+    const struct gv_imageio_module *m = dlsym(h, GV_IMAGEIO_MODULE_SYMBOL);
+    if (!m || m->abi != GV_IMAGEIO_MODULE_ABI) {
+        snprintf(why, sizeof why, "%s: not a gigaview %d OpenImageIO module",
+                 path, GV_IMAGEIO_MODULE_ABI);
+        dlclose(h);
+        return 0;
+    }
+    module = m;   /* kept open for the life of the process */
+    return 1;
+}
+
+static void load(void)
+{
+    const char *env = getenv("GV_OIIO_MODULE");
+    if (env && *env) {
+        try_path(env);
+        return;
+    }
+    char exe[PATH_MAX], path[PATH_MAX + 64];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n > 0) {
+        exe[n] = '\0';
+        char *slash = strrchr(exe, '/');
+        if (slash)
+            *slash = '\0';
+        static const char *const rel[] = {"", "/..", "/../lib/gigaview"};
+        for (size_t k = 0; k < sizeof rel / sizeof rel[0]; k++) {
+            snprintf(path, sizeof path, "%s%s/%s", exe, rel[k],
+                     GV_IMAGEIO_MODULE_FILE);
+            if (access(path, F_OK) == 0 && try_path(path))
+                return;
+        }
+    }
+    snprintf(path, sizeof path, "%s/%s", PKGLIBDIR, GV_IMAGEIO_MODULE_FILE);
+    if (access(path, F_OK) == 0) {
+        try_path(path);
+        return;
+    }
+    if (!why[0])
+        snprintf(why, sizeof why, "no %s beside the program, in its parent "
+                 "directory or in %s (set GV_OIIO_MODULE to its path)",
+                 GV_IMAGEIO_MODULE_FILE, PKGLIBDIR);
+}
+
+/* The module, or NULL with *err filled. */
+static const struct gv_imageio_module *get(struct gv_error *err)
+{
+    pthread_once(&once, load);
+    if (!module)
+        gv_fail(err, GV_EFORMAT, "imageio: cannot load the OpenImageIO "
+                "module: %s", why);
+    return module;
+}
+
+struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
+                                  struct gv_image_info *info,
+                                  struct gv_error *err)
+{
+    const struct gv_imageio_module *m = get(err);
+    return m ? m->open(path, max_pixels, info, err) : NULL;
+}
+
+int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,
+                  struct gv_error *err)
+{
+    /* An image was opened, so the module is loaded. */
+    return module->read(in, rows, out, err);
+}
+
+void gv_image_close(struct gv_image_in *in)
+{
+    if (in)
+        module->close(in);
+}
+
+int gv_image_write(const char *path, uint32_t width, uint32_t height,
+                   int channels, const uint8_t *pixels, struct gv_error *err)
+{
+    const struct gv_imageio_module *m = get(err);
+    return m ? m->write(path, width, height, channels, pixels, err) : -1;
+}
+
+int gv_image_encode(const char *format, uint32_t width, uint32_t height,
+                    int channels, const uint8_t *pixels, int quality,
+                    uint8_t **out, size_t *len, struct gv_error *err)
+{
+    const struct gv_imageio_module *m = get(err);
+    return m ? m->encode(format, width, height, channels, pixels, quality,
+                         out, len, err) : -1;
+}
+
+int gv_image_write_typed(const char *path, uint32_t width, uint32_t height,
+                         int channels, enum gv_sample sample,
+                         const void *pixels, struct gv_error *err)
+{
+    const struct gv_imageio_module *m = get(err);
+    return m ? m->write_typed(path, width, height, channels, sample, pixels,
+                              err) : -1;
+}
+
+int gv_image_encode_typed(const char *format, uint32_t width, uint32_t height,
+                          int channels, enum gv_sample sample,
+                          const void *pixels, uint8_t **out, size_t *len,
+                          struct gv_error *err)
+{
+    const struct gv_imageio_module *m = get(err);
+    return m ? m->encode_typed(format, width, height, channels, sample,
+                               pixels, out, len, err) : -1;
+}
