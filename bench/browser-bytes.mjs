@@ -148,7 +148,7 @@ async function meter(ctx, pg, isData) {
 }
 
 // Response bodies gigaviewd sent for /v1/ between two offsets of its
-// access log ("... access: REMOTE \"METHOD PATH\" STATUS BYTES USECus"):
+// access log ("... access: REMOTE \"METHOD PATH[?QUERY]\" STATUS BYTES USECus"):
 // all of them, and the tiles (batches, single tiles) and the root apart.
 const logAt = () => (opt['access-log'] ? statSync(opt['access-log']).size : 0);
 function served(from, to) {
@@ -161,7 +161,7 @@ function served(from, to) {
         if (!r || !r[2].startsWith('/v1/'))
             continue;
         const n = Number(r[4]);
-        const route = `${r[1]} ${r[2].replace(`/images/${opt.id}`, '/images/ID')}`;
+        const route = `${r[1]} ${r[2].replace(`/images/${opt.id}`, '/images/ID').replace(/\?.*/, '')}`;
         m.routes[route] = (m.routes[route] || 0) + 1;
         m.bytes += n;
         m.requests++;

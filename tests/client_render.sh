@@ -162,11 +162,11 @@ if [ -z "$no_gpu" ]; then
     run render "$BASE" --image x --level 0 --region 0,0,1100,600 -o c1.png -v
     down=$(sed -n 's/.* \([0-9]*\) tiles downloaded, \([0-9]*\) revalidated.*/\1 \2/p' "$T/err")
     before=$(grep -c '" 304 ' "$T/daemon.log")
-    batches=$(grep -c '"POST /v1/images/x/batch" 200 ' "$T/daemon.log")
+    batches=$(grep -cE '"POST /v1/images/x/batch(\?[^"]*)?" 200 ' "$T/daemon.log")
     run render "$BASE" --image x --level 0 --region 0,0,1100,600 -o c2.png -v
     again=$(sed -n 's/.* \([0-9]*\) tiles downloaded, \([0-9]*\) revalidated.*/\1 \2/p' "$T/err")
     after=$(grep -c '" 304 ' "$T/daemon.log")
-    batches=$(($(grep -c '"POST /v1/images/x/batch" 200 ' "$T/daemon.log") - batches))
+    batches=$(($(grep -cE '"POST /v1/images/x/batch(\?[^"]*)?" 200 ' "$T/daemon.log") - batches))
     n=${down%% *}
     # 1100x600 at level 0: 6 tiles there, 2 at level 1, 1 at level 2; the
     # requests: the metadata, the batch and the root (a 304).
