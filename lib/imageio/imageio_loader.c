@@ -13,7 +13,8 @@
  *
  * Where the module is looked for: only $GV_OIIO_MODULE when it is set;
  * else beside the executable (a build tree's gigaview and gigaviewd), in
- * its parent directory (a build tree's tests/ and bench/ programs), in
+ * its parent and grandparent directories (a build tree's tests/, bench/
+ * and tests/fuzz/ programs), in
  * ../lib/gigaview beside it (an installed tree moved elsewhere, or staged
  * with DESTDIR), and in the configured PKGLIBDIR.  A module
  * that cannot be opened, or whose table is of another version, makes
@@ -71,7 +72,8 @@ static void load(void)
         char *slash = strrchr(exe, '/');
         if (slash)
             *slash = '\0';
-        static const char *const rel[] = {"", "/..", "/../lib/gigaview"};
+        static const char *const rel[] = {"", "/..", "/../..",
+                                          "/../lib/gigaview"};
         for (size_t k = 0; k < sizeof rel / sizeof rel[0]; k++) {
             snprintf(path, sizeof path, "%s%s/%s", exe, rel[k],
                      GV_IMAGEIO_MODULE_FILE);
@@ -85,8 +87,9 @@ static void load(void)
         return;
     }
     if (!why[0])
-        snprintf(why, sizeof why, "no %s beside the program, in its parent "
-                 "directory or in %s (set GV_OIIO_MODULE to its path)",
+        snprintf(why, sizeof why, "no %s beside the program, in the two "
+                 "directories above it or in %s (set GV_OIIO_MODULE to its "
+                 "path)",
                  GV_IMAGEIO_MODULE_FILE, PKGLIBDIR);
 }
 

@@ -117,8 +117,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gv_error_clear(&err);
     struct gv_source *s = gv_source_open(inputs, 1, &opts, &info, &err);
     if (!s) {
-        if (!err.text[0])
+        /* A missing OpenImageIO module would refuse every input and fuzz
+         * nothing: stop loudly instead. */
+        if (!err.text[0] || strstr(err.text, "cannot load the OpenImageIO module")) {
+            fprintf(stderr, "fuzz_imageio: %s\n", err.text);
             abort();
+        }
         unlink(path);
         return 0;
     }
