@@ -127,6 +127,27 @@ expect_rc "the OpenImageIO module missing: a synthetic input needs none" 0
 GV_OIIO_MODULE="$T" bad_case_re "a directory as the OpenImageIO module" \
     "^gigaview encode: imageio: cannot load the OpenImageIO module: " "$jpg"
 unset GV_OIIO_MODULE
+# Found by searching, a module is taken only from a directory not everyone
+# may write: a copy of the program in $T/shared/bin, the module in
+# $T/shared, first writable by all, then not.
+module=$(dirname "$GIGAVIEW")/gigaview-oiio.so
+if [ -f "$module" ]; then
+    mkdir -p "$T/shared/bin"
+    cp "$GIGAVIEW" "$T/shared/bin/gigaview"
+    cp "$module" "$T/shared/"
+    chmod 777 "$T/shared"
+    "$T/shared/bin/gigaview" encode "$jpg" -o "$T/shared.gv" >"$T/out" 2>"$T/err"
+    rc=$?
+    expect_rc "a module in a directory anyone may write: refused" 1
+    expect_err "a module in a directory anyone may write: the message" \
+        "cannot load the OpenImageIO module: no gigaview-oiio.so beside the program"
+    chmod 755 "$T/shared"
+    "$T/shared/bin/gigaview" encode "$jpg" -o "$T/shared.gv" --quiet >"$T/out" 2>"$T/err"
+    rc=$?
+    expect_rc "the same module once its directory is not writable by all: loaded" 0
+else
+    skip "a module in a directory anyone may write" "no $module"
+fi
 
 # ------------------------------------------------- output locations
 # A path under a non-directory: no way to create anything.

@@ -14,11 +14,13 @@
  * Where the module is looked for: only $GV_OIIO_MODULE when it is set;
  * else beside the executable (a build tree's gigaview and gigaviewd), in
  * its parent and grandparent directories (a build tree's tests/, bench/
- * and tests/fuzz/ programs), in
- * ../lib/gigaview beside it (an installed tree moved elsewhere, or staged
- * with DESTDIR), and in the configured PKGLIBDIR.  A module
- * that cannot be opened, or whose table is of another version, makes
- * every call fail with GV_EFORMAT and one line that says where it looked.
+ * and tests/fuzz/ programs), in ../lib/gigaview beside it (an installed
+ * tree moved elsewhere, or staged with DESTDIR), and in the configured
+ * PKGLIBDIR.  One found beside the program is taken only if it and its
+ * directory belong to root or to the user and are not writable by all.
+ * A module that cannot be opened, or whose table is of another version,
+ * makes every call fail with GV_EFORMAT and one line that says where it
+ * looked.
  */
 #include <dlfcn.h>
 #include <limits.h>
@@ -26,6 +28,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "imageio/imageio.h"
@@ -55,6 +58,27 @@
 static pthread_once_t once = PTHREAD_ONCE_INIT;
 static const struct gv_imageio_module *module;
 static char why[PATH_MAX + 256];   /* when module is NULL */
+
+/* Whether a module found by searching may be loaded: the file and its
+ * directory owned by root or by this user and not writable by all, so
+ * that a build tree under a shared directory such as /tmp cannot be made
+ * to load a module someone else put there. */
+static int trusted(const char *path)
+{
+    char dir[PATH_MAX + 64];
+    if ((size_t)snprintf(dir, sizeof dir, "%s", path) >= sizeof dir)
+        return 0;
+    char *slash = strrchr(dir, '/');
+    if (!slash)
+        return 0;
+    *slash = '\0';
+    struct stat f, d;
+    if (stat(path, &f) < 0 || stat(dir[0] ? dir : "/", &d) < 0)
+        return 0;
+    const uid_t me = geteuid();
+    return (f.st_uid == 0 || f.st_uid == me) && (d.st_uid == 0 || d.st_uid == me) &&
+           !(f.st_mode & S_IWOTH) && !(d.st_mode & S_IWOTH);
+}
 
 /* Try one path; 1 when the module is loaded. */
 static int try_path(const char *path)
@@ -94,7 +118,7 @@ static void load(void)
         for (size_t k = 0; k < sizeof rel / sizeof rel[0]; k++) {
             snprintf(path, sizeof path, "%s%s/%s", exe, rel[k],
                      GV_IMAGEIO_MODULE_FILE);
-            if (access(path, F_OK) == 0 && try_path(path))
+            if (access(path, F_OK) == 0 && trusted(path) && try_path(path))
                 return;
         }
     }
@@ -104,9 +128,10 @@ static void load(void)
         return;
     }
     if (!why[0])
-        snprintf(why, sizeof why, "no %s beside the program, in the two "
-                 "directories above it or in %s (set GV_OIIO_MODULE to its "
-                 "path)",
+        snprintf(why, sizeof why, "no %s beside the program or in the two "
+                 "directories above it (owned by root or this user, "
+                 "not writable by all), nor in %s (set GV_OIIO_MODULE "
+                 "to its path)",
                  GV_IMAGEIO_MODULE_FILE, PKGLIBDIR);
 }
 
