@@ -217,19 +217,59 @@ static void init_tc(void)
     }
 }
 
-/* One past the last nonzero value of q[64] (0 when all are zero). */
-static inline int last_nonzero(const int16_t *q)
+/* Quantize one block x[64] with step s (inv = 1 / s) into q[64]: the
+ * dead-zone rounding floor(|x| / s + ROUND_OFFSET), capped at 2047, with
+ * the sign of x.  acc[l] gets the squared error of lanes l, l + 8, ...,
+ * summed in that order (the same roundings with SSE2 as without).
+ * Returns one past the last nonzero value (0 when all are zero). */
+static inline int quantize_block(const float *x, float inv, float s,
+                                 int16_t *q, float *acc)
 {
 #if defined(__SSE2__)
-    const __m128i z = _mm_setzero_si128();
+    const __m128 vinv = _mm_set1_ps(inv), vs = _mm_set1_ps(s);
+    const __m128 off = _mm_set1_ps(ROUND_OFFSET), cap = _mm_set1_ps(2047.5f);
+    const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128i zero = _mm_setzero_si128();
+    __m128 acc0 = _mm_setzero_ps(), acc1 = _mm_setzero_ps();
     uint64_t nz = 0;
-    for (int k = 0; k < 64; k += 16) {
-        __m128i a = _mm_cmpeq_epi16(_mm_loadu_si128((const __m128i *)(q + k)), z);
-        __m128i b = _mm_cmpeq_epi16(_mm_loadu_si128((const __m128i *)(q + k + 8)), z);
-        nz |= (uint64_t)(~_mm_movemask_epi8(_mm_packs_epi16(a, b)) & 0xffff) << k;
+    for (int k = 0; k < 64; k += 8) {
+        __m128i m2[2];
+        for (int h = 0; h < 2; h++) {
+            const __m128 v = _mm_loadu_ps(x + k + 4 * h);
+            const __m128 a = _mm_and_ps(v, absmask);
+            __m128 f = _mm_add_ps(_mm_mul_ps(a, vinv), off);
+            f = _mm_min_ps(f, cap);
+            const __m128i m = _mm_cvttps_epi32(f);
+            const __m128 err = _mm_sub_ps(a, _mm_mul_ps(_mm_cvtepi32_ps(m), vs));
+            if (h)
+                acc1 = _mm_add_ps(acc1, _mm_mul_ps(err, err));
+            else
+                acc0 = _mm_add_ps(acc0, _mm_mul_ps(err, err));
+            const __m128i sg = _mm_srai_epi32(_mm_castps_si128(v), 31);
+            m2[h] = _mm_sub_epi32(_mm_xor_si128(m, sg), sg);
+        }
+        const __m128i q8 = _mm_packs_epi32(m2[0], m2[1]);
+        _mm_storeu_si128((__m128i *)(q + k), q8);
+        const __m128i eq = _mm_cmpeq_epi16(q8, zero);
+        const int z = _mm_movemask_epi8(_mm_packs_epi16(eq, eq)) & 0xff;
+        nz |= (uint64_t)(~z & 0xff) << k;
     }
+    _mm_storeu_ps(acc, acc0);
+    _mm_storeu_ps(acc + 4, acc1);
     return nz ? 64 - __builtin_clzll(nz) : 0;
 #else
+    for (int l = 0; l < 8; l++)
+        acc[l] = 0;
+    for (int k = 0; k < 64; k += 8)
+        for (int l = 0; l < 8; l++) {
+            const float v = x[k + l], a = fabsf(v);
+            float f = a * inv + ROUND_OFFSET;
+            f = f < 2047.5f ? f : 2047.5f;
+            const int m = (int)f;
+            const float err = a - (float)m * s;
+            acc[l] += err * err;
+            q[k + l] = (int16_t)(v < 0 ? -m : m);
+        }
     int last = 64;
     while (last > 0 && !q[last - 1])
         last--;
@@ -274,22 +314,10 @@ static double quantize_count(const struct gv_dct_workspace *ws,
                 }
                 const float *x = ws->x[c][b];
                 int16_t *q = cd->q[c][b];
-                float acc[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-                /* Branch-free, in eight lanes, so that it vectorizes: the
-                 * truncation of a non-negative number is its floor. */
-                for (int k = 0; k < 64; k += 8)
-                    for (int l = 0; l < 8; l++) {
-                        const float v = x[k + l], a = fabsf(v);
-                        float f = a * inv + ROUND_OFFSET;
-                        f = f < 2047.5f ? f : 2047.5f;
-                        const int m = (int)f;
-                        const float err = a - (float)m * s;
-                        acc[l] += err * err;
-                        q[k + l] = (int16_t)(v < 0 ? -m : m);
-                    }
+                float acc[8];
+                const int n = quantize_block(x, inv, s, q, acc);
                 e2 += ((acc[0] + acc[1]) + (acc[2] + acc[3])) +
                       ((acc[4] + acc[5]) + (acc[6] + acc[7]));
-                const int n = last_nonzero(q);
                 cd->eob[c][b] = (uint8_t)n;
                 eobc[pe * GV_DCT_EOB_SYMBOLS + n]++;
                 int p = dcp;
