@@ -10,8 +10,10 @@
  *
  * Quantization rounds with a dead zone (offset ROUND_OFFSET instead of
  * 1/2), which lowers the rate more than it raises the error.  The step
- * of channel 0 is searched over half and then quarter octaves around the
- * high-rate optimum for lambda, each candidate costed by its exact model entropy
+ * of channel 0 is searched over quarter octaves around the high-rate
+ * optimum for lambda, by descent from the commonest best while the cost
+ * falls (J is unimodal there but for a plateau where every block is
+ * zero), each candidate costed by its exact model entropy
  * (the 8-bit models as the buffer will store them, their bytes included)
  * and by its squared error estimated in the transform domain; chroma
  * steps follow at the ratios that equalize the slopes of the YCoCg-R
@@ -19,12 +21,20 @@
  * of two, one in Cg a quarter of three: weights 3, 1/2, 3/4).  The best
  * candidate is written and decoded by gv_dct_decode, whose output is the
  * reconstruction and whose error is exact.
+ *
+ * Speed (bench/README.md, 2026-11-26 later): a candidate is quantized and
+ * its symbols counted in one pass, without copying; the transform and the
+ * quantizer run in SSE2 (the transform also in AVX2, chosen at run time)
+ * with the roundings of the plain C, in the same order, so the stores do
+ * not depend on the path.
  */
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
-#if defined(__SSE2__)
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#elif defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
@@ -97,10 +107,29 @@ void gv_dct_workspace_free(struct gv_dct_workspace *ws)
 
 /* The residual of channel c (YCoCg when C = 3) at pixel (x, y), the
  * coordinates clamped to the valid area. */
-static void residual_block(const uint8_t *orig, const uint8_t *pred,
+__attribute__((always_inline)) static inline void
+residual_block(const uint8_t *orig, const uint8_t *pred,
                            int channels, int bx, int by, uint32_t vw,
                            uint32_t vh, float out[3][64])
 {
+    if (channels == 3 && (uint32_t)(8 * bx + 8) <= vw &&
+        (uint32_t)(8 * by + 8) <= vh) {
+        /* Inside the valid area: no clamping, the same arithmetic. */
+        for (int j = 0; j < 8; j++) {
+            const size_t at = ((size_t)(8 * by + j) * GV_TILE + 8 * bx) * 3;
+            const uint8_t *o = orig + at, *p = pred + at;
+            for (int i = 0; i < 8; i++) {
+                const float r = (float)(o[3 * i] - p[3 * i]);
+                const float g = (float)(o[3 * i + 1] - p[3 * i + 1]);
+                const float b = (float)(o[3 * i + 2] - p[3 * i + 2]);
+                const float co = r - b, t = b + co / 2, cg = g - t;
+                out[0][8 * j + i] = t + cg / 2;
+                out[1][8 * j + i] = co;
+                out[2][8 * j + i] = cg;
+            }
+        }
+        return;
+    }
     for (int j = 0; j < 8; j++) {
         uint32_t y = (uint32_t)(8 * by + j);
         if (y >= vh)
@@ -140,7 +169,37 @@ static void init_kt(void)
  * zigzag order.  Each sum runs over i (then j) in increasing order, in
  * eight lanes over u so that it vectorizes; the order of the additions,
  * and so every rounding, is that of a plain loop (no FMA: ISO C mode). */
-static void forward(const float *e, float *d)
+#if defined(__SSE2__)
+static inline void forward(const float *e, float *d)
+{
+    __m128 t[8][2];   /* t[j][u / 4] */
+    for (int j = 0; j < 8; j++) {
+        __m128 s0 = _mm_setzero_ps(), s1 = _mm_setzero_ps();
+        for (int i = 0; i < 8; i++) {
+            const __m128 ei = _mm_set1_ps(e[8 * j + i]);
+            s0 = _mm_add_ps(s0, _mm_mul_ps(_mm_loadu_ps(kt[i]), ei));
+            s1 = _mm_add_ps(s1, _mm_mul_ps(_mm_loadu_ps(kt[i] + 4), ei));
+        }
+        t[j][0] = s0;
+        t[j][1] = s1;
+    }
+    float r[64];
+    const __m128 scale = _mm_set1_ps(1.0f / 4096.0f);
+    for (int v = 0; v < 8; v++) {
+        __m128 s0 = _mm_setzero_ps(), s1 = _mm_setzero_ps();
+        for (int j = 0; j < 8; j++) {
+            const __m128 k = _mm_set1_ps((float)gv_dct_matrix[v][j]);
+            s0 = _mm_add_ps(s0, _mm_mul_ps(k, t[j][0]));
+            s1 = _mm_add_ps(s1, _mm_mul_ps(k, t[j][1]));
+        }
+        _mm_storeu_ps(r + 8 * v, _mm_mul_ps(s0, scale));
+        _mm_storeu_ps(r + 8 * v + 4, _mm_mul_ps(s1, scale));
+    }
+    for (int k = 0; k < 64; k++)
+        d[k] = r[gv_dct_zigzag[k]];
+}
+#else
+static inline void forward(const float *e, float *d)
 {
     float t[8][8];   /* t[j][u] */
     for (int j = 0; j < 8; j++) {
@@ -161,15 +220,45 @@ static void forward(const float *e, float *d)
                 s[u] += k * t[j][u];
         }
         for (int u = 0; u < 8; u++)
-            r[8 * v + u] = s[u] / 4096.0f;
+            r[8 * v + u] = s[u] * (1.0f / 4096.0f);
     }
     for (int k = 0; k < 64; k++)
         d[k] = r[gv_dct_zigzag[k]];
 }
+#endif
 
-static void transform_tile(struct gv_dct_workspace *ws, const uint8_t *orig,
-                           const uint8_t *pred, int channels, uint32_t vw,
-                           uint32_t vh)
+#if defined(__x86_64__) && defined(__GNUC__)
+#define HAVE_AVX2_PATH 1
+/* forward() in 8 lanes: the same operations in the same order. */
+__attribute__((target("avx2"), always_inline)) static inline void
+forward_avx2(const float *e, float *d)
+{
+    __m256 t[8];
+    for (int j = 0; j < 8; j++) {
+        __m256 s = _mm256_setzero_ps();
+        for (int i = 0; i < 8; i++)
+            s = _mm256_add_ps(s, _mm256_mul_ps(_mm256_loadu_ps(kt[i]),
+                                               _mm256_set1_ps(e[8 * j + i])));
+        t[j] = s;
+    }
+    float r[64];
+    const __m256 scale = _mm256_set1_ps(1.0f / 4096.0f);
+    for (int v = 0; v < 8; v++) {
+        __m256 s = _mm256_setzero_ps();
+        for (int j = 0; j < 8; j++)
+            s = _mm256_add_ps(s, _mm256_mul_ps(
+                    _mm256_set1_ps((float)gv_dct_matrix[v][j]), t[j]));
+        _mm256_storeu_ps(r + 8 * v, _mm256_mul_ps(s, scale));
+    }
+    for (int k = 0; k < 64; k++)
+        d[k] = r[gv_dct_zigzag[k]];
+}
+#endif
+
+__attribute__((always_inline)) static inline void
+transform_body(struct gv_dct_workspace *ws, const uint8_t *orig,
+               const uint8_t *pred, int channels, uint32_t vw, uint32_t vh,
+               void (*fwd)(const float *, float *))
 {
     for (int by = 0; by < GV_DCT_BLOCKS; by++)
         for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
@@ -186,7 +275,7 @@ static void transform_tile(struct gv_dct_workspace *ws, const uint8_t *orig,
             residual_block(orig, pred, channels, bx, by, vw, vh, e);
             for (int c = 0; c < channels; c++) {
                 float *x = ws->x[c][b];
-                forward(e[c], x);
+                fwd(e[c], x);
                 float m[8] = {0, 0, 0, 0, 0, 0, 0, 0};
                 float e2[8] = {0, 0, 0, 0, 0, 0, 0, 0};
                 for (int k = 0; k < 64; k += 8)
@@ -204,6 +293,31 @@ static void transform_tile(struct gv_dct_workspace *ws, const uint8_t *orig,
             }
         }
 }
+
+/* The transform of a tile: residual, forward transform, the largest
+ * coefficient and the energy of every block.  The same C compiled twice,
+ * for the baseline and for AVX2 (8 lanes instead of 4; no FMA, so every
+ * rounding is the same and so are the stores), chosen at run time. */
+static void transform_tile_base(struct gv_dct_workspace *ws,
+                                const uint8_t *orig, const uint8_t *pred,
+                                int channels, uint32_t vw, uint32_t vh)
+{
+    transform_body(ws, orig, pred, channels, vw, vh, forward);
+}
+
+#ifdef HAVE_AVX2_PATH
+__attribute__((target("avx2"))) static void
+transform_tile_avx2(struct gv_dct_workspace *ws, const uint8_t *orig,
+                    const uint8_t *pred, int channels, uint32_t vw,
+                    uint32_t vh)
+{
+    transform_body(ws, orig, pred, channels, vw, vh, forward_avx2);
+}
+#endif
+
+typedef void transform_fn(struct gv_dct_workspace *, const uint8_t *,
+                          const uint8_t *, int, uint32_t, uint32_t);
+static transform_fn *transform_tile = transform_tile_base;
 
 /* token | class << 4 of a quantized value q, at tc[q + 2048]. */
 static uint8_t tc[4096];
@@ -525,6 +639,11 @@ static pthread_once_t tables_once = PTHREAD_ONCE_INIT;
 
 static void init_tables(void)
 {
+#ifdef HAVE_AVX2_PATH
+    /* GIGAVIEW_NO_AVX2 (tests, benches): the baseline path. */
+    if (__builtin_cpu_supports("avx2") && !getenv("GIGAVIEW_NO_AVX2"))
+        transform_tile = transform_tile_avx2;
+#endif
     init_kt();
     init_tc();
     init_log2();
