@@ -22,7 +22,7 @@ while [ $# -gt 0 ]; do
 	case $1 in
 	--gigaview) gv_arg=$2; shift 2 ;;
 	--baseline) base_arg=$2; shift 2 ;;
-	-h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+	-h|--help) sed -n '2,12p' "$0"; exit 0 ;;
 	*) inputs+=("$1"); shift ;;
 	esac
 done
