@@ -7,9 +7,11 @@
  * level k-1 is predicted from decoded tiles, not from a decoded image.
  *
  * Working set of pass 2 for one page: the original window (4097^2 x C),
- * up to 16 parent tiles, 64 decoded tiles and 64 tile buffers, plus one
- * tile workspace per thread.  Pass 1 holds one chunk of input rows and one
- * pending row per level.
+ * up to 16 parent tiles, 64 decoded tiles (level 0: one per thread, since
+ * no level is predicted from it) and 64 tile buffers, plus one tile
+ * workspace per thread.  Pass 1 holds one chunk of input rows (in two
+ * halves: one being decoded by the reader thread) and one pending row
+ * per level.
  *
  * A shard writes only the pixels of its tiles to the scratch file, which
  * is sized once so that the rest are holes (they read as zeros and take
@@ -84,6 +86,8 @@ struct encoder {
     uint8_t order[GV_PAGE_SLOTS];      /* the page's slots, likely slowest first */
     uint64_t canon_sse[GV_PAGE_SLOTS];
     uint8_t *origs;           /* per-worker 513^2 x C original tile */
+    uint8_t *wrecon;          /* per-worker decoded tile, level 0 (kept
+                               * by nobody: no level is predicted from it) */
     /* progress */
     double work_total, work_done;
 };
@@ -365,6 +369,10 @@ static void encode_tile(void *ctx, size_t slot, int worker)
     if (e->sharded && !gv_shard_plan_wants(&e->plan, &e->g, e->level, tx, ty))
         return;
     uint8_t *orig = e->origs + (size_t)worker * gv_tile_bytes(c);
+    /* Level 0's decoded tiles are only measured, so one buffer per worker
+     * does: fewer fresh pages to fault in than one per slot. */
+    uint8_t *recon = e->level == 0 ? e->wrecon + (size_t)worker * gv_tile_bytes(c)
+                                   : e->recon[slot];
     cut_tile(e, i, j, orig);
     const uint32_t valid_w = l->width - tx * GV_STEP < GV_TILE ?
                              l->width - tx * GV_STEP : GV_TILE;
@@ -380,12 +388,12 @@ static void encode_tile(void *ctx, size_t slot, int worker)
     };
     e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
                                    (int)(ty & 1), c, valid_w, valid_h, &params,
-                                   e->recon[slot], e->bufs[slot], &e->stats[slot]);
+                                   recon, e->bufs[slot], &e->stats[slot]);
     if (e->tile_rate[e->level])
         e->tile_rate[e->level][(size_t)ty * l->tiles_x + tx] = (uint8_t)e->stats[slot].rate;
     if (e->level == 0)
         e->canon_sse[slot] = level0_sse(e, tx, ty, valid_w, valid_h, orig,
-                                        e->recon[slot]);
+                                        recon);
 }
 
 /* Pool job: the i-th slot of the page's order. */
@@ -609,8 +617,9 @@ static int start_workers(struct encoder *e)
     e->ws = calloc((size_t)n, sizeof *e->ws);
     e->nws = e->ws ? n : 0;
     e->origs = malloc((size_t)n * gv_tile_bytes(c));
+    e->wrecon = malloc((size_t)n * gv_tile_bytes(c));
     e->window = malloc((size_t)WINDOW * WINDOW * c);
-    if (!e->ws || !e->origs || !e->window)
+    if (!e->ws || !e->origs || !e->wrecon || !e->window)
         return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
     for (int i = 0; i < n; i++)
         if (!(e->ws[i] = gv_tile_workspace_new()))
@@ -640,6 +649,7 @@ static void teardown(struct encoder *e)
         gv_tile_workspace_free(e->ws[i]);
     free(e->ws);
     free(e->origs);
+    free(e->wrecon);
     free(e->window);
     for (int s = 0; s < 16; s++)
         free(e->parents[s]);
