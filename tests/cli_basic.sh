@@ -241,12 +241,18 @@ expect_rc "encode -j 2" 0
 check "-j 1 and -j 2 stores are byte-identical" cmp -s j1.gv j2.gv
 run encode "$TESTDATA/seeding-700x520.png" -j 2 -o j2b.gv --quiet
 check "-j 2 on the PNG matches the default run" cmp -s j2b.gv seeding-700x520.gv
+# Layout D's transform has an AVX2 path and a baseline one: the same
+# bytes (at -q 50 two of the four tiles are D tiles).
+run encode "$TESTDATA/seeding-700x520.png" -q 50 -o avx2.gv --quiet
+GIGAVIEW_NO_AVX2=1 run encode "$TESTDATA/seeding-700x520.png" -q 50 -o noavx2.gv --quiet
+check "the baseline transform (GIGAVIEW_NO_AVX2) gives the same store" \
+    cmp -s noavx2.gv avx2.gv
 # Re-encoding over an existing store replaces it.
 run encode synth:600x300:gray -o j1.gv --quiet
 expect_rc "encode over an existing store" 0
 gv info --json j1.gv >info.json
 check "the store was replaced" test "$(json_field info.json width)" = 600
-rm -f j1.gv j2.gv j2b.gv
+rm -f j1.gv j2.gv j2b.gv avx2.gv noavx2.gv
 
 # ----------------------------------------------------------- progress
 run encode synth:1100x700 -o p.gv --progress --quiet

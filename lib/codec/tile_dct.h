@@ -96,7 +96,7 @@ void gv_dct_inverse(const int16_t *d, int32_t *e);
 
 struct gv_dct_workspace;
 
-/* About 14 MiB of scratch for one encoding thread; _free(NULL) is a no-op. */
+/* About 7 MiB of scratch for one encoding thread; _free(NULL) is a no-op. */
 struct gv_dct_workspace *gv_dct_workspace_new(void);
 void gv_dct_workspace_free(struct gv_dct_workspace *ws);
 

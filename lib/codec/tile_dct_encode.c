@@ -10,8 +10,10 @@
  *
  * Quantization rounds with a dead zone (offset ROUND_OFFSET instead of
  * 1/2), which lowers the rate more than it raises the error.  The step
- * of channel 0 is searched over half and then quarter octaves around the
- * high-rate optimum for lambda, each candidate costed by its exact model entropy
+ * of channel 0 is searched over quarter octaves around the high-rate
+ * optimum for lambda, by descent from the commonest best while the cost
+ * falls (J is unimodal there but for a plateau where every block is
+ * zero), each candidate costed by its exact model entropy
  * (the 8-bit models as the buffer will store them, their bytes included)
  * and by its squared error estimated in the transform domain; chroma
  * steps follow at the ratios that equalize the slopes of the YCoCg-R
@@ -19,10 +21,22 @@
  * of two, one in Cg a quarter of three: weights 3, 1/2, 3/4).  The best
  * candidate is written and decoded by gv_dct_decode, whose output is the
  * reconstruction and whose error is exact.
+ *
+ * Speed (bench/README.md, 2026-11-26 later): a candidate is quantized and
+ * its symbols counted in one pass, without copying; the transform and the
+ * quantizer run in SSE2 (the transform also in AVX2, chosen at run time)
+ * with the roundings of the plain C, in the same order, so the stores do
+ * not depend on the path.
  */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#elif defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "base/byteorder.h"
 #include "codec/tile.h"
@@ -35,6 +49,7 @@
 #define HEADER_BYTES 12
 #define LENGTHS_BYTES (2 * GV_DCT_BLOCKS)
 #define STEP_CANDIDATES 13      /* quarter octaves from 2^-0.5 to 2^2.5 */
+#define STEP_START 3            /* the commonest best: 2^0.25 */
 #define LN2 0.69314718055994530942
 
 /* 2^(-0.5 + 0.25 i), written out rather than computed with pow(), whose
@@ -55,14 +70,27 @@ struct sym {
     int16_t s;
 };
 
-struct gv_dct_workspace {
-    float x[3][NB][64];          /* transform of the residual, natural order */
-    int16_t q[3][NB][64];        /* candidate quantized values, zigzag order */
+struct models {
+    uint32_t count[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
+    uint32_t freq[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
+    uint32_t cum[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS + 1];
+    uint32_t total[GV_DCT_MODELS];
+    uint64_t uniform;            /* uniform steps */
+};
+
+/* A candidate's quantized coefficients (zigzag order; of a block only the
+ * first eob are meaningful) and symbol counts. */
+struct candidate {
+    int16_t q[3][NB][64];
     uint8_t eob[3][NB];
+    struct models md;
+};
+
+struct gv_dct_workspace {
+    float x[3][NB][64];          /* transform of the residual, zigzag order */
     float maxabs[3][NB];         /* largest |coefficient| of each block */
     double energy[3][NB];        /* sum of its squares */
-    int16_t bq[3][NB][64];       /* the best candidate */
-    uint8_t beob[3][NB];
+    struct candidate cand[2];    /* the one being tried, and the best */
     struct sym syms[MAX_ROW_SYMBOLS];
     uint16_t words[MAX_ROW_SYMBOLS + 2];
 };
@@ -79,10 +107,29 @@ void gv_dct_workspace_free(struct gv_dct_workspace *ws)
 
 /* The residual of channel c (YCoCg when C = 3) at pixel (x, y), the
  * coordinates clamped to the valid area. */
-static void residual_block(const uint8_t *orig, const uint8_t *pred,
+__attribute__((always_inline)) static inline void
+residual_block(const uint8_t *orig, const uint8_t *pred,
                            int channels, int bx, int by, uint32_t vw,
                            uint32_t vh, float out[3][64])
 {
+    if (channels == 3 && (uint32_t)(8 * bx + 8) <= vw &&
+        (uint32_t)(8 * by + 8) <= vh) {
+        /* Inside the valid area: no clamping, the same arithmetic. */
+        for (int j = 0; j < 8; j++) {
+            const size_t at = ((size_t)(8 * by + j) * GV_TILE + 8 * bx) * 3;
+            const uint8_t *o = orig + at, *p = pred + at;
+            for (int i = 0; i < 8; i++) {
+                const float r = (float)(o[3 * i] - p[3 * i]);
+                const float g = (float)(o[3 * i + 1] - p[3 * i + 1]);
+                const float b = (float)(o[3 * i + 2] - p[3 * i + 2]);
+                const float co = r - b, t = b + co / 2, cg = g - t;
+                out[0][8 * j + i] = t + cg / 2;
+                out[1][8 * j + i] = co;
+                out[2][8 * j + i] = cg;
+            }
+        }
+        return;
+    }
     for (int j = 0; j < 8; j++) {
         uint32_t y = (uint32_t)(8 * by + j);
         if (y >= vh)
@@ -107,106 +154,300 @@ static void residual_block(const uint8_t *orig, const uint8_t *pred,
     }
 }
 
-/* d[v][u] = sum_j sum_i K[v][j] K[u][i] e(i, j) / 4096: the coefficients
- * whose integer inverse (FORMAT.md 4.3) gives back e. */
-static void forward(const float *e, float *d)
+/* K transposed, as floats: kt[i][u] = K[u][i]. */
+static float kt[8][8];
+
+static void init_kt(void)
 {
-    float t[8][8];   /* t[j][u] */
-    for (int j = 0; j < 8; j++)
-        for (int u = 0; u < 8; u++) {
-            float s = 0;
-            for (int i = 0; i < 8; i++)
-                s += (float)gv_dct_matrix[u][i] * e[8 * j + i];
-            t[j][u] = s;
-        }
-    for (int v = 0; v < 8; v++)
-        for (int u = 0; u < 8; u++) {
-            float s = 0;
-            for (int j = 0; j < 8; j++)
-                s += (float)gv_dct_matrix[v][j] * t[j][u];
-            d[8 * v + u] = s / 4096.0f;
-        }
+    for (int i = 0; i < 8; i++)
+        for (int u = 0; u < 8; u++)
+            kt[i][u] = (float)gv_dct_matrix[u][i];
 }
 
-static void transform_tile(struct gv_dct_workspace *ws, const uint8_t *orig,
-                           const uint8_t *pred, int channels, uint32_t vw,
-                           uint32_t vh)
+/* d[zz^-1(8 v + u)] = sum_j sum_i K[v][j] K[u][i] e(i, j) / 4096: the
+ * coefficients whose integer inverse (FORMAT.md 4.3) gives back e, in
+ * zigzag order.  Each sum runs over i (then j) in increasing order, in
+ * eight lanes over u so that it vectorizes; the order of the additions,
+ * and so every rounding, is that of a plain loop (no FMA: ISO C mode). */
+#if defined(__SSE2__)
+static inline void forward(const float *e, float *d)
+{
+    __m128 t[8][2];   /* t[j][u / 4] */
+    for (int j = 0; j < 8; j++) {
+        __m128 s0 = _mm_setzero_ps(), s1 = _mm_setzero_ps();
+        for (int i = 0; i < 8; i++) {
+            const __m128 ei = _mm_set1_ps(e[8 * j + i]);
+            s0 = _mm_add_ps(s0, _mm_mul_ps(_mm_loadu_ps(kt[i]), ei));
+            s1 = _mm_add_ps(s1, _mm_mul_ps(_mm_loadu_ps(kt[i] + 4), ei));
+        }
+        t[j][0] = s0;
+        t[j][1] = s1;
+    }
+    float r[64];
+    const __m128 scale = _mm_set1_ps(1.0f / 4096.0f);
+    for (int v = 0; v < 8; v++) {
+        __m128 s0 = _mm_setzero_ps(), s1 = _mm_setzero_ps();
+        for (int j = 0; j < 8; j++) {
+            const __m128 k = _mm_set1_ps((float)gv_dct_matrix[v][j]);
+            s0 = _mm_add_ps(s0, _mm_mul_ps(k, t[j][0]));
+            s1 = _mm_add_ps(s1, _mm_mul_ps(k, t[j][1]));
+        }
+        _mm_storeu_ps(r + 8 * v, _mm_mul_ps(s0, scale));
+        _mm_storeu_ps(r + 8 * v + 4, _mm_mul_ps(s1, scale));
+    }
+    for (int k = 0; k < 64; k++)
+        d[k] = r[gv_dct_zigzag[k]];
+}
+#else
+static inline void forward(const float *e, float *d)
+{
+    float t[8][8];   /* t[j][u] */
+    for (int j = 0; j < 8; j++) {
+        float s[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+        for (int i = 0; i < 8; i++) {
+            const float ei = e[8 * j + i];
+            for (int u = 0; u < 8; u++)
+                s[u] += kt[i][u] * ei;
+        }
+        memcpy(t[j], s, sizeof s);
+    }
+    float r[64];
+    for (int v = 0; v < 8; v++) {
+        float s[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+        for (int j = 0; j < 8; j++) {
+            const float k = (float)gv_dct_matrix[v][j];
+            for (int u = 0; u < 8; u++)
+                s[u] += k * t[j][u];
+        }
+        for (int u = 0; u < 8; u++)
+            r[8 * v + u] = s[u] * (1.0f / 4096.0f);
+    }
+    for (int k = 0; k < 64; k++)
+        d[k] = r[gv_dct_zigzag[k]];
+}
+#endif
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define HAVE_AVX2_PATH 1
+/* forward() in 8 lanes: the same operations in the same order. */
+__attribute__((target("avx2"), always_inline)) static inline void
+forward_avx2(const float *e, float *d)
+{
+    __m256 t[8];
+    for (int j = 0; j < 8; j++) {
+        __m256 s = _mm256_setzero_ps();
+        for (int i = 0; i < 8; i++)
+            s = _mm256_add_ps(s, _mm256_mul_ps(_mm256_loadu_ps(kt[i]),
+                                               _mm256_set1_ps(e[8 * j + i])));
+        t[j] = s;
+    }
+    float r[64];
+    const __m256 scale = _mm256_set1_ps(1.0f / 4096.0f);
+    for (int v = 0; v < 8; v++) {
+        __m256 s = _mm256_setzero_ps();
+        for (int j = 0; j < 8; j++)
+            s = _mm256_add_ps(s, _mm256_mul_ps(
+                    _mm256_set1_ps((float)gv_dct_matrix[v][j]), t[j]));
+        _mm256_storeu_ps(r + 8 * v, _mm256_mul_ps(s, scale));
+    }
+    for (int k = 0; k < 64; k++)
+        d[k] = r[gv_dct_zigzag[k]];
+}
+#endif
+
+__attribute__((always_inline)) static inline void
+transform_body(struct gv_dct_workspace *ws, const uint8_t *orig,
+               const uint8_t *pred, int channels, uint32_t vw, uint32_t vh,
+               void (*fwd)(const float *, float *))
 {
     for (int by = 0; by < GV_DCT_BLOCKS; by++)
         for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
             const int b = by * GV_DCT_BLOCKS + bx;
             if ((uint32_t)(8 * bx) >= vw || (uint32_t)(8 * by) >= vh) {
-                for (int c = 0; c < channels; c++)
+                for (int c = 0; c < channels; c++) {
                     memset(ws->x[c][b], 0, sizeof ws->x[c][b]);
+                    ws->maxabs[c][b] = 0;
+                    ws->energy[c][b] = 0;
+                }
                 continue;
             }
             float e[3][64];
             residual_block(orig, pred, channels, bx, by, vw, vh, e);
-            for (int c = 0; c < channels; c++)
-                forward(e[c], ws->x[c][b]);
-        }
-    for (int c = 0; c < channels; c++)
-        for (int b = 0; b < NB; b++) {
-            float m = 0;
-            double e2 = 0;
-            for (int k = 0; k < 64; k++) {
-                const float a = fabsf(ws->x[c][b][k]);
-                m = a > m ? a : m;
-                e2 += (double)a * a;
+            for (int c = 0; c < channels; c++) {
+                float *x = ws->x[c][b];
+                fwd(e[c], x);
+                float m[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+                float e2[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+                for (int k = 0; k < 64; k += 8)
+                    for (int l = 0; l < 8; l++) {
+                        const float a = fabsf(x[k + l]);
+                        m[l] = a > m[l] ? a : m[l];
+                        e2[l] += a * a;
+                    }
+                float mm = 0;
+                for (int l = 0; l < 8; l++)
+                    mm = m[l] > mm ? m[l] : mm;
+                ws->maxabs[c][b] = mm;
+                ws->energy[c][b] = ((double)e2[0] + e2[1] + e2[2] + e2[3]) +
+                                   ((double)e2[4] + e2[5] + e2[6] + e2[7]);
             }
-            ws->maxabs[c][b] = m;
-            ws->energy[c][b] = e2;
         }
 }
 
-/* Quantize every block at steps[], filling q, eob; returns the estimated
- * weighted squared error (transform domain, pixel units).  A block whose
- * largest coefficient rounds to 0 is all zero: its error is its energy and
- * its q is left alone (only the first eob values are ever read). */
-static double quantize(struct gv_dct_workspace *ws, int channels,
-                       const int *steps)
+/* The transform of a tile: residual, forward transform, the largest
+ * coefficient and the energy of every block.  The same C compiled twice,
+ * for the baseline and for AVX2 (8 lanes instead of 4; no FMA, so every
+ * rounding is the same and so are the stores), chosen at run time. */
+static void transform_tile_base(struct gv_dct_workspace *ws,
+                                const uint8_t *orig, const uint8_t *pred,
+                                int channels, uint32_t vw, uint32_t vh)
 {
+    transform_body(ws, orig, pred, channels, vw, vh, forward);
+}
+
+#ifdef HAVE_AVX2_PATH
+__attribute__((target("avx2"))) static void
+transform_tile_avx2(struct gv_dct_workspace *ws, const uint8_t *orig,
+                    const uint8_t *pred, int channels, uint32_t vw,
+                    uint32_t vh)
+{
+    transform_body(ws, orig, pred, channels, vw, vh, forward_avx2);
+}
+#endif
+
+typedef void transform_fn(struct gv_dct_workspace *, const uint8_t *,
+                          const uint8_t *, int, uint32_t, uint32_t);
+static transform_fn *transform_tile = transform_tile_base;
+
+/* token | class << 4 of a quantized value q, at tc[q + 2048]. */
+static uint8_t tc[4096];
+
+static void init_tc(void)
+{
+    for (int q = -2048; q < 2048; q++) {
+        int t = q == 0 ? 0 : (q > 0 && q <= 7) ? 2 * q - 1 :
+                (q < 0 && q >= -7) ? -2 * q : GV_DCT_ESCAPE;
+        tc[q + 2048] = (uint8_t)(t | gv_dct_class(q) << 4);
+    }
+}
+
+/* Quantize one block x[64] with step s (inv = 1 / s) into q[64]: the
+ * dead-zone rounding floor(|x| / s + ROUND_OFFSET), capped at 2047, with
+ * the sign of x.  acc[l] gets the squared error of lanes l, l + 8, ...,
+ * summed in that order (the same roundings with SSE2 as without).
+ * Returns one past the last nonzero value (0 when all are zero). */
+static inline int quantize_block(const float *x, float inv, float s,
+                                 int16_t *q, float *acc)
+{
+#if defined(__SSE2__)
+    const __m128 vinv = _mm_set1_ps(inv), vs = _mm_set1_ps(s);
+    const __m128 off = _mm_set1_ps(ROUND_OFFSET), cap = _mm_set1_ps(2047.5f);
+    const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128i zero = _mm_setzero_si128();
+    __m128 acc0 = _mm_setzero_ps(), acc1 = _mm_setzero_ps();
+    uint64_t nz = 0;
+    for (int k = 0; k < 64; k += 8) {
+        __m128i m2[2];
+        for (int h = 0; h < 2; h++) {
+            const __m128 v = _mm_loadu_ps(x + k + 4 * h);
+            const __m128 a = _mm_and_ps(v, absmask);
+            __m128 f = _mm_add_ps(_mm_mul_ps(a, vinv), off);
+            f = _mm_min_ps(f, cap);
+            const __m128i m = _mm_cvttps_epi32(f);
+            const __m128 err = _mm_sub_ps(a, _mm_mul_ps(_mm_cvtepi32_ps(m), vs));
+            if (h)
+                acc1 = _mm_add_ps(acc1, _mm_mul_ps(err, err));
+            else
+                acc0 = _mm_add_ps(acc0, _mm_mul_ps(err, err));
+            const __m128i sg = _mm_srai_epi32(_mm_castps_si128(v), 31);
+            m2[h] = _mm_sub_epi32(_mm_xor_si128(m, sg), sg);
+        }
+        const __m128i q8 = _mm_packs_epi32(m2[0], m2[1]);
+        _mm_storeu_si128((__m128i *)(q + k), q8);
+        const __m128i eq = _mm_cmpeq_epi16(q8, zero);
+        const int z = _mm_movemask_epi8(_mm_packs_epi16(eq, eq)) & 0xff;
+        nz |= (uint64_t)(~z & 0xff) << k;
+    }
+    _mm_storeu_ps(acc, acc0);
+    _mm_storeu_ps(acc + 4, acc1);
+    return nz ? 64 - __builtin_clzll(nz) : 0;
+#else
+    for (int l = 0; l < 8; l++)
+        acc[l] = 0;
+    for (int k = 0; k < 64; k += 8)
+        for (int l = 0; l < 8; l++) {
+            const float v = x[k + l], a = fabsf(v);
+            float f = a * inv + ROUND_OFFSET;
+            f = f < 2047.5f ? f : 2047.5f;
+            const int m = (int)f;
+            const float err = a - (float)m * s;
+            acc[l] += err * err;
+            q[k + l] = (int16_t)(v < 0 ? -m : m);
+        }
+    int last = 64;
+    while (last > 0 && !q[last - 1])
+        last--;
+    return last;
+#endif
+}
+
+/* Quantize every block at steps[] into cd (q, eob) and count its symbols
+ * into cd->md (counts and the uniform steps; totals and frequencies are
+ * build_models'); returns the estimated weighted squared error (transform
+ * domain, pixel units).  A block whose largest coefficient rounds to 0 is
+ * all zero: its error is its energy and its q is left alone (only the
+ * first eob values are ever read).  The counts are the symbols that
+ * write_buffer codes (FORMAT.md 4.3), channel by channel: the contexts
+ * pe and dcp run along a row within one channel. */
+static double quantize_count(const struct gv_dct_workspace *ws,
+                             struct candidate *cd, int channels,
+                             const int *steps)
+{
+    struct models *md = &cd->md;
+    memset(md->count, 0, sizeof md->count);
+    uint64_t uniform = 0;
     double sse = 0;
     for (int c = 0; c < channels; c++) {
         const float inv = 1.0f / (float)steps[c], s = (float)steps[c];
         const float zero_below = (1.0f - ROUND_OFFSET) * s;
         const double w = channels == 1 ? 1.0 : channel_weight[c];
+        const int cc = c > 0;
+        uint32_t *eobc = md->count[3 * cc];
+        uint32_t *tokc = md->count[GV_DCT_EOB_MODELS + 12 * cc];
         double e2 = 0;
-        for (int b = 0; b < NB; b++) {
-            if (ws->maxabs[c][b] < zero_below) {
-                ws->eob[c][b] = 0;
-                e2 += ws->energy[c][b];
-                continue;
-            }
-            const float *x = ws->x[c][b];
-            int16_t *q = ws->q[c][b];
-            int16_t nat[64];
-            float acc[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-            /* Branch-free, in eight lanes, so that it vectorizes: the
-             * truncation of a non-negative number is its floor. */
-            for (int k = 0; k < 64; k += 8)
-                for (int l = 0; l < 8; l++) {
-                    const float v = x[k + l], a = fabsf(v);
-                    float f = a * inv + ROUND_OFFSET;
-                    f = f < 2047.5f ? f : 2047.5f;
-                    const int m = (int)f;
-                    const float err = a - (float)m * s;
-                    acc[l] += err * err;
-                    nat[k + l] = (int16_t)(v < 0 ? -m : m);
+        for (int by = 0; by < GV_DCT_BLOCKS; by++) {
+            int pe = 0, dcp = 0;
+            for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
+                const int b = by * GV_DCT_BLOCKS + bx;
+                if (ws->maxabs[c][b] < zero_below) {
+                    cd->eob[c][b] = 0;
+                    eobc[pe * GV_DCT_EOB_SYMBOLS]++;
+                    e2 += ws->energy[c][b];
+                    pe = dcp = 0;
+                    continue;
                 }
-            const float eb = ((acc[0] + acc[1]) + (acc[2] + acc[3])) +
-                             ((acc[4] + acc[5]) + (acc[6] + acc[7]));
-            int last = 0;
-            for (int k = 0; k < 64; k++) {
-                q[k] = nat[gv_dct_zigzag[k]];
-                if (q[k])
-                    last = k + 1;
+                const float *x = ws->x[c][b];
+                int16_t *q = cd->q[c][b];
+                float acc[8];
+                const int n = quantize_block(x, inv, s, q, acc);
+                e2 += ((acc[0] + acc[1]) + (acc[2] + acc[3])) +
+                      ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+                cd->eob[c][b] = (uint8_t)n;
+                eobc[pe * GV_DCT_EOB_SYMBOLS + n]++;
+                int p = dcp;
+                for (int k = 0; k < n; k++) {
+                    const int y = tc[q[k] + 2048], t = y & 15;
+                    tokc[(gv_dct_band_model[k] + p) * GV_DCT_EOB_SYMBOLS + t]++;
+                    uniform += t == GV_DCT_ESCAPE ? 2 : 0;
+                    p = y >> 4;
+                }
+                pe = n == 0 ? 0 : (n <= 4 ? 1 : 2);
+                dcp = n ? tc[q[0] + 2048] >> 4 : 0;
             }
-            ws->eob[c][b] = (uint8_t)last;
-            e2 += eb;
         }
         sse += w * e2 / 64.0;
     }
+    md->uniform = uniform;
     return sse;
 }
 
@@ -223,14 +464,14 @@ static inline int token_of(int q)
 
 /* Visit every symbol of block row `by` in stream order: fn(model, symbol)
  * with model -1 for a uniform step. */
-#define WALK_ROW(ws, channels, by, EMIT)                                      \
+#define WALK_ROW(cd, channels, by, EMIT)                                      \
     do {                                                                      \
         int pe_[3] = {0, 0, 0}, dcp_[3] = {0, 0, 0};                          \
         for (int bx_ = 0; bx_ < GV_DCT_BLOCKS; bx_++) {                       \
             const int b_ = (by) * GV_DCT_BLOCKS + bx_;                        \
             for (int c_ = 0; c_ < (channels); c_++) {                         \
-                const int cc_ = c_ > 0, n_ = (ws)->eob[c_][b_];               \
-                const int16_t *q_ = (ws)->q[c_][b_];                          \
+                const int cc_ = c_ > 0, n_ = (cd)->eob[c_][b_];               \
+                const int16_t *q_ = (cd)->q[c_][b_];                          \
                 EMIT(3 * cc_ + pe_[c_], n_);                                  \
                 int p_ = dcp_[c_];                                            \
                 for (int k_ = 0; k_ < n_; k_++) {                             \
@@ -248,32 +489,6 @@ static inline int token_of(int q)
             }                                                                 \
         }                                                                     \
     } while (0)
-
-struct models {
-    uint32_t count[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
-    uint32_t freq[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
-    uint32_t cum[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS + 1];
-    uint32_t total[GV_DCT_MODELS];
-    uint64_t uniform;            /* uniform steps */
-};
-
-static void count_symbols(struct gv_dct_workspace *ws, int channels,
-                          struct models *md)
-{
-    memset(md, 0, sizeof *md);
-#define COUNT(m, s)                                                           \
-    do {                                                                      \
-        if ((m) < 0)                                                          \
-            md->uniform++;                                                    \
-        else {                                                                \
-            md->count[m][s]++;                                                \
-            md->total[m]++;                                                   \
-        }                                                                     \
-    } while (0)
-    for (int by = 0; by < GV_DCT_BLOCKS; by++)
-        WALK_ROW(ws, channels, by, COUNT);
-#undef COUNT
-}
 
 /* Frequencies summing to 256, every used symbol at least 1, and the last
  * symbol at least 1 even when unused: the stored cumulative frequencies
@@ -314,9 +529,13 @@ static size_t build_models(struct models *md, uint32_t *mask)
     size_t bytes = 0;
     *mask = 0;
     for (int m = 0; m < GV_DCT_MODELS; m++) {
-        if (!md->total[m])
-            continue;
         const int k = gv_dct_model_symbols(m);
+        uint32_t total = 0;
+        for (int s = 0; s < k; s++)
+            total += md->count[m][s];
+        md->total[m] = total;
+        if (!total)
+            continue;
         *mask |= 1u << m;
         bytes += (size_t)k;
         normalize(md->count[m], k, md->total[m], md->freq[m]);
@@ -350,12 +569,14 @@ static double estimate_bytes(const struct models *md, size_t model_bytes)
            4.0 * GV_DCT_BLOCKS;
 }
 
-/* Write the buffer of the candidate in ws->q / ws->eob with models md.
+/* Write the buffer of candidate cd (its models built, mask theirs).
  * Returns its length, or 0 past cap. */
-static size_t write_buffer(struct gv_dct_workspace *ws, int channels,
-                           const int *steps, const struct models *md,
-                           uint32_t mask, uint8_t *buf, size_t cap)
+static size_t write_buffer(struct gv_dct_workspace *ws,
+                           const struct candidate *cd, int channels,
+                           const int *steps, uint32_t mask, uint8_t *buf,
+                           size_t cap)
 {
+    const struct models *md = &cd->md;
     size_t at = HEADER_BYTES;
     for (int m = 0; m < GV_DCT_MODELS; m++)
         if (mask >> m & 1)
@@ -385,7 +606,7 @@ static size_t write_buffer(struct gv_dct_workspace *ws, int channels,
         ws->syms[ns].s = (int16_t)(s_);                                       \
         ns++;                                                                 \
     } while (0)
-        WALK_ROW(ws, channels, by, COLLECT);
+        WALK_ROW(cd, channels, by, COLLECT);
 #undef COLLECT
         uint32_t x = 1u << 16;   /* the initial and final state */
         int n = 0;
@@ -414,56 +635,81 @@ static void chroma_steps(int s0, int channels, int *steps)
     }
 }
 
+static pthread_once_t tables_once = PTHREAD_ONCE_INIT;
+
+static void init_tables(void)
+{
+#ifdef HAVE_AVX2_PATH
+    /* GIGAVIEW_NO_AVX2 (tests, benches): the baseline path. */
+    if (__builtin_cpu_supports("avx2") && !getenv("GIGAVIEW_NO_AVX2"))
+        transform_tile = transform_tile_avx2;
+#endif
+    init_kt();
+    init_tc();
+    init_log2();
+}
+
+/* The step of channel 0 for candidate i, and its J; the candidate's
+ * quantized values and models in cd. */
+static double try_step(const struct gv_dct_workspace *ws,
+                       struct candidate *cd, int channels, double s_opt,
+                       double lambda, int i, uint32_t *mask)
+{
+    int s0 = (int)lrint(s_opt * step_factor[i]);
+    s0 = s0 < 1 ? 1 : (s0 > GV_DCT_MAX_STEP ? GV_DCT_MAX_STEP : s0);
+    int steps[3];
+    chroma_steps(s0, channels, steps);
+    double err = quantize_count(ws, cd, channels, steps);
+    size_t mb = build_models(&cd->md, mask);
+    return err + lambda * 8.0 * estimate_bytes(&cd->md, mb);
+}
+
 size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
                      const uint8_t *pred, const uint8_t *parent, int qx,
                      int qy, int channels, uint32_t valid_w, uint32_t valid_h,
                      double lambda, uint8_t *buf, size_t cap, uint8_t *recon,
                      uint64_t *sse)
 {
-    static _Thread_local struct models md;
-    if (!log2_table[1])
-        init_log2();
+    pthread_once(&tables_once, init_tables);
     transform_tile(ws, orig, pred, channels, valid_w, valid_h);
     /* High-rate optimum for channel 0: step^2 = 6 lambda / (w ln 2) in
      * orthonormal units, 8 times that in the plane's. */
     const double w0 = channels == 1 ? 1.0 : channel_weight[0];
     const double s_opt = 8.0 * sqrt(6.0 * lambda / (w0 * LN2));
-    /* Half octaves from 2^-0.5 to 2^2.5 times the high-rate optimum (on
-     * five photographs the best was never below 2^0, and 2^1.5 was most
-     * often the largest candidate then), then the quarter octaves on
-     * either side of the best. */
-    double best_j = INFINITY;
-    int best_s0 = 1, best_i = 0;
-    for (int pass = 0; pass < 2; pass++) {
-        for (int i = 0; i < STEP_CANDIDATES; i++) {
-            if (pass == 0 ? (i & 1) : (i != best_i - 1 && i != best_i + 1))
-                continue;
-            int s0 = (int)lrint(s_opt * step_factor[i]);
-            s0 = s0 < 1 ? 1 : (s0 > GV_DCT_MAX_STEP ? GV_DCT_MAX_STEP : s0);
-            int steps[3];
-            chroma_steps(s0, channels, steps);
-            double err = quantize(ws, channels, steps);
-            count_symbols(ws, channels, &md);
-            uint32_t mask;
-            size_t mb = build_models(&md, &mask);
-            double j = err + lambda * 8.0 * estimate_bytes(&md, mb);
-            if (j < best_j) {
-                best_j = j;
-                best_s0 = s0;
-                best_i = i;
-                memcpy(ws->bq, ws->q, sizeof ws->q);
-                memcpy(ws->beob, ws->eob, sizeof ws->eob);
-            }
+    /* Descent over quarter octaves from 2^-0.5 to 2^2.5 times the
+     * high-rate optimum: from the commonest best (2^0.25), one step up,
+     * then on in the direction J falls until it rises.  J is unimodal
+     * apart from a plateau at the largest steps, where every block is
+     * zero and the prediction alone is cheaper anyway.  3.6 candidates
+     * on average instead of 9 for the half-then-quarter octave search
+     * (bench/README.md, 2026-11-26 later). */
+    int best = 0, cur = 1, best_i = STEP_START;
+    uint32_t mask, cmask;
+    double best_j = try_step(ws, &ws->cand[best], channels, s_opt, lambda,
+                             STEP_START, &mask);
+    for (int dir = 1, i = STEP_START + 1; i >= 0 && i < STEP_CANDIDATES;
+         i += dir) {
+        double j = try_step(ws, &ws->cand[cur], channels, s_opt, lambda, i,
+                            &cmask);
+        if (j < best_j) {
+            best_j = j;
+            best_i = i;
+            mask = cmask;
+            best = cur;
+            cur = 1 - cur;
+        } else if (dir > 0 && best_i == STEP_START) {
+            dir = -1;       /* up did not help: try down */
+            i = STEP_START;
+        } else {
+            break;
         }
     }
-    memcpy(ws->q, ws->bq, sizeof ws->q);
-    memcpy(ws->eob, ws->beob, sizeof ws->eob);
-    count_symbols(ws, channels, &md);
-    uint32_t mask;
-    build_models(&md, &mask);
+    int s0 = (int)lrint(s_opt * step_factor[best_i]);
+    s0 = s0 < 1 ? 1 : (s0 > GV_DCT_MAX_STEP ? GV_DCT_MAX_STEP : s0);
     int best_steps[3] = {0, 0, 0};
-    chroma_steps(best_s0, channels, best_steps);
-    size_t len = write_buffer(ws, channels, best_steps, &md, mask, buf, cap);
+    chroma_steps(s0, channels, best_steps);
+    size_t len = write_buffer(ws, &ws->cand[best], channels, best_steps, mask,
+                              buf, cap);
     if (!len)
         return 0;
     struct gv_error err;

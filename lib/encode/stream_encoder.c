@@ -7,9 +7,11 @@
  * level k-1 is predicted from decoded tiles, not from a decoded image.
  *
  * Working set of pass 2 for one page: the original window (4097^2 x C),
- * up to 16 parent tiles, 64 decoded tiles and 64 tile buffers, plus one
- * tile workspace per thread.  Pass 1 holds one chunk of input rows and one
- * pending row per level.
+ * up to 16 parent tiles, 64 decoded tiles (level 0: one per thread, since
+ * no level is predicted from it) and 64 tile buffers, plus one tile
+ * workspace per thread.  Pass 1 holds one chunk of input rows (in two
+ * halves: one being decoded by the reader thread) and one pending row
+ * per level.
  *
  * A shard writes only the pixels of its tiles to the scratch file, which
  * is sized once so that the rest are holes (they read as zeros and take
@@ -18,6 +20,7 @@
  * too, so what it reads from the holes is never used.
  */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -34,7 +37,7 @@
 #include "store/store_write.h"
 
 #define WINDOW (GV_PAGE_TILES * GV_STEP + 1)  /* 4097: a page plus overlap */
-#define CHUNK_BYTES (16u << 20)               /* input rows read at once */
+#define CHUNK_BYTES (16u << 20)               /* input rows in memory (two halves) */
 #define PASS1_SHARE 0.15                      /* progress weight of pass 1 */
 
 void gv_encode_opts_default(struct gv_encode_opts *o)
@@ -83,6 +86,8 @@ struct encoder {
     uint8_t order[GV_PAGE_SLOTS];      /* the page's slots, likely slowest first */
     uint64_t canon_sse[GV_PAGE_SLOTS];
     uint8_t *origs;           /* per-worker 513^2 x C original tile */
+    uint8_t *wrecon;          /* per-worker decoded tile, level 0 (kept
+                               * by nobody: no level is predicted from it) */
     /* progress */
     double work_total, work_done;
 };
@@ -174,18 +179,68 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
     return emit_reduced(e, k, e->pending[k], row);
 }
 
+/* Pass 1's input reader: a thread that decodes the next chunk of rows
+ * while the encoder's thread reduces and stores the previous one, in two
+ * buffers of CHUNK_BYTES / 2 (the memory of one chunk before).  A chunk
+ * is ready when rows[slot] > 0; the consumer sets it back to 0. */
+struct reader {
+    struct gv_source *src;
+    uint32_t chunk, height;
+    uint8_t *buf[2];
+    uint32_t rows[2];
+    int failed, stop;
+    struct gv_error err;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+};
+
+static void *reader_main(void *arg)
+{
+    struct reader *r = arg;
+    int slot = 0;
+    for (uint32_t y = 0; y < r->height; y += r->chunk, slot ^= 1) {
+        const uint32_t n = r->height - y < r->chunk ? r->height - y : r->chunk;
+        pthread_mutex_lock(&r->mu);
+        while (r->rows[slot] && !r->stop)
+            pthread_cond_wait(&r->cv, &r->mu);
+        const int stop = r->stop;
+        pthread_mutex_unlock(&r->mu);
+        if (stop)
+            break;
+        struct gv_error err;
+        const int rc = gv_source_read(r->src, n, r->buf[slot], &err);
+        pthread_mutex_lock(&r->mu);
+        if (rc < 0) {
+            r->err = err;
+            r->failed = 1;
+        } else {
+            r->rows[slot] = n;
+        }
+        pthread_cond_broadcast(&r->cv);
+        pthread_mutex_unlock(&r->mu);
+        if (rc < 0)
+            break;
+    }
+    return NULL;
+}
+
 static int pass1(struct encoder *e, struct gv_source *src)
 {
     const struct gv_geometry *g = &e->g;
     const size_t rb0 = (size_t)g->width * e->c;
-    uint32_t chunk = (uint32_t)(CHUNK_BYTES / rb0);
+    uint32_t chunk = (uint32_t)(CHUNK_BYTES / 2 / rb0);
     if (chunk < 1)
         chunk = 1;
     if (chunk > g->height)
         chunk = g->height;
-    uint8_t *buf = malloc((size_t)chunk * rb0);
-    int rc = -1;
-    if (!buf) {
+    struct reader rd = {.src = src, .chunk = chunk, .height = g->height};
+    int rc = -1, started = 0;
+    pthread_mutex_init(&rd.mu, NULL);
+    pthread_cond_init(&rd.cv, NULL);
+    pthread_t thread;
+    rd.buf[0] = malloc((size_t)chunk * rb0);
+    rd.buf[1] = malloc((size_t)chunk * rb0);
+    if (!rd.buf[0] || !rd.buf[1]) {
         gv_fail(e->err, GV_ENOMEM, "encode: out of memory for input rows");
         goto out;
     }
@@ -198,14 +253,32 @@ static int pass1(struct encoder *e, struct gv_source *src)
             goto out;
         }
     }
-    for (uint32_t y = 0; y < g->height; y += chunk) {
-        uint32_t n = g->height - y < chunk ? g->height - y : chunk;
-        if (gv_source_read(src, n, buf, e->err) < 0)
+    if (pthread_create(&thread, NULL, reader_main, &rd) != 0) {
+        gv_fail(e->err, GV_ENOMEM, "encode: cannot start the input reader");
+        goto out;
+    }
+    started = 1;
+    int slot = 0;
+    for (uint32_t y = 0; y < g->height; slot ^= 1) {
+        pthread_mutex_lock(&rd.mu);
+        while (!rd.rows[slot] && !rd.failed)
+            pthread_cond_wait(&rd.cv, &rd.mu);
+        const uint32_t n = rd.rows[slot];
+        if (!n) {
+            *e->err = rd.err;
+            pthread_mutex_unlock(&rd.mu);
             goto out;
+        }
+        pthread_mutex_unlock(&rd.mu);
         for (uint32_t r = 0; r < n; r++)
-            if (push_row(e, 0, buf + (size_t)r * rb0) < 0)
+            if (push_row(e, 0, rd.buf[slot] + (size_t)r * rb0) < 0)
                 goto out;
-        report(e, "pyramid", PASS1_SHARE * (double)(y + n) / g->height);
+        pthread_mutex_lock(&rd.mu);
+        rd.rows[slot] = 0;
+        pthread_cond_broadcast(&rd.cv);
+        pthread_mutex_unlock(&rd.mu);
+        y += n;
+        report(e, "pyramid", PASS1_SHARE * (double)y / g->height);
     }
     /* Odd heights: the last row of a level pairs with itself. */
     for (int k = 0; k < g->root; k++)
@@ -216,7 +289,17 @@ static int pass1(struct encoder *e, struct gv_source *src)
         }
     rc = 0;
 out:
-    free(buf);
+    if (started) {
+        pthread_mutex_lock(&rd.mu);
+        rd.stop = 1;
+        pthread_cond_broadcast(&rd.cv);
+        pthread_mutex_unlock(&rd.mu);
+        pthread_join(thread, NULL);
+    }
+    pthread_cond_destroy(&rd.cv);
+    pthread_mutex_destroy(&rd.mu);
+    free(rd.buf[0]);
+    free(rd.buf[1]);
     return rc;
 }
 
@@ -286,6 +369,10 @@ static void encode_tile(void *ctx, size_t slot, int worker)
     if (e->sharded && !gv_shard_plan_wants(&e->plan, &e->g, e->level, tx, ty))
         return;
     uint8_t *orig = e->origs + (size_t)worker * gv_tile_bytes(c);
+    /* Level 0's decoded tiles are only measured, so one buffer per worker
+     * does: fewer fresh pages to fault in than one per slot. */
+    uint8_t *recon = e->level == 0 ? e->wrecon + (size_t)worker * gv_tile_bytes(c)
+                                   : e->recon[slot];
     cut_tile(e, i, j, orig);
     const uint32_t valid_w = l->width - tx * GV_STEP < GV_TILE ?
                              l->width - tx * GV_STEP : GV_TILE;
@@ -301,12 +388,12 @@ static void encode_tile(void *ctx, size_t slot, int worker)
     };
     e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
                                    (int)(ty & 1), c, valid_w, valid_h, &params,
-                                   e->recon[slot], e->bufs[slot], &e->stats[slot]);
+                                   recon, e->bufs[slot], &e->stats[slot]);
     if (e->tile_rate[e->level])
         e->tile_rate[e->level][(size_t)ty * l->tiles_x + tx] = (uint8_t)e->stats[slot].rate;
     if (e->level == 0)
         e->canon_sse[slot] = level0_sse(e, tx, ty, valid_w, valid_h, orig,
-                                        e->recon[slot]);
+                                        recon);
 }
 
 /* Pool job: the i-th slot of the page's order. */
@@ -530,8 +617,9 @@ static int start_workers(struct encoder *e)
     e->ws = calloc((size_t)n, sizeof *e->ws);
     e->nws = e->ws ? n : 0;
     e->origs = malloc((size_t)n * gv_tile_bytes(c));
+    e->wrecon = malloc((size_t)n * gv_tile_bytes(c));
     e->window = malloc((size_t)WINDOW * WINDOW * c);
-    if (!e->ws || !e->origs || !e->window)
+    if (!e->ws || !e->origs || !e->wrecon || !e->window)
         return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
     for (int i = 0; i < n; i++)
         if (!(e->ws[i] = gv_tile_workspace_new()))
@@ -561,6 +649,7 @@ static void teardown(struct encoder *e)
         gv_tile_workspace_free(e->ws[i]);
     free(e->ws);
     free(e->origs);
+    free(e->wrecon);
     free(e->window);
     for (int s = 0; s < 16; s++)
         free(e->parents[s]);
