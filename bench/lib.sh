@@ -35,11 +35,22 @@ find_gigaview() {
 }
 
 # snapshot_gigaview SRC DIR: copies the binary into DIR so a rebuild during
-# the run cannot change it half-way; prints the copy's path.
+# the run cannot change it half-way, with the OpenImageIO module beside it
+# where SRC has one (lib/imageio/imageio_loader.c looks there); prints the
+# copy's path.
 snapshot_gigaview() {
 	cp "$1" "$2/gigaview"
 	chmod +x "$2/gigaview"
+	snapshot_module "$1" "$2"
 	echo "$2/gigaview"
+}
+
+# snapshot_module BINARY DIR: copies gigaview-oiio.so from beside BINARY
+# into DIR, if there is one there.
+snapshot_module() {
+	if [ -f "$(dirname "$1")/gigaview-oiio.so" ]; then
+		cp "$(dirname "$1")/gigaview-oiio.so" "$2/"
+	fi
 }
 
 # describe_build BINARY: one line naming the binary, its checksum and the tree.
