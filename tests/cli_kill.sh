@@ -17,8 +17,7 @@ fi
 dir="$T/d"
 scratch="$T/scratch"
 mkdir "$dir" "$scratch" || bail "mkdir"
-# About 9 s of work on two cores at the default quality: every kill below
-# lands before the end.
+# A few seconds of work on two cores at the default quality.
 big=synth:6000x6000
 
 # kill_at SECONDS SIGNAL ARGS...: start `gigaview encode ARGS` in the
@@ -34,7 +33,23 @@ kill_at() {
     wait "$pid" || status=$?
 }
 
-for secs in 0.05 0.2 0.5 1.0 1.5 3.0; do
+# The encode's duration D is measured first (its store removed): the kills
+# below land at fixed fractions of it, from 0.6 % to a third, so that every
+# one of them comes before the end however fast the encoder or machine (a
+# faster encoder made fixed delays of up to 3 s land after it).
+t0=$(date +%s.%N)
+"$GIGAVIEW" encode "$big" --tmpdir "$scratch" -o "$dir/out.gv" >"$T/out" 2>"$T/err" ||
+    bail "reference encode failed: $(cat "$T/err")"
+t1=$(date +%s.%N)
+rm -f "$dir/out.gv"
+# at FRACTION: FRACTION of D in seconds.
+at() {
+    echo "$t0 $t1 $1" | awk '{ printf "%.3f", ($2 - $1) * $3 }'
+}
+diag "reference encode of $big: $(at 1)s"
+
+for frac in 0.006 0.02 0.05 0.11 0.17 0.33; do
+    secs=$(at "$frac")
     kill_at "$secs" KILL "$big" --tmpdir "$scratch" -o "$dir/out.gv"
     if [ "$status" -eq 137 ]; then ok "SIGKILL after ${secs}s: killed"; else
         not_ok "SIGKILL after ${secs}s: exit $status, not killed (too fast?)"; fi
@@ -45,13 +60,13 @@ for secs in 0.05 0.2 0.5 1.0 1.5 3.0; do
     check "SIGKILL after ${secs}s: scratch directory empty" test -z "$(listing "$scratch")"
 done
 # Without --tmpdir the scratch file lives beside the output.
-kill_at 1.0 KILL "$big" -o "$dir/out.gv"
+kill_at "$(at 0.11)" KILL "$big" -o "$dir/out.gv"
 check "SIGKILL without --tmpdir: killed" test "$status" -eq 137
 check "SIGKILL without --tmpdir: output directory empty" test -z "$(listing "$dir")"
 # SIGTERM has no handler: same outcome.  (SIGINT cannot be tested this
 # way: a non-interactive shell starts background jobs with it ignored.)
 for sig in TERM; do
-    kill_at 0.8 "$sig" "$big" -o "$dir/out.gv"
+    kill_at "$(at 0.09)" "$sig" "$big" -o "$dir/out.gv"
     check "SIG$sig: the encode stopped" test "$status" -gt 128
     check "SIG$sig: output directory empty" test -z "$(listing "$dir")"
 done
@@ -69,7 +84,8 @@ rm -f "$T/corner.png"
 
 # Killing a re-encode over the store leaves the old one untouched.
 cp "$dir/out.gv" "$T/copy.gv"
-for secs in 0.1 0.7 2.0; do
+for frac in 0.01 0.08 0.22; do
+    secs=$(at "$frac")
     kill_at "$secs" KILL "$big" -o "$dir/out.gv"
     check "SIGKILL of a re-encode after ${secs}s: killed" test "$status" -eq 137
     check "SIGKILL of a re-encode after ${secs}s: old store byte-identical" \
