@@ -206,33 +206,6 @@ static inline void block_portable(int16_t *const d[3], const int n[3],
               channels == 1 || !(n[1] | n[2]), e);
 }
 
-/* Where the compiler and CPU allow, the portable loops are also compiled
- * for AVX2 and AVX-512, chosen at load time. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define HOT_LOOP __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
-#else
-#define HOT_LOOP
-#endif
-
-HOT_LOOP static void add_row_portable(gv_dct_row co,
-                                      const uint8_t eobs[3][GV_DCT_BLOCKS],
-                                      int channels, int by, uint8_t *out)
-{
-    const size_t stride = (size_t)GV_TILE * channels;
-    const int y0 = 8 * by, rows = y0 + 8 <= GV_TILE ? 8 : GV_TILE - y0;
-    for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
-        const int n[3] = {eobs[0][bx], channels == 3 ? eobs[1][bx] : 0,
-                          channels == 3 ? eobs[2][bx] : 0};
-        if (!(n[0] | n[1] | n[2]))
-            continue;
-        int16_t *const d[3] = {&co[0][0][8 * bx], &co[1][0][8 * bx],
-                               &co[2][0][8 * bx]};
-        const int x0 = 8 * bx, cols = x0 + 8 <= GV_TILE ? 8 : GV_TILE - x0;
-        block_portable(d, n, channels, out + (size_t)y0 * stride +
-                       (size_t)x0 * channels, stride, rows, cols);
-    }
-}
-
 #if HAVE_AVX2_PATH
 
 #define AVX2 __attribute__((target("avx2")))
@@ -399,12 +372,17 @@ AVX2 static int block_avx2(const struct avx2_matrix *m, int16_t *const d[3],
     return 1;
 }
 
-AVX2 static void add_row_avx2(gv_dct_row co,
-                              const uint8_t eobs[3][GV_DCT_BLOCKS],
-                              int channels, int by, uint8_t *out)
+#endif
+
+void gv_dct_add_row(gv_dct_row co, const uint8_t eobs[3][GV_DCT_BLOCKS],
+                    int channels, int by, uint8_t *out)
 {
+#if HAVE_AVX2_PATH
+    const int avx2 = simd_allowed >= 1 && __builtin_cpu_supports("avx2");
     struct avx2_matrix m;
-    avx2_matrix_init(&m);
+    if (avx2)
+        avx2_matrix_init(&m);
+#endif
     const size_t stride = (size_t)GV_TILE * channels;
     const int y0 = 8 * by, rows = y0 + 8 <= GV_TILE ? 8 : GV_TILE - y0;
     for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
@@ -416,22 +394,14 @@ AVX2 static void add_row_avx2(gv_dct_row co,
                                &co[2][0][8 * bx]};
         const int x0 = 8 * bx, cols = x0 + 8 <= GV_TILE ? 8 : GV_TILE - x0;
         uint8_t *px = out + (size_t)y0 * stride + (size_t)x0 * channels;
-        if (rows < 8 || cols < 8 ||
-            !block_avx2(&m, d, n, channels, px, stride))
-            block_portable(d, n, channels, px, stride, rows, cols);
-    }
-}
-
-#endif
-
-void gv_dct_add_row(gv_dct_row co, const uint8_t eobs[3][GV_DCT_BLOCKS],
-                    int channels, int by, uint8_t *out)
-{
 #if HAVE_AVX2_PATH
-    if (simd_allowed >= 1 && __builtin_cpu_supports("avx2")) {
-        add_row_avx2(co, eobs, channels, by, out);
-        return;
-    }
+        /* Whole blocks by AVX2 where it may; the tile's last row and
+         * column of blocks (one pixel wide) and blocks out of its 16-bit
+         * range by the portable path. */
+        if (avx2 && rows == 8 && cols == 8 &&
+            block_avx2(&m, d, n, channels, px, stride))
+            continue;
 #endif
-    add_row_portable(co, eobs, channels, by, out);
+        block_portable(d, n, channels, px, stride, rows, cols);
+    }
 }
