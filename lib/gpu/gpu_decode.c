@@ -120,6 +120,16 @@ static int gl_failed(struct gv_error *err, const char *what)
     return gv_fail(err, GV_EIO, "gpu: %s failed (GL error 0x%x)", what, e);
 }
 
+/* The decoder's #define lines (tests' changes to the rounding) before a
+ * shader's source, malloc'ed; NULL without memory. */
+static char *with_defines(const struct gv_gpu_decoder *d, const char *source)
+{
+    char *s = malloc(strlen(d->defines) + strlen(source) + 1);
+    if (s)
+        strcat(strcpy(s, d->defines), source);
+    return s;
+}
+
 static int setup(void *arg, struct gv_error *err)
 {
     struct gv_gpu_decoder *d = ((struct job *)arg)->d;
@@ -128,10 +138,9 @@ static int setup(void *arg, struct gv_error *err)
     unsigned (*program)(const struct gv_gpu *, const char *, const char *,
                         char **, struct gv_error *) =
         webgl2 ? gv_gpu_program_es300 : gv_gpu_program;
-    char *frag = malloc(strlen(d->defines) + strlen(gv_shader_tile_decode_frag) + 1);
+    char *frag = with_defines(d, gv_shader_tile_decode_frag);
     if (!frag)
         return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
-    strcat(strcpy(frag, d->defines), gv_shader_tile_decode_frag);
     d->decode = program(d->gpu, gv_shader_fullscreen_vert, frag, &listing, err);
     free(frag);
     if (d->decode)
@@ -144,10 +153,9 @@ static int setup(void *arg, struct gv_error *err)
         d->dct = gv_gpu_compute_program(d->gpu, gv_shader_dct_decode_comp,
                                         &listing, err);
     if (d->dct) {
-        char *rows = malloc(strlen(d->defines) + strlen(gv_shader_dct_rows_comp) + 1);
+        char *rows = with_defines(d, gv_shader_dct_rows_comp);
         if (!rows)
             return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
-        strcat(strcpy(rows, d->defines), gv_shader_dct_rows_comp);
         d->dct_rows = gv_gpu_compute_program(d->gpu, rows, &listing, err);
         free(rows);
     }
