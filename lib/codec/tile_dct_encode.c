@@ -649,16 +649,22 @@ static void init_tables(void)
     init_log2();
 }
 
-/* The step of channel 0 for candidate i, and its J; the candidate's
- * quantized values and models in cd. */
+/* The steps of candidate i: channel 0's s_opt * step_factor[i], in
+ * 1 .. GV_DCT_MAX_STEP, and the chroma steps that follow from it. */
+static void candidate_steps(double s_opt, int i, int channels, int *steps)
+{
+    int s0 = (int)lrint(s_opt * step_factor[i]);
+    s0 = s0 < 1 ? 1 : (s0 > GV_DCT_MAX_STEP ? GV_DCT_MAX_STEP : s0);
+    chroma_steps(s0, channels, steps);
+}
+
+/* The J of candidate i; its quantized values and models in cd. */
 static double try_step(const struct gv_dct_workspace *ws,
                        struct candidate *cd, int channels, double s_opt,
                        double lambda, int i, uint32_t *mask)
 {
-    int s0 = (int)lrint(s_opt * step_factor[i]);
-    s0 = s0 < 1 ? 1 : (s0 > GV_DCT_MAX_STEP ? GV_DCT_MAX_STEP : s0);
     int steps[3];
-    chroma_steps(s0, channels, steps);
+    candidate_steps(s_opt, i, channels, steps);
     double err = quantize_count(ws, cd, channels, steps);
     size_t mb = build_models(&cd->md, mask);
     return err + lambda * 8.0 * estimate_bytes(&cd->md, mb);
@@ -704,10 +710,8 @@ size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
             break;
         }
     }
-    int s0 = (int)lrint(s_opt * step_factor[best_i]);
-    s0 = s0 < 1 ? 1 : (s0 > GV_DCT_MAX_STEP ? GV_DCT_MAX_STEP : s0);
     int best_steps[3] = {0, 0, 0};
-    chroma_steps(s0, channels, best_steps);
+    candidate_steps(s_opt, best_i, channels, best_steps);
     size_t len = write_buffer(ws, &ws->cand[best], channels, best_steps, mask,
                               buf, cap);
     if (!len)
