@@ -2,10 +2,10 @@
  * tile_dct.c - layout D (docs/FORMAT.md section 4.3): its layout check and
  * the CPU reference decoder.
  *
- * A buffer is decoded one row of 8x8 blocks at a time: the row's rANS
- * stream into its coefficients (at most 3 x 8 x 520 int16 on the stack),
- * the row's eight pixel rows predicted straight into the output, then the
- * residuals added (tile_dct_pixels.c).  A rANS step is one table load:
+ * A buffer is decoded two rows of 8x8 blocks at a time: the rows' rANS
+ * streams in lockstep into their coefficients (2 x 3 x 8 x 520 int16 on
+ * the stack), then for each row its eight pixel rows predicted straight
+ * into the output and the residuals added (tile_dct_pixels.c).  A rANS step is one table load:
  * each model's 256 slots hold their symbol, its frequency and the slot's
  * offset in one 32-bit entry (the models have 8-bit precision).
  */
