@@ -59,7 +59,7 @@ trap 'http_cleanup; rm -rf "$WORK"' EXIT
 cp "$GV" "$WORK/gigaview"
 cp "$GVD" "$WORK/gigaviewd"
 # the OpenImageIO module beside the copies, as beside the build's binaries
-[ ! -f "$(dirname "$GVD")/gigaview-oiio.so" ] || cp "$(dirname "$GVD")/gigaview-oiio.so" "$WORK/"
+snapshot_module "$GVD" "$WORK"
 echo "# $(describe_build "$GV")"
 echo "# $(machine_line)"
 echo "# chromium: $(/usr/bin/chromium --version 2>/dev/null | head -1)"

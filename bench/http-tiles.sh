@@ -70,7 +70,7 @@ trap 'exit 130' INT TERM
 GV=$(snapshot_gigaview "$GV_SRC" "$WORK")
 cp "$GVD_SRC" "$WORK/gigaviewd"
 # the OpenImageIO module beside the copy, as beside the build's binary
-[ ! -f "$(dirname "$GVD_SRC")/gigaview-oiio.so" ] || cp "$(dirname "$GVD_SRC")/gigaview-oiio.so" "$WORK/"
+snapshot_module "$GVD_SRC" "$WORK"
 GVD=$WORK/gigaviewd
 write_wrk_lua "$WORK/urls.lua"
 mkdir -p "$WORK/stores" "$WORK/www" "$WORK/nginx/tmp"
