@@ -649,6 +649,51 @@ static void check_rd_photo(struct gv_tile_workspace *ws)
     free(first);
 }
 
+/* gv_rans_put_rcp against gv_rans_put (the same state and words) for
+ * every frequency of 8- and 12-bit models, at the states where a quotient
+ * changes (multiples of f and one below), at each renormalization bound
+ * and below it, and at random states under the bound. */
+static void check_rans_rcp(void)
+{
+    long bad = 0, tried = 0;
+    for (int bits = 8; bits <= 12; bits += 4)
+        for (uint32_t f = 1; f <= (1u << bits); f++) {
+            const uint64_t rcp = gv_rans_rcp(f);
+            const uint64_t x_max = (uint64_t)(((1u << 16) >> bits) << 16) * f;
+            uint32_t xs[16 + 64];
+            int k = 0;
+            const uint32_t top = x_max > UINT32_MAX ? UINT32_MAX : (uint32_t)x_max;
+            xs[k++] = 1u << 16;
+            xs[k++] = top - 1;
+            xs[k++] = top;
+            xs[k++] = UINT32_MAX;
+            for (uint32_t m = 1; m <= 6; m++) {
+                uint64_t a = (uint64_t)top / f * f / m / f * f;
+                xs[k++] = (uint32_t)(a > 0 ? a : f);
+                xs[k++] = (uint32_t)(a > 0 ? a - 1 : f - 1);
+            }
+            while (k < 16 + 64)
+                xs[k++] = (1u << 16) + next_rand() % (top - (1u << 16));
+            for (int i = 0; i < k; i++) {
+                uint16_t w1[2], w2[2];
+                int n1 = 0, n2 = 0;
+                const uint32_t c = f < (1u << bits) ? (1u << bits) - f : 0;
+                uint32_t a = gv_rans_put(xs[i], f, c, bits, w1, &n1);
+                uint32_t b = gv_rans_put_rcp(xs[i], f, rcp, c, bits, w2, &n2);
+                bad += a != b || n1 != n2 || (n1 && w1[0] != w2[0]);
+                tried++;
+            }
+        }
+    check(bad == 0, "the rANS step by reciprocal equals the step by division "
+          "(%ld of %ld states differ)", bad, tried);
+    /* The bound is tight: a reciprocal one too small gives a wrong state. */
+    uint16_t w[2];
+    int n = 0;
+    check(gv_rans_put_rcp(255u * 1000, 255, gv_rans_rcp(255) - 1, 0, 8, w, &n) !=
+              gv_rans_put(255u * 1000, 255, 0, 8, w, &n),
+          "a reciprocal one too small changes the state (negative control)");
+}
+
 int main(void)
 {
     const size_t tb = gv_tile_bytes(3);
@@ -802,6 +847,9 @@ int main(void)
     check_biased_search();
     check_log2();
     check_rd_photo(ws);
+
+    /* 7. The rANS step by reciprocal equals the one by division. */
+    check_rans_rcp();
 
     gv_tile_workspace_free(ws);
     gv_tile_workspace_free(NULL);

@@ -547,11 +547,14 @@ static size_t build_models(struct models *md, uint32_t *mask)
 }
 
 static double log2_table[257];
+static uint64_t freq_rcp[257];   /* gv_rans_rcp of every frequency */
 
 static void init_log2(void)
 {
-    for (int f = 1; f <= 256; f++)
+    for (int f = 1; f <= 256; f++) {
         log2_table[f] = log2(256.0 / f);
+        freq_rcp[f] = gv_rans_rcp((uint32_t)f);
+    }
 }
 
 /* Estimated bytes of the buffer with these models. */
@@ -612,11 +615,14 @@ static size_t write_buffer(struct gv_dct_workspace *ws,
         int n = 0;
         for (int i = ns - 1; i >= 0; i--) {
             const struct sym *y = &ws->syms[i];
-            if (y->model < 0)
-                x = gv_rans_put(x, 4, 4u * (uint32_t)y->s, 8, ws->words, &n);
-            else
-                x = gv_rans_put(x, md->freq[y->model][y->s],
-                                md->cum[y->model][y->s], 8, ws->words, &n);
+            if (y->model < 0) {
+                x = gv_rans_put_rcp(x, 4, freq_rcp[4], 4u * (uint32_t)y->s, 8,
+                                    ws->words, &n);
+            } else {
+                const uint32_t f = md->freq[y->model][y->s];
+                x = gv_rans_put_rcp(x, f, freq_rcp[f], md->cum[y->model][y->s],
+                                    8, ws->words, &n);
+            }
         }
         if (!(at = gv_rans_put_stream(buf, lengths, by, at, x, ws->words, n, cap)))
             return 0;

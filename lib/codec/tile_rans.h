@@ -53,6 +53,38 @@ static inline uint32_t gv_rans_put(uint32_t x, uint32_t f, uint32_t c,
     return ((x / f) << prob_bits) + (x % f) + c;
 }
 
+/* The reciprocal of a frequency f >= 1 for gv_rans_put_rcp:
+ * floor((2^64 - 1) / f) + 1 for f >= 2 (it lies in [2^64 / f, 2^64 / f + 1),
+ * so x * rcp / 2^64 exceeds x / f by less than x / 2^64 < 2^-32, too little
+ * to carry floor(x / f) past an integer when f < 2^32), 0 for f = 1. */
+static inline uint64_t gv_rans_rcp(uint32_t f)
+{
+    return f > 1 ? UINT64_MAX / f + 1 : 0;
+}
+
+/* gv_rans_put, the same state for every input, with the division by f
+ * taken as a multiplication by rcp = gv_rans_rcp(f), computed once per
+ * frequency: a 32-bit division costs several times a 64-bit multiply, and
+ * it was a quarter of the layout D encoder's own time (bench/README.md,
+ * 2026-11-26, encoder's second pass). */
+static inline uint32_t gv_rans_put_rcp(uint32_t x, uint32_t f, uint64_t rcp,
+                                       uint32_t c, int prob_bits,
+                                       uint16_t *words, int *n)
+{
+    const uint64_t x_max = (uint64_t)(((1u << 16) >> prob_bits) << 16) * f;
+    if (x >= x_max) {
+        words[(*n)++] = (uint16_t)x;
+        x >>= 16;
+    }
+#ifdef __SIZEOF_INT128__
+    const uint32_t q = f > 1 ? (uint32_t)(((unsigned __int128)x * rcp) >> 64) : x;
+#else
+    (void)rcp;
+    const uint32_t q = x / f;
+#endif
+    return (q << prob_bits) + (x - q * f) + c;
+}
+
 /* Store a finished stream (state x, n words in encoding order) at byte
  * `at` of buf, its length in 16-bit words in slot `row` of the u16 table at
  * `lengths`.  Returns the offset after it, or 0 if it would pass cap or

@@ -135,6 +135,14 @@ int gv_store_writer_root(struct gv_store_writer *w, const uint8_t *pixels,
              : gv_root_pack(pixels, r->width, r->height, w->g.channels, &z,
                             &zlen, err)) < 0)
         return -1;
+    int rc = gv_store_writer_root_packed(w, z, zlen, err);
+    free(z);
+    return rc;
+}
+
+int gv_store_writer_root_packed(struct gv_store_writer *w, const uint8_t *z,
+                                size_t zlen, struct gv_error *err)
+{
     uint8_t crc[4];
     gv_put32(crc, gv_crc32(0, z, zlen));
     int rc = write_at(w, z, zlen, w->off, err);
@@ -146,7 +154,6 @@ int gv_store_writer_root(struct gv_store_writer *w, const uint8_t *pixels,
         w->off += zlen + 4;
         w->have_root = 1;
     }
-    free(z);
     return rc;
 }
 

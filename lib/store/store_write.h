@@ -42,6 +42,12 @@ int gv_store_writer_page(struct gv_store_writer *w, int level, uint32_t px,
 int gv_store_writer_root(struct gv_store_writer *w, const uint8_t *pixels,
                          struct gv_error *err);
 
+/* The same for a picture root already packed by gv_root_pack (z, zlen
+ * bytes; the caller keeps and frees z), so that the packing can run
+ * while the pages are still being encoded. */
+int gv_store_writer_root_packed(struct gv_store_writer *w, const uint8_t *z,
+                                size_t zlen, struct gv_error *err);
+
 /* Record the level-0 PSNR in millidecibels for the header. */
 void gv_store_writer_set_psnr(struct gv_store_writer *w, uint32_t psnr0_mdb);
 
