@@ -406,7 +406,13 @@ int main(int argc, char **argv)
         int bestq = 0, count = 0;
         double bestd = 1e9, p;
         struct jpeg_tile *jt = NULL;
-        for (int q = 10; q <= 98; q += 4) {
+        /* Every fourth quality, then the three on either side of the
+         * best: the nearest PSNR at a step of 1. */
+        int qs[23 + 6], nq = 0;
+        for (int q = 10; q <= 98; q += 4)
+            qs[nq++] = q;
+        for (int iq = 0; iq < nq; iq++) {
+            const int q = qs[iq];
             int n;
             struct jpeg_tile *t = jpeg_encode_tiles(img, info.width, info.height,
                                                     info.channels, q, &n, &p);
@@ -424,6 +430,10 @@ int main(int argc, char **argv)
                     free(t[i].data);
                 free(t);
             }
+            if (iq == 22)
+                for (int dq = -3; dq <= 3; dq++)
+                    if (dq && bestq + dq >= 1 && bestq + dq <= 100)
+                        qs[nq++] = bestq + dq;
         }
         double jp = jpeg_run(jt, count, 0), jp_c = last_cpu_rate;
         printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second; level-0 tiles, Q%d, PSNR within %.2f dB of the store)\n",
