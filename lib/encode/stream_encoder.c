@@ -88,6 +88,7 @@ struct encoder {
     int have_pending[GV_MAX_LEVELS];
     uint32_t rows_out[GV_MAX_LEVELS];
     uint8_t *reduced[GV_MAX_LEVELS];
+    int level0_stored;        /* the reader writes level 0's rows */
     /* pass 2: the current page */
     int level;
     uint32_t px, py;
@@ -181,7 +182,7 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
 {
     const struct gv_level *l = &e->g.level[k];
     const size_t rb = (size_t)l->width * e->c;
-    if (store_row(e, k, row) < 0)
+    if (!(k == 0 && e->level0_stored) && store_row(e, k, row) < 0)
         return -1;
     e->rows_out[k]++;
     if (k == e->g.root)
@@ -198,9 +199,18 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
 /* Pass 1's input reader: a thread that decodes the next chunk of rows
  * while the encoder's thread reduces and stores the previous one, in two
  * buffers of CHUNK_BYTES / 2 (the memory of one chunk before).  A chunk
- * is ready when rows[slot] > 0; the consumer sets it back to 0. */
+ * is ready when rows[slot] > 0; the consumer sets it back to 0.  Unless
+ * the encoder is a shard (which keeps only its tiles' columns), the
+ * reader also writes the chunk's rows to level 0 of the scratch file, in
+ * one write: they lie there end to end.  That takes the largest copy off
+ * the encoder's thread, which bounds pass 1 on an input that is cheap to
+ * decode (a 54 MP uncompressed tiled TIFF: the whole encode 1.28 -> 1.20 s,
+ * best of 4, bench/README.md 2026-11-26 "encoder, pass 1 and 2"). */
 struct reader {
     struct gv_source *src;
+    struct gv_spill *spill;   /* NULL: the encoder's thread stores level 0 */
+    uint64_t base;            /* level 0's offset in the scratch file */
+    size_t row_bytes;
     uint32_t chunk, height;
     uint8_t *buf[2];
     uint32_t rows[2];
@@ -224,7 +234,10 @@ static void *reader_main(void *arg)
         if (stop)
             break;
         struct gv_error err;
-        const int rc = gv_source_read(r->src, n, r->buf[slot], &err);
+        int rc = gv_source_read(r->src, n, r->buf[slot], &err);
+        if (rc == 0 && r->spill)
+            rc = gv_spill_write(r->spill, r->buf[slot], (size_t)n * r->row_bytes,
+                                r->base + (uint64_t)y * r->row_bytes, &err);
         pthread_mutex_lock(&r->mu);
         if (rc < 0) {
             r->err = err;
@@ -249,7 +262,10 @@ static int pass1(struct encoder *e, struct gv_source *src)
         chunk = 1;
     if (chunk > g->height)
         chunk = g->height;
-    struct reader rd = {.src = src, .chunk = chunk, .height = g->height};
+    struct reader rd = {.src = src, .chunk = chunk, .height = g->height,
+                        .spill = e->sharded ? NULL : e->spill,
+                        .base = e->orig_base[0], .row_bytes = rb0};
+    e->level0_stored = !e->sharded;
     int rc = -1, started = 0;
     pthread_mutex_init(&rd.mu, NULL);
     pthread_cond_init(&rd.cv, NULL);
