@@ -258,6 +258,14 @@ static int pass1(struct encoder *e, struct gv_source *src)
     const struct gv_geometry *g = &e->g;
     const size_t rb0 = (size_t)g->width * e->c;
     uint32_t chunk = (uint32_t)(CHUNK_BYTES / 2 / rb0);
+    /* At least eight chunks (of 64 rows or more) on an image whose rows
+     * would fill fewer: the encoder's thread waits for the reader's first
+     * chunk, and the reader for the encoder's last, so a third of the
+     * image in each (an 8 MP photograph) left a thread idle for a third
+     * of the pass. */
+    const uint32_t eighth = (g->height + 7) / 8;
+    if (chunk > eighth)
+        chunk = eighth < 64 ? 64 : eighth;
     if (chunk < 1)
         chunk = 1;
     if (chunk > g->height)
@@ -270,8 +278,14 @@ static int pass1(struct encoder *e, struct gv_source *src)
     pthread_mutex_init(&rd.mu, NULL);
     pthread_cond_init(&rd.cv, NULL);
     pthread_t thread;
-    rd.buf[0] = malloc((size_t)chunk * rb0);
-    rd.buf[1] = malloc((size_t)chunk * rb0);
+    /* The chunk's halves live in pass 2's page window, unused until
+     * then, so that memory the process has faulted in once serves both
+     * passes (each half is at most CHUNK_BYTES / 2, and the window holds
+     * 4097^2 x C bytes, more than CHUNK_BYTES); only rows wider than the
+     * window's half get memory of their own. */
+    const int own = 2 * (size_t)chunk * rb0 > (size_t)WINDOW * WINDOW * e->c;
+    rd.buf[0] = own ? malloc((size_t)chunk * rb0) : e->window;
+    rd.buf[1] = own ? malloc((size_t)chunk * rb0) : e->window + (size_t)chunk * rb0;
     if (!rd.buf[0] || !rd.buf[1]) {
         gv_fail(e->err, GV_ENOMEM, "encode: out of memory for input rows");
         goto out;
@@ -328,10 +342,12 @@ out:
         pthread_mutex_unlock(&rd.mu);
         pthread_join(thread, NULL);
     }
+    if (own) {
+        free(rd.buf[0]);
+        free(rd.buf[1]);
+    }
     pthread_cond_destroy(&rd.cv);
     pthread_mutex_destroy(&rd.mu);
-    free(rd.buf[0]);
-    free(rd.buf[1]);
     return rc;
 }
 
