@@ -44,6 +44,7 @@
 #include "codec/tile.h"
 #include "codec/tile_dct.h"
 #include "codec/tile_layout.h"
+#include "codec/sse.h"
 #include "codec/tile_rans.h"
 
 #define NB (GV_DCT_BLOCKS * GV_DCT_BLOCKS)
@@ -776,57 +777,6 @@ static double try_step(const struct gv_dct_workspace *ws,
     return err + lambda * 8.0 * estimate_bytes(&cd->md, mb);
 }
 
-/* Sum of (a - b)^2 over `rows` rows of n samples, `stride` apart: in
- * AVX2 where the CPU has it (the squares of 16-bit differences summed in
- * pairs by VPMADDWD, a row's sums in 32 bits: at most 1539 x 255^2), else
- * plainly.  Exact either way. */
-#ifdef HAVE_AVX2_PATH
-__attribute__((target("avx2"))) static uint64_t
-tile_sse_avx2(const uint8_t *a, const uint8_t *b, uint32_t n, uint32_t rows,
-              size_t stride)
-{
-    uint64_t e = 0;
-    for (uint32_t y = 0; y < rows; y++) {
-        const uint8_t *ra = a + (size_t)y * stride, *rb = b + (size_t)y * stride;
-        __m256i acc = _mm256_setzero_si256();
-        uint32_t i = 0;
-        for (; i + 16 <= n; i += 16) {
-            const __m256i d = _mm256_sub_epi16(
-                _mm256_cvtepu8_epi16(_mm_loadu_si128((const __m128i *)(ra + i))),
-                _mm256_cvtepu8_epi16(_mm_loadu_si128((const __m128i *)(rb + i))));
-            acc = _mm256_add_epi32(acc, _mm256_madd_epi16(d, d));
-        }
-        uint32_t lanes[8];
-        _mm256_storeu_si256((__m256i *)lanes, acc);
-        uint64_t row = 0;
-        for (int l = 0; l < 8; l++)
-            row += lanes[l];
-        for (; i < n; i++) {
-            const int d = (int)ra[i] - rb[i];
-            row += (uint64_t)(d * d);
-        }
-        e += row;
-    }
-    return e;
-}
-#endif
-
-static uint64_t tile_sse(const uint8_t *a, const uint8_t *b, uint32_t n,
-                         uint32_t rows, size_t stride)
-{
-#ifdef HAVE_AVX2_PATH
-    if (transform_tile == transform_tile_avx2)
-        return tile_sse_avx2(a, b, n, rows, stride);
-#endif
-    uint64_t e = 0;
-    for (uint32_t y = 0; y < rows; y++)
-        for (uint32_t i = 0; i < n; i++) {
-            const int d = (int)a[(size_t)y * stride + i] - b[(size_t)y * stride + i];
-            e += (uint64_t)(d * d);
-        }
-    return e;
-}
-
 size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
                      const uint8_t *pred, const uint8_t *parent, int qx,
                      int qy, int channels, uint32_t valid_w, uint32_t valid_h,
@@ -876,7 +826,7 @@ size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
     struct gv_error err;
     if (gv_dct_decode(buf, len, channels, parent, qx, qy, recon, &err) < 0)
         return 0;   /* cannot happen: the buffer was just written */
-    *sse = tile_sse(orig, recon, valid_w * (uint32_t)channels, valid_h,
-                    (size_t)GV_TILE * channels);
+    *sse = gv_sse_u8(orig, recon, valid_w * (uint32_t)channels, valid_h,
+                     (size_t)GV_TILE * channels);
     return len;
 }

@@ -28,6 +28,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "codec/sse.h"
 #include "codec/tile_layout.h"
 #include "codec/tile.h"
 #include "codec/tile_dct.h"
@@ -161,15 +162,7 @@ static uint64_t reconstruct(const struct gv_tile_workspace *ws,
             }
         }
     }
-    uint64_t sse = 0;
-    for (uint32_t y = 0; y < vh; y++) {
-        const uint8_t *a = orig + y * row, *b = recon + y * row;
-        for (uint32_t i = 0; i < vw * (uint32_t)channels; i++) {
-            int d = a[i] - b[i];
-            sse += (uint64_t)(d * d);
-        }
-    }
-    return sse;
+    return gv_sse_u8(orig, recon, vw * (uint32_t)channels, vh, row);
 }
 
 /* Squared error of one block coded with the widened codevector w: the

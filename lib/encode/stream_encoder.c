@@ -32,6 +32,7 @@
 
 #include "base/pool.h"
 #include "base/spill.h"
+#include "codec/sse.h"
 #include "codec/tile.h"
 #include "encode/encode_int.h"
 #include "encode/lambda_model.h"
@@ -397,15 +398,7 @@ static uint64_t level0_sse(const struct encoder *e, uint32_t tx, uint32_t ty,
     const size_t row = (size_t)GV_TILE * e->c;
     uint32_t cw = tx + 1 == l->tiles_x ? valid_w : GV_STEP;
     uint32_t ch = ty + 1 == l->tiles_y ? valid_h : GV_STEP;
-    uint64_t sse = 0;
-    for (uint32_t v = 0; v < ch; v++) {
-        const uint8_t *a = orig + v * row, *b = recon + v * row;
-        for (uint32_t k = 0; k < cw * (uint32_t)e->c; k++) {
-            int d = a[k] - b[k];
-            sse += (uint64_t)(d * d);
-        }
-    }
-    return sse;
+    return gv_sse_u8(orig, recon, cw * (uint32_t)e->c, ch, row);
 }
 
 /* Pool job: encode slot `slot` of the current page with the workspace of
