@@ -90,6 +90,8 @@
 #define gv_image_encode oiio_image_encode
 #define gv_image_write_typed oiio_image_write_typed
 #define gv_image_encode_typed oiio_image_encode_typed
+/* ...and its reading handle under the name imageio_module.h gives it. */
+#define gv_image_in gv_oiio_in
 #include "imageio/imageio.h"
 #include "imageio/imageio_module.h"
 #include "imageio/output_format.h"
