@@ -486,6 +486,27 @@ static void test_misuse(const char *dir)
     }
 }
 
+/* A FIFO named like a JPEG or PNG: refused as the module refuses it,
+ * without waiting for a writer (the test would hang). */
+static void test_fifo(void)
+{
+    const char *names[] = {"fifo.jpg", "fifo.png"};
+    for (int k = 0; k < 2; k++) {
+        const char *path = path_in(tmpdir, names[k]);
+        if (mkfifo(path, 0600) != 0)
+            fail("mkfifo %s: %s", path, strerror(errno));
+        struct result l = read_file(LOADER, path, 1u << 20);
+        char want[4200];
+        snprintf(want, sizeof want, "imageio: %s: not a regular file", path);
+        check(!l.opened && l.open_err.code == GV_EINVAL,
+              "%s: refused with GV_EINVAL", names[k]);
+        check_str(l.open_err.text, want, "%s: the module's message",
+                  names[k]);
+        result_free(&l);
+        unlink(path);
+    }
+}
+
 /* In a child without the module: JPEG and PNG read, declined files fail
  * with the module's "cannot load" message.  Run before the parent loads
  * the module. */
@@ -558,6 +579,7 @@ int main(void)
     test_corrupt(native);
     test_huge(native);
     test_misuse(native);
+    test_fifo();
 
     rmdir(tmpdir);
     return tap_done();

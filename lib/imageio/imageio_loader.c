@@ -43,6 +43,7 @@
 
 #include "imageio/imageio.h"
 #include "imageio/imageio_module.h"
+#include "imageio/native_file.h"
 #include "imageio/native_jpeg.h"
 #include "imageio/native_png.h"
 
@@ -176,12 +177,13 @@ static int native_allowed(void)
     return !(v && strcmp(v, "0") == 0);
 }
 
-/* The native reader for `path`'s first bytes, or BY_MODULE (also when the
- * file cannot be read: the module says why in its words). */
+/* The native reader for `path`'s first bytes, or BY_MODULE (also when it
+ * is not a regular file or cannot be read: the module says why in its
+ * words). */
 static enum reader sniff(const char *path)
 {
     uint8_t head[8];
-    FILE *f = fopen(path, "rb");
+    FILE *f = gv_native_open_regular(path);
     if (!f)
         return BY_MODULE;
     size_t n = fread(head, 1, sizeof head, f);

@@ -35,10 +35,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-
 #include <jpeglib.h>
 
+#include "imageio/native_file.h"
 #include "imageio/native_jpeg.h"
 
 /* libjpeg reports errors through error_exit, which must not return:
@@ -142,15 +141,14 @@ struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
         return NULL;   /* declined: the module reports what it can */
     size_t plen = strlen(path);
     j->path = malloc(plen + 1);
-    j->f = fopen(path, "rb");
+    j->f = gv_native_open_regular(path);
     if (!j->path || !j->f)
         goto decline;
     memcpy(j->path, path, plen + 1);
-    struct stat st;
     uint8_t head[3];
-    if (fstat(fileno(j->f), &st) != 0 || !S_ISREG(st.st_mode)
-        || fread(head, 1, sizeof head, j->f) != sizeof head
-        || !gv_native_jpeg_sniff(head, sizeof head) || fseek(j->f, 0, SEEK_SET) != 0)
+    if (fread(head, 1, sizeof head, j->f) != sizeof head
+        || !gv_native_jpeg_sniff(head, sizeof head)
+        || fseek(j->f, 0, SEEK_SET) != 0)
         goto decline;
 
     j->cinfo.err = jpeg_std_error(&j->jerr.pub);

@@ -37,10 +37,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-
 #include <png.h>
 
+#include "imageio/native_file.h"
 #include "imageio/native_png.h"
 
 struct gv_native_png {
@@ -123,14 +122,12 @@ struct gv_native_png *gv_native_png_open(const char *path,
         return NULL;   /* declined: the module reports what it can */
     size_t plen = strlen(path);
     p->path = malloc(plen + 1);
-    p->f = fopen(path, "rb");
+    p->f = gv_native_open_regular(path);
     if (!p->path || !p->f)
         goto decline;
     memcpy(p->path, path, plen + 1);
-    struct stat st;
     uint8_t head[8];
-    if (fstat(fileno(p->f), &st) != 0 || !S_ISREG(st.st_mode)
-        || fread(head, 1, sizeof head, p->f) != sizeof head
+    if (fread(head, 1, sizeof head, p->f) != sizeof head
         || !gv_native_png_sniff(head, sizeof head))
         goto decline;
     p->png = png_create_read_struct(PNG_LIBPNG_VER_STRING, p, on_error,
