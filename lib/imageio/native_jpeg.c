@@ -207,9 +207,9 @@ decline:
 static int fail_read(struct gv_native_jpeg *j, struct gv_error *err)
 {
     j->broken = 1;
+    const char *msg = j->jerr.msg[0] ? j->jerr.msg : "scanline read failed";
     return gv_fail(err, GV_ECORRUPT, "imageio: %s: JPEG error: %s (\"%s\")",
-                   j->path, j->jerr.msg[0] ? j->jerr.msg : "scanline read failed",
-                   j->path);
+                   j->path, msg, j->path);
 }
 
 int gv_native_jpeg_read(struct gv_native_jpeg *j, uint32_t rows, void *out,

@@ -26,9 +26,9 @@
  * Declined, for the module to read (gv_native_png_open returns NULL with
  * no error): interlaced files (the module reads them whole; rare in
  * photographs), an oFFs origin so far out that the module's row numbers
- * would pass INT_MAX (it only shifts them otherwise), and any file on which libpng
- * reports an error while opening, so that the module's own message and
- * code describe damaged headers.
+ * would pass INT_MAX (it only shifts them otherwise), and any file on
+ * which libpng reports an error while opening, so that the module's own
+ * message and code describe damaged headers.
  *
  * Memory: libpng's row buffers, allocated by png_read_update_info only
  * after width * height has been checked against max_pixels.
