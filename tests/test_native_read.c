@@ -9,7 +9,7 @@
  * by the module (GIGAVIEW_NATIVE_READERS=0), by the native reader called
  * directly, and through gv_image_open with native readers allowed.  The
  * image info and every delivered byte must be equal, and each file must
- * be taken natively or declined as expected (CMYK JPEG, interlaced PNG).
+ * be taken natively or declined as expected (the CMYK JPEG).
  * Negative controls: with a test-only decode setting (fast DCT and no
  * fancy upsampling; 16-bit samples left big-endian) the same comparison
  * finds differences, so it can fail.  Hostile files: truncated at several
@@ -17,7 +17,7 @@
  * the native path must fail (or decline) exactly where the module does,
  * with GV_ECORRUPT and an "imageio: PATH: " message, never crash.  A
  * forked child without the module checks that JPEG and PNG input needs
- * none, and that declined files do go to it.
+ * none, and that declined files (CMYK, a damaged header) do go to it.
  */
 #include <errno.h>
 #include <stdio.h>
@@ -190,7 +190,7 @@ static int same_info(const struct gv_image_info *a,
 /* Files the native readers must decline (the module reads them). */
 static int expect_declined(const char *name)
 {
-    return strcmp(name, "cmyk.jpg") == 0 || strstr(name, "interlaced");
+    return strcmp(name, "cmyk.jpg") == 0;
 }
 
 static void compare_file(const char *dir, const char *name)
@@ -340,7 +340,8 @@ static void test_truncated(const char *dir)
 {
     const char *files[] = {"s420.jpg", "progressive.jpg", "gray.jpg",
                            "restart.jpg", "rgb8.png", "rgb16.png",
-                           "palette4.png", "graya8.png"};
+                           "palette4.png", "graya8.png",
+                           "rgb8-interlaced.png", "gray4-interlaced.png"};
     /* Cut points in per mille of the length, and the last bytes. */
     const int cuts[] = {5, 30, 200, 500, 800, 990};
     for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
@@ -367,7 +368,7 @@ static void test_truncated(const char *dir)
 static void test_corrupt(const char *dir)
 {
     const char *files[] = {"s420.jpg", "progressive.jpg", "rgb8.png",
-                           "palette8-trns.png"};
+                           "palette8-trns.png", "rgb8-interlaced.png"};
     for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
         size_t len;
         uint8_t *p = slurp(path_in(dir, files[f]), &len);
@@ -530,9 +531,20 @@ static void test_without_module(const char *dir)
                                     "OpenImageIO module") ? 4 : 0;
         result_free(&r);
         r = read_file(LOADER, path_in(dir, "rgb8-interlaced.png"), 1u << 20);
-        bits |= !r.opened && strstr(r.open_err.text, "cannot load the "
-                                    "OpenImageIO module") ? 8 : 0;
+        bits |= r.opened && r.read_ok ? 8 : 0;
         result_free(&r);
+        /* a damaged header: IHDR's CRC */
+        size_t len;
+        uint8_t *p = slurp(path_in(dir, "rgb8.png"), &len);
+        p[30] ^= 0x55;
+        const char *bad = path_in(tmpdir, "bad-ihdr.png");
+        spill(bad, p, len);
+        free(p);
+        r = read_file(LOADER, bad, 1u << 20);
+        bits |= !r.opened && strstr(r.open_err.text, "cannot load the "
+                                    "OpenImageIO module") ? 16 : 0;
+        result_free(&r);
+        unlink(bad);
         _exit(bits);
     }
     int st = 0;
@@ -542,7 +554,9 @@ static void test_without_module(const char *dir)
     check(bits & 1, "without the module: a JPEG opens and reads");
     check(bits & 2, "without the module: a PNG opens and reads");
     check(bits & 4, "without the module: a CMYK JPEG is declined to it");
-    check(bits & 8, "without the module: an interlaced PNG is declined to it");
+    check(bits & 8, "without the module: an interlaced PNG opens and reads");
+    check(bits & 16, "without the module: a PNG with a damaged header is "
+          "declined to it");
 }
 
 int main(void)

@@ -26,7 +26,7 @@
  * first bytes and offers a JPEG to native_jpeg.c (libjpeg-turbo) and a
  * PNG to native_png.c (libpng), which deliver exactly the module's info
  * and samples for the variants they accept and decline the rest (CMYK
- * JPEG, interlaced PNG, damaged headers...), which then go to the module
+ * and 12-bit JPEG, damaged headers...), which then go to the module
  * as before.  struct gv_image_in is a tagged handle over either.  With
  * GIGAVIEW_NATIVE_READERS=0 in the environment every file goes to the
  * module (tests compare the two; the bench measures both).  Writing

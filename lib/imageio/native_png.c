@@ -23,15 +23,19 @@
  * ends early.  Nothing is printed.  The end of the file after the last
  * row (IEND, trailing chunks) is never read, as there.
  *
+ * Interlaced (Adam7) files are decoded whole at the first read, as
+ * there: png_read_image, then png_read_end.
+ *
  * Declined, for the module to read (gv_native_png_open returns NULL with
- * no error): interlaced files (the module reads them whole; rare in
- * photographs), an oFFs origin so far out that the module's row numbers
+ * no error): an oFFs origin so far out that the module's row numbers
  * would pass INT_MAX (it only shifts them otherwise), and any file on
  * which libpng reports an error while opening, so that the module's own
  * message and code describe damaged headers.
  *
  * Memory: libpng's row buffers, allocated by png_read_update_info only
- * after width * height has been checked against max_pixels.
+ * after width * height has been checked against max_pixels; for an
+ * interlaced file, the whole image (at most max_pixels * 8 bytes), as in
+ * the module.
  */
 #include <setjmp.h>
 #include <stdio.h>
@@ -49,6 +53,8 @@ struct gv_native_png {
     char *path;
     uint32_t width, height, next_row;
     size_t row_bytes;
+    int interlaced;                /* Adam7: read whole at the first read */
+    uint8_t *whole;                /* then the whole image, row_bytes * height */
     int broken;                    /* a read failed: every later one fails */
     char msg[256];                 /* the first error's text */
 };
@@ -101,6 +107,7 @@ void gv_native_png_close(struct gv_native_png *p)
         png_destroy_read_struct(&p->png, p->info ? &p->info : NULL, NULL);
     if (p->f)
         fclose(p->f);
+    free(p->whole);
     free(p->path);
     free(p);
 }
@@ -146,8 +153,6 @@ struct gv_native_png *gv_native_png_open(const char *path,
     int depth, color, interlace;
     png_get_IHDR(p->png, p->info, &w, &h, &depth, &color, &interlace, NULL,
                  NULL);
-    if (interlace != PNG_INTERLACE_NONE)
-        goto decline;
     if (w == 0 || h == 0 || w > 0x7fffffffu || h > 0x7fffffffu)
         goto decline;
     /* The module reads rows by their number from the oFFs origin, in an
@@ -175,6 +180,12 @@ struct gv_native_png *gv_native_png_open(const char *path,
         || png_get_rowbytes(p->png, p->info) != (size_t)w * channels * bytes)
         goto decline;
 
+    /* An interlaced image is held whole: w * h <= max_pixels, at most
+     * 8 bytes a pixel; refused here if that does not fit a size_t. */
+    if (interlace != PNG_INTERLACE_NONE
+        && (size_t)h > SIZE_MAX / 2 / ((size_t)w * channels * bytes))
+        goto decline;
+    p->interlaced = interlace != PNG_INTERLACE_NONE;
     p->width = w;
     p->height = h;
     p->row_bytes = (size_t)w * channels * bytes;
@@ -192,6 +203,43 @@ decline:
     return NULL;
 }
 
+/* An interlaced image: decoded whole at the first read, as OpenImageIO
+ * does (png_read_image without png_set_interlace_handling first, then
+ * png_read_end, so that a damaged or missing IEND fails it), then handed
+ * out from memory. */
+static int read_whole(struct gv_native_png *p, uint32_t rows, void *out,
+                      struct gv_error *err)
+{
+    if (!p->whole) {
+        png_bytep *ptr = malloc((size_t)p->height * sizeof *ptr);
+        p->whole = malloc(p->row_bytes * p->height);
+        if (!ptr || !p->whole) {
+            free(ptr);
+            p->broken = 1;
+            return gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory",
+                           p->path);
+        }
+        for (uint32_t y = 0; y < p->height; y++)
+            ptr[y] = p->whole + (size_t)y * p->row_bytes;
+        /* ptr is freed on both ways out: kept in a volatile across the
+         * setjmp. */
+        png_bytep *volatile rows_ptr = ptr;
+        if (setjmp(png_jmpbuf(p->png))) {
+            free(rows_ptr);
+            p->broken = 1;
+            return gv_fail(err, GV_ECORRUPT, "imageio: %s: %s", p->path,
+                           p->msg[0] ? p->msg : "PNG read error");
+        }
+        png_read_image(p->png, rows_ptr);
+        png_read_end(p->png, NULL);
+        free(rows_ptr);
+    }
+    memcpy(out, p->whole + (size_t)p->next_row * p->row_bytes,
+           (size_t)rows * p->row_bytes);
+    p->next_row += rows;
+    return 0;
+}
+
 int gv_native_png_read(struct gv_native_png *p, uint32_t rows, void *out,
                        struct gv_error *err)
 {
@@ -203,6 +251,10 @@ int gv_native_png_read(struct gv_native_png *p, uint32_t rows, void *out,
                        "imageio: %s: read of %u rows from row %u passes the "
                        "last row (%u)", p->path, rows, p->next_row,
                        p->height);
+    if (rows == 0)
+        return 0;
+    if (p->interlaced)
+        return read_whole(p, rows, out, err);
     if (setjmp(png_jmpbuf(p->png))) {
         p->broken = 1;
         return gv_fail(err, GV_ECORRUPT, "imageio: %s: %s", p->path,

@@ -22,9 +22,8 @@ int gv_native_png_sniff(const uint8_t *head, size_t n);
 /*
  * Open `path` and read its header, as gv_image_open does.  Returns the
  * reader, or NULL with *err filled (GV_ELIMIT: more than max_pixels), or
- * NULL with err->code == GV_OK when this reader declines the file
- * (interlaced, an oFFs origin past INT_MAX, or any libpng error while
- * opening): the
+ * NULL with err->code == GV_OK when this reader declines the file (an
+ * oFFs origin past INT_MAX, or any libpng error while opening): the
  * caller then hands it to the module.  err must not be NULL.  One reader
  * is used by one thread at a time; readers are independent.
  */
@@ -35,7 +34,8 @@ struct gv_native_png *gv_native_png_open(const char *path,
 
 /* The next `rows` rows, as gv_image_read: 0, or -1 with *err filled
  * (GV_ECORRUPT for damaged or truncated data, after which every read
- * fails; GV_EINVAL for a read past the last row). */
+ * fails; GV_EINVAL for a read past the last row; GV_ENOMEM).  An
+ * interlaced image is decoded whole at the first read. */
 int gv_native_png_read(struct gv_native_png *p, uint32_t rows, void *out,
                        struct gv_error *err);
 

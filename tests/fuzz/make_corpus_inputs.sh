@@ -144,7 +144,7 @@ PY
 
 # The native JPEG and PNG readers (lib/imageio/native_*.c): every variant
 # of tests/data/native (colour types, depths, subsampling, progressive,
-# arithmetic, and the CMYK and interlaced ones they leave to the module),
+# arithmetic, interlaced, and the CMYK one they leave to the module),
 # and truncated and damaged copies of a few.  Truncated PNGs are safe
 # here: the native reader takes them, not OpenImageIO's leaking one.
 python3 - "$top/tests/data/native" "$here/corpus" <<'PY'
