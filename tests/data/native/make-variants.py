@@ -1,18 +1,17 @@
 #!/usr/bin/env python3
-"""make-variants.py - writes the PNG variants of tests/data/native/ from
-seeding-700x520.png's pixels (decoded with djpeg-free means: the crop is
-read from a PPM made by `vips crop`, see make-variants.sh) with nothing
-but zlib and struct, so that every PNG colour type, bit depth and chunk
-the native reader must match OpenImageIO on is present and tiny.
+"""make-variants.py - writes the PNG variants of tests/data/native/ from a
+crop given as a binary PPM (make-variants.sh makes it with `vips crop`),
+with nothing but zlib and struct: every PNG colour type, bit depth and
+chunk the native reader must read as OpenImageIO does, each tiny.
+Deterministic: the same crop gives the same files.
 
 usage: make-variants.py CROP.ppm OUTDIR
 """
 import struct, sys, zlib
 
 def read_ppm(path):
-    data = open(path, "rb").read()
-    # drop comment lines (vips writes one)
-    head, rest = b"", data
+    rest = open(path, "rb").read()
+    # header fields, skipping comment lines (vips writes one)
     fields = []
     while len(fields) < 4:
         line, rest = rest.split(b"\n", 1)
@@ -55,19 +54,19 @@ def adam7(w, h):
         if xs and ys:
             yield xs, ys
 
-def png(path, w, h, ctype, bits, pix, extra=b"", interlace=0, before_ihdr_end=b""):
+def png(path, w, h, ctype, bits, pix, extra=b"", interlace=0):
     """pix(x, y) -> tuple of samples for one pixel."""
     raw = bytearray()
     if interlace:
         for xs, ys in adam7(w, h):
             for y in ys:
                 row = [s for x in xs for s in pix(x, y)]
-                # alternate filters: none / sub, to exercise unfiltering
                 raw += b"\0" + pack_row(row, bits)
     else:
         for y in range(h):
             row = [s for x in range(w) for s in pix(x, y)]
             body = pack_row(row, bits)
+            # every other row with the Sub filter, to exercise unfiltering
             if y % 2 and bits >= 8:
                 bpp = max(1, len(pix(0, 0)) * bits // 8)
                 sub = bytes((body[i] - (body[i - bpp] if i >= bpp else 0)) & 255
