@@ -18,6 +18,8 @@ PACKAGES="$PACKAGES gdal-bin"
 # Xvfb and weston: tests/client_view_wsi.sh runs the native viewer on X11
 # and on Wayland (weston nested in Xvfb), not only SDL's offscreen driver.
 PACKAGES="$PACKAGES xvfb weston"
+# libjpeg-turbo and libpng: the native JPEG and PNG readers (lib/imageio).
+PACKAGES="$PACKAGES libjpeg62-turbo-dev libpng-dev"
 
 # bench/*.sh and conf/: nginx (http-tiles, http-iiif), wrk, curl and jq
 # (http-*), iipsrv behind spawn-fcgi (http-iiif), vips (encode-speed,

@@ -116,17 +116,25 @@ bad_case_re "mosaic with one damaged tile" \
     "^gigaview encode: imageio: $in/trunc\\.jpg: JPEG error: " -m 2x1 "$jpg" "$in/trunc.jpg"
 
 # ------------------------------------------------- the OpenImageIO module
-# Image files are read through gigaview-oiio.so, loaded on first use
-# (lib/imageio/imageio_loader.c): without it an image file is refused in
-# one line that says so, and what needs no image file still works.
+# Image files other than JPEG and PNG (those have native readers) are
+# read through gigaview-oiio.so, loaded on first use
+# (lib/imageio/imageio_loader.c): without it such a file is refused in
+# one line that says so, and what needs no module still works.
+tif="$TESTDATA/seeding-300x200-striped.tif"
 export GV_OIIO_MODULE="$T/no-such-module.so"
 bad_case_re "the OpenImageIO module missing" \
-    "^gigaview encode: imageio: cannot load the OpenImageIO module: .*no-such-module\\.so" "$jpg"
+    "^gigaview encode: imageio: cannot load the OpenImageIO module: .*no-such-module\\.so" "$tif"
 run encode synth:300x200 -o "$T/synth-no-module.gv" --quiet
 expect_rc "the OpenImageIO module missing: a synthetic input needs none" 0
+run encode "$jpg" -o "$T/jpg-no-module.gv" --quiet
+expect_rc "the OpenImageIO module missing: a JPEG needs none" 0
+run encode "$png" -o "$T/png-no-module.gv" --quiet
+expect_rc "the OpenImageIO module missing: a PNG needs none" 0
+GIGAVIEW_NATIVE_READERS=0 bad_case_re "the OpenImageIO module missing, GIGAVIEW_NATIVE_READERS=0" \
+    "^gigaview encode: imageio: cannot load the OpenImageIO module: .*no-such-module\\.so" "$jpg"
 GV_OIIO_MODULE="$T" bad_case_re "a directory as the OpenImageIO module" \
-    "^gigaview encode: imageio: cannot load the OpenImageIO module: " "$jpg"
-unset GV_OIIO_MODULE
+    "^gigaview encode: imageio: cannot load the OpenImageIO module: " "$tif"
+unset GV_OIIO_MODULE GIGAVIEW_NATIVE_READERS
 # Found by searching, a module is taken only from a directory not everyone
 # may write: a copy of the program in $T/shared/bin, the module in
 # $T/shared, first writable by all, then not.
@@ -136,13 +144,13 @@ if [ -f "$module" ]; then
     cp "$GIGAVIEW" "$T/shared/bin/gigaview"
     cp "$module" "$T/shared/"
     chmod 777 "$T/shared"
-    "$T/shared/bin/gigaview" encode "$jpg" -o "$T/shared.gv" >"$T/out" 2>"$T/err"
+    "$T/shared/bin/gigaview" encode "$tif" -o "$T/shared.gv" >"$T/out" 2>"$T/err"
     rc=$?
     expect_rc "a module in a directory anyone may write: refused" 1
     expect_err "a module in a directory anyone may write: the message" \
         "cannot load the OpenImageIO module: no gigaview-oiio.so beside the program"
     chmod 755 "$T/shared"
-    "$T/shared/bin/gigaview" encode "$jpg" -o "$T/shared.gv" --quiet >"$T/out" 2>"$T/err"
+    "$T/shared/bin/gigaview" encode "$tif" -o "$T/shared.gv" --quiet >"$T/out" 2>"$T/err"
     rc=$?
     expect_rc "the same module once its directory is not writable by all: loaded" 0
 else

@@ -59,7 +59,11 @@
  * imageio_loader.c opens the first time a program reads or writes an
  * image file: OpenImageIO and the libraries it needs then load only into
  * the processes that use them.  The module exports one table
- * (imageio_module.h).
+ * (imageio_module.h).  JPEG and PNG input mostly never reaches it:
+ * native_jpeg.c and native_png.c read those with the same libraries and
+ * settings as OpenImageIO's readers, so what this file does to samples
+ * (types, the 8-bit rule, limits, messages) is what they must match
+ * (tests/test_native_read.c).
  */
 #include <cctype>
 #include <errno.h>
@@ -90,6 +94,8 @@
 #define gv_image_encode oiio_image_encode
 #define gv_image_write_typed oiio_image_write_typed
 #define gv_image_encode_typed oiio_image_encode_typed
+/* ...and its reading handle under the name imageio_module.h gives it. */
+#define gv_image_in gv_oiio_in
 #include "imageio/imageio.h"
 #include "imageio/imageio_module.h"
 #include "imageio/output_format.h"

@@ -1,6 +1,8 @@
 /*
  * imageio.h - the C face of the OpenImageIO bridge (imageio.cpp, the only
- * C++ in gigaview).
+ * C++ in gigaview), and of the native JPEG and PNG readers that stand in
+ * for it on input (native_jpeg.c, native_png.c, with the same results;
+ * imageio_loader.c chooses).
  *
  * Reading is split into a cheap probe (open: format and size from the
  * header) and sequential scanline reads in the file's own sample type

@@ -1,7 +1,9 @@
 /*
  * fuzz_imageio.c - libFuzzer target for the encoder's image input: the
- * OpenImageIO bridge (lib/imageio/imageio.cpp) behind the source (lib/encode/source.c),
- * with a pixel cap.
+ * native JPEG and PNG readers (lib/imageio/native_jpeg.c, native_png.c)
+ * and the OpenImageIO bridge (lib/imageio/imageio.cpp) behind the source
+ * (lib/encode/source.c), with a pixel cap.  A JPEG or PNG goes to a
+ * native reader whatever its extension, unless that reader declines it.
  *
  * Byte 0 picks a file name extension (modulo the table's size;
  * OpenImageIO chooses its reader by the extension first, then by trying

@@ -13,7 +13,9 @@
 # selector byte (the extension, index into its table) then a tiny image in
 # every format and sample type the bridge handles, tiled and striped,
 # plus a few damaged ones and a PNG whose header claims 100000x100000
-# pixels (past the 1 MP cap).  Needs oiiotool and python3.  Deterministic.
+# pixels (past the 1 MP cap), and the JPEG and PNG variants of
+# tests/data/native for the native readers (native-*).  Needs oiiotool
+# and python3.  Deterministic.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 top=$(cd "$here/../.." && pwd)
@@ -138,6 +140,31 @@ batch("j-unterminated", 1, 8, b'{"tiles":[[0,0,0]')
 batch("j-deep", 1, 8, b'{"tiles":' + b"[" * 3000 + b"]" * 3000 + b"}")
 batch("j-not-object", 1, 8, b"[[0,0,0]]")
 batch("j-nul", 1, 8, b'{"tiles":[[0,0,0]]}\0')
+PY
+
+# The native JPEG and PNG readers (lib/imageio/native_*.c): every variant
+# of tests/data/native (colour types, depths, subsampling, progressive,
+# arithmetic, interlaced, and the CMYK one they leave to the module),
+# and truncated and damaged copies of a few.  Truncated PNGs are safe
+# here: the native reader takes them, not OpenImageIO's leaking one.
+python3 - "$top/tests/data/native" "$here/corpus" <<'PY'
+import os, sys
+src, out = sys.argv[1], sys.argv[2]
+def save(name, data):
+    with open(os.path.join(out, "imageio", name), "wb") as f:
+        f.write(data)
+for name in sorted(os.listdir(src)):
+    if not name.endswith((".jpg", ".png")):
+        continue
+    e = 1 if name.endswith(".jpg") else 0
+    d = open(os.path.join(src, name), "rb").read()
+    stem = "native-" + name.replace(".", "-")
+    save(stem, bytes([e]) + d)
+    if name in ("s420.jpg", "progressive.jpg", "rgb16.png", "palette4.png"):
+        save(stem + "-trunc", bytes([e]) + d[:len(d) * 2 // 3])
+        f = bytearray(d)
+        f[len(f) // 2] ^= 0x40
+        save(stem + "-flip", bytes([e]) + bytes(f))
 PY
 
 # ------------------------------------------------------------- settings

@@ -1,0 +1,600 @@
+/*
+ * test_native_read.c - the native JPEG and PNG readers (lib/imageio/
+ * native_jpeg.c, native_png.c) against the OpenImageIO module, which they
+ * must equal byte for byte.
+ *
+ * Every JPEG and PNG in tests/data and tests/data/native (variants of
+ * every colour type, depth, subsampling and coding; make-variants.sh
+ * there) is read three ways, in uneven row counts (1, 7, then the rest):
+ * by the module (GIGAVIEW_NATIVE_READERS=0), by the native reader called
+ * directly, and through gv_image_open with native readers allowed.  The
+ * image info and every delivered byte must be equal, and each file must
+ * be taken natively or declined as expected (the CMYK JPEG).
+ * Negative controls: with a test-only decode setting (fast DCT and no
+ * fancy upsampling; 16-bit samples left big-endian) the same comparison
+ * finds differences, so it can fail.  Hostile files: truncated at several
+ * cut points, damaged headers, a header claiming more than max_pixels -
+ * the native path must fail (or decline) exactly where the module does,
+ * with GV_ECORRUPT and an "imageio: PATH: " message, never crash.  A
+ * forked child without the module checks that JPEG and PNG input needs
+ * none, and that declined files (CMYK, a damaged header) do go to it.
+ */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <dirent.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "util.h"
+#include "imageio/imageio.h"
+#include "imageio/native_jpeg.h"
+#include "imageio/native_png.h"
+
+/*
+ * LeakSanitizer (the sanitizer build): OpenImageIO 2.4.7's PNG reader, the
+ * module side of the comparisons of damaged PNGs, loses a std::string on
+ * every one that ends early (as in tests/fuzz/fuzz_imageio.c, whose
+ * suppression this is); the stack is needed whole to match it.
+ */
+const char *__lsan_default_suppressions(void);
+const char *__lsan_default_suppressions(void)
+{
+    return "leak:OpenImageIO_v2_4::PNGInput::PngReadCallback\n";
+}
+const char *__asan_default_options(void);
+const char *__asan_default_options(void)
+{
+    return "fast_unwind_on_malloc=0";
+}
+
+static const char *datadir;
+static char tmpdir[2048];
+
+static const char *path_in(const char *dir, const char *name)
+{
+    static char buf[4][4096];
+    static int i;
+    i = (i + 1) % 4;
+    if ((size_t)snprintf(buf[i], sizeof buf[i], "%s/%s", dir, name)
+        >= sizeof buf[i])
+        fail("path too long: %s/%s", dir, name);
+    return buf[i];
+}
+
+static int ends_with(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    return n >= m && strcmp(s + n - m, suffix) == 0;
+}
+
+static int starts_with(const char *s, const char *prefix)
+{
+    return strncmp(s, prefix, strlen(prefix)) == 0;
+}
+
+enum how { MODULE, NATIVE, LOADER };
+
+/* What one way of reading a file gave. */
+struct result {
+    int opened;              /* open succeeded */
+    int read_ok;             /* every read succeeded */
+    struct gv_image_info info;
+    uint8_t *pix;            /* all rows (NULL unless opened) */
+    size_t size;
+    struct gv_error open_err, read_err;
+};
+
+static void result_free(struct result *r)
+{
+    free(r->pix);
+    memset(r, 0, sizeof *r);
+}
+
+/* A reader opened one of the three ways, behind one set of calls. */
+struct any {
+    enum how how;
+    struct gv_image_in *in;
+    struct gv_native_jpeg *jpeg;
+    struct gv_native_png *png;
+};
+
+static int any_open(struct any *a, enum how how, const char *path,
+                    uint64_t max_pixels, struct gv_image_info *info,
+                    struct gv_error *err)
+{
+    memset(a, 0, sizeof *a);
+    a->how = how;
+    gv_error_clear(err);
+    if (how == NATIVE) {
+        if (ends_with(path, ".jpg"))
+            a->jpeg = gv_native_jpeg_open(path, max_pixels, info, err);
+        else
+            a->png = gv_native_png_open(path, max_pixels, info, err);
+        return a->jpeg || a->png ? 0 : -1;
+    }
+    if (how == MODULE)
+        setenv("GIGAVIEW_NATIVE_READERS", "0", 1);
+    else
+        unsetenv("GIGAVIEW_NATIVE_READERS");
+    a->in = gv_image_open(path, max_pixels, info, err);
+    unsetenv("GIGAVIEW_NATIVE_READERS");
+    return a->in ? 0 : -1;
+}
+
+static int any_read(struct any *a, uint32_t rows, void *out,
+                    struct gv_error *err)
+{
+    if (a->jpeg)
+        return gv_native_jpeg_read(a->jpeg, rows, out, err);
+    if (a->png)
+        return gv_native_png_read(a->png, rows, out, err);
+    return gv_image_read(a->in, rows, out, err);
+}
+
+static void any_close(struct any *a)
+{
+    gv_native_jpeg_close(a->jpeg);
+    gv_native_png_close(a->png);
+    gv_image_close(a->in);
+}
+
+static size_t sample_bytes(enum gv_sample s)
+{
+    return s == GV_SAMPLE_U8 ? 1 : s == GV_SAMPLE_U16 ? 2 : 4;
+}
+
+/* Read `path` one way: 1 row, 7 rows, then the rest. */
+static struct result read_file(enum how how, const char *path,
+                               uint64_t max_pixels)
+{
+    struct result r;
+    memset(&r, 0, sizeof r);
+    struct any a;
+    if (any_open(&a, how, path, max_pixels, &r.info, &r.open_err) != 0)
+        return r;
+    r.opened = 1;
+    size_t row = (size_t)r.info.width * r.info.channels
+                 * sample_bytes(r.info.sample);
+    r.size = row * r.info.height;
+    r.pix = calloc(1, r.size ? r.size : 1);
+    if (!r.pix)
+        fail("out of memory");
+    uint32_t y = 0, h = r.info.height;
+    uint32_t steps[3] = {1, 7, 0};
+    r.read_ok = 1;
+    for (int k = 0; k < 3 && y < h; k++) {
+        uint32_t n = k < 2 ? steps[k] : h - y;
+        if (n > h - y)
+            n = h - y;
+        if (any_read(&a, n, r.pix + row * y, &r.read_err) != 0) {
+            r.read_ok = 0;
+            break;
+        }
+        y += n;
+    }
+    any_close(&a);
+    return r;
+}
+
+static int same_info(const struct gv_image_info *a,
+                     const struct gv_image_info *b)
+{
+    return a->width == b->width && a->height == b->height
+           && a->channels == b->channels && a->bits == b->bits
+           && a->sample == b->sample && strcmp(a->format, b->format) == 0;
+}
+
+/* Files the native readers must decline (the module reads them). */
+static int expect_declined(const char *name)
+{
+    return strcmp(name, "cmyk.jpg") == 0;
+}
+
+static void compare_file(const char *dir, const char *name)
+{
+    const char *path = path_in(dir, name);
+    struct result m = read_file(MODULE, path, 1ull << 32);
+    struct result n = read_file(NATIVE, path, 1ull << 32);
+    struct result l = read_file(LOADER, path, 1ull << 32);
+    check(m.opened && m.read_ok, "%s: the module reads it (%s%s)", name,
+          m.open_err.text, m.read_err.text);
+    if (expect_declined(name)) {
+        check(!n.opened && n.open_err.code == GV_OK,
+              "%s: declined by the native reader, without an error", name);
+    } else {
+        check(n.opened && n.read_ok, "%s: the native reader reads it (%s%s)",
+              name, n.open_err.text, n.read_err.text);
+        check(n.opened && same_info(&n.info, &m.info),
+              "%s: native info = the module's (%ux%u c%d b%d s%d %s vs "
+              "%ux%u c%d b%d s%d %s)", name, n.info.width, n.info.height,
+              n.info.channels, n.info.bits, (int)n.info.sample,
+              n.info.format, m.info.width, m.info.height, m.info.channels,
+              m.info.bits, (int)m.info.sample, m.info.format);
+        check(n.read_ok && m.read_ok && n.size == m.size
+                  && memcmp(n.pix, m.pix, m.size) == 0,
+              "%s: native bytes = the module's (%zu bytes)", name, m.size);
+    }
+    check(l.opened && l.read_ok && same_info(&l.info, &m.info)
+              && l.size == m.size && memcmp(l.pix, m.pix, m.size) == 0,
+          "%s: gv_image_open with native readers = the module", name);
+    result_free(&m);
+    result_free(&n);
+    result_free(&l);
+}
+
+static int by_name(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* Every .jpg and .png in dir, in name order. */
+static void compare_dir(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d)
+        fail("opendir %s: %s", dir, strerror(errno));
+    char *names[256];
+    size_t count = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL && count < 256)
+        if (ends_with(e->d_name, ".jpg") || ends_with(e->d_name, ".png"))
+            names[count++] = strdup(e->d_name);
+    closedir(d);
+    qsort(names, count, sizeof names[0], by_name);
+    check(count >= 2, "%s: %zu JPEG and PNG files to compare", dir, count);
+    for (size_t i = 0; i < count; i++) {
+        compare_file(dir, names[i]);
+        free(names[i]);
+    }
+}
+
+/* The comparison can fail: test-only decode settings give other bytes. */
+static void test_negative_controls(const char *dir)
+{
+    const char *files[] = {"s420.jpg", "rgb16.png"};
+    for (int k = 0; k < 2; k++) {
+        const char *path = path_in(dir, files[k]);
+        struct result m = read_file(MODULE, path, 1ull << 32);
+        if (k == 0)
+            gv_native_jpeg_test_mode(1);
+        else
+            gv_native_png_test_mode(1);
+        struct result n = read_file(NATIVE, path, 1ull << 32);
+        gv_native_jpeg_test_mode(0);
+        gv_native_png_test_mode(0);
+        check(m.read_ok && n.read_ok && n.size == m.size
+                  && memcmp(n.pix, m.pix, m.size) != 0,
+              "%s: a different decode setting (%s) gives different bytes",
+              files[k], k == 0 ? "fast DCT, no fancy upsampling"
+                               : "16-bit samples big-endian");
+        result_free(&m);
+        result_free(&n);
+    }
+}
+
+static uint8_t *slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        fail("%s: %s", path, strerror(errno));
+    uint8_t *p = malloc(1 << 20);
+    *len = fread(p, 1, 1 << 20, f);
+    fclose(f);
+    return p;
+}
+
+static void spill(const char *path, const uint8_t *p, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f || fwrite(p, 1, n, f) != n || fclose(f) != 0)
+        fail("%s: cannot write", path);
+}
+
+/* A damaged file must fail (or open and read) exactly as in the module:
+ * the same open result, the same read result, and a failure's code and
+ * "imageio: PATH: " prefix. */
+static int under_valgrind;
+
+static void compare_damaged(const char *path, const char *what)
+{
+    if (under_valgrind && ends_with(path, ".png")) {
+        /* OpenImageIO 2.4.7's PNG reader leaks a string on a file that
+         * ends early (tests/fuzz/fuzz_imageio.c), which valgrind counts:
+         * the native reader alone, which must fail cleanly or read. */
+        struct result n = read_file(NATIVE, path, 1ull << 32);
+        check(!n.opened ? n.open_err.code == GV_OK
+                        : n.read_ok || (n.read_err.code == GV_ECORRUPT
+                                        && starts_with(n.read_err.text,
+                                                       "imageio: ")),
+              "%s: the native reader declines, reads or fails cleanly "
+              "(under valgrind, without the module)", what);
+        result_free(&n);
+        return;
+    }
+    struct result m = read_file(MODULE, path, 1ull << 32);
+    struct result l = read_file(LOADER, path, 1ull << 32);
+    int same = m.opened == l.opened && m.read_ok == l.read_ok;
+    if (same && !m.opened)
+        same = l.open_err.code == m.open_err.code
+               && strcmp(l.open_err.text, m.open_err.text) == 0;
+    else if (same && !m.read_ok)
+        same = l.read_err.code == m.read_err.code
+               && l.read_err.code == GV_ECORRUPT
+               && starts_with(l.read_err.text, "imageio: ")
+               && strstr(l.read_err.text, path) != NULL;
+    else if (same)
+        same = same_info(&l.info, &m.info)
+               && memcmp(l.pix, m.pix, m.size) == 0;
+    check(same, "%s: as the module: open %d/%d read %d/%d (%s | %s%s)", what,
+          l.opened, m.opened, l.read_ok, m.read_ok,
+          l.opened ? l.read_err.text : l.open_err.text,
+          m.open_err.text, m.read_err.text);
+    result_free(&m);
+    result_free(&l);
+}
+
+static void test_truncated(const char *dir)
+{
+    const char *files[] = {"s420.jpg", "progressive.jpg", "gray.jpg",
+                           "restart.jpg", "rgb8.png", "rgb16.png",
+                           "palette4.png", "graya8.png",
+                           "rgb8-interlaced.png", "gray4-interlaced.png"};
+    /* Cut points in per mille of the length, and the last bytes. */
+    const int cuts[] = {5, 30, 200, 500, 800, 990};
+    for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
+        size_t len;
+        uint8_t *p = slurp(path_in(dir, files[f]), &len);
+        for (size_t c = 0; c <= sizeof cuts / sizeof cuts[0]; c++) {
+            size_t n = c < sizeof cuts / sizeof cuts[0]
+                           ? len * (size_t)cuts[c] / 1000 : len - 1;
+            char name[64];
+            snprintf(name, sizeof name, "cut-%zu-%s", n, files[f]);
+            const char *path = path_in(tmpdir, name);
+            spill(path, p, n);
+            char what[128];
+            snprintf(what, sizeof what, "%s cut to %zu of %zu bytes",
+                     files[f], n, len);
+            compare_damaged(path, what);
+            unlink(path);
+        }
+        free(p);
+    }
+}
+
+/* Bytes of the header flipped, and entropy-coded data overwritten. */
+static void test_corrupt(const char *dir)
+{
+    const char *files[] = {"s420.jpg", "progressive.jpg", "rgb8.png",
+                           "palette8-trns.png", "rgb8-interlaced.png"};
+    for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
+        size_t len;
+        uint8_t *p = slurp(path_in(dir, files[f]), &len);
+        uint64_t seed = 0x9e3779b97f4a7c15ull + f;
+        for (int k = 0; k < 12; k++) {
+            uint8_t *q = malloc(len);
+            memcpy(q, p, len);
+            /* the first 8 damage the header (after the magic), the rest
+             * the data */
+            size_t at = k < 8 ? 8 + test_rand(&seed) % 120
+                              : len / 3 + test_rand(&seed) % (len / 2);
+            size_t span = k < 8 ? 1 : 16;
+            for (size_t i = at; i < at + span && i < len; i++)
+                q[i] ^= (uint8_t)(1 + test_rand(&seed) % 255);
+            char name[64], what[128];
+            snprintf(name, sizeof name, "bad-%d-%s", k, files[f]);
+            const char *path = path_in(tmpdir, name);
+            spill(path, q, len);
+            snprintf(what, sizeof what, "%s with bytes %zu..%zu flipped",
+                     files[f], at, at + span - 1);
+            compare_damaged(path, what);
+            unlink(path);
+            free(q);
+        }
+        free(p);
+    }
+}
+
+/* A header claiming more than max_pixels: refused at open with the
+ * module's code and words, before any pixel buffer is allocated (the
+ * sizes here would need gigabytes). */
+static void test_huge(const char *dir)
+{
+    size_t len;
+    uint8_t *p = slurp(path_in(dir, "s420.jpg"), &len);
+    /* SOF0: FF C0, length, precision, height, width */
+    for (size_t i = 0; i + 9 < len; i++)
+        if (p[i] == 0xFF && p[i + 1] == 0xC0) {
+            p[i + 5] = 0xFF, p[i + 6] = 0x00;   /* height 65280 */
+            p[i + 7] = 0xFF, p[i + 8] = 0x00;   /* width 65280 */
+            break;
+        }
+    const char *jpg = path_in(tmpdir, "huge.jpg");
+    spill(jpg, p, len);
+    free(p);
+    p = slurp(path_in(dir, "rgb8.png"), &len);
+    /* IHDR's width and height at 16..23; its CRC at 29..32 */
+    const uint8_t wh[8] = {0, 0x0F, 0x42, 0x40, 0, 0x0F, 0x42, 0x40};
+    memcpy(p + 16, wh, 8);
+    uint32_t crc = 0xFFFFFFFFu;
+    for (size_t i = 12; i < 29; i++) {
+        crc ^= p[i];
+        for (int b = 0; b < 8; b++)
+            crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1)));
+    }
+    crc ^= 0xFFFFFFFFu;
+    p[29] = (uint8_t)(crc >> 24), p[30] = (uint8_t)(crc >> 16);
+    p[31] = (uint8_t)(crc >> 8), p[32] = (uint8_t)crc;
+    const char *png = path_in(tmpdir, "huge.png");
+    spill(png, p, len);
+    free(p);
+    const char *files[2] = {jpg, png};
+    for (int k = 0; k < 2; k++) {
+        struct result m = read_file(MODULE, files[k], 1u << 20);
+        struct result n = read_file(NATIVE, files[k], 1u << 20);
+        char want[4200];
+        snprintf(want, sizeof want, "imageio: %s: image of %s pixels exceeds "
+                 "the limit of 1048576 pixels", files[k],
+                 k == 0 ? "65280x65280" : "1000000x1000000");
+        check(!n.opened && n.open_err.code == GV_ELIMIT
+                  && !m.opened && m.open_err.code == GV_ELIMIT,
+              "%s claiming more than max_pixels: GV_ELIMIT, as the module",
+              k == 0 ? "JPEG" : "PNG");
+        check_str(n.open_err.text, want, "%s claiming more than max_pixels: "
+                  "the module's message", k == 0 ? "JPEG" : "PNG");
+        check_str(m.open_err.text, want, "%s claiming more than max_pixels: "
+                  "the module's own message", k == 0 ? "JPEG" : "PNG");
+        result_free(&m);
+        result_free(&n);
+        unlink(files[k]);
+    }
+}
+
+/* Reads past the last row, and after an error, fail as in the module. */
+static void test_misuse(const char *dir)
+{
+    const char *files[] = {"s444.jpg", "gray16.png"};
+    for (int k = 0; k < 2; k++) {
+        const char *path = path_in(dir, files[k]);
+        char got[2][2][400];
+        int rc[2][2];
+        for (int how = 0; how < 2; how++) {
+            struct any a;
+            struct gv_image_info info;
+            struct gv_error err;
+            if (any_open(&a, how == 0 ? MODULE : NATIVE, path, 1ull << 32,
+                         &info, &err) != 0)
+                fail("%s: %s", path, err.text);
+            size_t row = (size_t)info.width * info.channels
+                         * sample_bytes(info.sample);
+            uint8_t *buf = malloc(row * (info.height + 1));
+            rc[how][0] = any_read(&a, info.height + 1, buf, &err);
+            snprintf(got[how][0], sizeof got[how][0], "%d %s", (int)err.code,
+                     err.text);
+            rc[how][1] = any_read(&a, info.height, buf, &err);
+            any_close(&a);
+            free(buf);
+        }
+        check(rc[0][0] == -1 && rc[1][0] == -1
+                  && strcmp(got[0][0], got[1][0]) == 0,
+              "%s: a read past the last row fails as in the module (%s)",
+              files[k], got[1][0]);
+        check(rc[0][1] == 0 && rc[1][1] == 0,
+              "%s: after a refused read, the whole image still reads",
+              files[k]);
+    }
+}
+
+/* A FIFO named like a JPEG or PNG: refused as the module refuses it,
+ * without waiting for a writer (the test would hang). */
+static void test_fifo(void)
+{
+    const char *names[] = {"fifo.jpg", "fifo.png"};
+    for (int k = 0; k < 2; k++) {
+        const char *path = path_in(tmpdir, names[k]);
+        if (mkfifo(path, 0600) != 0)
+            fail("mkfifo %s: %s", path, strerror(errno));
+        struct result l = read_file(LOADER, path, 1u << 20);
+        char want[4200];
+        snprintf(want, sizeof want, "imageio: %s: not a regular file", path);
+        check(!l.opened && l.open_err.code == GV_EINVAL,
+              "%s: refused with GV_EINVAL", names[k]);
+        check_str(l.open_err.text, want, "%s: the module's message",
+                  names[k]);
+        result_free(&l);
+        unlink(path);
+    }
+}
+
+/* In a child without the module: JPEG and PNG read, declined files fail
+ * with the module's "cannot load" message.  Run before the parent loads
+ * the module. */
+static void test_without_module(const char *dir)
+{
+    pid_t pid = fork();
+    if (pid < 0)
+        fail("fork: %s", strerror(errno));
+    if (pid == 0) {
+        setenv("GV_OIIO_MODULE", "/nonexistent/gigaview-oiio.so", 1);
+        unsetenv("GIGAVIEW_NATIVE_READERS");
+        int bits = 0;
+        struct result r = read_file(LOADER, path_in(dir, "s420.jpg"), 1u << 20);
+        bits |= r.opened && r.read_ok ? 1 : 0;
+        result_free(&r);
+        r = read_file(LOADER, path_in(dir, "rgba16.png"), 1u << 20);
+        bits |= r.opened && r.read_ok ? 2 : 0;
+        result_free(&r);
+        r = read_file(LOADER, path_in(dir, "cmyk.jpg"), 1u << 20);
+        bits |= !r.opened && strstr(r.open_err.text, "cannot load the "
+                                    "OpenImageIO module") ? 4 : 0;
+        result_free(&r);
+        r = read_file(LOADER, path_in(dir, "rgb8-interlaced.png"), 1u << 20);
+        bits |= r.opened && r.read_ok ? 8 : 0;
+        result_free(&r);
+        /* a damaged header: IHDR's CRC */
+        size_t len;
+        uint8_t *p = slurp(path_in(dir, "rgb8.png"), &len);
+        p[30] ^= 0x55;
+        const char *bad = path_in(tmpdir, "bad-ihdr.png");
+        spill(bad, p, len);
+        free(p);
+        r = read_file(LOADER, bad, 1u << 20);
+        bits |= !r.opened && strstr(r.open_err.text, "cannot load the "
+                                    "OpenImageIO module") ? 16 : 0;
+        result_free(&r);
+        unlink(bad);
+        _exit(bits);
+    }
+    int st = 0;
+    if (waitpid(pid, &st, 0) != pid)
+        fail("waitpid: %s", strerror(errno));
+    int bits = WIFEXITED(st) ? WEXITSTATUS(st) : 0;
+    check(bits & 1, "without the module: a JPEG opens and reads");
+    check(bits & 2, "without the module: a PNG opens and reads");
+    check(bits & 4, "without the module: a CMYK JPEG is declined to it");
+    check(bits & 8, "without the module: an interlaced PNG opens and reads");
+    check(bits & 16, "without the module: a PNG with a damaged header is "
+          "declined to it");
+}
+
+int main(void)
+{
+    /* Under valgrind (make check VALGRIND=1), libjpeg-turbo's C code
+     * instead of its SIMD code: valgrind takes some SIMD lanes of the
+     * 1x2-subsampled file's last column for undefined (the padding they
+     * share a vector with), though its bytes are the C code's and do not
+     * change with MALLOC_PERTURB_.  Both sides of every comparison use the
+     * same libjpeg, so they stay comparable. */
+    const char *vg = getenv("VALGRIND");
+    under_valgrind = vg && *vg && strcmp(vg, "0") != 0;
+    if (under_valgrind)
+        setenv("JSIMD_FORCENONE", "1", 1);
+    datadir = getenv("TESTDATA");
+    if (!datadir)
+        datadir = "tests/data";
+    struct stat st;
+    if (stat(path_in(datadir, "LICENSES.md"), &st) != 0)
+        fail("test data not found in %s (set TESTDATA)", datadir);
+    const char *t = getenv("TMPDIR");
+    snprintf(tmpdir, sizeof tmpdir, "%s/gv-test-native-XXXXXX",
+             t && *t ? t : "/tmp");
+    if (!mkdtemp(tmpdir))
+        fail("mkdtemp %s: %s", tmpdir, strerror(errno));
+    char native[4096];
+    snprintf(native, sizeof native, "%s/native", datadir);
+
+    test_without_module(native);
+    compare_dir(datadir);
+    compare_dir(native);
+    test_negative_controls(native);
+    test_truncated(native);
+    test_corrupt(native);
+    test_huge(native);
+    test_misuse(native);
+    test_fifo();
+
+    rmdir(tmpdir);
+    return tap_done();
+}
