@@ -202,6 +202,20 @@ expect_err_is "file size limit: the scratch file is too large" \
     "gigaview encode: spill: writing the scratch file in $out: File too large"
 check "file size limit: nothing left in the output directory" test -z "$(listing "$out")"
 
+# The same for a shard, whose scratch file is sized once at the start
+# (fault_disk_full.sh fills a real disk during a shard's pass 1).
+(
+    trap '' XFSZ
+    ulimit -f 200
+    gv encode "$jpg" --shard 0/2 -o "$out/x.gvshard" >"$T/out" 2>"$T/err"
+)
+rc=$?
+expect_rc "file size limit, a shard" 1
+expect_err_is "file size limit, a shard: the scratch file is too large" \
+    "gigaview encode: spill: writing the scratch file in $out: File too large"
+check "file size limit, a shard: nothing left in the output directory" \
+    test -z "$(listing "$out")"
+
 # --tmpdir that does not exist.
 run encode "$jpg" --tmpdir "$T/nothere" -o "$out/x.gv"
 expect_rc "--tmpdir that does not exist" 1

@@ -10,6 +10,7 @@
 #  - the scratch file does not fit (--tmpdir on the small mount);
 #  - neither has room (no --tmpdir: the scratch file lives beside the
 #    output);
+#  - a shard's scratch file does not fit (written by another thread);
 #  - a good store already at the output path, and no room for the new
 #    one: the old store is untouched;
 #  - another process fills the disk while the encode runs (a writer
@@ -102,6 +103,14 @@ with_mount 8m
 run encode $img $args -o "$M/x.gv"
 full_case "neither fits (8 MiB, scratch beside the output)" "$no_space_spill" \
     "$no_space_store"
+
+# A shard's scratch file is sized at the start, a hole that takes no
+# blocks; its level-0 rows are then written by pass 1's reducing thread
+# (a whole encode's by the reading one), so the full disk is found there
+# and the error has to cross to the encoder's thread.
+with_mount 8m
+run encode $img $args --shard 0/2 --tmpdir "$M" -o "$T/elsewhere/x.gvshard"
+full_case "a shard's scratch file does not fit (8 MiB --tmpdir)" "$no_space_spill"
 
 # Room for the old store but not for a second, larger one: the mount holds
 # the old store and half of the new one (both sizes measured, so no codec
