@@ -19,9 +19,8 @@
  * of its pages unencoded: every tile it encodes has its parent among them
  * too, so what it reads from the holes is never used.
  *
- * Threads: pass 1 is a pipeline of three (the input read and level 0
- * stored, level 0 reduced and modelled, the levels above; see struct
- * pipeline); pass 2 codes each page's
+ * Threads: pass 1 reads the input on a thread of its own while the
+ * encoder's thread reduces and stores the rows; pass 2 codes each page's
  * tiles on the pool, while one more thread packs the root's lossless WebP
  * (which depends only on the root's pixels) for finish_store.
  */
@@ -133,16 +132,14 @@ static void report(struct encoder *e, const char *phase, double fraction)
 static int push_row(struct encoder *e, int k, const uint8_t *row);
 
 /* Store row `rows_out[k]` of level k in the scratch file: all of it, or
- * for a shard the runs of columns that its tiles of level k cover; a
- * failure is told in *err (the reducer thread has its own). */
-static int store_row(struct encoder *e, int k, const uint8_t *row,
-                     struct gv_error *err)
+ * for a shard the runs of columns that its tiles of level k cover. */
+static int store_row(struct encoder *e, int k, const uint8_t *row)
 {
     const struct gv_level *l = &e->g.level[k];
     const size_t rb = (size_t)l->width * e->c;
     const uint64_t at = e->orig_base[k] + (uint64_t)e->rows_out[k] * rb;
     if (!e->sharded || k == e->g.root)
-        return gv_spill_write(e->spill, row, rb, at, err);
+        return gv_spill_write(e->spill, row, rb, at, e->err);
     /* Row y is in tile row y/512, and is row 512 of the tile row above
      * when y is a multiple of 512. */
     const uint32_t y = e->rows_out[k], ta = y / GV_STEP;
@@ -163,7 +160,7 @@ static int store_row(struct encoder *e, int k, const uint8_t *row,
                 x1 = l->width;
             if (gv_spill_write(e->spill, row + (size_t)x0 * e->c,
                                (size_t)(x1 - x0) * e->c, at + (uint64_t)x0 * e->c,
-                               err) < 0)
+                               e->err) < 0)
                 return -1;
             in_run = 0;
         }
@@ -186,7 +183,7 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
 {
     const struct gv_level *l = &e->g.level[k];
     const size_t rb = (size_t)l->width * e->c;
-    if (!(k == 0 && e->level0_stored) && store_row(e, k, row, e->err) < 0)
+    if (!(k == 0 && e->level0_stored) && store_row(e, k, row) < 0)
         return -1;
     e->rows_out[k]++;
     if (k == e->g.root)
@@ -200,71 +197,43 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
     return emit_reduced(e, k, e->pending[k], row);
 }
 
-/* Pass 1 runs as a pipeline of three threads, each chunk of input rows
- * passing through two buffers of CHUNK_BYTES / 2 (the memory of one chunk
- * before):
- *
- *   reader    decodes the next chunk of rows and, unless the encoder is a
- *             shard (which keeps only its tiles' columns), writes them to
- *             level 0 of the scratch file, where they lie end to end;
- *   reducer   reduces the chunk's pairs of rows to level 1 (box filter)
- *             and feeds level 0's lambda model, then hands the chunk back
- *             to the reader and its level-1 rows on;
- *   encoder's thread  pushes the level-1 rows up the pyramid (storing,
- *             reducing and modelling levels 1 and up).
- *
- * Level 0 is three quarters of the pyramid, so splitting its work from the
- * rest lets a second core take it where the input is cheap to decode (a
- * tiled TIFF); where decoding bounds the pass (a JPEG), nothing changes.
- * A chunk is ready when rows[slot] > 0, its level-1 rows when
- * up_ready[slot]; each consumer clears what it took.  One lock and one
- * condition serve all three. */
-struct pipeline {
-    struct encoder *e;
+/* Pass 1's input reader: a thread that decodes the next chunk of rows
+ * while the encoder's thread reduces and stores the previous one, in two
+ * buffers of CHUNK_BYTES / 2 (the memory of one chunk before).  A chunk
+ * is ready when rows[slot] > 0; the consumer sets it back to 0.  Unless
+ * the encoder is a shard (which keeps only its tiles' columns), the
+ * reader also writes the chunk's rows to level 0 of the scratch file
+ * (where they lie end to end) in writes of about 64 KiB.  That takes the
+ * largest copy off
+ * the encoder's thread, which bounds pass 1 on an input that is cheap to
+ * decode (a 54 MP uncompressed tiled TIFF: the whole encode 1.28 -> 1.20 s,
+ * best of 4, bench/README.md 2026-11-26 "encoder, pass 1 and 2"). */
+struct reader {
     struct gv_source *src;
-    struct gv_spill *spill;   /* NULL: the reducer stores level 0 */
+    struct gv_spill *spill;   /* NULL: the encoder's thread stores level 0 */
     uint64_t base;            /* level 0's offset in the scratch file */
-    size_t row_bytes, up_bytes;
+    size_t row_bytes;
     uint32_t chunk, height;
-    uint8_t *buf[2];          /* input rows */
+    uint8_t *buf[2];
     uint32_t rows[2];
-    uint8_t *up[2];           /* their level-1 rows */
-    uint32_t up_rows[2], up_src[2];
-    int up_ready[2];
-    int failed, stop;         /* a thread failed (err says why); stop all */
+    int failed, stop;
     struct gv_error err;
     pthread_mutex_t mu;
     pthread_cond_t cv;
 };
 
-/* Wait (locked) until cond or p->failed or p->stop; returns 0 when cond. */
-#define WAIT_FOR(p, cond)                                                     \
-    do {                                                                      \
-        while (!(cond) && !(p)->failed && !(p)->stop)                          \
-            pthread_cond_wait(&(p)->cv, &(p)->mu);                             \
-    } while (0)
-
-static void pipeline_fail(struct pipeline *p, const struct gv_error *err)
-{
-    pthread_mutex_lock(&p->mu);
-    if (!p->failed)
-        p->err = *err;
-    p->failed = 1;
-    pthread_cond_broadcast(&p->cv);
-    pthread_mutex_unlock(&p->mu);
-}
-
 static void *reader_main(void *arg)
 {
-    struct pipeline *r = arg;
+    struct reader *r = arg;
     int slot = 0;
     for (uint32_t y = 0; y < r->height; y += r->chunk, slot ^= 1) {
         const uint32_t n = r->height - y < r->chunk ? r->height - y : r->chunk;
         pthread_mutex_lock(&r->mu);
-        WAIT_FOR(r, !r->rows[slot]);
-        const int go = !r->failed && !r->stop;
+        while (r->rows[slot] && !r->stop)
+            pthread_cond_wait(&r->cv, &r->mu);
+        const int stop = r->stop;
         pthread_mutex_unlock(&r->mu);
-        if (!go)
+        if (stop)
             break;
         struct gv_error err;
         int rc = gv_source_read(r->src, n, r->buf[slot], &err);
@@ -277,84 +246,17 @@ static void *reader_main(void *arg)
             rc = gv_spill_write(r->spill, r->buf[slot] + (size_t)i * r->row_bytes,
                                 (size_t)(n - i < piece ? n - i : piece) * r->row_bytes,
                                 r->base + (uint64_t)(y + i) * r->row_bytes, &err);
-        if (rc < 0) {
-            pipeline_fail(r, &err);
-            break;
-        }
         pthread_mutex_lock(&r->mu);
-        r->rows[slot] = n;
+        if (rc < 0) {
+            r->err = err;
+            r->failed = 1;
+        } else {
+            r->rows[slot] = n;
+        }
         pthread_cond_broadcast(&r->cv);
         pthread_mutex_unlock(&r->mu);
-    }
-    return NULL;
-}
-
-/* Level 0's share of push_row for the pair (r0, r1): the level-1 row into
- * out, and level 0's model. */
-static void reduce_pair(struct encoder *e, const uint8_t *r0, const uint8_t *r1,
-                        uint8_t *out)
-{
-    gv_box_reduce_row(r0, r1, e->g.level[0].width, e->c, out);
-    if (!e->opts->per_tile)
-        gv_lambda_model_rows(&e->model[0], r0, r1, out);
-}
-
-static void *reducer_main(void *arg)
-{
-    struct pipeline *p = arg;
-    struct encoder *e = p->e;
-    const size_t rb = p->row_bytes;
-    int slot = 0;
-    for (uint32_t y = 0; y < p->height; slot ^= 1) {
-        pthread_mutex_lock(&p->mu);
-        WAIT_FOR(p, p->rows[slot] && !p->up_ready[slot]);
-        const int go = !p->failed && !p->stop;
-        const uint32_t n = p->rows[slot];
-        pthread_mutex_unlock(&p->mu);
-        if (!go)
+        if (rc < 0)
             break;
-        const uint8_t *in = p->buf[slot];
-        uint8_t *out = p->up[slot];
-        uint32_t nout = 0;
-        struct gv_error err;
-        for (uint32_t r = 0; r < n; r++) {
-            const uint8_t *row = in + (size_t)r * rb;
-            if (!e->level0_stored && store_row(e, 0, row, &err) < 0) {
-                pipeline_fail(p, &err);
-                return NULL;
-            }
-            e->rows_out[0]++;
-            if (e->have_pending[0]) {
-                e->have_pending[0] = 0;
-                reduce_pair(e, e->pending[0], row, out + nout++ * p->up_bytes);
-            } else if (r + 1 < n) {
-                /* Both rows in the chunk: no copy. */
-                if (!e->level0_stored && store_row(e, 0, row + rb, &err) < 0) {
-                    pipeline_fail(p, &err);
-                    return NULL;
-                }
-                e->rows_out[0]++;
-                reduce_pair(e, row, row + rb, out + nout++ * p->up_bytes);
-                r++;
-            } else {
-                memcpy(e->pending[0], row, rb);
-                e->have_pending[0] = 1;
-            }
-        }
-        y += n;
-        /* Odd heights: the last row pairs with itself. */
-        if (y == p->height && e->have_pending[0]) {
-            e->have_pending[0] = 0;
-            reduce_pair(e, e->pending[0], e->pending[0],
-                        out + nout++ * p->up_bytes);
-        }
-        pthread_mutex_lock(&p->mu);
-        p->rows[slot] = 0;
-        p->up_rows[slot] = nout;
-        p->up_src[slot] = n;
-        p->up_ready[slot] = 1;
-        pthread_cond_broadcast(&p->cv);
-        pthread_mutex_unlock(&p->mu);
     }
     return NULL;
 }
@@ -365,10 +267,10 @@ static int pass1(struct encoder *e, struct gv_source *src)
     const size_t rb0 = (size_t)g->width * e->c;
     uint32_t chunk = (uint32_t)(CHUNK_BYTES / 2 / rb0);
     /* At least eight chunks (of 64 rows or more) on an image whose rows
-     * would fill fewer: each stage waits for the one before it at the
-     * start and the one after it at the end, so a third of the image in
-     * each chunk (an 8 MP photograph) left a thread idle for a third of
-     * the pass. */
+     * would fill fewer: the encoder's thread waits for the reader's first
+     * chunk, and the reader for the encoder's last, so a third of the
+     * image in each (an 8 MP photograph) left a thread idle for a third
+     * of the pass. */
     const uint32_t eighth = (g->height + 7) / 8;
     if (chunk > eighth)
         chunk = eighth < 64 ? 64 : eighth;
@@ -376,28 +278,23 @@ static int pass1(struct encoder *e, struct gv_source *src)
         chunk = 1;
     if (chunk > g->height)
         chunk = g->height;
-    struct pipeline p = {.e = e, .src = src, .chunk = chunk, .height = g->height,
-                         .spill = e->sharded ? NULL : e->spill,
-                         .base = e->orig_base[0], .row_bytes = rb0,
-                         .up_bytes = g->root > 0 ? (size_t)g->level[1].width * e->c : 0};
+    struct reader rd = {.src = src, .chunk = chunk, .height = g->height,
+                        .spill = e->sharded ? NULL : e->spill,
+                        .base = e->orig_base[0], .row_bytes = rb0};
     e->level0_stored = !e->sharded;
-    int rc = -1, readers = 0, reducers = 0;
-    pthread_mutex_init(&p.mu, NULL);
-    pthread_cond_init(&p.cv, NULL);
-    pthread_t reader, reducer;
+    int rc = -1, started = 0;
+    pthread_mutex_init(&rd.mu, NULL);
+    pthread_cond_init(&rd.cv, NULL);
+    pthread_t thread;
     /* The chunk's halves live in pass 2's page window, unused until
      * then, so that memory the process has faulted in once serves both
      * passes (each half is at most CHUNK_BYTES / 2, and the window holds
      * 4097^2 x C bytes, more than CHUNK_BYTES); only rows wider than the
      * window's half get memory of their own. */
     const int own = 2 * (size_t)chunk * rb0 > (size_t)WINDOW * WINDOW * e->c;
-    p.buf[0] = own ? malloc((size_t)chunk * rb0) : e->window;
-    p.buf[1] = own ? malloc((size_t)chunk * rb0) : e->window + (size_t)chunk * rb0;
-    /* A chunk's level-1 rows: its pairs, and one more for a row left
-     * from the chunk before or the last row of an odd height. */
-    for (int i = 0; i < 2 && g->root > 0; i++)
-        p.up[i] = malloc((chunk / 2 + 2) * p.up_bytes);
-    if (!p.buf[0] || !p.buf[1] || (g->root > 0 && (!p.up[0] || !p.up[1]))) {
+    rd.buf[0] = own ? malloc((size_t)chunk * rb0) : e->window;
+    rd.buf[1] = own ? malloc((size_t)chunk * rb0) : e->window + (size_t)chunk * rb0;
+    if (!rd.buf[0] || !rd.buf[1]) {
         gv_fail(e->err, GV_ENOMEM, "encode: out of memory for input rows");
         goto out;
     }
@@ -410,65 +307,35 @@ static int pass1(struct encoder *e, struct gv_source *src)
             goto out;
         }
     }
-    if (pthread_create(&reader, NULL, reader_main, &p) != 0) {
+    if (pthread_create(&thread, NULL, reader_main, &rd) != 0) {
         gv_fail(e->err, GV_ENOMEM, "encode: cannot start the input reader");
         goto out;
     }
-    readers = 1;
-    if (g->root == 0) {
-        /* A single tile: level 0 is the root, nothing to reduce. */
-        int slot = 0;
-        for (uint32_t y = 0; y < g->height; slot ^= 1) {
-            pthread_mutex_lock(&p.mu);
-            WAIT_FOR(&p, p.rows[slot]);
-            const uint32_t n = p.failed ? 0 : p.rows[slot];
-            if (!n)
-                *e->err = p.err;
-            pthread_mutex_unlock(&p.mu);
-            if (!n)
-                goto out;
-            for (uint32_t r = 0; r < n; r++)
-                if (push_row(e, 0, p.buf[slot] + (size_t)r * rb0) < 0)
-                    goto out;
-            pthread_mutex_lock(&p.mu);
-            p.rows[slot] = 0;
-            pthread_cond_broadcast(&p.cv);
-            pthread_mutex_unlock(&p.mu);
-            y += n;
-            report(e, "pyramid", PASS1_SHARE * (double)y / g->height);
-        }
-        rc = 0;
-        goto out;
-    }
-    if (pthread_create(&reducer, NULL, reducer_main, &p) != 0) {
-        gv_fail(e->err, GV_ENOMEM, "encode: cannot start the reducer");
-        goto out;
-    }
-    reducers = 1;
+    started = 1;
     int slot = 0;
     for (uint32_t y = 0; y < g->height; slot ^= 1) {
-        pthread_mutex_lock(&p.mu);
-        WAIT_FOR(&p, p.up_ready[slot]);
-        if (p.failed) {
-            *e->err = p.err;
-            pthread_mutex_unlock(&p.mu);
+        pthread_mutex_lock(&rd.mu);
+        while (!rd.rows[slot] && !rd.failed)
+            pthread_cond_wait(&rd.cv, &rd.mu);
+        const uint32_t n = rd.rows[slot];
+        if (!n) {
+            *e->err = rd.err;
+            pthread_mutex_unlock(&rd.mu);
             goto out;
         }
-        const uint32_t nout = p.up_rows[slot], n = p.up_src[slot];
-        pthread_mutex_unlock(&p.mu);
-        for (uint32_t r = 0; r < nout; r++)
-            if (push_row(e, 1, p.up[slot] + (size_t)r * p.up_bytes) < 0)
+        pthread_mutex_unlock(&rd.mu);
+        for (uint32_t r = 0; r < n; r++)
+            if (push_row(e, 0, rd.buf[slot] + (size_t)r * rb0) < 0)
                 goto out;
-        pthread_mutex_lock(&p.mu);
-        p.up_ready[slot] = 0;
-        pthread_cond_broadcast(&p.cv);
-        pthread_mutex_unlock(&p.mu);
+        pthread_mutex_lock(&rd.mu);
+        rd.rows[slot] = 0;
+        pthread_cond_broadcast(&rd.cv);
+        pthread_mutex_unlock(&rd.mu);
         y += n;
         report(e, "pyramid", PASS1_SHARE * (double)y / g->height);
     }
-    /* Odd heights: the last row of a level pairs with itself (level 0's
-     * in the reducer). */
-    for (int k = 1; k < g->root; k++)
+    /* Odd heights: the last row of a level pairs with itself. */
+    for (int k = 0; k < g->root; k++)
         if (e->have_pending[k]) {
             e->have_pending[k] = 0;
             if (emit_reduced(e, k, e->pending[k], e->pending[k]) < 0)
@@ -476,22 +343,19 @@ static int pass1(struct encoder *e, struct gv_source *src)
         }
     rc = 0;
 out:
-    pthread_mutex_lock(&p.mu);
-    p.stop = 1;
-    pthread_cond_broadcast(&p.cv);
-    pthread_mutex_unlock(&p.mu);
-    if (reducers)
-        pthread_join(reducer, NULL);
-    if (readers)
-        pthread_join(reader, NULL);
-    if (own) {
-        free(p.buf[0]);
-        free(p.buf[1]);
+    if (started) {
+        pthread_mutex_lock(&rd.mu);
+        rd.stop = 1;
+        pthread_cond_broadcast(&rd.cv);
+        pthread_mutex_unlock(&rd.mu);
+        pthread_join(thread, NULL);
     }
-    free(p.up[0]);
-    free(p.up[1]);
-    pthread_cond_destroy(&p.cv);
-    pthread_mutex_destroy(&p.mu);
+    if (own) {
+        free(rd.buf[0]);
+        free(rd.buf[1]);
+    }
+    pthread_cond_destroy(&rd.cv);
+    pthread_mutex_destroy(&rd.mu);
     return rc;
 }
 
