@@ -10,7 +10,8 @@
 #  - the scratch file does not fit (--tmpdir on the small mount);
 #  - neither has room (no --tmpdir: the scratch file lives beside the
 #    output);
-#  - a shard's scratch file does not fit (written by another thread);
+#  - a shard's scratch file does not fit (level 0 written by another
+#    thread than a whole encode's);
 #  - a good store already at the output path, and no room for the new
 #    one: the old store is untouched;
 #  - another process fills the disk while the encode runs (a writer
@@ -105,9 +106,9 @@ full_case "neither fits (8 MiB, scratch beside the output)" "$no_space_spill" \
     "$no_space_store"
 
 # A shard's scratch file is sized at the start, a hole that takes no
-# blocks; its level-0 rows are then written by pass 1's reducing thread
-# (a whole encode's by the reading one), so the full disk is found there
-# and the error has to cross to the encoder's thread.
+# blocks; its level-0 rows are then written by the encoder's thread (a
+# whole encode's by pass 1's reading thread), so the full disk is found
+# in another place than above.
 with_mount 8m
 run encode $img $args --shard 0/2 --tmpdir "$M" -o "$T/elsewhere/x.gvshard"
 full_case "a shard's scratch file does not fit (8 MiB --tmpdir)" "$no_space_spill"
