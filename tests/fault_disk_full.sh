@@ -55,9 +55,12 @@ used_kb() {
 # about 2 x 3 bytes per pixel, 54 MB.
 img=synth:3000x3000
 args="-r 3 -q 32 --quiet"
+t0=$(date +%s.%N)
 run encode $img $args -o "$T/ref.gv"
+t1=$(date +%s.%N)
 [ "$rc" -eq 0 ] || bail "reference encode: $(cat "$T/err")"
-diag "the store is $(wc -c <"$T/ref.gv" | tr -d ' ') bytes"
+ref_s=$(echo "$t0 $t1" | awk '{ printf "%.3f", $2 - $1 }')
+diag "the store is $(wc -c <"$T/ref.gv" | tr -d ' ') bytes, encoded in ${ref_s}s"
 
 # The two messages of a full disk: the store or the scratch file.
 no_space_store="gigaview encode: store: writing $M/x.gv: No space left on device"
@@ -137,10 +140,12 @@ expect_rc "over an old one: the old store still opens" 0
 # for everything (scratch 54 MB + store) with 40 MB to spare; after a
 # random delay inside the encode, dd takes every free block.  Five runs;
 # each must either fail cleanly for lack of space or, if it finished
-# before dd got going, have written the whole store.
+# before dd got going, have written the whole store.  The delays fall in
+# the first 5 to 60 % of the reference encode's time (fixed delays of
+# 0.1 to 0.9 s missed most of a faster encoder's run).
 seed=${GV_FAULT_SEED:-$(date +%s)}
 diag "filler delays seed $seed"
-delays=$(awk -v s="$seed" 'BEGIN { srand(s); for (i = 0; i < 5; i++) printf "%.2f\n", 0.1 + rand() * 0.8 }')
+delays=$(awk -v s="$seed" -v d="$ref_s" 'BEGIN { srand(s); for (i = 0; i < 5; i++) printf "%.3f\n", d * (0.05 + rand() * 0.55) }')
 failed=0
 for delay in $delays; do
     with_mount 96m
