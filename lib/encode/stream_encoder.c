@@ -199,8 +199,7 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
 
 /* push_row of level-0 rows r0 and r1 in turn when no row is pending and
  * both lie in the input chunk: the pair is reduced where it is, without
- * the copy of r0 that push_row keeps for a pair split between chunks
- * (that copy was a tenth of pass 1 on a 1 GP mosaic). */
+ * the copy of r0 that push_row keeps for a pair split between chunks. */
 static int push_pair0(struct encoder *e, const uint8_t *r0, const uint8_t *r1)
 {
     if (!e->level0_stored) {

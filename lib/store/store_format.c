@@ -162,8 +162,9 @@ uint64_t gv_root_pixels_size(uint32_t w, uint32_t h, int channels)
 /* gv_box_reduce_row for a channel count known at compile time (1 or 3,
  * always_inline), in two steps that the compiler vectorizes: the columns'
  * sums of the two rows in 16 bits, 64 pixels at a time, then the pairs of
- * them.  The same sums as the one-step formula; 2.5 times faster on the
- * rows of a 1 GP mosaic, where pass 1 spent 12 % of its time here. */
+ * them.  The same sums as the one-step formula, 1.7 times faster (perf:
+ * 3.6 -> 2.1 % of a 54 MP mosaic's encode; 12 % of a 1 GP one's pass 1
+ * was here). */
 __attribute__((always_inline)) static inline void
 box_reduce_row_c(const uint8_t *r0, const uint8_t *r1, uint32_t sw,
                  const int c, uint8_t *dst)
