@@ -157,7 +157,7 @@ for f in "${inputs[@]}"; do
 	printf "$fmt" "${name:0:34}" "$mp" "$bv" "$sv" "$(maxof "${rv[@]}")" "$bg" "$sg" "$(maxof "${rg[@]}")" "${ratio}x"
 	bcv=$(best "${cv[@]}"); bcg=$(best "${cg[@]}")
 	cpu_lines+=("$(printf '%-34s %7s %8s %8s %8s' "${name:0:34}" "$mp" "$bcv" "$bcg" \
-		"$(awk -v v="$bcv" -v g="$bcg" 'BEGIN { printf "%.2fx", v / g }')")$( [ -n "$BASE" ] && \
+		"$(awk -v v="$bcv" -v g="$bcg" 'BEGIN { printf "%.2fx", v / g }')")$( [ -z "$BASE" ] || \
 		awk -v b="$(best "${cb[@]}")" -v g="$bcg" 'BEGIN { printf " %8s %9.2fx", b, b / g }')")
 	if [ -n "$BASE" ]; then
 		bb=$(best "${tb[@]}")
