@@ -221,8 +221,7 @@ static int push_pair0(struct encoder *e, const uint8_t *r0, const uint8_t *r1)
  * is ready when rows[slot] > 0; the consumer sets it back to 0.  Unless
  * the encoder is a shard (which keeps only its tiles' columns), the
  * reader also writes the chunk's rows to level 0 of the scratch file
- * (where they lie end to end) in writes of about 64 KiB.  That takes the
- * largest copy off
+ * (where they lie end to end).  That takes the largest copy off
  * the encoder's thread, which bounds pass 1 on an input that is cheap to
  * decode (a 54 MP uncompressed tiled TIFF: the whole encode 1.28 -> 1.20 s,
  * best of 4, bench/README.md 2026-11-26 "encoder, pass 1 and 2"). */
@@ -255,16 +254,10 @@ static void *reader_main(void *arg)
             break;
         struct gv_error err;
         int rc = gv_source_read(r->src, n, r->buf[slot], &err);
-        /* In pieces of 64 KiB (the rows lie end to end in both): one
-         * write of a whole chunk (8 MiB) took the kernel seven times as
-         * long to copy (perf, a 54 MP tiled TIFF: 15 % of the encode
-         * against 2 %), and a write per row of 127 KiB (a 1 GP mosaic)
-         * six times. */
-        const size_t bytes = (size_t)n * r->row_bytes, piece = 64u << 10;
-        for (size_t i = 0; rc == 0 && r->spill && i < bytes; i += piece)
-            rc = gv_spill_write(r->spill, r->buf[slot] + i,
-                                bytes - i < piece ? bytes - i : piece,
-                                r->base + (uint64_t)y * r->row_bytes + i, &err);
+        /* The rows lie end to end in the chunk and in the file. */
+        if (rc == 0 && r->spill)
+            rc = gv_spill_write(r->spill, r->buf[slot], (size_t)n * r->row_bytes,
+                                r->base + (uint64_t)y * r->row_bytes, &err);
         pthread_mutex_lock(&r->mu);
         if (rc < 0) {
             r->err = err;
