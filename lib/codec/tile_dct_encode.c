@@ -551,19 +551,9 @@ static double quantize_count(const struct gv_dct_workspace *ws,
     return sse;
 }
 
-static inline int token_of(int q)
-{
-    if (q == 0)
-        return 0;
-    if (q > 0 && q <= 7)
-        return 2 * q - 1;
-    if (q < 0 && q >= -7)
-        return -2 * q;
-    return GV_DCT_ESCAPE;
-}
-
 /* Visit every symbol of block row `by` in stream order: fn(model, symbol)
- * with model -1 for a uniform step. */
+ * with model -1 for a uniform step.  Tokens and classes from tc[], as
+ * quantize_count counts them. */
 #define WALK_ROW(cd, channels, by, EMIT)                                      \
     do {                                                                      \
         int pe_[3] = {0, 0, 0}, dcp_[3] = {0, 0, 0};                          \
@@ -575,17 +565,16 @@ static inline int token_of(int q)
                 EMIT(3 * cc_ + pe_[c_], n_);                                  \
                 int p_ = dcp_[c_];                                            \
                 for (int k_ = 0; k_ < n_; k_++) {                             \
-                    const int t_ = token_of(q_[k_]);                          \
+                    const int e_ = q_[k_] + 2048, y_ = tc[e_], t_ = y_ & 15;  \
                     EMIT(GV_DCT_EOB_MODELS + 12 * cc_ + gv_dct_band_model[k_] + p_, t_); \
                     if (t_ == GV_DCT_ESCAPE) {                                \
-                        const int e_ = q_[k_] + 2048;                         \
                         EMIT(-1, e_ >> 6);                                    \
                         EMIT(-1, e_ & 63);                                    \
                     }                                                         \
-                    p_ = gv_dct_class(q_[k_]);                                   \
+                    p_ = y_ >> 4;                                             \
                 }                                                             \
                 pe_[c_] = n_ == 0 ? 0 : (n_ <= 4 ? 1 : 2);                    \
-                dcp_[c_] = n_ ? gv_dct_class(q_[0]) : 0;                         \
+                dcp_[c_] = n_ ? tc[q_[0] + 2048] >> 4 : 0;                    \
             }                                                                 \
         }                                                                     \
     } while (0)
