@@ -1,9 +1,11 @@
 #!/bin/sh
-# make-variants.sh - regenerates the JPEG and PNG variants in this folder
-# (tests/test_native_read.c reads each with the native readers and with
-# the OpenImageIO module and compares).  Run from the repository root;
-# needs vips (libvips-tools), cjpeg and jpegtran (libjpeg-turbo-progs) and
-# python3.  The pixels are a 61x45 crop of tests/data/seeding-700x520.png.
+# make-variants.sh - regenerates the JPEG, PNG and TIFF variants in this
+# folder (tests/test_native_read.c reads each with the native readers and
+# with the OpenImageIO module and compares).  Run from the repository root;
+# needs vips (libvips-tools), cjpeg and jpegtran (libjpeg-turbo-progs),
+# ppm2tiff, tiffcp, tiffmedian and tiffset (libtiff-tools) and python3.
+# The pixels are a 61x45 crop of tests/data/seeding-700x520.png (the
+# TIFFs: a 37x29 one).
 set -eu
 out=tests/data/native
 t=$(mktemp -d)
