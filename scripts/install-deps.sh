@@ -20,6 +20,9 @@ PACKAGES="$PACKAGES gdal-bin"
 PACKAGES="$PACKAGES xvfb weston"
 # libjpeg-turbo and libpng: the native JPEG and PNG readers (lib/imageio).
 PACKAGES="$PACKAGES libjpeg62-turbo-dev libpng-dev"
+# libtiff: the native TIFF reader (lib/imageio); its tools (tiffcp) make
+# tests/data/native's TIFF variants.
+PACKAGES="$PACKAGES libtiff-dev libtiff-tools"
 
 # bench/*.sh and conf/: nginx (http-tiles, http-iiif), wrk, curl and jq
 # (http-*), iipsrv behind spawn-fcgi (http-iiif), vips (encode-speed,

@@ -116,11 +116,12 @@ bad_case_re "mosaic with one damaged tile" \
     "^gigaview encode: imageio: $in/trunc\\.jpg: JPEG error: " -m 2x1 "$jpg" "$in/trunc.jpg"
 
 # ------------------------------------------------- the OpenImageIO module
-# Image files other than JPEG and PNG (those have native readers) are
-# read through gigaview-oiio.so, loaded on first use
-# (lib/imageio/imageio_loader.c): without it such a file is refused in
-# one line that says so, and what needs no module still works.
-tif="$TESTDATA/seeding-300x200-striped.tif"
+# Image files the native readers do not take (JPEG, PNG and 8/16-bit
+# TIFF have them; a 12-bit TIFF is declined) are read through
+# gigaview-oiio.so, loaded on first use (lib/imageio/imageio_loader.c):
+# without it such a file is refused in one line that says so, and what
+# needs no module still works.
+tif="$TESTDATA/gradient-64x4-u12.tif"
 export GV_OIIO_MODULE="$T/no-such-module.so"
 bad_case_re "the OpenImageIO module missing" \
     "^gigaview encode: imageio: cannot load the OpenImageIO module: .*no-such-module\\.so" "$tif"
@@ -130,6 +131,8 @@ run encode "$jpg" -o "$T/jpg-no-module.gv" --quiet
 expect_rc "the OpenImageIO module missing: a JPEG needs none" 0
 run encode "$png" -o "$T/png-no-module.gv" --quiet
 expect_rc "the OpenImageIO module missing: a PNG needs none" 0
+run encode "$TESTDATA/seeding-300x200-tiled.tif" -o "$T/tif-no-module.gv" --quiet
+expect_rc "the OpenImageIO module missing: an 8-bit tiled TIFF needs none" 0
 GIGAVIEW_NATIVE_READERS=0 bad_case_re "the OpenImageIO module missing, GIGAVIEW_NATIVE_READERS=0" \
     "^gigaview encode: imageio: cannot load the OpenImageIO module: .*no-such-module\\.so" "$jpg"
 GV_OIIO_MODULE="$T" bad_case_re "a directory as the OpenImageIO module" \

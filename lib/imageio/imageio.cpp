@@ -59,9 +59,10 @@
  * imageio_loader.c opens the first time a program reads or writes an
  * image file: OpenImageIO and the libraries it needs then load only into
  * the processes that use them.  The module exports one table
- * (imageio_module.h).  JPEG and PNG input mostly never reaches it:
- * native_jpeg.c and native_png.c read those with the same libraries and
- * settings as OpenImageIO's readers, so what this file does to samples
+ * (imageio_module.h).  JPEG, PNG and 8/16-bit grey or RGB TIFF input
+ * mostly never reaches it: native_jpeg.c, native_png.c and native_tiff.c
+ * read those with the same libraries and settings as OpenImageIO's
+ * readers, so what this file does to samples
  * (types, the 8-bit rule, limits, messages) is what they must match
  * (tests/test_native_read.c).
  */

@@ -22,12 +22,13 @@
  * makes every call fail with GV_EFORMAT and one line that says where it
  * looked.
  *
- * JPEG and PNG input skips the module: gv_image_open looks at the file's
- * first bytes and offers a JPEG to native_jpeg.c (libjpeg-turbo) and a
- * PNG to native_png.c (libpng), which deliver exactly the module's info
- * and samples for the variants they accept and decline the rest (CMYK
- * and 12-bit JPEG, damaged headers...), which then go to the module
- * as before.  struct gv_image_in is a tagged handle over either.  With
+ * JPEG, PNG and TIFF input skips the module: gv_image_open looks at the
+ * file's first bytes and offers a JPEG to native_jpeg.c (libjpeg-turbo),
+ * a PNG to native_png.c (libpng) and a TIFF or BigTIFF to native_tiff.c
+ * (libtiff), which deliver exactly the module's info and samples for the
+ * variants they accept and decline the rest (CMYK and 12-bit JPEG,
+ * palette, alpha, float or JPEG-compressed TIFF, damaged headers...),
+ * which then go to the module as before.  struct gv_image_in is a tagged handle over either.  With
  * GIGAVIEW_NATIVE_READERS=0 in the environment every file goes to the
  * module (tests compare the two; the bench measures both).  Writing
  * always goes through the module.
@@ -46,6 +47,7 @@
 #include "imageio/native_file.h"
 #include "imageio/native_jpeg.h"
 #include "imageio/native_png.h"
+#include "imageio/native_tiff.h"
 
 #ifndef PKGLIBDIR
 #define PKGLIBDIR "/usr/local/lib/gigaview"
@@ -159,7 +161,7 @@ static const struct gv_imageio_module *get(struct gv_error *err)
 }
 
 /* Who reads an opened image. */
-enum reader { BY_MODULE, BY_JPEG, BY_PNG };
+enum reader { BY_MODULE, BY_JPEG, BY_PNG, BY_TIFF };
 
 struct gv_image_in {
     enum reader by;
@@ -167,6 +169,7 @@ struct gv_image_in {
         struct gv_oiio_in *module;
         struct gv_native_jpeg *jpeg;
         struct gv_native_png *png;
+        struct gv_native_tiff *tiff;
     } u;
 };
 
@@ -192,6 +195,8 @@ static enum reader sniff(const char *path)
         return BY_JPEG;
     if (gv_native_png_sniff(head, n))
         return BY_PNG;
+    if (gv_native_tiff_sniff(head, n))
+        return BY_TIFF;
     return BY_MODULE;
 }
 
@@ -211,7 +216,9 @@ struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
         in->u.jpeg = gv_native_jpeg_open(path, max_pixels, info, &e);
     else if (in->by == BY_PNG)
         in->u.png = gv_native_png_open(path, max_pixels, info, &e);
-    if (in->by != BY_MODULE && (in->u.jpeg || in->u.png))
+    else if (in->by == BY_TIFF)
+        in->u.tiff = gv_native_tiff_open(path, max_pixels, info, &e);
+    if (in->by != BY_MODULE && (in->u.jpeg || in->u.png || in->u.tiff))
         return in;
     if (e.code != GV_OK) {   /* refused, not declined */
         if (err)
@@ -237,6 +244,8 @@ int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,
         return gv_native_jpeg_read(in->u.jpeg, rows, out, err);
     case BY_PNG:
         return gv_native_png_read(in->u.png, rows, out, err);
+    case BY_TIFF:
+        return gv_native_tiff_read(in->u.tiff, rows, out, err);
     case BY_MODULE:
         break;
     }
@@ -254,6 +263,9 @@ void gv_image_close(struct gv_image_in *in)
         break;
     case BY_PNG:
         gv_native_png_close(in->u.png);
+        break;
+    case BY_TIFF:
+        gv_native_tiff_close(in->u.tiff);
         break;
     case BY_MODULE:
         module->close(in->u.module);

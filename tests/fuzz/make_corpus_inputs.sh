@@ -142,11 +142,13 @@ batch("j-not-object", 1, 8, b"[[0,0,0]]")
 batch("j-nul", 1, 8, b'{"tiles":[[0,0,0]]}\0')
 PY
 
-# The native JPEG and PNG readers (lib/imageio/native_*.c): every variant
-# of tests/data/native (colour types, depths, subsampling, progressive,
-# arithmetic, interlaced, and the CMYK one they leave to the module),
-# and truncated and damaged copies of a few.  Truncated PNGs are safe
-# here: the native reader takes them, not OpenImageIO's leaking one.
+# The native JPEG, PNG and TIFF readers (lib/imageio/native_*.c): every
+# variant of tests/data/native (colour types, depths, subsampling,
+# progressive, arithmetic, interlaced, TIFF codecs, tiles, strips,
+# byte orders, BigTIFF, and the ones they leave to the module: CMYK,
+# palette, alpha, MINISWHITE, JPEG-in-TIFF), and truncated and damaged
+# copies of a few.  Truncated PNGs are safe here: the native reader takes
+# them, not OpenImageIO's leaking one.
 python3 - "$top/tests/data/native" "$here/corpus" <<'PY'
 import os, sys
 src, out = sys.argv[1], sys.argv[2]
@@ -154,13 +156,15 @@ def save(name, data):
     with open(os.path.join(out, "imageio", name), "wb") as f:
         f.write(data)
 for name in sorted(os.listdir(src)):
-    if not name.endswith((".jpg", ".png")):
+    if not name.endswith((".jpg", ".png", ".tif")):
         continue
-    e = 1 if name.endswith(".jpg") else 0
+    e = 1 if name.endswith(".jpg") else 2 if name.endswith(".tif") else 0
     d = open(os.path.join(src, name), "rb").read()
     stem = "native-" + name.replace(".", "-")
     save(stem, bytes([e]) + d)
-    if name in ("s420.jpg", "progressive.jpg", "rgb16.png", "palette4.png"):
+    if name in ("s420.jpg", "progressive.jpg", "rgb16.png", "palette4.png",
+                "rgb8-lzw-tiled.tif", "rgb16-zip.tif",
+                "rgb8-bigtiff-be-tiled.tif"):
         save(stem + "-trunc", bytes([e]) + d[:len(d) * 2 // 3])
         f = bytearray(d)
         f[len(f) // 2] ^= 0x40
