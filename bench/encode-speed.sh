@@ -13,6 +13,7 @@
 # time is kept. Speeds are source megapixels per
 # second of wall time; the least CPU time (user + system) of each is
 # printed too, since on a shared machine it moves less than wall time.
+# Dirty pages are flushed (sync) before each timed command.
 # Peak RSS (maximum resident set, from GNU time) is
 # printed for both tools, the largest over the runs. With --baseline, an
 # older gigaview binary runs too, in the same alternation, and its speed
@@ -96,6 +97,10 @@ fi
 # RSS in MiB and the CPU time (user + system) in seconds.
 time_cmd() {
 	local t0 t1 rss
+	# The previous command's output (vips' zip, a store, a 4 GB scratch
+	# file) written back first, outside the timing: at 1 GP the kernel's
+	# writeback of one tool's output slowed the next by up to 40 %.
+	sync
 	t0=$(now)
 	/usr/bin/time -f '%M %U %S' -o "$work/rss" "$@" >/dev/null 2>&1 || { echo "FAILED: $*" >&2; return 1; }
 	t1=$(now)
