@@ -279,9 +279,6 @@ forward_avx2(const float *e, float *d)
 }
 #endif
 
-/* Lane l of m and e2 (zero on entry): the largest |x[k + l]| and the sum
- * of the squares in increasing k, k = 0, 8, ..., 56 (the roundings of
- * that order, a multiply and an add each, on every path). */
 #ifdef HAVE_AVX2_PATH
 /* residual_block, an RGB block inside the valid area eight pixels at a
  * time.  The same floats: with r, g, b the differences (integers), the
@@ -331,6 +328,9 @@ residual_block_avx2(const uint8_t *orig, const uint8_t *pred, int channels,
 }
 #endif
 
+/* Lane l of m and e2 (zero on entry): the largest |x[k + l]| and the sum
+ * of the squares in increasing k, k = 0, 8, ..., 56 (the roundings of
+ * that order, a multiply and an add each, on every path). */
 __attribute__((always_inline)) static inline void
 block_stats(const float *x, float *m, float *e2)
 {

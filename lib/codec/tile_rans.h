@@ -39,17 +39,25 @@ static inline size_t gv_tilebuf_book_offset(uint8_t b0)
 
 /* One rANS encoding step (a symbol of frequency f at cumulative c, in
  * prob_bits precision, 32-bit state, 16-bit words); may emit one word into
- * words[*n].  The bound is computed in 64 bits: for a certain symbol
- * (f = 2^prob_bits) it is 2^32, and the state passes unchanged.  Shared by
- * the index streams (15 bits) and layout D's coefficients (8 bits). */
-static inline uint32_t gv_rans_put(uint32_t x, uint32_t f, uint32_t c,
-                                   int prob_bits, uint16_t *words, int *n)
+ * words[*n].  Shared by the index streams (15 bits) and layout D's
+ * coefficients (8 bits).  gv_rans_renorm is its first half: the state
+ * brought under the bound for f, computed in 64 bits (for a certain
+ * symbol, f = 2^prob_bits, it is 2^32 and the state passes unchanged). */
+static inline uint32_t gv_rans_renorm(uint32_t x, uint32_t f, int prob_bits,
+                                      uint16_t *words, int *n)
 {
     const uint64_t x_max = (uint64_t)(((1u << 16) >> prob_bits) << 16) * f;
     if (x >= x_max) {
         words[(*n)++] = (uint16_t)x;
         x >>= 16;
     }
+    return x;
+}
+
+static inline uint32_t gv_rans_put(uint32_t x, uint32_t f, uint32_t c,
+                                   int prob_bits, uint16_t *words, int *n)
+{
+    x = gv_rans_renorm(x, f, prob_bits, words, n);
     return ((x / f) << prob_bits) + (x % f) + c;
 }
 
@@ -65,17 +73,13 @@ static inline uint64_t gv_rans_rcp(uint32_t f)
 /* gv_rans_put, the same state for every input, with the division by f
  * taken as a multiplication by rcp = gv_rans_rcp(f), computed once per
  * frequency: a 32-bit division costs several times a 64-bit multiply, and
- * it was a quarter of the layout D encoder's own time (bench/README.md,
- * 2026-11-26, encoder's second pass). */
+ * it was a quarter of the samples in gv_dct_encode itself (perf;
+ * bench/README.md, "2026-11-26 (session 6), encoding"). */
 static inline uint32_t gv_rans_put_rcp(uint32_t x, uint32_t f, uint64_t rcp,
                                        uint32_t c, int prob_bits,
                                        uint16_t *words, int *n)
 {
-    const uint64_t x_max = (uint64_t)(((1u << 16) >> prob_bits) << 16) * f;
-    if (x >= x_max) {
-        words[(*n)++] = (uint16_t)x;
-        x >>= 16;
-    }
+    x = gv_rans_renorm(x, f, prob_bits, words, n);
 #ifdef __SIZEOF_INT128__
     const uint32_t q = f > 1 ? (uint32_t)(((unsigned __int128)x * rcp) >> 64) : x;
 #else

@@ -15,6 +15,10 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define HAVE_SPLIT_SSSE3 1
+#endif
 
 #include "codec/tile.h"
 #include "encode/lambda_model.h"
@@ -43,12 +47,12 @@ int gv_lambda_model_init(struct gv_lambda_model *m, uint32_t width,
     const size_t hb = (size_t)(width / 2) * channels + 4;
     const size_t mb = (size_t)((width + 1) / 2 + 2) * channels;
     for (int i = 0; i < 2; i++)
-        if (!(m->even[i] = malloc(hb ? hb : 1)) || !(m->odd[i] = malloc(hb ? hb : 1)))
+        if (!(m->even[i] = malloc(hb)) || !(m->odd[i] = malloc(hb)))
             return -1;
     for (int i = 0; i < 3; i++)
         if (!(m->mean[i] = malloc(mb)))
             return -1;
-    if (!(m->detail = malloc((hb ? hb : 1) * sizeof *m->detail)))
+    if (!(m->detail = malloc(hb * sizeof *m->detail)))
         return -1;
     return 0;
 }
@@ -78,10 +82,7 @@ static int bin_of(uint64_t v)
     return b < GV_LM_BINS ? b : GV_LM_BINS - 1;
 }
 
-/* Split a level-0 row into its even and its odd pixels, of the width / 2
- * whole blocks (an odd width's last pixel is in none). */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#include <immintrin.h>
+#ifdef HAVE_SPLIT_SSSE3
 /* Blocks [0, 4 * (bw / 4)) of an RGB row by PSHUFB, four blocks (24
  * bytes, read as 16 at 0 and 16 at 8) into 12 even and 12 odd bytes,
  * stored as 16 (the buffers have 4 bytes to spare); returns the blocks
@@ -104,9 +105,10 @@ split_rgb_ssse3(const uint8_t *row, uint32_t bw, uint8_t *even, uint8_t *odd)
     }
     return bx;
 }
-#define HAVE_SPLIT_SSSE3 1
 #endif
 
+/* Split a level-0 row into its even and its odd pixels, of the width / 2
+ * whole blocks (an odd width's last pixel is in none). */
 static void split_row(const struct gv_lambda_model *m, const uint8_t *row,
                       uint8_t *even, uint8_t *odd)
 {
@@ -141,15 +143,9 @@ static void put_mean(struct gv_lambda_model *m, int i, const uint8_t *row)
     memcpy(d + (size_t)(mw + 1) * c, row + (size_t)(mw - 1) * c, (size_t)c);
 }
 
-/* Add the blocks of the pending block row (even[], odd[]) over mean[1],
- * with mean[0] above and mean[2] below.  First the detail of every block
- * and channel (block_detail: a loop of unit stride over the samples,
- * which the compiler vectorizes), then the blocks' sums into bins.  As
- * one loop over blocks with the channels inside, the model took 11.7 %
- * of a -j 1 encode of the 54 MP bench mosaic (perf), on the thread that
- * bounds pass 1; now 5.2 %, the row split included.  Block bx's left
- * neighbour is mean pixel bx - 1 and its right bx + 1, the edge
- * repeated: the padding of the mean rows gives both. */
+/* The detail of every block and channel of the pending block row into
+ * det[0 .. n-1]: a loop of unit stride over the samples, which the
+ * compiler vectorizes (restrict: no output aliases an input). */
 static void block_detail(uint32_t n, int c, const uint8_t *restrict m0,
                          const uint8_t *restrict m1, const uint8_t *restrict m2,
                          const uint8_t *restrict e0, const uint8_t *restrict o0,
@@ -173,6 +169,14 @@ static void block_detail(uint32_t n, int c, const uint8_t *restrict m0,
     }
 }
 
+/* Add the blocks of the pending block row (even[], odd[]) over mean[1],
+ * with mean[0] above and mean[2] below.  First the detail of every block
+ * and channel (block_detail), then the blocks' sums into bins.  As
+ * one loop over blocks with the channels inside, the model took 11.7 %
+ * of a -j 1 encode of the 54 MP bench mosaic (perf), on the thread that
+ * bounds pass 1; now 5.2 %, the row split included.  Block bx's left
+ * neighbour is mean pixel bx - 1 and its right bx + 1, the edge
+ * repeated: the padding of the mean rows gives both. */
 static void add_block_row(struct gv_lambda_model *m)
 {
     const int c = m->channels;

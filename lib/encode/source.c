@@ -8,10 +8,10 @@
  * row's `cols` inputs open, and concatenates their scanlines.  A single
  * image is read through the handle of its probe: opening a progressive
  * JPEG decodes all its scans, which took twice the time of the rest of
- * pass 1 when done twice (an 8 MP photograph: 0.63 -> 0.55 s encode).  Tiles are
- * read in chunks of rows into one scratch buffer (about 4 MiB), so memory
- * does not grow with the image height, and the whole grid row is never
- * held.  The synthetic pattern computes each pixel from (x, y) alone.
+ * pass 1 when done twice (an 8 MP photograph: 0.63 -> 0.55 s encode).
+ * Tiles are read in chunks of rows into one scratch buffer (about 4 MiB),
+ * so memory does not grow with the image height, and the whole grid row
+ * is never held.  The synthetic pattern computes each pixel from (x, y) alone.
  *
  * Channels: 1 channel is gray; 2 (gray + alpha) is gray, alpha dropped;
  * 3 or more give RGB from the first three.  Every tile of a mosaic must

@@ -75,9 +75,6 @@ struct encoder {
     struct root_packer {      /* the root's WebP, packed during pass 2 */
         pthread_t thread;
         int started, rc;
-        const uint8_t *pixels;
-        uint32_t w, h;
-        int c;
         uint8_t *z;
         size_t zlen;
         struct gv_error err;
@@ -89,7 +86,6 @@ struct encoder {
     int have_pending[GV_MAX_LEVELS];
     uint32_t rows_out[GV_MAX_LEVELS];
     uint8_t *reduced[GV_MAX_LEVELS];
-    int level0_stored;        /* the reader writes level 0's rows */
     /* pass 2: the current page */
     int level;
     uint32_t px, py;
@@ -178,14 +174,23 @@ static int emit_reduced(struct encoder *e, int k, const uint8_t *r0,
     return push_row(e, k + 1, e->reduced[k + 1]);
 }
 
+/* Store row `rows_out[k]` of level k and count it; level 0's rows are
+ * stored by pass 1's reader, except a shard's (see struct reader). */
+static int store_next(struct encoder *e, int k, const uint8_t *row)
+{
+    if ((k > 0 || e->sharded) && store_row(e, k, row) < 0)
+        return -1;
+    e->rows_out[k]++;
+    return 0;
+}
+
 /* Store row `rows_out[k]` of level k and feed the level above. */
 static int push_row(struct encoder *e, int k, const uint8_t *row)
 {
     const struct gv_level *l = &e->g.level[k];
     const size_t rb = (size_t)l->width * e->c;
-    if (!(k == 0 && e->level0_stored) && store_row(e, k, row) < 0)
+    if (store_next(e, k, row) < 0)
         return -1;
-    e->rows_out[k]++;
     if (k == e->g.root)
         return 0;
     if (!e->have_pending[k]) {
@@ -202,16 +207,8 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
  * the copy of r0 that push_row keeps for a pair split between chunks. */
 static int push_pair0(struct encoder *e, const uint8_t *r0, const uint8_t *r1)
 {
-    if (!e->level0_stored) {
-        if (store_row(e, 0, r0) < 0)
-            return -1;
-        e->rows_out[0]++;
-        if (store_row(e, 0, r1) < 0)
-            return -1;
-        e->rows_out[0]++;
-    } else {
-        e->rows_out[0] += 2;
-    }
+    if (store_next(e, 0, r0) < 0 || store_next(e, 0, r1) < 0)
+        return -1;
     return emit_reduced(e, 0, r0, r1);
 }
 
@@ -224,7 +221,7 @@ static int push_pair0(struct encoder *e, const uint8_t *r0, const uint8_t *r1)
  * (where they lie end to end).  That takes the largest copy off
  * the encoder's thread, which bounds pass 1 on an input that is cheap to
  * decode (a 54 MP uncompressed tiled TIFF: the whole encode 1.28 -> 1.20 s,
- * best of 4, bench/README.md 2026-11-26 "encoder, pass 1 and 2"). */
+ * best of 4; bench/README.md, "2026-11-26 (session 6), encoding"). */
 struct reader {
     struct gv_source *src;
     struct gv_spill *spill;   /* NULL: the encoder's thread stores level 0 */
@@ -293,7 +290,6 @@ static int pass1(struct encoder *e, struct gv_source *src)
     struct reader rd = {.src = src, .chunk = chunk, .height = g->height,
                         .spill = e->sharded ? NULL : e->spill,
                         .base = e->orig_base[0], .row_bytes = rb0};
-    e->level0_stored = !e->sharded;
     int rc = -1, started = 0;
     pthread_mutex_init(&rd.mu, NULL);
     pthread_cond_init(&rd.cv, NULL);
@@ -716,26 +712,21 @@ static int start_workers(struct encoder *e)
  * finish_store writes the bytes. */
 static void *root_packer_main(void *arg)
 {
-    struct root_packer *p = arg;
-    p->rc = gv_root_pack(p->pixels, p->w, p->h, p->c, &p->z, &p->zlen, &p->err);
+    struct encoder *e = arg;   /* e->root and e->g: not changed in pass 2 */
+    struct root_packer *p = &e->packer;
+    const struct gv_level *rl = &e->g.level[e->g.root];
+    p->rc = gv_root_pack(e->root, rl->width, rl->height, e->c, &p->z,
+                         &p->zlen, &p->err);
     return NULL;
 }
 
 /* Start packing e->root; without a thread it is packed at once. */
-static int root_packer_start(struct encoder *e)
+static void root_packer_start(struct encoder *e)
 {
-    struct root_packer *p = &e->packer;
-    const struct gv_level *rl = &e->g.level[e->g.root];
-    p->pixels = e->root;
-    p->w = rl->width;
-    p->h = rl->height;
-    p->c = e->c;
-    if (pthread_create(&p->thread, NULL, root_packer_main, p) == 0) {
-        p->started = 1;
-        return 0;
-    }
-    root_packer_main(p);
-    return 0;
+    if (pthread_create(&e->packer.thread, NULL, root_packer_main, e) == 0)
+        e->packer.started = 1;
+    else
+        root_packer_main(e);
 }
 
 /* Wait for the packing (if started); the packed root stays in p->z. */
@@ -872,7 +863,8 @@ static int load_root(struct encoder *e)
     gv_root_tile(e->root, rl->width, rl->height, e->c, e->root_tile);
     if (e->sharded)
         return gv_shard_writer_root(e->shard, e->root, e->err);
-    return root_packer_start(e);
+    root_packer_start(e);
+    return 0;
 }
 
 /* Publish the shard file; its size is the result's file_bytes. */
