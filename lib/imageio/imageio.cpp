@@ -100,6 +100,7 @@
 #include "imageio/imageio.h"
 #include "imageio/imageio_module.h"
 #include "imageio/output_format.h"
+#include "imageio/size_limit.h"
 
 using OIIO::ImageInput;
 using OIIO::ImageOutput;
@@ -361,13 +362,8 @@ static int check_size(const ImageSpec &spec, const char *path,
     if (spec.nchannels > 64)
         return gv_fail(err, GV_EFORMAT, "imageio: %s: too many channels (%d)",
                        path, spec.nchannels);
-    uint64_t w = (uint64_t)spec.width, h = (uint64_t)spec.height;
-    if (w > 0x7fffffffu || h > 0x7fffffffu || w * h > max_pixels)
-        return gv_fail(err, GV_ELIMIT,
-                       "imageio: %s: image of %llux%llu pixels exceeds the "
-                       "limit of %llu pixels", path, (unsigned long long)w,
-                       (unsigned long long)h, (unsigned long long)max_pixels);
-    return 0;
+    return gv_image_size_check(path, (uint64_t)spec.width,
+                               (uint64_t)spec.height, max_pixels, err);
 }
 
 /* The reading state for an opened, checked image delivered as `type`. */

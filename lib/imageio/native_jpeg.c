@@ -39,6 +39,7 @@
 
 #include "imageio/native_file.h"
 #include "imageio/native_jpeg.h"
+#include "imageio/size_limit.h"
 
 /* libjpeg reports errors through error_exit, which must not return:
  * it longjmps back to the call that failed. */
@@ -139,12 +140,10 @@ struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
     struct gv_native_jpeg *j = calloc(1, sizeof *j);
     if (!j)
         return NULL;   /* declined: the module reports what it can */
-    size_t plen = strlen(path);
-    j->path = malloc(plen + 1);
+    j->path = strdup(path);
     j->f = gv_native_open_regular(path);
     if (!j->path || !j->f)
         goto decline;
-    memcpy(j->path, path, plen + 1);
     uint8_t head[3];
     if (fread(head, 1, sizeof head, j->f) != sizeof head
         || !gv_native_jpeg_sniff(head, sizeof head)
@@ -168,11 +167,7 @@ struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
      * follow (imageio.cpp check_size), before anything is allocated. */
     if (w == 0 || h == 0 || w > 0x7fffffffu || h > 0x7fffffffu)
         goto decline;
-    if (w * h > max_pixels) {
-        gv_fail(err, GV_ELIMIT, "imageio: %s: image of %llux%llu pixels "
-                "exceeds the limit of %llu pixels", path,
-                (unsigned long long)w, (unsigned long long)h,
-                (unsigned long long)max_pixels);
+    if (gv_image_size_check(path, w, h, max_pixels, err) < 0) {
         gv_native_jpeg_close(j);
         return NULL;
     }

@@ -45,6 +45,7 @@
 
 #include "imageio/native_file.h"
 #include "imageio/native_png.h"
+#include "imageio/size_limit.h"
 
 struct gv_native_png {
     png_structp png;
@@ -127,12 +128,10 @@ struct gv_native_png *gv_native_png_open(const char *path,
     struct gv_native_png *p = calloc(1, sizeof *p);
     if (!p)
         return NULL;   /* declined: the module reports what it can */
-    size_t plen = strlen(path);
-    p->path = malloc(plen + 1);
+    p->path = strdup(path);
     p->f = gv_native_open_regular(path);
     if (!p->path || !p->f)
         goto decline;
-    memcpy(p->path, path, plen + 1);
     uint8_t head[8];
     if (fread(head, 1, sizeof head, p->f) != sizeof head
         || !gv_native_png_sniff(head, sizeof head))
@@ -160,11 +159,7 @@ struct gv_native_png *gv_native_png_open(const char *path,
     if ((int64_t)png_get_x_offset_pixels(p->png, p->info) + w > 0x7fffffff
         || (int64_t)png_get_y_offset_pixels(p->png, p->info) + h > 0x7fffffff)
         goto decline;
-    if ((uint64_t)w * h > max_pixels) {
-        gv_fail(err, GV_ELIMIT, "imageio: %s: image of %llux%llu pixels "
-                "exceeds the limit of %llu pixels", path,
-                (unsigned long long)w, (unsigned long long)h,
-                (unsigned long long)max_pixels);
+    if (gv_image_size_check(path, w, h, max_pixels, err) < 0) {
         gv_native_png_close(p);
         return NULL;
     }

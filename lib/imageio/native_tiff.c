@@ -56,6 +56,7 @@
 
 #include "imageio/native_file.h"
 #include "imageio/native_tiff.h"
+#include "imageio/size_limit.h"
 
 /* libtiff's functions, from dlopen (see the top of the file). */
 #define LIBTIFF_SONAME "libtiff.so.6"   /* libtiff 4.5 and later */
@@ -301,8 +302,7 @@ struct gv_native_tiff *gv_native_tiff_open(const char *path,
     if (!t)
         return NULL;   /* declined: the module reports what it can */
     t->fd = -1;
-    size_t plen = strlen(path);
-    t->path = malloc(plen + 1);
+    t->path = strdup(path);
     FILE *f = gv_native_open_regular(path);
     if (f) {
         t->fd = dup(fileno(f));
@@ -311,7 +311,6 @@ struct gv_native_tiff *gv_native_tiff_open(const char *path,
     pthread_once(&lt_once, lt_load);
     if (!t->path || t->fd < 0 || !lt_ok)
         goto decline;
-    memcpy(t->path, path, plen + 1);
     uint8_t head[4];
     if (pread(t->fd, head, sizeof head, 0) != (ssize_t)sizeof head
         || !gv_native_tiff_sniff(head, sizeof head))
@@ -332,11 +331,7 @@ struct gv_native_tiff *gv_native_tiff_open(const char *path,
         || !lt.GetField(t->tif, TIFFTAG_IMAGELENGTH, &h) || w == 0 || h == 0
         || !accepted(t))
         goto decline;
-    if (w > 0x7fffffffu || h > 0x7fffffffu || (uint64_t)w * h > max_pixels) {
-        gv_fail(err, GV_ELIMIT, "imageio: %s: image of %llux%llu pixels "
-                "exceeds the limit of %llu pixels", path,
-                (unsigned long long)w, (unsigned long long)h,
-                (unsigned long long)max_pixels);
+    if (gv_image_size_check(path, w, h, max_pixels, err) < 0) {
         gv_native_tiff_close(t);
         return NULL;
     }

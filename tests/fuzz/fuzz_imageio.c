@@ -47,27 +47,10 @@ static const char *const ext[] = {
      * among the accepted readers are fuzzed too. */
 };
 
-/*
- * LeakSanitizer: OpenImageIO 2.4.7's PNG reader loses a std::string (31
- * bytes) on every truncated PNG - PngReadCallback builds an error message
- * and libpng longjmps past its destructor.  Not ours to fix and bounded
- * per file, so the campaign ignores exactly that stack.  (For the same
- * reason no truncated PNG is in the replayed corpus: make check
- * VALGRIND=1 would count the leak.)
- */
-const char *__lsan_default_suppressions(void);
-const char *__lsan_default_suppressions(void)
-{
-    return "leak:OpenImageIO_v2_4::PNGInput::PngReadCallback\n";
-}
-
-/* The suppression needs the allocation's whole stack: libstdc++ has no
- * frame pointers, so the fast unwinder stops inside it. */
-const char *__asan_default_options(void);
-const char *__asan_default_options(void)
-{
-    return "fast_unwind_on_malloc=0";
-}
+/* OpenImageIO's own leak on truncated PNGs, ignored by the campaign.
+ * (For the same reason no truncated PNG is in the replayed corpus: make
+ * check VALGRIND=1 would count the leak.) */
+#include "../oiio_lsan.h"
 
 static char dir[64];
 
