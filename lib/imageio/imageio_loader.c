@@ -212,13 +212,14 @@ struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
     in->by = native_allowed() ? sniff(path) : BY_MODULE;
     struct gv_error e;
     gv_error_clear(&e);
+    const void *native = NULL;   /* the native reader opened, if any */
     if (in->by == BY_JPEG)
-        in->u.jpeg = gv_native_jpeg_open(path, max_pixels, info, &e);
+        native = in->u.jpeg = gv_native_jpeg_open(path, max_pixels, info, &e);
     else if (in->by == BY_PNG)
-        in->u.png = gv_native_png_open(path, max_pixels, info, &e);
+        native = in->u.png = gv_native_png_open(path, max_pixels, info, &e);
     else if (in->by == BY_TIFF)
-        in->u.tiff = gv_native_tiff_open(path, max_pixels, info, &e);
-    if (in->by != BY_MODULE && (in->u.jpeg || in->u.png || in->u.tiff))
+        native = in->u.tiff = gv_native_tiff_open(path, max_pixels, info, &e);
+    if (native)
         return in;
     if (e.code != GV_OK) {   /* refused, not declined */
         if (err)
