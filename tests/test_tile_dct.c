@@ -167,7 +167,7 @@ static void test_round_trip(int C, int amp, double lambda, uint32_t vw,
     }
     gv_predict(parent, C, 1, 0, pred);
     uint64_t sse = 0;
-    size_t len = gv_dct_encode(ws, orig, pred, parent, 1, 0, C, vw, vh, lambda,
+    size_t len = gv_dct_encode(ws, orig, pred, C, vw, vh, lambda,
                                buf, GV_TILEBUF_MAX, recon, &sse);
     check(len > 0 && len % 4 == 0 && buf[0] == GV_TILE_DCT,
           "C=%d amp %d lambda %.0f %ux%u: a D buffer of %zu bytes", C, amp,
@@ -203,14 +203,14 @@ static void test_lambda_order(void)
     make_tile(orig, 3, 10);
     gv_predict(parent, 3, 0, 1, pred);
     uint64_t s1, s2;
-    size_t l1 = gv_dct_encode(ws, orig, pred, parent, 0, 1, 3, T, T, 15,
+    size_t l1 = gv_dct_encode(ws, orig, pred, 3, T, T, 15,
                               buf, GV_TILEBUF_MAX, recon, &s1);
-    size_t l2 = gv_dct_encode(ws, orig, pred, parent, 0, 1, 3, T, T, 80,
+    size_t l2 = gv_dct_encode(ws, orig, pred, 3, T, T, 80,
                               buf, GV_TILEBUF_MAX, recon, &s2);
     check(l1 > l2 && s1 < s2, "lambda 15: %zu bytes, sse %llu; lambda 80: "
           "%zu bytes, sse %llu", l1, (unsigned long long)s1, l2,
           (unsigned long long)s2);
-    check(gv_dct_encode(ws, orig, pred, parent, 0, 1, 3, T, T, 5, buf, 64,
+    check(gv_dct_encode(ws, orig, pred, 3, T, T, 5, buf, 64,
                         recon, &s1) == 0, "a cap too small gives 0");
     gv_dct_workspace_free(ws);
 }
@@ -283,7 +283,7 @@ static void test_hostile(void)
     make_tile(orig, 3, 10);
     gv_predict(parent, 3, 0, 0, pred);
     uint64_t sse;
-    size_t len = gv_dct_encode(ws, orig, pred, parent, 0, 0, 3, T, T, 10, buf,
+    size_t len = gv_dct_encode(ws, orig, pred, 3, T, T, 10, buf,
                                GV_TILEBUF_MAX, recon, &sse);
     static uint8_t b[GV_TILEBUF_MAX];
 #define MUTATE(stmt, what)                                                    \

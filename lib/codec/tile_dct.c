@@ -436,6 +436,30 @@ int gv_dct_unpack(const uint8_t *buf, size_t len, int channels,
     return 0;
 }
 
+void gv_dct_rebuild(const int16_t (*q)[GV_DCT_BLOCKS * GV_DCT_BLOCKS][64],
+                    const uint8_t (*eob)[GV_DCT_BLOCKS * GV_DCT_BLOCKS],
+                    const int *steps, int channels, const uint8_t *pred,
+                    uint8_t *out)
+{
+    gv_dct_row co;
+    uint8_t eobs[3][GV_DCT_BLOCKS];
+    memset(co, 0, sizeof co);
+    memcpy(out, pred, (size_t)GV_TILE * GV_TILE * channels);
+    for (int by = 0; by < GV_DCT_BLOCKS; by++) {
+        /* The coefficients as decode_row leaves them: q * step, clamped,
+         * at their places in the row; gv_dct_add_row zeroes them again. */
+        for (int c = 0; c < channels; c++)
+            for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
+                const int b = by * GV_DCT_BLOCKS + bx, n = eob[c][b];
+                int16_t *dst = &co[c][0][8 * bx];
+                eobs[c][bx] = (uint8_t)n;
+                for (int k = 0; k < n; k++)
+                    dst[zz_offset[k]] = clamp_s16(q[c][b][k] * steps[c]);
+            }
+        gv_dct_add_row(co, eobs, channels, by, out);
+    }
+}
+
 int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
                   const uint8_t *parent, int qx, int qy, uint8_t *out,
                   struct gv_error *err)

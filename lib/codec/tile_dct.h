@@ -87,6 +87,19 @@ int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
                   struct gv_error *err);
 
 /*
+ * The tile that gv_dct_decode gives for a buffer whose quantized values
+ * are already known, without its rANS streams or the prediction: q[c][b]
+ * the values of block b = 65 * by + bx of channel c in zigzag order (only
+ * the first eob[c][b] are read), steps[c] the buffer's steps, pred the
+ * prediction from the parent (513 x 513 x channels).  Writes out, which
+ * must not overlap pred.  For the encoder, which has all of these.
+ */
+void gv_dct_rebuild(const int16_t (*q)[GV_DCT_BLOCKS * GV_DCT_BLOCKS][64],
+                    const uint8_t (*eob)[GV_DCT_BLOCKS * GV_DCT_BLOCKS],
+                    const int *steps, int channels, const uint8_t *pred,
+                    uint8_t *out);
+
+/*
  * The inverse transform of one 8x8 block of one channel, d[8 * v + u]
  * dequantized coefficients, into e[8 * j + i] (FORMAT.md 4.3), exactly.
  */
@@ -102,7 +115,7 @@ void gv_dct_workspace_free(struct gv_dct_workspace *ws);
 
 /*
  * Code tile `orig` (513x513xC, clamp-padded) against its prediction
- * `pred` (the prediction from `parent`, quadrant (qx,qy)) in layout D,
+ * `pred` (its prediction from the parent, section 3) in layout D,
  * choosing the quantizer steps that minimize
  * SSE + lambda * bits over the valid_w x valid_h pixels (lambda > 0).
  * Writes the buffer (at most cap bytes) and the decoded tile to recon
@@ -110,9 +123,8 @@ void gv_dct_workspace_free(struct gv_dct_workspace *ws);
  * *sse, or 0 when the buffer would not fit in cap (recon then unspecified).
  */
 size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
-                     const uint8_t *pred, const uint8_t *parent, int qx,
-                     int qy, int channels, uint32_t valid_w, uint32_t valid_h,
-                     double lambda, uint8_t *buf, size_t cap, uint8_t *recon,
-                     uint64_t *sse);
+                     const uint8_t *pred, int channels, uint32_t valid_w,
+                     uint32_t valid_h, double lambda, uint8_t *buf,
+                     size_t cap, uint8_t *recon, uint64_t *sse);
 
 #endif

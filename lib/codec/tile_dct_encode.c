@@ -767,10 +767,9 @@ static double try_step(const struct gv_dct_workspace *ws,
 }
 
 size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
-                     const uint8_t *pred, const uint8_t *parent, int qx,
-                     int qy, int channels, uint32_t valid_w, uint32_t valid_h,
-                     double lambda, uint8_t *buf, size_t cap, uint8_t *recon,
-                     uint64_t *sse)
+                     const uint8_t *pred, int channels, uint32_t valid_w,
+                     uint32_t valid_h, double lambda, uint8_t *buf,
+                     size_t cap, uint8_t *recon, uint64_t *sse)
 {
     pthread_once(&tables_once, init_tables);
     transform_tile(ws, orig, pred, channels, valid_w, valid_h);
@@ -812,9 +811,10 @@ size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
                               buf, cap);
     if (!len)
         return 0;
-    struct gv_error err;
-    if (gv_dct_decode(buf, len, channels, parent, qx, qy, recon, &err) < 0)
-        return 0;   /* cannot happen: the buffer was just written */
+    /* What gv_dct_decode would give, from the values just coded. */
+    gv_dct_rebuild((const int16_t (*)[NB][64])ws->cand[best].q,
+                   (const uint8_t (*)[NB])ws->cand[best].eob, best_steps,
+                   channels, pred, recon);
     *sse = gv_sse_u8(orig, recon, valid_w * (uint32_t)channels, valid_h,
                      (size_t)GV_TILE * channels);
     return len;

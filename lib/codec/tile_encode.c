@@ -764,16 +764,15 @@ static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
  * it fitted in GV_TILEBUF_MAX (at very low lambda it may not).  Returns
  * the length kept. */
 static size_t try_dct(struct gv_tile_workspace *ws, const uint8_t *orig,
-                      const uint8_t *parent, int qx, int qy, int channels,
-                      uint32_t valid_w, uint32_t valid_h, double lambda,
-                      size_t len, uint8_t *recon, uint8_t *buf,
+                      int channels, uint32_t valid_w, uint32_t valid_h,
+                      double lambda, size_t len, uint8_t *recon, uint8_t *buf,
                       struct gv_tile_stats *stats, int *fits)
 {
     size_t cap = GV_TILEBUF_MAX;
     uint64_t dsse;
-    size_t dlen = gv_dct_encode(ws->dct, orig, ws->pred, parent, qx, qy,
-                                channels, valid_w, valid_h, lambda, ws->alt,
-                                cap, ws->dct_recon, &dsse);
+    size_t dlen = gv_dct_encode(ws->dct, orig, ws->pred, channels, valid_w,
+                                valid_h, lambda, ws->alt, cap, ws->dct_recon,
+                                &dsse);
     *fits = dlen != 0;
     if (!dlen || (double)dsse + lambda * 8.0 * (double)dlen >=
                  (double)stats->sse + lambda * 8.0 * (double)len)
@@ -807,8 +806,8 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
         size_t len = gv_tilebuf_size(0, channels);
         pack_buffer(buf, len, 0, channels, NULL, NULL);
         int fits;
-        len = try_dct(ws, orig, parent, qx, qy, channels, valid_w, valid_h,
-                      params->lambda, len, recon, buf, stats, &fits);
+        len = try_dct(ws, orig, channels, valid_w, valid_h, params->lambda,
+                      len, recon, buf, stats, &fits);
         if (fits)
             return len;
         /* Too fine for D's largest buffer: the VQ search instead. */
@@ -821,7 +820,7 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
                                     params, max_rate, sse, recon, buf, stats);
         int fits;
         if (params->dct)
-            len = try_dct(ws, orig, parent, qx, qy, channels, valid_w, valid_h,
+            len = try_dct(ws, orig, channels, valid_w, valid_h,
                           params->lambda, len, recon, buf, stats, &fits);
         return len;
     }
