@@ -247,6 +247,15 @@ run encode "$TESTDATA/seeding-700x520.png" -q 50 -o avx2.gv --quiet
 GIGAVIEW_NO_AVX2=1 run encode "$TESTDATA/seeding-700x520.png" -q 50 -o noavx2.gv --quiet
 check "the baseline transform (GIGAVIEW_NO_AVX2) gives the same store" \
     cmp -s noavx2.gv avx2.gv
+# Pass 2 maps each page's window from the scratch file; copying it
+# (GIGAVIEW_SPILL_VIEWS=0, the fallback where mapping fails) gives the
+# same bytes.  4400 wide: two pages of level 0, the second one narrow.
+run encode synth:4400x700 -q 34 -o views.gv --quiet
+expect_rc "encode with mapped windows" 0
+GIGAVIEW_SPILL_VIEWS=0 run encode synth:4400x700 -q 34 -o copies.gv --quiet
+check "windows copied from the scratch file give the same store" \
+    cmp -s views.gv copies.gv
+rm -f views.gv copies.gv
 # Re-encoding over an existing store replaces it.
 run encode synth:600x300:gray -o j1.gv --quiet
 expect_rc "encode over an existing store" 0

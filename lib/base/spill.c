@@ -10,6 +10,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "base/file_io.h"
@@ -76,4 +78,31 @@ int gv_spill_read(struct gv_spill *s, void *buf, size_t len, uint64_t off,
         return gv_fail(err, GV_EIO, "spill: the scratch file in %s ends early",
                        s->dir);
     return 0;
+}
+
+int gv_spill_view(struct gv_spill *s, uint64_t off, size_t len,
+                  struct gv_spill_view *v)
+{
+    v->addr = NULL;
+    struct stat st;
+    if (!len || fstat(s->fd, &st) < 0 || st.st_size < 0 ||
+        off > (uint64_t)st.st_size || len > (uint64_t)st.st_size - off)
+        return -1;   /* touching a page past the end would raise SIGBUS */
+    const long page = sysconf(_SC_PAGESIZE);
+    const uint64_t start = off - off % (uint64_t)(page > 0 ? page : 4096);
+    const size_t span = (size_t)(off - start) + len;
+    void *addr = mmap(NULL, span, PROT_READ, MAP_SHARED, s->fd, (off_t)start);
+    if (addr == MAP_FAILED)
+        return -1;
+    v->addr = addr;
+    v->len = span;
+    v->data = (const uint8_t *)addr + (off - start);
+    return 0;
+}
+
+void gv_spill_unview(struct gv_spill_view *v)
+{
+    if (v->addr)
+        munmap(v->addr, v->len);
+    v->addr = NULL;
 }

@@ -1,12 +1,14 @@
 /*
  * stream_encoder.c - the two-pass streaming encoder (see stream_encoder.h).
  *
- * Scratch layout: level k of the original pyramid (k = 0..root) is stored
- * row-major at orig_base[k]; decoded tiles of level k (1..root-1) are
+ * Scratch layout, in two unnamed files: level 0 of the original pyramid
+ * alone in one, and in the other levels k = 1..root, each row-major at
+ * orig_base[k] (level 0's is 0, in its own file); decoded tiles of level k (1..root-1) are
  * stored as 513x513xC records at recon_base[k], row-major by tile, because
  * level k-1 is predicted from decoded tiles, not from a decoded image.
  *
- * Working set of pass 2 for one page: the original window (4097^2 x C),
+ * Working set of pass 2 for one page: the original window (4097^2 x C;
+ * mapped from the scratch file where it can be, else copied from it),
  * up to 16 parent tiles, 64 decoded tiles (level 0: one per thread, since
  * no level is predicted from it) and 64 tile buffers, plus one tile
  * workspace per thread.  Pass 1 holds one chunk of input rows (in two
@@ -26,6 +28,9 @@
  */
 #include <math.h>
 #include <pthread.h>
+#include <stdint.h>
+#include <sys/mman.h>
+#include <unistd.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -61,7 +66,12 @@ struct encoder {
     struct gv_lambda_model model[GV_MAX_LEVELS]; /* levels' detail, pass 1 */
     struct gv_geometry g;
     int c;
-    struct gv_spill *spill;
+    struct gv_spill *spill;   /* levels 1 .. root, decoded tiles */
+    /* Level 0, in a file of its own: pass 1's reader writes it while the
+     * encoder's thread writes the levels above, and writes to one file
+     * wait on each other (the inode's lock, spun on: 1.6 % of an 8 MP
+     * photograph's encode). */
+    struct gv_spill *spill0;
     uint64_t orig_base[GV_MAX_LEVELS], recon_base[GV_MAX_LEVELS];
     struct gv_store_writer *writer;
     struct gv_shard_plan plan;
@@ -91,6 +101,11 @@ struct encoder {
     uint32_t px, py;
     uint8_t *window;          /* WINDOW x WINDOW x C */
     uint32_t win_w, win_h;
+    const uint8_t *win;       /* the page's window: a view, or window */
+    size_t win_stride;        /* bytes from one of its rows to the next */
+    struct gv_spill_view view;
+    int no_views;             /* GIGAVIEW_SPILL_VIEWS=0: always copy */
+    int window_resident;      /* window's pages may be in memory */
     uint8_t *parents[16];     /* decoded parent tiles, 4x4 around the page */
     uint8_t *recon[GV_PAGE_SLOTS];
     uint8_t *bufs[GV_PAGE_SLOTS];
@@ -127,6 +142,12 @@ static void report(struct encoder *e, const char *phase, double fraction)
 
 static int push_row(struct encoder *e, int k, const uint8_t *row);
 
+/* The scratch file that holds level k's original. */
+static struct gv_spill *level_spill(const struct encoder *e, int k)
+{
+    return k == 0 ? e->spill0 : e->spill;
+}
+
 /* Store row `rows_out[k]` of level k in the scratch file: all of it, or
  * for a shard the runs of columns that its tiles of level k cover. */
 static int store_row(struct encoder *e, int k, const uint8_t *row)
@@ -135,7 +156,7 @@ static int store_row(struct encoder *e, int k, const uint8_t *row)
     const size_t rb = (size_t)l->width * e->c;
     const uint64_t at = e->orig_base[k] + (uint64_t)e->rows_out[k] * rb;
     if (!e->sharded || k == e->g.root)
-        return gv_spill_write(e->spill, row, rb, at, e->err);
+        return gv_spill_write(level_spill(e, k), row, rb, at, e->err);
     /* Row y is in tile row y/512, and is row 512 of the tile row above
      * when y is a multiple of 512. */
     const uint32_t y = e->rows_out[k], ta = y / GV_STEP;
@@ -154,7 +175,7 @@ static int store_row(struct encoder *e, int k, const uint8_t *row)
             uint32_t x0 = run * GV_STEP, x1 = tx * GV_STEP + 1;
             if (x1 > l->width)
                 x1 = l->width;
-            if (gv_spill_write(e->spill, row + (size_t)x0 * e->c,
+            if (gv_spill_write(level_spill(e, k), row + (size_t)x0 * e->c,
                                (size_t)(x1 - x0) * e->c, at + (uint64_t)x0 * e->c,
                                e->err) < 0)
                 return -1;
@@ -288,7 +309,7 @@ static int pass1(struct encoder *e, struct gv_source *src)
     if (chunk > g->height)
         chunk = g->height;
     struct reader rd = {.src = src, .chunk = chunk, .height = g->height,
-                        .spill = e->sharded ? NULL : e->spill,
+                        .spill = e->sharded ? NULL : e->spill0,
                         .base = e->orig_base[0], .row_bytes = rb0};
     int rc = -1, started = 0;
     pthread_mutex_init(&rd.mu, NULL);
@@ -300,6 +321,7 @@ static int pass1(struct encoder *e, struct gv_source *src)
      * 4097^2 x C bytes, more than CHUNK_BYTES); only rows wider than the
      * window's half get memory of their own. */
     const int own = 2 * (size_t)chunk * rb0 > (size_t)WINDOW * WINDOW * e->c;
+    e->window_resident |= !own;
     rd.buf[0] = own ? malloc((size_t)chunk * rb0) : e->window;
     rd.buf[1] = own ? malloc((size_t)chunk * rb0) : e->window + (size_t)chunk * rb0;
     if (!rd.buf[0] || !rd.buf[1]) {
@@ -394,7 +416,7 @@ static void cut_tile(const struct encoder *e, int i, int j, uint8_t *orig)
         uint32_t wy = (uint32_t)j * GV_STEP + v;
         if (wy >= e->win_h)
             wy = e->win_h - 1;
-        const uint8_t *src = e->window + (size_t)wy * WINDOW * c;
+        const uint8_t *src = e->win + (size_t)wy * e->win_stride;
         uint8_t *dst = orig + v * row;
         uint32_t x0 = (uint32_t)i * GV_STEP;
         uint32_t avail = e->win_w - x0 < GV_TILE ? e->win_w - x0 : GV_TILE;
@@ -492,6 +514,19 @@ static void order_page(struct encoder *e)
                 e->order[n++] = (uint8_t)s;
 }
 
+/* Give the whole pages of buf (len bytes of memory of our own) back to
+ * the system; they read as zeros when touched again. */
+static void release_pages(uint8_t *buf, size_t len)
+{
+    const long ps = sysconf(_SC_PAGESIZE);
+    const uintptr_t page = ps > 0 ? (uintptr_t)ps : 4096;
+    const uintptr_t a = (uintptr_t)buf, end = a + len;
+    const uintptr_t first = (a + page - 1) & ~(page - 1);
+    const uintptr_t last = end & ~(page - 1);
+    if (last > first)
+        madvise((void *)first, last - first, MADV_DONTNEED);
+}
+
 static int load_window(struct encoder *e)
 {
     const struct gv_level *l = &e->g.level[e->level];
@@ -501,11 +536,36 @@ static int load_window(struct encoder *e)
     e->win_w = l->width - x0 < WINDOW ? l->width - x0 : WINDOW;
     e->win_h = l->height - y0 < WINDOW ? l->height - y0 : WINDOW;
     const size_t rb = (size_t)l->width * c;
+    const uint64_t at = e->orig_base[e->level] + (uint64_t)y0 * rb +
+                        (uint64_t)x0 * c;
+    /* Mapped, the window's rows are read where they lie instead of being
+     * copied; but a mapping spans whole rows of the level, and the
+     * kernel maps the neighbours of each page touched (fault-around), so
+     * that all of it counts in the resident set: only where that span is
+     * at most a quarter larger than the window (levels up to 5121 wide)
+     * does the encoder's memory stay within its bound (docs/FORMAT.md
+     * section 9). */
+    const size_t span = (size_t)(e->win_h - 1) * rb + (size_t)e->win_w * c;
+    gv_spill_unview(&e->view);
+    if (!e->no_views && span <= (size_t)WINDOW * WINDOW * c / 4 * 5 &&
+        gv_spill_view(level_spill(e, e->level), at, span, &e->view) == 0) {
+        /* The copy's memory is given back while the mapping is used, so
+         * that the two never count together. */
+        if (e->window_resident)
+            release_pages(e->window, (size_t)WINDOW * WINDOW * c);
+        e->window_resident = 0;
+        e->win = e->view.data;
+        e->win_stride = rb;
+        return 0;
+    }
+    e->win = e->window;
+    e->win_stride = (size_t)WINDOW * c;
+    e->window_resident = 1;
     for (uint32_t r = 0; r < e->win_h; r++)
-        if (gv_spill_read(e->spill, e->window + (size_t)r * WINDOW * c,
-                          (size_t)e->win_w * c,
-                          e->orig_base[e->level] + (uint64_t)(y0 + r) * rb +
-                              (uint64_t)x0 * c, e->err) < 0)
+        if (gv_spill_read(level_spill(e, e->level),
+                          e->window + (size_t)r * WINDOW * c,
+                          (size_t)e->win_w * c, at + (uint64_t)r * rb,
+                          e->err) < 0)
             return -1;
     return 0;
 }
@@ -642,8 +702,11 @@ static int layout_scratch(struct encoder *e)
 {
     const struct gv_geometry *g = &e->g;
     const int c = e->c;
+    /* Level 0 alone in spill0, the rest in spill. */
+    const uint64_t size0 = (uint64_t)g->level[0].width * g->level[0].height * c;
     uint64_t off = 0;
-    for (int k = 0; k <= g->root; k++) {
+    e->orig_base[0] = 0;
+    for (int k = 1; k <= g->root; k++) {
         e->orig_base[k] = off;
         off += (uint64_t)g->level[k].width * g->level[k].height * c;
     }
@@ -659,7 +722,8 @@ static int layout_scratch(struct encoder *e)
         /* Size the scratch file once: what the shard never writes stays a
          * hole, so reading a whole page window cannot run past the end. */
         static const uint8_t zero = 0;
-        if (off > 0 && gv_spill_write(e->spill, &zero, 1, off - 1, e->err) < 0)
+        if ((off > 0 && gv_spill_write(e->spill, &zero, 1, off - 1, e->err) < 0) ||
+            (size0 > 0 && gv_spill_write(e->spill0, &zero, 1, size0 - 1, e->err) < 0))
             return -1;
     }
     if (e->work_total <= 0)
@@ -683,6 +747,8 @@ static int start_workers(struct encoder *e)
     e->origs = malloc((size_t)n * gv_tile_bytes(c));
     e->wrecon = malloc((size_t)n * gv_tile_bytes(c));
     e->window = malloc((size_t)WINDOW * WINDOW * c);
+    const char *views = getenv("GIGAVIEW_SPILL_VIEWS");   /* tests */
+    e->no_views = views && !strcmp(views, "0");
     if (!e->ws || !e->origs || !e->wrecon || !e->window)
         return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
     for (int i = 0; i < n; i++)
@@ -749,6 +815,7 @@ static void teardown(struct encoder *e)
     free(e->ws);
     free(e->origs);
     free(e->wrecon);
+    gv_spill_unview(&e->view);
     free(e->window);
     for (int s = 0; s < 16; s++)
         free(e->parents[s]);
@@ -766,6 +833,7 @@ static void teardown(struct encoder *e)
     for (int k = 0; k < GV_MAX_LEVELS; k++)
         gv_lambda_model_free(&e->model[k]);
     gv_spill_free(e->spill);
+    gv_spill_free(e->spill0);
 }
 
 static int check_opts(const struct gv_encode_opts *opts, struct gv_error *err)
@@ -839,8 +907,9 @@ static int open_spill(struct encoder *e, const char *output)
         tmpdir = slash ? outdir : ".";
     }
     e->spill = gv_spill_new(tmpdir, e->err);
+    e->spill0 = e->spill ? gv_spill_new(tmpdir, e->err) : NULL;
     free(outdir);
-    return e->spill ? 0 : -1;
+    return e->spill0 ? 0 : -1;
 }
 
 /* After pass 1: read the root level back from the scratch file and build
@@ -853,8 +922,8 @@ static int load_root(struct encoder *e)
     e->root_tile = malloc(gv_tile_bytes(e->c));
     if (!e->root || !e->root_tile)
         return gv_fail(e->err, GV_ENOMEM, "encode: out of memory for the root");
-    if (gv_spill_read(e->spill, e->root, rbytes, e->orig_base[e->g.root],
-                      e->err) < 0)
+    if (gv_spill_read(level_spill(e, e->g.root), e->root, rbytes,
+                      e->orig_base[e->g.root], e->err) < 0)
         return -1;
     if (e->g.root > 0 &&
         gv_root_approx(e->root, rl->width, rl->height, e->c,
