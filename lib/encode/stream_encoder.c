@@ -105,7 +105,14 @@ struct encoder {
     size_t win_stride;        /* bytes from one of its rows to the next */
     struct gv_spill_view view;
     int no_views;             /* GIGAVIEW_SPILL_VIEWS=0: always copy */
-    int window_resident;      /* window's pages may be in memory */
+    int window_resident;      /* copies' pages may be in memory */
+    /* Level 0 kept whole in window (rows of width * C bytes) from pass 1
+     * to the end, never written to the scratch file: where it fits
+     * (width * height <= 4097^2), the encoder is not a shard and the
+     * image is more than its root.  The other levels' windows are then
+     * copied, where they cannot be mapped, into copies instead. */
+    int level0_resident;
+    uint8_t *copies;          /* window, or memory of its own */
     uint8_t *parents[16];     /* decoded parent tiles, 4x4 around the page */
     uint8_t *recon[GV_PAGE_SLOTS];
     uint8_t *bufs[GV_PAGE_SLOTS];
@@ -250,6 +257,7 @@ struct reader {
     size_t row_bytes;
     uint32_t chunk, height;
     uint8_t *buf[2];
+    uint8_t *whole;           /* else: chunk at y read to whole + y rows */
     uint32_t rows[2];
     int failed, stop;
     struct gv_error err;
@@ -271,10 +279,12 @@ static void *reader_main(void *arg)
         if (stop)
             break;
         struct gv_error err;
-        int rc = gv_source_read(r->src, n, r->buf[slot], &err);
+        uint8_t *dst = r->whole ? r->whole + (size_t)y * r->row_bytes
+                                : r->buf[slot];
+        int rc = gv_source_read(r->src, n, dst, &err);
         /* The rows lie end to end in the chunk and in the file. */
         if (rc == 0 && r->spill)
-            rc = gv_spill_write(r->spill, r->buf[slot], (size_t)n * r->row_bytes,
+            rc = gv_spill_write(r->spill, dst, (size_t)n * r->row_bytes,
                                 r->base + (uint64_t)y * r->row_bytes, &err);
         pthread_mutex_lock(&r->mu);
         if (rc < 0) {
@@ -308,8 +318,11 @@ static int pass1(struct encoder *e, struct gv_source *src)
         chunk = 1;
     if (chunk > g->height)
         chunk = g->height;
+    /* Level 0 in memory: read where it stays, not stored. */
     struct reader rd = {.src = src, .chunk = chunk, .height = g->height,
-                        .spill = e->sharded ? NULL : e->spill0,
+                        .spill = e->sharded || e->level0_resident ? NULL
+                                                                  : e->spill0,
+                        .whole = e->level0_resident ? e->window : NULL,
                         .base = e->orig_base[0], .row_bytes = rb0};
     int rc = -1, started = 0;
     pthread_mutex_init(&rd.mu, NULL);
@@ -320,8 +333,9 @@ static int pass1(struct encoder *e, struct gv_source *src)
      * passes (each half is at most CHUNK_BYTES / 2, and the window holds
      * 4097^2 x C bytes, more than CHUNK_BYTES); only rows wider than the
      * window's half get memory of their own. */
-    const int own = 2 * (size_t)chunk * rb0 > (size_t)WINDOW * WINDOW * e->c;
-    e->window_resident |= !own;
+    const int own = !e->level0_resident &&
+                    2 * (size_t)chunk * rb0 > (size_t)WINDOW * WINDOW * e->c;
+    e->window_resident |= !own && !e->level0_resident;
     rd.buf[0] = own ? malloc((size_t)chunk * rb0) : e->window;
     rd.buf[1] = own ? malloc((size_t)chunk * rb0) : e->window + (size_t)chunk * rb0;
     if (!rd.buf[0] || !rd.buf[1]) {
@@ -354,8 +368,10 @@ static int pass1(struct encoder *e, struct gv_source *src)
             goto out;
         }
         pthread_mutex_unlock(&rd.mu);
+        const uint8_t *rows = rd.whole ? rd.whole + (size_t)y * rb0
+                                       : rd.buf[slot];
         for (uint32_t r = 0; r < n; r++) {
-            const uint8_t *row = rd.buf[slot] + (size_t)r * rb0;
+            const uint8_t *row = rows + (size_t)r * rb0;
             if (g->root == 0 || e->have_pending[0] || r + 1 == n) {
                 if (push_row(e, 0, row) < 0)
                     goto out;
@@ -536,6 +552,11 @@ static int load_window(struct encoder *e)
     e->win_w = l->width - x0 < WINDOW ? l->width - x0 : WINDOW;
     e->win_h = l->height - y0 < WINDOW ? l->height - y0 : WINDOW;
     const size_t rb = (size_t)l->width * c;
+    if (e->level == 0 && e->level0_resident) {
+        e->win = e->window + (size_t)y0 * rb + (size_t)x0 * c;
+        e->win_stride = rb;
+        return 0;
+    }
     const uint64_t at = e->orig_base[e->level] + (uint64_t)y0 * rb +
                         (uint64_t)x0 * c;
     /* Mapped, the window's rows are read where they lie instead of being
@@ -552,18 +573,20 @@ static int load_window(struct encoder *e)
         /* The copy's memory is given back while the mapping is used, so
          * that the two never count together. */
         if (e->window_resident)
-            release_pages(e->window, (size_t)WINDOW * WINDOW * c);
+            release_pages(e->copies, (size_t)WINDOW * WINDOW * c);
         e->window_resident = 0;
         e->win = e->view.data;
         e->win_stride = rb;
         return 0;
     }
-    e->win = e->window;
+    if (!e->copies && !(e->copies = malloc((size_t)WINDOW * WINDOW * c)))
+        return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
+    e->win = e->copies;
     e->win_stride = (size_t)WINDOW * c;
     e->window_resident = 1;
     for (uint32_t r = 0; r < e->win_h; r++)
         if (gv_spill_read(level_spill(e, e->level),
-                          e->window + (size_t)r * WINDOW * c,
+                          e->copies + (size_t)r * WINDOW * c,
                           (size_t)e->win_w * c, at + (uint64_t)r * rb,
                           e->err) < 0)
             return -1;
@@ -749,6 +772,10 @@ static int start_workers(struct encoder *e)
     e->window = malloc((size_t)WINDOW * WINDOW * c);
     const char *views = getenv("GIGAVIEW_SPILL_VIEWS");   /* tests */
     e->no_views = views && !strcmp(views, "0");
+    e->level0_resident = !e->sharded && e->g.root > 0 &&
+                         (uint64_t)e->g.width * e->g.height <=
+                             (uint64_t)WINDOW * WINDOW;
+    e->copies = e->level0_resident ? NULL : e->window;
     if (!e->ws || !e->origs || !e->wrecon || !e->window)
         return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
     for (int i = 0; i < n; i++)
@@ -816,6 +843,8 @@ static void teardown(struct encoder *e)
     free(e->origs);
     free(e->wrecon);
     gv_spill_unview(&e->view);
+    if (e->copies != e->window)
+        free(e->copies);
     free(e->window);
     for (int s = 0; s < 16; s++)
         free(e->parents[s]);
