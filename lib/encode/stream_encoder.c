@@ -6,6 +6,9 @@
  * orig_base[k] (level 0's is 0, in its own file); decoded tiles of level k (1..root-1) are
  * stored as 513x513xC records at recon_base[k], row-major by tile, because
  * level k-1 is predicted from decoded tiles, not from a decoded image.
+ * Where level 0 fits in the page window and the encoder is not a shard,
+ * it is kept there instead, from pass 1 until pass 2 has coded it
+ * (level0_resident).
  *
  * Working set of pass 2 for one page: the original window (4097^2 x C;
  * mapped from the scratch file where it can be, else copied from it),
@@ -114,6 +117,11 @@ struct encoder {
     int level0_resident;
     uint8_t *copies;          /* window, or memory of its own */
     uint8_t *parents[16];     /* decoded parent tiles, 4x4 around the page */
+    const uint8_t *parent_at[16]; /* where they are: parents, or kept */
+    /* Level 1 is one page, whose decoded tiles stay in recon while level
+     * 0 (which does not use recon) is coded: they are its parents, never
+     * stored in the scratch file and read back. */
+    int level1_kept;
     uint8_t *recon[GV_PAGE_SLOTS];
     uint8_t *bufs[GV_PAGE_SLOTS];
     size_t lens[GV_PAGE_SLOTS];
@@ -480,7 +488,7 @@ static void encode_tile(void *ctx, size_t slot, int worker)
                              l->width - tx * GV_STEP : GV_TILE;
     const uint32_t valid_h = l->height - ty * GV_STEP < GV_TILE ?
                              l->height - ty * GV_STEP : GV_TILE;
-    const uint8_t *parent = e->parents[(j / 2) * 4 + i / 2];
+    const uint8_t *parent = e->parent_at[(j / 2) * 4 + i / 2];
     struct gv_tile_params params = {
         .target_mse = e->target_mse,
         .max_rate = e->opts->max_rate,
@@ -598,15 +606,20 @@ static int load_parents(struct encoder *e, const uint8_t *root_tile)
     const int pl = e->level + 1;
     if (pl == e->g.root) {
         for (int s = 0; s < 16; s++)
-            memcpy(e->parents[s], root_tile, gv_tile_bytes(e->c));
+            e->parent_at[s] = root_tile;
         return 0;
     }
     const struct gv_level *l = &e->g.level[pl];
     const size_t tb = gv_tile_bytes(e->c);
     for (int s = 0; s < 16; s++) {
         uint32_t ptx = e->px * 4 + (uint32_t)(s % 4), pty = e->py * 4 + (uint32_t)(s / 4);
+        e->parent_at[s] = e->parents[s];
         if (ptx >= l->tiles_x || pty >= l->tiles_y)
             continue;
+        if (pl == 1 && e->level1_kept) {
+            e->parent_at[s] = e->recon[pty * GV_PAGE_TILES + ptx];
+            continue;
+        }
         if (gv_spill_read(e->spill, e->parents[s], tb,
                           e->recon_base[pl] + ((uint64_t)pty * l->tiles_x + ptx) * tb,
                           e->err) < 0)
@@ -685,7 +698,8 @@ static int encode_page(struct encoder *e, uint32_t px, uint32_t py,
     gv_pool_run(e->pool, encode_ordered, e, GV_PAGE_SLOTS);
     if (emit_page(e) < 0)
         return -1;
-    if (e->level > 0 && store_recon(e) < 0)
+    if (e->level > 0 && !(e->level == 1 && e->level1_kept) &&
+        store_recon(e) < 0)
         return -1;
     account_page(e, sse0);
     report(e, "encode", PASS1_SHARE + (1.0 - PASS1_SHARE) *
@@ -701,6 +715,8 @@ static int pass2(struct encoder *e, uint64_t *sse0, uint64_t *samples0)
     for (int k = e->g.root - 1; k >= 0; k--) {
         const struct gv_level *l = &e->g.level[k];
         e->level = k;
+        if (k == 1)
+            e->level1_kept = !e->sharded && l->pages_x == 1 && l->pages_y == 1;
         for (uint32_t py = 0; py < l->pages_y; py++)
             for (uint32_t px = 0; px < l->pages_x; px++) {
                 if (e->sharded && !gv_shard_plan_wants_page(&e->plan, &e->g, k, px, py))
