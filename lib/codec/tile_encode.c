@@ -798,23 +798,39 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
     gv_predict(parent, channels, qx, qy, ws->pred);
     stats->samples = samples;
 
-    uint64_t sse = reconstruct(ws, orig, NULL, 0, channels, valid_w, valid_h, recon);
     if (params->lambda > 0 && !params->nearest_only &&
         params->dct == GV_LAYOUTS_D) {
+        /* The prediction alone (r = 0) or layout D, whichever costs less,
+         * as try_dct chooses; D is coded straight into buf and recon
+         * (buf holds GV_TILEBUF_MAX bytes in this mode), which are
+         * rewritten only when the prediction alone wins. */
+        const size_t row = (size_t)GV_TILE * channels;
+        const uint64_t sse = gv_sse_u8(orig, ws->pred,
+                                       valid_w * (uint32_t)channels, valid_h,
+                                       row);
+        const size_t len = gv_tilebuf_size(0, channels);
+        uint64_t dsse;
+        const size_t dlen = gv_dct_encode(ws->dct, orig, ws->pred, channels,
+                                          valid_w, valid_h, params->lambda,
+                                          buf, GV_TILEBUF_MAX, recon, &dsse);
+        if (dlen && (double)dsse + params->lambda * 8.0 * (double)dlen <
+                        (double)sse + params->lambda * 8.0 * (double)len) {
+            stats->rate = GV_RATE_DCT;
+            stats->sse = dsse;
+            return dlen;
+        }
+        memcpy(recon, ws->pred, row * GV_TILE);
         stats->rate = 0;
         stats->sse = sse;
-        size_t len = gv_tilebuf_size(0, channels);
-        pack_buffer(buf, len, 0, channels, NULL, NULL);
-        int fits;
-        len = try_dct(ws, orig, channels, valid_w, valid_h, params->lambda,
-                      len, recon, buf, stats, &fits);
-        if (fits)
+        if (dlen) {
+            pack_buffer(buf, len, 0, channels, NULL, NULL);
             return len;
+        }
         /* Too fine for D's largest buffer: the VQ search instead. */
-        reconstruct(ws, orig, NULL, 0, channels, valid_w, valid_h, recon);
         return encode_rd_ecvq(ws, orig, channels, valid_w, valid_h, params,
                               max_rate, sse, recon, buf, stats);
     }
+    uint64_t sse = reconstruct(ws, orig, NULL, 0, channels, valid_w, valid_h, recon);
     if (params->lambda > 0 && !params->nearest_only) {
         size_t len = encode_rd_ecvq(ws, orig, channels, valid_w, valid_h,
                                     params, max_rate, sse, recon, buf, stats);
