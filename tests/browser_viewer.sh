@@ -87,8 +87,11 @@ check "/ is the viewer page with the image list" sh -c "[ '$code' = 200 ] &&
     grep -q 'text/html' '$T/h' && grep -qi 'content-security-policy' '$T/h' &&
     grep -q 'href=\"#image=picos\"' '$T/b' && grep -q 'web/main.js' '$T/b'"
 req "$(url /web/tile_decode.frag.glsl)"
-if [ "$code" = 200 ] && cmp -s "$T/b" "$srcdir/shaders/tile_decode.frag.glsl"; then
-    ok "/web/tile_decode.frag.glsl is the shared decode shader, byte for byte"
+# Its #include "dct_matrix.glsl" expanded, as in the native programs.
+sh "$srcdir/shaders/glsl_include.sh" "$srcdir/shaders/tile_decode.frag.glsl" >"$T/decode.glsl"
+if [ "$code" = 200 ] && cmp -s "$T/b" "$T/decode.glsl" &&
+    grep -q 'const highp int K\[64\]' "$T/b" && ! grep -q '^#include' "$T/b"; then
+    ok "/web/tile_decode.frag.glsl is the shared decode shader with dct_matrix.glsl, byte for byte"
 else
     not_ok "/web/tile_decode.frag.glsl is the shared decode shader (HTTP $code)"
 fi
