@@ -141,7 +141,7 @@ expect_mismatch() {
     d=$1
     shift
     img=picos
-    [ "$2" = dct ] && img=picosd
+    case $2 in dct | matrix) img=picosd ;; esac
     viewer "$@"
     if [ "$vrc" -eq 1 ] && grep -q "^FAIL $img level 0 1:1: the canvas matches" "$T/viewer.out" &&
         grep -q '^PASS the viewer opened with WebGL2' "$T/viewer.out"; then
@@ -154,6 +154,7 @@ expect_mismatch() {
 expect_mismatch "a decode shader with one weight changed" --sabotage shader
 expect_mismatch "a rANS decoder that flips index bits" --sabotage rans
 expect_mismatch "a layout-D unpacking with the zigzag order transposed" --sabotage dct
+expect_mismatch "a decode shader with one entry of dct_matrix.glsl's K changed" --sabotage matrix
 expect_mismatch "a root with a bit flipped in every 97th sample" --sabotage root
 
 stop_daemon
