@@ -39,16 +39,10 @@ layout(std430, binding = 2) readonly buffer Tiles { ivec4 tiles[]; };
 #define GV_DCT_ROUND_ROWS 64
 #endif
 
-// The 8x8 integer DCT basis K[u][i] of FORMAT.md 4.3, row-major.
-const int K[64] = int[64](
-    64,  64,  64,  64,  64,  64,  64,  64,
-    89,  75,  50,  18, -18, -50, -75, -89,
-    83,  36, -36, -83, -83, -36,  36,  83,
-    75, -18, -89, -50,  50,  89,  18, -75,
-    64, -64, -64,  64,  64, -64, -64,  64,
-    50, -89,  18,  75, -75, -18,  89, -50,
-    36, -83,  83, -36, -36,  83, -83,  36,
-    18, -50,  75, -89,  89, -75,  50, -18);
+// The 8x8 integer DCT basis K[u][i] of FORMAT.md 4.3, row-major: the one
+// copy, shared with the other decoders (put here by shaders/glsl_include.sh
+// when the shaders are embedded).
+#include "dct_matrix.glsl"
 
 void main()
 {

@@ -1,8 +1,10 @@
 #!/bin/sh
 # embed.sh OUT.c SRCDIR FILE... - turn GLSL files (paths relative to
 # SRCDIR) into C string constants, one per file, named
-# gv_shader_<basename with . and - as _>, declared in OUT.h.  Run by make;
-# the .glsl files stay the source.
+# gv_shader_<basename with . and - as _>, declared in OUT.h, each with its
+# #include "NAME" lines expanded by shaders/glsl_include.sh (as
+# client/web/embed.sh does for the browser's copies).  Run by make; the
+# .glsl files stay the source.
 set -eu
 out=$1
 src=$2
@@ -14,7 +16,8 @@ hdr=${out%.c}.h
     for f in "$@"; do
         name=gv_shader_$(basename "$f" .glsl | tr '.-' '__')
         echo "const char $name[] ="
-        sed -e 's/\\/\\\\/g' -e 's/"/\\"/g' -e 's/^/    "/' -e 's/$/\\n"/' "$src/$f"
+        sh "$src/shaders/glsl_include.sh" "$src/$f" >"$out.glsl"
+        sed -e 's/\\/\\\\/g' -e 's/"/\\"/g' -e 's/^/    "/' -e 's/$/\\n"/' "$out.glsl"
         echo "    ;"
     done
 } > "$out.tmp"
@@ -27,5 +30,6 @@ hdr=${out%.c}.h
     done
     echo "#endif"
 } > "$hdr.tmp"
+rm -f "$out.glsl"
 mv "$out.tmp" "$out"
 mv "$hdr.tmp" "$hdr"

@@ -91,16 +91,10 @@ int first_tap(int q, int u)
 #define GV_DCT_ROUND_COLS 1024
 #endif
 
-// The 8x8 integer DCT basis K[u][i] of FORMAT.md 4.3, row-major.
-const int K[64] = int[64](
-    64,  64,  64,  64,  64,  64,  64,  64,
-    89,  75,  50,  18, -18, -50, -75, -89,
-    83,  36, -36, -83, -83, -36,  36,  83,
-    75, -18, -89, -50,  50,  89,  18, -75,
-    64, -64, -64,  64,  64, -64, -64,  64,
-    50, -89,  18,  75, -75, -18,  89, -50,
-    36, -83,  83, -36, -36,  83, -83,  36,
-    18, -50,  75, -89,  89, -75,  50, -18);
+// The 8x8 integer DCT basis K[u][i] of FORMAT.md 4.3, row-major: the one
+// copy, shared with the other decoders (put here by shaders/glsl_include.sh
+// when the shaders are embedded).
+#include "dct_matrix.glsl"
 
 // The inverse colour transform of residual e: YCoCg-R back to RGB (C =
 // 3), or gray as is.

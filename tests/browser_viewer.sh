@@ -87,8 +87,11 @@ check "/ is the viewer page with the image list" sh -c "[ '$code' = 200 ] &&
     grep -q 'text/html' '$T/h' && grep -qi 'content-security-policy' '$T/h' &&
     grep -q 'href=\"#image=picos\"' '$T/b' && grep -q 'web/main.js' '$T/b'"
 req "$(url /web/tile_decode.frag.glsl)"
-if [ "$code" = 200 ] && cmp -s "$T/b" "$srcdir/shaders/tile_decode.frag.glsl"; then
-    ok "/web/tile_decode.frag.glsl is the shared decode shader, byte for byte"
+# Its #include "dct_matrix.glsl" expanded, as in the native programs.
+sh "$srcdir/shaders/glsl_include.sh" "$srcdir/shaders/tile_decode.frag.glsl" >"$T/decode.glsl"
+if [ "$code" = 200 ] && cmp -s "$T/b" "$T/decode.glsl" &&
+    grep -q 'const highp int K\[64\]' "$T/b" && ! grep -q '^#include' "$T/b"; then
+    ok "/web/tile_decode.frag.glsl is the shared decode shader with dct_matrix.glsl, byte for byte"
 else
     not_ok "/web/tile_decode.frag.glsl is the shared decode shader (HTTP $code)"
 fi
@@ -138,7 +141,7 @@ expect_mismatch() {
     d=$1
     shift
     img=picos
-    [ "$2" = dct ] && img=picosd
+    case $2 in dct | matrix) img=picosd ;; esac
     viewer "$@"
     if [ "$vrc" -eq 1 ] && grep -q "^FAIL $img level 0 1:1: the canvas matches" "$T/viewer.out" &&
         grep -q '^PASS the viewer opened with WebGL2' "$T/viewer.out"; then
@@ -151,6 +154,7 @@ expect_mismatch() {
 expect_mismatch "a decode shader with one weight changed" --sabotage shader
 expect_mismatch "a rANS decoder that flips index bits" --sabotage rans
 expect_mismatch "a layout-D unpacking with the zigzag order transposed" --sabotage dct
+expect_mismatch "a decode shader with one entry of dct_matrix.glsl's K changed" --sabotage matrix
 expect_mismatch "a root with a bit flipped in every 97th sample" --sabotage root
 
 stop_daemon

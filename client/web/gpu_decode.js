@@ -1,7 +1,9 @@
 // gpu_decode.js - the WebGL2 tile decoder: shaders/tile_decode.frag.glsl,
-// the very file that gigaviewd, the native client and tests/test_gpu_decode
-// compile, fetched from the server and compiled here as GLSL ES 3.00
-// (the GV_GPU_PATH_WEBGL2 variant of lib/gpu/gpu_decode.c).
+// the very text that gigaviewd, the native client and tests/test_gpu_decode
+// compile (its #include "dct_matrix.glsl" expanded at build time by
+// shaders/glsl_include.sh, in gigaviewd's copy as in theirs), fetched from
+// the server and compiled here as GLSL ES 3.00 (the GV_GPU_PATH_WEBGL2
+// variant of lib/gpu/gpu_decode.c).
 //
 // A decoded tile is a 513 x 513 RGBA8UI texture (gray replicated, alpha
 // 255) rendered in one pass from its parent's texture (texelFetch only, no
@@ -29,7 +31,8 @@ export class GpuDecoder {
     /**
      * gl: a WebGL2 context; channels: 1 or 3; vertSrc, decodeSrc: the
      * contents of shaders/fullscreen.vert.glsl and
-     * shaders/tile_decode.frag.glsl.  Throws if they do not compile.
+     * shaders/tile_decode.frag.glsl as gigaviewd serves them (web/, its
+     * #include expanded).  Throws if they do not compile.
      */
     constructor(gl, channels, vertSrc, decodeSrc) {
         this.gl = gl;

@@ -15,7 +15,9 @@
  * second compute pass (dct_rows, one invocation per 8x8 block) takes in
  * place, the decode shader the column pass; or on the CPU (gv_dct_unpack)
  * into a 520x520 RGBA16I texture, of which the decode shader takes both
- * passes.
+ * passes.  Both D shaders' matrix K is the one shaders/dct_matrix.glsl,
+ * already in their embedded text (shaders/embed.sh expands the #include),
+ * as in the browser's copy of the decode shader.
  *
  * A single tile is a batch of one.  A batch (gv_gpu_decode_batch) runs in
  * one call on the GL thread: on the SSBO path, in small groups of

@@ -3,7 +3,7 @@
 // playwright-core.
 //
 //   node viewer.mjs --base http://127.0.0.1:PORT --gigaview PATH
-//        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans|dct|root] [--only eviction|dct]
+//        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans|dct|matrix|root] [--only eviction|dct]
 //        [--dctcoefs tests/dct_coefs]
 //
 // Needs stores "picos" (tests/data/picos-1100x700.jpg: two tiled levels,
@@ -54,7 +54,9 @@
 // --sabotage shader serves a decode shader with one prediction weight
 // changed, --sabotage rans a rANS decoder that flips the lowest bit of
 // every index, --sabotage dct a layout-D unpacking with the zigzag order
-// transposed (on picosd), --sabotage root a root whose every 97th sample
+// transposed (on picosd), --sabotage matrix a decode shader whose matrix
+// K (shaders/dct_matrix.glsl, included in the served text) has one entry
+// changed (on picosd), --sabotage root a root whose every 97th sample
 // has its lowest bit flipped: check 1 must then FAIL (tests/browser_viewer.sh expects
 // that: negative controls of the whole pipeline); only check 1 runs.
 // Exit status 0 when everything passed, 1 otherwise, 2 on a usage error.
@@ -69,7 +71,7 @@ const MAX_MAD = 1;      // mean absolute difference per channel, 8-bit units
 const W = 800, H = 500;
 
 const opt = { chromium: '/usr/bin/chromium', out: '', sabotage: '', only: '', base: '', gigaview: '', filters: '0', token: '', dctcoefs: '' };
-parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|dct|root] [--only eviction|dct] [--dctcoefs PATH] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
+parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|dct|matrix|root] [--only eviction|dct] [--dctcoefs PATH] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
 const base = opt.base.replace(/\/+$/, '');
 
 let lapT = Date.now();
@@ -935,6 +937,16 @@ async function sabotaged(c) {
                 fail('sabotage dct: the zigzag line is not in tile_dct.js');
             await route.fulfill({ response: r, body: src });
         });
+    } else if (opt.sabotage === 'matrix') {
+        // Layout D's matrix K as the served decode shader carries it
+        // (dct_matrix.glsl, expanded by gigaviewd's build): K[1][2] 50 -> 51.
+        await pg.route(`${base}/web/tile_decode.frag.glsl`, async (route) => {
+            const r = await route.fetch(), orig = await r.text();
+            const src = orig.replace('    89,  75,  50,  18,', '    89,  75,  51,  18,');
+            if (src === orig)
+                fail('sabotage matrix: K is not in the served tile_decode.frag.glsl');
+            await route.fulfill({ response: r, body: src });
+        });
     } else if (opt.sabotage === 'root') {
         // The root as decoded by loadRoot, every 97th sample's lowest bit
         // flipped: every decode starts from it.
@@ -949,7 +961,7 @@ async function sabotaged(c) {
         return;
     }
     note(`sabotage: ${opt.sabotage}`);
-    const id = opt.sabotage === 'dct' ? 'picosd' : 'picos';
+    const id = opt.sabotage === 'dct' || opt.sabotage === 'matrix' ? 'picosd' : 'picos';
     await open(pg, `#image=${id}&x=550&y=350&z=0&r=0`, opt.sabotage === 'rans' || opt.sabotage === 'dct' ? '?workers=0' : '');
     await installCompare(pg);
     check((await pg.evaluate(() => window.gigaview.viewer.stats.kind)) === 'webgl2', 'the viewer opened with WebGL2');
