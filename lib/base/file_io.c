@@ -5,6 +5,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <stdlib.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #include "base/file_io.h"
@@ -46,6 +47,44 @@ int gv_pwrite_full(int fd, const void *buf, size_t len, uint64_t off)
         p += n;
         len -= (size_t)n;
         off += (uint64_t)n;
+    }
+    return 0;
+}
+
+int gv_pwrite_rows(int fd, const void *buf, size_t stride, size_t row_len,
+                   size_t rows, uint64_t off)
+{
+    /* Gathered by pwritev, at most 64 KiB a call as gv_pwrite_full does
+     * (and at least one row); what a short write leaves is written by
+     * gv_pwrite_full. */
+    enum { MOST = 64u << 10, IOVS = 64 };
+    const uint8_t *p = buf;
+    while (rows > 0) {
+        struct iovec iov[IOVS];
+        int n = 0;
+        size_t total = 0;
+        while ((size_t)n < rows && n < IOVS &&
+               (n == 0 || total + row_len <= MOST)) {
+            iov[n].iov_base = (void *)(p + (size_t)n * stride);
+            iov[n].iov_len = row_len;
+            total += row_len;
+            n++;
+        }
+        ssize_t w = pwritev(fd, iov, n, (off_t)off);
+        if (w < 0) {
+            if (errno == EINTR)
+                continue;
+            return -1;
+        }
+        /* Whole rows written, then the rest of a row cut short. */
+        size_t whole = (size_t)w / row_len, part = (size_t)w % row_len;
+        if (part && gv_pwrite_full(fd, p + whole * stride + part,
+                                   row_len - part, off + (uint64_t)w) < 0)
+            return -1;
+        const size_t done = whole + (part ? 1 : 0);
+        p += done * stride;
+        rows -= done;
+        off += (uint64_t)done * row_len;
     }
     return 0;
 }

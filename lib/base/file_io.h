@@ -32,6 +32,13 @@ int gv_pread_full(int fd, void *buf, size_t len, uint64_t off);
  * set (part of the bytes may have been written). */
 int gv_pwrite_full(int fd, const void *buf, size_t len, uint64_t off);
 
+/* Write `rows` rows of row_len bytes each, the first at buf and each
+ * next one `stride` bytes after the previous, end to end at offset off
+ * (a column strip of an image into a file of strips).  Returns 0, or -1
+ * with errno set. */
+int gv_pwrite_rows(int fd, const void *buf, size_t stride, size_t row_len,
+                   size_t rows, uint64_t off);
+
 /*
  * Create a file with no name in directory `dir` (O_TMPFILE: it vanishes
  * when closed unless linked), open for reading and writing, close-on-exec,

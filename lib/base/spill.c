@@ -67,6 +67,16 @@ int gv_spill_write(struct gv_spill *s, const void *buf, size_t len,
     return 0;
 }
 
+int gv_spill_write_rows(struct gv_spill *s, const void *buf, size_t stride,
+                        size_t row_len, size_t rows, uint64_t off,
+                        struct gv_error *err)
+{
+    if (gv_pwrite_rows(s->fd, buf, stride, row_len, rows, off) < 0)
+        return gv_fail_errno(err, errno, "spill: writing the scratch file in %s",
+                             s->dir);
+    return 0;
+}
+
 int gv_spill_read(struct gv_spill *s, void *buf, size_t len, uint64_t off,
                   struct gv_error *err)
 {

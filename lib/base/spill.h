@@ -33,6 +33,12 @@ void gv_spill_free(struct gv_spill *s);
 int gv_spill_write(struct gv_spill *s, const void *buf, size_t len,
                    uint64_t off, struct gv_error *err);
 
+/* gv_spill_write of `rows` rows of row_len bytes, each `stride` bytes
+ * after the previous in buf, end to end at offset off. */
+int gv_spill_write_rows(struct gv_spill *s, const void *buf, size_t stride,
+                        size_t row_len, size_t rows, uint64_t off,
+                        struct gv_error *err);
+
 /* Read len bytes at offset off.  Returns 0, or -1 with *err filled
  * (GV_EIO, also when the file ends first). */
 int gv_spill_read(struct gv_spill *s, void *buf, size_t len, uint64_t off,

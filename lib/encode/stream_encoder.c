@@ -2,10 +2,14 @@
  * stream_encoder.c - the two-pass streaming encoder (see stream_encoder.h).
  *
  * Scratch layout, in two unnamed files: level 0 of the original pyramid
- * alone in one, and in the other levels k = 1..root, each row-major at
- * orig_base[k] (level 0's is 0, in its own file); decoded tiles of level k (1..root-1) are
- * stored as 513x513xC records at recon_base[k], row-major by tile, because
- * level k-1 is predicted from decoded tiles, not from a decoded image.
+ * alone in one, and in the other levels k = 1..root, each at orig_base[k]
+ * (level 0's is 0, in its own file) as one strip per column of pages:
+ * the 4097 columns of the page's window (fewer in the last strip), all
+ * of the level's rows, row-major, so that a page's window is one
+ * contiguous span of the file and can be mapped as it is; decoded tiles
+ * of level k (1..root-1) are stored as 513x513xC records at
+ * recon_base[k], row-major by tile, because level k-1 is predicted from
+ * decoded tiles, not from a decoded image.
  * Where level 0 fits in the page window and the encoder is not a shard,
  * it is kept there instead, from pass 1 until pass 2 has coded it
  * (level0_resident).
@@ -52,6 +56,7 @@
 #include "store/store_write.h"
 
 #define WINDOW (GV_PAGE_TILES * GV_STEP + 1)  /* 4097: a page plus overlap */
+#define PAGE_W (GV_PAGE_TILES * GV_STEP)      /* 4096: from page to page */
 #define CHUNK_BYTES (16u << 20)               /* input rows in memory (two halves) */
 #define PASS1_SHARE 0.15                      /* progress weight of pass 1 */
 
@@ -163,15 +168,55 @@ static struct gv_spill *level_spill(const struct encoder *e, int k)
     return k == 0 ? e->spill0 : e->spill;
 }
 
+/* Width of strip p (page column p's window) of a level `width` wide. */
+static uint32_t strip_width(uint32_t width, uint32_t p)
+{
+    const uint32_t w = width - p * PAGE_W;
+    return w < WINDOW ? w : WINDOW;
+}
+
+/* Strips of a level: one per column of pages (the root, which has no
+ * pages, is one strip). */
+static uint32_t strip_count(const struct gv_level *l)
+{
+    return l->pages_x ? l->pages_x : 1;
+}
+
+/* Offset of row y of strip p of level k in its scratch file: every strip
+ * before the last is WINDOW wide. */
+static uint64_t strip_at(const struct encoder *e, int k, uint32_t p, uint32_t y)
+{
+    const struct gv_level *l = &e->g.level[k];
+    return e->orig_base[k] + ((uint64_t)p * WINDOW * l->height +
+                              (uint64_t)y * strip_width(l->width, p)) * e->c;
+}
+
+/* Store columns x0 .. x1-1 of row y of level k (row holds the whole
+ * row), in each strip they reach. */
+static int store_columns(struct encoder *e, int k, uint32_t y,
+                         const uint8_t *row, uint32_t x0, uint32_t x1)
+{
+    const struct gv_level *l = &e->g.level[k];
+    for (uint32_t p = 0; p < strip_count(l); p++) {
+        const uint32_t s0 = p * PAGE_W, s1 = s0 + strip_width(l->width, p);
+        const uint32_t a = x0 > s0 ? x0 : s0, b = x1 < s1 ? x1 : s1;
+        if (a < b &&
+            gv_spill_write(level_spill(e, k), row + (size_t)a * e->c,
+                           (size_t)(b - a) * e->c,
+                           strip_at(e, k, p, y) + (uint64_t)(a - s0) * e->c,
+                           e->err) < 0)
+            return -1;
+    }
+    return 0;
+}
+
 /* Store row `rows_out[k]` of level k in the scratch file: all of it, or
  * for a shard the runs of columns that its tiles of level k cover. */
 static int store_row(struct encoder *e, int k, const uint8_t *row)
 {
     const struct gv_level *l = &e->g.level[k];
-    const size_t rb = (size_t)l->width * e->c;
-    const uint64_t at = e->orig_base[k] + (uint64_t)e->rows_out[k] * rb;
     if (!e->sharded || k == e->g.root)
-        return gv_spill_write(level_spill(e, k), row, rb, at, e->err);
+        return store_columns(e, k, e->rows_out[k], row, 0, l->width);
     /* Row y is in tile row y/512, and is row 512 of the tile row above
      * when y is a multiple of 512. */
     const uint32_t y = e->rows_out[k], ta = y / GV_STEP;
@@ -190,9 +235,7 @@ static int store_row(struct encoder *e, int k, const uint8_t *row)
             uint32_t x0 = run * GV_STEP, x1 = tx * GV_STEP + 1;
             if (x1 > l->width)
                 x1 = l->width;
-            if (gv_spill_write(level_spill(e, k), row + (size_t)x0 * e->c,
-                               (size_t)(x1 - x0) * e->c, at + (uint64_t)x0 * e->c,
-                               e->err) < 0)
+            if (store_columns(e, k, y, row, x0, x1) < 0)
                 return -1;
             in_run = 0;
         }
@@ -263,6 +306,8 @@ struct reader {
     struct gv_spill *spill;   /* NULL: the encoder's thread stores level 0 */
     uint64_t base;            /* level 0's offset in the scratch file */
     size_t row_bytes;
+    uint32_t width, strips;   /* level 0's, and its strips (pages_x) */
+    int c;
     uint32_t chunk, height;
     uint8_t *buf[2];
     uint8_t *whole;           /* else: chunk at y read to whole + y rows */
@@ -290,10 +335,15 @@ static void *reader_main(void *arg)
         uint8_t *dst = r->whole ? r->whole + (size_t)y * r->row_bytes
                                 : r->buf[slot];
         int rc = gv_source_read(r->src, n, dst, &err);
-        /* The rows lie end to end in the chunk and in the file. */
-        if (rc == 0 && r->spill)
-            rc = gv_spill_write(r->spill, dst, (size_t)n * r->row_bytes,
-                                r->base + (uint64_t)y * r->row_bytes, &err);
+        /* Each strip's rows lie end to end in the file (strip_at). */
+        for (uint32_t p = 0; rc == 0 && r->spill && p < r->strips; p++) {
+            const uint32_t sw = strip_width(r->width, p);
+            rc = gv_spill_write_rows(
+                r->spill, dst + (size_t)p * PAGE_W * r->c, r->row_bytes,
+                (size_t)sw * r->c, n,
+                r->base + ((uint64_t)p * WINDOW * r->height +
+                           (uint64_t)y * sw) * r->c, &err);
+        }
         pthread_mutex_lock(&r->mu);
         if (rc < 0) {
             r->err = err;
@@ -331,7 +381,9 @@ static int pass1(struct encoder *e, struct gv_source *src)
                         .spill = e->sharded || e->level0_resident ? NULL
                                                                   : e->spill0,
                         .whole = e->level0_resident ? e->window : NULL,
-                        .base = e->orig_base[0], .row_bytes = rb0};
+                        .base = e->orig_base[0], .row_bytes = rb0,
+                        .width = g->width, .strips = strip_count(&g->level[0]),
+                        .c = e->c};
     int rc = -1, started = 0;
     pthread_mutex_init(&rd.mu, NULL);
     pthread_cond_init(&rd.cv, NULL);
@@ -555,28 +607,23 @@ static int load_window(struct encoder *e)
 {
     const struct gv_level *l = &e->g.level[e->level];
     const int c = e->c;
-    const uint32_t x0 = e->px * GV_PAGE_TILES * GV_STEP;
-    const uint32_t y0 = e->py * GV_PAGE_TILES * GV_STEP;
-    e->win_w = l->width - x0 < WINDOW ? l->width - x0 : WINDOW;
+    const uint32_t x0 = e->px * PAGE_W, y0 = e->py * PAGE_W;
+    e->win_w = strip_width(l->width, e->px);
     e->win_h = l->height - y0 < WINDOW ? l->height - y0 : WINDOW;
-    const size_t rb = (size_t)l->width * c;
     if (e->level == 0 && e->level0_resident) {
+        const size_t rb = (size_t)l->width * c;
         e->win = e->window + (size_t)y0 * rb + (size_t)x0 * c;
         e->win_stride = rb;
         return 0;
     }
-    const uint64_t at = e->orig_base[e->level] + (uint64_t)y0 * rb +
-                        (uint64_t)x0 * c;
-    /* Mapped, the window's rows are read where they lie instead of being
-     * copied; but a mapping spans whole rows of the level, and the
-     * kernel maps the neighbours of each page touched (fault-around), so
-     * that all of it counts in the resident set: only where that span is
-     * at most a quarter larger than the window (levels up to 5121 wide)
-     * does the encoder's memory stay within its bound (docs/FORMAT.md
-     * section 9). */
-    const size_t span = (size_t)(e->win_h - 1) * rb + (size_t)e->win_w * c;
+    /* The window is rows y0 .. y0 + win_h - 1 of strip px, one span of
+     * the file: mapped, it is read where it lies (and only its pages
+     * count in the resident set); else it is copied, in one read. */
+    const uint64_t at = strip_at(e, e->level, e->px, y0);
+    e->win_stride = (size_t)e->win_w * c;
+    const size_t span = (size_t)e->win_h * e->win_stride;
     gv_spill_unview(&e->view);
-    if (!e->no_views && span <= (size_t)WINDOW * WINDOW * c / 4 * 5 &&
+    if (!e->no_views &&
         gv_spill_view(level_spill(e, e->level), at, span, &e->view) == 0) {
         /* The copy's memory is given back while the mapping is used, so
          * that the two never count together. */
@@ -584,21 +631,13 @@ static int load_window(struct encoder *e)
             release_pages(e->copies, (size_t)WINDOW * WINDOW * c);
         e->window_resident = 0;
         e->win = e->view.data;
-        e->win_stride = rb;
         return 0;
     }
     if (!e->copies && !(e->copies = malloc((size_t)WINDOW * WINDOW * c)))
         return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
     e->win = e->copies;
-    e->win_stride = (size_t)WINDOW * c;
     e->window_resident = 1;
-    for (uint32_t r = 0; r < e->win_h; r++)
-        if (gv_spill_read(level_spill(e, e->level),
-                          e->copies + (size_t)r * WINDOW * c,
-                          (size_t)e->win_w * c, at + (uint64_t)r * rb,
-                          e->err) < 0)
-            return -1;
-    return 0;
+    return gv_spill_read(level_spill(e, e->level), e->copies, span, at, e->err);
 }
 
 static int load_parents(struct encoder *e, const uint8_t *root_tile)
@@ -741,13 +780,18 @@ static int layout_scratch(struct encoder *e)
 {
     const struct gv_geometry *g = &e->g;
     const int c = e->c;
-    /* Level 0 alone in spill0, the rest in spill. */
-    const uint64_t size0 = (uint64_t)g->level[0].width * g->level[0].height * c;
+    /* Level 0 alone in spill0, the rest in spill; a level of n strips
+     * holds n - 1 columns twice (the windows' overlap). */
+    uint64_t bytes[GV_MAX_LEVELS] = {0};
+    for (int k = 0; k <= g->root; k++)
+        bytes[k] = ((uint64_t)g->level[k].width +
+                    strip_count(&g->level[k]) - 1) * g->level[k].height * c;
+    const uint64_t size0 = bytes[0];
     uint64_t off = 0;
     e->orig_base[0] = 0;
     for (int k = 1; k <= g->root; k++) {
         e->orig_base[k] = off;
-        off += (uint64_t)g->level[k].width * g->level[k].height * c;
+        off += bytes[k];
     }
     e->work_total = 0;
     for (int k = 1; k < g->root; k++) {
