@@ -30,7 +30,10 @@
  * palette, alpha, float or JPEG-compressed TIFF, damaged headers...),
  * which then go to the module as before.  struct gv_image_in is a tagged handle over either.  With
  * GIGAVIEW_NATIVE_READERS=0 in the environment every file goes to the
- * module (tests compare the two; the bench measures both).  Writing
+ * module (tests compare the two; the bench measures both); a JPEG's
+ * header is still checked first by native_jpeg.c against the limits
+ * (max_pixels and the decoder memory of a progressive JPEG), which
+ * OpenImageIO's reader would only apply after allocating.  Writing
  * always goes through the module.
  */
 #include <dlfcn.h>
@@ -200,25 +203,33 @@ static enum reader sniff(const char *path)
     return BY_MODULE;
 }
 
-struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
-                                  struct gv_image_info *info,
-                                  struct gv_error *err)
+struct gv_image_in *gv_image_open_limits(const char *path,
+                                         const struct gv_image_limits *lim,
+                                         struct gv_image_info *info,
+                                         struct gv_error *err)
 {
     struct gv_image_in *in = calloc(1, sizeof *in);
     if (!in) {
         gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
         return NULL;
     }
-    in->by = native_allowed() ? sniff(path) : BY_MODULE;
+    const enum reader kind = sniff(path);
+    in->by = native_allowed() ? kind : BY_MODULE;
     struct gv_error e;
     gv_error_clear(&e);
     const void *native = NULL;   /* the native reader opened, if any */
     if (in->by == BY_JPEG)
-        native = in->u.jpeg = gv_native_jpeg_open(path, max_pixels, info, &e);
+        native = in->u.jpeg = gv_native_jpeg_open(path, lim, info, &e);
     else if (in->by == BY_PNG)
-        native = in->u.png = gv_native_png_open(path, max_pixels, info, &e);
+        native = in->u.png = gv_native_png_open(path, lim->max_pixels, info,
+                                                &e);
     else if (in->by == BY_TIFF)
-        native = in->u.tiff = gv_native_tiff_open(path, max_pixels, info, &e);
+        native = in->u.tiff = gv_native_tiff_open(path, lim->max_pixels,
+                                                  info, &e);
+    else if (kind == BY_JPEG)
+        /* The module's libjpeg takes no limit on its memory: the native
+         * reader's limits, from the header, before it opens the file. */
+        gv_native_jpeg_check(path, lim, &e);
     if (native)
         return in;
     if (e.code != GV_OK) {   /* refused, not declined */
@@ -229,12 +240,20 @@ struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
     }
     in->by = BY_MODULE;
     const struct gv_imageio_module *m = get(err);
-    in->u.module = m ? m->open(path, max_pixels, info, err) : NULL;
+    in->u.module = m ? m->open(path, lim->max_pixels, info, err) : NULL;
     if (!in->u.module) {
         free(in);
         return NULL;
     }
     return in;
+}
+
+struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
+                                  struct gv_image_info *info,
+                                  struct gv_error *err)
+{
+    const struct gv_image_limits lim = {.max_pixels = max_pixels};
+    return gv_image_open_limits(path, &lim, info, err);
 }
 
 int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,
