@@ -191,7 +191,7 @@ static const struct opt_spec encode_opts[] = {
      .wants = "a positive count", .help = "refuse inputs larger than N pixels"},
     {.name = "max-decoder-memory", .kind = OPT_CUSTOM, .arg = "SIZE",
      .parse = parse_decoder_memory,
-     .wants = "a size: digits with an optional K, M, G or T",
+     .wants = "a positive size: digits with an optional K, M, G or T",
      .help = "memory a decoder may hold for one whole input\n"
              "(a progressive JPEG: 3 to 6 bytes a pixel);\n"
              "larger ones are refused (default 1G)"},

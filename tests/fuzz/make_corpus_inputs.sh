@@ -146,8 +146,8 @@ PY
 # variant of tests/data/native (colour types, depths, subsampling,
 # progressive, arithmetic, interlaced, TIFF codecs, tiles, strips,
 # byte orders, BigTIFF, and the ones they leave to the module: CMYK,
-# palette, alpha, MINISWHITE, JPEG-in-TIFF), and truncated and damaged
-# copies of a few.  Truncated PNGs are safe here: the native reader takes
+# palette, alpha, MINISWHITE, JPEG-in-TIFF), truncated and damaged
+# copies of a few, and JPEGs whose headers claim sizes they cannot hold.  Truncated PNGs are safe here: the native reader takes
 # them, not OpenImageIO's leaking one.
 python3 - "$top/tests/data/native" "$here/corpus" <<'PY'
 import os, sys
@@ -169,6 +169,19 @@ for name in sorted(os.listdir(src)):
         f = bytearray(d)
         f[len(f) // 2] ^= 0x40
         save(stem + "-flip", bytes([e]) + bytes(f))
+    # Hostile frame headers: a progressive or multi-scan JPEG claiming
+    # 1000 x 1000 (within the target's 1 MP cap: refused because 863
+    # bytes cannot code its first scan's blocks) and 30000 x 30000
+    # (2.5 GiB of coefficients: refused before libjpeg allocates them,
+    # lib/imageio/native_jpeg.c check_limits).
+    if name in ("progressive.jpg", "multiscan.jpg"):
+        i = 2
+        while d[i + 1] not in (0xC0, 0xC2):
+            i += 2 + (d[i + 2] << 8 | d[i + 3])
+        for side in (1000, 30000):
+            f = bytearray(d)
+            f[i + 5:i + 9] = side.to_bytes(2, "big") * 2
+            save(stem + "-claims-%d" % side, bytes([e]) + bytes(f))
 PY
 
 # ------------------------------------------------------------- settings
