@@ -591,6 +591,28 @@ static void test_decoder_memory(const char *dir)
         expect_refused(path, all, GV_ELIMIT, huge_want[k], what);
         unlink(path);
     }
+    /* A byte between the start of image and the next marker: the native
+     * reader does not take it, libjpeg (and so the module) skips it with
+     * a warning; the loader checks its header all the same. */
+    {
+        size_t len;
+        const char *src = jpeg_claiming(dir, "progressive.jpg",
+                                        "claims-huge.jpg", 30000, 30000);
+        uint8_t *p = slurp(src, &len);
+        uint8_t *q = malloc(len + 1);
+        memcpy(q, p, 2);
+        q[2] = 0x00;
+        memcpy(q + 3, p + 2, len - 2);
+        const char *path = path_in(tmpdir, "stray-byte.jpg");
+        spill(path, q, len + 1);
+        free(p);
+        free(q);
+        unlink(src);
+        expect_refused(path, 1u << MODULE | 1u << LOADER, GV_ELIMIT,
+                       huge_want[0], "progressive.jpg claiming 30000 x 30000 "
+                       "with a stray byte after SOI");
+        unlink(path);
+    }
     /* 12000 x 12000 (412 MiB) under a 64 MiB limit; then the same
      * refusal by libjpeg's own limit alone (not the module: its libjpeg
      * has none). */

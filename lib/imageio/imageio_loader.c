@@ -185,15 +185,19 @@ static int native_allowed(void)
 
 /* The native reader for `path`'s first bytes, or BY_MODULE (also when it
  * is not a regular file or cannot be read: the module says why in its
- * words). */
-static enum reader sniff(const char *path)
+ * words).  *soi: whether they are a JPEG's start of image, FF D8, as
+ * libjpeg (which skips bytes between markers, with a warning) and so the
+ * module take them even when the native reader does not. */
+static enum reader sniff(const char *path, int *soi)
 {
     uint8_t head[8];
+    *soi = 0;
     FILE *f = gv_native_open_regular(path);
     if (!f)
         return BY_MODULE;
     size_t n = fread(head, 1, sizeof head, f);
     fclose(f);
+    *soi = n >= 2 && head[0] == 0xFF && head[1] == 0xD8;
     if (gv_native_jpeg_sniff(head, n))
         return BY_JPEG;
     if (gv_native_png_sniff(head, n))
@@ -213,8 +217,10 @@ struct gv_image_in *gv_image_open_limits(const char *path,
         gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
         return NULL;
     }
-    const enum reader kind = sniff(path);
-    in->by = native_allowed() ? kind : BY_MODULE;
+    int soi;
+    in->by = sniff(path, &soi);
+    if (!native_allowed())
+        in->by = BY_MODULE;
     struct gv_error e;
     gv_error_clear(&e);
     const void *native = NULL;   /* the native reader opened, if any */
@@ -226,7 +232,7 @@ struct gv_image_in *gv_image_open_limits(const char *path,
     else if (in->by == BY_TIFF)
         native = in->u.tiff = gv_native_tiff_open(path, lim->max_pixels,
                                                   info, &e);
-    else if (kind == BY_JPEG)
+    else if (soi)
         /* The module's libjpeg takes no limit on its memory: the native
          * reader's limits, from the header, before it opens the file. */
         gv_native_jpeg_check(path, lim, &e);
