@@ -17,7 +17,8 @@
  * cut points, damaged headers, a header claiming more than max_pixels,
  * progressive and multi-scan JPEGs claiming more than the decoder memory
  * limit or more blocks than their bytes can code (refused every way,
- * with the resident size measured), TIFF tiles claimed enormous, tile
+ * with the resident size measured), a Photoshop file whose JPEG
+ * thumbnail claims the same, TIFF tiles claimed enormous, tile
  * offsets past the end of the file -
  * the native path must fail (or decline) exactly where the module does,
  * with GV_ECORRUPT and an "imageio: PATH: " message, never crash.  A
@@ -667,6 +668,91 @@ static void test_decoder_memory(const char *dir)
     decoder_bytes = 0;
 }
 
+static void put_be(uint8_t *p, uint32_t v, int bytes)
+{
+    for (int i = 0; i < bytes; i++)
+        p[i] = (uint8_t)(v >> 8 * (bytes - 1 - i));
+}
+
+/* tmpdir/out: a 4 x 4 RGB Photoshop file (raw, zero) whose thumbnail
+ * resource (1036) holds the JPEG file `jpg` (psd_thumbnail.c gives the
+ * layout). */
+static const char *psd_with_thumbnail(const char *jpg, const char *out)
+{
+    size_t n;
+    uint8_t *j = slurp(jpg, &n);
+    size_t data = 28 + n + (n & 1), size = 26 + 4 + 4 + 12 + data + 4
+                                           + 2 + 48;
+    uint8_t *p = calloc(1, size), *q = p;
+    memcpy(q, "8BPS", 4);
+    put_be(q + 4, 1, 2);        /* version */
+    put_be(q + 12, 3, 2);       /* channels */
+    put_be(q + 14, 4, 4);       /* height */
+    put_be(q + 18, 4, 4);       /* width */
+    put_be(q + 22, 8, 2);       /* depth */
+    put_be(q + 24, 3, 2);       /* RGB */
+    q += 26 + 4;                /* no colour mode data */
+    put_be(q, (uint32_t)(12 + data), 4);
+    memcpy(q + 4, "8BIM", 4);
+    put_be(q + 8, 1036, 2);     /* then an empty name, 2 bytes */
+    put_be(q + 12, (uint32_t)(28 + n), 4);
+    q += 16;
+    put_be(q, 1, 4);            /* JPEG RGB, 61 x 45 (the header's claim) */
+    put_be(q + 4, 61, 4);
+    put_be(q + 8, 45, 4);
+    put_be(q + 12, 184, 4);     /* row bytes, padded to 4 */
+    put_be(q + 16, 184 * 45, 4);
+    put_be(q + 20, (uint32_t)n, 4);
+    put_be(q + 24, 24, 2);
+    put_be(q + 26, 1, 2);
+    memcpy(q + 28, j, n);
+    /* then no layers (4 zero bytes), raw image data (2 zero bytes), and
+     * 48 zero bytes of pixels */
+    const char *path = path_in(tmpdir, out);
+    spill(path, p, size);
+    free(p);
+    free(j);
+    return path;
+}
+
+/* A Photoshop file's JPEG thumbnail, which OpenImageIO decodes whole
+ * while it opens the file (psd_thumbnail.c): one claiming 30000 x 30000
+ * is refused before the module opens the file; a real one is read. */
+static void test_psd_thumbnail(const char *dir)
+{
+    const char *jpg = jpeg_claiming(dir, "progressive.jpg",
+                                    "claims-huge.jpg", 30000, 30000);
+    const char *bad = psd_with_thumbnail(jpg, "thumb-huge.psd");
+    unlink(jpg);
+    expect_refused(bad, 1u << MODULE | 1u << LOADER, GV_ELIMIT,
+                   "imageio: PATH: its thumbnail, a JPEG of 30000 x 30000, "
+                   "needs about 5.0 GiB of decoder memory, more than the "
+                   "limit of 1.0 GiB (--max-decoder-memory)",
+                   "PSD whose thumbnail claims 30000 x 30000");
+    unlink(bad);
+    const char *good = psd_with_thumbnail(path_in(dir, "progressive.jpg"),
+                                          "thumb.psd");
+    struct result r = read_file(LOADER, good, 1ull << 32);
+    check(r.opened && r.read_ok && r.info.width == 4 && r.info.height == 4,
+          "PSD with a 61 x 45 thumbnail: read (%s%s)", r.open_err.text,
+          r.read_err.text);
+    result_free(&r);
+    /* 61 x 45 x 3 bytes of pixels and 9216 of coefficients */
+    decoder_bytes = 17450;
+    expect_refused(good, 1u << LOADER, GV_ELIMIT, "imageio: PATH: its "
+                   "thumbnail, a JPEG of 61 x 45, needs about 17.0 KiB of "
+                   "decoder memory, more than the limit of 17.0 KiB "
+                   "(--max-decoder-memory)", "PSD, 1 byte under its "
+                   "thumbnail's need");
+    decoder_bytes = 17451;
+    r = read_file(LOADER, good, 1ull << 32);
+    check(r.opened && r.read_ok, "PSD, at exactly its thumbnail's need: "
+          "read (%s%s)", r.open_err.text, r.read_err.text);
+    result_free(&r);
+    decoder_bytes = 0;
+    unlink(good);
+}
+
 /* Little-endian classic TIFF: the first directory's entry for `tag`, or
  * NULL. */
 static uint8_t *tiff_entry(uint8_t *p, size_t len, uint16_t tag)
@@ -977,6 +1063,7 @@ int main(void)
     test_corrupt(native);
     test_huge(native);
     test_decoder_memory(native);
+    test_psd_thumbnail(native);
     test_tiff_hostile(native);
     test_misuse(native);
     test_fifo();

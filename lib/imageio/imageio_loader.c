@@ -33,8 +33,9 @@
  * module (tests compare the two; the bench measures both); a JPEG's
  * header is still checked first by native_jpeg.c against the limits
  * (max_pixels and the decoder memory of a progressive JPEG), which
- * OpenImageIO's reader would only apply after allocating.  Writing
- * always goes through the module.
+ * OpenImageIO's reader would only apply after allocating, and so is a
+ * Photoshop file's thumbnail (psd_thumbnail.c).  Writing always goes
+ * through the module.
  */
 #include <dlfcn.h>
 #include <limits.h>
@@ -51,6 +52,7 @@
 #include "imageio/native_jpeg.h"
 #include "imageio/native_png.h"
 #include "imageio/native_tiff.h"
+#include "imageio/psd_thumbnail.h"
 
 #ifndef PKGLIBDIR
 #define PKGLIBDIR "/usr/local/lib/gigaview"
@@ -187,17 +189,19 @@ static int native_allowed(void)
  * is not a regular file or cannot be read: the module says why in its
  * words).  *soi: whether they are a JPEG's start of image, FF D8, as
  * libjpeg (which skips bytes between markers, with a warning) and so the
- * module take them even when the native reader does not. */
-static enum reader sniff(const char *path, int *soi)
+ * module take them even when the native reader does not.  *psd: whether
+ * they are a Photoshop file's, whose thumbnail the module decodes. */
+static enum reader sniff(const char *path, int *soi, int *psd)
 {
     uint8_t head[8];
-    *soi = 0;
+    *soi = *psd = 0;
     FILE *f = gv_native_open_regular(path);
     if (!f)
         return BY_MODULE;
     size_t n = fread(head, 1, sizeof head, f);
     fclose(f);
     *soi = n >= 2 && head[0] == 0xFF && head[1] == 0xD8;
+    *psd = gv_psd_sniff(head, n);
     if (gv_native_jpeg_sniff(head, n))
         return BY_JPEG;
     if (gv_native_png_sniff(head, n))
@@ -217,8 +221,8 @@ struct gv_image_in *gv_image_open_limits(const char *path,
         gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
         return NULL;
     }
-    int soi;
-    in->by = sniff(path, &soi);
+    int soi, psd;
+    in->by = sniff(path, &soi, &psd);
     if (!native_allowed())
         in->by = BY_MODULE;
     struct gv_error e;
@@ -236,6 +240,8 @@ struct gv_image_in *gv_image_open_limits(const char *path,
         /* The module's libjpeg takes no limit on its memory: the native
          * reader's limits, from the header, before it opens the file. */
         gv_native_jpeg_check(path, lim, &e);
+    else if (psd)
+        gv_psd_thumbnail_check(path, lim, &e);
     if (native)
         return in;
     if (e.code != GV_OK) {   /* refused, not declined */

@@ -359,6 +359,54 @@ out:
     return NULL;
 }
 
+int gv_native_jpeg_check_embedded(FILE *f, long at, const char *path,
+                                  const char *what,
+                                  const struct gv_image_limits *lim,
+                                  struct gv_error *err)
+{
+    gv_error_clear(err);
+    if (fseek(f, at, SEEK_SET) != 0)
+        return 0;
+    struct jpeg_decompress_struct *volatile c = calloc(1, sizeof *c);
+    struct jerr *volatile jerr = calloc(1, sizeof *jerr);
+    volatile int rc = 0;   /* volatile: read after a longjmp */
+    if (!c || !jerr)
+        goto done;
+    c->err = jpeg_std_error(&jerr->pub);
+    jerr->pub.error_exit = on_error;
+    jerr->pub.emit_message = on_message;
+    jerr->pub.output_message = on_output;
+    if (setjmp(jerr->jump))
+        goto done;   /* no header: OpenImageIO's reader fails on it too */
+    jpeg_create_decompress(c);
+    jpeg_stdio_src(c, f);
+    jpeg_read_header(c, TRUE);
+    /* decoded whole: every pixel, and the coefficients of a multi-scan
+     * file */
+    uint64_t need = (uint64_t)c->image_width * c->image_height
+                    * (uint64_t)c->num_components
+                    + (multi_scan(c) ? coef_bytes(c) : 0);
+    uint64_t max = decoder_limit(lim);
+    if (need > max) {
+        char need_s[32], max_s[32];
+        bytes_text(need_s, sizeof need_s, need);
+        bytes_text(max_s, sizeof max_s, max);
+        rc = gv_fail(err, GV_ELIMIT, "imageio: %s: %s, a JPEG of %u x %u, "
+                     "needs about %s of decoder memory, more than the limit "
+                     "of %s (--max-decoder-memory)", path, what,
+                     (unsigned)c->image_width, (unsigned)c->image_height,
+                     need_s, max_s);
+    }
+done:
+    if (c) {
+        if (c->mem)
+            jpeg_destroy_decompress(c);
+        free(c);
+    }
+    free(jerr);
+    return rc;
+}
+
 int gv_native_jpeg_check(const char *path, const struct gv_image_limits *lim,
                          struct gv_error *err)
 {

@@ -9,6 +9,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "base/error.h"
 #include "imageio/imageio.h"
@@ -47,6 +48,20 @@ struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
  */
 int gv_native_jpeg_check(const char *path, const struct gv_image_limits *lim,
                          struct gv_error *err);
+
+/*
+ * The decoder memory of a JPEG inside another file, at byte `at` of f,
+ * which OpenImageIO decodes whole (a Photoshop file's thumbnail,
+ * psd_thumbnail.c): its pixels (width * height * components) and, for a
+ * progressive or multi-scan one, its coefficients.  Returns -1 with *err
+ * filled (GV_ELIMIT, naming `what`) when they exceed
+ * lim->max_decoder_bytes, else 0 (also when libjpeg cannot read its
+ * header).  err must not be NULL.
+ */
+int gv_native_jpeg_check_embedded(FILE *f, long at, const char *path,
+                                  const char *what,
+                                  const struct gv_image_limits *lim,
+                                  struct gv_error *err);
 
 /* The next `rows` rows, as gv_image_read: 0, or -1 with *err filled
  * (GV_ECORRUPT for damaged or truncated data, after which every read

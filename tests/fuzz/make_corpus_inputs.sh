@@ -150,7 +150,7 @@ PY
 # copies of a few, and JPEGs whose headers claim sizes they cannot hold.  Truncated PNGs are safe here: the native reader takes
 # them, not OpenImageIO's leaking one.
 python3 - "$top/tests/data/native" "$here/corpus" <<'PY'
-import os, sys
+import os, struct, sys
 src, out = sys.argv[1], sys.argv[2]
 def save(name, data):
     with open(os.path.join(out, "imageio", name), "wb") as f:
@@ -182,6 +182,18 @@ for name in sorted(os.listdir(src)):
             f = bytearray(d)
             f[i + 5:i + 9] = side.to_bytes(2, "big") * 2
             save(stem + "-claims-%d" % side, bytes([e]) + bytes(f))
+        # A 4 x 4 Photoshop file with this JPEG as its thumbnail, whole
+        # and claiming 30000 x 30000 (lib/imageio/psd_thumbnail.c).
+        if name == "progressive.jpg":
+            for suffix, jpg in (("", d), ("-claims-30000", bytes(f))):
+                j = jpg + b"\0" * (len(jpg) & 1)
+                res = (b"8BIM" + struct.pack(">HHI", 1036, 0, 28 + len(jpg)) +
+                       struct.pack(">IIIIIIHH", 1, 61, 45, 184, 184 * 45,
+                                   len(jpg), 24, 1) + j)
+                psd = (b"8BPS" + struct.pack(">H6xHIIHH", 1, 3, 4, 4, 8, 3) +
+                       struct.pack(">II", 0, len(res)) + res +
+                       struct.pack(">IH", 0, 0) + bytes(48))
+                save("psd-thumbnail" + suffix, bytes([10]) + psd)
 PY
 
 # ------------------------------------------------------------- settings
