@@ -236,14 +236,16 @@ struct gv_image_in *gv_image_open_limits(const char *path,
     else if (in->by == BY_TIFF)
         native = in->u.tiff = gv_native_tiff_open(path, lim->max_pixels,
                                                   info, &e);
-    else if (soi)
-        /* The module's libjpeg takes no limit on its memory: the native
-         * reader's limits, from the header, before it opens the file. */
-        gv_native_jpeg_check(path, lim, &e);
-    else if (psd)
-        gv_psd_thumbnail_check(path, lim, &e);
     if (native)
         return in;
+    /* For the module, whose libjpeg takes no limit on its memory: the
+     * native reader's limits from the header (again, for a JPEG it
+     * declined: it may have done so before reading the header), and a
+     * Photoshop file's thumbnail, before it opens the file. */
+    if (e.code == GV_OK && soi)
+        gv_native_jpeg_check(path, lim, &e);
+    else if (e.code == GV_OK && psd)
+        gv_psd_thumbnail_check(path, lim, &e);
     if (e.code != GV_OK) {   /* refused, not declined */
         if (err)
             *err = e;

@@ -370,14 +370,16 @@ int gv_native_jpeg_check_embedded(FILE *f, long at, const char *path,
     struct jpeg_decompress_struct *volatile c = calloc(1, sizeof *c);
     struct jerr *volatile jerr = calloc(1, sizeof *jerr);
     volatile int rc = 0;   /* volatile: read after a longjmp */
-    if (!c || !jerr)
-        goto done;
+    if (!c || !jerr) {
+        rc = gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+        goto out;
+    }
     c->err = jpeg_std_error(&jerr->pub);
     jerr->pub.error_exit = on_error;
     jerr->pub.emit_message = on_message;
     jerr->pub.output_message = on_output;
     if (setjmp(jerr->jump))
-        goto done;   /* no header: OpenImageIO's reader fails on it too */
+        goto out;   /* no header: OpenImageIO's reader fails on it too */
     jpeg_create_decompress(c);
     jpeg_stdio_src(c, f);
     jpeg_read_header(c, TRUE);
@@ -397,7 +399,7 @@ int gv_native_jpeg_check_embedded(FILE *f, long at, const char *path,
                      (unsigned)c->image_width, (unsigned)c->image_height,
                      need_s, max_s);
     }
-done:
+out:
     if (c) {
         if (c->mem)
             jpeg_destroy_decompress(c);
@@ -414,22 +416,22 @@ int gv_native_jpeg_check(const char *path, const struct gv_image_limits *lim,
     volatile int rc = 0;   /* volatile: read after a longjmp */
     struct gv_native_jpeg *j = calloc(1, sizeof *j);
     if (!j)
-        return 0;
+        return gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
     j->f = gv_native_open_regular(path);
     if (!j->f)
-        goto done;
+        goto out;   /* the module says why */
     j->cinfo.err = jpeg_std_error(&j->jerr.pub);
     j->jerr.pub.error_exit = on_error;
     j->jerr.pub.emit_message = on_message;
     j->jerr.pub.output_message = on_output;
     if (setjmp(j->jerr.jump))
-        goto done;   /* no header: the module says why */
+        goto out;   /* no header: the module says why */
     jpeg_create_decompress(&j->cinfo);
     j->created = 1;
     jpeg_stdio_src(&j->cinfo, j->f);
     jpeg_read_header(&j->cinfo, TRUE);
     rc = check_limits(&j->cinfo, path, file_size(j->f), lim, err);
-done:
+out:
     gv_native_jpeg_close(j);
     return rc;
 }

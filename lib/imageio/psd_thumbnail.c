@@ -55,11 +55,11 @@ int gv_psd_thumbnail_check(const char *path, const struct gv_image_limits *lim,
     int rc = 0;
     int64_t mode_len = be32_at(f, 26);
     if (mode_len < 0)
-        goto done;
+        goto out;
     int64_t at = 26 + 4 + mode_len;   /* the resources' length */
     int64_t res_len = be32_at(f, at);
     if (res_len < 0)
-        goto done;
+        goto out;
     int64_t end = at + 4 + res_len;
     at += 4;
     while (at + 12 <= end) {
@@ -81,7 +81,7 @@ int gv_psd_thumbnail_check(const char *path, const struct gv_image_limits *lim,
         }
         at = data + size + (size & 1);
     }
-done:
+out:
     fclose(f);
     return rc;
 }
