@@ -39,7 +39,8 @@ struct gv_image_limits {
     uint64_t max_pixels;          /* width * height */
     uint64_t max_decoder_bytes;   /* memory a decoder may hold for the whole
                                    * image: a progressive or multi-scan
-                                   * JPEG's coefficients (0: the default,
+                                   * JPEG's coefficients, a Photoshop
+                                   * file's JPEG thumbnail (0: the default,
                                    * GV_IMAGE_MAX_DECODER_BYTES) */
 };
 
@@ -52,9 +53,10 @@ struct gv_image_limits {
  * lim->max_pixels or whose sizes do not fit in 31 bits, and JPEGs whose
  * decoding would hold more than lim->max_decoder_bytes (a progressive or
  * multi-scan JPEG is held whole as coefficients, 2 bytes a sample, by
- * every reader); such a JPEG that claims more blocks than its file can
- * code is refused with GV_ECORRUPT.  Returns NULL and fills *err on
- * failure. */
+ * every reader), or Photoshop files whose JPEG thumbnail would (the
+ * module decodes it whole); such a JPEG that claims more blocks than its
+ * file can code is refused with GV_ECORRUPT.  Returns NULL and fills *err
+ * on failure. */
 struct gv_image_in *gv_image_open_limits(const char *path,
                                          const struct gv_image_limits *lim,
                                          struct gv_image_info *info,
