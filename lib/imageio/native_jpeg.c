@@ -48,10 +48,14 @@
  * (max_memory_to_use, honoured by jmemnobs.c since libjpeg-turbo 1.5.2:
  * arrays that do not fit need a backing store, which it does not have,
  * and it fails with "Backing store not supported" before allocating
- * them), with a margin for its other buffers: a backstop, reported in
- * the same words.  A sequential single-scan file requests no such array,
- * so no file within max_pixels that is not progressive or multi-scan is
- * affected.
+ * them; only arrays no taller than its access window, a few block rows,
+ * are always allocated), with a margin for its other buffers: a
+ * backstop, reported in the same words (measured: a 65500 x 16
+ * progressive file decodes at a limit of exactly its coefficients, and
+ * a 12000 x 12000 claim is refused by the backstop alone, test
+ * test_native_read.c).  A sequential single-scan file requests no such
+ * array, so no file within max_pixels that is not progressive or
+ * multi-scan is affected.
  */
 #include <limits.h>
 #include <setjmp.h>
@@ -126,7 +130,9 @@ static uint64_t round_up(uint64_t v, uint64_t m)
  * file (jdcoefct.c jinit_d_coef_controller): per component, its width
  * and height in blocks rounded up to its sampling factors, a JBLOCK (64
  * coefficients of 2 bytes) each - the maximum_space of jmemmgr.c
- * realize_virt_arrays. */
+ * realize_virt_arrays.  Measured with the checks removed: the resident
+ * size rose by 2574 MiB for a 30000 x 30000 4:2:0 claim, computed here
+ * as 2575 MiB, and by 411 MiB for 12000 x 12000, computed 412. */
 static uint64_t coef_bytes(const struct jpeg_decompress_struct *c)
 {
     uint64_t sum = 0;
