@@ -9,8 +9,11 @@
  * --shard I/N it writes one shard file instead (docs/OPERATIONS.md,
  * "Encoding on many machines"), which `gigaview merge` assembles.
  */
+#include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,6 +22,7 @@
 #include "encode/height_encode.h"
 #include "encode/shard_plan.h"
 #include "encode/stream_encoder.h"
+#include "imageio/imageio.h"
 #include "options.h"
 #include "progress.h"
 #include "summary.h"
@@ -107,6 +111,40 @@ static int parse_range(const char *arg, void *fields, const char **wants)
     return 0;
 }
 
+/* --max-decoder-memory SIZE: digits with an optional K, M, G or T (powers
+ * of 1024, as gigaviewd.conf's sizes), then an optional "iB" or "B";
+ * at least 1. */
+static int parse_decoder_memory(const char *arg, void *fields,
+                                const char **wants)
+{
+    struct gv_source_opts *src = &((struct encode_args *)fields)->o.source;
+    (void)wants;
+    if (*arg < '0' || *arg > '9')
+        return -1;
+    errno = 0;
+    char *end;
+    unsigned long long v = strtoull(arg, &end, 10);
+    if (errno == ERANGE)
+        return -1;
+    int shift = 0;
+    if (*end) {
+        static const char units[] = "KMGT";
+        const char *u = strchr(units, toupper((unsigned char)*end));
+        if (!u || !*u)
+            return -1;
+        shift = 10 * (int)(u - units + 1);
+        end++;
+        if (*end == 'i')
+            end++;
+        if (*end == 'B')
+            end++;
+    }
+    if (*end || v == 0 || v > (UINT64_MAX >> shift))
+        return -1;
+    src->max_decoder_bytes = (uint64_t)v << shift;
+    return 0;
+}
+
 /* --shard I/N */
 static int parse_shard(const char *arg, void *fields, const char **wants)
 {
@@ -114,6 +152,9 @@ static int parse_shard(const char *arg, void *fields, const char **wants)
     (void)wants;
     return gv_shard_parse(arg, &o->shard_index, &o->shard_count);
 }
+
+_Static_assert(GV_IMAGE_MAX_DECODER_BYTES == 1ull << 30,
+               "--max-decoder-memory's help says the default is 1G");
 
 #define F(field) offsetof(struct encode_args, field)
 static const struct opt_spec encode_opts[] = {
@@ -148,6 +189,12 @@ static const struct opt_spec encode_opts[] = {
     {.name = "max-pixels", .kind = OPT_COUNT, .arg = "N",
      .field = F(o.source.max_pixels), .flags = OPT_NO_ECHO,
      .wants = "a positive count", .help = "refuse inputs larger than N pixels"},
+    {.name = "max-decoder-memory", .kind = OPT_CUSTOM, .arg = "SIZE",
+     .parse = parse_decoder_memory,
+     .wants = "a positive size: digits with an optional K, M, G or T",
+     .help = "memory a decoder may hold for one whole input\n"
+             "(a progressive JPEG: 3 to 6 bytes a pixel);\n"
+             "larger ones are refused (default 1G)"},
     {.name = "tmpdir", .kind = OPT_STRING, .arg = "DIR", .field = F(o.tmpdir),
      .help = "scratch directory (default: the output's)"},
     {.name = "progress", .kind = OPT_FLAG, .field = F(progress),

@@ -178,14 +178,17 @@ static void usage_row(FILE *out, char short_name, const char *name, const char *
     char head[64];
     snprintf(head, sizeof head, "--%s%s%s", name, arg ? " " : "", arg ? arg : "");
     const int width = HELP_COLUMN - 7;   /* "  -s, " before, one space after */
+    /* A head wider than its column gets a line of its own. */
+    const int own_line = (int)strlen(head) > width;
     if (short_name)
-        fprintf(out, "  -%c, %-*s ", short_name, width, head);
+        fprintf(out, "  -%c, %-*s", short_name, width, head);
     else
-        fprintf(out, "      %-*s ", width, head);
+        fprintf(out, "      %-*s", width, head);
+    fputs(own_line ? "\n" : " ", out);
     for (const char *line = help; line;) {
         const char *nl = strchr(line, '\n');
         int len = nl ? (int)(nl - line) : (int)strlen(line);
-        if (line != help)
+        if (line != help || own_line)
             fprintf(out, "%*s", HELP_COLUMN, "");
         fprintf(out, "%.*s\n", len, line);
         line = nl ? nl + 1 : NULL;

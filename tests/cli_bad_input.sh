@@ -112,6 +112,37 @@ bad_case "--max-pixels 1000 on a 640x480 JPEG" \
 bad_case "--max-pixels 1000 on a mosaic" \
     "imageio: $jpg: image of 640x480 pixels exceeds the limit of 1000 pixels" \
     --max-pixels 1000 -m 2x1 "$jpg" "$jpg"
+# A progressive JPEG of 863 bytes (tests/data/native/progressive.jpg)
+# whose frame header claims 30000x30000: libjpeg would allocate and touch
+# 2.5 GiB of coefficients before failing on the missing data.  Refused
+# from the header, natively and before the OpenImageIO module; over the
+# default --max-decoder-memory (1G) it is the limit that says no, under
+# a larger one the file's size (its first scan's blocks need 2.6 MB).
+python3 - "$TESTDATA/native/progressive.jpg" "$in/claims-huge.jpg" <<'EOF' || bail "python3"
+import sys
+p = bytearray(open(sys.argv[1], "rb").read())
+i = 2
+while p[i + 1] != 0xC2:
+    i += 2 + (p[i + 2] << 8 | p[i + 3])
+p[i + 5:i + 9] = (30000).to_bytes(2, "big") * 2
+open(sys.argv[2], "wb").write(p)
+EOF
+huge_msg="imageio: $in/claims-huge.jpg: a progressive JPEG of 30000 x 30000 needs about 2.5 GiB of decoder memory, more than the limit of 1.0 GiB (--max-decoder-memory)"
+bad_case "progressive JPEG claiming 30000x30000" "$huge_msg" "$in/claims-huge.jpg"
+export GIGAVIEW_NATIVE_READERS=0
+bad_case "progressive JPEG claiming 30000x30000, through the module" "$huge_msg" \
+    "$in/claims-huge.jpg"
+unset GIGAVIEW_NATIVE_READERS
+bad_case "progressive JPEG claiming 30000x30000, --max-decoder-memory 4G" \
+    "imageio: $in/claims-huge.jpg: a progressive JPEG of 30000 x 30000 is truncated: its first scan codes 21093750 blocks, at least 2636718 bytes, in a file of 863 bytes" \
+    --max-decoder-memory 4G "$in/claims-huge.jpg"
+bad_case "--max-decoder-memory 8K on a progressive JPEG of 61x45" \
+    "imageio: $TESTDATA/native/progressive.jpg: a progressive JPEG of 61 x 45 needs about 9.0 KiB of decoder memory, more than the limit of 8.0 KiB (--max-decoder-memory)" \
+    --max-decoder-memory 8K "$TESTDATA/native/progressive.jpg"
+run encode --max-decoder-memory 9KiB "$TESTDATA/native/progressive.jpg" -o "$T/prog.gv" --quiet
+expect_rc "--max-decoder-memory 9KiB: the progressive JPEG that needs 9 KiB" 0
+run encode --max-decoder-memory 1 "$jpg" -o "$T/baseline.gv" --quiet
+expect_rc "--max-decoder-memory 1: a baseline JPEG needs no decoder memory" 0
 bad_case_re "mosaic with one damaged tile" \
     "^gigaview encode: imageio: $in/trunc\\.jpg: JPEG error: " -m 2x1 "$jpg" "$in/trunc.jpg"
 

@@ -354,6 +354,15 @@ usage_case "encode --max-pixels 0" "$E --max-pixels wants a positive count" \
     encode --max-pixels 0 synth:10x10 -o u.gv
 usage_case "encode --max-pixels -5 (strtoull would wrap it)" "$E --max-pixels wants a positive count" \
     encode --max-pixels -5 synth:10x10 -o u.gv
+usage_case "encode --max-decoder-memory 0" \
+    "$E --max-decoder-memory wants a positive size: digits with an optional K, M, G or T, not '0'" \
+    encode --max-decoder-memory 0 synth:10x10 -o u.gv
+usage_case "encode --max-decoder-memory 1X" \
+    "$E --max-decoder-memory wants a positive size: digits with an optional K, M, G or T, not '1X'" \
+    encode --max-decoder-memory 1X synth:10x10 -o u.gv
+usage_case "encode --max-decoder-memory 99999999999T (past 64 bits)" \
+    "$E --max-decoder-memory wants a positive size: digits with an optional K, M, G or T, not '99999999999T'" \
+    encode --max-decoder-memory 99999999999T synth:10x10 -o u.gv
 # getopt's own words (glibc), then the usage.
 usage_case "encode unknown option" "$E unrecognized option '--frobnicate'" \
     encode --frobnicate synth:10x10 -o u.gv

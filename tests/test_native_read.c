@@ -15,7 +15,11 @@
  * fancy upsampling; 16-bit samples left big-endian or byte-swapped) the
  * same comparison finds differences, so it can fail.  Hostile files: truncated at several
  * cut points, damaged headers, a header claiming more than max_pixels,
- * TIFF tiles claimed enormous, tile offsets past the end of the file -
+ * progressive and multi-scan JPEGs claiming more than the decoder memory
+ * limit or more blocks than their bytes can code (refused every way,
+ * with the resident size measured), a Photoshop file whose JPEG
+ * thumbnail claims the same, TIFF tiles claimed enormous, tile
+ * offsets past the end of the file -
  * the native path must fail (or decline) exactly where the module does,
  * with GV_ECORRUPT and an "imageio: PATH: " message, never crash.  A
  * forked child without the module checks that JPEG and PNG input needs
@@ -92,6 +96,9 @@ struct any {
     struct gv_native_tiff *tiff;
 };
 
+/* The decoder memory limit every open uses (0: the default). */
+static uint64_t decoder_bytes;
+
 static int any_open(struct any *a, enum how how, const char *path,
                     uint64_t max_pixels, struct gv_image_info *info,
                     struct gv_error *err)
@@ -99,9 +106,11 @@ static int any_open(struct any *a, enum how how, const char *path,
     memset(a, 0, sizeof *a);
     a->how = how;
     gv_error_clear(err);
+    const struct gv_image_limits lim = {.max_pixels = max_pixels,
+                                        .max_decoder_bytes = decoder_bytes};
     if (how == NATIVE) {
         if (ends_with(path, ".jpg"))
-            a->jpeg = gv_native_jpeg_open(path, max_pixels, info, err);
+            a->jpeg = gv_native_jpeg_open(path, &lim, info, err);
         else if (ends_with(path, ".tif"))
             a->tiff = gv_native_tiff_open(path, max_pixels, info, err);
         else
@@ -112,7 +121,8 @@ static int any_open(struct any *a, enum how how, const char *path,
         setenv("GIGAVIEW_NATIVE_READERS", "0", 1);
     else
         unsetenv("GIGAVIEW_NATIVE_READERS");
-    a->in = gv_image_open(path, max_pixels, info, err);
+    a->in = decoder_bytes ? gv_image_open_limits(path, &lim, info, err)
+                          : gv_image_open(path, max_pixels, info, err);
     unsetenv("GIGAVIEW_NATIVE_READERS");
     return a->in ? 0 : -1;
 }
@@ -460,6 +470,289 @@ static void test_huge(const char *dir)
     }
 }
 
+/* tmpdir/out: a copy of the JPEG dir/name whose frame header (SOF0, 1 or
+ * 2) claims w x h. */
+static const char *jpeg_claiming(const char *dir, const char *name,
+                                 const char *out, unsigned w, unsigned h)
+{
+    size_t len;
+    uint8_t *p = slurp(path_in(dir, name), &len);
+    size_t i = 2;
+    while (i + 9 < len && p[i] == 0xFF && !(p[i + 1] >= 0xC0
+                                            && p[i + 1] <= 0xC2))
+        i += 2 + (size_t)(p[i + 2] << 8 | p[i + 3]);
+    if (i + 9 >= len || p[i] != 0xFF)
+        fail("%s: no frame header", name);
+    p[i + 5] = (uint8_t)(h >> 8), p[i + 6] = (uint8_t)h;
+    p[i + 7] = (uint8_t)(w >> 8), p[i + 8] = (uint8_t)w;
+    const char *path = path_in(tmpdir, out);
+    spill(path, p, len);
+    free(p);
+    return path;
+}
+
+/* A field of /proc/self/status in kB ("VmHWM", "VmRSS"), or -1. */
+static long long status_kb(const char *key)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    long long v = -1;
+    size_t n = strlen(key);
+    while (f && fgets(line, sizeof line, f))
+        if (strncmp(line, key, n) == 0 && line[n] == ':')
+            v = atoll(line + n + 1);
+    if (f)
+        fclose(f);
+    return v;
+}
+
+/* Reset the peak resident size to the current one (Linux 4.0's
+ * /proc/self/clear_refs "5"); 0 when that cannot be done. */
+static int peak_reset(void)
+{
+    FILE *f = fopen("/proc/self/clear_refs", "w");
+    if (!f)
+        return 0;
+    int ok = fputs("5", f) >= 0;
+    return fclose(f) == 0 && ok;
+}
+
+/* What reading `path` one way gave, and by how many MiB the resident
+ * size rose to its peak meanwhile (-1: not measured). */
+static struct result read_measured(enum how how, const char *path,
+                                   uint64_t max_pixels, long long *peak_mib)
+{
+    *peak_mib = -1;
+    long long before = peak_reset() ? status_kb("VmRSS") : -1;
+    struct result r = read_file(how, path, max_pixels);
+    long long hwm = status_kb("VmHWM");
+    if (before >= 0 && hwm >= 0)
+        *peak_mib = (hwm - before) / 1024;
+    return r;
+}
+
+static const char *const how_name[] = {"the module", "native", "loader"};
+
+/* Open `path` each way in ways (bits 1 << MODULE, NATIVE, LOADER): refused
+ * at open with `code` and exactly `want` (with "PATH" for the path),
+ * while the resident size rises by less than 48 MiB (hostile files here
+ * would need hundreds, and the unprotected readers touch what they
+ * need). */
+static void expect_refused(const char *path, unsigned ways, enum gv_code code,
+                           const char *want, const char *what)
+{
+    char full[4400];
+    const char *at = strstr(want, "PATH");
+    snprintf(full, sizeof full, "%.*s%s%s", (int)(at - want), want, path,
+             at + 4);
+    for (int how = MODULE; how <= LOADER; how++) {
+        if (!(ways & 1u << how))
+            continue;
+        long long mib;
+        struct result r = read_measured((enum how)how, path, 1ull << 32,
+                                        &mib);
+        check(!r.opened && r.open_err.code == code, "%s, %s: refused at open "
+              "with code %d (%d: %s)", what, how_name[how], (int)code,
+              (int)r.open_err.code, r.opened ? "opened" : r.open_err.text);
+        check_str(r.open_err.text, full, "%s, %s: the message", what,
+                  how_name[how]);
+        if (mib >= 0 && !under_valgrind)
+            check(mib < 48, "%s, %s: the resident size rose by %lld MiB "
+                  "(< 48)", what, how_name[how], mib);
+        result_free(&r);
+    }
+}
+
+/* The decoder memory limit (native_jpeg.c, "Memory"): a progressive or
+ * multi-scan JPEG claiming a size it cannot hold is refused from its
+ * header, whichever reader would read it, before libjpeg allocates its
+ * coefficients; the limit is exact and leaves other JPEGs alone. */
+static void test_decoder_memory(const char *dir)
+{
+    const unsigned all = 1u << MODULE | 1u << NATIVE | 1u << LOADER;
+    const char *const srcs[3] = {"progressive.jpg", "multiscan.jpg",
+                                 "gray-progressive.jpg"};
+    /* 30000 x 30000 under the default limit, 1 GiB: 4:2:0, 2.5 GiB; gray,
+     * 1.7 GiB. */
+    const char *const huge_want[3] = {
+        "imageio: PATH: a progressive JPEG of 30000 x 30000 needs about "
+        "2.5 GiB of decoder memory, more than the limit of 1.0 GiB "
+        "(--max-decoder-memory)",
+        "imageio: PATH: a multi-scan JPEG of 30000 x 30000 needs about "
+        "2.5 GiB of decoder memory, more than the limit of 1.0 GiB "
+        "(--max-decoder-memory)",
+        "imageio: PATH: a progressive JPEG of 30000 x 30000 needs about "
+        "1.7 GiB of decoder memory, more than the limit of 1.0 GiB "
+        "(--max-decoder-memory)"};
+    for (int k = 0; k < 3; k++) {
+        const char *path = jpeg_claiming(dir, srcs[k], "claims-huge.jpg",
+                                         30000, 30000);
+        char what[96];
+        snprintf(what, sizeof what, "%s claiming 30000 x 30000", srcs[k]);
+        expect_refused(path, all, GV_ELIMIT, huge_want[k], what);
+        unlink(path);
+    }
+    /* A byte between the start of image and the next marker: the native
+     * reader does not take it, libjpeg (and so the module) skips it with
+     * a warning; the loader checks its header all the same. */
+    {
+        size_t len;
+        const char *src = jpeg_claiming(dir, "progressive.jpg",
+                                        "claims-huge.jpg", 30000, 30000);
+        uint8_t *p = slurp(src, &len);
+        uint8_t *q = malloc(len + 1);
+        memcpy(q, p, 2);
+        q[2] = 0x00;
+        memcpy(q + 3, p + 2, len - 2);
+        const char *path = path_in(tmpdir, "stray-byte.jpg");
+        spill(path, q, len + 1);
+        free(p);
+        free(q);
+        unlink(src);
+        expect_refused(path, 1u << MODULE | 1u << LOADER, GV_ELIMIT,
+                       huge_want[0], "progressive.jpg claiming 30000 x 30000 "
+                       "with a stray byte after SOI");
+        unlink(path);
+    }
+    /* 12000 x 12000 (412 MiB) under a 64 MiB limit; then the same
+     * refusal by libjpeg's own limit alone (not the module: its libjpeg
+     * has none). */
+    const char *mid = jpeg_claiming(dir, "progressive.jpg", "claims-mid.jpg",
+                                    12000, 12000);
+    const char *mid_want = "imageio: PATH: a progressive JPEG of 12000 x "
+                           "12000 needs about 412.0 MiB of decoder memory, "
+                           "more than the limit of 64.0 MiB "
+                           "(--max-decoder-memory)";
+    decoder_bytes = 64u << 20;
+    expect_refused(mid, all, GV_ELIMIT, mid_want, "12000 x 12000, 64 MiB");
+    gv_native_jpeg_test_backstop_only(1);
+    expect_refused(mid, 1u << NATIVE | 1u << LOADER, GV_ELIMIT, mid_want,
+                   "12000 x 12000, 64 MiB, libjpeg's limit alone");
+    gv_native_jpeg_test_backstop_only(0);
+    decoder_bytes = 0;
+    /* Within the default limit, but 863 bytes cannot code the first
+     * scan's 3375000 blocks. */
+    expect_refused(mid, all, GV_ECORRUPT, "imageio: PATH: a progressive JPEG "
+                   "of 12000 x 12000 is truncated: its first scan codes "
+                   "3375000 blocks, at least 421875 bytes, in a file of 863 "
+                   "bytes", "12000 x 12000 in 863 bytes");
+    unlink(mid);
+    /* progressive.jpg: 72 blocks of 128 bytes (8 x 6 of Y, 4 x 3 of Cb
+     * and of Cr).  Read at exactly that limit, refused one byte under;
+     * a sequential single-scan file needs none. */
+    const char *prog = path_in(dir, "progressive.jpg");
+    decoder_bytes = 9216;
+    for (int how = MODULE; how <= LOADER; how++) {
+        struct result r = read_file((enum how)how, prog, 1ull << 32);
+        check(r.opened && r.read_ok, "progressive.jpg, %s: read with a limit "
+              "of exactly its 9216 bytes (%s%s)", how_name[how],
+              r.open_err.text, r.read_err.text);
+        result_free(&r);
+    }
+    decoder_bytes = 9215;
+    expect_refused(prog, all, GV_ELIMIT, "imageio: PATH: a progressive JPEG "
+                   "of 61 x 45 needs about 9.0 KiB of decoder memory, more "
+                   "than the limit of 9.0 KiB (--max-decoder-memory)",
+                   "progressive.jpg, 1 byte under its need");
+    decoder_bytes = 1;
+    const char *const seq[3] = {"s420.jpg", "restart.jpg", "arithmetic.jpg"};
+    for (int k = 0; k < 3; k++)
+        for (int how = MODULE; how <= LOADER; how++) {
+            struct result r = read_file((enum how)how, path_in(dir, seq[k]),
+                                        1ull << 32);
+            check(r.opened && r.read_ok, "%s, %s: read with a decoder "
+                  "memory limit of 1 byte (%s%s)", seq[k], how_name[how],
+                  r.open_err.text, r.read_err.text);
+            result_free(&r);
+        }
+    decoder_bytes = 0;
+}
+
+static void put_be(uint8_t *p, uint32_t v, int bytes)
+{
+    for (int i = 0; i < bytes; i++)
+        p[i] = (uint8_t)(v >> 8 * (bytes - 1 - i));
+}
+
+/* tmpdir/out: a 4 x 4 RGB Photoshop file (raw, zero) whose thumbnail
+ * resource (1036) holds the JPEG file `jpg` (psd_thumbnail.c gives the
+ * layout). */
+static const char *psd_with_thumbnail(const char *jpg, const char *out)
+{
+    size_t n;
+    uint8_t *j = slurp(jpg, &n);
+    size_t data = 28 + n + (n & 1), size = 26 + 4 + 4 + 12 + data + 4
+                                           + 2 + 48;
+    uint8_t *p = calloc(1, size), *q = p;
+    memcpy(q, "8BPS", 4);
+    put_be(q + 4, 1, 2);        /* version */
+    put_be(q + 12, 3, 2);       /* channels */
+    put_be(q + 14, 4, 4);       /* height */
+    put_be(q + 18, 4, 4);       /* width */
+    put_be(q + 22, 8, 2);       /* depth */
+    put_be(q + 24, 3, 2);       /* RGB */
+    q += 26 + 4;                /* no colour mode data */
+    put_be(q, (uint32_t)(12 + data), 4);
+    memcpy(q + 4, "8BIM", 4);
+    put_be(q + 8, 1036, 2);     /* then an empty name, 2 bytes */
+    put_be(q + 12, (uint32_t)(28 + n), 4);
+    q += 16;
+    put_be(q, 1, 4);            /* JPEG RGB, 61 x 45 (the header's claim) */
+    put_be(q + 4, 61, 4);
+    put_be(q + 8, 45, 4);
+    put_be(q + 12, 184, 4);     /* row bytes, padded to 4 */
+    put_be(q + 16, 184 * 45, 4);
+    put_be(q + 20, (uint32_t)n, 4);
+    put_be(q + 24, 24, 2);
+    put_be(q + 26, 1, 2);
+    memcpy(q + 28, j, n);
+    /* then no layers (4 zero bytes), raw image data (2 zero bytes), and
+     * 48 zero bytes of pixels */
+    const char *path = path_in(tmpdir, out);
+    spill(path, p, size);
+    free(p);
+    free(j);
+    return path;
+}
+
+/* A Photoshop file's JPEG thumbnail, which OpenImageIO decodes whole
+ * while it opens the file (psd_thumbnail.c): one claiming 30000 x 30000
+ * is refused before the module opens the file; a real one is read. */
+static void test_psd_thumbnail(const char *dir)
+{
+    const char *jpg = jpeg_claiming(dir, "progressive.jpg",
+                                    "claims-huge.jpg", 30000, 30000);
+    const char *bad = psd_with_thumbnail(jpg, "thumb-huge.psd");
+    unlink(jpg);
+    expect_refused(bad, 1u << MODULE | 1u << LOADER, GV_ELIMIT,
+                   "imageio: PATH: its thumbnail, a JPEG of 30000 x 30000, "
+                   "needs about 5.0 GiB of decoder memory, more than the "
+                   "limit of 1.0 GiB (--max-decoder-memory)",
+                   "PSD whose thumbnail claims 30000 x 30000");
+    unlink(bad);
+    const char *good = psd_with_thumbnail(path_in(dir, "progressive.jpg"),
+                                          "thumb.psd");
+    struct result r = read_file(LOADER, good, 1ull << 32);
+    check(r.opened && r.read_ok && r.info.width == 4 && r.info.height == 4,
+          "PSD with a 61 x 45 thumbnail: read (%s%s)", r.open_err.text,
+          r.read_err.text);
+    result_free(&r);
+    /* 61 x 45 x 3 bytes of pixels and 9216 of coefficients */
+    decoder_bytes = 17450;
+    expect_refused(good, 1u << LOADER, GV_ELIMIT, "imageio: PATH: its "
+                   "thumbnail, a JPEG of 61 x 45, needs about 17.0 KiB of "
+                   "decoder memory, more than the limit of 17.0 KiB "
+                   "(--max-decoder-memory)", "PSD, 1 byte under its "
+                   "thumbnail's need");
+    decoder_bytes = 17451;
+    r = read_file(LOADER, good, 1ull << 32);
+    check(r.opened && r.read_ok, "PSD, at exactly its thumbnail's need: "
+          "read (%s%s)", r.open_err.text, r.read_err.text);
+    result_free(&r);
+    decoder_bytes = 0;
+    unlink(good);
+}
+
 /* Little-endian classic TIFF: the first directory's entry for `tag`, or
  * NULL. */
 static uint8_t *tiff_entry(uint8_t *p, size_t len, uint16_t tag)
@@ -769,6 +1062,8 @@ int main(void)
     test_truncated(native);
     test_corrupt(native);
     test_huge(native);
+    test_decoder_memory(native);
+    test_psd_thumbnail(native);
     test_tiff_hostile(native);
     test_misuse(native);
     test_fifo();

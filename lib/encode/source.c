@@ -83,6 +83,7 @@ struct gv_source {
                                  * JPEG decodes every scan) */
     unsigned char *scratch;
     size_t scratch_size;
+    struct gv_image_limits limits;  /* max_pixels below, and the decoder's */
     uint64_t max_pixels;
 
     /* tone */
@@ -357,8 +358,8 @@ static int probe_tiles(struct gv_source *s, const char *const *inputs,
         t->path = strdup(inputs[i]);
         if (!t->path)
             return gv_fail(err, GV_ENOMEM, "source: out of memory");
-        struct gv_image_in *in = gv_image_open(t->path, s->max_pixels,
-                                               &t->info, err);
+        struct gv_image_in *in = gv_image_open_limits(t->path, &s->limits,
+                                                      &t->info, err);
         if (!in)
             return -1;
         if (cols * rows == 1)
@@ -449,6 +450,8 @@ struct gv_source *gv_source_open(const char *const *inputs, int n,
     }
     s->max_pixels = opts && opts->max_pixels ? opts->max_pixels
                                              : GV_SOURCE_MAX_PIXELS;
+    s->limits.max_pixels = s->max_pixels;
+    s->limits.max_decoder_bytes = opts ? opts->max_decoder_bytes : 0;
     s->cols = 1;
     s->rows = 1;
     if (opts && opts->mosaic_cols > 0) {
@@ -508,7 +511,7 @@ static int open_grid_row(struct gv_source *s, int r, struct gv_error *err)
     for (int c = 0; c < s->cols; c++) {
         const struct tile *t = &s->tiles[r * s->cols + c];
         struct gv_image_info now;
-        s->open[c] = gv_image_open(t->path, s->max_pixels, &now, err);
+        s->open[c] = gv_image_open_limits(t->path, &s->limits, &now, err);
         if (!s->open[c])
             return -1;
         if (now.width != t->info.width || now.height != t->info.height

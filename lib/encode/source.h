@@ -31,6 +31,10 @@ struct gv_source_opts {
     int mosaic_cols;       /* > 0: inputs form a grid of this many columns */
     int mosaic_rows;       /* ... and rows, listed row by row */
     uint64_t max_pixels;   /* refuse larger images (0: GV_SOURCE_MAX_PIXELS) */
+    uint64_t max_decoder_bytes; /* a decoder's memory for one whole image,
+                                 * e.g. a progressive JPEG's (0: the
+                                 * default, GV_IMAGE_MAX_DECODER_BYTES of
+                                 * imageio/imageio.h) */
     double range_lo;       /* used when range_hi > range_lo */
     double range_hi;
 };

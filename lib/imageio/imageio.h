@@ -34,9 +34,35 @@ struct gv_image_info {
 
 struct gv_image_in;
 
-/* Open and probe `path`.  Rejects images whose width*height exceeds
- * max_pixels or whose sizes do not fit in 31 bits.  Returns NULL and fills
- * *err on failure. */
+/* What a reader may take for one image. */
+struct gv_image_limits {
+    uint64_t max_pixels;          /* width * height */
+    uint64_t max_decoder_bytes;   /* memory a decoder may hold for the whole
+                                   * image: a progressive or multi-scan
+                                   * JPEG's coefficients, a Photoshop
+                                   * file's JPEG thumbnail (0: the default,
+                                   * GV_IMAGE_MAX_DECODER_BYTES) */
+};
+
+/* The default max_decoder_bytes: 1 GiB, the coefficients of a 350 MP
+ * progressive JPEG in 4:2:0 or a 175 MP one in 4:4:4. */
+#define GV_IMAGE_MAX_DECODER_BYTES (1ull << 30)
+
+/* Open and probe `path`.  Rejects, with GV_ELIMIT and before allocating
+ * anything for the image, images whose width*height exceeds
+ * lim->max_pixels or whose sizes do not fit in 31 bits, and JPEGs whose
+ * decoding would hold more than lim->max_decoder_bytes (a progressive or
+ * multi-scan JPEG is held whole as coefficients, 2 bytes a sample, by
+ * every reader), or Photoshop files whose JPEG thumbnail would (the
+ * module decodes it whole); such a JPEG that claims more blocks than its
+ * file can code is refused with GV_ECORRUPT.  Returns NULL and fills *err
+ * on failure. */
+struct gv_image_in *gv_image_open_limits(const char *path,
+                                         const struct gv_image_limits *lim,
+                                         struct gv_image_info *info,
+                                         struct gv_error *err);
+
+/* gv_image_open_limits with max_pixels and the default decoder memory. */
 struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
                                   struct gv_image_info *info,
                                   struct gv_error *err);

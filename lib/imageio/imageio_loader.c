@@ -30,8 +30,12 @@
  * palette, alpha, float or JPEG-compressed TIFF, damaged headers...),
  * which then go to the module as before.  struct gv_image_in is a tagged handle over either.  With
  * GIGAVIEW_NATIVE_READERS=0 in the environment every file goes to the
- * module (tests compare the two; the bench measures both).  Writing
- * always goes through the module.
+ * module (tests compare the two; the bench measures both); a JPEG's
+ * header is still checked first by native_jpeg.c against the limits
+ * (max_pixels and the decoder memory of a progressive JPEG), which
+ * OpenImageIO's reader would only apply after allocating, and so is a
+ * Photoshop file's thumbnail (psd_thumbnail.c).  Writing always goes
+ * through the module.
  */
 #include <dlfcn.h>
 #include <limits.h>
@@ -48,6 +52,7 @@
 #include "imageio/native_jpeg.h"
 #include "imageio/native_png.h"
 #include "imageio/native_tiff.h"
+#include "imageio/psd_thumbnail.h"
 
 #ifndef PKGLIBDIR
 #define PKGLIBDIR "/usr/local/lib/gigaview"
@@ -182,15 +187,21 @@ static int native_allowed(void)
 
 /* The native reader for `path`'s first bytes, or BY_MODULE (also when it
  * is not a regular file or cannot be read: the module says why in its
- * words). */
-static enum reader sniff(const char *path)
+ * words).  *soi: whether they are a JPEG's start of image, FF D8, as
+ * libjpeg (which skips bytes between markers, with a warning) and so the
+ * module take them even when the native reader does not.  *psd: whether
+ * they are a Photoshop file's, whose thumbnail the module decodes. */
+static enum reader sniff(const char *path, int *soi, int *psd)
 {
     uint8_t head[8];
+    *soi = *psd = 0;
     FILE *f = gv_native_open_regular(path);
     if (!f)
         return BY_MODULE;
     size_t n = fread(head, 1, sizeof head, f);
     fclose(f);
+    *soi = n >= 2 && head[0] == 0xFF && head[1] == 0xD8;
+    *psd = gv_psd_sniff(head, n);
     if (gv_native_jpeg_sniff(head, n))
         return BY_JPEG;
     if (gv_native_png_sniff(head, n))
@@ -200,27 +211,41 @@ static enum reader sniff(const char *path)
     return BY_MODULE;
 }
 
-struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
-                                  struct gv_image_info *info,
-                                  struct gv_error *err)
+struct gv_image_in *gv_image_open_limits(const char *path,
+                                         const struct gv_image_limits *lim,
+                                         struct gv_image_info *info,
+                                         struct gv_error *err)
 {
     struct gv_image_in *in = calloc(1, sizeof *in);
     if (!in) {
         gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
         return NULL;
     }
-    in->by = native_allowed() ? sniff(path) : BY_MODULE;
+    int soi, psd;
+    in->by = sniff(path, &soi, &psd);
+    if (!native_allowed())
+        in->by = BY_MODULE;
     struct gv_error e;
     gv_error_clear(&e);
     const void *native = NULL;   /* the native reader opened, if any */
     if (in->by == BY_JPEG)
-        native = in->u.jpeg = gv_native_jpeg_open(path, max_pixels, info, &e);
+        native = in->u.jpeg = gv_native_jpeg_open(path, lim, info, &e);
     else if (in->by == BY_PNG)
-        native = in->u.png = gv_native_png_open(path, max_pixels, info, &e);
+        native = in->u.png = gv_native_png_open(path, lim->max_pixels, info,
+                                                &e);
     else if (in->by == BY_TIFF)
-        native = in->u.tiff = gv_native_tiff_open(path, max_pixels, info, &e);
+        native = in->u.tiff = gv_native_tiff_open(path, lim->max_pixels,
+                                                  info, &e);
     if (native)
         return in;
+    /* For the module, whose libjpeg takes no limit on its memory: the
+     * native reader's limits from the header (again, for a JPEG it
+     * declined: it may have done so before reading the header), and a
+     * Photoshop file's thumbnail, before it opens the file. */
+    if (e.code == GV_OK && soi)
+        gv_native_jpeg_check(path, lim, &e);
+    else if (e.code == GV_OK && psd)
+        gv_psd_thumbnail_check(path, lim, &e);
     if (e.code != GV_OK) {   /* refused, not declined */
         if (err)
             *err = e;
@@ -229,12 +254,20 @@ struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
     }
     in->by = BY_MODULE;
     const struct gv_imageio_module *m = get(err);
-    in->u.module = m ? m->open(path, max_pixels, info, err) : NULL;
+    in->u.module = m ? m->open(path, lim->max_pixels, info, err) : NULL;
     if (!in->u.module) {
         free(in);
         return NULL;
     }
     return in;
+}
+
+struct gv_image_in *gv_image_open(const char *path, uint64_t max_pixels,
+                                  struct gv_image_info *info,
+                                  struct gv_error *err)
+{
+    const struct gv_image_limits lim = {.max_pixels = max_pixels};
+    return gv_image_open_limits(path, &lim, info, err);
 }
 
 int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,

@@ -28,14 +28,43 @@
  *
  * Memory: one iMCU row of buffers, as libjpeg needs for a sequential
  * file; a progressive or multi-scan file needs its whole coefficient
- * array (2 bytes a sample), as in the module.  Both are allocated only
- * after width * height has been checked against max_pixels.
+ * array (2 bytes a sample, pre-zeroed as it is decoded), as in the module.
+ * That array is what a hostile file of a few hundred bytes claiming
+ * 30000 x 30000 would make any libjpeg reader allocate and touch (about
+ * 2.5 GiB, then fail on the missing data: the "progressive JPEG" attack,
+ * LJT-01-004 in libjpeg-turbo's change log for 1.5.2).  So, from the
+ * header alone and before anything is allocated for the image, every
+ * JPEG this reader opens or the module is to read (check_limits):
+ *  - width * height against max_pixels (size_limit.h);
+ *  - for a progressive or multi-scan file, the bytes of the arrays
+ *    libjpeg will request (coef_bytes, its own rule) against
+ *    max_decoder_bytes, GV_ELIMIT above it, naming both;
+ *  - and, Huffman-coded, the blocks of its first scan against the file:
+ *    a DC or sequential scan codes every block of its components in at
+ *    least one bit (a code is 1 to 16 bits long, ITU-T T.81 C and F.1.2,
+ *    G.1.2.1; such scans skip no block), so a file with fewer bits than
+ *    those blocks is truncated, whatever else it holds: GV_ECORRUPT.
+ * libjpeg's memory manager enforces the same limit itself
+ * (max_memory_to_use, honoured by jmemnobs.c since libjpeg-turbo 1.5.2:
+ * arrays that do not fit need a backing store, which it does not have,
+ * and it fails with "Backing store not supported" before allocating
+ * them; only arrays no taller than its access window, a few block rows,
+ * are always allocated), with a margin for its other buffers: a
+ * backstop, reported in the same words (measured: a 65500 x 16
+ * progressive file decodes at a limit of exactly its coefficients, and
+ * a 12000 x 12000 claim is refused by the backstop alone, test
+ * test_native_read.c).  A sequential single-scan file requests no such
+ * array, so no file within max_pixels that is not progressive or
+ * multi-scan is affected.
  */
+#include <limits.h>
 #include <setjmp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <jpeglib.h>
+#include <jerror.h>
 
 #include "imageio/native_file.h"
 #include "imageio/native_jpeg.h"
@@ -61,11 +90,140 @@ struct gv_native_jpeg {
     int broken;                    /* a read failed: every later one fails */
 };
 
-static int test_fast;
+/* What libjpeg's memory manager may hold besides the coefficient arrays
+ * when it realizes them (a few iMCU rows of buffers, under 10 MiB at the
+ * widest, 65500 pixels): its own limit is max_decoder_bytes plus this. */
+#define BACKSTOP_SLACK (64ull << 20)
+
+static int test_fast, test_backstop_only;
 
 void gv_native_jpeg_test_mode(int fast)
 {
     test_fast = fast;
+}
+
+void gv_native_jpeg_test_backstop_only(int on)
+{
+    test_backstop_only = on;
+}
+
+static uint64_t decoder_limit(const struct gv_image_limits *lim)
+{
+    return lim->max_decoder_bytes ? lim->max_decoder_bytes
+                                  : GV_IMAGE_MAX_DECODER_BYTES;
+}
+
+/* Whether libjpeg holds the whole coefficient array of this file: a
+ * progressive file, or a sequential one whose first scan lacks a
+ * component (jdinput.c initial_setup, jdmaster.c: has_multiple_scans). */
+static int multi_scan(const struct jpeg_decompress_struct *c)
+{
+    return c->progressive_mode || c->comps_in_scan < c->num_components;
+}
+
+static uint64_t round_up(uint64_t v, uint64_t m)
+{
+    return m ? (v + m - 1) / m * m : v;
+}
+
+/* The bytes of the whole-image arrays libjpeg requests for a multi-scan
+ * file (jdcoefct.c jinit_d_coef_controller): per component, its width
+ * and height in blocks rounded up to its sampling factors, a JBLOCK (64
+ * coefficients of 2 bytes) each - the maximum_space of jmemmgr.c
+ * realize_virt_arrays.  Measured with the checks removed: the resident
+ * size rose by 2574 MiB for a 30000 x 30000 4:2:0 claim, computed here
+ * as 2575 MiB, and by 411 MiB for 12000 x 12000, computed 412. */
+static uint64_t coef_bytes(const struct jpeg_decompress_struct *c)
+{
+    uint64_t sum = 0;
+    for (int ci = 0; ci < c->num_components; ci++) {
+        const jpeg_component_info *k = &c->comp_info[ci];
+        sum += round_up(k->width_in_blocks, (uint64_t)k->h_samp_factor)
+               * round_up(k->height_in_blocks, (uint64_t)k->v_samp_factor)
+               * sizeof(JBLOCK);
+    }
+    return sum;
+}
+
+/* The blocks the first scan must code in at least one bit each: those of
+ * its components, when it is Huffman-coded and a DC or sequential scan
+ * (Ss = 0); else 0 (arithmetic coding can take less than a bit). */
+static uint64_t first_scan_blocks(const struct jpeg_decompress_struct *c)
+{
+    if (c->arith_code || c->Ss != 0)
+        return 0;
+    uint64_t n = 0;
+    for (int i = 0; i < c->comps_in_scan; i++)
+        n += (uint64_t)c->cur_comp_info[i]->width_in_blocks
+             * c->cur_comp_info[i]->height_in_blocks;
+    return n;
+}
+
+/* b bytes for a message: "2.5 GiB", "192.0 MiB", "4.0 KiB", "100 bytes". */
+static void bytes_text(char *buf, size_t n, uint64_t b)
+{
+    if (b >= 1ull << 30)
+        snprintf(buf, n, "%.1f GiB", (double)b / (1ull << 30));
+    else if (b >= 1ull << 20)
+        snprintf(buf, n, "%.1f MiB", (double)b / (1ull << 20));
+    else if (b >= 1ull << 10)
+        snprintf(buf, n, "%.1f KiB", (double)b / (1ull << 10));
+    else
+        snprintf(buf, n, "%llu bytes", (unsigned long long)b);
+}
+
+static const char *kind(const struct jpeg_decompress_struct *c)
+{
+    return c->progressive_mode ? "progressive" : "multi-scan";
+}
+
+/* The refusal for more than max_decoder_bytes: -1 with *err filled. */
+static int refuse_memory(const struct jpeg_decompress_struct *c,
+                         const char *path, uint64_t max,
+                         struct gv_error *err)
+{
+    char need_s[32], max_s[32];
+    bytes_text(need_s, sizeof need_s, coef_bytes(c));
+    bytes_text(max_s, sizeof max_s, max);
+    return gv_fail(err, GV_ELIMIT, "imageio: %s: a %s JPEG of %u x %u needs "
+                   "about %s of decoder memory, more than the limit of %s "
+                   "(--max-decoder-memory)", path, kind(c),
+                   (unsigned)c->image_width, (unsigned)c->image_height,
+                   need_s, max_s);
+}
+
+/* The limits, from the header (jpeg_read_header has returned) of a file
+ * of file_bytes bytes, before anything is allocated for the image: 0, or
+ * -1 with *err filled. */
+static int check_limits(const struct jpeg_decompress_struct *c,
+                        const char *path, uint64_t file_bytes,
+                        const struct gv_image_limits *lim,
+                        struct gv_error *err)
+{
+    if (gv_image_size_check(path, c->image_width, c->image_height,
+                            lim->max_pixels, err) < 0)
+        return -1;
+    if (!multi_scan(c) || test_backstop_only)
+        return 0;
+    uint64_t max = decoder_limit(lim);
+    if (coef_bytes(c) > max)
+        return refuse_memory(c, path, max, err);
+    uint64_t blocks = first_scan_blocks(c);
+    if (blocks / 8 > file_bytes)
+        return gv_fail(err, GV_ECORRUPT, "imageio: %s: a %s JPEG of %u x %u "
+                       "is truncated: its first scan codes %llu blocks, at "
+                       "least %llu bytes, in a file of %llu bytes", path,
+                       kind(c), (unsigned)c->image_width,
+                       (unsigned)c->image_height, (unsigned long long)blocks,
+                       (unsigned long long)(blocks / 8),
+                       (unsigned long long)file_bytes);
+    return 0;
+}
+
+static uint64_t file_size(FILE *f)
+{
+    struct stat st;
+    return fstat(fileno(f), &st) == 0 ? (uint64_t)st.st_size : UINT64_MAX;
 }
 
 int gv_native_jpeg_sniff(const uint8_t *head, size_t n)
@@ -132,7 +290,7 @@ static int supported(const struct jpeg_decompress_struct *c)
 }
 
 struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
-                                           uint64_t max_pixels,
+                                           const struct gv_image_limits *lim,
                                            struct gv_image_info *info,
                                            struct gv_error *err)
 {
@@ -143,44 +301,47 @@ struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
     j->path = strdup(path);
     j->f = gv_native_open_regular(path);
     if (!j->path || !j->f)
-        goto decline;
+        goto out;
     uint8_t head[3];
     if (fread(head, 1, sizeof head, j->f) != sizeof head
         || !gv_native_jpeg_sniff(head, sizeof head)
         || fseek(j->f, 0, SEEK_SET) != 0)
-        goto decline;
+        goto out;
 
     j->cinfo.err = jpeg_std_error(&j->jerr.pub);
     j->jerr.pub.error_exit = on_error;
     j->jerr.pub.emit_message = on_message;
     j->jerr.pub.output_message = on_output;
     if (setjmp(j->jerr.jump))
-        goto decline;
+        goto jumped;
     jpeg_create_decompress(&j->cinfo);
     j->created = 1;
     jpeg_stdio_src(&j->cinfo, j->f);
     jpeg_read_header(&j->cinfo, TRUE);
+    /* The limits apply to a file declined below as well: the module's
+     * libjpeg would allocate the same for it. */
+    if (check_limits(&j->cinfo, path, file_size(j->f), lim, err) < 0)
+        goto out;   /* refused: err says why */
     if (j->jerr.failed || !supported(&j->cinfo))
-        goto decline;
+        goto out;   /* declined: err is clear */
     uint64_t w = j->cinfo.image_width, h = j->cinfo.image_height;
     /* libjpeg refuses sides above 65500 and zero; the module's limits
      * follow (imageio.cpp check_size), before anything is allocated. */
     if (w == 0 || h == 0 || w > 0x7fffffffu || h > 0x7fffffffu)
-        goto decline;
-    if (gv_image_size_check(path, w, h, max_pixels, err) < 0) {
-        gv_native_jpeg_close(j);
-        return NULL;
-    }
+        goto out;
     if (test_fast) {
         j->cinfo.dct_method = JDCT_IFAST;
         j->cinfo.do_fancy_upsampling = FALSE;
     }
+    uint64_t cap = decoder_limit(lim) + BACKSTOP_SLACK;
+    j->cinfo.mem->max_memory_to_use = cap > (uint64_t)LONG_MAX
+                                          ? LONG_MAX : (long)cap;
     jpeg_start_decompress(&j->cinfo);
     if (j->jerr.failed || j->cinfo.output_width != w
         || j->cinfo.output_height != h
         || (j->cinfo.output_components != 1
             && j->cinfo.output_components != 3))
-        goto decline;
+        goto out;
 
     j->width = (uint32_t)w;
     j->height = (uint32_t)h;
@@ -194,9 +355,91 @@ struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
     snprintf(info->format, sizeof info->format, "jpeg");
     return j;
 
-decline:
+jumped:
+    /* libjpeg's own limit (the backstop) is a refusal, never handed to
+     * the module, whose libjpeg has none; any other error a decline. */
+    if (j->created && j->jerr.pub.msg_code == JERR_NO_BACKING_STORE)
+        refuse_memory(&j->cinfo, path, decoder_limit(lim), err);
+out:
     gv_native_jpeg_close(j);
     return NULL;
+}
+
+int gv_native_jpeg_check_embedded(FILE *f, long at, const char *path,
+                                  const char *what,
+                                  const struct gv_image_limits *lim,
+                                  struct gv_error *err)
+{
+    gv_error_clear(err);
+    if (fseek(f, at, SEEK_SET) != 0)
+        return 0;
+    struct jpeg_decompress_struct *volatile c = calloc(1, sizeof *c);
+    struct jerr *volatile jerr = calloc(1, sizeof *jerr);
+    volatile int rc = 0;   /* volatile: read after a longjmp */
+    if (!c || !jerr) {
+        rc = gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+        goto out;
+    }
+    c->err = jpeg_std_error(&jerr->pub);
+    jerr->pub.error_exit = on_error;
+    jerr->pub.emit_message = on_message;
+    jerr->pub.output_message = on_output;
+    if (setjmp(jerr->jump))
+        goto out;   /* no header: OpenImageIO's reader fails on it too */
+    jpeg_create_decompress(c);
+    jpeg_stdio_src(c, f);
+    jpeg_read_header(c, TRUE);
+    /* decoded whole: every pixel, and the coefficients of a multi-scan
+     * file */
+    uint64_t need = (uint64_t)c->image_width * c->image_height
+                    * (uint64_t)c->num_components
+                    + (multi_scan(c) ? coef_bytes(c) : 0);
+    uint64_t max = decoder_limit(lim);
+    if (need > max) {
+        char need_s[32], max_s[32];
+        bytes_text(need_s, sizeof need_s, need);
+        bytes_text(max_s, sizeof max_s, max);
+        rc = gv_fail(err, GV_ELIMIT, "imageio: %s: %s, a JPEG of %u x %u, "
+                     "needs about %s of decoder memory, more than the limit "
+                     "of %s (--max-decoder-memory)", path, what,
+                     (unsigned)c->image_width, (unsigned)c->image_height,
+                     need_s, max_s);
+    }
+out:
+    if (c) {
+        if (c->mem)
+            jpeg_destroy_decompress(c);
+        free(c);
+    }
+    free(jerr);
+    return rc;
+}
+
+int gv_native_jpeg_check(const char *path, const struct gv_image_limits *lim,
+                         struct gv_error *err)
+{
+    gv_error_clear(err);
+    volatile int rc = 0;   /* volatile: read after a longjmp */
+    struct gv_native_jpeg *j = calloc(1, sizeof *j);
+    if (!j)
+        return gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+    j->f = gv_native_open_regular(path);
+    if (!j->f)
+        goto out;   /* the module says why */
+    j->cinfo.err = jpeg_std_error(&j->jerr.pub);
+    j->jerr.pub.error_exit = on_error;
+    j->jerr.pub.emit_message = on_message;
+    j->jerr.pub.output_message = on_output;
+    if (setjmp(j->jerr.jump))
+        goto out;   /* no header: the module says why */
+    jpeg_create_decompress(&j->cinfo);
+    j->created = 1;
+    jpeg_stdio_src(&j->cinfo, j->f);
+    jpeg_read_header(&j->cinfo, TRUE);
+    rc = check_limits(&j->cinfo, path, file_size(j->f), lim, err);
+out:
+    gv_native_jpeg_close(j);
+    return rc;
 }
 
 static int fail_read(struct gv_native_jpeg *j, struct gv_error *err)

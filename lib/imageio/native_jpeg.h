@@ -9,6 +9,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "base/error.h"
 #include "imageio/imageio.h"
@@ -20,19 +21,47 @@ struct gv_native_jpeg;
 int gv_native_jpeg_sniff(const uint8_t *head, size_t n);
 
 /*
- * Open `path` and read its header, as gv_image_open does.  Returns the
- * reader, or NULL with *err filled (GV_ELIMIT: more than max_pixels), or
- * NULL with err->code == GV_OK when this reader declines the file (not a
- * JPEG it reads exactly as the module does, or any error or warning of
- * libjpeg while opening): the caller then hands it to the module, which
- * reads it or reports the failure in its own words.  err must not be
- * NULL.  One reader is used by one thread at a time; readers are
- * independent.
+ * Open `path` and read its header, as gv_image_open_limits does.  Returns
+ * the reader, or NULL with *err filled (GV_ELIMIT: more than
+ * lim->max_pixels, or a progressive or multi-scan JPEG needing more than
+ * lim->max_decoder_bytes; GV_ECORRUPT: such a JPEG claiming more blocks
+ * than the file can code), or NULL with err->code == GV_OK when this
+ * reader declines the file (not a JPEG it reads exactly as the module
+ * does, or any error or warning of libjpeg while opening): the caller
+ * then hands it to the module, which reads it or reports the failure in
+ * its own words.  The limits are applied to declined files too, so that
+ * the module is never handed one its libjpeg would allocate too much for.
+ * err must not be NULL.  One reader is used by one thread at a time;
+ * readers are independent.
  */
 struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
-                                           uint64_t max_pixels,
+                                           const struct gv_image_limits *lim,
                                            struct gv_image_info *info,
                                            struct gv_error *err);
+
+/*
+ * The limits of gv_native_jpeg_open alone, for a JPEG the module is to
+ * read (GIGAVIEW_NATIVE_READERS=0): reads the header only.  Returns -1
+ * with *err filled (the codes and words of gv_native_jpeg_open), or 0
+ * when within the limits or when libjpeg cannot read the header (the
+ * module then says why).  err must not be NULL.
+ */
+int gv_native_jpeg_check(const char *path, const struct gv_image_limits *lim,
+                         struct gv_error *err);
+
+/*
+ * The decoder memory of a JPEG inside another file, at byte `at` of f,
+ * which OpenImageIO decodes whole (a Photoshop file's thumbnail,
+ * psd_thumbnail.c): its pixels (width * height * components) and, for a
+ * progressive or multi-scan one, its coefficients.  Returns -1 with *err
+ * filled (GV_ELIMIT, naming `what`) when they exceed
+ * lim->max_decoder_bytes, else 0 (also when libjpeg cannot read its
+ * header).  err must not be NULL.
+ */
+int gv_native_jpeg_check_embedded(FILE *f, long at, const char *path,
+                                  const char *what,
+                                  const struct gv_image_limits *lim,
+                                  struct gv_error *err);
 
 /* The next `rows` rows, as gv_image_read: 0, or -1 with *err filled
  * (GV_ECORRUPT for damaged or truncated data, after which every read
@@ -48,5 +77,11 @@ void gv_native_jpeg_close(struct gv_native_jpeg *j);
  * without fancy upsampling, which gives other pixels than the module;
  * 0 (the default) restores libjpeg's defaults.  Not thread-safe. */
 void gv_native_jpeg_test_mode(int fast);
+
+/* For tests only: 1 skips the decoder memory check made from the header,
+ * leaving the limit libjpeg's memory manager applies itself
+ * (max_memory_to_use) to refuse; 0 (the default) restores it.  Not
+ * thread-safe. */
+void gv_native_jpeg_test_backstop_only(int on);
 
 #endif

@@ -146,11 +146,11 @@ PY
 # variant of tests/data/native (colour types, depths, subsampling,
 # progressive, arithmetic, interlaced, TIFF codecs, tiles, strips,
 # byte orders, BigTIFF, and the ones they leave to the module: CMYK,
-# palette, alpha, MINISWHITE, JPEG-in-TIFF), and truncated and damaged
-# copies of a few.  Truncated PNGs are safe here: the native reader takes
+# palette, alpha, MINISWHITE, JPEG-in-TIFF), truncated and damaged
+# copies of a few, and JPEGs whose headers claim sizes they cannot hold.  Truncated PNGs are safe here: the native reader takes
 # them, not OpenImageIO's leaking one.
 python3 - "$top/tests/data/native" "$here/corpus" <<'PY'
-import os, sys
+import os, struct, sys
 src, out = sys.argv[1], sys.argv[2]
 def save(name, data):
     with open(os.path.join(out, "imageio", name), "wb") as f:
@@ -169,6 +169,31 @@ for name in sorted(os.listdir(src)):
         f = bytearray(d)
         f[len(f) // 2] ^= 0x40
         save(stem + "-flip", bytes([e]) + bytes(f))
+    # Hostile frame headers: a progressive or multi-scan JPEG claiming
+    # 1000 x 1000 (within the target's 1 MP cap: refused because 863
+    # bytes cannot code its first scan's blocks) and 30000 x 30000
+    # (2.5 GiB of coefficients: refused before libjpeg allocates them,
+    # lib/imageio/native_jpeg.c check_limits).
+    if name in ("progressive.jpg", "multiscan.jpg"):
+        i = 2
+        while d[i + 1] not in (0xC0, 0xC2):
+            i += 2 + (d[i + 2] << 8 | d[i + 3])
+        for side in (1000, 30000):
+            f = bytearray(d)
+            f[i + 5:i + 9] = side.to_bytes(2, "big") * 2
+            save(stem + "-claims-%d" % side, bytes([e]) + bytes(f))
+        # A 4 x 4 Photoshop file with this JPEG as its thumbnail, whole
+        # and claiming 30000 x 30000 (lib/imageio/psd_thumbnail.c).
+        if name == "progressive.jpg":
+            for suffix, jpg in (("", d), ("-claims-30000", bytes(f))):
+                j = jpg + b"\0" * (len(jpg) & 1)
+                res = (b"8BIM" + struct.pack(">HHI", 1036, 0, 28 + len(jpg)) +
+                       struct.pack(">IIIIIIHH", 1, 61, 45, 184, 184 * 45,
+                                   len(jpg), 24, 1) + j)
+                psd = (b"8BPS" + struct.pack(">H6xHIIHH", 1, 3, 4, 4, 8, 3) +
+                       struct.pack(">II", 0, len(res)) + res +
+                       struct.pack(">IH", 0, 0) + bytes(48))
+                save("psd-thumbnail" + suffix, bytes([10]) + psd)
 PY
 
 # ------------------------------------------------------------- settings

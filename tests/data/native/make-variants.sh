@@ -13,7 +13,8 @@ trap 'rm -rf "$t"' EXIT
 vips crop tests/data/seeding-700x520.png "$t/crop.ppm" 100 100 61 45
 vips colourspace "$t/crop.ppm" "$t/gray.pgm" b-w
 # JPEG: chroma subsampling, progressive, restart intervals, arithmetic
-# coding, gray, RGB (no colour transform), and CMYK (declined).
+# coding, gray, RGB (no colour transform), multi-scan sequential, and CMYK
+# (declined).
 cjpeg -quality 85 -sample 2x2 "$t/crop.ppm" >"$out/s420.jpg"
 cjpeg -quality 85 -sample 2x1 "$t/crop.ppm" >"$out/s422.jpg"
 cjpeg -quality 85 -sample 1x2 "$t/crop.ppm" >"$out/s440.jpg"
@@ -24,6 +25,9 @@ cjpeg -quality 85 -arithmetic "$t/crop.ppm" >"$out/arithmetic.jpg"
 cjpeg -quality 85 -optimize "$t/gray.pgm" >"$out/gray.jpg"
 cjpeg -quality 85 -progressive "$t/gray.pgm" >"$out/gray-progressive.jpg"
 cjpeg -quality 95 -rgb "$t/crop.ppm" >"$out/rgb.jpg"
+# sequential, one scan per component: held whole, like a progressive one
+printf '0;\n1;\n2;\n' >"$t/scans"
+cjpeg -quality 85 -scans "$t/scans" "$t/crop.ppm" >"$out/multiscan.jpg"
 vips colourspace "$t/crop.ppm" "$t/cmyk.v" cmyk
 vips jpegsave "$t/cmyk.v" "$out/cmyk.jpg" --Q 85 --strip
 python3 "$out/make-variants.py" "$t/crop.ppm" "$out"
