@@ -30,7 +30,8 @@
  * no error): an oFFs origin so far out that the module's row numbers
  * would pass INT_MAX (it only shifts them otherwise), and any file on
  * which libpng reports an error while opening, so that the module's own
- * message and code describe damaged headers.
+ * message and code describe damaged headers.  The limits (below) are
+ * applied before the oFFs decline.
  *
  * Memory: libpng's row buffers, allocated by png_read_update_info only
  * after width * height has been checked against max_pixels; for an
