@@ -193,7 +193,8 @@ static const struct opt_spec encode_opts[] = {
      .parse = parse_decoder_memory,
      .wants = "a positive size: digits with an optional K, M, G or T",
      .help = "memory a decoder may hold for one whole input\n"
-             "(a progressive JPEG: 3 to 6 bytes a pixel);\n"
+             "(a progressive JPEG: 3 to 6 bytes a pixel;\n"
+             "an interlaced PNG: its pixels);\n"
              "larger ones are refused (default 1G)"},
     {.name = "tmpdir", .kind = OPT_STRING, .arg = "DIR", .field = F(o.tmpdir),
      .help = "scratch directory (default: the output's)"},

@@ -143,6 +143,24 @@ run encode --max-decoder-memory 9KiB "$TESTDATA/native/progressive.jpg" -o "$T/p
 expect_rc "--max-decoder-memory 9KiB: the progressive JPEG that needs 9 KiB" 0
 run encode --max-decoder-memory 1 "$jpg" -o "$T/baseline.gv" --quiet
 expect_rc "--max-decoder-memory 1: a baseline JPEG needs no decoder memory" 0
+# An interlaced PNG of 1.5 KB (tests/data/native/rgb8-interlaced.png)
+# whose IHDR claims 12000x12000 RGBA of 16 bits: held whole while it is
+# read, 1.1 GiB, which OpenImageIO's reader allocated and zeroed before
+# failing on the missing data.  Refused from the header under the default
+# --max-decoder-memory, natively and before the module.
+python3 - "$TESTDATA/native/rgb8-interlaced.png" "$in/claims-huge.png" <<'EOF' || bail "python3"
+import struct, sys, zlib
+p = bytearray(open(sys.argv[1], "rb").read())
+p[16:29] = struct.pack(">IIBBBBB", 12000, 12000, 16, 6, 0, 0, 1)
+p[29:33] = struct.pack(">I", zlib.crc32(bytes(p[12:29])))
+open(sys.argv[2], "wb").write(p)
+EOF
+png_msg="imageio: $in/claims-huge.png: an interlaced PNG of 12000 x 12000 needs about 1.1 GiB of decoder memory, more than the limit of 1.0 GiB (--max-decoder-memory)"
+bad_case "interlaced PNG claiming 12000x12000" "$png_msg" "$in/claims-huge.png"
+export GIGAVIEW_NATIVE_READERS=0
+bad_case "interlaced PNG claiming 12000x12000, through the module" "$png_msg" \
+    "$in/claims-huge.png"
+unset GIGAVIEW_NATIVE_READERS
 bad_case_re "mosaic with one damaged tile" \
     "^gigaview encode: imageio: $in/trunc\\.jpg: JPEG error: " -m 2x1 "$jpg" "$in/trunc.jpg"
 

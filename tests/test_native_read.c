@@ -17,8 +17,9 @@
  * cut points, damaged headers, a header claiming more than max_pixels,
  * progressive and multi-scan JPEGs claiming more than the decoder memory
  * limit or more blocks than their bytes can code (refused every way,
- * with the resident size measured), a Photoshop file whose JPEG
- * thumbnail claims the same, TIFF tiles claimed enormous, tile
+ * with the resident size measured), interlaced PNGs claiming more
+ * than it (the same; the limit exact, non-interlaced PNGs unaffected), a
+ * Photoshop file whose JPEG thumbnail claims the same, TIFF tiles claimed enormous, tile
  * offsets past the end of the file -
  * the native path must fail (or decline) exactly where the module does,
  * with GV_ECORRUPT and an "imageio: PATH: " message, never crash.  A
@@ -35,6 +36,7 @@
 #include <unistd.h>
 
 #include "util.h"
+#include "base/crc32.h"
 #include "imageio/imageio.h"
 #include "imageio/native_jpeg.h"
 #include "imageio/native_png.h"
@@ -114,7 +116,7 @@ static int any_open(struct any *a, enum how how, const char *path,
         else if (ends_with(path, ".tif"))
             a->tiff = gv_native_tiff_open(path, max_pixels, info, err);
         else
-            a->png = gv_native_png_open(path, max_pixels, info, err);
+            a->png = gv_native_png_open(path, &lim, info, err);
         return a->jpeg || a->png || a->tiff ? 0 : -1;
     }
     if (how == MODULE)
@@ -715,6 +717,124 @@ static const char *psd_with_thumbnail(const char *jpg, const char *out)
     return path;
 }
 
+/* tmpdir/out: a copy of the PNG dir/name whose IHDR (the first chunk,
+ * its data at 16..28, its CRC at 29..32) claims w x h of `depth` bits in
+ * colour type `color`, interlaced or not, with the CRC recomputed. */
+static const char *png_claiming(const char *dir, const char *name,
+                                const char *out, uint32_t w, uint32_t h,
+                                int depth, int color, int interlaced)
+{
+    size_t len;
+    uint8_t *p = slurp(path_in(dir, name), &len);
+    if (len < 33 || memcmp(p + 12, "IHDR", 4) != 0)
+        fail("%s: no IHDR first", name);
+    const uint8_t wh[8] = {w >> 24, w >> 16, w >> 8, w, h >> 24, h >> 16,
+                           h >> 8, h};
+    memcpy(p + 16, wh, 8);
+    p[24] = (uint8_t)depth;
+    p[25] = (uint8_t)color;
+    p[28] = (uint8_t)interlaced;
+    uint32_t crc = gv_crc32(0, p + 12, 17);
+    const uint8_t c[4] = {crc >> 24, crc >> 16, crc >> 8, crc};
+    memcpy(p + 29, c, 4);
+    const char *path = path_in(tmpdir, out);
+    spill(path, p, len);
+    free(p);
+    return path;
+}
+
+/* The decoder memory limit for interlaced PNGs (native_png.c, "Memory"):
+ * every reader holds one whole while it is read, so one claiming a size
+ * it cannot hold is refused from its header, whichever reader would read
+ * it, before that buffer is allocated (the module zeroes it: 549 MiB for
+ * the 12000 x 12000 claim below); the need counts the channels libpng
+ * delivers (a tRNS chunk's alpha), the limit is exact, and PNGs read a
+ * row at a time are not affected. */
+static void test_png_decoder_memory(const char *dir)
+{
+    const unsigned all = 1u << MODULE | 1u << NATIVE | 1u << LOADER;
+    /* 12000 x 12000 RGBA of 16 bits under the default limit, 1 GiB:
+     * 12000 rows of 96000 bytes and a pointer. */
+    const char *huge = png_claiming(dir, "rgb8-interlaced.png",
+                                    "claims-huge.png", 12000, 12000, 16, 6,
+                                    1);
+    expect_refused(huge, all, GV_ELIMIT, "imageio: PATH: an interlaced PNG "
+                   "of 12000 x 12000 needs about 1.1 GiB of decoder memory, "
+                   "more than the limit of 1.0 GiB (--max-decoder-memory)",
+                   "an interlaced RGBA16 PNG claiming 12000 x 12000");
+    unlink(huge);
+    /* A palette with a tRNS chunk claiming 12000 x 12000 is read as RGBA:
+     * 549.4 MiB (as RGB it would be 412.1) under a 500 MiB limit. */
+    const char *trns = png_claiming(dir, "palette8-trns.png",
+                                    "claims-trns.png", 12000, 12000, 8, 3,
+                                    1);
+    decoder_bytes = 500u << 20;
+    expect_refused(trns, all, GV_ELIMIT, "imageio: PATH: an interlaced PNG "
+                   "of 12000 x 12000 needs about 549.4 MiB of decoder "
+                   "memory, more than the limit of 500.0 MiB "
+                   "(--max-decoder-memory)", "an interlaced palette PNG "
+                   "with tRNS claiming 12000 x 12000, 500 MiB");
+    unlink(trns);
+    /* Not interlaced, the same claim is not held whole: it opens, and
+     * its first row fails on the missing data. */
+    const char *flat = png_claiming(dir, "palette8-trns.png",
+                                    "claims-flat.png", 12000, 12000, 8, 3,
+                                    0);
+    decoder_bytes = 1;
+    uint8_t *row = malloc(12000 * 4);
+    if (!row)
+        fail("out of memory");
+    for (int how = MODULE; how <= LOADER; how++) {
+        struct any a;
+        struct gv_image_info info;
+        struct gv_error e, re;
+        gv_error_clear(&re);
+        int opened = any_open(&a, (enum how)how, flat, 1ull << 32, &info,
+                              &e) == 0;
+        int failed = opened && info.width == 12000 && info.channels == 4
+                     && any_read(&a, 1, row, &re) != 0
+                     && re.code == GV_ECORRUPT;
+        if (opened)
+            any_close(&a);
+        check(failed, "a non-interlaced PNG claiming 12000 x 12000, %s: "
+              "opens under a limit of 1 byte, then fails on its data (%s%s)",
+              how_name[how], opened ? "" : e.text, re.text);
+    }
+    free(row);
+    unlink(flat);
+    /* rgb8-interlaced.png: 23 rows of 37 x 3 bytes and a pointer, 2737
+     * bytes.  Read at exactly that limit, refused one byte under. */
+    const char *il = path_in(dir, "rgb8-interlaced.png");
+    const unsigned need = 23 * (37 * 3 + (unsigned)sizeof(void *));
+    decoder_bytes = need;
+    for (int how = MODULE; how <= LOADER; how++) {
+        struct result r = read_file((enum how)how, il, 1ull << 32);
+        check(r.opened && r.read_ok, "rgb8-interlaced.png, %s: read with a "
+              "limit of exactly its %u bytes (%s%s)", how_name[how], need,
+              r.open_err.text, r.read_err.text);
+        result_free(&r);
+    }
+    decoder_bytes = need - 1;
+    expect_refused(il, all, GV_ELIMIT, "imageio: PATH: an interlaced PNG of "
+                   "37 x 23 needs about 2.7 KiB of decoder memory, more than "
+                   "the limit of 2.7 KiB (--max-decoder-memory)",
+                   "rgb8-interlaced.png, 1 byte under its need");
+    /* Read a row at a time: no limit applies. */
+    decoder_bytes = 1;
+    const char *const rows[3] = {"rgb8.png", "rgba16.png",
+                                 "palette8-trns.png"};
+    for (int k = 0; k < 3; k++)
+        for (int how = MODULE; how <= LOADER; how++) {
+            struct result r = read_file((enum how)how, path_in(dir, rows[k]),
+                                        1ull << 32);
+            check(r.opened && r.read_ok, "%s, %s: read with a decoder "
+                  "memory limit of 1 byte (%s%s)", rows[k], how_name[how],
+                  r.open_err.text, r.read_err.text);
+            result_free(&r);
+        }
+    decoder_bytes = 0;
+}
+
 /* A Photoshop file's JPEG thumbnail, which OpenImageIO decodes whole
  * while it opens the file (psd_thumbnail.c): one claiming 30000 x 30000
  * is refused before the module opens the file; a real one is read. */
@@ -1063,6 +1183,7 @@ int main(void)
     test_corrupt(native);
     test_huge(native);
     test_decoder_memory(native);
+    test_png_decoder_memory(native);
     test_psd_thumbnail(native);
     test_tiff_hostile(native);
     test_misuse(native);

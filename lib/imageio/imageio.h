@@ -40,7 +40,8 @@ struct gv_image_limits {
     uint64_t max_decoder_bytes;   /* memory a decoder may hold for the whole
                                    * image: a progressive or multi-scan
                                    * JPEG's coefficients, a Photoshop
-                                   * file's JPEG thumbnail (0: the default,
+                                   * file's JPEG thumbnail, an interlaced
+                                   * PNG's pixels (0: the default,
                                    * GV_IMAGE_MAX_DECODER_BYTES) */
 };
 
@@ -53,7 +54,8 @@ struct gv_image_limits {
  * lim->max_pixels or whose sizes do not fit in 31 bits, and JPEGs whose
  * decoding would hold more than lim->max_decoder_bytes (a progressive or
  * multi-scan JPEG is held whole as coefficients, 2 bytes a sample, by
- * every reader), or Photoshop files whose JPEG thumbnail would (the
+ * every reader), interlaced PNGs whose pixels would (held whole by every
+ * reader), or Photoshop files whose JPEG thumbnail would (the
  * module decodes it whole); such a JPEG that claims more blocks than its
  * file can code is refused with GV_ECORRUPT.  Returns NULL and fills *err
  * on failure. */

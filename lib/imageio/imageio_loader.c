@@ -33,8 +33,9 @@
  * module (tests compare the two; the bench measures both); a JPEG's
  * header is still checked first by native_jpeg.c against the limits
  * (max_pixels and the decoder memory of a progressive JPEG), which
- * OpenImageIO's reader would only apply after allocating, and so is a
- * Photoshop file's thumbnail (psd_thumbnail.c).  Writing always goes
+ * OpenImageIO's reader would only apply after allocating, and so are a
+ * PNG's (native_png.c: an interlaced one is held whole) and a Photoshop
+ * file's thumbnail (psd_thumbnail.c).  Writing always goes
  * through the module.
  */
 #include <dlfcn.h>
@@ -223,6 +224,7 @@ struct gv_image_in *gv_image_open_limits(const char *path,
     }
     int soi, psd;
     in->by = sniff(path, &soi, &psd);
+    const int png = in->by == BY_PNG;   /* the PNG signature */
     if (!native_allowed())
         in->by = BY_MODULE;
     struct gv_error e;
@@ -231,19 +233,22 @@ struct gv_image_in *gv_image_open_limits(const char *path,
     if (in->by == BY_JPEG)
         native = in->u.jpeg = gv_native_jpeg_open(path, lim, info, &e);
     else if (in->by == BY_PNG)
-        native = in->u.png = gv_native_png_open(path, lim->max_pixels, info,
-                                                &e);
+        native = in->u.png = gv_native_png_open(path, lim, info, &e);
     else if (in->by == BY_TIFF)
         native = in->u.tiff = gv_native_tiff_open(path, lim->max_pixels,
                                                   info, &e);
     if (native)
         return in;
-    /* For the module, whose libjpeg takes no limit on its memory: the
-     * native reader's limits from the header (again, for a JPEG it
-     * declined: it may have done so before reading the header), and a
-     * Photoshop file's thumbnail, before it opens the file. */
+    /* For the module, whose libjpeg takes no limit on its memory and
+     * whose PNG reader allocates an interlaced image whole before
+     * decoding it: the native reader's limits from the header (again,
+     * for a JPEG it declined: it may have done so before reading the
+     * header), and a Photoshop file's thumbnail, before it opens the
+     * file. */
     if (e.code == GV_OK && soi)
         gv_native_jpeg_check(path, lim, &e);
+    else if (e.code == GV_OK && png)
+        gv_native_png_check(path, lim, &e);
     else if (e.code == GV_OK && psd)
         gv_psd_thumbnail_check(path, lim, &e);
     if (e.code != GV_OK) {   /* refused, not declined */

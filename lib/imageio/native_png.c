@@ -30,12 +30,24 @@
  * no error): an oFFs origin so far out that the module's row numbers
  * would pass INT_MAX (it only shifts them otherwise), and any file on
  * which libpng reports an error while opening, so that the module's own
- * message and code describe damaged headers.
+ * message and code describe damaged headers.  The limits (below) are
+ * applied before the oFFs decline.
  *
  * Memory: libpng's row buffers, allocated by png_read_update_info only
  * after width * height has been checked against max_pixels; for an
- * interlaced file, the whole image (at most max_pixels * 8 bytes), as in
- * the module.
+ * interlaced file, the whole image and its row pointers, as in the
+ * module (OpenImageIO 2.4 png_pvt.h read_into_buffer: image_bytes of the
+ * expanded samples, zeroed, and a pointer a row).  A file of 1 KB whose
+ * IHDR claims 12000 x 12000 made the module allocate and touch 549 MiB
+ * before failing on its missing data.  So, before anything is allocated
+ * for the image, an interlaced file's need, height * (width * channels *
+ * bytes a sample + a pointer), with the channels and bytes as libpng
+ * will deliver them (after png_set_expand: a tRNS chunk adds an alpha
+ * channel), is checked against max_decoder_bytes: GV_ELIMIT above it,
+ * naming both, in the words of native_jpeg.c.  The same check, with the
+ * pixel limit, runs before the module is handed any PNG
+ * (gv_native_png_check).  A non-interlaced file is read a row at a time
+ * and needs no such buffer: the limit does not apply to it.
  */
 #include <setjmp.h>
 #include <stdio.h>
@@ -119,32 +131,74 @@ static int little_endian(void)
     return *(const uint8_t *)&one == 1;
 }
 
-struct gv_native_png *gv_native_png_open(const char *path,
-                                         uint64_t max_pixels,
-                                         struct gv_image_info *info,
-                                         struct gv_error *err)
+static uint64_t decoder_limit(const struct gv_image_limits *lim)
+{
+    return lim->max_decoder_bytes ? lim->max_decoder_bytes
+                                  : GV_IMAGE_MAX_DECODER_BYTES;
+}
+
+/* b bytes for a message, as native_jpeg.c writes them: "2.5 GiB",
+ * "192.0 MiB", "4.0 KiB", "100 bytes". */
+static void bytes_text(char *buf, size_t n, uint64_t b)
+{
+    if (b >= 1ull << 30)
+        snprintf(buf, n, "%.1f GiB", (double)b / (1ull << 30));
+    else if (b >= 1ull << 20)
+        snprintf(buf, n, "%.1f MiB", (double)b / (1ull << 20));
+    else if (b >= 1ull << 10)
+        snprintf(buf, n, "%.1f KiB", (double)b / (1ull << 10));
+    else
+        snprintf(buf, n, "%llu bytes", (unsigned long long)b);
+}
+
+/* What an interlaced image of h rows of row_bytes is held in while it is
+ * read, here and in the module: the rows and a pointer to each
+ * (UINT64_MAX past 64 bits). */
+static uint64_t whole_bytes(uint64_t row_bytes, uint64_t h)
+{
+    const uint64_t per_row = row_bytes + sizeof(png_bytep);
+    return h > UINT64_MAX / per_row ? UINT64_MAX : h * per_row;
+}
+
+/* Open `path`, read its header and apply the limits (see "Memory"):
+ * returns the reader with p->width, height, row_bytes and interlaced set
+ * and *channels_out, *depth_out, or NULL with *err filled (refused), or
+ * NULL with err->code == GV_OK (declined: not a PNG, or a libpng error).
+ * `reader`: 0 for gv_native_png_check, which takes any PNG libpng
+ * reads; 1 also declines what this reader leaves to the module. */
+static struct gv_native_png *start(const char *path,
+                                   const struct gv_image_limits *lim,
+                                   int reader, int *channels_out,
+                                   int *depth_out, struct gv_error *err)
 {
     gv_error_clear(err);
     struct gv_native_png *p = calloc(1, sizeof *p);
-    if (!p)
-        return NULL;   /* declined: the module reports what it can */
+    if (!p) {
+        gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+        return NULL;
+    }
     p->path = strdup(path);
+    if (!p->path) {
+        gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+        goto out;
+    }
     p->f = gv_native_open_regular(path);
-    if (!p->path || !p->f)
-        goto decline;
+    if (!p->f)
+        goto out;   /* the module says why */
     uint8_t head[8];
     if (fread(head, 1, sizeof head, p->f) != sizeof head
         || !gv_native_png_sniff(head, sizeof head))
-        goto decline;
+        goto out;
     p->png = png_create_read_struct(PNG_LIBPNG_VER_STRING, p, on_error,
                                     on_warning);
-    if (!p->png)
-        goto decline;
-    p->info = png_create_info_struct(p->png);
-    if (!p->info)
-        goto decline;
+    if (p->png)
+        p->info = png_create_info_struct(p->png);
+    if (!p->info) {
+        gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
+        goto out;
+    }
     if (setjmp(png_jmpbuf(p->png)))
-        goto decline;
+        goto out;
     png_set_read_fn(p->png, p, on_read);
     png_set_sig_bytes(p->png, 8);
     png_read_info(p->png, p->info);
@@ -153,49 +207,86 @@ struct gv_native_png *gv_native_png_open(const char *path,
     png_get_IHDR(p->png, p->info, &w, &h, &depth, &color, &interlace, NULL,
                  NULL);
     if (w == 0 || h == 0 || w > 0x7fffffffu || h > 0x7fffffffu)
-        goto decline;
-    /* The module reads rows by their number from the oFFs origin, in an
-     * int: one whose last row would pass INT_MAX is left to it. */
-    if ((int64_t)png_get_x_offset_pixels(p->png, p->info) + w > 0x7fffffff
-        || (int64_t)png_get_y_offset_pixels(p->png, p->info) + h > 0x7fffffff)
-        goto decline;
-    if (gv_image_size_check(path, w, h, max_pixels, err) < 0) {
-        gv_native_png_close(p);
-        return NULL;
-    }
+        goto out;   /* libpng's own check refuses these first */
+    if (gv_image_size_check(path, w, h, lim->max_pixels, err) < 0)
+        goto out;
+    /* The row buffers (png_read_update_info) are allocated only now. */
     png_set_expand(p->png);
     if (little_endian() && !test_raw16)
         png_set_swap(p->png);
     png_read_update_info(p->png, p->info);
     int channels = png_get_channels(p->png, p->info);
     depth = png_get_bit_depth(p->png, p->info);
-    size_t bytes = depth == 16 ? 2 : 1;
-    if (p->msg[0] || channels < 1 || channels > 4
-        || (depth != 8 && depth != 16)
-        || png_get_rowbytes(p->png, p->info) != (size_t)w * channels * bytes)
-        goto decline;
-
-    /* An interlaced image is held whole: w * h <= max_pixels, at most
-     * 8 bytes a pixel; refused here if that does not fit a size_t. */
-    if (interlace != PNG_INTERLACE_NONE
-        && (size_t)h > SIZE_MAX / 2 / ((size_t)w * channels * bytes))
-        goto decline;
+    const size_t row_bytes = png_get_rowbytes(p->png, p->info);
+    if (p->msg[0])
+        goto out;
     p->interlaced = interlace != PNG_INTERLACE_NONE;
+    const uint64_t max = decoder_limit(lim);
+    if (p->interlaced && whole_bytes(row_bytes, h) > max) {
+        char need_s[32], max_s[32];
+        bytes_text(need_s, sizeof need_s, whole_bytes(row_bytes, h));
+        bytes_text(max_s, sizeof max_s, max);
+        gv_fail(err, GV_ELIMIT, "imageio: %s: an interlaced PNG of %u x %u "
+                "needs about %s of decoder memory, more than the limit of "
+                "%s (--max-decoder-memory)", path, (unsigned)w, (unsigned)h,
+                need_s, max_s);
+        goto out;
+    }
+    if (reader) {
+        size_t bytes = depth == 16 ? 2 : 1;
+        /* The module reads rows by their number from the oFFs origin, in
+         * an int: one whose last row would pass INT_MAX is left to it. */
+        if ((int64_t)png_get_x_offset_pixels(p->png, p->info) + w
+                > 0x7fffffff
+            || (int64_t)png_get_y_offset_pixels(p->png, p->info) + h
+                > 0x7fffffff)
+            goto out;
+        if (channels < 1 || channels > 4 || (depth != 8 && depth != 16)
+            || row_bytes != (size_t)w * channels * bytes)
+            goto out;
+        /* An interlaced image is held whole, within max_decoder_bytes;
+         * refused here if that does not fit a size_t. */
+        if (p->interlaced && (size_t)h > SIZE_MAX / 2 / row_bytes)
+            goto out;
+    }
     p->width = w;
     p->height = h;
-    p->row_bytes = (size_t)w * channels * bytes;
+    p->row_bytes = row_bytes;
+    *channels_out = channels;
+    *depth_out = depth;
+    return p;
+
+out:   /* refused with *err filled, or declined with it clear */
+    gv_native_png_close(p);
+    return NULL;
+}
+
+struct gv_native_png *gv_native_png_open(const char *path,
+                                         const struct gv_image_limits *lim,
+                                         struct gv_image_info *info,
+                                         struct gv_error *err)
+{
+    int channels = 0, depth = 0;
+    struct gv_native_png *p = start(path, lim, 1, &channels, &depth, err);
+    if (!p)
+        return NULL;
     memset(info, 0, sizeof *info);
-    info->width = w;
-    info->height = h;
+    info->width = p->width;
+    info->height = p->height;
     info->channels = channels;
     info->bits = depth;
     info->sample = depth == 16 ? GV_SAMPLE_U16 : GV_SAMPLE_U8;
     snprintf(info->format, sizeof info->format, "png");
     return p;
+}
 
-decline:
+int gv_native_png_check(const char *path, const struct gv_image_limits *lim,
+                        struct gv_error *err)
+{
+    int channels, depth;
+    struct gv_native_png *p = start(path, lim, 0, &channels, &depth, err);
     gv_native_png_close(p);
-    return NULL;
+    return err->code == GV_OK ? 0 : -1;
 }
 
 /* An interlaced image: decoded whole at the first read, as OpenImageIO

@@ -20,17 +20,32 @@ struct gv_native_png;
 int gv_native_png_sniff(const uint8_t *head, size_t n);
 
 /*
- * Open `path` and read its header, as gv_image_open does.  Returns the
- * reader, or NULL with *err filled (GV_ELIMIT: more than max_pixels), or
- * NULL with err->code == GV_OK when this reader declines the file (an
- * oFFs origin past INT_MAX, or any libpng error while opening): the
- * caller then hands it to the module.  err must not be NULL.  One reader
- * is used by one thread at a time; readers are independent.
+ * Open `path` and read its header, as gv_image_open_limits does.  Returns
+ * the reader, or NULL with *err filled (GV_ELIMIT: more than
+ * lim->max_pixels, or an interlaced PNG, held whole while it is read,
+ * needing more than lim->max_decoder_bytes; GV_ENOMEM), or NULL with
+ * err->code == GV_OK when this reader declines the file (an oFFs origin
+ * past INT_MAX, or any libpng error while opening): the caller then
+ * hands it to the module.  The limits are applied before such a
+ * decline.  err must not be NULL.  One reader is used by one thread at a
+ * time; readers are independent.
  */
 struct gv_native_png *gv_native_png_open(const char *path,
-                                         uint64_t max_pixels,
+                                         const struct gv_image_limits *lim,
                                          struct gv_image_info *info,
                                          struct gv_error *err);
+
+/*
+ * The limits of gv_native_png_open alone, for a PNG the module is to read
+ * (GIGAVIEW_NATIVE_READERS=0, or one the native reader declined): reads
+ * the header only, with the module's libpng calls.  Returns -1 with *err
+ * filled (the codes and words of gv_native_png_open), or 0 when within
+ * the limits or when libpng cannot read the header (the module then
+ * fails on it too, before allocating, and says why).  err must not be
+ * NULL.
+ */
+int gv_native_png_check(const char *path, const struct gv_image_limits *lim,
+                        struct gv_error *err);
 
 /* The next `rows` rows, as gv_image_read: 0, or -1 with *err filled
  * (GV_ECORRUPT for damaged or truncated data, after which every read

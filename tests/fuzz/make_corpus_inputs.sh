@@ -147,10 +147,10 @@ PY
 # progressive, arithmetic, interlaced, TIFF codecs, tiles, strips,
 # byte orders, BigTIFF, and the ones they leave to the module: CMYK,
 # palette, alpha, MINISWHITE, JPEG-in-TIFF), truncated and damaged
-# copies of a few, and JPEGs whose headers claim sizes they cannot hold.  Truncated PNGs are safe here: the native reader takes
+# copies of a few, and JPEGs and interlaced PNGs whose headers claim sizes they cannot hold.  Truncated PNGs are safe here: the native reader takes
 # them, not OpenImageIO's leaking one.
 python3 - "$top/tests/data/native" "$here/corpus" <<'PY'
-import os, struct, sys
+import os, struct, sys, zlib
 src, out = sys.argv[1], sys.argv[2]
 def save(name, data):
     with open(os.path.join(out, "imageio", name), "wb") as f:
@@ -181,6 +181,18 @@ for name in sorted(os.listdir(src)):
         for side in (1000, 30000):
             f = bytearray(d)
             f[i + 5:i + 9] = side.to_bytes(2, "big") * 2
+            save(stem + "-claims-%d" % side, bytes([e]) + bytes(f))
+    # Hostile IHDRs: an interlaced PNG, held whole while it is read,
+    # claiming 1000 x 1000 RGB (within the target's 1 MP cap: 3 MB, then
+    # its data runs out) and 12000 x 12000 RGBA of 16 bits (1.1 GiB:
+    # refused before it is allocated, lib/imageio/native_png.c, here
+    # already by the cap).
+    if name == "rgb8-interlaced.png":
+        for side, depth, color in ((1000, 8, 2), (12000, 16, 6)):
+            f = bytearray(d)
+            f[16:29] = struct.pack(">IIBBBBB", side, side, depth, color, 0,
+                                   0, 1)
+            f[29:33] = struct.pack(">I", zlib.crc32(bytes(f[12:29])))
             save(stem + "-claims-%d" % side, bytes([e]) + bytes(f))
         # A 4 x 4 Photoshop file with this JPEG as its thumbnail, whole
         # and claiming 30000 x 30000 (lib/imageio/psd_thumbnail.c).
