@@ -107,12 +107,6 @@ void gv_native_jpeg_test_backstop_only(int on)
     test_backstop_only = on;
 }
 
-static uint64_t decoder_limit(const struct gv_image_limits *lim)
-{
-    return lim->max_decoder_bytes ? lim->max_decoder_bytes
-                                  : GV_IMAGE_MAX_DECODER_BYTES;
-}
-
 /* Whether libjpeg holds the whole coefficient array of this file: a
  * progressive file, or a sequential one whose first scan lacks a
  * component (jdinput.c initial_setup, jdmaster.c: has_multiple_scans). */
@@ -159,19 +153,6 @@ static uint64_t first_scan_blocks(const struct jpeg_decompress_struct *c)
     return n;
 }
 
-/* b bytes for a message: "2.5 GiB", "192.0 MiB", "4.0 KiB", "100 bytes". */
-static void bytes_text(char *buf, size_t n, uint64_t b)
-{
-    if (b >= 1ull << 30)
-        snprintf(buf, n, "%.1f GiB", (double)b / (1ull << 30));
-    else if (b >= 1ull << 20)
-        snprintf(buf, n, "%.1f MiB", (double)b / (1ull << 20));
-    else if (b >= 1ull << 10)
-        snprintf(buf, n, "%.1f KiB", (double)b / (1ull << 10));
-    else
-        snprintf(buf, n, "%llu bytes", (unsigned long long)b);
-}
-
 static const char *kind(const struct jpeg_decompress_struct *c)
 {
     return c->progressive_mode ? "progressive" : "multi-scan";
@@ -183,8 +164,8 @@ static int refuse_memory(const struct jpeg_decompress_struct *c,
                          struct gv_error *err)
 {
     char need_s[32], max_s[32];
-    bytes_text(need_s, sizeof need_s, coef_bytes(c));
-    bytes_text(max_s, sizeof max_s, max);
+    gv_image_bytes_text(need_s, sizeof need_s, coef_bytes(c));
+    gv_image_bytes_text(max_s, sizeof max_s, max);
     return gv_fail(err, GV_ELIMIT, "imageio: %s: a %s JPEG of %u x %u needs "
                    "about %s of decoder memory, more than the limit of %s "
                    "(--max-decoder-memory)", path, kind(c),
@@ -205,7 +186,7 @@ static int check_limits(const struct jpeg_decompress_struct *c,
         return -1;
     if (!multi_scan(c) || test_backstop_only)
         return 0;
-    uint64_t max = decoder_limit(lim);
+    uint64_t max = gv_image_decoder_limit(lim);
     if (coef_bytes(c) > max)
         return refuse_memory(c, path, max, err);
     uint64_t blocks = first_scan_blocks(c);
@@ -333,7 +314,7 @@ struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
         j->cinfo.dct_method = JDCT_IFAST;
         j->cinfo.do_fancy_upsampling = FALSE;
     }
-    uint64_t cap = decoder_limit(lim) + BACKSTOP_SLACK;
+    uint64_t cap = gv_image_decoder_limit(lim) + BACKSTOP_SLACK;
     j->cinfo.mem->max_memory_to_use = cap > (uint64_t)LONG_MAX
                                           ? LONG_MAX : (long)cap;
     jpeg_start_decompress(&j->cinfo);
@@ -359,7 +340,7 @@ jumped:
     /* libjpeg's own limit (the backstop) is a refusal, never handed to
      * the module, whose libjpeg has none; any other error a decline. */
     if (j->created && j->jerr.pub.msg_code == JERR_NO_BACKING_STORE)
-        refuse_memory(&j->cinfo, path, decoder_limit(lim), err);
+        refuse_memory(&j->cinfo, path, gv_image_decoder_limit(lim), err);
 out:
     gv_native_jpeg_close(j);
     return NULL;
@@ -394,11 +375,11 @@ int gv_native_jpeg_check_embedded(FILE *f, long at, const char *path,
     uint64_t need = (uint64_t)c->image_width * c->image_height
                     * (uint64_t)c->num_components
                     + (multi_scan(c) ? coef_bytes(c) : 0);
-    uint64_t max = decoder_limit(lim);
+    uint64_t max = gv_image_decoder_limit(lim);
     if (need > max) {
         char need_s[32], max_s[32];
-        bytes_text(need_s, sizeof need_s, need);
-        bytes_text(max_s, sizeof max_s, max);
+        gv_image_bytes_text(need_s, sizeof need_s, need);
+        gv_image_bytes_text(max_s, sizeof max_s, max);
         rc = gv_fail(err, GV_ELIMIT, "imageio: %s: %s, a JPEG of %u x %u, "
                      "needs about %s of decoder memory, more than the limit "
                      "of %s (--max-decoder-memory)", path, what,

@@ -131,26 +131,6 @@ static int little_endian(void)
     return *(const uint8_t *)&one == 1;
 }
 
-static uint64_t decoder_limit(const struct gv_image_limits *lim)
-{
-    return lim->max_decoder_bytes ? lim->max_decoder_bytes
-                                  : GV_IMAGE_MAX_DECODER_BYTES;
-}
-
-/* b bytes for a message, as native_jpeg.c writes them: "2.5 GiB",
- * "192.0 MiB", "4.0 KiB", "100 bytes". */
-static void bytes_text(char *buf, size_t n, uint64_t b)
-{
-    if (b >= 1ull << 30)
-        snprintf(buf, n, "%.1f GiB", (double)b / (1ull << 30));
-    else if (b >= 1ull << 20)
-        snprintf(buf, n, "%.1f MiB", (double)b / (1ull << 20));
-    else if (b >= 1ull << 10)
-        snprintf(buf, n, "%.1f KiB", (double)b / (1ull << 10));
-    else
-        snprintf(buf, n, "%llu bytes", (unsigned long long)b);
-}
-
 /* What an interlaced image of h rows of row_bytes is held in while it is
  * read, here and in the module: the rows and a pointer to each
  * (UINT64_MAX past 64 bits). */
@@ -221,11 +201,11 @@ static struct gv_native_png *start(const char *path,
     if (p->msg[0])
         goto out;
     p->interlaced = interlace != PNG_INTERLACE_NONE;
-    const uint64_t max = decoder_limit(lim);
+    const uint64_t max = gv_image_decoder_limit(lim);
     if (p->interlaced && whole_bytes(row_bytes, h) > max) {
         char need_s[32], max_s[32];
-        bytes_text(need_s, sizeof need_s, whole_bytes(row_bytes, h));
-        bytes_text(max_s, sizeof max_s, max);
+        gv_image_bytes_text(need_s, sizeof need_s, whole_bytes(row_bytes, h));
+        gv_image_bytes_text(max_s, sizeof max_s, max);
         gv_fail(err, GV_ELIMIT, "imageio: %s: an interlaced PNG of %u x %u "
                 "needs about %s of decoder memory, more than the limit of "
                 "%s (--max-decoder-memory)", path, (unsigned)w, (unsigned)h,
