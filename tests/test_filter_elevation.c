@@ -47,6 +47,7 @@
 #include "filter.h"
 #include "filter_ref.h"
 #include "gpu/gpu.h"
+#include "test_env.h"
 #include "util.h"
 
 #define ROI_W 160
@@ -607,10 +608,7 @@ static void gdal_compare(struct gv_gpu *gpu, const struct dem *d, double mpl, do
         return;
     }
     char dir[256], path[512], cmd[1536];
-    snprintf(dir, sizeof dir, "%s/gv-elev-XXXXXX",
-             getenv("TMPDIR") && *getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
-    if (!mkdtemp(dir))
-        fail("mkdtemp: %s", strerror(errno));
+    test_tmpdir_new(dir, sizeof dir, "gv-elev");
     snprintf(path, sizeof path, "%s/dem.asc", dir);
     FILE *f = fopen(path, "w");
     if (!f)
@@ -711,20 +709,13 @@ static void gdal_compare(struct gv_gpu *gpu, const struct dem *d, double mpl, do
         free(out);
         free(g);
     }
-    static const char *const files[] = {"dem.asc", "dem.tif", "out.tif", "out.asc",
-                                        "out.asc.aux.xml", "out.prj", "dem.tif.aux.xml"};
-    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
-        snprintf(path, sizeof path, "%s/%s", dir, files[i]);
-        remove(path);
-    }
-    if (rmdir(dir) < 0)
-        printf("# rmdir %s: %s\n", dir, strerror(errno));
+    test_tmpdir_free(dir);
 }
 
 int main(void)
 {
     const char *top = getenv("top_srcdir") ? getenv("top_srcdir") : ".";
-    const char *data = getenv("TESTDATA") ? getenv("TESTDATA") : "tests/data";
+    const char *data = test_data_dir();
     struct gv_filter_limits lim;
     gv_filter_limits_default(&lim);
     for (int i = 0; i < NGRAPH; i++) {

@@ -20,9 +20,10 @@
 #include "gpu/gpu_cache.h"
 #include "gpu/gpu_decode.h"
 #include "store/store_read.h"
+#include "test_env.h"
 #include "util.h"
 
-static char dir[] = "/tmp/gv-test-gpucache-XXXXXX";
+static char dir[128];
 
 struct source {
     struct gv_store *s;
@@ -236,12 +237,11 @@ int main(void)
     }
     const struct gv_gpu_info *in = gv_gpu_info(gpu);
     printf("# EGL %s platform, %s: %s\n", in->platform, in->api, in->renderer);
-    if (!mkdtemp(dir))
-        fail("mkdtemp");
+    test_tmpdir_new(dir, sizeof dir, "gv-test-gpucache");
     check_store(gpu, "synth:2100x1500", 36.0, 3);      /* 4 levels, 27 tiles */
     check_store(gpu, "synth:1300x2600:gray", 40.0, 2); /* gray, tall */
     check_store(gpu, "synth:3000x700", 30.0, 1);       /* budget below a chain */
-    rmdir(dir);
+    test_tmpdir_free(dir);
     gv_gpu_close(gpu);
     return tap_done();
 }

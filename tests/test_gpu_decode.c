@@ -24,9 +24,10 @@
 #include "dct_fixture.h"
 #include "codec/tile.h"
 #include "codec/tile_dct.h"
+#include "test_env.h"
 #include "util.h"
 
-static char dir[] = "/tmp/gv-test-gpu-XXXXXX";
+static char dir[128];
 
 static int check_path(struct gv_gpu *gpu, const char *input, const char *out,
                       enum gv_gpu_path path);
@@ -465,9 +466,8 @@ int main(int argc, char **argv)
     const struct gv_gpu_info *in = gv_gpu_info(gpu);
     printf("# EGL %s platform, %s: %s / %s / %s\n", in->platform, in->api, in->vendor,
            in->renderer, in->version);
-    if (!mkdtemp(dir))
-        fail("mkdtemp");
-    const char *data = getenv("TESTDATA") ? getenv("TESTDATA") : "tests/data";
+    test_tmpdir_new(dir, sizeof dir, "gv-test-gpu");
+    const char *data = test_data_dir();
     char picos[512];
     snprintf(picos, sizeof picos, "%s/picos-1100x700.jpg", data);
     if (argc > 1) {
@@ -476,7 +476,7 @@ int main(int argc, char **argv)
         for (int i = 1; i + 2 < argc; i += 3)
             check_store(gpu, argv[i], atof(argv[i + 1]), atoi(argv[i + 2]),
                         getenv("GV_TEST_DCT") != NULL);
-        rmdir(dir);
+        test_tmpdir_free(dir);
         gv_gpu_close(gpu);
         return tap_done();
     }
@@ -497,7 +497,7 @@ int main(int argc, char **argv)
     snprintf(v1, sizeof v1, "%s/v1-picos-530x516.gv", data);
     check_path(gpu, v1, v1, GV_GPU_PATH_SSBO);
     check_path(gpu, v1, v1, GV_GPU_PATH_WEBGL2);
-    rmdir(dir);
+    test_tmpdir_free(dir);
     gv_gpu_close(gpu);
     return tap_done();
 }

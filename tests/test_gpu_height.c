@@ -17,9 +17,10 @@
 #include "gpu/gpu_height.h"
 #include "render/store_decoder.h"
 #include "store/store_read.h"
+#include "test_env.h"
 #include "util.h"
 
-static char dir[] = "/tmp/gv-test-gpu-height-XXXXXX";
+static char dir[128];
 
 /* Decode every tile of `path` on the GPU, level by level from the
  * uploaded root tile, and compare each with the CPU decoder. */
@@ -128,24 +129,23 @@ int main(int argc, char **argv)
     const struct gv_gpu_info *in = gv_gpu_info(gpu);
     printf("# EGL %s platform, %s: %s / %s\n", in->platform, in->api, in->vendor,
            in->renderer);
-    if (!mkdtemp(dir))
-        fail("mkdtemp");
+    test_tmpdir_new(dir, sizeof dir, "gv-test-gpu-height");
     if (argc > 1) {
         /* Explicit inputs (for a machine without the test data, e.g. one
          * with a real GPU): INPUT MAX-ERROR pairs. */
         for (int i = 1; i + 1 < argc; i += 2)
             check_store(gpu, argv[i], atof(argv[i + 1]), argv[i]);
-        rmdir(dir);
+        test_tmpdir_free(dir);
         gv_gpu_close(gpu);
         return tap_done();
     }
-    const char *data = getenv("TESTDATA") ? getenv("TESTDATA") : "tests/data";
+    const char *data = test_data_dir();
     char dem[512];
     snprintf(dem, sizeof dem, "%s/etopo5-himalaya-1030x300-u16.png", data);
     check_store(gpu, dem, 0, "etopo lossless");
     check_store(gpu, dem, 2, "etopo e=2");
     check_store(gpu, "synth-height:1100x1030", 1, "synth e=1");
-    rmdir(dir);
+    test_tmpdir_free(dir);
     gv_gpu_close(gpu);
     return tap_done();
 }

@@ -19,9 +19,10 @@
 #include "imageio/imageio.h"
 #include "render/height_region.h"
 #include "store/store_read.h"
+#include "test_env.h"
 #include "util.h"
 
-static char dir[] = "/tmp/gv-test-height-XXXXXX";
+static char dir[128];
 
 /* The input PNG as codes. */
 static uint16_t *read_png(const char *path, uint32_t *w, uint32_t *h)
@@ -278,16 +279,12 @@ static void test_damage(void)
 
 int main(void)
 {
-    const char *data = getenv("TESTDATA") ? getenv("TESTDATA") : "tests/data";
-    if (!mkdtemp(dir))
-        fail("mkdtemp");
+    const char *data = test_data_dir();
+    test_tmpdir_new(dir, sizeof dir, "gv-test-height");
     test_damage();
     test_etopo(data);
     test_synth();
     test_float();
-    char cmd[200];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    if (system(cmd) != 0)
-        fprintf(stderr, "could not remove %s\n", dir);
+    test_tmpdir_free(dir);
     return tap_done();
 }

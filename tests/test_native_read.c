@@ -35,6 +35,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "test_env.h"
 #include "util.h"
 #include "base/crc32.h"
 #include "imageio/imageio.h"
@@ -1152,17 +1153,8 @@ int main(void)
     under_valgrind = vg && *vg && strcmp(vg, "0") != 0;
     if (under_valgrind)
         setenv("JSIMD_FORCENONE", "1", 1);
-    datadir = getenv("TESTDATA");
-    if (!datadir)
-        datadir = "tests/data";
-    struct stat st;
-    if (stat(path_in(datadir, "LICENSES.md"), &st) != 0)
-        fail("test data not found in %s (set TESTDATA)", datadir);
-    const char *t = getenv("TMPDIR");
-    snprintf(tmpdir, sizeof tmpdir, "%s/gv-test-native-XXXXXX",
-             t && *t ? t : "/tmp");
-    if (!mkdtemp(tmpdir))
-        fail("mkdtemp %s: %s", tmpdir, strerror(errno));
+    datadir = test_data_dir_found();
+    test_tmpdir_new(tmpdir, sizeof tmpdir, "gv-test-native");
     char native[4096];
     snprintf(native, sizeof native, "%s/native", datadir);
 
@@ -1189,6 +1181,6 @@ int main(void)
     test_misuse(native);
     test_fifo();
 
-    rmdir(tmpdir);
+    test_tmpdir_free(tmpdir);
     return tap_done();
 }

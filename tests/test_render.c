@@ -25,9 +25,10 @@
 #include "render/region.h"
 #include "store/store_read.h"
 #include "store_fixture.h"
+#include "test_env.h"
 #include "util.h"
 
-static char dir[] = "/tmp/gv-test-render-XXXXXX";
+static char dir[128];
 
 struct img {
     uint8_t *px;
@@ -527,8 +528,7 @@ static void check_encode(struct gv_decoder *d)
 
 int main(void)
 {
-    if (!mkdtemp(dir))
-        fail("mkdtemp");
+    test_tmpdir_new(dir, sizeof dir, "gv-test-render");
     struct gv_store *s = fixture_store(dir, "rgb.gv", "synth:1500x1100", 0);
     struct gv_store *sg = fixture_store(dir, "gray.gv", "synth:700x600:gray", 0);
     struct gv_decoder *d = gv_decoder_new(s, 64u << 20);
@@ -564,11 +564,6 @@ int main(void)
     gv_decoder_free(dg);
     gv_store_close(s);
     gv_store_close(sg);
-    char p[256];
-    snprintf(p, sizeof p, "%s/rgb.gv", dir);
-    unlink(p);
-    snprintf(p, sizeof p, "%s/gray.gv", dir);
-    unlink(p);
-    rmdir(dir);
+    test_tmpdir_free(dir);
     return tap_done();
 }

@@ -20,9 +20,10 @@
 #include "store/store_format.h"
 #include "store/store_read.h"
 #include "codec/tile.h"
+#include "test_env.h"
 #include "util.h"
 
-static char dir[] = "/tmp/gv-test-roundtrip-XXXXXX";
+static char dir[128];
 
 /* Default mode: |level-0 PSNR - target| at most PHOTO_TOL dB on the
  * photographs, SYNTH_TOL on the procedural image, whose hard edges the
@@ -202,11 +203,8 @@ static void roundtrip(const char *input, double psnr, int max_rate, int per_tile
 
 int main(void)
 {
-    const char *data = getenv("TESTDATA");
-    if (!data)
-        data = "tests/data";
-    if (!mkdtemp(dir))
-        fail("mkdtemp");
+    const char *data = test_data_dir();
+    test_tmpdir_new(dir, sizeof dir, "gv-test-roundtrip");
     char a[512], b[512], c[512], d[512];
     snprintf(a, sizeof a, "%s/seeding-640x480.jpg", data);
     snprintf(b, sizeof b, "%s/seeding-700x520.png", data);
@@ -232,6 +230,6 @@ int main(void)
      * of 513 pixels; 2050: 5 tiles, then 3 and 2). */
     roundtrip("synth:1026x600", 36.0, 10, 1);
     roundtrip("synth:600x2050:gray", 36.0, 10, 1);
-    rmdir(dir);
+    test_tmpdir_free(dir);
     return tap_done();
 }

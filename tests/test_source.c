@@ -22,6 +22,7 @@
 
 #include "imageio/imageio.h"
 #include "encode/source.h"
+#include "test_env.h"
 #include "util.h"
 
 static const char *datadir;
@@ -719,34 +720,10 @@ static void test_write(void)
     check(no_temp_left(), "no temporary files are left behind");
 }
 
-static void cleanup(void)
-{
-    DIR *d = opendir(tmpdir);
-    struct dirent *e;
-    if (!d)
-        return;
-    while ((e = readdir(d)) != NULL)
-        if (strcmp(e->d_name, ".") && strcmp(e->d_name, ".."))
-            unlink(tmp(e->d_name));
-    closedir(d);
-    rmdir(tmpdir);
-}
-
 int main(void)
 {
-    datadir = getenv("TESTDATA");
-    if (!datadir)
-        datadir = "tests/data";
-    struct stat st;
-    char probe[4096];
-    snprintf(probe, sizeof probe, "%s/LICENSES.md", datadir);
-    if (stat(probe, &st) != 0)
-        fail("test data not found in %s (set TESTDATA)", datadir);
-    const char *t = getenv("TMPDIR");
-    snprintf(tmpdir, sizeof tmpdir, "%s/gv-test-source-XXXXXX",
-             t && *t ? t : "/tmp");
-    if (!mkdtemp(tmpdir))
-        fail("mkdtemp %s: %s", tmpdir, strerror(errno));
+    datadir = test_data_dir_found();
+    test_tmpdir_new(tmpdir, sizeof tmpdir, "gv-test-source");
 
     test_probe();
     test_u16();
@@ -760,6 +737,6 @@ int main(void)
     test_past_end();
     test_write();
 
-    cleanup();
+    test_tmpdir_free(tmpdir);
     return tap_done();
 }

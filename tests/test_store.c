@@ -19,9 +19,10 @@
 #include "store/store_read.h"
 #include "store/store_write.h"
 #include "codec/tile.h"
+#include "test_env.h"
 #include "util.h"
 
-static char dir[] = "/tmp/gv-test-store-XXXXXX";
+static char dir[128];
 
 /* A 1100x600 gray store (levels 0 and 1 tiled, 275x150 root), every tile
  * coded at rate 0 except tile 0/1/0 at rate 2. */
@@ -170,8 +171,7 @@ static void atomic_file_contract(void)
 
 int main(void)
 {
-    if (!mkdtemp(dir))
-        fail("mkdtemp");
+    test_tmpdir_new(dir, sizeof dir, "gv-test-store");
     char path[256], bad[256];
     snprintf(path, sizeof path, "%s/a.gv", dir);
     snprintf(bad, sizeof bad, "%s/bad.gv", dir);
@@ -321,8 +321,6 @@ int main(void)
 
     free(orig);
     free(copy);
-    unlink(path);
-    unlink(bad);
-    rmdir(dir);
+    test_tmpdir_free(dir);
     return tap_done();
 }

@@ -20,12 +20,13 @@
 #include "render/store_decoder.h"
 #include "render/tile_cache.h"
 #include "store_fixture.h"
+#include "test_env.h"
 #include "util.h"
 
 #define NTHREADS 6
 #define TB 1000 /* bytes of a test tile */
 
-static char dir[] = "/tmp/gv_tile_cache_XXXXXX";
+static char dir[128];
 
 struct waiter {
     struct gv_tile_cache *c;
@@ -366,11 +367,10 @@ static void test_decoders(void)
 
 int main(void)
 {
-    if (!mkdtemp(dir))
-        fail("mkdtemp");
+    test_tmpdir_new(dir, sizeof dir, "gv-test-tile-cache");
     test_single_flight();
     test_budget();
     test_decoders();
-    rmdir(dir);
+    test_tmpdir_free(dir);
     return tap_done();
 }
