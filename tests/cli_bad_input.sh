@@ -37,6 +37,16 @@ run_bad_case() {
     run encode "$@" -o "$out/x.gv"
     expect_rc "$desc" 1
 }
+# bad_case_both_ways DESCRIPTION MESSAGE FILE: bad_case on FILE with the
+# native readers, then again through the OpenImageIO module
+# (GIGAVIEW_NATIVE_READERS=0, DESCRIPTION ", through the module"): the
+# same MESSAGE either way.
+bad_case_both_ways() {
+    bad_case "$1" "$2" "$3"
+    export GIGAVIEW_NATIVE_READERS=0
+    bad_case "$1, through the module" "$2" "$3"
+    unset GIGAVIEW_NATIVE_READERS
+}
 bad_case_left() {
     left=$(listing "$out")
     if [ -z "$left" ]; then ok "$desc: nothing left in the output directory"; else
@@ -128,11 +138,7 @@ p[i + 5:i + 9] = (30000).to_bytes(2, "big") * 2
 open(sys.argv[2], "wb").write(p)
 EOF
 huge_msg="imageio: $in/claims-huge.jpg: a progressive JPEG of 30000 x 30000 needs about 2.5 GiB of decoder memory, more than the limit of 1.0 GiB (--max-decoder-memory)"
-bad_case "progressive JPEG claiming 30000x30000" "$huge_msg" "$in/claims-huge.jpg"
-export GIGAVIEW_NATIVE_READERS=0
-bad_case "progressive JPEG claiming 30000x30000, through the module" "$huge_msg" \
-    "$in/claims-huge.jpg"
-unset GIGAVIEW_NATIVE_READERS
+bad_case_both_ways "progressive JPEG claiming 30000x30000" "$huge_msg" "$in/claims-huge.jpg"
 bad_case "progressive JPEG claiming 30000x30000, --max-decoder-memory 4G" \
     "imageio: $in/claims-huge.jpg: a progressive JPEG of 30000 x 30000 is truncated: its first scan codes 21093750 blocks, at least 2636718 bytes, in a file of 863 bytes" \
     --max-decoder-memory 4G "$in/claims-huge.jpg"
@@ -156,11 +162,7 @@ p[29:33] = struct.pack(">I", zlib.crc32(bytes(p[12:29])))
 open(sys.argv[2], "wb").write(p)
 EOF
 png_msg="imageio: $in/claims-huge.png: an interlaced PNG of 12000 x 12000 needs about 1.1 GiB of decoder memory, more than the limit of 1.0 GiB (--max-decoder-memory)"
-bad_case "interlaced PNG claiming 12000x12000" "$png_msg" "$in/claims-huge.png"
-export GIGAVIEW_NATIVE_READERS=0
-bad_case "interlaced PNG claiming 12000x12000, through the module" "$png_msg" \
-    "$in/claims-huge.png"
-unset GIGAVIEW_NATIVE_READERS
+bad_case_both_ways "interlaced PNG claiming 12000x12000" "$png_msg" "$in/claims-huge.png"
 bad_case_re "mosaic with one damaged tile" \
     "^gigaview encode: imageio: $in/trunc\\.jpg: JPEG error: " -m 2x1 "$jpg" "$in/trunc.jpg"
 

@@ -566,6 +566,36 @@ static void expect_refused(const char *path, unsigned ways, enum gv_code code,
     }
 }
 
+/* NAME in DIR read each way with a decoder memory limit of exactly BYTES,
+ * its need; leaves the limit at BYTES. */
+static void expect_read_at_limit(const char *dir, const char *name, unsigned bytes)
+{
+    decoder_bytes = bytes;
+    for (int how = MODULE; how <= LOADER; how++) {
+        struct result r = read_file((enum how)how, path_in(dir, name), 1ull << 32);
+        check(r.opened && r.read_ok, "%s, %s: read with a limit of exactly its %u bytes "
+              "(%s%s)", name, how_name[how], bytes, r.open_err.text, r.read_err.text);
+        result_free(&r);
+    }
+}
+
+/* The three files NAMES in DIR, each read each way with a decoder memory
+ * limit of 1 byte: a reader that holds a row or a scan at a time needs
+ * none.  Leaves the limit off. */
+static void expect_read_in_one_byte(const char *dir, const char *const names[3])
+{
+    decoder_bytes = 1;
+    for (int k = 0; k < 3; k++)
+        for (int how = MODULE; how <= LOADER; how++) {
+            struct result r = read_file((enum how)how, path_in(dir, names[k]), 1ull << 32);
+            check(r.opened && r.read_ok, "%s, %s: read with a decoder "
+                  "memory limit of 1 byte (%s%s)", names[k], how_name[how],
+                  r.open_err.text, r.read_err.text);
+            result_free(&r);
+        }
+    decoder_bytes = 0;
+}
+
 /* The decoder memory limit (native_jpeg.c, "Memory"): a progressive or
  * multi-scan JPEG claiming a size it cannot hold is refused from its
  * header, whichever reader would read it, before libjpeg allocates its
@@ -643,32 +673,15 @@ static void test_decoder_memory(const char *dir)
     /* progressive.jpg: 72 blocks of 128 bytes (8 x 6 of Y, 4 x 3 of Cb
      * and of Cr).  Read at exactly that limit, refused one byte under;
      * a sequential single-scan file needs none. */
+    expect_read_at_limit(dir, "progressive.jpg", 9216);
     const char *prog = path_in(dir, "progressive.jpg");
-    decoder_bytes = 9216;
-    for (int how = MODULE; how <= LOADER; how++) {
-        struct result r = read_file((enum how)how, prog, 1ull << 32);
-        check(r.opened && r.read_ok, "progressive.jpg, %s: read with a limit "
-              "of exactly its 9216 bytes (%s%s)", how_name[how],
-              r.open_err.text, r.read_err.text);
-        result_free(&r);
-    }
     decoder_bytes = 9215;
     expect_refused(prog, all, GV_ELIMIT, "imageio: PATH: a progressive JPEG "
                    "of 61 x 45 needs about 9.0 KiB of decoder memory, more "
                    "than the limit of 9.0 KiB (--max-decoder-memory)",
                    "progressive.jpg, 1 byte under its need");
-    decoder_bytes = 1;
     const char *const seq[3] = {"s420.jpg", "restart.jpg", "arithmetic.jpg"};
-    for (int k = 0; k < 3; k++)
-        for (int how = MODULE; how <= LOADER; how++) {
-            struct result r = read_file((enum how)how, path_in(dir, seq[k]),
-                                        1ull << 32);
-            check(r.opened && r.read_ok, "%s, %s: read with a decoder "
-                  "memory limit of 1 byte (%s%s)", seq[k], how_name[how],
-                  r.open_err.text, r.read_err.text);
-            result_free(&r);
-        }
-    decoder_bytes = 0;
+    expect_read_in_one_byte(dir, seq);
 }
 
 static void put_be(uint8_t *p, uint32_t v, int bytes)
@@ -805,35 +818,18 @@ static void test_png_decoder_memory(const char *dir)
     unlink(flat);
     /* rgb8-interlaced.png: 23 rows of 37 x 3 bytes and a pointer, 2737
      * bytes.  Read at exactly that limit, refused one byte under. */
-    const char *il = path_in(dir, "rgb8-interlaced.png");
     const unsigned need = 23 * (37 * 3 + (unsigned)sizeof(void *));
-    decoder_bytes = need;
-    for (int how = MODULE; how <= LOADER; how++) {
-        struct result r = read_file((enum how)how, il, 1ull << 32);
-        check(r.opened && r.read_ok, "rgb8-interlaced.png, %s: read with a "
-              "limit of exactly its %u bytes (%s%s)", how_name[how], need,
-              r.open_err.text, r.read_err.text);
-        result_free(&r);
-    }
+    expect_read_at_limit(dir, "rgb8-interlaced.png", need);
+    const char *il = path_in(dir, "rgb8-interlaced.png");
     decoder_bytes = need - 1;
     expect_refused(il, all, GV_ELIMIT, "imageio: PATH: an interlaced PNG of "
                    "37 x 23 needs about 2.7 KiB of decoder memory, more than "
                    "the limit of 2.7 KiB (--max-decoder-memory)",
                    "rgb8-interlaced.png, 1 byte under its need");
     /* Read a row at a time: no limit applies. */
-    decoder_bytes = 1;
     const char *const rows[3] = {"rgb8.png", "rgba16.png",
                                  "palette8-trns.png"};
-    for (int k = 0; k < 3; k++)
-        for (int how = MODULE; how <= LOADER; how++) {
-            struct result r = read_file((enum how)how, path_in(dir, rows[k]),
-                                        1ull << 32);
-            check(r.opened && r.read_ok, "%s, %s: read with a decoder "
-                  "memory limit of 1 byte (%s%s)", rows[k], how_name[how],
-                  r.open_err.text, r.read_err.text);
-            result_free(&r);
-        }
-    decoder_bytes = 0;
+    expect_read_in_one_byte(dir, rows);
 }
 
 /* A Photoshop file's JPEG thumbnail, which OpenImageIO decodes whole
