@@ -1,0 +1,103 @@
+/*
+ * test_env.h - where the C unit tests find their data and keep their
+ * files: the set-up that eleven tests each wrote out, once.
+ *
+ * The test data directory is $TESTDATA (which `make check` exports as an
+ * absolute path, so out-of-tree builds work), else tests/data (a run by
+ * hand from the top of the source tree).  A test's temporary directory is
+ * made under $TMPDIR (/tmp when it is unset or empty) with mkdtemp, and
+ * removed with everything in it at the end; a test that stops with fail()
+ * leaves it behind for a look.  Static inline, like util.h, which must be
+ * included too.
+ */
+#ifndef GV_TESTS_TEST_ENV_H
+#define GV_TESTS_TEST_ENV_H
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "util.h"
+
+/* The test data directory: $TESTDATA if set (even to ""), else
+ * "tests/data".  Never NULL. */
+static inline const char *test_data_dir(void)
+{
+    const char *d = getenv("TESTDATA");
+    return d ? d : "tests/data";
+}
+
+/* test_data_dir(), and fail() unless its LICENSES.md is there: for the
+ * tests that would otherwise report every missing file one by one. */
+static inline const char *test_data_dir_found(void)
+{
+    const char *d = test_data_dir();
+    char probe[4096];
+    struct stat st;
+    snprintf(probe, sizeof probe, "%s/LICENSES.md", d);
+    if (stat(probe, &st) != 0)
+        fail("test data not found in %s (set TESTDATA)", d);
+    return d;
+}
+
+/* Make $TMPDIR/PREFIX-XXXXXX (/tmp when TMPDIR is unset or empty) into
+ * dir (size bytes); fail() when the name does not fit or mkdtemp fails. */
+static inline void test_tmpdir_new(char *dir, size_t size, const char *prefix)
+{
+    const char *t = getenv("TMPDIR");
+    int n = snprintf(dir, size, "%s/%s-XXXXXX", t && *t ? t : "/tmp", prefix);
+    if (n < 0 || (size_t)n >= size)
+        fail("temporary directory name too long: %s/%s-XXXXXX",
+             t && *t ? t : "/tmp", prefix);
+    if (!mkdtemp(dir))
+        fail("mkdtemp %s: %s", dir, strerror(errno));
+}
+
+/* Remove everything in the open directory dfd (which it closes), without
+ * following links: names relative to it, so no path is ever composed.
+ * Returns the number of entries left, each reported on a "#" line (a
+ * diagnostic, not a failed check). */
+static inline int test_empty_dir(int dfd)
+{
+    DIR *d = fdopendir(dfd);
+    int left = 0;
+    if (!d) {
+        close(dfd);
+        return 1;
+    }
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
+            continue;
+        if (unlinkat(dirfd(d), e->d_name, 0) == 0)
+            continue;
+        int sub = openat(dirfd(d), e->d_name,
+                         O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+        if (sub >= 0)
+            left += test_empty_dir(sub);
+        if (unlinkat(dirfd(d), e->d_name, AT_REMOVEDIR) != 0) {
+            printf("# could not remove %s: %s\n", e->d_name, strerror(errno));
+            left++;
+        }
+    }
+    closedir(d);
+    return left;
+}
+
+/* Remove a test's temporary directory and everything in it, without
+ * following links. */
+static inline void test_tmpdir_free(const char *dir)
+{
+    int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+    if (dfd >= 0)
+        test_empty_dir(dfd);
+    if (rmdir(dir) != 0)
+        printf("# could not remove %s: %s\n", dir, strerror(errno));
+}
+
+#endif
