@@ -335,6 +335,8 @@ static int encode_height(const struct encode_args *a, const char *input)
                                 .scale = a->hscale > 0 ? a->hscale : 1,
                                 .offset = a->hoffset, .unit = a->unit,
                                 .max_pixels = a->o.source.max_pixels,
+                                .max_decoder_bytes =
+                                    a->o.source.max_decoder_bytes,
                                 .threads = a->o.threads};
     struct gv_height_result r;
     struct gv_error err;

@@ -149,6 +149,12 @@ run encode --max-decoder-memory 9KiB "$TESTDATA/native/progressive.jpg" -o "$T/p
 expect_rc "--max-decoder-memory 9KiB: the progressive JPEG that needs 9 KiB" 0
 run encode --max-decoder-memory 1 "$jpg" -o "$T/baseline.gv" --quiet
 expect_rc "--max-decoder-memory 1: a baseline JPEG needs no decoder memory" 0
+# --height reads its input under the same limits.
+bad_case "--height --max-decoder-memory 1K on a gray progressive JPEG" \
+    "imageio: $TESTDATA/native/gray-progressive.jpg: a progressive JPEG of 61 x 45 needs about 6.0 KiB of decoder memory, more than the limit of 1.0 KiB (--max-decoder-memory)" \
+    --height --max-decoder-memory 1K "$TESTDATA/native/gray-progressive.jpg"
+run encode --height --max-decoder-memory 6K "$TESTDATA/native/gray-progressive.jpg" -o "$T/prog-height.gv" --quiet
+expect_rc "--height --max-decoder-memory 6K: the gray progressive JPEG that needs 6 KiB" 0
 # An interlaced PNG of 1.5 KB (tests/data/native/rgb8-interlaced.png)
 # whose IHDR claims 12000x12000 RGBA of 16 bits: held whole while it is
 # read, 1.1 GiB, which OpenImageIO's reader allocated and zeroed before

@@ -108,7 +108,9 @@ static int read_input(const char *input, const struct gv_height_opts *o,
         m->src_float = 0;
     } else {
         struct gv_image_info ii;
-        struct gv_image_in *in = gv_image_open(input, limit, &ii, err);
+        const struct gv_image_limits lim = {
+            .max_pixels = limit, .max_decoder_bytes = o->max_decoder_bytes};
+        struct gv_image_in *in = gv_image_open_limits(input, &lim, &ii, err);
         if (!in)
             return -1;
         int rc = -1;

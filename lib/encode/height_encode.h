@@ -32,6 +32,8 @@ struct gv_height_opts {
     double scale, offset;  /* value = code * scale + offset */
     const char *unit;      /* up to 8 printable characters, or NULL */
     uint64_t max_pixels;   /* refuse larger inputs (0: GV_HEIGHT_MAX_PIXELS) */
+    uint64_t max_decoder_bytes; /* a decoder's memory for the whole image
+                                 * (gv_image_limits; 0: the default) */
     int threads;           /* workers; 0 = every CPU */
 };
 
