@@ -759,23 +759,28 @@ static size_t encode_target(struct gv_tile_workspace *ws, const uint8_t *orig,
     }
 }
 
+/* Whether a layout D buffer of dlen bytes (0: it did not fit in
+ * GV_TILEBUF_MAX) with squared error dsse costs less than the other
+ * layout's len bytes with sse: SSE + lambda * bits, D strictly lower. */
+static int dct_wins(double lambda, uint64_t dsse, size_t dlen, uint64_t sse,
+                    size_t len)
+{
+    return dlen && (double)dsse + lambda * 8.0 * (double)dlen <
+                       (double)sse + lambda * 8.0 * (double)len;
+}
+
 /* Layout D for the same tile: kept instead of the VQ buffer (len bytes,
- * stats, recon) when its SSE + lambda * bits is lower.  *fits says whether
- * it fitted in GV_TILEBUF_MAX (at very low lambda it may not).  Returns
- * the length kept. */
+ * stats, recon) when dct_wins.  Returns the length kept. */
 static size_t try_dct(struct gv_tile_workspace *ws, const uint8_t *orig,
                       int channels, uint32_t valid_w, uint32_t valid_h,
                       double lambda, size_t len, uint8_t *recon, uint8_t *buf,
-                      struct gv_tile_stats *stats, int *fits)
+                      struct gv_tile_stats *stats)
 {
-    size_t cap = GV_TILEBUF_MAX;
     uint64_t dsse;
     size_t dlen = gv_dct_encode(ws->dct, orig, ws->pred, channels, valid_w,
-                                valid_h, lambda, ws->alt, cap, ws->dct_recon,
-                                &dsse);
-    *fits = dlen != 0;
-    if (!dlen || (double)dsse + lambda * 8.0 * (double)dlen >=
-                 (double)stats->sse + lambda * 8.0 * (double)len)
+                                valid_h, lambda, ws->alt, GV_TILEBUF_MAX,
+                                ws->dct_recon, &dsse);
+    if (!dct_wins(lambda, dsse, dlen, stats->sse, len))
         return len;
     memcpy(buf, ws->alt, dlen);
     memcpy(recon, ws->dct_recon, (size_t)GV_TILE * GV_TILE * channels);
@@ -800,8 +805,8 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
 
     if (params->lambda > 0 && !params->nearest_only &&
         params->dct == GV_LAYOUTS_D) {
-        /* The prediction alone (r = 0) or layout D, whichever costs less,
-         * as try_dct chooses; D is coded straight into buf and recon
+        /* The prediction alone (r = 0) or layout D, whichever costs less
+         * (dct_wins); D is coded straight into buf and recon
          * (buf holds GV_TILEBUF_MAX bytes in this mode), which are
          * rewritten only when the prediction alone wins. */
         const size_t row = (size_t)GV_TILE * channels;
@@ -813,8 +818,7 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
         const size_t dlen = gv_dct_encode(ws->dct, orig, ws->pred, channels,
                                           valid_w, valid_h, params->lambda,
                                           buf, GV_TILEBUF_MAX, recon, &dsse);
-        if (dlen && (double)dsse + params->lambda * 8.0 * (double)dlen <
-                        (double)sse + params->lambda * 8.0 * (double)len) {
+        if (dct_wins(params->lambda, dsse, dlen, sse, len)) {
             stats->rate = GV_RATE_DCT;
             stats->sse = dsse;
             return dlen;
@@ -834,10 +838,9 @@ size_t gv_tile_encode(struct gv_tile_workspace *ws, const uint8_t *orig,
     if (params->lambda > 0 && !params->nearest_only) {
         size_t len = encode_rd_ecvq(ws, orig, channels, valid_w, valid_h,
                                     params, max_rate, sse, recon, buf, stats);
-        int fits;
         if (params->dct)
             len = try_dct(ws, orig, channels, valid_w, valid_h,
-                          params->lambda, len, recon, buf, stats, &fits);
+                          params->lambda, len, recon, buf, stats);
         return len;
     }
     if (params->lambda > 0)
