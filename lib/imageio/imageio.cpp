@@ -517,14 +517,9 @@ static int read_impl(struct gv_image_in *im, uint32_t rows, void *out,
 static int read_rows(struct gv_image_in *im, uint32_t rows, void *out,
                      struct gv_error *err)
 {
-    if (im->failed)
-        return gv_fail(err, GV_ECORRUPT, "imageio: %s: read after an error",
-                       im->path.c_str());
-    if (rows > im->height - im->next_row)
-        return gv_fail(err, GV_EINVAL,
-                       "imageio: %s: read of %u rows from row %u passes the "
-                       "last row (%u)", im->path.c_str(), rows, im->next_row,
-                       im->height);
+    if (gv_image_read_check(im->path.c_str(), im->failed, rows, im->next_row,
+                            im->height, err) < 0)
+        return -1;
     if (rows == 0)
         return 0;
     unsigned char *dst = static_cast<unsigned char *>(out);

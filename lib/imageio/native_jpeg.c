@@ -434,14 +434,9 @@ static int fail_read(struct gv_native_jpeg *j, struct gv_error *err)
 int gv_native_jpeg_read(struct gv_native_jpeg *j, uint32_t rows, void *out,
                         struct gv_error *err)
 {
-    if (j->broken)
-        return gv_fail(err, GV_ECORRUPT, "imageio: %s: read after an error",
-                       j->path);
-    if (rows > j->height - j->next_row)
-        return gv_fail(err, GV_EINVAL,
-                       "imageio: %s: read of %u rows from row %u passes the "
-                       "last row (%u)", j->path, rows, j->next_row,
-                       j->height);
+    if (gv_image_read_check(j->path, j->broken, rows, j->next_row,
+                            j->height, err) < 0)
+        return -1;
     /* volatile: changed between setjmp and a longjmp back to it */
     volatile uint32_t done = 0;
     if (setjmp(j->jerr.jump))

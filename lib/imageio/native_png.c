@@ -309,14 +309,9 @@ static int read_whole(struct gv_native_png *p, uint32_t rows, void *out,
 int gv_native_png_read(struct gv_native_png *p, uint32_t rows, void *out,
                        struct gv_error *err)
 {
-    if (p->broken)
-        return gv_fail(err, GV_ECORRUPT, "imageio: %s: read after an error",
-                       p->path);
-    if (rows > p->height - p->next_row)
-        return gv_fail(err, GV_EINVAL,
-                       "imageio: %s: read of %u rows from row %u passes the "
-                       "last row (%u)", p->path, rows, p->next_row,
-                       p->height);
+    if (gv_image_read_check(p->path, p->broken, rows, p->next_row,
+                            p->height, err) < 0)
+        return -1;
     if (rows == 0)
         return 0;
     if (p->interlaced)

@@ -410,14 +410,9 @@ static void swap16(uint8_t *p, size_t n)
 int gv_native_tiff_read(struct gv_native_tiff *t, uint32_t rows, void *out,
                         struct gv_error *err)
 {
-    if (t->broken)
-        return gv_fail(err, GV_ECORRUPT, "imageio: %s: read after an error",
-                       t->path);
-    if (rows > t->height - t->next_row)
-        return gv_fail(err, GV_EINVAL,
-                       "imageio: %s: read of %u rows from row %u passes the "
-                       "last row (%u)", t->path, rows, t->next_row,
-                       t->height);
+    if (gv_image_read_check(t->path, t->broken, rows, t->next_row,
+                            t->height, err) < 0)
+        return -1;
     uint8_t *dst = out;
     while (rows > 0) {
         uint32_t r = t->next_row;

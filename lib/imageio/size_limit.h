@@ -2,7 +2,8 @@
  * size_limit.h - the size rules every reader behind imageio.h applies
  * before it allocates anything for an image: sides within 31 bits and the
  * area within the caller's max_pixels, else GV_ELIMIT with one message;
- * and the decoder memory limit with the wording of its messages.
+ * the decoder memory limit with the wording of its messages; and the
+ * bounds of every read.
  * The OpenImageIO module (imageio.cpp) and the native readers
  * (native_jpeg.c, native_png.c, native_tiff.c) say the same words, which
  * tests/test_native_read.c checks.  Internal to lib/imageio.
@@ -29,6 +30,24 @@ static inline int gv_image_size_check(const char *path, uint64_t w,
                    "exceeds the limit of %llu pixels", path,
                    (unsigned long long)w, (unsigned long long)h,
                    (unsigned long long)max_pixels);
+}
+
+/* 0 when a read of `rows` rows from row next_row of an image `height`
+ * rows tall may go ahead, else -1 with *err filled, in the words every
+ * reader uses: GV_ECORRUPT after a failed read (broken), GV_EINVAL past
+ * the last row. */
+static inline int gv_image_read_check(const char *path, int broken,
+                                      uint32_t rows, uint32_t next_row,
+                                      uint32_t height, struct gv_error *err)
+{
+    if (broken)
+        return gv_fail(err, GV_ECORRUPT, "imageio: %s: read after an error",
+                       path);
+    if (rows > height - next_row)
+        return gv_fail(err, GV_EINVAL,
+                       "imageio: %s: read of %u rows from row %u passes the "
+                       "last row (%u)", path, rows, next_row, height);
+    return 0;
 }
 
 /* The caller's decoder memory limit, 0 meaning the default. */
