@@ -9,8 +9,6 @@
  * --shard I/N it writes one shard file instead (docs/OPERATIONS.md,
  * "Encoding on many machines"), which `gigaview merge` assembles.
  */
-#include <ctype.h>
-#include <errno.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -18,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/parse_uint.h"
 #include "commands.h"
 #include "encode/height_encode.h"
 #include "encode/shard_plan.h"
@@ -111,37 +110,18 @@ static int parse_range(const char *arg, void *fields, const char **wants)
     return 0;
 }
 
-/* --max-decoder-memory SIZE: digits with an optional K, M, G or T (powers
- * of 1024, as gigaviewd.conf's sizes), then an optional "iB" or "B";
- * at least 1. */
+/* --max-decoder-memory SIZE: a size as gigaviewd.conf's
+ * (base/parse_uint.h: digits with an optional K, M, G or T, powers of
+ * 1024), at least 1. */
 static int parse_decoder_memory(const char *arg, void *fields,
                                 const char **wants)
 {
     struct gv_source_opts *src = &((struct encode_args *)fields)->o.source;
+    uint64_t v;
     (void)wants;
-    if (*arg < '0' || *arg > '9')
+    if (gv_parse_uint(arg, 1, &v) < 0 || v == 0)
         return -1;
-    errno = 0;
-    char *end;
-    unsigned long long v = strtoull(arg, &end, 10);
-    if (errno == ERANGE)
-        return -1;
-    int shift = 0;
-    if (*end) {
-        static const char units[] = "KMGT";
-        const char *u = strchr(units, toupper((unsigned char)*end));
-        if (!u || !*u)
-            return -1;
-        shift = 10 * (int)(u - units + 1);
-        end++;
-        if (*end == 'i')
-            end++;
-        if (*end == 'B')
-            end++;
-    }
-    if (*end || v == 0 || v > (UINT64_MAX >> shift))
-        return -1;
-    src->max_decoder_bytes = (uint64_t)v << shift;
+    src->max_decoder_bytes = v;
     return 0;
 }
 

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "settings.h"
+#include "base/parse_uint.h"
 #include "log.h"
 
 /* Where `make install` puts the stock filter graphs (Makefile.am). */
@@ -151,38 +152,6 @@ static const struct settings_key keys[] = {
 
 #define NKEYS (sizeof keys / sizeof keys[0])
 
-static int parse_uint(const char *s, int sizes, uint64_t *out)
-{
-    if (*s < '0' || *s > '9')
-        return -1;
-    errno = 0;
-    char *end;
-    unsigned long long v = strtoull(s, &end, 10);
-    if (errno == ERANGE)
-        return -1;
-    int shift = 0;
-    if (sizes && *end) {
-        switch (*end) {
-        case 'k': case 'K': shift = 10; break;
-        case 'm': case 'M': shift = 20; break;
-        case 'g': case 'G': shift = 30; break;
-        case 't': case 'T': shift = 40; break;
-        default: return -1;
-        }
-        end++;
-        if (*end == 'i' || *end == 'I')
-            end++;
-        if (*end == 'b' || *end == 'B')
-            end++;
-    }
-    if (*end)
-        return -1;
-    if (shift && v > (UINT64_MAX >> shift))
-        return -1;
-    *out = (uint64_t)v << shift;
-    return 0;
-}
-
 static int set_key(struct settings *c, const struct settings_key *k,
                    const char *value, const char *where,
                    struct gv_error *err)
@@ -218,7 +187,7 @@ static int set_key(struct settings *c, const struct settings_key *k,
     case T_UINT:
     case T_SIZE: {
         uint64_t v;
-        if (parse_uint(value, k->type == T_SIZE, &v) < 0)
+        if (gv_parse_uint(value, k->type == T_SIZE, &v) < 0)
             return gv_fail(err, GV_EINVAL, "%s: %s: '%s' is not a %s", where,
                            k->name, value,
                            k->type == T_SIZE ? "size (digits with optional K, M, G, T)"
