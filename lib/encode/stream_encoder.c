@@ -304,10 +304,8 @@ static int push_pair0(struct encoder *e, const uint8_t *r0, const uint8_t *r1)
 struct reader {
     struct gv_source *src;
     struct gv_spill *spill;   /* NULL: the encoder's thread stores level 0 */
-    uint64_t base;            /* level 0's offset in the scratch file */
+    const struct encoder *e;  /* level 0's geometry and strips (strip_at) */
     size_t row_bytes;
-    uint32_t width, strips;   /* level 0's, and its strips (pages_x) */
-    int c;
     uint32_t chunk, height;
     uint8_t *buf[2];
     uint8_t *whole;           /* else: chunk at y read to whole + y rows */
@@ -336,14 +334,13 @@ static void *reader_main(void *arg)
                                 : r->buf[slot];
         int rc = gv_source_read(r->src, n, dst, &err);
         /* Each strip's rows lie end to end in the file (strip_at). */
-        for (uint32_t p = 0; rc == 0 && r->spill && p < r->strips; p++) {
-            const uint32_t sw = strip_width(r->width, p);
+        const struct gv_level *l0 = &r->e->g.level[0];
+        const int c = r->e->c;
+        for (uint32_t p = 0; rc == 0 && r->spill && p < strip_count(l0); p++)
             rc = gv_spill_write_rows(
-                r->spill, dst + (size_t)p * PAGE_W * r->c, r->row_bytes,
-                (size_t)sw * r->c, n,
-                r->base + ((uint64_t)p * WINDOW * r->height +
-                           (uint64_t)y * sw) * r->c, &err);
-        }
+                r->spill, dst + (size_t)p * PAGE_W * c, r->row_bytes,
+                (size_t)strip_width(l0->width, p) * c, n,
+                strip_at(r->e, 0, p, y), &err);
         pthread_mutex_lock(&r->mu);
         if (rc < 0) {
             r->err = err;
@@ -381,9 +378,7 @@ static int pass1(struct encoder *e, struct gv_source *src)
                         .spill = e->sharded || e->level0_resident ? NULL
                                                                   : e->spill0,
                         .whole = e->level0_resident ? e->window : NULL,
-                        .base = e->orig_base[0], .row_bytes = rb0,
-                        .width = g->width, .strips = strip_count(&g->level[0]),
-                        .c = e->c};
+                        .e = e, .row_bytes = rb0};
     int rc = -1, started = 0;
     pthread_mutex_init(&rd.mu, NULL);
     pthread_cond_init(&rd.cv, NULL);
