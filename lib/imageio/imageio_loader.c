@@ -28,15 +28,15 @@
  * (libtiff), which deliver exactly the module's info and samples for the
  * variants they accept and decline the rest (CMYK and 12-bit JPEG,
  * palette, alpha, float or JPEG-compressed TIFF, damaged headers...),
- * which then go to the module as before.  struct gv_image_in is a tagged handle over either.  With
- * GIGAVIEW_NATIVE_READERS=0 in the environment every file goes to the
- * module (tests compare the two; the bench measures both); a JPEG's
- * header is still checked first by native_jpeg.c against the limits
- * (max_pixels and the decoder memory of a progressive JPEG), which
- * OpenImageIO's reader would only apply after allocating, and so are a
- * PNG's (native_png.c: an interlaced one is held whole) and a Photoshop
- * file's thumbnail (psd_thumbnail.c).  Writing always goes
- * through the module.
+ * which then go to the module as before.  struct gv_image_in is a
+ * tagged handle over any of them.  With GIGAVIEW_NATIVE_READERS=0 in the
+ * environment every file goes to the module (tests compare the two; the
+ * bench measures both); a JPEG's header is still checked first by
+ * native_jpeg.c against the limits (max_pixels and the decoder memory of
+ * a progressive JPEG), which OpenImageIO's reader would only apply after
+ * allocating, and so are a PNG's (native_png.c: an interlaced one is
+ * held whole) and a Photoshop file's thumbnail (psd_thumbnail.c).
+ * Writing always goes through the module.
  */
 #include <dlfcn.h>
 #include <limits.h>
