@@ -7,7 +7,8 @@
 # whole one byte for byte (the default mode: one slope for the whole
 # image, from a model of every row, which every shard reads).  The same
 # for the per-tile mode (--min-tile-psnr) on a PNG, for a multi-page
-# gray image, and for an image that is all root.  The merge must refuse,
+# gray image, for an uncompressed tiled TIFF (whose level 0 shards read
+# again from the file) and for an image that is all root.  The merge must refuse,
 # writing nothing, a missing, duplicated, foreign or damaged shard; a
 # killed shard leaves no file.  conf/slurm-encode.sh (its shard and merge
 # modes, as the array tasks run them) and conf/parallel-encode.sh (when
@@ -85,6 +86,23 @@ if ! under_valgrind; then
     expect_rc "single encode of a 4700x1100 gray image" 0
     shards 5 "$d/gray5.gv" synth:4700x1100:gray
     same "multi-page gray, 5 shards = single encode" "$d/gray.gv" "$d/gray5.gv"
+fi
+
+# An uncompressed tiled TIFF: shards read level 0 again from it in pass 2
+# (lib/imageio/raw_regions.c) instead of a scratch copy; the whole encode
+# keeps it in memory.  Two pages of level 0 (4700 wide).
+if command -v tiffcp >/dev/null 2>&1; then
+    gv encode --quiet -q 30 synth:4700x900 -o "$d/raw-src.gv" &&
+        gv export "$d/raw-src.gv" -o "$d/raw-src.tif" &&
+        tiffcp -c none -t -w 128 -l 64 "$d/raw-src.tif" "$d/raw.tif" ||
+        bail "cannot make an uncompressed tiled TIFF"
+    run encode --quiet -j 2 "$d/raw.tif" -o "$d/raw.gv"
+    expect_rc "single encode of an uncompressed tiled TIFF" 0
+    shards 3 "$d/raw3.gv" "$d/raw.tif"
+    same "uncompressed tiled TIFF read again, 3 shards = single encode" \
+        "$d/raw.gv" "$d/raw3.gv"
+else
+    skip "tiffcp (libtiff-tools) is not installed"
 fi
 
 # An image that fits the root: no tiles at all.

@@ -49,6 +49,14 @@ struct gv_spill *gv_spill_new(const char *dir, struct gv_error *err)
     return s;
 }
 
+uint64_t gv_spill_bytes(const struct gv_spill *s)
+{
+    struct stat st;
+    if (!s || fstat(s->fd, &st) != 0)
+        return 0;
+    return (uint64_t)st.st_blocks * 512;
+}
+
 void gv_spill_free(struct gv_spill *s)
 {
     if (!s)

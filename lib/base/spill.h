@@ -24,6 +24,10 @@ struct gv_spill;
  * filled when the directory cannot hold one. */
 struct gv_spill *gv_spill_new(const char *dir, struct gv_error *err);
 
+/* The disk (or memory, in a tmpfs) the file takes now: its allocated
+ * blocks, which a hole does not take; 0 for NULL. */
+uint64_t gv_spill_bytes(const struct gv_spill *s);
+
 /* Close and discard.  NULL does nothing. */
 void gv_spill_free(struct gv_spill *s);
 

@@ -606,6 +606,20 @@ fail:
     return -1;
 }
 
+struct gv_raw_regions *gv_source_raw_regions(struct gv_source *s,
+                                             struct gv_error *err)
+{
+    gv_error_clear(err);
+    /* Rows as the file holds them: one image, 8-bit samples copied
+     * unchanged (no tone rule, no channel dropped). */
+    if (s->kind != KIND_IMAGES || !s->probed || s->next_row
+        || s->tone != GV_TONE_NONE || s->lut
+        || s->tiles[0].info.sample != GV_SAMPLE_U8
+        || s->tiles[0].info.channels != s->channels)
+        return NULL;
+    return gv_image_raw_regions(s->probed, err);
+}
+
 void gv_source_free(struct gv_source *s)
 {
     if (!s)

@@ -12,7 +12,13 @@
  * decoded tiles, not from a decoded image.
  * Where level 0 fits in the page window and the encoder is not a shard,
  * it is kept there instead, from pass 1 until pass 2 has coded it
- * (level0_resident).
+ * (level0_resident).  Else, where the input file holds its pixels
+ * uncompressed as pass 1 read them (an uncompressed 8-bit TIFF), pass 2
+ * reads each level-0 tile from the file again (level0_file,
+ * imageio/raw_regions.h) and level 0 is never written to scratch: that
+ * saves a copy as large as the input, written, kept in the page cache
+ * beside the input's own pages, and read back (a 1.07-gigapixel tiled
+ * TIFF: 3.2 GB; bench/README.md, session 8).
  *
  * Working set of pass 2 for one page: the original window (4097^2 x C;
  * mapped from the scratch file where it can be, else copied from it),
@@ -35,6 +41,7 @@
  */
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -51,6 +58,7 @@
 #include "encode/shard_file.h"
 #include "encode/shard_plan.h"
 #include "encode/stream_encoder.h"
+#include "imageio/raw_regions.h"
 #include "render/store_decoder.h"
 #include "store/store_format.h"
 #include "store/store_write.h"
@@ -120,6 +128,12 @@ struct encoder {
      * image is more than its root.  The other levels' windows are then
      * copied, where they cannot be mapped, into copies instead. */
     int level0_resident;
+    /* Level 0 read again from the input file in pass 2, tile by tile
+     * (see the top of the file); NULL where it is not. */
+    struct gv_raw_regions *level0_file;
+    /* A pool job that failed (reading level0_file): the first error. */
+    atomic_int job_failed;
+    struct gv_error job_err;
     uint8_t *copies;          /* window, or memory of its own */
     uint8_t *parents[16];     /* decoded parent tiles, 4x4 around the page */
     const uint8_t *parent_at[16]; /* where they are: parents, or kept */
@@ -254,10 +268,12 @@ static int emit_reduced(struct encoder *e, int k, const uint8_t *r0,
 }
 
 /* Store row `rows_out[k]` of level k and count it; level 0's rows are
- * stored by pass 1's reader, except a shard's (see struct reader). */
+ * stored by pass 1's reader, except a shard's (see struct reader), and
+ * not at all when pass 2 reads them from the input file. */
 static int store_next(struct encoder *e, int k, const uint8_t *row)
 {
-    if ((k > 0 || e->sharded) && store_row(e, k, row) < 0)
+    if ((k > 0 || (e->sharded && !e->level0_file)) &&
+        store_row(e, k, row) < 0)
         return -1;
     e->rows_out[k]++;
     return 0;
@@ -375,8 +391,8 @@ static int pass1(struct encoder *e, struct gv_source *src)
         chunk = g->height;
     /* Level 0 in memory: read where it stays, not stored. */
     struct reader rd = {.src = src, .chunk = chunk, .height = g->height,
-                        .spill = e->sharded || e->level0_resident ? NULL
-                                                                  : e->spill0,
+                        .spill = e->sharded || e->level0_resident ||
+                                         e->level0_file ? NULL : e->spill0,
                         .whole = e->level0_resident ? e->window : NULL,
                         .e = e, .row_bytes = rb0};
     int rc = -1, started = 0;
@@ -476,11 +492,41 @@ static uint64_t tile_seed(int level, uint32_t tx, uint32_t ty)
            0x6a09e667f3bcc909ull;
 }
 
+/* Read the original of level-0 tile (i, j) of the current page from the
+ * input file into orig (513x513xC), repeating the last row and column
+ * past the image's edge, as cut_tile does from a window.  Returns 0 or
+ * -1 with *err. */
+static int read_tile0(const struct encoder *e, int i, int j, uint8_t *orig,
+                      struct gv_error *err)
+{
+    const int c = e->c;
+    const size_t row = (size_t)GV_TILE * c;
+    const uint32_t x0 = (uint32_t)i * GV_STEP, y0 = (uint32_t)j * GV_STEP;
+    const uint32_t w = e->win_w - x0 < GV_TILE ? e->win_w - x0 : GV_TILE;
+    const uint32_t h = e->win_h - y0 < GV_TILE ? e->win_h - y0 : GV_TILE;
+    if (gv_raw_regions_read(e->level0_file, e->px * PAGE_W + x0,
+                            e->py * PAGE_W + y0, w, h, orig, row, err) < 0)
+        return -1;
+    for (uint32_t v = 0; v < GV_TILE; v++) {
+        uint8_t *dst = orig + v * row;
+        if (v >= h)
+            memcpy(dst, orig + (h - 1) * row, row);
+        else
+            for (uint32_t u = w; u < GV_TILE; u++)
+                memcpy(dst + u * c, dst + (size_t)(w - 1) * c, (size_t)c);
+    }
+    return 0;
+}
+
 /* Cut the original of tile (i, j) of the current page out of the page
  * window into orig (513x513xC), repeating the last row and column past
- * the image's edge. */
-static void cut_tile(const struct encoder *e, int i, int j, uint8_t *orig)
+ * the image's edge; at level 0 read from the input file where it is
+ * (read_tile0).  Returns 0 or -1 with *err. */
+static int cut_tile(const struct encoder *e, int i, int j, uint8_t *orig,
+                    struct gv_error *err)
 {
+    if (e->level == 0 && e->level0_file)
+        return read_tile0(e, i, j, orig, err);
     const int c = e->c;
     const size_t row = (size_t)GV_TILE * c;
     for (uint32_t v = 0; v < GV_TILE; v++) {
@@ -495,6 +541,7 @@ static void cut_tile(const struct encoder *e, int i, int j, uint8_t *orig)
         for (uint32_t u = avail; u < GV_TILE; u++)
             memcpy(dst + u * c, src + (size_t)(e->win_w - 1) * c, (size_t)c);
     }
+    return 0;
 }
 
 /* Squared error of a level-0 tile over the pixels it is the source of
@@ -511,7 +558,8 @@ static uint64_t level0_sse(const struct encoder *e, uint32_t tx, uint32_t ty,
 }
 
 /* Pool job: encode slot `slot` of the current page with the workspace of
- * `worker`; lens[slot] stays 0 for a slot outside the level or the shard. */
+ * `worker`; lens[slot] stays 0 for a slot outside the level or the shard,
+ * and for one whose original cannot be read (job_failed, job_err). */
 static void encode_tile(void *ctx, size_t slot, int worker)
 {
     struct encoder *e = ctx;
@@ -530,7 +578,13 @@ static void encode_tile(void *ctx, size_t slot, int worker)
      * does: fewer fresh pages to fault in than one per slot. */
     uint8_t *recon = e->level == 0 ? e->wrecon + (size_t)worker * gv_tile_bytes(c)
                                    : e->recon[slot];
-    cut_tile(e, i, j, orig);
+    struct gv_error err;
+    if (cut_tile(e, i, j, orig, &err) < 0) {
+        /* The first failure is kept; encode_page reports it. */
+        if (!atomic_exchange(&e->job_failed, 1))
+            e->job_err = err;
+        return;
+    }
     const uint32_t valid_w = l->width - tx * GV_STEP < GV_TILE ?
                              l->width - tx * GV_STEP : GV_TILE;
     const uint32_t valid_h = l->height - ty * GV_STEP < GV_TILE ?
@@ -609,6 +663,17 @@ static int load_window(struct encoder *e)
         const size_t rb = (size_t)l->width * c;
         e->win = e->window + (size_t)y0 * rb + (size_t)x0 * c;
         e->win_stride = rb;
+        return 0;
+    }
+    if (e->level == 0 && e->level0_file) {
+        /* Each tile is read from the file by its worker (read_tile0): no
+         * window, and the copies' memory is given back. */
+        gv_spill_unview(&e->view);
+        if (e->window_resident)
+            release_pages(e->copies, (size_t)WINDOW * WINDOW * c);
+        e->window_resident = 0;
+        e->win = NULL;
+        e->win_stride = 0;
         return 0;
     }
     /* The window is rows y0 .. y0 + win_h - 1 of strip px, one span of
@@ -730,6 +795,10 @@ static int encode_page(struct encoder *e, uint32_t px, uint32_t py,
         return -1;
     order_page(e);
     gv_pool_run(e->pool, encode_ordered, e, GV_PAGE_SLOTS);
+    if (atomic_load(&e->job_failed)) {
+        *e->err = e->job_err;
+        return -1;
+    }
     if (emit_page(e) < 0)
         return -1;
     if (e->level > 0 && !(e->level == 1 && e->level1_kept) &&
@@ -781,7 +850,6 @@ static int layout_scratch(struct encoder *e)
     for (int k = 0; k <= g->root; k++)
         bytes[k] = ((uint64_t)g->level[k].width +
                     strip_count(&g->level[k]) - 1) * g->level[k].height * c;
-    const uint64_t size0 = bytes[0];
     uint64_t off = 0;
     e->orig_base[0] = 0;
     for (int k = 1; k <= g->root; k++) {
@@ -797,6 +865,7 @@ static int layout_scratch(struct encoder *e)
         e->work_total += (double)g->level[k].width * g->level[k].height * c;
     if (e->sharded) {
         e->work_total = (double)e->plan.samples;
+        const uint64_t size0 = e->level0_file ? 0 : bytes[0];
         /* Size the scratch file once: what the shard never writes stays a
          * hole, so reading a whole page window cannot run past the end. */
         static const uint8_t zero = 0;
@@ -807,6 +876,30 @@ static int layout_scratch(struct encoder *e)
     if (e->work_total <= 0)
         e->work_total = 1;
     return 0;
+}
+
+/* Whether environment variable `name` is "0" (the tests' switches). */
+static int env_off(const char *name)
+{
+    const char *v = getenv(name);
+    return v && !strcmp(v, "0");
+}
+
+/* Where level 0 lives between the passes: in the page window where it
+ * fits (level0_resident), else in the input file where pass 2 can read it
+ * from there (level0_file), else in the scratch file.  For tests,
+ * GIGAVIEW_LEVEL0_RESIDENT=0 and GIGAVIEW_LEVEL0_FILE=0 rule out the
+ * first and the second.  Before layout_scratch and start_workers. */
+static int choose_level0(struct encoder *e, struct gv_source *src)
+{
+    e->level0_resident = !e->sharded && e->g.root > 0 &&
+                         (uint64_t)e->g.width * e->g.height <=
+                             (uint64_t)WINDOW * WINDOW &&
+                         !env_off("GIGAVIEW_LEVEL0_RESIDENT");
+    if (e->level0_resident || e->g.root == 0 || env_off("GIGAVIEW_LEVEL0_FILE"))
+        return 0;
+    e->level0_file = gv_source_raw_regions(src, e->err);
+    return e->level0_file || e->err->code == GV_OK ? 0 : -1;
 }
 
 /* The thread pool, and the buffers of pass 2: one tile workspace and one
@@ -825,11 +918,7 @@ static int start_workers(struct encoder *e)
     e->origs = malloc((size_t)n * gv_tile_bytes(c));
     e->wrecon = malloc((size_t)n * gv_tile_bytes(c));
     e->window = malloc((size_t)WINDOW * WINDOW * c);
-    const char *views = getenv("GIGAVIEW_SPILL_VIEWS");   /* tests */
-    e->no_views = views && !strcmp(views, "0");
-    e->level0_resident = !e->sharded && e->g.root > 0 &&
-                         (uint64_t)e->g.width * e->g.height <=
-                             (uint64_t)WINDOW * WINDOW;
+    e->no_views = env_off("GIGAVIEW_SPILL_VIEWS");   /* tests */
     e->copies = e->level0_resident ? NULL : e->window;
     if (!e->ws || !e->origs || !e->wrecon || !e->window)
         return gv_fail(e->err, GV_ENOMEM, "encode: out of memory");
@@ -918,6 +1007,7 @@ static void teardown(struct encoder *e)
         gv_lambda_model_free(&e->model[k]);
     gv_spill_free(e->spill);
     gv_spill_free(e->spill0);
+    gv_raw_regions_free(e->level0_file);
 }
 
 static int check_opts(const struct gv_encode_opts *opts, struct gv_error *err)
@@ -1070,7 +1160,7 @@ int gv_encode(const char *const *inputs, int n, const char *output,
     if (!src)
         return -1;
     if (open_output(&e, output) < 0 || open_spill(&e, output) < 0 ||
-        layout_scratch(&e) < 0 || start_workers(&e) < 0 || pass1(&e, src) < 0)
+        choose_level0(&e, src) < 0 || layout_scratch(&e) < 0 || start_workers(&e) < 0 || pass1(&e, src) < 0)
         goto out;
     gv_source_free(src);
     src = NULL;
@@ -1085,6 +1175,8 @@ int gv_encode(const char *const *inputs, int n, const char *output,
     res->lambda = opts->per_tile ? 0.0 : e.lambda;
     if (pass2(&e, &sse0, &samples0) < 0)
         goto out;
+    res->scratch_bytes = gv_spill_bytes(e.spill) + gv_spill_bytes(e.spill0);
+    res->level0_from_input = e.level0_file != NULL;
     if ((e.sharded ? finish_shard(&e)
                    : finish_store(&e, output, sse0, samples0)) < 0)
         goto out;

@@ -78,6 +78,10 @@ struct gv_encode_result {
     double lambda;            /* equal-slope mode: the price of a bit in
                                * squared error (0 in per_tile mode) */
     double seconds;
+    uint64_t scratch_bytes;   /* disk the scratch files took at the end of
+                               * pass 2 (their most) */
+    int level0_from_input;    /* pass 2 read level 0 from the input file
+                               * instead of a scratch copy */
 };
 
 /* Fill *o with the defaults. */

@@ -78,6 +78,15 @@ int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,
 /* Close.  gv_image_close(NULL) does nothing. */
 void gv_image_close(struct gv_image_in *in);
 
+/* Where the file stores its pixels uncompressed, as gv_image_read
+ * delivers them (today: an uncompressed TIFF of 8-bit samples read by
+ * the native reader), a reader of any rectangle of them that outlives in
+ * (raw_regions.h); else NULL with err->code GV_OK, or NULL with *err
+ * for GV_ENOMEM.  Call it before the first gv_image_read. */
+struct gv_raw_regions;
+struct gv_raw_regions *gv_image_raw_regions(struct gv_image_in *in,
+                                            struct gv_error *err);
+
 /* Write an 8-bit image (channels 1 or 3, rows packed) to `path`, format by
  * extension (.png, .tif/.tiff, .jpg/.jpeg, .webp).  The file appears under
  * its final name only when complete, replacing any file there, and is

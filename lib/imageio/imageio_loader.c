@@ -292,6 +292,13 @@ int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,
     return module->read(in->u.module, rows, out, err);
 }
 
+struct gv_raw_regions *gv_image_raw_regions(struct gv_image_in *in,
+                                            struct gv_error *err)
+{
+    gv_error_clear(err);
+    return in->by == BY_TIFF ? gv_native_tiff_regions(in->u.tiff, err) : NULL;
+}
+
 void gv_image_close(struct gv_image_in *in)
 {
     if (!in)

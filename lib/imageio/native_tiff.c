@@ -56,6 +56,7 @@
 
 #include "imageio/native_file.h"
 #include "imageio/native_tiff.h"
+#include "imageio/raw_regions.h"
 #include "imageio/size_limit.h"
 
 /* libtiff's functions, from dlopen (see the top of the file). */
@@ -78,6 +79,8 @@ static struct {
     uint32_t (*ComputeStrip)(TIFF *, uint32_t, uint16_t);
     tmsize_t (*ReadEncodedTile)(TIFF *, uint32_t, void *, tmsize_t);
     tmsize_t (*ReadEncodedStrip)(TIFF *, uint32_t, void *, tmsize_t);
+    uint32_t (*NumberOfTiles)(TIFF *);
+    uint32_t (*NumberOfStrips)(TIFF *);
 } lt;
 static int lt_ok;
 static pthread_once_t lt_once = PTHREAD_ONCE_INIT;
@@ -108,6 +111,8 @@ static void lt_load(void)
         {(void **)&lt.ComputeStrip, "TIFFComputeStrip"},
         {(void **)&lt.ReadEncodedTile, "TIFFReadEncodedTile"},
         {(void **)&lt.ReadEncodedStrip, "TIFFReadEncodedStrip"},
+        {(void **)&lt.NumberOfTiles, "TIFFNumberOfTiles"},
+        {(void **)&lt.NumberOfStrips, "TIFFNumberOfStrips"},
     };
     for (size_t i = 0; i < sizeof f / sizeof f[0]; i++) {
         /* POSIX: a function pointer may be stored through void *. */
@@ -445,4 +450,39 @@ int gv_native_tiff_read(struct gv_native_tiff *t, uint32_t rows, void *out,
         rows -= take;
     }
     return 0;
+}
+
+struct gv_raw_regions *gv_native_tiff_regions(struct gv_native_tiff *t,
+                                              struct gv_error *err)
+{
+    gv_error_clear(err);
+    TIFF *tif = t->tif;
+    uint16_t comp = 0;
+    uint64_t *offsets = NULL, *counts = NULL;
+    if (t->broken || t->swap16 || t->bits != 8
+        || !lt.GetFieldDefaulted(tif, TIFFTAG_COMPRESSION, &comp)
+        || comp != COMPRESSION_NONE)
+        return NULL;
+    struct gv_raw_layout l = {
+        .width = t->width,
+        .height = t->height,
+        .pixel_bytes = (int)t->pixel_bytes,
+        .block_w = t->tiled ? t->tile_w : t->width,
+        .block_h = t->tile_h,
+    };
+    l.across = (t->width - 1) / l.block_w + 1;
+    l.down = (t->height - 1) / l.block_h + 1;
+    l.short_last_row = !t->tiled;
+    const uint32_t blocks = t->tiled ? lt.NumberOfTiles(tif)
+                                     : lt.NumberOfStrips(tif);
+    if ((uint64_t)l.across * l.down != blocks
+        || !lt.GetField(tif, t->tiled ? TIFFTAG_TILEOFFSETS
+                                      : TIFFTAG_STRIPOFFSETS, &offsets)
+        || !lt.GetField(tif, t->tiled ? TIFFTAG_TILEBYTECOUNTS
+                                      : TIFFTAG_STRIPBYTECOUNTS, &counts)
+        || !offsets || !counts || t->msg[0])
+        return NULL;
+    l.offsets = offsets;
+    l.byte_counts = counts;
+    return gv_raw_regions_new(t->fd, t->path, &l, err);
 }

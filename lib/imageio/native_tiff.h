@@ -12,6 +12,7 @@
 
 #include "base/error.h"
 #include "imageio/imageio.h"
+#include "imageio/raw_regions.h"
 
 struct gv_native_tiff;
 
@@ -38,6 +39,15 @@ struct gv_native_tiff *gv_native_tiff_open(const char *path,
  * fails; GV_EINVAL for a read past the last row; GV_ENOMEM). */
 int gv_native_tiff_read(struct gv_native_tiff *t, uint32_t rows, void *out,
                         struct gv_error *err);
+
+/* The file's pixels as rectangles read where they lie (raw_regions.h),
+ * for an uncompressed file of 8-bit samples whose tiles or strips lie in
+ * it whole; NULL with err->code GV_OK for any other (and for a reader
+ * that failed), NULL with *err for GV_ENOMEM.  The reader has its own
+ * descriptor: it outlives t.  The samples are those gv_native_tiff_read
+ * delivers. */
+struct gv_raw_regions *gv_native_tiff_regions(struct gv_native_tiff *t,
+                                              struct gv_error *err);
 
 /* Close.  gv_native_tiff_close(NULL) does nothing. */
 void gv_native_tiff_close(struct gv_native_tiff *t);

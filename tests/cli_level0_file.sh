@@ -1,0 +1,93 @@
+#!/bin/sh
+# cli_level0_file.sh - pass 2 reads level 0 again from an uncompressed
+# TIFF (lib/imageio/raw_regions.c) instead of a scratch copy of it, and
+# the store is the same byte for byte.
+#
+# The inputs are made here: synthetic images encoded, exported to TIFF
+# and rewritten by tiffcp without compression, tiled (tiles that overhang
+# the right and bottom edges) or in strips (the last one short).  Each is
+# encoded as it is (the summary must say that level 0 was read again, and
+# the scratch must hold less than the image) and with
+# GIGAVIEW_LEVEL0_FILE=0 (a scratch copy of level 0, so the scratch holds
+# more than the image): the two stores must be identical.  Small images
+# take the path with GIGAVIEW_LEVEL0_RESIDENT=0 (level 0 would stay in
+# memory otherwise); one tiled RGB image of more than 4097^2 pixels takes
+# it by default.  LZW, 16-bit and gray+alpha TIFFs are never read that
+# way.  (cli_shard.sh checks that shards, which read level 0 from the
+# input too, merge into the whole encode's store.)
+. "$(dirname "$0")/lib.sh"
+need_tool tiffcp
+
+export GIGAVIEW_LEVEL0_RESIDENT=0
+
+# scratch_mb: the scratch line's megabytes in the last run's summary.
+scratch_mb() {
+    sed -n 's/^scratch *\([0-9.]*\) MB.*/\1/p' "$T/out"
+}
+
+# make_tiff SYNTH OUT TIFFCP-OPTIONS...: the pattern SYNTH, encoded and
+# exported to a TIFF, rewritten by tiffcp with the options into OUT.
+make_tiff() {
+    synth=$1 out=$2
+    shift 2
+    gv encode --quiet -q 34 "$synth" -o "$T/src.gv" &&
+        gv export "$T/src.gv" -o "$T/src.tif" &&
+        tiffcp "$@" "$T/src.tif" "$out" ||
+        bail "cannot make $out from $synth"
+}
+
+# both DESCRIPTION FILE MB: encode FILE (MB megabytes of pixels) reading
+# level 0 again and from a scratch copy; the same store, and scratch
+# below and above MB.
+both() {
+    what=$1 file=$2 mb=$3
+    run encode -q 34 "$file" -o "$T/again.gv"
+    expect_rc "$what: encode" 0
+    check "$what: the summary says level 0 was read again from the input" \
+        grep -q '^scratch .*level 0 read again from the input$' "$T/out"
+    again=$(scratch_mb)
+    check "$what: scratch ${again} MB, less than the image's $mb MB" \
+        awk "BEGIN { exit !($again < $mb) }"
+    GIGAVIEW_LEVEL0_FILE=0 run encode -q 34 "$file" -o "$T/copy.gv"
+    expect_rc "$what: encode with a scratch copy of level 0" 0
+    copy=$(scratch_mb)
+    check "$what: the copy's scratch ${copy} MB holds the image's $mb MB" \
+        awk "BEGIN { exit !($copy >= $mb) }"
+    check "$what: the same store either way" cmp -s "$T/again.gv" "$T/copy.gv"
+}
+
+# Small images, level 0 out of memory by the switch: tiles of 64 x 64
+# (1100 x 700: overhanging both edges), strips of 5 rows (the last of 3),
+# gray in tiles of 16 x 48.
+make_tiff synth:1100x700 "$T/tiled.tif" -c none -t -w 64 -l 64
+both "RGB 1100x700 in 64x64 tiles" "$T/tiled.tif" 2.31
+cp "$T/again.gv" "$T/rgb.gv"
+make_tiff synth:1100x700 "$T/strips.tif" -c none -r 5
+both "RGB 1100x700 in strips of 5 rows" "$T/strips.tif" 2.31
+make_tiff synth:1300x600:gray "$T/gray.tif" -c none -t -w 16 -l 48
+both "gray 1300x600 in 16x48 tiles" "$T/gray.tif" 0.78
+
+# What is not stored as the encoder reads it goes through the scratch
+# file: compressed, 16-bit, gray with alpha.
+make_tiff synth:1100x700 "$T/lzw.tif" -c lzw -t -w 64 -l 64
+run encode -q 34 "$T/lzw.tif" -o "$T/lzw.gv"
+expect_rc "LZW tiles: encode" 0
+check "LZW tiles: level 0 goes through the scratch file" \
+    sh -c "! grep -q 'read again' '$T/out' && grep -q '^scratch' '$T/out'"
+check "LZW tiles: the same store as the uncompressed ones" \
+    cmp -s "$T/lzw.gv" "$T/rgb.gv"
+run encode -q 34 "$TESTDATA/courtyard-160x120-u16.tif" -o "$T/u16.gv"
+expect_rc "a 16-bit TIFF: encode" 0
+check "a 16-bit TIFF: level 0 goes through the scratch file" \
+    sh -c "! grep -q 'read again' '$T/out'"
+
+# The real threshold: more than 4097^2 pixels leave memory by default.
+if under_valgrind; then
+    skip "RGB 4400x3900 in 128x128 tiles, by default" "valgrind: some 40 times slower"
+else
+    unset GIGAVIEW_LEVEL0_RESIDENT
+    make_tiff synth:4400x3900 "$T/big.tif" -c none -t -w 128 -l 128
+    both "RGB 4400x3900 in 128x128 tiles, by default" "$T/big.tif" 51.48
+fi
+
+done_testing
