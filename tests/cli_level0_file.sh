@@ -1,15 +1,17 @@
 #!/bin/sh
-# cli_level0_file.sh - pass 2 reads level 0 again from an uncompressed
-# TIFF (lib/imageio/raw_regions.c) instead of a scratch copy of it, and
-# the store is the same byte for byte.
+# cli_level0_file.sh - an uncompressed TIFF is read where its pixels lie
+# (lib/imageio/raw_regions.c): pass 1 reads its rows without libtiff, and
+# pass 2 reads level 0 again from it instead of a scratch copy; the store
+# is the same byte for byte as through libtiff and the scratch file.
 #
 # The inputs are made here: synthetic images encoded, exported to TIFF
 # and rewritten by tiffcp without compression, tiled (tiles that overhang
 # the right and bottom edges) or in strips (the last one short).  Each is
 # encoded as it is (the summary must say that level 0 was read again, and
 # the scratch must hold less than the image) and with
-# GIGAVIEW_LEVEL0_FILE=0 (a scratch copy of level 0, so the scratch holds
-# more than the image): the two stores must be identical.  Small images
+# GIGAVIEW_RAW_REGIONS=0 (read by libtiff, with a scratch copy of level 0,
+# so the scratch holds more than the image): the two stores must be
+# identical.  Small images
 # take the path with GIGAVIEW_LEVEL0_RESIDENT=0 (level 0 would stay in
 # memory otherwise); one tiled RGB image of more than 4097^2 pixels takes
 # it by default.  LZW, 16-bit and gray+alpha TIFFs are never read that
@@ -48,7 +50,7 @@ both() {
     again=$(scratch_mb)
     check "$what: scratch ${again} MB, less than the image's $mb MB" \
         awk "BEGIN { exit !($again < $mb) }"
-    GIGAVIEW_LEVEL0_FILE=0 run encode -q 34 "$file" -o "$T/copy.gv"
+    GIGAVIEW_RAW_REGIONS=0 run encode -q 34 "$file" -o "$T/copy.gv"
     expect_rc "$what: encode with a scratch copy of level 0" 0
     copy=$(scratch_mb)
     check "$what: the copy's scratch ${copy} MB holds the image's $mb MB" \

@@ -50,6 +50,7 @@
 #include <string.h>
 
 #include "imageio/imageio.h"
+#include "imageio/raw_regions.h"
 #include "encode/source.h"
 
 /* Rows read from a tile per gv_image_read call are capped so that the
@@ -81,6 +82,10 @@ struct gv_source {
     struct gv_image_in *probed; /* a single image: its probe, kept open
                                  * for the reading (opening a progressive
                                  * JPEG decodes every scan) */
+    struct gv_raw_regions *raw; /* a single uncompressed image of 8-bit
+                                 * samples delivered as they are: its rows
+                                 * read where they lie, without the
+                                 * decoder's two copies */
     unsigned char *scratch;
     size_t scratch_size;
     struct gv_image_limits limits;  /* max_pixels below, and the decoder's */
@@ -414,6 +419,15 @@ static int probe_tiles(struct gv_source *s, const char *const *inputs,
     return 0;
 }
 
+/* Whether the rows are the file's samples unchanged: one image, 8-bit
+ * samples, no tone rule and no channel dropped. */
+static int raw_eligible(const struct gv_source *s)
+{
+    return s->kind == KIND_IMAGES && s->probed && s->tone == GV_TONE_NONE
+           && !s->lut && s->tiles[0].info.sample == GV_SAMPLE_U8
+           && s->tiles[0].info.channels == s->channels;
+}
+
 static int open_images(struct gv_source *s, const char *const *inputs,
                        const struct gv_source_opts *opts,
                        struct gv_source_info *info, struct gv_error *err)
@@ -430,6 +444,9 @@ static int open_images(struct gv_source *s, const char *const *inputs,
         return -1;
     const struct gv_image_info *f = &s->tiles[0].info;
     if (setup_tone(s, opts, f, err) != 0)
+        return -1;
+    if (raw_eligible(s) && !(s->raw = gv_image_raw_regions(s->probed, err))
+        && err->code != GV_OK)
         return -1;
     info->src_bits = f->bits;
     info->src_float = f->sample == GV_SAMPLE_F32;
@@ -578,6 +595,15 @@ int gv_source_read(struct gv_source *s, uint32_t rows, uint8_t *out,
                        "row %" PRIu32 " passes the last row (height %" PRIu32
                        ")", rows, s->next_row, s->height);
     size_t out_row = (size_t)s->width * (size_t)s->channels;
+    if (s->raw && rows > 0) {
+        if (gv_raw_regions_read(s->raw, 0, s->next_row, s->width, rows, out,
+                                out_row, err) != 0) {
+            s->failed = 1;
+            return -1;
+        }
+        s->next_row += rows;
+        return 0;
+    }
     if (s->kind == KIND_SYNTH) {
         for (uint32_t i = 0; i < rows; i++)
             synth_row(s, s->next_row + i, out + out_row * i);
@@ -610,14 +636,7 @@ struct gv_raw_regions *gv_source_raw_regions(struct gv_source *s,
                                              struct gv_error *err)
 {
     gv_error_clear(err);
-    /* Rows as the file holds them: one image, 8-bit samples copied
-     * unchanged (no tone rule, no channel dropped). */
-    if (s->kind != KIND_IMAGES || !s->probed || s->next_row
-        || s->tone != GV_TONE_NONE || s->lut
-        || s->tiles[0].info.sample != GV_SAMPLE_U8
-        || s->tiles[0].info.channels != s->channels)
-        return NULL;
-    return gv_image_raw_regions(s->probed, err);
+    return s->raw ? gv_image_raw_regions(s->probed, err) : NULL;
 }
 
 void gv_source_free(struct gv_source *s)
@@ -627,6 +646,7 @@ void gv_source_free(struct gv_source *s)
     if (s->open)
         close_grid_row(s);
     gv_image_close(s->probed);
+    gv_raw_regions_free(s->raw);
     if (s->tiles)
         for (int i = 0; i < s->cols * s->rows; i++)
             free(s->tiles[i].path);

@@ -888,15 +888,16 @@ static int env_off(const char *name)
 /* Where level 0 lives between the passes: in the page window where it
  * fits (level0_resident), else in the input file where pass 2 can read it
  * from there (level0_file), else in the scratch file.  For tests,
- * GIGAVIEW_LEVEL0_RESIDENT=0 and GIGAVIEW_LEVEL0_FILE=0 rule out the
- * first and the second.  Before layout_scratch and start_workers. */
+ * GIGAVIEW_LEVEL0_RESIDENT=0 rules out the first, and
+ * GIGAVIEW_RAW_REGIONS=0 the second (imageio.h).  Before layout_scratch
+ * and start_workers. */
 static int choose_level0(struct encoder *e, struct gv_source *src)
 {
     e->level0_resident = !e->sharded && e->g.root > 0 &&
                          (uint64_t)e->g.width * e->g.height <=
                              (uint64_t)WINDOW * WINDOW &&
                          !env_off("GIGAVIEW_LEVEL0_RESIDENT");
-    if (e->level0_resident || e->g.root == 0 || env_off("GIGAVIEW_LEVEL0_FILE"))
+    if (e->level0_resident || e->g.root == 0)
         return 0;
     e->level0_file = gv_source_raw_regions(src, e->err);
     return e->level0_file || e->err->code == GV_OK ? 0 : -1;

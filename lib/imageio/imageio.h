@@ -81,8 +81,9 @@ void gv_image_close(struct gv_image_in *in);
 /* Where the file stores its pixels uncompressed, as gv_image_read
  * delivers them (today: an uncompressed TIFF of 8-bit samples read by
  * the native reader), a reader of any rectangle of them that outlives in
- * (raw_regions.h); else NULL with err->code GV_OK, or NULL with *err
- * for GV_ENOMEM.  Call it before the first gv_image_read. */
+ * (raw_regions.h); else NULL with err->code GV_OK (always with
+ * GIGAVIEW_RAW_REGIONS=0, for tests), or NULL with *err for
+ * GV_ENOMEM. */
 struct gv_raw_regions;
 struct gv_raw_regions *gv_image_raw_regions(struct gv_image_in *in,
                                             struct gv_error *err);
