@@ -491,6 +491,46 @@ static inline int quantize_block(const float *x, float inv, float s,
 #endif
 }
 
+#ifdef HAVE_AVX2_PATH
+/* quantize_block in eight lanes: the same operations in the same order
+ * (a multiply and an add, never fused: ISO C mode), so the same q, the
+ * same return and the same acc[l], lane l summing k = l, l + 8, ... */
+__attribute__((target("avx2,fma"), always_inline)) static inline int
+quantize_block_avx2(const float *x, float inv, float s, int16_t *q,
+                    float *acc)
+{
+    const __m256 vinv = _mm256_set1_ps(inv), vs = _mm256_set1_ps(s);
+    const __m256 off = _mm256_set1_ps(ROUND_OFFSET), cap = _mm256_set1_ps(2047.5f);
+    const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    const __m128i zero = _mm_setzero_si128();
+    __m256 sum = _mm256_setzero_ps();
+    uint64_t nz = 0;
+    for (int k = 0; k < 64; k += 8) {
+        const __m256 v = _mm256_loadu_ps(x + k);
+        const __m256 a = _mm256_and_ps(v, absmask);
+        __m256 f = _mm256_add_ps(_mm256_mul_ps(a, vinv), off);
+        f = _mm256_min_ps(f, cap);
+        const __m256i m = _mm256_cvttps_epi32(f);
+        const __m256 err = _mm256_sub_ps(a, _mm256_mul_ps(_mm256_cvtepi32_ps(m), vs));
+        sum = _mm256_add_ps(sum, _mm256_mul_ps(err, err));
+        const __m256i sg = _mm256_srai_epi32(_mm256_castps_si256(v), 31);
+        const __m256i sm = _mm256_sub_epi32(_mm256_xor_si256(m, sg), sg);
+        /* Eight int16: packs works within each 128-bit half, so the
+         * halves' low quadwords (values 0-3 and 4-7) are gathered. */
+        const __m128i q8 = _mm256_castsi256_si128(
+            _mm256_permute4x64_epi64(_mm256_packs_epi32(sm, sm), 0x08));
+        _mm_storeu_si128((__m128i *)(q + k), q8);
+        const __m128i eq = _mm_cmpeq_epi16(q8, zero);
+        const int z = _mm_movemask_epi8(_mm_packs_epi16(eq, eq)) & 0xff;
+        nz |= (uint64_t)(~z & 0xff) << k;
+    }
+    _mm256_storeu_ps(acc, sum);
+    return nz ? 64 - __builtin_clzll(nz) : 0;
+}
+#endif
+
+typedef int quantize_fn(const float *, float, float, int16_t *, float *);
+
 /* Quantize every block at steps[] into cd (q, eob) and count its symbols
  * into cd->md (counts and the uniform steps; totals and frequencies are
  * build_models'); returns the estimated weighted squared error (transform
@@ -499,9 +539,9 @@ static inline int quantize_block(const float *x, float inv, float s,
  * first eob values are ever read).  The counts are the symbols that
  * write_buffer codes (FORMAT.md 4.3), channel by channel: the contexts
  * pe and dcp run along a row within one channel. */
-static double quantize_count(const struct gv_dct_workspace *ws,
-                             struct candidate *cd, int channels,
-                             const int *steps)
+__attribute__((always_inline)) static inline double
+quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
+                    int channels, const int *steps, quantize_fn *qblock)
 {
     struct models *md = &cd->md;
     memset(md->count, 0, sizeof md->count);
@@ -529,7 +569,7 @@ static double quantize_count(const struct gv_dct_workspace *ws,
                 const float *x = ws->x[c][b];
                 int16_t *q = cd->q[c][b];
                 float acc[8];
-                const int n = quantize_block(x, inv, s, q, acc);
+                const int n = qblock(x, inv, s, q, acc);
                 e2 += ((acc[0] + acc[1]) + (acc[2] + acc[3])) +
                       ((acc[4] + acc[5]) + (acc[6] + acc[7]));
                 cd->eob[c][b] = (uint8_t)n;
@@ -550,6 +590,28 @@ static double quantize_count(const struct gv_dct_workspace *ws,
     md->uniform = uniform;
     return sse;
 }
+
+/* quantize_count_body compiled for the baseline and for AVX2, chosen at
+ * run time with the transform (the same results). */
+static double quantize_count_base(const struct gv_dct_workspace *ws,
+                                  struct candidate *cd, int channels,
+                                  const int *steps)
+{
+    return quantize_count_body(ws, cd, channels, steps, quantize_block);
+}
+
+#ifdef HAVE_AVX2_PATH
+__attribute__((target("avx2,fma"))) static double
+quantize_count_avx2(const struct gv_dct_workspace *ws, struct candidate *cd,
+                    int channels, const int *steps)
+{
+    return quantize_count_body(ws, cd, channels, steps, quantize_block_avx2);
+}
+#endif
+
+typedef double quantize_count_fn(const struct gv_dct_workspace *,
+                                 struct candidate *, int, const int *);
+static quantize_count_fn *quantize_count = quantize_count_base;
 
 /* Visit every symbol of block row `by` in stream order: fn(model, symbol)
  * with model -1 for a uniform step.  Tokens and classes from tc[], as
@@ -737,8 +799,10 @@ static void init_tables(void)
 #ifdef HAVE_AVX2_PATH
     /* GIGAVIEW_NO_AVX2 (tests, benches): the baseline path. */
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-        !getenv("GIGAVIEW_NO_AVX2"))
+        !getenv("GIGAVIEW_NO_AVX2")) {
         transform_tile = transform_tile_avx2;
+        quantize_count = quantize_count_avx2;
+    }
 #endif
     init_kt();
     init_tc();
