@@ -16,7 +16,10 @@
  *    fuzzer's -rss_limit_mb and malloc limit catch an allocation sized
  *    by a header before the cap is checked);
  *  - every failure fills the error message;
- *  - reading stops at the first error, and a read after it fails too.
+ *  - reading stops at the first error, and a read after it fails too;
+ *  - where the file stores its pixels uncompressed (gv_source_raw_regions:
+ *    an uncompressed 8-bit TIFF), three rectangles read from it where
+ *    they lie equal the rows read in order.
  * Anything else (a crash, a sanitizer report, a hang) is a bug.  Only
  * gigaview's own code is instrumented, for coverage and for AddressSanitizer:
  * the readers inside OpenImageIO and its libraries are Debian's builds, so
@@ -32,6 +35,7 @@
 
 #include "fuzz.h"
 #include "encode/source.h"
+#include "imageio/raw_regions.h"
 
 #define MAX_INPUT (1u << 20)   /* bigger files add time, not coverage */
 #define MAX_PIXELS (1u << 20)  /* the cap under test: 1 MP */
@@ -118,12 +122,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     uint32_t step = (uint32_t)(READ_BYTES / row);
     if (step == 0)
         step = 1;
-    uint8_t *buf = malloc((size_t)step * row);
-    if (!buf)
+    struct gv_raw_regions *raw = gv_source_raw_regions(s, &err);
+    if (!raw && err.code != GV_OK)
+        abort();   /* only GV_ENOMEM, which the caps rule out */
+    /* The whole image (at most MAX_PIXELS x 3 bytes), for the regions. */
+    uint8_t *img = malloc((size_t)info.height * row);
+    if (!img)
         abort();
     uint32_t y = 0;
     while (y < info.height) {
         uint32_t n = info.height - y < step ? info.height - y : step;
+        uint8_t *buf = img + (size_t)y * row;
         gv_error_clear(&err);
         if (gv_source_read(s, n, buf, &err) < 0) {
             if (!err.text[0])
@@ -135,7 +144,29 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         y += n;
     }
-    free(buf);
+    if (raw && y == info.height) {
+        /* The whole image, its middle third, its last pixel. */
+        const uint32_t w = info.width, h = info.height, c = (uint32_t)info.channels;
+        const uint32_t r[3][4] = {{0, 0, w, h},
+                                  {w / 3, h / 3, w - 2 * (w / 3), h - 2 * (h / 3)},
+                                  {w - 1, h - 1, 1, 1}};
+        uint8_t *got = malloc((size_t)h * row);
+        if (!got)
+            abort();
+        for (int k = 0; k < 3; k++) {
+            if (gv_raw_regions_read(raw, r[k][0], r[k][1], r[k][2], r[k][3],
+                                    got, row, &err) < 0)
+                abort();   /* the rows were read from the same blocks */
+            for (uint32_t v = 0; v < r[k][3]; v++)
+                if (memcmp(got + (size_t)v * row,
+                           img + (size_t)(r[k][1] + v) * row + (size_t)r[k][0] * c,
+                           (size_t)r[k][2] * c))
+                    abort();
+        }
+        free(got);
+    }
+    gv_raw_regions_free(raw);
+    free(img);
     gv_source_free(s);
     unlink(path);
     return 0;
