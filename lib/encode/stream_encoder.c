@@ -297,16 +297,6 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
     return emit_reduced(e, k, e->pending[k], row);
 }
 
-/* push_row of level-0 rows r0 and r1 in turn when no row is pending and
- * both lie in the input chunk: the pair is reduced where it is, without
- * the copy of r0 that push_row keeps for a pair split between chunks. */
-static int push_pair0(struct encoder *e, const uint8_t *r0, const uint8_t *r1)
-{
-    if (store_next(e, 0, r0) < 0 || store_next(e, 0, r1) < 0)
-        return -1;
-    return emit_reduced(e, 0, r0, r1);
-}
-
 /* Pass 1's input reader: a thread that decodes the next chunk of rows
  * while the encoder's thread reduces and stores the previous one, in two
  * buffers of CHUNK_BYTES / 2 (the memory of one chunk before).  A chunk
@@ -316,7 +306,15 @@ static int push_pair0(struct encoder *e, const uint8_t *r0, const uint8_t *r1)
  * (where they lie end to end).  That takes the largest copy off
  * the encoder's thread, which bounds pass 1 on an input that is cheap to
  * decode (a 54 MP uncompressed tiled TIFF: the whole encode 1.28 -> 1.20 s,
- * best of 4; bench/README.md, "2026-11-26 (session 6), encoding"). */
+ * best of 4; bench/README.md, "2026-11-26 (session 6), encoding").
+ * Where there are levels above level 0, the reader also reduces each
+ * pair of the chunk's rows into level 1 (red) and feeds level 0's rate
+ * model, and the encoder's thread takes the level-1 rows from there:
+ * once level 0 is read where it lies, which costs the reader little,
+ * that work had bounded pass 1 on the encoder's thread (the model alone
+ * 36 % of pass 1 on the 1.07-gigapixel bench mosaic).  Chunks then hold
+ * an even number of rows, so that no pair is split between two; an odd
+ * last row pairs with itself, as it does in push_row. */
 struct reader {
     struct gv_source *src;
     struct gv_spill *spill;   /* NULL: the encoder's thread stores level 0 */
@@ -324,6 +322,8 @@ struct reader {
     size_t row_bytes;
     uint32_t chunk, height;
     uint8_t *buf[2];
+    uint8_t *red[2];          /* level-1 rows of buf[i]'s pairs, or NULL */
+    struct gv_lambda_model *model0;  /* level 0's, fed with red, or NULL */
     uint8_t *whole;           /* else: chunk at y read to whole + y rows */
     uint32_t rows[2];
     int failed, stop;
@@ -357,6 +357,15 @@ static void *reader_main(void *arg)
                 r->spill, dst + (size_t)p * PAGE_W * c, r->row_bytes,
                 (size_t)strip_width(l0->width, p) * c, n,
                 strip_at(r->e, 0, p, y), &err);
+        const size_t rb1 = (size_t)r->e->g.level[1].width * c;
+        for (uint32_t i = 0; rc == 0 && r->red[slot] && i < n; i += 2) {
+            const uint8_t *r0 = dst + (size_t)i * r->row_bytes;
+            const uint8_t *r1 = i + 1 < n ? r0 + r->row_bytes : r0;
+            uint8_t *out = r->red[slot] + (size_t)(i / 2) * rb1;
+            gv_box_reduce_row(r0, r1, l0->width, c, out);
+            if (r->model0)
+                gv_lambda_model_rows(r->model0, r0, r1, out);
+        }
         pthread_mutex_lock(&r->mu);
         if (rc < 0) {
             r->err = err;
@@ -389,6 +398,11 @@ static int pass1(struct encoder *e, struct gv_source *src)
         chunk = 1;
     if (chunk > g->height)
         chunk = g->height;
+    /* Pairs of rows reduced by the reader (see struct reader). */
+    const int split = g->root > 0;
+    if (split)
+        chunk = chunk < 2 ? 2 : chunk & ~1u;
+    const size_t rb1 = split ? (size_t)g->level[1].width * e->c : 0;
     /* Level 0 in memory: read where it stays, not stored. */
     struct reader rd = {.src = src, .chunk = chunk, .height = g->height,
                         .spill = e->sharded || e->level0_resident ||
@@ -409,7 +423,12 @@ static int pass1(struct encoder *e, struct gv_source *src)
     e->window_resident |= !own && !e->level0_resident;
     rd.buf[0] = own ? malloc((size_t)chunk * rb0) : e->window;
     rd.buf[1] = own ? malloc((size_t)chunk * rb0) : e->window + (size_t)chunk * rb0;
-    if (!rd.buf[0] || !rd.buf[1]) {
+    if (split) {
+        rd.red[0] = malloc((size_t)(chunk / 2) * rb1);
+        rd.red[1] = malloc((size_t)(chunk / 2) * rb1);
+        rd.model0 = e->opts->per_tile ? NULL : &e->model[0];
+    }
+    if (!rd.buf[0] || !rd.buf[1] || (split && (!rd.red[0] || !rd.red[1]))) {
         gv_fail(e->err, GV_ENOMEM, "encode: out of memory for input rows");
         goto out;
     }
@@ -441,17 +460,14 @@ static int pass1(struct encoder *e, struct gv_source *src)
         pthread_mutex_unlock(&rd.mu);
         const uint8_t *rows = rd.whole ? rd.whole + (size_t)y * rb0
                                        : rd.buf[slot];
-        for (uint32_t r = 0; r < n; r++) {
-            const uint8_t *row = rows + (size_t)r * rb0;
-            if (g->root == 0 || e->have_pending[0] || r + 1 == n) {
-                if (push_row(e, 0, row) < 0)
-                    goto out;
-            } else {
-                if (push_pair0(e, row, row + rb0) < 0)
-                    goto out;
-                r++;
-            }
-        }
+        /* Level 0's rows counted (and a shard's stored), then the level-1
+         * rows the reader made of them. */
+        for (uint32_t r = 0; r < n; r++)
+            if (store_next(e, 0, rows + (size_t)r * rb0) < 0)
+                goto out;
+        for (uint32_t i = 0; split && i < n; i += 2)
+            if (push_row(e, 1, rd.red[slot] + (size_t)(i / 2) * rb1) < 0)
+                goto out;
         pthread_mutex_lock(&rd.mu);
         rd.rows[slot] = 0;
         pthread_cond_broadcast(&rd.cv);
@@ -459,8 +475,9 @@ static int pass1(struct encoder *e, struct gv_source *src)
         y += n;
         report(e, "pyramid", PASS1_SHARE * (double)y / g->height);
     }
-    /* Odd heights: the last row of a level pairs with itself. */
-    for (int k = 0; k < g->root; k++)
+    /* Odd heights: the last row of a level pairs with itself (level 0's:
+     * the reader's). */
+    for (int k = 1; k < g->root; k++)
         if (e->have_pending[k]) {
             e->have_pending[k] = 0;
             if (emit_reduced(e, k, e->pending[k], e->pending[k]) < 0)
@@ -479,6 +496,8 @@ out:
         free(rd.buf[0]);
         free(rd.buf[1]);
     }
+    free(rd.red[0]);
+    free(rd.red[1]);
     pthread_cond_destroy(&rd.cv);
     pthread_mutex_destroy(&rd.mu);
     return rc;
