@@ -59,15 +59,27 @@ both() {
 }
 
 # Small images, level 0 out of memory by the switch: tiles of 64 x 64
-# (1100 x 700: overhanging both edges), strips of 5 rows (the last of 3),
-# gray in tiles of 16 x 48.
+# (1100 x 700: overhanging both edges), strips of 5 rows (1101 x 701: the
+# last strip of 1 row, and an odd last row that pass 1's reader pairs
+# with itself), gray in tiles of 16 x 48.
 make_tiff synth:1100x700 "$T/tiled.tif" -c none -t -w 64 -l 64
 both "RGB 1100x700 in 64x64 tiles" "$T/tiled.tif" 2.31
 cp "$T/again.gv" "$T/rgb.gv"
-make_tiff synth:1100x700 "$T/strips.tif" -c none -r 5
-both "RGB 1100x700 in strips of 5 rows" "$T/strips.tif" 2.31
+make_tiff synth:1101x701 "$T/strips.tif" -c none -r 5
+both "RGB 1101x701 in strips of 5 rows" "$T/strips.tif" 2.31
 make_tiff synth:1300x600:gray "$T/gray.tif" -c none -t -w 16 -l 48
 both "gray 1300x600 in 16x48 tiles" "$T/gray.tif" 0.78
+
+# Level 0 kept in memory, its rows still read where they lie (and pairs
+# of them reduced by pass 1's reader): the same store as through libtiff.
+export GIGAVIEW_LEVEL0_RESIDENT=1
+run encode -q 34 "$T/strips.tif" -o "$T/kept.gv"
+expect_rc "RGB 1101x701 in strips, level 0 in memory: encode" 0
+GIGAVIEW_RAW_REGIONS=0 run encode -q 34 "$T/strips.tif" -o "$T/kept-libtiff.gv"
+expect_rc "... and through libtiff" 0
+check "RGB 1101x701 in strips, level 0 in memory: the same store either way" \
+    cmp -s "$T/kept.gv" "$T/kept-libtiff.gv"
+export GIGAVIEW_LEVEL0_RESIDENT=0
 
 # What is not stored as the encoder reads it goes through the scratch
 # file: compressed, 16-bit, gray with alpha.

@@ -632,6 +632,11 @@ fail:
     return -1;
 }
 
+int gv_source_reads_raw(const struct gv_source *s)
+{
+    return s->raw != NULL;
+}
+
 struct gv_raw_regions *gv_source_raw_regions(struct gv_source *s,
                                              struct gv_error *err)
 {

@@ -86,6 +86,10 @@ struct gv_raw_regions;
 struct gv_raw_regions *gv_source_raw_regions(struct gv_source *s,
                                              struct gv_error *err);
 
+/* Whether gv_source_read reads the rows where they lie in the file, with
+ * no decoder (gv_source_raw_regions is then not NULL): cheap to read. */
+int gv_source_reads_raw(const struct gv_source *s);
+
 void gv_source_free(struct gv_source *s);
 
 #endif

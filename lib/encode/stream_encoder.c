@@ -297,6 +297,16 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
     return emit_reduced(e, k, e->pending[k], row);
 }
 
+/* push_row of level-0 rows r0 and r1 in turn when no row is pending and
+ * both lie in the input chunk: the pair is reduced where it is, without
+ * the copy of r0 that push_row keeps for a pair split between chunks. */
+static int push_pair0(struct encoder *e, const uint8_t *r0, const uint8_t *r1)
+{
+    if (store_next(e, 0, r0) < 0 || store_next(e, 0, r1) < 0)
+        return -1;
+    return emit_reduced(e, 0, r0, r1);
+}
+
 /* Pass 1's input reader: a thread that decodes the next chunk of rows
  * while the encoder's thread reduces and stores the previous one, in two
  * buffers of CHUNK_BYTES / 2 (the memory of one chunk before).  A chunk
@@ -307,14 +317,17 @@ static int push_row(struct encoder *e, int k, const uint8_t *row)
  * the encoder's thread, which bounds pass 1 on an input that is cheap to
  * decode (a 54 MP uncompressed tiled TIFF: the whole encode 1.28 -> 1.20 s,
  * best of 4; bench/README.md, "2026-11-26 (session 6), encoding").
- * Where there are levels above level 0, the reader also reduces each
- * pair of the chunk's rows into level 1 (red) and feeds level 0's rate
- * model, and the encoder's thread takes the level-1 rows from there:
- * once level 0 is read where it lies, which costs the reader little,
- * that work had bounded pass 1 on the encoder's thread (the model alone
- * 36 % of pass 1 on the 1.07-gigapixel bench mosaic).  Chunks then hold
- * an even number of rows, so that no pair is split between two; an odd
- * last row pairs with itself, as it does in push_row. */
+ * Where the input is read where it lies (gv_source_reads_raw), which
+ * costs the reader little, and there are levels above level 0, the
+ * reader also reduces each pair of the chunk's rows into level 1 (red)
+ * and feeds level 0's rate model, and the encoder's thread takes the
+ * level-1 rows from there: that work had bounded pass 1 on the encoder's
+ * thread (the model alone 36 % of pass 1 on the 1.07-gigapixel bench
+ * mosaic), while the reader waited.  Chunks then hold an even number of
+ * rows, so that no pair is split between two; an odd last row pairs
+ * with itself, as it does in push_row.  A decoder (JPEG, PNG, LZW...)
+ * keeps the reader busy enough, and the encoder's thread does that work
+ * as before. */
 struct reader {
     struct gv_source *src;
     struct gv_spill *spill;   /* NULL: the encoder's thread stores level 0 */
@@ -383,6 +396,7 @@ static void *reader_main(void *arg)
 
 static int pass1(struct encoder *e, struct gv_source *src)
 {
+    const int split = e->g.root > 0 && gv_source_reads_raw(src);
     const struct gv_geometry *g = &e->g;
     const size_t rb0 = (size_t)g->width * e->c;
     uint32_t chunk = (uint32_t)(CHUNK_BYTES / 2 / rb0);
@@ -399,7 +413,6 @@ static int pass1(struct encoder *e, struct gv_source *src)
     if (chunk > g->height)
         chunk = g->height;
     /* Pairs of rows reduced by the reader (see struct reader). */
-    const int split = g->root > 0;
     if (split)
         chunk = chunk < 2 ? 2 : chunk & ~1u;
     const size_t rb1 = split ? (size_t)g->level[1].width * e->c : 0;
@@ -460,14 +473,27 @@ static int pass1(struct encoder *e, struct gv_source *src)
         pthread_mutex_unlock(&rd.mu);
         const uint8_t *rows = rd.whole ? rd.whole + (size_t)y * rb0
                                        : rd.buf[slot];
-        /* Level 0's rows counted (and a shard's stored), then the level-1
-         * rows the reader made of them. */
-        for (uint32_t r = 0; r < n; r++)
-            if (store_next(e, 0, rows + (size_t)r * rb0) < 0)
-                goto out;
-        for (uint32_t i = 0; split && i < n; i += 2)
-            if (push_row(e, 1, rd.red[slot] + (size_t)(i / 2) * rb1) < 0)
-                goto out;
+        if (split) {
+            /* Level 0's rows counted (and a shard's stored), then the
+             * level-1 rows the reader made of them. */
+            for (uint32_t r = 0; r < n; r++)
+                if (store_next(e, 0, rows + (size_t)r * rb0) < 0)
+                    goto out;
+            for (uint32_t i = 0; i < n; i += 2)
+                if (push_row(e, 1, rd.red[slot] + (size_t)(i / 2) * rb1) < 0)
+                    goto out;
+        }
+        for (uint32_t r = 0; !split && r < n; r++) {
+            const uint8_t *row = rows + (size_t)r * rb0;
+            if (g->root == 0 || e->have_pending[0] || r + 1 == n) {
+                if (push_row(e, 0, row) < 0)
+                    goto out;
+            } else {
+                if (push_pair0(e, row, row + rb0) < 0)
+                    goto out;
+                r++;
+            }
+        }
         pthread_mutex_lock(&rd.mu);
         rd.rows[slot] = 0;
         pthread_cond_broadcast(&rd.cv);
@@ -475,9 +501,9 @@ static int pass1(struct encoder *e, struct gv_source *src)
         y += n;
         report(e, "pyramid", PASS1_SHARE * (double)y / g->height);
     }
-    /* Odd heights: the last row of a level pairs with itself (level 0's:
-     * the reader's). */
-    for (int k = 1; k < g->root; k++)
+    /* Odd heights: the last row of a level pairs with itself (level 0's
+     * the reader's, when it reduces). */
+    for (int k = 0; k < g->root; k++)
         if (e->have_pending[k]) {
             e->have_pending[k] = 0;
             if (emit_reduced(e, k, e->pending[k], e->pending[k]) < 0)
