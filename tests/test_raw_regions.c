@@ -15,10 +15,13 @@
  * count short of the block, a grid that does not cover the image.  After
  * the file is cut short, a read of a lost block fails with GV_ECORRUPT
  * (no SIGBUS: nothing is mapped); a rectangle outside the image fails
- * with GV_EINVAL.
+ * with GV_EINVAL.  gv_raw_regions_unchanged says a file whose
+ * modification time or size changed since the reader was made has
+ * changed.
  */
 #include <fcntl.h>
 #include <stdint.h>
+#include <sys/stat.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -256,6 +259,23 @@ int main(void)
     check(gv_raw_regions_read(r, 0, 0, 0, 1, px, 3, &err) < 0
               && err.code == GV_EINVAL,
           "an empty rectangle: GV_EINVAL");
+    check(gv_raw_regions_unchanged(r, &err) == 0,
+          "the file as it was: unchanged");
+    struct stat st;
+    if (fstat(m.fd, &st) != 0)
+        fail("fstat");
+    struct timespec times[2] = {st.st_atim, st.st_mtim};
+    times[1].tv_sec -= 10;
+    if (futimens(m.fd, times) != 0)
+        fail("futimens");
+    check(gv_raw_regions_unchanged(r, &err) < 0 && err.code == GV_ECORRUPT
+              && strstr(err.text, "changed while being read"),
+          "a new modification time: changed (%s)", err.text);
+    times[1] = st.st_mtim;
+    if (futimens(m.fd, times) != 0)
+        fail("futimens");
+    check(gv_raw_regions_unchanged(r, &err) == 0,
+          "the modification time put back: unchanged");
     uint64_t first = UINT64_MAX;
     for (size_t k = 0; k < 8; k++)
         first = m.offsets[k] < first ? m.offsets[k] : first;
@@ -264,6 +284,10 @@ int main(void)
     check(gv_raw_regions_read(r, 0, 0, 100, 60, px, 300, &err) < 0
               && err.code == GV_ECORRUPT && strstr(err.text, "ends before"),
           "the file cut short: GV_ECORRUPT (%s)", err.text);
+    if (futimens(m.fd, times) != 0)
+        fail("futimens");
+    check(gv_raw_regions_unchanged(r, &err) < 0 && err.code == GV_ECORRUPT,
+          "the file cut short, its time put back: changed (size)");
     gv_raw_regions_free(r);
     gv_raw_regions_free(NULL);
     free_made(&m);

@@ -1221,6 +1221,9 @@ int gv_encode(const char *const *inputs, int n, const char *output,
     res->lambda = opts->per_tile ? 0.0 : e.lambda;
     if (pass2(&e, &sse0, &samples0) < 0)
         goto out;
+    /* Level 0 was read twice from the input: it must not have changed. */
+    if (e.level0_file && gv_raw_regions_unchanged(e.level0_file, err) < 0)
+        goto out;
     res->scratch_bytes = gv_spill_bytes(e.spill) + gv_spill_bytes(e.spill0);
     res->level0_from_input = e.level0_file != NULL;
     if ((e.sharded ? finish_shard(&e)

@@ -31,6 +31,7 @@
 struct gv_raw_regions {
     int fd;
     char *path;
+    struct stat made;      /* the file when r was made */
     struct gv_raw_layout l;
     uint64_t *offsets;
 };
@@ -107,10 +108,26 @@ struct gv_raw_regions *gv_raw_regions_new(int fd, const char *path,
         return NULL;
     }
     memcpy(r->offsets, l->offsets, n * sizeof *r->offsets);
+    r->made = st;
     r->l = *l;
     r->l.offsets = r->offsets;
     r->l.byte_counts = NULL;   /* checked; not kept */
     return r;
+}
+
+int gv_raw_regions_unchanged(const struct gv_raw_regions *r,
+                             struct gv_error *err)
+{
+    struct stat now;
+    if (fstat(r->fd, &now) != 0)
+        return gv_fail_errno(err, errno, "imageio: %s: cannot stat", r->path);
+    if (now.st_size != r->made.st_size
+        || now.st_mtim.tv_sec != r->made.st_mtim.tv_sec
+        || now.st_mtim.tv_nsec != r->made.st_mtim.tv_nsec)
+        return gv_fail(err, GV_ECORRUPT, "imageio: %s: changed while being "
+                       "read (it is read twice: encode a copy, or leave it "
+                       "alone until the encode ends)", r->path);
+    return 0;
 }
 
 void gv_raw_regions_size(const struct gv_raw_regions *r, uint32_t *width,

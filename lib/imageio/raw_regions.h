@@ -57,6 +57,13 @@ struct gv_raw_regions *gv_raw_regions_new(int fd, const char *path,
                                           const struct gv_raw_layout *l,
                                           struct gv_error *err);
 
+/* Whether the file is still as it was when r was made: the same size and
+ * modification time (a file rewritten in place while an encoder read it
+ * twice would give it two different images).  Returns 0, or -1 with
+ * *err (GV_ECORRUPT, "changed while being read") if it is not. */
+int gv_raw_regions_unchanged(const struct gv_raw_regions *r,
+                             struct gv_error *err);
+
 /* Free.  NULL does nothing. */
 void gv_raw_regions_free(struct gv_raw_regions *r);
 
