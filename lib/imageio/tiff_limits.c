@@ -1,0 +1,334 @@
+/*
+ * tiff_limits.c - a TIFF's decoder memory against --max-decoder-memory,
+ * from its first directory, before anything is allocated for its pixels.
+ *
+ * Why: native_tiff.c declines JPEG-compressed, YCbCr, palette and other
+ * TIFFs, which OpenImageIO 2.4 then reads through libtiff 4.5 and
+ * libjpeg-turbo, none of which takes the limit.  Measured on files of
+ * 1 to 2 KB claiming 30000 x 30000 (tests/data/native/limits,
+ * make-tiff-limits.py), peak resident size of `gigaview encode` before
+ * this check: 8.9 GB for one YCbCr JPEG strip holding a progressive
+ * JPEG, 6.3 GB for the same with a baseline JPEG, 8.9 GB for one such
+ * tile, 3.7 GB for an uncompressed YCbCr strip - each failing (or
+ * "succeeding" on filler) only after.  The native reader, too, holds one
+ * strip or row of tiles, of whatever size the header claims.
+ *
+ * What is counted, each from the header, as the decoders allocate it:
+ *  - one strip (RowsPerStrip rows, at most the image's) or one row of
+ *    tiles (tiles across x TileLength rows), decoded: ceil(width x
+ *    SamplesPerPixel x BitsPerSample / 8) bytes a row.  native_tiff.c
+ *    holds exactly that; OpenImageIO's scanline reader decodes a strip
+ *    whole, its tile reader (imageio.cpp) holds a row of tiles, and
+ *    libtiff's RGBA reader one strip or tile besides.
+ *  - the whole image as RGBA, 4 bytes a pixel, where OpenImageIO reads
+ *    through libtiff's RGBA interface (TIFFReadRGBAImage): a
+ *    JPEG-compressed file (Compression 7, or old-style 6) with other than
+ *    3 samples, and any YCbCr, CIE L*a*b*, ICC Lab, ITU Lab, LogL or
+ *    LogLuv file (its tiffinput.cpp, m_use_rgba_interface).
+ *  - for JPEG compression, the largest coefficient arrays libjpeg
+ *    requests for one strip or tile whose stream is progressive or
+ *    multi-scan, by native_jpeg.c's rule (coef_bytes), read from that
+ *    stream's header after the JPEGTables as libtiff feeds them
+ *    (gv_native_jpeg_stream_need).  libtiff refuses a stream larger than
+ *    its strip or tile (tif_jpeg.c JPEGPreDecode), except the last
+ *    strip's, so when even a stream the size of a strip or tile with any
+ *    sampling (bound_coef) stays within the limit only the last strip's
+ *    header is read; else every strip's or tile's.  libjpeg frees them
+ *    between strips and tiles: the largest counts, not the sum.
+ * More than lim->max_decoder_bytes is GV_ELIMIT, naming both, in the
+ * words of the other readers' limits (size_limit.h).  Measured after:
+ * every file above refused in under 20 MB.
+ *
+ * The directory is parsed here, not with libtiff, so that nothing of the
+ * file is allocated: TIFF 6.0 section 2 (header, IFD entries of 12 bytes,
+ * values inline when they fit in 4 bytes) and BigTIFF (version 43, 20-byte
+ * entries, 8-byte counts and offsets, values inline in 8), either byte
+ * order; every offset and count is checked against the file's size, and
+ * arrays are read an element at a time.  A file this cannot follow is
+ * passed (0): the reader refuses it in its own words.  Defaults as
+ * libtiff's: 1 sample of 1 bit, no compression, RowsPerStrip the height.
+ */
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "imageio/native_file.h"
+#include "imageio/native_jpeg.h"
+#include "imageio/size_limit.h"
+#include "imageio/tiff_limits.h"
+
+/* The fields of the first directory this check needs. */
+struct dir {
+    FILE *f;
+    uint64_t file_bytes;
+    int be, big;
+    uint64_t width, height, rps, tile_w, tile_h;
+    uint64_t spp, bps, compression, photometric, planar;
+    int tiled;
+    uint64_t offsets_at, offsets_n, offsets_size;   /* chunk offsets */
+    uint64_t counts_at, counts_n, counts_size;      /* chunk byte counts */
+    uint64_t tables_at, tables_len;                 /* JPEGTables */
+};
+
+/* a * b, or UINT64_MAX when it overflows */
+static uint64_t mul(uint64_t a, uint64_t b)
+{
+    return a && b > UINT64_MAX / a ? UINT64_MAX : a * b;
+}
+
+static uint64_t add(uint64_t a, uint64_t b)
+{
+    return b > UINT64_MAX - a ? UINT64_MAX : a + b;
+}
+
+/* n bytes at `at` as an unsigned integer of the file's byte order, or -1
+ * when they are not all in the file. */
+static int get(const struct dir *d, uint64_t at, unsigned n, uint64_t *v)
+{
+    uint8_t b[8];
+    if (n > 8 || at > d->file_bytes || n > d->file_bytes - at
+        || fseeko(d->f, (off_t)at, SEEK_SET) != 0
+        || fread(b, 1, n, d->f) != n)
+        return -1;
+    *v = 0;
+    for (unsigned i = 0; i < n; i++)
+        *v |= (uint64_t)b[d->be ? i : n - 1 - i] << (8 * (n - 1 - i));
+    return 0;
+}
+
+/* The size of one value of a TIFF field type, 0 for an unknown one. */
+static unsigned type_size(uint64_t type)
+{
+    static const unsigned size[19] = {0, 1, 1, 2, 4, 8, 1, 1, 2, 4,
+                                      8, 4, 8, 4, 0, 0, 8, 8, 8};
+    return type < 19 ? size[type] : 0;
+}
+
+/* Element i of an array of unsigned integers of `size` bytes at `at`. */
+static int element(const struct dir *d, uint64_t at, uint64_t size,
+                   uint64_t i, uint64_t *v)
+{
+    return get(d, add(at, mul(i, size)), (unsigned)size, v);
+}
+
+/* Read the header and the first directory: 0, or -1 when it cannot be
+ * followed. */
+static int read_dir(struct dir *d)
+{
+    uint64_t magic, version, ifd, n;
+    if (get(d, 0, 2, &magic) < 0)
+        return -1;
+    if (magic == 0x4D4D)
+        d->be = 1;
+    else if (magic != 0x4949)
+        return -1;
+    if (get(d, 2, 2, &version) < 0)
+        return -1;
+    d->big = version == 43;
+    if (version != 42 && !d->big)
+        return -1;
+    if (d->big ? get(d, 8, 8, &ifd) : get(d, 4, 4, &ifd))
+        return -1;
+    const unsigned count_bytes = d->big ? 8 : 4, inline_bytes = count_bytes;
+    const unsigned entry_bytes = d->big ? 20 : 12;
+    if (get(d, ifd, d->big ? 8 : 2, &n) < 0)
+        return -1;
+    const uint64_t first = ifd + (d->big ? 8 : 2);
+    if (n > (d->file_bytes - first) / entry_bytes)
+        return -1;
+    d->spp = d->bps = d->compression = d->planar = 1;
+    d->rps = UINT64_MAX;
+    for (uint64_t i = 0; i < n; i++) {
+        const uint64_t e = first + i * entry_bytes;
+        uint64_t tag, type, count, value;
+        if (get(d, e, 2, &tag) < 0 || get(d, e + 2, 2, &type) < 0
+            || get(d, e + 4, count_bytes, &count) < 0)
+            return -1;
+        const unsigned size = type_size(type);
+        const uint64_t field = e + 4 + count_bytes;
+        uint64_t at = field;   /* where the values are */
+        if (size == 0 || count == 0)
+            continue;   /* libtiff ignores such an entry */
+        if (mul(count, size) > inline_bytes
+            && get(d, field, count_bytes, &at) < 0)
+            return -1;
+        if (mul(count, size) > d->file_bytes
+            || at > d->file_bytes - count * size)
+            return -1;
+        switch (tag) {
+        case 273:   /* StripOffsets */
+        case 324:   /* TileOffsets */
+            d->offsets_at = at, d->offsets_n = count, d->offsets_size = size;
+            d->tiled |= tag == 324;
+            continue;
+        case 279:   /* StripByteCounts */
+        case 325:   /* TileByteCounts */
+            d->counts_at = at, d->counts_n = count, d->counts_size = size;
+            continue;
+        case 347:   /* JPEGTables */
+            d->tables_at = at, d->tables_len = count * size;
+            continue;
+        default:
+            break;
+        }
+        /* scalars: the first value, of an integer type */
+        if (type != 1 && type != 3 && type != 4 && type != 16)
+            continue;
+        if (get(d, at, size, &value) < 0)
+            return -1;
+        switch (tag) {
+        case 256: d->width = value; break;
+        case 257: d->height = value; break;
+        case 258: d->bps = value; break;
+        case 259: d->compression = value; break;
+        case 262: d->photometric = value; break;
+        case 277: d->spp = value; break;
+        case 278: d->rps = value; break;
+        case 284: d->planar = value; break;
+        case 322: d->tile_w = value; break;
+        case 323: d->tile_h = value; break;
+        default: break;
+        }
+    }
+    if (d->offsets_size != 2 && d->offsets_size != 4 && d->offsets_size != 8)
+        return -1;
+    return 0;
+}
+
+/* Whether OpenImageIO 2.4 reads the file through libtiff's RGBA
+ * interface, holding the whole image as RGBA (see the top). */
+static int rgba_interface(const struct dir *d)
+{
+    const int jpeg = d->compression == 6 || d->compression == 7;
+    switch (d->photometric) {
+    case 6: case 8: case 9: case 10: case 32844: case 32845:
+        return 1;
+    default:
+        return jpeg && d->spp != 3;
+    }
+}
+
+/* An upper bound of the coefficients of a JPEG stream of at most w x h
+ * pixels and `comps` components of any sampling (factors 1 to 4): each
+ * component at most ceil(w / 8) + 4 by ceil(h / 8) + 4 blocks (rounded
+ * up to its sampling factors), of 128 bytes. */
+static uint64_t bound_coef(uint64_t w, uint64_t h, uint64_t comps)
+{
+    return mul(comps, mul(mul((w + 7) / 8 + 4, (h + 7) / 8 + 4), 128));
+}
+
+/* The refusal: -1 with *err filled. */
+static int refuse(const char *path, const struct dir *d, uint64_t need,
+                  uint64_t max, const char *what, struct gv_error *err)
+{
+    char need_s[32], max_s[32];
+    gv_image_bytes_text(need_s, sizeof need_s, need);
+    gv_image_bytes_text(max_s, sizeof max_s, max);
+    return gv_fail(err, GV_ELIMIT, "imageio: %s: a TIFF of %llu x %llu "
+                   "needs about %s of decoder memory (%s), more than the "
+                   "limit of %s (--max-decoder-memory)", path,
+                   (unsigned long long)d->width,
+                   (unsigned long long)d->height, need_s, what, max_s);
+}
+
+/* The largest coefficient arrays of the JPEG strips or tiles, and
+ * whether the largest is progressive; checks chunks [from, n). */
+static uint64_t max_coef(const struct dir *d, uint64_t from, uint64_t n,
+                         int *progressive)
+{
+    uint64_t most = 0;
+    for (uint64_t i = from; i < n; i++) {
+        uint64_t at, len;
+        struct gv_jpeg_need need;
+        if (element(d, d->offsets_at, d->offsets_size, i, &at) < 0)
+            break;
+        if (i >= d->counts_n
+            || element(d, d->counts_at, d->counts_size, i, &len) < 0)
+            len = d->file_bytes;   /* libtiff: up to the end of the file */
+        if (gv_native_jpeg_stream_need(d->f, d->tables_at, d->tables_len,
+                                       at, len, &need) == 0
+            && need.coef_bytes > most) {
+            most = need.coef_bytes;
+            *progressive = need.progressive;
+        }
+    }
+    return most;
+}
+
+int gv_tiff_limits_check(const char *path, const struct gv_image_limits *lim,
+                         enum gv_tiff_reader reader, struct gv_error *err)
+{
+    gv_error_clear(err);
+    struct dir d;
+    memset(&d, 0, sizeof d);
+    d.f = gv_native_open_regular(path);
+    if (!d.f)
+        return 0;   /* the reader says why */
+    struct stat st;
+    int rc = 0;
+    if (fstat(fileno(d.f), &st) != 0)
+        goto out;
+    d.file_bytes = (uint64_t)st.st_size;
+    if (read_dir(&d) < 0 || d.width == 0 || d.height == 0)
+        goto out;
+    if (gv_image_size_check(path, d.width, d.height, lim->max_pixels,
+                            err) < 0) {
+        rc = -1;
+        goto out;
+    }
+    /* one strip or row of tiles: its width and rows */
+    uint64_t chunk_w = d.width, rows, chunk_rows, across = 1;
+    if (d.tiled) {
+        if (d.tile_w == 0 || d.tile_h == 0)
+            goto out;   /* libtiff refuses it */
+        across = (d.width + d.tile_w - 1) / d.tile_w;
+        chunk_w = d.tile_w;
+        rows = chunk_rows = d.tile_h;
+    } else {
+        chunk_rows = d.rps == 0 ? d.height : d.rps;
+        rows = chunk_rows < d.height ? chunk_rows : d.height;
+    }
+    const uint64_t bits = mul(mul(chunk_w, d.spp), d.bps);
+    const uint64_t row_bytes = bits / 8 + (bits % 8 != 0);
+    const int rgba = rgba_interface(&d);
+    char what[160] = "";
+    uint64_t need = 0;
+    if (d.tiled || rgba || reader == GV_TIFF_READ_STRIPS) {
+        need = mul(mul(row_bytes, rows), across);
+        snprintf(what, sizeof what, "%s of %llu rows",
+                 d.tiled ? "a row of tiles" : "a strip",
+                 (unsigned long long)rows);
+    }
+    if (rgba) {
+        need = add(need, mul(mul(d.width, d.height), 4));
+        size_t k = strlen(what);
+        snprintf(what + k, sizeof what - k, "%sthe whole image as RGBA",
+                 k ? ", " : "");
+    }
+    const uint64_t max = gv_image_decoder_limit(lim);
+    if (need > max) {
+        rc = refuse(path, &d, need, max, what, err);
+        goto out;
+    }
+    if (d.compression != 7 && d.compression != 6)
+        goto out;
+    /* JPEG: the coefficients of a progressive or multi-scan stream */
+    /* every strip's or tile's header, or only the last strip's when a
+     * stream of a strip's or tile's size could not pass the limit */
+    const uint64_t comps = d.planar == 2 ? 1 : d.spp;
+    const uint64_t n = d.offsets_n;
+    uint64_t from = 0;
+    if (add(need, bound_coef(chunk_w, chunk_rows, comps)) <= max)
+        from = d.tiled ? n : n - 1;
+    int progressive = 0;
+    const uint64_t coef = max_coef(&d, from, n, &progressive);
+    if (add(need, coef) > max) {
+        size_t k = strlen(what);
+        snprintf(what + k, sizeof what - k, "%sa %s JPEG's coefficients",
+                 k ? ", " : "", progressive ? "progressive" : "multi-scan");
+        rc = refuse(path, &d, add(need, coef), max, what, err);
+    }
+out:
+    fclose(d.f);
+    return rc;
+}
