@@ -280,6 +280,10 @@ static void test_hostile(const char *limits)
          "imageio: PATH: a TIFF of 30000 x 30000 needs about 5.9 GiB of "
          "decoder memory (a strip of 30000 rows, the whole image as RGBA), "
          "more than the limit of 1.0 GiB (--max-decoder-memory)"},
+        {"gray-64x64-tile-65536.tif",
+         "imageio: PATH: a TIFF of 64 x 64 needs about 4.0 GiB of decoder "
+         "memory (a row of tiles of 65536 rows), more than the limit of 1.0 "
+         "GiB (--max-decoder-memory)"},
         {"gray-claims-tile.tif",
          "imageio: PATH: a TIFF of 65536 x 65536 needs about 4.0 GiB of "
          "decoder memory (a row of tiles of 65536 rows), more than the limit "

@@ -40,6 +40,13 @@ Hostile files (a few KB, headers claiming what they do not hold):
   palette-claims-30000.tif     8-bit palette, LZW, 30000x30000 in one strip
   ycbcr-claims-30000.tif       uncompressed YCbCr 4:2:0, 30000x30000
   gray-claims-tile.tif         8-bit grey, LZW, one 65536x65536 tile
+  gray-64x64-tile-65536.tif    the same tile for an image of 64x64 (tiles
+                               may overhang the image: within any pixel
+                               limit, 4 GiB of tile)
+  jpeg-rgb-progressive-claims-1000.tif  1000x1000 RGB in one strip, its
+                               progressive JPEG claiming as much (6 MB of
+                               coefficients: within the limit, then its
+                               data runs out)
 """
 import os
 import struct
@@ -214,6 +221,8 @@ def main():
     save("jpeg-rgb-progressive.tif", rgb8(61, 45, 45, [rgbp], 7))
     save("jpeg-rgb-progressive-claims-15000.tif",
          rgb8(15000, 15000, 15000, [claim(rgbp, 15000, 15000)], 7))
+    save("jpeg-rgb-progressive-claims-1000.tif",
+         rgb8(1000, 1000, 1000, [claim(rgbp, 1000, 1000)], 7))
     save("jpeg-progressive-claims-30000.tif",
          ycbcr_jpeg(30000, 30000, 30000, [claim(prog, 30000, 30000)]))
     save("jpeg-baseline-claims-30000.tif",
@@ -235,12 +244,13 @@ def main():
                (258, SHORT, [8, 8, 8]), (259, SHORT, [1]),
                (262, SHORT, [6]), (277, SHORT, [3]), (278, LONG, [30000]),
                (284, SHORT, [1]), (530, SHORT, [2, 2])], [bytes(600)]))
-    save("gray-claims-tile.tif",
-         tiff([(256, LONG, [65536]), (257, LONG, [65536]),
-               (258, SHORT, [8]), (259, SHORT, [5]), (262, SHORT, [1]),
-               (277, SHORT, [1]), (322, LONG, [65536]),
-               (323, LONG, [65536])], [lzw], offsets_tag=324,
-              counts_tag=325))
+    for name, side in (("gray-claims-tile.tif", 65536),
+                       ("gray-64x64-tile-65536.tif", 64)):
+        save(name, tiff([(256, LONG, [side]), (257, LONG, [side]),
+                         (258, SHORT, [8]), (259, SHORT, [5]),
+                         (262, SHORT, [1]), (277, SHORT, [1]),
+                         (322, LONG, [65536]), (323, LONG, [65536])],
+                        [lzw], offsets_tag=324, counts_tag=325))
 
 
 if __name__ == "__main__":
