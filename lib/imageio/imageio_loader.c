@@ -35,7 +35,14 @@
  * native_jpeg.c against the limits (max_pixels and the decoder memory of
  * a progressive JPEG), which OpenImageIO's reader would only apply after
  * allocating, and so are a PNG's (native_png.c: an interlaced one is
- * held whole) and a Photoshop file's thumbnail (psd_thumbnail.c).
+ * held whole) and a Photoshop file's thumbnail (psd_thumbnail.c).  A
+ * TIFF's decoder memory (tiff_limits.c: a row of tiles, the RGBA image
+ * of OpenImageIO's RGBA interface, a progressive JPEG strip's
+ * coefficients) is checked from its first directory before the module
+ * opens it, and one native_tiff.c took is checked after its open (which
+ * reads the header only) against its strip too: a file whose strip
+ * passes the limit goes to the module, which reads a strip a row at a
+ * time.
  * Writing always goes through the module.
  */
 #include <dlfcn.h>

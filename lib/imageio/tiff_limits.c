@@ -13,18 +13,25 @@
  * "succeeding" on filler) only after.  The native reader, too, holds one
  * strip or row of tiles, of whatever size the header claims.
  *
- * What is counted, each from the header, as the decoders allocate it:
- *  - one strip (RowsPerStrip rows, at most the image's) or one row of
- *    tiles (tiles across x TileLength rows), decoded: ceil(width x
- *    SamplesPerPixel x BitsPerSample / 8) bytes a row.  native_tiff.c
- *    holds exactly that; OpenImageIO's scanline reader decodes a strip
- *    whole, its tile reader (imageio.cpp) holds a row of tiles, and
- *    libtiff's RGBA reader one strip or tile besides.
+ * What is counted, each from the header, as the readers allocate it
+ * (the rows the caller asks for are the caller's):
+ *  - a row of tiles (tiles across x TileLength rows), decoded:
+ *    ceil(TileWidth x SamplesPerPixel x BitsPerSample / 8) bytes a tile
+ *    row.  native_tiff.c and the module (imageio.cpp, read_tiles) both
+ *    hold one.
+ *  - one strip (RowsPerStrip rows, at most the image's), decoded, where
+ *    the reader decodes a strip whole: native_tiff.c
+ *    (GV_TIFF_READ_STRIPS), and libtiff's RGBA interface.  OpenImageIO's
+ *    scanline reader decodes a row at a time (TIFFReadScanline; measured:
+ *    a 40000 x 40000 grey strip of deflate took 176 MB through it, 1.6 GB
+ *    natively), so imageio_loader.c gives a file whose strip is too big
+ *    for the native reader to the module instead of refusing it.
  *  - the whole image as RGBA, 4 bytes a pixel, where OpenImageIO reads
  *    through libtiff's RGBA interface (TIFFReadRGBAImage): a
  *    JPEG-compressed file (Compression 7, or old-style 6) with other than
  *    3 samples, and any YCbCr, CIE L*a*b*, ICC Lab, ITU Lab, LogL or
- *    LogLuv file (its tiffinput.cpp, m_use_rgba_interface).
+ *    LogLuv file (its tiffinput.cpp, m_use_rgba_interface; measured: an
+ *    uncompressed YCbCr 30000 x 30000 took 3.7 GB, 30000^2 x 4 bytes).
  *  - for JPEG compression, the largest coefficient arrays libjpeg
  *    requests for one strip or tile whose stream is progressive or
  *    multi-scan, by native_jpeg.c's rule (coef_bytes), read from that
@@ -35,9 +42,10 @@
  *    sampling (bound_coef) stays within the limit only the last strip's
  *    header is read; else every strip's or tile's.  libjpeg frees them
  *    between strips and tiles: the largest counts, not the sum.
- * More than lim->max_decoder_bytes is GV_ELIMIT, naming both, in the
- * words of the other readers' limits (size_limit.h).  Measured after:
- * every file above refused in under 20 MB.
+ * More than lim->max_decoder_bytes is GV_ELIMIT, naming both and what was
+ * counted, in the words of the other readers' limits (size_limit.h).
+ * Measured after: every file above refused, or read, in under 20 MB
+ * (tiles, RGBA and coefficients) or 260 MB (strips read by the module).
  *
  * The directory is parsed here, not with libtiff, so that nothing of the
  * file is allocated: TIFF 6.0 section 2 (header, IFD entries of 12 bytes,
