@@ -219,10 +219,10 @@ static int rgba_interface(const struct dir *d)
 /* An upper bound of the coefficients of a JPEG stream of at most w x h
  * pixels and `comps` components of any sampling (factors 1 to 4): each
  * component at most ceil(w / 8) + 4 by ceil(h / 8) + 4 blocks (rounded
- * up to its sampling factors), of 128 bytes. */
+ * up to its sampling factors; w / 8 + 5 cannot overflow), of 128 bytes. */
 static uint64_t bound_coef(uint64_t w, uint64_t h, uint64_t comps)
 {
-    return mul(comps, mul(mul((w + 7) / 8 + 4, (h + 7) / 8 + 4), 128));
+    return mul(comps, mul(mul(w / 8 + 5, h / 8 + 5), 128));
 }
 
 /* The refusal: -1 with *err filled. */
@@ -289,7 +289,7 @@ int gv_tiff_limits_check(const char *path, const struct gv_image_limits *lim,
     if (d.tiled) {
         if (d.tile_w == 0 || d.tile_h == 0)
             goto out;   /* libtiff refuses it */
-        across = (d.width + d.tile_w - 1) / d.tile_w;
+        across = d.width / d.tile_w + (d.width % d.tile_w != 0);
         chunk_w = d.tile_w;
         rows = chunk_rows = d.tile_h;
     } else {
@@ -324,9 +324,13 @@ int gv_tiff_limits_check(const char *path, const struct gv_image_limits *lim,
     /* every strip's or tile's header, or only the last strip's when a
      * stream of a strip's or tile's size could not pass the limit */
     const uint64_t comps = d.planar == 2 ? 1 : d.spp;
-    const uint64_t n = d.offsets_n;
+    /* the strips or tiles libtiff reads: no more than the image has,
+     * whatever the offsets' count claims */
+    const uint64_t down = d.height / chunk_rows + (d.height % chunk_rows != 0);
+    const uint64_t chunks = mul(mul(across, down), d.planar == 2 ? d.spp : 1);
+    const uint64_t n = d.offsets_n < chunks ? d.offsets_n : chunks;
     uint64_t from = 0;
-    if (add(need, bound_coef(chunk_w, chunk_rows, comps)) <= max)
+    if (add(need, bound_coef(chunk_w, rows, comps)) <= max)
         from = d.tiled ? n : n - 1;
     int progressive = 0;
     const uint64_t coef = max_coef(&d, from, n, &progressive);
