@@ -17,7 +17,9 @@
  *    natively at its strip's size; a tiled one is refused by either
  *    reader one byte under its row of tiles;
  *  - headers of 1 to 2 KB claiming 15000 to 65536 pixels a side in one
- *    strip or tile (JPEG progressive and baseline, YCbCr, grey) refused
+ *    strip or tile (JPEG progressive and baseline, YCbCr, grey; a tile
+ *    behind a duplicate tag, under StripOffsets, past a broken entry, as
+ *    libtiff reads them) refused
  *    under the default limit in words naming --max-decoder-memory, and
  *    above max_pixels in its words; every cut of one of them fails to
  *    open, none crashes.
@@ -281,6 +283,18 @@ static void test_hostile(const char *limits)
          "decoder memory (a strip of 30000 rows, the whole image as RGBA), "
          "more than the limit of 1.0 GiB (--max-decoder-memory)"},
         {"gray-64x64-tile-65536.tif",
+         "imageio: PATH: a TIFF of 64 x 64 needs about 4.0 GiB of decoder "
+         "memory (a row of tiles of 65536 rows), more than the limit of 1.0 "
+         "GiB (--max-decoder-memory)"},
+        {"gray-tile-duplicate.tif",
+         "imageio: PATH: a TIFF of 64 x 64 needs about 4.0 GiB of decoder "
+         "memory (a row of tiles of 65536 rows), more than the limit of 1.0 "
+         "GiB (--max-decoder-memory)"},
+        {"gray-tile-strip-offsets.tif",
+         "imageio: PATH: a TIFF of 64 x 64 needs about 4.0 GiB of decoder "
+         "memory (a row of tiles of 65536 rows), more than the limit of 1.0 "
+         "GiB (--max-decoder-memory)"},
+        {"gray-tile-bad-entry.tif",
          "imageio: PATH: a TIFF of 64 x 64 needs about 4.0 GiB of decoder "
          "memory (a row of tiles of 65536 rows), more than the limit of 1.0 "
          "GiB (--max-decoder-memory)"},

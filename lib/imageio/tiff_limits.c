@@ -52,9 +52,14 @@
  * values inline when they fit in 4 bytes) and BigTIFF (version 43, 20-byte
  * entries, 8-byte counts and offsets, values inline in 8), either byte
  * order; every offset and count is checked against the file's size, and
- * arrays are read an element at a time.  A file this cannot follow is
- * passed (0): the reader refuses it in its own words.  Defaults as
- * libtiff's: 1 sample of 1 bit, no compression, RowsPerStrip the height.
+ * arrays are read an element at a time.  As libtiff 4.5 reads the
+ * directory (tif_dirread.c): the first of duplicate tags counts, an
+ * entry whose values lie outside the file is ignored, either tile
+ * dimension makes the file tiled, StripOffsets and TileOffsets are one
+ * array.  A file this cannot follow (no directory, no offsets) is passed
+ * (0): libtiff fails on it too, and the reader says so in its own words.
+ * Defaults as libtiff's: 1 sample of 1 bit, no compression, RowsPerStrip
+ * the height.
  */
 #include <stdio.h>
 #include <string.h>
@@ -73,8 +78,14 @@ struct dir {
     uint64_t width, height, rps, tile_w, tile_h;
     uint64_t spp, bps, compression, photometric, planar;
     int tiled;
-    uint64_t offsets_at, offsets_n, offsets_size;   /* chunk offsets */
-    uint64_t counts_at, counts_n, counts_size;      /* chunk byte counts */
+    /* the strips' or tiles' offsets and byte counts: [0] from StripOffsets
+     * and StripByteCounts, [1] from TileOffsets and TileByteCounts (libtiff
+     * keeps one of them, which one depending on the order: both are
+     * checked) */
+    struct {
+        uint64_t at, n, size;              /* offsets; size 0: none */
+        uint64_t counts_at, counts_n, counts_size;
+    } chunk[2];
     uint64_t tables_at, tables_len;                 /* JPEGTables */
 };
 
@@ -146,32 +157,49 @@ static int read_dir(struct dir *d)
         return -1;
     d->spp = d->bps = d->compression = d->planar = 1;
     d->rps = UINT64_MAX;
+    /* the tags read: libtiff takes the first of duplicates and ignores
+     * the rest (tif_dirread.c, "Mark duplicates of any tag to be
+     * ignored"), so does this */
+    static const uint16_t tags[] = {256, 257, 258, 259, 262, 273, 277, 278,
+                                    279, 284, 322, 323, 324, 325, 347};
+    unsigned seen = 0;
     for (uint64_t i = 0; i < n; i++) {
         const uint64_t e = first + i * entry_bytes;
         uint64_t tag, type, count, value;
         if (get(d, e, 2, &tag) < 0 || get(d, e + 2, 2, &type) < 0
             || get(d, e + 4, count_bytes, &count) < 0)
             return -1;
+        unsigned k = 0;
+        while (k < sizeof tags / sizeof tags[0] && tags[k] != tag)
+            k++;
+        if (k == sizeof tags / sizeof tags[0] || (seen & 1u << k))
+            continue;
+        seen |= 1u << k;
+        /* An entry whose values cannot be read is ignored, as libtiff
+         * ignores it (a required one missing, libtiff fails the file). */
         const unsigned size = type_size(type);
         const uint64_t field = e + 4 + count_bytes;
         uint64_t at = field;   /* where the values are */
         if (size == 0 || count == 0)
-            continue;   /* libtiff ignores such an entry */
+            continue;
         if (mul(count, size) > inline_bytes
             && get(d, field, count_bytes, &at) < 0)
-            return -1;
+            continue;
         if (mul(count, size) > d->file_bytes
             || at > d->file_bytes - count * size)
-            return -1;
+            continue;
         switch (tag) {
         case 273:   /* StripOffsets */
-        case 324:   /* TileOffsets */
-            d->offsets_at = at, d->offsets_n = count, d->offsets_size = size;
-            d->tiled |= tag == 324;
+        case 324:   /* TileOffsets: the same array in libtiff */
+            if (size == 2 || size == 4 || size == 8)
+                d->chunk[tag == 324].at = at, d->chunk[tag == 324].n = count,
+                d->chunk[tag == 324].size = size;
             continue;
         case 279:   /* StripByteCounts */
         case 325:   /* TileByteCounts */
-            d->counts_at = at, d->counts_n = count, d->counts_size = size;
+            d->chunk[tag == 325].counts_at = at;
+            d->chunk[tag == 325].counts_n = count;
+            d->chunk[tag == 325].counts_size = size;
             continue;
         case 347:   /* JPEGTables */
             d->tables_at = at, d->tables_len = count * size;
@@ -179,11 +207,14 @@ static int read_dir(struct dir *d)
         default:
             break;
         }
-        /* scalars: the first value, of an integer type */
-        if (type != 1 && type != 3 && type != 4 && type != 16)
+        /* scalars: the first value, of an integer type (a signed one
+         * read as unsigned: a negative value is huge, and refused) */
+        if (type != 1 && type != 3 && type != 4 && type != 6 && type != 8
+            && type != 9 && type != 13 && type != 16 && type != 17
+            && type != 18)
             continue;
         if (get(d, at, size, &value) < 0)
-            return -1;
+            continue;
         switch (tag) {
         case 256: d->width = value; break;
         case 257: d->height = value; break;
@@ -193,12 +224,14 @@ static int read_dir(struct dir *d)
         case 277: d->spp = value; break;
         case 278: d->rps = value; break;
         case 284: d->planar = value; break;
-        case 322: d->tile_w = value; break;
-        case 323: d->tile_h = value; break;
+        /* tiled when either is there (libtiff: FIELD_TILEDIMENSIONS),
+         * whichever offsets tag the file has */
+        case 322: d->tile_w = value; d->tiled = 1; break;
+        case 323: d->tile_h = value; d->tiled = 1; break;
         default: break;
         }
     }
-    if (d->offsets_size != 2 && d->offsets_size != 4 && d->offsets_size != 8)
+    if (d->chunk[0].size == 0 && d->chunk[1].size == 0)
         return -1;
     return 0;
 }
@@ -239,25 +272,31 @@ static int refuse(const char *path, const struct dir *d, uint64_t need,
                    (unsigned long long)d->height, need_s, what, max_s);
 }
 
-/* The largest coefficient arrays of the JPEG strips or tiles, and
- * whether the largest is progressive; checks chunks [from, n). */
+/* The largest coefficient arrays of the JPEG strips or tiles [from, n)
+ * of both offset arrays, and whether the largest is progressive. */
 static uint64_t max_coef(const struct dir *d, uint64_t from, uint64_t n,
                          int *progressive)
 {
     uint64_t most = 0;
-    for (uint64_t i = from; i < n; i++) {
-        uint64_t at, len;
-        struct gv_jpeg_need need;
-        if (element(d, d->offsets_at, d->offsets_size, i, &at) < 0)
-            break;
-        if (i >= d->counts_n
-            || element(d, d->counts_at, d->counts_size, i, &len) < 0)
-            len = d->file_bytes;   /* libtiff: up to the end of the file */
-        if (gv_native_jpeg_stream_need(d->f, d->tables_at, d->tables_len,
-                                       at, len, &need) == 0
-            && need.coef_bytes > most) {
-            most = need.coef_bytes;
-            *progressive = need.progressive;
+    for (int a = 0; a < 2; a++) {
+        /* libtiff pads a short array with zeros: no JPEG there */
+        const uint64_t count = d->chunk[a].n < n ? d->chunk[a].n : n;
+        for (uint64_t i = from; i < count; i++) {
+            uint64_t at, len;
+            struct gv_jpeg_need need;
+            if (element(d, d->chunk[a].at, d->chunk[a].size, i, &at) < 0)
+                break;
+            if (i >= d->chunk[a].counts_n
+                || element(d, d->chunk[a].counts_at,
+                           d->chunk[a].counts_size, i, &len) < 0)
+                len = d->file_bytes;   /* at most to the end of the file */
+            if (gv_native_jpeg_stream_need(d->f, d->tables_at,
+                                           d->tables_len, at, len,
+                                           &need) == 0
+                && need.coef_bytes > most) {
+                most = need.coef_bytes;
+                *progressive = need.progressive;
+            }
         }
     }
     return most;
@@ -328,7 +367,7 @@ int gv_tiff_limits_check(const char *path, const struct gv_image_limits *lim,
      * whatever the offsets' count claims */
     const uint64_t down = d.height / chunk_rows + (d.height % chunk_rows != 0);
     const uint64_t chunks = mul(mul(across, down), d.planar == 2 ? d.spp : 1);
-    const uint64_t n = d.offsets_n < chunks ? d.offsets_n : chunks;
+    const uint64_t n = chunks;
     uint64_t from = 0;
     if (add(need, bound_coef(chunk_w, rows, comps)) <= max)
         from = d.tiled ? n : n - 1;

@@ -43,6 +43,11 @@ Hostile files (a few KB, headers claiming what they do not hold):
   gray-64x64-tile-65536.tif    the same tile for an image of 64x64 (tiles
                                may overhang the image: within any pixel
                                limit, 4 GiB of tile)
+  gray-tile-duplicate.tif, gray-tile-strip-offsets.tif,
+  gray-tile-bad-entry.tif      the 64x64 one as libtiff reads it from a
+                               directory with a later duplicate TileWidth,
+                               the tiles under StripOffsets, a broken
+                               Photometric entry
   jpeg-rgb-progressive-claims-1000.tif  1000x1000 RGB in one strip, its
                                progressive JPEG claiming as much (6 MB of
                                coefficients: within the limit, then its
@@ -251,6 +256,22 @@ def main():
                          (262, SHORT, [1]), (277, SHORT, [1]),
                          (322, LONG, [65536]), (323, LONG, [65536])],
                         [lzw], offsets_tag=324, counts_tag=325))
+    # The same as libtiff reads it from directories a stricter parser
+    # would misread: a later duplicate TileWidth of 16 (libtiff keeps the
+    # first), the tiles' offsets under StripOffsets (one array in
+    # libtiff), an entry whose values lie outside the file (libtiff
+    # ignores it; found by fuzz_imageio).
+    gray = [(256, LONG, [64]), (257, LONG, [64]), (258, SHORT, [8]),
+            (259, SHORT, [5]), (262, SHORT, [1]), (277, SHORT, [1]),
+            (322, LONG, [65536]), (323, LONG, [65536])]
+    save("gray-tile-duplicate.tif",
+         tiff(gray + [(322, LONG, [16])], [lzw], offsets_tag=324,
+              counts_tag=325))
+    save("gray-tile-strip-offsets.tif", tiff(gray, [lzw]))
+    bad = tiff(gray, [lzw], offsets_tag=324, counts_tag=325)
+    i = bad.index(struct.pack("<HHI", 262, SHORT, 1))
+    bad = bad[:i] + struct.pack("<HHI", 262, LONG, 0xFFFFFFFF) + bad[i + 8:]
+    save("gray-tile-bad-entry.tif", bad)
 
 
 if __name__ == "__main__":
