@@ -17,8 +17,9 @@
  * (the rows the caller asks for are the caller's):
  *  - a row of tiles (tiles across x TileLength rows), decoded:
  *    ceil(TileWidth x SamplesPerPixel x BitsPerSample / 8) bytes a tile
- *    row.  native_tiff.c and the module (imageio.cpp, read_tiles) both
- *    hold one.
+ *    row, or as the module delivers them when that is more (samples of
+ *    1 to 8 bits as bytes, a palette as RGB).  native_tiff.c and the
+ *    module (imageio.cpp, read_tiles) both hold one.
  *  - one strip (RowsPerStrip rows, at most the image's), decoded, where
  *    the reader decodes a strip whole: native_tiff.c
  *    (GV_TIFF_READ_STRIPS), and libtiff's RGBA interface.  OpenImageIO's
@@ -336,7 +337,15 @@ int gv_tiff_limits_check(const char *path, const struct gv_image_limits *lim,
         rows = chunk_rows < d.height ? chunk_rows : d.height;
     }
     const uint64_t bits = mul(mul(chunk_w, d.spp), d.bps);
-    const uint64_t row_bytes = bits / 8 + (bits % 8 != 0);
+    uint64_t row_bytes = bits / 8 + (bits % 8 != 0);
+    if (d.tiled) {
+        /* the module's row of tiles holds them as delivered: samples
+         * of 1 to 8 bits as bytes, 9 to 16 as two, a palette as RGB */
+        const uint64_t out = mul(mul(chunk_w, d.photometric == 3 ? 3 : d.spp),
+                                 d.bps <= 8 ? 1 : d.bps <= 16 ? 2
+                                                : d.bps / 8 + (d.bps % 8 != 0));
+        row_bytes = out > row_bytes ? out : row_bytes;
+    }
     const int rgba = rgba_interface(&d);
     char what[160] = "";
     uint64_t need = 0;

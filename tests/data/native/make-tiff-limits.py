@@ -48,6 +48,8 @@ Hostile files (a few KB, headers claiming what they do not hold):
                                directory with a later duplicate TileWidth,
                                the tiles under StripOffsets, a broken
                                Photometric entry
+  bilevel-tile-40000.tif       1-bit grey, 64x64, one 40000x40000 tile:
+                               200 MB as stored, 1.6 GB as delivered
   jpeg-rgb-progressive-claims-1000.tif  1000x1000 RGB in one strip, its
                                progressive JPEG claiming as much (6 MB of
                                coefficients: within the limit, then its
@@ -272,6 +274,12 @@ def main():
     i = bad.index(struct.pack("<HHI", 262, SHORT, 1))
     bad = bad[:i] + struct.pack("<HHI", 262, LONG, 0xFFFFFFFF) + bad[i + 8:]
     save("gray-tile-bad-entry.tif", bad)
+    # 1 bit a sample: 200 MB a tile as stored, 1.6 GB as delivered
+    save("bilevel-tile-40000.tif",
+         tiff([(256, LONG, [64]), (257, LONG, [64]), (258, SHORT, [1]),
+               (259, SHORT, [5]), (262, SHORT, [1]), (277, SHORT, [1]),
+               (322, LONG, [40000]), (323, LONG, [40000])], [lzw],
+              offsets_tag=324, counts_tag=325))
 
 
 if __name__ == "__main__":
