@@ -22,7 +22,8 @@
  *    module (imageio.cpp, read_tiles) both hold one.
  *  - one strip (RowsPerStrip rows, at most the image's), decoded, where
  *    the reader decodes a strip whole: native_tiff.c
- *    (GV_TIFF_READ_STRIPS), and libtiff's RGBA interface.  OpenImageIO's
+ *    (GV_TIFF_READ_STRIPS), libtiff's RGBA interface, and the libtiff
+ *    codecs that hold one whatever the caller reads (whole_strip_codec).  OpenImageIO's
  *    scanline reader decodes a row at a time (TIFFReadScanline; measured:
  *    a 40000 x 40000 grey strip of deflate took 176 MB through it, 1.6 GB
  *    natively), so imageio_loader.c gives a file whose strip is too big
@@ -250,6 +251,20 @@ static int rgba_interface(const struct dir *d)
     }
 }
 
+/* Whether libtiff's codec for this compression decodes a strip or tile
+ * whole into a buffer of its own even when read a row at a time:
+ * PixarLog (32909), SGI LogL and LogLuv (34676, 34677), JBIG (34661),
+ * LERC (34887), WebP (50001); its tif_*.c setup allocates it. */
+static int whole_strip_codec(uint64_t compression)
+{
+    switch (compression) {
+    case 32909: case 34661: case 34676: case 34677: case 34887: case 50001:
+        return 1;
+    default:
+        return 0;
+    }
+}
+
 /* An upper bound of the coefficients of a JPEG stream of at most w x h
  * pixels and `comps` components of any sampling (factors 1 to 4): each
  * component at most ceil(w / 8) + 4 by ceil(h / 8) + 4 blocks (rounded
@@ -349,7 +364,8 @@ int gv_tiff_limits_check(const char *path, const struct gv_image_limits *lim,
     const int rgba = rgba_interface(&d);
     char what[160] = "";
     uint64_t need = 0;
-    if (d.tiled || rgba || reader == GV_TIFF_READ_STRIPS) {
+    if (d.tiled || rgba || reader == GV_TIFF_READ_STRIPS
+        || whole_strip_codec(d.compression)) {
         need = mul(mul(row_bytes, rows), across);
         snprintf(what, sizeof what, "%s of %llu rows",
                  d.tiled ? "a row of tiles" : "a strip",
