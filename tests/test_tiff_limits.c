@@ -18,9 +18,9 @@
  *    reader one byte under its row of tiles;
  *  - headers of 1 to 2 KB claiming 15000 to 65536 pixels a side in one
  *    strip or tile (JPEG progressive and baseline, YCbCr, grey; a tile
- *    behind a duplicate tag, under StripOffsets, past a broken entry, as
- *    libtiff reads them; a 1-bit tile, small stored, large delivered)
- *    refused
+ *    behind a duplicate tag, under StripOffsets, past a broken entry,
+ *    behind offsets claiming more than the file, as libtiff reads them;
+ *    a 1-bit tile, small stored, large delivered) refused
  *    under the default limit in words naming --max-decoder-memory, and
  *    above max_pixels in its words; every cut of one of them fails to
  *    open, none crashes.
@@ -292,6 +292,10 @@ static void test_hostile(const char *limits)
          "memory (a row of tiles of 65536 rows), more than the limit of 1.0 "
          "GiB (--max-decoder-memory)"},
         {"gray-tile-strip-offsets.tif",
+         "imageio: PATH: a TIFF of 64 x 64 needs about 4.0 GiB of decoder "
+         "memory (a row of tiles of 65536 rows), more than the limit of 1.0 "
+         "GiB (--max-decoder-memory)"},
+        {"gray-tile-long-offsets.tif",
          "imageio: PATH: a TIFF of 64 x 64 needs about 4.0 GiB of decoder "
          "memory (a row of tiles of 65536 rows), more than the limit of 1.0 "
          "GiB (--max-decoder-memory)"},

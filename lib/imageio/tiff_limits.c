@@ -58,8 +58,10 @@
  * directory (tif_dirread.c): the first of duplicate tags counts, an
  * entry whose values lie outside the file is ignored, either tile
  * dimension makes the file tiled, StripOffsets and TileOffsets are one
- * array.  A file this cannot follow (no directory, no offsets) is passed
- * (0): libtiff fails on it too, and the reader says so in its own words.
+ * array, trimmed to what lies in the file.  The memory counted needs the
+ * sizes only (no offsets); a file without a directory this can follow,
+ * or without width and height, is passed (0): libtiff fails on it too,
+ * and the reader says so in its own words.
  * Defaults as libtiff's: 1 sample of 1 bit, no compression, RowsPerStrip
  * the height.
  */
@@ -187,9 +189,17 @@ static int read_dir(struct dir *d)
         if (mul(count, size) > inline_bytes
             && get(d, field, count_bytes, &at) < 0)
             continue;
-        if (mul(count, size) > d->file_bytes
-            || at > d->file_bytes - count * size)
+        if (at >= d->file_bytes)
             continue;
+        if (mul(count, size) > d->file_bytes - at) {
+            /* libtiff trims an offsets or byte counts array to what it
+             * can read; any other such entry it ignores */
+            if (tag != 273 && tag != 279 && tag != 324 && tag != 325)
+                continue;
+            count = (d->file_bytes - at) / size;
+            if (count == 0)
+                continue;
+        }
         switch (tag) {
         case 273:   /* StripOffsets */
         case 324:   /* TileOffsets: the same array in libtiff */
@@ -233,9 +243,7 @@ static int read_dir(struct dir *d)
         default: break;
         }
     }
-    if (d->chunk[0].size == 0 && d->chunk[1].size == 0)
-        return -1;
-    return 0;
+    return 0;   /* without offsets: no JPEG header to read */
 }
 
 /* Whether OpenImageIO 2.4 reads the file through libtiff's RGBA

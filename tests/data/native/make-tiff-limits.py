@@ -44,10 +44,12 @@ Hostile files (a few KB, headers claiming what they do not hold):
                                may overhang the image: within any pixel
                                limit, 4 GiB of tile)
   gray-tile-duplicate.tif, gray-tile-strip-offsets.tif,
-  gray-tile-bad-entry.tif      the 64x64 one as libtiff reads it from a
+  gray-tile-bad-entry.tif, gray-tile-long-offsets.tif
+                               the 64x64 one as libtiff reads it from a
                                directory with a later duplicate TileWidth,
                                the tiles under StripOffsets, a broken
-                               Photometric entry
+                               Photometric entry, TileOffsets claiming
+                               more entries than the file holds
   bilevel-tile-40000.tif       1-bit grey, 64x64, one 40000x40000 tile:
                                200 MB as stored, 1.6 GB as delivered
   jpeg-rgb-progressive-claims-1000.tif  1000x1000 RGB in one strip, its
@@ -274,6 +276,12 @@ def main():
     i = bad.index(struct.pack("<HHI", 262, SHORT, 1))
     bad = bad[:i] + struct.pack("<HHI", 262, LONG, 0xFFFFFFFF) + bad[i + 8:]
     save("gray-tile-bad-entry.tif", bad)
+    # TileOffsets claiming 786433 entries: libtiff trims the array to the
+    # file and reads the tile (found by fuzz_imageio)
+    long = tiff(gray, [lzw], offsets_tag=324, counts_tag=325)
+    i = long.index(struct.pack("<HHI", 324, LONG, 1))
+    long = long[:i] + struct.pack("<HHI", 324, LONG, 0xC0001) + long[i + 8:]
+    save("gray-tile-long-offsets.tif", long)
     # 1 bit a sample: 200 MB a tile as stored, 1.6 GB as delivered
     save("bilevel-tile-40000.tif",
          tiff([(256, LONG, [64]), (257, LONG, [64]), (258, SHORT, [1]),
