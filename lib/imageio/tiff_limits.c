@@ -9,9 +9,12 @@
  * make-tiff-limits.py), peak resident size of `gigaview encode` before
  * this check: 8.9 GB for one YCbCr JPEG strip holding a progressive
  * JPEG, 6.3 GB for the same with a baseline JPEG, 8.9 GB for one such
- * tile, 3.7 GB for an uncompressed YCbCr strip - each failing (or
- * "succeeding" on filler) only after.  The native reader, too, holds one
- * strip or row of tiles, of whatever size the header claims.
+ * tile, 3.7 GB for an uncompressed YCbCr strip, 1.5 GB for an RGB strip
+ * whose progressive JPEG claims 15000 x 15000, 8.5 GB for a 64 x 64
+ * grey image of one 65536 x 65536 tile, 3.3 GB for a 1-bit one of
+ * 40000 x 40000 - each failing (or "succeeding" on filler) only after.
+ * The native reader, too, holds one strip or row of tiles, of whatever
+ * size the header claims (1.6 GB for a 1.5 MB deflate strip).
  *
  * What is counted, each from the header, as the readers allocate it
  * (the rows the caller asks for are the caller's):
