@@ -299,16 +299,17 @@ static int refuse(const char *path, const struct dir *d, uint64_t need,
                    (unsigned long long)d->height, need_s, what, max_s);
 }
 
-/* The largest coefficient arrays of the JPEG strips or tiles [from, n)
- * of both offset arrays, and whether the largest is progressive. */
-static uint64_t max_coef(const struct dir *d, uint64_t from, uint64_t n,
-                         int *progressive)
+/* The largest coefficient arrays of the JPEG strips or tiles from,
+ * from + step, ... below n of both offset arrays, and whether the
+ * largest is progressive. */
+static uint64_t max_coef(const struct dir *d, uint64_t from, uint64_t step,
+                         uint64_t n, int *progressive)
 {
     uint64_t most = 0;
     for (int a = 0; a < 2; a++) {
         /* libtiff pads a short array with zeros: no JPEG there */
         const uint64_t count = d->chunk[a].n < n ? d->chunk[a].n : n;
-        for (uint64_t i = from; i < count; i++) {
+        for (uint64_t i = from; i < count; i = add(i, step)) {
             uint64_t at, len;
             struct gv_jpeg_need need;
             if (element(d, d->chunk[a].at, d->chunk[a].size, i, &at) < 0)
@@ -395,20 +396,22 @@ int gv_tiff_limits_check(const char *path, const struct gv_image_limits *lim,
     }
     if (d.compression != 7 && d.compression != 6)
         goto out;
-    /* JPEG: the coefficients of a progressive or multi-scan stream */
-    /* every strip's or tile's header, or only the last strip's when a
-     * stream of a strip's or tile's size could not pass the limit */
+    /* JPEG: the coefficients of a progressive or multi-scan stream.
+     * Every strip's or tile's header, or, when a stream of a strip's or
+     * tile's size could not pass the limit, none of a tiled file's and
+     * only the last strip of each plane (libtiff lets that one's stream
+     * be taller).  No more strips or tiles than the image has, whatever
+     * the offsets' count claims. */
     const uint64_t comps = d.planar == 2 ? 1 : d.spp;
-    /* the strips or tiles libtiff reads: no more than the image has,
-     * whatever the offsets' count claims */
     const uint64_t down = d.height / chunk_rows + (d.height % chunk_rows != 0);
-    const uint64_t chunks = mul(mul(across, down), d.planar == 2 ? d.spp : 1);
-    const uint64_t n = chunks;
-    uint64_t from = 0;
-    if (add(need, bound_coef(chunk_w, rows, comps)) <= max)
-        from = d.tiled ? n : n - 1;
+    const uint64_t n = mul(mul(across, down), d.planar == 2 ? d.spp : 1);
+    uint64_t from = 0, step = 1;
+    if (add(need, bound_coef(chunk_w, rows, comps)) <= max) {
+        from = d.tiled ? n : down - 1;
+        step = down;
+    }
     int progressive = 0;
-    const uint64_t coef = max_coef(&d, from, n, &progressive);
+    const uint64_t coef = max_coef(&d, from, step, n, &progressive);
     if (add(need, coef) > max) {
         size_t k = strlen(what);
         snprintf(what + k, sizeof what - k, "%sa %s JPEG's coefficients",
