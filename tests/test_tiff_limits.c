@@ -20,7 +20,8 @@
  *    strip or tile (JPEG progressive and baseline, YCbCr, grey; a tile
  *    behind a duplicate tag, under StripOffsets, past a broken entry,
  *    behind offsets claiming more than the file, as libtiff reads them;
- *    a 1-bit tile, small stored, large delivered) refused
+ *    a 1-bit tile, small stored, large delivered; RowsPerStrip far past
+ *    the height) refused
  *    under the default limit in words naming --max-decoder-memory, and
  *    above max_pixels in its words; every cut of one of them fails to
  *    open, none crashes.
@@ -286,6 +287,10 @@ static void test_hostile(const char *limits)
         {"gray-64x64-tile-65536.tif",
          "imageio: PATH: a TIFF of 64 x 64 needs about 4.0 GiB of decoder "
          "memory (a row of tiles of 65536 rows), more than the limit of 1.0 "
+         "GiB (--max-decoder-memory)"},
+        {"jpeg-rps-claims.tif",
+         "imageio: PATH: a TIFF of 61 x 45 needs about 186.7 GiB of decoder "
+         "memory (a strip of 1095582055 rows), more than the limit of 1.0 "
          "GiB (--max-decoder-memory)"},
         {"gray-tile-duplicate.tif",
          "imageio: PATH: a TIFF of 64 x 64 needs about 4.0 GiB of decoder "

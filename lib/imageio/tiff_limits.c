@@ -30,7 +30,10 @@
  *    scanline reader decodes a row at a time (TIFFReadScanline; measured:
  *    a 40000 x 40000 grey strip of deflate took 176 MB through it, 1.6 GB
  *    natively), so imageio_loader.c gives a file whose strip is too big
- *    for the native reader to the module instead of refusing it.
+ *    for the native reader to the module instead of refusing it.  But
+ *    where RowsPerStrip exceeds the height (below 2^31), OpenImageIO
+ *    allocates a strip of that many rows (read_scanlines' chunks), and
+ *    that strip is counted.
  *  - the whole image as RGBA, 4 bytes a pixel, where OpenImageIO reads
  *    through libtiff's RGBA interface (TIFFReadRGBAImage): a
  *    JPEG-compressed file (Compression 7, or old-style 6) with other than
@@ -363,6 +366,16 @@ int gv_tiff_limits_check(const char *path, const struct gv_image_limits *lim,
         chunk_rows = d.rps == 0 ? d.height : d.rps;
         rows = chunk_rows < d.height ? chunk_rows : d.height;
     }
+    /* OpenImageIO's read_scanlines reads in chunks of whole strips of
+     * RowsPerStrip rows as the file says, not cut to the height (an int:
+     * from 2^31 on it takes none), and allocates one (fuzz_imageio: a
+     * 61 x 45 JPEG TIFF claiming 1095582055 rows a strip made it ask
+     * for 187 GiB) */
+    const int oiio_strip = !d.tiled && reader == GV_TIFF_READ_ROWS
+                           && chunk_rows > d.height
+                           && chunk_rows <= 0x7fffffffu;
+    if (oiio_strip)
+        rows = chunk_rows;
     const uint64_t bits = mul(mul(chunk_w, d.spp), d.bps);
     uint64_t row_bytes = bits / 8 + (bits % 8 != 0);
     if (d.tiled) {
@@ -376,7 +389,7 @@ int gv_tiff_limits_check(const char *path, const struct gv_image_limits *lim,
     const int rgba = rgba_interface(&d);
     char what[160] = "";
     uint64_t need = 0;
-    if (d.tiled || rgba || reader == GV_TIFF_READ_STRIPS
+    if (d.tiled || rgba || reader == GV_TIFF_READ_STRIPS || oiio_strip
         || whole_strip_codec(d.compression)) {
         need = mul(mul(row_bytes, rows), across);
         snprintf(what, sizeof what, "%s of %llu rows",

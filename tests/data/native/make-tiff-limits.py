@@ -52,6 +52,8 @@ Hostile files (a few KB, headers claiming what they do not hold):
                                more entries than the file holds
   bilevel-tile-40000.tif       1-bit grey, 64x64, one 40000x40000 tile:
                                200 MB as stored, 1.6 GB as delivered
+  jpeg-rps-claims.tif          the RGB one with a RowsPerStrip of
+                               1095582055 for its 45 rows
   jpeg-rgb-progressive-claims-1000.tif  1000x1000 RGB in one strip, its
                                progressive JPEG claiming as much (6 MB of
                                coefficients: within the limit, then its
@@ -228,6 +230,9 @@ def main():
     save("jpeg-progressive-big.tif",
          ycbcr_jpeg(61, 45, 45, [prog], be=True, big=True))
     save("jpeg-rgb-progressive.tif", rgb8(61, 45, 45, [rgbp], 7))
+    # RowsPerStrip of 1095582055 for 45 rows (found by fuzz_imageio):
+    # OpenImageIO allocates that many rows
+    save("jpeg-rps-claims.tif", rgb8(61, 45, 1095582055, [rgbp], 7))
     save("jpeg-rgb-progressive-claims-15000.tif",
          rgb8(15000, 15000, 15000, [claim(rgbp, 15000, 15000)], 7))
     save("jpeg-rgb-progressive-claims-1000.tif",
