@@ -327,7 +327,8 @@ static void test_hostile(const char *limits)
     /* cuts of the hostile RGB one, every 5th byte through its directory
      * and its JPEG's header, every 101st after: none opens, no crash */
     size_t len;
-    uint8_t *p = slurp(path_in(limits, "jpeg-rgb-progressive-claims-15000.tif"),
+    uint8_t *p = slurp(path_in(limits,
+                               "jpeg-rgb-progressive-claims-15000.tif"),
                        &len);
     const char *cut = path_in(tmpdir, "cut.tif");
     int opened = 0, quiet = 0, tries = 0;

@@ -26,14 +26,14 @@
  *  - one strip (RowsPerStrip rows, at most the image's), decoded, where
  *    the reader decodes a strip whole: native_tiff.c
  *    (GV_TIFF_READ_STRIPS), libtiff's RGBA interface, and the libtiff
- *    codecs that hold one whatever the caller reads (whole_strip_codec).  OpenImageIO's
- *    scanline reader decodes a row at a time (TIFFReadScanline; measured:
- *    a 40000 x 40000 grey strip of deflate took 176 MB through it, 1.6 GB
- *    natively), so imageio_loader.c gives a file whose strip is too big
- *    for the native reader to the module instead of refusing it.  But
- *    where RowsPerStrip exceeds the height (below 2^31), OpenImageIO
- *    allocates a strip of that many rows (read_scanlines' chunks), and
- *    that strip is counted.
+ *    codecs that hold one whatever the caller reads (whole_strip_codec).
+ *    OpenImageIO's scanline reader decodes a row at a time
+ *    (TIFFReadScanline; measured: a 40000 x 40000 grey strip of deflate
+ *    took 176 MB through it, 1.6 GB natively), so imageio_loader.c gives
+ *    a file whose strip is too big for the native reader to the module
+ *    instead of refusing it.  But where RowsPerStrip exceeds the height
+ *    (below 2^31), OpenImageIO allocates a strip of that many rows
+ *    (read_scanlines' chunks), and that strip is counted.
  *  - the whole image as RGBA, 4 bytes a pixel, where OpenImageIO reads
  *    through libtiff's RGBA interface (TIFFReadRGBAImage): a
  *    JPEG-compressed file (Compression 7, or old-style 6) with other than
@@ -381,9 +381,11 @@ int gv_tiff_limits_check(const char *path, const struct gv_image_limits *lim,
     if (d.tiled) {
         /* the module's row of tiles holds them as delivered: samples
          * of 1 to 8 bits as bytes, 9 to 16 as two, a palette as RGB */
+        const uint64_t sample = d.bps <= 8    ? 1
+                                : d.bps <= 16 ? 2
+                                              : d.bps / 8 + (d.bps % 8 != 0);
         const uint64_t out = mul(mul(chunk_w, d.photometric == 3 ? 3 : d.spp),
-                                 d.bps <= 8 ? 1 : d.bps <= 16 ? 2
-                                                : d.bps / 8 + (d.bps % 8 != 0));
+                                 sample);
         row_bytes = out > row_bytes ? out : row_bytes;
     }
     const int rgba = rgba_interface(&d);
