@@ -169,6 +169,40 @@ open(sys.argv[2], "wb").write(p)
 EOF
 png_msg="imageio: $in/claims-huge.png: an interlaced PNG of 12000 x 12000 needs about 1.1 GiB of decoder memory, more than the limit of 1.0 GiB (--max-decoder-memory)"
 bad_case_both_ways "interlaced PNG claiming 12000x12000" "$png_msg" "$in/claims-huge.png"
+# TIFFs whose first directory claims what their 1 to 2 KB cannot hold
+# (tests/data/native/limits, make-tiff-limits.py there): one YCbCr JPEG
+# strip of 30000x30000 whose JPEG is progressive (8.9 GB of resident
+# size before lib/imageio/tiff_limits.c: libtiff's RGBA image, its strip
+# and libjpeg's coefficients), and one RGB strip of 15000x15000 whose
+# progressive JPEG's coefficients alone pass the limit (1.5 GB before).
+# Refused from the header, natively and before the module; a real JPEG
+# TIFF (tiffcp -c jpeg) still encodes, and is refused one byte under
+# what it needs.
+lim="$TESTDATA/native/limits"
+bad_case_both_ways "JPEG-compressed TIFF claiming 30000x30000 in one strip" \
+    "imageio: $lim/jpeg-progressive-claims-30000.tif: a TIFF of 30000 x 30000 needs about 5.9 GiB of decoder memory (a strip of 30000 rows, the whole image as RGBA), more than the limit of 1.0 GiB (--max-decoder-memory)" \
+    "$lim/jpeg-progressive-claims-30000.tif"
+bad_case_both_ways "RGB JPEG TIFF whose progressive strip claims 15000x15000" \
+    "imageio: $lim/jpeg-rgb-progressive-claims-15000.tif: a TIFF of 15000 x 15000 needs about 1.3 GiB of decoder memory (a progressive JPEG's coefficients), more than the limit of 1.0 GiB (--max-decoder-memory)" \
+    "$lim/jpeg-rgb-progressive-claims-15000.tif"
+run encode "$TESTDATA/native/rgb8-jpeg-declined.tif" -o "$T/jpeg-tiff.gv" --quiet
+expect_rc "a JPEG-compressed TIFF from tiffcp -c jpeg encodes" 0
+if command -v tiffcp >/dev/null 2>&1; then
+    # 300x200 as one strip, in strips of 16 rows and in 64x64 tiles
+    for o in "-r 200" "-r 16" "-t -w 64 -l 64"; do
+        # shellcheck disable=SC2086 # $o is options
+        tiffcp -c jpeg $o "$TESTDATA/seeding-300x200-striped.tif" "$in/jpeg.tif" 2>/dev/null
+        run encode "$in/jpeg.tif" -o "$T/jpeg-tiff-cp.gv" --quiet
+        expect_rc "tiffcp -c jpeg $o of a 300x200 TIFF encodes" 0
+    done
+else
+    skip "tiffcp -c jpeg TIFFs" "no tiffcp (libtiff-tools)"
+fi
+run encode --max-decoder-memory 6068 "$TESTDATA/native/rgb8-jpeg-declined.tif" -o "$T/jpeg-tiff-6068.gv" --quiet
+expect_rc "--max-decoder-memory 6068: the JPEG TIFF that needs 6068 bytes" 0
+bad_case "--max-decoder-memory 6067 on a JPEG TIFF of 37x29" \
+    "imageio: $TESTDATA/native/rgb8-jpeg-declined.tif: a TIFF of 37 x 29 needs about 5.9 KiB of decoder memory (a strip of 16 rows, the whole image as RGBA), more than the limit of 5.9 KiB (--max-decoder-memory)" \
+    --max-decoder-memory 6067 "$TESTDATA/native/rgb8-jpeg-declined.tif"
 bad_case_re "mosaic with one damaged tile" \
     "^gigaview encode: imageio: $in/trunc\\.jpg: JPEG error: " -m 2x1 "$jpg" "$in/trunc.jpg"
 

@@ -35,7 +35,14 @@
  * native_jpeg.c against the limits (max_pixels and the decoder memory of
  * a progressive JPEG), which OpenImageIO's reader would only apply after
  * allocating, and so are a PNG's (native_png.c: an interlaced one is
- * held whole) and a Photoshop file's thumbnail (psd_thumbnail.c).
+ * held whole) and a Photoshop file's thumbnail (psd_thumbnail.c).  A
+ * TIFF's decoder memory (tiff_limits.c: a row of tiles, the RGBA image
+ * of OpenImageIO's RGBA interface, a progressive JPEG strip's
+ * coefficients) is checked from its first directory before the module
+ * opens it, and one native_tiff.c took is checked after its open (which
+ * reads the header only) against its strip too: a file whose strip
+ * passes the limit goes to the module, which reads a strip a row at a
+ * time.
  * Writing always goes through the module.
  */
 #include <dlfcn.h>
@@ -54,6 +61,7 @@
 #include "imageio/native_png.h"
 #include "imageio/native_tiff.h"
 #include "imageio/psd_thumbnail.h"
+#include "imageio/tiff_limits.h"
 
 #ifndef PKGLIBDIR
 #define PKGLIBDIR "/usr/local/lib/gigaview"
@@ -225,6 +233,7 @@ struct gv_image_in *gv_image_open_limits(const char *path,
     int soi, psd;
     in->by = sniff(path, &soi, &psd);
     const int png = in->by == BY_PNG;   /* the PNG signature */
+    const int tiff = in->by == BY_TIFF;   /* a TIFF's or BigTIFF's */
     if (!native_allowed())
         in->by = BY_MODULE;
     struct gv_error e;
@@ -237,13 +246,25 @@ struct gv_image_in *gv_image_open_limits(const char *path,
     else if (in->by == BY_TIFF)
         native = in->u.tiff = gv_native_tiff_open(path, lim->max_pixels,
                                                   info, &e);
+    /* A TIFF native_tiff.c takes, whose strip or row of tiles (allocated
+     * at its first read: its open has read the header only) would pass
+     * the decoder memory limit (tiff_limits.c), is declined: the
+     * module's scanline reader holds a row of a strip, not the strip,
+     * and its own check below still applies. */
+    if (in->by == BY_TIFF && native
+        && gv_tiff_limits_check(path, lim, GV_TIFF_READ_STRIPS, &e) < 0) {
+        gv_native_tiff_close(in->u.tiff);
+        native = NULL;
+        gv_error_clear(&e);
+    }
     if (native)
         return in;
     /* For the module, whose libjpeg takes no limit on its memory and
      * whose PNG reader allocates an interlaced image whole before
      * decoding it: the native reader's limits from the header (again,
      * for a JPEG it declined: it may have done so before reading the
-     * header), and a Photoshop file's thumbnail, before it opens the
+     * header), a Photoshop file's thumbnail, and a TIFF's tiles, RGBA
+     * image and JPEG coefficients (tiff_limits.c), before it opens the
      * file. */
     if (e.code == GV_OK && soi)
         gv_native_jpeg_check(path, lim, &e);
@@ -251,6 +272,8 @@ struct gv_image_in *gv_image_open_limits(const char *path,
         gv_native_png_check(path, lim, &e);
     else if (e.code == GV_OK && psd)
         gv_psd_thumbnail_check(path, lim, &e);
+    else if (e.code == GV_OK && tiff)
+        gv_tiff_limits_check(path, lim, GV_TIFF_READ_ROWS, &e);
     if (e.code != GV_OK) {   /* refused, not declined */
         if (err)
             *err = e;

@@ -396,6 +396,120 @@ out:
     return rc;
 }
 
+/* A libjpeg source over bytes [at, end) of a file, read a buffer at a
+ * time, as libtiff's JPEG codec gives libjpeg one strip or tile: at the
+ * range's end an EOI, as libtiff's own source inserts. */
+struct range_src {
+    struct jpeg_source_mgr pub;
+    FILE *f;
+    uint64_t at, end;
+    JOCTET buf[4096];
+};
+
+static void range_init(j_decompress_ptr c)
+{
+    (void)c;
+}
+
+static boolean range_fill(j_decompress_ptr c)
+{
+    struct range_src *s = (struct range_src *)c->src;
+    static const JOCTET eoi[2] = {0xFF, JPEG_EOI};
+    size_t want = s->end - s->at < sizeof s->buf ? (size_t)(s->end - s->at)
+                                                 : sizeof s->buf;
+    size_t got = 0;
+    if (want > 0 && fseeko(s->f, (off_t)s->at, SEEK_SET) == 0)
+        got = fread(s->buf, 1, want, s->f);
+    if (got == 0) {
+        s->at = s->end;
+        s->pub.next_input_byte = eoi;
+        s->pub.bytes_in_buffer = sizeof eoi;
+        return TRUE;
+    }
+    s->at += got;
+    s->pub.next_input_byte = s->buf;
+    s->pub.bytes_in_buffer = got;
+    return TRUE;
+}
+
+static void range_skip(j_decompress_ptr c, long n)
+{
+    struct range_src *s = (struct range_src *)c->src;
+    if (n <= 0)
+        return;
+    if ((size_t)n <= s->pub.bytes_in_buffer) {
+        s->pub.next_input_byte += n;
+        s->pub.bytes_in_buffer -= (size_t)n;
+        return;
+    }
+    uint64_t rest = (uint64_t)n - s->pub.bytes_in_buffer;
+    s->at = s->end - s->at < rest ? s->end : s->at + rest;
+    s->pub.bytes_in_buffer = 0;
+}
+
+static void range_term(j_decompress_ptr c)
+{
+    (void)c;
+}
+
+static void range_set(struct range_src *s, FILE *f, uint64_t at,
+                      uint64_t len)
+{
+    s->f = f;
+    s->at = at;
+    s->end = len > UINT64_MAX - at ? UINT64_MAX : at + len;
+    s->pub.bytes_in_buffer = 0;
+    s->pub.next_input_byte = NULL;
+}
+
+int gv_native_jpeg_stream_need(FILE *f, uint64_t tables_at,
+                               uint64_t tables_len, uint64_t at,
+                               uint64_t len, struct gv_jpeg_need *need)
+{
+    memset(need, 0, sizeof *need);
+    struct jpeg_decompress_struct *volatile c = calloc(1, sizeof *c);
+    struct jerr *volatile jerr = calloc(1, sizeof *jerr);
+    struct range_src *volatile src = calloc(1, sizeof *src);
+    volatile int rc = -1;   /* volatile: read after a longjmp */
+    if (!c || !jerr || !src)
+        goto out;
+    c->err = jpeg_std_error(&jerr->pub);
+    jerr->pub.error_exit = on_error;
+    jerr->pub.emit_message = on_message;
+    jerr->pub.output_message = on_output;
+    if (setjmp(jerr->jump))
+        goto out;
+    jpeg_create_decompress(c);
+    src->pub.init_source = range_init;
+    src->pub.fill_input_buffer = range_fill;
+    src->pub.skip_input_data = range_skip;
+    src->pub.resync_to_restart = jpeg_resync_to_restart;
+    src->pub.term_source = range_term;
+    c->src = &src->pub;
+    if (tables_len > 0) {   /* libtiff: JPEGTables first, tables only */
+        range_set(src, f, tables_at, tables_len);
+        jpeg_read_header(c, FALSE);
+    }
+    range_set(src, f, at, len);
+    if (jpeg_read_header(c, TRUE) != JPEG_HEADER_OK)
+        goto out;
+    need->width = c->image_width;
+    need->height = c->image_height;
+    need->progressive = c->progressive_mode != 0;
+    need->multi_scan = multi_scan(c);
+    need->coef_bytes = need->multi_scan ? coef_bytes(c) : 0;
+    rc = 0;
+out:
+    if (c) {
+        if (c->mem)
+            jpeg_destroy_decompress(c);
+        free(c);
+    }
+    free(jerr);
+    free(src);
+    return rc;
+}
+
 int gv_native_jpeg_check(const char *path, const struct gv_image_limits *lim,
                          struct gv_error *err)
 {

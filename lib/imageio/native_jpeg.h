@@ -63,6 +63,31 @@ int gv_native_jpeg_check_embedded(FILE *f, long at, const char *path,
                                   const struct gv_image_limits *lim,
                                   struct gv_error *err);
 
+/* What libjpeg will hold to decode one JPEG stream inside another file
+ * (gv_native_jpeg_stream_need). */
+struct gv_jpeg_need {
+    uint32_t width, height;        /* the frame header's */
+    int multi_scan;                /* progressive or multi-scan: held whole */
+    int progressive;
+    uint64_t coef_bytes;           /* the whole-image coefficient arrays
+                                    * libjpeg requests, 0 when not multi_scan */
+};
+
+/*
+ * The header of the JPEG stream in bytes [at, at + len) of f, read as
+ * libtiff's JPEG codec hands it to libjpeg (a strip or tile of a
+ * JPEG-compressed TIFF): after the tables-only stream in [tables_at,
+ * tables_at + tables_len) when tables_len > 0 (the TIFF's JPEGTables),
+ * and never past either range (libjpeg sees an EOI there).  Reads the
+ * header only, in a few KB of buffer whatever the ranges claim.  Returns
+ * 0 with *need filled (coef_bytes by native_jpeg.c's own rule, the one
+ * its limit applies), or -1 when libjpeg cannot read a header there (the
+ * decoder then fails on it too).
+ */
+int gv_native_jpeg_stream_need(FILE *f, uint64_t tables_at,
+                               uint64_t tables_len, uint64_t at,
+                               uint64_t len, struct gv_jpeg_need *need);
+
 /* The next `rows` rows, as gv_image_read: 0, or -1 with *err filled
  * (GV_ECORRUPT for damaged or truncated data, after which every read
  * fails; GV_EINVAL for a read past the last row). */

@@ -32,7 +32,10 @@
  * strip (TIFFReadEncodedStrip).  Both are allocated at the first read,
  * and a file whose tile or strip would need much more than the rows it
  * covers (a hostile header claiming huge tiles) is declined at open,
- * before anything is allocated.  Never the whole image.
+ * before anything is allocated.  Never the whole image.  The strip or
+ * row of tiles is also held to the decoder memory limit: after this
+ * open, imageio_loader.c declines a file whose strip passes it to the
+ * module and refuses one whose row of tiles does (tiff_limits.c).
  *
  * libtiff is opened with dlopen at the first TIFF a process reads, not
  * linked: it brings libLerc and with it libstdc++, whose loading added

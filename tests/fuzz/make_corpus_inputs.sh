@@ -208,6 +208,14 @@ for name in sorted(os.listdir(src)):
                 save("psd-thumbnail" + suffix, bytes([10]) + psd)
 PY
 
+# TIFFs of tests/data/native/limits (make-tiff-limits.py there): JPEG in
+# strips and tiles, with JPEGTables, BigTIFF, and headers claiming more
+# decoder memory than the limit (lib/imageio/tiff_limits.c).
+for f in "$top"/tests/data/native/limits/*.tif; do
+    n=$(basename "$f" .tif)
+    { printf '\002'; cat "$f"; } >"$here/corpus/imageio/limits-$n-tif"
+done
+
 # ------------------------------------------------------------- settings
 s=$here/corpus/settings
 cp "$top/conf/gigaviewd.conf" "$s/shipped.conf"
