@@ -13,7 +13,7 @@ scripts/install-deps.sh
 # tests/browser/package-lock.json pins them (into tests/browser/node_modules).
 (cd tests/browser && npm ci --no-audit --no-fund)
 nogpu_tests="tests/test_render tests/test_filter_graph tests/test_edt_cpu \
-    tests/http_api.sh tests/http_filters.sh tests/client_render.sh \
+    tests/http_api.sh tests/http_iiif.sh tests/http_filters.sh tests/client_render.sh \
     tests/fuzz/corpus-worker.sh tests/test_zfield"
 for variant in build:--enable-werror build-asan:--enable-sanitizers \
     build-nogpu:--without-gpu; do
