@@ -6,6 +6,9 @@
 # then build without the GPU (--without-gpu: lib/gpu/poison stops the build
 # if anything outside the GPU parts includes an EGL or GL header) and run
 # there the tests that cover what such a build does differently.
+# scripts/test-times.sh DIR lists the slowest tests of a build's last run:
+# make -j2 runs two tests at a time, so the time a test phase takes is
+# about half the tests' sum, and a long test late in TESTS makes the tail.
 set -eu
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
