@@ -6,6 +6,9 @@
 # then build without the GPU (--without-gpu: lib/gpu/poison stops the build
 # if anything outside the GPU parts includes an EGL or GL header) and run
 # there the tests that cover what such a build does differently.
+# scripts/test-times.sh DIR lists the slowest tests of a build's last run:
+# make -j2 runs two tests at a time, so the time a test phase takes is
+# about half the tests' sum, and a long test late in TESTS makes the tail.
 set -eu
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
@@ -13,7 +16,7 @@ scripts/install-deps.sh
 # tests/browser/package-lock.json pins them (into tests/browser/node_modules).
 (cd tests/browser && npm ci --no-audit --no-fund)
 nogpu_tests="tests/test_render tests/test_filter_graph tests/test_edt_cpu \
-    tests/http_api.sh tests/http_filters.sh tests/client_render.sh \
+    tests/http_api.sh tests/http_iiif.sh tests/http_filters.sh tests/client_render.sh \
     tests/fuzz/corpus-worker.sh tests/test_zfield"
 for variant in build:--enable-werror build-asan:--enable-sanitizers \
     build-nogpu:--without-gpu; do

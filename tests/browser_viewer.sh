@@ -34,7 +34,8 @@
 # damaged, refused alike (same message) or unpacked to the same
 # coefficients.
 #
-# Negative controls of the whole pipeline, each must FAIL the 1:1 match:
+# Negative controls of the whole pipeline (one browser runs them all, each
+# on a page of its own), each must FAIL the 1:1 match:
 # a decode shader with one prediction weight changed (29/111 to 30/110),
 # a rANS decoder that flips the lowest bit of every index, a layout-D
 # unpacking with the zigzag order transposed (on picosd), and a root
@@ -135,27 +136,30 @@ timeout 120 node "$BROWSER_DIR/dct_unpack.mjs" --base "$BASE" --helper "$DCT_COE
     --images picosd,grayd >"$T/dct.out" 2>&1 || urc=$?
 browser_relay "$T/dct.out" "$urc" dct_unpack.mjs
 
-# expect_mismatch DESCRIPTION ARGS...: the sabotaged run must fail the
-# 1:1 match, and nothing else may have broken it.
+# The negative controls, in one browser (viewer.mjs runs each sabotage on
+# a page of its own, its output from "# sabotage: NAME" on).
+# expect_mismatch DESCRIPTION NAME: that sabotage must fail the 1:1
+# match, and nothing else may have broken it.
+viewer --sabotage shader,rans,dct,matrix,root
 expect_mismatch() {
     d=$1
-    shift
     img=picos
     case $2 in dct | matrix) img=picosd ;; esac
-    viewer "$@"
-    if [ "$vrc" -eq 1 ] && grep -q "^FAIL $img level 0 1:1: the canvas matches" "$T/viewer.out" &&
-        grep -q '^PASS the viewer opened with WebGL2' "$T/viewer.out"; then
-        ok "negative control: $d fails the match ($(grep -A1 "^FAIL $img level 0" "$T/viewer.out" |
+    awk -v s="# sabotage: $2" '$0 == s { on = 1; next } /^# sabotage: / { on = 0 } on' \
+        "$T/viewer.out" >"$T/sabotage.out"
+    if [ "$vrc" -eq 1 ] && grep -q "^FAIL $img level 0 1:1: the canvas matches" "$T/sabotage.out" &&
+        grep -q '^PASS the viewer opened with WebGL2' "$T/sabotage.out"; then
+        ok "negative control: $d fails the match ($(grep -A1 "^FAIL $img level 0" "$T/sabotage.out" |
             sed -n 's/^# \(MAD [^,]*\).*/\1/p'))"
     else
-        not_ok "negative control: $d fails the match (exit $vrc)" "$(tail -n 20 "$T/viewer.out")"
+        not_ok "negative control: $d fails the match (exit $vrc)" "$(tail -n 20 "$T/sabotage.out")"
     fi
 }
-expect_mismatch "a decode shader with one weight changed" --sabotage shader
-expect_mismatch "a rANS decoder that flips index bits" --sabotage rans
-expect_mismatch "a layout-D unpacking with the zigzag order transposed" --sabotage dct
-expect_mismatch "a decode shader with one entry of dct_matrix.glsl's K changed" --sabotage matrix
-expect_mismatch "a root with a bit flipped in every 97th sample" --sabotage root
+expect_mismatch "a decode shader with one weight changed" shader
+expect_mismatch "a rANS decoder that flips index bits" rans
+expect_mismatch "a layout-D unpacking with the zigzag order transposed" dct
+expect_mismatch "a decode shader with one entry of dct_matrix.glsl's K changed" matrix
+expect_mismatch "a root with a bit flipped in every 97th sample" root
 
 stop_daemon
 if [ "$drc" -eq 0 ]; then ok "gigaviewd exits 0 on SIGTERM"; else

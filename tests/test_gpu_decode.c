@@ -484,7 +484,11 @@ int main(int argc, char **argv)
     check_dct_synthetic(gpu, 1);
     check_store(gpu, picos, 36.0, 10, 0);
     check_store(gpu, picos, 41.0, 10, 0);               /* rates 8 to 10 */
-    check_store(gpu, "synth:1500x1100", 60.0, 12, 0);  /* rates up to the cap */
+    /* Rates up to the cap: 11 and 12 (measured: r11:1 r12:4), in full and
+     * edge tiles of two tiled levels; 1100x512 has what 1500x1100 had in
+     * 5 tiles instead of 13 (whose encode took 35 s of this test's 65 under
+     * ASan). */
+    check_store(gpu, "synth:1100x512", 60.0, 12, 0);
     check_store(gpu, "synth:1100x1500:gray", 33.0, 10, 0);
     check_store(gpu, "synth:2100x900", 20.0, 3, 0);    /* low rates, r = 0 */
     check_store(gpu, "synth:600x600:gray", 99.0, 12, 0);

@@ -3,7 +3,7 @@
 // playwright-core.
 //
 //   node viewer.mjs --base http://127.0.0.1:PORT --gigaview PATH
-//        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans|dct|matrix|root] [--only eviction|dct]
+//        [--chromium /usr/bin/chromium] [--out DIR] [--sabotage shader|rans|dct|matrix|root[,...]] [--only eviction|dct]
 //        [--dctcoefs tests/dct_coefs]
 //
 // Needs stores "picos" (tests/data/picos-1100x700.jpg: two tiled levels,
@@ -59,6 +59,9 @@
 // changed (on picosd), --sabotage root a root whose every 97th sample
 // has its lowest bit flipped: check 1 must then FAIL (tests/browser_viewer.sh expects
 // that: negative controls of the whole pipeline); only check 1 runs.
+// Several, comma-separated (--sabotage shader,rans,root), run one after
+// the other in the same browser, each on a page of its own whose output
+// begins with "# sabotage: NAME" (one browser start for all of them).
 // Exit status 0 when everything passed, 1 otherwise, 2 on a usage error.
 import { execFileSync } from 'node:child_process';
 import { mkdtempSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
@@ -71,7 +74,7 @@ const MAX_MAD = 1;      // mean absolute difference per channel, 8-bit units
 const W = 800, H = 500;
 
 const opt = { chromium: '/usr/bin/chromium', out: '', sabotage: '', only: '', base: '', gigaview: '', filters: '0', token: '', dctcoefs: '' };
-parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|dct|matrix|root] [--only eviction|dct] [--dctcoefs PATH] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
+parseArgs(opt, 'usage: node viewer.mjs --base URL --gigaview PATH [--chromium PATH] [--out DIR] [--sabotage shader|rans|dct|matrix|root[,...]] [--only eviction|dct] [--dctcoefs PATH] [--filters 1 --token TOKEN]', 'viewer.mjs', ['base', 'gigaview']);
 const base = opt.base.replace(/\/+$/, '');
 
 let lapT = Date.now();
@@ -909,16 +912,17 @@ async function filters(c) {
 }
 
 // Negative controls: break the decoder on its way to the browser.
-async function sabotaged(c) {
+async function sabotaged(c, which) {
+    note(`sabotage: ${which}`);
     const pg = await newPage(c);
-    if (opt.sabotage === 'shader') {
+    if (which === 'shader') {
         await pg.route(`${base}/web/tile_decode.frag.glsl`, async (route) => {
             const r = await route.fetch();
             const src = (await r.text()).replace('return k == 0 ? -3 : (k == 1 ? 29 : (k == 2 ? 111 : -9));',
                 'return k == 0 ? -3 : (k == 1 ? 30 : (k == 2 ? 110 : -9));');
             await route.fulfill({ response: r, body: src });
         });
-    } else if (opt.sabotage === 'rans') {
+    } else if (which === 'rans') {
         await pg.route(`${base}/web/tilebuf.js`, async (route) => {
             const r = await route.fetch();
             const src = (await r.text()).replace('idx[base + i] = v;', 'idx[base + i] = v ^ 1;');
@@ -926,7 +930,7 @@ async function sabotaged(c) {
         });
         // The workers load tilebuf.js outside the page's routes: prepare
         // tiles on the main thread.
-    } else if (opt.sabotage === 'dct') {
+    } else if (which === 'dct') {
         // Layout D's zigzag order transposed (coefficient (v, u) stored at
         // (u, v)), on picosd: every 1:1 view must fail.
         await pg.route(`${base}/web/tile_dct.js`, async (route) => {
@@ -937,7 +941,7 @@ async function sabotaged(c) {
                 fail('sabotage dct: the zigzag line is not in tile_dct.js');
             await route.fulfill({ response: r, body: src });
         });
-    } else if (opt.sabotage === 'matrix') {
+    } else if (which === 'matrix') {
         // Layout D's matrix K as the served decode shader carries it
         // (dct_matrix.glsl, expanded by gigaviewd's build): K[1][2] 50 -> 51.
         await pg.route(`${base}/web/tile_decode.frag.glsl`, async (route) => {
@@ -947,7 +951,7 @@ async function sabotaged(c) {
                 fail('sabotage matrix: K is not in the served tile_decode.frag.glsl');
             await route.fulfill({ response: r, body: src });
         });
-    } else if (opt.sabotage === 'root') {
+    } else if (which === 'root') {
         // The root as decoded by loadRoot, every 97th sample's lowest bit
         // flipped: every decode starts from it.
         await pg.route(`${base}/web/viewer.js`, async (route) => {
@@ -957,15 +961,16 @@ async function sabotaged(c) {
             await route.fulfill({ response: r, body: src });
         });
     } else {
-        fail(`unknown sabotage ${opt.sabotage}`);
+        fail(`unknown sabotage ${which}`);
+        await pg.close();
         return;
     }
-    note(`sabotage: ${opt.sabotage}`);
-    const id = opt.sabotage === 'dct' || opt.sabotage === 'matrix' ? 'picosd' : 'picos';
-    await open(pg, `#image=${id}&x=550&y=350&z=0&r=0`, opt.sabotage === 'rans' || opt.sabotage === 'dct' ? '?workers=0' : '');
+    const id = which === 'dct' || which === 'matrix' ? 'picosd' : 'picos';
+    await open(pg, `#image=${id}&x=550&y=350&z=0&r=0`, which === 'rans' || which === 'dct' ? '?workers=0' : '');
     await installCompare(pg);
     check((await pg.evaluate(() => window.gigaview.viewer.stats.kind)) === 'webgl2', 'the viewer opened with WebGL2');
     await checkRegion(pg, `${id} level 0 1:1`, 0, 150, 100, W, H, 0, 0, false);
+    await pg.close();
 }
 
 // --only eviction: the eviction checks alone (quicker to iterate on).
@@ -983,8 +988,16 @@ const profile = join(scratch, 'profile');
 let ctx;
 try {
     ctx = await launchChromium(profile, opt.chromium, W, H);
-    if (opt.sabotage)
-        await sabotaged(ctx);
+    if (opt.sabotage) {
+        // One failing to run (a timeout) leaves the others to run.
+        for (const which of opt.sabotage.split(',')) {
+            try {
+                await sabotaged(ctx, which);
+            } catch (e) {
+                fail(`sabotage ${which} ran`, String(e && e.stack || e));
+            }
+        }
+    }
     else if (opt.only === 'eviction')
         await evictionOnly(ctx);
     else if (opt.only === 'dct')
