@@ -38,19 +38,20 @@ make_tiff() {
         bail "cannot make $out from $synth"
 }
 
-# both DESCRIPTION FILE MB: encode FILE (MB megabytes of pixels) reading
-# level 0 again and from a scratch copy; the same store, and scratch
-# below and above MB.
+# both DESCRIPTION FILE MB [OPTION...]: encode FILE (MB megabytes of
+# pixels) reading level 0 again and from a scratch copy; the same store,
+# and scratch below and above MB.
 both() {
     what=$1 file=$2 mb=$3
-    run encode -q 34 "$file" -o "$T/again.gv"
+    shift 3
+    run encode -q 34 "$@" "$file" -o "$T/again.gv"
     expect_rc "$what: encode" 0
     check "$what: the summary says level 0 was read again from the input" \
         grep -q '^scratch .*level 0 read again from the input$' "$T/out"
     again=$(scratch_mb)
     check "$what: scratch ${again} MB, less than the image's $mb MB" \
         awk "BEGIN { exit !($again < $mb) }"
-    GIGAVIEW_RAW_REGIONS=0 run encode -q 34 "$file" -o "$T/copy.gv"
+    GIGAVIEW_RAW_REGIONS=0 run encode -q 34 "$@" "$file" -o "$T/copy.gv"
     expect_rc "$what: encode with a scratch copy of level 0" 0
     copy=$(scratch_mb)
     check "$what: the copy's scratch ${copy} MB holds the image's $mb MB" \
@@ -69,6 +70,14 @@ make_tiff synth:1101x701 "$T/strips.tif" -c none -r 5
 both "RGB 1101x701 in strips of 5 rows" "$T/strips.tif" 2.31
 make_tiff synth:1300x600:gray "$T/gray.tif" -c none -t -w 16 -l 48
 both "gray 1300x600 in 16x48 tiles" "$T/gray.tif" 0.78
+
+# One strip of the whole image (780 KB) under --max-decoder-memory 100K:
+# read where its rows lie, it needs no strip buffer, so the native reader
+# keeps it (through libtiff, the strip would pass the limit and the file
+# go to OpenImageIO, a row at a time): the same store either way.
+make_tiff synth:1300x600:gray "$T/onestrip.tif" -c none -r 600
+both "gray 1300x600 in one strip, --max-decoder-memory 100K" \
+    "$T/onestrip.tif" 0.78 --max-decoder-memory 100K
 
 # Level 0 kept in memory, its rows still read where they lie (and pairs
 # of them reduced by pass 1's reader): the same store as through libtiff.

@@ -229,34 +229,43 @@ static void test_exact(const char *limits, const char *native)
                  "limit of 2.2 KiB (--max-decoder-memory)");
 }
 
-/* rgb8-none-strips.tif (strips of 5 rows of 37 x 3 bytes: 555): read
- * natively at 555, declined to the module at 554, which reads it a row
- * at a time.  In a child without the module, so that the asking shows. */
+/* rgb8-be-lzw-pred.tif (LZW strips of 4 rows of 37 x 3 bytes: 444):
+ * read natively at 444, declined to the module at 443, which reads it a
+ * row at a time.  rgb8-none-strips.tif (uncompressed strips of 555
+ * bytes): read natively at 554 too, where its rows lie, with no strip
+ * buffer to count (raw_regions.c).  In a child without the module, so
+ * that the asking shows. */
 static void test_native_declines(const char *native)
 {
-    const char *path = path_in(native, "rgb8-none-strips.tif");
+    const char *path = path_in(native, "rgb8-be-lzw-pred.tif");
+    char raw[4200];
+    snprintf(raw, sizeof raw, "%s", path_in(native, "rgb8-none-strips.tif"));
     pid_t pid = fork();
     if (pid < 0)
         fail("fork: %s", strerror(errno));
     if (pid == 0) {
         setenv("GV_OIIO_MODULE", "/nonexistent/gigaview-oiio.so", 1);
         struct gv_error e;
-        int bits = read_all(LOADER, path, 1ull << 32, 555, &e) == 0;
-        bits |= read_all(LOADER, path, 1ull << 32, 554, &e) < 0
+        int bits = read_all(LOADER, path, 1ull << 32, 444, &e) == 0;
+        bits |= read_all(LOADER, path, 1ull << 32, 443, &e) < 0
                         && strstr(e.text, "cannot load the OpenImageIO "
                                           "module")
                     ? 2 : 0;
+        bits |= read_all(LOADER, raw, 1ull << 32, 554, &e) == 0 ? 4 : 0;
         _exit(bits);
     }
     int st = 0;
     if (waitpid(pid, &st, 0) != pid)
         fail("waitpid: %s", strerror(errno));
     int bits = WIFEXITED(st) ? WEXITSTATUS(st) : 0;
-    check(bits & 1, "strips of 555 bytes, limit 555: read natively");
-    check(bits & 2, "strips of 555 bytes, limit 554: declined to the module");
+    check(bits & 1, "LZW strips of 444 bytes, limit 444: read natively");
+    check(bits & 2, "LZW strips of 444 bytes, limit 443: declined to the module");
+    check(bits & 4, "uncompressed strips of 555 bytes, limit 554: read "
+          "natively, where the rows lie");
     struct gv_error e;
-    check(read_all(LOADER, path, 1ull << 32, 554, &e) == 0,
-          "strips of 555 bytes, limit 554: the module reads it (%s)", e.text);
+    check(read_all(LOADER, path, 1ull << 32, 443, &e) == 0,
+          "LZW strips of 444 bytes, limit 443: the module reads it (%s)",
+          e.text);
 }
 
 static void test_hostile(const char *limits)

@@ -248,10 +248,11 @@ struct gv_image_in *gv_image_open_limits(const char *path,
                                                   info, &e);
     /* A TIFF native_tiff.c takes, whose strip or row of tiles (allocated
      * at its first read: its open has read the header only) would pass
-     * the decoder memory limit (tiff_limits.c), is declined: the
+     * the decoder memory limit (tiff_limits.c), is declined unless it is
+     * read where its rows lie (no such buffer at all): the
      * module's scanline reader holds a row of a strip, not the strip,
      * and its own check below still applies. */
-    if (in->by == BY_TIFF && native
+    if (in->by == BY_TIFF && native && !gv_native_tiff_reads_raw(in->u.tiff)
         && gv_tiff_limits_check(path, lim, GV_TIFF_READ_STRIPS, &e) < 0) {
         gv_native_tiff_close(in->u.tiff);
         native = NULL;

@@ -32,7 +32,10 @@
  * strip (TIFFReadEncodedStrip).  Both are allocated at the first read,
  * and a file whose tile or strip would need much more than the rows it
  * covers (a hostile header claiming huge tiles) is declined at open,
- * before anything is allocated.  Never the whole image.  The strip or
+ * before anything is allocated.  Never the whole image.  An uncompressed
+ * file of 8-bit samples keeps neither: its rows are read where they lie
+ * (raw_regions.c, the same bytes), so no strip's size matters, and the
+ * loader's decoder memory check (tiff_limits.c) does not decline it.  The strip or
  * row of tiles is also held to the decoder memory limit: after this
  * open, imageio_loader.c declines a file whose strip passes it to the
  * module and refuses one whose row of tiles does (tiff_limits.c).
@@ -145,6 +148,8 @@ struct gv_native_tiff {
     size_t buf_size;
     uint32_t buf_first, buf_rows;  /* rows held in buf */
     int swap16;                    /* test mode */
+    struct gv_raw_regions *raw;    /* uncompressed 8-bit: rows read where
+                                    * they lie, no strip or tile buffer */
     int broken;                    /* a read failed: every later one fails */
     char msg[256];                 /* the first error's text */
 };
@@ -198,6 +203,7 @@ void gv_native_tiff_close(struct gv_native_tiff *t)
         lt.Close(t->tif);   /* closes fd */
     else if (t->fd >= 0)
         close(t->fd);
+    gv_raw_regions_free(t->raw);
     free(t->buf);
     free(t->path);
     free(t);
@@ -349,6 +355,13 @@ struct gv_native_tiff *gv_native_tiff_open(const char *path,
     if (layout(t) != 0 || t->msg[0])
         goto decline;
     t->swap16 = test_swap16 && t->bits == 16;
+    /* An uncompressed file of 8-bit samples is read where its rows lie
+     * (raw_regions.h): the same bytes as libtiff's, without a buffer of
+     * a strip or a row of tiles (a strip can be the whole image). */
+    struct gv_error re;
+    t->raw = gv_native_tiff_regions(t, &re);
+    if (!t->raw && re.code != GV_OK)
+        goto decline;
     memset(info, 0, sizeof *info);
     info->width = w;
     info->height = h;
@@ -422,6 +435,15 @@ int gv_native_tiff_read(struct gv_native_tiff *t, uint32_t rows, void *out,
                             t->height, err) < 0)
         return -1;
     uint8_t *dst = out;
+    if (t->raw && rows > 0) {
+        if (gv_raw_regions_read(t->raw, 0, t->next_row, t->width, rows, dst,
+                                t->row_bytes, err) < 0) {
+            t->broken = 1;
+            return -1;
+        }
+        t->next_row += rows;
+        return 0;
+    }
     while (rows > 0) {
         uint32_t r = t->next_row;
         if (t->buf_rows == 0 || r < t->buf_first
@@ -453,6 +475,11 @@ int gv_native_tiff_read(struct gv_native_tiff *t, uint32_t rows, void *out,
         rows -= take;
     }
     return 0;
+}
+
+int gv_native_tiff_reads_raw(const struct gv_native_tiff *t)
+{
+    return t->raw != NULL;
 }
 
 struct gv_raw_regions *gv_native_tiff_regions(struct gv_native_tiff *t,

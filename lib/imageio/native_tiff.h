@@ -49,6 +49,11 @@ int gv_native_tiff_read(struct gv_native_tiff *t, uint32_t rows, void *out,
 struct gv_raw_regions *gv_native_tiff_regions(struct gv_native_tiff *t,
                                               struct gv_error *err);
 
+/* Whether t reads its rows where they lie (an uncompressed file of 8-bit
+ * samples, raw_regions.h): it then holds no strip or tile buffer, so
+ * the size of a strip does not matter. */
+int gv_native_tiff_reads_raw(const struct gv_native_tiff *t);
+
 /* Close.  gv_native_tiff_close(NULL) does nothing. */
 void gv_native_tiff_close(struct gv_native_tiff *t);
 
