@@ -229,6 +229,15 @@ int main(void)
     r = gv_raw_regions_new(m.fd, path, &odd, &err);
     check(!r && err.code == GV_OK, "a grid one block short of the width: declined");
     odd = m.l;
+    odd.block_w = 0x80000000u;
+    odd.block_h = 0x20000000u;
+    odd.across = 1;
+    odd.down = 1;
+    odd.pixel_bytes = 16;
+    r = gv_raw_regions_new(m.fd, path, &odd, &err);
+    check(!r && err.code == GV_OK, "blocks of 2^31 x 2^29 pixels of 16 bytes "
+          "(2^64 bytes, 0 in 64 bits): declined");
+    odd = m.l;
     odd.block_w = 0;
     r = gv_raw_regions_new(m.fd, path, &odd, &err);
     check(!r && err.code == GV_OK, "blocks 0 pixels wide: declined");

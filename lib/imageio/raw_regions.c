@@ -65,8 +65,9 @@ static int layout_fits(const struct gv_raw_layout *l, uint64_t file_size)
         || l->pixel_bytes > 16 || l->block_w == 0 || l->block_h == 0
         || l->across != (l->width - 1) / l->block_w + 1
         || l->down != (l->height - 1) / l->block_h + 1
-        || (uint64_t)l->block_w * (uint64_t)l->pixel_bytes > SIZE_MAX / 2)
-        return 0;
+        || (uint64_t)l->block_w * (uint64_t)l->pixel_bytes > SIZE_MAX / 2
+        || l->block_h > UINT64_MAX / ((uint64_t)l->block_w * l->pixel_bytes))
+        return 0;   /* a block's bytes (block_need) must not overflow */
     for (uint32_t by = 0; by < l->down; by++) {
         const uint64_t need = block_need(l, by);
         for (uint32_t bx = 0; bx < l->across; bx++) {
