@@ -50,7 +50,6 @@
 #include <string.h>
 
 #include "imageio/imageio.h"
-#include "imageio/raw_regions.h"
 #include "encode/source.h"
 
 /* Rows read from a tile per gv_image_read call are capped so that the
@@ -82,10 +81,6 @@ struct gv_source {
     struct gv_image_in *probed; /* a single image: its probe, kept open
                                  * for the reading (opening a progressive
                                  * JPEG decodes every scan) */
-    struct gv_raw_regions *raw; /* a single uncompressed image of 8-bit
-                                 * samples delivered as they are: its rows
-                                 * read where they lie, without the
-                                 * decoder's two copies */
     unsigned char *scratch;
     size_t scratch_size;
     struct gv_image_limits limits;  /* max_pixels below, and the decoder's */
@@ -419,13 +414,20 @@ static int probe_tiles(struct gv_source *s, const char *const *inputs,
     return 0;
 }
 
-/* Whether the rows are the file's samples unchanged: one image, 8-bit
- * samples, no tone rule and no channel dropped. */
+/* Whether convert() copies tile t's samples unchanged: 8-bit samples,
+ * no tone rule, no channel dropped. */
+static int unchanged(const struct gv_source *s, const struct tile *t)
+{
+    return t->info.sample == GV_SAMPLE_U8 && !s->lut
+           && t->info.channels == s->channels;
+}
+
+/* Whether the rows are one image's samples unchanged, not read yet (its
+ * probe's handle still here). */
 static int raw_eligible(const struct gv_source *s)
 {
-    return s->kind == KIND_IMAGES && s->probed && s->tone == GV_TONE_NONE
-           && !s->lut && s->tiles[0].info.sample == GV_SAMPLE_U8
-           && s->tiles[0].info.channels == s->channels;
+    return s->kind == KIND_IMAGES && s->probed && s->cols * s->rows == 1
+           && unchanged(s, &s->tiles[0]);
 }
 
 static int open_images(struct gv_source *s, const char *const *inputs,
@@ -444,9 +446,6 @@ static int open_images(struct gv_source *s, const char *const *inputs,
         return -1;
     const struct gv_image_info *f = &s->tiles[0].info;
     if (setup_tone(s, opts, f, err) != 0)
-        return -1;
-    if (raw_eligible(s) && !(s->raw = gv_image_raw_regions(s->probed, err))
-        && err->code != GV_OK)
         return -1;
     info->src_bits = f->bits;
     info->src_float = f->sample == GV_SAMPLE_F32;
@@ -550,6 +549,10 @@ static int read_grid_rows(struct gv_source *s, uint32_t n, uint8_t *out,
                           struct gv_error *err)
 {
     size_t out_row = (size_t)s->width * (size_t)s->channels;
+    /* One column of samples kept as they are: read straight into out,
+     * without the scratch buffer and convert()'s copy. */
+    if (s->cols == 1 && unchanged(s, &s->tiles[s->grid_row]))
+        return gv_image_read(s->open[0], n, out, err);
     for (int c = 0; c < s->cols; c++) {
         const struct tile *t = &s->tiles[s->grid_row * s->cols + c];
         size_t raw_row = (size_t)t->info.width * (size_t)t->info.channels
@@ -595,15 +598,6 @@ int gv_source_read(struct gv_source *s, uint32_t rows, uint8_t *out,
                        "row %" PRIu32 " passes the last row (height %" PRIu32
                        ")", rows, s->next_row, s->height);
     size_t out_row = (size_t)s->width * (size_t)s->channels;
-    if (s->raw && rows > 0) {
-        if (gv_raw_regions_read(s->raw, 0, s->next_row, s->width, rows, out,
-                                out_row, err) != 0) {
-            s->failed = 1;
-            return -1;
-        }
-        s->next_row += rows;
-        return 0;
-    }
     if (s->kind == KIND_SYNTH) {
         for (uint32_t i = 0; i < rows; i++)
             synth_row(s, s->next_row + i, out + out_row * i);
@@ -634,14 +628,14 @@ fail:
 
 int gv_source_reads_raw(const struct gv_source *s)
 {
-    return s->raw != NULL;
+    return raw_eligible(s) && gv_image_reads_raw(s->probed);
 }
 
 struct gv_raw_regions *gv_source_raw_regions(struct gv_source *s,
                                              struct gv_error *err)
 {
     gv_error_clear(err);
-    return s->raw ? gv_image_raw_regions(s->probed, err) : NULL;
+    return raw_eligible(s) ? gv_image_raw_regions(s->probed, err) : NULL;
 }
 
 void gv_source_free(struct gv_source *s)
@@ -651,7 +645,6 @@ void gv_source_free(struct gv_source *s)
     if (s->open)
         close_grid_row(s);
     gv_image_close(s->probed);
-    gv_raw_regions_free(s->raw);
     if (s->tiles)
         for (int i = 0; i < s->cols * s->rows; i++)
             free(s->tiles[i].path);

@@ -78,16 +78,16 @@ int gv_source_read(struct gv_source *s, uint32_t rows, uint8_t *out,
 /* A reader of any rectangle of the rows gv_source_read delivers, read
  * from the input file where they lie (raw_regions.h), for a source that
  * is one uncompressed file of 8-bit samples delivered unchanged (see
- * gv_image_raw_regions; gv_source_read then reads its rows the same
- * way, not through the decoder); else NULL with err->code GV_OK, or NULL
- * with *err for GV_ENOMEM.  The reader outlives s; free it with
- * gv_raw_regions_free. */
+ * gv_image_raw_regions), asked before the first gv_source_read; else
+ * NULL with err->code GV_OK, or NULL with *err for GV_ENOMEM.  The
+ * reader outlives s; free it with gv_raw_regions_free. */
 struct gv_raw_regions;
 struct gv_raw_regions *gv_source_raw_regions(struct gv_source *s,
                                              struct gv_error *err);
 
 /* Whether gv_source_read reads the rows where they lie in the file, with
- * no decoder (gv_source_raw_regions is then not NULL): cheap to read. */
+ * no decoder (gv_image_reads_raw): cheap to read.  Before the first
+ * gv_source_read. */
 int gv_source_reads_raw(const struct gv_source *s);
 
 void gv_source_free(struct gv_source *s);

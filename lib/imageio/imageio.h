@@ -88,6 +88,10 @@ struct gv_raw_regions;
 struct gv_raw_regions *gv_image_raw_regions(struct gv_image_in *in,
                                             struct gv_error *err);
 
+/* Whether gv_image_read reads in's rows where they lie in the file, with
+ * no decoder (the file gv_image_raw_regions answers for). */
+int gv_image_reads_raw(const struct gv_image_in *in);
+
 /* Write an 8-bit image (channels 1 or 3, rows packed) to `path`, format by
  * extension (.png, .tif/.tiff, .jpg/.jpeg, .webp).  The file appears under
  * its final name only when complete, replacing any file there, and is

@@ -320,10 +320,12 @@ struct gv_raw_regions *gv_image_raw_regions(struct gv_image_in *in,
                                             struct gv_error *err)
 {
     gv_error_clear(err);
-    const char *v = getenv("GIGAVIEW_RAW_REGIONS");   /* tests */
-    if (v && !strcmp(v, "0"))
-        return NULL;
     return in->by == BY_TIFF ? gv_native_tiff_regions(in->u.tiff, err) : NULL;
+}
+
+int gv_image_reads_raw(const struct gv_image_in *in)
+{
+    return in->by == BY_TIFF && gv_native_tiff_reads_raw(in->u.tiff);
 }
 
 void gv_image_close(struct gv_image_in *in)

@@ -43,7 +43,9 @@ int gv_native_tiff_read(struct gv_native_tiff *t, uint32_t rows, void *out,
 /* The file's pixels as rectangles read where they lie (raw_regions.h),
  * for an uncompressed file of 8-bit samples whose tiles or strips lie in
  * it whole; NULL with err->code GV_OK for any other (and for a reader
- * that failed), NULL with *err for GV_ENOMEM.  The reader has its own
+ * that failed, and always with GIGAVIEW_RAW_REGIONS=0, for tests: the
+ * reader then reads every file through libtiff), NULL with *err for
+ * GV_ENOMEM.  The reader has its own
  * descriptor: it outlives t.  The samples are those gv_native_tiff_read
  * delivers. */
 struct gv_raw_regions *gv_native_tiff_regions(struct gv_native_tiff *t,
