@@ -45,6 +45,54 @@ static inline const char *test_data_dir_found(void)
     return d;
 }
 
+/* DIR/NAME in one of four static buffers, so that up to four such paths
+ * can be in use at once; fail() when it does not fit. */
+static inline const char *test_path_in(const char *dir, const char *name)
+{
+    static char buf[4][4096];
+    static int k;
+    k = (k + 1) % 4;
+    if ((size_t)snprintf(buf[k], sizeof buf[k], "%s/%s", dir, name)
+        >= sizeof buf[k])
+        fail("path too long: %s/%s", dir, name);
+    return buf[k];
+}
+
+/* Write n bytes to path (created or truncated); fail() if that fails. */
+static inline void test_write_file(const char *path, const uint8_t *p,
+                                   size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f || fwrite(p, 1, n, f) != n || fclose(f) != 0)
+        fail("%s: cannot write", path);
+}
+
+/* A field of /proc/self/status in kB ("VmHWM", "VmRSS"), or -1. */
+static inline long long test_status_kb(const char *key)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    long long v = -1;
+    size_t n = strlen(key);
+    while (f && fgets(line, sizeof line, f))
+        if (strncmp(line, key, n) == 0 && line[n] == ':')
+            v = atoll(line + n + 1);
+    if (f)
+        fclose(f);
+    return v;
+}
+
+/* Reset the peak resident size to the current one (Linux 4.0's
+ * /proc/self/clear_refs "5"); 0 when that cannot be done. */
+static inline int test_peak_reset(void)
+{
+    FILE *f = fopen("/proc/self/clear_refs", "w");
+    if (!f)
+        return 0;
+    int ok = fputs("5", f) >= 0;
+    return fclose(f) == 0 && ok;
+}
+
 /* Make $TMPDIR/PREFIX-XXXXXX (/tmp when TMPDIR is unset or empty) into
  * dir (size bytes); fail() when the name does not fit or mkdtemp fails. */
 static inline void test_tmpdir_new(char *dir, size_t size, const char *prefix)

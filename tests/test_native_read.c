@@ -50,17 +50,6 @@
 static const char *datadir;
 static char tmpdir[2048];
 
-static const char *path_in(const char *dir, const char *name)
-{
-    static char buf[4][4096];
-    static int i;
-    i = (i + 1) % 4;
-    if ((size_t)snprintf(buf[i], sizeof buf[i], "%s/%s", dir, name)
-        >= sizeof buf[i])
-        fail("path too long: %s/%s", dir, name);
-    return buf[i];
-}
-
 static int ends_with(const char *s, const char *suffix)
 {
     size_t n = strlen(s), m = strlen(suffix);
@@ -206,7 +195,7 @@ static int expect_declined(const char *name)
 
 static void compare_file(const char *dir, const char *name)
 {
-    const char *path = path_in(dir, name);
+    const char *path = test_path_in(dir, name);
     struct result m = read_file(MODULE, path, 1ull << 32);
     struct result n = read_file(NATIVE, path, 1ull << 32);
     struct result l = read_file(LOADER, path, 1ull << 32);
@@ -269,7 +258,7 @@ static void test_negative_controls(const char *dir)
 {
     const char *files[] = {"s420.jpg", "rgb16.png", "rgb16-zip.tif"};
     for (int k = 0; k < 3; k++) {
-        const char *path = path_in(dir, files[k]);
+        const char *path = test_path_in(dir, files[k]);
         struct result m = read_file(MODULE, path, 1ull << 32);
         if (k == 0)
             gv_native_jpeg_test_mode(1);
@@ -301,13 +290,6 @@ static uint8_t *slurp(const char *path, size_t *len)
     *len = fread(p, 1, 1 << 20, f);
     fclose(f);
     return p;
-}
-
-static void spill(const char *path, const uint8_t *p, size_t n)
-{
-    FILE *f = fopen(path, "wb");
-    if (!f || fwrite(p, 1, n, f) != n || fclose(f) != 0)
-        fail("%s: cannot write", path);
 }
 
 /* A damaged file must fail (or open and read) exactly as in the module:
@@ -366,14 +348,14 @@ static void test_truncated(const char *dir)
     const int cuts[] = {5, 30, 200, 500, 800, 990};
     for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
         size_t len;
-        uint8_t *p = slurp(path_in(dir, files[f]), &len);
+        uint8_t *p = slurp(test_path_in(dir, files[f]), &len);
         for (size_t c = 0; c <= sizeof cuts / sizeof cuts[0]; c++) {
             size_t n = c < sizeof cuts / sizeof cuts[0]
                            ? len * (size_t)cuts[c] / 1000 : len - 1;
             char name[64];
             snprintf(name, sizeof name, "cut-%zu-%s", n, files[f]);
-            const char *path = path_in(tmpdir, name);
-            spill(path, p, n);
+            const char *path = test_path_in(tmpdir, name);
+            test_write_file(path, p, n);
             char what[128];
             snprintf(what, sizeof what, "%s cut to %zu of %zu bytes",
                      files[f], n, len);
@@ -392,7 +374,7 @@ static void test_corrupt(const char *dir)
                            "rgb8-lzw-tiled.tif", "rgb16-zip.tif"};
     for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
         size_t len;
-        uint8_t *p = slurp(path_in(dir, files[f]), &len);
+        uint8_t *p = slurp(test_path_in(dir, files[f]), &len);
         uint64_t seed = 0x9e3779b97f4a7c15ull + f;
         for (int k = 0; k < 12; k++) {
             uint8_t *q = malloc(len);
@@ -406,8 +388,8 @@ static void test_corrupt(const char *dir)
                 q[i] ^= (uint8_t)(1 + test_rand(&seed) % 255);
             char name[64], what[128];
             snprintf(name, sizeof name, "bad-%d-%s", k, files[f]);
-            const char *path = path_in(tmpdir, name);
-            spill(path, q, len);
+            const char *path = test_path_in(tmpdir, name);
+            test_write_file(path, q, len);
             snprintf(what, sizeof what, "%s with bytes %zu..%zu flipped",
                      files[f], at, at + span - 1);
             compare_damaged(path, what);
@@ -424,7 +406,7 @@ static void test_corrupt(const char *dir)
 static void test_huge(const char *dir)
 {
     size_t len;
-    uint8_t *p = slurp(path_in(dir, "s420.jpg"), &len);
+    uint8_t *p = slurp(test_path_in(dir, "s420.jpg"), &len);
     /* SOF0: FF C0, length, precision, height, width */
     for (size_t i = 0; i + 9 < len; i++)
         if (p[i] == 0xFF && p[i + 1] == 0xC0) {
@@ -432,10 +414,10 @@ static void test_huge(const char *dir)
             p[i + 7] = 0xFF, p[i + 8] = 0x00;   /* width 65280 */
             break;
         }
-    const char *jpg = path_in(tmpdir, "huge.jpg");
-    spill(jpg, p, len);
+    const char *jpg = test_path_in(tmpdir, "huge.jpg");
+    test_write_file(jpg, p, len);
     free(p);
-    p = slurp(path_in(dir, "rgb8.png"), &len);
+    p = slurp(test_path_in(dir, "rgb8.png"), &len);
     /* IHDR's width and height at 16..23; its CRC at 29..32 */
     const uint8_t wh[8] = {0, 0x0F, 0x42, 0x40, 0, 0x0F, 0x42, 0x40};
     memcpy(p + 16, wh, 8);
@@ -448,8 +430,8 @@ static void test_huge(const char *dir)
     crc ^= 0xFFFFFFFFu;
     p[29] = (uint8_t)(crc >> 24), p[30] = (uint8_t)(crc >> 16);
     p[31] = (uint8_t)(crc >> 8), p[32] = (uint8_t)crc;
-    const char *png = path_in(tmpdir, "huge.png");
-    spill(png, p, len);
+    const char *png = test_path_in(tmpdir, "huge.png");
+    test_write_file(png, p, len);
     free(p);
     const char *files[2] = {jpg, png};
     for (int k = 0; k < 2; k++) {
@@ -479,7 +461,7 @@ static const char *jpeg_claiming(const char *dir, const char *name,
                                  const char *out, unsigned w, unsigned h)
 {
     size_t len;
-    uint8_t *p = slurp(path_in(dir, name), &len);
+    uint8_t *p = slurp(test_path_in(dir, name), &len);
     size_t i = 2;
     while (i + 9 < len && p[i] == 0xFF && !(p[i + 1] >= 0xC0
                                             && p[i + 1] <= 0xC2))
@@ -488,36 +470,10 @@ static const char *jpeg_claiming(const char *dir, const char *name,
         fail("%s: no frame header", name);
     p[i + 5] = (uint8_t)(h >> 8), p[i + 6] = (uint8_t)h;
     p[i + 7] = (uint8_t)(w >> 8), p[i + 8] = (uint8_t)w;
-    const char *path = path_in(tmpdir, out);
-    spill(path, p, len);
+    const char *path = test_path_in(tmpdir, out);
+    test_write_file(path, p, len);
     free(p);
     return path;
-}
-
-/* A field of /proc/self/status in kB ("VmHWM", "VmRSS"), or -1. */
-static long long status_kb(const char *key)
-{
-    FILE *f = fopen("/proc/self/status", "r");
-    char line[256];
-    long long v = -1;
-    size_t n = strlen(key);
-    while (f && fgets(line, sizeof line, f))
-        if (strncmp(line, key, n) == 0 && line[n] == ':')
-            v = atoll(line + n + 1);
-    if (f)
-        fclose(f);
-    return v;
-}
-
-/* Reset the peak resident size to the current one (Linux 4.0's
- * /proc/self/clear_refs "5"); 0 when that cannot be done. */
-static int peak_reset(void)
-{
-    FILE *f = fopen("/proc/self/clear_refs", "w");
-    if (!f)
-        return 0;
-    int ok = fputs("5", f) >= 0;
-    return fclose(f) == 0 && ok;
 }
 
 /* What reading `path` one way gave, and by how many MiB the resident
@@ -526,9 +482,9 @@ static struct result read_measured(enum how how, const char *path,
                                    uint64_t max_pixels, long long *peak_mib)
 {
     *peak_mib = -1;
-    long long before = peak_reset() ? status_kb("VmRSS") : -1;
+    long long before = test_peak_reset() ? test_status_kb("VmRSS") : -1;
     struct result r = read_file(how, path, max_pixels);
-    long long hwm = status_kb("VmHWM");
+    long long hwm = test_status_kb("VmHWM");
     if (before >= 0 && hwm >= 0)
         *peak_mib = (hwm - before) / 1024;
     return r;
@@ -572,7 +528,7 @@ static void expect_read_at_limit(const char *dir, const char *name, unsigned byt
 {
     decoder_bytes = bytes;
     for (int how = MODULE; how <= LOADER; how++) {
-        struct result r = read_file((enum how)how, path_in(dir, name), 1ull << 32);
+        struct result r = read_file((enum how)how, test_path_in(dir, name), 1ull << 32);
         check(r.opened && r.read_ok, "%s, %s: read with a limit of exactly its %u bytes "
               "(%s%s)", name, how_name[how], bytes, r.open_err.text, r.read_err.text);
         result_free(&r);
@@ -587,7 +543,7 @@ static void expect_read_in_one_byte(const char *dir, const char *const names[3])
     decoder_bytes = 1;
     for (int k = 0; k < 3; k++)
         for (int how = MODULE; how <= LOADER; how++) {
-            struct result r = read_file((enum how)how, path_in(dir, names[k]), 1ull << 32);
+            struct result r = read_file((enum how)how, test_path_in(dir, names[k]), 1ull << 32);
             check(r.opened && r.read_ok, "%s, %s: read with a decoder "
                   "memory limit of 1 byte (%s%s)", names[k], how_name[how],
                   r.open_err.text, r.read_err.text);
@@ -637,8 +593,8 @@ static void test_decoder_memory(const char *dir)
         memcpy(q, p, 2);
         q[2] = 0x00;
         memcpy(q + 3, p + 2, len - 2);
-        const char *path = path_in(tmpdir, "stray-byte.jpg");
-        spill(path, q, len + 1);
+        const char *path = test_path_in(tmpdir, "stray-byte.jpg");
+        test_write_file(path, q, len + 1);
         free(p);
         free(q);
         unlink(src);
@@ -674,7 +630,7 @@ static void test_decoder_memory(const char *dir)
      * and of Cr).  Read at exactly that limit, refused one byte under;
      * a sequential single-scan file needs none. */
     expect_read_at_limit(dir, "progressive.jpg", 9216);
-    const char *prog = path_in(dir, "progressive.jpg");
+    const char *prog = test_path_in(dir, "progressive.jpg");
     decoder_bytes = 9215;
     expect_refused(prog, all, GV_ELIMIT, "imageio: PATH: a progressive JPEG "
                    "of 61 x 45 needs about 9.0 KiB of decoder memory, more "
@@ -724,8 +680,8 @@ static const char *psd_with_thumbnail(const char *jpg, const char *out)
     memcpy(q + 28, j, n);
     /* then no layers (4 zero bytes), raw image data (2 zero bytes), and
      * 48 zero bytes of pixels */
-    const char *path = path_in(tmpdir, out);
-    spill(path, p, size);
+    const char *path = test_path_in(tmpdir, out);
+    test_write_file(path, p, size);
     free(p);
     free(j);
     return path;
@@ -739,7 +695,7 @@ static const char *png_claiming(const char *dir, const char *name,
                                 int depth, int color, int interlaced)
 {
     size_t len;
-    uint8_t *p = slurp(path_in(dir, name), &len);
+    uint8_t *p = slurp(test_path_in(dir, name), &len);
     if (len < 33 || memcmp(p + 12, "IHDR", 4) != 0)
         fail("%s: no IHDR first", name);
     const uint8_t wh[8] = {w >> 24, w >> 16, w >> 8, w, h >> 24, h >> 16,
@@ -751,8 +707,8 @@ static const char *png_claiming(const char *dir, const char *name,
     uint32_t crc = gv_crc32(0, p + 12, 17);
     const uint8_t c[4] = {crc >> 24, crc >> 16, crc >> 8, crc};
     memcpy(p + 29, c, 4);
-    const char *path = path_in(tmpdir, out);
-    spill(path, p, len);
+    const char *path = test_path_in(tmpdir, out);
+    test_write_file(path, p, len);
     free(p);
     return path;
 }
@@ -820,7 +776,7 @@ static void test_png_decoder_memory(const char *dir)
      * bytes.  Read at exactly that limit, refused one byte under. */
     const unsigned need = 23 * (37 * 3 + (unsigned)sizeof(void *));
     expect_read_at_limit(dir, "rgb8-interlaced.png", need);
-    const char *il = path_in(dir, "rgb8-interlaced.png");
+    const char *il = test_path_in(dir, "rgb8-interlaced.png");
     decoder_bytes = need - 1;
     expect_refused(il, all, GV_ELIMIT, "imageio: PATH: an interlaced PNG of "
                    "37 x 23 needs about 2.7 KiB of decoder memory, more than "
@@ -847,7 +803,7 @@ static void test_psd_thumbnail(const char *dir)
                    "limit of 1.0 GiB (--max-decoder-memory)",
                    "PSD whose thumbnail claims 30000 x 30000");
     unlink(bad);
-    const char *good = psd_with_thumbnail(path_in(dir, "progressive.jpg"),
+    const char *good = psd_with_thumbnail(test_path_in(dir, "progressive.jpg"),
                                           "thumb.psd");
     struct result r = read_file(LOADER, good, 1ull << 32);
     check(r.opened && r.read_ok && r.info.width == 4 && r.info.height == 4,
@@ -904,7 +860,7 @@ static void tiff_set_long(uint8_t *e, uint32_t v)
 static void test_tiff_hostile(const char *dir)
 {
     size_t len;
-    uint8_t *p = slurp(path_in(dir, "rgb8-lzw-tiled.tif"), &len);
+    uint8_t *p = slurp(test_path_in(dir, "rgb8-lzw-tiled.tif"), &len);
     uint8_t *q = malloc(len);
     /* width and height 1000000 */
     memcpy(q, p, len);
@@ -913,8 +869,8 @@ static void test_tiff_hostile(const char *dir)
         fail("rgb8-lzw-tiled.tif: no width or height entry");
     tiff_set_long(ew, 1000000);
     tiff_set_long(eh, 1000000);
-    const char *huge = path_in(tmpdir, "huge.tif");
-    spill(huge, q, len);
+    const char *huge = test_path_in(tmpdir, "huge.tif");
+    test_write_file(huge, q, len);
     struct result m = read_file(MODULE, huge, 1u << 20);
     struct result n = read_file(NATIVE, huge, 1u << 20);
     struct result l = read_file(LOADER, huge, 1u << 20);
@@ -934,7 +890,7 @@ static void test_tiff_hostile(const char *dir)
      * without complaint, refused by the pixel cap, with the module's code
      * and words. */
     free(p);
-    p = slurp(path_in(dir, "gray8-none.tif"), &len);
+    p = slurp(test_path_in(dir, "gray8-none.tif"), &len);
     q = realloc(q, len);
     memcpy(q, p, len);
     ew = tiff_entry(q, len, 256), eh = tiff_entry(q, len, 257);
@@ -944,7 +900,7 @@ static void test_tiff_hostile(const char *dir)
     tiff_set_long(ew, 100000);
     tiff_set_long(eh, 100000);
     tiff_set_long(er, 0xFFFFFFFFu);
-    spill(huge, q, len);
+    test_write_file(huge, q, len);
     m = read_file(MODULE, huge, 1u << 20);
     n = read_file(NATIVE, huge, 1u << 20);
     char want[4200];
@@ -962,7 +918,7 @@ static void test_tiff_hostile(const char *dir)
     result_free(&n);
     unlink(huge);
     free(p);
-    p = slurp(path_in(dir, "rgb8-lzw-tiled.tif"), &len);
+    p = slurp(test_path_in(dir, "rgb8-lzw-tiled.tif"), &len);
     q = realloc(q, len);
     /* tiles of 65536 x 65536, and of 65536 x 512 (a row of tiles would
      * take 96 MiB, thousands of times the rows it covers) */
@@ -974,8 +930,8 @@ static void test_tiff_hostile(const char *dir)
             fail("rgb8-lzw-tiled.tif: no tile size entries");
         tiff_set_long(tw, tiles[k][0]);
         tiff_set_long(th, tiles[k][1]);
-        const char *path = path_in(tmpdir, "bigtile.tif");
-        spill(path, q, len);
+        const char *path = test_path_in(tmpdir, "bigtile.tif");
+        test_write_file(path, q, len);
         n = read_file(NATIVE, path, 1ull << 32);
         check(!n.opened && n.open_err.code == GV_OK,
               "TIFF with %ux%u tiles: declined by the native reader",
@@ -1003,8 +959,8 @@ static void test_tiff_hostile(const char *dir)
             fail("rgb8-lzw-tiled.tif: tile offsets not where expected");
         q[slot] = 0xF0, q[slot + 1] = 0xFF, q[slot + 2] = 0xFF;
         q[slot + 3] = 0x7F;
-        const char *path = path_in(tmpdir, "faroff.tif");
-        spill(path, q, len);
+        const char *path = test_path_in(tmpdir, "faroff.tif");
+        test_write_file(path, q, len);
         n = read_file(NATIVE, path, 1ull << 32);
         check(!n.opened ? n.open_err.code == GV_OK
                         : !n.read_ok && n.read_err.code == GV_ECORRUPT,
@@ -1025,7 +981,7 @@ static void test_misuse(const char *dir)
 {
     const char *files[] = {"s444.jpg", "gray16.png", "rgb8-lzw-tiled.tif"};
     for (int k = 0; k < 3; k++) {
-        const char *path = path_in(dir, files[k]);
+        const char *path = test_path_in(dir, files[k]);
         char got[2][2][400];
         int rc[2][2];
         for (int how = 0; how < 2; how++) {
@@ -1061,7 +1017,7 @@ static void test_fifo(void)
 {
     const char *names[] = {"fifo.jpg", "fifo.png", "fifo.tif"};
     for (int k = 0; k < 3; k++) {
-        const char *path = path_in(tmpdir, names[k]);
+        const char *path = test_path_in(tmpdir, names[k]);
         if (mkfifo(path, 0600) != 0)
             fail("mkfifo %s: %s", path, strerror(errno));
         struct result l = read_file(LOADER, path, 1u << 20);
@@ -1088,32 +1044,32 @@ static void test_without_module(const char *dir)
         setenv("GV_OIIO_MODULE", "/nonexistent/gigaview-oiio.so", 1);
         unsetenv("GIGAVIEW_NATIVE_READERS");
         int bits = 0;
-        struct result r = read_file(LOADER, path_in(dir, "s420.jpg"), 1u << 20);
+        struct result r = read_file(LOADER, test_path_in(dir, "s420.jpg"), 1u << 20);
         bits |= r.opened && r.read_ok ? 1 : 0;
         result_free(&r);
-        r = read_file(LOADER, path_in(dir, "rgba16.png"), 1u << 20);
+        r = read_file(LOADER, test_path_in(dir, "rgba16.png"), 1u << 20);
         bits |= r.opened && r.read_ok ? 2 : 0;
         result_free(&r);
-        r = read_file(LOADER, path_in(dir, "cmyk.jpg"), 1u << 20);
+        r = read_file(LOADER, test_path_in(dir, "cmyk.jpg"), 1u << 20);
         bits |= !r.opened && strstr(r.open_err.text, "cannot load the "
                                     "OpenImageIO module") ? 4 : 0;
         result_free(&r);
-        r = read_file(LOADER, path_in(dir, "rgb8-interlaced.png"), 1u << 20);
+        r = read_file(LOADER, test_path_in(dir, "rgb8-interlaced.png"), 1u << 20);
         bits |= r.opened && r.read_ok ? 8 : 0;
         result_free(&r);
-        r = read_file(LOADER, path_in(dir, "rgb16-be-lzw-tiled.tif"), 1u << 20);
+        r = read_file(LOADER, test_path_in(dir, "rgb16-be-lzw-tiled.tif"), 1u << 20);
         bits |= r.opened && r.read_ok ? 32 : 0;
         result_free(&r);
-        r = read_file(LOADER, path_in(dir, "palette8-declined.tif"), 1u << 20);
+        r = read_file(LOADER, test_path_in(dir, "palette8-declined.tif"), 1u << 20);
         bits |= !r.opened && strstr(r.open_err.text, "cannot load the "
                                     "OpenImageIO module") ? 64 : 0;
         result_free(&r);
         /* a damaged header: IHDR's CRC */
         size_t len;
-        uint8_t *p = slurp(path_in(dir, "rgb8.png"), &len);
+        uint8_t *p = slurp(test_path_in(dir, "rgb8.png"), &len);
         p[30] ^= 0x55;
-        const char *bad = path_in(tmpdir, "bad-ihdr.png");
-        spill(bad, p, len);
+        const char *bad = test_path_in(tmpdir, "bad-ihdr.png");
+        test_write_file(bad, p, len);
         free(p);
         r = read_file(LOADER, bad, 1u << 20);
         bits |= !r.opened && strstr(r.open_err.text, "cannot load the "
@@ -1159,7 +1115,7 @@ int main(void)
      * as one of OpenImageIO's libraries, as in `gigaview encode`: dlopen
      * of a library another dlopen loaded as a dependency leaves glibc
      * 2.36 with an l_initfini block valgrind calls definitely lost. */
-    struct result first = read_file(NATIVE, path_in(native, "gray8-none.tif"),
+    struct result first = read_file(NATIVE, test_path_in(native, "gray8-none.tif"),
                                     1u << 20);
     check(first.opened && first.read_ok, "a TIFF read natively before the "
           "module is loaded");

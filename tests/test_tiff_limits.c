@@ -42,17 +42,6 @@ static const char *const how_name[] = {"module", "loader"};
 
 static char tmpdir[4096];
 
-static const char *path_in(const char *dir, const char *name)
-{
-    static char buf[4][4096];
-    static int k;
-    k = (k + 1) % 4;
-    if ((size_t)snprintf(buf[k], sizeof buf[k], "%s/%s", dir, name)
-        >= sizeof buf[k])
-        fail("path too long: %s/%s", dir, name);
-    return buf[k];
-}
-
 static uint8_t *slurp(const char *path, size_t *len)
 {
     FILE *f = fopen(path, "rb");
@@ -62,13 +51,6 @@ static uint8_t *slurp(const char *path, size_t *len)
     *len = fread(p, 1, 1 << 16, f);
     fclose(f);
     return p;
-}
-
-static void spill(const char *path, const uint8_t *p, size_t n)
-{
-    FILE *f = fopen(path, "wb");
-    if (!f || fwrite(p, 1, n, f) != n || fclose(f) != 0)
-        fail("%s: cannot write", path);
 }
 
 /* Open `path` one way under the limits, and read every row, one at a
@@ -118,32 +100,6 @@ static const char *with_path(const char *msg, const char *path)
     return out;
 }
 
-/* A field of /proc/self/status in kB ("VmHWM", "VmRSS"), or -1. */
-static long long status_kb(const char *key)
-{
-    FILE *f = fopen("/proc/self/status", "r");
-    char line[256];
-    long long v = -1;
-    size_t n = strlen(key);
-    while (f && fgets(line, sizeof line, f))
-        if (strncmp(line, key, n) == 0 && line[n] == ':')
-            v = atoll(line + n + 1);
-    if (f)
-        fclose(f);
-    return v;
-}
-
-/* Reset the peak resident size to the current one (Linux 4.0's
- * /proc/self/clear_refs "5"); 0 when that cannot be done. */
-static int peak_reset(void)
-{
-    FILE *f = fopen("/proc/self/clear_refs", "w");
-    if (!f)
-        return 0;
-    int ok = fputs("5", f) >= 0;
-    return fclose(f) == 0 && ok;
-}
-
 /* `path` refused both ways with GV_ELIMIT and exactly `msg`, while the
  * resident size rises by less than 48 MiB (the hostile files here took
  * 1.4 to 8.9 GB unprotected). */
@@ -153,9 +109,9 @@ static void expect_refused(const char *path, uint64_t max_pixels,
 {
     for (int how = MODULE; how <= LOADER; how++) {
         struct gv_error e;
-        long long before = peak_reset() ? status_kb("VmRSS") : -1;
+        long long before = test_peak_reset() ? test_status_kb("VmRSS") : -1;
         int rc = read_all((enum how)how, path, max_pixels, decoder_bytes, &e);
-        long long hwm = status_kb("VmHWM");
+        long long hwm = test_status_kb("VmHWM");
         const char *want = with_path(msg, path);
         check(rc < 0 && e.code == GV_ELIMIT && strcmp(e.text, want) == 0,
               "%s, %s: refused (got \"%s\")", what, how_name[how], e.text);
@@ -171,7 +127,7 @@ static void expect_refused(const char *path, uint64_t max_pixels,
 static void expect_exact(const char *dir, const char *name, uint64_t need,
                          const char *msg)
 {
-    const char *path = path_in(dir, name);
+    const char *path = test_path_in(dir, name);
     for (int how = MODULE; how <= LOADER; how++) {
         struct gv_error e;
         int rc = read_all((enum how)how, path, 1ull << 32, need, &e);
@@ -237,9 +193,9 @@ static void test_exact(const char *limits, const char *native)
  * that the asking shows. */
 static void test_native_declines(const char *native)
 {
-    const char *path = path_in(native, "rgb8-be-lzw-pred.tif");
+    const char *path = test_path_in(native, "rgb8-be-lzw-pred.tif");
     char raw[4200];
-    snprintf(raw, sizeof raw, "%s", path_in(native, "rgb8-none-strips.tif"));
+    snprintf(raw, sizeof raw, "%s", test_path_in(native, "rgb8-none-strips.tif"));
     pid_t pid = fork();
     if (pid < 0)
         fail("fork: %s", strerror(errno));
@@ -327,22 +283,22 @@ static void test_hostile(const char *limits)
          "of 1.0 GiB (--max-decoder-memory)"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++)
-        expect_refused(path_in(limits, cases[i].name), 1ull << 40, 0,
+        expect_refused(test_path_in(limits, cases[i].name), 1ull << 40, 0,
                        cases[i].msg, cases[i].name);
-    const char *huge = path_in(limits, "jpeg-progressive-claims-30000.tif");
+    const char *huge = test_path_in(limits, "jpeg-progressive-claims-30000.tif");
     expect_refused(huge, 1000000, 0, "imageio: PATH: image of 30000x30000 "
                    "pixels exceeds the limit of 1000000 pixels",
                    "30000 x 30000 under max_pixels 10^6");
     /* cuts of the hostile RGB one, every 5th byte through its directory
      * and its JPEG's header, every 101st after: none opens, no crash */
     size_t len;
-    uint8_t *p = slurp(path_in(limits,
+    uint8_t *p = slurp(test_path_in(limits,
                                "jpeg-rgb-progressive-claims-15000.tif"),
                        &len);
-    const char *cut = path_in(tmpdir, "cut.tif");
+    const char *cut = test_path_in(tmpdir, "cut.tif");
     int opened = 0, quiet = 0, tries = 0;
     for (size_t n = 0; n < len; n += n < 700 ? 5 : 101, tries++) {
-        spill(cut, p, n);
+        test_write_file(cut, p, n);
         struct gv_error e;
         if (read_all(LOADER, cut, 1ull << 40, 0, &e) == 0)
             opened++;
