@@ -242,6 +242,28 @@ static void on_output(j_common_ptr cinfo)
     (void)cinfo;
 }
 
+/* Errors to jerr (on_error: a longjmp to jerr->jump, which the caller
+ * sets), warnings and messages kept, nothing printed; returns the
+ * manager for cinfo.err. */
+static struct jpeg_error_mgr *quiet_errors(struct jerr *jerr)
+{
+    struct jpeg_error_mgr *m = jpeg_std_error(&jerr->pub);
+    m->error_exit = on_error;
+    m->emit_message = on_message;
+    m->output_message = on_output;
+    return m;
+}
+
+/* Free a decompressor of our own (calloc'ed), created or not. */
+static void free_decompress(struct jpeg_decompress_struct *c)
+{
+    if (!c)
+        return;
+    if (c->mem)
+        jpeg_destroy_decompress(c);
+    free(c);
+}
+
 void gv_native_jpeg_close(struct gv_native_jpeg *j)
 {
     if (!j)
@@ -289,10 +311,7 @@ struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
         || fseek(j->f, 0, SEEK_SET) != 0)
         goto out;
 
-    j->cinfo.err = jpeg_std_error(&j->jerr.pub);
-    j->jerr.pub.error_exit = on_error;
-    j->jerr.pub.emit_message = on_message;
-    j->jerr.pub.output_message = on_output;
+    j->cinfo.err = quiet_errors(&j->jerr);
     if (setjmp(j->jerr.jump))
         goto jumped;
     jpeg_create_decompress(&j->cinfo);
@@ -361,10 +380,7 @@ int gv_native_jpeg_check_embedded(FILE *f, long at, const char *path,
         rc = gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
         goto out;
     }
-    c->err = jpeg_std_error(&jerr->pub);
-    jerr->pub.error_exit = on_error;
-    jerr->pub.emit_message = on_message;
-    jerr->pub.output_message = on_output;
+    c->err = quiet_errors(jerr);
     if (setjmp(jerr->jump))
         goto out;   /* no header: OpenImageIO's reader fails on it too */
     jpeg_create_decompress(c);
@@ -387,11 +403,7 @@ int gv_native_jpeg_check_embedded(FILE *f, long at, const char *path,
                      need_s, max_s);
     }
 out:
-    if (c) {
-        if (c->mem)
-            jpeg_destroy_decompress(c);
-        free(c);
-    }
+    free_decompress(c);
     free(jerr);
     return rc;
 }
@@ -473,10 +485,7 @@ int gv_native_jpeg_stream_need(FILE *f, uint64_t tables_at,
     volatile int rc = -1;   /* volatile: read after a longjmp */
     if (!c || !jerr || !src)
         goto out;
-    c->err = jpeg_std_error(&jerr->pub);
-    jerr->pub.error_exit = on_error;
-    jerr->pub.emit_message = on_message;
-    jerr->pub.output_message = on_output;
+    c->err = quiet_errors(jerr);
     if (setjmp(jerr->jump))
         goto out;
     jpeg_create_decompress(c);
@@ -500,11 +509,7 @@ int gv_native_jpeg_stream_need(FILE *f, uint64_t tables_at,
     need->coef_bytes = need->multi_scan ? coef_bytes(c) : 0;
     rc = 0;
 out:
-    if (c) {
-        if (c->mem)
-            jpeg_destroy_decompress(c);
-        free(c);
-    }
+    free_decompress(c);
     free(jerr);
     free(src);
     return rc;
@@ -521,10 +526,7 @@ int gv_native_jpeg_check(const char *path, const struct gv_image_limits *lim,
     j->f = gv_native_open_regular(path);
     if (!j->f)
         goto out;   /* the module says why */
-    j->cinfo.err = jpeg_std_error(&j->jerr.pub);
-    j->jerr.pub.error_exit = on_error;
-    j->jerr.pub.emit_message = on_message;
-    j->jerr.pub.output_message = on_output;
+    j->cinfo.err = quiet_errors(&j->jerr);
     if (setjmp(j->jerr.jump))
         goto out;   /* no header: the module says why */
     jpeg_create_decompress(&j->cinfo);
