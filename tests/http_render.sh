@@ -38,17 +38,6 @@ output_cache_bytes = $1
 EOF2
 }
 
-# no_sanitizer_report: the daemon's log has no ASan/UBSan/LSan report (the
-# report is shown when there is one).
-no_sanitizer_report() {
-    pat='==[0-9]+==ERROR: [A-Za-z]+Sanitizer|: runtime error: '
-    if grep -Eq "$pat" "$T/daemon.log"; then
-        not_ok "no sanitizer report in the log" "$(grep -E -A 30 "$pat" "$T/daemon.log" | head -n 80)"
-    else
-        ok "no sanitizer report in the log"
-    fi
-}
-
 # metric NAME: the value of sample NAME in a fresh /metrics.
 metric() {
     curl -sS --max-time 30 "$(url /metrics)" | awk -v n="$1" '$1 == n { print $2 }'

@@ -61,6 +61,20 @@ stop_daemon() {
     DPID=
 }
 
+# no_sanitizer_report: the daemon's log has no ASan/UBSan/LSan report
+# (its first one is shown when there is one).  The reports' own first
+# lines: the filter workers of a sanitizer build log "built with
+# AddressSanitizer" as information.
+no_sanitizer_report() {
+    san='==[0-9]+==ERROR: [A-Za-z]+Sanitizer|: runtime error: '
+    if grep -Eq "$san" "$T/daemon.log"; then
+        not_ok "no sanitizer or UBSan report in the log" \
+            "$(grep -E -m 1 -A 40 "$san" "$T/daemon.log")"
+    else
+        ok "no sanitizer or UBSan report in the log"
+    fi
+}
+
 req() {
     code=$(curl -sS --path-as-is -o "$T/b" -D "$T/h" -w '%{http_code}' \
         --max-time 30 "$@" 2>"$T/curl.err") || code=000
