@@ -126,9 +126,10 @@ int main(void)
     uint16_t *idx = malloc(GV_NBLOCKS * sizeof *idx);
     struct gv_error err;
     /* The paths this CPU has, widest first, down to the portable one. */
-    static const char *path_name[3] = {"portable", "AVX2", "AVX-512BW"};
-    int paths[3], npaths = 0;
-    for (int level = 2; level >= 0; level--)
+    static const char *path_name[4] = {"portable", "AVX2", "AVX-512BW",
+                                       "AVX-512 VBMI"};
+    int paths[4], npaths = 0;
+    for (int level = 3; level >= 0; level--)
         if (gv_predict_simd(level) == level)
             paths[npaths++] = level;
     printf("# paths on this CPU:");
@@ -164,7 +165,7 @@ int main(void)
                 check(bad == 0, "200 rows in random order, %d channel(s), %s parent, "
                       "quadrant (%d,%d): %d samples differ", C, kind_name[kind],
                       qx, qy, bad);
-                gv_predict_simd(2);
+                gv_predict_simd(3);
             }
         }
 
@@ -199,7 +200,7 @@ int main(void)
                   entropy ? "entropy-coded" : "fixed", qx, qy,
                   path_name[paths[i]], rc == 0 ? count_diff(got, want, n) : -1);
         }
-        gv_predict_simd(2);
+        gv_predict_simd(3);
     }
     check(layouts[0] > 0 && layouts[1] > 0, "both layouts tested (%d fixed, %d "
           "entropy-coded)", layouts[0], layouts[1]);

@@ -18,15 +18,21 @@
 #include "codec/tile_layout.h"
 
 #define GV_PREDICT_RING 8   /* filtered parent rows kept (a child row needs 4) */
+#define GV_PREDICT_PAIR_ROW (50 * 64)   /* two rows' sums interleaved, padded */
 
 /* The state of one tile's prediction: which parent quadrant it reads, and
  * the horizontal sums of the parent rows in use (a ring of rows, tagged
- * with their row number).  About 25 KiB; put it on the stack. */
+ * with their row number); on the widest SIMD path also pairs of
+ * successive rows' sums interleaved for the vertical multiply-adds (a
+ * ring tagged with the pair's first tap).  About 76 KiB; put it on the
+ * stack. */
 struct gv_predictor {
     const uint8_t *parent;
     int channels, qx, qy;
     int tag[GV_PREDICT_RING];
+    int pair_tag[GV_PREDICT_RING];
     int16_t ring[GV_PREDICT_RING][GV_TILE * 3];
+    _Alignas(64) int16_t pair[GV_PREDICT_RING][GV_PREDICT_PAIR_ROW];
 };
 
 /* Start predicting from quadrant (qx,qy) in {0,1}^2 of the decoded
@@ -48,7 +54,9 @@ void gv_add_residual_row(uint8_t *row, const int8_t *book,
                          const uint16_t *ids, int channels, int half);
 
 /* For tests and benchmarks: the widest SIMD the run-time choice may use,
- * 0 (the portable C loops), 1 (AVX2) or 2 (AVX-512BW, the default).  Not
+ * 0 (the portable C loops), 1 (AVX2), 2 (AVX-512BW) or 3 (AVX-512BW with
+ * VBMI: the horizontal filter by byte permutes and the vertical one on
+ * interleaved pairs of rows; the default).  Not
  * thread-safe: set it before decoding.  Returns the level now in use on
  * this CPU (at most the one asked for). */
 int gv_predict_simd(int level);
