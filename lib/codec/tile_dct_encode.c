@@ -19,8 +19,10 @@
  * steps follow at the ratios that equalize the slopes of the YCoCg-R
  * inverse (a unit of error in Y reaches three channels, one in Co half
  * of two, one in Cg a quarter of three: weights 3, 1/2, 3/4).  The best
- * candidate is written and decoded by gv_dct_decode, whose output is the
- * reconstruction and whose error is exact.
+ * candidate's blocks are then cut short where their last values cost
+ * more bits than the error they remove (truncate_tails), and it is
+ * written and rebuilt as gv_dct_decode would decode it, whose error is
+ * exact.
  *
  * Speed (bench/README.md, 2026-11-26 later): a candidate is quantized and
  * its symbols counted in one pass, without copying; the transform and the
@@ -793,6 +795,7 @@ static void chroma_steps(int s0, int channels, int *steps)
 }
 
 static pthread_once_t tables_once = PTHREAD_ONCE_INIT;
+static int rdo_tails = 1;   /* GIGAVIEW_RDO_TAILS=0: off (benchmarks) */
 
 static void init_tables(void)
 {
@@ -804,6 +807,8 @@ static void init_tables(void)
         quantize_count = quantize_count_avx2;
     }
 #endif
+    const char *rt = getenv("GIGAVIEW_RDO_TAILS");
+    rdo_tails = !(rt && !strcmp(rt, "0"));
     init_kt();
     init_tc();
     init_log2();
@@ -828,6 +833,137 @@ static double try_step(const struct gv_dct_workspace *ws,
     double err = quantize_count(ws, cd, channels, steps);
     size_t mb = build_models(&cd->md, mask);
     return err + lambda * 8.0 * estimate_bytes(&cd->md, mb);
+}
+
+/* The bytes of the stored models of a mask. */
+static size_t mask_model_bytes(uint32_t mask)
+{
+    size_t bytes = 0;
+    for (int m = 0; m < GV_DCT_MODELS; m++)
+        if (mask >> m & 1)
+            bytes += (size_t)gv_dct_model_symbols(m);
+    return bytes;
+}
+
+/* Count the symbols of cd's q and eob into cd->md (as quantize_count
+ * does, from the values instead of the coefficients). */
+static void count_symbols(struct candidate *cd, int channels)
+{
+    struct models *md = &cd->md;
+    memset(md->count, 0, sizeof md->count);
+    md->uniform = 0;
+    for (int by = 0; by < GV_DCT_BLOCKS; by++) {
+#define COUNT(m, s_)                                                          \
+    do {                                                                      \
+        if ((m) < 0)                                                          \
+            md->uniform++;                                                    \
+        else                                                                  \
+            md->count[m][s_]++;                                               \
+    } while (0)
+        WALK_ROW(cd, channels, by, COUNT);
+#undef COUNT
+    }
+}
+
+/* Bits of symbol s in model m as the candidate's models code it; a symbol
+ * the models do not have yet is priced as one of frequency 1/2 in 256. */
+static inline double symbol_bits(const struct models *md, int m, int s)
+{
+    const uint32_t f = md->total[m] ? md->freq[m][s] : 0;
+    return f ? log2_table[f] : 9.0;
+}
+
+/*
+ * Rate-distortion truncation of each block's coded coefficients (the
+ * encoder side of RDOQ, as in x264's and HM's "trellis"-lite): a block's
+ * last nonzero values often cost more bits (the zero tokens before them,
+ * the value, the longer count) than the error they remove.  For every
+ * block, channel by channel in stream order, the count n' is chosen
+ * among n and each shorter count that ends after a nonzero value of
+ * magnitude 1 (or is 0), at most three values back, minimizing the added
+ * squared error (transform domain, weighted as quantize_count weighs it)
+ * plus lambda times the bits, priced by the candidate's models with the
+ * contexts of the blocks already decided.  The symbols are then counted
+ * again and the models rebuilt; if the estimated J did not fall, the
+ * counts stay as they were.  Fewer coded coefficients also mean fewer
+ * rANS steps for every decoder.  Plain C on every CPU (the same doubles
+ * in the same order), so the stores do not depend on the path.  Returns
+ * the (new) model mask in *mask.
+ */
+static void truncate_tails(const struct gv_dct_workspace *ws,
+                           struct candidate *cd, int channels,
+                           const int *steps, double lambda, uint32_t *mask)
+{
+    struct models *md = &cd->md;
+    static _Thread_local uint8_t saved[3][NB];
+    memcpy(saved, cd->eob, sizeof saved);
+    const double j_old = lambda * 8.0 * estimate_bytes(md, mask_model_bytes(*mask));
+    double added = 0, added_at = 0;
+    for (int c = 0; c < channels; c++) {
+        const double s = (double)steps[c];
+        const double w = (channels == 1 ? 1.0 : channel_weight[c]) / 64.0;
+        const int cc = c > 0;
+        const int eob_model = 3 * cc, tok_model = GV_DCT_EOB_MODELS + 12 * cc;
+        for (int by = 0; by < GV_DCT_BLOCKS; by++) {
+            int pe = 0, dcp = 0;
+            for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
+                const int b = by * GV_DCT_BLOCKS + bx, n = cd->eob[c][b];
+                if (!n) {
+                    pe = dcp = 0;
+                    continue;
+                }
+                const int16_t *q = cd->q[c][b];
+                const float *x = ws->x[c][b];
+                /* From the end: the bits of the tail's tokens and the
+                 * error its values remove, J(n') - J(n) at each n' that
+                 * ends on a nonzero value (or is 0).  The scan stops at
+                 * the third nonzero value or the first of magnitude 2 or
+                 * more, whose removal does not pay. */
+                const double eob_n = symbol_bits(md, eob_model + pe, n);
+                double tail_bits = 0, tail_err = 0, best = 0;
+                int best_n = n, values = 0;
+                for (int k = n - 1; k >= 0; k--) {
+                    const int y = tc[q[k] + 2048], t = y & 15;
+                    const int pk = k ? tc[q[k - 1] + 2048] >> 4 : dcp;
+                    tail_bits += symbol_bits(md, tok_model + gv_dct_band_model[k] + pk, t);
+                    if (t == GV_DCT_ESCAPE)
+                        tail_bits += 12.0;
+                    if (q[k]) {
+                        if (abs(q[k]) > 1 || ++values > 3)
+                            break;
+                        const double xa = fabs((double)x[k]), r = xa - s;
+                        tail_err += (xa * xa - r * r) * w;
+                    }
+                    if (k > 0 && !q[k - 1])
+                        continue;
+                    const double j = tail_err + lambda * (symbol_bits(md, eob_model + pe, k) -
+                                                          eob_n - tail_bits);
+                    if (j < best) {
+                        best = j;
+                        best_n = k;
+                        added_at = tail_err;
+                    }
+                }
+                if (best_n < n) {
+                    added += added_at;
+                    cd->eob[c][b] = (uint8_t)best_n;
+                }
+                const int m = cd->eob[c][b];
+                pe = m == 0 ? 0 : (m <= 4 ? 1 : 2);
+                dcp = m ? tc[q[0] + 2048] >> 4 : 0;
+            }
+        }
+    }
+    struct models before = *md;
+    uint32_t new_mask;
+    count_symbols(cd, channels);
+    const size_t mb = build_models(md, &new_mask);
+    if (added + lambda * 8.0 * estimate_bytes(md, mb) < j_old) {
+        *mask = new_mask;
+        return;
+    }
+    memcpy(cd->eob, saved, sizeof saved);
+    *md = before;
 }
 
 size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
@@ -871,6 +1007,8 @@ size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
     }
     int best_steps[3] = {0, 0, 0};
     candidate_steps(s_opt, best_i, channels, best_steps);
+    if (rdo_tails)
+        truncate_tails(ws, &ws->cand[best], channels, best_steps, lambda, &mask);
     size_t len = write_buffer(ws, &ws->cand[best], channels, best_steps, mask,
                               buf, cap);
     if (!len)
