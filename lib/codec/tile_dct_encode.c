@@ -879,8 +879,8 @@ static inline double symbol_bits(const struct models *md, int m, int s)
  * last nonzero values often cost more bits (the zero tokens before them,
  * the value, the longer count) than the error they remove.  For every
  * block, channel by channel in stream order, the count n' is chosen
- * among n and each shorter count that ends after a nonzero value of
- * magnitude 1 (or is 0), at most three values back, minimizing the added
+ * among n and each shorter count that ends after a nonzero value (or is
+ * 0), back to the last value of magnitude 2 or more, minimizing the added
  * squared error (transform domain, weighted as quantize_count weighs it)
  * plus lambda times the bits, priced by the candidate's models with the
  * contexts of the blocks already decided.  The symbols are then counted
@@ -917,11 +917,11 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
                 /* From the end: the bits of the tail's tokens and the
                  * error its values remove, J(n') - J(n) at each n' that
                  * ends on a nonzero value (or is 0).  The scan stops at
-                 * the third nonzero value or the first of magnitude 2 or
-                 * more, whose removal does not pay. */
+                 * the first value of magnitude 2 or more, whose removal
+                 * does not pay. */
                 const double eob_n = symbol_bits(md, eob_model + pe, n);
                 double tail_bits = 0, tail_err = 0, best = 0;
-                int best_n = n, values = 0;
+                int best_n = n;
                 for (int k = n - 1; k >= 0; k--) {
                     const int y = tc[q[k] + 2048], t = y & 15;
                     const int pk = k ? tc[q[k - 1] + 2048] >> 4 : dcp;
@@ -929,7 +929,7 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
                     if (t == GV_DCT_ESCAPE)
                         tail_bits += 12.0;
                     if (q[k]) {
-                        if (abs(q[k]) > 1 || ++values > 3)
+                        if (abs(q[k]) > 1)
                             break;
                         const double xa = fabs((double)x[k]), r = xa - s;
                         tail_err += (xa * xa - r * r) * w;
