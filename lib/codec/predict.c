@@ -329,25 +329,27 @@ filter_vbmi(const uint8_t *row, const uint8_t *end, int C, int first,
 }
 #undef VBMI_SUMS
 
-/* filter_row by filter_vbmi: the parent pixels the children read,
- * base .. base + 259, clamped to the row and copied once into a buffer
- * (zero past them, for whole loads), so that every child, those at the
- * tile's edge too, is one straight filter. */
+/* filter_row by filter_vbmi: the children whose taps lie inside the row
+ * straight from it (4 .. 512 for qx = 0, 0 .. 509 for qx = 1), and the
+ * few at the tile's edge from a copy of the pixels they read, clamped to
+ * the row (zero past them, for whole loads), so that every child is the
+ * same straight filter. */
 static void filter_row_vbmi(const uint8_t *src, int C, int qx, int16_t *dst)
 {
-    enum { SPAN = 260 };
     pthread_once(&vbmi_once, vbmi_init);
-    uint8_t buf[SPAN * 3 + 64];
     const int base = 256 * qx - 2;
-    const int lo = base < 0 ? -base : 0;                    /* first inside */
-    const int hi = GV_TILE - base < SPAN ? GV_TILE - base : SPAN;
-    memcpy(buf + lo * C, src + (size_t)(base + lo) * C, (size_t)(hi - lo) * C);
-    for (int i = 0; i < lo; i++)
-        memcpy(buf + i * C, src, (size_t)C);
-    for (int i = hi; i < SPAN; i++)
-        memcpy(buf + i * C, src + (size_t)(GV_TILE - 1) * C, (size_t)C);
-    memset(buf + SPAN * C, 0, sizeof buf - (size_t)SPAN * C);
-    filter_vbmi(buf, buf + sizeof buf, C, 0, 0, GV_TILE, dst);
+    const int u0 = qx ? 0 : 4, u1 = qx ? 510 : GV_TILE;   /* interior [u0, u1) */
+    filter_vbmi(src, src + (size_t)GV_TILE * C, C, base + (u0 >> 1), u0,
+                u1 - u0, dst);
+    /* The edge children e0 .. e0 + n - 1 (e0 even) read pixels a(e0)
+     * onwards, at most 6 of them. */
+    const int e0 = qx ? u1 : 0, n = qx ? GV_TILE - u1 : u0;
+    const int first = base + ((e0 + 1) >> 1);
+    uint8_t buf[64] = {0};
+    for (int i = 0; i < 6; i++)
+        for (int c = 0; c < C; c++)
+            buf[i * C + c] = src[clamp_tile(first + i) * C + c];
+    filter_vbmi(buf, buf + sizeof buf, C, 0, e0, n, dst);
 }
 #endif
 
