@@ -15,8 +15,10 @@
 # take the path with GIGAVIEW_LEVEL0_RESIDENT=0 (level 0 would stay in
 # memory otherwise); one tiled gray image of more than 4097^2 pixels
 # takes it by default.  LZW, 16-bit and gray+alpha TIFFs are never read that
-# way.  (cli_shard.sh checks that shards, which read level 0 from the
-# input too, merge into the whole encode's store.)
+# way.  The large one is also changed while pass 2 reads it (the encoder
+# stopped, its modification time touched): the encode must fail and
+# publish nothing.  (cli_shard.sh checks that shards, which read level 0
+# from the input too, merge into the whole encode's store.)
 . "$(dirname "$0")/lib.sh"
 need_tool tiffcp
 
@@ -112,6 +114,28 @@ else
     unset GIGAVIEW_LEVEL0_RESIDENT
     make_tiff synth:4100x4100:gray "$T/big.tif" -c none -t -w 128 -l 128
     both "gray 4100x4100 in 128x128 tiles, by default" "$T/big.tif" 16.81
+
+    # An input rewritten while level 0 is read from it again: the encoder
+    # is stopped once its progress shows pass 2 ("encode"), the file's
+    # modification time changes, and it must fail at its check rather
+    # than publish a store of two images.
+    rm -f "$T/changed.gv"
+    "$GIGAVIEW" encode -q 34 --progress --quiet "$T/big.tif" -o "$T/changed.gv" \
+        2>"$T/progress" &
+    pid=$!
+    while kill -0 "$pid" 2>/dev/null &&
+        ! tr '\r' '\n' <"$T/progress" | grep -q '^encode '; do
+        sleep 0.05
+    done
+    kill -STOP "$pid" 2>/dev/null
+    touch "$T/big.tif"
+    kill -CONT "$pid" 2>/dev/null
+    rc=0
+    wait "$pid" || rc=$?
+    expect_rc "an input changed during pass 2: the encode fails" 1
+    check "and says the input changed while being read" \
+        grep -q 'changed while being read' "$T/progress"
+    check "and publishes no store" test ! -e "$T/changed.gv"
 fi
 
 done_testing
