@@ -34,19 +34,7 @@ set -euo pipefail
 
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
-gv_arg=""
-base_arg=""
-inputs=()
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	--baseline) base_arg=$2; shift 2 ;;
-	--baseline=*) base_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,34p' "$0"; exit 0 ;;
-	*) inputs+=("$1"); shift ;;
-	esac
-done
+parse_binary_args '2,34p' "$@"
 
 need_cmd vips libvips-tools
 need_cmd vipsheader libvips-tools

@@ -34,6 +34,29 @@ find_gigaview() {
 	die "no gigaview binary: pass --gigaview PATH or set GIGAVIEW (e.g. GIGAVIEW=/path/to/build/gigaview)"
 }
 
+# parse_binary_args HELP-RANGE ARGS...: the options of the scripts that
+# run gigaview binaries: --gigaview NEW, --baseline OLD (also as
+# --opt=VALUE) and -h (prints lines HELP-RANGE, e.g. '2,12p', of the
+# script's opening comment); sets gv_arg, base_arg and inputs (the other
+# arguments, in order).
+parse_binary_args() {
+	local help=$1
+	shift
+	gv_arg=""
+	base_arg=""
+	inputs=()
+	while [ $# -gt 0 ]; do
+		case $1 in
+		--gigaview) gv_arg=$2; shift 2 ;;
+		--gigaview=*) gv_arg=${1#*=}; shift ;;
+		--baseline) base_arg=$2; shift 2 ;;
+		--baseline=*) base_arg=${1#*=}; shift ;;
+		-h|--help) sed -n "$help" "$0"; exit 0 ;;
+		*) inputs+=("$1"); shift ;;
+		esac
+	done
+}
+
 # snapshot_gigaview SRC DIR: copies the binary into DIR so a rebuild during
 # the run cannot change it half-way, with the OpenImageIO module beside it
 # where SRC has one (lib/imageio/imageio_loader.c looks there); prints the

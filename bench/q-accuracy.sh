@@ -15,17 +15,7 @@ set -euo pipefail
 
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
-gv_arg=""
-base_arg=""
-inputs=()
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--baseline) base_arg=$2; shift 2 ;;
-	-h|--help) sed -n '2,13p' "$0"; exit 0 ;;
-	*) inputs+=("$1"); shift ;;
-	esac
-done
+parse_binary_args '2,13p' "$@"
 GV=$(find_gigaview "$gv_arg")
 QS=${QS:-32 36 40 44 46}
 if [ ${#inputs[@]} -eq 0 ]; then

@@ -419,6 +419,13 @@ HOT_LOOP static void vertical_c(const int16_t *restrict h0,
 }
 
 #if HAVE_AVX2_PATH
+/* Weights w[k] and w[k + 1] as a VPMADDWD operand: two 16-bit values in a
+ * 32-bit lane, w[k] in the low half. */
+static inline int32_t weight_pair(const int *w, int k)
+{
+    return (int32_t)((uint32_t)(uint16_t)w[k] | (uint32_t)(uint16_t)w[k + 1] << 16);
+}
+
 /* 16 samples of a child row as 16-bit values (before the final pack):
  * rows interleaved pairwise, VPMADDWD, round, shift (a floor). */
 __attribute__((target("avx2"))) static inline __m256i
@@ -449,10 +456,8 @@ __attribute__((target("avx2"))) static void
 vertical_avx2(const int16_t *h0, const int16_t *h1, const int16_t *h2,
               const int16_t *h3, const int *w, size_t n, uint8_t *out)
 {
-    const __m256i w01 = _mm256_set1_epi32((int32_t)((uint32_t)(uint16_t)w[0] |
-                                                    (uint32_t)w[1] << 16));
-    const __m256i w23 = _mm256_set1_epi32((int32_t)((uint32_t)(uint16_t)w[2] |
-                                                    (uint32_t)(uint16_t)w[3] << 16));
+    const __m256i w01 = _mm256_set1_epi32(weight_pair(w, 0));
+    const __m256i w23 = _mm256_set1_epi32(weight_pair(w, 2));
     const __m256i rnd = _mm256_set1_epi32(ROUND);
     size_t i = 0;
     for (; i + 32 <= n; i += 32) {
@@ -473,10 +478,8 @@ __attribute__((target("avx512bw"))) static void
 vertical_avx512(const int16_t *h0, const int16_t *h1, const int16_t *h2,
                 const int16_t *h3, const int *w, size_t n, uint8_t *out)
 {
-    const __m512i w01 = _mm512_set1_epi32((int32_t)((uint32_t)(uint16_t)w[0] |
-                                                    (uint32_t)w[1] << 16));
-    const __m512i w23 = _mm512_set1_epi32((int32_t)((uint32_t)(uint16_t)w[2] |
-                                                    (uint32_t)(uint16_t)w[3] << 16));
+    const __m512i w01 = _mm512_set1_epi32(weight_pair(w, 0));
+    const __m512i w23 = _mm512_set1_epi32(weight_pair(w, 2));
     const __m512i rnd = _mm512_set1_epi32(ROUND);
     const __m512i order = _mm512_set_epi64(7, 5, 3, 1, 6, 4, 2, 0);
     size_t i = 0;
@@ -560,10 +563,8 @@ __attribute__((target("avx512bw,avx512vnni"))) static void
 vertical_pairs(const int16_t *p0, const int16_t *p1, const int *w, size_t n,
                uint8_t *out)
 {
-    const __m512i w01 = _mm512_set1_epi32((int32_t)((uint32_t)(uint16_t)w[0] |
-                                                    (uint32_t)w[1] << 16));
-    const __m512i w23 = _mm512_set1_epi32((int32_t)((uint32_t)(uint16_t)w[2] |
-                                                    (uint32_t)(uint16_t)w[3] << 16));
+    const __m512i w01 = _mm512_set1_epi32(weight_pair(w, 0));
+    const __m512i w23 = _mm512_set1_epi32(weight_pair(w, 2));
     const __m512i rnd = _mm512_set1_epi32(ROUND);
     const __m512i order = _mm512_set_epi64(7, 5, 3, 1, 6, 4, 2, 0);
     size_t i = 0, c = 0;
