@@ -68,10 +68,20 @@ static const double step_factor[STEP_CANDIDATES] = {
 
 static const double channel_weight[3] = {3.0, 0.5, 0.75};
 
-struct sym {
-    int16_t model;   /* -1: a uniform 6-bit step */
-    int16_t s;
+
+/* A symbol's rANS coding at 8 bits (put_sym): x / f = x * m >> 40, the
+ * state renormalized when x > thr = f 2^24 - 1, g = 256 - f, c its
+ * cumulative frequency.  Entry enc_at[model] + symbol for a model's
+ * symbols, ENC_UNIFORM + v for a uniform 6-bit step v. */
+struct enc_sym {
+    uint64_t m;
+    uint32_t thr;
+    uint16_t g, c;
 };
+
+#define ENC_UNIFORM (GV_DCT_EOB_MODELS * GV_DCT_EOB_SYMBOLS +                \
+                     (GV_DCT_MODELS - GV_DCT_EOB_MODELS) * GV_DCT_TOKEN_SYMBOLS)
+#define ENC_SYMBOLS (ENC_UNIFORM + 64)
 
 struct models {
     uint32_t count[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
@@ -94,8 +104,9 @@ struct gv_dct_workspace {
     float maxabs[3][NB];         /* largest |coefficient| of each block */
     double energy[3][NB];        /* sum of its squares */
     struct candidate cand[2];    /* the one being tried, and the best */
-    struct sym syms[MAX_ROW_SYMBOLS];
-    uint16_t words[MAX_ROW_SYMBOLS + 2];
+    uint16_t syms[2][MAX_ROW_SYMBOLS];     /* two rows' symbols (enc[]) */
+    struct enc_sym enc[ENC_SYMBOLS];       /* the coding of every symbol */
+    uint16_t words[2][MAX_ROW_SYMBOLS + 2];
 };
 
 struct gv_dct_workspace *gv_dct_workspace_new(void)
@@ -368,8 +379,9 @@ transform_body(struct gv_dct_workspace *ws, const uint8_t *orig,
         for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
             const int b = by * GV_DCT_BLOCKS + bx;
             if ((uint32_t)(8 * bx) >= vw || (uint32_t)(8 * by) >= vh) {
+                /* All zero: quantize_count never reads x of a block
+                 * whose maxabs is under half a step, so x is left. */
                 for (int c = 0; c < channels; c++) {
-                    memset(ws->x[c][b], 0, sizeof ws->x[c][b]);
                     ws->maxabs[c][b] = 0;
                     ws->energy[c][b] = 0;
                 }
@@ -435,8 +447,8 @@ static void init_tc(void)
  * dead-zone rounding floor(|x| / s + ROUND_OFFSET), capped at 2047, with
  * the sign of x.  acc[l] gets the squared error of lanes l, l + 8, ...,
  * summed in that order (the same roundings with SSE2 as without).
- * Returns one past the last nonzero value (0 when all are zero). */
-static inline int quantize_block(const float *x, float inv, float s,
+ * Returns the mask of the nonzero values (bit k for q[k]). */
+static inline uint64_t quantize_block(const float *x, float inv, float s,
                                  int16_t *q, float *acc)
 {
 #if defined(__SSE2__)
@@ -470,7 +482,7 @@ static inline int quantize_block(const float *x, float inv, float s,
     }
     _mm_storeu_ps(acc, acc0);
     _mm_storeu_ps(acc + 4, acc1);
-    return nz ? 64 - __builtin_clzll(nz) : 0;
+    return nz;
 #else
     for (int l = 0; l < 8; l++)
         acc[l] = 0;
@@ -484,10 +496,10 @@ static inline int quantize_block(const float *x, float inv, float s,
             acc[l] += err * err;
             q[k + l] = (int16_t)(v < 0 ? -m : m);
         }
-    int last = 64;
-    while (last > 0 && !q[last - 1])
-        last--;
-    return last;
+    uint64_t nz = 0;
+    for (int k = 0; k < 64; k++)
+        nz |= (uint64_t)(q[k] != 0) << k;
+    return nz;
 #endif
 }
 
@@ -495,7 +507,7 @@ static inline int quantize_block(const float *x, float inv, float s,
 /* quantize_block in eight lanes: the same operations in the same order
  * (a multiply and an add, never fused: ISO C mode), so the same q, the
  * same return and the same acc[l], lane l summing k = l, l + 8, ... */
-__attribute__((target("avx2,fma"), always_inline)) static inline int
+__attribute__((target("avx2,fma"), always_inline)) static inline uint64_t
 quantize_block_avx2(const float *x, float inv, float s, int16_t *q,
                     float *acc)
 {
@@ -525,11 +537,79 @@ quantize_block_avx2(const float *x, float inv, float s, int16_t *q,
         nz |= (uint64_t)(~z & 0xff) << k;
     }
     _mm256_storeu_ps(acc, sum);
-    return nz ? 64 - __builtin_clzll(nz) : 0;
+    return nz;
 }
 #endif
 
-typedef int quantize_fn(const float *, float, float, int16_t *, float *);
+/* The token counts of quantize_count: TOKEN_COPIES histograms of the 24
+ * token models (12 per channel class, 16 symbols each), token k of a
+ * block counted in copy k % TOKEN_COPIES and summed after.  A run of
+ * zeros adds to one counter at every step, and each add would wait for
+ * the one before it through memory; split, consecutive adds never meet. */
+#define TOKEN_COPIES 4
+#define TOKEN_SLOTS (12 * GV_DCT_TOKEN_SYMBOLS)     /* one channel class */
+
+/* The slot of token k in tokh, less its model's class and symbol:
+ * (gv_dct_band_model[k] + copy offset) in symbols. */
+static _Alignas(16) int16_t tok_base[64];
+
+static void init_tok_base(void)
+{
+    for (int k = 0; k < 64; k++)
+        tok_base[k] = (int16_t)(gv_dct_band_model[k] * GV_DCT_TOKEN_SYMBOLS +
+                                (k % TOKEN_COPIES) * 2 * TOKEN_SLOTS);
+}
+
+/* Count the tokens of a block q (zigzag order) whose eob is n >= 1 into
+ * h (the histograms of its channel class), dcp the class of the previous
+ * block's first value: token k's model is its band's for the class of
+ * value k - 1 (dcp for k = 0), as write_buffer codes it.  Returns the
+ * uniform steps (two per escape).  The tokens and classes are computed
+ * eight at a time: t = min(2 |q| - (q > 0), 15) is tc[]'s token and
+ * min(|q|, 2) the class. */
+__attribute__((always_inline)) static inline uint64_t
+count_block(const int16_t *q, int n, int dcp, uint32_t *h)
+{
+#if defined(__SSE2__)
+    _Alignas(16) int16_t idx[64];
+    const __m128i zero = _mm_setzero_si128(), two = _mm_set1_epi16(2);
+    const __m128i fifteen = _mm_set1_epi16(15), seven = _mm_set1_epi16(7);
+    __m128i prev = _mm_insert_epi16(zero, dcp, 7);
+    int esc = 0;
+    for (int k = 0; k < n; k += 8) {
+        const __m128i v = _mm_loadu_si128((const __m128i *)(q + k));
+        const __m128i a = _mm_max_epi16(v, _mm_sub_epi16(zero, v));
+        const __m128i t = _mm_min_epi16(
+            _mm_add_epi16(_mm_add_epi16(a, a), _mm_cmpgt_epi16(v, zero)), fifteen);
+        const __m128i cls = _mm_min_epi16(a, two);
+        const __m128i p = _mm_or_si128(_mm_slli_si128(cls, 2),
+                                       _mm_srli_si128(prev, 14));
+        prev = cls;
+        const __m128i id = _mm_add_epi16(
+            _mm_add_epi16(_mm_load_si128((const __m128i *)(tok_base + k)),
+                          _mm_slli_epi16(p, 4)), t);
+        _mm_store_si128((__m128i *)(idx + k), id);
+        /* Two mask bits per escape: its two uniform steps. */
+        esc += __builtin_popcount(
+            (unsigned)_mm_movemask_epi8(_mm_cmpgt_epi16(a, seven)));
+    }
+    for (int k = 0; k < n; k++)
+        h[idx[k]]++;
+    return (uint64_t)esc;
+#else
+    uint64_t uniform = 0;
+    int p = dcp;
+    for (int k = 0; k < n; k++) {
+        const int y = tc[q[k] + 2048], t = y & 15;
+        h[tok_base[k] + p * GV_DCT_TOKEN_SYMBOLS + t]++;
+        uniform += t == GV_DCT_ESCAPE ? 2 : 0;
+        p = y >> 4;
+    }
+    return uniform;
+#endif
+}
+
+typedef uint64_t quantize_fn(const float *, float, float, int16_t *, float *);
 
 /* Quantize every block at steps[] into cd (q, eob) and count its symbols
  * into cd->md (counts and the uniform steps; totals and frequencies are
@@ -545,6 +625,8 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
 {
     struct models *md = &cd->md;
     memset(md->count, 0, sizeof md->count);
+    uint32_t tokh[TOKEN_COPIES * 2 * TOKEN_SLOTS];
+    memset(tokh, 0, sizeof tokh);
     uint64_t uniform = 0;
     double sse = 0;
     for (int c = 0; c < channels; c++) {
@@ -553,7 +635,7 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
         const double w = channels == 1 ? 1.0 : channel_weight[c];
         const int cc = c > 0;
         uint32_t *eobc = md->count[3 * cc];
-        uint32_t *tokc = md->count[GV_DCT_EOB_MODELS + 12 * cc];
+        uint32_t *tokc = tokh + TOKEN_SLOTS * cc;
         double e2 = 0;
         for (int by = 0; by < GV_DCT_BLOCKS; by++) {
             int pe = 0, dcp = 0;
@@ -569,24 +651,29 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
                 const float *x = ws->x[c][b];
                 int16_t *q = cd->q[c][b];
                 float acc[8];
-                const int n = qblock(x, inv, s, q, acc);
+                const uint64_t nz = qblock(x, inv, s, q, acc);
                 e2 += ((acc[0] + acc[1]) + (acc[2] + acc[3])) +
                       ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+                const int n = nz ? 64 - __builtin_clzll(nz) : 0;
                 cd->eob[c][b] = (uint8_t)n;
                 eobc[pe * GV_DCT_EOB_SYMBOLS + n]++;
-                int p = dcp;
-                for (int k = 0; k < n; k++) {
-                    const int y = tc[q[k] + 2048], t = y & 15;
-                    tokc[(gv_dct_band_model[k] + p) * GV_DCT_EOB_SYMBOLS + t]++;
-                    uniform += t == GV_DCT_ESCAPE ? 2 : 0;
-                    p = y >> 4;
-                }
                 pe = n == 0 ? 0 : (n <= 4 ? 1 : 2);
-                dcp = n ? tc[q[0] + 2048] >> 4 : 0;
+                if (!n) {
+                    dcp = 0;
+                    continue;
+                }
+                const int dc_ctx = dcp;
+                dcp = gv_dct_class(q[0]);
+                uniform += count_block(q, n, dc_ctx, tokc);
             }
         }
         sse += w * e2 / 64.0;
     }
+    for (int r = 0; r < TOKEN_COPIES; r++)
+        for (int m = 0; m < 24; m++)
+            for (int t = 0; t < GV_DCT_TOKEN_SYMBOLS; t++)
+                md->count[GV_DCT_EOB_MODELS + m][t] +=
+                    tokh[(2 * r * 12 + m) * GV_DCT_TOKEN_SYMBOLS + t];
     md->uniform = uniform;
     return sse;
 }
@@ -698,13 +785,22 @@ static size_t build_models(struct models *md, uint32_t *mask)
 }
 
 static double log2_table[257];
-static uint64_t freq_rcp[257];   /* gv_rans_rcp of every frequency */
+
+/* ceil(2^40 / f): x / f = x * freq_m40[f] >> 40 exactly for every
+ * state x < f 2^24 (the bound after renormalization at 8 bits).  With
+ * freq_m40[f] = (2^40 + r) / f, 0 <= r < f, the product exceeds x / f 2^40
+ * by x r / f < (f - 1) 2^24, and f (f - 1) < 2^16 for f <= 256, so the
+ * excess stays under 2^40 / f: too little to carry past the next
+ * multiple of 1 / f, the least gap above a quotient's fraction.  The
+ * product stays under 2^64 since f r < 2^16.  One 64-bit multiply
+ * instead of gv_rans_rcp's 128-bit one, and no case for f = 1. */
+static uint64_t freq_m40[257];
 
 static void init_log2(void)
 {
     for (int f = 1; f <= 256; f++) {
         log2_table[f] = log2(256.0 / f);
-        freq_rcp[f] = gv_rans_rcp((uint32_t)f);
+        freq_m40[f] = ((1ull << 40) + (uint64_t)f - 1) / (uint64_t)f;
     }
 }
 
@@ -721,6 +817,38 @@ static double estimate_bytes(const struct models *md, size_t model_bytes)
     }
     return bits / 8 + (double)model_bytes + HEADER_BYTES + LENGTHS_BYTES +
            4.0 * GV_DCT_BLOCKS;
+}
+
+/* The first enc[] entry of model m. */
+static inline int enc_at(int m)
+{
+    return m < GV_DCT_EOB_MODELS ? m * GV_DCT_EOB_SYMBOLS :
+           GV_DCT_EOB_MODELS * GV_DCT_EOB_SYMBOLS +
+           (m - GV_DCT_EOB_MODELS) * GV_DCT_TOKEN_SYMBOLS;
+}
+
+static void set_enc(struct enc_sym *e, uint32_t f, uint32_t c)
+{
+    e->m = freq_m40[f];
+    e->thr = (uint32_t)(((uint64_t)f << 24) - 1);
+    e->g = (uint16_t)(256 - f);
+    e->c = (uint16_t)c;
+}
+
+/* gv_rans_put_rcp at 8 bits for symbol e: the same state and words, with
+ * x - (x / f) f + (x / f) 2^8 written x + (x / f) g, and no branch: the
+ * renormalized state and the other are both at hand and one is kept
+ * (whether a word goes out follows the data and would be mispredicted
+ * often; words[] has room for a store that the count then drops). */
+static inline uint32_t put_sym(uint32_t x, const struct enc_sym *e,
+                               uint16_t *words, int *n)
+{
+    const int out = x > e->thr;
+    words[*n] = (uint16_t)x;
+    *n += out;
+    const uint32_t xr = out ? x >> 16 : x;
+    const uint32_t q = (uint32_t)((uint64_t)xr * e->m >> 40);
+    return xr + q * e->g + e->c;
 }
 
 /* Write the buffer of candidate cd (its models built, mask theirs).
@@ -751,31 +879,47 @@ static size_t write_buffer(struct gv_dct_workspace *ws,
         for (int s = 0; s < gv_dct_model_symbols(m); s++)
             buf[at++] = (uint8_t)md->cum[m][s];
     }
+    for (int m = 0; m < GV_DCT_MODELS; m++)
+        if (mask >> m & 1)
+            for (int v = 0; v < gv_dct_model_symbols(m); v++)
+                set_enc(&ws->enc[enc_at(m) + v], md->freq[m][v], md->cum[m][v]);
+    for (int v = 0; v < 64; v++)
+        set_enc(&ws->enc[ENC_UNIFORM + v], 4, 4u * (uint32_t)v);
     at = streams;
-    for (int by = 0; by < GV_DCT_BLOCKS; by++) {
-        int ns = 0;
+    for (int by = 0; by < GV_DCT_BLOCKS; by += 2) {
+        const int rows = by + 1 < GV_DCT_BLOCKS ? 2 : 1;
+        int ns[2] = {0, 0}, n[2] = {0, 0};
+        for (int r = 0; r < rows; r++) {
+            uint16_t *sy = ws->syms[r];
+            int k = 0;
 #define COLLECT(m, s_)                                                        \
     do {                                                                      \
-        ws->syms[ns].model = (int16_t)(m);                                    \
-        ws->syms[ns].s = (int16_t)(s_);                                       \
-        ns++;                                                                 \
+        const int m_ = (m);                                                   \
+        sy[k++] = (uint16_t)((m_ < 0 ? ENC_UNIFORM : enc_at(m_)) + (s_));     \
     } while (0)
-        WALK_ROW(cd, channels, by, COLLECT);
+            WALK_ROW(cd, channels, by + r, COLLECT);
 #undef COLLECT
-        uint32_t x = 1u << 16;   /* the initial and final state */
-        int n = 0;
-        for (int i = ns - 1; i >= 0; i--) {
-            const struct sym *y = &ws->syms[i];
-            if (y->model < 0) {
-                x = gv_rans_put_rcp(x, 4, freq_rcp[4], 4u * (uint32_t)y->s, 8,
-                                    ws->words, &n);
-            } else {
-                const uint32_t f = md->freq[y->model][y->s];
-                x = gv_rans_put_rcp(x, f, freq_rcp[f], md->cum[y->model][y->s],
-                                    8, ws->words, &n);
-            }
+            ns[r] = k;
         }
-        if (!(at = gv_rans_put_stream(buf, lengths, by, at, x, ws->words, n, cap)))
+        /* The two rows' states are independent chains: coded in
+         * lockstep, each one's multiplies overlap the other's. */
+        uint32_t x0 = 1u << 16, x1 = 1u << 16;   /* initial and final state */
+        int i0 = ns[0], i1 = ns[1];
+        uint16_t *w0 = ws->words[0], *w1 = ws->words[1];
+        const struct enc_sym *enc = ws->enc;
+        const uint16_t *s0 = ws->syms[0], *s1 = ws->syms[1];
+        for (; i0 > 0 && i1 > 0; i0--, i1--) {
+            x0 = put_sym(x0, &enc[s0[i0 - 1]], w0, &n[0]);
+            x1 = put_sym(x1, &enc[s1[i1 - 1]], w1, &n[1]);
+        }
+        for (; i0 > 0; i0--)
+            x0 = put_sym(x0, &enc[s0[i0 - 1]], w0, &n[0]);
+        for (; i1 > 0; i1--)
+            x1 = put_sym(x1, &enc[s1[i1 - 1]], w1, &n[1]);
+        if (!(at = gv_rans_put_stream(buf, lengths, by, at, x0, w0, n[0], cap)))
+            return 0;
+        if (rows == 2 &&
+            !(at = gv_rans_put_stream(buf, lengths, by + 1, at, x1, w1, n[1], cap)))
             return 0;
     }
     return gv_rans_finish(buf, at, cap);
@@ -806,6 +950,7 @@ static void init_tables(void)
 #endif
     init_kt();
     init_tc();
+    init_tok_base();
     init_log2();
 }
 
