@@ -104,7 +104,7 @@ struct gv_dct_workspace {
     float maxabs[3][NB];         /* largest |coefficient| of each block */
     double energy[3][NB];        /* sum of its squares */
     struct candidate cand[2];    /* the one being tried, and the best */
-    uint16_t syms[2][MAX_ROW_SYMBOLS];     /* two rows' symbols (enc[]) */
+    uint16_t syms[2][MAX_ROW_SYMBOLS + 64];  /* two rows' symbols (enc[]) */
     struct enc_sym enc[ENC_SYMBOLS];       /* the coding of every symbol */
     uint16_t words[2][MAX_ROW_SYMBOLS + 2];
 };
@@ -541,39 +541,34 @@ quantize_block_avx2(const float *x, float inv, float s, int16_t *q,
 }
 #endif
 
-/* The token counts of quantize_count: TOKEN_COPIES histograms of the 24
- * token models (12 per channel class, 16 symbols each), token k of a
- * block counted in copy k % TOKEN_COPIES and summed after.  A run of
- * zeros adds to one counter at every step, and each add would wait for
- * the one before it through memory; split, consecutive adds never meet. */
-#define TOKEN_COPIES 4
+/* The token counts of quantize_count: the 24 token models (12 per
+ * channel class, 16 symbols each), packed, copied into the models after. */
 #define TOKEN_SLOTS (12 * GV_DCT_TOKEN_SYMBOLS)     /* one channel class */
 
-/* The slot of token k in tokh, less its model's class and symbol:
- * (gv_dct_band_model[k] + copy offset) in symbols. */
-static _Alignas(16) int16_t tok_base[64];
+/* The slot of token k's band within its channel class's counts. */
+static _Alignas(16) uint16_t tok_base[64];
 
 static void init_tok_base(void)
 {
     for (int k = 0; k < 64; k++)
-        tok_base[k] = (int16_t)(gv_dct_band_model[k] * GV_DCT_TOKEN_SYMBOLS +
-                                (k % TOKEN_COPIES) * 2 * TOKEN_SLOTS);
+        tok_base[k] = (uint16_t)(gv_dct_band_model[k] * GV_DCT_TOKEN_SYMBOLS);
 }
 
-/* Count the tokens of a block q (zigzag order) whose eob is n >= 1 into
- * h (the histograms of its channel class), dcp the class of the previous
- * block's first value: token k's model is its band's for the class of
- * value k - 1 (dcp for k = 0), as write_buffer codes it.  Returns the
- * uniform steps (two per escape).  The tokens and classes are computed
- * eight at a time: t = min(2 |q| - (q > 0), 15) is tc[]'s token and
+/* The token slots of a block q (zigzag order) whose eob is n >= 1:
+ * slot[k] = add + tok_base[k] + 16 class(q[k - 1]) + token(q[k]) for
+ * k < n, class(q[-1]) taken as dcp (the class of the previous block's
+ * first value), as write_buffer codes them: token k's model is its
+ * band's for the class of value k - 1.  Values up to n rounded up to 8
+ * are written.  Returns twice the escapes (their uniform steps).  Eight
+ * at a time: t = min(2 |q| - (q > 0), 15) is tc[]'s token and
  * min(|q|, 2) the class. */
-__attribute__((always_inline)) static inline uint64_t
-count_block(const int16_t *q, int n, int dcp, uint32_t *h)
+__attribute__((always_inline)) static inline int
+block_slots(const int16_t *q, int n, int dcp, int add, uint16_t *slot)
 {
 #if defined(__SSE2__)
-    _Alignas(16) int16_t idx[64];
     const __m128i zero = _mm_setzero_si128(), two = _mm_set1_epi16(2);
     const __m128i fifteen = _mm_set1_epi16(15), seven = _mm_set1_epi16(7);
+    const __m128i vadd = _mm_set1_epi16((int16_t)add);
     __m128i prev = _mm_insert_epi16(zero, dcp, 7);
     int esc = 0;
     for (int k = 0; k < n; k += 8) {
@@ -585,28 +580,37 @@ count_block(const int16_t *q, int n, int dcp, uint32_t *h)
         const __m128i p = _mm_or_si128(_mm_slli_si128(cls, 2),
                                        _mm_srli_si128(prev, 14));
         prev = cls;
-        const __m128i id = _mm_add_epi16(
-            _mm_add_epi16(_mm_load_si128((const __m128i *)(tok_base + k)),
-                          _mm_slli_epi16(p, 4)), t);
-        _mm_store_si128((__m128i *)(idx + k), id);
-        /* Two mask bits per escape: its two uniform steps. */
+        const __m128i base = _mm_add_epi16(
+            _mm_load_si128((const __m128i *)(tok_base + k)), vadd);
+        _mm_storeu_si128((__m128i *)(slot + k),
+                         _mm_add_epi16(_mm_add_epi16(base, _mm_slli_epi16(p, 4)), t));
+        /* Two mask bits per escape. */
         esc += __builtin_popcount(
             (unsigned)_mm_movemask_epi8(_mm_cmpgt_epi16(a, seven)));
     }
-    for (int k = 0; k < n; k++)
-        h[idx[k]]++;
-    return (uint64_t)esc;
+    return esc;
 #else
-    uint64_t uniform = 0;
-    int p = dcp;
+    int esc = 0, p = dcp;
     for (int k = 0; k < n; k++) {
         const int y = tc[q[k] + 2048], t = y & 15;
-        h[tok_base[k] + p * GV_DCT_TOKEN_SYMBOLS + t]++;
-        uniform += t == GV_DCT_ESCAPE ? 2 : 0;
+        slot[k] = (uint16_t)(add + tok_base[k] + 16 * p + t);
+        esc += t == GV_DCT_ESCAPE ? 2 : 0;
         p = y >> 4;
     }
-    return uniform;
+    return esc;
 #endif
+}
+
+/* Count the tokens of block q (eob n >= 1, dcp as block_slots) into h,
+ * the counts of its channel class; returns its uniform steps. */
+__attribute__((always_inline)) static inline uint64_t
+count_block(const int16_t *q, int n, int dcp, uint32_t *h)
+{
+    _Alignas(16) uint16_t slot[64];
+    const int esc = block_slots(q, n, dcp, 0, slot);
+    for (int k = 0; k < n; k++)
+        h[slot[k]]++;
+    return (uint64_t)esc;
 }
 
 typedef uint64_t quantize_fn(const float *, float, float, int16_t *, float *);
@@ -625,7 +629,7 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
 {
     struct models *md = &cd->md;
     memset(md->count, 0, sizeof md->count);
-    uint32_t tokh[TOKEN_COPIES * 2 * TOKEN_SLOTS];
+    uint32_t tokh[2 * TOKEN_SLOTS];
     memset(tokh, 0, sizeof tokh);
     uint64_t uniform = 0;
     double sse = 0;
@@ -642,10 +646,24 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
             for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
                 const int b = by * GV_DCT_BLOCKS + bx;
                 if (ws->maxabs[c][b] < zero_below) {
-                    cd->eob[c][b] = 0;
+                    /* A run of all-zero blocks, in a loop of its own that
+                     * keeps the error's sum in a register: its first eob
+                     * in context pe, the others in context 0. */
+                    const float *ma = ws->maxabs[c] + by * GV_DCT_BLOCKS;
+                    const double *en = ws->energy[c] + by * GV_DCT_BLOCKS;
+                    uint8_t *eob = cd->eob[c] + by * GV_DCT_BLOCKS;
+                    double t = e2;
+                    int r = bx;
+                    do {
+                        eob[r] = 0;
+                        t += en[r];
+                        r++;
+                    } while (r < GV_DCT_BLOCKS && ma[r] < zero_below);
+                    e2 = t;
                     eobc[pe * GV_DCT_EOB_SYMBOLS]++;
-                    e2 += ws->energy[c][b];
+                    eobc[0] += (uint32_t)(r - bx - 1);
                     pe = dcp = 0;
+                    bx = r - 1;
                     continue;
                 }
                 const float *x = ws->x[c][b];
@@ -669,11 +687,9 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
         }
         sse += w * e2 / 64.0;
     }
-    for (int r = 0; r < TOKEN_COPIES; r++)
-        for (int m = 0; m < 24; m++)
-            for (int t = 0; t < GV_DCT_TOKEN_SYMBOLS; t++)
-                md->count[GV_DCT_EOB_MODELS + m][t] +=
-                    tokh[(2 * r * 12 + m) * GV_DCT_TOKEN_SYMBOLS + t];
+    for (int m = 0; m < 2 * 12; m++)
+        memcpy(md->count[GV_DCT_EOB_MODELS + m], tokh + m * GV_DCT_TOKEN_SYMBOLS,
+               GV_DCT_TOKEN_SYMBOLS * sizeof *tokh);
     md->uniform = uniform;
     return sse;
 }
@@ -699,34 +715,6 @@ quantize_count_avx2(const struct gv_dct_workspace *ws, struct candidate *cd,
 typedef double quantize_count_fn(const struct gv_dct_workspace *,
                                  struct candidate *, int, const int *);
 static quantize_count_fn *quantize_count = quantize_count_base;
-
-/* Visit every symbol of block row `by` in stream order: fn(model, symbol)
- * with model -1 for a uniform step.  Tokens and classes from tc[], as
- * quantize_count counts them. */
-#define WALK_ROW(cd, channels, by, EMIT)                                      \
-    do {                                                                      \
-        int pe_[3] = {0, 0, 0}, dcp_[3] = {0, 0, 0};                          \
-        for (int bx_ = 0; bx_ < GV_DCT_BLOCKS; bx_++) {                       \
-            const int b_ = (by) * GV_DCT_BLOCKS + bx_;                        \
-            for (int c_ = 0; c_ < (channels); c_++) {                         \
-                const int cc_ = c_ > 0, n_ = (cd)->eob[c_][b_];               \
-                const int16_t *q_ = (cd)->q[c_][b_];                          \
-                EMIT(3 * cc_ + pe_[c_], n_);                                  \
-                int p_ = dcp_[c_];                                            \
-                for (int k_ = 0; k_ < n_; k_++) {                             \
-                    const int e_ = q_[k_] + 2048, y_ = tc[e_], t_ = y_ & 15;  \
-                    EMIT(GV_DCT_EOB_MODELS + 12 * cc_ + gv_dct_band_model[k_] + p_, t_); \
-                    if (t_ == GV_DCT_ESCAPE) {                                \
-                        EMIT(-1, e_ >> 6);                                    \
-                        EMIT(-1, e_ & 63);                                    \
-                    }                                                         \
-                    p_ = y_ >> 4;                                             \
-                }                                                             \
-                pe_[c_] = n_ == 0 ? 0 : (n_ <= 4 ? 1 : 2);                    \
-                dcp_[c_] = n_ ? tc[q_[0] + 2048] >> 4 : 0;                    \
-            }                                                                 \
-        }                                                                     \
-    } while (0)
 
 /* Frequencies summing to 256, every used symbol at least 1, and the last
  * symbol at least 1 even when unused: the stored cumulative frequencies
@@ -851,6 +839,47 @@ static inline uint32_t put_sym(uint32_t x, const struct enc_sym *e,
     return xr + q * e->g + e->c;
 }
 
+/* The symbols of block row `by` in stream order into sy, as enc[]
+ * entries (FORMAT.md 4.3: per block, per channel, the eob, then each
+ * token, an escape followed by its two uniform steps); returns their
+ * number.  sy has room for 64 past the last. */
+static int collect_row(const struct candidate *cd, int channels, int by,
+                       uint16_t *sy)
+{
+    int k = 0, pe[3] = {0, 0, 0}, dcp[3] = {0, 0, 0};
+    for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
+        const int b = by * GV_DCT_BLOCKS + bx;
+        for (int c = 0; c < channels; c++) {
+            const int cc = c > 0, n = cd->eob[c][b];
+            const int16_t *q = cd->q[c][b];
+            sy[k++] = (uint16_t)(enc_at(3 * cc + pe[c]) + n);
+            pe[c] = n == 0 ? 0 : (n <= 4 ? 1 : 2);
+            if (!n) {
+                dcp[c] = 0;
+                continue;
+            }
+            const int tokens = enc_at(GV_DCT_EOB_MODELS) + TOKEN_SLOTS * cc;
+            if (!block_slots(q, n, dcp[c], tokens, sy + k)) {
+                k += n;
+            } else {
+                /* Escapes: their uniform steps go in after them. */
+                _Alignas(16) uint16_t slot[64];
+                block_slots(q, n, dcp[c], tokens, slot);
+                for (int j = 0; j < n; j++) {
+                    sy[k++] = slot[j];
+                    if (q[j] > 7 || q[j] < -7) {
+                        const int e = q[j] + 2048;
+                        sy[k++] = (uint16_t)(ENC_UNIFORM + (e >> 6));
+                        sy[k++] = (uint16_t)(ENC_UNIFORM + (e & 63));
+                    }
+                }
+            }
+            dcp[c] = gv_dct_class(q[0]);
+        }
+    }
+    return k;
+}
+
 /* Write the buffer of candidate cd (its models built, mask theirs).
  * Returns its length, or 0 past cap. */
 static size_t write_buffer(struct gv_dct_workspace *ws,
@@ -889,18 +918,8 @@ static size_t write_buffer(struct gv_dct_workspace *ws,
     for (int by = 0; by < GV_DCT_BLOCKS; by += 2) {
         const int rows = by + 1 < GV_DCT_BLOCKS ? 2 : 1;
         int ns[2] = {0, 0}, n[2] = {0, 0};
-        for (int r = 0; r < rows; r++) {
-            uint16_t *sy = ws->syms[r];
-            int k = 0;
-#define COLLECT(m, s_)                                                        \
-    do {                                                                      \
-        const int m_ = (m);                                                   \
-        sy[k++] = (uint16_t)((m_ < 0 ? ENC_UNIFORM : enc_at(m_)) + (s_));     \
-    } while (0)
-            WALK_ROW(cd, channels, by + r, COLLECT);
-#undef COLLECT
-            ns[r] = k;
-        }
+        for (int r = 0; r < rows; r++)
+            ns[r] = collect_row(cd, channels, by + r, ws->syms[r]);
         /* The two rows' states are independent chains: coded in
          * lockstep, each one's multiplies overlap the other's. */
         uint32_t x0 = 1u << 16, x1 = 1u << 16;   /* initial and final state */
