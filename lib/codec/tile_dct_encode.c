@@ -514,27 +514,31 @@ quantize_block_avx2(const float *x, float inv, float s, int16_t *q,
     const __m256 vinv = _mm256_set1_ps(inv), vs = _mm256_set1_ps(s);
     const __m256 off = _mm256_set1_ps(ROUND_OFFSET), cap = _mm256_set1_ps(2047.5f);
     const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-    const __m128i zero = _mm_setzero_si128();
+    const __m256i zero = _mm256_setzero_si256();
     __m256 sum = _mm256_setzero_ps();
     uint64_t nz = 0;
-    for (int k = 0; k < 64; k += 8) {
-        const __m256 v = _mm256_loadu_ps(x + k);
-        const __m256 a = _mm256_and_ps(v, absmask);
-        __m256 f = _mm256_add_ps(_mm256_mul_ps(a, vinv), off);
-        f = _mm256_min_ps(f, cap);
-        const __m256i m = _mm256_cvttps_epi32(f);
-        const __m256 err = _mm256_sub_ps(a, _mm256_mul_ps(_mm256_cvtepi32_ps(m), vs));
-        sum = _mm256_add_ps(sum, _mm256_mul_ps(err, err));
-        const __m256i sg = _mm256_srai_epi32(_mm256_castps_si256(v), 31);
-        const __m256i sm = _mm256_sub_epi32(_mm256_xor_si256(m, sg), sg);
-        /* Eight int16: packs works within each 128-bit half, so the
-         * halves' low quadwords (values 0-3 and 4-7) are gathered. */
-        const __m128i q8 = _mm256_castsi256_si128(
-            _mm256_permute4x64_epi64(_mm256_packs_epi32(sm, sm), 0x08));
-        _mm_storeu_si128((__m128i *)(q + k), q8);
-        const __m128i eq = _mm_cmpeq_epi16(q8, zero);
-        const int z = _mm_movemask_epi8(_mm_packs_epi16(eq, eq)) & 0xff;
-        nz |= (uint64_t)(~z & 0xff) << k;
+    for (int k = 0; k < 64; k += 16) {
+        __m256i sm[2];
+        unsigned z = 0;
+        for (int h = 0; h < 2; h++) {
+            const __m256 v = _mm256_loadu_ps(x + k + 8 * h);
+            const __m256 a = _mm256_and_ps(v, absmask);
+            __m256 f = _mm256_add_ps(_mm256_mul_ps(a, vinv), off);
+            f = _mm256_min_ps(f, cap);
+            const __m256i m = _mm256_cvttps_epi32(f);
+            const __m256 err = _mm256_sub_ps(a, _mm256_mul_ps(_mm256_cvtepi32_ps(m), vs));
+            sum = _mm256_add_ps(sum, _mm256_mul_ps(err, err));
+            /* m with the sign of x (sign_epi32 reads x's bits as an
+             * integer: negative for x < 0, -0 included, where m = 0). */
+            sm[h] = _mm256_sign_epi32(m, _mm256_castps_si256(v));
+            z |= (unsigned)_mm256_movemask_ps(
+                     _mm256_castsi256_ps(_mm256_cmpeq_epi32(m, zero))) << 8 * h;
+        }
+        /* Sixteen int16: packs works within each 128-bit half, giving
+         * the quadwords 0-3, 8-11, 4-7, 12-15, put back in order. */
+        _mm256_storeu_si256((__m256i *)(q + k), _mm256_permute4x64_epi64(
+            _mm256_packs_epi32(sm[0], sm[1]), 0xd8));
+        nz |= (uint64_t)(~z & 0xffff) << k;
     }
     _mm256_storeu_ps(acc, sum);
     return nz;
