@@ -65,6 +65,7 @@ static const double step_factor[STEP_CANDIDATES] = {
     5.65685424949238020,
 };
 #define MAX_ROW_SYMBOLS (GV_DCT_BLOCKS * 3 * (1 + 64 * 3))
+#define LANES 4                 /* rows whose rANS states are coded together */
 
 static const double channel_weight[3] = {3.0, 0.5, 0.75};
 
@@ -104,9 +105,9 @@ struct gv_dct_workspace {
     float maxabs[3][NB];         /* largest |coefficient| of each block */
     double energy[3][NB];        /* sum of its squares */
     struct candidate cand[2];    /* the one being tried, and the best */
-    uint16_t syms[2][MAX_ROW_SYMBOLS + 64];  /* two rows' symbols (enc[]) */
+    uint16_t syms[LANES][MAX_ROW_SYMBOLS + 64];  /* rows' symbols (enc[]) */
     struct enc_sym enc[ENC_SYMBOLS];       /* the coding of every symbol */
-    uint16_t words[2][MAX_ROW_SYMBOLS + 2];
+    uint16_t words[LANES][MAX_ROW_SYMBOLS + 2];
 };
 
 struct gv_dct_workspace *gv_dct_workspace_new(void)
@@ -833,11 +834,11 @@ static void set_enc(struct enc_sym *e, uint32_t f, uint32_t c)
  * (whether a word goes out follows the data and would be mispredicted
  * often; words[] has room for a store that the count then drops). */
 static inline uint32_t put_sym(uint32_t x, const struct enc_sym *e,
-                               uint16_t *words, int *n)
+                               uint16_t **w)
 {
     const int out = x > e->thr;
-    words[*n] = (uint16_t)x;
-    *n += out;
+    **w = (uint16_t)x;
+    *w += out;
     const uint32_t xr = out ? x >> 16 : x;
     const uint32_t q = (uint32_t)((uint64_t)xr * e->m >> 40);
     return xr + q * e->g + e->c;
@@ -884,6 +885,56 @@ static int collect_row(const struct candidate *cd, int channels, int by,
     return k;
 }
 
+/* Code the collected symbols of `rows` rows (at most LANES; left[r] of
+ * row r, coded last to first) into their states x[] and words.  The
+ * rows' states are independent chains of multiplies: coded in lockstep,
+ * LANES at a time while every row has symbols left, then two, then
+ * one, so that each chain's latency hides behind the others'. */
+static void code_rows(struct gv_dct_workspace *ws, int rows, int *left,
+                      uint32_t *x, int *n)
+{
+    const struct enc_sym *enc = ws->enc;
+    uint16_t *w[LANES];
+    for (int r = 0; r < rows; r++)
+        w[r] = ws->words[r];
+    if (rows == LANES) {
+        int common = left[0];
+        for (int r = 1; r < LANES; r++)
+            common = left[r] < common ? left[r] : common;
+        const uint16_t *s0 = ws->syms[0] + left[0] - 1, *s1 = ws->syms[1] + left[1] - 1;
+        const uint16_t *s2 = ws->syms[2] + left[2] - 1, *s3 = ws->syms[3] + left[3] - 1;
+        uint32_t x0 = x[0], x1 = x[1], x2 = x[2], x3 = x[3];
+        uint16_t *w0 = w[0], *w1 = w[1], *w2 = w[2], *w3 = w[3];
+        for (int j = 0; j < common; j++) {
+            x0 = put_sym(x0, &enc[s0[-j]], &w0);
+            x1 = put_sym(x1, &enc[s1[-j]], &w1);
+            x2 = put_sym(x2, &enc[s2[-j]], &w2);
+            x3 = put_sym(x3, &enc[s3[-j]], &w3);
+        }
+        x[0] = x0, x[1] = x1, x[2] = x2, x[3] = x3;
+        w[0] = w0, w[1] = w1, w[2] = w2, w[3] = w3;
+        for (int r = 0; r < LANES; r++)
+            left[r] -= common;
+    }
+    for (int a = 0; a < rows; a++) {
+        if (!left[a])
+            continue;
+        int b = a + 1;
+        while (b < rows && !left[b])
+            b++;
+        if (b < rows)
+            for (; left[a] && left[b];) {
+                x[a] = put_sym(x[a], &enc[ws->syms[a][--left[a]]], &w[a]);
+                x[b] = put_sym(x[b], &enc[ws->syms[b][--left[b]]], &w[b]);
+            }
+        while (left[a])
+            x[a] = put_sym(x[a], &enc[ws->syms[a][--left[a]]], &w[a]);
+        /* Row b, if it still has symbols, pairs with the next. */
+    }
+    for (int r = 0; r < rows; r++)
+        n[r] = (int)(w[r] - ws->words[r]);
+}
+
 /* Write the buffer of candidate cd (its models built, mask theirs).
  * Returns its length, or 0 past cap. */
 static size_t write_buffer(struct gv_dct_workspace *ws,
@@ -919,31 +970,19 @@ static size_t write_buffer(struct gv_dct_workspace *ws,
     for (int v = 0; v < 64; v++)
         set_enc(&ws->enc[ENC_UNIFORM + v], 4, 4u * (uint32_t)v);
     at = streams;
-    for (int by = 0; by < GV_DCT_BLOCKS; by += 2) {
-        const int rows = by + 1 < GV_DCT_BLOCKS ? 2 : 1;
-        int ns[2] = {0, 0}, n[2] = {0, 0};
-        for (int r = 0; r < rows; r++)
-            ns[r] = collect_row(cd, channels, by + r, ws->syms[r]);
-        /* The two rows' states are independent chains: coded in
-         * lockstep, each one's multiplies overlap the other's. */
-        uint32_t x0 = 1u << 16, x1 = 1u << 16;   /* initial and final state */
-        int i0 = ns[0], i1 = ns[1];
-        uint16_t *w0 = ws->words[0], *w1 = ws->words[1];
-        const struct enc_sym *enc = ws->enc;
-        const uint16_t *s0 = ws->syms[0], *s1 = ws->syms[1];
-        for (; i0 > 0 && i1 > 0; i0--, i1--) {
-            x0 = put_sym(x0, &enc[s0[i0 - 1]], w0, &n[0]);
-            x1 = put_sym(x1, &enc[s1[i1 - 1]], w1, &n[1]);
+    for (int by = 0; by < GV_DCT_BLOCKS; by += LANES) {
+        const int rows = GV_DCT_BLOCKS - by < LANES ? GV_DCT_BLOCKS - by : LANES;
+        int left[LANES] = {0}, n[LANES] = {0};
+        uint32_t x[LANES];
+        for (int r = 0; r < rows; r++) {
+            left[r] = collect_row(cd, channels, by + r, ws->syms[r]);
+            x[r] = 1u << 16;     /* the initial and final state */
         }
-        for (; i0 > 0; i0--)
-            x0 = put_sym(x0, &enc[s0[i0 - 1]], w0, &n[0]);
-        for (; i1 > 0; i1--)
-            x1 = put_sym(x1, &enc[s1[i1 - 1]], w1, &n[1]);
-        if (!(at = gv_rans_put_stream(buf, lengths, by, at, x0, w0, n[0], cap)))
-            return 0;
-        if (rows == 2 &&
-            !(at = gv_rans_put_stream(buf, lengths, by + 1, at, x1, w1, n[1], cap)))
-            return 0;
+        code_rows(ws, rows, left, x, n);
+        for (int r = 0; r < rows; r++)
+            if (!(at = gv_rans_put_stream(buf, lengths, by + r, at, x[r],
+                                          ws->words[r], n[r], cap)))
+                return 0;
     }
     return gv_rans_finish(buf, at, cap);
 }
