@@ -29,6 +29,12 @@
  * not depend on the path.  The AVX2 transform also takes the residual of
  * eight pixels at once and writes its second pass straight in zigzag
  * order (2.1 times faster than the plain C's structure in 8 lanes).
+ * Session 9 (bench/README.md, "2026-11-26 (session 9), encoder CPU"):
+ * the tokens, contexts and escapes of a block are computed eight at a
+ * time as slots (block_slots), which both the counting and the writing
+ * use; the rANS rows are coded four at a time in lockstep, without a
+ * branch, by a per-symbol table and a 64-bit multiply for x / f.  All of
+ * it integer, so every path gives the same bytes.
  */
 #include <math.h>
 #include <pthread.h>
