@@ -75,7 +75,6 @@ static const double step_factor[STEP_CANDIDATES] = {
 
 static const double channel_weight[3] = {3.0, 0.5, 0.75};
 
-
 /* A symbol's rANS coding at 8 bits (put_sym): x / f = x * m >> 40, the
  * state renormalized when x > thr = f 2^24 - 1, g = 256 - f, c its
  * cumulative frequency.  Entry enc_at[model] + symbol for a model's
@@ -111,8 +110,8 @@ struct gv_dct_workspace {
     float maxabs[3][NB];         /* largest |coefficient| of each block */
     double energy[3][NB];        /* sum of its squares */
     struct candidate cand[2];    /* the one being tried, and the best */
-    uint16_t syms[LANES][MAX_ROW_SYMBOLS + 64];  /* rows' symbols (enc[]) */
-    struct enc_sym enc[ENC_SYMBOLS];       /* the coding of every symbol */
+    uint16_t syms[LANES][MAX_ROW_SYMBOLS + 64]; /* rows' symbols (enc[]) */
+    struct enc_sym enc[ENC_SYMBOLS];   /* the coding of every symbol */
     uint16_t words[LANES][MAX_ROW_SYMBOLS + 2];
 };
 
@@ -456,7 +455,7 @@ static void init_tc(void)
  * summed in that order (the same roundings with SSE2 as without).
  * Returns the mask of the nonzero values (bit k for q[k]). */
 static inline uint64_t quantize_block(const float *x, float inv, float s,
-                                 int16_t *q, float *acc)
+                                      int16_t *q, float *acc)
 {
 #if defined(__SSE2__)
     const __m128 vinv = _mm_set1_ps(inv), vs = _mm_set1_ps(s);
@@ -533,13 +532,14 @@ quantize_block_avx2(const float *x, float inv, float s, int16_t *q,
             __m256 f = _mm256_add_ps(_mm256_mul_ps(a, vinv), off);
             f = _mm256_min_ps(f, cap);
             const __m256i m = _mm256_cvttps_epi32(f);
-            const __m256 err = _mm256_sub_ps(a, _mm256_mul_ps(_mm256_cvtepi32_ps(m), vs));
+            const __m256 err =
+                _mm256_sub_ps(a, _mm256_mul_ps(_mm256_cvtepi32_ps(m), vs));
             sum = _mm256_add_ps(sum, _mm256_mul_ps(err, err));
             /* m with the sign of x (sign_epi32 reads x's bits as an
              * integer: negative for x < 0, -0 included, where m = 0). */
             sm[h] = _mm256_sign_epi32(m, _mm256_castps_si256(v));
-            z |= (unsigned)_mm256_movemask_ps(
-                     _mm256_castsi256_ps(_mm256_cmpeq_epi32(m, zero))) << 8 * h;
+            z |= (unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(
+                     _mm256_cmpeq_epi32(m, zero))) << 8 * h;
         }
         /* Sixteen int16: packs works within each 128-bit half, giving
          * the quadwords 0-3, 8-11, 4-7, 12-15, put back in order. */
@@ -586,15 +586,16 @@ block_slots(const int16_t *q, int n, int dcp, int add, uint16_t *slot)
         const __m128i v = _mm_loadu_si128((const __m128i *)(q + k));
         const __m128i a = _mm_max_epi16(v, _mm_sub_epi16(zero, v));
         const __m128i t = _mm_min_epi16(
-            _mm_add_epi16(_mm_add_epi16(a, a), _mm_cmpgt_epi16(v, zero)), fifteen);
+            _mm_add_epi16(_mm_add_epi16(a, a), _mm_cmpgt_epi16(v, zero)),
+            fifteen);
         const __m128i cls = _mm_min_epi16(a, two);
         const __m128i p = _mm_or_si128(_mm_slli_si128(cls, 2),
                                        _mm_srli_si128(prev, 14));
         prev = cls;
         const __m128i base = _mm_add_epi16(
             _mm_load_si128((const __m128i *)(tok_base + k)), vadd);
-        _mm_storeu_si128((__m128i *)(slot + k),
-                         _mm_add_epi16(_mm_add_epi16(base, _mm_slli_epi16(p, 4)), t));
+        _mm_storeu_si128((__m128i *)(slot + k), _mm_add_epi16(
+            _mm_add_epi16(base, _mm_slli_epi16(p, 4)), t));
         /* Two mask bits per escape. */
         esc += __builtin_popcount(
             (unsigned)_mm_movemask_epi8(_mm_cmpgt_epi16(a, seven)));
@@ -699,7 +700,8 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
         sse += w * e2 / 64.0;
     }
     for (int m = 0; m < 2 * 12; m++)
-        memcpy(md->count[GV_DCT_EOB_MODELS + m], tokh + m * GV_DCT_TOKEN_SYMBOLS,
+        memcpy(md->count[GV_DCT_EOB_MODELS + m],
+               tokh + m * GV_DCT_TOKEN_SYMBOLS,
                GV_DCT_TOKEN_SYMBOLS * sizeof *tokh);
     md->uniform = uniform;
     return sse;
@@ -903,12 +905,17 @@ static void code_rows(struct gv_dct_workspace *ws, int rows, int *left,
     uint16_t *w[LANES];
     for (int r = 0; r < rows; r++)
         w[r] = ws->words[r];
+    _Static_assert(LANES == 4, "code_rows names four lanes");
     if (rows == LANES) {
         int common = left[0];
         for (int r = 1; r < LANES; r++)
             common = left[r] < common ? left[r] : common;
-        const uint16_t *s0 = ws->syms[0] + left[0] - 1, *s1 = ws->syms[1] + left[1] - 1;
-        const uint16_t *s2 = ws->syms[2] + left[2] - 1, *s3 = ws->syms[3] + left[3] - 1;
+        /* Each row's last symbol first; the lanes in locals, so that
+         * their states and pointers stay in registers. */
+        const uint16_t *s0 = ws->syms[0] + left[0] - 1;
+        const uint16_t *s1 = ws->syms[1] + left[1] - 1;
+        const uint16_t *s2 = ws->syms[2] + left[2] - 1;
+        const uint16_t *s3 = ws->syms[3] + left[3] - 1;
         uint32_t x0 = x[0], x1 = x[1], x2 = x[2], x3 = x[3];
         uint16_t *w0 = w[0], *w1 = w[1], *w2 = w[2], *w3 = w[3];
         for (int j = 0; j < common; j++) {
@@ -972,12 +979,14 @@ static size_t write_buffer(struct gv_dct_workspace *ws,
     for (int m = 0; m < GV_DCT_MODELS; m++)
         if (mask >> m & 1)
             for (int v = 0; v < gv_dct_model_symbols(m); v++)
-                set_enc(&ws->enc[enc_at(m) + v], md->freq[m][v], md->cum[m][v]);
+                set_enc(&ws->enc[enc_at(m) + v], md->freq[m][v],
+                        md->cum[m][v]);
     for (int v = 0; v < 64; v++)
         set_enc(&ws->enc[ENC_UNIFORM + v], 4, 4u * (uint32_t)v);
     at = streams;
     for (int by = 0; by < GV_DCT_BLOCKS; by += LANES) {
-        const int rows = GV_DCT_BLOCKS - by < LANES ? GV_DCT_BLOCKS - by : LANES;
+        const int rows = GV_DCT_BLOCKS - by < LANES ? GV_DCT_BLOCKS - by
+                                                    : LANES;
         int left[LANES] = {0}, n[LANES] = {0};
         uint32_t x[LANES];
         for (int r = 0; r < rows; r++) {
