@@ -29,12 +29,15 @@
 #                   uncompressed tiled TIFF in the scratch directory; both
 #                   tools read the same file)
 #   MOSAIC=NxM      the same with N x M copies (10x8: 1.07 gigapixels)
+#   THREADS=N       N threads for each tool instead of every core: -j N for
+#                   gigaview (new and baseline), VIPS_CONCURRENCY=N for vips
+#                   (THREADS=1 with REPS=5: the one-thread CPU comparison)
 #   TMPDIR=DIR      scratch space (default /tmp)
 set -euo pipefail
 
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
-parse_binary_args '2,34p' "$@"
+parse_binary_args '2,37p' "$@"
 
 need_cmd vips libvips-tools
 need_cmd vipsheader libvips-tools
@@ -43,6 +46,14 @@ GV_SRC=$(find_gigaview "$gv_arg")
 QUICK=${QUICK:-0}
 REPS=${REPS:-3}
 MOSAIC=${MOSAIC:-0}
+THREADS=${THREADS:-}
+gv_threads=()
+vips_env=()
+if [ -n "$THREADS" ]; then
+	[[ $THREADS =~ ^[1-9][0-9]*$ ]] || die "THREADS must be a positive integer"
+	gv_threads=(-j "$THREADS")
+	vips_env=(env "VIPS_CONCURRENCY=$THREADS")
+fi
 
 P=$DATA_DIR/photos
 LARGE=$DATA_DIR/large/marble-srtm-relief-10800x5400.png
@@ -105,7 +116,9 @@ echo "# gigaview encode speed vs vips dzsave (same inputs, same run)"
 echo "# $(date '+%F %T %Z'); $(machine_line)"
 echo "# $(describe_build "$GV_SRC")"
 echo "# vips $(vips --version | awk '{print $1}' | sed 's/^vips-//'); anchor: vips dzsave IN OUT.zip --container zip --suffix '.jpg[Q=85]'"
-echo "# gigaview: encode IN -o OUT.gv (defaults: -q 40 whole-image PSNR, -r 10, every CPU); best of $REPS wall-clock runs each, alternating"
+threads_desc="every CPU"
+[ -n "$THREADS" ] && threads_desc="-j $THREADS; vips with VIPS_CONCURRENCY=$THREADS"
+echo "# gigaview: encode IN -o OUT.gv (defaults: -q 40 whole-image PSNR, -r 10, $threads_desc); best of $REPS wall-clock runs each, alternating"
 echo "# MP/s = source megapixels / best wall time (decode of the input included for both);"
 echo "# bpp = output bytes * 8 / source pixels (zip of every JPEG tile level; store of every level);"
 echo "#   the two run at different qualities (JPEG Q85 vs -q 40), so the bpp columns are not a rate-distortion comparison"
@@ -131,12 +144,12 @@ for f in "${inputs[@]}"; do
 	tv=(); tg=(); tb=(); rv=(); rg=(); rb=(); cv=(); cg=(); cb=()
 	for ((r = 0; r < REPS; r++)); do
 		rm -rf "$work/dz" "$work/dz.zip" "$work/out.gv" "$work/base.gv"
-		read -r t m u < <(time_cmd vips dzsave "$f" "$work/dz.zip" --container zip --suffix '.jpg[Q=85]')
+		read -r t m u < <(time_cmd "${vips_env[@]}" vips dzsave "$f" "$work/dz.zip" --container zip --suffix '.jpg[Q=85]')
 		tv+=("$t"); rv+=("$m"); cv+=("$u")
-		read -r t m u < <(time_cmd "$GV" encode "$f" -o "$work/out.gv" --quiet)
+		read -r t m u < <(time_cmd "$GV" encode "$f" -o "$work/out.gv" "${gv_threads[@]}" --quiet)
 		tg+=("$t"); rg+=("$m"); cg+=("$u")
 		if [ -n "$BASE" ]; then
-			read -r t m u < <(time_cmd "$BASE" encode "$f" -o "$work/base.gv" --quiet)
+			read -r t m u < <(time_cmd "$BASE" encode "$f" -o "$work/base.gv" "${gv_threads[@]}" --quiet)
 			tb+=("$t"); rb+=("$m"); cb+=("$u")
 		fi
 	done

@@ -31,6 +31,12 @@
  * not depend on the path.  The AVX2 transform also takes the residual of
  * eight pixels at once and writes its second pass straight in zigzag
  * order (2.1 times faster than the plain C's structure in 8 lanes).
+ * Session 9 (bench/README.md, "2026-11-26 (session 9), encoder CPU"):
+ * the tokens, contexts and escapes of a block are computed eight at a
+ * time as slots (block_slots), which both the counting and the writing
+ * use; the rANS rows are coded four at a time in lockstep, without a
+ * branch, by a per-symbol table and a 64-bit multiply for x / f.  All of
+ * it integer, so every path gives the same bytes.
  */
 #include <math.h>
 #include <pthread.h>
@@ -67,13 +73,23 @@ static const double step_factor[STEP_CANDIDATES] = {
     5.65685424949238020,
 };
 #define MAX_ROW_SYMBOLS (GV_DCT_BLOCKS * 3 * (1 + 64 * 3))
+#define LANES 4                 /* rows whose rANS states are coded together */
 
 static const double channel_weight[3] = {3.0, 0.5, 0.75};
 
-struct sym {
-    int16_t model;   /* -1: a uniform 6-bit step */
-    int16_t s;
+/* A symbol's rANS coding at 8 bits (put_sym): x / f = x * m >> 40, the
+ * state renormalized when x > thr = f 2^24 - 1, g = 256 - f, c its
+ * cumulative frequency.  Entry enc_at[model] + symbol for a model's
+ * symbols, ENC_UNIFORM + v for a uniform 6-bit step v. */
+struct enc_sym {
+    uint64_t m;
+    uint32_t thr;
+    uint16_t g, c;
 };
+
+#define ENC_UNIFORM (GV_DCT_EOB_MODELS * GV_DCT_EOB_SYMBOLS +                \
+                     (GV_DCT_MODELS - GV_DCT_EOB_MODELS) * GV_DCT_TOKEN_SYMBOLS)
+#define ENC_SYMBOLS (ENC_UNIFORM + 64)
 
 struct models {
     uint32_t count[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
@@ -96,8 +112,9 @@ struct gv_dct_workspace {
     float maxabs[3][NB];         /* largest |coefficient| of each block */
     double energy[3][NB];        /* sum of its squares */
     struct candidate cand[2];    /* the one being tried, and the best */
-    struct sym syms[MAX_ROW_SYMBOLS];
-    uint16_t words[MAX_ROW_SYMBOLS + 2];
+    uint16_t syms[LANES][MAX_ROW_SYMBOLS + 64]; /* rows' symbols (enc[]) */
+    struct enc_sym enc[ENC_SYMBOLS];   /* the coding of every symbol */
+    uint16_t words[LANES][MAX_ROW_SYMBOLS + 2];
 };
 
 struct gv_dct_workspace *gv_dct_workspace_new(void)
@@ -370,8 +387,9 @@ transform_body(struct gv_dct_workspace *ws, const uint8_t *orig,
         for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
             const int b = by * GV_DCT_BLOCKS + bx;
             if ((uint32_t)(8 * bx) >= vw || (uint32_t)(8 * by) >= vh) {
+                /* All zero: quantize_count never reads x of a block
+                 * whose maxabs is under half a step, so x is left. */
                 for (int c = 0; c < channels; c++) {
-                    memset(ws->x[c][b], 0, sizeof ws->x[c][b]);
                     ws->maxabs[c][b] = 0;
                     ws->energy[c][b] = 0;
                 }
@@ -437,9 +455,9 @@ static void init_tc(void)
  * dead-zone rounding floor(|x| / s + ROUND_OFFSET), capped at 2047, with
  * the sign of x.  acc[l] gets the squared error of lanes l, l + 8, ...,
  * summed in that order (the same roundings with SSE2 as without).
- * Returns one past the last nonzero value (0 when all are zero). */
-static inline int quantize_block(const float *x, float inv, float s,
-                                 int16_t *q, float *acc)
+ * Returns the mask of the nonzero values (bit k for q[k]). */
+static inline uint64_t quantize_block(const float *x, float inv, float s,
+                                      int16_t *q, float *acc)
 {
 #if defined(__SSE2__)
     const __m128 vinv = _mm_set1_ps(inv), vs = _mm_set1_ps(s);
@@ -472,7 +490,7 @@ static inline int quantize_block(const float *x, float inv, float s,
     }
     _mm_storeu_ps(acc, acc0);
     _mm_storeu_ps(acc + 4, acc1);
-    return nz ? 64 - __builtin_clzll(nz) : 0;
+    return nz;
 #else
     for (int l = 0; l < 8; l++)
         acc[l] = 0;
@@ -486,10 +504,10 @@ static inline int quantize_block(const float *x, float inv, float s,
             acc[l] += err * err;
             q[k + l] = (int16_t)(v < 0 ? -m : m);
         }
-    int last = 64;
-    while (last > 0 && !q[last - 1])
-        last--;
-    return last;
+    uint64_t nz = 0;
+    for (int k = 0; k < 64; k++)
+        nz |= (uint64_t)(q[k] != 0) << k;
+    return nz;
 #endif
 }
 
@@ -497,41 +515,119 @@ static inline int quantize_block(const float *x, float inv, float s,
 /* quantize_block in eight lanes: the same operations in the same order
  * (a multiply and an add, never fused: ISO C mode), so the same q, the
  * same return and the same acc[l], lane l summing k = l, l + 8, ... */
-__attribute__((target("avx2,fma"), always_inline)) static inline int
+__attribute__((target("avx2,fma"), always_inline)) static inline uint64_t
 quantize_block_avx2(const float *x, float inv, float s, int16_t *q,
                     float *acc)
 {
     const __m256 vinv = _mm256_set1_ps(inv), vs = _mm256_set1_ps(s);
     const __m256 off = _mm256_set1_ps(ROUND_OFFSET), cap = _mm256_set1_ps(2047.5f);
     const __m256 absmask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-    const __m128i zero = _mm_setzero_si128();
+    const __m256i zero = _mm256_setzero_si256();
     __m256 sum = _mm256_setzero_ps();
     uint64_t nz = 0;
-    for (int k = 0; k < 64; k += 8) {
-        const __m256 v = _mm256_loadu_ps(x + k);
-        const __m256 a = _mm256_and_ps(v, absmask);
-        __m256 f = _mm256_add_ps(_mm256_mul_ps(a, vinv), off);
-        f = _mm256_min_ps(f, cap);
-        const __m256i m = _mm256_cvttps_epi32(f);
-        const __m256 err = _mm256_sub_ps(a, _mm256_mul_ps(_mm256_cvtepi32_ps(m), vs));
-        sum = _mm256_add_ps(sum, _mm256_mul_ps(err, err));
-        const __m256i sg = _mm256_srai_epi32(_mm256_castps_si256(v), 31);
-        const __m256i sm = _mm256_sub_epi32(_mm256_xor_si256(m, sg), sg);
-        /* Eight int16: packs works within each 128-bit half, so the
-         * halves' low quadwords (values 0-3 and 4-7) are gathered. */
-        const __m128i q8 = _mm256_castsi256_si128(
-            _mm256_permute4x64_epi64(_mm256_packs_epi32(sm, sm), 0x08));
-        _mm_storeu_si128((__m128i *)(q + k), q8);
-        const __m128i eq = _mm_cmpeq_epi16(q8, zero);
-        const int z = _mm_movemask_epi8(_mm_packs_epi16(eq, eq)) & 0xff;
-        nz |= (uint64_t)(~z & 0xff) << k;
+    for (int k = 0; k < 64; k += 16) {
+        __m256i sm[2];
+        unsigned z = 0;
+        for (int h = 0; h < 2; h++) {
+            const __m256 v = _mm256_loadu_ps(x + k + 8 * h);
+            const __m256 a = _mm256_and_ps(v, absmask);
+            __m256 f = _mm256_add_ps(_mm256_mul_ps(a, vinv), off);
+            f = _mm256_min_ps(f, cap);
+            const __m256i m = _mm256_cvttps_epi32(f);
+            const __m256 err =
+                _mm256_sub_ps(a, _mm256_mul_ps(_mm256_cvtepi32_ps(m), vs));
+            sum = _mm256_add_ps(sum, _mm256_mul_ps(err, err));
+            /* m with the sign of x (sign_epi32 reads x's bits as an
+             * integer: negative for x < 0, -0 included, where m = 0). */
+            sm[h] = _mm256_sign_epi32(m, _mm256_castps_si256(v));
+            z |= (unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(
+                     _mm256_cmpeq_epi32(m, zero))) << 8 * h;
+        }
+        /* Sixteen int16: packs works within each 128-bit half, giving
+         * the quadwords 0-3, 8-11, 4-7, 12-15, put back in order. */
+        _mm256_storeu_si256((__m256i *)(q + k), _mm256_permute4x64_epi64(
+            _mm256_packs_epi32(sm[0], sm[1]), 0xd8));
+        nz |= (uint64_t)(~z & 0xffff) << k;
     }
     _mm256_storeu_ps(acc, sum);
-    return nz ? 64 - __builtin_clzll(nz) : 0;
+    return nz;
 }
 #endif
 
-typedef int quantize_fn(const float *, float, float, int16_t *, float *);
+/* The token counts of quantize_count: the 24 token models (12 per
+ * channel class, 16 symbols each), packed, copied into the models after. */
+#define TOKEN_SLOTS (12 * GV_DCT_TOKEN_SYMBOLS)     /* one channel class */
+
+/* The slot of token k's band within its channel class's counts. */
+static _Alignas(16) uint16_t tok_base[64];
+
+static void init_tok_base(void)
+{
+    for (int k = 0; k < 64; k++)
+        tok_base[k] = (uint16_t)(gv_dct_band_model[k] * GV_DCT_TOKEN_SYMBOLS);
+}
+
+/* The token slots of a block q (zigzag order) whose eob is n >= 1:
+ * slot[k] = add + tok_base[k] + 16 class(q[k - 1]) + token(q[k]) for
+ * k < n, class(q[-1]) taken as dcp (the class of the previous block's
+ * first value), as write_buffer codes them: token k's model is its
+ * band's for the class of value k - 1.  Values up to n rounded up to 8
+ * are written.  Returns twice the escapes (their uniform steps).  Eight
+ * at a time: t = min(2 |q| - (q > 0), 15) is tc[]'s token and
+ * min(|q|, 2) the class. */
+__attribute__((always_inline)) static inline int
+block_slots(const int16_t *q, int n, int dcp, int add, uint16_t *slot)
+{
+#if defined(__SSE2__)
+    const __m128i zero = _mm_setzero_si128(), two = _mm_set1_epi16(2);
+    const __m128i fifteen = _mm_set1_epi16(15), seven = _mm_set1_epi16(7);
+    const __m128i vadd = _mm_set1_epi16((int16_t)add);
+    __m128i prev = _mm_insert_epi16(zero, dcp, 7);
+    int esc = 0;
+    for (int k = 0; k < n; k += 8) {
+        const __m128i v = _mm_loadu_si128((const __m128i *)(q + k));
+        const __m128i a = _mm_max_epi16(v, _mm_sub_epi16(zero, v));
+        const __m128i t = _mm_min_epi16(
+            _mm_add_epi16(_mm_add_epi16(a, a), _mm_cmpgt_epi16(v, zero)),
+            fifteen);
+        const __m128i cls = _mm_min_epi16(a, two);
+        const __m128i p = _mm_or_si128(_mm_slli_si128(cls, 2),
+                                       _mm_srli_si128(prev, 14));
+        prev = cls;
+        const __m128i base = _mm_add_epi16(
+            _mm_load_si128((const __m128i *)(tok_base + k)), vadd);
+        _mm_storeu_si128((__m128i *)(slot + k), _mm_add_epi16(
+            _mm_add_epi16(base, _mm_slli_epi16(p, 4)), t));
+        /* Two mask bits per escape. */
+        esc += __builtin_popcount(
+            (unsigned)_mm_movemask_epi8(_mm_cmpgt_epi16(a, seven)));
+    }
+    return esc;
+#else
+    int esc = 0, p = dcp;
+    for (int k = 0; k < n; k++) {
+        const int y = tc[q[k] + 2048], t = y & 15;
+        slot[k] = (uint16_t)(add + tok_base[k] + 16 * p + t);
+        esc += t == GV_DCT_ESCAPE ? 2 : 0;
+        p = y >> 4;
+    }
+    return esc;
+#endif
+}
+
+/* Count the tokens of block q (eob n >= 1, dcp as block_slots) into h,
+ * the counts of its channel class; returns its uniform steps. */
+__attribute__((always_inline)) static inline uint64_t
+count_block(const int16_t *q, int n, int dcp, uint32_t *h)
+{
+    _Alignas(16) uint16_t slot[64];
+    const int esc = block_slots(q, n, dcp, 0, slot);
+    for (int k = 0; k < n; k++)
+        h[slot[k]]++;
+    return (uint64_t)esc;
+}
+
+typedef uint64_t quantize_fn(const float *, float, float, int16_t *, float *);
 
 /* Quantize every block at steps[] into cd (q, eob) and count its symbols
  * into cd->md (counts and the uniform steps; totals and frequencies are
@@ -547,6 +643,8 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
 {
     struct models *md = &cd->md;
     memset(md->count, 0, sizeof md->count);
+    uint32_t tokh[2 * TOKEN_SLOTS];
+    memset(tokh, 0, sizeof tokh);
     uint64_t uniform = 0;
     double sse = 0;
     for (int c = 0; c < channels; c++) {
@@ -555,40 +653,58 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
         const double w = channels == 1 ? 1.0 : channel_weight[c];
         const int cc = c > 0;
         uint32_t *eobc = md->count[3 * cc];
-        uint32_t *tokc = md->count[GV_DCT_EOB_MODELS + 12 * cc];
+        uint32_t *tokc = tokh + TOKEN_SLOTS * cc;
         double e2 = 0;
         for (int by = 0; by < GV_DCT_BLOCKS; by++) {
             int pe = 0, dcp = 0;
             for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
                 const int b = by * GV_DCT_BLOCKS + bx;
                 if (ws->maxabs[c][b] < zero_below) {
-                    cd->eob[c][b] = 0;
+                    /* A run of all-zero blocks, in a loop of its own that
+                     * keeps the error's sum in a register: its first eob
+                     * in context pe, the others in context 0. */
+                    const float *ma = ws->maxabs[c] + by * GV_DCT_BLOCKS;
+                    const double *en = ws->energy[c] + by * GV_DCT_BLOCKS;
+                    uint8_t *eob = cd->eob[c] + by * GV_DCT_BLOCKS;
+                    double t = e2;
+                    int r = bx;
+                    do {
+                        eob[r] = 0;
+                        t += en[r];
+                        r++;
+                    } while (r < GV_DCT_BLOCKS && ma[r] < zero_below);
+                    e2 = t;
                     eobc[pe * GV_DCT_EOB_SYMBOLS]++;
-                    e2 += ws->energy[c][b];
+                    eobc[0] += (uint32_t)(r - bx - 1);
                     pe = dcp = 0;
+                    bx = r - 1;
                     continue;
                 }
                 const float *x = ws->x[c][b];
                 int16_t *q = cd->q[c][b];
                 float acc[8];
-                const int n = qblock(x, inv, s, q, acc);
+                const uint64_t nz = qblock(x, inv, s, q, acc);
                 e2 += ((acc[0] + acc[1]) + (acc[2] + acc[3])) +
                       ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+                const int n = nz ? 64 - __builtin_clzll(nz) : 0;
                 cd->eob[c][b] = (uint8_t)n;
                 eobc[pe * GV_DCT_EOB_SYMBOLS + n]++;
-                int p = dcp;
-                for (int k = 0; k < n; k++) {
-                    const int y = tc[q[k] + 2048], t = y & 15;
-                    tokc[(gv_dct_band_model[k] + p) * GV_DCT_EOB_SYMBOLS + t]++;
-                    uniform += t == GV_DCT_ESCAPE ? 2 : 0;
-                    p = y >> 4;
-                }
                 pe = n == 0 ? 0 : (n <= 4 ? 1 : 2);
-                dcp = n ? tc[q[0] + 2048] >> 4 : 0;
+                if (!n) {
+                    dcp = 0;
+                    continue;
+                }
+                const int dc_ctx = dcp;
+                dcp = gv_dct_class(q[0]);
+                uniform += count_block(q, n, dc_ctx, tokc);
             }
         }
         sse += w * e2 / 64.0;
     }
+    for (int m = 0; m < 2 * 12; m++)
+        memcpy(md->count[GV_DCT_EOB_MODELS + m],
+               tokh + m * GV_DCT_TOKEN_SYMBOLS,
+               GV_DCT_TOKEN_SYMBOLS * sizeof *tokh);
     md->uniform = uniform;
     return sse;
 }
@@ -614,34 +730,6 @@ quantize_count_avx2(const struct gv_dct_workspace *ws, struct candidate *cd,
 typedef double quantize_count_fn(const struct gv_dct_workspace *,
                                  struct candidate *, int, const int *);
 static quantize_count_fn *quantize_count = quantize_count_base;
-
-/* Visit every symbol of block row `by` in stream order: fn(model, symbol)
- * with model -1 for a uniform step.  Tokens and classes from tc[], as
- * quantize_count counts them. */
-#define WALK_ROW(cd, channels, by, EMIT)                                      \
-    do {                                                                      \
-        int pe_[3] = {0, 0, 0}, dcp_[3] = {0, 0, 0};                          \
-        for (int bx_ = 0; bx_ < GV_DCT_BLOCKS; bx_++) {                       \
-            const int b_ = (by) * GV_DCT_BLOCKS + bx_;                        \
-            for (int c_ = 0; c_ < (channels); c_++) {                         \
-                const int cc_ = c_ > 0, n_ = (cd)->eob[c_][b_];               \
-                const int16_t *q_ = (cd)->q[c_][b_];                          \
-                EMIT(3 * cc_ + pe_[c_], n_);                                  \
-                int p_ = dcp_[c_];                                            \
-                for (int k_ = 0; k_ < n_; k_++) {                             \
-                    const int e_ = q_[k_] + 2048, y_ = tc[e_], t_ = y_ & 15;  \
-                    EMIT(GV_DCT_EOB_MODELS + 12 * cc_ + gv_dct_band_model[k_] + p_, t_); \
-                    if (t_ == GV_DCT_ESCAPE) {                                \
-                        EMIT(-1, e_ >> 6);                                    \
-                        EMIT(-1, e_ & 63);                                    \
-                    }                                                         \
-                    p_ = y_ >> 4;                                             \
-                }                                                             \
-                pe_[c_] = n_ == 0 ? 0 : (n_ <= 4 ? 1 : 2);                    \
-                dcp_[c_] = n_ ? tc[q_[0] + 2048] >> 4 : 0;                    \
-            }                                                                 \
-        }                                                                     \
-    } while (0)
 
 /* Frequencies summing to 256, every used symbol at least 1, and the last
  * symbol at least 1 even when unused: the stored cumulative frequencies
@@ -700,13 +788,22 @@ static size_t build_models(struct models *md, uint32_t *mask)
 }
 
 static double log2_table[257];
-static uint64_t freq_rcp[257];   /* gv_rans_rcp of every frequency */
+
+/* ceil(2^40 / f): x / f = x * freq_m40[f] >> 40 exactly for every
+ * state x < f 2^24 (the bound after renormalization at 8 bits).  With
+ * freq_m40[f] = (2^40 + r) / f, 0 <= r < f, the product exceeds x / f 2^40
+ * by x r / f < (f - 1) 2^24, and f (f - 1) < 2^16 for f <= 256, so the
+ * excess stays under 2^40 / f: too little to carry past the next
+ * multiple of 1 / f, the least gap above a quotient's fraction.  The
+ * product stays under 2^64 since f r < 2^16.  One 64-bit multiply
+ * instead of gv_rans_rcp's 128-bit one, and no case for f = 1. */
+static uint64_t freq_m40[257];
 
 static void init_log2(void)
 {
     for (int f = 1; f <= 256; f++) {
         log2_table[f] = log2(256.0 / f);
-        freq_rcp[f] = gv_rans_rcp((uint32_t)f);
+        freq_m40[f] = ((1ull << 40) + (uint64_t)f - 1) / (uint64_t)f;
     }
 }
 
@@ -723,6 +820,134 @@ static double estimate_bytes(const struct models *md, size_t model_bytes)
     }
     return bits / 8 + (double)model_bytes + HEADER_BYTES + LENGTHS_BYTES +
            4.0 * GV_DCT_BLOCKS;
+}
+
+/* The first enc[] entry of model m. */
+static inline int enc_at(int m)
+{
+    return m < GV_DCT_EOB_MODELS ? m * GV_DCT_EOB_SYMBOLS :
+           GV_DCT_EOB_MODELS * GV_DCT_EOB_SYMBOLS +
+           (m - GV_DCT_EOB_MODELS) * GV_DCT_TOKEN_SYMBOLS;
+}
+
+static void set_enc(struct enc_sym *e, uint32_t f, uint32_t c)
+{
+    e->m = freq_m40[f];
+    e->thr = (uint32_t)(((uint64_t)f << 24) - 1);
+    e->g = (uint16_t)(256 - f);
+    e->c = (uint16_t)c;
+}
+
+/* gv_rans_put_rcp at 8 bits for symbol e: the same state and words, with
+ * x - (x / f) f + (x / f) 2^8 written x + (x / f) g, and no branch: the
+ * renormalized state and the other are both at hand and one is kept
+ * (whether a word goes out follows the data and would be mispredicted
+ * often; words[] has room for a store that the count then drops). */
+static inline uint32_t put_sym(uint32_t x, const struct enc_sym *e,
+                               uint16_t **w)
+{
+    const int out = x > e->thr;
+    **w = (uint16_t)x;
+    *w += out;
+    const uint32_t xr = out ? x >> 16 : x;
+    const uint32_t q = (uint32_t)((uint64_t)xr * e->m >> 40);
+    return xr + q * e->g + e->c;
+}
+
+/* The symbols of block row `by` in stream order into sy, as enc[]
+ * entries (FORMAT.md 4.3: per block, per channel, the eob, then each
+ * token, an escape followed by its two uniform steps); returns their
+ * number.  sy has room for 64 past the last. */
+static int collect_row(const struct candidate *cd, int channels, int by,
+                       uint16_t *sy)
+{
+    int k = 0, pe[3] = {0, 0, 0}, dcp[3] = {0, 0, 0};
+    for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
+        const int b = by * GV_DCT_BLOCKS + bx;
+        for (int c = 0; c < channels; c++) {
+            const int cc = c > 0, n = cd->eob[c][b];
+            const int16_t *q = cd->q[c][b];
+            sy[k++] = (uint16_t)(enc_at(3 * cc + pe[c]) + n);
+            pe[c] = n == 0 ? 0 : (n <= 4 ? 1 : 2);
+            if (!n) {
+                dcp[c] = 0;
+                continue;
+            }
+            const int tokens = enc_at(GV_DCT_EOB_MODELS) + TOKEN_SLOTS * cc;
+            if (!block_slots(q, n, dcp[c], tokens, sy + k)) {
+                k += n;
+            } else {
+                /* Escapes: their uniform steps go in after them. */
+                _Alignas(16) uint16_t slot[64];
+                block_slots(q, n, dcp[c], tokens, slot);
+                for (int j = 0; j < n; j++) {
+                    sy[k++] = slot[j];
+                    if (q[j] > 7 || q[j] < -7) {
+                        const int e = q[j] + 2048;
+                        sy[k++] = (uint16_t)(ENC_UNIFORM + (e >> 6));
+                        sy[k++] = (uint16_t)(ENC_UNIFORM + (e & 63));
+                    }
+                }
+            }
+            dcp[c] = gv_dct_class(q[0]);
+        }
+    }
+    return k;
+}
+
+/* Code the collected symbols of `rows` rows (at most LANES; left[r] of
+ * row r, coded last to first) into their states x[] and words.  The
+ * rows' states are independent chains of multiplies: coded in lockstep,
+ * LANES at a time while every row has symbols left, then two, then
+ * one, so that each chain's latency hides behind the others'. */
+static void code_rows(struct gv_dct_workspace *ws, int rows, int *left,
+                      uint32_t *x, int *n)
+{
+    const struct enc_sym *enc = ws->enc;
+    uint16_t *w[LANES];
+    for (int r = 0; r < rows; r++)
+        w[r] = ws->words[r];
+    _Static_assert(LANES == 4, "code_rows names four lanes");
+    if (rows == LANES) {
+        int common = left[0];
+        for (int r = 1; r < LANES; r++)
+            common = left[r] < common ? left[r] : common;
+        /* Each row's last symbol first; the lanes in locals, so that
+         * their states and pointers stay in registers. */
+        const uint16_t *s0 = ws->syms[0] + left[0] - 1;
+        const uint16_t *s1 = ws->syms[1] + left[1] - 1;
+        const uint16_t *s2 = ws->syms[2] + left[2] - 1;
+        const uint16_t *s3 = ws->syms[3] + left[3] - 1;
+        uint32_t x0 = x[0], x1 = x[1], x2 = x[2], x3 = x[3];
+        uint16_t *w0 = w[0], *w1 = w[1], *w2 = w[2], *w3 = w[3];
+        for (int j = 0; j < common; j++) {
+            x0 = put_sym(x0, &enc[s0[-j]], &w0);
+            x1 = put_sym(x1, &enc[s1[-j]], &w1);
+            x2 = put_sym(x2, &enc[s2[-j]], &w2);
+            x3 = put_sym(x3, &enc[s3[-j]], &w3);
+        }
+        x[0] = x0, x[1] = x1, x[2] = x2, x[3] = x3;
+        w[0] = w0, w[1] = w1, w[2] = w2, w[3] = w3;
+        for (int r = 0; r < LANES; r++)
+            left[r] -= common;
+    }
+    for (int a = 0; a < rows; a++) {
+        if (!left[a])
+            continue;
+        int b = a + 1;
+        while (b < rows && !left[b])
+            b++;
+        if (b < rows)
+            for (; left[a] && left[b];) {
+                x[a] = put_sym(x[a], &enc[ws->syms[a][--left[a]]], &w[a]);
+                x[b] = put_sym(x[b], &enc[ws->syms[b][--left[b]]], &w[b]);
+            }
+        while (left[a])
+            x[a] = put_sym(x[a], &enc[ws->syms[a][--left[a]]], &w[a]);
+        /* Row b, if it still has symbols, pairs with the next. */
+    }
+    for (int r = 0; r < rows; r++)
+        n[r] = (int)(w[r] - ws->words[r]);
 }
 
 /* Write the buffer of candidate cd (its models built, mask theirs).
@@ -753,32 +978,28 @@ static size_t write_buffer(struct gv_dct_workspace *ws,
         for (int s = 0; s < gv_dct_model_symbols(m); s++)
             buf[at++] = (uint8_t)md->cum[m][s];
     }
+    for (int m = 0; m < GV_DCT_MODELS; m++)
+        if (mask >> m & 1)
+            for (int v = 0; v < gv_dct_model_symbols(m); v++)
+                set_enc(&ws->enc[enc_at(m) + v], md->freq[m][v],
+                        md->cum[m][v]);
+    for (int v = 0; v < 64; v++)
+        set_enc(&ws->enc[ENC_UNIFORM + v], 4, 4u * (uint32_t)v);
     at = streams;
-    for (int by = 0; by < GV_DCT_BLOCKS; by++) {
-        int ns = 0;
-#define COLLECT(m, s_)                                                        \
-    do {                                                                      \
-        ws->syms[ns].model = (int16_t)(m);                                    \
-        ws->syms[ns].s = (int16_t)(s_);                                       \
-        ns++;                                                                 \
-    } while (0)
-        WALK_ROW(cd, channels, by, COLLECT);
-#undef COLLECT
-        uint32_t x = 1u << 16;   /* the initial and final state */
-        int n = 0;
-        for (int i = ns - 1; i >= 0; i--) {
-            const struct sym *y = &ws->syms[i];
-            if (y->model < 0) {
-                x = gv_rans_put_rcp(x, 4, freq_rcp[4], 4u * (uint32_t)y->s, 8,
-                                    ws->words, &n);
-            } else {
-                const uint32_t f = md->freq[y->model][y->s];
-                x = gv_rans_put_rcp(x, f, freq_rcp[f], md->cum[y->model][y->s],
-                                    8, ws->words, &n);
-            }
+    for (int by = 0; by < GV_DCT_BLOCKS; by += LANES) {
+        const int rows = GV_DCT_BLOCKS - by < LANES ? GV_DCT_BLOCKS - by
+                                                    : LANES;
+        int left[LANES] = {0}, n[LANES] = {0};
+        uint32_t x[LANES];
+        for (int r = 0; r < rows; r++) {
+            left[r] = collect_row(cd, channels, by + r, ws->syms[r]);
+            x[r] = 1u << 16;     /* the initial and final state */
         }
-        if (!(at = gv_rans_put_stream(buf, lengths, by, at, x, ws->words, n, cap)))
-            return 0;
+        code_rows(ws, rows, left, x, n);
+        for (int r = 0; r < rows; r++)
+            if (!(at = gv_rans_put_stream(buf, lengths, by + r, at, x[r],
+                                          ws->words[r], n[r], cap)))
+                return 0;
     }
     return gv_rans_finish(buf, at, cap);
 }
@@ -811,6 +1032,7 @@ static void init_tables(void)
     rdo_tails = !(rt && !strcmp(rt, "0"));
     init_kt();
     init_tc();
+    init_tok_base();
     init_log2();
 }
 
@@ -845,24 +1067,44 @@ static size_t mask_model_bytes(uint32_t mask)
     return bytes;
 }
 
-/* Count the symbols of cd's q and eob into cd->md (as quantize_count
- * does, from the values instead of the coefficients). */
+/* Count the symbols of cd's q and eob into cd->md, as quantize_count
+ * does, from the values instead of the coefficients.  Values past a
+ * block's eob may be stale (truncate_tails has not cleared them yet):
+ * block_slots reads up to the next multiple of 8, but they are of
+ * magnitude 1 at most, so they add no escape, and their slots are not
+ * counted. */
 static void count_symbols(struct candidate *cd, int channels)
 {
     struct models *md = &cd->md;
     memset(md->count, 0, sizeof md->count);
-    md->uniform = 0;
-    for (int by = 0; by < GV_DCT_BLOCKS; by++) {
-#define COUNT(m, s_)                                                          \
-    do {                                                                      \
-        if ((m) < 0)                                                          \
-            md->uniform++;                                                    \
-        else                                                                  \
-            md->count[m][s_]++;                                               \
-    } while (0)
-        WALK_ROW(cd, channels, by, COUNT);
-#undef COUNT
+    uint32_t tokh[2 * TOKEN_SLOTS];
+    memset(tokh, 0, sizeof tokh);
+    uint64_t uniform = 0;
+    for (int c = 0; c < channels; c++) {
+        const int cc = c > 0;
+        uint32_t *eobc = md->count[3 * cc];
+        uint32_t *tokc = tokh + TOKEN_SLOTS * cc;
+        for (int by = 0; by < GV_DCT_BLOCKS; by++) {
+            int pe = 0, dcp = 0;
+            for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
+                const int b = by * GV_DCT_BLOCKS + bx, n = cd->eob[c][b];
+                eobc[pe * GV_DCT_EOB_SYMBOLS + n]++;
+                pe = n == 0 ? 0 : (n <= 4 ? 1 : 2);
+                if (!n) {
+                    dcp = 0;
+                    continue;
+                }
+                const int16_t *q = cd->q[c][b];
+                uniform += count_block(q, n, dcp, tokc);
+                dcp = gv_dct_class(q[0]);
+            }
+        }
     }
+    for (int m = 0; m < 2 * 12; m++)
+        memcpy(md->count[GV_DCT_EOB_MODELS + m],
+               tokh + m * GV_DCT_TOKEN_SYMBOLS,
+               GV_DCT_TOKEN_SYMBOLS * sizeof *tokh);
+    md->uniform = uniform;
 }
 
 /* Bits of symbol s in model m as the candidate's models code it; a symbol
@@ -959,6 +1201,12 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
     count_symbols(cd, channels);
     const size_t mb = build_models(md, &new_mask);
     if (added + lambda * 8.0 * estimate_bytes(md, mb) < j_old) {
+        /* Clear the values cut off, for the writer's block_slots, which
+         * reads past the eob to a multiple of 8. */
+        for (int c = 0; c < channels; c++)
+            for (int b = 0; b < NB; b++)
+                for (int k = cd->eob[c][b]; k < saved[c][b]; k++)
+                    cd->q[c][b][k] = 0;
         *mask = new_mask;
         return;
     }
