@@ -34,6 +34,7 @@
 #include "store/store_read.h"
 #include "codec/tile.h"
 #include "codec/predict.h"
+#include "codec/tile_dct_lanes.h"
 
 struct tile_ref {
     int level;
@@ -320,6 +321,17 @@ int main(int argc, char **argv)
             printf("ratio prediction level 3 / level 2: decoder %.2fx (per CPU-second %.2fx), "
                    "prediction alone %.2fx (%.2fx)\n", cpu1 / old1, cpu1_c / old1_c,
                    pr / oldp, pr_c / oldp_c);
+        }
+        /* Where layout D's rANS rows run in AVX-512 lanes, the same
+         * decoder with the scalar rows (two in lockstep), in this run. */
+        if (gv_dct_lanes(1)) {
+            gv_dct_lanes(0);
+            double sc1 = cpu_run(1), sc1_c = last_cpu_rate;
+            gv_dct_lanes(1);
+            printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
+                   "CPU reference, scalar rANS rows", sc1, sc1_c);
+            printf("ratio rANS rows in lanes / scalar: decoder %.2fx (per CPU-second %.2fx)\n",
+                   cpu1 / sc1, cpu1_c / sc1_c);
         }
     }
 
