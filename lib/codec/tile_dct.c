@@ -479,8 +479,8 @@ int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
     /* Where the CPU has AVX-512: sixteen rows at a time in SIMD lanes
      * (tile_dct_lanes.c), then their pixels; a group with damage, and the
      * last row, by the scalar code below. */
-    gv_dct_row *lane_rows = gv_dct_lanes_usable() ? gv_dct_lanes_arena() : NULL;
-    int lanes_to = lane_rows ? GV_DCT_BLOCKS - 1 : 0;
+    struct gv_dct_lanes_arena *lanes = gv_dct_lanes_usable() ? gv_dct_lanes_arena() : NULL;
+    int lanes_to = lanes ? GV_DCT_BLOCKS - 1 : 0;
     for (int by = 0; by < lanes_to; by += GV_DCT_LANES) {
         uint8_t lane_eobs[GV_DCT_LANES][3][GV_DCT_BLOCKS];
         uint32_t at[GV_DCT_LANES], end[GV_DCT_LANES];
@@ -491,7 +491,7 @@ int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
             end[i] = (uint32_t)a;
         }
         if (gv_dct_lanes_rows(buf, at, end, GV_DCT_LANES, channels,
-                              &it.md.slot[0][0], it.steps, lane_rows,
+                              &it.md.slot[0][0], it.steps, lanes,
                               lane_eobs) < 0) {
             lanes_to = by;
             break;
@@ -501,7 +501,7 @@ int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
             const int y0 = 8 * (by + r);
             for (int j = 0; j < 8; j++)
                 gv_predictor_row(&pred, y0 + j, out + (size_t)(y0 + j) * stride);
-            gv_dct_add_row(lane_rows[r], lane_eobs[r], channels, by + r, out);
+            gv_dct_add_row(lanes->rows[r], lane_eobs[r], channels, by + r, out);
         }
     }
     for (int by = lanes_to; by < GV_DCT_BLOCKS; by += 2) {

@@ -57,7 +57,6 @@ static int cpu_has_lanes(void)
     return __builtin_cpu_supports("avx512f") &&
            __builtin_cpu_supports("avx512bw") &&
            __builtin_cpu_supports("avx512vbmi") &&
-           __builtin_cpu_supports("bmi2") &&
            __builtin_cpu_supports("popcnt");
 #else
     return 0;
@@ -93,14 +92,14 @@ static void arena_key_make(void)
     arena_key_ok = pthread_key_create(&arena_key, free) == 0;
 }
 
-gv_dct_row *gv_dct_lanes_arena(void)
+struct gv_dct_lanes_arena *gv_dct_lanes_arena(void)
 {
     pthread_once(&arena_once, arena_key_make);
     if (!arena_key_ok)
         return NULL;
-    gv_dct_row *rows = pthread_getspecific(arena_key);
+    struct gv_dct_lanes_arena *rows = pthread_getspecific(arena_key);
     if (!rows) {
-        rows = calloc(GV_DCT_LANES, sizeof *rows);
+        rows = calloc(1, sizeof *rows);
         if (rows && pthread_setspecific(arena_key, rows) != 0) {
             free(rows);
             rows = NULL;
@@ -114,233 +113,248 @@ gv_dct_row *gv_dct_lanes_arena(void)
 #define ROW16 (3 * 8 * GV_DCT_PLANE)  /* int16 in a gv_dct_row */
 #define PLANE8 (8 * GV_DCT_PLANE)     /* int16 in a channel's row */
 #define EOBS16 (3 * GV_DCT_BLOCKS)    /* eobs of a row */
-#define LOG_CAP 2048                  /* log entries */
-#define ADDR_MASK 0xffffffffffffull
+#define EOB_AT (GV_DCT_LANES * ROW16) /* the eobs' place in the arena */
+#define LOG_CAP 1024                  /* log entries */
+#define K0 0x4000                     /* kk of k = 0 (see lanes_run) */
 
-#define LANES_TARGET __attribute__((target("avx512f,avx512bw,avx512vbmi,bmi2,popcnt")))
+#define LANES_TARGET __attribute__((target("avx512f,avx512bw,avx512vbmi,popcnt")))
 
-/* band(k) * 3 (the models' band offset in models) and the zigzag place
- * 8 v + u of coefficient k, as VPERMB tables. */
-static const uint8_t band3_table[64] = {
-    0, 3, 3, 6, 6, 6, 6, 6, 6, 6, 9, 9, 9, 9, 9, 9,
-    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
-    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
-    9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9,
+/* The look-up tables of a group, as VPERMB/VPERMT2B operands. */
+struct lane_tables {
+    uint8_t zz_lo[64], zz_hi[64];  /* v * 520 + u of coefficient k */
+    uint8_t band_hi[64];           /* (6 + 3 band(k)): its models' first, / 256 */
+    uint8_t pe_lo[64], pe_hi[64];  /* the eob context of an eob 0..64 */
+    int32_t value[16];             /* token_value(t), 0 for the escape */
 };
 
-/* Replay log entries: *(int16_t *)address = value. */
-static void replay(const uint64_t *log, int n)
+static void tables_make(struct lane_tables *t)
 {
-    for (int i = 0; i < n; i++)
-        *(int16_t *)(uintptr_t)(log[i] & ADDR_MASK) = (int16_t)(log[i] >> 48);
+    for (int k = 0; k < 64; k++) {
+        const int z = gv_dct_zigzag[k], o = (z >> 3) * GV_DCT_PLANE + (z & 7);
+        t->zz_lo[k] = (uint8_t)o;
+        t->zz_hi[k] = (uint8_t)(o >> 8);
+        t->band_hi[k] = (uint8_t)(GV_DCT_EOB_MODELS + gv_dct_band_model[k]);
+        t->pe_lo[k] = k == 0 ? 0 : (k <= 4 ? 1 : 2);
+        t->pe_hi[k] = 2;
+    }
+    for (int s = 0; s < 16; s++)
+        t->value[s] = s == GV_DCT_ESCAPE ? 0 : ((s & 1) ? (s + 1) >> 1 : -(s >> 1));
 }
 
+/* Replay the log: base[off[i]] = val[i]. */
+static void replay(int16_t *base, const uint32_t *off, const int32_t *val, int n)
+{
+    for (int i = 0; i < n; i++)
+        base[off[i]] = (int16_t)val[i];
+}
+
+/*
+ * The lanes.  Per lane: x; the words in wc (wn of them, the next in the
+ * low half) and the stream's next uncached word at rpos, its end at end;
+ * the phase; kk = 257 k + K0 for token k (byte 0 is k, byte 1 is k + 64:
+ * one VPERMT2B reads a 16-bit table entry, and bytes 2-3, 0, read entry
+ * 0, which is 0 in both tables' low halves), neobk the same of the eob;
+ * c; p = the previous value's class * 256 (a model is 256 entries); pe
+ * and dcp, two bits per channel; h, an escape's first step; bb, the
+ * block's first coefficient in the arena (int16), eb its eob's.
+ */
 LANES_TARGET static int lanes_run(const uint8_t *buf,
                                   const uint32_t at[GV_DCT_LANES],
                                   const uint32_t end_[GV_DCT_LANES], int n,
                                   int channels, const uint32_t *slot,
-                                  const int32_t steps[3], int16_t *rows16,
-                                  int16_t *eob16)
+                                  const int32_t steps[3], int16_t *base16)
 {
-    uint64_t log[LOG_CAP];
+    uint32_t logo[LOG_CAP];
+    int32_t logv[LOG_CAP];
     int nlog = 0;
-    const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi32(1);
+    struct lane_tables tb;
+    tables_make(&tb);
+#define V(c) _mm512_set1_epi32(c)
+    const __m512i zero = _mm512_setzero_si512(), one = V(1), two = V(2),
+                  three = V(3);
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
                                            11, 12, 13, 14, 15);
-    const __m512i band3 = _mm512_loadu_si512(band3_table);
-    const __m512i zigzag = _mm512_loadu_si512(gv_dct_zigzag);
+    const __m512i zz_lo = _mm512_loadu_si512(tb.zz_lo),
+                  zz_hi = _mm512_loadu_si512(tb.zz_hi),
+                  band_hi = _mm512_loadu_si512(tb.band_hi),
+                  pe_lo = _mm512_loadu_si512(tb.pe_lo),
+                  pe_hi = _mm512_loadu_si512(tb.pe_hi),
+                  value = _mm512_loadu_si512(tb.value);
     const __m512i stepv = _mm512_setr_epi32(steps[0], steps[1], steps[2], 0,
                                             0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0);
-    const __m512i chans = _mm512_set1_epi32(channels);
-    const __m512i rowbase = _mm512_mullo_epi32(lane, _mm512_set1_epi32(ROW16));
-    const __m512i eobbase = _mm512_mullo_epi32(lane, _mm512_set1_epi32(EOBS16));
-    const __m512i rows_addr = _mm512_set1_epi64((long long)(uintptr_t)rows16);
-    const __m512i eobs_addr = _mm512_set1_epi64((long long)(uintptr_t)eob16);
+    const __m512i chans = V(channels);
+    const __m512i eb0 = _mm512_add_epi32(V(EOB_AT), _mm512_mullo_epi32(lane, V(EOBS16)));
+    const __m512i ebend = _mm512_add_epi32(eb0, V(GV_DCT_BLOCKS));
 
     const __mmask16 used = (__mmask16)((1u << n) - 1);
-    __m512i pos = _mm512_maskz_loadu_epi32(used, at);
-    __m512i end = _mm512_maskz_loadu_epi32(used, end_);
-    __m512i x = _mm512_mask_i32gather_epi32(_mm512_set1_epi32(1 << 16), used,
-                                            pos, buf, 1);
-    pos = _mm512_mask_add_epi32(pos, used, pos, _mm512_set1_epi32(4));
-    __mmask16 bad = _mm512_cmplt_epu32_mask(x, _mm512_set1_epi32(1 << 16));
-    __m512i phase = _mm512_mask_mov_epi32(_mm512_set1_epi32(4), used, zero);
-    __m512i k = zero, neob = zero, bx = zero, c = zero, p = zero, pe = zero,
-            dcp = zero, h = zero;
+    __m512i rpos = _mm512_maskz_loadu_epi32(used, at);
+    const __m512i end = _mm512_maskz_loadu_epi32(used, end_);
+    __m512i x = _mm512_mask_i32gather_epi32(V(1 << 16), used, rpos, buf, 1);
+    rpos = _mm512_mask_add_epi32(rpos, used, rpos, V(4));
+    __mmask16 bad = _mm512_cmplt_epu32_mask(x, V(1 << 16));
+    __m512i phase = _mm512_mask_mov_epi32(V(4), used, zero);
+    __m512i wc = zero, wn = zero, kk = V(K0), neobk = V(K0), c = zero,
+            p = zero, pe = zero, dcp = zero, h = zero, eb = eb0,
+            bb = _mm512_mullo_epi32(lane, V(ROW16));
     __mmask16 live = used;
 
     while (live && !bad) {
-        /* The model entries and the words a renormalization would take. */
-        const __m512i xl = _mm512_and_si512(x, _mm512_set1_epi32(255));
+        /* Words: where a lane has none, every lane tops its two up. */
+        if (_mm512_mask_cmpeq_epi32_mask(live, wn, zero)) {
+            const __mmask16 fill = _mm512_mask_cmplt_epu32_mask(live, wn, two);
+            const __m512i endm4 = _mm512_sub_epi32(end, V(4));
+            __m512i g = _mm512_mask_i32gather_epi32(
+                zero, fill, _mm512_min_epu32(rpos, endm4), buf, 1);
+            g = _mm512_mask_srli_epi32(g, _mm512_cmpgt_epu32_mask(rpos, endm4), g, 16);
+            const __m512i take = _mm512_min_epu32(
+                _mm512_srli_epi32(_mm512_sub_epi32(end, rpos), 1),
+                _mm512_sub_epi32(two, wn));
+            wc = _mm512_mask_or_epi32(wc, fill, wc,
+                                      _mm512_sllv_epi32(g, _mm512_slli_epi32(wn, 4)));
+            rpos = _mm512_mask_add_epi32(rpos, fill, rpos, _mm512_add_epi32(take, take));
+            wn = _mm512_mask_add_epi32(wn, fill, wn, take);
+        }
+
+        /* The model entries: eob model 3 cc + pe[c], or token model
+         * 6 + 12 cc + 3 band(k) + p. */
+        const __m512i xl = _mm512_and_si512(x, V(255));
         const __mmask16 cc = _mm512_cmpgt_epi32_mask(c, zero);
         const __m512i sh = _mm512_add_epi32(c, c);
         const __mmask16 m_eob = _mm512_mask_cmpeq_epi32_mask(live, phase, zero);
-        const __mmask16 m_model =
-            _mm512_mask_cmple_epu32_mask(live, phase, one);
-        const __m512i pe_c = _mm512_and_si512(_mm512_srlv_epi32(pe, sh),
-                                              _mm512_set1_epi32(3));
+        const __mmask16 m_tok = _mm512_mask_cmpeq_epi32_mask(live, phase, one);
+        const __mmask16 m_model = m_eob | m_tok;
+        const __m512i pe_c = _mm512_and_si512(_mm512_srlv_epi32(pe, sh), three);
         const __m512i idx_e = _mm512_add_epi32(
-            _mm512_add_epi32(_mm512_maskz_mov_epi32(cc, _mm512_set1_epi32(768)),
-                             _mm512_slli_epi32(pe_c, 8)), xl);
-        const __m512i b3 = _mm512_and_si512(_mm512_permutexvar_epi8(k, band3),
-                                            _mm512_set1_epi32(255));
-        const __m512i idx_t = _mm512_add_epi32(
-            _mm512_add_epi32(
-                _mm512_mask_mov_epi32(_mm512_set1_epi32(GV_DCT_EOB_MODELS * 256),
-                                      cc, _mm512_set1_epi32((GV_DCT_EOB_MODELS + 12) * 256)),
-                _mm512_slli_epi32(b3, 8)),
-            _mm512_add_epi32(p, xl));
-        const __m512i idx = _mm512_mask_mov_epi32(idx_t, m_eob, idx_e);
-        const __m512i e = _mm512_mask_i32gather_epi32(zero, m_model, idx, slot, 4);
-        const __m512i wat = _mm512_sub_epi32(
-            _mm512_min_epu32(pos, _mm512_sub_epi32(end, _mm512_set1_epi32(2))),
-            _mm512_set1_epi32(2));
-        const __m512i word = _mm512_srli_epi32(
-            _mm512_mask_i32gather_epi32(zero, live, wat, buf, 1), 16);
+            _mm512_maskz_mov_epi32(cc, V(3 * 256)),
+            _mm512_add_epi32(_mm512_slli_epi32(pe_c, 8), xl));
+        __m512i idx_t = _mm512_add_epi32(_mm512_permutex2var_epi8(zero, kk, band_hi),
+                                         _mm512_add_epi32(p, xl));
+        idx_t = _mm512_mask_add_epi32(idx_t, cc, idx_t, V(12 * 256));
+        const __m512i e = _mm512_mask_i32gather_epi32(
+            zero, m_model, _mm512_mask_mov_epi32(idx_t, m_eob, idx_e), slot, 4);
 
-        /* The rANS step: a model's, or a uniform 6-bit one. */
-        const __m512i freq = _mm512_and_si512(e, _mm512_set1_epi32(511));
-        const __m512i off = _mm512_and_si512(_mm512_srli_epi32(e, 12),
-                                             _mm512_set1_epi32(255));
+        /* The rANS step. */
+        const __m512i freq = _mm512_and_si512(e, V(511));
+        const __m512i off = _mm512_and_si512(_mm512_srli_epi32(e, 12), V(255));
         const __m512i sym = _mm512_srli_epi32(e, 20);
         bad |= _mm512_mask_cmpeq_epi32_mask(m_model, freq, zero);
         const __m512i xhi = _mm512_srli_epi32(x, 8);
-        const __m512i xm = _mm512_add_epi32(_mm512_mullo_epi32(freq, xhi), off);
-        const __m512i xu = _mm512_or_si512(
-            _mm512_slli_epi32(xhi, 2), _mm512_and_si512(x, _mm512_set1_epi32(3)));
-        const __m512i hv = _mm512_srli_epi32(xl, 2);
-        x = _mm512_mask_mov_epi32(_mm512_mask_mov_epi32(x, live, xu), m_model, xm);
-        const __mmask16 r = _mm512_mask_cmplt_epu32_mask(live, x, _mm512_set1_epi32(1 << 16));
-        bad |= _mm512_mask_cmpge_epu32_mask(r, pos, end);
-        x = _mm512_mask_or_epi32(x, r, _mm512_slli_epi32(x, 16), word);
-        pos = _mm512_mask_add_epi32(pos, r, pos, _mm512_set1_epi32(2));
+        const __m512i step_c = _mm512_permutexvar_epi32(c, stepv);
+        __m512i val = _mm512_mullo_epi32(_mm512_permutexvar_epi32(sym, value), step_c);
+        __m512i cls = _mm512_and_si512(_mm512_srli_epi32(e, 10), three);
+        const __mmask16 m_unif = live & ~m_model;
+        __mmask16 m_lo = 0;
+        if (m_unif) {
+            /* An escape's uniform 6-bit steps (rare). */
+            const __mmask16 m_hi = _mm512_mask_cmpeq_epi32_mask(m_unif, phase, two);
+            m_lo = m_unif & ~m_hi;
+            const __m512i hv = _mm512_srli_epi32(xl, 2);
+            const __m512i q = _mm512_sub_epi32(
+                _mm512_add_epi32(_mm512_slli_epi32(h, 6), hv), V(2048));
+            val = _mm512_mask_mov_epi32(val, m_lo, _mm512_max_epi32(
+                _mm512_min_epi32(_mm512_mullo_epi32(q, step_c), V(32767)), V(-32768)));
+            cls = _mm512_mask_min_epi32(cls, m_lo, _mm512_abs_epi32(q), two);
+            h = _mm512_mask_mov_epi32(h, m_hi, hv);
+            phase = _mm512_mask_mov_epi32(phase, m_hi, three);
+            x = _mm512_mask_or_epi32(x, m_unif, _mm512_slli_epi32(xhi, 2),
+                                     _mm512_and_si512(x, three));
+        }
+        x = _mm512_mask_add_epi32(x, m_model, _mm512_mullo_epi32(freq, xhi), off);
+        const __mmask16 r = _mm512_mask_cmplt_epu32_mask(live, x, V(1 << 16));
+        bad |= _mm512_mask_cmpeq_epi32_mask(r, wn, zero);
+        x = _mm512_mask_or_epi32(x, r, _mm512_slli_epi32(x, 16),
+                                 _mm512_and_si512(wc, V(0xffff)));
+        wc = _mm512_mask_srli_epi32(wc, r, wc, 16);
+        wn = _mm512_mask_sub_epi32(wn, r, wn, one);
 
         /* Eob lanes: the block's count, its context, the DC context. */
-        const __mmask16 m_tok = _mm512_mask_cmpeq_epi32_mask(live, phase, one);
-        const __mmask16 m_hi = _mm512_mask_cmpeq_epi32_mask(live, phase, _mm512_set1_epi32(2));
-        const __mmask16 m_lo = _mm512_mask_cmpeq_epi32_mask(live, phase, _mm512_set1_epi32(3));
-        const __mmask16 sym_nz = _mm512_test_epi32_mask(sym, sym);
-        const __m512i ch3 = _mm512_sllv_epi32(_mm512_set1_epi32(3), sh);
-        {
-            const __m512i pe_new = _mm512_add_epi32(
-                _mm512_maskz_mov_epi32(sym_nz, one),
-                _mm512_maskz_mov_epi32(_mm512_cmpgt_epi32_mask(sym, _mm512_set1_epi32(4)), one));
+        const __mmask16 eob_nz = _mm512_mask_test_epi32_mask(m_eob, sym, sym);
+        const __m512i ch3 = _mm512_sllv_epi32(three, sh);
+        if (m_eob) {
+            const __m512i pe_new = _mm512_permutex2var_epi8(pe_lo, sym, pe_hi);
             pe = _mm512_mask_or_epi32(pe, m_eob, _mm512_andnot_si512(ch3, pe),
                                       _mm512_sllv_epi32(pe_new, sh));
-            const __m512i dcp_c = _mm512_and_si512(_mm512_srlv_epi32(dcp, sh),
-                                                   _mm512_set1_epi32(3));
-            p = _mm512_mask_slli_epi32(p, m_eob, dcp_c, 8);
+            p = _mm512_mask_slli_epi32(p, m_eob, _mm512_and_si512(_mm512_srlv_epi32(dcp, sh), three), 8);
             dcp = _mm512_mask_andnot_epi32(dcp, m_eob, ch3, dcp);
-            neob = _mm512_mask_mov_epi32(neob, m_eob, sym);
-            k = _mm512_mask_mov_epi32(k, m_eob, zero);
+            neobk = _mm512_mask_add_epi32(neobk, m_eob, _mm512_mullo_epi32(sym, V(257)), V(K0));
+            kk = _mm512_mask_mov_epi32(kk, m_eob, V(K0));
         }
 
         /* Coefficient lanes: a token other than the escape, or an
          * escape's second step. */
-        const __mmask16 esc = _mm512_mask_cmpeq_epi32_mask(m_tok, sym, _mm512_set1_epi32(GV_DCT_ESCAPE));
-        const __mmask16 plain = m_tok & ~esc;
-        const __mmask16 m_coef = plain | m_lo;
-        const __m512i step_c = _mm512_permutexvar_epi32(c, stepv);
-        /* token_value(t) = (t & 1) ? (t + 1) >> 1 : -(t >> 1); an escape's
-         * q = 64 h + lo - 2048. */
-        const __mmask16 odd = _mm512_test_epi32_mask(sym, one);
-        const __m512i tv = _mm512_mask_srli_epi32(
-            _mm512_sub_epi32(zero, _mm512_srli_epi32(sym, 1)), odd,
-            _mm512_add_epi32(sym, one), 1);
-        const __m512i qv = _mm512_sub_epi32(
-            _mm512_add_epi32(_mm512_slli_epi32(h, 6), hv), _mm512_set1_epi32(2048));
-        const __m512i q = _mm512_mask_mov_epi32(tv, m_lo, qv);
-        const __m512i val = _mm512_max_epi32(
-            _mm512_min_epi32(_mm512_mullo_epi32(q, step_c), _mm512_set1_epi32(32767)),
-            _mm512_set1_epi32(-32768));
-        const __m512i cls = _mm512_min_epi32(_mm512_abs_epi32(q), _mm512_set1_epi32(2));
+        const __mmask16 esc = _mm512_mask_cmpeq_epi32_mask(m_tok, sym, V(GV_DCT_ESCAPE));
+        const __mmask16 m_coef = (m_tok & ~esc) | m_lo;
         p = _mm512_mask_slli_epi32(p, m_coef, cls, 8);
-        const __mmask16 first = _mm512_mask_cmpeq_epi32_mask(m_coef, k, zero);
+        const __mmask16 first = _mm512_mask_cmpeq_epi32_mask(m_coef, kk, V(K0));
         dcp = _mm512_mask_or_epi32(dcp, first, dcp, _mm512_sllv_epi32(cls, sh));
-        h = _mm512_mask_mov_epi32(h, m_hi, hv);
 
         /* The writes: coded nonzero values and nonzero eobs. */
-        {
-            const __m512i zz = _mm512_and_si512(_mm512_permutexvar_epi8(k, zigzag),
-                                                _mm512_set1_epi32(255));
-            /* v * 520 + u = zz + 512 v */
-            const __m512i coff = _mm512_add_epi32(
-                _mm512_add_epi32(rowbase, _mm512_mullo_epi32(c, _mm512_set1_epi32(PLANE8))),
-                _mm512_add_epi32(_mm512_slli_epi32(bx, 3),
-                                 _mm512_add_epi32(zz, _mm512_slli_epi32(_mm512_srli_epi32(zz, 3), 9))));
-            const __m512i eoff = _mm512_add_epi32(
-                eobbase, _mm512_add_epi32(_mm512_mullo_epi32(c, _mm512_set1_epi32(GV_DCT_BLOCKS)), bx));
-            const __m512i woff = _mm512_mask_mov_epi32(coff, m_eob, eoff);
+        const __mmask16 wm = eob_nz | _mm512_mask_test_epi32_mask(m_coef, val, val);
+        if (wm) {
+            const __m512i woff = _mm512_mask_mov_epi32(
+                _mm512_add_epi32(bb, _mm512_permutex2var_epi8(zz_lo, kk, zz_hi)), m_eob, eb);
             const __m512i wval = _mm512_mask_mov_epi32(val, m_eob, sym);
-            const __mmask16 wm = (m_eob & sym_nz) |
-                                 _mm512_mask_test_epi32_mask(m_coef, val, val);
-            if (wm) {
-                for (int half = 0; half < 2; half++) {
-                    const __mmask8 hm = (__mmask8)(wm >> (8 * half));
-                    const __mmask8 he = (__mmask8)(m_eob >> (8 * half));
-                    const __m256i o = half ? _mm512_extracti64x4_epi64(woff, 1)
-                                           : _mm512_castsi512_si256(woff);
-                    const __m256i v = half ? _mm512_extracti64x4_epi64(wval, 1)
-                                           : _mm512_castsi512_si256(wval);
-                    const __m512i base = _mm512_mask_mov_epi64(rows_addr, he, eobs_addr);
-                    const __m512i ent = _mm512_or_si512(
-                        _mm512_add_epi64(base, _mm512_slli_epi64(_mm512_cvtepu32_epi64(o), 1)),
-                        _mm512_slli_epi64(_mm512_cvtepi32_epi64(v), 48));
-                    _mm512_storeu_si512(log + nlog, _mm512_maskz_compress_epi64(hm, ent));
-                    nlog += __builtin_popcount(hm);
-                }
-                if (nlog > LOG_CAP - 16) {
-                    replay(log, nlog);
-                    nlog = 0;
-                }
+            _mm512_storeu_si512(logo + nlog, _mm512_maskz_compress_epi32(wm, woff));
+            _mm512_storeu_si512(logv + nlog, _mm512_maskz_compress_epi32(wm, wval));
+            nlog += __builtin_popcount(wm);
+            if (nlog > LOG_CAP - 16) {
+                replay(base16, logo, logv, nlog);
+                nlog = 0;
             }
         }
 
         /* The phases: an escape goes to its steps; a finished block to
          * the next channel, block or the end. */
-        k = _mm512_mask_add_epi32(k, m_coef, k, one);
-        const __mmask16 fin = _mm512_mask_cmpeq_epi32_mask(m_coef, k, neob);
-        const __mmask16 adv = (m_eob & ~sym_nz) | fin;
-        phase = _mm512_mask_mov_epi32(phase, (m_eob & sym_nz) | (m_coef & ~fin), one);
-        phase = _mm512_mask_mov_epi32(phase, esc, _mm512_set1_epi32(2));
-        phase = _mm512_mask_mov_epi32(phase, m_hi, _mm512_set1_epi32(3));
-        c = _mm512_mask_add_epi32(c, adv, c, one);
-        const __mmask16 wrap = _mm512_mask_cmpeq_epi32_mask(adv, c, chans);
-        c = _mm512_mask_mov_epi32(c, wrap, zero);
-        bx = _mm512_mask_add_epi32(bx, wrap, bx, one);
-        const __mmask16 done = _mm512_mask_cmpeq_epi32_mask(wrap, bx, _mm512_set1_epi32(GV_DCT_BLOCKS));
+        kk = _mm512_mask_add_epi32(kk, m_coef, kk, V(257));
+        const __mmask16 fin = _mm512_mask_cmpeq_epi32_mask(m_coef, kk, neobk);
+        const __mmask16 adv = (m_eob & ~eob_nz) | fin;
+        phase = _mm512_mask_mov_epi32(phase, eob_nz | (m_coef & ~fin), one);
+        phase = _mm512_mask_mov_epi32(phase, esc, two);
         phase = _mm512_mask_mov_epi32(phase, adv, zero);
-        phase = _mm512_mask_mov_epi32(phase, done, _mm512_set1_epi32(4));
-        live &= ~done;
+        c = _mm512_mask_add_epi32(c, adv, c, one);
+        bb = _mm512_mask_add_epi32(bb, adv, bb, V(PLANE8));
+        eb = _mm512_mask_add_epi32(eb, adv, eb, V(GV_DCT_BLOCKS));
+        const __mmask16 wrap = _mm512_mask_cmpeq_epi32_mask(adv, c, chans);
+        if (wrap) {
+            c = _mm512_mask_mov_epi32(c, wrap, zero);
+            bb = _mm512_mask_add_epi32(bb, wrap, bb, V(8 - channels * PLANE8));
+            eb = _mm512_mask_add_epi32(eb, wrap, eb, V(1 - channels * GV_DCT_BLOCKS));
+            const __mmask16 done = _mm512_mask_cmpeq_epi32_mask(wrap, eb, ebend);
+            phase = _mm512_mask_mov_epi32(phase, done, V(4));
+            live &= ~done;
+        }
     }
-    replay(log, nlog);
+    replay(base16, logo, logv, nlog);
     if (bad)
         return -1;
     /* Every lane back at its start state with every word read. */
-    bad = _mm512_mask_cmpneq_epi32_mask(used, x, _mm512_set1_epi32(1 << 16)) |
-          _mm512_mask_cmpneq_epi32_mask(used, pos, end);
+    bad = _mm512_mask_cmpneq_epi32_mask(used, x, V(1 << 16)) |
+          _mm512_mask_cmpneq_epi32_mask(used, rpos, end) |
+          _mm512_mask_test_epi32_mask(used, wn, wn);
     return bad ? -1 : 0;
+#undef V
 }
 
 int gv_dct_lanes_rows(const uint8_t *buf, const uint32_t at[GV_DCT_LANES],
                       const uint32_t end[GV_DCT_LANES], int n, int channels,
                       const uint32_t *slot, const int32_t steps[3],
-                      gv_dct_row *rows, uint8_t eobs[][3][GV_DCT_BLOCKS])
+                      struct gv_dct_lanes_arena *a,
+                      uint8_t eobs[][3][GV_DCT_BLOCKS])
 {
-    int16_t eob16[GV_DCT_LANES * EOBS16];
-    memset(eob16, 0, sizeof eob16);
+    int16_t *base = &a->rows[0][0][0][0];
     groups_tried++;
-    if (lanes_run(buf, at, end, n, channels, slot, steps, &rows[0][0][0][0],
-                  eob16) < 0) {
+    const int rc = lanes_run(buf, at, end, n, channels, slot, steps, base);
+    if (rc < 0) {
         groups_refused++;
-        memset(rows, 0, sizeof *rows * (size_t)n);
-        return -1;
+        memset(a->rows, 0, sizeof a->rows[0] * (size_t)n);
+    } else {
+        for (int i = 0; i < n; i++)
+            for (int c = 0; c < 3; c++)
+                for (int bx = 0; bx < GV_DCT_BLOCKS; bx++)
+                    eobs[i][c][bx] = (uint8_t)a->eobs[i][c * GV_DCT_BLOCKS + bx];
     }
-    for (int i = 0; i < n; i++)
-        for (int c = 0; c < 3; c++)
-            for (int bx = 0; bx < GV_DCT_BLOCKS; bx++)
-                eobs[i][c][bx] = (uint8_t)eob16[i * EOBS16 + c * GV_DCT_BLOCKS + bx];
-    return 0;
+    memset(a->eobs, 0, sizeof a->eobs);
+    return rc;
 }
 
 #else
@@ -348,10 +362,11 @@ int gv_dct_lanes_rows(const uint8_t *buf, const uint32_t at[GV_DCT_LANES],
 int gv_dct_lanes_rows(const uint8_t *buf, const uint32_t at[GV_DCT_LANES],
                       const uint32_t end[GV_DCT_LANES], int n, int channels,
                       const uint32_t *slot, const int32_t steps[3],
-                      gv_dct_row *rows, uint8_t eobs[][3][GV_DCT_BLOCKS])
+                      struct gv_dct_lanes_arena *a,
+                      uint8_t eobs[][3][GV_DCT_BLOCKS])
 {
     (void)buf, (void)at, (void)end, (void)n, (void)channels, (void)slot,
-        (void)steps, (void)rows, (void)eobs;
+        (void)steps, (void)a, (void)eobs;
     return -1;
 }
 

@@ -14,9 +14,16 @@
 
 #define GV_DCT_LANES 16
 
+/* A thread's scratch: the rows of a group, the eobs of its rows as the
+ * lanes write them. */
+struct gv_dct_lanes_arena {
+    gv_dct_row rows[GV_DCT_LANES];
+    int16_t eobs[GV_DCT_LANES][3 * GV_DCT_BLOCKS];
+};
+
 /*
  * Whether gv_dct_lanes_rows may run: the CPU has AVX-512 F, BW and VBMI
- * and BMI2, and gv_dct_lanes(0) has not turned it off.
+ * and gv_dct_lanes(0) has not turned it off.
  */
 int gv_dct_lanes_usable(void);
 
@@ -35,25 +42,26 @@ int gv_dct_lanes(int on);
 void gv_dct_lanes_counts(unsigned long *tried, unsigned long *refused);
 
 /*
- * This thread's 16 rows for gv_dct_lanes_rows, all zero (and to be left
- * all zero by its user), made on its first call (390 KiB) and freed when
+ * This thread's arena for gv_dct_lanes_rows, all zero (and to be left
+ * all zero by its user), made on its first call (396 KiB) and freed when
  * the thread ends; NULL when out of memory.
  */
-gv_dct_row *gv_dct_lanes_arena(void);
+struct gv_dct_lanes_arena *gv_dct_lanes_arena(void);
 
 /*
  * Decode the n <= 16 streams of a checked layout D buffer whose words
  * lie at buf + at[i] up to buf + end[i] (end[i] - at[i] >= 4, even) into
- * rows[i] and eobs[i], as tile_dct.c's decode_row does: slot is its
+ * a->rows[i] and eobs[i], as tile_dct.c's decode_row does: slot is its
  * table of model entries (GV_DCT_MODELS x 256, see load_models), steps
- * the channels' quantizer steps.  rows[0..n) must be all zero and are
+ * the channels' quantizer steps.  a must be all zero and are
  * written only at coded coefficients.  Returns 0, or -1 when any stream
- * is damaged, with rows[0..n) all zero again and no message (the caller
+ * is damaged, with a all zero again and no message (the caller
  * decodes the rows again by the scalar code for its message).
  */
 int gv_dct_lanes_rows(const uint8_t *buf, const uint32_t at[GV_DCT_LANES],
                       const uint32_t end[GV_DCT_LANES], int n, int channels,
                       const uint32_t *slot, const int32_t steps[3],
-                      gv_dct_row *rows, uint8_t eobs[][3][GV_DCT_BLOCKS]);
+                      struct gv_dct_lanes_arena *a,
+                      uint8_t eobs[][3][GV_DCT_BLOCKS]);
 
 #endif
