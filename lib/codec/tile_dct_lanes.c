@@ -270,7 +270,7 @@ LANES_TARGET static int lanes_run(const uint8_t *buf,
         /* Eob lanes: the block's count, its context, the DC context. */
         const __mmask16 eob_nz = _mm512_mask_test_epi32_mask(m_eob, sym, sym);
         const __m512i ch3 = _mm512_sllv_epi32(three, sh);
-        if (m_eob) {
+        {
             const __m512i pe_new = _mm512_permutex2var_epi8(pe_lo, sym, pe_hi);
             pe = _mm512_mask_or_epi32(pe, m_eob, _mm512_andnot_si512(ch3, pe),
                                       _mm512_sllv_epi32(pe_new, sh));
@@ -315,14 +315,12 @@ LANES_TARGET static int lanes_run(const uint8_t *buf,
         bb = _mm512_mask_add_epi32(bb, adv, bb, V(PLANE8));
         eb = _mm512_mask_add_epi32(eb, adv, eb, V(GV_DCT_BLOCKS));
         const __mmask16 wrap = _mm512_mask_cmpeq_epi32_mask(adv, c, chans);
-        if (wrap) {
-            c = _mm512_mask_mov_epi32(c, wrap, zero);
-            bb = _mm512_mask_add_epi32(bb, wrap, bb, V(8 - channels * PLANE8));
-            eb = _mm512_mask_add_epi32(eb, wrap, eb, V(1 - channels * GV_DCT_BLOCKS));
-            const __mmask16 done = _mm512_mask_cmpeq_epi32_mask(wrap, eb, ebend);
-            phase = _mm512_mask_mov_epi32(phase, done, V(4));
-            live &= ~done;
-        }
+        c = _mm512_mask_mov_epi32(c, wrap, zero);
+        bb = _mm512_mask_add_epi32(bb, wrap, bb, V(8 - channels * PLANE8));
+        eb = _mm512_mask_add_epi32(eb, wrap, eb, V(1 - channels * GV_DCT_BLOCKS));
+        const __mmask16 done = _mm512_mask_cmpeq_epi32_mask(wrap, eb, ebend);
+        phase = _mm512_mask_mov_epi32(phase, done, V(4));
+        live &= ~done;
     }
     replay(base16, logo, logv, nlog);
     if (bad)
