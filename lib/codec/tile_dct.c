@@ -7,7 +7,11 @@
  * the stack), then for each row its eight pixel rows predicted straight
  * into the output and the residuals added (tile_dct_pixels.c).  A rANS step is one table load:
  * each model's 256 slots hold their symbol, its frequency and the slot's
- * offset in one 32-bit entry (the models have 8-bit precision).
+ * offset in one 32-bit entry (the models have 8-bit precision).  Where
+ * the CPU has AVX-512 VBMI, gv_dct_decode takes rows 0-63 sixteen at a
+ * time through tile_dct_lanes.c instead, which gives the same bytes; this
+ * file's scalar rows stay the reference, the path of other CPUs, and the
+ * fallback (with the message) for a damaged group.
  */
 #include <string.h>
 
