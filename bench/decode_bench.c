@@ -11,6 +11,9 @@
  * SOURCE-IMAGE enables the JPEG anchor; --no-gpu and --no-cpu leave out
  * those decoders (to profile one of them).
  *
+ * Where layout D's rANS rows run in AVX-512 lanes (tile_dct_lanes.c), the
+ * single-thread CPU run is repeated with the scalar rows, with the ratio.
+ *
  * Speeds are megapixels of decoded tiles (513 x 513 each) per second of
  * wall time, best of 5 for the CPU runs (3 for the GPU); single-thread
  * runs are also given per second of process CPU time, which a loaded

@@ -17,23 +17,23 @@
  *   phase 2, 3  the two uniform 6-bit steps after an escape;
  *   phase 4  done (the row's 65 x C blocks are decoded).
  * A step gathers every lane's model entry (VPGATHERDD on the 32-bit slot
- * table of load_models), updates x, and renormalizes from a word gathered
- * before the step (it does not depend on x, only on the lane's position),
- * so that the chain from one step to the next holds one gather.  The
- * per-channel contexts pe[3] and dcp[3] sit in one register each, two
- * bits a channel; band(k) and the zigzag place of k are VPERMB look-ups.
+ * table of load_models) and updates x; a renormalization takes its word
+ * from the two words cached per lane, which one gather tops up whenever
+ * some lane has none left (about a step in four).  The per-channel
+ * contexts pe[3] and dcp[3] sit in one register each, two bits a channel;
+ * the zigzag place and the band of coefficient k are VPERMT2B look-ups.
  *
- * The writes (coded nonzero coefficients, nonzero eobs) of a step are
- * 64-bit log entries, the int16 destination's address and the value,
- * compacted by VPCOMPRESSQ in registers (VPCOMPRESSQ to memory is slow on
- * Zen 4) and replayed by a scalar loop whenever the log fills and at the
+ * The writes (coded nonzero coefficients, nonzero eobs) of a step go to
+ * two logs, the int16 offset in the thread's arena and the value, each
+ * compacted by VPCOMPRESSD in registers (VPCOMPRESSD to memory is slow on
+ * Zen 4) and replayed by a scalar loop whenever the logs fill and at the
  * end.  Zero tokens are not written: the rows start all zero.
  *
  * Damage: the lanes check what decode_row checks (a zero frequency, a
  * renormalization past the stream's words, a start below 2^16, the end
- * state and position); on any of it the whole group is abandoned, its
- * rows zeroed, and the caller decodes them again by decode_row, which
- * gives the message of the first damaged row.  Lanes that finish early
+ * state and position, every cached word used); on any of it the whole
+ * group is abandoned, its rows zeroed, and the caller decodes them again
+ * by decode_row, which gives the message of the first damaged row.  Lanes that finish early
  * idle until the group's longest row ends.
  */
 #include <pthread.h>
