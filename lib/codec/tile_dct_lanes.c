@@ -170,8 +170,7 @@ LANES_TARGET static int lanes_run(const uint8_t *buf,
     struct lane_tables tb;
     tables_make(&tb);
 #define V(c) _mm512_set1_epi32(c)
-    const __m512i zero = _mm512_setzero_si512(), one = V(1), two = V(2),
-                  three = V(3);
+    const __m512i zero = _mm512_setzero_si512();
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10,
                                            11, 12, 13, 14, 15);
     const __m512i zz_lo = _mm512_loadu_si512(tb.zz_lo),
@@ -198,17 +197,44 @@ LANES_TARGET static int lanes_run(const uint8_t *buf,
             bb = _mm512_mullo_epi32(lane, V(ROW16));
     __mmask16 live = used;
 
+    struct {
+        __m512i blocks, c2048, c255, c257, c3072, c511, c65535, c768, escape, four, k0, l16, one, plane8, smax, smin, three, two, wrapbb, wrapeb, zero;
+    } kc, *K = &kc;
+    kc.blocks = V(GV_DCT_BLOCKS);
+    kc.c2048 = V(2048);
+    kc.c255 = V(255);
+    kc.c257 = V(257);
+    kc.c3072 = V(12 * 256);
+    kc.c511 = V(511);
+    kc.c65535 = V(0xffff);
+    kc.c768 = V(3 * 256);
+    kc.escape = V(GV_DCT_ESCAPE);
+    kc.four = V(4);
+    kc.k0 = V(K0);
+    kc.l16 = V(1 << 16);
+    kc.one = V(1);
+    kc.plane8 = V(PLANE8);
+    kc.smax = V(32767);
+    kc.smin = V(-32768);
+    kc.three = V(3);
+    kc.two = V(2);
+    kc.wrapbb = V(8 - channels * PLANE8);
+    kc.wrapeb = V(1 - channels * GV_DCT_BLOCKS);
+    kc.zero = V(0);
+    /* The constants stay in memory: folded into the instructions that
+     * use them instead of rebuilt from general registers each step. */
+    __asm__("" : "+r"(K));
     while (live && !bad) {
-        /* Words: where a lane has none, every lane tops its two up. */
-        if (_mm512_mask_cmpeq_epi32_mask(live, wn, zero)) {
-            const __mmask16 fill = _mm512_mask_cmplt_epu32_mask(live, wn, two);
-            const __m512i endm4 = _mm512_sub_epi32(end, V(4));
+        /* Words: where a lane has none, every lane tops its K->two up. */
+        if (_mm512_mask_cmpeq_epi32_mask(live, wn, K->zero)) {
+            const __mmask16 fill = _mm512_mask_cmplt_epu32_mask(live, wn, K->two);
+            const __m512i endm4 = _mm512_sub_epi32(end, K->four);
             __m512i g = _mm512_mask_i32gather_epi32(
-                zero, fill, _mm512_min_epu32(rpos, endm4), buf, 1);
+                K->zero, fill, _mm512_min_epu32(rpos, endm4), buf, 1);
             g = _mm512_mask_srli_epi32(g, _mm512_cmpgt_epu32_mask(rpos, endm4), g, 16);
             const __m512i take = _mm512_min_epu32(
                 _mm512_srli_epi32(_mm512_sub_epi32(end, rpos), 1),
-                _mm512_sub_epi32(two, wn));
+                _mm512_sub_epi32(K->two, wn));
             wc = _mm512_mask_or_epi32(wc, fill, wc,
                                       _mm512_sllv_epi32(g, _mm512_slli_epi32(wn, 4)));
             rpos = _mm512_mask_add_epi32(rpos, fill, rpos, _mm512_add_epi32(take, take));
@@ -217,75 +243,75 @@ LANES_TARGET static int lanes_run(const uint8_t *buf,
 
         /* The model entries: eob model 3 cc + pe[c], or token model
          * 6 + 12 cc + 3 band(k) + p. */
-        const __m512i xl = _mm512_and_si512(x, V(255));
-        const __mmask16 cc = _mm512_cmpgt_epi32_mask(c, zero);
+        const __m512i xl = _mm512_and_si512(x, K->c255);
+        const __mmask16 cc = _mm512_cmpgt_epi32_mask(c, K->zero);
         const __m512i sh = _mm512_add_epi32(c, c);
-        const __mmask16 m_eob = _mm512_mask_cmpeq_epi32_mask(live, phase, zero);
-        const __mmask16 m_tok = _mm512_mask_cmpeq_epi32_mask(live, phase, one);
+        const __mmask16 m_eob = _mm512_mask_cmpeq_epi32_mask(live, phase, K->zero);
+        const __mmask16 m_tok = _mm512_mask_cmpeq_epi32_mask(live, phase, K->one);
         const __mmask16 m_model = m_eob | m_tok;
-        const __m512i pe_c = _mm512_and_si512(_mm512_srlv_epi32(pe, sh), three);
+        const __m512i pe_c = _mm512_and_si512(_mm512_srlv_epi32(pe, sh), K->three);
         const __m512i idx_e = _mm512_add_epi32(
-            _mm512_maskz_mov_epi32(cc, V(3 * 256)),
+            _mm512_maskz_mov_epi32(cc, K->c768),
             _mm512_add_epi32(_mm512_slli_epi32(pe_c, 8), xl));
-        __m512i idx_t = _mm512_add_epi32(_mm512_permutex2var_epi8(zero, kk, band_hi),
+        __m512i idx_t = _mm512_add_epi32(_mm512_permutex2var_epi8(K->zero, kk, band_hi),
                                          _mm512_add_epi32(p, xl));
-        idx_t = _mm512_mask_add_epi32(idx_t, cc, idx_t, V(12 * 256));
+        idx_t = _mm512_mask_add_epi32(idx_t, cc, idx_t, K->c3072);
         const __m512i e = _mm512_mask_i32gather_epi32(
-            zero, m_model, _mm512_mask_mov_epi32(idx_t, m_eob, idx_e), slot, 4);
+            K->zero, m_model, _mm512_mask_mov_epi32(idx_t, m_eob, idx_e), slot, 4);
 
         /* The rANS step. */
-        const __m512i freq = _mm512_and_si512(e, V(511));
-        const __m512i off = _mm512_and_si512(_mm512_srli_epi32(e, 12), V(255));
+        const __m512i freq = _mm512_and_si512(e, K->c511);
+        const __m512i off = _mm512_and_si512(_mm512_srli_epi32(e, 12), K->c255);
         const __m512i sym = _mm512_srli_epi32(e, 20);
-        bad |= _mm512_mask_cmpeq_epi32_mask(m_model, freq, zero);
+        bad |= _mm512_mask_cmpeq_epi32_mask(m_model, freq, K->zero);
         const __m512i xhi = _mm512_srli_epi32(x, 8);
         const __m512i step_c = _mm512_permutexvar_epi32(c, stepv);
         __m512i val = _mm512_mullo_epi32(_mm512_permutexvar_epi32(sym, value), step_c);
-        __m512i cls = _mm512_and_si512(_mm512_srli_epi32(e, 10), three);
+        __m512i cls = _mm512_and_si512(_mm512_srli_epi32(e, 10), K->three);
         const __mmask16 m_unif = live & ~m_model;
         __mmask16 m_lo = 0;
         if (m_unif) {
             /* An escape's uniform 6-bit steps (rare). */
-            const __mmask16 m_hi = _mm512_mask_cmpeq_epi32_mask(m_unif, phase, two);
+            const __mmask16 m_hi = _mm512_mask_cmpeq_epi32_mask(m_unif, phase, K->two);
             m_lo = m_unif & ~m_hi;
             const __m512i hv = _mm512_srli_epi32(xl, 2);
             const __m512i q = _mm512_sub_epi32(
-                _mm512_add_epi32(_mm512_slli_epi32(h, 6), hv), V(2048));
+                _mm512_add_epi32(_mm512_slli_epi32(h, 6), hv), K->c2048);
             val = _mm512_mask_mov_epi32(val, m_lo, _mm512_max_epi32(
-                _mm512_min_epi32(_mm512_mullo_epi32(q, step_c), V(32767)), V(-32768)));
-            cls = _mm512_mask_min_epi32(cls, m_lo, _mm512_abs_epi32(q), two);
+                _mm512_min_epi32(_mm512_mullo_epi32(q, step_c), K->smax), K->smin));
+            cls = _mm512_mask_min_epi32(cls, m_lo, _mm512_abs_epi32(q), K->two);
             h = _mm512_mask_mov_epi32(h, m_hi, hv);
-            phase = _mm512_mask_mov_epi32(phase, m_hi, three);
+            phase = _mm512_mask_mov_epi32(phase, m_hi, K->three);
             x = _mm512_mask_or_epi32(x, m_unif, _mm512_slli_epi32(xhi, 2),
-                                     _mm512_and_si512(x, three));
+                                     _mm512_and_si512(x, K->three));
         }
         x = _mm512_mask_add_epi32(x, m_model, _mm512_mullo_epi32(freq, xhi), off);
-        const __mmask16 r = _mm512_mask_cmplt_epu32_mask(live, x, V(1 << 16));
-        bad |= _mm512_mask_cmpeq_epi32_mask(r, wn, zero);
+        const __mmask16 r = _mm512_mask_cmplt_epu32_mask(live, x, K->l16);
+        bad |= _mm512_mask_cmpeq_epi32_mask(r, wn, K->zero);
         x = _mm512_mask_or_epi32(x, r, _mm512_slli_epi32(x, 16),
-                                 _mm512_and_si512(wc, V(0xffff)));
+                                 _mm512_and_si512(wc, K->c65535));
         wc = _mm512_mask_srli_epi32(wc, r, wc, 16);
-        wn = _mm512_mask_sub_epi32(wn, r, wn, one);
+        wn = _mm512_mask_sub_epi32(wn, r, wn, K->one);
 
         /* Eob lanes: the block's count, its context, the DC context. */
         const __mmask16 eob_nz = _mm512_mask_test_epi32_mask(m_eob, sym, sym);
-        const __m512i ch3 = _mm512_sllv_epi32(three, sh);
+        const __m512i ch3 = _mm512_sllv_epi32(K->three, sh);
         {
             const __m512i pe_new = _mm512_permutex2var_epi8(pe_lo, sym, pe_hi);
             pe = _mm512_mask_or_epi32(pe, m_eob, _mm512_andnot_si512(ch3, pe),
                                       _mm512_sllv_epi32(pe_new, sh));
-            p = _mm512_mask_slli_epi32(p, m_eob, _mm512_and_si512(_mm512_srlv_epi32(dcp, sh), three), 8);
+            p = _mm512_mask_slli_epi32(p, m_eob, _mm512_and_si512(_mm512_srlv_epi32(dcp, sh), K->three), 8);
             dcp = _mm512_mask_andnot_epi32(dcp, m_eob, ch3, dcp);
-            neobk = _mm512_mask_add_epi32(neobk, m_eob, _mm512_mullo_epi32(sym, V(257)), V(K0));
-            kk = _mm512_mask_mov_epi32(kk, m_eob, V(K0));
+            neobk = _mm512_mask_add_epi32(neobk, m_eob, _mm512_mullo_epi32(sym, K->c257), K->k0);
+            kk = _mm512_mask_mov_epi32(kk, m_eob, K->k0);
         }
 
         /* Coefficient lanes: a token other than the escape, or an
          * escape's second step. */
-        const __mmask16 esc = _mm512_mask_cmpeq_epi32_mask(m_tok, sym, V(GV_DCT_ESCAPE));
+        const __mmask16 esc = _mm512_mask_cmpeq_epi32_mask(m_tok, sym, K->escape);
         const __mmask16 m_coef = (m_tok & ~esc) | m_lo;
         p = _mm512_mask_slli_epi32(p, m_coef, cls, 8);
-        const __mmask16 first = _mm512_mask_cmpeq_epi32_mask(m_coef, kk, V(K0));
+        const __mmask16 first = _mm512_mask_cmpeq_epi32_mask(m_coef, kk, K->k0);
         dcp = _mm512_mask_or_epi32(dcp, first, dcp, _mm512_sllv_epi32(cls, sh));
 
         /* The writes: coded nonzero values and nonzero eobs. */
@@ -305,21 +331,21 @@ LANES_TARGET static int lanes_run(const uint8_t *buf,
 
         /* The phases: an escape goes to its steps; a finished block to
          * the next channel, block or the end. */
-        kk = _mm512_mask_add_epi32(kk, m_coef, kk, V(257));
+        kk = _mm512_mask_add_epi32(kk, m_coef, kk, K->c257);
         const __mmask16 fin = _mm512_mask_cmpeq_epi32_mask(m_coef, kk, neobk);
         const __mmask16 adv = (m_eob & ~eob_nz) | fin;
-        phase = _mm512_mask_mov_epi32(phase, eob_nz | (m_coef & ~fin), one);
-        phase = _mm512_mask_mov_epi32(phase, esc, two);
-        phase = _mm512_mask_mov_epi32(phase, adv, zero);
-        c = _mm512_mask_add_epi32(c, adv, c, one);
-        bb = _mm512_mask_add_epi32(bb, adv, bb, V(PLANE8));
-        eb = _mm512_mask_add_epi32(eb, adv, eb, V(GV_DCT_BLOCKS));
+        phase = _mm512_mask_mov_epi32(phase, eob_nz | (m_coef & ~fin), K->one);
+        phase = _mm512_mask_mov_epi32(phase, esc, K->two);
+        phase = _mm512_mask_mov_epi32(phase, adv, K->zero);
+        c = _mm512_mask_add_epi32(c, adv, c, K->one);
+        bb = _mm512_mask_add_epi32(bb, adv, bb, K->plane8);
+        eb = _mm512_mask_add_epi32(eb, adv, eb, K->blocks);
         const __mmask16 wrap = _mm512_mask_cmpeq_epi32_mask(adv, c, chans);
-        c = _mm512_mask_mov_epi32(c, wrap, zero);
-        bb = _mm512_mask_add_epi32(bb, wrap, bb, V(8 - channels * PLANE8));
-        eb = _mm512_mask_add_epi32(eb, wrap, eb, V(1 - channels * GV_DCT_BLOCKS));
+        c = _mm512_mask_mov_epi32(c, wrap, K->zero);
+        bb = _mm512_mask_add_epi32(bb, wrap, bb, K->wrapbb);
+        eb = _mm512_mask_add_epi32(eb, wrap, eb, K->wrapeb);
         const __mmask16 done = _mm512_mask_cmpeq_epi32_mask(wrap, eb, ebend);
-        phase = _mm512_mask_mov_epi32(phase, done, V(4));
+        phase = _mm512_mask_mov_epi32(phase, done, K->four);
         live &= ~done;
     }
     replay(base16, logo, logv, nlog);
