@@ -11,6 +11,9 @@
  * SOURCE-IMAGE enables the JPEG anchor; --no-gpu and --no-cpu leave out
  * those decoders (to profile one of them).
  *
+ * Where layout D's rANS rows run in AVX-512 lanes (tile_dct_lanes.c), the
+ * single-thread CPU run is repeated with the scalar rows, with the ratio.
+ *
  * Speeds are megapixels of decoded tiles (513 x 513 each) per second of
  * wall time, best of 5 for the CPU runs (3 for the GPU); single-thread
  * runs are also given per second of process CPU time, which a loaded
@@ -34,6 +37,7 @@
 #include "store/store_read.h"
 #include "codec/tile.h"
 #include "codec/predict.h"
+#include "codec/tile_dct_lanes.h"
 
 struct tile_ref {
     int level;
@@ -320,6 +324,17 @@ int main(int argc, char **argv)
             printf("ratio prediction level 3 / level 2: decoder %.2fx (per CPU-second %.2fx), "
                    "prediction alone %.2fx (%.2fx)\n", cpu1 / old1, cpu1_c / old1_c,
                    pr / oldp, pr_c / oldp_c);
+        }
+        /* Where layout D's rANS rows run in AVX-512 lanes, the same
+         * decoder with the scalar rows (two in lockstep), in this run. */
+        if (gv_dct_lanes(1)) {
+            gv_dct_lanes(0);
+            double sc1 = cpu_run(1), sc1_c = last_cpu_rate;
+            gv_dct_lanes(1);
+            printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
+                   "CPU reference, scalar rANS rows", sc1, sc1_c);
+            printf("ratio rANS rows in lanes / scalar: decoder %.2fx (per CPU-second %.2fx)\n",
+                   cpu1 / sc1, cpu1_c / sc1_c);
         }
     }
 

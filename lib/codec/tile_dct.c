@@ -7,7 +7,11 @@
  * the stack), then for each row its eight pixel rows predicted straight
  * into the output and the residuals added (tile_dct_pixels.c).  A rANS step is one table load:
  * each model's 256 slots hold their symbol, its frequency and the slot's
- * offset in one 32-bit entry (the models have 8-bit precision).
+ * offset in one 32-bit entry (the models have 8-bit precision).  Where
+ * the CPU has AVX-512 VBMI, gv_dct_decode takes rows 0-63 sixteen at a
+ * time through tile_dct_lanes.c instead, which gives the same bytes; this
+ * file's scalar rows stay the reference, the path of other CPUs, and the
+ * fallback (with the message) for a damaged group.
  */
 #include <string.h>
 
@@ -15,6 +19,7 @@
 #include "codec/predict.h"
 #include "codec/tile.h"
 #include "codec/tile_dct.h"
+#include "codec/tile_dct_lanes.h"
 #include "codec/tile_dct_pixels.h"
 #include "codec/tile_layout.h"
 
@@ -475,7 +480,35 @@ int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
      * cleared again once used. */
     memset(co, 0, sizeof co);
     const size_t stride = (size_t)GV_TILE * channels;
-    for (int by = 0; by < GV_DCT_BLOCKS; by += 2) {
+    /* Where the CPU has AVX-512: sixteen rows at a time in SIMD lanes
+     * (tile_dct_lanes.c), then their pixels; a group with damage, and the
+     * last row, by the scalar code below. */
+    struct gv_dct_lanes_arena *lanes = gv_dct_lanes_usable() ? gv_dct_lanes_arena() : NULL;
+    int lanes_to = lanes ? GV_DCT_BLOCKS - 1 : 0;
+    for (int by = 0; by < lanes_to; by += GV_DCT_LANES) {
+        uint8_t lane_eobs[GV_DCT_LANES][3][GV_DCT_BLOCKS];
+        uint32_t at[GV_DCT_LANES], end[GV_DCT_LANES];
+        size_t a = it.at;
+        for (int i = 0; i < GV_DCT_LANES; i++) {
+            at[i] = (uint32_t)a;
+            a += 2 * (size_t)gv_get16(buf + it.l.lengths + 2 * (by + i));
+            end[i] = (uint32_t)a;
+        }
+        if (gv_dct_lanes_rows(buf, at, end, GV_DCT_LANES, channels,
+                              &it.md.slot[0][0], it.steps, lanes,
+                              lane_eobs) < 0) {
+            lanes_to = by;
+            break;
+        }
+        it.at = a;
+        for (int r = 0; r < GV_DCT_LANES; r++) {
+            const int y0 = 8 * (by + r);
+            for (int j = 0; j < 8; j++)
+                gv_predictor_row(&pred, y0 + j, out + (size_t)(y0 + j) * stride);
+            gv_dct_add_row(lanes->rows[r], lane_eobs[r], channels, by + r, out);
+        }
+    }
+    for (int by = lanes_to; by < GV_DCT_BLOCKS; by += 2) {
         if (rows_next(&it, buf, by, channels, co, eobs, err) < 0)
             return -1;
         for (int r = 0; r < 2 && by + r < GV_DCT_BLOCKS; r++) {

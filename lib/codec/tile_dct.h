@@ -78,9 +78,12 @@ int gv_dct_unpack(const uint8_t *buf, size_t len, int channels,
 
 /*
  * Decode a D buffer against its decoded parent, as gv_tile_decode does
- * (which calls this for D buffers).  Allocates nothing: its scratch
- * (about 110 KiB: two rows of coefficients, the models' tables and the
- * predictor's rows) is on the stack.  Returns 0 or -1 with *err.
+ * (which calls this for D buffers).  Its scratch (about 110 KiB: two
+ * rows of coefficients, the models' tables and the predictor's rows) is on
+ * the stack; where the CPU has AVX-512 VBMI, a thread's first call also
+ * allocates the 396 KiB that its rANS lanes keep until the thread ends
+ * (tile_dct_lanes.h), and decodes with the scalar rows if that fails.
+ * Returns 0 or -1 with *err.
  */
 int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
                   const uint8_t *parent, int qx, int qy, uint8_t *out,
