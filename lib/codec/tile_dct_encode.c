@@ -1138,14 +1138,21 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
 {
     struct models *md = &cd->md;
     static _Thread_local uint8_t saved[3][NB];
+    static _Thread_local uint16_t cut[3 * NB];   /* c * NB + b of each cut */
+    static _Thread_local double bits[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
+    int ncut = 0;
     memcpy(saved, cd->eob, sizeof saved);
+    for (int m = 0; m < GV_DCT_MODELS; m++)
+        for (int v = 0; v < gv_dct_model_symbols(m); v++)
+            bits[m][v] = symbol_bits(md, m, v);
     const double j_old = lambda * 8.0 * estimate_bytes(md, mask_model_bytes(*mask));
     double added = 0, added_at = 0;
     for (int c = 0; c < channels; c++) {
         const double s = (double)steps[c];
         const double w = (channels == 1 ? 1.0 : channel_weight[c]) / 64.0;
         const int cc = c > 0;
-        const int eob_model = 3 * cc, tok_model = GV_DCT_EOB_MODELS + 12 * cc;
+        const double *eob_bits = bits[3 * cc];
+        const double(*tok_bits)[GV_DCT_EOB_SYMBOLS] = bits + GV_DCT_EOB_MODELS + 12 * cc;
         for (int by = 0; by < GV_DCT_BLOCKS; by++) {
             int pe = 0, dcp = 0;
             for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
@@ -1160,26 +1167,27 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
                  * error its values remove, J(n') - J(n) at each n' that
                  * ends on a nonzero value (or is 0).  The scan stops at
                  * the first value of magnitude 2 or more, whose removal
-                 * does not pay. */
-                const double eob_n = symbol_bits(md, eob_model + pe, n);
+                 * does not pay.  y is value k's token and class. */
+                const double *eob_pe = eob_bits + pe * GV_DCT_EOB_SYMBOLS;
+                const double eob_n = eob_pe[n];
                 double tail_bits = 0, tail_err = 0, best = 0;
-                int best_n = n;
+                int best_n = n, y = tc[q[n - 1] + 2048];
                 for (int k = n - 1; k >= 0; k--) {
-                    const int y = tc[q[k] + 2048], t = y & 15;
-                    const int pk = k ? tc[q[k - 1] + 2048] >> 4 : dcp;
-                    tail_bits += symbol_bits(md, tok_model + gv_dct_band_model[k] + pk, t);
+                    const int t = y & 15;
+                    const int yp = k ? tc[q[k - 1] + 2048] : dcp << 4;
+                    tail_bits += tok_bits[gv_dct_band_model[k] + (yp >> 4)][t];
                     if (t == GV_DCT_ESCAPE)
                         tail_bits += 12.0;
+                    y = yp;
                     if (q[k]) {
-                        if (abs(q[k]) > 1)
+                        if (q[k] > 1 || q[k] < -1)
                             break;
                         const double xa = fabs((double)x[k]), r = xa - s;
                         tail_err += (xa * xa - r * r) * w;
                     }
                     if (k > 0 && !q[k - 1])
                         continue;
-                    const double j = tail_err + lambda * (symbol_bits(md, eob_model + pe, k) -
-                                                          eob_n - tail_bits);
+                    const double j = tail_err + lambda * (eob_pe[k] - eob_n - tail_bits);
                     if (j < best) {
                         best = j;
                         best_n = k;
@@ -1189,6 +1197,7 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
                 if (best_n < n) {
                     added += added_at;
                     cd->eob[c][b] = (uint8_t)best_n;
+                    cut[ncut++] = (uint16_t)(c * NB + b);
                 }
                 const int m = cd->eob[c][b];
                 pe = m == 0 ? 0 : (m <= 4 ? 1 : 2);
@@ -1196,6 +1205,8 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
             }
         }
     }
+    if (!ncut)
+        return;
     struct models before = *md;
     uint32_t new_mask;
     count_symbols(cd, channels);
@@ -1203,10 +1214,11 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
     if (added + lambda * 8.0 * estimate_bytes(md, mb) < j_old) {
         /* Clear the values cut off, for the writer's block_slots, which
          * reads past the eob to a multiple of 8. */
-        for (int c = 0; c < channels; c++)
-            for (int b = 0; b < NB; b++)
-                for (int k = cd->eob[c][b]; k < saved[c][b]; k++)
-                    cd->q[c][b][k] = 0;
+        for (int i = 0; i < ncut; i++) {
+            const int c = cut[i] / NB, b = cut[i] % NB;
+            for (int k = cd->eob[c][b]; k < saved[c][b]; k++)
+                cd->q[c][b][k] = 0;
+        }
         *mask = new_mask;
         return;
     }
