@@ -221,4 +221,19 @@ static inline void dct_fixture_case(int k, int channels, uint64_t *seed,
         }
 }
 
+/* A textured n x n tile of C channels, the encoders' test input: noise of
+ * amplitude amp (from test_rand(rng)) over gradients, with an edge at
+ * x = 250. */
+static inline void dct_fixture_tile(uint8_t *t, int n, int C, int amp,
+                                    uint64_t *rng)
+{
+    for (int y = 0; y < n; y++)
+        for (int x = 0; x < n; x++)
+            for (int c = 0; c < C; c++) {
+                int v = 60 + (x + 2 * y) / 8 + 30 * c + (x > 250 ? 60 : 0);
+                v += (int)(test_rand(rng) % (2 * amp + 1)) - amp;
+                t[((size_t)y * n + x) * C + c] = (uint8_t)(v < 0 ? 0 : v > 255 ? 255 : v);
+            }
+}
+
 #endif

@@ -56,13 +56,7 @@ static int same(const uint8_t *bb, size_t len, int C, int *rc_out)
 
 static void make_tile(uint8_t *t, int C, int amp)
 {
-    for (int y = 0; y < T; y++)
-        for (int x = 0; x < T; x++)
-            for (int c = 0; c < C; c++) {
-                int v = 60 + (x + 2 * y) / 8 + 30 * c + (x > 250 ? 60 : 0);
-                v += (int)(test_rand(&rng) % (2 * amp + 1)) - amp;
-                t[((size_t)y * T + x) * C + c] = (uint8_t)(v < 0 ? 0 : v > 255 ? 255 : v);
-            }
+    dct_fixture_tile(t, T, C, amp, &rng);
 }
 
 static void test_fixtures(void)

@@ -90,13 +90,7 @@ static void test_inverse(void)
 /* A textured tile, C channels: noise over gradients, with an edge. */
 static void make_tile(uint8_t *t, int C, int amp)
 {
-    for (int y = 0; y < T; y++)
-        for (int x = 0; x < T; x++)
-            for (int c = 0; c < C; c++) {
-                int v = 60 + (x + 2 * y) / 8 + 30 * c + (x > 250 ? 60 : 0);
-                v += (int)(test_rand(&rng) % (2 * amp + 1)) - amp;
-                t[((size_t)y * T + x) * C + c] = (uint8_t)(v < 0 ? 0 : v > 255 ? 255 : v);
-            }
+    dct_fixture_tile(t, T, C, amp, &rng);
 }
 
 static uint8_t orig[T * T * 3], parent[T * T * 3], pred[T * T * 3],
