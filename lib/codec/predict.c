@@ -44,8 +44,10 @@
  *   straight into the interleaved child order (VPERMB gathers each
  *   sample's four parent bytes, VPMADDUBSW weighs them in pairs), and
  *   the vertical sum reads pairs of rows interleaved once per pair
- *   (VPDPWSSD) instead of unpacking four rows for every child row: 1.4 times the
- *   prediction's speed of level 2 (bench/README.md, session 9).
+ *   (VPDPWSSD) instead of unpacking four rows for every child row: 1.5 to
+ *   1.7 times the prediction's speed of level 2 (bench/README.md,
+ *   session 9).  The AVX2 path (level 1) reads pairs of rows the same
+ *   way with VPMADDWD (1.13 times its speed with four rows).
  */
 #include <pthread.h>
 #include <stddef.h>
@@ -580,6 +582,72 @@ vertical_pairs(const int16_t *p0, const int16_t *p1, const int *w, size_t n,
         }
     }
 }
+/* The same pairs for AVX2 (level 1): 16 samples of each row per 32
+ * values, as VPUNPCKLWD / VPUNPCKHWD give them; whole groups of 32
+ * samples, the padding zero. */
+__attribute__((target("avx2"))) static void
+interleave_pair_avx2(const int16_t *a, const int16_t *b, size_t n, int16_t *dst)
+{
+    const size_t groups = (n + 31) / 32;
+    for (size_t c = 0; c < 2 * groups; c++) {
+        const size_t i = 16 * c;
+        __m256i x, y;
+        if (i + 16 <= n) {
+            x = _mm256_loadu_si256((const __m256i *)(a + i));
+            y = _mm256_loadu_si256((const __m256i *)(b + i));
+        } else {
+            int16_t ta[16] = {0}, tb[16] = {0};
+            if (i < n) {
+                memcpy(ta, a + i, (n - i) * sizeof *ta);
+                memcpy(tb, b + i, (n - i) * sizeof *tb);
+            }
+            x = _mm256_loadu_si256((const __m256i *)ta);
+            y = _mm256_loadu_si256((const __m256i *)tb);
+        }
+        _mm256_store_si256((__m256i *)(dst + 32 * c), _mm256_unpacklo_epi16(x, y));
+        _mm256_store_si256((__m256i *)(dst + 32 * c + 16), _mm256_unpackhi_epi16(x, y));
+    }
+}
+
+/* 16 samples (chunk c) of a child row from its two AVX2 pairs, before
+ * the final pack. */
+__attribute__((target("avx2"), always_inline)) static inline __m256i
+vertical_pairs16(const int16_t *p0, const int16_t *p1, size_t c, __m256i w01,
+                 __m256i w23, __m256i rnd)
+{
+    const int16_t *a = p0 + 32 * c, *b = p1 + 32 * c;
+    __m256i lo = _mm256_add_epi32(
+        _mm256_madd_epi16(_mm256_load_si256((const __m256i *)a), w01),
+        _mm256_madd_epi16(_mm256_load_si256((const __m256i *)b), w23));
+    __m256i hi = _mm256_add_epi32(
+        _mm256_madd_epi16(_mm256_load_si256((const __m256i *)(a + 16)), w01),
+        _mm256_madd_epi16(_mm256_load_si256((const __m256i *)(b + 16)), w23));
+    lo = _mm256_srai_epi32(_mm256_add_epi32(lo, rnd), 14);
+    hi = _mm256_srai_epi32(_mm256_add_epi32(hi, rnd), 14);
+    return _mm256_packs_epi32(lo, hi);
+}
+
+/* vertical_pairs with AVX2, 32 samples at a time. */
+__attribute__((target("avx2"))) static void
+vertical_pairs_avx2(const int16_t *p0, const int16_t *p1, const int *w,
+                    size_t n, uint8_t *out)
+{
+    const __m256i w01 = _mm256_set1_epi32(weight_pair(w, 0));
+    const __m256i w23 = _mm256_set1_epi32(weight_pair(w, 2));
+    const __m256i rnd = _mm256_set1_epi32(ROUND);
+    for (size_t i = 0, c = 0; i < n; i += 32, c += 2) {
+        const __m256i a = vertical_pairs16(p0, p1, c, w01, w23, rnd);
+        const __m256i b = vertical_pairs16(p0, p1, c + 1, w01, w23, rnd);
+        const __m256i v = _mm256_permute4x64_epi64(_mm256_packus_epi16(a, b), 0xd8);
+        if (i + 32 <= n) {
+            _mm256_storeu_si256((__m256i *)(out + i), v);
+        } else {
+            uint8_t tail[32];
+            _mm256_storeu_si256((__m256i *)tail, v);
+            memcpy(out + i, tail, n - i);
+        }
+    }
+}
 #endif
 
 /* The horizontal sums of parent row pr (clamped to the tile), from the
@@ -614,7 +682,11 @@ static const int16_t *pair_row(struct gv_predictor *p, int t)
     const int slot = (t + 2 * GV_PREDICT_RING) % GV_PREDICT_RING;
     if (p->pair_tag[slot] != t) {
         const int16_t *a = ring_row(p, t), *b = ring_row(p, t + 1);
-        interleave_pair(a, b, (size_t)GV_TILE * p->channels, p->pair[slot]);
+        const size_t n = (size_t)GV_TILE * p->channels;
+        if (use_vbmi())
+            interleave_pair(a, b, n, p->pair[slot]);
+        else
+            interleave_pair_avx2(a, b, n, p->pair[slot]);
         p->pair_tag[slot] = t;
     }
     return p->pair[slot];
@@ -631,6 +703,11 @@ void gv_predictor_row(struct gv_predictor *p, int v, uint8_t *row)
     if (use_vbmi()) {
         const int16_t *p0 = pair_row(p, t), *p1 = pair_row(p, t + 2);
         vertical_pairs(p0, p1, w, n, row);
+        return;
+    }
+    if (use_avx2() && !use_avx512()) {
+        const int16_t *p0 = pair_row(p, t), *p1 = pair_row(p, t + 2);
+        vertical_pairs_avx2(p0, p1, w, n, row);
         return;
     }
 #endif
