@@ -308,8 +308,8 @@ int main(int argc, char **argv)
                "CPU prediction only, 1 thread", pr, pr_c);
         predict_only = 0;
         /* Where the prediction runs at level 3 (AVX-512 VBMI and VNNI),
-         * the same decoder with the level-2 prediction (AVX-512BW, which
-         * it had before), in this run: the change measured side by side. */
+         * the same decoder with the level-2 prediction (AVX-512BW without
+         * them, as on Skylake-SP and Cascade Lake), in this run. */
         if (gv_predict_simd(3) == 3) {
             gv_predict_simd(2);
             double old1 = cpu_run(1), old1_c = last_cpu_rate;

@@ -34,20 +34,21 @@
  * - No clamping inside the loops: the even and odd children are two
  *   straight 4-tap filters over the parent row, and only the two children
  *   at the tile's edge whose taps leave it are done apart, clamped.
- * - The vertical sum runs on AVX-512BW or AVX2 where the CPU has them
- *   (pairs of rows interleaved into VPMADDWD, the clamp done by the
- *   saturating packs, which equals clamping before the shift since the
- *   shift is a floor); elsewhere a plain C loop the compiler vectorizes.
- *   The residual addition uses AVX2's saturating byte arithmetic.
+ * - The vertical sum, where the CPU has AVX2, reads successive parent
+ *   rows' sums interleaved in pairs (h[t], h[t+1]), each pair made once and
+ *   kept in a ring, since it serves four child rows: a child row is two
+ *   VPMADDWD per 16 samples (VPDPWSSD per 32 on level 3) and no
+ *   unpacking; the clamp is done by the saturating packs, which equals
+ *   clamping before the shift since the shift is a floor.  Elsewhere a
+ *   plain C loop over four rows, which the compiler vectorizes.  The
+ *   residual addition uses AVX2's saturating byte arithmetic.
  * - Where the CPU also has AVX-512 VBMI and VNNI (level 3; Ice Lake, Zen 4
- *   and later), the horizontal sums go
- *   straight into the interleaved child order (VPERMB gathers each
- *   sample's four parent bytes, VPMADDUBSW weighs them in pairs), and
- *   the vertical sum reads pairs of rows interleaved once per pair
- *   (VPDPWSSD) instead of unpacking four rows for every child row: 1.5 to
- *   1.7 times the prediction's speed of level 2 (bench/README.md,
- *   session 9).  The AVX2 path (level 1) reads pairs of rows the same
- *   way with VPMADDWD (1.13 times its speed with four rows).
+ *   and later), the horizontal sums go straight into the interleaved
+ *   child order (VPERMB gathers each sample's four parent bytes,
+ *   VPMADDUBSW weighs them in pairs).
+ * Measured (bench/README.md, session 9): level 3 1.5 to 1.7 times the
+ * prediction's speed of the session start's AVX-512BW path; the pairs
+ * alone 1.13 times on AVX2 and 1.16 times on AVX-512BW.
  */
 #include <pthread.h>
 #include <stddef.h>
@@ -428,87 +429,6 @@ static inline int32_t weight_pair(const int *w, int k)
     return (int32_t)((uint32_t)(uint16_t)w[k] | (uint32_t)(uint16_t)w[k + 1] << 16);
 }
 
-/* 16 samples of a child row as 16-bit values (before the final pack):
- * rows interleaved pairwise, VPMADDWD, round, shift (a floor). */
-__attribute__((target("avx2"))) static inline __m256i
-vertical16(const int16_t *h0, const int16_t *h1, const int16_t *h2,
-           const int16_t *h3, __m256i w01, __m256i w23, __m256i rnd)
-{
-    __m256i a0 = _mm256_loadu_si256((const __m256i *)h0);
-    __m256i a1 = _mm256_loadu_si256((const __m256i *)h1);
-    __m256i a2 = _mm256_loadu_si256((const __m256i *)h2);
-    __m256i a3 = _mm256_loadu_si256((const __m256i *)h3);
-    __m256i lo = _mm256_add_epi32(
-        _mm256_madd_epi16(_mm256_unpacklo_epi16(a0, a1), w01),
-        _mm256_madd_epi16(_mm256_unpacklo_epi16(a2, a3), w23));
-    __m256i hi = _mm256_add_epi32(
-        _mm256_madd_epi16(_mm256_unpackhi_epi16(a0, a1), w01),
-        _mm256_madd_epi16(_mm256_unpackhi_epi16(a2, a3), w23));
-    lo = _mm256_srai_epi32(_mm256_add_epi32(lo, rnd), 14);
-    hi = _mm256_srai_epi32(_mm256_add_epi32(hi, rnd), 14);
-    /* Within each 128-bit lane, lo holds samples 0-3 and hi 4-7: the
-     * pack puts them back in order (|values| < 2^12, no saturation). */
-    return _mm256_packs_epi32(lo, hi);
-}
-
-/* The same as vertical_c.  The clamp to 0..255 is the unsigned saturating
- * pack after the floor shift: floor is monotonic, so clamping after the
- * shift equals clamping to [0, SUM_MAX] before it. */
-__attribute__((target("avx2"))) static void
-vertical_avx2(const int16_t *h0, const int16_t *h1, const int16_t *h2,
-              const int16_t *h3, const int *w, size_t n, uint8_t *out)
-{
-    const __m256i w01 = _mm256_set1_epi32(weight_pair(w, 0));
-    const __m256i w23 = _mm256_set1_epi32(weight_pair(w, 2));
-    const __m256i rnd = _mm256_set1_epi32(ROUND);
-    size_t i = 0;
-    for (; i + 32 <= n; i += 32) {
-        __m256i p0 = vertical16(h0 + i, h1 + i, h2 + i, h3 + i, w01, w23, rnd);
-        __m256i p1 = vertical16(h0 + i + 16, h1 + i + 16, h2 + i + 16,
-                                h3 + i + 16, w01, w23, rnd);
-        __m256i b = _mm256_permute4x64_epi64(_mm256_packus_epi16(p0, p1), 0xd8);
-        _mm256_storeu_si256((__m256i *)(out + i), b);
-    }
-    if (i < n)
-        vertical_c(h0 + i, h1 + i, h2 + i, h3 + i, w, n - i, out + i);
-}
-
-/* The same 64 samples at a time with AVX-512BW (same arithmetic; the
- * packs work within 128-bit lanes, so the 64-bit groups are put back in
- * order at the end). */
-__attribute__((target("avx512bw"))) static void
-vertical_avx512(const int16_t *h0, const int16_t *h1, const int16_t *h2,
-                const int16_t *h3, const int *w, size_t n, uint8_t *out)
-{
-    const __m512i w01 = _mm512_set1_epi32(weight_pair(w, 0));
-    const __m512i w23 = _mm512_set1_epi32(weight_pair(w, 2));
-    const __m512i rnd = _mm512_set1_epi32(ROUND);
-    const __m512i order = _mm512_set_epi64(7, 5, 3, 1, 6, 4, 2, 0);
-    size_t i = 0;
-    for (; i + 64 <= n; i += 64) {
-        __m512i p[2];
-        for (int k = 0; k < 2; k++) {
-            const size_t j = i + 32 * (size_t)k;
-            __m512i a0 = _mm512_loadu_si512((const void *)(h0 + j));
-            __m512i a1 = _mm512_loadu_si512((const void *)(h1 + j));
-            __m512i a2 = _mm512_loadu_si512((const void *)(h2 + j));
-            __m512i a3 = _mm512_loadu_si512((const void *)(h3 + j));
-            __m512i lo = _mm512_add_epi32(
-                _mm512_madd_epi16(_mm512_unpacklo_epi16(a0, a1), w01),
-                _mm512_madd_epi16(_mm512_unpacklo_epi16(a2, a3), w23));
-            __m512i hi = _mm512_add_epi32(
-                _mm512_madd_epi16(_mm512_unpackhi_epi16(a0, a1), w01),
-                _mm512_madd_epi16(_mm512_unpackhi_epi16(a2, a3), w23));
-            lo = _mm512_srai_epi32(_mm512_add_epi32(lo, rnd), 14);
-            hi = _mm512_srai_epi32(_mm512_add_epi32(hi, rnd), 14);
-            p[k] = _mm512_packs_epi32(lo, hi);
-        }
-        __m512i b = _mm512_permutexvar_epi64(order, _mm512_packus_epi16(p[0], p[1]));
-        _mm512_storeu_si512((void *)(out + i), b);
-    }
-    if (i < n)
-        vertical_avx2(h0 + i, h1 + i, h2 + i, h3 + i, w, n - i, out + i);
-}
 #endif
 
 #if HAVE_AVX2_PATH
@@ -705,7 +625,7 @@ void gv_predictor_row(struct gv_predictor *p, int v, uint8_t *row)
         vertical_pairs(p0, p1, w, n, row);
         return;
     }
-    if (use_avx2() && !use_avx512()) {
+    if (use_avx2()) {
         const int16_t *p0 = pair_row(p, t), *p1 = pair_row(p, t + 2);
         vertical_pairs_avx2(p0, p1, w, n, row);
         return;
@@ -714,16 +634,6 @@ void gv_predictor_row(struct gv_predictor *p, int v, uint8_t *row)
     const int16_t *h[4];
     for (int k = 0; k < 4; k++)
         h[k] = ring_row(p, t + k);
-#if HAVE_AVX2_PATH
-    if (use_avx512()) {
-        vertical_avx512(h[0], h[1], h[2], h[3], w, n, row);
-        return;
-    }
-    if (use_avx2()) {
-        vertical_avx2(h[0], h[1], h[2], h[3], w, n, row);
-        return;
-    }
-#endif
     vertical_c(h[0], h[1], h[2], h[3], w, n, row);
 }
 
