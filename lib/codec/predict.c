@@ -46,9 +46,11 @@
  *   and later), the horizontal sums go straight into the interleaved
  *   child order (VPERMB gathers each sample's four parent bytes,
  *   VPMADDUBSW weighs them in pairs).
+ * - On AVX2 alone (level 1) the even and odd children's sums are
+ *   interleaved by PSHUFB, four pixel pairs a step.
  * Measured (bench/README.md, session 9): level 3 1.5 to 1.7 times the
- * prediction's speed of the session start's AVX-512BW path; the pairs
- * alone 1.13 times on AVX2 and 1.16 times on AVX-512BW.
+ * prediction's speed of the session start's AVX-512BW path; level 2 1.17
+ * times its own, level 1 1.22 to 1.24 times.
  */
 #include <pthread.h>
 #include <stddef.h>
@@ -356,6 +358,42 @@ static void filter_row_vbmi(const uint8_t *src, int C, int qx, int16_t *dst)
 }
 #endif
 
+#if HAVE_AVX2_PATH
+/* interleave3_avx512 with PSHUFB on 128-bit vectors (level 1): four pairs
+ * (24 samples, 48 bytes) a step from two overlapping loads of each of
+ * even[] and odd[] (samples 0-7 and 4-11 of the four pixels), each output
+ * vector the OR of two shuffles; the loads read up to the 12 samples they
+ * use. */
+__attribute__((target("avx2"))) static void
+interleave3_ssse3(const uint16_t *even, const uint16_t *odd, int16_t *dst)
+{
+    /* Output samples, in 16-bit units: vector 0 = e0 e1 e2 o0 o1 o2 e3 e4
+     * (of the loads E0, O0), vector 1 = e5 o3 o4 o5 e6 e7 e8 o6 (E1: e4..,
+     * O0), vector 2 = o7 o8 e9 e10 e11 o9 o10 o11 (O1: o4.., E1). */
+    const __m128i m0e = _mm_setr_epi8(0, 1, 2, 3, 4, 5, -1, -1, -1, -1, -1, -1, 6, 7, 8, 9);
+    const __m128i m0o = _mm_setr_epi8(-1, -1, -1, -1, -1, -1, 0, 1, 2, 3, 4, 5, -1, -1, -1, -1);
+    const __m128i m1e = _mm_setr_epi8(2, 3, -1, -1, -1, -1, -1, -1, 4, 5, 6, 7, 8, 9, -1, -1);
+    const __m128i m1o = _mm_setr_epi8(-1, -1, 6, 7, 8, 9, 10, 11, -1, -1, -1, -1, -1, -1, 12, 13);
+    const __m128i m2o = _mm_setr_epi8(6, 7, 8, 9, -1, -1, -1, -1, -1, -1, 10, 11, 12, 13, 14, 15);
+    const __m128i m2e = _mm_setr_epi8(-1, -1, -1, -1, 10, 11, 12, 13, 14, 15, -1, -1, -1, -1, -1, -1);
+    for (int k = 0; k < 256; k += 4) {
+        const uint16_t *e = even + 3 * k, *o = odd + 3 * k;
+        const __m128i e0 = _mm_loadu_si128((const __m128i *)e);
+        const __m128i e1 = _mm_loadu_si128((const __m128i *)(e + 4));
+        const __m128i o0 = _mm_loadu_si128((const __m128i *)o);
+        const __m128i o1 = _mm_loadu_si128((const __m128i *)(o + 4));
+        int16_t *d = dst + 6 * k;
+        _mm_storeu_si128((__m128i *)d, _mm_or_si128(_mm_shuffle_epi8(e0, m0e),
+                                                    _mm_shuffle_epi8(o0, m0o)));
+        _mm_storeu_si128((__m128i *)(d + 8), _mm_or_si128(_mm_shuffle_epi8(e1, m1e),
+                                                          _mm_shuffle_epi8(o0, m1o)));
+        _mm_storeu_si128((__m128i *)(d + 16), _mm_or_si128(_mm_shuffle_epi8(o1, m2o),
+                                                           _mm_shuffle_epi8(e1, m2e)));
+    }
+    memcpy(dst + 6 * 256, even + 3 * 256, 3 * sizeof *dst);
+}
+#endif
+
 /*
  * Horizontal sums (minus OFFSET) of one parent row for every child column
  * u = 0..512 of quadrant qx, interleaved as dst[u * C + c].  Child 2k
@@ -393,6 +431,10 @@ static void filter_row(const uint8_t *src, int C, int qx, int16_t *dst)
 #if HAVE_AVX2_PATH
     if (use_avx512()) {
         interleave3_avx512(even, odd, dst);
+        return;
+    }
+    if (use_avx2()) {
+        interleave3_ssse3(even, odd, dst);
         return;
     }
 #endif
