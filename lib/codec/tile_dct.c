@@ -212,7 +212,7 @@ static void load_models(const uint8_t *buf, const struct dct_layout *l,
         STEP(L, md->slot[3 * cc + pe##L[c]], e_);                           \
         eob##L = E_SYMBOL(e_);                                              \
         eobs##L[c][bx] = (uint8_t)eob##L;                                   \
-        pe##L[c] = eob##L == 0 ? 0 : (eob##L <= 4 ? 1 : 2);                 \
+        pe##L[c] = gv_dct_eob_class(eob##L);                                \
         dst##L = &co##L[c][0][8 * bx];                                      \
         p##L = dcp##L[c];                                                   \
         dcp##L[c] = 0;                                                      \

@@ -48,6 +48,13 @@ static inline int gv_dct_class(int q)
     return a > 2 ? 2 : a;
 }
 
+/* The eob context a block's count n of coded coefficients gives the next
+ * block of its channel in the row: 0 for none, 1 for 1..4, 2 above. */
+static inline int gv_dct_eob_class(int n)
+{
+    return n == 0 ? 0 : (n <= 4 ? 1 : 2);
+}
+
 /* Symbols of model m: 65 for an eob model, 16 for a token model. */
 static inline int gv_dct_model_symbols(int m)
 {

@@ -627,6 +627,18 @@ count_block(const int16_t *q, int n, int dcp, uint32_t *h)
     return (uint64_t)esc;
 }
 
+/* The token counts of both channel classes (tokh, TOKEN_SLOTS each) and
+ * the uniform steps into the models' counts. */
+static void tokens_to_models(struct models *md, const uint32_t *tokh,
+                             uint64_t uniform)
+{
+    for (int m = 0; m < 2 * 12; m++)
+        memcpy(md->count[GV_DCT_EOB_MODELS + m],
+               tokh + m * GV_DCT_TOKEN_SYMBOLS,
+               GV_DCT_TOKEN_SYMBOLS * sizeof *tokh);
+    md->uniform = uniform;
+}
+
 typedef uint64_t quantize_fn(const float *, float, float, int16_t *, float *);
 
 /* Quantize every block at steps[] into cd (q, eob) and count its symbols
@@ -689,7 +701,7 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
                 const int n = nz ? 64 - __builtin_clzll(nz) : 0;
                 cd->eob[c][b] = (uint8_t)n;
                 eobc[pe * GV_DCT_EOB_SYMBOLS + n]++;
-                pe = n == 0 ? 0 : (n <= 4 ? 1 : 2);
+                pe = gv_dct_eob_class(n);
                 if (!n) {
                     dcp = 0;
                     continue;
@@ -701,11 +713,7 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
         }
         sse += w * e2 / 64.0;
     }
-    for (int m = 0; m < 2 * 12; m++)
-        memcpy(md->count[GV_DCT_EOB_MODELS + m],
-               tokh + m * GV_DCT_TOKEN_SYMBOLS,
-               GV_DCT_TOKEN_SYMBOLS * sizeof *tokh);
-    md->uniform = uniform;
+    tokens_to_models(md, tokh, uniform);
     return sse;
 }
 
@@ -868,7 +876,7 @@ static int collect_row(const struct candidate *cd, int channels, int by,
             const int cc = c > 0, n = cd->eob[c][b];
             const int16_t *q = cd->q[c][b];
             sy[k++] = (uint16_t)(enc_at(3 * cc + pe[c]) + n);
-            pe[c] = n == 0 ? 0 : (n <= 4 ? 1 : 2);
+            pe[c] = gv_dct_eob_class(n);
             if (!n) {
                 dcp[c] = 0;
                 continue;
@@ -950,6 +958,16 @@ static void code_rows(struct gv_dct_workspace *ws, int rows, int *left,
         n[r] = (int)(w[r] - ws->words[r]);
 }
 
+/* The bytes of the stored models of a mask. */
+static size_t mask_model_bytes(uint32_t mask)
+{
+    size_t bytes = 0;
+    for (int m = 0; m < GV_DCT_MODELS; m++)
+        if (mask >> m & 1)
+            bytes += (size_t)gv_dct_model_symbols(m);
+    return bytes;
+}
+
 /* Write the buffer of candidate cd (its models built, mask theirs).
  * Returns its length, or 0 past cap. */
 static size_t write_buffer(struct gv_dct_workspace *ws,
@@ -958,10 +976,7 @@ static size_t write_buffer(struct gv_dct_workspace *ws,
                            size_t cap)
 {
     const struct models *md = &cd->md;
-    size_t at = HEADER_BYTES;
-    for (int m = 0; m < GV_DCT_MODELS; m++)
-        if (mask >> m & 1)
-            at += (size_t)gv_dct_model_symbols(m);
+    size_t at = HEADER_BYTES + mask_model_bytes(mask);
     const size_t lengths = (at + 1) & ~(size_t)1;
     const size_t streams = lengths + LENGTHS_BYTES;
     if (streams > cap)
@@ -1057,15 +1072,6 @@ static double try_step(const struct gv_dct_workspace *ws,
     return err + lambda * 8.0 * estimate_bytes(&cd->md, mb);
 }
 
-/* The bytes of the stored models of a mask. */
-static size_t mask_model_bytes(uint32_t mask)
-{
-    size_t bytes = 0;
-    for (int m = 0; m < GV_DCT_MODELS; m++)
-        if (mask >> m & 1)
-            bytes += (size_t)gv_dct_model_symbols(m);
-    return bytes;
-}
 
 /* Count the symbols of cd's q and eob into cd->md, as quantize_count
  * does, from the values instead of the coefficients.  Values past a
@@ -1089,7 +1095,7 @@ static void count_symbols(struct candidate *cd, int channels)
             for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
                 const int b = by * GV_DCT_BLOCKS + bx, n = cd->eob[c][b];
                 eobc[pe * GV_DCT_EOB_SYMBOLS + n]++;
-                pe = n == 0 ? 0 : (n <= 4 ? 1 : 2);
+                pe = gv_dct_eob_class(n);
                 if (!n) {
                     dcp = 0;
                     continue;
@@ -1100,11 +1106,7 @@ static void count_symbols(struct candidate *cd, int channels)
             }
         }
     }
-    for (int m = 0; m < 2 * 12; m++)
-        memcpy(md->count[GV_DCT_EOB_MODELS + m],
-               tokh + m * GV_DCT_TOKEN_SYMBOLS,
-               GV_DCT_TOKEN_SYMBOLS * sizeof *tokh);
-    md->uniform = uniform;
+    tokens_to_models(md, tokh, uniform);
 }
 
 /* Bits of symbol s in model m as the candidate's models code it; a symbol
@@ -1200,8 +1202,8 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
                     cut[ncut++] = (uint16_t)(c * NB + b);
                 }
                 const int m = cd->eob[c][b];
-                pe = m == 0 ? 0 : (m <= 4 ? 1 : 2);
-                dcp = m ? tc[q[0] + 2048] >> 4 : 0;
+                pe = gv_dct_eob_class(m);
+                dcp = m ? gv_dct_class(q[0]) : 0;
             }
         }
     }

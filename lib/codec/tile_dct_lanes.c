@@ -134,7 +134,7 @@ static void tables_make(struct lane_tables *t)
         t->zz_lo[k] = (uint8_t)o;
         t->zz_hi[k] = (uint8_t)(o >> 8);
         t->band_hi[k] = (uint8_t)(GV_DCT_EOB_MODELS + gv_dct_band_model[k]);
-        t->pe_lo[k] = k == 0 ? 0 : (k <= 4 ? 1 : 2);
+        t->pe_lo[k] = (uint8_t)gv_dct_eob_class(k);
         t->pe_hi[k] = 2;
     }
     for (int s = 0; s < 16; s++)
