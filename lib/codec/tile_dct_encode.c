@@ -1139,11 +1139,13 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
                            const int *steps, double lambda, uint32_t *mask)
 {
     struct models *md = &cd->md;
-    static _Thread_local uint8_t saved[3][NB];
-    static _Thread_local uint16_t cut[3 * NB];   /* c * NB + b of each cut */
+    /* Each block cut: c * NB + b, and its count before the cut. */
+    static _Thread_local struct {
+        uint16_t block;
+        uint8_t was;
+    } cut[3 * NB];
     static _Thread_local double bits[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
     int ncut = 0;
-    memcpy(saved, cd->eob, sizeof saved);
     for (int m = 0; m < GV_DCT_MODELS; m++)
         for (int v = 0; v < gv_dct_model_symbols(m); v++)
             bits[m][v] = symbol_bits(md, m, v);
@@ -1199,7 +1201,8 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
                 if (best_n < n) {
                     added += added_at;
                     cd->eob[c][b] = (uint8_t)best_n;
-                    cut[ncut++] = (uint16_t)(c * NB + b);
+                    cut[ncut].block = (uint16_t)(c * NB + b);
+                    cut[ncut++].was = (uint8_t)n;
                 }
                 const int m = cd->eob[c][b];
                 pe = gv_dct_eob_class(m);
@@ -1217,14 +1220,15 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
         /* Clear the values cut off, for the writer's block_slots, which
          * reads past the eob to a multiple of 8. */
         for (int i = 0; i < ncut; i++) {
-            const int c = cut[i] / NB, b = cut[i] % NB;
-            for (int k = cd->eob[c][b]; k < saved[c][b]; k++)
+            const int c = cut[i].block / NB, b = cut[i].block % NB;
+            for (int k = cd->eob[c][b]; k < cut[i].was; k++)
                 cd->q[c][b][k] = 0;
         }
         *mask = new_mask;
         return;
     }
-    memcpy(cd->eob, saved, sizeof saved);
+    for (int i = 0; i < ncut; i++)
+        cd->eob[cut[i].block / NB][cut[i].block % NB] = cut[i].was;
     *md = before;
 }
 
