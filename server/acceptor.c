@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "acceptor.h"
+#include "conn_watch.h"
 #include "log.h"
 
 struct acceptor {
@@ -40,6 +41,7 @@ struct acceptor {
     atomic_int *busy;         /* by daemon: its thread is in a handler */
     atomic_int waiting;       /* the thread waits for an idle daemon */
     int warned;               /* starved of descriptors, said so */
+    struct conn_watch *watch; /* evicts at the limit; may be NULL */
 };
 
 int acceptor_listen(const char *addr, unsigned port, uint16_t *bound,
@@ -161,16 +163,21 @@ static int accept_one(struct acceptor *a)
 static void *accept_loop(void *arg)
 {
     struct acceptor *a = arg;
-    int starved = 0;
+    int starved = 0, evicted = 0;
     while (!atomic_load(&a->stopping)) {
         /* Accept only for a thread that is free to serve: while every
          * one is in a handler (a long render), a new client waits in the
          * accept queue rather than behind one of them. */
-        int room = atomic_load(&a->open) < a->limit && !starved && some_idle(a);
+        int full = atomic_load(&a->open) >= a->limit;
+        int room = !full && !starved && some_idle(a);
+        /* At the limit, a waiting client is seen (unless an eviction is
+         * already under way, or none was possible a moment ago). */
+        int look = full && a->watch && !evicted && !starved;
         struct pollfd p[2] = {{a->wake_fd, POLLIN, 0}, {a->listen_fd, POLLIN, 0}};
-        /* Starved of descriptors: retry within 100 ms even if no
-         * connection of ours closes (another part may free some). */
-        if (poll(p, room ? 2 : 1, starved ? 100 : -1) < 0 && errno != EINTR)
+        /* Starved of descriptors, or nobody to evict: retry within a
+         * while even if no connection of ours closes. */
+        int wait = starved ? 100 : evicted ? 1000 : -1;
+        if (poll(p, room || look ? 2 : 1, wait) < 0 && errno != EINTR)
             break;
         atomic_store(&a->waiting, 0);
         if (p[0].revents) {
@@ -178,17 +185,23 @@ static void *accept_loop(void *arg)
             ssize_t r = read(a->wake_fd, &v, sizeof v);
             (void)r;
             starved = 0;
+            evicted = 0;
         }
-        if (starved && !p[0].revents)
-            starved = 0; /* the 100 ms passed */
-        if (room && (p[1].revents & POLLIN))
+        if (!p[0].revents)
+            starved = evicted = 0; /* the wait passed */
+        if (look && (p[1].revents & POLLIN)) {
+            conn_watch_evict(a->watch, 1000);
+            evicted = 1; /* a close, or a second, before the next */
+        } else if (room && (p[1].revents & POLLIN)) {
             starved = accept_one(a) < 0;
+        }
     }
     return NULL;
 }
 
 struct acceptor *acceptor_start(int listen_fd, struct MHD_Daemon *const *d,
-                                int n, unsigned limit, struct gv_error *err)
+                                int n, unsigned limit, struct conn_watch *watch,
+                                struct gv_error *err)
 {
     struct acceptor *a = calloc(1, sizeof *a);
     if (!a || !(a->per_daemon = calloc((size_t)n, sizeof *a->per_daemon)) ||
@@ -203,6 +216,7 @@ struct acceptor *acceptor_start(int listen_fd, struct MHD_Daemon *const *d,
     a->d = d;
     a->n = n;
     a->limit = limit;
+    a->watch = watch;
     a->wake_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
     if (a->wake_fd < 0) {
         gv_fail_errno(err, errno, "acceptor: eventfd");

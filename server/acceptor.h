@@ -18,7 +18,9 @@
  *
  * It also keeps connection_limit: at the limit it stops accepting, so
  * further clients wait in the kernel's accept queue (never refused) until
- * a connection closes, as libmicrohttpd did.
+ * a connection closes, as libmicrohttpd did; and so that idle or slow
+ * clients cannot hold every place, a waiting client evicts the one that
+ * has waited longest for its next request.
  */
 #ifndef GV_SERVER_ACCEPTOR_H
 #define GV_SERVER_ACCEPTOR_H
@@ -41,14 +43,20 @@ struct acceptor;
 int acceptor_listen(const char *addr, unsigned port, uint16_t *bound,
                     struct gv_error *err);
 
+struct conn_watch;
+
 /*
  * Start accepting on listen_fd (kept open; the caller closes it after
  * acceptor_stop) and handing the connections to the n daemons d[0..n-1],
- * at most `limit` open at once.  Returns NULL with *err when the thread
- * cannot start.
+ * at most `limit` open at once.  At the limit, a client waiting to
+ * connect makes it evict, through `watch` (NULL: never), the connection
+ * that has waited longest (a second at least) for a request
+ * (conn_watch_evict), one at a time.  Returns NULL with *err when the
+ * thread cannot start.
  */
 struct acceptor *acceptor_start(int listen_fd, struct MHD_Daemon *const *d,
-                                int n, unsigned limit, struct gv_error *err);
+                                int n, unsigned limit, struct conn_watch *watch,
+                                struct gv_error *err);
 
 /* A connection handed to daemon i closed (libmicrohttpd's
  * MHD_CONNECTION_NOTIFY_CLOSED): its slot is free.  Any thread. */

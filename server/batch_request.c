@@ -24,7 +24,8 @@
  * when there is no digit or the value exceeds GV_MAX_DIM (checked digit
  * by digit, so the 64-bit accumulator cannot overflow however long the
  * run of digits). */
-static int number(const char **p, uint32_t *out, struct gv_error *err)
+static int number(const char **p, uint32_t max, uint32_t *out,
+                  struct gv_error *err)
 {
     const char *s = *p;
     if (*s < '0' || *s > '9')
@@ -32,8 +33,10 @@ static int number(const char **p, uint32_t *out, struct gv_error *err)
     uint64_t v = 0;
     for (; *s >= '0' && *s <= '9'; s++) {
         v = v * 10 + (uint64_t)(*s - '0');
-        if (v > GV_MAX_DIM)
-            return gv_fail(err, GV_EINVAL, "batch: number out of range");
+        if (v > max)
+            return gv_fail(err, GV_EINVAL, "batch: number out of range (a "
+                           "level is 0..%u, tx and ty 0..%u)",
+                           BATCH_LEVEL_MAX, GV_MAX_DIM);
     }
     *out = (uint32_t)v;
     *p = s;
@@ -65,15 +68,15 @@ int batch_parse_query(const char *t, size_t max, struct batch_tile **tiles,
     while (*p) {
         /* Each triple after the first follows a ';', so *n < cap here. */
         struct batch_tile *b = &(*tiles)[*n];
-        if (number(&p, &b->level, err) < 0)
+        if (number(&p, BATCH_LEVEL_MAX, &b->level, err) < 0)
             goto bad;
         if (*p++ != ',')
             goto syntax;
-        if (number(&p, &b->tx, err) < 0)
+        if (number(&p, GV_MAX_DIM, &b->tx, err) < 0)
             goto bad;
         if (*p++ != ',')
             goto syntax;
-        if (number(&p, &b->ty, err) < 0)
+        if (number(&p, GV_MAX_DIM, &b->ty, err) < 0)
             goto bad;
         (*n)++;
         if (*p == ';' && p[1])
@@ -130,8 +133,9 @@ int batch_parse_json(const char *body, size_t len, size_t max,
         uint32_t v[3];
         for (size_t k = 0; k < 3; k++) {
             json_t *e = json_array_get(t, k);
+            json_int_t top = k ? (json_int_t)GV_MAX_DIM : BATCH_LEVEL_MAX;
             if (!json_is_integer(e) || json_integer_value(e) < 0 ||
-                json_integer_value(e) > (json_int_t)GV_MAX_DIM) {
+                json_integer_value(e) > top) {
                 rc = gv_fail(err, GV_EINVAL,
                              "batch: tiles[%zu][%zu] is not a non-negative integer "
                              "in range", i, k);

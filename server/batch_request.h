@@ -6,8 +6,10 @@
  *   GET  ?t=L,X,Y;L,X,Y;...          batch_parse_query
  *   POST {"tiles": [[L, X, Y], ...]} batch_parse_json
  *
- * Both produce the same thing: an array of (level, tx, ty) triples, each
- * number a decimal in 0..GV_MAX_DIM, at least one and at most `max`.
+ * Both produce the same thing: an array of (level, tx, ty) triples, the
+ * level a decimal in 0..BATCH_LEVEL_MAX (a frame holds it in one byte;
+ * the single-tile route takes the same range), tx and ty in
+ * 0..GV_MAX_DIM, at least one and at most `max`.
  * Whether a triple names a real tile is the caller's business (a batch
  * answers 404 per tile for those).  Pure functions: thread-safe.
  */
@@ -18,6 +20,8 @@
 #include <stdint.h>
 
 #include "base/error.h"
+
+#define BATCH_LEVEL_MAX 255u
 
 struct batch_tile {
     uint32_t level, tx, ty;

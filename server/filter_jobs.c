@@ -410,8 +410,16 @@ static void *slot_main(void *arg)
         p->running++;
         pthread_mutex_unlock(&p->lock);
 
-        check_idle(s);
-        int replace = run_job(s, j);
+        int replace = 0;
+        if (j->cancel && atomic_load(j->cancel)) { /* its client left */
+            j->status = FILTER_JOB_CANCELLED;
+            gv_fail(&j->err, GV_EUNAVAIL, "filter: cancelled: the client "
+                    "went away");
+            atomic_fetch_add(&p->n_cancelled, 1);
+        } else {
+            check_idle(s);
+            replace = run_job(s, j);
+        }
 
         pthread_mutex_lock(&p->lock);
         p->running--;
@@ -581,7 +589,7 @@ void filter_jobs_metrics(struct filter_jobs *p, struct prom *out)
                 "Filter jobs by result: ok, error (the graph failed in the "
                 "worker: GLSL, limits), timeout (worker killed at "
                 "filter_timeout_ms), crash (worker died), unavailable (no worker "
-                "could start), cancelled (shutdown).");
+                "could start), cancelled (shutdown, or the client went away).");
     for (int i = 0; i < 6; i++)
         prom_printf(out, "gigaview_filter_jobs_total{result=\"%s\"} %llu\n",
                     results[i], (unsigned long long)v[i]);

@@ -30,6 +30,7 @@
 #ifndef GV_SERVER_FILTER_JOBS_H
 #define GV_SERVER_FILTER_JOBS_H
 
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -56,7 +57,8 @@ enum filter_job_status {
     FILTER_JOB_TIMEOUT,        /* past the time limit: the worker was killed */
     FILTER_JOB_CRASHED,        /* the worker died or broke the protocol */
     FILTER_JOB_UNAVAILABLE,    /* no worker could be started: err says why */
-    FILTER_JOB_CANCELLED       /* the pool is stopping */
+    FILTER_JOB_CANCELLED       /* the pool is stopping, or nobody waits
+                                  for the answer any more (cancel) */
 };
 
 struct filter_job {
@@ -65,6 +67,10 @@ struct filter_job {
                                          pool's (filter_timeout_ms) */
     const char *timeout_key;          /* in: the setting a timeout's message
                                          names; NULL: filter_timeout_ms */
+    const atomic_int *cancel;         /* in: NULL, or a flag that turns 1
+                                         when nobody waits for the answer
+                                         any more: a job still queued then
+                                         is not run (FILTER_JOB_CANCELLED) */
     void (*done)(struct filter_job *j, void *arg);
     void *arg;
     /* out, valid in done() and after */

@@ -18,10 +18,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include "acceptor.h"
+#include "conn_watch.h"
 #include "http.h"
 #include "listen_fds.h"
 #include "log.h"
@@ -34,6 +36,10 @@
 /* The one failure that only the HTTP layer has: a method the route does
  * not take.  Numbered after every gv_code, so that the table holds it. */
 #define HTTP_EMETHOD (GV_CODE_MAX + 1)
+/* A request target over max_url_bytes (414), a head over
+ * max_header_bytes (431). */
+#define HTTP_EURI (GV_CODE_MAX + 2)
+#define HTTP_EHEAD (GV_CODE_MAX + 3)
 
 /* Every error status and JSON code gigaviewd answers with. */
 static const struct {
@@ -58,6 +64,8 @@ static const struct {
     {GV_EPERM, 403, 403, "forbidden"},
     {GV_EAUTH, 401, 401, "unauthorized"},
     {HTTP_EMETHOD, 405, 405, "method_not_allowed"},
+    {HTTP_EURI, 414, 414, "uri_too_long"},
+    {HTTP_EHEAD, 431, 431, "headers_too_large"},
 };
 
 /* The row of `code`; an unknown code is "internal" (500). */
@@ -351,7 +359,8 @@ _Static_assert(HTTP_MAX_PARAMS >= ROUTER_MAX_PARAMS, "req.param[] too small");
 static enum MHD_Result dispatch(struct req *r)
 {
     struct router_match m;
-    enum router_result res = router_find(r->head ? "GET" : r->method, r->path, &m);
+    enum router_result res = router_find(r->head ? "GET" : r->method,
+                                         r->raw_path, &m);
     r->iiif = m.iiif;
     if (res == ROUTER_MATCH) {
         free(r->segbuf);
@@ -414,6 +423,10 @@ static void remote_address(struct MHD_Connection *conn, char *buf, size_t size)
                   (socklen_t)size);
 }
 
+/* An announced body over its cap is read and dropped before the 413 when
+ * it is at most this much (or the cap, if larger) over the cap. */
+#define DRAIN_MIN (1u << 20)
+
 /* The body cap: max_request_bytes, or simplify_max_bytes for a mesh
  * POSTed to /v1/meshes/simplify (route_mesh_simplify.c). */
 static int is_simplify(const struct req *r)
@@ -438,8 +451,9 @@ static enum MHD_Result send_too_large(struct req *r)
                                            : "max_request_bytes");
 }
 
-/* The daemons, one per thread, and what their callbacks need to tell the
- * acceptor which one a connection left or is busy. */
+/* The daemons, one per thread, the watchdog of their connections, and
+ * what their callbacks need to tell the acceptor which one a connection
+ * left or is busy. */
 struct http_threads {
     int n;
     struct MHD_Daemon **daemon;
@@ -448,6 +462,7 @@ struct http_threads {
         int index;
     } *thread;
     struct acceptor *acceptor;
+    struct conn_watch *watch;
 };
 
 /* The daemon this thread runs: set by its first connection's start,
@@ -485,39 +500,200 @@ static char *query_string(struct MHD_Connection *conn)
     return q.len ? strdup(q.buf) : NULL;
 }
 
+/* What the request head holds, for its limits (struct head_count). */
+struct head_count {
+    size_t bytes;          /* every header line, with ": " and CRLF */
+    int content_length;    /* Content-Length headers */
+    int length_differs;    /* ... with different values */
+    const char *first_length;
+    int chunked;           /* a Transfer-Encoding header */
+};
+
+static enum MHD_Result count_header(void *cls, enum MHD_ValueKind kind,
+                                    const char *key, const char *value)
+{
+    (void)kind;
+    struct head_count *h = cls;
+    h->bytes += strlen(key) + (value ? strlen(value) : 0) + 4;
+    if (!strcasecmp(key, "Content-Length")) {
+        if (h->content_length++ && strcmp(h->first_length, value ? value : ""))
+            h->length_differs = 1;
+        else if (h->content_length == 1)
+            h->first_length = value ? value : "";
+    } else if (!strcasecmp(key, "Transfer-Encoding")) {
+        h->chunked = 1;
+    }
+    return MHD_YES;
+}
+
+/* The query arguments in the raw target: '&'-separated pieces after '?'. */
+static size_t count_args(const char *target)
+{
+    const char *q = strchr(target, '?');
+    if (!q)
+        return 0;
+    size_t n = 0;
+    for (const char *p = q + 1; *p;) {
+        const char *e = strchr(p, '&');
+        size_t len = e ? (size_t)(e - p) : strlen(p);
+        n += len > 0;
+        p += len + (e != NULL);
+    }
+    return n;
+}
+
+/* The head's limits (max_url_bytes, max_header_bytes, max_query_args)
+ * and its framing: one Content-Length at most (or equal ones), and not
+ * with Transfer-Encoding (RFC 9112 section 6.3: a request that could be
+ * framed two ways is refused, as a proxy in front may have framed it the
+ * other way).  0, or -1 with the error answered (*ret). */
+static int check_head(struct req *r, enum MHD_Result *ret)
+{
+    const struct settings *cfg = r->srv->cfg;
+    size_t target = strlen(r->raw);
+    if (target > cfg->max_url_bytes) {
+        *ret = send_error(r, HTTP_EURI, "the request target is longer than "
+                          "max_url_bytes", NULL, NULL);
+        return -1;
+    }
+    struct head_count h = {0};
+    MHD_get_connection_values(r->conn, MHD_HEADER_KIND, count_header, &h);
+    if (target + h.bytes > cfg->max_header_bytes) {
+        *ret = send_error(r, HTTP_EHEAD, "the request head is larger than "
+                          "max_header_bytes", NULL, NULL);
+        return -1;
+    }
+    size_t nargs = count_args(r->raw);
+    if (nargs > cfg->max_query_args) {
+        *ret = http_send_errorf(r, GV_EINVAL, "%zu query arguments, more than "
+                                "max_query_args (%llu)", nargs,
+                                (unsigned long long)cfg->max_query_args);
+        return -1;
+    }
+    if (h.length_differs || (h.content_length && h.chunked)) {
+        *ret = http_send_errorf(r, GV_EINVAL, "the request's length is "
+                                "ambiguous: %s", h.chunked
+                                ? "both Content-Length and Transfer-Encoding"
+                                : "Content-Length headers that differ");
+        return -1;
+    }
+    return 0;
+}
+
+/* Does the client wait for "100 Continue" before sending its body? */
+static int expects_continue(struct req *r)
+{
+    const char *e = http_header(r, "Expect");
+    return e && !strcasecmp(e, "100-continue");
+}
+
+/* libmicrohttpd's URI log callback: the first sight of a request, with
+ * its target as sent (not yet percent-decoded).  The request's state is
+ * made here, so that routing splits the raw path (an encoded '/' stays
+ * inside its segment) and the limits see the target's real size.  What
+ * this returns is the handler's *req_cls. */
+static void *on_uri(void *cls, const char *uri, struct MHD_Connection *conn)
+{
+    struct req *r = calloc(1, sizeof *r);
+    if (!r)
+        return NULL;
+    r->raw = strdup(uri ? uri : "");
+    if (!r->raw) {
+        free(r);
+        return NULL;
+    }
+    r->raw_path = strndup(r->raw, strcspn(r->raw, "?"));
+    if (!r->raw_path) {
+        free(r->raw);
+        free(r);
+        return NULL;
+    }
+    r->srv = cls;
+    r->conn = conn;
+    r->route = -1;
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+    r->watch = ci ? ci->socket_context : NULL;
+    return r;
+}
+
+static struct conn_watch *watchdog(const struct req *r)
+{
+    return r->srv->http ? r->srv->http->watch : NULL;
+}
+
+const atomic_int *http_suspend(struct req *r, void *async,
+                               void (*async_free)(void *async))
+{
+    r->async = async;
+    r->async_free = async_free;
+    r->suspended = 1;
+    MHD_suspend_connection(r->conn);
+    conn_watch_suspended(watchdog(r), r->watch, &r->gone);
+    return &r->gone;
+}
+
+/* A suspended request runs again: stop watching for the hang-up; 1 when
+ * the client hung up meanwhile. */
+static int resumed_gone(struct req *r)
+{
+    if (!r->suspended)
+        return 0;
+    r->suspended = 0;
+    conn_watch_resumed(watchdog(r), r->watch);
+    return atomic_load(&r->gone);
+}
+
 static enum MHD_Result handle_request(void *cls, struct MHD_Connection *conn,
                                       const char *url, const char *method,
                                       const char *version, const char *upload,
                                       size_t *upload_size, void **req_cls)
 {
     (void)version;
+    (void)cls;
     struct req *r = *req_cls;
-    if (!r) { /* first call: headers are in */
-        r = calloc(1, sizeof *r);
-        if (!r)
-            return MHD_NO;
+    if (!r) /* on_uri ran out of memory */
+        return MHD_NO;
+    if (!r->started) { /* first call: the head is in */
+        r->started = 1;
         r->path = strdup(url);
-        if (!r->path) {
-            free(r);
+        if (!r->path)
             return MHD_NO;
-        }
         r->query = query_string(conn);
-        r->srv = cls;
-        r->conn = conn;
         r->method = method;
         r->head = !strcmp(method, MHD_HTTP_METHOD_HEAD);
-        r->route = -1;
         clock_gettime(CLOCK_MONOTONIC, &r->t0);
         remote_address(conn, r->remote, sizeof r->remote);
         atomic_fetch_add(&metrics.in_flight, 1);
-        *req_cls = r;
-        /* Refuse an announced oversized body before reading it. */
+        enum MHD_Result ret;
+        if (check_head(r, &ret) < 0)
+            return ret;
+        /* An announced oversized body: refused before it is sent when the
+         * client waits for "100 Continue" or when it is far over the cap;
+         * otherwise read and dropped, then refused, so that the client
+         * reads the answer instead of a reset connection (libmicrohttpd
+         * closes without reading what is left; request_timeout bounds the
+         * reading). */
         const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
                                                      "Content-Length");
+        uint64_t cap = body_cap(r), drain = cap + (cap > DRAIN_MIN ? cap
+                                                                   : DRAIN_MIN);
         uint32_t n;
-        if (cl && (http_parse_u32(cl, (uint32_t)body_cap(r), &n) < 0))
-            return send_too_large(r);
+        if (cl && (http_parse_u32(cl, (uint32_t)cap, &n) < 0)) {
+            if (expects_continue(r) ||
+                http_parse_u32(cl, (uint32_t)(drain < UINT32_MAX ? drain
+                                              : UINT32_MAX), &n) < 0)
+                return send_too_large(r);
+            r->body_over = 1;
+        }
         return MHD_YES;
+    }
+    if (resumed_gone(r)) { /* the job was skipped: nobody to answer */
+        if (r->async && r->async_free)
+            r->async_free(r->async);
+        r->async = NULL;
+        r->status = 499;
+        return MHD_NO;
     }
     if (r->responded)
         return MHD_YES;
@@ -536,6 +712,10 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *conn,
         r->body_len += n;
         r->body[r->body_len] = '\0';
         return MHD_YES;
+    }
+    if (!r->arrived) {
+        r->arrived = 1;
+        conn_watch_request_in(watchdog(r), r->watch);
     }
     if (r->body_over)
         return send_too_large(r);
@@ -559,6 +739,19 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
     return ret;
 }
 
+static void free_req(struct req *r)
+{
+    if (r->async && r->async_free)
+        r->async_free(r->async);
+    free(r->segbuf);
+    free(r->body);
+    free(r->path);
+    free(r->query);
+    free(r->raw_path);
+    free(r->raw);
+    free(r);
+}
+
 static void on_completed(void *cls, struct MHD_Connection *conn,
                          void **req_cls, enum MHD_RequestTerminationCode why)
 {
@@ -568,27 +761,33 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
     if (!r)
         return;
     *req_cls = NULL;
+    resumed_gone(r);
+    conn_watch_request_done(watchdog(r), r->watch);
+    if (!r->started) { /* libmicrohttpd refused the head itself */
+        free_req(r);
+        return;
+    }
     struct timespec now;
     clock_gettime(CLOCK_MONOTONIC, &now);
     uint64_t usec = (uint64_t)(now.tv_sec - r->t0.tv_sec) * 1000000u +
                     (uint64_t)((now.tv_nsec - r->t0.tv_nsec) / 1000);
     unsigned status = r->status;
-    if (why != MHD_REQUEST_TERMINATED_COMPLETED_OK && status == 0)
-        status = 499; /* closed before any response, as nginx logs it */
+    uint64_t bytes = r->bytes;
+    /* Closed before the answer was complete, as nginx logs it; what was
+     * queued but not sent is not counted. */
+    if (why != MHD_REQUEST_TERMINATED_COMPLETED_OK &&
+        (status == 0 || r->responded)) {
+        status = 499;
+        bytes = 0;
+    }
     char target[2048];
     snprintf(target, sizeof target, "%s%s%s", r->path, r->query ? "?" : "",
              r->query ? r->query : "");
     log_access(r->remote, r->method, target, status,
-               (unsigned long long)r->bytes, (unsigned long long)usec);
-    metrics_record(metrics_id(r->route), status, usec, r->bytes);
+               (unsigned long long)bytes, (unsigned long long)usec);
+    metrics_record(metrics_id(r->route), status, usec, bytes);
     atomic_fetch_sub(&metrics.in_flight, 1);
-    if (r->async && r->async_free)
-        r->async_free(r->async);
-    free(r->segbuf);
-    free(r->body);
-    free(r->path);
-    free(r->query);
-    free(r);
+    free_req(r);
 }
 
 
@@ -596,9 +795,16 @@ static void on_connection(void *cls, struct MHD_Connection *conn,
                           void **socket_ctx, enum MHD_ConnectionNotificationCode t)
 {
     struct http_thread *th = cls;
-    (void)conn;
-    (void)socket_ctx;
     this_thread = th;
+    struct conn_watch *w = th->all->watch;
+    if (t == MHD_CONNECTION_NOTIFY_STARTED) {
+        const union MHD_ConnectionInfo *ci =
+            MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+        *socket_ctx = ci ? conn_watch_open(w, ci->connect_fd) : NULL;
+    } else {
+        conn_watch_close(w, *socket_ctx);
+        *socket_ctx = NULL;
+    }
     /* The acceptor first: once /metrics shows a connection closed, the
      * acceptor has counted it out too (tests/http_metrics.sh relies on
      * it). */
@@ -618,7 +824,11 @@ static void mhd_logger(void *cls, const char *fmt, va_list ap)
     while (n > 0 && msg[n - 1] == '\n')
         msg[--n] = '\0';
     char esc[600];
-    log_msg(LOG_WARN, "mhd", "%s", log_escape(esc, sizeof esc, msg));
+    /* A handler's MHD_NO is deliberate (a client gone while its request
+     * was suspended; or out of memory, logged where it happened). */
+    int ours = !strncmp(msg, "Application reported internal error", 35);
+    log_msg(ours ? LOG_DEBUG : LOG_WARN, "mhd", "%s",
+            log_escape(esc, sizeof esc, msg));
 }
 #pragma GCC diagnostic pop
 
@@ -670,9 +880,20 @@ static void stop_threads(struct http_threads *h)
         if (h->daemon[i])
             MHD_stop_daemon(h->daemon[i]);
     acceptor_free(h->acceptor);
+    conn_watch_stop(h->watch);
     free(h->daemon);
     free(h->thread);
     free(h);
+}
+
+/* libmicrohttpd's memory for one connection: the head must fit in it
+ * (beyond, libmicrohttpd answers 414 or 431 itself, in HTML), so it holds
+ * a head at our limits twice over, so that our JSON answers those; the
+ * rest is the response's header lines and the first body bytes. */
+static size_t pool_bytes(const struct settings *cfg)
+{
+    return (size_t)(2 * (cfg->max_url_bytes + cfg->max_header_bytes) +
+                    64 * cfg->max_query_args + 32768);
 }
 
 /* One daemon without a listen socket, on its own internal thread. */
@@ -693,6 +914,8 @@ static struct MHD_Daemon *start_daemon(struct server *srv, struct http_thread *t
         MHD_OPTION_NOTIFY_COMPLETED, on_completed, srv,
         MHD_OPTION_NOTIFY_CONNECTION, on_connection, th,
         MHD_OPTION_UNESCAPE_CALLBACK, unescape, NULL,
+        MHD_OPTION_URI_LOG_CALLBACK, on_uri, srv,
+        MHD_OPTION_CONNECTION_MEMORY_LIMIT, pool_bytes(cfg),
         MHD_OPTION_END);
 }
 
@@ -727,11 +950,21 @@ int http_start(struct server *srv)
         return -1;
     }
     h->n = n;
+    h->watch = conn_watch_start((unsigned)cfg->request_timeout, &err);
+    if (!h->watch) {
+        log_msg(LOG_ERROR, "http", "%s", err.text);
+        stop_threads(h);
+        close(srv->listen_fd);
+        srv->listen_fd = -1;
+        return -1;
+    }
+    srv->http = h; /* the handlers' http_suspend finds the watchdog */
     for (int i = 0; i < n; i++) {
         h->thread[i].all = h;
         h->thread[i].index = i;
         if (!(h->daemon[i] = start_daemon(srv, &h->thread[i]))) {
             log_msg(LOG_ERROR, "http", "cannot start HTTP thread %d of %d", i + 1, n);
+            srv->http = NULL;
             stop_threads(h);
             close(srv->listen_fd);
             srv->listen_fd = -1;
@@ -739,9 +972,11 @@ int http_start(struct server *srv)
         }
     }
     h->acceptor = acceptor_start(srv->listen_fd, h->daemon, n,
-                                 (unsigned)cfg->connection_limit, &err);
+                                 (unsigned)cfg->connection_limit, h->watch,
+                                 &err);
     if (!h->acceptor) {
         log_msg(LOG_ERROR, "http", "%s", err.text);
+        srv->http = NULL;
         stop_threads(h);
         close(srv->listen_fd);
         srv->listen_fd = -1;

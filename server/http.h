@@ -24,6 +24,7 @@
 #ifndef GV_SERVER_HTTP_H
 #define GV_SERVER_HTTP_H
 
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <time.h>
@@ -80,10 +81,15 @@ struct server {
 
 #define HTTP_MAX_PARAMS 8
 
+struct conn_entry;
+
 struct req {
     struct server *srv;
     struct MHD_Connection *conn;
+    struct conn_entry *watch; /* its connection in the watchdog (conn_watch.h) */
     const char *method;       /* as received; HEAD is routed as GET */
+    char *raw;                /* the request target as sent, owned */
+    char *raw_path;           /* its path, not decoded (routing), owned */
     char *path;               /* decoded path, owned */
     char *query;              /* "k=v&..." as decoded, for the access log; owned, NULL for none */
     int head;                 /* HEAD request: headers only */
@@ -95,7 +101,11 @@ struct req {
     char *body;               /* POST body, NUL-terminated */
     size_t body_len;
     int body_over;            /* body exceeded the cap (discarded) */
+    int started;              /* the head was seen by the handler */
+    int arrived;              /* the whole request was received */
     int responded;
+    int suspended;            /* between http_suspend and the next call */
+    atomic_int gone;          /* the client hung up while suspended */
     /* A handler's state while its connection is suspended (filter jobs:
      * route_filters.c; renders: render_call.c); the handler runs again
      * when it is resumed, and frees this before answering. */
@@ -109,6 +119,19 @@ struct req {
     struct timespec t0;
     char remote[64];
 };
+
+/*
+ * Suspend r's connection while a job runs on another thread, keeping
+ * `async` (freed by async_free, which may be NULL, if the request ends
+ * without its handler running again).  The job resumes the connection
+ * with MHD_resume_connection when done; the handler is then called again
+ * and finds r->async.  Meanwhile the client's hang-up is watched: the
+ * flag returned turns 1 when it hangs up, so the job may skip its work;
+ * the request then ends as 499 without its handler running again.  The
+ * flag stays valid until the job has resumed the connection.
+ */
+const atomic_int *http_suspend(struct req *r, void *async,
+                               void (*async_free)(void *async));
 
 /* Start serving on cfg's address and port.  Returns 0 (srv->port holds
  * the bound port) or -1 (logged). */

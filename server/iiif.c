@@ -7,14 +7,16 @@
  * strtol/strtod (locale, whitespace, signs, exponents, "nan" and "inf"
  * would all slip through).  Anything outside the grammar is GV_EINVAL
  * (400) with a message naming the parameter; a well-formed request this
- * server cannot honour (arbitrary rotation, a listed but unsupported
- * format) is GV_EFORMAT (501, "a valid IIIF request that is not
- * implemented", section 7.3).  No allocation.
+ * server cannot honour (arbitrary rotation) is GV_EFORMAT (501, "a valid
+ * IIIF request that is not implemented", section 7.3); a format of the
+ * specification's table that this server does not produce (gif, jp2,
+ * pdf) is 400, like any other format it does not list.  No allocation.
  *
  * Numbers (section 4 and 4.7):
  *  - pixel values are one or more ASCII digits (leading zeros allowed),
- *    at most 2^32-1; larger values are refused as out of range rather
- *    than saturated (section 10: early rejection of out-of-range values);
+ *    at most 2^31-1 (the largest image side); larger values are refused
+ *    as out of range rather than saturated (section 10: early rejection
+ *    of out-of-range values);
  *  - percentages and the rotation are decimal numbers made only of digits
  *    and at most one '.', with at least one digit ("0.5", "5", ".5" and
  *    "5." are accepted; "+1", "1e3", "nan", "inf", " 1" are not).  At most
@@ -80,7 +82,11 @@ static const char *show(const char *s, size_t n, char *buf, size_t size)
 
 #define SHOW(s) show((s), strlen(s), shown, sizeof shown)
 
-/* Parse digits [s, e) as an unsigned integer <= UINT32_MAX. */
+/* The largest pixel number: 2^31 - 1, the largest image side a store
+ * can have (store/geometry.h), so no sum of two overflows 32 bits. */
+#define PIXEL_MAX 0x7fffffffu
+
+/* Parse digits [s, e) as an unsigned integer <= PIXEL_MAX. */
 static int parse_uint(const char *s, const char *e, uint32_t *out)
 {
     if (s == e)
@@ -90,7 +96,7 @@ static int parse_uint(const char *s, const char *e, uint32_t *out)
         if (*s < '0' || *s > '9')
             return -1;
         v = v * 10 + (uint64_t)(*s - '0');
-        if (v > UINT32_MAX)
+        if (v > PIXEL_MAX)
             return -1;
     }
     *out = (uint32_t)v;
@@ -213,7 +219,7 @@ static int parse_region(const char *region, uint32_t W, uint32_t H,
             if (parse_uint(fs[i], fe[i], &v[i]) != 0)
                 return gv_fail(err, GV_EINVAL, "iiif: region \"%s\": "
                                "field %d is not an integer in 0..%u",
-                               SHOW(region), i + 1, UINT32_MAX);
+                               SHOW(region), i + 1, PIXEL_MAX);
         x = v[0];
         y = v[1];
         w = v[2];
@@ -350,7 +356,7 @@ static int parse_wh(const char *size, const char *s, const char *e, int bang,
         if (have[i] && parse_uint(fs[i], fe[i], &v[i]) != 0)
             return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": %s is not an "
                            "integer in 0..%u", SHOW(size),
-                           i ? "height" : "width", UINT32_MAX);
+                           i ? "height" : "width", PIXEL_MAX);
     }
     if (!have[0] && !have[1])
         return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": no width or "
@@ -545,7 +551,7 @@ static int parse_quality_format(const char *qf, struct iiif_request *out,
     }
     for (int i = 0; i < 3; i++)
         if (strcmp(fmt, known[i]) == 0)
-            return gv_fail(err, GV_EFORMAT, "iiif: format \"%s\" is not "
+            return gv_fail(err, GV_EINVAL, "iiif: format \"%s\" is not "
                            "supported (jpg, png, webp, tif)", fmt);
     return gv_fail(err, GV_EINVAL, "iiif: format \"%s\": expected jpg, png, "
                    "webp or tif", SHOW(fmt));

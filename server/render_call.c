@@ -4,6 +4,7 @@
  * resumed answer; it holds the image reference all along, so the store
  * stays open while the render thread decodes it.
  */
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -24,6 +25,7 @@ struct render_call {
     uint8_t *out;
     size_t len;
     struct gv_error err;
+    const atomic_int *gone;       /* the client hung up: skip the render */
 };
 
 static void call_free(struct render_call *c)
@@ -43,11 +45,17 @@ static void async_free(void *c)
     call_free(c);
 }
 
-/* On a render thread: render, keep a success, resume the connection. */
+/* On a render thread: render, keep a success, resume the connection.
+ * A render whose client has hung up is skipped (http.c ends the request
+ * as 499 without calling the handler again). */
 static void run(struct render_job *j)
 {
     struct render_call *c = (struct render_call *)j;
     gv_error_clear(&c->err);
+    if (atomic_load(c->gone)) {
+        MHD_resume_connection(c->conn);
+        return;
+    }
     c->rc = c->spec.render(c->spec.arg, c->img, &c->out, &c->len, &c->err);
     if (c->rc == 0)
         output_cache_put(c->outputs, c->key, c->out, c->len, c->spec.mime);
@@ -100,9 +108,8 @@ static enum MHD_Result queue(struct req *r, struct image *img,
     snprintf(c->etag, sizeof c->etag, "%s", spec->etag);
     c->spec.key = c->key;
     c->spec.etag = c->etag;
-    r->async = c;
-    r->async_free = async_free;
-    MHD_suspend_connection(r->conn); /* before the job can resume it */
+    c->gone = http_suspend(r, c, async_free); /* before the job can resume
+                                                 it */
     render_pool_submit(r->srv->render, &c->job);
     return MHD_YES;
 }

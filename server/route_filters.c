@@ -57,6 +57,12 @@ static void call_free(struct call *c)
     free(c);
 }
 
+/* r->async_free: the client went away while the job ran. */
+static void call_free_any(void *c)
+{
+    call_free(c);
+}
+
 static void call_done(struct filter_job *j, void *arg)
 {
     (void)j;
@@ -133,8 +139,8 @@ static enum MHD_Result suspend_on(struct req *r, struct call *c)
     c->conn = r->conn;
     c->fj.done = call_done;
     c->fj.arg = c;
-    r->async = c;
-    MHD_suspend_connection(r->conn); /* before the job can resume it */
+    c->fj.cancel = http_suspend(r, c, call_free_any); /* before the job
+                                                        can resume it */
     filter_jobs_submit(r->srv->filters, &c->fj);
     return MHD_YES;
 }
@@ -228,6 +234,7 @@ enum MHD_Result route_filters_post(struct req *r)
     struct call *c = r->async;
     if (c) { /* resumed: the worker has compiled it, or failed */
         r->async = NULL;
+        r->async_free = NULL;
         ret = finish_store(r, c);
         call_free(c);
         return ret;
@@ -265,6 +272,8 @@ enum MHD_Result route_filters_post(struct req *r)
     memcpy(c->doc, r->body, r->body_len + 1);
     c->doc_len = r->body_len;
     c->fj.job.op = GV_WORKER_COMPILE;
+    c->fj.timeout_ms = (int)r->srv->cfg->filter_compile_timeout_ms;
+    c->fj.timeout_key = "filter_compile_timeout_ms";
     c->fj.job.lim = lim;
     c->fj.job.doc = c->doc;
     c->fj.job.doc_len = c->doc_len;
@@ -606,6 +615,7 @@ enum MHD_Result route_image_filter(struct req *r)
     struct call *c = r->async;
     if (c) { /* resumed */
         r->async = NULL;
+        r->async_free = NULL;
         ret = finish_run(r, c);
         call_free(c);
         return ret;

@@ -235,8 +235,10 @@ static int parse(struct req *r, const struct image *img, struct iiif_call *c,
         return -1;
     /* gv_render decodes at most 2x oversampled, so a request within
      * maxArea decodes at most about 4 x maxArea pixels (plus a pixel of
-     * rounding per edge); /region's max_region_pixels does not apply, or
-     * info.json would advertise sizes the server refuses. */
+     * rounding per edge): that is the bound of an IIIF decode, which
+     * max_output_pixels sets (conf/gigaviewd.conf says so).  /region's
+     * max_region_pixels does not apply, or info.json would advertise
+     * sizes the server refuses. */
     c->q.render.max_decode_pixels = 4 * (r->srv->cfg->max_output_pixels +
                                          2 * r->srv->cfg->max_output_side + 1);
     c->jpeg_quality = (int)r->srv->cfg->jpeg_quality;

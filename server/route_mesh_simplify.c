@@ -207,9 +207,8 @@ enum MHD_Result route_mesh_simplify(struct req *r)
     c->fj.done = call_done;
     c->fj.arg = c;
     c->conn = r->conn;
-    r->async = c;
-    r->async_free = call_free_any;
-    MHD_suspend_connection(r->conn); /* before the job can resume it */
+    c->fj.cancel = http_suspend(r, c, call_free_any); /* before the job
+                                                        can resume it */
     filter_jobs_submit(r->srv->filters, &c->fj);
     return MHD_YES;
 }

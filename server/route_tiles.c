@@ -120,7 +120,7 @@ enum MHD_Result route_tile(struct req *r)
     enum MHD_Result ret;
     uint32_t level, tx, ty, crc;
     struct gv_error err;
-    if (http_parse_u32(r->param[1], GV_MAX_LEVELS, &level) < 0 ||
+    if (http_parse_u32(r->param[1], BATCH_LEVEL_MAX, &level) < 0 ||
         http_parse_u32(r->param[2], GV_MAX_DIM, &tx) < 0 ||
         http_parse_u32(r->param[3], GV_MAX_DIM, &ty) < 0)
         return http_send_errorf(r, GV_EINVAL,

@@ -35,6 +35,57 @@ const struct router_route router_routes[ROUTE_COUNT] = {
     [ROUTE_WEB] = {"GET", "/web/*", "web", 0},
 };
 
+static int hexval(char c)
+{
+    if (c >= '0' && c <= '9')
+        return c - '0';
+    if (c >= 'a' && c <= 'f')
+        return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F')
+        return c - 'A' + 10;
+    return -1;
+}
+
+/* Decode the escape at s[0..2] ("%XY", not "%00") into *c: 3, or 0 when
+ * s holds no such escape. */
+static int escape_at(const char *s, size_t n, char *c)
+{
+    int hi, lo;
+    if (n < 3 || s[0] != '%' || (hi = hexval(s[1])) < 0 ||
+        (lo = hexval(s[2])) < 0 || (hi | lo) == 0)
+        return 0;
+    *c = (char)(hi << 4 | lo);
+    return 3;
+}
+
+/* Does raw segment u[0..ul-1], decoded, equal literal p[0..pl-1]? */
+static int segment_is(const char *u, size_t ul, const char *p, size_t pl)
+{
+    size_t i = 0, k = 0;
+    while (i < ul && k < pl) {
+        char c = u[i];
+        int step = escape_at(u + i, ul - i, &c);
+        if (c != p[k++])
+            return 0;
+        i += step ? (size_t)step : 1;
+    }
+    return i == ul && k == pl;
+}
+
+/* Decode raw segment u[0..ul-1] into o (room for ul + 1): its length. */
+static size_t decode_segment(const char *u, size_t ul, char *o)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < ul;) {
+        char c = u[i];
+        int step = escape_at(u + i, ul - i, &c);
+        o[n++] = c;
+        i += step ? (size_t)step : 1;
+    }
+    o[n] = '\0';
+    return n;
+}
+
 int router_match_pattern(const char *pattern, const char *path,
                          const char **seg, size_t *len, int max)
 {
@@ -57,7 +108,7 @@ int router_match_pattern(const char *pattern, const char *path,
                 return -1;
             seg[np] = u;
             len[np++] = ul;
-        } else if (pl != ul || memcmp(p, u, pl)) {
+        } else if (!segment_is(u, ul, p, pl)) {
             return -1;
         }
         p += pl;
@@ -112,10 +163,8 @@ enum router_result router_find(const char *method, const char *path,
             return ROUTER_NOMEM;
         char *o = m->segbuf;
         for (int k = 0; k < np; k++) {
-            memcpy(o, seg[k], len[k]);
-            o[len[k]] = '\0';
             m->param[k] = o;
-            o += len[k] + 1;
+            o += decode_segment(seg[k], len[k], o) + 1;
         }
         m->nparam = np;
         m->route = i;
@@ -133,30 +182,7 @@ void router_match_free(struct router_match *m)
     m->nparam = 0;
 }
 
-static int hexval(char c)
-{
-    if (c >= '0' && c <= '9')
-        return c - '0';
-    if (c >= 'a' && c <= 'f')
-        return c - 'a' + 10;
-    if (c >= 'A' && c <= 'F')
-        return c - 'A' + 10;
-    return -1;
-}
-
 size_t router_unescape(char *s)
 {
-    char *o = s;
-    for (const char *p = s; *p; p++) {
-        int hi, lo;
-        if (*p == '%' && (hi = hexval(p[1])) >= 0 && (lo = hexval(p[2])) >= 0 &&
-            (hi | lo) != 0) {
-            *o++ = (char)(hi << 4 | lo);
-            p += 2;
-        } else {
-            *o++ = *p;
-        }
-    }
-    *o = '\0';
-    return (size_t)(o - s);
+    return decode_segment(s, strlen(s), s);
 }

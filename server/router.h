@@ -73,16 +73,21 @@ struct router_match {
     char allow[64];         /* "GET, HEAD, POST" style; "" if none */
 };
 
-/* Match `path` (already percent-decoded) with `method` ("GET" for a HEAD
- * request) against router_routes[].  Always fills *m (route -1, no
- * parameters, unless ROUTER_MATCH); call router_match_free after. */
+/* Match `path` (as sent: not percent-decoded, no query) with `method`
+ * ("GET" for a HEAD request) against router_routes[].  The path is split
+ * at its '/' before any decoding, so "%2F" stays inside its segment
+ * ("/v1/images/a%2Froot" names image "a/root", not its root); literal
+ * segments compare decoded, and the captured ones are decoded as
+ * router_unescape does.  Always fills *m (route -1, no parameters, unless
+ * ROUTER_MATCH); call router_match_free after. */
 enum router_result router_find(const char *method, const char *path,
                                struct router_match *m);
 
 void router_match_free(struct router_match *m);
 
-/* Match one pattern: the number of '*' segments captured (pointers into
- * path and their lengths in seg[]/len[], at most max), or -1. */
+/* Match one pattern against a raw path: the number of '*' segments
+ * captured (pointers into path and their raw lengths in seg[]/len[], at
+ * most max), or -1. */
 int router_match_pattern(const char *pattern, const char *path,
                          const char **seg, size_t *len, int max);
 

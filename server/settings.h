@@ -42,6 +42,10 @@ struct settings {
     double max_upscale;            /* largest IIIF '^' factor */
     uint64_t connection_limit;
     uint64_t connection_timeout;   /* seconds idle before a close */
+    uint64_t request_timeout;      /* seconds for a whole request to arrive */
+    uint64_t max_url_bytes;        /* request target (414 beyond) */
+    uint64_t max_header_bytes;     /* request head (431 beyond) */
+    uint64_t max_query_args;       /* query arguments (400 beyond) */
     uint64_t drain_timeout;        /* seconds SIGTERM waits for requests */
     char cors_origin[SETTINGS_STR];  /* Access-Control-Allow-Origin, "" off */
     char auth_token[SETTINGS_STR];   /* bearer token for write endpoints */
@@ -56,6 +60,7 @@ struct settings {
     /* filter graphs (docs/FILTERS.md sections 7 and 9) */
     uint64_t filter_workers;       /* worker processes; 0 disables filters */
     uint64_t filter_timeout_ms;    /* per job; the worker is killed past it */
+    uint64_t filter_compile_timeout_ms; /* storing a graph: its compile job */
     uint64_t filter_memory_limit;  /* RLIMIT_DATA of a worker; 0 none */
     uint64_t filter_max_jobs;      /* queued plus running; 503 beyond */
     uint64_t max_filter_pixels;    /* padded region of one filter request */

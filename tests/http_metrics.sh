@@ -6,7 +6,9 @@
 # 4, 3, 3 and 3 on the 4 HTTP threads (the acceptor hands a connection to
 # the thread with the fewest).  Then it provokes 200, 201, 204, 303, 304,
 # 400, 401, 404, 405, 413 and 504 (201 and 504 with a GPU: storing a
-# graph, and a filter past filter_timeout_ms; without one the filter
+# graph, and a filter past filter_timeout_ms, which the graph's compile,
+# under filter_compile_timeout_ms, never meets however busy the machine
+# is; without one the filter
 # request's 501 or 503), notes each request's route and the status it
 # got, and reads /metrics: every (route, status) counter equals the
 # number of such answers, and no request counts as "other".
@@ -26,6 +28,7 @@ auth_token = "$TOKEN"
 filter_dir = "$T/stored"
 filter_workers = 1
 filter_timeout_ms = 200
+filter_compile_timeout_ms = 120000
 max_request_bytes = 1K
 drain_timeout = 1
 EOF

@@ -5,7 +5,10 @@
 # 8 connections that send half a request and stall.  Well-behaved requests
 # must still be answered promptly, the stalled connections must be closed
 # by the daemon after the timeout, and when stalled connections fill the
-# whole limit, the daemon must recover by itself once they time out.
+# whole limit, a new client is still answered (the stalled connection that
+# waited longest is evicted for it, or timed out) and the daemon recovers
+# by itself once they time out.  (tests/http_hostile.sh shows eviction
+# alone, with clients that never time out.)
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
 
@@ -35,10 +38,10 @@ def stall(n):
         socks.append(s)
     return socks
 
-def good():
+def good(wait=1.5):
     t0 = time.time()
     try:
-        c = http.client.HTTPConnection('127.0.0.1', port, timeout=1.5)
+        c = http.client.HTTPConnection('127.0.0.1', port, timeout=wait)
         c.request('GET', '/healthz')
         r = c.getresponse()
         r.read()
@@ -66,7 +69,7 @@ if phase == 'under':
 else:  # fill the whole connection limit
     socks = stall(n_stall)
     time.sleep(0.3)
-    s, t = good()
+    s, t = good(20)
     print('during', s)
     time.sleep(timeout + 2.0)
     s, t = good()
@@ -79,8 +82,8 @@ check "good requests answered while 8 connections stall" \
 check "stalled connections closed after the timeout" grep -q '^closed 8 of 8$' "$T/under.out"
 python3 "$T/loris.py" "$PORT" 12 2 fill >"$T/fill.out" 2>&1
 diag "$(cat "$T/fill.out")"
-check "with the limit full, new requests are not served" \
-    sh -c "! grep -q '^during 200' '$T/fill.out'"
+check "with the limit full of stalled connections, a new request is answered" \
+    grep -q '^during 200$' "$T/fill.out"
 check "the daemon recovers once the stalled ones time out" grep -q '^after 200$' "$T/fill.out"
 req "$(url /metrics)"
 check "open connections back to 0..1" grep -Eq '^gigaview_open_connections [01]$' "$T/b"

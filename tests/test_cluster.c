@@ -228,6 +228,11 @@ static void test_readers(void)
     check(gv_mesh_read((const uint8_t *)obj, strlen(obj), GV_MESH_IN_AUTO,
                        &lim, &m, &err) < 0 && err.code == GV_ELIMIT,
           "the byte limit enforced");
+    check(read_str("garbage\n", &m, &err) < 0 && err.code == GV_ECORRUPT &&
+          m.pos == NULL && m.tris == NULL,
+          "a file with no triangle (garbage read as OBJ) refused as malformed");
+    check(read_str("v 0 0 0\nv 1 0 0\nv 0 1 0\n", &m, &err) < 0 &&
+          err.code == GV_ECORRUPT, "vertices without a face refused");
 }
 
 /* Vertex counts of a node's cells: the leaves and child nodes under it. */

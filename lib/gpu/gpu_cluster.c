@@ -31,11 +31,13 @@ struct call {
     float *vpos;
 };
 
+/* Buffer b with `bytes` of data (NULL: uninitialized); an empty buffer
+ * gets 16 bytes that nothing reads, never a copy from data. */
 static int upload(GLuint b, size_t bytes, const void *data)
 {
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, b);
     glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(bytes ? bytes : 16),
-                 data, data ? GL_STATIC_DRAW : GL_DYNAMIC_READ);
+                 bytes ? data : NULL, data ? GL_STATIC_DRAW : GL_DYNAMIC_READ);
     return glGetError() == GL_NO_ERROR ? 0 : -1;
 }
 

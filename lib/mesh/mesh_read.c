@@ -125,6 +125,10 @@ int gv_mesh_read(const uint8_t *buf, size_t len, enum gv_mesh_in in,
     case GV_MESH_IN_GLB: rc = gv_mesh_read_glb(buf, len, &l, out, err); break;
     default: rc = gv_mesh_read_obj(buf, len, &l, out, err); break;
     }
+    if (rc == 0 && out->ntris == 0)
+        rc = gv_fail(err, GV_ECORRUPT, "mesh: no triangles: not a %s mesh, "
+                     "or an empty one", in == GV_MESH_IN_PLY ? "PLY" :
+                     in == GV_MESH_IN_GLB ? "glTF binary" : "Wavefront OBJ");
     if (rc < 0)
         gv_trimesh_free(out);
     return rc;

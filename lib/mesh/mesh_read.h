@@ -41,9 +41,9 @@ enum gv_mesh_in { GV_MESH_IN_AUTO, GV_MESH_IN_PLY, GV_MESH_IN_OBJ,
  * Parse the file in buf[0 .. len-1] (no terminator needed) as format `in`
  * (GV_MESH_IN_AUTO: "ply" at the start is PLY, "glTF" GLB, anything else
  * OBJ) into *out (free with gv_trimesh_free).  Returns 0, or -1 with *err:
- * GV_ECORRUPT (malformed; the message says where), GV_EFORMAT (valid but
- * unsupported: big-endian PLY, sparse or external glTF buffers),
- * GV_ELIMIT, GV_ENOMEM.  Thread-safe.
+ * GV_ECORRUPT (malformed, or no triangle at all; the message says where),
+ * GV_EFORMAT (valid but unsupported: big-endian PLY, sparse or external
+ * glTF buffers), GV_ELIMIT, GV_ENOMEM.  Thread-safe.
  */
 int gv_mesh_read(const uint8_t *buf, size_t len, enum gv_mesh_in in,
                  const struct gv_mesh_limits *lim, struct gv_trimesh *out,

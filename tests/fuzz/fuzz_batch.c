@@ -7,7 +7,8 @@
  * (max = 1 + (byte >> 1), 1..128, so both sides of batch_max_tiles get
  * reached); the rest is the query value (cut at the first NUL, as a C
  * string from libmicrohttpd would be) or the body (as is).  Checked:
- *  - success: 1 <= n <= max, every number <= GV_MAX_DIM; a query holds
+ *  - success: 1 <= n <= max, every level <= BATCH_LEVEL_MAX and every
+ *    tx, ty <= GV_MAX_DIM; a query holds
  *    only digits, ',' and ';'; printing the triples back in the same
  *    form and parsing that again gives the same triples;
  *  - failure: no array, n = 0, a message, and a code the HTTP error
@@ -91,7 +92,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!t || n < 1 || n > max)
         abort();
     for (size_t i = 0; i < n; i++)
-        if (t[i].level > GV_MAX_DIM || t[i].tx > GV_MAX_DIM || t[i].ty > GV_MAX_DIM)
+        if (t[i].level > BATCH_LEVEL_MAX || t[i].tx > GV_MAX_DIM || t[i].ty > GV_MAX_DIM)
             abort();
     if (!json && in[strspn(in, "0123456789,;")] != '\0')
         abort();

@@ -6,18 +6,20 @@
  * (no space: the whole input is the target, method GET), cut at the
  * first NUL or newline, which an HTTP parser would never hand on, and at
  * 8 KiB.  TARGET splits at the first '?' into the path and the query, as
- * libmicrohttpd splits it; the path and every query key and value are
- * decoded with router_unescape, as the daemon's unescape callback does,
- * and the path is routed with the method (HEAD as GET, as http.c does),
- * then with GET and POST as well.  Every answer is checked against what
- * the table says:
+ * libmicrohttpd splits it; every query key and value is decoded with
+ * router_unescape, as the daemon's unescape callback does, and the raw
+ * path is routed with the method (HEAD as GET, as http.c does), then with
+ * GET and POST as well (and its decoded copy is checked by
+ * router_unescape's rules).  Every answer is checked against what the
+ * table says:
  *  - router_unescape: the length it returns is strlen of the result, no
  *    longer than the input, and the result equals the input when that
  *    holds no '%';
  *  - a match names a route of that method, no earlier route of that
  *    method matches, the parameters are as many as the pattern's '*'
- *    segments, each non-empty and free of '/', and putting them back into
- *    the pattern gives the path again, byte for byte;
+ *    segments, each non-empty, the path has as many segments as the
+ *    pattern, and each raw segment, decoded, equals the pattern's literal
+ *    or the parameter in its place (so "%2F" never splits a segment);
  *  - "not found": no pattern matches (router_match_pattern agrees);
  *  - "method not allowed": some pattern matches, none with this method,
  *    and the Allow list names every method that does match (GET with
@@ -111,26 +113,32 @@ static void check_route(const char *method, const char *path)
             abort();
         if (m.nparam != stars(rt->pattern) || (m.nparam && !m.segbuf))
             abort();
-        /* Rebuild the path from the pattern and the parameters. */
-        char rebuilt[MAX_TARGET + 1];
-        size_t o = 0;
-        int k = 0;
-        for (const char *p = rt->pattern; *p; p++) {
-            if (*p == '*' && p > rt->pattern && p[-1] == '/'
-                && (p[1] == '/' || !p[1])) {
-                size_t n = strlen(m.param[k]);
-                if (n == 0 || strchr(m.param[k], '/') || o + n > MAX_TARGET)
-                    abort();
-                memcpy(rebuilt + o, m.param[k++], n);
-                o += n;
-            } else {
-                if (o + 1 > MAX_TARGET)
-                    abort();
-                rebuilt[o++] = *p;
-            }
+        /* Walk the pattern's and the path's segments side by side. */
+        if (!strcmp(rt->pattern, "/")) {
+            if (strcmp(path, "/") || m.nparam)
+                abort();
+            break;
         }
-        rebuilt[o] = '\0';
-        if (strcmp(rebuilt, path))
+        const char *p = rt->pattern, *u = path;
+        int k = 0;
+        while (*p || *u) {
+            if (*p != '/' || *u != '/')
+                abort();
+            p++;
+            u++;
+            size_t pl = strcspn(p, "/"), ul = strcspn(u, "/");
+            char seg[MAX_TARGET + 1];
+            memcpy(seg, u, ul);
+            seg[ul] = '\0';
+            router_unescape(seg);
+            const char *want = (pl == 1 && *p == '*') ? m.param[k++] : NULL;
+            if (want ? (!want[0] || strcmp(seg, want))
+                     : (strlen(seg) != pl || memcmp(seg, p, pl)))
+                abort();
+            p += pl;
+            u += ul;
+        }
+        if (k != m.nparam)
             abort();
         break;
     }
@@ -176,10 +184,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     char *query = strchr(target, '?');
     if (query)
         *query++ = '\0';
-    check_unescape(target);
     check_route(method, target);
     check_route("GET", target);
     check_route("POST", target);
+    check_unescape(target);
     while (query && *query) {
         char *amp = strchr(query, '&');
         if (amp)
