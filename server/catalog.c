@@ -19,7 +19,6 @@
 
 #include "catalog.h"
 #include "log.h"
-#include "store/store_format.h"
 
 struct catalog {
     char *dir;
@@ -153,9 +152,7 @@ static struct image *open_image(struct catalog *c, const char *id,
     snprintf(img->id, sizeof img->id, "%s", id);
     img->store = s;
     img->info = gv_store_info(s);
-    uint8_t h[GV_HEADER_SIZE];
-    gv_header_pack(&img->info->header, h);
-    img->tag = gv_crc32(0, h, sizeof h);
+    img->identity = gv_store_identity(s);
     img->bytes = (uint64_t)st->st_size;
     img->dev = (uint64_t)st->st_dev;
     img->ino = (uint64_t)st->st_ino;

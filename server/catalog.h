@@ -35,7 +35,7 @@ struct image {
     struct gv_store *store;            /* read-only after open */
     const struct gv_store_info *info;
     uint64_t serial;                   /* unique per opened instance */
-    uint32_t tag;                      /* CRC of the header: ETag seed */
+    uint64_t identity;                 /* gv_store_identity: ETag seed */
     uint64_t bytes;                    /* file size */
     /* private */
     int refs;

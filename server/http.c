@@ -341,6 +341,32 @@ double http_uptime(const struct server *srv)
            (double)(now.tv_nsec - srv->started.tv_nsec) / 1e9;
 }
 
+int http_etag_listed(const char *inm, const char *etag)
+{
+    if (!inm || !etag)
+        return 0;
+    if (!strncmp(etag, "W/", 2))
+        etag += 2;
+    const size_t n = strlen(etag);
+    const char *s = inm;
+    for (;;) {
+        s += strspn(s, " \t,");
+        if (!*s)
+            return 0;
+        const char *tag = !strncmp(s, "W/", 2) ? s + 2 : s;
+        const char *end = NULL;   /* past the entry when it is well formed */
+        if (*s == '*')
+            end = s + 1;
+        else if (*tag == '"' && (end = strchr(tag + 1, '"')) != NULL)
+            end++;
+        const char *next = end ? end + strspn(end, " \t") : s;
+        if (end && (!*next || *next == ',') &&
+            (*s == '*' || ((size_t)(end - tag) == n && !memcmp(tag, etag, n))))
+            return 1;
+        s = next + strcspn(next, ",");
+    }
+}
+
 /* Metrics id of a route: the first route with the same name. */
 static int metrics_id(int route)
 {

@@ -208,6 +208,16 @@ enum MHD_Result http_send_empty(struct req *r, unsigned status,
 const char *http_header(struct req *r, const char *name);
 const char *http_query(struct req *r, const char *name);
 
+/*
+ * 1 if an If-None-Match value (NULL: the header is absent) matches etag
+ * (a strong ETag with its quotes), else 0: the value is "*", or one of
+ * its comma-separated entity tags, with or without the weak "W/" prefix,
+ * has etag's opaque tag (RFC 9110 section 13.1.2: the weak comparison).
+ * A malformed entry matches nothing and the entries after it are still
+ * read.  The one matcher of every route.  Pure; any thread.
+ */
+int http_etag_listed(const char *if_none_match, const char *etag);
+
 /* Strict unsigned parse: digits only, value <= max.  0 or -1. */
 int http_parse_u32(const char *s, uint32_t max, uint32_t *out);
 

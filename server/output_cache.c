@@ -203,21 +203,9 @@ void output_cache_metrics(struct output_cache *c, struct prom *out)
                 "Encoded outputs cached.", "%llu", (unsigned long long)s.entries);
 }
 
-void output_cache_etag(uint32_t tag, const char *canon, char *buf, size_t size)
+void output_cache_etag(uint64_t identity, const char *canon, char *buf,
+                       size_t size)
 {
-    snprintf(buf, size, "\"%08x-%016llx\"", tag, (unsigned long long)fnv1a(canon));
-}
-
-int output_cache_etag_match(const char *inm, const char *etag)
-{
-    if (!inm)
-        return 0;
-    if (!strcmp(inm, "*"))
-        return 1;
-    size_t n = strlen(etag);
-    for (const char *s = inm; (s = strstr(s, etag)) != NULL; s += n)
-        if ((s == inm || s[-1] == ' ' || s[-1] == ',' || s[-1] == '/') &&
-            (s[n] == '\0' || s[n] == ',' || s[n] == ' '))
-            return 1;
-    return 0;
+    snprintf(buf, size, "\"%016llx-%016llx\"", (unsigned long long)identity,
+             (unsigned long long)fnv1a(canon));
 }

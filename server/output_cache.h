@@ -52,11 +52,13 @@ void output_cache_stats(struct output_cache *c, struct output_cache_stats *s);
 void output_cache_metrics(struct output_cache *c, struct prom *out);
 
 /* The strong ETag of the answer to canonical request `canon` of a store
- * whose header CRC is `tag`: "\"TTTTTTTT-HHHHHHHHHHHHHHHH\"" (tag, then a
- * 64-bit FNV-1a hash of canon), into buf (at least 28 bytes). */
-void output_cache_etag(uint32_t tag, const char *canon, char *buf, size_t size);
-
-/* 1 if an If-None-Match value (NULL: none) lists etag, or is "*". */
-int output_cache_etag_match(const char *if_none_match, const char *etag);
+ * whose identity (gv_store_identity) is `identity`:
+ * "\"IIIIIIIIIIIIIIII-HHHHHHHHHHHHHHHH\"" (the identity, then a 64-bit
+ * FNV-1a hash of canon, in hex), into buf (OUTPUT_ETAG_SIZE bytes or
+ * more; a smaller buf gets a truncated, useless string).  A client
+ * revalidates it with If-None-Match (http_etag_listed). */
+#define OUTPUT_ETAG_SIZE 36
+void output_cache_etag(uint64_t identity, const char *canon, char *buf,
+                       size_t size);
 
 #endif

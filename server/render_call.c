@@ -20,7 +20,7 @@ struct render_call {
     struct image *img;
     struct render_spec spec;      /* key and etag point into the call */
     char *key;
-    char etag[48];
+    char etag[OUTPUT_ETAG_SIZE];
     int rc;
     uint8_t *out;
     size_t len;
@@ -121,7 +121,7 @@ enum MHD_Result render_call_serve(struct req *r, struct image *img,
     uint8_t *body;
     size_t len;
     const char *mime;
-    if (output_cache_etag_match(http_header(r, "If-None-Match"), spec->etag)) {
+    if (http_etag_listed(http_header(r, "If-None-Match"), spec->etag)) {
         ret = http_send_empty(r, 304, MHD_HTTP_HEADER_ETAG, spec->etag);
     } else if (output_cache_get(r->srv->outputs, spec->key, &body, &len, &mime)) {
         ret = send_body(r, img, spec, body, len);

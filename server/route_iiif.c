@@ -264,7 +264,7 @@ enum MHD_Result route_iiif_image(struct req *r)
         image_put(img);
         return http_send_error(r, &err);
     }
-    char id[600], path[200], canon[900], key[920], etag[48];
+    char id[600], path[200], canon[900], key[920], etag[OUTPUT_ETAG_SIZE];
     service_id(r, img, id, sizeof id);
     canonical_path(img, &c->q, path, sizeof path);
     snprintf(c->link, sizeof c->link, "<%s/%s>;rel=\"canonical\", "
@@ -273,7 +273,7 @@ enum MHD_Result route_iiif_image(struct req *r)
      * asked through: the bytes do not depend on it. */
     snprintf(canon, sizeof canon, "iiif/%s/%s q%d", img->id, path, c->jpeg_quality);
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);
-    output_cache_etag(img->tag, canon, etag, sizeof etag);
+    output_cache_etag(img->identity, canon, etag, sizeof etag);
     struct render_spec spec = {
         .module = "iiif", .key = key, .etag = etag,
         .mime = gv_output_format_image(c->q.format)->mime,

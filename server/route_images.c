@@ -195,11 +195,10 @@ enum MHD_Result route_image_root(struct req *r)
                                g->root_mips - 1);
         goto out;
     }
-    char etag[64];
-    snprintf(etag, sizeof etag, "\"%08x-root-%u-%s\"", img->tag, mip,
-             form_name[form]);
-    const char *inm = http_header(r, "If-None-Match");
-    if (inm && strstr(inm, etag)) {
+    char etag[64]; /* quotes, 16 hex digits, "-root-", a mip, a format */
+    snprintf(etag, sizeof etag, "\"%016llx-root-%u-%s\"",
+             (unsigned long long)img->identity, mip, form_name[form]);
+    if (http_etag_listed(http_header(r, "If-None-Match"), etag)) {
         ret = http_send_empty(r, 304, "ETag", etag);
         goto out;
     }

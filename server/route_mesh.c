@@ -281,14 +281,14 @@ enum MHD_Result route_mesh(struct req *r)
         return http_send_error(r, &err);
     }
     *arg = q;
-    char canon[400], key[420], etag[48];
+    char canon[400], key[420], etag[OUTPUT_ETAG_SIZE];
     snprintf(canon, sizeof canon, "mesh/%s/%u/%u,%u,%u,%u e%.17g n%u l%llu%s.%s",
              img->id, q.level, q.x, q.y, q.w, q.h, q.max_error,
              q.max_triangles, (unsigned long long)q.limit_triangles,
              q.zfield ? " zfield" : "",
              gv_mesh_format_ext(q.format));
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);
-    output_cache_etag(img->tag, canon, etag, sizeof etag);
+    output_cache_etag(img->identity, canon, etag, sizeof etag);
     struct render_spec spec = {
         .module = "mesh", .key = key, .etag = etag,
         .mime = gv_mesh_format_mime(q.format), .render = render,

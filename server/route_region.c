@@ -175,13 +175,13 @@ enum MHD_Result route_region(struct req *r)
         return http_send_error(r, &err);
     }
     *arg = q;
-    char canon[400], key[420], etag[48];
+    char canon[400], key[420], etag[OUTPUT_ETAG_SIZE];
     snprintf(canon, sizeof canon, "region/%s/%u/%u,%u,%u,%u.%s q%u", img->id,
              q.level, q.x, q.y, q.w, q.h,
              q.height == HEIGHT_PNG16 ? "png16"
              : q.height == HEIGHT_TIFF32 ? "tiff32" : q.format->name, q.quality);
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);
-    output_cache_etag(img->tag, canon, etag, sizeof etag);
+    output_cache_etag(img->identity, canon, etag, sizeof etag);
     struct render_spec spec = {
         .module = "region", .key = key, .etag = etag, .mime = q.format->mime,
         .render = render, .headers = add_headers, .arg = arg};

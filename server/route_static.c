@@ -29,8 +29,7 @@ enum MHD_Result route_static(struct req *r)
         return http_send_errorf(r, GV_ENOTFOUND, "no file '%s' in the viewer",
                                 esc);
     }
-    const char *inm = http_header(r, "If-None-Match");
-    if (inm && (strstr(inm, a->etag) || !strcmp(inm, "*")))
+    if (http_etag_listed(http_header(r, "If-None-Match"), a->etag))
         return http_send_empty(r, 304, "ETag", a->etag);
     struct MHD_Response *resp = MHD_create_response_from_buffer(
         a->len, (void *)a->data, MHD_RESPMEM_PERSISTENT);

@@ -144,7 +144,7 @@ enum MHD_Result route_terrain_layer(struct req *r)
         goto out;
     }
     frame_of(img, lon0, &f);
-    char canon[96], etag[48], tiles[96];
+    char canon[96], etag[OUTPUT_ETAG_SIZE], tiles[96];
     snprintf(canon, sizeof canon, "terrain-layer %.17g %.17g",
              r->srv->cfg->terrain_error_scale, lon0);
     if (http_query(r, "lon0"))
@@ -152,9 +152,8 @@ enum MHD_Result route_terrain_layer(struct req *r)
                  "&lon0=%.17g", lon0);
     else
         snprintf(tiles, sizeof tiles, "{z}/{x}/{y}.terrain?v={version}");
-    output_cache_etag(img->tag, canon, etag, sizeof etag);
-    const char *inm = http_header(r, "If-None-Match");
-    if (inm && (strstr(inm, etag) || !strcmp(inm, "*"))) {
+    output_cache_etag(img->identity, canon, etag, sizeof etag);
+    if (http_etag_listed(http_header(r, "If-None-Match"), etag)) {
         ret = http_send_empty(r, 304, MHD_HTTP_HEADER_ETAG, etag);
         goto out;
     }
@@ -438,13 +437,13 @@ enum MHD_Result route_terrain_tile(struct req *r)
         return http_send_errorf(r, GV_ENOMEM, "terrain: out of memory");
     }
     *arg = q;
-    char canon[300], key[320], etag[48];
+    char canon[300], key[320], etag[OUTPUT_ETAG_SIZE];
     snprintf(canon, sizeof canon, "terrain/%s/%u/%u/%u e%.17g n%u l%.17g%s",
              img->id, q.z, q.x, q.y, q.max_error, q.max_triangles, lon0,
              q.gzip ? " gz" : "");
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial,
              canon);
-    output_cache_etag(img->tag, canon, etag, sizeof etag);
+    output_cache_etag(img->identity, canon, etag, sizeof etag);
     struct render_spec spec = {
         .module = "terrain", .key = key, .etag = etag, .mime = TERRAIN_MIME,
         .render = render_tile, .headers = tile_headers, .arg = arg};

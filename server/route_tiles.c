@@ -7,7 +7,8 @@
  *
  * A tile response points into the cached page (page_cache.h) and holds a
  * reference to it until libmicrohttpd has sent it: no copy.  The strong
- * ETag is derived from the store's header CRC, the page CRC and the tile
+ * ETag is derived from the store's identity (gv_store_identity: a hash
+ * of its header, root CRC and page index), the page CRC and the tile
  * coordinates, so it changes whenever the bytes could; it is known from
  * the page index alone, so a 304 costs no disk read.
  *
@@ -37,23 +38,21 @@
 #include "store/store_format.h"
 
 #define IMMUTABLE "public, max-age=31536000, immutable"
-#define ETAG_MAX 64 /* a tile ETag: quotes, 16 hex digits, 3 numbers (< 48) */
+/* A tile ETag and its NUL: quotes, 24 hex digits, 3 dashes and 3 numbers
+ * (a level of 2 digits, tx and ty of up to 10) make 51 bytes at most, and
+ * GVB2 frames carry the length in a byte. */
+#define ETAG_MAX 64
 #define FRAME_HEAD 20
 
 /* Tile (level, tx, ty)'s strong ETag into etag (ETAG_MAX bytes): the
- * store's tag, the page CRC and the coordinates.  Returns its length. */
+ * store's identity, the page CRC and the coordinates.  Returns its
+ * length. */
 static size_t tile_etag(char *etag, const struct image *img, uint32_t crc,
                         uint32_t level, uint32_t tx, uint32_t ty)
 {
-    int n = snprintf(etag, ETAG_MAX, "\"%08x%08x-%u-%u-%u\"", img->tag, crc,
-                     level, tx, ty);
+    int n = snprintf(etag, ETAG_MAX, "\"%016llx%08x-%u-%u-%u\"",
+                     (unsigned long long)img->identity, crc, level, tx, ty);
     return n > 0 && n < ETAG_MAX ? (size_t)n : 0;
-}
-
-/* Does If-None-Match value inm (may be NULL) list etag (or "*")? */
-static int etag_listed(const char *inm, const char *etag)
-{
-    return inm && (strstr(inm, etag) || !strcmp(inm, "*"));
 }
 
 static void release_page(void *cls)
@@ -135,7 +134,7 @@ enum MHD_Result route_tile(struct req *r)
     }
     char etag[ETAG_MAX];
     tile_etag(etag, img, crc, level, tx, ty);
-    if (etag_listed(http_header(r, "If-None-Match"), etag)) {
+    if (http_etag_listed(http_header(r, "If-None-Match"), etag)) {
         struct MHD_Response *resp = MHD_create_response_from_buffer(
             0, (void *)"", MHD_RESPMEM_PERSISTENT);
         if (resp) {
@@ -253,7 +252,7 @@ static int batch_tile(struct req *r, const struct image *img, struct batch *b,
     int found = locate(img, level, tx, ty, &crc, &err) == 0;
     if (found && b->etags)
         elen = tile_etag((char *)f + FRAME_HEAD, img, crc, level, tx, ty);
-    if (found && b->etags && etag_listed(b->inm, (char *)f + FRAME_HEAD)) {
+    if (found && b->etags && http_etag_listed(b->inm, (char *)f + FRAME_HEAD)) {
         status = 304;
     } else if (!found ||
                fetch(r->srv, img, level, tx, ty, &p, &tile, &len, &err) < 0) {

@@ -25,8 +25,9 @@
 static char dir[128];
 
 /* A 1100x600 gray store (levels 0 and 1 tiled, 275x150 root), every tile
- * coded at rate 0 except tile 0/1/0 at rate 2. */
-static int write_store(const char *path, struct gv_error *err)
+ * coded at rate 0 except tile 0/1/0 at rate 2, whose indices depend on
+ * salt (so stores of different salts differ in pixels alone). */
+static int write_store(const char *path, int salt, struct gv_error *err)
 {
     struct gv_header h = {0};
     h.width = 1100;
@@ -47,7 +48,7 @@ static int write_store(const char *path, struct gv_error *err)
     for (int i = 0; i < 4 * 4; i++)
         r2[1 + i] = (uint8_t)(i * 5 - 40);
     for (size_t k = 17; k < l2; k++)
-        r2[k] = (uint8_t)(k * 37);
+        r2[k] = (uint8_t)(k * 37 + (size_t)salt);
     for (int k = g.root - 1; k >= 0; k--) {
         const uint8_t *tiles[64] = {0};
         size_t lens[64] = {0};
@@ -169,6 +170,43 @@ static void atomic_file_contract(void)
     rmdir(sub);
 }
 
+/* gv_store_identity: the same bytes give the same identity (the store at
+ * path, orig: its len bytes, opened twice and as a copy), and a store
+ * with a byte-identical header but other pixels gets another. */
+static void identity_contract(const char *path, const uint8_t *orig, size_t len)
+{
+    char other[256], copy[256];
+    snprintf(other, sizeof other, "%s/other.gv", dir);
+    snprintf(copy, sizeof copy, "%s/copy.gv", dir);
+    struct gv_error err;
+    struct gv_store *a = gv_store_open(path, &err);
+    struct gv_store *a2 = gv_store_open(path, &err);
+    spit(copy, orig, len);
+    struct gv_store *c = gv_store_open(copy, &err);
+    check(a && a2 && c && gv_store_identity(a) == gv_store_identity(a2) &&
+              gv_store_identity(a) == gv_store_identity(c),
+          "identity: the same file twice, and a copy, give the same identity");
+
+    check(write_store(other, 1, &err) == 0, "identity: write a store with other pixels");
+    size_t olen = 0;
+    uint8_t *ob = slurp(other, &olen);
+    struct gv_store *b = gv_store_open(other, &err);
+    check(ob && olen == len && memcmp(ob, orig, GV_HEADER_SIZE) == 0 &&
+              memcmp(ob, orig, len) != 0,
+          "identity: the other store has a byte-identical header, other bytes");
+    check(a && b && gv_store_identity(a) != gv_store_identity(b),
+          "identity: other pixels under the same header give another identity "
+          "(%016llx, %016llx)", a ? (unsigned long long)gv_store_identity(a) : 0,
+          b ? (unsigned long long)gv_store_identity(b) : 0);
+    free(ob);
+    gv_store_close(a);
+    gv_store_close(a2);
+    gv_store_close(b);
+    gv_store_close(c);
+    unlink(other);
+    unlink(copy);
+}
+
 int main(void)
 {
     test_tmpdir_new(dir, sizeof dir, "gv-test-store");
@@ -177,7 +215,7 @@ int main(void)
     snprintf(bad, sizeof bad, "%s/bad.gv", dir);
     struct gv_error err;
 
-    check(write_store(path, &err) == 0, "write a store");
+    check(write_store(path, 0, &err) == 0, "write a store");
     struct gv_store *s = gv_store_open(path, &err);
     check(s != NULL, "reopen it");
     if (!s)
@@ -319,6 +357,7 @@ int main(void)
         pclose(ls);
     check(entries == 2, "atomic file: nothing left behind (%d entries)", entries);
 
+    identity_contract(path, orig, len);
     free(orig);
     free(copy);
     test_tmpdir_free(dir);

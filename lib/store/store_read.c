@@ -23,6 +23,8 @@ struct gv_store {
     uint8_t *root;            /* all root mips */
     uint64_t root_mip_off[GV_MAX_LEVELS + 2];
     uint8_t *index;           /* pages * 16 bytes */
+    uint32_t root_crc;        /* the root section's CRC, as stored */
+    uint64_t identity;        /* gv_store_identity */
     char *path;
 };
 
@@ -130,6 +132,7 @@ static int load_root(struct gv_store *s, struct gv_error *err)
         free(packed);
         return -1;
     }
+    s->root_crc = gv_get32(packed + h->root_size - 4);
     free(packed);
     if (height)
         height_mips((uint16_t *)(void *)s->root, w, hh);
@@ -170,6 +173,67 @@ static int load_index(struct gv_store *s, struct gv_error *err)
     return 0;
 }
 
+/*
+ * The store identity: a 64-bit hash of the header, the root's CRC and
+ * the page index (every page's offset, size and CRC, then the index's
+ * CRC), fed as little-endian 64-bit words in that order.  Each piece ends
+ * with a word of its length, so two pieces never run into each other.
+ * A word is mixed by multiply-rotate-multiply into a state that is
+ * rotated, multiplied by 5 and offset, and the state is avalanched at the
+ * end by the xor-shift-multiply finalizer; the odd multipliers are
+ * MurmurHash3's 64-bit constants, chosen there for their measured
+ * avalanche.
+ */
+static uint64_t rotl64(uint64_t x, int r)
+{
+    return x << r | x >> (64 - r);
+}
+
+static uint64_t id_word(uint64_t h, uint64_t w)
+{
+    w *= 0x87c37b91114253d5ull;
+    w = rotl64(w, 31);
+    w *= 0x4cf5ad432745937full;
+    h ^= w;
+    h = rotl64(h, 27);
+    return h * 5 + 0x52dce729;
+}
+
+static uint64_t id_bytes(uint64_t h, const uint8_t *p, size_t n)
+{
+    size_t left = n;
+    for (; left >= 8; p += 8, left -= 8)
+        h = id_word(h, gv_get64(p));
+    uint64_t tail = 0;
+    for (size_t i = 0; i < left; i++)
+        tail |= (uint64_t)p[i] << (8 * i);
+    if (left)
+        h = id_word(h, tail);
+    return id_word(h, (uint64_t)n);
+}
+
+static uint64_t id_final(uint64_t h)
+{
+    h ^= h >> 33;
+    h *= 0xff51afd7ed558ccdull;
+    h ^= h >> 33;
+    h *= 0xc4ceb9fe1a85ec53ull;
+    h ^= h >> 33;
+    return h;
+}
+
+/* The identity of s, whose header bytes are hb (as read). */
+static uint64_t identity(const struct gv_store *s, const uint8_t *hb)
+{
+    uint8_t crc[4];
+    gv_put32(crc, s->root_crc);
+    uint64_t h = id_bytes(0x6769676176696577ull, hb, GV_HEADER_SIZE);
+    h = id_bytes(h, crc, sizeof crc);
+    h = id_bytes(h, s->index,
+                 (size_t)s->info.header.pages * GV_INDEX_ENTRY + 4);
+    return id_final(h);
+}
+
 struct gv_store *gv_store_open(const char *path, struct gv_error *err)
 {
     struct gv_store *s = calloc(1, sizeof *s);
@@ -187,6 +251,7 @@ struct gv_store *gv_store_open(const char *path, struct gv_error *err)
         gv_store_close(s);
         return NULL;
     }
+    s->identity = identity(s, hb);
     s->path = strdup(path);
     return s;
 }
@@ -206,6 +271,11 @@ void gv_store_close(struct gv_store *s)
 const struct gv_store_info *gv_store_info(const struct gv_store *s)
 {
     return &s->info;
+}
+
+uint64_t gv_store_identity(const struct gv_store *s)
+{
+    return s->identity;
 }
 
 const uint8_t *gv_store_root(const struct gv_store *s, int mip, uint32_t *w,

@@ -36,6 +36,19 @@ void gv_store_close(struct gv_store *s);
 
 const struct gv_store_info *gv_store_info(const struct gv_store *s);
 
+/*
+ * The store's identity: a 64-bit hash, computed at open, of the header,
+ * the root section's CRC and the whole page index (each page's offset,
+ * size and CRC, and the index's own CRC), so every byte that can change a
+ * pixel or a field of the header changes it (up to the CRCs' and the
+ * hash's collisions).  It depends on the file's bytes alone: equal files
+ * (a sharded encode merged and the unsharded one, a copy, the same file
+ * opened twice) have equal identities, on any host and in any format
+ * version the reader accepts.  What gigaviewd derives its ETags from
+ * (docs/FORMAT.md section 6).  Any thread.
+ */
+uint64_t gv_store_identity(const struct gv_store *s);
+
 /* Root mip `mip` (0 = the root level itself): its pixels (read-only, valid
  * until close) and size.  NULL if mip is out of range.  In a height store
  * (header.kind GV_KIND_HEIGHT) the pixels are w*h host-order uint16_t
