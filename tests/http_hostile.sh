@@ -213,7 +213,13 @@ def busy():   # holds the one worker until filter_timeout_ms: 504
     res["busy"] = c.getresponse().status
 t = threading.Thread(target=busy)
 t.start()
-time.sleep(0.5)
+for i in range(600):  # until the spin runs in the one worker
+    c = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
+    c.request("GET", "/metrics")
+    m = c.getresponse().read().decode()
+    if "\ngigaview_filter_jobs_running 1\n" in m:
+        break
+    time.sleep(0.05)
 body = json.dumps({"filter": "negate", "region": [0, 0, 256, 256]}).encode()
 for i in range(3):   # queued behind it; the client leaves
     s = socket.create_connection(("127.0.0.1", port))
@@ -227,12 +233,14 @@ PY
     check "the long job ran to its time limit (504; got $(tail -n 1 "$T/gone.out"))" \
         test "$(tail -n 1 "$T/gone.out")" = 504
     # The slot takes the queued jobs once it has replaced the killed
-    # worker: wait for all three (up to 30 s, a busy machine).
+    # worker, and each request is logged once its connection is resumed:
+    # wait for all three of both (up to 30 s, a busy machine).
     i=0
     while [ $i -lt 300 ]; do
         req "$(url /metrics)"
         n=$(sed -n 's/^gigaview_filter_jobs_total{result="cancelled"} //p' "$T/b")
-        [ "${n:-0}" -ge 3 ] && break
+        l=$(grep -c '"POST /v1/images/p/filter" 499 0 ' "$T/daemon.log")
+        [ "${n:-0}" -ge 3 ] && [ "$l" -ge 3 ] && break
         sleep 0.1
         i=$((i + 1))
     done
