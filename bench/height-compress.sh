@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # height-compress.sh - bytes of a height store against GDAL's GeoTIFF
 # compressors on the same DEM at the same maximum error (docs/FORMAT.md
-# section 12; issue 14's compression anchors).
+# section 12; the height stores' compression anchors).
 #
 #   bench/height-compress.sh [--gigaview PATH] [DEM.png]
 #

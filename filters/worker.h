@@ -76,7 +76,7 @@ enum gv_worker_msg {
     GV_WORKER_RUN,
     GV_WORKER_DONE,
     GV_WORKER_FAILED,
-    GV_WORKER_SIMPLIFY             /* mesh simplification (issue 15) */
+    GV_WORKER_SIMPLIFY             /* mesh simplification */
 };
 
 /* Fixed parts of a SIMPLIFY job and of its DONE answer, in bytes. */

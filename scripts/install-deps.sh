@@ -32,7 +32,7 @@ PACKAGES="$PACKAGES libtiff-dev libtiff-tools"
 BENCH_PACKAGES="nginx-light wrk curl jq iipimage-server spawn-fcgi
   libvips-tools libjpeg-turbo-progs webp astcenc
   python3-opencv python3-scipy parallel"
-# bench/simplify-speed.sh (mesh simplification, issue 15 part 2)
+# bench/simplify-speed.sh (mesh simplification)
 BENCH_PACKAGES="$BENCH_PACKAGES libmeshoptimizer-dev python3-open3d assimp-testmodels"
 
 bench=0 print=0

@@ -42,7 +42,7 @@ enum route_id {
     ROUTE_MESH,
     ROUTE_TERRAIN_LAYER, /* route_terrain.c */
     ROUTE_TERRAIN_TILE,
-    ROUTE_MESH_SIMPLIFY,   /* issue 15 part 2 */
+    ROUTE_MESH_SIMPLIFY,   /* mesh simplification */
     ROUTE_WEB,
     ROUTE_COUNT
 };

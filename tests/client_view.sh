@@ -591,7 +591,7 @@ same_as_render "server down: after the restart the frame equals render" d2.png x
 
 # ================================================================
 # Selection drawn while Shift-dragging, and a prompt quit while a request
-# hangs (issue 16 follow-up; this block is self-contained: it only uses
+# hangs (follow-up; this block is self-contained: it only uses
 # $BASE, the helpers above, and files of its own).
 # ================================================================
 

@@ -48,7 +48,7 @@
  *   VPMADDUBSW weighs them in pairs).
  * - On AVX2 alone (level 1) the even and odd children's sums are
  *   interleaved by PSHUFB, four pixel pairs a step.
- * Measured (bench/README.md, session 9): level 3 1.5 to 1.7 times the
+ * Measured (bench/README.md, 2026-11-26, encoder CPU): level 3 1.5 to 1.7 times the
  * prediction's speed of the session start's AVX-512BW path; level 2 1.17
  * times its own, level 1 1.22 to 1.24 times.
  */

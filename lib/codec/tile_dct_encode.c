@@ -31,7 +31,7 @@
  * not depend on the path.  The AVX2 transform also takes the residual of
  * eight pixels at once and writes its second pass straight in zigzag
  * order (2.1 times faster than the plain C's structure in 8 lanes).
- * Session 9 (bench/README.md, "2026-11-26 (session 9), encoder CPU"):
+ * The encoder of 2026-11-26 (bench/README.md, "2026-11-26, encoder CPU"):
  * the tokens, contexts and escapes of a block are computed eight at a
  * time as slots (block_slots), which both the counting and the writing
  * use; the rANS rows are coded four at a time in lockstep, without a

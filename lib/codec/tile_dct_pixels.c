@@ -15,7 +15,7 @@
  *   same way on the first pass's results, packed to 16 bits in pairs of
  *   rows.  Blocks with four coded rows or more take even-odd butterflies
  *   instead (half the multiplies; 1.03 times the tile decoding speed on
- *   Picos de Europa, bench/README.md session 9).  Those results fit in 16 bits for every block an encoder writes
+ *   Picos de Europa, bench/README.md, 2026-11-26, encoder CPU).  Those results fit in 16 bits for every block an encoder writes
  *   but not for every block a buffer can hold (steps of 4095), so a block
  *   whose first pass leaves the 16-bit range is done by the portable
  *   path.  The sum with the prediction saturates to 16 bits and then

@@ -74,7 +74,7 @@ static inline uint64_t gv_rans_rcp(uint32_t f)
  * taken as a multiplication by rcp = gv_rans_rcp(f), computed once per
  * frequency: a 32-bit division costs several times a 64-bit multiply, and
  * it was a quarter of the samples in gv_dct_encode itself (perf;
- * bench/README.md, "2026-11-26 (session 6), encoding"). */
+ * bench/README.md, "2026-11-26, encoding"). */
 static inline uint32_t gv_rans_put_rcp(uint32_t x, uint32_t f, uint64_t rcp,
                                        uint32_t c, int prob_bits,
                                        uint16_t *words, int *n)

@@ -18,7 +18,7 @@
  * imageio/raw_regions.h) and level 0 is never written to scratch: that
  * saves a copy as large as the input, written, kept in the page cache
  * beside the input's own pages, and read back (a 1.07-gigapixel tiled
- * TIFF: 3.2 GB; bench/README.md, session 8).
+ * TIFF: 3.2 GB; bench/README.md, 2026-11-26, the gigapixel mosaic at 1.18–1.33×).
  *
  * Working set of pass 2 for one page: the original window (4097^2 x C;
  * mapped from the scratch file where it can be, else copied from it),
@@ -316,7 +316,7 @@ static int push_pair0(struct encoder *e, const uint8_t *r0, const uint8_t *r1)
  * (where they lie end to end).  That takes the largest copy off
  * the encoder's thread, which bounds pass 1 on an input that is cheap to
  * decode (a 54 MP uncompressed tiled TIFF: the whole encode 1.28 -> 1.20 s,
- * best of 4; bench/README.md, "2026-11-26 (session 6), encoding").
+ * best of 4; bench/README.md, "2026-11-26, encoding").
  * Where the input is read where it lies (gv_source_reads_raw), which
  * costs the reader little, and there are levels above level 0, the
  * reader also reduces each pair of the chunk's rows into level 1 (red)
