@@ -34,6 +34,7 @@
 #include <stdint.h>
 
 #include "base/error.h"
+#include "codec/tile_layout.h"
 
 /* The largest tile buffer: gv_tilebuf_size(GV_MAX_RATE, 3) (checked by
  * tests/test_tile.c).  Entropy-coded buffers are only ever written when
@@ -41,8 +42,16 @@
 #define GV_TILEBUF_MAX 148228
 
 /* Bytes of a fixed-layout tile buffer at index width `rate`
- * (0..GV_MAX_RATE). */
-size_t gv_tilebuf_size(int rate, int channels);
+ * (0..GV_MAX_RATE).  Inline: the layout checks of tile_decode.c and
+ * tile_rans.c both need it, and neither depends on the other for it. */
+static inline size_t gv_tilebuf_size(int rate, int channels)
+{
+    if (rate <= 0)
+        return 4;
+    uint64_t bits = 8u * (1u + ((uint64_t)1 << rate) * 4u * (unsigned)channels) +
+                    (uint64_t)GV_NBLOCKS * (unsigned)rate;
+    return (size_t)((bits + 31) / 32 * 4);
+}
 
 /*
  * Predict a 513x513 tile from quadrant (qx,qy) in {0,1}^2 of the decoded

@@ -17,15 +17,6 @@
 #include "codec/tile_dct.h"
 #include "codec/tile_rans.h"
 
-size_t gv_tilebuf_size(int rate, int channels)
-{
-    if (rate <= 0)
-        return 4;
-    uint64_t bits = 8u * (1u + ((uint64_t)1 << rate) * 4u * (unsigned)channels) +
-                    (uint64_t)GV_NBLOCKS * (unsigned)rate;
-    return (size_t)((bits + 31) / 32 * 4);
-}
-
 int gv_tilebuf_check(const uint8_t *buf, size_t len, int channels,
                      struct gv_error *err)
 {
