@@ -288,7 +288,7 @@ static int encode_with_progress(struct encode_args *a, const char *const *inputs
     struct progress *bar = progress_new(stderr, a->progress);
     a->o.progress = on_progress;
     a->o.progress_ctx = bar;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     int rc = gv_encode(inputs, ninputs, a->output, &a->o, r, &err);
     progress_free(bar);
@@ -319,7 +319,7 @@ static int encode_height(const struct encode_args *a, const char *input)
                                     a->o.source.max_decoder_bytes,
                                 .threads = a->o.threads};
     struct gv_height_result r;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     if (gv_height_encode(input, a->output, &ho, &r, &err) < 0) {
         fprintf(stderr, ME ": %s\n", err.text);

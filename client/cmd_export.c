@@ -67,7 +67,7 @@ static int decode_and_write(struct gv_store *s, int k, const struct region *r,
     const int c = gv_store_info(s)->geometry.channels;
     uint8_t *pixels = malloc((size_t)r->w * r->h * c);
     struct gv_decoder *d = gv_decoder_new(s, DECODER_CACHE);
-    struct gv_error err;
+    struct gv_error err = {0};
     int rc = 1;
     if (!pixels || !d)
         fprintf(stderr, ME ": out of memory\n");
@@ -91,7 +91,7 @@ int cmd_export(int argc, char **argv)
         opt_usage(&export_command, stderr);
         return 2;
     }
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s = gv_store_open(argv[first], &err);
     if (!s) {
         fprintf(stderr, ME ": %s\n", err.text);

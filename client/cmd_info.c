@@ -53,7 +53,7 @@ static const char *tone_name(int tone)
 /* List the images of the server at url.  Returns the exit status. */
 static int info_server(const char *url)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_http *h = gv_http_new(url, HTTP_TIMEOUT_MS, 0, &err);
     int bad = !h || gv_http_print_images(h, stdout, &err) < 0;
     if (bad)
@@ -189,7 +189,7 @@ int cmd_info(int argc, char **argv)
     const char *path = argv[first];
     if (!strncmp(path, "http://", 7) || !strncmp(path, "https://", 8))
         return info_server(path);
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s = gv_store_open(path, &err);
     if (!s) {
         fprintf(stderr, ME ": %s\n", err.text);

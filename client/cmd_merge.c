@@ -48,7 +48,7 @@ static const struct opt_command merge_command = {
  * Returns the exit status. */
 static int print_summary(const char *output, const struct gv_encode_result *r)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s = gv_store_open(output, &err);
     if (!s) {
         fprintf(stderr, ME ": %s\n", err.text);
@@ -71,7 +71,7 @@ int cmd_merge(int argc, char **argv)
         return 2;
     }
     struct gv_encode_result r;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     if (gv_shard_merge((const char *const *)argv + first, argc - first, a.output,
                        &r, &err) < 0) {

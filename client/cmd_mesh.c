@@ -128,7 +128,7 @@ static int read_store(struct gv_store *s, const struct mesh_args *a,
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     struct gv_decoder *d = gv_decoder_new(s, DECODER_CACHE);
     struct gv_height_meta hm;
-    struct gv_error err;
+    struct gv_error err = {0};
     uint16_t *codes = NULL;
     uint32_t lw, lh;
     int rc = 1;
@@ -176,7 +176,7 @@ static int read_image(const char *path, const struct mesh_args *a,
                       uint32_t *gh)
 {
     struct gv_image_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_image_in *in = gv_image_open(path, MAX_IMAGE_PIXELS, &info, &err);
     void *row = NULL;
     int rc = 1;
@@ -317,7 +317,7 @@ int cmd_mesh(int argc, char **argv)
         return 2;
     }
 
-    struct gv_error err;
+    struct gv_error err = {0};
     struct region r;
     float *h = NULL;
     uint32_t gw = 0, gh = 0;

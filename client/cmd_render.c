@@ -657,7 +657,7 @@ static void open_disk_cache(struct session *s, const struct render_args *a)
 static int session_open(struct session *s, const char *url, const struct render_args *a,
                         enum gv_gpu_platform platform)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     memset(s, 0, sizeof *s);
     s->platform = platform;
     s->gpu_budget = (size_t)(a->gpu_mib * 1048576.0);
@@ -714,7 +714,7 @@ static int picture_alloc(struct picture *pic, uint32_t w, uint32_t h, int c)
 static int draw_view(struct session *s, const struct render_args *a, struct view *v,
                      struct picture *pic)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     if (!a->center) {
         v->cx = s->img.width / 2.0;
         v->cy = s->img.height / 2.0;
@@ -745,7 +745,7 @@ static int draw_view(struct session *s, const struct render_args *a, struct view
 static int draw_region(struct session *s, const struct render_args *a,
                        struct picture *pic)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     const int top = s->geo.root + s->img.root_mips - 1;
     const int level = a->level < 0 ? 0 : a->level;
     uint32_t lw, lh;
@@ -804,7 +804,7 @@ int cmd_render(int argc, char **argv)
         return 2;
     struct session s;
     struct picture pic = {NULL, 0, 0};
-    struct gv_error err;
+    struct gv_error err = {0};
     rc = 1;
     if (session_open(&s, argv[first], &a, platform) == 0) {
         rc = is_view_form(&a) ? draw_view(&s, &a, &v, &pic) : draw_region(&s, &a, &pic);

@@ -130,7 +130,7 @@ int cmd_simplify(int argc, char **argv)
         fprintf(stderr, ME ": cannot read %s\n", argv[first]);
         return 1;
     }
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *where = "cpu";
 #ifdef GV_HAVE_GPU
     struct gv_gpu *gpu = NULL;

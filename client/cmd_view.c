@@ -250,7 +250,7 @@ static void take_result(struct app *app, struct vf_result *r, double now)
             vf_result_free(r);
         return;
     }
-    struct gv_error err;
+    struct gv_error err = {0};
     if (!r->ok) {
         fprintf(stderr, ME ": %s\n", r->msg);
         snprintf(app->message, sizeof app->message, "%.90s", r->msg);
@@ -763,7 +763,7 @@ static void write_shot(struct app *app)
 {
     const int ch = app->tiles ? vt_geometry(app->tiles)->channels : 3;
     uint8_t *px = malloc((size_t)app->w * app->h * ch);
-    struct gv_error err;
+    struct gv_error err = {0};
     if (!px) {
         fprintf(stderr, ME ": out of memory for a screenshot\n");
     } else {
@@ -955,7 +955,7 @@ static int open_window(struct app *app, int w, int h)
                  strcmp(SDL_GetCurrentVideoDriver(), "offscreen") != 0;
     if (!app->vsync)
         SDL_GL_SetSwapInterval(0);
-    struct gv_error err;
+    struct gv_error err = {0};
     if (!(app->gpu = gv_gpu_adopt(&err)) || !(app->draw = vd_new(app->gpu, &err)) ||
         !(app->overlay = vo_new(app->gpu, &err)) || !(app->roi = vr_new(app->gpu, &err)) ||
         !(app->sel = vsel_new(app->gpu, &err))) {
@@ -1033,7 +1033,7 @@ static void summary(struct app *app, double elapsed)
 
 static int start(struct app *app, const char *url, struct view_args *a)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     int w = 1280, h = 720;
     if (a->size && parse_size(a->size, &w, &h) < 0) {
         fprintf(stderr, ME ": --size wants WxH (16 to 16384 each), not '%s'\n", a->size);

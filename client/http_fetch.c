@@ -429,8 +429,10 @@ int gv_http_image(struct gv_http *h, const char *id,
     snprintf(what, sizeof what, "image '%s'", id);
     json_t *j = get_json(h, path, what, err);
     if (!j) {
-        if (err && err->code == GV_ENOTFOUND)
+        if (err && err->code == GV_ENOTFOUND) {   /* said for this image */
+            gv_error_clear(err);
             gv_fail(err, GV_ENOTFOUND, "no image '%s' on %s", id, h->base);
+        }
         return -1;
     }
     memset(img, 0, sizeof *img);
@@ -571,7 +573,7 @@ int gv_http_root_webp(struct gv_http *h, const struct gv_remote_image *img,
     char path[400];
     snprintf(path, sizeof path, "/v1/images/%s/root?format=webp", img->id);
     long status;
-    struct gv_error e;
+    struct gv_error e = {0};
     if (get_cached(h, path, "root-webp", "root (WebP)", 0, dc, webp, len,
                    &status, &e) == 0)
         return 0;
@@ -622,7 +624,7 @@ static int tiles_one_by_one(struct gv_http *h, const struct gv_remote_image *img
             rc = -1;
             break;
         }
-        struct gv_error te;
+        struct gv_error te = {0};
         if (gv_tilebuf_check(t[i].buf, t[i].len, img->channels, &te) < 0) {
             rc = gv_fail(err, GV_ECORRUPT, "%s from %s is corrupt (%zu bytes): %s",
                          what, h->base, t[i].len, te.text);
@@ -732,7 +734,7 @@ static int batch_take(struct gv_http *h, const struct gv_remote_image *img,
         return gv_fail(err, GV_ENOMEM, "http: out of memory");
     memcpy(t->buf, f->data, f->len);
     t->len = f->len;
-    struct gv_error te;
+    struct gv_error te = {0};
     if (gv_tilebuf_check(t->buf, t->len, img->channels, &te) < 0)
         return gv_fail(err, GV_ECORRUPT, "%s from %s is corrupt (%zu bytes): %s",
                        what, h->base, t->len, te.text);

@@ -121,7 +121,7 @@ static int mips_from_webp(struct vf_result *r, const uint8_t *webp, size_t len,
     uint8_t *all = malloc(gv_root_pixels_size(im->root_w, im->root_h, c));
     if (!all)
         return gv_fail(err, GV_ENOMEM, "view: out of memory for the root");
-    struct gv_error e;
+    struct gv_error e = {0};
     if (gv_root_unpack(webp, len, im->root_w, im->root_h, c, all, &e) < 0) {
         free(all);
         return gv_fail(err, e.code, "root (WebP) from the server: %s", e.text);
@@ -147,7 +147,7 @@ static int mips_from_webp(struct vf_result *r, const uint8_t *webp, size_t len,
 static void do_open(struct vf *f, const char *id, unsigned gen)
 {
     struct vf_result r;
-    struct gv_error err;
+    struct gv_error err = {0};
     memset(&r, 0, sizeof r);
     r.kind = VF_IMAGE;
     f->have_img = 0;
@@ -193,7 +193,7 @@ fail:
 static void do_tiles(struct vf *f, size_t n, unsigned gen)
 {
     struct gv_tile_want t[VF_BATCH];
-    struct gv_error err;
+    struct gv_error err = {0};
     for (size_t i = 0; i < n; i++)
         t[i] = (struct gv_tile_want){.level = f->flight[i].level,
                                      .tx = f->flight[i].tx, .ty = f->flight[i].ty};

@@ -209,7 +209,7 @@ static int decode(const struct body *b, struct vx_result *r)
     }
     close(fd);
     struct gv_image_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_image_in *in = NULL;
     uint8_t *px = NULL;
     if (off != b->n) {

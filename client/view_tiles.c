@@ -686,7 +686,7 @@ static int make_resident(struct vt *t, struct entry *e, uint64_t before, double 
 {
     if (t->dt)
         return post_job(t, e, before);
-    struct gv_error err;
+    struct gv_error err = {0};
     uint32_t h;
     int s = take_slot(t, before);
     if (s < 0)

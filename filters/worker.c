@@ -813,7 +813,7 @@ int gv_worker_serve(int fd, struct gv_gpu *gpu, const char *hello_text,
         return gv_fail(err, GV_ENOMEM, "worker: out of memory");
     for (;;) {
         struct gv_worker_job job;
-        struct gv_error jerr;
+        struct gv_error jerr = {0};
         uint8_t *body;
         rc = recv_job(fd, max_pixels, &job, &body, params, &jerr, err);
         if (rc) {

@@ -165,7 +165,7 @@ int main(int argc, char **argv)
     close_others((int)fd);
     reset_signals();
 
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     struct gv_gpu *gpu = gv_gpu_open((enum gv_gpu_platform)platform, &err);
     char hello[GV_WORKER_MSG_MAX + 1];

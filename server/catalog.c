@@ -138,7 +138,7 @@ static int find(struct catalog *c, const char *id)
 static struct image *open_image(struct catalog *c, const char *id,
                                 const char *path, const struct stat *st)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s = gv_store_open(path, &err);
     if (!s) {
         log_msg(LOG_WARN, "catalog", "skipping %s: %s", path, err.text);

@@ -224,6 +224,7 @@ static int hello_failed(struct slot *s, pid_t pid, int io, const char *text,
     int stopping = p->stop;
     pthread_mutex_unlock(&p->lock);
     if (stopping) { /* shut down under it: not a failure to report */
+        gv_error_clear(&s->start_err);   /* it may hold an earlier start's */
         gv_fail(&s->start_err, GV_EUNAVAIL, "filter: the server is stopping");
         return -1;
     }
@@ -243,7 +244,7 @@ static int hello_failed(struct slot *s, pid_t pid, int io, const char *text,
 static int start_worker(struct slot *s)
 {
     struct filter_jobs *p = s->pool;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     double t0 = now_s();
     pid_t pid = 0;
@@ -307,7 +308,7 @@ static int run_job(struct slot *s, struct filter_job *j)
         return 0;
     }
     pid_t pid = s->pid;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     double t0 = now_s();
     int timeout_ms = j->timeout_ms > 0 ? j->timeout_ms : p->cfg.timeout_ms;

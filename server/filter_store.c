@@ -201,7 +201,7 @@ static void scan_dir(struct filter_store *fs, const char *dir, int stock,
         char id[GV_FILTER_ID_MAX];
         memcpy(id, de->d_name, k);
         id[k] = '\0';
-        struct gv_error err;
+        struct gv_error err = {0};
         gv_error_clear(&err);
         size_t len;
         char *doc = read_file(dir, de->d_name, fs->lim.max_json_bytes, &len, &err);

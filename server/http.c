@@ -228,7 +228,7 @@ enum MHD_Result http_send_fail(struct req *r, enum gv_code code,
 enum MHD_Result http_send_errorf(struct req *r, enum gv_code code,
                                  const char *fmt, ...)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     err.code = code;
     va_list ap;
     va_start(ap, fmt);
@@ -863,7 +863,7 @@ static void mhd_logger(void *cls, const char *fmt, va_list ap)
  * listen:port (acceptor_listen).  Returns it, or -1 after a message. */
 static int open_listen_socket(const struct settings *cfg, uint16_t *port)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     int fd = listen_fds_take(&err);
     if (fd == -2) {
         log_msg(LOG_ERROR, "http", "%s", err.text);
@@ -959,7 +959,7 @@ int http_start(struct server *srv)
     metrics_init(names, ROUTE_COUNT);
     clock_gettime(CLOCK_MONOTONIC, &srv->started);
 
-    struct gv_error err;
+    struct gv_error err = {0};
     srv->listen_fd = open_listen_socket(cfg, &srv->port);
     if (srv->listen_fd < 0)
         return -1;

@@ -99,7 +99,7 @@ static void open_gpu(struct server *srv)
     }
     int platform = gv_gpu_platform_parse(srv->cfg->gpu_platform);
     assert(platform >= 0); /* settings.c accepts only these names */
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     srv->gpu = gv_gpu_open((enum gv_gpu_platform)platform, &err);
     if (!srv->gpu) {
@@ -208,7 +208,7 @@ static int start_filters(struct server *srv)
             path, (int)cfg->filter_workers, (int)cfg->filter_timeout_ms,
             cfg->filter_memory_limit, cfg->max_filter_pixels,
             (int)cfg->filter_max_jobs, cfg->gpu_platform};
-        struct gv_error err;
+        struct gv_error err = {0};
         srv->filters = filter_jobs_new(&fc, &err);
         if (!srv->filters) {
             log_msg(LOG_ERROR, "filter", "%s", err.text);
@@ -231,7 +231,7 @@ static int start_filters(struct server *srv)
  * configuration). */
 static int configure(int argc, char **argv, struct settings *cfg)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *file = NULL, *port = NULL, *dir = NULL, *addr = NULL;
     int test = 0, c;
     settings_defaults(cfg);

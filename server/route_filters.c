@@ -83,8 +83,7 @@ static void limits(const struct settings *cfg, struct gv_filter_limits *lim)
  * (docs/FILTERS.md section 2). */
 static void invalid_graph(struct gv_error *err)
 {
-    if (err->code == GV_ELIMIT)
-        err->code = GV_EINVAL;
+    gv_error_recode(err, GV_ELIMIT, GV_EINVAL);
 }
 
 /* No pool: 503 (gpu = off, no EGL, no worker program), or 501 in a build
@@ -159,7 +158,7 @@ enum MHD_Result route_filters_list(struct req *r)
 
 enum MHD_Result route_filter_get(struct req *r)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     char *doc;
     size_t len;
     int stock;
@@ -192,7 +191,7 @@ enum MHD_Result route_filter_delete(struct req *r)
     enum MHD_Result ret;
     if (check_auth(r, &ret) < 0)
         return ret;
-    struct gv_error err;
+    struct gv_error err = {0};
     int rc = filter_store_delete(r->srv->filter_store, r->param[0], &err);
     if (rc == 1) {
         char msg[160], esc[80];
@@ -213,7 +212,7 @@ static enum MHD_Result finish_store(struct req *r, struct call *c)
         return send_job_error(r, &c->fj);
     char id[GV_FILTER_ID_MAX];
     int created;
-    struct gv_error err;
+    struct gv_error err = {0};
     if (filter_store_put(r->srv->filter_store, c->doc, c->doc_len, id, &created,
                          &err) < 0)
         return http_send_error(r, &err);
@@ -248,7 +247,7 @@ enum MHD_Result route_filters_post(struct req *r)
     if (!r->body_len)
         return http_send_errorf(r, GV_EINVAL, "filter: the body must be a graph "
                                 "document (docs/FILTERS.md)");
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_filter_limits lim;
     limits(r->srv->cfg, &lim);
     struct gv_filter_graph *g = gv_filter_graph_parse(r->body, r->body_len, &lim, &err);
@@ -482,7 +481,7 @@ static enum MHD_Result finish_run(struct req *r, struct call *c)
     const struct gv_filter_input *in = &c->fj.job.in;
     uint8_t *out = NULL;
     size_t len;
-    struct gv_error err;
+    struct gv_error err = {0};
     if (filter_output_encode(c->form, c->fj.res.out, in->roi_w, in->roi_h,
                              c->channels, c->scale, &out, &len, &err) < 0)
         return http_send_error(r, &err);
@@ -622,7 +621,7 @@ enum MHD_Result route_image_filter(struct req *r)
     }
     if (!r->srv->filters)
         return send_no_filters(r);
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     struct gv_filter_graph *g = NULL;
     struct image *img = NULL;

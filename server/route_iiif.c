@@ -253,7 +253,7 @@ enum MHD_Result route_iiif_image(struct req *r)
     struct image *img = http_image(r, &ret);
     if (!img)
         return ret;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct iiif_call *c = calloc(1, sizeof *c);
     if (!c) {
         image_put(img);

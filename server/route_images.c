@@ -204,7 +204,7 @@ enum MHD_Result route_image_root(struct req *r)
     }
     struct MHD_Response *resp;
     size_t len;
-    struct gv_error err;
+    struct gv_error err = {0};
     if (root_response(img, px, w, h, form, &resp, &len, &err) < 0) {
         ret = http_send_error(r, &err);
         goto out;

@@ -199,9 +199,11 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
         .border_first = q->max_error >= 0,
         .time_limit = q->time_limit};
     if (gv_tin_build(h, gw, gh, gw, &p, &t, err) < 0) {
-        if (err->code == GV_ELIMIT)
+        if (err->code == GV_ELIMIT) {   /* said in the request's terms */
+            gv_error_clear(err);
             gv_fail(err, GV_ELIMIT, "mesh: max_error %g needs more than %u "
                     "triangles (max_mesh_triangles)", q->max_error, limit);
+        }
         goto out;
     }
     if (q->max_error >= 0 && !q->max_triangles &&
@@ -264,7 +266,7 @@ enum MHD_Result route_mesh(struct req *r)
     if (render_call_resumed(r))
         return render_call_finish(r);
     enum MHD_Result ret;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct mesh_query q;
     uint32_t gw, gh;
     if (parse_query(r, &q, &err) < 0)

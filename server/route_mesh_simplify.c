@@ -123,8 +123,8 @@ static enum MHD_Result send_job_error(struct req *r, struct filter_job *j)
         if (err.code == GV_ELIMIT && strstr(err.text, "limit"))
             strncat(err.text, " (simplify_max_faces or simplify_max_bytes)",
                     sizeof err.text - strlen(err.text) - 1);
-        if (err.code == GV_ECORRUPT)   /* the client's file, not our data */
-            err.code = GV_EINVAL;
+        /* the client's file, not our data */
+        gv_error_recode(&err, GV_ECORRUPT, GV_EINVAL);
         return http_send_error(r, &err);
     }
     if (j->status == FILTER_JOB_UNAVAILABLE || j->status == FILTER_JOB_CANCELLED)
@@ -168,7 +168,7 @@ enum MHD_Result route_mesh_simplify(struct req *r)
         call_free(c);
         return ret;
     }
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_simplify_opts o;
     if (parse(r, &o, &err) < 0)
         return http_send_error(r, &err);

@@ -159,7 +159,7 @@ enum MHD_Result route_region(struct req *r)
     if (render_call_resumed(r))
         return render_call_finish(r);
     enum MHD_Result ret;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct region_query q;
     if (parse_query(r, &q, &err) < 0)
         return http_send_error(r, &err);

@@ -98,7 +98,10 @@ static int fetch(struct server *srv, const struct image *img, uint32_t level,
                      (int)(tx % GV_PAGE_TILES), (int)(ty % GV_PAGE_TILES), tile,
                      len, err) < 0) {
         page_release(p);
-        err->code = GV_ECORRUPT;
+        /* the catalog sent us to this slot: whatever is wrong with it
+         * is damage to the page */
+        gv_error_recode(err, GV_ENOTFOUND, GV_ECORRUPT);
+        gv_error_recode(err, GV_EINVAL, GV_ECORRUPT);
         return -1;
     }
     *page = p;
@@ -118,7 +121,7 @@ enum MHD_Result route_tile(struct req *r)
 {
     enum MHD_Result ret;
     uint32_t level, tx, ty, crc;
-    struct gv_error err;
+    struct gv_error err = {0};
     if (http_parse_u32(r->param[1], BATCH_LEVEL_MAX, &level) < 0 ||
         http_parse_u32(r->param[2], GV_MAX_DIM, &tx) < 0 ||
         http_parse_u32(r->param[3], GV_MAX_DIM, &ty) < 0)
@@ -248,7 +251,7 @@ static int batch_tile(struct req *r, const struct image *img, struct batch *b,
     const uint8_t *tile = NULL;
     size_t len = 0, elen = 0;
     struct page *p = NULL;
-    struct gv_error err;
+    struct gv_error err = {0};
     int found = locate(img, level, tx, ty, &crc, &err) == 0;
     if (found && b->etags)
         elen = tile_etag((char *)f + FRAME_HEAD, img, crc, level, tx, ty);
@@ -299,7 +302,7 @@ static int batch_tile(struct req *r, const struct image *img, struct batch *b,
 enum MHD_Result route_batch(struct req *r)
 {
     enum MHD_Result ret;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct batch *b = calloc(1, sizeof *b);
     if (!b)
         return http_send_errorf(r, GV_ENOMEM, "batch: out of memory");

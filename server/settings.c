@@ -232,7 +232,7 @@ void settings_defaults(struct settings *c)
 {
     memset(c, 0, sizeof *c);
     for (size_t i = 0; i < NKEYS; i++) {
-        struct gv_error err;
+        struct gv_error err = {0};
         if (set_key(c, &keys[i], keys[i].def, "default", &err) < 0)
             log_msg(LOG_ERROR, "config", "%s", err.text); /* a bug */
     }

@@ -76,7 +76,7 @@ static int write_fixtures(int only)
                 parent[i] = (uint8_t)(p % 513 / 3 + p / 513 / 4 + test_rand(&pseed) % 8 +
                                       40 * (i % (size_t)channels));
             }
-            struct gv_error err;
+            struct gv_error err = {0};
             if (gv_tile_decode(buf, len, channels, parent, qx, qy, out, &err) < 0) {
                 fprintf(stderr, "dct_coefs: fixture %d: %s\n", k, err.text);
                 goto done;

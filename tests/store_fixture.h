@@ -28,7 +28,7 @@ static inline void fixture_encode(const char *path, const char *input,
         o = &def;
     }
     struct gv_encode_result res;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *in[1] = {input};
     if (gv_encode(in, 1, path, o, &res, &err) != 0)
         fail("encode %s: %s", input, err.text);
@@ -37,7 +37,7 @@ static inline void fixture_encode(const char *path, const char *input,
 /* The store at `path`, open. */
 static inline struct gv_store *fixture_open(const char *path)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s = gv_store_open(path, &err);
     if (!s)
         fail("open %s: %s", path, err.text);
@@ -65,7 +65,7 @@ static inline void fixture_tile(const struct gv_store *s, int level, uint32_t tx
                                 uint32_t ty, uint8_t **page, const uint8_t **buf,
                                 size_t *len)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     size_t plen;
     if (gv_store_read_page(s, level, tx / 8, ty / 8, page, &plen, &err) < 0 ||
         gv_page_tile(*page, plen, gv_store_info(s)->geometry.channels, (int)(tx % 8),

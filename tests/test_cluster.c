@@ -116,7 +116,7 @@ static void test_roundtrip(const struct gv_trimesh *m)
     for (int i = 0; i < 3; i++) {
         uint8_t *b = NULL;
         size_t n = 0;
-        struct gv_error err;
+        struct gv_error err = {0};
         struct gv_trimesh r;
         int ok = gv_trimesh_encode(fs[i], m, "test", &b, &n, &err) == 0 &&
                  gv_mesh_read(b, n, GV_MESH_IN_AUTO, NULL, &r, &err) == 0;
@@ -137,7 +137,7 @@ static int read_str(const char *s, struct gv_trimesh *m, struct gv_error *err)
 static void test_readers(void)
 {
     struct gv_trimesh m;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *ply =
         "ply\nformat ascii 1.0\ncomment x\nelement vertex 4\n"
         "property float x\nproperty float y\nproperty float z\n"
@@ -204,33 +204,42 @@ static void test_readers(void)
         printf("# %s\n", err.text);
     /* Hostile: each must fail with the code named. */
     glb[28 + jn - 8] = 0xff;   /* BIN length past the end */
+    gv_error_clear(&err);
     check(gv_mesh_read(glb, total, GV_MESH_IN_AUTO, NULL, &m, &err) < 0 &&
           err.code == GV_ECORRUPT, "GLB: BIN chunk past the end refused");
+    gv_error_clear(&err);
     check(read_str("v 0 0 0\nf 1 2 3\n", &m, &err) < 0 &&
           err.code == GV_ECORRUPT, "OBJ: index past the vertices refused");
+    gv_error_clear(&err);
     check(read_str("ply\nformat ascii 1.0\nelement vertex 3\nproperty float "
                    "x\nproperty float y\nproperty float z\nend_header\n0 0 0"
                    "\n1 1\n", &m, &err) < 0 && err.code == GV_ECORRUPT,
           "PLY: truncated ascii data refused");
+    gv_error_clear(&err);
     check(read_str("ply\nformat binary_big_endian 1.0\nend_header\n", &m,
                    &err) < 0 && err.code == GV_EFORMAT,
           "PLY: big endian refused as unsupported");
+    gv_error_clear(&err);
     check(read_str("ply\nformat binary_little_endian 1.0\nelement vertex "
                    "4000000000\nproperty float x\nproperty float y\nproperty "
                    "float z\nend_header\n", &m, &err) < 0 &&
           err.code == GV_ECORRUPT, "PLY: a count over the file's size "
           "refused before allocating");
     struct gv_mesh_limits lim = {.max_verts = 3};
+    gv_error_clear(&err);
     check(gv_mesh_read((const uint8_t *)obj, strlen(obj), GV_MESH_IN_AUTO,
                        &lim, &m, &err) < 0 && err.code == GV_ELIMIT,
           "OBJ: the vertex limit enforced");
     lim = (struct gv_mesh_limits){.max_bytes = 10};
+    gv_error_clear(&err);
     check(gv_mesh_read((const uint8_t *)obj, strlen(obj), GV_MESH_IN_AUTO,
                        &lim, &m, &err) < 0 && err.code == GV_ELIMIT,
           "the byte limit enforced");
+    gv_error_clear(&err);
     check(read_str("garbage\n", &m, &err) < 0 && err.code == GV_ECORRUPT &&
           m.pos == NULL && m.tris == NULL,
           "a file with no triangle (garbage read as OBJ) refused as malformed");
+    gv_error_clear(&err);
     check(read_str("v 0 0 0\nv 1 0 0\nv 0 1 0\n", &m, &err) < 0 &&
           err.code == GV_ECORRUPT, "vertices without a face refused");
 }
@@ -272,7 +281,7 @@ static void test_mesh(const char *name, const struct gv_trimesh *m,
                       int surface)
 {
     struct gv_cluster_tree t;
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_cluster_build(m, 0, &t, &err) < 0) {
         fail("%s: build: %s", name, err.text);
         return;
@@ -369,7 +378,7 @@ static void test_run(const struct gv_trimesh *m)
 {
     uint8_t *in = NULL, *out = NULL, *out2 = NULL;
     size_t n = 0, on = 0, on2 = 0;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_trimesh_encode(GV_MESH_PLY, m, NULL, &in, &n, &err);
     struct gv_simplify_opts o = {.ratio = 0.1, .format = GV_MESH_PLY};
     struct gv_simplify_stats st, st2;
@@ -379,6 +388,7 @@ static void test_run(const struct gv_trimesh *m)
     o.max_faces = 10;
     o.ratio = 0;
     o.faces = 11;
+    gv_error_clear(&err);
     check(gv_simplify(in, n, &o, &out2, &on2, &st2, &err) < 0 &&
           err.code == GV_ELIMIT, "gv_simplify: faces over the limit refused");
 #ifdef GV_HAVE_GPU
@@ -407,7 +417,7 @@ int main(void)
     soup(&ms[3], 3000, 9000);
     test_roundtrip(&ms[1]);
 #ifdef GV_HAVE_GPU
-    struct gv_error err;
+    struct gv_error err = {0};
     gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu)
         tap_skip("no EGL context", "GPU selection: %s", err.text);

@@ -84,7 +84,7 @@ static int load_photo(int C)
     char path[512];
     snprintf(path, sizeof path, "%s/picos-1100x700.jpg", data);
     struct gv_image_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_image_in *in = gv_image_open(path, 1u << 24, &info, &err);
     if (!in)
         return -1;
@@ -140,7 +140,7 @@ static size_t test_encoded(void)
                 int rc;
                 /* same() decodes against quadrant (1, 0): predict that. */
                 int ok = len > 0 && same(buf, len, C, &rc) && rc == 0;
-                struct gv_error err;
+                struct gv_error err = {0};
                 gv_dct_lanes(1);
                 ok = ok && gv_dct_decode(buf, len, C, parent, photo ? 0 : 1, 0,
                                          out1, &err) == 0 &&
@@ -247,7 +247,7 @@ static void test_damaged(const uint8_t *good, size_t len, int C)
     const size_t e5 = s5 + 2 * (size_t)gv_get16(good + lengths + 10);
     b[e5 - 3] ^= 0x40;
     b[s9 + 5] ^= 0x40;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_dct_lanes(1);
     int r = gv_dct_decode(b, len, C, parent, 1, 0, out1, &err);
     check(same(b, len, C, &rc) && r < 0 && strstr(err.text, "stream 5 ") != NULL,

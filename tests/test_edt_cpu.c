@@ -202,7 +202,7 @@ static int run_fast(const uint32_t *ids, uint32_t w, uint32_t h, int threads,
                     struct edt_result *r)
 {
     struct gv_edt_out o = {r->sx, r->sy, r->id, r->dist};
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_edt_cpu(ids, w, h, threads, &o, &err) != 0) {
         printf("# gv_edt_cpu %ux%u: %s\n", w, h, err.text);
         return -1;
@@ -505,7 +505,7 @@ static void test_against_reference(void)
 
 static void test_errors(void)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     uint32_t id = 1;
     float d;
     struct gv_edt_out o = {NULL, NULL, NULL, &d};

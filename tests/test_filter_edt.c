@@ -82,7 +82,7 @@ static void one(struct gv_gpu *gpu, const struct gv_filter_graph *g,
                                  .roi_w = (uint32_t)w, .roi_h = (uint32_t)h,
                                  .params = params, .path = path};
     float *out = NULL;
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_filter_run(gpu, g, &in, &out, NULL, &err) < 0)
         fail("run: %s", err.text);
     int32_t *sx = malloc((size_t)w * h * sizeof *sx), *sy = malloc((size_t)w * h * sizeof *sy);
@@ -139,7 +139,7 @@ static uint32_t *sites_laplace(int w, int h, int n)
 
 int main(void)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu) {
         return tap_skip_all("no EGL context: %s", err.text);

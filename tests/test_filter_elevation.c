@@ -139,7 +139,7 @@ static void load_dem(struct dem *d, const char *path, double lo, double hi)
     struct gv_source_opts o = {0};
     o.range_lo = lo, o.range_hi = hi;
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_source *s = gv_source_open(in, 1, &o, &info, &err);
     if (!s)
         fail("open %s: %s", path, err.text);
@@ -189,7 +189,7 @@ static double *params_of(int gi, const char *given, double *p)
         if (!gj)
             fail("%s: bad test parameters: %s", graphs[gi].file, je.text);
     }
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_filter_params(g, gj, values, &err) < 0)
         fail("%s: params: %s", graphs[gi].file, err.text);
     json_decref(gj);
@@ -233,7 +233,7 @@ static float *run_gpu(struct gv_gpu *gpu, int gi, const struct dem *d, int rx, i
         .roi_w = (uint32_t)rw, .roi_h = (uint32_t)rh, .abs_x = x0, .abs_y = y0,
         .params = values};
     float *out = NULL;
-    struct gv_error err;
+    struct gv_error err = {0};
     const double t0 = now_ms();
     if (gv_filter_run(gpu, g, &in, &out, NULL, &err) < 0) {
         check(0, "%s: gv_filter_run: %s", graphs[gi].file, err.text);
@@ -737,7 +737,7 @@ int main(void)
             fail("%s does not parse", graphs[i].file);
     }
 
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu) {
         tap_skip(err.text, "the elevation filters on the GPU (no EGL context)");

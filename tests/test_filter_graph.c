@@ -19,8 +19,7 @@ static struct gv_filter_graph *try_parse(const char *json, struct gv_error *err)
 /* Expect a failure with `code` and exactly the message `want`. */
 static void bad(const char *json, enum gv_code code, const char *want, const char *what)
 {
-    struct gv_error err;
-    gv_error_clear(&err);
+    struct gv_error err = {0};
     struct gv_filter_graph *g = try_parse(json, &err);
     check_str(!g && err.code == code ? err.text : NULL, want, "%s (code %d)", what,
               (int)err.code);
@@ -163,7 +162,7 @@ static void test_errors(void)
     struct gv_filter_limits lim;
     gv_filter_limits_default(&lim);
     lim.max_json_bytes = 10;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *small = "{\"name\":\"xxxxxxxxxxxxxxxxxxxx\"}";
     struct gv_filter_graph *g = gv_filter_graph_parse(small, strlen(small), &lim, &err);
     check_str(!g && err.code == GV_ELIMIT ? err.text : NULL,
@@ -178,7 +177,7 @@ static void test_order_and_plan(void)
         "{\"name\":\"chain\",\"output\":\"d\",\"modules\":["
         PT("c", "\"b\"") "," PT("d", "\"source\",\"c\"") "," PT("b", "\"a\"") ","
         PT("a", "\"source\"") "," PT("unused", "\"a\"") "]}";
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_filter_graph *g = try_parse(doc, &err);
     if (!g)
         fail("%s", err.text);
@@ -264,7 +263,7 @@ static void test_params(void)
         "{\"name\":\"y\",\"min\":-5,\"max\":5,\"default\":1}],\"glsl\":\"return vec4($(1), $(2), 0.0, 1.0);\"},"
         "{\"id\":\"b\",\"template\":\"point\",\"inputs\":[\"a\"],\"params\":["
         "{\"name\":\"z\",\"min\":0,\"max\":10,\"default\":3}],\"glsl\":\"return vec4($(1));\"}]}";
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_filter_graph *g = try_parse(doc, &err);
     if (!g)
         fail("%s", err.text);
@@ -281,6 +280,7 @@ static void test_params(void)
         {"{\"a\":{\"y\":\"1\"}}", "filter: params: a.y must be a finite number"}};
     for (int i = 0; i < 4; i++) {
         given = json_loads(badp[i][0], 0, NULL);
+        gv_error_clear(&err);
         rc = gv_filter_params(g, given, v, &err);
         check_str(rc < 0 && err.code == GV_EINVAL ? err.text : NULL, badp[i][1],
                   "bad params %s", badp[i][0]);

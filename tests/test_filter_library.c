@@ -130,7 +130,7 @@ static void load_image(struct image *im, const char *data)
     snprintf(path, sizeof path, "%s/%s", data, im->file);
     const char *in[1] = {path};
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_source *s = gv_source_open(in, 1, NULL, &info, &err);
     if (!s)
         fail("open %s: %s", path, err.text);
@@ -185,7 +185,7 @@ static struct gv_filter_graph *reoutput(const char *json, size_t len, const char
         return NULL;
     struct gv_filter_limits lim;
     gv_filter_limits_default(&lim);
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_filter_graph *g = gv_filter_graph_parse(s, strlen(s), &lim, &err);
     free(s);
     return g;
@@ -408,7 +408,7 @@ static void check_edt_cpu(const struct stock *st, const struct ref_region *rr,
     if (!ids || !sid || !sx || !sy || ref_initial_ids(st->ref, rr, p, ids) < 0)
         fail("out of memory");
     struct gv_edt_out o = {sx, sy, sid, NULL};
-    struct gv_error err;
+    struct gv_error err = {0};
     long bad = 0;
     if (gv_edt_cpu(ids, (uint32_t)rr->img.w, (uint32_t)rr->img.h, 1, &o, &err) < 0)
         fail("gv_edt_cpu: %s", err.text);
@@ -498,7 +498,7 @@ static void dump(const struct stock *st, const struct gv_filter_graph *g, const 
                 st->cmp == CMP_DISTANCE ? out[i * 4] / 64.0f : out[i * 4 + (size_t)c]);
     char path[512];
     snprintf(path, sizeof path, "%s/%s-%s%s.png", dir, st->file, where, given ? "-p" : "");
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_image_write(path, ROI_W, ROI_H, ch, px, &err) < 0)
         printf("# %s: %s\n", path, err.text);
     free(px);
@@ -510,7 +510,7 @@ static void run_case(struct gv_gpu *gpu, int si, const struct gv_filter_graph *g
 {
     const struct stock *st = &stock[si];
     const struct image *im = &images[st->image];
-    struct gv_error err;
+    struct gv_error err = {0};
     double *values = calloc((size_t)g->nparams + 1, sizeof *values), p[5] = {0};
     if (!values)
         fail("out of memory");
@@ -620,7 +620,7 @@ int main(void)
         free(json);
     }
 
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu) {
         tap_skip(err.text, "the filter library on the GPU (no EGL context)");

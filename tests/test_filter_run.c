@@ -34,7 +34,7 @@ static uint32_t rnd(void)
 
 static struct gv_filter_graph *parse(const char *json)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_filter_graph *g = gv_filter_graph_parse(json, strlen(json), NULL, &err);
     if (!g)
         fail("parse: %s\n%s", err.text, json);
@@ -50,7 +50,7 @@ static float *run(struct gv_gpu *gpu, const struct gv_filter_graph *g,
                   int ax, int ay, struct gv_filter_stats *st)
 {
     double params[64];
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_filter_params(g, NULL, params, &err) < 0)
         fail("params: %s", err.text);
     struct gv_filter_input in = {
@@ -426,7 +426,7 @@ static void test_compile_error(struct gv_gpu *gpu)
         "{\"name\":\"bad\",\"output\":\"b\",\"modules\":[{\"id\":\"b\",\"template\":\"point\","
         "\"inputs\":[\"source\"],\"glsl\":\"vec4 s = $(FilterInput1)(rel_pos);\\n"
         "float x = undefined_thing + 1.0;\\nreturn s;\"}]}");
-    struct gv_error err;
+    struct gv_error err = {0};
     int rc = gv_filter_compile(gpu, g, &err);
     printf("# %s\n", err.text);
 
@@ -439,7 +439,7 @@ static void test_compile_error(struct gv_gpu *gpu)
 
 int main(void)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu) {
         return tap_skip_all("no EGL context: %s", err.text);

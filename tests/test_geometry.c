@@ -106,17 +106,20 @@ int main(void)
     check(gv_header_unpack(hb, &back, NULL) == 0 && back.width == 1234 &&
           back.file_size == (1ull << 40), "header round trip");
     hb[13] ^= 1;
-    struct gv_error err;
+    struct gv_error err = {0};
     check(gv_header_unpack(hb, &back, &err) < 0 && err.code == GV_ECORRUPT,
           "header CRC catches a flipped bit: %s", err.text);
     hb[13] ^= 1;
     hb[8] = GV_VERSION_MAX + 1;
+    gv_error_clear(&err);
     check(gv_header_unpack(hb, &back, &err) < 0 && err.code == GV_EFORMAT,
           "version %d is refused: %s", GV_VERSION_MAX + 1, err.text);
     hb[8] = GV_VERSION_MIN - 1;
+    gv_error_clear(&err);
     check(gv_header_unpack(hb, &back, &err) < 0 && err.code == GV_EFORMAT,
           "version %d is refused: %s", GV_VERSION_MIN - 1, err.text);
     hb[0] = 'X';
+    gv_error_clear(&err);
     check(gv_header_unpack(hb, &back, &err) < 0 && err.code == GV_EFORMAT,
           "bad magic is refused");
     check(gv_crc32(0, "123456789", 9) == 0xcbf43926u, "CRC-32 check value");

@@ -79,7 +79,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     gv_encode_opts_default(&o);
     o.target_psnr = psnr;
     struct gv_encode_result r;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *in[1] = {input};
     if (gv_encode(in, 1, out, &o, &r, &err) < 0)
         fail("encode %s: %s", input, err.text);
@@ -164,9 +164,11 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     src.fail_tx = g->level[0].tiles_x - 1;
     src.fail_ty = g->level[0].tiles_y - 1;
     uint32_t h;
+    gv_error_clear(&err);
     int rc1 = gv_gpu_cache_get(gc, 0, src.fail_tx, src.fail_ty, &h, &err);
     int msg1 = strcmp(err.text, "test: injected fetch failure") == 0;   /* as fetch gave it */
     src.truncate = 1;
+    gv_error_clear(&err);
     int rc2 = gv_gpu_cache_get(gc, 0, src.fail_tx, src.fail_ty, &h, &err);
     int code2 = err.code == GV_ECORRUPT;
     src.fail_level = -1;
@@ -174,6 +176,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     int rc3 = gv_gpu_cache_read(gc, 0, src.fail_tx, src.fail_ty, px, &err);
     if (gv_decoder_tile(cpu, 0, src.fail_tx, src.fail_ty, &ref, &err) < 0)
         fail("cpu: %s", err.text);
+    gv_error_clear(&err);
     int rc4 = gv_gpu_cache_get(gc, 0, g->level[0].tiles_x, 0, &h, &err);
     check(rc1 < 0 && msg1 && rc2 < 0 && code2 && rc3 == 0 &&
               memcmp(px, ref, tb) == 0 && rc4 < 0 && err.code == GV_ENOTFOUND,
@@ -230,7 +233,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
 
 int main(void)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu) {
         return tap_skip_all("no EGL context: %s", err.text);

@@ -79,8 +79,7 @@ static int attempts_only(const char *text, const char *want)
  * opened, with the vendor in vendor. */
 static int check_forced(int p, char *vendor, size_t size)
 {
-    struct gv_error err;
-    gv_error_clear(&err);
+    struct gv_error err = {0};
     struct gv_gpu *g = gv_gpu_open((enum gv_gpu_platform)p, &err);
     if (!g) {
         printf("# %s: %s\n", names[p], err.text);
@@ -104,8 +103,7 @@ int main(void)
 
     /* Auto first, then each platform forced: the forced checks hold on
      * any machine, with EGL or without. */
-    struct gv_error err;
-    gv_error_clear(&err);
+    struct gv_error err = {0};
     struct gv_gpu *g = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     char auto_platform[32] = "", auto_vendor[128] = "";
     if (g) {

@@ -70,7 +70,7 @@ static struct gv_gpu_decoder *open_decoders(struct gv_gpu *gpu, const char *out,
                                             enum gv_gpu_path path, struct gv_store **s,
                                             struct gv_decoder **cpu)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     *s = fixture_open(out);
     *cpu = gv_decoder_new(*s, 64u << 20);
     struct gv_gpu_decoder *gd =
@@ -86,7 +86,7 @@ static struct gv_gpu_decoder *open_decoders(struct gv_gpu *gpu, const char *out,
 static int check_path(struct gv_gpu *gpu, const char *input, const char *out,
                       enum gv_gpu_path path)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s;
     struct gv_decoder *cpu;
     struct gv_gpu_decoder *gd = open_decoders(gpu, out, path, &s, &cpu);
@@ -193,7 +193,7 @@ static int count_mismatches(struct gv_decoder *cpu, struct gv_gpu_decoder *gd,
                             const struct gv_gpu_tile_job *jobs,
                             const struct tile_where *where, size_t n, int c)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     const size_t tb = gv_tile_bytes(c);
     uint8_t *px = malloc(tb);
     int mismatched = 0;
@@ -218,7 +218,7 @@ static int count_mismatches(struct gv_decoder *cpu, struct gv_gpu_decoder *gd,
 static void check_batch(struct gv_gpu *gpu, const char *input, const char *out,
                         enum gv_gpu_path path, int copies)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s;
     struct gv_decoder *cpu;
     struct gv_gpu_decoder *gd = open_decoders(gpu, out, path, &s, &cpu);
@@ -347,7 +347,7 @@ struct dct_tile {
 static int dct_mismatches(struct gv_gpu_decoder *gd, uint32_t ph, struct dct_tile *t,
                           int n, int batch, int channels)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_gpu_tile_job jobs[DCT_FIXTURE_CASES];
     for (int i = 0; i < n; i++)
         jobs[i] = (struct gv_gpu_tile_job){.buf = t[i].buf, .len = t[i].len, .parent = ph,
@@ -375,7 +375,7 @@ static int dct_mismatches(struct gv_gpu_decoder *gd, uint32_t ph, struct dct_til
 
 static void check_dct_synthetic(struct gv_gpu *gpu, int channels)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     const size_t tb = gv_tile_bytes(channels);
     uint8_t *parent = malloc(tb);
     for (size_t i = 0; i < tb; i++) {
@@ -458,7 +458,7 @@ static void check_dct_synthetic(struct gv_gpu *gpu, int channels)
 
 int main(int argc, char **argv)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu) {
         return tap_skip_all("no EGL context: %s", err.text);

@@ -28,7 +28,7 @@ static void check_path(struct gv_gpu *gpu, const char *path, const char *name,
                        enum gv_gpu_path gp)
 {
     const char *pn = gp == GV_GPU_PATH_SSBO ? "ssbo" : "webgl2";
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_gpu_height *gh = gv_gpu_height_new(gpu, gp, &err);
     if (!gh) {
         if (err.code == GV_EFORMAT) {
@@ -112,7 +112,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double e,
     snprintf(out, sizeof out, "%s/h.gv", dir);
     struct gv_height_opts o = {.max_error = e};
     struct gv_height_result r;
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_height_encode(input, out, &o, &r, &err) < 0)
         fail("encode %s: %s", input, err.text);
     check_path(gpu, out, name, GV_GPU_PATH_SSBO);
@@ -122,7 +122,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double e,
 
 int main(int argc, char **argv)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu)
         return tap_skip_all("no EGL context: %s", err.text);

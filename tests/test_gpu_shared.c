@@ -38,8 +38,7 @@ static int open_shared(void *arg, struct gv_error *err)
 
 int main(void)
 {
-    struct gv_error err;
-    gv_error_clear(&err);
+    struct gv_error err = {0};
     struct gv_gpu *none = gv_gpu_open_shared(&err);
     check(!none && err.code == GV_EUNAVAIL,
           "without a current context: refused (%s)", err.text);

@@ -27,7 +27,7 @@ static char dir[128];
 /* The input PNG as codes. */
 static uint16_t *read_png(const char *path, uint32_t *w, uint32_t *h)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_image_info ii;
     struct gv_image_in *in = gv_image_open(path, 1u << 30, &ii, &err);
     if (!in)
@@ -49,7 +49,7 @@ static uint16_t *read_png(const char *path, uint32_t *w, uint32_t *h)
 static int max_diff(const char *path, const uint16_t *codes, uint32_t w,
                     uint32_t h)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s = gv_store_open(path, &err);
     if (!s) {
         check(0, "open %s: %s", path, err.text);
@@ -100,7 +100,7 @@ static void test_etopo(const char *data)
         struct gv_height_opts o = {.max_error = errors[i], .unit = "m",
                                    .mapped = 1, .scale = 1, .offset = -11000};
         struct gv_height_result r;
-        struct gv_error err;
+        struct gv_error err = {0};
         if (gv_height_encode(png, out, &o, &r, &err) < 0)
             fail("encode E=%g: %s", errors[i], err.text);
         check(r.e == (int)errors[i] && r.max_error == errors[i],
@@ -136,6 +136,7 @@ static void test_etopo(const char *data)
                   m.offset, m.max_error, m.min, m.max, m.unit);
             /* Outside the level: GV_EINVAL. */
             uint16_t one;
+            gv_error_clear(&err);
             check(gv_height_region(d, 0, w, 0, 1, 1, &one, &err) < 0 &&
                   err.code == GV_EINVAL, "E=%g: a region outside level 0 is "
                   "GV_EINVAL", errors[i]);
@@ -157,7 +158,7 @@ static void test_synth(void)
     snprintf(out, sizeof out, "%s/synth.gv", dir);
     struct gv_height_opts o = {.max_error = 2, .threads = 1};
     struct gv_height_result r;
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_height_encode("synth-height:2100x1100", out, &o, &r, &err) < 0)
         fail("synth: %s", err.text);
     check(r.geometry.root == 3, "synth: root level %d", r.geometry.root);
@@ -208,7 +209,7 @@ static void test_float(void)
     char tif[1200], out[1200];
     snprintf(tif, sizeof tif, "%s/float.tif", dir);
     snprintf(out, sizeof out, "%s/float.gv", dir);
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_image_write_typed(tif, w, h, 1, GV_SAMPLE_F32, f, &err) < 0)
         fail("write %s: %s", tif, err.text);
     const double errors[] = {0, 0.5};
@@ -254,7 +255,7 @@ static void test_damage(void)
         orig[i] = (uint16_t)(i % 513 == 0 ? 65535 : 900 + (i * 13) % 500);
     }
     size_t len = gv_height_tile_encode(orig, parent, 1, 0, 0, 513, 513, buf, dec);
-    struct gv_error err;
+    struct gv_error err = {0};
     check(len > GV_HT_CUM_AT && gv_height_tile_decode(buf, len, parent, 1, 0, out, &err) == 0 &&
           memcmp(out, orig, sizeof *out * GV_HT_SAMPLES) == 0 &&
           memcmp(dec, orig, sizeof *dec * GV_HT_SAMPLES) == 0,
@@ -268,6 +269,7 @@ static void test_damage(void)
         buf[at] ^= 0x5a;
     }
     check(refused >= tries * 9 / 10, "damaged tiles refused: %d of %d", refused, tries);
+    gv_error_clear(&err);
     check(gv_height_tile_decode(buf, len - 4, parent, 1, 0, out, &err) < 0,
           "a truncated tile is refused");
     free(parent);

@@ -329,7 +329,7 @@ int main(void)
     for (size_t i = 0; i < n; i++) {
         const struct row *t = &rows[i];
         struct iiif_request r;
-        struct gv_error err;
+        struct gv_error err = {0};
         memset(&r, 0xA5, sizeof r);
         gv_error_clear(&err);
         int rc = iiif_parse(t->region, t->size, t->rotation, t->qf, t->W,
@@ -364,7 +364,7 @@ int main(void)
      * characters and quotes become '?'. */
     {
         struct iiif_request r;
-        struct gv_error err;
+        struct gv_error err = {0};
         int rc = iiif_parse("\x1b[31m\n\"x\"", "max", "0", "default.jpg", 10,
                             10, &limits[0], &r, &err);
         int clean = 1;

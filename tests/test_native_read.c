@@ -757,7 +757,7 @@ static void test_png_decoder_memory(const char *dir)
     for (int how = MODULE; how <= LOADER; how++) {
         struct any a;
         struct gv_image_info info;
-        struct gv_error e, re;
+        struct gv_error e = {0}, re = {0};
         gv_error_clear(&re);
         int opened = any_open(&a, (enum how)how, flat, 1ull << 32, &info,
                               &e) == 0;
@@ -987,7 +987,7 @@ static void test_misuse(const char *dir)
         for (int how = 0; how < 2; how++) {
             struct any a;
             struct gv_image_info info;
-            struct gv_error err;
+            struct gv_error err = {0};
             if (any_open(&a, how == 0 ? MODULE : NATIVE, path, 1ull << 32,
                          &info, &err) != 0)
                 fail("%s: %s", path, err.text);

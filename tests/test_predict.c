@@ -124,7 +124,7 @@ int main(void)
     uint8_t *buf = malloc(GV_TILEBUF_MAX);
     int8_t *book = malloc(((size_t)1 << GV_MAX_RATE) * 12);
     uint16_t *idx = malloc(GV_NBLOCKS * sizeof *idx);
-    struct gv_error err;
+    struct gv_error err = {0};
     /* The paths this CPU has, widest first, down to the portable one. */
     static const char *path_name[4] = {"portable", "AVX2", "AVX-512BW",
                                        "AVX-512 VBMI"};

@@ -119,7 +119,7 @@ static int rect_ok(const struct gv_raw_regions *r, const struct gv_raw_layout *l
     if (!buf)
         fail("out of memory");
     memset(buf, 0xAB, stride * h);
-    struct gv_error err;
+    struct gv_error err = {0};
     int ok = gv_raw_regions_read(r, x, y, w, h, buf, stride, &err) == 0;
     if (!ok)
         printf("# read (%u, %u) %ux%u: %s\n", x, y, w, h, err.text);
@@ -149,7 +149,7 @@ static void check_layout(const char *dir, const char *name,
     struct made m = {.l = l};
     uint64_t rng = seed;
     make_file(path, &m, &rng);
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_raw_regions *r = gv_raw_regions_new(m.fd, path, &m.l, &err);
     if (!check(r != NULL, "%s: a reader is made", name)) {
         free_made(&m);
@@ -207,7 +207,7 @@ int main(void)
     struct made m = {.l = base};
     uint64_t rng = 21;
     make_file(path, &m, &rng);
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_raw_regions *r = gv_raw_regions_new(m.fd, path, &m.l, &err);
     check(r != NULL, "the file for the refusals is readable as written");
     gv_raw_regions_free(r);
@@ -259,12 +259,15 @@ int main(void)
     check(rect_ok(r, &m.l, 0, 0, 100, 60),
           "the reader reads after the caller closed its descriptor");
     uint8_t px[3 * 100 * 60];
+    gv_error_clear(&err);
     check(gv_raw_regions_read(r, 90, 0, 11, 1, px, 33, &err) < 0
               && err.code == GV_EINVAL,
           "a rectangle past the right edge: GV_EINVAL");
+    gv_error_clear(&err);
     check(gv_raw_regions_read(r, 0, 60, 1, 1, px, 3, &err) < 0
               && err.code == GV_EINVAL,
           "a rectangle below the last row: GV_EINVAL");
+    gv_error_clear(&err);
     check(gv_raw_regions_read(r, 0, 0, 0, 1, px, 3, &err) < 0
               && err.code == GV_EINVAL,
           "an empty rectangle: GV_EINVAL");
@@ -277,6 +280,7 @@ int main(void)
     times[1].tv_sec -= 10;
     if (futimens(m.fd, times) != 0)
         fail("futimens");
+    gv_error_clear(&err);
     check(gv_raw_regions_unchanged(r, &err) < 0 && err.code == GV_ECORRUPT
               && strstr(err.text, "changed while being read"),
           "a new modification time: changed (%s)", err.text);
@@ -290,11 +294,13 @@ int main(void)
         first = m.offsets[k] < first ? m.offsets[k] : first;
     if (ftruncate(m.fd, (off_t)first + 10) != 0)
         fail("ftruncate");
+    gv_error_clear(&err);
     check(gv_raw_regions_read(r, 0, 0, 100, 60, px, 300, &err) < 0
               && err.code == GV_ECORRUPT && strstr(err.text, "ends before"),
           "the file cut short: GV_ECORRUPT (%s)", err.text);
     if (futimens(m.fd, times) != 0)
         fail("futimens");
+    gv_error_clear(&err);
     check(gv_raw_regions_unchanged(r, &err) < 0 && err.code == GV_ECORRUPT,
           "the file cut short, its time put back: changed (size)");
     gv_raw_regions_free(r);

@@ -67,7 +67,7 @@ static int render(struct gv_decoder *d, const struct gv_render_req *r,
 static uint8_t *decode(struct gv_decoder *d, int level, uint32_t x,
                        uint32_t y, uint32_t w, uint32_t h, int c)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     uint8_t *p = malloc((size_t)w * h * c);
     if (!p)
         fail("out of memory");
@@ -84,7 +84,7 @@ static void check_exact(struct gv_decoder *d, int c, uint32_t x, uint32_t y,
 {
     struct gv_render_req r = req_of(x, y, w, h, ow, oh);
     struct img m;
-    struct gv_error err;
+    struct gv_error err = {0};
     int rc = render(d, &r, &m, &err);
     if (rc != 0) {
         check(0, "render %u,%u %ux%u at %ux%u: %s", x, y, w, h, ow, oh,
@@ -120,7 +120,7 @@ static void check_rotations(struct gv_decoder *d)
 {
     struct gv_render_req r = req_of(700, 450, 600, 400, 150, 100);
     struct img u, m;
-    struct gv_error err;
+    struct gv_error err = {0};
     if (render(d, &r, &u, &err) != 0)
         fail("render: %s", err.text);
     static const int rots[] = {0, 90, 180, 270};
@@ -215,7 +215,7 @@ static void check_rotations(struct gv_decoder *d)
 
 static void check_scaling(struct gv_decoder *d)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct img m;
 
     /* 2x upscale: sizes, and bilinear values at a corner and inside */
@@ -279,10 +279,11 @@ static void check_scaling(struct gv_decoder *d)
 
 static void check_errors(struct gv_decoder *d)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct img m;
     struct gv_render_req r = req_of(0, 0, 1500, 1100, 1500, 1100);
     r.max_decode_pixels = 1000;
+    gv_error_clear(&err);
     check(render(d, &r, &m, &err) != 0 && err.code == GV_ELIMIT,
           "max_decode_pixels exceeded -> GV_ELIMIT (%s)", err.text);
     r.max_decode_pixels = 1500 * 1100;
@@ -319,6 +320,7 @@ static void check_errors(struct gv_decoder *d)
                    bad[i].oh);
         r.rotation = bad[i].rot;
         m.px = NULL;
+        gv_error_clear(&err);
         int rc = render(d, &r, &m, &err);
         check(rc != 0 && err.code == GV_EINVAL && m.px == NULL,
               "bad request %u,%u %ux%u -> %ux%u rot %d -> GV_EINVAL",
@@ -329,7 +331,7 @@ static void check_errors(struct gv_decoder *d)
 
 static void check_gray_store(struct gv_decoder *d)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct img a, b, c;
     struct gv_render_req r = req_of(0, 0, 700, 600, 700, 600);
     check_exact(d, 1, 0, 0, 700, 600, 700, 600, 0, 0, 0);
@@ -372,7 +374,7 @@ static double psnr(const uint8_t *a, const uint8_t *b, size_t n)
 static int roundtrip(const struct img *m, const char *fmt, int quality,
                      struct img *back, size_t *bytes)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     uint8_t *data = NULL;
     size_t len = 0;
     memset(back, 0, sizeof *back);
@@ -419,7 +421,7 @@ struct thread_job {
 static void *encode_thread(void *arg)
 {
     struct thread_job *j = arg;
-    struct gv_error err;
+    struct gv_error err = {0};
     j->rc = gv_image_encode("png", j->m->w, j->m->h, j->m->c, j->m->px, 90,
                             &j->data, &j->len, &err);
     return NULL;
@@ -427,7 +429,7 @@ static void *encode_thread(void *arg)
 
 static void check_encode(struct gv_decoder *d)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct img m, g, back;
     size_t bytes;
     struct gv_render_req r = req_of(0, 0, 1500, 1100, 375, 275);
@@ -492,12 +494,15 @@ static void check_encode(struct gv_decoder *d)
     }
     uint8_t *data = NULL;
     size_t len;
+    gv_error_clear(&err);
     check(gv_image_encode("gif", m.w, m.h, 3, m.px, 90, &data, &len, &err)
                   != 0 && err.code == GV_EFORMAT && !data,
           "gif -> GV_EFORMAT (%s)", err.text);
+    gv_error_clear(&err);
     check(gv_image_encode("bmp", m.w, m.h, 3, m.px, 90, &data, &len, &err)
                   != 0 && err.code == GV_EFORMAT,
           "bmp -> GV_EFORMAT");
+    gv_error_clear(&err);
     check(gv_image_encode("png", m.w, m.h, 2, m.px, 90, &data, &len, &err)
                   != 0 && err.code == GV_EINVAL,
           "2 channels -> GV_EINVAL");

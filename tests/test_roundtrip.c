@@ -44,7 +44,7 @@ static int load_pyramid(const char *input, struct pyramid *p, const struct gv_ge
 {
     struct gv_source_opts o = {0};
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *in[1] = {input};
     struct gv_source *s = gv_source_open(in, 1, &o, &info, &err);
     if (!s)
@@ -84,7 +84,7 @@ static void roundtrip(const char *input, double psnr, int max_rate, int per_tile
     o.max_rate = max_rate;
     o.per_tile = per_tile;
     struct gv_encode_result r;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *in[1] = {input};
     const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
     if (!check(gv_encode(in, 1, out, &o, &r, &err) == 0, "%s: encode at %.0f dB", name, psnr)) {

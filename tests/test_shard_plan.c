@@ -31,7 +31,7 @@ static int check_plans(uint32_t w, uint32_t h, int n)
     struct gv_shard_plan *p = calloc((size_t)n, sizeof *p);
     if (!p)
         fail("out of memory");
-    struct gv_error err;
+    struct gv_error err = {0};
     for (int i = 0; i < n; i++)
         if (gv_shard_plan_init(&p[i], &g, i, n, &err) < 0)
             fail("plan %d/%d of %ux%u: %s", i, n, w, h, err.text);
@@ -103,12 +103,13 @@ int main(void)
 
     struct gv_geometry g;
     struct gv_shard_plan p;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_geometry_init(&g, 300, 200, 3);
     check(gv_shard_plan_init(&p, &g, 1, 2, &err) == 0 && p.tiles == 0,
           "an image that is all root has no tiles to shard");
     gv_shard_plan_free(&p);
     gv_geometry_init(&g, 1100, 700, 3);
+    gv_error_clear(&err);
     check(gv_shard_plan_init(&p, &g, 2, 2, &err) < 0 &&
           gv_shard_plan_init(&p, &g, -1, 2, &err) < 0 &&
           gv_shard_plan_init(&p, &g, 0, 0, &err) < 0, "shard index and count checked");

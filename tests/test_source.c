@@ -124,7 +124,7 @@ static uint8_t *read_one(const char *path, const struct gv_source_opts *opts,
 /* Raw samples as gv_image_read delivers them. */
 static void *read_raw(const char *path, struct gv_image_info *info)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_image_in *in = gv_image_open(path, 1ull << 32, info, &err);
     if (!in)
         fail("%s", err.text);
@@ -158,7 +158,7 @@ static int range8(double v, double lo, double hi)
 static void test_probe(void)
 {
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     uint8_t *p = read_one(data("seeding-640x480.jpg"), NULL, &info, &err);
     check(p && info.width == 640 && info.height == 480 && info.channels == 3
               && info.tone == GV_TONE_NONE && info.src_bits == 8
@@ -182,7 +182,7 @@ static void test_u16(void)
     struct gv_image_info ri;
     uint16_t *raw = read_raw(data("etopo-600x400-u16.png"), &ri);
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     uint8_t *p = read_one(data("etopo-600x400-u16.png"), NULL, &info, &err);
     check(p && info.channels == 1 && info.tone == GV_TONE_SCALE
               && info.src_bits == 16 && ri.sample == GV_SAMPLE_U16,
@@ -248,7 +248,7 @@ static void test_float(void)
     struct gv_image_info ri;
     float *raw = read_raw(data("courtyard-256x128.exr"), &ri);
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     uint8_t *p = read_one(data("courtyard-256x128.exr"), NULL, &info, &err);
     check(p && info.src_float && info.tone == GV_TONE_SRGB_CLIP
               && info.channels == 3 && ri.sample == GV_SAMPLE_F32,
@@ -283,7 +283,7 @@ static void test_float(void)
 static void test_tiled(void)
 {
     struct gv_source_info a, b;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *t[1] = {data("seeding-300x200-tiled.tif")};
     const char *s[1] = {data("seeding-300x200-striped.tif")};
     uint8_t *pt = read_source(t, 1, NULL, 7, &a, &err);
@@ -327,7 +327,7 @@ static void test_tiled(void)
 static void test_gray_alpha(void)
 {
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     uint8_t *p = read_one(data("graya-32x8.png"), NULL, &info, &err);
     int ok = p && info.channels == 1 && info.width == 32;
     for (int x = 0; ok && x < 32; x++) {
@@ -343,7 +343,7 @@ static void test_gray_alpha(void)
 static void test_mosaic(void)
 {
     struct gv_source_info info, winfo;
-    struct gv_error err;
+    struct gv_error err = {0};
     uint8_t *whole = read_one(data("seeding-700x520.png"), NULL, &winfo, &err);
     if (!whole)
         fail("%s", err.text);
@@ -388,6 +388,7 @@ static void test_mosaic(void)
 
     /* swap the two tiles of the bottom row: grid column widths differ */
     const char *bad[4] = {inputs[0], inputs[1], inputs[3], inputs[2]};
+    gv_error_clear(&err);
     m = read_source(bad, 4, &o, 50, &info, &err);
     check_str(!m && err.code == GV_EINVAL ? err.text : NULL,
               msg("source: mosaic: %s is 400 pixels wide but %s above it in grid "
@@ -397,6 +398,7 @@ static void test_mosaic(void)
 
     /* transposed grid: heights in a row differ */
     const char *bad2[4] = {inputs[0], inputs[2], inputs[1], inputs[3]};
+    gv_error_clear(&err);
     m = read_source(bad2, 4, &o, 50, &info, &err);
     check_str(!m && err.code == GV_EINVAL ? err.text : NULL,
               msg("source: mosaic: %s is 320 pixels high but %s left of it in grid "
@@ -410,6 +412,7 @@ static void test_mosaic(void)
     if (gv_image_write(tmp("gray.png"), 300, 200, 1, g, &err))
         fail("%s", err.text);
     const char *bad3[4] = {tmp("gray.png"), inputs[1], inputs[2], inputs[3]};
+    gv_error_clear(&err);
     m = read_source(bad3, 4, &o, 50, &info, &err);
     check_str(!m && err.code == GV_EINVAL ? err.text : NULL,
               msg("source: mosaic: %s is colour but %s is gray", tmp("m01.png"),
@@ -418,6 +421,7 @@ static void test_mosaic(void)
     free(m);
 
     o.mosaic_rows = 3;
+    gv_error_clear(&err);
     m = read_source(inputs, 4, &o, 50, &info, &err);
     check_str(!m && err.code == GV_EINVAL ? err.text : NULL,
               "source: a 2x3 mosaic needs 6 inputs, got 4",
@@ -429,7 +433,7 @@ static void test_mosaic(void)
 static void test_bad_files(void)
 {
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     size_t n;
     unsigned char *jpg = slurp(data("seeding-640x480.jpg"), &n);
     write_file(tmp("trunc.jpg"), jpg, n * 4 / 10);
@@ -452,16 +456,19 @@ static void test_bad_files(void)
     gv_source_free(s);
 
     write_file(tmp("empty.png"), "", 0);
+    gv_error_clear(&err);
     uint8_t *p = read_one(tmp("empty.png"), NULL, &info, &err);
     check_str(!p && err.code == GV_ECORRUPT ? err.text : NULL,
               msg("imageio: %s: empty file", tmp("empty.png")), "zero-byte file fails");
 
     write_file(tmp("junk.jpg"), "this is not an image at all\n", 28);
+    gv_error_clear(&err);
     p = read_one(tmp("junk.jpg"), NULL, &info, &err);
     /* OpenImageIO's words after the path, as above. */
     check(!p && starts_with(err.text, msg("imageio: %s: ", tmp("junk.jpg"))),
           "non-image file fails: %s", err.text);
 
+    gv_error_clear(&err);
     p = read_one(tmp("no-such-file.png"), NULL, &info, &err);
     check_str(!p && err.code == GV_ENOTFOUND ? err.text : NULL,
               msg("imageio: %s: no such file", tmp("no-such-file.png")),
@@ -518,7 +525,7 @@ static void test_huge_header(void)
     struct gv_source_opts o = {0};
     o.max_pixels = 1ull << 30;
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *in[1] = {tmp("huge.png")};
     struct mallinfo2 before = mallinfo2();
     struct gv_source *s = gv_source_open(in, 1, &o, &info, &err);
@@ -545,7 +552,7 @@ static uint64_t fnv1a(const uint8_t *p, size_t n)
 static void test_synth(void)
 {
     struct gv_source_info a, b, g;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *in[1] = {"synth:1000x700"};
     uint8_t *p = read_source(in, 1, NULL, 33, &a, &err);
     uint8_t *q = read_source(in, 1, NULL, 700, &b, &err);
@@ -596,6 +603,7 @@ static void test_synth(void)
         {"synth:-5x5", SYNTH_FORM}};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         const char *bi[1] = {bad[i][0]};
+        gv_error_clear(&err);
         struct gv_source *s = gv_source_open(bi, 1, NULL, &a, &err);
         check_str(s == NULL && err.code == GV_EINVAL ? err.text : NULL,
                   msg("source: %s: %s", bad[i][0], bad[i][1]),
@@ -608,6 +616,7 @@ static void test_synth(void)
     struct gv_source_opts o = {0};
     o.max_pixels = 1000000;
     const char *big[1] = {"synth:2000x1000"};
+    gv_error_clear(&err);
     struct gv_source *s = gv_source_open(big, 1, &o, &a, &err);
     check_str(!s && err.code == GV_ELIMIT ? err.text : NULL,
               "source: synth:2000x1000: 2000000 pixels exceed the limit of 1000000",
@@ -628,7 +637,7 @@ static void test_synth(void)
 static void test_past_end(void)
 {
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *in[1] = {data("seeding-640x480.jpg")};
     struct gv_source *s = gv_source_open(in, 1, NULL, &info, &err);
     uint8_t *buf = malloc(640 * 3 * 481);
@@ -637,6 +646,7 @@ static void test_past_end(void)
               "reading 481 rows of a 480-row image fails");
     check(s && gv_source_read(s, 480, buf, &err) == 0,
           "reading exactly 480 rows works");
+    gv_error_clear(&err);
     check_str(s && gv_source_read(s, 1, buf, &err) == -1 && err.code == GV_EINVAL
                   ? err.text : NULL,
               "source: read of 1 rows at row 480 passes the last row (height 480)",
@@ -668,7 +678,7 @@ static int no_temp_left(void)
 
 static void test_write(void)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     uint8_t px[48 * 32 * 3];
     for (size_t i = 0; i < sizeof px; i++)
         px[i] = (uint8_t)(i * 7);
@@ -699,6 +709,7 @@ static void test_write(void)
     free(raw);
 
     struct stat st;
+    gv_error_clear(&err);
     int rc = gv_image_write(tmp("w.xyz"), 48, 32, 3, px, &err);
     check(rc == -1 && err.code == GV_EFORMAT && stat(tmp("w.xyz"), &st) != 0,
           "unknown extension fails and leaves no file");
@@ -706,12 +717,14 @@ static void test_write(void)
               msg("imageio: %s: unsupported output format \".xyz\" (png, jpg, webp, tif)",
                   tmp("w.xyz")),
               "unknown extension: the message");
+    gv_error_clear(&err);
     rc = gv_image_write(tmp("nodir/w.png"), 48, 32, 3, px, &err);
     /* The atomic writer names the directory it could not create in. */
     check(rc == -1, "missing directory fails");
     check_str(err.text, msg("imageio: cannot create a file in %s: No such file or directory",
                             tmp("nodir")),
               "missing directory: the message names the directory");
+    gv_error_clear(&err);
     rc = gv_image_write(tmp("w2.png"), 48, 32, 2, px, &err);
     check(rc == -1 && err.code == GV_EINVAL && stat(tmp("w2.png"), &st) != 0,
           "two channels are refused and leave no file");

@@ -106,7 +106,7 @@ static void spit(const char *path, const uint8_t *b, size_t len)
  * (open counts as everything). */
 static int exercise(const char *path)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s = gv_store_open(path, &err);
     if (!s)
         return 1000;
@@ -137,7 +137,7 @@ static void atomic_file_contract(void)
     snprintf(sub, sizeof sub, "%s/sub", dir);
     snprintf(missing, sizeof missing, "%s/nodir/af", dir);
     const struct gv_atomic_opts opts = {.module = "af", .mode = 0600};
-    struct gv_error err;
+    struct gv_error err = {0};
     int ok = gv_atomic_file_write(p, "one", 3, &opts, &err) == 0;
     int fd = open(p, O_RDONLY);
     ok = ok && fd >= 0 && gv_atomic_file_write(p, "second", 6, &opts, &err) == 0;
@@ -178,7 +178,7 @@ static void identity_contract(const char *path, const uint8_t *orig, size_t len)
     char other[256], copy[256];
     snprintf(other, sizeof other, "%s/other.gv", dir);
     snprintf(copy, sizeof copy, "%s/copy.gv", dir);
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *a = gv_store_open(path, &err);
     struct gv_store *a2 = gv_store_open(path, &err);
     spit(copy, orig, len);
@@ -213,7 +213,7 @@ int main(void)
     char path[256], bad[256];
     snprintf(path, sizeof path, "%s/a.gv", dir);
     snprintf(bad, sizeof bad, "%s/bad.gv", dir);
-    struct gv_error err;
+    struct gv_error err = {0};
 
     check(write_store(path, 0, &err) == 0, "write a store");
     struct gv_store *s = gv_store_open(path, &err);
@@ -247,9 +247,11 @@ int main(void)
     size_t tl;
     check(gv_page_tile(page, plen, 1, 1, 0, &t, &tl, &err) == 0 &&
           tl == gv_tilebuf_size(2, 1) && t[0] == 2, "tile 1,0 is the rate-2 buffer");
+    gv_error_clear(&err);
     check(gv_page_tile(page, plen, 1, 5, 5, &t, &tl, &err) < 0,
           "slot outside the grid is empty");
     free(page);
+    gv_error_clear(&err);
     check(gv_store_read_page(s, 1, 1, 0, &page, &plen, &err) < 0 &&
           err.code == GV_ENOTFOUND, "no page 1/1/0: GV_ENOTFOUND");
     check_str(err.text, "store: no page 1/1/0", "no page 1/1/0: the message");
@@ -271,6 +273,7 @@ int main(void)
     memcpy(copy, orig, len);
     copy[off + psize / 2] ^= 0x40;
     spit(bad, copy, len);
+    gv_error_clear(&err);
     s = gv_store_open(bad, &err);
     int page_fails = s && gv_store_read_page(s, 0, 0, 0, &page, &plen, &err) < 0 &&
                      err.code == GV_ECORRUPT;
@@ -286,22 +289,26 @@ int main(void)
     memcpy(copy, orig, len);
     copy[8] = 9;
     spit(bad, copy, len);
+    gv_error_clear(&err);
     check(!gv_store_open(bad, &err) && err.code == GV_EFORMAT, "bad version: GV_EFORMAT");
     check_str(err.text, "store: format version 9 is not supported (this build reads versions 1 to 4)",
               "bad version: the message");
 
     char want[512];
     spit(bad, orig, len - 7);
+    gv_error_clear(&err);
     check(!gv_store_open(bad, &err) && err.code == GV_ECORRUPT, "truncated: GV_ECORRUPT");
     snprintf(want, sizeof want, "store: file is %zu bytes, header says %zu (truncated?)",
              len - 7, len);
     check_str(err.text, want, "truncated: the message");
     snprintf(want, sizeof want, "store: %s is too short to be a store", bad);
     spit(bad, orig, 100);
+    gv_error_clear(&err);
     check(!gv_store_open(bad, &err) && err.code == GV_EFORMAT,
           "truncated inside the header: GV_EFORMAT");
     check_str(err.text, want, "truncated inside the header: the message");
     spit(bad, orig, 0);
+    gv_error_clear(&err);
     check(!gv_store_open(bad, &err) && err.code == GV_EFORMAT, "empty file: GV_EFORMAT");
     check_str(err.text, want, "empty file: the message");
 
@@ -311,6 +318,7 @@ int main(void)
     gv_put64(copy + idx, (uint64_t)len - 10);
     gv_put32(copy + idx + 2 * 16, gv_crc32(0, copy + idx, 2 * 16));
     spit(bad, copy, len);
+    gv_error_clear(&err);
     check(!gv_store_open(bad, &err) && err.code == GV_ECORRUPT,
           "hostile page offset: GV_ECORRUPT");
     check_str(err.text, "store: page 0 lies outside the file", "hostile page offset: the message");

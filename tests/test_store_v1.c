@@ -34,7 +34,7 @@ int main(void)
     const char *data = getenv("TESTDATA") ? getenv("TESTDATA") : "tests/data";
     char path[1024];
     snprintf(path, sizeof path, "%s/v1-picos-530x516.gv", data);
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s = gv_store_open(path, &err);
     if (!s)
         fail("open %s: %s", path, err.text);

@@ -108,7 +108,7 @@ static void expect_refused(const char *path, uint64_t max_pixels,
                            const char *what)
 {
     for (int how = MODULE; how <= LOADER; how++) {
-        struct gv_error e;
+        struct gv_error e = {0};
         long long before = test_peak_reset() ? test_status_kb("VmRSS") : -1;
         int rc = read_all((enum how)how, path, max_pixels, decoder_bytes, &e);
         long long hwm = test_status_kb("VmHWM");
@@ -129,7 +129,7 @@ static void expect_exact(const char *dir, const char *name, uint64_t need,
 {
     const char *path = test_path_in(dir, name);
     for (int how = MODULE; how <= LOADER; how++) {
-        struct gv_error e;
+        struct gv_error e = {0};
         int rc = read_all((enum how)how, path, 1ull << 32, need, &e);
         check(rc == 0, "%s, %s: read at its need, %llu bytes (%s)", name,
               how_name[how], (unsigned long long)need, e.text);
@@ -201,7 +201,7 @@ static void test_native_declines(const char *native)
         fail("fork: %s", strerror(errno));
     if (pid == 0) {
         setenv("GV_OIIO_MODULE", "/nonexistent/gigaview-oiio.so", 1);
-        struct gv_error e;
+        struct gv_error e = {0};
         int bits = read_all(LOADER, path, 1ull << 32, 444, &e) == 0;
         bits |= read_all(LOADER, path, 1ull << 32, 443, &e) < 0
                         && strstr(e.text, "cannot load the OpenImageIO "
@@ -218,7 +218,7 @@ static void test_native_declines(const char *native)
     check(bits & 2, "LZW strips of 444 bytes, limit 443: declined to the module");
     check(bits & 4, "uncompressed strips of 555 bytes, limit 554: read "
           "natively, where the rows lie");
-    struct gv_error e;
+    struct gv_error e = {0};
     check(read_all(LOADER, path, 1ull << 32, 443, &e) == 0,
           "LZW strips of 444 bytes, limit 443: the module reads it (%s)",
           e.text);
@@ -299,7 +299,7 @@ static void test_hostile(const char *limits)
     int opened = 0, quiet = 0, tries = 0;
     for (size_t n = 0; n < len; n += n < 700 ? 5 : 101, tries++) {
         test_write_file(cut, p, n);
-        struct gv_error e;
+        struct gv_error e = {0};
         if (read_all(LOADER, cut, 1ull << 40, 0, &e) == 0)
             opened++;
         else if (strncmp(e.text, "imageio: ", 9) != 0)

@@ -233,7 +233,7 @@ static void attack(const uint8_t *buf, size_t len, const uint8_t *parent,
                    const char *name)
 {
     const size_t tb = gv_tile_bytes(3);
-    struct gv_error err;
+    struct gv_error err = {0};
     uint8_t *copy = malloc(len), *dec = malloc(tb), *want_px = malloc(tb);
     if (!copy || !dec || !want_px)
         fail("out of memory");
@@ -272,15 +272,18 @@ static void attack(const uint8_t *buf, size_t len, const uint8_t *parent,
     char want[128];
     snprintf(want, sizeof want, "tile: streams need %zu bytes, the buffer has %zu",
              2 * words, len - 4 - streams);
+    gv_error_clear(&err);
     check_str(refusal(gv_tile_decode(buf, len - 4, 3, parent, 0, 0, dec, &err), &err),
               want, "%s: a truncated buffer is refused", name);
     memcpy(copy, buf, len);
     copy[0] = (uint8_t)(buf[0] & 0xc0);
     snprintf(want, sizeof want, "tile: bad rate byte 0x%02x", copy[0]);
+    gv_error_clear(&err);
     check_str(refusal(gv_tilebuf_check(copy, len, 3, &err), &err), want,
               "%s: entropy flag at rate 0 is refused", name);
     copy[0] = (uint8_t)(buf[0] | 0x10);
     snprintf(want, sizeof want, "tile: bad rate byte 0x%02x", copy[0]);
+    gv_error_clear(&err);
     check_str(refusal(gv_tilebuf_check(copy, len, 3, &err), &err), want,
               "%s: reserved bits are refused", name);
     free(copy);
@@ -295,7 +298,7 @@ static void check_attacks(struct gv_tile_workspace *ws, const uint8_t *orig,
                           const uint8_t *parent, uint8_t *buf)
 {
     const size_t tb = gv_tile_bytes(3);
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_tile_params prm = {.target_mse = 0.01, .max_rate = 6, .seed = 3};
     struct gv_tile_stats st;
     uint8_t *recon = malloc(tb), *dec = malloc(tb), *e = malloc(GV_TILEBUF_MAX);
@@ -331,7 +334,7 @@ static void check_attacks(struct gv_tile_workspace *ws, const uint8_t *orig,
  * the check refuses.  Then hostile EX headers. */
 static void check_context_layout(const uint8_t *parent)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     const size_t cap = 2 * GV_TILEBUF_MAX;
     uint16_t *idx = malloc(sizeof *idx * GV_NBLOCKS), *back = malloc(sizeof *back * GV_NBLOCKS);
     uint8_t *buf = malloc(cap), *copy = malloc(cap), *dec = malloc(gv_tile_bytes(3));
@@ -371,6 +374,7 @@ static void check_context_layout(const uint8_t *parent)
         char want[128];
         snprintf(want, sizeof want, "tile: entropy-coded buffer of %zu bytes, longer than "
                  "the fixed layout's %d", len, GV_TILEBUF_MAX);
+        gv_error_clear(&err);
         check_str(refusal(gv_tilebuf_check(buf, len, 3, &err), &err), want,
                   "uniform indices at rate 12, %s layout: refused", ctx ? "EX" : "E");
     }
@@ -405,6 +409,7 @@ static void check_context_layout(const uint8_t *parent)
             snprintf(want, sizeof want, "tile: context map entry 0 is 15 of %d models", buf[1]);
         memcpy(copy, buf, len);
         copy[bad[b].at] = bad[b].val;
+        gv_error_clear(&err);
         check_str(refusal(gv_tilebuf_check(copy, len, 3, &err), &err), want,
                   "EX, hostile header: %s", want);
     }
@@ -445,7 +450,7 @@ static size_t stream_at(const uint8_t *buf, int channels, int r)
  * that works on several rows at once must keep both). */
 static void check_damaged_rows(void)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     const size_t cap = 2 * GV_TILEBUF_MAX;
     uint16_t *idx = malloc(sizeof *idx * GV_NBLOCKS), *want = malloc(sizeof *want * GV_NBLOCKS),
              *back = malloc(sizeof *back * GV_NBLOCKS);
@@ -476,6 +481,7 @@ static void check_damaged_rows(void)
             memset(back, 0xff, sizeof *back * GV_NBLOCKS);
             char named[32];
             snprintf(named, sizeof named, "tile: stream %d ", r);
+            gv_error_clear(&err);
             const int rc = gv_rans_unpack(copy, len, 8, 3, back, &err);
             const int same = memcmp(back, want, sizeof *back * GV_BLOCKS * (size_t)r) == 0;
             if (rc == 0 || strncmp(err.text, named, strlen(named)) != 0 || !same) {
@@ -553,7 +559,7 @@ static void check_rd_photo(struct gv_tile_workspace *ws)
     snprintf(path, sizeof path, "%s/picos-1100x700.jpg", data ? data : "tests/data");
     const char *in[1] = {path};
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_source *src = gv_source_open(in, 1, NULL, &info, &err);
     if (!src || info.channels != 3)
         fail("cannot read %s: %s", path, src ? "not RGB" : err.text);
@@ -702,7 +708,7 @@ int main(void)
     uint8_t *recon = malloc(tb), *dec = malloc(tb);
     uint8_t *buf = malloc(gv_tilebuf_size(GV_MAX_RATE, 3));
     struct gv_tile_workspace *ws = gv_tile_workspace_new();
-    struct gv_error err;
+    struct gv_error err = {0};
     if (!parent || !pred || !orig || !recon || !dec || !buf || !ws)
         fail("out of memory");
 
@@ -822,15 +828,19 @@ int main(void)
 
     /* 5. Hostile buffers are refused, not read past. */
     buf[0] = 13;
+    gv_error_clear(&err);
     check_str(refusal(gv_tilebuf_check(buf, gv_tilebuf_size(12, 3), 3, &err), &err),
               "tile: bad rate byte 0x0d", "rate 13 refused");
     buf[0] = 5;
+    gv_error_clear(&err);
     check_str(refusal(gv_tile_decode(buf, gv_tilebuf_size(5, 3) - 4, 3, parent, 0, 0,
                                      dec, &err), &err),
               "tile: 41664 bytes where rate 5 needs 41668", "short buffer refused");
+    gv_error_clear(&err);
     check_str(refusal(gv_tilebuf_check(buf, 6, 3, &err), &err),
               "tile: buffer of 6 bytes is not a positive multiple of 4",
               "odd length refused");
+    gv_error_clear(&err);
     check_str(refusal(gv_tilebuf_check(buf, 0, 3, &err), &err),
               "tile: buffer of 0 bytes is not a positive multiple of 4",
               "empty buffer refused");

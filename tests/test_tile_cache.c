@@ -73,7 +73,7 @@ static void test_single_flight(void)
     struct gv_tile_cache *c = gv_tile_cache_new(100 * TB);
     struct gv_tile_key k = {1, 0, 3, 4};
     struct gv_tile_entry *e;
-    struct gv_error err;
+    struct gv_error err = {0};
     check(gv_tile_cache_acquire(c, &k, TB, &e, &err) == 0, "first acquire claims");
     struct waiter w[NTHREADS];
     pthread_t th[NTHREADS];
@@ -98,7 +98,7 @@ static void test_single_flight(void)
     struct gv_tile_key k2 = {1, 0, 5, 5};
     check(gv_tile_cache_acquire(c, &k2, TB, &e, &err) == 0, "claim a second tile");
     start_waiters(c, &k2, w, th);
-    struct gv_error boom;
+    struct gv_error boom = {0};
     gv_fail(&boom, GV_ECORRUPT, "boom");
     gv_tile_cache_fail(c, e, &boom);
     all = 1;
@@ -122,7 +122,7 @@ static int get(struct gv_tile_cache *c, uint64_t store, uint32_t tx,
                uint8_t v, struct gv_tile_entry **e)
 {
     struct gv_tile_key k = {store, 0, tx, 0};
-    struct gv_error err;
+    struct gv_error err = {0};
     int rc = gv_tile_cache_acquire(c, &k, TB, e, &err);
     if (rc < 0)
         fail("acquire: %s", err.text);
@@ -204,7 +204,7 @@ struct decode_job {
 static void *decode_thread(void *arg)
 {
     struct decode_job *j = arg;
-    struct gv_error err;
+    struct gv_error err = {0};
     j->rc = gv_decoder_tile(j->d, 0, 1, 1, &j->px, &err);
     if (j->rc == 0) {
         j->copy = malloc(j->bytes);
@@ -227,7 +227,7 @@ struct stress_job {
 static void *stress_thread(void *arg)
 {
     struct stress_job *j = arg;
-    struct gv_error err;
+    struct gv_error err = {0};
     for (int i = 0; i < 300; i++) {
         int level = rand_r(&j->seed) % 2;
         uint32_t tx = (uint32_t)rand_r(&j->seed) % j->g->level[level].tiles_x;
@@ -246,7 +246,7 @@ static void test_stress(struct gv_store *s)
     const size_t tb = gv_tile_bytes(g->channels);
     uint8_t *ref[128] = {0};
     struct gv_decoder *r = gv_decoder_new(s, 64u << 20);
-    struct gv_error err;
+    struct gv_error err = {0};
     for (int k = 0; k < 2; k++)
         for (uint32_t ty = 0; ty < g->level[k].tiles_y; ty++)
             for (uint32_t tx = 0; tx < g->level[k].tiles_x; tx++) {
@@ -303,7 +303,7 @@ static void test_decoders(void)
     /* The reference: a decoder with its own cache. */
     struct gv_decoder *ref = gv_decoder_new(s, 0);
     const uint8_t *want;
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_decoder_tile(ref, 0, 1, 1, &want, &err) < 0)
         fail("reference decode: %s", err.text);
     int same = 1;

@@ -149,7 +149,7 @@ static void test_round_trip(int C, int amp, double lambda, uint32_t vw,
                             uint32_t vh, int gray_rgb)
 {
     struct gv_dct_workspace *ws = gv_dct_workspace_new();
-    struct gv_error err;
+    struct gv_error err = {0};
     make_tile(parent, C, 4);
     make_tile(orig, C, amp);
     if (gray_rgb) {
@@ -213,7 +213,7 @@ static void test_lambda_order(void)
 static void test_choice(void)
 {
     struct gv_tile_workspace *ws = gv_tile_workspace_new();
-    struct gv_error err;
+    struct gv_error err = {0};
     make_tile(parent, 3, 3);
     make_tile(orig, 3, 6);
     struct gv_tile_params p = {.target_mse = gv_psnr_to_mse(40), .max_rate = 10,
@@ -261,7 +261,7 @@ static void test_choice(void)
 
 static void expect_refused(const uint8_t *b, size_t len, int C, const char *what)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     int c1 = gv_tilebuf_check(b, len, C, &err);
     int c2 = gv_tile_decode(b, len, C, parent, 0, 0, out, &err);
     int c3 = gv_dct_unpack(b, len, C, plane, &err);
@@ -317,7 +317,7 @@ static void test_hostile(void)
         memcpy(b, buf, len);
         b[s3 - 3] ^= 0x40;
         b[s3 + 5] ^= 0x40;
-        struct gv_error err;
+        struct gv_error err = {0};
         int rc = gv_tile_decode(b, len, 3, parent, 0, 0, out, &err);
         check(rc < 0 && strstr(err.text, "stream 2 ") != NULL,
               "two damaged streams of a pair: the first named (%s)", err.text);
@@ -337,7 +337,7 @@ static void test_hostile(void)
     for (size_t k = at + 2 * GV_DCT_BLOCKS; k < len - 4; k += 499, tries++) {
         memcpy(b, buf, len);
         b[k] ^= 0x10;
-        struct gv_error err;
+        struct gv_error err = {0};
         int r1 = gv_tile_decode(b, len, 3, parent, 0, 0, out, &err);
         int r2 = gv_dct_unpack(b, len, 3, plane, &err);
         if (r1 != r2) {
@@ -371,7 +371,7 @@ static void test_simd_paths(void)
         gv_predict(parent, C, 0, 1, pred);
         for (int k = 0; k < DCT_FIXTURE_CASES; k++) {
             int S[3];
-            struct gv_error err;
+            struct gv_error err = {0};
             dct_fixture_case(k, C, &seed, q, S);
             size_t len = dct_fixture_write(q, S, C, fb);
             gv_dct_simd(0);

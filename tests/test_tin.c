@@ -135,7 +135,7 @@ static void compare_brute(uint32_t w, uint32_t h, int kind, double e,
     float *f = field(w, h, kind, 99 + (uint32_t)kind);
     struct gv_tin_params p = {e, maxt, border, 0};
     struct gv_tin a, b;
-    struct gv_error err;
+    struct gv_error err = {0};
     int ra = gv_tin_build(f, w, h, w, &p, &a, &err);
     int rb = gv_tin_build_brute(f, w, h, w, &p, &b, &err);
     check(ra == 0 && rb == 0, "%ux%u kind %d E=%g N=%u border=%d: built", w, h,
@@ -221,7 +221,7 @@ static void crack_free(void)
         }
     struct gv_tin_params p = {1.5, 0, 1, 0};
     struct gv_tin a, b, c;
-    struct gv_error err;
+    struct gv_error err = {0};
     int ok = gv_tin_build(f, 41, H, W, &p, &a, &err) == 0 &&
              gv_tin_build(f + 40, 41, H, W, &p, &b, &err) == 0 &&
              gv_tin_build(g, 41, H, 41, &p, &c, &err) == 0;
@@ -259,23 +259,27 @@ static void edge_cases(void)
     for (int i = 0; i < 16 * 9; i++)
         flat[i] = 7;
     struct gv_tin t;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_tin_params p = {0, 0, 1, 0};
     check(gv_tin_build(flat, 16, 9, 16, &p, &t, &err) == 0 && t.ntris == 2 &&
           t.nverts == 4 && t.max_error == 0, "a flat grid is two triangles");
     gv_tin_free(&t);
     p.max_error = -1;
     p.border_first = 0;
+    gv_error_clear(&err);
     check(gv_tin_build(flat, 16, 9, 16, &p, &t, &err) < 0 &&
           err.code == GV_EINVAL, "no goal: refused (%s)", err.text);
     p.max_triangles = 10;
+    gv_error_clear(&err);
     check(gv_tin_build(flat, 1, 9, 16, &p, &t, &err) < 0 &&
           err.code == GV_EINVAL, "a grid 1 wide: refused");
     flat[20] = NAN;
+    gv_error_clear(&err);
     check(gv_tin_build(flat, 16, 9, 16, &p, &t, &err) < 0 &&
           err.code == GV_EINVAL, "a NaN height: refused (%s)", err.text);
     float *g = field(33, 21, 0, 99);
     struct gv_tin_params lim = {0.5, 60, 1, 0};
+    gv_error_clear(&err);
     check(gv_tin_build(g, 33, 21, 33, &lim, &t, &err) < 0 &&
           err.code == GV_ELIMIT, "border beyond the triangle limit: refused "
           "(%s)", err.text);
@@ -300,7 +304,7 @@ static void tiled(void)
     float *f = field(W, H, 0, 11);
     struct gv_tin_params p = {2.0, 0, 1, 0};
     struct gv_tin a, b, one;
-    struct gv_error err;
+    struct gv_error err = {0};
     int ok = gv_tin_build_tiled(f, W, H, W, &p, 32, 1, &a, &err) == 0 &&
              gv_tin_build_tiled(f, W, H, W, &p, 32, 3, &b, &err) == 0 &&
              gv_tin_build(f, 33, 33, W, &p, &one, &err) == 0;
@@ -336,6 +340,7 @@ static void tiled(void)
     gv_tin_free(&a);
     p.max_error = -1;
     p.max_triangles = 100;
+    gv_error_clear(&err);
     check(gv_tin_build_tiled(f, W, H, W, &p, 32, 1, &a, &err) < 0,
           "tiled: a triangle limit is refused");
     gv_tin_free(&b);

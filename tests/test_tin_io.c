@@ -63,7 +63,7 @@ static void test_glb(const struct gv_tin *t, const struct gv_mesh_place *pl)
 {
     uint8_t *b;
     size_t n;
-    struct gv_error err;
+    struct gv_error err = {0};
     check(gv_mesh_encode(GV_MESH_GLB, t, pl, &b, &n, &err) == 0, "glb: wrote");
     check(n >= 28 && rd32(b) == 0x46546C67u && rd32(b + 4) == 2 &&
           rd32(b + 8) == n, "glb: header, version 2, length %zu", n);
@@ -208,7 +208,7 @@ static void test_qmesh(const struct gv_tin *t, struct gv_mesh_place pl)
 {
     uint8_t *b, *z;
     size_t n, zn;
-    struct gv_error err;
+    struct gv_error err = {0};
     pl.has_geo = 1;
     pl.west = 5;
     pl.east = 6;
@@ -246,7 +246,7 @@ static void test_ply(const struct gv_tin *t, const struct gv_mesh_place *pl)
 {
     uint8_t *b;
     size_t n;
-    struct gv_error err;
+    struct gv_error err = {0};
     check(gv_mesh_encode(GV_MESH_PLY, t, pl, &b, &n, &err) == 0, "ply: wrote");
     const char *end = memmem(b, n, "end_header\n", 11);
     check(end != NULL, "ply: a header");
@@ -289,7 +289,7 @@ static void test_obj(const struct gv_tin *t, const struct gv_mesh_place *pl)
 {
     uint8_t *b;
     size_t n;
-    struct gv_error err;
+    struct gv_error err = {0};
     check(gv_mesh_encode(GV_MESH_OBJ, t, pl, &b, &n, &err) == 0, "obj: wrote");
     char *s = strndup((const char *)b, n);
     uint32_t nv = 0, nf = 0;
@@ -335,7 +335,7 @@ int main(void)
             f[y * w + x] = (float)(300 + 80 * sin(x * 0.3) * cos(y * 0.25) +
                                    (x * 7 + y * 3) % 5);
     struct gv_tin t;
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_tin_params p = {.max_error = 3, .border_first = 1};
     int built = gv_tin_build(f, w, h, w, &p, &t, &err) == 0;
     check(built && t.ntris > 20, "a TIN of %u triangles", t.ntris);

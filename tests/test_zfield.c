@@ -235,7 +235,7 @@ static const char *path_name[2] = {"compute", "fragment (GLSL ES 3.00)"};
 static void check_case(const char *name, const float *z, uint32_t n, const struct gv_zfield_params *p,
                        int check_mesh)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     const size_t cells = (size_t)n * n;
     uint8_t *sweep = malloc(cells), *coarse = malloc(cells), *bf = malloc(cells);
     struct gv_zfield_params q = *p;
@@ -287,7 +287,7 @@ static void check_case(const char *name, const float *z, uint32_t n, const struc
 
 int main(void)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
 #ifdef GV_TEST_GPU
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu)
@@ -308,6 +308,7 @@ int main(void)
           gv_zfield_side_ok(3) && gv_zfield_side_ok(513) && !gv_zfield_side_ok(512) &&
           !gv_zfield_side_ok(2) && !gv_zfield_side_ok(GV_ZFIELD_MAX_SIDE + 1),
           "grid sides: 2^k + 1 only");
+    gv_error_clear(&err);
     check(gv_zfield_enable(z9, 4, &(struct gv_zfield_params){0}, tmp, &err) < 0 &&
           err.code == GV_EINVAL, "a 4 x 4 grid is refused (%s)", err.text);
 

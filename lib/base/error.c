@@ -1,5 +1,6 @@
 /*
- * error.c - struct gv_error helpers.  See error.h for the model.
+ * error.c - struct gv_error helpers.  See error.h for the model: the
+ * first failure written into an error stays until it is cleared.
  */
 #include <errno.h>
 #include <stdarg.h>
@@ -10,7 +11,7 @@
 
 int gv_fail(struct gv_error *err, enum gv_code code, const char *fmt, ...)
 {
-    if (err) {
+    if (err && err->code == GV_OK) {
         va_list ap;
         va_start(ap, fmt);
         vsnprintf(err->text, sizeof err->text, fmt, ap);
@@ -22,7 +23,7 @@ int gv_fail(struct gv_error *err, enum gv_code code, const char *fmt, ...)
 
 int gv_fail_errno(struct gv_error *err, int errnum, const char *fmt, ...)
 {
-    if (err) {
+    if (err && err->code == GV_OK) {
         va_list ap;
         char head[256];
         va_start(ap, fmt);
@@ -41,4 +42,12 @@ void gv_error_clear(struct gv_error *err)
         err->code = GV_OK;
         err->text[0] = '\0';
     }
+}
+
+int gv_error_recode(struct gv_error *err, enum gv_code from, enum gv_code to)
+{
+    if (!err || err->code != from)
+        return 0;
+    err->code = to;
+    return 1;
 }

@@ -268,8 +268,8 @@ static int open_file(struct gv_shard_reader *r, const char *path,
     if (r->fd < 0) {
         int e = errno;
         gv_fail_errno(err, e, "shard: cannot open %s", path);
-        if (e == ENOENT && err)
-            err->code = GV_ENOTFOUND;
+        if (e == ENOENT)
+            gv_error_recode(err, GV_EIO, GV_ENOTFOUND);
         return -1;
     }
     struct stat st;

@@ -358,7 +358,7 @@ static void *reader_main(void *arg)
         pthread_mutex_unlock(&r->mu);
         if (stop)
             break;
-        struct gv_error err;
+        struct gv_error err = {0};
         uint8_t *dst = r->whole ? r->whole + (size_t)y * r->row_bytes
                                 : r->buf[slot];
         int rc = gv_source_read(r->src, n, dst, &err);
@@ -623,7 +623,7 @@ static void encode_tile(void *ctx, size_t slot, int worker)
      * does: fewer fresh pages to fault in than one per slot. */
     uint8_t *recon = e->level == 0 ? e->wrecon + (size_t)worker * gv_tile_bytes(c)
                                    : e->recon[slot];
-    struct gv_error err;
+    struct gv_error err = {0};
     if (cut_tile(e, i, j, orig, &err) < 0) {
         /* The first failure is kept; encode_page reports it. */
         if (!atomic_exchange(&e->job_failed, 1))

@@ -204,7 +204,7 @@ void gv_gpu_cluster_free(struct gv_gpu_cluster *c)
 {
     if (!c)
         return;
-    struct gv_error e;
+    struct gv_error e = {0};
     gv_gpu_call(c->gpu, do_free, c, &e);
     free(c);
 }

@@ -236,7 +236,7 @@ struct gv_image_in *gv_image_open_limits(const char *path,
     const int tiff = in->by == BY_TIFF;   /* a TIFF's or BigTIFF's */
     if (!native_allowed())
         in->by = BY_MODULE;
-    struct gv_error e;
+    struct gv_error e = {0};
     gv_error_clear(&e);
     const void *native = NULL;   /* the native reader opened, if any */
     if (in->by == BY_JPEG)

@@ -358,7 +358,7 @@ struct gv_native_tiff *gv_native_tiff_open(const char *path,
     /* An uncompressed file of 8-bit samples is read where its rows lie
      * (raw_regions.h): the same bytes as libtiff's, without a buffer of
      * a strip or a row of tiles (a strip can be the whole image). */
-    struct gv_error re;
+    struct gv_error re = {0};
     t->raw = gv_native_tiff_regions(t, &re);
     if (!t->raw && re.code != GV_OK)
         goto decline;

@@ -79,8 +79,8 @@ static int open_file(struct gv_store *s, const char *path, uint64_t *size,
     if (s->fd < 0) {
         int e = errno;
         gv_fail_errno(err, e, "store: %s", path);
-        if (e == ENOENT && err)
-            err->code = GV_ENOTFOUND;
+        if (e == ENOENT)
+            gv_error_recode(err, GV_EIO, GV_ENOTFOUND);
         return -1;
     }
     struct stat st;
@@ -365,7 +365,7 @@ int gv_page_check(const struct gv_store *s, const uint8_t *page, size_t len,
             if (to < GV_PAGE_TABLE || (to & 3) || to > len || ts > len - to)
                 return gv_fail(err, GV_ECORRUPT, "store: tile %d/%u/%u lies "
                                "outside its page", level, tx, ty);
-            struct gv_error why;
+            struct gv_error why = {0};
             if ((s->info.header.kind == GV_KIND_HEIGHT
                      ? gv_height_tile_check(page + to, ts, &why)
                      : gv_tilebuf_check(page + to, ts, g->channels, &why)) < 0)

@@ -72,7 +72,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
     struct batch_tile *t = (struct batch_tile *)1; /* must be overwritten */
     size_t n = 12345;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     if (parse(in, len, json, max, &t, &n, &err) < 0) {
         if (t || n || !err.text[0])

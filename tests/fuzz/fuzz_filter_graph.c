@@ -44,7 +44,7 @@ static void check_graph(const struct gv_filter_graph *g,
             if (m->texture >= 0 && in >= 0 && g->module[in].texture < 0)
                 abort();
         }
-        struct gv_error err;
+        struct gv_error err = {0};
         if (gv_filter_check_body(m, &err) != 0)
             abort();
         /* Registers are expanded everywhere; "$(" may stay in comments,
@@ -60,7 +60,7 @@ static void check_graph(const struct gv_filter_graph *g,
     if (nparams != g->nparams)
         abort();
     double *v = malloc(((size_t)g->nparams + 1) * sizeof *v);
-    struct gv_error err;
+    struct gv_error err = {0};
     if (!v || gv_filter_params(g, NULL, v, &err) != 0)
         abort();
     free(v);
@@ -72,7 +72,7 @@ static void check_graph(const struct gv_filter_graph *g,
 
 static void one(const uint8_t *data, size_t size, const struct gv_filter_limits *lim)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     struct gv_filter_graph *g =
         gv_filter_graph_parse((const char *)data, size, lim, &err);

@@ -43,7 +43,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!buf)
         return 0;
     memcpy(buf, data + 1, len);
-    struct gv_error err;
+    struct gv_error err = {0};
     int ok = gv_height_tile_check(buf, len, &err) == 0;
     int rc = gv_height_tile_decode(buf, len, parent, qx, qy, out, &err);
     if (!ok && rc == 0)

@@ -26,7 +26,7 @@ static void check_one(char *const seg[4], uint32_t W, uint32_t H,
                       const struct iiif_limits *lim)
 {
     struct iiif_request r;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     if (iiif_parse(seg[0], seg[1], seg[2], seg[3], W, H, lim, &r, &err)
         != 0) {

@@ -102,7 +102,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     memset(&opts, 0, sizeof opts);
     opts.max_pixels = MAX_PIXELS;
     struct gv_source_info info;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     struct gv_source *s = gv_source_open(inputs, 1, &opts, &info, &err);
     if (!s) {

@@ -81,7 +81,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             abort();
     }
 
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     int rc = listen_fds_take(&err);
 

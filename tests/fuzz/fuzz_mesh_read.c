@@ -34,7 +34,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     struct gv_mesh_limits lim = {.max_bytes = 1u << 20, .max_verts = 1u << 16,
                                  .max_tris = 1u << 16};
     struct gv_trimesh m;
-    struct gv_error err;
+    struct gv_error err = {0};
     err.text[0] = 0;
     if (gv_mesh_read(buf, len, in, &lim, &m, &err) < 0) {
         if (!err.text[0])

@@ -83,7 +83,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!a || !b)
         abort();
     settings_defaults(a);
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     if (settings_load(a, path, &err) < 0) {
         if (err.code != GV_EINVAL || strncmp(err.text, path, strlen(path)))

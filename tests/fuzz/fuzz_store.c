@@ -55,7 +55,7 @@ static int write_all(int fd, const uint8_t *p, size_t n)
 
 static void walk(struct gv_store *s)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     const int c = g->channels;
 
@@ -200,7 +200,7 @@ static void open_and_walk(const uint8_t *data, size_t size)
     }
     char path[64];
     snprintf(path, sizeof path, "/proc/self/fd/%d", fd);
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     struct gv_store *s = gv_store_open(path, &err);
     if (s) {

@@ -56,7 +56,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         return 0;
     memcpy(buf, data + 1, len);
 
-    struct gv_error err;
+    struct gv_error err = {0};
     int rate = gv_tilebuf_check(buf, len, channels, &err);
     int rc = gv_tile_decode(buf, len, channels, parent, qx, qy, out, &err);
     const int entropy = len > 0 && (buf[0] & GV_TILE_ENTROPY);

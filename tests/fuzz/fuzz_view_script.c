@@ -171,7 +171,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     const long lines = count_lines(text);
 
     struct vs_script s, s2;
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     int rc = check(vs_parse(text, "fuzz", &s, &err), &s, &err, "fuzz", lines);
     gv_error_clear(&err);

@@ -58,7 +58,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     /* sv[1] is the peer: it sends the input, then end of file */
     if (write(sv[1], data + 1, size - 1) != (ssize_t)(size - 1))
         abort();
-    struct gv_error err;
+    struct gv_error err = {0};
     gv_error_clear(&err);
     if (mode == 3) {
         shutdown(sv[1], SHUT_WR);
