@@ -6,14 +6,15 @@
  * of an RGB tile was 2 to 3 % of an encode.  With AVX2 the differences are
  * widened to 16 bits and squared and summed in pairs by VPMADDWD; a row's
  * sums stay in 32 bits (each lane adds at most n / 16 pairs of 2 x 255^2,
- * under 2^31 for n <= 2^15) and the rows' in 64.
+ * under 2^31 for n <= 2^15) and the rows' in 64.  The kernel is picked
+ * from gv_cpu_flags() (base/cpu.h) into a one-entry table.
  */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#include <immintrin.h>
-#define HAVE_AVX2_PATH 1
-#endif
-
+#include "base/cpu.h"
 #include "codec/sse.h"
+
+#if GV_HAVE_X86_SIMD
+#include <immintrin.h>
+#endif
 
 static uint64_t sse_plain(const uint8_t *a, const uint8_t *b, uint32_t n,
                           uint32_t rows, size_t stride)
@@ -29,7 +30,7 @@ static uint64_t sse_plain(const uint8_t *a, const uint8_t *b, uint32_t n,
     return e;
 }
 
-#ifdef HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 __attribute__((target("avx2"))) static uint64_t
 sse_avx2(const uint8_t *a, const uint8_t *b, uint32_t n, uint32_t rows,
          size_t stride)
@@ -60,12 +61,26 @@ sse_avx2(const uint8_t *a, const uint8_t *b, uint32_t n, uint32_t rows,
 }
 #endif
 
+typedef uint64_t sse_fn(const uint8_t *, const uint8_t *, uint32_t, uint32_t,
+                       size_t);
+
+static sse_fn *sse_kernel = sse_plain;
+static struct gv_cpu_once sse_once = GV_CPU_ONCE_INIT;
+
+static void sse_dsp_init(unsigned flags)
+{
+    sse_kernel = sse_plain;
+#if GV_HAVE_X86_SIMD
+    if (flags & GV_CPU_AVX2)
+        sse_kernel = sse_avx2;
+#else
+    (void)flags;
+#endif
+}
+
 uint64_t gv_sse_u8(const uint8_t *a, const uint8_t *b, uint32_t n,
                    uint32_t rows, size_t stride)
 {
-#ifdef HAVE_AVX2_PATH
-    if (__builtin_cpu_supports("avx2"))
-        return sse_avx2(a, b, n, rows, stride);
-#endif
-    return sse_plain(a, b, n, rows, stride);
+    gv_cpu_once(&sse_once, sse_dsp_init);
+    return sse_kernel(a, b, n, rows, stride);
 }

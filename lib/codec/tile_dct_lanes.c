@@ -40,38 +40,29 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/cpu.h"
 #include "codec/tile_dct_lanes.h"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if GV_HAVE_X86_SIMD
 #include <immintrin.h>
-#define HAVE_LANES 1
-#else
-#define HAVE_LANES 0
 #endif
 
-static int lanes_allowed = 1;
+/* The lanes need AVX-512 F, BW and VBMI, and POPCNT (base/cpu.h); the
+ * choice is made once per mask, as every kernel's is. */
+#define LANES_FLAGS (GV_CPU_AVX512 | GV_CPU_AVX512VBMI | GV_CPU_POPCNT)
 
-static int cpu_has_lanes(void)
-{
-#if HAVE_LANES
-    return __builtin_cpu_supports("avx512f") &&
-           __builtin_cpu_supports("avx512bw") &&
-           __builtin_cpu_supports("avx512vbmi") &&
-           __builtin_cpu_supports("popcnt");
-#else
-    return 0;
-#endif
-}
+static int lanes_on;
+static struct gv_cpu_once lanes_once = GV_CPU_ONCE_INIT;
 
-int gv_dct_lanes(int on)
+static void lanes_dsp_init(unsigned flags)
 {
-    lanes_allowed = on;
-    return gv_dct_lanes_usable();
+    lanes_on = GV_HAVE_X86_SIMD && (flags & LANES_FLAGS) == LANES_FLAGS;
 }
 
 int gv_dct_lanes_usable(void)
 {
-    return lanes_allowed && cpu_has_lanes();
+    gv_cpu_once(&lanes_once, lanes_dsp_init);
+    return lanes_on;
 }
 
 static _Thread_local unsigned long groups_tried, groups_refused;
@@ -108,7 +99,7 @@ struct gv_dct_lanes_arena *gv_dct_lanes_arena(void)
     return rows;
 }
 
-#if HAVE_LANES
+#if GV_HAVE_X86_SIMD
 
 #define ROW16 (3 * 8 * GV_DCT_PLANE)  /* int16 in a gv_dct_row */
 #define PLANE8 (8 * GV_DCT_PLANE)     /* int16 in a channel's row */

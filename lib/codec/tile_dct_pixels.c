@@ -25,17 +25,17 @@
  * the colour) add Y to R, G and B, which is what YCoCg-R gives for
  * Co = Cg = 0.  Arithmetic shifts of negative numbers go through asr(), a
  * floor division, so that the result does not depend on the compiler.
+ * The row function is picked from gv_cpu_flags() (base/cpu.h) into a
+ * one-entry table, add_row.
  */
 #include <string.h>
 
+#include "base/cpu.h"
 #include "codec/tile_dct_pixels.h"
 #include "codec/tile_layout.h"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if GV_HAVE_X86_SIMD
 #include <immintrin.h>
-#define HAVE_AVX2_PATH 1
-#else
-#define HAVE_AVX2_PATH 0
 #endif
 
 const int32_t gv_dct_matrix[8][8] = {
@@ -59,18 +59,6 @@ const uint8_t gv_dct_zz_cols[65] = {
     6, 6, 6, 6, 6, 6, 7, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8,
     8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8, 8,
 };
-
-static int simd_allowed = 1;
-
-int gv_dct_simd(int level)
-{
-    simd_allowed = level;
-#if HAVE_AVX2_PATH
-    if (level >= 1 && __builtin_cpu_supports("avx2"))
-        return 1;
-#endif
-    return 0;
-}
 
 /* floor(a / 2^s).  GCC and Clang define >> of a negative number as the
  * arithmetic shift (and vectorize it); anything else gets the portable
@@ -208,7 +196,7 @@ static inline void block_portable(int16_t *const d[3], const int n[3],
               channels == 1 || !(n[1] | n[2]), e);
 }
 
-#if HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 
 #define AVX2 __attribute__((target("avx2")))
 
@@ -462,15 +450,13 @@ AVX2 static int block_avx2(const struct avx2_matrix *m, int16_t *const d[3],
 
 #endif
 
-void gv_dct_add_row(gv_dct_row co, const uint8_t eobs[3][GV_DCT_BLOCKS],
-                    int channels, int by, uint8_t *out)
+/* A row of blocks; with m, whole blocks by AVX2 where it may (the tile's
+ * last row and column of blocks, one pixel wide, and blocks out of its
+ * 16-bit range by the portable path). */
+static inline void add_row(gv_dct_row co, const uint8_t eobs[3][GV_DCT_BLOCKS],
+                           int channels, int by, uint8_t *out, void *m)
 {
-#if HAVE_AVX2_PATH
-    const int avx2 = simd_allowed >= 1 && __builtin_cpu_supports("avx2");
-    struct avx2_matrix m;
-    if (avx2)
-        avx2_matrix_init(&m);
-#endif
+    (void)m;   /* unused where there are no x86 kernels */
     const size_t stride = (size_t)GV_TILE * channels;
     const int y0 = 8 * by, rows = y0 + 8 <= GV_TILE ? 8 : GV_TILE - y0;
     for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
@@ -482,14 +468,51 @@ void gv_dct_add_row(gv_dct_row co, const uint8_t eobs[3][GV_DCT_BLOCKS],
                                &co[2][0][8 * bx]};
         const int x0 = 8 * bx, cols = x0 + 8 <= GV_TILE ? 8 : GV_TILE - x0;
         uint8_t *px = out + (size_t)y0 * stride + (size_t)x0 * channels;
-#if HAVE_AVX2_PATH
-        /* Whole blocks by AVX2 where it may; the tile's last row and
-         * column of blocks (one pixel wide) and blocks out of its 16-bit
-         * range by the portable path. */
-        if (avx2 && rows == 8 && cols == 8 &&
-            block_avx2(&m, d, n, channels, px, stride))
+#if GV_HAVE_X86_SIMD
+        if (m && rows == 8 && cols == 8 &&
+            block_avx2(m, d, n, channels, px, stride))
             continue;
 #endif
         block_portable(d, n, channels, px, stride, rows, cols);
     }
+}
+
+typedef void add_row_fn(gv_dct_row, const uint8_t[3][GV_DCT_BLOCKS], int, int,
+                        uint8_t *);
+
+static void add_row_c(gv_dct_row co, const uint8_t eobs[3][GV_DCT_BLOCKS],
+                      int channels, int by, uint8_t *out)
+{
+    add_row(co, eobs, channels, by, out, NULL);
+}
+
+#if GV_HAVE_X86_SIMD
+static void add_row_avx2(gv_dct_row co, const uint8_t eobs[3][GV_DCT_BLOCKS],
+                         int channels, int by, uint8_t *out)
+{
+    struct avx2_matrix m;
+    avx2_matrix_init(&m);
+    add_row(co, eobs, channels, by, out, &m);
+}
+#endif
+
+static add_row_fn *add_row_kernel = add_row_c;
+static struct gv_cpu_once add_row_once = GV_CPU_ONCE_INIT;
+
+static void pixels_dsp_init(unsigned flags)
+{
+    add_row_kernel = add_row_c;
+#if GV_HAVE_X86_SIMD
+    if (flags & GV_CPU_AVX2)
+        add_row_kernel = add_row_avx2;
+#else
+    (void)flags;
+#endif
+}
+
+void gv_dct_add_row(gv_dct_row co, const uint8_t eobs[3][GV_DCT_BLOCKS],
+                    int channels, int by, uint8_t *out)
+{
+    gv_cpu_once(&add_row_once, pixels_dsp_init);
+    add_row_kernel(co, eobs, channels, by, out);
 }

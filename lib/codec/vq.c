@@ -4,9 +4,9 @@
  * The search packs two dimensions per 32-bit lane so that one
  * _mm256_madd_epi16 yields d0^2 + d1^2 for eight codevectors at once; a
  * codevector needs dim/2 (6 for RGB) load-subtract-madd-add steps.  An
- * AVX-512 kernel (16 codevectors at once) or the AVX2 one is chosen at run
- * time (GIGAVIEW_NO_AVX512 in the environment rules out the first), and
- * each returns exactly what the portable loop returns (the least cost,
+ * AVX-512 kernel (16 codevectors at once) or the AVX2 one is picked from
+ * gv_cpu_flags() (base/cpu.h; GIGAVIEW_SIMD=avx2 rules out the first)
+ * into a one-entry table, and each returns exactly what the portable loop returns (the least cost,
  * ties to the lowest index), so stores do not depend on the CPU that
  * wrote them.  A per-codevector bias is where each cost starts: every
  * path adds it before the first pair, in int32.  The codevectors are kept
@@ -28,12 +28,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-#define VQ_HAVE_X86 1
-#endif
-
+#include "base/cpu.h"
 #include "codec/vq.h"
+
+#if GV_HAVE_X86_SIMD
+#include <immintrin.h>
+#endif
 
 static inline int32_t pack_pair(int a, int b)
 {
@@ -183,7 +183,7 @@ static inline int64_t guess_cost(const struct vq_search *s, const int16_t *x,
     return d;
 }
 
-#ifdef VQ_HAVE_X86
+#if GV_HAVE_X86_SIMD
 /* One run of 16 codevectors for nearest_avx2_dim, as two halves of 8:
  * the costs, kept per lane where less than the lane's best (or equal
  * with a lower index); with ub, *ub is lowered to the least best when
@@ -303,7 +303,7 @@ nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
 }
 #endif
 
-#ifdef VQ_HAVE_X86
+#if GV_HAVE_X86_SIMD
 /* One run of 16 codevectors for nearest_avx512_dim: the costs, kept
  * per lane where less than the lane's best (or equal with a lower index);
  * *ub is lowered to the least best when some cost fell below it. */
@@ -482,74 +482,45 @@ nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
 }
 #endif
 
-static int search_path(enum vq_path path, const struct vq_search *s,
-                       const int16_t *vecs, size_t n, uint16_t *idx,
-                       uint32_t *dist, int warm)
+/* A search kernel; warm: start from the guesses in idx. */
+typedef void nearest_fn(const struct vq_search *, const int16_t *, size_t,
+                        uint16_t *, uint32_t *, int);
+
+static void nearest_c(const struct vq_search *s, const int16_t *vecs,
+                      size_t n, uint16_t *idx, uint32_t *dist, int warm)
 {
-    switch (path) {
-    case VQ_PATH_PORTABLE:
-        nearest_portable(s, vecs, n, idx, dist);
-        return 0;
-#ifdef VQ_HAVE_X86
-    case VQ_PATH_AVX2:
-        if (!__builtin_cpu_supports("avx2"))
-            return -1;
-        nearest_avx2(s, vecs, n, idx, dist, warm);
-        return 0;
-    case VQ_PATH_AVX512:
-        if (!__builtin_cpu_supports("avx512f") || !__builtin_cpu_supports("avx512bw"))
-            return -1;
-        nearest_avx512(s, vecs, n, idx, dist, warm);
-        return 0;
+    (void)warm;   /* the exhaustive search needs no bound */
+    nearest_portable(s, vecs, n, idx, dist);
+}
+
+static nearest_fn *nearest_kernel = nearest_c;
+static struct gv_cpu_once nearest_once = GV_CPU_ONCE_INIT;
+
+static void vq_dsp_init(unsigned flags)
+{
+    nearest_kernel = nearest_c;
+#if GV_HAVE_X86_SIMD
+    if (flags & GV_CPU_AVX512)
+        nearest_kernel = nearest_avx512;
+    else if (flags & GV_CPU_AVX2)
+        nearest_kernel = nearest_avx2;
+#else
+    (void)flags;
 #endif
-    default:
-        (void)warm;
-        return -1;
-    }
-}
-
-int vq_nearest_path(enum vq_path path, const struct vq_search *s,
-                    const int16_t *vecs, size_t n, uint16_t *idx,
-                    uint32_t *dist)
-{
-    return search_path(path, s, vecs, n, idx, dist, 0);
-}
-
-int vq_nearest_warm_path(enum vq_path path, const struct vq_search *s,
-                         const int16_t *vecs, size_t n, uint16_t *idx,
-                         uint32_t *dist)
-{
-    return search_path(path, s, vecs, n, idx, dist, 1);
-}
-
-/* The best path this CPU has (chosen once). */
-static enum vq_path best_path(void)
-{
-    static int path = -1;
-    if (path < 0) {
-        int p = VQ_PATH_PORTABLE;
-#ifdef VQ_HAVE_X86
-        if (__builtin_cpu_supports("avx512f") &&
-            __builtin_cpu_supports("avx512bw") && !getenv("GIGAVIEW_NO_AVX512"))
-            p = VQ_PATH_AVX512;
-        else if (__builtin_cpu_supports("avx2"))
-            p = VQ_PATH_AVX2;
-#endif
-        path = p;
-    }
-    return (enum vq_path)path;
 }
 
 void vq_nearest(const struct vq_search *s, const int16_t *vecs, size_t n,
                 uint16_t *idx, uint32_t *dist)
 {
-    search_path(best_path(), s, vecs, n, idx, dist, 0);
+    gv_cpu_once(&nearest_once, vq_dsp_init);
+    nearest_kernel(s, vecs, n, idx, dist, 0);
 }
 
 void vq_nearest_warm(const struct vq_search *s, const int16_t *vecs, size_t n,
                      uint16_t *idx, uint32_t *dist)
 {
-    search_path(best_path(), s, vecs, n, idx, dist, 1);
+    gv_cpu_once(&nearest_once, vq_dsp_init);
+    nearest_kernel(s, vecs, n, idx, dist, 1);
 }
 
 static inline int8_t clamp_s8(long v)
