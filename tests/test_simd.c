@@ -214,7 +214,9 @@ static int run_dct_encode(uint64_t *h)
 
 /* vq_nearest and vq_nearest_warm: codebook sizes on both sides of the
  * small-codebook kernel (32) and of a run (16), duplicated codevectors
- * (ties), biases at 0, VQ_BIAS_MAX and beyond, residuals at +-255. */
+ * (ties), books of three distinct codevectors repeated (ties between runs
+ * in the same lane), biases at 0, VQ_BIAS_MAX and beyond, residuals at
+ * +-255. */
 static int run_vq(uint64_t *h)
 {
     static const int ks[] = {1, 5, 16, 17, 32, 33, 256, 1000};
@@ -229,7 +231,7 @@ static int run_vq(uint64_t *h)
     int c = 0;
     if (!s || !book || !bias || !vecs || !idx || !dist)
         fail("out of memory");
-    for (int clustered = 0; clustered < 2; clustered++)
+    for (int clustered = 0; clustered < 3; clustered++)
         for (int dim = 4; dim <= 12; dim += 8)
             for (size_t ki = 0; ki < sizeof ks / sizeof ks[0]; ki++) {
                 const int k = ks[ki];
@@ -246,12 +248,16 @@ static int run_vq(uint64_t *h)
                     memcpy(book + j * dim, book + (j - 1) * dim, (size_t)dim);
                     bias[j] = bias[j - 1];
                 }
+                for (int j = 3; clustered == 2 && j < k; j++) {
+                    memcpy(book + j * dim, book + j % 3 * dim, (size_t)dim);
+                    bias[j] = bias[j % 3];
+                }
                 for (size_t i = 0; i < n; i++) {
                     const int j = (int)(test_rand(&rng) % (uint32_t)k);
                     for (int d = 0; d < dim; d++) {
                         const uint32_t r = test_rand(&rng) % 16;
                         vecs[i * VQ_STRIDE + d] = (int16_t)(
-                            clustered ? book[j * dim + d] + (int)(test_rand(&rng) % 7) - 3 :
+                            clustered == 1 ? book[j * dim + d] + (int)(test_rand(&rng) % 7) - 3 :
                             r == 0 ? 255 : r == 1 ? -255 : (int)(test_rand(&rng) % 161) - 80);
                     }
                 }
