@@ -29,6 +29,7 @@
 
 #include <jpeglib.h>
 
+#include "base/cpu.h"
 #include "render/store_decoder.h"
 #include "gpu/gpu.h"
 #include "gpu/gpu_decode.h"
@@ -80,7 +81,7 @@ static void cpu_decode_one(void *ctx, size_t i, int worker)
         out = malloc(gv_tile_bytes(channels));
     const struct tile_ref *t = &tiles[i];
     const uint8_t *parent = t->parent < 0 ? root_tile : decoded[t->parent];
-    struct gv_error err;
+    struct gv_error err = {0};
     if (predict_only) {
         gv_predict(parent, channels, (int)(t->tx & 1), (int)(t->ty & 1), out);
         return;
@@ -233,7 +234,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: decode_bench [--no-gpu] [--no-cpu] STORE [SOURCE-IMAGE]\n");
         return 2;
     }
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_store *s = gv_store_open(argv[1], &err);
     if (!s) {
         fprintf(stderr, "%s\n", err.text);
@@ -310,13 +311,15 @@ int main(int argc, char **argv)
         /* Where the prediction runs at level 3 (AVX-512 VBMI and VNNI),
          * the same decoder with the level-2 prediction (AVX-512BW without
          * them, as on Skylake-SP and Cascade Lake), in this run. */
-        if (gv_predict_simd(3) == 3) {
-            gv_predict_simd(2);
+        const unsigned l3 = GV_CPU_AVX512 | GV_CPU_AVX512VBMI | GV_CPU_AVX512VNNI;
+        const unsigned flags = gv_cpu_flags();
+        if ((flags & l3) == l3) {
+            gv_cpu_set_mask(flags & ~(unsigned)GV_CPU_AVX512VNNI);
             double old1 = cpu_run(1), old1_c = last_cpu_rate;
             predict_only = 1;
             double oldp = cpu_run(1), oldp_c = last_cpu_rate;
             predict_only = 0;
-            gv_predict_simd(3);
+            gv_cpu_set_mask(flags);
             printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
                    "CPU reference, level-2 prediction", old1, old1_c);
             printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
@@ -327,10 +330,12 @@ int main(int argc, char **argv)
         }
         /* Where layout D's rANS rows run in AVX-512 lanes, the same
          * decoder with the scalar rows (two in lockstep), in this run. */
-        if (gv_dct_lanes(1)) {
-            gv_dct_lanes(0);
+        if (gv_dct_lanes_usable()) {
+            /* Of the kernels only the lanes need POPCNT: without it the
+             * rest stays as it was. */
+            gv_cpu_set_mask(flags & ~(unsigned)GV_CPU_POPCNT);
             double sc1 = cpu_run(1), sc1_c = last_cpu_rate;
-            gv_dct_lanes(1);
+            gv_cpu_set_mask(flags);
             printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
                    "CPU reference, scalar rANS rows", sc1, sc1_c);
             printf("ratio rANS rows in lanes / scalar: decoder %.2fx (per CPU-second %.2fx)\n",

@@ -118,7 +118,7 @@ static int nthreads;
 static int run_cpu(const uint32_t *ids, uint32_t w, uint32_t h, int threads,
                    int sites, float *dist)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct gv_edt_out o = {NULL, NULL, NULL, dist};
     size_t n = (size_t)w * h;
     if (sites) {
@@ -172,7 +172,7 @@ static int egl_setup(void)
 {
     if (egl)
         return 0;
-    struct gv_error err;
+    struct gv_error err = {0};
     const char *path = getenv("GV_EDT_GRAPH");
     FILE *f = path ? fopen(path, "rb") : NULL;
     if (!f)
@@ -212,7 +212,7 @@ static int run_egl(const uint32_t *ids, uint32_t w, uint32_t h, float *dist,
     struct gv_filter_input in = {.w = w, .h = h, .rgba = rgba, .roi_w = w, .roi_h = h,
                                  .params = egl_params, .path = path};
     float *out = NULL;
-    struct gv_error err;
+    struct gv_error err = {0};
     int rc = gv_filter_run(egl, egl_graph, &in, &out, NULL, &err);
     if (rc)
         fprintf(stderr, "edt_bench: %s\n", err.text);

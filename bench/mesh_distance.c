@@ -279,7 +279,7 @@ static int load(const char *path, struct gv_trimesh *m)
     uint8_t *b = malloc(n > 0 ? (size_t)n : 1);
     size_t got = fread(b, 1, (size_t)n, f);
     fclose(f);
-    struct gv_error err;
+    struct gv_error err = {0};
     int rc = gv_mesh_read(b, got, GV_MESH_IN_AUTO, NULL, m, &err);
     if (rc < 0)
         fprintf(stderr, "mesh_distance: %s: %s\n", path, err.text);

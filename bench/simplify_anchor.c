@@ -45,7 +45,7 @@ int main(int argc, char **argv)
     size_t got = fread(b, 1, (size_t)n, f);
     fclose(f);
     struct gv_trimesh m, o = {0};
-    struct gv_error err;
+    struct gv_error err = {0};
     if (gv_mesh_read(b, got, GV_MESH_IN_AUTO, NULL, &m, &err) < 0) {
         fprintf(stderr, "simplify_anchor: %s\n", err.text);
         return 1;

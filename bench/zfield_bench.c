@@ -115,7 +115,7 @@ int main(int argc, char **argv)
                 "[DEM-u16.png OFFSET]\n");
         return 2;
     }
-    struct gv_error err;
+    struct gv_error err = {0};
     const size_t cells = (size_t)side * side;
     float *z = fractal(side);
     uint8_t *en = malloc(cells);

@@ -13,7 +13,7 @@
  *    (edt_kernel.h) serves all four: a line is a row (y-sweeps) or a
  *    column (x-sweeps), and each of its positions takes the best of own,
  *    prev[i], prev[i-1], prev[i+1].  The kernel runs 16 lanes along the
- *    line (AVX-512, AVX2 or SSE2 picked at run time).
+ *    line (AVX-512, AVX2 or SSE2 picked by gv_cpu_flags(), base/cpu.h).
  *  - y-sweeps run in place on the rows.  x-sweeps need columns as
  *    contiguous lines: a strip of K = 64 columns is transposed (16 x 16
  *    blocks in registers) into K + 1 column lines ("slots"; slot 0 is the
@@ -41,11 +41,9 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
-#if defined(__x86_64__) || defined(__i386__)
+#include "base/cpu.h"
+#if GV_HAVE_X86_SIMD
 #include <immintrin.h>
-#define EDT_X86 1
-#else
-#define EDT_X86 0
 #endif
 
 #include "edt_cpu.h"
@@ -214,7 +212,7 @@ static inline void edt_store_scalar(uint32_t *restrict px,
 #undef EDT_ISA
 #undef EDT_ATTR
 
-#if EDT_X86
+#if GV_HAVE_X86_SIMD
 #define EDT_ATTR __attribute__((target("sse2")))
 #define EDT_ISA 1
 #define EDT_PACKED 0
@@ -290,24 +288,29 @@ static int edt_yes(void)
     return 1;
 }
 
-#if EDT_X86
+#if GV_HAVE_X86_SIMD
+static int edt_has_sse2(void)
+{
+    return (gv_cpu_flags() & GV_CPU_SSE2) != 0;
+}
+
 static int edt_has_avx2(void)
 {
-    return __builtin_cpu_supports("avx2");
+    return (gv_cpu_flags() & GV_CPU_AVX2) != 0;
 }
 
 static int edt_has_avx512(void)
 {
-    return __builtin_cpu_supports("avx512f");
+    return (gv_cpu_flags() & GV_CPU_AVX512) != 0;
 }
 #endif
 
 /* Best first. */
 static const struct edt_isa edt_isas[] = {
-#if EDT_X86
+#if GV_HAVE_X86_SIMD
     {"avx512", EDT_K(avx512_w), EDT_K(avx512_p), edt_has_avx512},
     {"avx2", EDT_K(avx2_w), EDT_K(avx2_p), edt_has_avx2},
-    {"sse2", EDT_K(sse2_w), EDT_K(sse2_p), edt_yes},
+    {"sse2", EDT_K(sse2_w), EDT_K(sse2_p), edt_has_sse2},
 #endif
     {"c", EDT_K(c_w), EDT_K(c_p), edt_yes},
 };
@@ -381,7 +384,7 @@ static void edt_barrier_wait(struct edt_barrier *b)
     for (unsigned spins = 0; spins < b->spins; spins++) {
         if (atomic_load(&b->gen) != gen)
             return;
-#if EDT_X86
+#if GV_HAVE_X86_SIMD
         _mm_pause();
 #endif
     }

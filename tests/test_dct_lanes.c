@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "base/byteorder.h"
+#include "base/cpu.h"
 #include "codec/predict.h"
 #include "codec/tile.h"
 #include "codec/tile_dct.h"
@@ -39,9 +40,9 @@ static int same(const uint8_t *bb, size_t len, int C, int *rc_out)
     struct gv_error e0, e1;
     memset(&e0, 0, sizeof e0);
     memset(&e1, 0, sizeof e1);
-    gv_dct_lanes(0);
+    gv_cpu_set_mask(GV_CPU_LEVEL_AVX2);
     int rc0 = gv_dct_decode(bb, len, C, parent, 1, 0, out0, &e0);
-    gv_dct_lanes(1);
+    gv_cpu_set_mask(GV_CPU_LEVEL_MAX);
     unsigned long t0, r0, t1, r1;
     gv_dct_lanes_counts(&t0, &r0);
     int rc1 = gv_dct_decode(bb, len, C, parent, 1, 0, out1, &e1);
@@ -141,7 +142,7 @@ static size_t test_encoded(void)
                 /* same() decodes against quadrant (1, 0): predict that. */
                 int ok = len > 0 && same(buf, len, C, &rc) && rc == 0;
                 struct gv_error err = {0};
-                gv_dct_lanes(1);
+                gv_cpu_set_mask(GV_CPU_LEVEL_MAX);
                 ok = ok && gv_dct_decode(buf, len, C, parent, photo ? 0 : 1, 0,
                                          out1, &err) == 0 &&
                      !memcmp(out1, recon, (size_t)T * T * C);
@@ -248,7 +249,7 @@ static void test_damaged(const uint8_t *good, size_t len, int C)
     b[e5 - 3] ^= 0x40;
     b[s9 + 5] ^= 0x40;
     struct gv_error err = {0};
-    gv_dct_lanes(1);
+    gv_cpu_set_mask(GV_CPU_LEVEL_MAX);
     int r = gv_dct_decode(b, len, C, parent, 1, 0, out1, &err);
     check(same(b, len, C, &rc) && r < 0 && strstr(err.text, "stream 5 ") != NULL,
           "C=%d streams 5 and 9 damaged: stream 5 named (%s)", C,
@@ -257,7 +258,8 @@ static void test_damaged(const uint8_t *good, size_t len, int C)
 
 int main(void)
 {
-    if (!gv_dct_lanes(1)) {
+    gv_cpu_set_mask(GV_CPU_LEVEL_MAX);
+    if (!gv_dct_lanes_usable()) {
         tap_skip("no AVX-512 VBMI on this CPU", "the rANS rows in lanes");
         return tap_done();
     }

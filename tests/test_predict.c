@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "base/byteorder.h"
+#include "base/cpu.h"
 #include "codec/predict.h"
 #include "codec/tile.h"
 #include "codec/tile_rans.h"
@@ -117,6 +118,20 @@ static int count_diff(const uint8_t *a, const uint8_t *b, size_t n)
     return d;
 }
 
+/* Mask the CPU's flags (base/cpu.h) down to the prediction's level 0
+ * (portable), 1 (AVX2), 2 (AVX-512BW) or 3 (AVX-512 VBMI and VNNI);
+ * returns the level that the flags granted now give. */
+static int predict_level(int level)
+{
+    static const unsigned masks[4] = {
+        GV_CPU_LEVEL_C, GV_CPU_LEVEL_AVX2,
+        GV_CPU_LEVEL_AVX512 & ~(unsigned)(GV_CPU_AVX512VBMI | GV_CPU_AVX512VNNI),
+        GV_CPU_LEVEL_AVX512};
+    const unsigned f = gv_cpu_set_mask(masks[level]);
+    const unsigned l3 = GV_CPU_AVX512 | GV_CPU_AVX512VBMI | GV_CPU_AVX512VNNI;
+    return !(f & GV_CPU_AVX2) ? 0 : (f & l3) == l3 ? 3 : (f & GV_CPU_AVX512) ? 2 : 1;
+}
+
 int main(void)
 {
     const size_t max = gv_tile_bytes(3);
@@ -130,7 +145,7 @@ int main(void)
                                        "AVX-512 VBMI"};
     int paths[4], npaths = 0;
     for (int level = 3; level >= 0; level--)
-        if (gv_predict_simd(level) == level)
+        if (predict_level(level) == level)
             paths[npaths++] = level;
     printf("# paths on this CPU:");
     for (int i = 0; i < npaths; i++)
@@ -145,7 +160,7 @@ int main(void)
                 const int qx = q & 1, qy = q >> 1;
                 reference_decode(P, C, qx, qy, NULL, NULL, want);
                 for (int i = 0; i < npaths; i++) {
-                    gv_predict_simd(paths[i]);
+                    predict_level(paths[i]);
                     gv_predict(P, C, qx, qy, got);
                     check(count_diff(got, want, n) == 0,
                           "gv_predict, %d channel(s), %s parent, quadrant (%d,%d), "
@@ -165,7 +180,7 @@ int main(void)
                 check(bad == 0, "200 rows in random order, %d channel(s), %s parent, "
                       "quadrant (%d,%d): %d samples differ", C, kind_name[kind],
                       qx, qy, bad);
-                gv_predict_simd(3);
+                gv_cpu_set_mask(GV_CPU_LEVEL_MAX);
             }
         }
 
@@ -192,7 +207,7 @@ int main(void)
         reference_decode(P, C, qx, qy, book, idx, want);
         const size_t n = gv_tile_bytes(C);
         for (int i = 0; i < npaths; i++) {
-            gv_predict_simd(paths[i]);
+            predict_level(paths[i]);
             int rc = gv_tile_decode(buf, len, C, P, qx, qy, got, &err);
             check(rc == 0 && count_diff(got, want, n) == 0,
                   "tile %d: %d channel(s), rate %d, %s layout, quadrant (%d,%d), "
@@ -200,7 +215,7 @@ int main(void)
                   entropy ? "entropy-coded" : "fixed", qx, qy,
                   path_name[paths[i]], rc == 0 ? count_diff(got, want, n) : -1);
         }
-        gv_predict_simd(3);
+        gv_cpu_set_mask(GV_CPU_LEVEL_MAX);
     }
     check(layouts[0] > 0 && layouts[1] > 0, "both layouts tested (%d fixed, %d "
           "entropy-coded)", layouts[0], layouts[1]);

@@ -11,6 +11,7 @@
 
 #include "store/geometry.h"
 #include "base/byteorder.h"
+#include "base/cpu.h"
 #include "codec/tile.h"
 #include "codec/sse.h"
 #include "codec/tile_rans.h"
@@ -105,7 +106,8 @@ static void reference_nearest(const int8_t *book, const int32_t *bias, int k,
  * ties occur) and residuals (some at +-255, the extremes), and on
  * residuals close to the codevectors (clustered), where the SIMD paths
  * skip most runs of their search (vq.c: pruning by component sums).
- * Each path is also started from guesses (vq_nearest_warm_path): the
+ * The paths are chosen by gv_cpu_set_mask (base/cpu.h).  Each is also
+ * started from guesses (vq_nearest_warm): the
  * answer itself, a random index, and an equal-cost duplicate of higher
  * index than the answer, which must not win the tie. */
 static void check_biased_search(void)
@@ -121,8 +123,13 @@ static void check_biased_search(void)
     uint32_t *dist = malloc(n * sizeof *dist), rcost;
     if (!s || !book || !bias || !vecs || !idx || !dist)
         fail("out of memory");
-    for (int path = VQ_PATH_PORTABLE; path <= VQ_PATH_AVX512; path++) {
-        int wrong = 0, ties = 0, runs = 0, have = 1, wrong_warm = 0, tie_guesses = 0;
+    static const unsigned masks[] = {GV_CPU_LEVEL_C, GV_CPU_LEVEL_AVX2,
+                                     GV_CPU_LEVEL_AVX512};
+    static const unsigned needs[] = {0, GV_CPU_AVX2, GV_CPU_AVX512};
+    for (int path = 0; path < 3; path++) {
+        const unsigned granted = gv_cpu_set_mask(masks[path]);
+        int wrong = 0, ties = 0, runs = 0, wrong_warm = 0, tie_guesses = 0;
+        int have = (granted & needs[path]) == needs[path];
         for (int clustered = 0; clustered < 2 && have; clustered++)
         for (int dim = 4; dim <= 12 && have; dim += 8)
             for (size_t ki = 0; ki < sizeof ks / sizeof ks[0] && have; ki++) {
@@ -153,10 +160,7 @@ static void check_biased_search(void)
                 }
                 vq_search_prepare(s, book, k, dim);
                 vq_search_set_bias(s, bias);
-                if (vq_nearest_path(path, s, vecs, n, idx, dist) < 0) {
-                    have = 0;
-                    break;
-                }
+                vq_nearest(s, vecs, n, idx, dist);
                 runs++;
                 for (size_t i = 0; i < n; i++) {
                     reference_nearest(book, bias, k, dim, vecs + i * VQ_STRIDE, &ridx, &rcost);
@@ -173,8 +177,7 @@ static void check_biased_search(void)
                         idx[i] = i % 3 == 1 ? ridx : (uint16_t)(next_rand() % (uint32_t)k);
                     }
                 }
-                if (vq_nearest_warm_path(path, s, vecs, n, idx, dist) < 0)
-                    fail("warm search refused on a path the cold one took");
+                vq_nearest_warm(s, vecs, n, idx, dist);
                 for (size_t i = 0; i < n; i++) {
                     reference_nearest(book, bias, k, dim, vecs + i * VQ_STRIDE, &ridx, &rcost);
                     wrong_warm += idx[i] != ridx || dist[i] != rcost;
@@ -190,6 +193,7 @@ static void check_biased_search(void)
               "%zu answers differ from the reference (%d guesses tie the answer from above)",
               names[path], wrong_warm, runs * n, tie_guesses);
     }
+    gv_cpu_set_mask(GV_CPU_LEVEL_MAX);
     /* NULL biases: the plain nearest search, the same on the dispatched path. */
     vq_search_set_bias(s, NULL);
     vq_nearest(s, vecs, n, idx, dist);

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "base/byteorder.h"
+#include "base/cpu.h"
 #include "codec/predict.h"
 #include "codec/tile.h"
 #include "codec/tile_dct.h"
@@ -362,7 +363,7 @@ static void test_simd_paths(void)
     static int q[3 * P * P];
     static uint8_t fb[2u << 20];
     uint64_t seed = 11;
-    if (gv_dct_simd(1) < 1) {
+    if (!(gv_cpu_set_mask(GV_CPU_LEVEL_MAX) & GV_CPU_AVX2)) {
         tap_skip("no AVX2 on this CPU", "the AVX2 pixel path against the portable one");
         return;
     }
@@ -374,9 +375,9 @@ static void test_simd_paths(void)
             struct gv_error err = {0};
             dct_fixture_case(k, C, &seed, q, S);
             size_t len = dct_fixture_write(q, S, C, fb);
-            gv_dct_simd(0);
+            gv_cpu_set_mask(GV_CPU_LEVEL_C);
             int rc0 = gv_dct_decode(fb, len, C, parent, 0, 1, recon, &err);
-            gv_dct_simd(1);
+            gv_cpu_set_mask(GV_CPU_LEVEL_MAX);
             int rc1 = gv_dct_decode(fb, len, C, parent, 0, 1, out, &err);
             check(rc0 == 0 && rc1 == 0 &&
                   !memcmp(out, recon, (size_t)T * T * C),

@@ -48,22 +48,27 @@
  *   VPMADDUBSW weighs them in pairs).
  * - On AVX2 alone (level 1) the even and odd children's sums are
  *   interleaved by PSHUFB, four pixel pairs a step.
- * Measured (bench/README.md, 2026-11-26, encoder CPU): level 3 1.5 to 1.7 times the
- * prediction's speed of the session start's AVX-512BW path; level 2 1.17
- * times its own, level 1 1.22 to 1.24 times.
+ * Measured (bench/README.md, 2026-11-26): level 3 1.5 to 1.7 times the
+ * prediction's speed of the earlier AVX-512BW path; level 2 1.17 times
+ * its own, level 1 1.22 to 1.24 times.
+ *
+ * The levels are picked from gv_cpu_flags() (base/cpu.h) into one table,
+ * predict_dsp, filled by predict_dsp_init: level 3 where the flags have
+ * AVX-512 with VBMI and VNNI, level 2 with AVX-512 alone, level 1 with
+ * AVX2, else level 0 (the portable C).  The plain C loops are also
+ * compiled for AVX2 and for AVX-512 (target attributes) and take the
+ * table's place at those levels.
  */
 #include <pthread.h>
 #include <stddef.h>
 #include <string.h>
 
+#include "base/cpu.h"
 #include "codec/predict.h"
 #include "codec/tile.h"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if GV_HAVE_X86_SIMD
 #include <immintrin.h>
-#define HAVE_AVX2_PATH 1
-#else
-#define HAVE_AVX2_PATH 0
 #endif
 
 static const int W_EVEN[4] = {-3, 29, 111, -9};  /* taps at p-2 .. p+1 */
@@ -73,53 +78,6 @@ static const int W_ODD[4] = {-9, 111, 29, -3};   /* taps at p-1 .. p+2 */
 #define OFFSET 16384
 #define ROUND (8192 + 128 * OFFSET)
 #define SUM_MAX (255 * 16384 + 16383)
-
-static int simd_allowed = 3;
-
-int gv_predict_simd(int level)
-{
-    simd_allowed = level;
-#if HAVE_AVX2_PATH
-    if (level >= 3 && __builtin_cpu_supports("avx512bw") &&
-        __builtin_cpu_supports("avx512vbmi") &&
-        __builtin_cpu_supports("avx512vnni"))
-        return 3;
-    if (level >= 2 && __builtin_cpu_supports("avx512bw"))
-        return 2;
-    if (level >= 1 && __builtin_cpu_supports("avx2"))
-        return 1;
-#endif
-    return 0;
-}
-
-static inline int use_avx2(void)
-{
-#if HAVE_AVX2_PATH
-    return simd_allowed >= 1 && __builtin_cpu_supports("avx2");
-#else
-    return 0;
-#endif
-}
-
-static inline int use_avx512(void)
-{
-#if HAVE_AVX2_PATH
-    return simd_allowed >= 2 && __builtin_cpu_supports("avx512bw");
-#else
-    return 0;
-#endif
-}
-
-static inline int use_vbmi(void)
-{
-#if HAVE_AVX2_PATH
-    return simd_allowed >= 3 && __builtin_cpu_supports("avx512bw") &&
-           __builtin_cpu_supports("avx512vbmi") &&
-           __builtin_cpu_supports("avx512vnni");
-#else
-    return 0;
-#endif
-}
 
 static inline int clamp_tile(int i)
 {
@@ -133,20 +91,20 @@ static inline int first_tap(int q, int u)
     return (u & 1) ? p - 1 : p - 2;
 }
 
-/* Where the compiler and CPU allow, the plain C loops are also compiled
- * for AVX2, chosen at load time.  The integers are the same on every
+/* The plain C loops are written once, always inlined, and instantiated
+ * per instruction set (C_LOOPS below); the integers are the same on every
  * path. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define HOT_LOOP __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
-#else
-#define HOT_LOOP
+#define HOT_LOOP __attribute__((always_inline)) static inline
+#if GV_HAVE_X86_SIMD
+#define TARGET_AVX2 __attribute__((target("avx2")))
+#define TARGET_AVX512 __attribute__((target("avx2,avx512f,avx512bw")))
 #endif
 
 /* Even and odd horizontal sums (minus OFFSET) of children k0 <= k < k1,
  * whose taps all lie inside the row: parent pixels p0 + k - k0 onwards,
  * p0 = 256*qx - 2 + k0.  Exact in wrapping 16-bit arithmetic because the
  * true value fits. */
-HOT_LOOP static void filter_interior(const uint8_t *restrict src, int C,
+HOT_LOOP void filter_interior(const uint8_t *restrict src, int C,
                                      uint16_t *restrict even,
                                      uint16_t *restrict odd, int n)
 {
@@ -175,7 +133,7 @@ static void filter_edge(const uint8_t *src, int C, int base, int k,
     }
 }
 
-#if HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 /* Interleave three-sample pixels: dst = even pixel 0, odd pixel 0, even
  * pixel 1, ... for 256 pairs, then even pixel 256.  Eight pairs (48
  * samples) per step, as two-source word permutes; the loads read up to 8
@@ -203,7 +161,7 @@ interleave3_avx512(const uint16_t *even, const uint16_t *odd, int16_t *dst)
 }
 #endif
 
-#if HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 /*
  * The horizontal sums of one parent row straight into the interleaved
  * child order, 32 at a time, with AVX-512 VBMI: child u (of the interior,
@@ -358,7 +316,7 @@ static void filter_row_vbmi(const uint8_t *src, int C, int qx, int16_t *dst)
 }
 #endif
 
-#if HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 /* interleave3_avx512 with PSHUFB on 128-bit vectors (level 1): four pairs
  * (24 samples, 48 bytes) a step from two overlapping loads of each of
  * even[] and odd[] (samples 0-7 and 4-11 of the four pixels), each output
@@ -402,19 +360,30 @@ interleave3_ssse3(const uint16_t *even, const uint16_t *odd, int16_t *dst)
  * or 255 and 256 (qx = 1) reach outside the tile and are clamped; the
  * rest is a straight filter over the row.
  */
-static void filter_row(const uint8_t *src, int C, int qx, int16_t *dst)
+typedef void interior_fn(const uint8_t *restrict, int, uint16_t *restrict,
+                         uint16_t *restrict, int);
+typedef void interleave3_fn(const uint16_t *, const uint16_t *, int16_t *);
+
+static void interleave3_c(const uint16_t *even, const uint16_t *odd, int16_t *dst)
 {
-#if HAVE_AVX2_PATH
-    if (use_vbmi()) {
-        filter_row_vbmi(src, C, qx, dst);
-        return;
+    /* Three samples per pixel: copies of four, each spare sample
+     * overwritten by the next copy (even[] and odd[] have spare room). */
+    for (int k = 0; k < 256; k++) {
+        memcpy(dst + 6 * k, even + 3 * k, 4 * sizeof *dst);
+        memcpy(dst + 6 * k + 3, odd + 3 * k, 4 * sizeof *dst);
     }
-#endif
+    memcpy(dst + 6 * 256, even + 3 * 256, 3 * sizeof *dst);
+}
+
+__attribute__((always_inline)) static inline void
+filter_row(const uint8_t *src, int C, int qx, int16_t *dst,
+           interior_fn *interior, interleave3_fn *interleave3)
+{
     uint16_t even[257 * 3 + 16], odd[257 * 3 + 16];   /* spare for wide loads */
     const int base = 256 * qx - 2;
     const int k0 = qx ? 0 : 2, k1 = qx ? 255 : 257;   /* interior [k0, k1) */
-    filter_interior(src + (size_t)(base + k0) * C, C, even + k0 * C,
-                    odd + k0 * C, (k1 - k0) * C);
+    interior(src + (size_t)(base + k0) * C, C, even + k0 * C, odd + k0 * C,
+             (k1 - k0) * C);
     for (int k = 0; k < k0; k++)
         filter_edge(src, C, base, k, even, odd);
     for (int k = k1; k < 257; k++)
@@ -428,27 +397,11 @@ static void filter_row(const uint8_t *src, int C, int qx, int16_t *dst)
         dst[512] = (int16_t)even[256];
         return;
     }
-#if HAVE_AVX2_PATH
-    if (use_avx512()) {
-        interleave3_avx512(even, odd, dst);
-        return;
-    }
-    if (use_avx2()) {
-        interleave3_ssse3(even, odd, dst);
-        return;
-    }
-#endif
-    /* Three samples per pixel: copies of four, each spare sample
-     * overwritten by the next copy (even[] and odd[] have spare room). */
-    for (int k = 0; k < 256; k++) {
-        memcpy(dst + 6 * k, even + 3 * k, 4 * sizeof *dst);
-        memcpy(dst + 6 * k + 3, odd + 3 * k, 4 * sizeof *dst);
-    }
-    memcpy(dst + 6 * 256, even + 3 * 256, 3 * sizeof *dst);
+    interleave3(even, odd, dst);
 }
 
 /* One child row from the four filtered parent rows it reads (portable). */
-HOT_LOOP static void vertical_c(const int16_t *restrict h0,
+HOT_LOOP void vertical_c(const int16_t *restrict h0,
                                 const int16_t *restrict h1,
                                 const int16_t *restrict h2,
                                 const int16_t *restrict h3, const int *w,
@@ -463,7 +416,7 @@ HOT_LOOP static void vertical_c(const int16_t *restrict h0,
     }
 }
 
-#if HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 /* Weights w[k] and w[k + 1] as a VPMADDWD operand: two 16-bit values in a
  * 32-bit lane, w[k] in the low half. */
 static inline int32_t weight_pair(const int *w, int k)
@@ -473,7 +426,7 @@ static inline int32_t weight_pair(const int *w, int k)
 
 #endif
 
-#if HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 /*
  * The vertical sum on pairs of rows (level 3).  A child row is
  * w0 h[t] + w1 h[t+1] + w2 h[t+2] + w3 h[t+3], rows clamped to the tile;
@@ -612,6 +565,22 @@ vertical_pairs_avx2(const int16_t *p0, const int16_t *p1, const int *w,
 }
 #endif
 
+/* The kernels of this mask (predict_dsp_init, below). */
+static struct {
+    /* one parent row's horizontal sums, in child order */
+    void (*filter_row)(const uint8_t *src, int C, int qx, int16_t *dst);
+    /* a child row from two interleaved pairs of rows of sums (levels 1
+     * to 3; NULL at level 0: vertical_c on four rows) */
+    void (*interleave_pair)(const int16_t *a, const int16_t *b, size_t n,
+                            int16_t *dst);
+    void (*vertical_pairs)(const int16_t *p0, const int16_t *p1,
+                           const int *w, size_t n, uint8_t *out);
+    /* the residual's clamped addition */
+    void (*add_clamped)(uint8_t *row, const int8_t *res, size_t n);
+} dsp;
+static struct gv_cpu_once dsp_once = GV_CPU_ONCE_INIT;
+static void predict_dsp_init(unsigned flags);
+
 /* The horizontal sums of parent row pr (clamped to the tile), from the
  * ring or filtered into it. */
 static const int16_t *ring_row(struct gv_predictor *p, int pr)
@@ -619,8 +588,8 @@ static const int16_t *ring_row(struct gv_predictor *p, int pr)
     pr = clamp_tile(pr);
     const int slot = pr % GV_PREDICT_RING;
     if (p->tag[slot] != pr) {
-        filter_row(p->parent + (size_t)pr * GV_TILE * p->channels,
-                   p->channels, p->qx, p->ring[slot]);
+        dsp.filter_row(p->parent + (size_t)pr * GV_TILE * p->channels,
+                       p->channels, p->qx, p->ring[slot]);
         p->tag[slot] = pr;
     }
     return p->ring[slot];
@@ -629,6 +598,7 @@ static const int16_t *ring_row(struct gv_predictor *p, int pr)
 void gv_predictor_init(struct gv_predictor *p, const uint8_t *parent,
                        int channels, int qx, int qy)
 {
+    gv_cpu_once(&dsp_once, predict_dsp_init);
     p->parent = parent;
     p->channels = channels;
     p->qx = qx;
@@ -637,7 +607,7 @@ void gv_predictor_init(struct gv_predictor *p, const uint8_t *parent,
         p->tag[k] = p->pair_tag[k] = -1000;
 }
 
-#if HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 /* The pair of ring rows t, t + 1 (clamped), interleaved (level 3). */
 static const int16_t *pair_row(struct gv_predictor *p, int t)
 {
@@ -645,10 +615,7 @@ static const int16_t *pair_row(struct gv_predictor *p, int t)
     if (p->pair_tag[slot] != t) {
         const int16_t *a = ring_row(p, t), *b = ring_row(p, t + 1);
         const size_t n = (size_t)GV_TILE * p->channels;
-        if (use_vbmi())
-            interleave_pair(a, b, n, p->pair[slot]);
-        else
-            interleave_pair_avx2(a, b, n, p->pair[slot]);
+        dsp.interleave_pair(a, b, n, p->pair[slot]);
         p->pair_tag[slot] = t;
     }
     return p->pair[slot];
@@ -661,15 +628,10 @@ void gv_predictor_row(struct gv_predictor *p, int v, uint8_t *row)
     const int *w = (v & 1) ? W_ODD : W_EVEN;
     const int t = first_tap(p->qy, v);
     const size_t n = (size_t)GV_TILE * C;
-#if HAVE_AVX2_PATH
-    if (use_vbmi()) {
+#if GV_HAVE_X86_SIMD
+    if (dsp.vertical_pairs) {
         const int16_t *p0 = pair_row(p, t), *p1 = pair_row(p, t + 2);
-        vertical_pairs(p0, p1, w, n, row);
-        return;
-    }
-    if (use_avx2()) {
-        const int16_t *p0 = pair_row(p, t), *p1 = pair_row(p, t + 2);
-        vertical_pairs_avx2(p0, p1, w, n, row);
+        dsp.vertical_pairs(p0, p1, w, n, row);
         return;
     }
 #endif
@@ -690,7 +652,7 @@ void gv_predict(const uint8_t *parent, int channels, int qx, int qy,
 }
 
 /* row[i] = clamp(row[i] + res[i], 0, 255). */
-HOT_LOOP static void add_clamped_c(uint8_t *restrict row,
+HOT_LOOP void add_clamped_c(uint8_t *restrict row,
                                    const int8_t *restrict res, size_t n)
 {
     for (size_t i = 0; i < n; i++) {
@@ -699,7 +661,7 @@ HOT_LOOP static void add_clamped_c(uint8_t *restrict row,
     }
 }
 
-#if HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 /* The same with unsigned saturating byte arithmetic: add max(res, 0),
  * then subtract max(-res, 0) (computed as max(res, 0) - res, which is
  * 128 for -128); at most one of the two is non-zero. */
@@ -718,6 +680,67 @@ add_clamped_avx2(uint8_t *row, const int8_t *res, size_t n)
     }
     if (i < n)
         add_clamped_c(row + i, res + i, n - i);
+}
+
+/* ---------------------------------------------------------- the table */
+
+/* filter_interior per instruction set. */
+#define INTERIOR(isa, attr)                                                  \
+    attr static void filter_interior_##isa(const uint8_t *restrict src,     \
+                                           int C, uint16_t *restrict even,  \
+                                           uint16_t *restrict odd, int n)   \
+    {                                                                        \
+        filter_interior(src, C, even, odd, n);                               \
+    }
+
+INTERIOR(c, )
+static void filter_row_c(const uint8_t *src, int C, int qx, int16_t *dst)
+{
+    filter_row(src, C, qx, dst, filter_interior_c, interleave3_c);
+}
+
+static void add_clamped_portable(uint8_t *row, const int8_t *res, size_t n)
+{
+    add_clamped_c(row, res, n);
+}
+
+#if GV_HAVE_X86_SIMD
+INTERIOR(avx2, TARGET_AVX2)
+INTERIOR(avx512, TARGET_AVX512)
+static void filter_row_avx2(const uint8_t *src, int C, int qx, int16_t *dst)
+{
+    filter_row(src, C, qx, dst, filter_interior_avx2, interleave3_ssse3);
+}
+static void filter_row_avx512(const uint8_t *src, int C, int qx, int16_t *dst)
+{
+    filter_row(src, C, qx, dst, filter_interior_avx512, interleave3_avx512);
+}
+#endif
+
+static void predict_dsp_init(unsigned flags)
+{
+    dsp.filter_row = filter_row_c;
+    dsp.interleave_pair = NULL;
+    dsp.vertical_pairs = NULL;
+    dsp.add_clamped = add_clamped_portable;
+#if GV_HAVE_X86_SIMD
+    const unsigned l3 = GV_CPU_AVX512 | GV_CPU_AVX512VBMI | GV_CPU_AVX512VNNI;
+    if (!(flags & GV_CPU_AVX2))
+        return;
+    dsp.filter_row = filter_row_avx2;                 /* level 1 */
+    dsp.interleave_pair = interleave_pair_avx2;
+    dsp.vertical_pairs = vertical_pairs_avx2;
+    dsp.add_clamped = add_clamped_avx2;
+    if (flags & GV_CPU_AVX512)                        /* level 2 */
+        dsp.filter_row = filter_row_avx512;
+    if ((flags & l3) == l3) {                         /* level 3 */
+        dsp.filter_row = filter_row_vbmi;
+        dsp.interleave_pair = interleave_pair;
+        dsp.vertical_pairs = vertical_pairs;
+    }
+#else
+    (void)flags;
+#endif
 }
 #endif
 
@@ -743,12 +766,6 @@ void gv_add_residual_row(uint8_t *row, const int8_t *book,
         for (int bx = 0; bx < GV_BLOCKS; bx++)
             memcpy(res + 2 * bx, b + (size_t)ids[bx] * 4, 2);
     }
-    const size_t n = (size_t)GV_TILE * channels;
-#if HAVE_AVX2_PATH
-    if (use_avx2()) {
-        add_clamped_avx2(row, res, n);
-        return;
-    }
-#endif
-    add_clamped_c(row, res, n);
+    gv_cpu_once(&dsp_once, predict_dsp_init);
+    dsp.add_clamped(row, res, (size_t)GV_TILE * channels);
 }

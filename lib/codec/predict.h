@@ -53,13 +53,4 @@ void gv_predictor_row(struct gv_predictor *p, int v, uint8_t *row);
 void gv_add_residual_row(uint8_t *row, const int8_t *book,
                          const uint16_t *ids, int channels, int half);
 
-/* For tests and benchmarks: the widest SIMD the run-time choice may use,
- * 0 (the portable C loops), 1 (AVX2: the vertical sum on interleaved pairs
- * of rows), 2 (AVX-512BW: also the horizontal sums' interleaving) or 3
- * (AVX-512 VBMI and VNNI: the horizontal sums by byte permutes, the
- * vertical ones 32 at a time; the default).  Not
- * thread-safe: set it before decoding.  Returns the level now in use on
- * this CPU (at most the one asked for). */
-int gv_predict_simd(int level);
-
 #endif

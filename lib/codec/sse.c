@@ -3,17 +3,13 @@
  *
  * The encoders measure every tile they code, some twice (the prediction
  * alone, then what they chose), and a plain loop over the 789,507 samples
- * of an RGB tile was 2 to 3 % of an encode.  With AVX2 the differences are
- * widened to 16 bits and squared and summed in pairs by VPMADDWD; a row's
- * sums stay in 32 bits (each lane adds at most n / 16 pairs of 2 x 255^2,
- * under 2^31 for n <= 2^15) and the rows' in 64.
+ * of an RGB tile was 2 to 3 % of an encode.  Where gv_cpu_flags()
+ * (base/cpu.h) has AVX2 the one-entry table holds x86/sse_avx2.c's kernel
+ * (16 samples a step), else the plain loop here.
  */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#include <immintrin.h>
-#define HAVE_AVX2_PATH 1
-#endif
-
+#include "base/cpu.h"
 #include "codec/sse.h"
+#include "codec/x86/sse_avx2.h"
 
 static uint64_t sse_plain(const uint8_t *a, const uint8_t *b, uint32_t n,
                           uint32_t rows, size_t stride)
@@ -29,43 +25,26 @@ static uint64_t sse_plain(const uint8_t *a, const uint8_t *b, uint32_t n,
     return e;
 }
 
-#ifdef HAVE_AVX2_PATH
-__attribute__((target("avx2"))) static uint64_t
-sse_avx2(const uint8_t *a, const uint8_t *b, uint32_t n, uint32_t rows,
-         size_t stride)
+typedef uint64_t sse_fn(const uint8_t *, const uint8_t *, uint32_t, uint32_t,
+                       size_t);
+
+static sse_fn *sse_kernel = sse_plain;
+static struct gv_cpu_once sse_once = GV_CPU_ONCE_INIT;
+
+static void sse_dsp_init(unsigned flags)
 {
-    uint64_t e = 0;
-    for (uint32_t y = 0; y < rows; y++) {
-        const uint8_t *ra = a + (size_t)y * stride, *rb = b + (size_t)y * stride;
-        __m256i acc = _mm256_setzero_si256();
-        uint32_t i = 0;
-        for (; i + 16 <= n; i += 16) {
-            const __m256i d = _mm256_sub_epi16(
-                _mm256_cvtepu8_epi16(_mm_loadu_si128((const __m128i *)(ra + i))),
-                _mm256_cvtepu8_epi16(_mm_loadu_si128((const __m128i *)(rb + i))));
-            acc = _mm256_add_epi32(acc, _mm256_madd_epi16(d, d));
-        }
-        uint32_t lanes[8];
-        _mm256_storeu_si256((__m256i *)lanes, acc);
-        uint64_t row = 0;
-        for (int l = 0; l < 8; l++)
-            row += lanes[l];
-        for (; i < n; i++) {
-            const int d = (int)ra[i] - rb[i];
-            row += (uint64_t)(d * d);
-        }
-        e += row;
-    }
-    return e;
-}
+    sse_kernel = sse_plain;
+#if GV_HAVE_X86_SIMD
+    if (flags & GV_CPU_AVX2)
+        sse_kernel = gv_sse_u8_avx2;
+#else
+    (void)flags;
 #endif
+}
 
 uint64_t gv_sse_u8(const uint8_t *a, const uint8_t *b, uint32_t n,
                    uint32_t rows, size_t stride)
 {
-#ifdef HAVE_AVX2_PATH
-    if (__builtin_cpu_supports("avx2"))
-        return sse_avx2(a, b, n, rows, stride);
-#endif
-    return sse_plain(a, b, n, rows, stride);
+    gv_cpu_once(&sse_once, sse_dsp_init);
+    return sse_kernel(a, b, n, rows, stride);
 }

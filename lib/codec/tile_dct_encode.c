@@ -42,7 +42,9 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
-#if defined(__x86_64__) && defined(__GNUC__)
+
+#include "base/cpu.h"
+#if GV_HAVE_X86_SIMD
 #include <immintrin.h>
 #elif defined(__SSE2__)
 #include <emmintrin.h>
@@ -261,8 +263,7 @@ static inline void forward(const float *e, float *d)
 }
 #endif
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#define HAVE_AVX2_PATH 1
+#if GV_HAVE_X86_SIMD
 /* forward() in 8 lanes: the same operations in the same order, but for
  * the first pass's fused multiply-adds.  They give the same floats: the
  * residual is a multiple of 1/4 below 2^9 in magnitude (YCoCg of 8-bit
@@ -298,7 +299,7 @@ forward_avx2(const float *e, float *d)
 }
 #endif
 
-#ifdef HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 /* residual_block, an RGB block inside the valid area eight pixels at a
  * time.  The same floats: with r, g, b the differences (integers), the
  * plain code's exact steps give Y = (r + 2g + b) / 4, Co = r - b and
@@ -424,7 +425,7 @@ static void transform_tile_base(struct gv_dct_workspace *ws,
     transform_body(ws, orig, pred, channels, vw, vh, forward, residual_block);
 }
 
-#ifdef HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 __attribute__((target("avx2,fma"))) static void
 transform_tile_avx2(struct gv_dct_workspace *ws, const uint8_t *orig,
                     const uint8_t *pred, int channels, uint32_t vw,
@@ -511,7 +512,7 @@ static inline uint64_t quantize_block(const float *x, float inv, float s,
 #endif
 }
 
-#ifdef HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 /* quantize_block in eight lanes: the same operations in the same order
  * (a multiply and an add, never fused: ISO C mode), so the same q, the
  * same return and the same acc[l], lane l summing k = l, l + 8, ... */
@@ -726,7 +727,7 @@ static double quantize_count_base(const struct gv_dct_workspace *ws,
     return quantize_count_body(ws, cd, channels, steps, quantize_block);
 }
 
-#ifdef HAVE_AVX2_PATH
+#if GV_HAVE_X86_SIMD
 __attribute__((target("avx2,fma"))) static double
 quantize_count_avx2(const struct gv_dct_workspace *ws, struct candidate *cd,
                     int channels, const int *steps)
@@ -1033,16 +1034,27 @@ static void chroma_steps(int s0, int channels, int *steps)
 static pthread_once_t tables_once = PTHREAD_ONCE_INIT;
 static int rdo_tails = 1;   /* GIGAVIEW_RDO_TAILS=0: off (benchmarks) */
 
-static void init_tables(void)
+/* The kernels: AVX2 with FMA where gv_cpu_flags() (base/cpu.h) has both,
+ * else the baseline (SSE2 where the compiler targets it); the same floats
+ * either way. */
+static struct gv_cpu_once kernels_once = GV_CPU_ONCE_INIT;
+
+static void dct_encode_dsp_init(unsigned flags)
 {
-#ifdef HAVE_AVX2_PATH
-    /* GIGAVIEW_NO_AVX2 (tests, benches): the baseline path. */
-    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-        !getenv("GIGAVIEW_NO_AVX2")) {
+    transform_tile = transform_tile_base;
+    quantize_count = quantize_count_base;
+#if GV_HAVE_X86_SIMD
+    if ((flags & (GV_CPU_AVX2 | GV_CPU_FMA)) == (GV_CPU_AVX2 | GV_CPU_FMA)) {
         transform_tile = transform_tile_avx2;
         quantize_count = quantize_count_avx2;
     }
+#else
+    (void)flags;
 #endif
+}
+
+static void init_tables(void)
+{
     const char *rt = getenv("GIGAVIEW_RDO_TAILS");
     rdo_tails = !(rt && !strcmp(rt, "0"));
     init_kt();
@@ -1238,6 +1250,7 @@ size_t gv_dct_encode(struct gv_dct_workspace *ws, const uint8_t *orig,
                      size_t cap, uint8_t *recon, uint64_t *sse)
 {
     pthread_once(&tables_once, init_tables);
+    gv_cpu_once(&kernels_once, dct_encode_dsp_init);
     transform_tile(ws, orig, pred, channels, valid_w, valid_h);
     /* High-rate optimum for channel 0: step^2 = 6 lambda / (w ln 2) in
      * orthonormal units, 8 times that in the plane's. */

@@ -22,18 +22,12 @@ struct gv_dct_lanes_arena {
 };
 
 /*
- * Whether gv_dct_lanes_rows may run: the CPU has AVX-512 F, BW and VBMI
- * and gv_dct_lanes(0) has not turned it off.
+ * Whether gv_dct_lanes_rows may run: gv_cpu_flags() (base/cpu.h) has
+ * AVX-512 (F, BW), VBMI and POPCNT.  GIGAVIEW_SIMD=avx2 or c, or
+ * gv_cpu_set_mask, turns the lanes off (tile_dct.c then decodes every row
+ * with its scalar code); both give the same bytes.  Thread-safe.
  */
 int gv_dct_lanes_usable(void);
-
-/*
- * For tests and benchmarks: 0 turns the lanes off (tile_dct.c then
- * decodes every row with its scalar code), 1 back on where the CPU can.
- * Not thread-safe: set it before decoding.  Returns whether they are in
- * use now.  Both give the same bytes.
- */
-int gv_dct_lanes(int on);
 
 /*
  * For tests: how many groups of rows this thread has given

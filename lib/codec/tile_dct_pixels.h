@@ -31,12 +31,4 @@ extern const uint8_t gv_dct_zz_rows[65], gv_dct_zz_cols[65];
 void gv_dct_add_row(gv_dct_row co, const uint8_t eobs[3][GV_DCT_BLOCKS],
                     int channels, int by, uint8_t *out);
 
-/*
- * For tests and benchmarks: the widest SIMD gv_dct_add_row may use, 0 (the
- * portable C code) or 1 (AVX2, the default).  Not thread-safe: set it
- * before decoding.  Returns the level now in use on this CPU (at most the
- * one asked for).  Every level gives the same bytes.
- */
-int gv_dct_simd(int level);
-
 #endif

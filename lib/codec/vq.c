@@ -4,9 +4,10 @@
  * The search packs two dimensions per 32-bit lane so that one
  * _mm256_madd_epi16 yields d0^2 + d1^2 for eight codevectors at once; a
  * codevector needs dim/2 (6 for RGB) load-subtract-madd-add steps.  An
- * AVX-512 kernel (16 codevectors at once) or the AVX2 one is chosen at run
- * time (GIGAVIEW_NO_AVX512 in the environment rules out the first), and
- * each returns exactly what the portable loop returns (the least cost,
+ * AVX-512 kernel (16 codevectors at once, x86/vq_avx512.c) or the AVX2
+ * one (x86/vq_avx2.c), both the walk of x86/vq_walk.h, is picked from
+ * gv_cpu_flags() (base/cpu.h; GIGAVIEW_SIMD=avx2 rules out the first)
+ * into a one-entry table, and each returns exactly what the portable loop returns (the least cost,
  * ties to the lowest index), so stores do not depend on the CPU that
  * wrote them.  A per-codevector bias is where each cost starts: every
  * path adds it before the first pair, in int32.  The codevectors are kept
@@ -28,18 +29,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-#define VQ_HAVE_X86 1
-#endif
-
+#include "base/cpu.h"
 #include "codec/vq.h"
-
-static inline int32_t pack_pair(int a, int b)
-{
-    return (int32_t)(((uint32_t)(uint16_t)(int16_t)b << 16) |
-                     (uint16_t)(int16_t)a);
-}
+#include "codec/vq_int.h"
+#include "codec/x86/vq_avx2.h"
+#include "codec/x86/vq_avx512.h"
 
 /* Padding codevectors fill the SIMD lanes past k: -32000 in the first two
  * dimensions and 0 elsewhere, with bias 0.  Against any residual
@@ -48,10 +42,6 @@ static inline int32_t pack_pair(int a, int b)
  * the int32 sums cannot overflow (at most 2.09e9); so they are never
  * chosen and every path returns what the portable loop returns. */
 #define PAD_VALUE (-32000)
-
-/* The sum of a codevector's components ranges over SUM_LO .. -SUM_LO. */
-#define SUM_LO (-128 * VQ_MAXDIM)
-#define SUM_SPAN (256 * VQ_MAXDIM)
 
 void vq_search_prepare(struct vq_search *s, const int8_t *book, int k, int dim)
 {
@@ -144,412 +134,41 @@ static void nearest_portable(const struct vq_search *s, const int16_t *vecs,
     }
 }
 
-/*
- * The pruned order of the SIMD searches, for one vector whose components
- * sum to sx: the run where sx falls first (run_at), then the runs above
- * it, then those below it.  A run is skipped when even its best case, its
- * least bias plus ceil(gap^2 / dim) (gap: from sx to the run's sums),
- * exceeds the best cost found so far, and a direction ends when the gap
- * alone does (farther runs only have larger gaps).  Skipped runs cannot
- * hold the answer, not even a tie, so the result is the exhaustive one.
- * With integers, ceil(a / dim) > t is a > dim * t.  Searches of at most
- * SMALL_RUNS runs visit them all: there the branches cost more than the
- * runs they would skip.
- */
-#define SMALL_RUNS 4
-
-/* The run_at entry for a vector whose components sum to sx: residuals
- * reach +-255 per component, beyond the codevectors' sums, and there
- * the first run (below) or the last (above) is the start. */
-static inline int run_key(int sx)
+static void nearest_c(const struct vq_search *s, const int16_t *vecs,
+                      size_t n, uint16_t *idx, uint32_t *dist, int warm)
 {
-    int v = sx - SUM_LO;
-    return v < 0 ? 0 : (v > SUM_SPAN ? SUM_SPAN : v);
+    (void)warm;   /* the exhaustive search needs no bound */
+    nearest_portable(s, vecs, n, idx, dist);
 }
 
-/* The cost of codevector g for x (as every kernel computes it: bias plus
- * the squared differences, in int32 with no overflow), for warm starts. */
-static inline int64_t guess_cost(const struct vq_search *s, const int16_t *x,
-                                 int g, int pairs)
-{
-    const int p = s->pos[g];
-    int32_t d = s->bias[p];
-    for (int j = 0; j < pairs; j++) {
-        int32_t pr = s->pairs[j * s->kpad + p];
-        int d0 = x[2 * j] - (int16_t)(pr & 0xffff);
-        int d1 = x[2 * j + 1] - (int16_t)((uint32_t)pr >> 16);
-        d += d0 * d0 + d1 * d1;
-    }
-    return d;
-}
+static vq_nearest_fn *nearest_kernel = nearest_c;
+static struct gv_cpu_once nearest_once = GV_CPU_ONCE_INIT;
 
-#ifdef VQ_HAVE_X86
-/* One run of 16 codevectors for nearest_avx2_dim, as two halves of 8:
- * the costs, kept per lane where less than the lane's best (or equal
- * with a lower index); with ub, *ub is lowered to the least best when
- * some cost fell below it. */
-__attribute__((target("avx2"), always_inline)) static inline void
-run8x2(const struct vq_search *s, int r, const __m256i *xp, int pairs,
-       __m256i *best, __m256i *besti, int64_t *ub)
+static void vq_dsp_init(unsigned flags)
 {
-    const int k = s->kpad;
-    __m256i any = _mm256_setzero_si256();
-    const __m256i ubv = _mm256_set1_epi32(ub ? (int32_t)*ub : 0);
-    for (int c = 16 * r; c < 16 * r + 16; c += 8) {
-        __m256i acc = _mm256_loadu_si256((const __m256i *)(s->bias + c));
-        for (int j = 0; j < pairs; j++) {
-            __m256i cv = _mm256_loadu_si256((const __m256i *)(s->pairs + j * k + c));
-            __m256i d = _mm256_sub_epi16(xp[j], cv);
-            acc = _mm256_add_epi32(acc, _mm256_madd_epi16(d, d));
-        }
-        __m256i oi = _mm256_loadu_si256((const __m256i *)(s->orig + c));
-        __m256i lt = _mm256_or_si256(
-            _mm256_cmpgt_epi32(*best, acc),
-            _mm256_and_si256(_mm256_cmpeq_epi32(*best, acc),
-                             _mm256_cmpgt_epi32(*besti, oi)));
-        *best = _mm256_blendv_epi8(*best, acc, lt);
-        *besti = _mm256_blendv_epi8(*besti, oi, lt);
-        if (ub)
-            any = _mm256_or_si256(any, _mm256_cmpgt_epi32(ubv, acc));
-    }
-    if (ub && !_mm256_testz_si256(any, any)) {
-        __m256i m = _mm256_min_epi32(*best, _mm256_shuffle_epi32(*best, 0x4e));
-        m = _mm256_min_epi32(m, _mm256_shuffle_epi32(m, 0xb1));
-        m = _mm256_min_epi32(m, _mm256_permute2x128_si256(m, m, 1));
-        *ub = _mm256_cvtsi256_si32(m);
-    }
-}
-
-/* The search eight codevectors at a time, over the runs the pruned order
- * gives.  nearest_avx512_dim repeats this loop on purpose, with 16 lanes
- * and mask registers: one generic kernel would need the width and the
- * compare-and-blend as parameters and would no longer compile to either
- * instruction set's best form.  A change to one kernel must be made to the
- * other, and to nearest_portable, which both must match exactly; `pairs`
- * is a constant in each caller, so the inner loops unroll. */
-__attribute__((target("avx2"), always_inline)) static inline void
-nearest_avx2_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
-                 uint16_t *idx, uint32_t *dist, const int pairs, int warm)
-{
-    const int64_t dim = 2 * pairs;
-    const int nruns = s->kpad / 16;
-    for (size_t i = 0; i < n; i++) {
-        const int16_t *x = vecs + i * VQ_STRIDE;
-        __m256i xp[VQ_MAXDIM / 2];
-        int sx = 0;
-        for (int j = 0; j < pairs; j++) {
-            xp[j] = _mm256_set1_epi32(pack_pair(x[2 * j], x[2 * j + 1]));
-            sx += x[2 * j] + x[2 * j + 1];
-        }
-        __m256i best = _mm256_set1_epi32(INT_MAX);
-        __m256i besti = _mm256_set1_epi32(INT_MAX);
-        const int g = warm ? idx[i] : 0;
-        int64_t gc = INT64_MAX;   /* the guess's cost, when it was used */
-        if (nruns <= SMALL_RUNS) {
-            for (int r = 0; r < nruns; r++)
-                run8x2(s, r, xp, pairs, &best, &besti, NULL);
-        } else {
-            int64_t ub = INT_MAX;
-            if (warm)
-                ub = gc = guess_cost(s, x, g, pairs);
-            const int r0 = s->run_at[run_key(sx)];
-            run8x2(s, r0, xp, pairs, &best, &besti, &ub);
-            for (int r = r0 + 1; r < nruns; r++) {
-                const int64_t gap = s->run_smin[r] - sx;
-                const int64_t g2 = gap > 0 ? gap * gap : 0;
-                if (g2 > dim * ub)
-                    break;
-                if (g2 <= dim * (ub - s->run_bmin[r]))
-                    run8x2(s, r, xp, pairs, &best, &besti, &ub);
-            }
-            for (int r = r0 - 1; r >= 0; r--) {
-                const int64_t gap = sx - s->run_smax[r];
-                const int64_t g2 = gap > 0 ? gap * gap : 0;
-                if (g2 > dim * ub)
-                    break;
-                if (g2 <= dim * (ub - s->run_bmin[r]))
-                    run8x2(s, r, xp, pairs, &best, &besti, &ub);
-            }
-        }
-        int32_t bd[8], bi[8];
-        _mm256_storeu_si256((__m256i *)bd, best);
-        _mm256_storeu_si256((__m256i *)bi, besti);
-        int32_t m = bd[0], mi = bi[0];
-        for (int l = 1; l < 8; l++)
-            if (bd[l] < m || (bd[l] == m && bi[l] < mi)) {
-                m = bd[l];
-                mi = bi[l];
-            }
-        if (gc < m || (gc == m && g < mi)) {
-            m = (int32_t)gc;
-            mi = g;
-        }
-        idx[i] = (uint16_t)mi;
-        if (dist)
-            dist[i] = (uint32_t)m;
-    }
-}
-
-__attribute__((target("avx2"))) static void
-nearest_avx2(const struct vq_search *s, const int16_t *vecs, size_t n,
-             uint16_t *idx, uint32_t *dist, int warm)
-{
-    if (s->dim == 12)
-        nearest_avx2_dim(s, vecs, n, idx, dist, 6, warm);
-    else if (s->dim == 4)
-        nearest_avx2_dim(s, vecs, n, idx, dist, 2, warm);
-    else
-        nearest_avx2_dim(s, vecs, n, idx, dist, s->dim / 2, warm);
-}
+    nearest_kernel = nearest_c;
+#if GV_HAVE_X86_SIMD
+    if (flags & GV_CPU_AVX512)
+        nearest_kernel = gv_vq_nearest_avx512;
+    else if (flags & GV_CPU_AVX2)
+        nearest_kernel = gv_vq_nearest_avx2;
+#else
+    (void)flags;
 #endif
-
-#ifdef VQ_HAVE_X86
-/* One run of 16 codevectors for nearest_avx512_dim: the costs, kept
- * per lane where less than the lane's best (or equal with a lower index);
- * *ub is lowered to the least best when some cost fell below it. */
-__attribute__((target("avx512f,avx512bw"), always_inline)) static inline void
-run16(const struct vq_search *s, int r, const __m512i *xp, int pairs,
-      __m512i *best, __m512i *besti, int64_t *ub)
-{
-    const int c = 16 * r, k = s->kpad;
-    __m512i acc = _mm512_loadu_si512(s->bias + c);
-    for (int j = 0; j < pairs; j++) {
-        __m512i d = _mm512_sub_epi16(xp[j], _mm512_loadu_si512(s->pairs + j * k + c));
-        acc = _mm512_add_epi32(acc, _mm512_madd_epi16(d, d));
-    }
-    __m512i oi = _mm512_loadu_si512(s->orig + c);
-    __mmask16 lt = _mm512_cmpgt_epi32_mask(*best, acc) |
-                   (_mm512_cmpeq_epi32_mask(*best, acc) &
-                    _mm512_cmpgt_epi32_mask(*besti, oi));
-    *best = _mm512_mask_mov_epi32(*best, lt, acc);
-    *besti = _mm512_mask_mov_epi32(*besti, lt, oi);
-    if (_mm512_cmplt_epi32_mask(acc, _mm512_set1_epi32((int32_t)*ub)))
-        *ub = _mm512_reduce_min_epi32(*best);
-}
-
-/* run16 without the bound: for searches that visit every run. */
-__attribute__((target("avx512f,avx512bw"), always_inline)) static inline void
-run16_all(const struct vq_search *s, int r, const __m512i *xp, int pairs,
-          __m512i *best, __m512i *besti)
-{
-    const int c = 16 * r, k = s->kpad;
-    __m512i acc = _mm512_loadu_si512(s->bias + c);
-    for (int j = 0; j < pairs; j++) {
-        __m512i d = _mm512_sub_epi16(xp[j], _mm512_loadu_si512(s->pairs + j * k + c));
-        acc = _mm512_add_epi32(acc, _mm512_madd_epi16(d, d));
-    }
-    __m512i oi = _mm512_loadu_si512(s->orig + c);
-    __mmask16 lt = _mm512_cmpgt_epi32_mask(*best, acc) |
-                   (_mm512_cmpeq_epi32_mask(*best, acc) &
-                    _mm512_cmpgt_epi32_mask(*besti, oi));
-    *best = _mm512_mask_mov_epi32(*best, lt, acc);
-    *besti = _mm512_mask_mov_epi32(*besti, lt, oi);
-}
-
-/* The same search sixteen codevectors (one run) at a time: a deliberate
- * repeat of nearest_avx2 for AVX-512 (see there why), returning exactly
- * what it and nearest_portable return; `pairs` is a constant in each
- * caller, so the inner loops unroll. */
-__attribute__((target("avx512f,avx512bw"), always_inline)) static inline void
-nearest_avx512_dim(const struct vq_search *s, const int16_t *vecs, size_t n,
-                   uint16_t *idx, uint32_t *dist, const int pairs, int warm)
-{
-    const int64_t dim = 2 * pairs;
-    const int nruns = s->kpad / 16;
-    for (size_t i = 0; i < n; i++) {
-        const int16_t *x = vecs + i * VQ_STRIDE;
-        __m512i xp[VQ_MAXDIM / 2];
-        int sx = 0;
-        for (int j = 0; j < pairs; j++) {
-            xp[j] = _mm512_set1_epi32(pack_pair(x[2 * j], x[2 * j + 1]));
-            sx += x[2 * j] + x[2 * j + 1];
-        }
-        __m512i best = _mm512_set1_epi32(INT_MAX);
-        __m512i besti = _mm512_set1_epi32(INT_MAX);
-        int64_t ub = INT_MAX;
-        if (nruns <= SMALL_RUNS) {
-            for (int r = 0; r < nruns; r++)
-                run16_all(s, r, xp, pairs, &best, &besti);
-            int32_t m = _mm512_reduce_min_epi32(best);
-            __mmask16 at = _mm512_cmpeq_epi32_mask(best, _mm512_set1_epi32(m));
-            idx[i] = (uint16_t)_mm512_mask_reduce_min_epi32(at, besti);
-            if (dist)
-                dist[i] = (uint32_t)m;
-            continue;
-        }
-        const int g = warm ? idx[i] : 0;
-        int64_t gc = INT64_MAX;   /* the guess's cost, when it was used */
-        if (warm)
-            ub = gc = guess_cost(s, x, g, pairs);
-        const int r0 = s->run_at[run_key(sx)];
-        run16(s, r0, xp, pairs, &best, &besti, &ub);
-        for (int r = r0 + 1; r < nruns; r++) {
-            const int64_t gap = s->run_smin[r] - sx;
-            const int64_t g2 = gap > 0 ? gap * gap : 0;
-            if (g2 > dim * ub)
-                break;
-            if (g2 <= dim * (ub - s->run_bmin[r]))
-                run16(s, r, xp, pairs, &best, &besti, &ub);
-        }
-        for (int r = r0 - 1; r >= 0; r--) {
-            const int64_t gap = sx - s->run_smax[r];
-            const int64_t g2 = gap > 0 ? gap * gap : 0;
-            if (g2 > dim * ub)
-                break;
-            if (g2 <= dim * (ub - s->run_bmin[r]))
-                run16(s, r, xp, pairs, &best, &besti, &ub);
-        }
-        /* Smallest cost, then the lowest index among lanes holding it;
-         * then the guess, which the search may have skipped (only when
-         * something visited costs no more). */
-        int32_t m = _mm512_reduce_min_epi32(best);
-        __mmask16 at = _mm512_cmpeq_epi32_mask(best, _mm512_set1_epi32(m));
-        int32_t mi = _mm512_mask_reduce_min_epi32(at, besti);
-        if (gc < m || (gc == m && g < mi)) {
-            m = (int32_t)gc;
-            mi = g;
-        }
-        idx[i] = (uint16_t)mi;
-        if (dist)
-            dist[i] = (uint32_t)m;
-    }
-}
-
-/* Small codebooks the other way round: sixteen vectors at a time, one
- * per lane (their pairs gathered), against every codevector in turn, so
- * that no lane needs reducing.  The same costs and the same rule for ties
- * as the other kernels.  Returns how many vectors it did (a multiple of
- * 16); the rest are left to nearest_avx512_dim. */
-__attribute__((target("avx512f,avx512bw"), always_inline)) static inline size_t
-nearest_avx512_lanes(const struct vq_search *s, const int16_t *vecs, size_t n,
-                     uint16_t *idx, uint32_t *dist, const int pairs)
-{
-    const int k = s->k, kp = s->kpad;
-    const __m512i rows = _mm512_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56, 64,
-                                           72, 80, 88, 96, 104, 112, 120);
-    size_t i = 0;
-    for (; i + 16 <= n; i += 16) {
-        const int32_t *base = (const int32_t *)(const void *)(vecs + i * VQ_STRIDE);
-        __m512i xp[VQ_MAXDIM / 2];
-        for (int j = 0; j < pairs; j++)
-            xp[j] = _mm512_i32gather_epi32(
-                _mm512_add_epi32(rows, _mm512_set1_epi32(j)), base, 4);
-        __m512i best = _mm512_set1_epi32(INT_MAX);
-        __m512i besti = _mm512_set1_epi32(INT_MAX);
-        for (int p = 0; p < k; p++) {
-            __m512i acc = _mm512_set1_epi32(s->bias[p]);
-            for (int j = 0; j < pairs; j++) {
-                __m512i d = _mm512_sub_epi16(xp[j], _mm512_set1_epi32(s->pairs[j * kp + p]));
-                acc = _mm512_add_epi32(acc, _mm512_madd_epi16(d, d));
-            }
-            const __m512i oi = _mm512_set1_epi32(s->orig[p]);
-            __mmask16 lt = _mm512_cmpgt_epi32_mask(best, acc) |
-                           (_mm512_cmpeq_epi32_mask(best, acc) &
-                            _mm512_cmpgt_epi32_mask(besti, oi));
-            best = _mm512_mask_mov_epi32(best, lt, acc);
-            besti = _mm512_mask_mov_epi32(besti, lt, oi);
-        }
-        _mm256_storeu_si256((__m256i *)(void *)(idx + i), _mm512_cvtepi32_epi16(besti));
-        if (dist)
-            _mm512_storeu_si512(dist + i, best);
-    }
-    return i;
-}
-
-/* Codebooks of at most this many entries go to nearest_avx512_lanes. */
-#define LANES_MAXK 32
-
-__attribute__((target("avx512f,avx512bw"))) static void
-nearest_avx512(const struct vq_search *s, const int16_t *vecs, size_t n,
-               uint16_t *idx, uint32_t *dist, int warm)
-{
-    size_t done = 0;
-    if (s->k <= LANES_MAXK)
-        done = s->dim == 12 ? nearest_avx512_lanes(s, vecs, n, idx, dist, 6) :
-               s->dim == 4 ? nearest_avx512_lanes(s, vecs, n, idx, dist, 2) :
-               nearest_avx512_lanes(s, vecs, n, idx, dist, s->dim / 2);
-    vecs += done * VQ_STRIDE;
-    idx += done;
-    if (dist)
-        dist += done;
-    n -= done;
-    if (s->dim == 12)
-        nearest_avx512_dim(s, vecs, n, idx, dist, 6, warm);
-    else if (s->dim == 4)
-        nearest_avx512_dim(s, vecs, n, idx, dist, 2, warm);
-    else
-        nearest_avx512_dim(s, vecs, n, idx, dist, s->dim / 2, warm);
-}
-#endif
-
-static int search_path(enum vq_path path, const struct vq_search *s,
-                       const int16_t *vecs, size_t n, uint16_t *idx,
-                       uint32_t *dist, int warm)
-{
-    switch (path) {
-    case VQ_PATH_PORTABLE:
-        nearest_portable(s, vecs, n, idx, dist);
-        return 0;
-#ifdef VQ_HAVE_X86
-    case VQ_PATH_AVX2:
-        if (!__builtin_cpu_supports("avx2"))
-            return -1;
-        nearest_avx2(s, vecs, n, idx, dist, warm);
-        return 0;
-    case VQ_PATH_AVX512:
-        if (!__builtin_cpu_supports("avx512f") || !__builtin_cpu_supports("avx512bw"))
-            return -1;
-        nearest_avx512(s, vecs, n, idx, dist, warm);
-        return 0;
-#endif
-    default:
-        (void)warm;
-        return -1;
-    }
-}
-
-int vq_nearest_path(enum vq_path path, const struct vq_search *s,
-                    const int16_t *vecs, size_t n, uint16_t *idx,
-                    uint32_t *dist)
-{
-    return search_path(path, s, vecs, n, idx, dist, 0);
-}
-
-int vq_nearest_warm_path(enum vq_path path, const struct vq_search *s,
-                         const int16_t *vecs, size_t n, uint16_t *idx,
-                         uint32_t *dist)
-{
-    return search_path(path, s, vecs, n, idx, dist, 1);
-}
-
-/* The best path this CPU has (chosen once). */
-static enum vq_path best_path(void)
-{
-    static int path = -1;
-    if (path < 0) {
-        int p = VQ_PATH_PORTABLE;
-#ifdef VQ_HAVE_X86
-        if (__builtin_cpu_supports("avx512f") &&
-            __builtin_cpu_supports("avx512bw") && !getenv("GIGAVIEW_NO_AVX512"))
-            p = VQ_PATH_AVX512;
-        else if (__builtin_cpu_supports("avx2"))
-            p = VQ_PATH_AVX2;
-#endif
-        path = p;
-    }
-    return (enum vq_path)path;
 }
 
 void vq_nearest(const struct vq_search *s, const int16_t *vecs, size_t n,
                 uint16_t *idx, uint32_t *dist)
 {
-    search_path(best_path(), s, vecs, n, idx, dist, 0);
+    gv_cpu_once(&nearest_once, vq_dsp_init);
+    nearest_kernel(s, vecs, n, idx, dist, 0);
 }
 
 void vq_nearest_warm(const struct vq_search *s, const int16_t *vecs, size_t n,
                      uint16_t *idx, uint32_t *dist)
 {
-    search_path(best_path(), s, vecs, n, idx, dist, 1);
+    gv_cpu_once(&nearest_once, vq_dsp_init);
+    nearest_kernel(s, vecs, n, idx, dist, 1);
 }
 
 static inline int8_t clamp_s8(long v)

@@ -74,20 +74,6 @@ void vq_nearest(const struct vq_search *s, const int16_t *vecs, size_t n,
 void vq_nearest_warm(const struct vq_search *s, const int16_t *vecs, size_t n,
                      uint16_t *idx, uint32_t *dist);
 
-/* The search paths, for tests: each gives what VQ_PATH_PORTABLE gives. */
-enum vq_path { VQ_PATH_PORTABLE, VQ_PATH_AVX2, VQ_PATH_AVX512 };
-
-/* vq_nearest on one given path.  Returns 0, or -1 (computing nothing)
- * when this CPU or build does not have it. */
-int vq_nearest_path(enum vq_path path, const struct vq_search *s,
-                    const int16_t *vecs, size_t n, uint16_t *idx,
-                    uint32_t *dist);
-
-/* vq_nearest_warm on one given path (idx holds the guesses on entry). */
-int vq_nearest_warm_path(enum vq_path path, const struct vq_search *s,
-                         const int16_t *vecs, size_t n, uint16_t *idx,
-                         uint32_t *dist);
-
 /* The largest training sample (a tile's blocks). */
 #define VQ_TRAIN_MAXN (257 * 257)
 

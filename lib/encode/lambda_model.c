@@ -10,14 +10,17 @@
  * prediction, so V / (1024 C) is the detail per sample.  Bins are 8 per octave of V + 1, by integer
  * arithmetic.  D(theta) sums the exact detail of the bins wholly under
  * the water and theta for the blocks of the bins wholly above; the bin
- * that straddles it counts min(its mean detail, theta) per block.
+ * that straddles it counts min(its mean detail, theta) per block.  The
+ * split of RGB rows into even and odd pixels runs in SSSE3 where
+ * gv_cpu_flags() (base/cpu.h) has it, picked once into split_rgb.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+
+#include "base/cpu.h"
+#if GV_HAVE_X86_SIMD
 #include <immintrin.h>
-#define HAVE_SPLIT_SSSE3 1
 #endif
 
 #include "codec/tile.h"
@@ -84,7 +87,7 @@ static int bin_of(uint64_t v)
     return b < GV_LM_BINS ? b : GV_LM_BINS - 1;
 }
 
-#ifdef HAVE_SPLIT_SSSE3
+#if GV_HAVE_X86_SIMD
 /* Blocks [0, 4 * (bw / 4)) of an RGB row by PSHUFB, four blocks (24
  * bytes, read as 16 at 0 and 16 at 8) into 12 even and 12 odd bytes,
  * stored as 16 (the buffers have 4 bytes to spare); returns the blocks
@@ -109,6 +112,31 @@ split_rgb_ssse3(const uint8_t *row, uint32_t bw, uint8_t *even, uint8_t *odd)
 }
 #endif
 
+/* The whole groups of four RGB blocks a kernel splits (returns how many
+ * blocks it did); the rest is plain C. */
+typedef uint32_t split_fn(const uint8_t *, uint32_t, uint8_t *, uint8_t *);
+
+static uint32_t split_rgb_none(const uint8_t *row, uint32_t bw, uint8_t *even,
+                               uint8_t *odd)
+{
+    (void)row, (void)bw, (void)even, (void)odd;
+    return 0;
+}
+
+static split_fn *split_rgb = split_rgb_none;
+static struct gv_cpu_once split_once = GV_CPU_ONCE_INIT;
+
+static void split_dsp_init(unsigned flags)
+{
+    split_rgb = split_rgb_none;
+#if GV_HAVE_X86_SIMD
+    if (flags & GV_CPU_SSSE3)
+        split_rgb = split_rgb_ssse3;
+#else
+    (void)flags;
+#endif
+}
+
 /* Split a level-0 row into its even and its odd pixels, of the width / 2
  * whole blocks (an odd width's last pixel is in none). */
 static void split_row(const struct gv_lambda_model *m, const uint8_t *row,
@@ -116,11 +144,8 @@ static void split_row(const struct gv_lambda_model *m, const uint8_t *row,
 {
     const uint32_t bw = m->width / 2;
     if (m->channels == 3) {
-        uint32_t bx = 0;
-#ifdef HAVE_SPLIT_SSSE3
-        if (__builtin_cpu_supports("ssse3"))
-            bx = split_rgb_ssse3(row, bw, even, odd);
-#endif
+        gv_cpu_once(&split_once, split_dsp_init);
+        uint32_t bx = split_rgb(row, bw, even, odd);
         for (; bx < bw; bx++) {
             memcpy(even + 3 * bx, row + 6 * bx, 3);
             memcpy(odd + 3 * bx, row + 6 * bx + 3, 3);
