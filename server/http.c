@@ -640,6 +640,10 @@ static enum MHD_Result add_query_arg(void *cls, enum MHD_ValueKind kind,
 {
     (void)kind;
     struct query *q = cls;
+    /* An access token (/iiif/auth/login?token=) is a credential: the log
+     * shows that one was sent, not what it was. */
+    if (value && !strcmp(key, "token"))
+        value = "-";
     int n = snprintf(q->buf + q->len, sizeof q->buf - q->len, "%s%s%s%s",
                      q->len ? "&" : "", key, value ? "=" : "", value ? value : "");
     if (n < 0 || (size_t)n >= sizeof q->buf - q->len) {

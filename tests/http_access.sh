@@ -319,6 +319,7 @@ expect_status "the groups header elsewhere is ignored" 401 /v1/images/staff-dem 
 req "$(url "/iiif/auth/login?token=$STAFF")"
 check "login with ?token=: the cookie holds it" \
     test "$(header Set-Cookie | sed -n 's/^gigaview_access=\([^;]*\);.*/\1/p')" = "$STAFF"
+check "the access log does not show a ?token=" sh -c "grep -q 'GET /iiif/auth/login?token=-\"' '$T/daemon.log' && ! grep -q '$STAFF' '$T/daemon.log'"
 req "$(url "/iiif/auth/login?token=$FLIPPED")"
 check "login with a forged ?token=: 401, no cookie" \
     sh -c "[ $code = 401 ] && ! grep -qi '^Set-Cookie' '$T/h'"
