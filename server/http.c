@@ -1100,6 +1100,15 @@ int http_start(struct server *srv)
                     "shows an image (router.c)", names[i]);
             return -1;
         }
+        /* Every route under an image's path shows that image: it must be
+         * guarded, whatever its row says. */
+        const char *pat = router_routes[i].pattern;
+        if ((!strncmp(pat, "/v1/images/*", 12) || !strncmp(pat, "/iiif/3/*", 9)) &&
+            router_routes[i].image != ROUTER_IMAGE) {
+            log_msg(LOG_ERROR, "http", "route '%s' (%s) names an image but is "
+                    "not marked ROUTER_IMAGE (router.c)", names[i], pat);
+            return -1;
+        }
     }
     metrics_init(names, ROUTE_COUNT);
     clock_gettime(CLOCK_MONOTONIC, &srv->started);

@@ -19,7 +19,8 @@
 # policy rewritten and SIGHUP'ed takes effect; a bad policy or a short
 # secret stops the daemon from starting.
 # Tokens are minted by scripts/gigaview-token (Python's hmac), so the
-# C verifier is checked against an independent signer.
+# C verifier is checked against an independent signer, and one by
+# `gigaview token`.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
 
@@ -227,6 +228,12 @@ req -H "Authorization: Bearer $EXPIRED" "$(url /v1/images/staff-dem)"
 check "a refused token: WWW-Authenticate says invalid_token" \
     test "$(header WWW-Authenticate)" = 'Bearer realm="gigaview", error="invalid_token"'
 expect_status "a token of both groups" 200 /v1/images/staff-dem -H "Authorization: Bearer $BOTH"
+CLI=$(gv token --secret-file "$T/secret" --groups board,staff --ttl 120 --sub cli) ||
+    not_ok "gigaview token mints a token"
+expect_status "a token from gigaview token" 200 /v1/images/board-minutes -H "Authorization: Bearer $CLI"
+rc=0
+gv token --secret-file "$T/short" --groups staff >/dev/null 2>"$T/err" || rc=$?
+expect_rc "gigaview token refuses a short secret" 1
 
 # ------------------------------------------------------------ lists
 ids() {
