@@ -344,7 +344,10 @@ void http_base_url(struct req *r, char *buf, size_t size)
 
 struct image *http_image(struct req *r, enum MHD_Result *ret)
 {
-    struct image *img = catalog_get(r->srv->catalog, r->param[0]);
+    /* A hidden image the caller may not see is absent (guard_image):
+     * every handler then answers exactly as it does for an absent one. */
+    struct image *img = r->hidden ? NULL
+                                  : catalog_get(r->srv->catalog, r->param[0]);
     if (!img)
         *ret = http_send_no_image(r);
     return img;
@@ -410,18 +413,18 @@ enum access_verdict http_access(struct req *r, const char *id)
 }
 
 /* The access check of a route that shows image param[0]: 0 when the
- * caller may see it, else -1 after queueing the 404 of an absent image
- * (hidden) or a 401 with WWW-Authenticate, and on info.json the IIIF
- * authorization services, so that a client learns where to log in. */
+ * handler may run: the caller may see the image, or it is hidden from
+ * them and the handler then finds no such image (http_image), so that
+ * it answers exactly as for an absent one, whatever it checks first;
+ * else -1 after queueing a 401 with WWW-Authenticate, and on info.json
+ * the IIIF authorization services, so that a client learns where to
+ * log in. */
 static int guard_image(struct req *r, enum MHD_Result *ret)
 {
     enum access_verdict v = http_access(r, r->param[0]);
-    if (v == ACCESS_PUBLIC || v == ACCESS_GRANTED)
+    r->hidden = v == ACCESS_HIDDEN;
+    if (v != ACCESS_DENIED)
         return 0;
-    if (v == ACCESS_HIDDEN) {
-        *ret = http_send_no_image(r);
-        return -1;
-    }
     int refused;
     http_caller(r, &refused);
     char esc[160], msg[300];

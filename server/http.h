@@ -135,6 +135,8 @@ struct req {
      * group, a list with protected images): http_send makes it
      * "Cache-Control: private" and adds "Vary: Authorization, Cookie". */
     int private_answer;
+    /* param[0] is an image hidden from the caller: http_image finds none. */
+    int hidden;
 };
 
 /*
@@ -243,7 +245,9 @@ int http_parse_u32(const char *s, uint32_t max, uint32_t *out);
 void http_base_url(struct req *r, char *buf, size_t size);
 
 /* Look up the image named by param[0]: a reference, or NULL after
- * queueing a 404 (*ret holds the result to return). */
+ * queueing a 404 (*ret holds the result to return), also when the access
+ * policy hides that image from the caller.  The one lookup of every
+ * route that shows an image: catalog_get there would bypass the hiding. */
 struct image *http_image(struct req *r, enum MHD_Result *ret);
 
 /* After a failure that may come from img's store: a damaged or unreadable
