@@ -14,5 +14,6 @@ int cmd_merge(int argc, char **argv);
 int cmd_mesh(int argc, char **argv);
 int cmd_view(int argc, char **argv);
 int cmd_simplify(int argc, char **argv);
+int cmd_token(int argc, char **argv);
 
 #endif

@@ -22,6 +22,7 @@ static const struct command commands[] = {
     {"export", cmd_export, "decode a region of a store to PNG, TIFF or JPEG"},
     {"mesh", cmd_mesh, "the TIN of a region of a height field: GLB, quantized-mesh, PLY, OBJ"},
     {"simplify", cmd_simplify, "vertex clustering of a PLY/OBJ/GLB mesh to a face count"},
+    {"token", cmd_token, "mint an access token for gigaviewd's protected images"},
 #ifdef GV_HAVE_GPU
     {"render", cmd_render, "fetch tiles from gigaviewd, decode them on the GPU, write an image"},
 #else

@@ -90,6 +90,37 @@ unsigned http_error_status(const struct req *r, enum gv_code code)
 
 /* ------------------------------------------------------------ responses */
 
+/* An answer that depends on the caller: no shared cache may keep it
+ * ("public" becomes "private", other directives stay; no-store stays as
+ * it is), and every cache keys it by the credentials. */
+static void make_private(struct MHD_Response *resp)
+{
+    const char *cc = MHD_get_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL);
+    if (!cc) {
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, "private");
+    } else if (!strstr(cc, "no-store") && !strstr(cc, "private")) {
+        char old[256], now[300];
+        snprintf(old, sizeof old, "%s", cc);
+        if (!strncmp(old, "public", 6))
+            snprintf(now, sizeof now, "private%s", old + 6);
+        else
+            snprintf(now, sizeof now, "private, %s", old);
+        MHD_del_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, old);
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL, now);
+    }
+    const char *vary = MHD_get_response_header(resp, MHD_HTTP_HEADER_VARY);
+    if (vary) {
+        char old[256], now[300];
+        snprintf(old, sizeof old, "%s", vary);
+        snprintf(now, sizeof now, "%s, Authorization, Cookie", old);
+        MHD_del_response_header(resp, MHD_HTTP_HEADER_VARY, old);
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, now);
+    } else {
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY,
+                                "Authorization, Cookie");
+    }
+}
+
 static void add_common_headers(struct req *r, struct MHD_Response *resp)
 {
     const char *origin = r->iiif ? "*" : r->srv->cfg->cors_origin;
@@ -100,6 +131,8 @@ static void add_common_headers(struct req *r, struct MHD_Response *resp)
                                 "X-Channels, X-Level");
     }
     MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+    if (r->private_answer)
+        make_private(resp);
 }
 
 enum MHD_Result http_send(struct req *r, unsigned status,
@@ -188,9 +221,11 @@ enum MHD_Result http_send_json(struct req *r, unsigned status, json_t *json)
 }
 
 /* The error body of row `code` of the table, logged, with one extra
- * header (name NULL: none). */
-static enum MHD_Result send_error(struct req *r, int code, const char *message,
-                                  const char *name, const char *value)
+ * header (name NULL: none) and the members of `extra` (stolen; NULL:
+ * none) beside "error". */
+static enum MHD_Result send_error_with(struct req *r, int code,
+                                       const char *message, const char *name,
+                                       const char *value, json_t *extra)
 {
     size_t i = error_row(code);
     unsigned status = row_status(r, i);
@@ -202,6 +237,9 @@ static enum MHD_Result send_error(struct req *r, int code, const char *message,
             id, log_escape(esc, sizeof esc, message));
     json_t *e = json_pack("{s:{s:i,s:s,s:s}}", "error", "status", (int)status,
                           "code", id, "message", message);
+    if (e && extra)
+        json_object_update_missing(e, extra);
+    json_decref(extra);
     size_t len;
     struct MHD_Response *resp =
         http_response_json(e, JSON_COMPACT, "application/json", &len);
@@ -211,6 +249,12 @@ static enum MHD_Result send_error(struct req *r, int code, const char *message,
             MHD_add_response_header(resp, name, value);
     }
     return http_send(r, status, resp, len);
+}
+
+static enum MHD_Result send_error(struct req *r, int code, const char *message,
+                                  const char *name, const char *value)
+{
+    return send_error_with(r, code, message, name, value, NULL);
 }
 
 enum MHD_Result http_send_error(struct req *r, const struct gv_error *err)
@@ -300,13 +344,102 @@ void http_base_url(struct req *r, char *buf, size_t size)
 
 struct image *http_image(struct req *r, enum MHD_Result *ret)
 {
-    struct image *img = catalog_get(r->srv->catalog, r->param[0]);
-    if (!img) {
-        char esc[160];
-        log_escape(esc, sizeof esc, r->param[0]);
-        *ret = http_send_errorf(r, GV_ENOTFOUND, "no image '%s'", esc);
-    }
+    /* A hidden image the caller may not see is absent (guard_image):
+     * every handler then answers exactly as it does for an absent one. */
+    struct image *img = r->hidden ? NULL
+                                  : catalog_get(r->srv->catalog, r->param[0]);
+    if (!img)
+        *ret = http_send_no_image(r);
     return img;
+}
+
+enum MHD_Result http_send_no_image(struct req *r)
+{
+    char esc[160];
+    log_escape(esc, sizeof esc, r->param[0]);
+    return http_send_errorf(r, GV_ENOTFOUND, "no image '%s'", esc);
+}
+
+const struct access_policy *http_policy(struct req *r)
+{
+    if (!r->policy_held) {
+        r->policy = access_hold(r->srv->access);
+        r->policy_held = 1;
+    }
+    return r->policy;
+}
+
+/* A Bearer token, or NULL. */
+static const char *bearer(struct req *r)
+{
+    const char *h = http_header(r, "Authorization");
+    if (!h || strncasecmp(h, "Bearer ", 7))
+        return NULL;
+    return h + 7 + strspn(h + 7, " ");
+}
+
+const struct access_claims *http_caller(struct req *r, int *refused)
+{
+    if (!r->caller_read) {
+        r->caller_read = 1;
+        const char *tokens[2] = {
+            bearer(r), MHD_lookup_connection_value(r->conn, MHD_COOKIE_KIND,
+                                                   HTTP_ACCESS_COOKIE)};
+        for (int i = 0; i < 2 && r->caller_state != 1; i++) {
+            if (!tokens[i] || !tokens[i][0])
+                continue;
+            enum access_token_status st =
+                access_verify(r->srv->access, tokens[i], &r->caller);
+            r->caller_state = st == ACCESS_TOKEN_OK ? 1 : -1;
+            if (st != ACCESS_TOKEN_OK)
+                log_msg(LOG_DEBUG, "access", "%s token refused: %s",
+                        i ? "cookie" : "bearer", access_token_status_name(st));
+        }
+    }
+    if (refused)
+        *refused = r->caller_state < 0;
+    return r->caller_state == 1 ? &r->caller : NULL;
+}
+
+enum access_verdict http_access(struct req *r, const char *id)
+{
+    const struct access_policy *p = http_policy(r);
+    if (!p)
+        return ACCESS_PUBLIC;
+    enum access_verdict v = access_judge(p, http_caller(r, NULL), id, NULL);
+    if (v == ACCESS_GRANTED || v == ACCESS_DENIED)
+        r->private_answer = 1;
+    return v;
+}
+
+/* The access check of a route that shows image param[0]: 0 when the
+ * handler may run: the caller may see the image, or it is hidden from
+ * them and the handler then finds no such image (http_image), so that
+ * it answers exactly as for an absent one, whatever it checks first;
+ * else -1 after queueing a 401 with WWW-Authenticate, and on info.json
+ * the IIIF authorization services, so that a client learns where to
+ * log in. */
+static int guard_image(struct req *r, enum MHD_Result *ret)
+{
+    enum access_verdict v = http_access(r, r->param[0]);
+    r->hidden = v == ACCESS_HIDDEN;
+    if (v != ACCESS_DENIED)
+        return 0;
+    int refused;
+    http_caller(r, &refused);
+    char esc[160], msg[300];
+    log_escape(esc, sizeof esc, r->param[0]);
+    snprintf(msg, sizeof msg, "image '%s' is restricted: %s", esc,
+             refused ? "the access token is invalid, expired or not of its "
+                       "group" : "send an access token (Authorization: Bearer)");
+    json_t *extra = NULL;
+    if (r->route == ROUTE_IIIF_INFO)
+        extra = json_pack("{s:o}", "service", auth_services_json(r, r->param[0]));
+    *ret = send_error_with(r, GV_EAUTH, msg, "WWW-Authenticate",
+                           refused ? "Bearer realm=\"gigaview\", "
+                                     "error=\"invalid_token\""
+                                   : "Bearer realm=\"gigaview\"", extra);
+    return -1;
 }
 
 void http_page_error(const struct image *img, const char *module,
@@ -395,6 +528,10 @@ static enum MHD_Result dispatch(struct req *r)
             r->param[i] = m.param[i];
         r->nparam = m.nparam;
         r->route = m.route;
+        enum MHD_Result ret;
+        if (router_routes[m.route].image == ROUTER_IMAGE && m.nparam > 0 &&
+            guard_image(r, &ret) < 0)
+            return ret;
         return route_handlers[m.route](r);
     }
     router_match_free(&m);
@@ -506,6 +643,10 @@ static enum MHD_Result add_query_arg(void *cls, enum MHD_ValueKind kind,
 {
     (void)kind;
     struct query *q = cls;
+    /* An access token (/iiif/auth/login?token=) is a credential: the log
+     * shows that one was sent, not what it was. */
+    if (value && !strcmp(key, "token"))
+        value = "-";
     int n = snprintf(q->buf + q->len, sizeof q->buf - q->len, "%s%s%s%s",
                      q->len ? "&" : "", key, value ? "=" : "", value ? value : "");
     if (n < 0 || (size_t)n >= sizeof q->buf - q->len) {
@@ -767,6 +908,8 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
 
 static void free_req(struct req *r)
 {
+    if (r->policy_held)
+        access_release(r->srv->access, r->policy);
     if (r->async && r->async_free)
         r->async_free(r->async);
     free(r->segbuf);
@@ -953,6 +1096,20 @@ int http_start(struct server *srv)
         names[i] = router_routes[i].name;
         if (!route_handlers[i]) {
             log_msg(LOG_ERROR, "http", "route '%s' has no handler", names[i]);
+            return -1;
+        }
+        if (router_routes[i].image == ROUTER_IMAGE_UNSET) {
+            log_msg(LOG_ERROR, "http", "route '%s' does not say whether it "
+                    "shows an image (router.c)", names[i]);
+            return -1;
+        }
+        /* Every route under an image's path shows that image: it must be
+         * guarded, whatever its row says. */
+        const char *pat = router_routes[i].pattern;
+        if ((!strncmp(pat, "/v1/images/*", 12) || !strncmp(pat, "/iiif/3/*", 9)) &&
+            router_routes[i].image != ROUTER_IMAGE) {
+            log_msg(LOG_ERROR, "http", "route '%s' (%s) names an image but is "
+                    "not marked ROUTER_IMAGE (router.c)", names[i], pat);
             return -1;
         }
     }

@@ -32,6 +32,7 @@
 #include <jansson.h>
 #include <microhttpd.h>
 
+#include "access.h"
 #include "catalog.h"
 #include "settings.h"
 #include "base/error.h"
@@ -77,6 +78,10 @@ struct server {
     struct gv_tile_cache *tiles;
     struct render_pool *render;
     struct output_cache *outputs;
+    /* Access control (access.h): the policy, the token secret; NULL
+     * only in tests that build a server by hand (everything public).
+     * Thread-safe. */
+    struct access *access;
 };
 
 #define HTTP_MAX_PARAMS 8
@@ -118,6 +123,20 @@ struct req {
     uint64_t bytes;
     struct timespec t0;
     char remote[64];
+    /* Access control: the policy snapshot the request judges by (held on
+     * first use, released with the request) and the caller's token, read
+     * once (http_caller). */
+    const struct access_policy *policy;
+    int policy_held;
+    int caller_read;          /* caller_state is set */
+    int caller_state;         /* 0 no token, 1 valid (caller), -1 refused */
+    struct access_claims caller;
+    /* The answer depends on who asks (a protected image shown to its
+     * group, a list with protected images): http_send makes it
+     * "Cache-Control: private" and adds "Vary: Authorization, Cookie". */
+    int private_answer;
+    /* param[0] is an image hidden from the caller: http_image finds none. */
+    int hidden;
 };
 
 /*
@@ -226,7 +245,9 @@ int http_parse_u32(const char *s, uint32_t max, uint32_t *out);
 void http_base_url(struct req *r, char *buf, size_t size);
 
 /* Look up the image named by param[0]: a reference, or NULL after
- * queueing a 404 (*ret holds the result to return). */
+ * queueing a 404 (*ret holds the result to return), also when the access
+ * policy hides that image from the caller.  The one lookup of every
+ * route that shows an image: catalog_get there would bypass the hiding. */
 struct image *http_image(struct req *r, enum MHD_Result *ret);
 
 /* After a failure that may come from img's store: a damaged or unreadable
@@ -240,6 +261,26 @@ void http_page_error(const struct image *img, const char *module,
  * token is configured (compared in constant time), else 0.  For the write
  * endpoints: storing and deleting filter graphs. */
 int http_authorized(struct req *r);
+
+/* The cookie that carries an access token (route_auth.c sets it). */
+#define HTTP_ACCESS_COOKIE "gigaview_access"
+
+/* The policy r judges by (NULL: every image public), held until the
+ * request ends. */
+const struct access_policy *http_policy(struct req *r);
+
+/* r's caller: the claims of a valid token ("Authorization: Bearer T",
+ * else the gigaview_access cookie), or NULL; *refused (may be NULL) is
+ * 1 when a token was sent and none was valid.  Read once per request. */
+const struct access_claims *http_caller(struct req *r, int *refused);
+
+/* The policy's verdict on image `id` for r's caller.  A protected image
+ * shown to its group makes the answer private (req.private_answer). */
+enum access_verdict http_access(struct req *r, const char *id);
+
+/* The 404 of an absent image, "no image 'ID'" (param[0]): also the
+ * answer for a hidden one, byte for byte. */
+enum MHD_Result http_send_no_image(struct req *r);
 
 /* Seconds since the server started. */
 double http_uptime(const struct server *srv);

@@ -11,8 +11,9 @@
  * the main thread (sigwait; they are blocked in every other thread, which
  * inherit the mask):
  *   SIGHUP           rescan the store directory (added, replaced and
- *                    removed stores; requests in flight keep their store)
- *                    and the filter graph directories
+ *                    removed stores; requests in flight keep their store),
+ *                    the filter graph directories and the access policy
+ *                    (a bad one is logged and the old one stays)
  *   SIGTERM, SIGINT  let filter jobs finish, stop accepting, let requests
  *                    in flight finish (up to drain_timeout seconds each),
  *                    exit 0
@@ -21,8 +22,9 @@
  * just as much (on the same gpu_platform).  A build configured
  * --without-gpu never touches EGL: it serves tiles, regions and IIIF, and
  * answers filter runs 501 not_implemented.
- * -t checks the configuration (and that the store directory is readable)
- * and exits 0 or 1 without serving.
+ * -t checks the configuration (and that the store directory, the access
+ * policy and the token secret are readable) and exits 0 or 1 without
+ * serving.
  */
 #include <assert.h>
 #include <errno.h>
@@ -36,6 +38,7 @@
 
 #include "config.h" /* autoconf: PACKAGE_VERSION, GV_HAVE_GPU */
 
+#include "access.h"
 #include "catalog.h"
 #include "filter.h"
 #include "filter_jobs.h"
@@ -270,6 +273,14 @@ static int configure(int argc, char **argv, struct settings *cfg)
     }
     settings_resolve(cfg);
     if (test) {
+        /* The access policy and the token secret (main() refuses to
+         * serve without them as well). */
+        struct access *acc = access_new(cfg, &err);
+        if (!acc) {
+            fprintf(stderr, "gigaviewd: %s\n", err.text);
+            return 1;
+        }
+        access_free(acc);
         printf("gigaviewd: configuration %s is valid\n", file ? file : "(defaults)");
         return 0;
     }
@@ -302,7 +313,8 @@ static void stop_rendering(struct server *srv)
 }
 
 /* Serve until SIGTERM or SIGINT (blocked in every thread, taken here with
- * sigwait); SIGHUP rescans the stores and the filter graphs. */
+ * sigwait); SIGHUP rescans the stores and the filter graphs and rereads
+ * the access policy. */
 static void wait_for_stop(struct server *srv, const sigset_t *set)
 {
     for (;;) {
@@ -313,6 +325,10 @@ static void wait_for_stop(struct server *srv, const sigset_t *set)
             log_msg(LOG_INFO, "main", "SIGHUP: rescanning %s", srv->cfg->store_dir);
             catalog_scan(srv->catalog);
             filter_store_scan(srv->filter_store);
+            struct gv_error err;
+            if (access_reload(srv->access, &err) < 0)
+                log_msg(LOG_ERROR, "access", "%s (the previous policy stays "
+                        "in force)", err.text);
             continue;
         }
         log_msg(LOG_INFO, "main", "%s: draining (up to %llus)",
@@ -359,6 +375,12 @@ int main(int argc, char **argv)
         log_msg(LOG_ERROR, "main", "out of memory");
         return 1;
     }
+    struct gv_error aerr;
+    srv.access = access_new(&cfg, &aerr);
+    if (!srv.access) {
+        log_msg(LOG_ERROR, "access", "%s", aerr.text);
+        return 1;
+    }
     catalog_on_close(srv.catalog, forget_pages, srv.pages);
     catalog_scan(srv.catalog);
     open_gpu(&srv);
@@ -386,6 +408,7 @@ int main(int argc, char **argv)
     filter_store_free(srv.filter_store);
     close_gpu(&srv);
     catalog_free(srv.catalog);
+    access_free(srv.access);
     stop_rendering(&srv);
     page_cache_free(srv.pages);
     log_msg(LOG_INFO, "main", "stopped");

@@ -6,7 +6,8 @@
  * info.json.  Ids are restricted to [A-Za-z0-9._-] (catalog.h), so they
  * need no HTML or URL escaping.  The page is built per request (the
  * catalog changes on SIGHUP) and sent with "Cache-Control: no-cache" and
- * the viewer's Content-Security-Policy.
+ * the viewer's Content-Security-Policy.  Images hidden from the caller
+ * by the access policy are left out.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -48,8 +49,14 @@ enum MHD_Result route_home(struct req *r)
             "<li class=\"dim\">No images yet: encode one with <code>gigaview "
             "encode</code> into the store directory and send gigaviewd a "
             "SIGHUP.</li>");
+    if (http_policy(r))
+        r->private_answer = 1;
     for (int i = 0; i < n; i++) {
         const char *id = imgs[i]->id;
+        if (http_access(r, id) == ACCESS_HIDDEN) { /* as if absent */
+            image_put(imgs[i]);
+            continue;
+        }
         const struct gv_geometry *g = &imgs[i]->info->geometry;
         len += (size_t)snprintf(s + len, cap - len,
             "<li><a href=\"#image=%s\">%s</a> <span class=\"dim\">%u &times; "

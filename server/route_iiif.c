@@ -131,6 +131,15 @@ enum MHD_Result route_iiif_info(struct req *r)
     if (!img)
         return ret;
     json_t *j = info_json(r, img);
+    /* A protected image (shown to its group: http.c let it through)
+     * names its IIIF Authorization Flow 2.0 services, and their context
+     * comes first (Image API 3.0 section 5.1: extensions before the
+     * image context). */
+    if (j && http_access(r, img->id) == ACCESS_GRANTED) {
+        json_object_set_new(j, "@context", json_pack(
+            "[s,s]", "http://iiif.io/api/auth/2/context.json", IIIF_CONTEXT));
+        json_object_set_new(j, "service", auth_services_json(r, img->id));
+    }
     image_put(img);
     /* JSON-LD only when asked for (spec 5.1); otherwise plain JSON with
      * the context in a Link header. */

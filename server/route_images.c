@@ -3,7 +3,9 @@
  * image's metadata: geometry, tile grid per level, sizes, links) and
  * GET /v1/images/{id}/root (the lossless root level or one of its mips,
  * as PNG or raw samples for GPU clients; the root level also as the
- * lossless WebP the store keeps, the fewest bytes).
+ * lossless WebP the store keeps, the fewest bytes).  http.c checks the
+ * access policy before the last two run; the list leaves out the images
+ * hidden from the caller.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -28,13 +30,24 @@ enum MHD_Result route_images_list(struct req *r)
     json_t *arr = json_array();
     for (int i = 0; i < n; i++) {
         const struct gv_geometry *g = &imgs[i]->info->geometry;
-        json_array_append_new(arr, json_pack(
+        /* Hidden images are left out; a protected one says whether this
+         * caller may see it (access.h). */
+        enum access_verdict v = http_access(r, imgs[i]->id);
+        json_t *e = v == ACCESS_HIDDEN ? NULL : json_pack(
             "{s:s,s:I,s:I,s:i,s:i,s:I}", "id", imgs[i]->id,
             "width", (json_int_t)g->width, "height", (json_int_t)g->height,
             "levels", g->root + 1, "channels", g->channels,
-            "bytes", (json_int_t)imgs[i]->bytes));
+            "bytes", (json_int_t)imgs[i]->bytes);
+        if (e && v != ACCESS_PUBLIC)
+            json_object_set_new(e, "access", json_string(
+                v == ACCESS_GRANTED ? "granted" : "restricted"));
+        if (e)
+            json_array_append_new(arr, e);
         image_put(imgs[i]);
     }
+    /* The list depends on who asks once some image is protected. */
+    if (http_policy(r))
+        r->private_answer = 1;
     free(imgs);
     return http_send_json(r, 200, json_pack("{s:o}", "images", arr));
 }

@@ -3,9 +3,12 @@
  * functions, no libmicrohttpd types, so that tests/fuzz/fuzz_router.c can
  * drive them directly.
  *
- * The table router_routes[] holds {method, pattern, name, iiif} for every
- * route, indexed by enum route_id; routes.c pairs each id with its
- * handler.  A pattern is a path whose '*' segments match any one
+ * The table router_routes[] holds {method, pattern, name, iiif, image}
+ * for every route, indexed by enum route_id; routes.c pairs each id with
+ * its handler.  `image` says whether the route shows an image (its first
+ * '*' segment is the image's id), so that http.c checks the access policy
+ * (access_policy.h) before any such handler runs; it has no default, and
+ * gigaviewd refuses to start when a row leaves it out.  A pattern is a path whose '*' segments match any one
  * non-empty segment and are captured in order; literal segments match
  * exactly; "/" matches only "/".  An empty segment ("//", a trailing '/')
  * never matches.  The first route whose pattern and method both match
@@ -44,7 +47,22 @@ enum route_id {
     ROUTE_TERRAIN_TILE,
     ROUTE_MESH_SIMPLIFY,   /* mesh simplification */
     ROUTE_WEB,
+    ROUTE_AUTH_PROBE,    /* route_auth.c: IIIF Authorization Flow 2.0 */
+    ROUTE_AUTH_LOGIN,
+    ROUTE_AUTH_TOKEN,
+    ROUTE_AUTH_LOGOUT,
     ROUTE_COUNT
+};
+
+/* What a route says about images (router_route.image). */
+enum router_image {
+    ROUTER_IMAGE_UNSET = 0, /* the row forgot to say: refused at start */
+    ROUTER_NO_IMAGE,        /* the route shows no image */
+    ROUTER_IMAGE,           /* param[0] is an image id: http.c answers 401
+                               or 404 for it before the handler runs when
+                               the caller may not see it */
+    ROUTER_IMAGE_OWN,       /* param[0] is an image id whose access the
+                               handler reports itself (the IIIF probe) */
 };
 
 struct router_route {
@@ -52,6 +70,7 @@ struct router_route {
     const char *pattern;
     const char *name;       /* the label in /metrics */
     int iiif;               /* errors and CORS as the IIIF spec wants */
+    enum router_image image;
 };
 
 extern const struct router_route router_routes[ROUTE_COUNT];

@@ -28,4 +28,8 @@ const route_fn route_handlers[ROUTE_COUNT] = {
     [ROUTE_TERRAIN_TILE] = route_terrain_tile,
     [ROUTE_MESH_SIMPLIFY] = route_mesh_simplify,
     [ROUTE_WEB] = route_static,
+    [ROUTE_AUTH_PROBE] = route_auth_probe,
+    [ROUTE_AUTH_LOGIN] = route_auth_login,
+    [ROUTE_AUTH_TOKEN] = route_auth_token,
+    [ROUTE_AUTH_LOGOUT] = route_auth_logout,
 };

@@ -44,6 +44,14 @@ enum MHD_Result route_filters_post(struct req *r);
 enum MHD_Result route_filter_get(struct req *r);
 enum MHD_Result route_filter_delete(struct req *r);
 enum MHD_Result route_image_filter(struct req *r);
+/* route_auth.c: IIIF Authorization Flow 2.0 */
+enum MHD_Result route_auth_probe(struct req *r);
+enum MHD_Result route_auth_login(struct req *r);
+enum MHD_Result route_auth_token(struct req *r);
+enum MHD_Result route_auth_logout(struct req *r);
+/* The info.json "service" array of image `id`'s authorization services
+ * (probe, access, token, logout) with absolute ids; new reference. */
+json_t *auth_services_json(struct req *r, const char *id);
 /* route_health.c */
 enum MHD_Result route_healthz(struct req *r);
 enum MHD_Result route_metrics(struct req *r);

@@ -104,6 +104,21 @@ static const struct settings_key keys[] = {
      "Access-Control-Allow-Origin of /v1 responses (\"\" for none); IIIF always sends *"},
     {"auth_token", T_STR, F(auth_token), "", 0, 0,
      "bearer token required by write endpoints (\"\" disables them)"},
+    /* access control (access.h, docs/OPERATIONS.md "Access control") */
+    {"access_policy", T_STR, F(access_policy), "", 0, 0,
+     "JSON file mapping image ids to public or an access group (\"\": every "
+     "image public); reread on SIGHUP"},
+    {"access_token_secret_file", T_STR, F(access_token_secret_file), "", 0, 0,
+     "file holding the HMAC-SHA256 secret of signed access tokens, at least "
+     "32 bytes (\"\": no signed tokens from elsewhere)"},
+    {"access_trusted_header", T_STR, F(access_trusted_header), "", 0, 0,
+     "request header a reverse proxy sets to the user's groups on "
+     "/iiif/auth/login only (\"\": off)"},
+    {"access_origins", T_STR, F(access_origins), "", 0, 0,
+     "origins (scheme://host[:port], space separated) the IIIF token service "
+     "gives tokens to (\"\": any)"},
+    {"access_token_ttl", T_UINT, F(access_token_ttl), "3600", 60, 31536000,
+     "seconds a token minted by /iiif/auth/login stays valid"},
     {"public_url", T_STR, F(public_url), "", 0, 0,
      "base URL for absolute links, e.g. https://img.example.org (\"\": from Host)"},
     {"log_level", T_LEVEL, F(log_level), "info", 0, 0,

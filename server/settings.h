@@ -50,6 +50,12 @@ struct settings {
     char cors_origin[SETTINGS_STR];  /* Access-Control-Allow-Origin, "" off */
     char auth_token[SETTINGS_STR];   /* bearer token for write endpoints */
     char public_url[SETTINGS_STR];   /* base URL for absolute links, "" auto */
+    /* access control (access.h) */
+    char access_policy[SETTINGS_PATH];            /* policy file, "" none */
+    char access_token_secret_file[SETTINGS_PATH]; /* token secret, "" none */
+    char access_trusted_header[SETTINGS_STR];     /* proxy's groups header */
+    char access_origins[SETTINGS_PATH];           /* token service origins */
+    uint64_t access_token_ttl;                    /* seconds of a minted token */
     char log_level[16];
     char access_log[SETTINGS_PATH];
     uint64_t batch_max_tiles;

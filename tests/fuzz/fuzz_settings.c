@@ -50,7 +50,11 @@ static void check_values(const struct settings *c)
         !TERMINATED(c->public_url) || !TERMINATED(c->log_level) ||
         !TERMINATED(c->access_log) || !TERMINATED(c->gpu) ||
         !TERMINATED(c->filter_worker) || !TERMINATED(c->filter_dir) ||
-        !TERMINATED(c->filter_library_dir))
+        !TERMINATED(c->filter_library_dir) || !TERMINATED(c->access_policy) ||
+        !TERMINATED(c->access_token_secret_file) ||
+        !TERMINATED(c->access_trusted_header) || !TERMINATED(c->access_origins))
+        abort();
+    if (c->access_token_ttl < 60 || c->access_token_ttl > 31536000)
         abort();
     if (c->port > 65535 || c->threads < 1 || c->threads > 256)
         abort();
