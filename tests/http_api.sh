@@ -507,13 +507,16 @@ check "log lines carry time pid level module" grep -Eq '^[0-9]{4}-[0-9]{2}-[0-9]
 # gets SIGTERM, then the client sends the rest: the request in flight is
 # answered (200) and the daemon exits 0.
 cat >slow.py <<'PY'
-import socket, sys, time
+import os, socket, sys, time
 body = b'{"tiles":[[0,0,0],[0,1,0]]}'
 s = socket.create_connection(('127.0.0.1', int(sys.argv[1])))
 s.sendall(b'POST /v1/images/x/batch HTTP/1.1\r\nHost: t\r\nContent-Type: application/json\r\n'
           b'Content-Length: %d\r\nConnection: close\r\n\r\n' % len(body) + body[:10])
 open(sys.argv[2], 'w').write('sent\n')
-time.sleep(1.5)
+for i in range(300):        # the rest once the drain waits for it (30 s)
+    if os.path.exists(sys.argv[3]):
+        break
+    time.sleep(0.1)
 s.sendall(body[10:])
 data = b''
 while True:
@@ -523,11 +526,18 @@ while True:
     data += chunk
 print(data.split(b'\r\n')[0].decode())
 PY
-python3 slow.py "$PORT" started >slow.out 2>&1 &
+python3 slow.py "$PORT" started go >slow.out 2>&1 &
 spid=$!
 i=0
 while [ ! -s started ] && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
-sleep 0.3
+# In flight once the daemon has its head: /metrics counts it and itself.
+i=0
+while [ $i -lt 300 ]; do
+    req "$(url /metrics)"
+    grep -Eq '^gigaview_http_requests_in_flight [2-9]' "$T/b" && break
+    sleep 0.1
+    i=$((i + 1))
+done
 kill -TERM "$DPID"
 # The drain has stopped accepting once it logs what it waits for.
 i=0
@@ -539,6 +549,7 @@ rc=0
 curl -s -o /dev/null --max-time 2 "$(url /healthz)" || rc=$?
 check "SIGTERM: new connections refused while draining (curl exit $rc, 7 = refused)" \
     test "$rc" -eq 7
+: >go
 wait "$spid"
 check "SIGTERM: the request in flight is answered" grep -q '^HTTP/1.1 200' slow.out
 drc=0
