@@ -325,7 +325,7 @@ static void wait_for_stop(struct server *srv, const sigset_t *set)
             log_msg(LOG_INFO, "main", "SIGHUP: rescanning %s", srv->cfg->store_dir);
             catalog_scan(srv->catalog);
             filter_store_scan(srv->filter_store);
-            struct gv_error err;
+            struct gv_error err = {0};
             if (access_reload(srv->access, &err) < 0)
                 log_msg(LOG_ERROR, "access", "%s (the previous policy stays "
                         "in force)", err.text);
@@ -375,7 +375,7 @@ int main(int argc, char **argv)
         log_msg(LOG_ERROR, "main", "out of memory");
         return 1;
     }
-    struct gv_error aerr;
+    struct gv_error aerr = {0};
     srv.access = access_new(&cfg, &aerr);
     if (!srv.access) {
         log_msg(LOG_ERROR, "access", "%s", aerr.text);

@@ -21,12 +21,23 @@
 #     when a.c includes, directly or through other headers, a header that
 #     declares a function b.c defines.  Two files needing each other are
 #     one module cut in two, or a declaration in the wrong header.
-# One cycle is known and let through, named in known_cycles below:
-# gv_decode_region (store_decoder.c) hands a height store's 8-bit region
-# to height_region.c, which decodes through store_decoder.c.  Undoing it
-# moves the height dispatch out of gv_decode_region; until then a new
-# cycle, or this one grown, still fails.
-known_cycles="lib/render/store_decoder.c lib/render/height_region.c"
+# Known cycles are let through, named in known_cycles below (one a
+# line, its files in the order the check prints them):
+# - gv_decode_region (store_decoder.c) hands a height store's 8-bit
+#   region to height_region.c, which decodes through store_decoder.c.
+#   Undoing it moves the height dispatch out of gv_decode_region.
+# - A SIMD kernel file (x86/) falls back to its group's portable C for
+#   what it cannot do (a block past 16 bits, a damaged lane group), and
+#   the group's table calls the kernel: deliberate, both directions are
+#   one kernel group.
+# - http.c puts the IIIF auth services (route_auth.c) into a 401 body,
+#   and route_auth.c answers through http.c's helpers, as every route
+#   does.
+# A new cycle, or one of these grown, still fails.
+known_cycles="lib/render/store_decoder.c lib/render/height_region.c
+lib/codec/tile_dct_pixels.c lib/codec/x86/tile_dct_pixels_avx2.c
+lib/codec/tile_dct_lanes.c lib/codec/x86/tile_dct_lanes_avx512.c
+server/http.c server/route_auth.c"
 set -eu
 top=${top_srcdir:-$(dirname "$0")/..}
 cd "$top"
@@ -85,7 +96,7 @@ function strong(v,   w, i, n, members) {
             w = stack[sp--]; onst[w] = 0; n++
             members = w (members == "" ? "" : " ") members
         } while (w != v)
-        if (n > 1 && members != known_cycles) {
+        if (n > 1 && !(members in known_cycle)) {
             printf "layers: include cycle: %s\n", members
             bad++
         }
@@ -104,6 +115,8 @@ function reach_from(f,   i, h) {
     }
 }
 BEGIN {
+    nk = split(known_cycles, kc, "\n")
+    for (i = 1; i <= nk; i++) known_cycle[kc[i]] = 1
     # the layer table
     while ((getline line < doc) > 0) {
         if (line !~ /^\| `lib\/[a-z_]+` \|/) continue

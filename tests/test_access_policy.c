@@ -34,7 +34,7 @@ static struct access_policy *parse(const char *text, struct gv_error *err)
 
 static void test_verdicts(void)
 {
-    struct gv_error err;
+    struct gv_error err = {0};
     struct access_policy *p = parse(
         "{\"groups\": [\"staff\", \"board\"], \"hide\": true,\n"
         " \"images\": [\n"
@@ -112,7 +112,7 @@ static void test_errors(void)
         check_str(err.text, bad[i].want, "bad policy %zu: %s", i, bad[i].want);
         access_policy_free(p);
     }
-    struct gv_error err;
+    struct gv_error err = {0};
     /* The limits: a file one byte over, one rule too many. */
     size_t big = ACCESS_POLICY_MAX_BYTES + 1;
     char *text = malloc(big);
@@ -131,6 +131,7 @@ static void test_errors(void)
     check(!access_policy_parse(text, n, "p.json", &err) && err.code == GV_ELIMIT,
           "%d rules: GV_ELIMIT", ACCESS_POLICY_MAX_RULES + 1);
     free(text);
+    gv_error_clear(&err);
     check(!access_policy_load("/nonexistent/policy.json", &err) &&
           err.code == GV_ENOTFOUND, "a missing file: GV_ENOTFOUND");
 }
