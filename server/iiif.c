@@ -82,11 +82,9 @@ static const char *show(const char *s, size_t n, char *buf, size_t size)
 
 #define SHOW(s) show((s), strlen(s), shown, sizeof shown)
 
-/* The largest pixel number: 2^31 - 1, the largest image side a store
- * can have (store/geometry.h), so no sum of two overflows 32 bits. */
-#define PIXEL_MAX 0x7fffffffu
-
-/* Parse digits [s, e) as an unsigned integer <= PIXEL_MAX. */
+/* Parse digits [s, e) as an unsigned integer <= GV_MAX_DIM (2^31 - 1, the
+ * largest image side a store can have, so no sum of two overflows 32
+ * bits). */
 static int parse_uint(const char *s, const char *e, uint32_t *out)
 {
     if (s == e)
@@ -96,7 +94,7 @@ static int parse_uint(const char *s, const char *e, uint32_t *out)
         if (*s < '0' || *s > '9')
             return -1;
         v = v * 10 + (uint64_t)(*s - '0');
-        if (v > PIXEL_MAX)
+        if (v > GV_MAX_DIM)
             return -1;
     }
     *out = (uint32_t)v;
@@ -219,7 +217,7 @@ static int parse_region(const char *region, uint32_t W, uint32_t H,
             if (parse_uint(fs[i], fe[i], &v[i]) != 0)
                 return gv_fail(err, GV_EINVAL, "iiif: region \"%s\": "
                                "field %d is not an integer in 0..%u",
-                               SHOW(region), i + 1, PIXEL_MAX);
+                               SHOW(region), i + 1, GV_MAX_DIM);
         x = v[0];
         y = v[1];
         w = v[2];
@@ -356,7 +354,7 @@ static int parse_wh(const char *size, const char *s, const char *e, int bang,
         if (have[i] && parse_uint(fs[i], fe[i], &v[i]) != 0)
             return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": %s is not an "
                            "integer in 0..%u", SHOW(size),
-                           i ? "height" : "width", PIXEL_MAX);
+                           i ? "height" : "width", GV_MAX_DIM);
     }
     if (!have[0] && !have[1])
         return gv_fail(err, GV_EINVAL, "iiif: size \"%s\": no width or "
