@@ -164,14 +164,14 @@ int main(int argc, char **argv)
             else
 #endif
                 rc = gv_zfield_enable(z, side, &p, en, &err);
-            struct gv_tin t;
+            struct gv_mesh t;
             if (rc < 0 || gv_zfield_mesh(z, side, en, 0, &t, &err) < 0) {
                 fprintf(stderr, "zfield: %s\n", err.text);
                 return 1;
             }
             s->t[s->n++] = now() - t0;
             s->tris += t.ntris;
-            gv_tin_free(&t);
+            gv_mesh_free(&t);
         }
 #ifdef GV_ZFIELD_BENCH_EGL
         gv_gpu_zfield_free(zf);
@@ -233,7 +233,7 @@ int main(int argc, char **argv)
     const float th[] = {10.0f, 40.0f, 160.0f};
     for (int i = 0; i < 3; i++) {
         struct gv_zfield_params p = {.threshold = th[i]};
-        struct gv_tin tz, tg;
+        struct gv_mesh tz, tg;
         double t0 = now();
         if (gv_zfield_enable(dem, n, &p, den, &err) < 0 ||
             gv_zfield_mesh(dem, n, den, 1, &tz, &err) < 0)
@@ -250,8 +250,8 @@ int main(int argc, char **argv)
                "insertion at that error %7u (%.3f s); ratio z-field / greedy %.2fx\n",
                th[i], tz.ntris, tz.max_error, tzt, tg.ntris, tgt,
                (double)tz.ntris / (tg.ntris ? tg.ntris : 1));
-        gv_tin_free(&tz);
-        gv_tin_free(&tg);
+        gv_mesh_free(&tz);
+        gv_mesh_free(&tg);
     }
     free(dem), free(den), free(img);
     return 0;

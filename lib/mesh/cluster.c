@@ -64,7 +64,7 @@ static void select_k(struct key *a, size_t n, size_t k)
 }
 
 struct build {
-    const struct gv_trimesh *m;
+    const struct gv_mesh *m;
     uint32_t *perm;
     struct key *keys;
     uint32_t *first, *count;   /* per node: its range of perm */
@@ -153,7 +153,7 @@ static uint32_t lca_rank(const struct gv_cluster_tree *t, uint32_t u,
     return t->rank[a];
 }
 
-int gv_cluster_build(const struct gv_trimesh *m, double time_limit,
+int gv_cluster_build(const struct gv_mesh *m, double time_limit,
                      struct gv_cluster_tree *t, struct gv_error *err)
 {
     memset(t, 0, sizeof *t);
@@ -393,7 +393,7 @@ uint32_t gv_cluster_level(const struct gv_cluster_tree *t, uint64_t faces,
 void gv_cluster_select(const struct gv_cluster_tree *t, uint32_t T,
                        uint32_t *cluster, uint8_t *keep)
 {
-    const struct gv_trimesh *m = t->mesh;
+    const struct gv_mesh *m = t->mesh;
     for (uint32_t v = 0; v < m->nverts; v++) {   /* pass 2 */
         uint32_t p = t->leaf_parent[v];
         if (p == NONE || t->rank[p] < T) {
@@ -413,9 +413,9 @@ void gv_cluster_select(const struct gv_cluster_tree *t, uint32_t T,
 
 int gv_cluster_collect(const struct gv_cluster_tree *t, const uint32_t *cluster,
                        const uint8_t *keep, const float *vpos,
-                       struct gv_trimesh *out, struct gv_error *err)
+                       struct gv_mesh *out, struct gv_error *err)
 {
-    const struct gv_trimesh *m = t->mesh;
+    const struct gv_mesh *m = t->mesh;
     memset(out, 0, sizeof *out);
     size_t ids = (size_t)t->nnodes + m->nverts;
     uint32_t *remap = malloc((ids ? ids : 1) * sizeof *remap);
@@ -465,6 +465,6 @@ int gv_cluster_collect(const struct gv_cluster_tree *t, const uint32_t *cluster,
     return 0;
 oom:
     free(remap);
-    gv_trimesh_free(out);
+    gv_mesh_free(out);
     return gv_fail(err, GV_ENOMEM, "cluster: out of memory for the result");
 }

@@ -642,8 +642,38 @@ static void brute_select(const struct tin *m, double *be_out, int64_t *bi_out,
     *bt_out = bt;
 }
 
+/* The result of the private state: the one mesh type (mesh/mesh.h), the
+ * vertices as grid coordinates in floats.  Returns 0, or -1 out of
+ * memory (*out then empty). */
+static int hand_out(const struct tin *m, uint32_t w, uint32_t hgt, double me,
+                    struct gv_mesh *out)
+{
+    out->width = w;
+    out->height = hgt;
+    out->nverts = m->nv;
+    out->ntris = m->nt;
+    out->max_error = me;
+    out->pos = malloc((size_t)m->nv * 3 * sizeof *out->pos);
+    out->tris = malloc((size_t)m->nt * 3 * sizeof *out->tris);
+    if (!out->pos || !out->tris) {
+        gv_mesh_free(out);
+        return -1;
+    }
+    out->zmin = out->zmax = m->vz[0];
+    for (uint32_t i = 0; i < m->nv; i++) {
+        out->pos[3 * (size_t)i] = (float)m->vx[i];
+        out->pos[3 * (size_t)i + 1] = (float)m->vy[i];
+        out->pos[3 * (size_t)i + 2] = m->vz[i];
+        if (m->vz[i] < out->zmin) out->zmin = m->vz[i];
+        if (m->vz[i] > out->zmax) out->zmax = m->vz[i];
+    }
+    for (uint32_t i = 0; i < 3 * m->nt; i++)
+        out->tris[i] = (uint32_t)m->tv[i];
+    return 0;
+}
+
 static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
-                 const struct gv_tin_params *p, int brute, struct gv_tin *out,
+                 const struct gv_tin_params *p, int brute, struct gv_mesh *out,
                  struct gv_error *err)
 {
     struct tin m;
@@ -777,29 +807,8 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
         if (e > me)
             me = e;
     }
-    out->width = w;
-    out->height = hgt;
-    out->nverts = m.nv;
-    out->ntris = m.nt;
-    out->max_error = me;
-    out->vx = malloc((size_t)m.nv * sizeof *out->vx);
-    out->vy = malloc((size_t)m.nv * sizeof *out->vy);
-    out->tris = malloc((size_t)m.nt * 3 * sizeof *out->tris);
-    out->vz = m.vz;
-    m.vz = NULL;
-    if (!out->vx || !out->vy || !out->tris) {
-        gv_tin_free(out);
+    if (hand_out(&m, w, hgt, me, out) < 0)
         goto nomem;
-    }
-    out->zmin = out->zmax = out->vz[0];
-    for (uint32_t i = 0; i < m.nv; i++) {
-        out->vx[i] = (uint32_t)m.vx[i];
-        out->vy[i] = (uint32_t)m.vy[i];
-        if (out->vz[i] < out->zmin) out->zmin = out->vz[i];
-        if (out->vz[i] > out->zmax) out->zmax = out->vz[i];
-    }
-    for (uint32_t i = 0; i < 3 * m.nt; i++)
-        out->tris[i] = (uint32_t)m.tv[i];
     rc = 0;
     goto out;
 nomem:
@@ -811,7 +820,7 @@ out:
 }
 
 int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
-                 const struct gv_tin_params *p, struct gv_tin *out,
+                 const struct gv_tin_params *p, struct gv_mesh *out,
                  struct gv_error *err)
 {
     return build(h, w, hgt, stride, p, 0, out, err);
@@ -819,18 +828,7 @@ int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
 
 int gv_tin_build_brute(const float *h, uint32_t w, uint32_t hgt,
                        size_t stride, const struct gv_tin_params *p,
-                       struct gv_tin *out, struct gv_error *err)
+                       struct gv_mesh *out, struct gv_error *err)
 {
     return build(h, w, hgt, stride, p, 1, out, err);
-}
-
-void gv_tin_free(struct gv_tin *t)
-{
-    if (!t)
-        return;
-    free(t->vx);
-    free(t->vy);
-    free(t->vz);
-    free(t->tris);
-    memset(t, 0, sizeof *t);
 }
