@@ -5,7 +5,7 @@
  *
  *   mesh_distance A B [SAMPLES]
  *
- * Each mesh (PLY, OBJ or GLB, lib/mesh/mesh_read.h) is sampled at its
+ * Each mesh (PLY, OBJ or GLB, lib/mesh/io/mesh_read.h) is sampled at its
  * vertices (every k-th when it has more than SAMPLES) and at SAMPLES points (default 200000) spread over its
  * triangles in proportion to their area (a fixed linear congruential
  * generator: the same numbers on every run); each sample's distance to

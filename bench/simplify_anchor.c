@@ -3,7 +3,7 @@
  *
  *   simplify_anchor sloppy|quadric IN FACES OUT [REPEAT]
  *
- * Reads IN (PLY, OBJ, GLB through lib/mesh/mesh_read.h), runs
+ * Reads IN (PLY, OBJ, GLB through lib/mesh/io/mesh_read.h), runs
  * meshopt_simplifySloppy (vertex-grid clustering) or meshopt_simplify
  * (quadric edge collapse) to 3 * FACES indices with no error bound
  * (target_error 1), REPEAT times (default 3), and prints the best time in

@@ -3,7 +3,7 @@
  *   GET /v1/images/{id}/terrain/layer.json
  *   GET /v1/images/{id}/terrain/{z}/{x}/{y}.terrain
  *
- * The tiles are quantized-mesh-1.0 (lib/mesh/mesh_qmesh.c) in Cesium's
+ * The tiles are quantized-mesh-1.0 (lib/mesh/io/mesh_qmesh.c) in Cesium's
  * geographic tiling scheme (EPSG:4326, TMS: two root tiles of 180 degrees
  * side by side, tile y = 0 at the south, 2^(z+1) x 2^z tiles at level z),
  * so that CesiumJS's CesiumTerrainProvider loads them unchanged.

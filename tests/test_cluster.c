@@ -1,7 +1,7 @@
 /*
  * test_cluster.c - mesh simplification by vertex clustering
  * (lib/mesh/cluster.h, Kanaya et al.) and the mesh readers
- * (lib/mesh/mesh_read.h).
+ * (lib/mesh/io/mesh_read.h).
  *
  * Readers: a mesh written as binary PLY, ascii PLY, OBJ and GLB reads back
  * the same; quads are fanned, negative OBJ indices resolved, a GLB with two

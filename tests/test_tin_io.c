@@ -1,5 +1,5 @@
 /*
- * test_tin_io.c - the mesh writers (lib/mesh/mesh_write.h) read back.
+ * test_tin_io.c - the mesh writers (lib/mesh/io/mesh_write.h) read back.
  *
  * A small TIN is written in every format and parsed again by the minimal
  * readers below, written from the format specifications and not from the

@@ -1,6 +1,6 @@
 /*
  * fuzz_mesh_read.c - libFuzzer target for the mesh readers
- * (lib/mesh/mesh_read.h: PLY ascii and binary, OBJ, GLB) and the
+ * (lib/mesh/io/mesh_read.h: PLY ascii and binary, OBJ, GLB) and the
  * simplifier behind them (lib/mesh/cluster.h).
  *
  * Byte 0 picks the reader (0: sniffed, 1: PLY, 2: OBJ, 3: GLB, modulo 4);
