@@ -18,6 +18,7 @@
 
 #include "mesh/cluster.h"
 #include "mesh/io/mesh_read.h"
+#include "mesh/io/mesh_write.h"
 
 static double now_ms(void)
 {
