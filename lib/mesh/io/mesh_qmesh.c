@@ -98,10 +98,10 @@ static void quantize(const struct gv_mesh *t, const uint32_t *old,
     double zr = (double)t->zmax - t->zmin;
     for (uint32_t i = 0; i < nv; i++) {
         uint32_t v = old[i];
+        double z = (double)gv_mesh_gz(t, v) - t->zmin;
         q[i] = (uint16_t)lround((double)gv_mesh_gx(t, v) / W * QMAX);
         q[nv + i] = (uint16_t)lround((double)(H - gv_mesh_gy(t, v)) / H * QMAX);
-        q[2 * nv + i] = zr > 0 ? (uint16_t)lround(((double)gv_mesh_gz(t, v) - t->zmin)
-                                                  / zr * QMAX) : 0;
+        q[2 * nv + i] = zr > 0 ? (uint16_t)lround(z / zr * QMAX) : 0;
     }
 }
 
