@@ -349,7 +349,8 @@ int main(int argc, char **argv)
         printf("%-34s unavailable: %s\n", "GPU (EGL)", err.text);
     } else if (gpuctx) {
         const struct gv_gpu_info *in = gv_gpu_info(gpuctx);
-        struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpuctx, channels, &err);
+        struct gv_gpu_decoder *gd = gv_gpu_decoder_new(
+            gpuctx, &(struct gv_gpu_decoder_opts){.channels = channels}, &err);
         uint32_t *h = calloc((size_t)ntiles, sizeof *h), root;
         gv_gpu_upload_tile(gd, root_tile, &root, &err);
         double best = 1e9, best_c = 1e9;

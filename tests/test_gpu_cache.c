@@ -89,7 +89,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     const int c = g->channels;
     struct gv_decoder *cpu = gv_decoder_new(s, 64u << 20);
-    struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpu, c, &err);
+    struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpu, &(struct gv_gpu_decoder_opts){.channels = c}, &err);
     if (!gd)
         fail("gpu decoder: %s", err.text);
     uint32_t rw, rh;
