@@ -102,8 +102,9 @@ void gv_gpu_release(struct gv_gpu_decoder *d, uint32_t handle);
 /* Allocate textures for `tiles` tiles up front and keep that many released
  * ones from now on, so that decoding them allocates nothing (on an H100 a
  * fifth to a third of a batch's time went to allocating textures).  A
- * client that knows its cache's size in tiles reserves it.  Returns 0, or
- * -1 with *err. */
+ * client that knows its cache's size in tiles may reserve it; only
+ * bench/decode_bench and tests/test_gpu_decode call it so far.  Returns 0,
+ * or -1 with *err. */
 int gv_gpu_reserve(struct gv_gpu_decoder *d, size_t tiles, struct gv_error *err);
 
 #endif
