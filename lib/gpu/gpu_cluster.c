@@ -156,8 +156,10 @@ static int do_select(void *arg, struct gv_error *err)
     for (size_t f = 0; rc == 0 && f < m->ntris; f++)
         a->keep[f] = (uint8_t)(keep32[f] != 0);
     free(keep32);
-    if (rc == 0)
-        rc = gv_gpu_gl_check(err, "cluster selection");
+    /* Always asked, so that no GL error outlives this call (a failure
+     * already in *err stays the one reported). */
+    if (gv_gpu_gl_check(err, "cluster selection") < 0)
+        rc = -1;
     return rc;
 }
 

@@ -472,6 +472,39 @@ static void dispatch_streams(GLuint prog, GLuint words, GLuint out, GLuint tiles
     glDispatchCompute(gx, gy, 1);
 }
 
+/* Transform-coded tiles of a group (nd of its n, tile i at offset off[i]
+ * of the set's storage buffer, in coefficient plane dslot[i] or -1):
+ * every such tile's 65 coefficient streams in one dispatch, one
+ * invocation per row of 8x8 blocks, then the inverse transform's row pass
+ * in place. */
+static void dispatch_dct(struct gv_gpu_decoder *d, int set,
+                         const struct gv_gpu_tile_job *jobs, size_t n,
+                         const size_t *off, const long *dslot, size_t nd)
+{
+    if (nd > d->coef_cap[set]) {
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->coefs[set]);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(nd * d->coef_stride),
+                     NULL, GL_DYNAMIC_COPY);
+        d->coef_cap[set] = nd;
+    }
+    GLint params[GROUP][4];
+    for (size_t i = 0; i < n; i++) {
+        if (dslot[i] < 0)
+            continue;
+        params[dslot[i]][0] = (GLint)(off[i] / 4);
+        params[dslot[i]][1] = (GLint)jobs[i].len;
+        params[dslot[i]][2] = (GLint)((size_t)dslot[i] * d->coef_stride / sizeof(GLuint));
+        params[dslot[i]][3] = d->channels;
+    }
+    dispatch_streams(d->dct, d->ssbo[set], d->coefs[set], d->dct_tiles[set],
+                     params, (size_t)nd * sizeof params[0], 1, (GLuint)nd);
+    /* The inverse transform's row pass, in place, once the planes are
+     * written: one invocation per block (same buffers bound). */
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(d->dct_rows);
+    glDispatchCompute((GV_DCT_BLOCKS * GV_DCT_BLOCKS + 63) / 64, (GLuint)nd, 1);
+}
+
 static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
                         size_t first, size_t n, struct gv_error *err)
 {
@@ -549,32 +582,8 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
                          params, m * sizeof params[0], (GV_BLOCKS + 63) / 64,
                          (GLuint)m);
     }
-    /* Transform-coded tiles: every such tile's 65 coefficient streams in
-     * one dispatch, one invocation per row of 8x8 blocks. */
-    if (nd > 0) {
-        if (nd > d->coef_cap[set]) {
-            glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->coefs[set]);
-            glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(nd * d->coef_stride),
-                         NULL, GL_DYNAMIC_COPY);
-            d->coef_cap[set] = nd;
-        }
-        GLint params[GROUP][4];
-        for (size_t i = 0; i < n; i++) {
-            if (dslot[i] < 0)
-                continue;
-            params[dslot[i]][0] = (GLint)(off[i] / 4);
-            params[dslot[i]][1] = (GLint)jobs[i].len;
-            params[dslot[i]][2] = (GLint)((size_t)dslot[i] * d->coef_stride / sizeof(GLuint));
-            params[dslot[i]][3] = d->channels;
-        }
-        dispatch_streams(d->dct, d->ssbo[set], d->coefs[set], d->dct_tiles[set],
-                         params, (size_t)nd * sizeof params[0], 1, (GLuint)nd);
-        /* The inverse transform's row pass, in place, once the planes are
-         * written: one invocation per block (same buffers bound). */
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        glUseProgram(d->dct_rows);
-        glDispatchCompute((GV_DCT_BLOCKS * GV_DCT_BLOCKS + 63) / 64, (GLuint)nd, 1);
-    }
+    if (nd > 0)
+        dispatch_dct(d, set, jobs, n, off, dslot, nd);
     if (entropy || nd > 0)
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     glBindVertexArray(d->vao);

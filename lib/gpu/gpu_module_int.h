@@ -3,8 +3,10 @@
  * (internal to lib/gpu: gpu_decode.c, gpu_height.c, gpu_zfield.c,
  * gpu_cluster.c).
  *
- * A module is an opaque struct made by one gv_gpu_X_new(g, &opts, err),
- * whose set-up runs on the GL thread: it builds its programs from a table
+ * A module is an opaque struct made by one constructor, gv_gpu_X_new (its
+ * choices in an options struct whose zeros are the defaults, among them
+ * enum gv_gpu_path where it runs either way), whose set-up runs on the GL
+ * thread: it builds its programs from a table
  * of stages and uniform names (gv_gpu_build_programs, gpu_program.c),
  * makes its buffers and textures, and ends with gv_gpu_gl_check.  Its
  * gv_gpu_X_free deletes every GL object named in a table
