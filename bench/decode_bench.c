@@ -217,29 +217,13 @@ static double jpeg_run(struct jpeg_tile *jt, int count, int whole_tile)
     return (double)count * 513 * 513 / best / 1e6;
 }
 
-int main(int argc, char **argv)
+/* Every tile of store s (at path), parents before children, into tiles[],
+ * their CPU decode into decoded[], the root tile into root_tile; prints the
+ * store's line.  Returns the level-0 PSNR, or -1 when a page cannot be
+ * read. */
+static double load_tiles(struct gv_store *s, const char *path)
 {
-    int want_gpu = 1, want_cpu = 1;
-    while (argc > 1 && argv[1][0] == '-') {
-        if (!strcmp(argv[1], "--no-gpu"))
-            want_gpu = 0;
-        else if (!strcmp(argv[1], "--no-cpu"))
-            want_cpu = 0;
-        else
-            break;
-        argv++;
-        argc--;
-    }
-    if (argc < 2) {
-        fprintf(stderr, "usage: decode_bench [--no-gpu] [--no-cpu] STORE [SOURCE-IMAGE]\n");
-        return 2;
-    }
     struct gv_error err = {0};
-    struct gv_store *s = gv_store_open(argv[1], &err);
-    if (!s) {
-        fprintf(stderr, "%s\n", err.text);
-        return 1;
-    }
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     channels = g->channels;
     /* Every tile, parents before children. */
@@ -260,7 +244,7 @@ int main(int argc, char **argv)
                 size_t plen;
                 if (gv_store_read_page(s, k, tx / 8, ty / 8, &page, &plen, &err) < 0) {
                     fprintf(stderr, "%s\n", err.text);
-                    return 1;
+                    return -1;
                 }
                 struct tile_ref *t = &tiles[ntiles];
                 const uint8_t *b;
@@ -292,64 +276,78 @@ int main(int argc, char **argv)
     }
     double psnr0 = gv_store_info(s)->header.psnr0_mdb / 1000.0;
     printf("store %s: %ux%u, %d tiles (%d VQ entropy-coded, %d layout D), %.3f bits per decoded tile pixel, level-0 PSNR %.2f dB\n",
-           argv[1], g->width, g->height, ntiles, entropy, dct,
+           path, g->width, g->height, ntiles, entropy, dct,
            8.0 * coded_bytes / ((double)ntiles * 513 * 513), psnr0);
+    return psnr0;
+}
 
-    double cpu1 = 0, cpun = 0, cpu1_c = 0;
-    if (want_cpu) {
-        cpu1 = cpu_run(1);
-        cpu1_c = last_cpu_rate;
-        printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n", "CPU reference, 1 thread",
-               cpu1, cpu1_c);
-        cpun = cpu_run(gv_cpu_count());
-        printf("%-34s %9.1f MP/s  (%d threads)\n", "CPU reference, all cores", cpun, gv_cpu_count());
+/* The CPU reference decoder's rates, printed: *out1 on 1 thread (*out1_c
+ * per CPU-second), *outn on every core. */
+static void cpu_rates(double *out1, double *outn, double *out1_c)
+{
+    double cpu1, cpun, cpu1_c;
+    cpu1 = cpu_run(1);
+    cpu1_c = last_cpu_rate;
+    printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n", "CPU reference, 1 thread",
+           cpu1, cpu1_c);
+    cpun = cpu_run(gv_cpu_count());
+    printf("%-34s %9.1f MP/s  (%d threads)\n", "CPU reference, all cores", cpun, gv_cpu_count());
+    predict_only = 1;
+    double pr = cpu_run(1), pr_c = last_cpu_rate;
+    printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second; the residual and rANS left out)\n",
+           "CPU prediction only, 1 thread", pr, pr_c);
+    predict_only = 0;
+    /* Where the prediction runs at level 3 (AVX-512 VBMI and VNNI),
+     * the same decoder with the level-2 prediction (AVX-512BW without
+     * them, as on Skylake-SP and Cascade Lake), in this run. */
+    const unsigned l3 = GV_CPU_AVX512 | GV_CPU_AVX512VBMI | GV_CPU_AVX512VNNI;
+    const unsigned flags = gv_cpu_flags();
+    if ((flags & l3) == l3) {
+        gv_cpu_set_mask(flags & ~(unsigned)GV_CPU_AVX512VNNI);
+        double old1 = cpu_run(1), old1_c = last_cpu_rate;
         predict_only = 1;
-        double pr = cpu_run(1), pr_c = last_cpu_rate;
-        printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second; the residual and rANS left out)\n",
-               "CPU prediction only, 1 thread", pr, pr_c);
+        double oldp = cpu_run(1), oldp_c = last_cpu_rate;
         predict_only = 0;
-        /* Where the prediction runs at level 3 (AVX-512 VBMI and VNNI),
-         * the same decoder with the level-2 prediction (AVX-512BW without
-         * them, as on Skylake-SP and Cascade Lake), in this run. */
-        const unsigned l3 = GV_CPU_AVX512 | GV_CPU_AVX512VBMI | GV_CPU_AVX512VNNI;
-        const unsigned flags = gv_cpu_flags();
-        if ((flags & l3) == l3) {
-            gv_cpu_set_mask(flags & ~(unsigned)GV_CPU_AVX512VNNI);
-            double old1 = cpu_run(1), old1_c = last_cpu_rate;
-            predict_only = 1;
-            double oldp = cpu_run(1), oldp_c = last_cpu_rate;
-            predict_only = 0;
-            gv_cpu_set_mask(flags);
-            printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
-                   "CPU reference, level-2 prediction", old1, old1_c);
-            printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
-                   "CPU prediction only, level 2", oldp, oldp_c);
-            printf("ratio prediction level 3 / level 2: decoder %.2fx (per CPU-second %.2fx), "
-                   "prediction alone %.2fx (%.2fx)\n", cpu1 / old1, cpu1_c / old1_c,
-                   pr / oldp, pr_c / oldp_c);
-        }
-        /* Where layout D's rANS rows run in AVX-512 lanes, the same
-         * decoder with the scalar rows (two in lockstep), in this run. */
-        if (gv_dct_lanes_usable()) {
-            /* Of the kernels only the lanes need POPCNT: without it the
-             * rest stays as it was. */
-            gv_cpu_set_mask(flags & ~(unsigned)GV_CPU_POPCNT);
-            double sc1 = cpu_run(1), sc1_c = last_cpu_rate;
-            gv_cpu_set_mask(flags);
-            printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
-                   "CPU reference, scalar rANS rows", sc1, sc1_c);
-            printf("ratio rANS rows in lanes / scalar: decoder %.2fx (per CPU-second %.2fx)\n",
-                   cpu1 / sc1, cpu1_c / sc1_c);
-        }
+        gv_cpu_set_mask(flags);
+        printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
+               "CPU reference, level-2 prediction", old1, old1_c);
+        printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
+               "CPU prediction only, level 2", oldp, oldp_c);
+        printf("ratio prediction level 3 / level 2: decoder %.2fx (per CPU-second %.2fx), "
+               "prediction alone %.2fx (%.2fx)\n", cpu1 / old1, cpu1_c / old1_c,
+               pr / oldp, pr_c / oldp_c);
     }
+    /* Where layout D's rANS rows run in AVX-512 lanes, the same
+     * decoder with the scalar rows (two in lockstep), in this run. */
+    if (gv_dct_lanes_usable()) {
+        /* Of the kernels only the lanes need POPCNT: without it the
+         * rest stays as it was. */
+        gv_cpu_set_mask(flags & ~(unsigned)GV_CPU_POPCNT);
+        double sc1 = cpu_run(1), sc1_c = last_cpu_rate;
+        gv_cpu_set_mask(flags);
+        printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second)\n",
+               "CPU reference, scalar rANS rows", sc1, sc1_c);
+        printf("ratio rANS rows in lanes / scalar: decoder %.2fx (per CPU-second %.2fx)\n",
+               cpu1 / sc1, cpu1_c / sc1_c);
+    }
+    *out1 = cpu1;
+    *outn = cpun;
+    *out1_c = cpu1_c;
+}
 
+/* The GPU decoder's rates, printed (without a context: why).  Returns the
+ * faster rate in MP/s (0 without a GPU), or -1 when a batch fails. */
+static double gpu_rates(int want_gpu)
+{
+    struct gv_error err = {0};
     double gpu = 0;
     struct gv_gpu *gpuctx = want_gpu ? gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err) : NULL;
     if (want_gpu && !gpuctx) {
         printf("%-34s unavailable: %s\n", "GPU (EGL)", err.text);
     } else if (gpuctx) {
         const struct gv_gpu_info *in = gv_gpu_info(gpuctx);
-        struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpuctx, channels, &err);
+        struct gv_gpu_decoder *gd = gv_gpu_decoder_new(
+            gpuctx, &(struct gv_gpu_decoder_opts){.channels = channels}, &err);
         uint32_t *h = calloc((size_t)ntiles, sizeof *h), root;
         gv_gpu_upload_tile(gd, root_tile, &root, &err);
         double best = 1e9, best_c = 1e9;
@@ -382,7 +380,7 @@ int main(int argc, char **argv)
         for (int reserved = 0; reserved < 2; reserved++) {
             if (reserved && gv_gpu_reserve(gd, (size_t)ntiles, &err) < 0) {
                 fprintf(stderr, "reserve: %s\n", err.text);
-                return 1;
+                return -1;
             }
             double bbest = 1e9, bbest_c = 1e9;
             for (int rep = 0; rep < 3; rep++) {
@@ -398,7 +396,7 @@ int main(int argc, char **argv)
                             .qx = (int)(tiles[i].tx & 1), .qy = (int)(tiles[i].ty & 1)};
                     if (gv_gpu_decode_batch(gd, jobs + a, (size_t)(b - a), &err) < 0) {
                         fprintf(stderr, "batch: %s\n", err.text);
-                        return 1;
+                        return -1;
                     }
                     a = b;
                 }
@@ -431,64 +429,109 @@ int main(int argc, char **argv)
         gv_gpu_close(gpuctx);
     }
 
-    if (argc > 2) {
-        struct gv_image_info info;
-        struct gv_image_in *in = gv_image_open(argv[2], 1ull << 34, &info, &err);
-        if (!in || info.sample != GV_SAMPLE_U8) {
-            printf("JPEG anchor: cannot read %s as 8-bit\n", argv[2]);
-            return 0;
-        }
-        uint8_t *img = malloc((size_t)info.width * info.height * info.channels);
-        gv_image_read(in, info.height, img, &err);
-        gv_image_close(in);
-        /* The quality whose tiles' PSNR is closest to the store's level 0. */
-        int bestq = 0, count = 0;
-        double bestd = 1e9, p;
-        struct jpeg_tile *jt = NULL;
-        /* Every fourth quality, then the three on either side of the
-         * best: the nearest PSNR at a step of 1. */
-        int qs[23 + 6], nq = 0;
-        for (int q = 10; q <= 98; q += 4)
-            qs[nq++] = q;
-        for (int iq = 0; iq < nq; iq++) {
-            const int q = qs[iq];
-            int n;
-            struct jpeg_tile *t = jpeg_encode_tiles(img, info.width, info.height,
-                                                    info.channels, q, &n, &p);
-            if (fabs(p - psnr0) < bestd) {
-                if (jt)
-                    for (int i = 0; i < count; i++)
-                        free(jt[i].data);
-                free(jt);
-                jt = t;
-                count = n;
-                bestd = fabs(p - psnr0);
-                bestq = q;
-            } else {
-                for (int i = 0; i < n; i++)
-                    free(t[i].data);
-                free(t);
-            }
-            if (iq == 22)
-                for (int dq = -3; dq <= 3; dq++)
-                    if (dq && bestq + dq >= 1 && bestq + dq <= 100)
-                        qs[nq++] = bestq + dq;
-        }
-        double jp = jpeg_run(jt, count, 0), jp_c = last_cpu_rate;
-        printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second; level-0 tiles, Q%d, PSNR within %.2f dB of the store)\n",
-               "libjpeg-turbo, 1 thread (anchor)", jp, jp_c, bestq, bestd);
-        double jw = jpeg_run(jt, count, 1), jw_c = last_cpu_rate;
-        printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second; rows kept, as a tile decoder writes them)\n",
-               "libjpeg-turbo into a tile buffer", jw, jw_c);
-        if (cpu1 > 0) {
-            printf("ratio CPU reference 1 thread / libjpeg-turbo 1 thread: %.2fx  (per CPU-second %.2fx; goal >= 3x)\n",
-                   cpu1 / jp, cpu1_c / jp_c);
-            printf("ratio CPU reference all cores / libjpeg-turbo 1 thread: %.2fx\n", cpun / jp);
-            printf("ratio CPU reference 1 thread / libjpeg-turbo into a tile buffer: %.2fx  (per CPU-second %.2fx)\n",
-                   cpu1 / jw, cpu1_c / jw_c);
-        }
-        if (gpu > 0)
-            printf("ratio GPU decode (the faster way) / libjpeg-turbo 1 thread: %.2fx\n", gpu / jp);
+    return gpu;
+}
+
+/* libjpeg-turbo on the source image at path, at the quality nearest the
+ * store's level-0 PSNR, as the anchor of the rates measured before. */
+static int jpeg_anchor(const char *path, double psnr0, double cpu1, double cpu1_c,
+                       double cpun, double gpu)
+{
+    struct gv_error err = {0};
+    struct gv_image_info info;
+    struct gv_image_in *in = gv_image_open(path, 1ull << 34, &info, &err);
+    if (!in || info.sample != GV_SAMPLE_U8) {
+        printf("JPEG anchor: cannot read %s as 8-bit\n", path);
+        return 0;
     }
+    uint8_t *img = malloc((size_t)info.width * info.height * info.channels);
+    gv_image_read(in, info.height, img, &err);
+    gv_image_close(in);
+    /* The quality whose tiles' PSNR is closest to the store's level 0. */
+    int bestq = 0, count = 0;
+    double bestd = 1e9, p;
+    struct jpeg_tile *jt = NULL;
+    /* Every fourth quality, then the three on either side of the
+     * best: the nearest PSNR at a step of 1. */
+    int qs[23 + 6], nq = 0;
+    for (int q = 10; q <= 98; q += 4)
+        qs[nq++] = q;
+    for (int iq = 0; iq < nq; iq++) {
+        const int q = qs[iq];
+        int n;
+        struct jpeg_tile *t = jpeg_encode_tiles(img, info.width, info.height,
+                                                info.channels, q, &n, &p);
+        if (fabs(p - psnr0) < bestd) {
+            if (jt)
+                for (int i = 0; i < count; i++)
+                    free(jt[i].data);
+            free(jt);
+            jt = t;
+            count = n;
+            bestd = fabs(p - psnr0);
+            bestq = q;
+        } else {
+            for (int i = 0; i < n; i++)
+                free(t[i].data);
+            free(t);
+        }
+        if (iq == 22)
+            for (int dq = -3; dq <= 3; dq++)
+                if (dq && bestq + dq >= 1 && bestq + dq <= 100)
+                    qs[nq++] = bestq + dq;
+    }
+    double jp = jpeg_run(jt, count, 0), jp_c = last_cpu_rate;
+    printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second; level-0 tiles, Q%d, PSNR within %.2f dB of the store)\n",
+           "libjpeg-turbo, 1 thread (anchor)", jp, jp_c, bestq, bestd);
+    double jw = jpeg_run(jt, count, 1), jw_c = last_cpu_rate;
+    printf("%-34s %9.1f MP/s  (%.1f MP per CPU-second; rows kept, as a tile decoder writes them)\n",
+           "libjpeg-turbo into a tile buffer", jw, jw_c);
+    if (cpu1 > 0) {
+        printf("ratio CPU reference 1 thread / libjpeg-turbo 1 thread: %.2fx  (per CPU-second %.2fx; goal >= 3x)\n",
+               cpu1 / jp, cpu1_c / jp_c);
+        printf("ratio CPU reference all cores / libjpeg-turbo 1 thread: %.2fx\n", cpun / jp);
+        printf("ratio CPU reference 1 thread / libjpeg-turbo into a tile buffer: %.2fx  (per CPU-second %.2fx)\n",
+               cpu1 / jw, cpu1_c / jw_c);
+    }
+    if (gpu > 0)
+        printf("ratio GPU decode (the faster way) / libjpeg-turbo 1 thread: %.2fx\n", gpu / jp);
     return 0;
+}
+
+int main(int argc, char **argv)
+{
+    int want_gpu = 1, want_cpu = 1;
+    while (argc > 1 && argv[1][0] == '-') {
+        if (!strcmp(argv[1], "--no-gpu"))
+            want_gpu = 0;
+        else if (!strcmp(argv[1], "--no-cpu"))
+            want_cpu = 0;
+        else
+            break;
+        argv++;
+        argc--;
+    }
+    if (argc < 2) {
+        fprintf(stderr, "usage: decode_bench [--no-gpu] [--no-cpu] STORE [SOURCE-IMAGE]\n");
+        return 2;
+    }
+    struct gv_error err = {0};
+    struct gv_store *s = gv_store_open(argv[1], &err);
+    if (!s) {
+        fprintf(stderr, "%s\n", err.text);
+        return 1;
+    }
+    const double psnr0 = load_tiles(s, argv[1]);
+    if (psnr0 < 0)
+        return 1;
+
+    double cpu1 = 0, cpun = 0, cpu1_c = 0;
+    if (want_cpu)
+        cpu_rates(&cpu1, &cpun, &cpu1_c);
+
+    const double gpu = gpu_rates(want_gpu);
+    if (gpu < 0)
+        return 1;
+
+    return argc > 2 ? jpeg_anchor(argv[2], psnr0, cpu1, cpu1_c, cpun, gpu) : 0;
 }

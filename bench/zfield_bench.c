@@ -207,8 +207,9 @@ int main(int argc, char **argv)
             if (!want_gpu)
                 break;
             g = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
-            if (!g || !(zf = gv_gpu_zfield_new_path(g, pass == 2 ? GV_ZFIELD_COMPUTE
-                                                                 : GV_ZFIELD_FRAGMENT, &err)) ||
+            if (!g || !(zf = gv_gpu_zfield_new(g, &(struct gv_gpu_zfield_opts){
+                                    .path = pass == 2 ? GV_GPU_PATH_COMPUTE
+                                                      : GV_GPU_PATH_WEBGL2}, &err)) ||
                 gv_gpu_zfield_heights(zf, z, side, &err) < 0) {
                 printf("GPU: unavailable: %s\n", err.text);
                 break;

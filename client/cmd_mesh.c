@@ -254,7 +254,7 @@ static int zfield_build(const float *h, uint32_t w, uint32_t hgt, double thresho
     if (use_gpu) {
 #ifdef GV_HAVE_GPU
         struct gv_gpu *g = gv_gpu_open(GV_GPU_PLATFORM_AUTO, err);
-        struct gv_gpu_zfield *zf = g ? gv_gpu_zfield_new(g, err) : NULL;
+        struct gv_gpu_zfield *zf = g ? gv_gpu_zfield_new(g, NULL, err) : NULL;
         rc = zf && gv_gpu_zfield_heights(zf, h, w, err) == 0 &&
                      gv_gpu_zfield_enable(zf, &p, en, err) == 0 ? 0 : -1;
         gv_gpu_zfield_free(zf);

@@ -289,7 +289,8 @@ static int start_decoding(struct session *s, struct gv_error *err)
         return 0;
     if (!(s->gpu = gv_gpu_open(s->platform, err)))
         return -1;
-    if (!(s->dec = gv_gpu_decoder_new(s->gpu, s->img.channels, err)))
+    if (!(s->dec = gv_gpu_decoder_new(s->gpu, &(struct gv_gpu_decoder_opts){
+                                          .channels = s->img.channels}, err)))
         return -1;
     uint8_t *root;
     uint32_t rw, rh;

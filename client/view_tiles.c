@@ -313,7 +313,8 @@ struct vt *vt_new(struct gv_gpu *g, struct vf_result *res,
         vf_result_free(res);
         return t;
     }
-    if (!(t->dec = gv_gpu_decoder_new(g, im->channels, err)))
+    if (!(t->dec = gv_gpu_decoder_new(g, &(struct gv_gpu_decoder_opts){
+                                          .channels = im->channels}, err)))
         goto fail;
     t->cache = gv_gpu_cache_new(t->dec, &t->geo, res->mip[0], res->mip_w[0],
                                 res->mip_h[0], o->decode_bytes, from_memory, t, err);

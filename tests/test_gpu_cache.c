@@ -70,6 +70,88 @@ struct tile_id {
     uint32_t tx, ty;
 };
 
+/* Every tile of g, finest level first, then the same list shuffled:
+ * 2 * *n entries (*n: the tiles, the root included), malloc'ed. */
+static struct tile_id *tile_order(const struct gv_geometry *g, size_t *count)
+{
+    size_t n = 1;
+    for (int k = 0; k < g->root; k++)
+        n += (size_t)g->level[k].tiles_x * g->level[k].tiles_y;
+    struct tile_id *ids = malloc(2 * n * sizeof *ids);
+    if (!ids)
+        fail("out of memory");
+    size_t m = 0;
+    for (int k = 0; k < g->root; k++)
+        for (uint32_t ty = 0; ty < g->level[k].tiles_y; ty++)
+            for (uint32_t tx = 0; tx < g->level[k].tiles_x; tx++)
+                ids[m++] = (struct tile_id){k, tx, ty};
+    ids[m++] = (struct tile_id){g->root, 0, 0};
+    uint64_t seed = 12345;
+    for (size_t i = 0; i < n; i++)
+        ids[n + i] = ids[i];
+    for (size_t i = n - 1; i > 0; i--) {
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        size_t j = (size_t)(seed >> 33) % (i + 1);
+        struct tile_id t = ids[n + i];
+        ids[n + i] = ids[n + j];
+        ids[n + j] = t;
+    }
+    *count = n;
+    return ids;
+}
+
+/* A batch: every level-0 tile prepared at once (their ancestors with
+ * them), then read as hits, equal to the CPU decoder; with a budget too
+ * small for them, prepare decodes nothing but the root.  n: the store's
+ * tiles, the root included. */
+static void check_prepare(struct gv_gpu_decoder *gd, const struct gv_geometry *g,
+                          const uint8_t *root, uint32_t rw, uint32_t rh,
+                          struct source *src, struct gv_decoder *cpu, size_t n,
+                          const char *name)
+{
+    struct gv_error err = {0};
+    const size_t tb = gv_tile_bytes(g->channels);
+    uint8_t *px = malloc(tb);
+    const uint8_t *ref;
+    struct gv_gpu_cache *gc;
+    gc = gv_gpu_cache_new(gd, g, root, rw, rh, n * GV_GPU_TILE_BYTES, fetch, src, &err);
+    if (!gc)
+        fail("gpu cache: %s", err.text);
+    const uint32_t lx = g->level[0].tiles_x, ly = g->level[0].tiles_y;
+    int prc = gv_gpu_cache_prepare(gc, 0, 0, 0, lx, ly, &err);   /* clipped */
+    struct gv_gpu_cache_stats ps;
+    gv_gpu_cache_stats(gc, &ps);
+    int bad = 0;
+    for (uint32_t ty = 0; ty < ly; ty++)
+        for (uint32_t tx = 0; tx < lx; tx++) {
+            if (gv_gpu_cache_read(gc, 0, tx, ty, px, &err) < 0 ||
+                gv_decoder_tile(cpu, 0, tx, ty, &ref, &err) < 0)
+                fail("prepared %u/%u: %s", tx, ty, err.text);
+            bad += memcmp(px, ref, tb) != 0;
+        }
+    struct gv_gpu_cache_stats after;
+    gv_gpu_cache_stats(gc, &after);
+    check(prc == 0 && ps.decodes == n && ps.fetches == n - 1 && bad == 0 &&
+              after.decodes == ps.decodes && after.hits == ps.hits + (uint64_t)lx * ly,
+          "%s: prepare decodes all %zu tiles in one batch (%llu decodes, %llu "
+          "fetches); the %u level-0 reads then hit, equal to the CPU decoder "
+          "(%d differ)", name, n, (unsigned long long)ps.decodes,
+          (unsigned long long)ps.fetches, lx * ly, bad);
+    gv_gpu_cache_free(gc);
+    gc = gv_gpu_cache_new(gd, g, root, rw, rh, 2 * GV_GPU_TILE_BYTES, fetch, src, &err);
+    if (!gc)
+        fail("gpu cache: %s", err.text);
+    prc = gv_gpu_cache_prepare(gc, 0, 0, 0, lx - 1, ly - 1, &err);
+    gv_gpu_cache_stats(gc, &ps);
+    check(prc == 0 && ps.decodes == 1 && ps.fetches == 0,
+          "%s: with room for 2 tiles, prepare of %u leaves them to the "
+          "per-tile path (%llu decodes: the root)", name, lx * ly,
+          (unsigned long long)ps.decodes);
+
+    free(px);
+    gv_gpu_cache_free(gc);
+}
+
 static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
                         size_t budget_tiles)
 {
@@ -89,7 +171,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     const int c = g->channels;
     struct gv_decoder *cpu = gv_decoder_new(s, 64u << 20);
-    struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpu, c, &err);
+    struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpu, &(struct gv_gpu_decoder_opts){.channels = c}, &err);
     if (!gd)
         fail("gpu decoder: %s", err.text);
     uint32_t rw, rh;
@@ -103,26 +185,8 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
 
     /* All tiles, finest level first (each pulls its whole chain), then the
      * same list shuffled. */
-    size_t n = 1;
-    for (int k = 0; k < g->root; k++)
-        n += (size_t)g->level[k].tiles_x * g->level[k].tiles_y;
-    struct tile_id *ids = malloc(2 * n * sizeof *ids);
-    size_t m = 0;
-    for (int k = 0; k < g->root; k++)
-        for (uint32_t ty = 0; ty < g->level[k].tiles_y; ty++)
-            for (uint32_t tx = 0; tx < g->level[k].tiles_x; tx++)
-                ids[m++] = (struct tile_id){k, tx, ty};
-    ids[m++] = (struct tile_id){g->root, 0, 0};
-    uint64_t seed = 12345;
-    for (size_t i = 0; i < n; i++)
-        ids[n + i] = ids[i];
-    for (size_t i = n - 1; i > 0; i--) {
-        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
-        size_t j = (size_t)(seed >> 33) % (i + 1);
-        struct tile_id t = ids[n + i];
-        ids[n + i] = ids[n + j];
-        ids[n + j] = t;
-    }
+    size_t n;
+    struct tile_id *ids = tile_order(g, &n);
     const size_t tb = gv_tile_bytes(c);
     uint8_t *px = malloc(tb);
     int mismatched = 0, over_budget = 0;
@@ -184,47 +248,11 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
           "the tile decodes once the source heals; outside the grid is not found",
           name);
 
-    /* A batch: every level-0 tile prepared at once (their ancestors with
-     * them), then read as hits, equal to the CPU decoder; with a budget
-     * too small for them, prepare decodes nothing but the root. */
     gv_gpu_cache_free(gc);
-    gc = gv_gpu_cache_new(gd, g, root, rw, rh, n * GV_GPU_TILE_BYTES, fetch, &src, &err);
-    if (!gc)
-        fail("gpu cache: %s", err.text);
-    const uint32_t lx = g->level[0].tiles_x, ly = g->level[0].tiles_y;
-    int prc = gv_gpu_cache_prepare(gc, 0, 0, 0, lx, ly, &err);   /* clipped */
-    struct gv_gpu_cache_stats ps;
-    gv_gpu_cache_stats(gc, &ps);
-    int bad = 0;
-    for (uint32_t ty = 0; ty < ly; ty++)
-        for (uint32_t tx = 0; tx < lx; tx++) {
-            if (gv_gpu_cache_read(gc, 0, tx, ty, px, &err) < 0 ||
-                gv_decoder_tile(cpu, 0, tx, ty, &ref, &err) < 0)
-                fail("prepared %u/%u: %s", tx, ty, err.text);
-            bad += memcmp(px, ref, tb) != 0;
-        }
-    struct gv_gpu_cache_stats after;
-    gv_gpu_cache_stats(gc, &after);
-    check(prc == 0 && ps.decodes == n && ps.fetches == n - 1 && bad == 0 &&
-              after.decodes == ps.decodes && after.hits == ps.hits + (uint64_t)lx * ly,
-          "%s: prepare decodes all %zu tiles in one batch (%llu decodes, %llu "
-          "fetches); the %u level-0 reads then hit, equal to the CPU decoder "
-          "(%d differ)", name, n, (unsigned long long)ps.decodes,
-          (unsigned long long)ps.fetches, lx * ly, bad);
-    gv_gpu_cache_free(gc);
-    gc = gv_gpu_cache_new(gd, g, root, rw, rh, 2 * GV_GPU_TILE_BYTES, fetch, &src, &err);
-    if (!gc)
-        fail("gpu cache: %s", err.text);
-    prc = gv_gpu_cache_prepare(gc, 0, 0, 0, lx - 1, ly - 1, &err);
-    gv_gpu_cache_stats(gc, &ps);
-    check(prc == 0 && ps.decodes == 1 && ps.fetches == 0,
-          "%s: with room for 2 tiles, prepare of %u leaves them to the "
-          "per-tile path (%llu decodes: the root)", name, lx * ly,
-          (unsigned long long)ps.decodes);
+    check_prepare(gd, g, root, rw, rh, &src, cpu, n, name);
 
     free(px);
     free(ids);
-    gv_gpu_cache_free(gc);
     gv_gpu_decoder_free(gd);
     gv_decoder_free(cpu);
     gv_store_close(s);

@@ -49,7 +49,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     o.max_rate = max_rate;
     o.dct = dct ? GV_LAYOUTS_ALL : GV_LAYOUTS_VQ;
     fixture_encode(out, input, &o);
-    const int d = check_path(gpu, input, out, GV_GPU_PATH_SSBO);
+    const int d = check_path(gpu, input, out, GV_GPU_PATH_COMPUTE);
     check_path(gpu, input, out, GV_GPU_PATH_WEBGL2);
     if (dct) {
         const char *name = strrchr(input, '/') ? strrchr(input, '/') + 1 : input;
@@ -59,7 +59,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     /* The gray synthetic store five times over (65 tiles): a batch longer
      * than a group, parents in earlier groups. */
     const int copies = strcmp(input, "synth:1100x1500:gray") == 0 ? 5 : 1;
-    check_batch(gpu, input, out, GV_GPU_PATH_SSBO, copies);
+    check_batch(gpu, input, out, GV_GPU_PATH_COMPUTE, copies);
     check_batch(gpu, input, out, GV_GPU_PATH_WEBGL2, 1);
     unlink(out);
 }
@@ -74,7 +74,8 @@ static struct gv_gpu_decoder *open_decoders(struct gv_gpu *gpu, const char *out,
     *s = fixture_open(out);
     *cpu = gv_decoder_new(*s, 64u << 20);
     struct gv_gpu_decoder *gd =
-        gv_gpu_decoder_new_path(gpu, gv_store_info(*s)->geometry.channels, path, &err);
+        gv_gpu_decoder_new(gpu, &(struct gv_gpu_decoder_opts){
+            .channels = gv_store_info(*s)->geometry.channels, .path = path}, &err);
     if (!*cpu || !gd)
         fail("decoders: %s", *cpu ? err.text : "no CPU decoder");
     return gd;
@@ -167,7 +168,7 @@ static int check_path(struct gv_gpu *gpu, const char *input, const char *out,
     check(mismatched == 0 && quarter_bad == 0 && tiles > 0,
           "%s, %s: %d tiles (%s; %d entropy-coded, %d of them context-coded) decode "
           "identically on the GPU (%d differ, %d mip-1 rows differ)", name,
-          path == GV_GPU_PATH_SSBO ? "GLSL ES 3.10 + compute" : "GLSL ES 3.00 (WebGL2)",
+          path == GV_GPU_PATH_COMPUTE ? "GLSL ES 3.10 + compute" : "GLSL ES 3.00 (WebGL2)",
           tiles, rs + 1, coded, ctx, mismatched, quarter_bad);
     free(px);
     free(quarter);
@@ -179,7 +180,7 @@ static int check_path(struct gv_gpu *gpu, const char *input, const char *out,
 
 static const char *path_name(enum gv_gpu_path path)
 {
-    return path == GV_GPU_PATH_SSBO ? "GLSL ES 3.10 + compute" : "GLSL ES 3.00 (WebGL2)";
+    return path == GV_GPU_PATH_COMPUTE ? "GLSL ES 3.10 + compute" : "GLSL ES 3.00 (WebGL2)";
 }
 
 struct tile_where {
@@ -400,8 +401,9 @@ static void check_dct_synthetic(struct gv_gpu *gpu, int channels)
         for (size_t i = 0; i < tb; i++)
             clamped += t[k].ref[i] == 0 || t[k].ref[i] == 255;
     }
-    for (int path = GV_GPU_PATH_SSBO; path <= GV_GPU_PATH_WEBGL2; path++) {
-        struct gv_gpu_decoder *gd = gv_gpu_decoder_new_path(gpu, channels, path, &err);
+    for (int path = GV_GPU_PATH_COMPUTE; path <= GV_GPU_PATH_WEBGL2; path++) {
+        struct gv_gpu_decoder *gd = gv_gpu_decoder_new(
+            gpu, &(struct gv_gpu_decoder_opts){.channels = channels, .path = path}, &err);
         if (!gd)
             fail("decoder: %s", err.text);
         uint32_t ph;
@@ -423,7 +425,8 @@ static void check_dct_synthetic(struct gv_gpu *gpu, int channels)
         static const char *const wrong[2] = {"#define GV_DCT_ROUND_ROWS 63\n",
                                              "#define GV_DCT_ROUND_COLS 1023\n"};
         for (int w = 0; w < 2; w++) {
-            gd = gv_gpu_decoder_new_defines(gpu, channels, path, wrong[w], &err);
+            gd = gv_gpu_decoder_new(gpu, &(struct gv_gpu_decoder_opts){
+                .channels = channels, .path = path, .defines = wrong[w]}, &err);
             if (!gd || gv_gpu_upload_tile(gd, parent, &ph, &err) < 0)
                 fail("control decoder: %s", err.text);
             const int bad = dct_mismatches(gd, ph, t, 1, 0, channels);
@@ -437,8 +440,9 @@ static void check_dct_synthetic(struct gv_gpu *gpu, int channels)
     /* Negative control: the first buffer with another quantizer step for
      * channel 0 than the one its CPU decoding saw. */
     t[0].buf[2] ^= 1;
-    for (int path = GV_GPU_PATH_SSBO; path <= GV_GPU_PATH_WEBGL2; path++) {
-        struct gv_gpu_decoder *gd = gv_gpu_decoder_new_path(gpu, channels, path, &err);
+    for (int path = GV_GPU_PATH_COMPUTE; path <= GV_GPU_PATH_WEBGL2; path++) {
+        struct gv_gpu_decoder *gd = gv_gpu_decoder_new(
+            gpu, &(struct gv_gpu_decoder_opts){.channels = channels, .path = path}, &err);
         uint32_t ph;
         if (!gd || gv_gpu_upload_tile(gd, parent, &ph, &err) < 0)
             fail("decoder: %s", err.text);
@@ -499,7 +503,7 @@ int main(int argc, char **argv)
     /* A store of format version 1 (E layout and rate 0 only). */
     char v1[512];
     snprintf(v1, sizeof v1, "%s/v1-picos-530x516.gv", data);
-    check_path(gpu, v1, v1, GV_GPU_PATH_SSBO);
+    check_path(gpu, v1, v1, GV_GPU_PATH_COMPUTE);
     check_path(gpu, v1, v1, GV_GPU_PATH_WEBGL2);
     test_tmpdir_free(dir);
     gv_gpu_close(gpu);

@@ -27,9 +27,9 @@ static char dir[128];
 static void check_path(struct gv_gpu *gpu, const char *path, const char *name,
                        enum gv_gpu_path gp)
 {
-    const char *pn = gp == GV_GPU_PATH_SSBO ? "ssbo" : "webgl2";
+    const char *pn = gp == GV_GPU_PATH_COMPUTE ? "ssbo" : "webgl2";
     struct gv_error err = {0};
-    struct gv_gpu_height *gh = gv_gpu_height_new(gpu, gp, &err);
+    struct gv_gpu_height *gh = gv_gpu_height_new(gpu, &(struct gv_gpu_height_opts){.path = gp}, &err);
     if (!gh) {
         if (err.code == GV_EFORMAT) {
             tap_skip("no OpenGL ES context", "%s %s", name, pn);
@@ -115,7 +115,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double e,
     struct gv_error err = {0};
     if (gv_height_encode(input, out, &o, &r, &err) < 0)
         fail("encode %s: %s", input, err.text);
-    check_path(gpu, out, name, GV_GPU_PATH_SSBO);
+    check_path(gpu, out, name, GV_GPU_PATH_COMPUTE);
     check_path(gpu, out, name, GV_GPU_PATH_WEBGL2);
     unlink(out);
 }

@@ -68,8 +68,9 @@ int main(void)
     uint8_t *px = malloc(N), *back = malloc(N), *first = malloc(N);
     for (size_t i = 0; px && i < N; i++)
         px[i] = (uint8_t)(i * 7 + i / 1539);
-    struct gv_gpu_decoder *d1 = gv_gpu_decoder_new(g, 3, &err);
-    struct gv_gpu_decoder *d2 = d1 ? gv_gpu_decoder_new(a.shared, 3, &err) : NULL;
+    const struct gv_gpu_decoder_opts three = {.channels = 3};
+    struct gv_gpu_decoder *d1 = gv_gpu_decoder_new(g, &three, &err);
+    struct gv_gpu_decoder *d2 = d1 ? gv_gpu_decoder_new(a.shared, &three, &err) : NULL;
     uint32_t h = 0;
     int ok = px && back && first && d1 && d2 &&
              gv_gpu_upload_tile(d2, px, &h, &err) == 0 &&

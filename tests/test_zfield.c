@@ -291,11 +291,12 @@ int main(void)
     struct gv_gpu *gpu = gv_gpu_open(GV_GPU_PLATFORM_AUTO, &err);
     if (!gpu)
         printf("# no EGL context (%s): CPU checks only\n", err.text);
-    else if (!(gzf[0] = gv_gpu_zfield_new_path(gpu, GV_ZFIELD_COMPUTE, &err)))
+    else if (!(gzf[0] = gv_gpu_zfield_new(gpu, NULL, &err)))
         fail("gpu zfield, compute: %s", err.text);
     else if (!gv_gpu_info(gpu)->es)
         printf("# not an ES context: the fragment (WebGL2) variant is not run\n");
-    else if (!(gzf[1] = gv_gpu_zfield_new_path(gpu, GV_ZFIELD_FRAGMENT, &err)))
+    else if (!(gzf[1] = gv_gpu_zfield_new(
+                     gpu, &(struct gv_gpu_zfield_opts){.path = GV_GPU_PATH_WEBGL2}, &err)))
         fail("gpu zfield, fragment: %s", err.text);
     if (gpu)
         printf("# EGL: %s\n", gv_gpu_info(gpu)->renderer);

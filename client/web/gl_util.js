@@ -32,8 +32,8 @@ function compile(gl, type, src, name) {
 
 /**
  * Link a program from GLSL ES 3.00 bodies (without the #version line,
- * which is prepended here, as gv_gpu_program_es300 does on EGL).  Returns
- * {program, loc(name)}.  Throws with the log and a numbered listing.
+ * which is prepended here, as lib/gpu does on EGL for GV_GPU_PATH_WEBGL2).
+ * Returns {program, loc(name)}.  Throws with the log and a numbered listing.
  */
 export function program(gl, vertSrc, fragSrc, name) {
     const vs = compile(gl, gl.VERTEX_SHADER, `#version 300 es\n${vertSrc}`, `${name} (vertex)`);

@@ -27,6 +27,21 @@
 
 struct gv_gpu;
 
+/*
+ * The two ways every GPU module of lib/gpu can run its work (the decoders
+ * of gpu_decode.h and gpu_height.h, the z-field sweep of gpu_zfield.h),
+ * the same shader files either way:
+ */
+enum gv_gpu_path {
+    /* GLSL ES 3.10 / GL 4.30: compute passes over shader storage buffers
+     * (rANS streams, the sweep's levels), then fragment passes. */
+    GV_GPU_PATH_COMPUTE = 0,
+    /* GLSL ES 3.00 as WebGL2 runs it: fragment (and vertex) passes only,
+     * what they cannot do done on the CPU, inputs in textures.  Needs an
+     * OpenGL ES context; it checks on EGL what the browser runs. */
+    GV_GPU_PATH_WEBGL2
+};
+
 /* Which EGL platform gv_gpu_open uses (gigaviewd's gpu_platform,
  * GIGAVIEW_GPU_PLATFORM for `gigaview render`). */
 enum gv_gpu_platform {
@@ -125,18 +140,11 @@ unsigned gv_gpu_program(const struct gv_gpu *g, const char *vertex,
                         const char *fragment, char **listing,
                         struct gv_error *err);
 
-/* The same, compiled as GLSL ES 3.00 without storage buffers ("#version
- * 300 es"), the language of WebGL2: used to test the browser's variant of
- * the shared shaders on EGL.  Needs an OpenGL ES context (else 0 with
- * GV_EFORMAT). */
-unsigned gv_gpu_program_es300(const struct gv_gpu *g, const char *vertex,
-                              const char *fragment, char **listing,
-                              struct gv_error *err);
-
 /*
- * The two steps every program here is built with (gv_gpu_program above and
- * the filter templates, filters/run_gpu.c), for callers that add their own
- * version line and map the driver's log themselves.  GL thread only.
+ * The two steps every program here is built with (gv_gpu_program above,
+ * the modules of lib/gpu and the filter templates, filters/run_gpu.c), for
+ * callers that add their own version line and map the driver's log
+ * themselves.  GL thread only.
  * gv_gpu_compile_stage compiles src as a shader of GL type `type`
  * (GL_VERTEX_SHADER, ...) and returns it, or 0 with the driver's log in
  * log (cap bytes, always terminated).  gv_gpu_link_stages links n compiled
@@ -145,11 +153,5 @@ unsigned gv_gpu_program_es300(const struct gv_gpu *g, const char *vertex,
  */
 unsigned gv_gpu_compile_stage(unsigned type, const char *src, char *log, size_t cap);
 unsigned gv_gpu_link_stages(const unsigned *stages, int n, char *log, size_t cap);
-
-/* Compile and link a compute program from a shared GLSL body, as
- * gv_gpu_program does (listing likewise).  GL thread only; returns the
- * program, or 0 with *err. */
-unsigned gv_gpu_compute_program(const struct gv_gpu *g, const char *compute,
-                                char **listing, struct gv_error *err);
 
 #endif

@@ -12,6 +12,7 @@
 
 #include <GLES3/gl31.h>
 
+#include "gpu/gpu_module_int.h"
 #include "shaders.h"
 
 enum { B_TREE, B_LEAF, B_FACES, B_CLUSTER, B_SELECTED, B_KEEP, NBUF };
@@ -60,16 +61,15 @@ static int do_new(void *arg, struct gv_error *err)
             return gv_fail(err, GV_ELIMIT, "cluster: a buffer of %zu bytes "
                            "exceeds the GPU's storage block size (%lld)",
                            sizes[i], (long long)maxblock);
-    char *listing = NULL;
-    c->prog = gv_gpu_compute_program(c->gpu, gv_shader_cluster_select_comp,
-                                     &listing, err);
-    free(listing);
-    if (!c->prog)
+    const struct gv_gpu_uniform uniforms[] = {
+        {"u_T", &c->u_T}, {"u_count", &c->u_count}, {"u_nnodes", &c->u_nnodes},
+        {"u_pass", &c->u_pass}, {NULL, NULL},
+    };
+    const struct gv_gpu_program_def def = {
+        &c->prog, {{GL_COMPUTE_SHADER, {gv_shader_cluster_select_comp}}}, uniforms,
+    };
+    if (gv_gpu_build_programs(c->gpu, GV_GPU_PATH_COMPUTE, &def, 1, err) < 0)
         return -1;
-    c->u_T = glGetUniformLocation(c->prog, "u_T");
-    c->u_count = glGetUniformLocation(c->prog, "u_count");
-    c->u_nnodes = glGetUniformLocation(c->prog, "u_nnodes");
-    c->u_pass = glGetUniformLocation(c->prog, "u_pass");
     uint32_t *tree = malloc(sizes[B_TREE] ? sizes[B_TREE] : 1);
     uint32_t *leaf = malloc(sizes[B_LEAF] ? sizes[B_LEAF] : 1);
     if (!tree || !leaf) {
@@ -118,8 +118,7 @@ static int read_back(GLuint b, size_t bytes, void *dst, struct gv_error *err)
     void *p = glMapBufferRange(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)bytes,
                                GL_MAP_READ_BIT);
     if (!p)
-        return gv_fail(err, GV_EIO, "cluster: cannot map a GPU buffer "
-                       "(GL error 0x%x)", glGetError());
+        return gv_gpu_gl_fail(err, "cluster read-back");
     memcpy(dst, p, bytes);
     glUnmapBuffer(GL_SHADER_STORAGE_BUFFER);
     return 0;
@@ -157,9 +156,10 @@ static int do_select(void *arg, struct gv_error *err)
     for (size_t f = 0; rc == 0 && f < m->ntris; f++)
         a->keep[f] = (uint8_t)(keep32[f] != 0);
     free(keep32);
-    GLenum e = glGetError();
-    if (rc == 0 && e != GL_NO_ERROR)
-        rc = gv_fail(err, GV_EIO, "cluster: GL error 0x%x", e);
+    /* Always asked, so that no GL error outlives this call (a failure
+     * already in *err stays the one reported). */
+    if (gv_gpu_gl_check(err, "cluster selection") < 0)
+        rc = -1;
     return rc;
 }
 
@@ -167,10 +167,10 @@ static int do_free(void *arg, struct gv_error *err)
 {
     (void)err;
     struct gv_gpu_cluster *c = arg;
-    if (c->buf[0])
-        glDeleteBuffers(NBUF, c->buf);
-    if (c->prog)
-        glDeleteProgram(c->prog);
+    const struct gv_gpu_objects objects[] = {
+        {GV_GPU_PROGRAMS, &c->prog, 1}, {GV_GPU_BUFFERS, c->buf, NBUF},
+    };
+    gv_gpu_delete_objects(objects, 2);
     return 0;
 }
 

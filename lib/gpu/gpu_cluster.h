@@ -17,7 +17,8 @@ struct gv_gpu_cluster;
 /* Upload tree t (which must outlive the result) on context g.  Returns
  * the handle, or NULL with *err: GV_ELIMIT when a buffer exceeds the
  * context's storage-block size, GV_EUNAVAIL without storage buffers,
- * GV_EINVAL for a shader that does not build, GV_ENOMEM.  Any thread but
+ * GV_EINVAL for a shader that does not build (also listed on stderr),
+ * GV_ENOMEM.  Any thread but
  * g's GL thread. */
 struct gv_gpu_cluster *gv_gpu_cluster_new(struct gv_gpu *g,
                                           const struct gv_cluster_tree *t,

@@ -4,7 +4,7 @@
  * Two passes per tile, as section 7.5 describes: the parent quarter is
  * copied into mip 1, and the decode shader renders mip 0 from the parent
  * and the tile buffer.  Both draw one viewport-covering triangle into a
- * framebuffer bound to the target mip level.  On the SSBO path the tile
+ * framebuffer bound to the target mip level.  On the compute path the tile
  * buffer is a shader storage buffer of 32-bit words, and an entropy-coded
  * tile's indices are first decoded by a compute pass (rans_decode); on the
  * WebGL2 path the buffer is an R32UI texture and the indices are decoded
@@ -20,13 +20,12 @@
  * as in the browser's copy of the decode shader.
  *
  * A single tile is a batch of one.  A batch (gv_gpu_decode_batch) runs in
- * one call on the GL thread: on the SSBO path, in small groups of
+ * one call on the GL thread: on the compute path, in small groups of
  * tiles, each with its own tile and index buffer, whose rANS passes run
  * back to back before a single memory barrier, and then each tile's two
  * draws follow.  Only a group waits, for the one before the previous to
  * finish with the buffers it reuses.
  */
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -34,6 +33,7 @@
 
 #include "store/geometry.h"
 #include "gpu/gpu_decode.h"
+#include "gpu/gpu_module_int.h"
 #include "shaders.h"
 #include "store/store_format.h"
 #include "codec/tile.h"
@@ -42,7 +42,7 @@
 
 #define WORDS_WIDTH 1024   /* texels per row of the WebGL2 words texture */
 
-/* Tiles per group on the SSBO path: the group's tile buffers share one
+/* Tiles per group on the compute path: the group's tile buffers share one
  * storage buffer and their indices another (16 x 145 KiB and 16 x 258 KiB
  * at most per set).  On llvmpipe the group size changed nothing
  * measurable: the CPU work per tile was the same (0.95 to 1.01x) with
@@ -62,7 +62,7 @@
 #endif
 #define SPARE_MAX GV_GPU_SPARES
 
-/* A layout-D coefficient plane on the SSBO path: 520x520 texels of two
+/* A layout-D coefficient plane on the compute path: 520x520 texels of two
  * uints (dct_decode.comp.glsl). */
 #define COEF_BYTES ((size_t)GV_DCT_PLANE * GV_DCT_PLANE * 2 * sizeof(GLuint))
 
@@ -114,90 +114,63 @@ static size_t align_up(size_t n, size_t a)
     return (n + a - 1) / a * a;
 }
 
-static int gl_failed(struct gv_error *err, const char *what)
+/* The decoder's programs: the quarter copy and the decode pass, and on
+ * the compute path the rANS, layout-D stream and row passes.  The
+ * decoder's #define lines (tests' changes to the rounding) go before the
+ * decode shader and the row pass. */
+static int build_programs(struct gv_gpu_decoder *d, struct gv_error *err)
 {
-    GLenum e = glGetError();
-    if (e == GL_NO_ERROR)
-        return 0;
-    return gv_fail(err, GV_EIO, "gpu: %s failed (GL error 0x%x)", what, e);
+    const struct gv_gpu_uniform dec_u[] = {
+        {"u_parent", &d->dec_parent}, {"u_quadrant", &d->dec_quadrant},
+        {"u_channels", &d->dec_channels}, {"u_words", &d->dec_words},
+        {"u_words_width", &d->dec_words_width}, {"u_indices", &d->dec_indices},
+        {"u_coefs", &d->dec_coefs}, {NULL, NULL},
+    };
+    const struct gv_gpu_uniform q_u[] = {
+        {"u_parent", &d->q_parent}, {"u_quadrant", &d->q_quadrant}, {NULL, NULL},
+    };
+    const struct gv_gpu_program_def defs[] = {
+        {&d->decode, {{GL_VERTEX_SHADER, {gv_shader_fullscreen_vert}},
+                      {GL_FRAGMENT_SHADER, {d->defines, gv_shader_tile_decode_frag}}},
+         dec_u},
+        {&d->quarter, {{GL_VERTEX_SHADER, {gv_shader_fullscreen_vert}},
+                       {GL_FRAGMENT_SHADER, {gv_shader_quarter_copy_frag}}},
+         q_u},
+        {&d->rans, {{GL_COMPUTE_SHADER, {gv_shader_rans_decode_comp}}}, NULL},
+        {&d->dct, {{GL_COMPUTE_SHADER, {gv_shader_dct_decode_comp}}}, NULL},
+        {&d->dct_rows, {{GL_COMPUTE_SHADER, {d->defines, gv_shader_dct_rows_comp}}},
+         NULL},
+    };
+    const size_t n = d->path == GV_GPU_PATH_WEBGL2 ? 2 : sizeof defs / sizeof defs[0];
+    return gv_gpu_build_programs(d->gpu, d->path, defs, n, err);
 }
 
-/* The decoder's #define lines (tests' changes to the rounding) before a
- * shader's source, malloc'ed; NULL without memory. */
-static char *with_defines(const struct gv_gpu_decoder *d, const char *source)
+/* The WebGL2 path's inputs: the words, index and coefficient textures and
+ * the CPU's buffers for the indices and the coefficients. */
+static int setup_webgl2(struct gv_gpu_decoder *d, struct gv_error *err)
 {
-    char *s = malloc(strlen(d->defines) + strlen(source) + 1);
-    if (s)
-        strcat(strcpy(s, d->defines), source);
-    return s;
-}
-
-static int setup(void *arg, struct gv_error *err)
-{
-    struct gv_gpu_decoder *d = ((struct job *)arg)->d;
-    char *listing = NULL;
-    const int webgl2 = d->path == GV_GPU_PATH_WEBGL2;
-    unsigned (*program)(const struct gv_gpu *, const char *, const char *,
-                        char **, struct gv_error *) =
-        webgl2 ? gv_gpu_program_es300 : gv_gpu_program;
-    char *frag = with_defines(d, gv_shader_tile_decode_frag);
-    if (!frag)
+    glGenTextures(1, &d->words_tex);
+    glGenTextures(1, &d->indices_tex);
+    glBindTexture(GL_TEXTURE_2D, d->indices_tex);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_R16UI, GV_BLOCKS, GV_BLOCKS);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glGenTextures(1, &d->coefs_tex);
+    glBindTexture(GL_TEXTURE_2D, d->coefs_tex);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA16I, GV_DCT_PLANE, GV_DCT_PLANE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    d->cpu_indices = malloc(GV_NBLOCKS * sizeof *d->cpu_indices);
+    d->cpu_coefs = malloc((size_t)GV_DCT_PLANE * GV_DCT_PLANE * 4 *
+                          sizeof *d->cpu_coefs);
+    if (!d->cpu_indices || !d->cpu_coefs)
         return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
-    d->decode = program(d->gpu, gv_shader_fullscreen_vert, frag, &listing, err);
-    free(frag);
-    if (d->decode)
-        d->quarter = program(d->gpu, gv_shader_fullscreen_vert,
-                             gv_shader_quarter_copy_frag, &listing, err);
-    if (d->quarter && !webgl2)
-        d->rans = gv_gpu_compute_program(d->gpu, gv_shader_rans_decode_comp,
-                                         &listing, err);
-    if (d->rans)
-        d->dct = gv_gpu_compute_program(d->gpu, gv_shader_dct_decode_comp,
-                                        &listing, err);
-    if (d->dct) {
-        char *rows = with_defines(d, gv_shader_dct_rows_comp);
-        if (!rows)
-            return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
-        d->dct_rows = gv_gpu_compute_program(d->gpu, rows, &listing, err);
-        free(rows);
-    }
-    if (!d->decode || !d->quarter || (!webgl2 && !d->dct_rows)) {
-        /* Our own shader failing is a bug or a broken driver: show why. */
-        if (listing)
-            fprintf(stderr, "%s", listing);
-        free(listing);
-        return -1;
-    }
-    d->dec_parent = glGetUniformLocation(d->decode, "u_parent");
-    d->dec_quadrant = glGetUniformLocation(d->decode, "u_quadrant");
-    d->dec_channels = glGetUniformLocation(d->decode, "u_channels");
-    d->q_parent = glGetUniformLocation(d->quarter, "u_parent");
-    d->q_quadrant = glGetUniformLocation(d->quarter, "u_quadrant");
-    glGenFramebuffers(1, &d->fbo);
-    glGenVertexArrays(1, &d->vao);
-    if (webgl2) {
-        d->dec_words = glGetUniformLocation(d->decode, "u_words");
-        d->dec_words_width = glGetUniformLocation(d->decode, "u_words_width");
-        d->dec_indices = glGetUniformLocation(d->decode, "u_indices");
-        d->dec_coefs = glGetUniformLocation(d->decode, "u_coefs");
-        glGenTextures(1, &d->words_tex);
-        glGenTextures(1, &d->indices_tex);
-        glBindTexture(GL_TEXTURE_2D, d->indices_tex);
-        glTexStorage2D(GL_TEXTURE_2D, 1, GL_R16UI, GV_BLOCKS, GV_BLOCKS);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-        glGenTextures(1, &d->coefs_tex);
-        glBindTexture(GL_TEXTURE_2D, d->coefs_tex);
-        glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA16I, GV_DCT_PLANE, GV_DCT_PLANE);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-        d->cpu_indices = malloc(GV_NBLOCKS * sizeof *d->cpu_indices);
-        d->cpu_coefs = malloc((size_t)GV_DCT_PLANE * GV_DCT_PLANE * 4 *
-                              sizeof *d->cpu_coefs);
-        if (!d->cpu_indices || !d->cpu_coefs)
-            return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
-        return gl_failed(err, "decoder set-up");
-    }
+    return gv_gpu_gl_check(err, "decoder set-up");
+}
+
+/* The compute path's two sets of storage buffers. */
+static int setup_compute(struct gv_gpu_decoder *d, struct gv_error *err)
+{
     /* The index buffers exist even for a fixed-layout tile, whose decode
      * pass has one bound but never reads it. */
     glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &d->ssbo_align);
@@ -215,26 +188,23 @@ static int setup(void *arg, struct gv_error *err)
         glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(GROUP * d->index_stride),
                      NULL, GL_DYNAMIC_COPY);
     }
-    return gl_failed(err, "decoder set-up");
+    return gv_gpu_gl_check(err, "decoder set-up");
 }
 
-struct gv_gpu_decoder *gv_gpu_decoder_new(struct gv_gpu *g, int channels,
+static int setup(void *arg, struct gv_error *err)
+{
+    struct gv_gpu_decoder *d = ((struct job *)arg)->d;
+    if (build_programs(d, err) < 0)
+        return -1;
+    glGenFramebuffers(1, &d->fbo);
+    glGenVertexArrays(1, &d->vao);
+    return d->path == GV_GPU_PATH_WEBGL2 ? setup_webgl2(d, err)
+                                         : setup_compute(d, err);
+}
+
+struct gv_gpu_decoder *gv_gpu_decoder_new(struct gv_gpu *g,
+                                          const struct gv_gpu_decoder_opts *o,
                                           struct gv_error *err)
-{
-    return gv_gpu_decoder_new_path(g, channels, GV_GPU_PATH_SSBO, err);
-}
-
-struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
-                                               enum gv_gpu_path path,
-                                               struct gv_error *err)
-{
-    return gv_gpu_decoder_new_defines(g, channels, path, "", err);
-}
-
-struct gv_gpu_decoder *gv_gpu_decoder_new_defines(struct gv_gpu *g, int channels,
-                                                  enum gv_gpu_path path,
-                                                  const char *defines,
-                                                  struct gv_error *err)
 {
     struct gv_gpu_decoder *d = calloc(1, sizeof *d);
     if (!d) {
@@ -242,9 +212,9 @@ struct gv_gpu_decoder *gv_gpu_decoder_new_defines(struct gv_gpu *g, int channels
         return NULL;
     }
     d->gpu = g;
-    d->channels = channels;
-    d->path = path;
-    d->defines = defines;
+    d->channels = o->channels;
+    d->path = o->path;
+    d->defines = o->defines ? o->defines : "";
     d->spare_cap = SPARE_MAX;
     d->spare = malloc(SPARE_MAX * sizeof *d->spare);
     if (!d->spare) {
@@ -264,43 +234,22 @@ static int teardown(void *arg, struct gv_error *err)
 {
     (void)err;
     struct gv_gpu_decoder *d = ((struct job *)arg)->d;
-    if (d->decode)
-        glDeleteProgram(d->decode);
-    if (d->quarter)
-        glDeleteProgram(d->quarter);
-    if (d->rans)
-        glDeleteProgram(d->rans);
-    if (d->dct)
-        glDeleteProgram(d->dct);
-    if (d->dct_rows)
-        glDeleteProgram(d->dct_rows);
-    for (int k = 0; k < 2; k++) {
-        if (d->coefs[k])
-            glDeleteBuffers(1, &d->coefs[k]);
-        if (d->dct_tiles[k])
-            glDeleteBuffers(1, &d->dct_tiles[k]);
-        if (d->indices[k])
-            glDeleteBuffers(1, &d->indices[k]);
-        if (d->tiles[k])
-            glDeleteBuffers(1, &d->tiles[k]);
-        if (d->ssbo[k])
-            glDeleteBuffers(1, &d->ssbo[k]);
+    const struct gv_gpu_objects objects[] = {
+        {GV_GPU_PROGRAMS, &d->decode, 1}, {GV_GPU_PROGRAMS, &d->quarter, 1},
+        {GV_GPU_PROGRAMS, &d->rans, 1}, {GV_GPU_PROGRAMS, &d->dct, 1},
+        {GV_GPU_PROGRAMS, &d->dct_rows, 1},
+        {GV_GPU_BUFFERS, d->coefs, 2}, {GV_GPU_BUFFERS, d->dct_tiles, 2},
+        {GV_GPU_BUFFERS, d->indices, 2}, {GV_GPU_BUFFERS, d->tiles, 2},
+        {GV_GPU_BUFFERS, d->ssbo, 2},
+        {GV_GPU_TEXTURES, &d->words_tex, 1}, {GV_GPU_TEXTURES, &d->indices_tex, 1},
+        {GV_GPU_TEXTURES, &d->coefs_tex, 1}, {GV_GPU_TEXTURES, d->spare, d->spares},
+        {GV_GPU_FRAMEBUFFERS, &d->fbo, 1}, {GV_GPU_VERTEX_ARRAYS, &d->vao, 1},
+    };
+    gv_gpu_delete_objects(objects, sizeof objects / sizeof objects[0]);
+    d->spares = 0;
+    for (int k = 0; k < 2; k++)
         if (d->fence[k])
             glDeleteSync(d->fence[k]);
-    }
-    if (d->words_tex)
-        glDeleteTextures(1, &d->words_tex);
-    if (d->indices_tex)
-        glDeleteTextures(1, &d->indices_tex);
-    if (d->coefs_tex)
-        glDeleteTextures(1, &d->coefs_tex);
-    if (d->spares)
-        glDeleteTextures((GLsizei)d->spares, d->spare);
-    d->spares = 0;
-    if (d->fbo)
-        glDeleteFramebuffers(1, &d->fbo);
-    if (d->vao)
-        glDeleteVertexArrays(1, &d->vao);
     return 0;
 }
 
@@ -378,7 +327,7 @@ static int upload(void *arg, struct gv_error *err)
     free(half);
     free(rgba);
     j->handle = tex;
-    return gl_failed(err, "tile upload");
+    return gv_gpu_gl_check(err, "tile upload");
 }
 
 int gv_gpu_upload_tile(struct gv_gpu_decoder *d, const uint8_t *pixels,
@@ -500,7 +449,7 @@ static int decode_webgl2(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *jobs,
 
 
 /*
- * SSBO path, a group of at most GROUP tiles: the tile buffers uploaded
+ * Compute path, a group of at most GROUP tiles: the tile buffers uploaded
  * together into the set's storage buffer, one rANS compute dispatch for
  * all entropy-coded tiles, one barrier, then the two draws of each tile
  * (a parent earlier in the batch is rendered before its children read
@@ -521,6 +470,39 @@ static void dispatch_streams(GLuint prog, GLuint words, GLuint out, GLuint tiles
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, out);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, tiles);
     glDispatchCompute(gx, gy, 1);
+}
+
+/* Transform-coded tiles of a group (nd of its n, tile i at offset off[i]
+ * of the set's storage buffer, in coefficient plane dslot[i] or -1):
+ * every such tile's 65 coefficient streams in one dispatch, one
+ * invocation per row of 8x8 blocks, then the inverse transform's row pass
+ * in place. */
+static void dispatch_dct(struct gv_gpu_decoder *d, int set,
+                         const struct gv_gpu_tile_job *jobs, size_t n,
+                         const size_t *off, const long *dslot, size_t nd)
+{
+    if (nd > d->coef_cap[set]) {
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->coefs[set]);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(nd * d->coef_stride),
+                     NULL, GL_DYNAMIC_COPY);
+        d->coef_cap[set] = nd;
+    }
+    GLint params[GROUP][4];
+    for (size_t i = 0; i < n; i++) {
+        if (dslot[i] < 0)
+            continue;
+        params[dslot[i]][0] = (GLint)(off[i] / 4);
+        params[dslot[i]][1] = (GLint)jobs[i].len;
+        params[dslot[i]][2] = (GLint)((size_t)dslot[i] * d->coef_stride / sizeof(GLuint));
+        params[dslot[i]][3] = d->channels;
+    }
+    dispatch_streams(d->dct, d->ssbo[set], d->coefs[set], d->dct_tiles[set],
+                     params, (size_t)nd * sizeof params[0], 1, (GLuint)nd);
+    /* The inverse transform's row pass, in place, once the planes are
+     * written: one invocation per block (same buffers bound). */
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(d->dct_rows);
+    glDispatchCompute((GV_DCT_BLOCKS * GV_DCT_BLOCKS + 63) / 64, (GLuint)nd, 1);
 }
 
 static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
@@ -600,32 +582,8 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
                          params, m * sizeof params[0], (GV_BLOCKS + 63) / 64,
                          (GLuint)m);
     }
-    /* Transform-coded tiles: every such tile's 65 coefficient streams in
-     * one dispatch, one invocation per row of 8x8 blocks. */
-    if (nd > 0) {
-        if (nd > d->coef_cap[set]) {
-            glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->coefs[set]);
-            glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(nd * d->coef_stride),
-                         NULL, GL_DYNAMIC_COPY);
-            d->coef_cap[set] = nd;
-        }
-        GLint params[GROUP][4];
-        for (size_t i = 0; i < n; i++) {
-            if (dslot[i] < 0)
-                continue;
-            params[dslot[i]][0] = (GLint)(off[i] / 4);
-            params[dslot[i]][1] = (GLint)jobs[i].len;
-            params[dslot[i]][2] = (GLint)((size_t)dslot[i] * d->coef_stride / sizeof(GLuint));
-            params[dslot[i]][3] = d->channels;
-        }
-        dispatch_streams(d->dct, d->ssbo[set], d->coefs[set], d->dct_tiles[set],
-                         params, (size_t)nd * sizeof params[0], 1, (GLuint)nd);
-        /* The inverse transform's row pass, in place, once the planes are
-         * written: one invocation per block (same buffers bound). */
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        glUseProgram(d->dct_rows);
-        glDispatchCompute((GV_DCT_BLOCKS * GV_DCT_BLOCKS + 63) / 64, (GLuint)nd, 1);
-    }
+    if (nd > 0)
+        dispatch_dct(d, set, jobs, n, off, dslot, nd);
     if (entropy || nd > 0)
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     glBindVertexArray(d->vao);
@@ -673,7 +631,7 @@ static int decode_batch(void *arg, struct gv_error *err)
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glActiveTexture(GL_TEXTURE0);
     if (rc == 0)
-        rc = gl_failed(err, "tile decode");
+        rc = gv_gpu_gl_check(err, "tile decode");
     if (rc < 0)
         for (size_t i = 0; i < b->n; i++)
             if (b->jobs[i].handle) {
@@ -733,7 +691,7 @@ static int readback(void *arg, struct gv_error *err)
         for (int k = 0; k < c; k++)
             j->pixels_out[i * c + k] = (uint8_t)px[4 * i + k];
     free(px);
-    return gl_failed(err, "tile read-back");
+    return gv_gpu_gl_check(err, "tile read-back");
 }
 
 int gv_gpu_read_tile(struct gv_gpu_decoder *d, uint32_t handle, int mip,
@@ -769,7 +727,7 @@ static int reserve(void *arg, struct gv_error *err)
     }
     while (d->spares < want)
         d->spare[d->spares++] = new_tile_texture_fresh();
-    return gl_failed(err, "texture reserve");
+    return gv_gpu_gl_check(err, "texture reserve");
 }
 
 int gv_gpu_reserve(struct gv_gpu_decoder *d, size_t tiles, struct gv_error *err)

@@ -22,34 +22,30 @@
 
 struct gv_gpu_decoder;
 
-/* How the shader reads a tile buffer: from a shader storage buffer, with
- * rANS streams (indices, or layout D's coefficients) decoded by a compute
- * pass (GLSL ES 3.10 / GL 4.30), or as WebGL2 does (GLSL ES 3.00): the
- * buffer as an R32UI texture and rANS streams decoded on the CPU into an
- * R16UI index texture or a 520x520 RGBA16I coefficient texture. */
-enum gv_gpu_path { GV_GPU_PATH_SSBO, GV_GPU_PATH_WEBGL2 };
+/* How a decoder is made (gv_gpu_decoder_new). */
+struct gv_gpu_decoder_opts {
+    int channels;            /* of the store's tiles: 1 or 3 */
+    /* How the shader reads a tile buffer: GV_GPU_PATH_COMPUTE (0), from a
+     * shader storage buffer, with rANS streams (indices, or layout D's
+     * coefficients) decoded by a compute pass; or GV_GPU_PATH_WEBGL2, as
+     * the browser does: the buffer as an R32UI texture and rANS streams
+     * decoded on the CPU into an R16UI index texture or a 520x520 RGBA16I
+     * coefficient texture (needs an ES context, else GV_EFORMAT). */
+    enum gv_gpu_path path;
+    /* NULL, or #define lines (read only during gv_gpu_decoder_new) put
+     * before the decode shader's source: tests use them to change the
+     * transform's rounding (GV_DCT_ROUND_ROWS, GV_DCT_ROUND_COLS in
+     * shaders/tile_decode.frag.glsl) and see the comparison fail. */
+    const char *defines;
+};
 
-/* Compile the decode programs for tiles of `channels` channels (1 or 3)
- * on the SSBO path.  Returns the decoder (g is borrowed: close it after
- * gv_gpu_decoder_free), or NULL with *err; a shader that does not compile
- * is also listed on stderr. */
-struct gv_gpu_decoder *gv_gpu_decoder_new(struct gv_gpu *g, int channels,
+/* Compile the decode programs described by *o (read during the call).
+ * Returns the decoder (g is borrowed: close it after gv_gpu_decoder_free),
+ * or NULL with *err; a shader that does not compile is also listed on
+ * stderr. */
+struct gv_gpu_decoder *gv_gpu_decoder_new(struct gv_gpu *g,
+                                          const struct gv_gpu_decoder_opts *o,
                                           struct gv_error *err);
-
-/* The same for a chosen path; GV_GPU_PATH_WEBGL2 needs an ES context
- * (else NULL with GV_EFORMAT). */
-struct gv_gpu_decoder *gv_gpu_decoder_new_path(struct gv_gpu *g, int channels,
-                                               enum gv_gpu_path path,
-                                               struct gv_error *err);
-
-/* The same with `defines` (#define lines, read only during this call)
- * put before the decode shader's source: tests use it to change the
- * transform's rounding (GV_DCT_ROUND_ROWS, GV_DCT_ROUND_COLS in
- * shaders/tile_decode.frag.glsl) and see the comparison fail. */
-struct gv_gpu_decoder *gv_gpu_decoder_new_defines(struct gv_gpu *g, int channels,
-                                                  enum gv_gpu_path path,
-                                                  const char *defines,
-                                                  struct gv_error *err);
 
 /* Free every texture and program.  NULL does nothing. */
 void gv_gpu_decoder_free(struct gv_gpu_decoder *d);
@@ -82,7 +78,7 @@ struct gv_gpu_tile_job {
 /*
  * Decode n tiles in one call to the GL thread, as gv_gpu_decode_tile would
  * one by one, in order (a tile may name an earlier job as its parent, so a
- * pyramid can be decoded level by level in one batch).  On the SSBO path
+ * pyramid can be decoded level by level in one batch).  On the compute path
  * tiles go in groups: every rANS pass of a group runs before one barrier,
  * and nothing waits for the GPU but a group for the one before the
  * previous (whose buffers it reuses).  Every buffer is checked with
@@ -106,8 +102,9 @@ void gv_gpu_release(struct gv_gpu_decoder *d, uint32_t handle);
 /* Allocate textures for `tiles` tiles up front and keep that many released
  * ones from now on, so that decoding them allocates nothing (on an H100 a
  * fifth to a third of a batch's time went to allocating textures).  A
- * client that knows its cache's size in tiles reserves it.  Returns 0, or
- * -1 with *err. */
+ * client that knows its cache's size in tiles may reserve it; only
+ * bench/decode_bench and tests/test_gpu_decode call it so far.  Returns 0,
+ * or -1 with *err. */
 int gv_gpu_reserve(struct gv_gpu_decoder *d, size_t tiles, struct gv_error *err);
 
 #endif

@@ -1,22 +1,21 @@
 /*
  * gpu_height.c - the GPU height tile decoder (see gpu_height.h).
  *
- * One tile per call.  On the SSBO path the storage buffers are reused
+ * One tile per call.  On the compute path the storage buffers are reused
  * from tile to tile, so each decode waits for a fence after its draw:
  * shader storage is not ordered after earlier draws' reads (the image
  * decoder, gpu_decode.c, found llvmpipe deferring draws past a later
  * compute pass).  Height tiles are few next to image tiles in a view;
  * batching can come when a client needs it.
  */
-#include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include <GLES3/gl31.h>
 
 #include "base/byteorder.h"
 #include "codec/height_tile.h"
 #include "gpu/gpu_height.h"
+#include "gpu/gpu_module_int.h"
 #include "shaders.h"
 
 struct gv_gpu_height {
@@ -37,39 +36,26 @@ struct job {
     int qx, qy;
 };
 
-static int gl_failed(struct gv_error *err, const char *what)
-{
-    GLenum e = glGetError();
-    if (e == GL_NO_ERROR)
-        return 0;
-    return gv_fail(err, GV_EIO, "gpu: %s failed (GL error 0x%x)", what, e);
-}
-
 static int setup(void *arg, struct gv_error *err)
 {
     struct gv_gpu_height *h = ((struct job *)arg)->h;
-    char *listing = NULL;
+    const struct gv_gpu_uniform decode_u[] = {
+        {"u_parent", &h->u_parent}, {"u_quadrant", &h->u_quadrant},
+        {"u_e", &h->u_e}, {"u_coded", &h->u_coded}, {"u_q", &h->u_q},
+        {NULL, NULL},
+    };
+    const struct gv_gpu_program_def defs[] = {
+        {&h->decode, {{GL_VERTEX_SHADER, {gv_shader_fullscreen_vert}},
+                      {GL_FRAGMENT_SHADER, {gv_shader_height_decode_frag}}},
+         decode_u},
+        {&h->rans, {{GL_COMPUTE_SHADER, {gv_shader_height_rans_comp}}}, NULL},
+    };
     const int webgl2 = h->path == GV_GPU_PATH_WEBGL2;
-    h->decode = (webgl2 ? gv_gpu_program_es300 : gv_gpu_program)(
-        h->gpu, gv_shader_fullscreen_vert, gv_shader_height_decode_frag,
-        &listing, err);
-    if (h->decode && !webgl2)
-        h->rans = gv_gpu_compute_program(h->gpu, gv_shader_height_rans_comp,
-                                         &listing, err);
-    if (!h->decode || (!webgl2 && !h->rans)) {
-        if (listing)
-            fprintf(stderr, "%s", listing);
-        free(listing);
+    if (gv_gpu_build_programs(h->gpu, h->path, defs, webgl2 ? 1 : 2, err) < 0)
         return -1;
-    }
-    h->u_parent = glGetUniformLocation(h->decode, "u_parent");
-    h->u_quadrant = glGetUniformLocation(h->decode, "u_quadrant");
-    h->u_e = glGetUniformLocation(h->decode, "u_e");
-    h->u_coded = glGetUniformLocation(h->decode, "u_coded");
     glGenFramebuffers(1, &h->fbo);
     glGenVertexArrays(1, &h->vao);
     if (webgl2) {
-        h->u_q = glGetUniformLocation(h->decode, "u_q");
         glGenTextures(1, &h->qtex);
         glBindTexture(GL_TEXTURE_2D, h->qtex);
         glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32I, GV_HT_SIDE, GV_HT_SIDE);
@@ -85,12 +71,14 @@ static int setup(void *arg, struct gv_error *err)
         glBufferData(GL_SHADER_STORAGE_BUFFER, GV_HT_SAMPLES * sizeof(GLint), NULL,
                      GL_DYNAMIC_COPY);
     }
-    return gl_failed(err, "height decoder set-up");
+    return gv_gpu_gl_check(err, "height decoder set-up");
 }
 
-struct gv_gpu_height *gv_gpu_height_new(struct gv_gpu *g, enum gv_gpu_path path,
+struct gv_gpu_height *gv_gpu_height_new(struct gv_gpu *g,
+                                        const struct gv_gpu_height_opts *o,
                                         struct gv_error *err)
 {
+    const enum gv_gpu_path path = o ? o->path : GV_GPU_PATH_COMPUTE;
     struct gv_gpu_height *h = calloc(1, sizeof *h);
     if (!h) {
         gv_fail(err, GV_ENOMEM, "gpu: out of memory");
@@ -115,20 +103,13 @@ static int teardown(void *arg, struct gv_error *err)
 {
     (void)err;
     struct gv_gpu_height *h = ((struct job *)arg)->h;
-    if (h->decode)
-        glDeleteProgram(h->decode);
-    if (h->rans)
-        glDeleteProgram(h->rans);
-    if (h->words)
-        glDeleteBuffers(1, &h->words);
-    if (h->qbuf)
-        glDeleteBuffers(1, &h->qbuf);
-    if (h->qtex)
-        glDeleteTextures(1, &h->qtex);
-    if (h->fbo)
-        glDeleteFramebuffers(1, &h->fbo);
-    if (h->vao)
-        glDeleteVertexArrays(1, &h->vao);
+    const struct gv_gpu_objects objects[] = {
+        {GV_GPU_PROGRAMS, &h->decode, 1}, {GV_GPU_PROGRAMS, &h->rans, 1},
+        {GV_GPU_BUFFERS, &h->words, 1}, {GV_GPU_BUFFERS, &h->qbuf, 1},
+        {GV_GPU_TEXTURES, &h->qtex, 1}, {GV_GPU_FRAMEBUFFERS, &h->fbo, 1},
+        {GV_GPU_VERTEX_ARRAYS, &h->vao, 1},
+    };
+    gv_gpu_delete_objects(objects, sizeof objects / sizeof objects[0]);
     return 0;
 }
 
@@ -161,7 +142,7 @@ static int upload(void *arg, struct gv_error *err)
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GV_HT_SIDE, GV_HT_SIDE,
                     GL_RED_INTEGER, GL_UNSIGNED_SHORT, j->codes_in);
     j->handle = tex;
-    return gl_failed(err, "height tile upload");
+    return gv_gpu_gl_check(err, "height tile upload");
 }
 
 int gv_gpu_height_upload(struct gv_gpu_height *h, const uint16_t *codes,
@@ -227,7 +208,7 @@ static int decode(void *arg, struct gv_error *err)
         ;
     glDeleteSync(fence);
     j->handle = tex;
-    return gl_failed(err, "height tile decode");
+    return gv_gpu_gl_check(err, "height tile decode");
 }
 
 int gv_gpu_height_decode(struct gv_gpu_height *h, const uint8_t *buf,
@@ -258,7 +239,7 @@ static int readback(void *arg, struct gv_error *err)
     for (int i = 0; i < GV_HT_SAMPLES; i++)
         j->codes_out[i] = (uint16_t)rgba[4 * i];
     free(rgba);
-    return gl_failed(err, "height tile read-back");
+    return gv_gpu_gl_check(err, "height tile read-back");
 }
 
 int gv_gpu_height_read(struct gv_gpu_height *h, uint32_t handle,

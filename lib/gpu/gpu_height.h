@@ -3,7 +3,7 @@
  * 12), bit for bit what lib/codec/height_tile.c does.
  *
  * A decoded height tile lives on the GPU as a 513x513 R16UI texture named
- * by a handle.  On the SSBO path (GLSL ES 3.10 / GL 4.30) a compute pass
+ * by a handle.  On the compute path (GLSL ES 3.10 / GL 4.30) a compute pass
  * (shaders/height_rans.comp.glsl, one invocation per stream) entropy-
  * decodes the buffer into a storage buffer of q, then a fragment pass
  * (shaders/height_decode.frag.glsl) predicts from the parent texture and
@@ -11,6 +11,13 @@
  * CPU entropy-decodes into an R32I texture for the same fragment pass.
  * Every function may be called from any thread but the GPU's own (the
  * work runs there, through gv_gpu_call).
+ *
+ * For tests only, so far: no program of gigaview decodes height tiles on
+ * its GPU (gigaviewd and `gigaview mesh` read heights through the CPU
+ * decoder, lib/render/height_region.c).  tests/test_gpu_height runs both paths against the CPU
+ * decoder, which checks shaders/height_*.glsl; the WebGL2 path compiles
+ * the very fragment shader the browser's client/web/height_decode.js
+ * does.  A native client that draws terrain would be its first caller.
  */
 #ifndef GV_GPU_HEIGHT_H
 #define GV_GPU_HEIGHT_H
@@ -20,14 +27,21 @@
 
 #include "base/error.h"
 #include "gpu/gpu.h"
-#include "gpu/gpu_decode.h"
 
 struct gv_gpu_height;
 
-/* Compile the programs of `path` (GV_GPU_PATH_WEBGL2 needs an ES
- * context).  g is borrowed.  NULL with *err on failure (a shader that
- * does not compile is listed on stderr). */
-struct gv_gpu_height *gv_gpu_height_new(struct gv_gpu *g, enum gv_gpu_path path,
+/* How a height decoder is made (gv_gpu_height_new). */
+struct gv_gpu_height_opts {
+    /* GV_GPU_PATH_COMPUTE (0) or GV_GPU_PATH_WEBGL2 (needs an ES context,
+     * else GV_EFORMAT) */
+    enum gv_gpu_path path;
+};
+
+/* Compile the programs described by *o (NULL: every option 0).  g is
+ * borrowed.  NULL with *err on failure (a shader that does not compile is
+ * listed on stderr). */
+struct gv_gpu_height *gv_gpu_height_new(struct gv_gpu *g,
+                                        const struct gv_gpu_height_opts *o,
                                         struct gv_error *err);
 
 /* Free every texture and program.  NULL does nothing. */

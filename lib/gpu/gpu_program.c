@@ -1,14 +1,18 @@
 /*
  * gpu_program.c - compiling the embedded GLSL for the current context
- * (gpu.h: gv_gpu_program, gv_gpu_program_es300, gv_gpu_compute_program).
+ * (gpu.h: gv_gpu_program, gv_gpu_compile_stage, gv_gpu_link_stages; and
+ * gpu_module_int.h: gv_gpu_build_programs, the programs of every module
+ * of lib/gpu, built from tables of stages and uniform names).
  *
  * The shared shader bodies carry no #version line: it depends on the
  * context (GLSL ES 3.10 on ES 3.1+, 4.30 core on desktop GL, 3.00 ES in
  * WebGL2, where the browser adds its own).  On failure the listing shows
  * the final source with line numbers beside the driver's log, so that a
  * log's "0:42" points at something (mpv's compile_attach_shader does the
- * same).
+ * same).  A stage's final source is the version head followed by its
+ * parts, put together in one place (concat).
  */
+#include <assert.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +20,7 @@
 #include <GLES3/gl31.h>
 
 #include "gpu/gpu.h"
+#include "gpu/gpu_module_int.h"
 
 static char *number_lines(const char *src, const char *log)
 {
@@ -91,11 +96,25 @@ static const char *version_head(const struct gv_gpu *g)
                               : "#version 430 core\n#define GV_SSBO 1\n";
 }
 
-static char *with_head(const char *head, const char *body)
+/* head followed by the non-NULL parts, malloc'ed; NULL without memory.
+ * The one place a shader's final source is put together. */
+static char *concat(const char *head, const char *const *parts)
 {
-    char *s = malloc(strlen(head) + strlen(body) + 1);
-    if (s)
-        strcat(strcpy(s, head), body);
+    const char *all[GV_GPU_STAGE_PARTS + 1] = {head};
+    size_t len[GV_GPU_STAGE_PARTS + 1], total = 1;
+    int n = 1;
+    for (int i = 0; i < GV_GPU_STAGE_PARTS && parts[i]; i++)
+        all[n++] = parts[i];
+    for (int i = 0; i < n; i++)
+        total += len[i] = strlen(all[i]);
+    char *s = malloc(total), *p = s;
+    if (!s)
+        return NULL;
+    for (int i = 0; i < n; i++) {
+        memcpy(p, all[i], len[i]);
+        p += len[i];
+    }
+    *p = 0;
     return s;
 }
 
@@ -113,59 +132,75 @@ static GLuint link(const GLuint *stages, int n, const char *shown, char **listin
     return 0;
 }
 
-unsigned gv_gpu_compute_program(const struct gv_gpu *g, const char *compute,
-                                char **listing, struct gv_error *err)
+/* One program of one or two stages, each head + parts. */
+static GLuint build(const char *head, const struct gv_gpu_stage *stage,
+                    char **listing, struct gv_error *err)
 {
-    char *cs = with_head(version_head(g), compute);
-    GLuint c = 0, prog = 0;
-    if (!cs) {
-        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
-        return 0;
-    }
-    if ((c = compile(GL_COMPUTE_SHADER, cs, listing, err)))
-        prog = link(&c, 1, cs, listing, err);
-    free(cs);
+    const int n = stage[1].type ? 2 : 1;
+    char *src[2] = {NULL, NULL};
+    GLuint sh[2] = {0, 0}, prog = 0;
+    for (int i = 0; i < n; i++)
+        if (!(src[i] = concat(head, stage[i].parts))) {
+            gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+            goto out;
+        }
+    for (int i = 0; i < n; i++)
+        if (!(sh[i] = compile(stage[i].type, src[i], listing, err))) {
+            for (int k = 0; k < i; k++)
+                glDeleteShader(sh[k]);
+            goto out;
+        }
+    prog = link(sh, n, src[n - 1], listing, err);
+out:
+    free(src[0]);
+    free(src[1]);
     return prog;
 }
 
-static unsigned program_with_head(const char *head, const char *vertex,
-                                  const char *fragment, char **listing,
-                                  struct gv_error *err)
+/* The version head of `path`, or NULL with *err. */
+static const char *path_head(const struct gv_gpu *g, enum gv_gpu_path path,
+                             struct gv_error *err)
 {
-    char *vs = with_head(head, vertex);
-    char *fs = with_head(head, fragment);
-    GLuint prog = 0, v = 0, f = 0;
-    if (!vs || !fs) {
-        gv_fail(err, GV_ENOMEM, "gpu: out of memory");
-        goto out;
+    if (path == GV_GPU_PATH_COMPUTE)
+        return version_head(g);
+    if (!gv_gpu_info(g)->es) {
+        gv_fail(err, GV_EFORMAT, "gpu: GLSL ES 3.00 needs an OpenGL ES context");
+        return NULL;
     }
-    if (!(v = compile(GL_VERTEX_SHADER, vs, listing, err)))
-        goto out;
-    if (!(f = compile(GL_FRAGMENT_SHADER, fs, listing, err))) {
-        glDeleteShader(v);
-        goto out;
+    return "#version 300 es\n";
+}
+
+int gv_gpu_build_programs(const struct gv_gpu *g, enum gv_gpu_path path,
+                          const struct gv_gpu_program_def *defs, size_t n,
+                          struct gv_error *err)
+{
+    const char *head = path_head(g, path, err);
+    if (!head)
+        return -1;
+    for (size_t i = 0; i < n; i++) {
+        char *listing = NULL;
+        assert(path == GV_GPU_PATH_COMPUTE ||
+               defs[i].stage[0].type != GL_COMPUTE_SHADER);
+        *defs[i].prog = build(head, defs[i].stage, &listing, err);
+        if (!*defs[i].prog) {
+            if (listing)
+                fprintf(stderr, "%s", listing);
+            free(listing);
+            return -1;
+        }
+        for (const struct gv_gpu_uniform *u = defs[i].uniforms; u && u->name; u++)
+            *u->loc = glGetUniformLocation(*defs[i].prog, u->name);
     }
-    prog = link((const GLuint[]){v, f}, 2, fs, listing, err);
-out:
-    free(vs);
-    free(fs);
-    return prog;
+    return 0;
 }
 
 unsigned gv_gpu_program(const struct gv_gpu *g, const char *vertex,
                         const char *fragment, char **listing,
                         struct gv_error *err)
 {
-    return program_with_head(version_head(g), vertex, fragment, listing, err);
-}
-
-unsigned gv_gpu_program_es300(const struct gv_gpu *g, const char *vertex,
-                              const char *fragment, char **listing,
-                              struct gv_error *err)
-{
-    if (!gv_gpu_info(g)->es) {
-        gv_fail(err, GV_EFORMAT, "gpu: GLSL ES 3.00 needs an OpenGL ES context");
-        return 0;
-    }
-    return program_with_head("#version 300 es\n", vertex, fragment, listing, err);
+    const struct gv_gpu_stage stage[2] = {
+        {GL_VERTEX_SHADER, {vertex}},
+        {GL_FRAGMENT_SHADER, {fragment}},
+    };
+    return build(version_head(g), stage, listing, err);
 }

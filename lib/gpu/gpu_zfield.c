@@ -13,13 +13,12 @@
  * an RGBA32UI texel, read back.  Both programs are shaders/
  * zfield_rules.glsl followed by the variant's main file.
  */
-#include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include <GLES3/gl31.h>
 
 #include "gpu/gpu_zfield.h"
+#include "gpu/gpu_module_int.h"
 #include "shaders.h"
 
 /* Work groups along x of a dispatch (64 invocations each); more
@@ -28,7 +27,7 @@
 
 struct gv_gpu_zfield {
     struct gv_gpu *gpu;
-    enum gv_zfield_path path;
+    enum gv_gpu_path path;
     GLuint sweep, pack;
     GLuint heights, enabled, packed;          /* compute: buffers */
     GLuint ztex, state[2], ptex, fbo[3], vao; /* fragment: textures */
@@ -46,70 +45,47 @@ struct call {
     uint8_t *enabled;
 };
 
-static int gl_failed(struct gv_error *err, const char *what)
+/* The sweep and the packing pass: zfield_rules.glsl then the variant's
+ * main file, the packing pass with GV_ZFIELD_PACK defined first. */
+static int build_programs(struct gv_gpu_zfield *zf, struct gv_error *err)
 {
-    const GLenum e = glGetError();
-    if (e == GL_NO_ERROR)
-        return 0;
-    return gv_fail(err, GV_EIO, "gpu zfield: %s failed (GL error 0x%04x)", what, e);
-}
-
-/* head + zfield_rules.glsl + body, malloc'ed. */
-static char *source(const char *head, const char *body)
-{
+    static const char pack_def[] = "#define GV_ZFIELD_PACK 1\n";
     const char *rules = gv_shader_zfield_rules;
-    char *s = malloc(strlen(head) + strlen(rules) + strlen(body) + 1);
-    if (s) {
-        strcpy(s, head);
-        strcat(s, rules);
-        strcat(s, body);
-    }
-    return s;
+    const struct gv_gpu_uniform sweep_u[] = {
+        {"u_n", &zf->u_n}, {"u_level", &zf->u_level}, {"u_count", &zf->u_count},
+        {"u_mode", &zf->u_mode}, {"u_thr2", &zf->u_thr2}, {"u_tau2", &zf->u_tau2},
+        {"u_halfk", &zf->u_halfk}, {"u_xy", &zf->u_xy}, {"u_eye", &zf->u_eye},
+        {"u_z", &zf->u_z}, {"u_prev", &zf->u_prev}, {NULL, NULL},
+    };
+    const struct gv_gpu_uniform pack_u[] = {
+        {"u_n", &zf->pk_n}, {"u_count", &zf->pk_count}, {"u_prev", &zf->pk_prev},
+        {"u_other", &zf->pk_other}, {NULL, NULL},
+    };
+    const struct gv_gpu_program_def compute[] = {
+        {&zf->sweep, {{GL_COMPUTE_SHADER, {rules, gv_shader_zfield_sweep_comp}}},
+         sweep_u},
+        {&zf->pack, {{GL_COMPUTE_SHADER,
+                      {pack_def, rules, gv_shader_zfield_sweep_comp}}}, pack_u},
+    };
+    const struct gv_gpu_program_def fragment[] = {
+        {&zf->sweep, {{GL_VERTEX_SHADER, {rules, gv_shader_zfield_points_vert}},
+                      {GL_FRAGMENT_SHADER, {rules, gv_shader_zfield_sweep_frag}}},
+         sweep_u},
+        {&zf->pack, {{GL_VERTEX_SHADER, {gv_shader_fullscreen_vert}},
+                     {GL_FRAGMENT_SHADER,
+                      {pack_def, rules, gv_shader_zfield_sweep_frag}}}, pack_u},
+    };
+    return gv_gpu_build_programs(zf->gpu, zf->path,
+                                 zf->path == GV_GPU_PATH_COMPUTE ? compute : fragment,
+                                 2, err);
 }
 
 static int setup(void *arg, struct gv_error *err)
 {
     struct gv_gpu_zfield *zf = ((struct call *)arg)->zf;
-    const char *pack_def = "#define GV_ZFIELD_PACK 1\n";
-    char *listing = NULL;
-    char *a = NULL, *b = NULL, *c = NULL;
-    if (zf->path == GV_ZFIELD_COMPUTE) {
-        a = source("", gv_shader_zfield_sweep_comp);
-        b = source(pack_def, gv_shader_zfield_sweep_comp);
-        if (!a || !b)
-            goto oom;
-        zf->sweep = gv_gpu_compute_program(zf->gpu, a, &listing, err);
-        if (zf->sweep)
-            zf->pack = gv_gpu_compute_program(zf->gpu, b, &listing, err);
-    } else {
-        a = source("", gv_shader_zfield_points_vert);
-        b = source("", gv_shader_zfield_sweep_frag);
-        c = source(pack_def, gv_shader_zfield_sweep_frag);
-        if (!a || !b || !c)
-            goto oom;
-        zf->sweep = gv_gpu_program_es300(zf->gpu, a, b, &listing, err);
-        if (zf->sweep)
-            zf->pack = gv_gpu_program_es300(zf->gpu, gv_shader_fullscreen_vert, c,
-                                            &listing, err);
-    }
-    free(a), free(b), free(c);
-    if (!zf->sweep || !zf->pack) {
-        if (listing)
-            fprintf(stderr, "%s", listing);
-        free(listing);
+    if (build_programs(zf, err) < 0)
         return -1;
-    }
-    static const char *names[] = {"u_n", "u_level", "u_count", "u_mode", "u_thr2",
-                                  "u_tau2", "u_halfk", "u_xy", "u_eye", "u_z", "u_prev"};
-    GLint *locs[] = {&zf->u_n, &zf->u_level, &zf->u_count, &zf->u_mode, &zf->u_thr2,
-                     &zf->u_tau2, &zf->u_halfk, &zf->u_xy, &zf->u_eye, &zf->u_z, &zf->u_prev};
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
-        *locs[i] = glGetUniformLocation(zf->sweep, names[i]);
-    zf->pk_n = glGetUniformLocation(zf->pack, "u_n");
-    zf->pk_count = glGetUniformLocation(zf->pack, "u_count");
-    zf->pk_prev = glGetUniformLocation(zf->pack, "u_prev");
-    zf->pk_other = glGetUniformLocation(zf->pack, "u_other");
-    if (zf->path == GV_ZFIELD_COMPUTE) {
+    if (zf->path == GV_GPU_PATH_COMPUTE) {
         glGenBuffers(1, &zf->heights);
         glGenBuffers(1, &zf->enabled);
         glGenBuffers(1, &zf->packed);
@@ -120,15 +96,14 @@ static int setup(void *arg, struct gv_error *err)
         glGenFramebuffers(3, zf->fbo);
         glGenVertexArrays(1, &zf->vao);
     }
-    return gl_failed(err, "set-up");
-oom:
-    free(a), free(b), free(c);
-    return gv_fail(err, GV_ENOMEM, "gpu zfield: out of memory");
+    return gv_gpu_gl_check(err, "zfield set-up");
 }
 
-struct gv_gpu_zfield *gv_gpu_zfield_new_path(struct gv_gpu *g, enum gv_zfield_path path,
-                                             struct gv_error *err)
+struct gv_gpu_zfield *gv_gpu_zfield_new(struct gv_gpu *g,
+                                        const struct gv_gpu_zfield_opts *o,
+                                        struct gv_error *err)
 {
+    const enum gv_gpu_path path = o ? o->path : GV_GPU_PATH_COMPUTE;
     struct gv_gpu_zfield *zf = calloc(1, sizeof *zf);
     if (!zf) {
         gv_fail(err, GV_ENOMEM, "gpu zfield: out of memory");
@@ -144,32 +119,18 @@ struct gv_gpu_zfield *gv_gpu_zfield_new_path(struct gv_gpu *g, enum gv_zfield_pa
     return zf;
 }
 
-struct gv_gpu_zfield *gv_gpu_zfield_new(struct gv_gpu *g, struct gv_error *err)
-{
-    return gv_gpu_zfield_new_path(g, GV_ZFIELD_COMPUTE, err);
-}
-
 static int teardown(void *arg, struct gv_error *err)
 {
     (void)err;
     struct gv_gpu_zfield *zf = ((struct call *)arg)->zf;
-    if (zf->sweep)
-        glDeleteProgram(zf->sweep);
-    if (zf->pack)
-        glDeleteProgram(zf->pack);
-    GLuint b[3] = {zf->heights, zf->enabled, zf->packed};
-    for (int i = 0; i < 3; i++)
-        if (b[i])
-            glDeleteBuffers(1, &b[i]);
-    GLuint t[4] = {zf->ztex, zf->state[0], zf->state[1], zf->ptex};
-    for (int i = 0; i < 4; i++)
-        if (t[i])
-            glDeleteTextures(1, &t[i]);
-    for (int i = 0; i < 3; i++)
-        if (zf->fbo[i])
-            glDeleteFramebuffers(1, &zf->fbo[i]);
-    if (zf->vao)
-        glDeleteVertexArrays(1, &zf->vao);
+    const struct gv_gpu_objects objects[] = {
+        {GV_GPU_PROGRAMS, &zf->sweep, 1}, {GV_GPU_PROGRAMS, &zf->pack, 1},
+        {GV_GPU_BUFFERS, &zf->heights, 1}, {GV_GPU_BUFFERS, &zf->enabled, 1},
+        {GV_GPU_BUFFERS, &zf->packed, 1}, {GV_GPU_TEXTURES, &zf->ztex, 1},
+        {GV_GPU_TEXTURES, zf->state, 2}, {GV_GPU_TEXTURES, &zf->ptex, 1},
+        {GV_GPU_FRAMEBUFFERS, zf->fbo, 3}, {GV_GPU_VERTEX_ARRAYS, &zf->vao, 1},
+    };
+    gv_gpu_delete_objects(objects, sizeof objects / sizeof objects[0]);
     return 0;
 }
 
@@ -196,7 +157,7 @@ static int upload(void *arg, struct gv_error *err)
     struct call *c = arg;
     struct gv_gpu_zfield *zf = c->zf;
     const size_t cells = (size_t)c->n * c->n;
-    if (zf->path == GV_ZFIELD_COMPUTE) {
+    if (zf->path == GV_GPU_PATH_COMPUTE) {
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, zf->heights);
         glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(cells * sizeof(float)), c->z,
                      GL_STATIC_DRAW);
@@ -236,7 +197,7 @@ static int upload(void *arg, struct gv_error *err)
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
     zf->n = c->n;
-    return gl_failed(err, "height upload");
+    return gv_gpu_gl_check(err, "zfield height upload");
 }
 
 int gv_gpu_zfield_heights(struct gv_gpu_zfield *zf, const float *z, uint32_t n,
@@ -303,8 +264,7 @@ static int run_compute(struct call *c, struct gv_error *err)
                                           (GLsizeiptr)(words * sizeof(GLuint)),
                                           GL_MAP_READ_BIT);
     if (!bits)
-        return gl_failed(err, "read-back") < 0 ? -1
-               : gv_fail(err, GV_EIO, "gpu zfield: read-back failed");
+        return gv_gpu_gl_fail(err, "zfield read-back");
     unpack(bits, cells, c->enabled);
     glUnmapBuffer(GL_SHADER_STORAGE_BUFFER);
     return 0;
@@ -367,7 +327,7 @@ static int run_fragment(struct call *c, struct gv_error *err)
 static int run(void *arg, struct gv_error *err)
 {
     struct call *c = arg;
-    const int rc = c->zf->path == GV_ZFIELD_COMPUTE ? run_compute(c, err)
+    const int rc = c->zf->path == GV_GPU_PATH_COMPUTE ? run_compute(c, err)
                                                    : run_fragment(c, err);
     if (rc < 0)
         return rc;
@@ -376,7 +336,7 @@ static int run(void *arg, struct gv_error *err)
     const size_t cells = (size_t)n * n;
     c->enabled[0] = c->enabled[n - 1] = 1;
     c->enabled[(size_t)(n - 1) * n] = c->enabled[cells - 1] = 1;
-    return gl_failed(err, "sweep");
+    return gv_gpu_gl_check(err, "zfield sweep");
 }
 
 int gv_gpu_zfield_enable(struct gv_gpu_zfield *zf, const struct gv_zfield_params *p,

@@ -21,20 +21,23 @@
 
 struct gv_gpu_zfield;
 
-/* The two variants of the sweep, one shader source (shaders/zfield_*). */
-enum gv_zfield_path {
-    GV_ZFIELD_COMPUTE,   /* a compute dispatch per level, storage buffers */
-    GV_ZFIELD_FRAGMENT   /* GLSL ES 3.00 as WebGL2 runs it: a draw of one
-                            point per vertex per level into alternating
-                            R8UI targets (needs an ES context) */
+/* How a sweep is made (gv_gpu_zfield_new).  One shader source for both
+ * paths (shaders/zfield_*). */
+struct gv_gpu_zfield_opts {
+    /* GV_GPU_PATH_COMPUTE (0): a compute dispatch per level, storage
+     * buffers; GV_GPU_PATH_WEBGL2: GLSL ES 3.00 as WebGL2 runs it, a draw
+     * of one point per vertex per level into alternating R8UI targets
+     * (needs an ES context) */
+    enum gv_gpu_path path;
 };
 
-/* Compile the sweep programs on g (borrowed: close it after
- * gv_gpu_zfield_free).  NULL with *err (GV_EFORMAT: the path is not
- * available on this context). */
-struct gv_gpu_zfield *gv_gpu_zfield_new(struct gv_gpu *g, struct gv_error *err);
-struct gv_gpu_zfield *gv_gpu_zfield_new_path(struct gv_gpu *g, enum gv_zfield_path path,
-                                             struct gv_error *err);
+/* Compile the sweep programs described by *o (NULL: every option 0) on g
+ * (borrowed: close it after gv_gpu_zfield_free).  NULL with *err
+ * (GV_EFORMAT: the path is not available on this context; a shader that
+ * does not compile is also listed on stderr). */
+struct gv_gpu_zfield *gv_gpu_zfield_new(struct gv_gpu *g,
+                                        const struct gv_gpu_zfield_opts *o,
+                                        struct gv_error *err);
 
 /* Free the programs and buffers.  NULL does nothing. */
 void gv_gpu_zfield_free(struct gv_gpu_zfield *zf);
