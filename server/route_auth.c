@@ -138,10 +138,14 @@ static enum MHD_Result send_page(struct req *r, unsigned status,
 static enum MHD_Result send_cookie(struct req *r, const char *token,
                                    long long max_age, const char *page)
 {
+    /* Browsers drop a SameSite=None cookie that is not Secure, and a
+     * Secure one is not set over http: over http the cookie serves this
+     * site's own pages (SameSite=Lax), as other sites' viewers could not
+     * use it there anyway. */
     char cookie[ACCESS_TOKEN_MAX + 160];
     snprintf(cookie, sizeof cookie, "%s=%s; Path=/; Max-Age=%lld; HttpOnly; "
-             "SameSite=None%s", HTTP_ACCESS_COOKIE, token, max_age,
-             over_https(r) ? "; Secure" : "");
+             "%s", HTTP_ACCESS_COOKIE, token, max_age,
+             over_https(r) ? "SameSite=None; Secure" : "SameSite=Lax");
     return send_page(r, 200, page, MHD_HTTP_HEADER_SET_COOKIE, cookie);
 }
 
@@ -237,6 +241,19 @@ static char *script_json(json_t *j)
     return o;
 }
 
+/* 1 if `origin` is this server's own (scheme://host[:port] of its base
+ * URL): the viewer gigaviewd serves itself may always have the token. */
+static int own_origin(struct req *r, const char *origin)
+{
+    char base[300];
+    http_base_url(r, base, sizeof base);
+    const char *host = strstr(base, "://");
+    if (!host)
+        return 0;
+    size_t n = strcspn(host + 3, "/") + (size_t)(host + 3 - base);
+    return strlen(origin) == n && !memcmp(origin, base, n);
+}
+
 /* The AuthAccessTokenError2 of `profile`. */
 static json_t *token_error(const char *profile, const char *note,
                            const char *message_id)
@@ -263,7 +280,7 @@ enum MHD_Result route_auth_token(struct req *r)
     struct access_claims c;
     const char *cookie = MHD_lookup_connection_value(r->conn, MHD_COOKIE_KIND,
                                                      HTTP_ACCESS_COOKIE);
-    if (!access_origin_allowed(a, origin)) {
+    if (!access_origin_allowed(a, origin) && !own_origin(r, origin)) {
         msg = token_error("invalidOrigin", "This site may not use these "
                           "images' access tokens.", mid);
     } else if (!access_has_secret(a)) {

@@ -10,6 +10,7 @@
 //
 // window.gigaview exposes the viewer to the console, tests and benchmarks.
 
+import { AuthDialog, obtainAccess } from './auth.js';
 import { FilterPanel } from './filter_panel.js';
 import { attachInput } from './input.js';
 import { Overlay } from './overlay.js';
@@ -40,6 +41,12 @@ new Overlay(viewer, {
 
 let opening = null;
 const errors = [];
+const authDialog = new AuthDialog({
+    box: $('auth'), heading: $('auth-heading'), note: $('auth-note'),
+    confirm: $('auth-confirm'), cancel: $('auth-cancel'),
+});
+let loggingIn = false;
+let auth = null;         // the last login's {token, expiresIn}
 
 function showError(msg) {
     errors.push(msg);
@@ -105,7 +112,21 @@ async function route() {
             `WebGL2 · ${viewer.backend.renderer}` : 'no WebGL2: server-decoded regions';
         document.title = `${st.image} · gigaview`;
         $('view').focus({ preventScroll: true });
-    }, (e) => {
+    }, async (e) => {
+        if (e.status === 401 && !loggingIn) {
+            // A restricted image: log in (IIIF Authorization Flow 2.0) and
+            // open it again; the login's cookie goes with every request.
+            loggingIn = true;
+            const got = await obtainAccess(st.image, authDialog).catch((x) => ({ ok: false, message: x.message }));
+            loggingIn = false;
+            if (got.ok && parseHash(location.hash).image === st.image) {
+                auth = got;
+                await route();
+                return;
+            }
+            if (!got.ok)
+                e = new Error(got.message);
+        }
         showError(e.message);
         $('images').hidden = false;
     });
@@ -132,7 +153,7 @@ window.addEventListener('keydown', (e) => {
 window.addEventListener('hashchange', route);
 
 window.gigaview = {
-    viewer, modes, errors, terrain, parseHash, formatHash, screenToImage, imageToScreen, runner, panel,
+    viewer, modes, errors, terrain, parseHash, auth: () => auth, formatHash, screenToImage, imageToScreen, runner, panel,
     /** Resolves once the image named in the hash is open (or failed). */
     ready: (async () => { await Promise.all([loadList(), panel.load()]); await route(); })(),
 };

@@ -144,7 +144,9 @@ export class Viewer {
         if (!r.ok) {
             let msg = `HTTP ${r.status}`;
             try { msg = (await r.json()).error.message; } catch (e) { /* keep the status */ }
-            throw new Error(`cannot open '${id}': ${msg}`);
+            const err = new Error(`cannot open '${id}': ${msg}`);
+            err.status = r.status;   // 401: restricted (main.js logs in)
+            throw err;
         }
         const info = await r.json();
         const root = await loadRoot(url, info);
