@@ -40,26 +40,28 @@
 #include <GLES3/gl32.h>
 
 #include "gpu/gpu.h"
-#include "http_fetch.h"
 #include "imageio/imageio.h"
 #include "options.h"
-#include "view_draw.h"
-#include "view_fetch.h"
-#include "view_filter.h"
-#include "view_geom.h"
-#include "view_input.h"
-#include "view_overlay.h"
-#include "view_roi.h"
-#include "view_script.h"
-#include "view_select.h"
-#include "view_tiles.h"
+#include "remote/http_fetch.h"
+#include "remote_opts.h"
+#include "view/view_draw.h"
+#include "view/view_fetch.h"
+#include "view/view_filter.h"
+#include "view/view_geom.h"
+#include "view/view_input.h"
+#include "view/view_overlay.h"
+#include "view/view_roi.h"
+#include "view/view_script.h"
+#include "view/view_select.h"
+#include "view/view_tiles.h"
 
 struct view_args {
-    const char *image, *size, *view, *script, *cache_dir, *stats;
-    int fullscreen, no_cache, no_batch, no_prefetch, no_vsync, no_overlay, verbose;
+    struct remote_opts remote; /* --timeout, --cache-dir, --no-cache, --gpu-cache */
+    const char *image, *size, *view, *script, *stats;
+    int fullscreen, no_batch, no_prefetch, no_vsync, no_overlay, verbose;
     int no_decode_thread;
     int budget;
-    double timeout, gpu_mib, budget_ms;
+    double budget_ms;
 };
 
 #define F(field) offsetof(struct view_args, field)
@@ -77,19 +79,11 @@ static const struct opt_spec view_opts[] = {
              "#image=ID&x=..&y=..&z=..&r=.. (default: the whole image)"},
     {.name = "script", .kind = OPT_STRING, .arg = "FILE", .field = F(script),
      .help = "replay the input in FILE, then exit (docs/VIEWER.md)"},
-    {.name = "timeout", .short_name = 't', .kind = OPT_DOUBLE, .arg = "SEC",
-     .field = F(timeout), .min = 0, .max = 86400, .flags = OPT_FINITE | OPT_MIN_OPEN,
-     .help = "limit for each HTTP request (default 10)"},
-    {.name = "cache-dir", .kind = OPT_STRING, .arg = "DIR", .field = F(cache_dir),
-     .help = "tile cache (default $XDG_CACHE_HOME/gigaview\n"
-             "or ~/.cache/gigaview)"},
-    {.name = "no-cache", .kind = OPT_FLAG, .field = F(no_cache),
-     .help = "do not use the tile cache"},
+    REMOTE_OPT_TIMEOUT(F(remote)),
+    REMOTE_OPT_CACHE(F(remote)),
     {.name = "no-batch", .kind = OPT_FLAG, .field = F(no_batch),
      .help = "fetch each tile with a request of its own"},
-    {.name = "gpu-cache", .kind = OPT_DOUBLE, .arg = "MIB", .field = F(gpu_mib),
-     .min = 16, .max = 65536, .flags = OPT_FINITE,
-     .help = "GPU memory for decoded tiles (default 256)"},
+    REMOTE_OPT_GPU_CACHE(F(remote)),
     {.name = "budget", .kind = OPT_INT, .arg = "N", .field = F(budget), .min = 1,
      .max = 4096, .help = "tile decodes in flight at most (default 4; in\n"
                           "the frame: decodes per frame)"},
@@ -199,7 +193,7 @@ static double now_s(void)
  * gv_http_print_images prints). */
 static int list_images(struct app *app, const char *url, struct gv_error *err)
 {
-    struct gv_http *h = gv_http_new(url, (long)(app->a->timeout * 1000), 0, err);
+    struct gv_http *h = gv_http_new(url, remote_timeout_ms(&app->a->remote), 0, err);
     if (!h)
         return -1;
     char *text = NULL;
@@ -262,8 +256,8 @@ static void take_result(struct app *app, struct vf_result *r, double now)
         return;
     }
     struct vt_options o = {
-        .atlas_bytes = (size_t)(app->a->gpu_mib * 1048576.0 * 0.75),
-        .decode_bytes = (size_t)(app->a->gpu_mib * 1048576.0 * 0.25),
+        .atlas_bytes = (size_t)(app->a->remote.gpu_mib * 1048576.0 * 0.75),
+        .decode_bytes = (size_t)(app->a->remote.gpu_mib * 1048576.0 * 0.25),
         .buffer_bytes = (size_t)256 << 20,
         .budget = app->a->budget,
         .budget_ms = app->a->budget_ms,
@@ -1068,14 +1062,14 @@ static int start(struct app *app, const char *url, struct view_args *a)
         fprintf(stderr, ME ": the server at %s has no images\n", url);
         return 1;
     }
-    struct vf_options fo = {.url = url, .timeout_ms = (long)(a->timeout * 1000),
-                            .cache_dir = a->cache_dir, .no_cache = a->no_cache,
+    struct vf_options fo = {.url = url, .timeout_ms = remote_timeout_ms(&a->remote),
+                            .cache_dir = a->remote.cache_dir, .no_cache = a->remote.no_cache,
                             .no_batch = a->no_batch, .verbose = a->verbose};
     if (!(app->fetch = vf_new(&fo, &err))) {
         fprintf(stderr, ME ": %s\n", err.text);
         return 1;
     }
-    if (!(app->filt = vx_new(url, (long)(a->timeout * 1000), a->verbose, &err))) {
+    if (!(app->filt = vx_new(url, remote_timeout_ms(&a->remote), a->verbose, &err))) {
         fprintf(stderr, ME ": %s\n", err.text);
         return 1;
     }
@@ -1091,7 +1085,8 @@ static int start(struct app *app, const char *url, struct view_args *a)
 
 int cmd_view(int argc, char **argv)
 {
-    struct view_args a = {.timeout = 10, .gpu_mib = 256, .budget = 4, .budget_ms = 6};
+    struct view_args a = {.budget = 4, .budget_ms = 6};
+    remote_opts_init(&a.remote);
     int first, rc = opt_parse(&view_command, argc, argv, &a, &first);
     if (rc != OPT_GO_ON)
         return rc;
