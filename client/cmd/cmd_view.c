@@ -538,169 +538,204 @@ static int settled(const struct app *app)
            !vx_busy(app->filt);
 }
 
+/* A script command that waits (wait, frames, settle, wait-file, shot):
+ * 1 while it still has to wait for later frames, else 0 (also for every
+ * other command). */
+static int script_blocked(struct app *app, const struct vs_cmd *c, double waited)
+{
+    switch (c->op) {
+    case VS_WAIT:
+        if (waited < c->a[0])
+            return 1;
+        break;
+    case VS_FRAMES:
+        if (app->frames < app->pc_frame + (uint64_t)c->a[0])
+            return 1;
+        break;
+    case VS_SETTLE:
+        if (!settled(app)) {
+            if (waited > c->a[0])
+                script_fail(app, c, "the view did not settle in time");
+            return 1;
+        }
+        break;
+    case VS_WAIT_FILE:
+        if (access(c->text, F_OK) != 0) {
+            if (waited > c->a[0])
+                script_fail(app, c, "the file did not appear in time");
+            return 1;
+        }
+        break;
+    case VS_SHOT:
+        if (!app->shot_done) {
+            app->shot_path = c->text;
+            return 1;          /* written by the next draw */
+        }
+        app->shot_done = 0;
+        break;
+    default:
+        break;
+    }
+    return 0;
+}
+
+/* A script command that fakes input (keys, mouse, wheel, gamepad, touch):
+ * fed to view_input as the live event would be.  Returns 1, or 0 for a
+ * command of another kind. */
+static int script_input(struct app *app, const struct vs_cmd *c)
+{
+    switch (c->op) {
+    case VS_KEY: {
+        SDL_Event e;
+        memset(&e, 0, sizeof e);
+        e.type = SDL_KEYDOWN;
+        e.key.state = SDL_PRESSED;
+        e.key.keysym.sym = c->keycode;
+        e.key.keysym.mod = (Uint16)((c->shift ? KMOD_LSHIFT : 0) |
+                                    (c->ctrl ? KMOD_LCTRL : 0));
+        act(app, vi_event(&app->in, &e));
+        break;
+    }
+    case VS_DOWN: fake_button(app, 1, c->a[0], c->a[1], c->shift); break;
+    case VS_MOVE: fake_move(app, c->a[0], c->a[1]); break;
+    case VS_UP: fake_button(app, 0, c->a[0], c->a[1], 0); break;
+    case VS_DRAG: {
+        int n = (int)c->a[4];
+        fake_button(app, 1, c->a[0], c->a[1], 0);
+        for (int i = 1; i <= n; i++)
+            fake_move(app, c->a[0] + (c->a[2] - c->a[0]) * i / n,
+                      c->a[1] + (c->a[3] - c->a[1]) * i / n);
+        fake_button(app, 0, c->a[2], c->a[3], 0);
+        break;
+    }
+    case VS_WHEEL: {
+        fake_move(app, c->a[0], c->a[1]);
+        SDL_Event e;
+        memset(&e, 0, sizeof e);
+        e.type = SDL_MOUSEWHEEL;
+        e.wheel.y = (Sint32)c->a[2];
+        e.wheel.preciseY = (float)c->a[2];
+        act(app, vi_event(&app->in, &e));
+        break;
+    }
+    case VS_PAD_AXIS:
+    case VS_PAD_BUTTON: {
+        SDL_Event e;
+        memset(&e, 0, sizeof e);
+        if (c->op == VS_PAD_AXIS) {
+            e.type = SDL_CONTROLLERAXISMOTION;
+            e.caxis.axis = (Uint8)c->code;
+            e.caxis.value = (Sint16)lround(c->a[0] * 32767);
+            act(app, vi_event(&app->in, &e));
+        } else {
+            e.type = SDL_CONTROLLERBUTTONDOWN;
+            e.cbutton.button = (Uint8)c->code;
+            e.cbutton.state = SDL_PRESSED;
+            act(app, vi_event(&app->in, &e));
+            e.type = SDL_CONTROLLERBUTTONUP;
+            e.cbutton.state = SDL_RELEASED;
+            act(app, vi_event(&app->in, &e));
+        }
+        break;
+    }
+    case VS_PINCH: {
+        SDL_Event e;
+        memset(&e, 0, sizeof e);
+        e.type = SDL_MULTIGESTURE;
+        e.mgesture.x = (float)(c->a[0] * app->in.ratio / app->w);
+        e.mgesture.y = (float)(c->a[1] * app->in.ratio / app->h);
+        e.mgesture.dDist = (float)c->a[2];
+        e.mgesture.dTheta = (float)(c->a[3] * M_PI / 180);
+        e.mgesture.numFingers = 2;
+        act(app, vi_event(&app->in, &e));
+        break;
+    }
+    case VS_TOUCH: {
+        /* One finger down at (a0, a1), N moves to (a2, a3), up. */
+        SDL_Event e;
+        memset(&e, 0, sizeof e);
+        const double ww = app->w / app->in.ratio, wh = app->h / app->in.ratio;
+        int n = (int)c->a[4];
+        e.type = SDL_FINGERDOWN;
+        e.tfinger.x = (float)(c->a[0] / ww);
+        e.tfinger.y = (float)(c->a[1] / wh);
+        act(app, vi_event(&app->in, &e));
+        for (int i = 1; i <= n; i++) {
+            e.type = SDL_FINGERMOTION;
+            e.tfinger.dx = (float)((c->a[2] - c->a[0]) / n / ww);
+            e.tfinger.dy = (float)((c->a[3] - c->a[1]) / n / wh);
+            e.tfinger.x = (float)((c->a[0] + (c->a[2] - c->a[0]) * i / n) / ww);
+            e.tfinger.y = (float)((c->a[1] + (c->a[3] - c->a[1]) * i / n) / wh);
+            act(app, vi_event(&app->in, &e));
+        }
+        e.type = SDL_FINGERUP;
+        e.tfinger.dx = e.tfinger.dy = 0;
+        act(app, vi_event(&app->in, &e));
+        break;
+    }
+    default:
+        return 0;
+    }
+    return 1;
+}
+
+/* Any other script command: views, images, prints, quit, filters. */
+static void script_action(struct app *app, const struct vs_cmd *c)
+{
+    switch (c->op) {
+    case VS_VIEW:
+        if (c->view_image[0] && strcmp(c->view_image, app->want_image))
+            open_image(app, c->view_image);
+        if (!app->tiles || strcmp(vt_image(app->tiles), app->want_image)) {
+            /* Taken when the image comes. */
+            app->have_start_view = 1;
+            app->start_view = c->view;
+        } else {
+            vi_jump(&app->in, &c->view);
+        }
+        break;
+    case VS_IMAGE: open_image(app, c->text); break;
+    case VS_PRINT: {
+        char link[512];
+        vg_format_hash(app->want_image, &app->in.cur, link, sizeof link);
+        printf("%s %s\n", c->text, link);
+        fflush(stdout);
+        break;
+    }
+    case VS_QUIT: app->quit = 1; break;
+    case VS_MESSAGE:
+        printf("%s %s\n", c->text, app->message);
+        fflush(stdout);
+        break;
+    case VS_FILTER:
+        app->in.sel[0] = c->a[0] * app->in.ratio;
+        app->in.sel[1] = c->a[1] * app->in.ratio;
+        app->in.sel[2] = c->a[2] * app->in.ratio;
+        app->in.sel[3] = c->a[3] * app->in.ratio;
+        filter_region(app);
+        break;
+    case VS_GRAPH:
+        if (!strcmp(c->text, "next"))
+            filter_next(app);
+        else
+            filter_choose(app, c->text);
+        break;
+    case VS_PARAM: filter_param(app, c->a[0] > 0 ? 1 : -1); break;
+    default:
+        break;
+    }
+}
+
 /* Run script commands until one has to wait for later frames. */
 static void script_step(struct app *app, double now)
 {
     while (app->pc < app->script.n && !app->quit) {
         const struct vs_cmd *c = &app->script.cmd[app->pc];
         double waited = (now - app->pc_since) * 1000;
-        switch (c->op) {
-        case VS_WAIT:
-            if (waited < c->a[0])
-                return;
-            break;
-        case VS_FRAMES:
-            if (app->frames < app->pc_frame + (uint64_t)c->a[0])
-                return;
-            break;
-        case VS_SETTLE:
-            if (!settled(app)) {
-                if (waited > c->a[0])
-                    script_fail(app, c, "the view did not settle in time");
-                return;
-            }
-            break;
-        case VS_WAIT_FILE:
-            if (access(c->text, F_OK) != 0) {
-                if (waited > c->a[0])
-                    script_fail(app, c, "the file did not appear in time");
-                return;
-            }
-            break;
-        case VS_SHOT:
-            if (!app->shot_done) {
-                app->shot_path = c->text;
-                return;          /* written by the next draw */
-            }
-            app->shot_done = 0;
-            break;
-        case VS_KEY: {
-            SDL_Event e;
-            memset(&e, 0, sizeof e);
-            e.type = SDL_KEYDOWN;
-            e.key.state = SDL_PRESSED;
-            e.key.keysym.sym = c->keycode;
-            e.key.keysym.mod = (Uint16)((c->shift ? KMOD_LSHIFT : 0) |
-                                        (c->ctrl ? KMOD_LCTRL : 0));
-            act(app, vi_event(&app->in, &e));
-            break;
-        }
-        case VS_DOWN: fake_button(app, 1, c->a[0], c->a[1], c->shift); break;
-        case VS_MOVE: fake_move(app, c->a[0], c->a[1]); break;
-        case VS_UP: fake_button(app, 0, c->a[0], c->a[1], 0); break;
-        case VS_DRAG: {
-            int n = (int)c->a[4];
-            fake_button(app, 1, c->a[0], c->a[1], 0);
-            for (int i = 1; i <= n; i++)
-                fake_move(app, c->a[0] + (c->a[2] - c->a[0]) * i / n,
-                          c->a[1] + (c->a[3] - c->a[1]) * i / n);
-            fake_button(app, 0, c->a[2], c->a[3], 0);
-            break;
-        }
-        case VS_WHEEL: {
-            fake_move(app, c->a[0], c->a[1]);
-            SDL_Event e;
-            memset(&e, 0, sizeof e);
-            e.type = SDL_MOUSEWHEEL;
-            e.wheel.y = (Sint32)c->a[2];
-            e.wheel.preciseY = (float)c->a[2];
-            act(app, vi_event(&app->in, &e));
-            break;
-        }
-        case VS_VIEW:
-            if (c->view_image[0] && strcmp(c->view_image, app->want_image))
-                open_image(app, c->view_image);
-            if (!app->tiles || strcmp(vt_image(app->tiles), app->want_image)) {
-                /* Taken when the image comes. */
-                app->have_start_view = 1;
-                app->start_view = c->view;
-            } else {
-                vi_jump(&app->in, &c->view);
-            }
-            break;
-        case VS_IMAGE: open_image(app, c->text); break;
-        case VS_PRINT: {
-            char link[512];
-            vg_format_hash(app->want_image, &app->in.cur, link, sizeof link);
-            printf("%s %s\n", c->text, link);
-            fflush(stdout);
-            break;
-        }
-        case VS_QUIT: app->quit = 1; break;
-        case VS_MESSAGE:
-            printf("%s %s\n", c->text, app->message);
-            fflush(stdout);
-            break;
-        case VS_FILTER:
-            app->in.sel[0] = c->a[0] * app->in.ratio;
-            app->in.sel[1] = c->a[1] * app->in.ratio;
-            app->in.sel[2] = c->a[2] * app->in.ratio;
-            app->in.sel[3] = c->a[3] * app->in.ratio;
-            filter_region(app);
-            break;
-        case VS_GRAPH:
-            if (!strcmp(c->text, "next"))
-                filter_next(app);
-            else
-                filter_choose(app, c->text);
-            break;
-        case VS_PARAM: filter_param(app, c->a[0] > 0 ? 1 : -1); break;
-        case VS_PAD_AXIS:
-        case VS_PAD_BUTTON: {
-            SDL_Event e;
-            memset(&e, 0, sizeof e);
-            if (c->op == VS_PAD_AXIS) {
-                e.type = SDL_CONTROLLERAXISMOTION;
-                e.caxis.axis = (Uint8)c->code;
-                e.caxis.value = (Sint16)lround(c->a[0] * 32767);
-                act(app, vi_event(&app->in, &e));
-            } else {
-                e.type = SDL_CONTROLLERBUTTONDOWN;
-                e.cbutton.button = (Uint8)c->code;
-                e.cbutton.state = SDL_PRESSED;
-                act(app, vi_event(&app->in, &e));
-                e.type = SDL_CONTROLLERBUTTONUP;
-                e.cbutton.state = SDL_RELEASED;
-                act(app, vi_event(&app->in, &e));
-            }
-            break;
-        }
-        case VS_PINCH: {
-            SDL_Event e;
-            memset(&e, 0, sizeof e);
-            e.type = SDL_MULTIGESTURE;
-            e.mgesture.x = (float)(c->a[0] * app->in.ratio / app->w);
-            e.mgesture.y = (float)(c->a[1] * app->in.ratio / app->h);
-            e.mgesture.dDist = (float)c->a[2];
-            e.mgesture.dTheta = (float)(c->a[3] * M_PI / 180);
-            e.mgesture.numFingers = 2;
-            act(app, vi_event(&app->in, &e));
-            break;
-        }
-        case VS_TOUCH: {
-            /* One finger down at (a0, a1), N moves to (a2, a3), up. */
-            SDL_Event e;
-            memset(&e, 0, sizeof e);
-            const double ww = app->w / app->in.ratio, wh = app->h / app->in.ratio;
-            int n = (int)c->a[4];
-            e.type = SDL_FINGERDOWN;
-            e.tfinger.x = (float)(c->a[0] / ww);
-            e.tfinger.y = (float)(c->a[1] / wh);
-            act(app, vi_event(&app->in, &e));
-            for (int i = 1; i <= n; i++) {
-                e.type = SDL_FINGERMOTION;
-                e.tfinger.dx = (float)((c->a[2] - c->a[0]) / n / ww);
-                e.tfinger.dy = (float)((c->a[3] - c->a[1]) / n / wh);
-                e.tfinger.x = (float)((c->a[0] + (c->a[2] - c->a[0]) * i / n) / ww);
-                e.tfinger.y = (float)((c->a[1] + (c->a[3] - c->a[1]) * i / n) / wh);
-                act(app, vi_event(&app->in, &e));
-            }
-            e.type = SDL_FINGERUP;
-            e.tfinger.dx = e.tfinger.dy = 0;
-            act(app, vi_event(&app->in, &e));
-            break;
-        }
-        }
+        if (script_blocked(app, c, waited))
+            return;
+        if (!script_input(app, c))
+            script_action(app, c);
         app->pc++;
         app->pc_since = now;
         app->pc_frame = app->frames;
