@@ -5,7 +5,7 @@
  *
  *   mesh_distance A B [SAMPLES]
  *
- * Each mesh (PLY, OBJ or GLB, lib/mesh/mesh_read.h) is sampled at its
+ * Each mesh (PLY, OBJ or GLB, lib/mesh/io/mesh_read.h) is sampled at its
  * vertices (every k-th when it has more than SAMPLES) and at SAMPLES points (default 200000) spread over its
  * triangles in proportion to their area (a fixed linear congruential
  * generator: the same numbers on every run); each sample's distance to
@@ -22,10 +22,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "mesh/mesh_read.h"
+#include "mesh/io/mesh_read.h"
 
 struct grid {
-    const struct gv_trimesh *m;
+    const struct gv_mesh *m;
     double lo[3], cell;
     int n[3];
     uint32_t *start, *items;   /* CSR: cell -> triangles */
@@ -102,7 +102,7 @@ done:;
     return dot(d, d);
 }
 
-static void vert(const struct gv_trimesh *m, uint32_t i, double *v)
+static void vert(const struct gv_mesh *m, uint32_t i, double *v)
 {
     for (int k = 0; k < 3; k++)
         v[k] = m->pos[3 * (size_t)i + k];
@@ -113,7 +113,7 @@ static int cell_of(const struct grid *g, double x, int k)
     return (int)clampd(floor((x - g->lo[k]) / g->cell), 0, g->n[k] - 1);
 }
 
-static void grid_build(struct grid *g, const struct gv_trimesh *m)
+static void grid_build(struct grid *g, const struct gv_mesh *m)
 {
     double hi[3] = {-1e300, -1e300, -1e300};
     g->m = m;
@@ -218,7 +218,7 @@ static double urand(void)
 
 /* Sample m (vertices + n area-weighted points) against g: max and sum of
  * squares. */
-static void sample(const struct gv_trimesh *m, const struct grid *g, long n,
+static void sample(const struct gv_mesh *m, const struct grid *g, long n,
                    double *mx, double *sum2, long *count)
 {
     double *cum = malloc((m->ntris + 1) * sizeof *cum);
@@ -269,7 +269,7 @@ static void sample(const struct gv_trimesh *m, const struct grid *g, long n,
     free(cum);
 }
 
-static int load(const char *path, struct gv_trimesh *m)
+static int load(const char *path, struct gv_mesh *m)
 {
     FILE *f = fopen(path, "rb");
     if (!f) return -1;
@@ -294,7 +294,7 @@ int main(int argc, char **argv)
         return 2;
     }
     long n = argc > 3 ? atol(argv[3]) : 200000;
-    struct gv_trimesh a, b;
+    struct gv_mesh a, b;
     if (load(argv[1], &a) < 0 || load(argv[2], &b) < 0)
         return 1;
     if (!a.ntris || !b.ntris) {
@@ -317,8 +317,8 @@ int main(int argc, char **argv)
     for (int k = 0; k < 3; k++) diag += (hi[k] - lo[k]) * (hi[k] - lo[k]);
     printf("hausdorff %.6g rms %.6g a_to_b %.6g b_to_a %.6g diag %.6g\n",
            fmax(m1, m2), sqrt((s1 + s2) / (double)(c1 + c2)), m1, m2, sqrt(diag));
-    gv_trimesh_free(&a);
-    gv_trimesh_free(&b);
+    gv_mesh_free(&a);
+    gv_mesh_free(&b);
     free(ga.start); free(ga.items); free(gb.start); free(gb.items);
     return 0;
 }

@@ -3,7 +3,7 @@
  *
  *   simplify_anchor sloppy|quadric IN FACES OUT [REPEAT]
  *
- * Reads IN (PLY, OBJ, GLB through lib/mesh/mesh_read.h), runs
+ * Reads IN (PLY, OBJ, GLB through lib/mesh/io/mesh_read.h), runs
  * meshopt_simplifySloppy (vertex-grid clustering) or meshopt_simplify
  * (quadric edge collapse) to 3 * FACES indices with no error bound
  * (target_error 1), REPEAT times (default 3), and prints the best time in
@@ -17,7 +17,8 @@
 #include <time.h>
 
 #include "mesh/cluster.h"
-#include "mesh/mesh_read.h"
+#include "mesh/io/mesh_read.h"
+#include "mesh/io/mesh_write.h"
 
 static double now_ms(void)
 {
@@ -44,7 +45,7 @@ int main(int argc, char **argv)
     uint8_t *b = malloc((size_t)n + 1);
     size_t got = fread(b, 1, (size_t)n, f);
     fclose(f);
-    struct gv_trimesh m, o = {0};
+    struct gv_mesh m, o = {0};
     struct gv_error err = {0};
     if (gv_mesh_read(b, got, GV_MESH_IN_AUTO, NULL, &m, &err) < 0) {
         fprintf(stderr, "simplify_anchor: %s\n", err.text);
@@ -80,7 +81,7 @@ int main(int argc, char **argv)
     }
     uint8_t *out;
     size_t len;
-    if (gv_trimesh_encode(GV_MESH_PLY, &o, argv[1], &out, &len, &err) < 0)
+    if (gv_mesh_encode(GV_MESH_PLY, &o, NULL, argv[1], &out, &len, &err) < 0)
         return 1;
     FILE *w = fopen(argv[4], "wb");
     if (!w || fwrite(out, 1, len, w) != len || fclose(w))
@@ -89,7 +90,7 @@ int main(int argc, char **argv)
     free(out);
     free(remap);
     free(dst);
-    gv_trimesh_free(&o);
-    gv_trimesh_free(&m);
+    gv_mesh_free(&o);
+    gv_mesh_free(&m);
     return 0;
 }

@@ -97,6 +97,73 @@ static void report(const char *name, struct series *s, const struct series *anch
     printf("\n");
 }
 
+/* Part 2: triangles at equal error against greedy insertion, on a crop of
+ * the 16-bit DEM at path (heights minus off). */
+static int equal_error(const char *path, double off)
+{
+    struct gv_error err = {0};
+    struct gv_image_info info;
+    struct gv_image_in *in = gv_image_open(path, 1ull << 32, &info, &err);
+    if (!in || info.channels != 1 || info.sample != GV_SAMPLE_U16) {
+        fprintf(stderr, "zfield_bench: %s: need a 16-bit one-channel image\n", path);
+        return 1;
+    }
+    uint16_t *img = malloc((size_t)info.width * info.height * 2);
+    if (!img || gv_image_read(in, info.height, img, &err) < 0)
+        return 1;
+    gv_image_close(in);
+    const uint32_t n = 1025;
+    if (info.width < n || info.height < n)
+        return 1;
+    float *dem = malloc((size_t)n * n * sizeof *dem);
+    uint8_t *den = malloc((size_t)n * n);
+    /* A mountainous crop: the window with the largest height range among
+     * a few, so that the counts are not all flat ocean. */
+    uint32_t bx = 0, by = 0;
+    double best = -1;
+    for (uint32_t y0 = 0; y0 + n <= info.height; y0 += 256)
+        for (uint32_t x0 = 0; x0 + n <= info.width; x0 += 256) {
+            double lo = 1e9, hi = -1e9;
+            for (uint32_t y = y0; y < y0 + n; y += 8)
+                for (uint32_t x = x0; x < x0 + n; x += 8) {
+                    const double v = img[(size_t)y * info.width + x];
+                    lo = v < lo ? v : lo, hi = v > hi ? v : hi;
+                }
+            if (hi - lo > best)
+                best = hi - lo, bx = x0, by = y0;
+        }
+    for (uint32_t y = 0; y < n; y++)
+        for (uint32_t x = 0; x < n; x++)
+            dem[(size_t)y * n + x] = (float)(img[(size_t)(by + y) * info.width + bx + x] - off);
+    printf("== triangles at equal maximum error, %s crop %u,%u %ux%u (range %.0f m)\n",
+           path, bx, by, n, n, best);
+    const float th[] = {10.0f, 40.0f, 160.0f};
+    for (int i = 0; i < 3; i++) {
+        struct gv_zfield_params p = {.threshold = th[i]};
+        struct gv_mesh tz, tg;
+        double t0 = now();
+        if (gv_zfield_enable(dem, n, &p, den, &err) < 0 ||
+            gv_zfield_mesh(dem, n, den, 1, &tz, &err) < 0)
+            return 1;
+        const double tzt = now() - t0;
+        struct gv_tin_params gp = {.max_error = tz.max_error, .border_first = 0};
+        t0 = now();
+        if (gv_tin_build(dem, n, n, n, &gp, &tg, &err) < 0) {
+            fprintf(stderr, "tin: %s\n", err.text);
+            return 1;
+        }
+        const double tgt = now() - t0;
+        printf("threshold %5.0f m: z-field %7u triangles (max error %6.1f m, %.3f s); greedy "
+               "insertion at that error %7u (%.3f s); ratio z-field / greedy %.2fx\n",
+               th[i], tz.ntris, tz.max_error, tzt, tg.ntris, tgt,
+               (double)tz.ntris / (tg.ntris ? tg.ntris : 1));
+        gv_mesh_free(&tz);
+        gv_mesh_free(&tg);
+    }
+    free(dem), free(den), free(img);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     int want_gpu = 1, frames = 10;
@@ -164,14 +231,14 @@ int main(int argc, char **argv)
             else
 #endif
                 rc = gv_zfield_enable(z, side, &p, en, &err);
-            struct gv_tin t;
+            struct gv_mesh t;
             if (rc < 0 || gv_zfield_mesh(z, side, en, 0, &t, &err) < 0) {
                 fprintf(stderr, "zfield: %s\n", err.text);
                 return 1;
             }
             s->t[s->n++] = now() - t0;
             s->tris += t.ntris;
-            gv_tin_free(&t);
+            gv_mesh_free(&t);
         }
 #ifdef GV_ZFIELD_BENCH_EGL
         gv_gpu_zfield_free(zf);
@@ -193,66 +260,5 @@ int main(int argc, char **argv)
 
     if (a + 1 >= argc)
         return 0;
-    /* Part 2: triangles at equal error against greedy insertion. */
-    struct gv_image_info info;
-    struct gv_image_in *in = gv_image_open(argv[a], 1ull << 32, &info, &err);
-    if (!in || info.channels != 1 || info.sample != GV_SAMPLE_U16) {
-        fprintf(stderr, "zfield_bench: %s: need a 16-bit one-channel image\n", argv[a]);
-        return 1;
-    }
-    const double off = atof(argv[a + 1]);
-    uint16_t *img = malloc((size_t)info.width * info.height * 2);
-    if (!img || gv_image_read(in, info.height, img, &err) < 0)
-        return 1;
-    gv_image_close(in);
-    const uint32_t n = 1025;
-    if (info.width < n || info.height < n)
-        return 1;
-    float *dem = malloc((size_t)n * n * sizeof *dem);
-    uint8_t *den = malloc((size_t)n * n);
-    /* A mountainous crop: the window with the largest height range among
-     * a few, so that the counts are not all flat ocean. */
-    uint32_t bx = 0, by = 0;
-    double best = -1;
-    for (uint32_t y0 = 0; y0 + n <= info.height; y0 += 256)
-        for (uint32_t x0 = 0; x0 + n <= info.width; x0 += 256) {
-            double lo = 1e9, hi = -1e9;
-            for (uint32_t y = y0; y < y0 + n; y += 8)
-                for (uint32_t x = x0; x < x0 + n; x += 8) {
-                    const double v = img[(size_t)y * info.width + x];
-                    lo = v < lo ? v : lo, hi = v > hi ? v : hi;
-                }
-            if (hi - lo > best)
-                best = hi - lo, bx = x0, by = y0;
-        }
-    for (uint32_t y = 0; y < n; y++)
-        for (uint32_t x = 0; x < n; x++)
-            dem[(size_t)y * n + x] = (float)(img[(size_t)(by + y) * info.width + bx + x] - off);
-    printf("== triangles at equal maximum error, %s crop %u,%u %ux%u (range %.0f m)\n",
-           argv[a], bx, by, n, n, best);
-    const float th[] = {10.0f, 40.0f, 160.0f};
-    for (int i = 0; i < 3; i++) {
-        struct gv_zfield_params p = {.threshold = th[i]};
-        struct gv_tin tz, tg;
-        double t0 = now();
-        if (gv_zfield_enable(dem, n, &p, den, &err) < 0 ||
-            gv_zfield_mesh(dem, n, den, 1, &tz, &err) < 0)
-            return 1;
-        const double tzt = now() - t0;
-        struct gv_tin_params gp = {.max_error = tz.max_error, .border_first = 0};
-        t0 = now();
-        if (gv_tin_build(dem, n, n, n, &gp, &tg, &err) < 0) {
-            fprintf(stderr, "tin: %s\n", err.text);
-            return 1;
-        }
-        const double tgt = now() - t0;
-        printf("threshold %5.0f m: z-field %7u triangles (max error %6.1f m, %.3f s); greedy "
-               "insertion at that error %7u (%.3f s); ratio z-field / greedy %.2fx\n",
-               th[i], tz.ntris, tz.max_error, tzt, tg.ntris, tgt,
-               (double)tz.ntris / (tg.ntris ? tg.ntris : 1));
-        gv_tin_free(&tz);
-        gv_tin_free(&tg);
-    }
-    free(dem), free(den), free(img);
-    return 0;
+    return equal_error(argv[a], atof(argv[a + 1]));
 }

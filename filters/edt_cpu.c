@@ -47,11 +47,10 @@
 #endif
 
 #include "edt_cpu.h"
+#include "edt_int.h"
 
-#define EDT_NONE_U 0xffffffffu   /* GV_EDT_NONE as uint32, and packed */
 #define EDT_PACK_MAX 65535u      /* packed layout: w, h at most this, so
                                     0xffff is never a coordinate */
-#define EDT_VL 16                /* lanes of the kernels */
 #define EDT_STRIP 64             /* K: columns per x-sweep strip: 65
                                     packed column lines of 4 bytes per
                                     row stay in L2 (2 MB) up to ~7000 rows
@@ -67,137 +66,11 @@
                                                  wall time */
 #define EDT_SPINS 500            /* barrier: ~25 us of pauses, then sleep */
 
-typedef uint32_t edt_vu32 __attribute__((vector_size(64)));
-typedef float edt_vf32 __attribute__((vector_size(64)));
-
-/* ---------------------------------------------------------------- scalar */
-
-/* The key of site (a, b) for the pixel (i, k); none is UINT32_MAX, which
- * no sum of two squares modulo 2^32 equals. */
-static inline uint32_t edt_key(uint32_t a, uint32_t b, uint32_t i,
-                               uint32_t k)
-{
-    uint32_t da = a - i, db = b - k;
-    return da * da + db * db;
-}
-
-/* Site of element x of a line, unpacked ("a" along the line). */
-static inline void edt_get(const uint32_t *pa, const uint32_t *pb, size_t x,
-                           int packed, uint32_t *a, uint32_t *b)
-{
-    if (packed) {
-        *a = pa[x] & 0xffffu;
-        *b = pa[x] >> 16;
-    } else {
-        *a = pa[x];
-        *b = pb[x];
-    }
-}
-
-/* The rule for position i of a line of n (the scalar path of the
- * kernels: line ends, tails, and targets without vectors); x = i - base
- * indexes the arrays. */
-static inline void edt_pixel(uint32_t *restrict oa, uint32_t *restrict ob,
-                             const uint32_t *restrict pa,
-                             const uint32_t *restrict pb, size_t x,
-                             uint32_t n, uint32_t i, uint32_t k, int packed)
-{
-    const uint32_t *src = oa, *srcb = ob;
-    size_t at = x;
-    uint32_t a, b, bd;
-    edt_get(oa, ob, x, packed, &a, &b);
-    bd = oa[x] == EDT_NONE_U ? UINT32_MAX : edt_key(a, b, i, k);
-    for (int c = 0; c < 3; c++) {
-        size_t y = c == 0 ? x : c == 1 ? x - 1 : x + 1;
-        if ((c == 1 && i == 0) || (c == 2 && i + 1 >= n) ||
-            pa[y] == EDT_NONE_U)
-            continue;
-        edt_get(pa, pb, y, packed, &a, &b);
-        uint32_t d = edt_key(a, b, i, k);
-        if (d < bd) {
-            bd = d;
-            src = pa;
-            srcb = pb;
-            at = y;
-        }
-    }
-    uint32_t va = src[at], vb = packed ? 0 : srcb[at];
-    oa[x] = va;
-    if (!packed)
-        ob[x] = vb;
-}
-
-/* Distance of the site in element x of row y (its column is x too). */
-static inline float edt_pixel_dist(const uint32_t *sx, const uint32_t *sy,
-                                   uint32_t x, uint32_t y, int packed)
-{
-    uint32_t a, b;
-    if (sx[x] == EDT_NONE_U)
-        return INFINITY;
-    edt_get(sx, sy, x, packed, &a, &b);
-    return sqrtf((float)edt_key(a, b, x, y));
-}
-
-static inline uint32_t edt_swap16(uint32_t v)
-{
-    return v >> 16 | v << 16;
-}
-
-/* The scalar strip transposes: rows [ya, yb), strip columns c0 .. nc-1
- * (edt_kernel.h's edt_load and edt_store do the 16 x 16 blocks).  Load and
- * store are mirror images on purpose (same walk, opposite direction of
- * copy), kept as two plain loops so each compiles to straight code. */
-static inline void edt_load_scalar(const uint32_t *restrict ids,
-                                   const uint32_t *restrict px,
-                                   const uint32_t *restrict py, size_t w,
-                                   uint32_t x0, uint32_t nc, int dir,
-                                   uint32_t ya, uint32_t yb, uint32_t c0,
-                                   uint32_t base, uint32_t *const *sa,
-                                   uint32_t *const *sb, int packed)
-{
-    for (uint32_t y = ya; y < yb; y++) {
-        size_t p = (size_t)y * w + x0;
-        for (uint32_t c = c0; c < nc; c++) {
-            uint32_t j = dir > 0 ? c + 1 : nc - c;
-            int site = ids && ids[p + c] != 0;
-            if (packed)
-                sa[j][y - base] = ids ? site ? y | (x0 + c) << 16 : EDT_NONE_U
-                                      : edt_swap16(px[p + c]);
-            else if (ids) {
-                sa[j][y - base] = site ? y : EDT_NONE_U;
-                sb[j][y - base] = site ? x0 + c : EDT_NONE_U;
-            } else {
-                sa[j][y - base] = py[p + c];
-                sb[j][y - base] = px[p + c];
-            }
-        }
-    }
-}
-
-static inline void edt_store_scalar(uint32_t *restrict px,
-                                    uint32_t *restrict py, size_t w,
-                                    uint32_t x0, uint32_t nc, int dir,
-                                    uint32_t ya, uint32_t yb, uint32_t c0,
-                                    uint32_t base, uint32_t *const *sa,
-                                    uint32_t *const *sb, int packed)
-{
-    for (uint32_t y = ya; y < yb; y++) {
-        size_t p = (size_t)y * w + x0;
-        for (uint32_t c = c0; c < nc; c++) {
-            uint32_t j = dir > 0 ? c + 1 : nc - c;
-            if (packed) {
-                px[p + c] = edt_swap16(sa[j][y - base]);
-            } else {
-                py[p + c] = sa[j][y - base];
-                px[p + c] = sb[j][y - base];
-            }
-        }
-    }
-}
-
 /* ---------------------------------------------------------------- kernels */
 
-#define EDT_ATTR
+/* The portable C instantiation of edt_kernel.h (the SIMD ones are in
+ * x86/edt_sse2.c, edt_avx2.c and edt_avx512.c, each compiled with its
+ * own flags). */
 #define EDT_ISA 0
 #define EDT_PACKED 0
 #define EDT_SUFFIX c_w
@@ -210,109 +83,28 @@ static inline void edt_store_scalar(uint32_t *restrict px,
 #undef EDT_SUFFIX
 #undef EDT_PACKED
 #undef EDT_ISA
-#undef EDT_ATTR
 
-#if GV_HAVE_X86_SIMD
-#define EDT_ATTR __attribute__((target("sse2")))
-#define EDT_ISA 1
-#define EDT_PACKED 0
-#define EDT_SUFFIX sse2_w
-#include "edt_kernel.h"
-#undef EDT_SUFFIX
-#undef EDT_PACKED
-#define EDT_PACKED 1
-#define EDT_SUFFIX sse2_p
-#include "edt_kernel.h"
-#undef EDT_SUFFIX
-#undef EDT_PACKED
-#undef EDT_ISA
-#undef EDT_ATTR
+static const struct edt_kernels edt_c_wide = {edt_line_c_w, edt_dist_c_w,
+                                              edt_load_c_w, edt_store_c_w};
+static const struct edt_kernels edt_c_packed = {edt_line_c_p, edt_dist_c_p,
+                                                edt_load_c_p, edt_store_c_p};
 
-#define EDT_ATTR __attribute__((target("avx2")))
-#define EDT_ISA 2
-#define EDT_PACKED 0
-#define EDT_SUFFIX avx2_w
-#include "edt_kernel.h"
-#undef EDT_SUFFIX
-#undef EDT_PACKED
-#define EDT_PACKED 1
-#define EDT_SUFFIX avx2_p
-#include "edt_kernel.h"
-#undef EDT_SUFFIX
-#undef EDT_PACKED
-#undef EDT_ISA
-#undef EDT_ATTR
-
-#define EDT_ATTR __attribute__((target("avx512f")))
-#define EDT_ISA 3
-#define EDT_PACKED 0
-#define EDT_SUFFIX avx512_w
-#include "edt_kernel.h"
-#undef EDT_SUFFIX
-#undef EDT_PACKED
-#define EDT_PACKED 1
-#define EDT_SUFFIX avx512_p
-#include "edt_kernel.h"
-#undef EDT_SUFFIX
-#undef EDT_PACKED
-#undef EDT_ISA
-#undef EDT_ATTR
-#endif
-
-/* One layout's kernels on one instruction set. */
-struct edt_kernels {
-    void (*line)(uint32_t *restrict, uint32_t *restrict,
-                 const uint32_t *restrict, const uint32_t *restrict,
-                 uint32_t, uint32_t, uint32_t, uint32_t, uint32_t);
-    void (*dist)(const uint32_t *restrict, const uint32_t *restrict,
-                 uint32_t, uint32_t, uint32_t, float *restrict);
-    void (*load)(const uint32_t *restrict, const uint32_t *restrict,
-                 const uint32_t *restrict, size_t, uint32_t, uint32_t, int,
-                 uint32_t, uint32_t, uint32_t, uint32_t *const *,
-                 uint32_t *const *);
-    void (*store)(uint32_t *restrict, uint32_t *restrict, size_t, uint32_t,
-                  uint32_t, int, uint32_t, uint32_t, uint32_t,
-                  uint32_t *const *, uint32_t *const *);
-};
-
+/* One instruction set's kernels, and the flags of gv_cpu_flags() (base/cpu.h)
+ * they need. */
 struct edt_isa {
     const char *name;
-    struct edt_kernels wide, packed;
-    int (*supported)(void);
+    const struct edt_kernels *wide, *packed;
+    unsigned needs;
 };
-
-#define EDT_K(S) {edt_line_##S, edt_dist_##S, edt_load_##S, edt_store_##S}
-
-static int edt_yes(void)
-{
-    return 1;
-}
-
-#if GV_HAVE_X86_SIMD
-static int edt_has_sse2(void)
-{
-    return (gv_cpu_flags() & GV_CPU_SSE2) != 0;
-}
-
-static int edt_has_avx2(void)
-{
-    return (gv_cpu_flags() & GV_CPU_AVX2) != 0;
-}
-
-static int edt_has_avx512(void)
-{
-    return (gv_cpu_flags() & GV_CPU_AVX512) != 0;
-}
-#endif
 
 /* Best first. */
 static const struct edt_isa edt_isas[] = {
 #if GV_HAVE_X86_SIMD
-    {"avx512", EDT_K(avx512_w), EDT_K(avx512_p), edt_has_avx512},
-    {"avx2", EDT_K(avx2_w), EDT_K(avx2_p), edt_has_avx2},
-    {"sse2", EDT_K(sse2_w), EDT_K(sse2_p), edt_has_sse2},
+    {"avx512", &gv_edt_avx512_wide, &gv_edt_avx512_packed, GV_CPU_AVX512},
+    {"avx2", &gv_edt_avx2_wide, &gv_edt_avx2_packed, GV_CPU_AVX2},
+    {"sse2", &gv_edt_sse2_wide, &gv_edt_sse2_packed, GV_CPU_SSE2},
 #endif
-    {"c", EDT_K(c_w), EDT_K(c_p), edt_yes},
+    {"c", &edt_c_wide, &edt_c_packed, 0},
 };
 #define EDT_NISA (sizeof edt_isas / sizeof edt_isas[0])
 
@@ -320,14 +112,27 @@ static const struct edt_isa *edt_forced;
 static uint32_t edt_min_pixels = EDT_MIN_PIXELS_PER_THREAD;
 static int edt_force_wide;
 
+/* The table: the best instruction set of the flags, filled once per mask
+ * (gv_cpu_once). */
+static const struct edt_isa *edt_best;
+static struct gv_cpu_once edt_once = GV_CPU_ONCE_INIT;
+
+static void edt_dsp_init(unsigned flags)
+{
+    edt_best = &edt_isas[EDT_NISA - 1];
+    for (size_t i = 0; i < EDT_NISA; i++)
+        if ((flags & edt_isas[i].needs) == edt_isas[i].needs) {
+            edt_best = &edt_isas[i];
+            return;
+        }
+}
+
 static const struct edt_isa *edt_pick(void)
 {
     if (edt_forced)
         return edt_forced;
-    for (size_t i = 0; i < EDT_NISA; i++)
-        if (edt_isas[i].supported())
-            return &edt_isas[i];
-    return &edt_isas[EDT_NISA - 1];
+    gv_cpu_once(&edt_once, edt_dsp_init);
+    return edt_best;
 }
 
 const char *gv_edt_cpu_isa(void)
@@ -342,7 +147,8 @@ const char *gv_edt_cpu_configure(const char *name, uint32_t min_pixels,
     edt_force_wide = wide;
     edt_forced = NULL;
     for (size_t i = 0; name && i < EDT_NISA; i++)
-        if (strcmp(edt_isas[i].name, name) == 0 && edt_isas[i].supported())
+        if (strcmp(edt_isas[i].name, name) == 0 &&
+            (gv_cpu_flags() & edt_isas[i].needs) == edt_isas[i].needs)
             edt_forced = &edt_isas[i];
     return gv_edt_cpu_isa();
 }
@@ -766,7 +572,7 @@ int gv_edt_cpu(const uint32_t *ids, uint32_t w, uint32_t h, int threads,
     r.h = h;
     r.out = out;
     r.packed = w <= EDT_PACK_MAX && h <= EDT_PACK_MAX && !edt_force_wide;
-    r.k = r.packed ? &edt_pick()->packed : &edt_pick()->wide;
+    r.k = r.packed ? edt_pick()->packed : edt_pick()->wide;
     edt_threads(&r, threads);
     if (!r.packed && out->site_x && out->site_y) {
         r.sx = (uint32_t *)out->site_x;   /* the outputs are the state */

@@ -1,10 +1,10 @@
 /*
  * edt_kernel.h - the inner loops of edt_cpu.c, compiled once per
  * instruction set and state layout.  Not a normal header: edt_cpu.c
- * includes it several times with these defined:
+ * (the portable C) and x86/edt_*.c (each compiled with its instruction
+ * set's flags) include it once per layout with these defined:
  *
  *   EDT_SUFFIX   name suffix of the functions
- *   EDT_ATTR     a target attribute, or nothing
  *   EDT_ISA      3 AVX-512, 2 AVX2, 1 SSE2, 0 plain C (no vectors)
  *   EDT_PACKED   1: one plane of packed sites, x | y << 16 (both below
  *                65535; 0xffffffff is none); 0: two uint32 planes, the
@@ -22,7 +22,7 @@
  * boundary (no vector arguments or returns), so the ABI of the default
  * target is never involved.
  *
- * Needs, from edt_cpu.c: EDT_VL, edt_vu32, edt_vf32, EDT_NONE_U and the
+ * Needs, from edt_int.h: EDT_VL, edt_vu32, edt_vf32, EDT_NONE_U and the
  * scalar helpers edt_pixel(), edt_pixel_dist(), edt_load_scalar() and
  * edt_store_scalar().
  */
@@ -72,7 +72,7 @@
  * coordinates (a, b) = (i, k).  Candidates: own, prev[i], prev[i-1],
  * prev[i+1].
  */
-EDT_ATTR static void EDT_FN(edt_line)(uint32_t *restrict oa,
+static void EDT_FN(edt_line)(uint32_t *restrict oa,
                                       uint32_t *restrict ob,
                                       const uint32_t *restrict pa,
                                       const uint32_t *restrict pb,
@@ -134,7 +134,7 @@ EDT_ATTR static void EDT_FN(edt_line)(uint32_t *restrict oa,
  * site in (sx[x], sy[x]) (packed: sx[x] alone), +INFINITY where there is
  * none.  sx, sy and dist point at the row's column 0.
  */
-EDT_ATTR static void EDT_FN(edt_dist)(const uint32_t *restrict sx,
+static void EDT_FN(edt_dist)(const uint32_t *restrict sx,
                                       const uint32_t *restrict sy,
                                       uint32_t x0, uint32_t x1, uint32_t y,
                                       float *restrict dist)
@@ -230,7 +230,7 @@ EDT_ATTR static void EDT_FN(edt_dist)(const uint32_t *restrict sx,
 #endif
 
 /* ids != NULL: build the initial state from the ids (+x only). */
-EDT_ATTR static void EDT_FN(edt_load)(const uint32_t *restrict ids,
+static void EDT_FN(edt_load)(const uint32_t *restrict ids,
                                       const uint32_t *restrict px,
                                       const uint32_t *restrict py, size_t w,
                                       uint32_t x0, uint32_t nc, int dir,
@@ -310,7 +310,7 @@ EDT_ATTR static void EDT_FN(edt_load)(const uint32_t *restrict ids,
                         EDT_PACKED);
 }
 
-EDT_ATTR static void EDT_FN(edt_store)(uint32_t *restrict px,
+static void EDT_FN(edt_store)(uint32_t *restrict px,
                                        uint32_t *restrict py, size_t w,
                                        uint32_t x0, uint32_t nc, int dir,
                                        uint32_t ya, uint32_t yb,

@@ -22,7 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "mesh/mesh_write.h"
+#include "mesh/io/mesh_write.h"
 #include "mesh/tin.h"
 #include "output_cache.h"
 #include "mesh/zfield.h"
@@ -152,7 +152,7 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
     struct gv_height_meta hm;
     uint16_t *codes = NULL;
     float *h = NULL;
-    struct gv_tin t = {0};
+    struct gv_mesh t = {0};
     uint32_t gw, gh;
     int rc = -1;
     if (!d) {
@@ -214,9 +214,9 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
     }
 encode:;
     struct gv_mesh_place pl = {.x0 = q->x, .y0 = q->y, .level = q->level};
-    rc = gv_mesh_encode(q->format, &t, &pl, out, len, err);
+    rc = gv_mesh_encode(q->format, &t, &pl, NULL, out, len, err);
 out:
-    gv_tin_free(&t);
+    gv_mesh_free(&t);
     free(codes);
     free(h);
     image_decoder_put(img, d);

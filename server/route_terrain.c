@@ -3,7 +3,7 @@
  *   GET /v1/images/{id}/terrain/layer.json
  *   GET /v1/images/{id}/terrain/{z}/{x}/{y}.terrain
  *
- * The tiles are quantized-mesh-1.0 (lib/mesh/mesh_qmesh.c) in Cesium's
+ * The tiles are quantized-mesh-1.0 (lib/mesh/io/mesh_qmesh.c) in Cesium's
  * geographic tiling scheme (EPSG:4326, TMS: two root tiles of 180 degrees
  * side by side, tile y = 0 at the south, 2^(z+1) x 2^z tiles at level z),
  * so that CesiumJS's CesiumTerrainProvider loads them unchanged.
@@ -43,7 +43,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "mesh/mesh_write.h"
+#include "mesh/io/mesh_write.h"
 #include "mesh/tin.h"
 #include "output_cache.h"
 #include "render/height_region.h"
@@ -314,7 +314,7 @@ static int render_tile(void *arg, struct image *img, uint8_t **out,
     const uint32_t n = TERRAIN_STEPS + 1;
     struct gv_decoder *d = image_decoder_get(img);
     struct gv_height_meta hm;
-    struct gv_tin t = {0};
+    struct gv_mesh t = {0};
     float *h = malloc((size_t)n * n * sizeof *h);
     int rc = -1;
     if (!d || !h) {
@@ -339,9 +339,9 @@ static int render_tile(void *arg, struct image *img, uint8_t **out,
         .has_geo = 1, .west = -180.0 + q->x * side, .east = -180.0 + (q->x + 1) * side,
         .south = -90.0 + q->y * side, .north = -90.0 + (q->y + 1) * side,
         .gzip = q->gzip, .metadata_id = TERRAIN_METADATA_ID};
-    rc = gv_mesh_encode(GV_MESH_QMESH, &t, &pl, out, len, err);
+    rc = gv_mesh_encode(GV_MESH_QMESH, &t, &pl, NULL, out, len, err);
 out:
-    gv_tin_free(&t);
+    gv_mesh_free(&t);
     free(h);
     if (d)
         image_decoder_put(img, d);

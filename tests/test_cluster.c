@@ -1,7 +1,7 @@
 /*
  * test_cluster.c - mesh simplification by vertex clustering
  * (lib/mesh/cluster.h, Kanaya et al.) and the mesh readers
- * (lib/mesh/mesh_read.h).
+ * (lib/mesh/io/mesh_read.h).
  *
  * Readers: a mesh written as binary PLY, ascii PLY, OBJ and GLB reads back
  * the same; quads are fanned, negative OBJ indices resolved, a GLB with two
@@ -25,7 +25,7 @@
 #include "config.h"
 #include "mesh/cluster.h"
 #include "mesh/cluster_run.h"
-#include "mesh/mesh_read.h"
+#include "mesh/io/mesh_read.h"
 #include "util.h"
 #ifdef GV_HAVE_GPU
 #include "gpu/gpu.h"
@@ -44,7 +44,7 @@ static double frand(void)
     return (rng >> 8) / 16777216.0;
 }
 
-static void alloc_mesh(struct gv_trimesh *m, uint32_t nv, uint32_t nt)
+static void alloc_mesh(struct gv_mesh *m, uint32_t nv, uint32_t nt)
 {
     m->nverts = nv;
     m->ntris = nt;
@@ -53,7 +53,7 @@ static void alloc_mesh(struct gv_trimesh *m, uint32_t nv, uint32_t nt)
 }
 
 /* A (w+1) x (h+1) grid of vertices, z from f, two triangles per cell. */
-static void grid(struct gv_trimesh *m, uint32_t w, uint32_t h, int kind)
+static void grid(struct gv_mesh *m, uint32_t w, uint32_t h, int kind)
 {
     alloc_mesh(m, (w + 1) * (h + 1), 2 * w * h);
     for (uint32_t j = 0; j <= h; j++)
@@ -87,7 +87,7 @@ static void grid(struct gv_trimesh *m, uint32_t w, uint32_t h, int kind)
         }
 }
 
-static void soup(struct gv_trimesh *m, uint32_t nv, uint32_t nt)
+static void soup(struct gv_mesh *m, uint32_t nv, uint32_t nt)
 {
     alloc_mesh(m, nv, nt);
     for (uint32_t i = 0; i < 3 * nv; i++)
@@ -102,14 +102,14 @@ static void soup(struct gv_trimesh *m, uint32_t nv, uint32_t nt)
     }
 }
 
-static int same_mesh(const struct gv_trimesh *a, const struct gv_trimesh *b)
+static int same_mesh(const struct gv_mesh *a, const struct gv_mesh *b)
 {
     return a->nverts == b->nverts && a->ntris == b->ntris &&
            memcmp(a->pos, b->pos, 12 * (size_t)a->nverts) == 0 &&
            memcmp(a->tris, b->tris, 12 * (size_t)a->ntris) == 0;
 }
 
-static void test_roundtrip(const struct gv_trimesh *m)
+static void test_roundtrip(const struct gv_mesh *m)
 {
     enum gv_mesh_format fs[] = {GV_MESH_PLY, GV_MESH_OBJ, GV_MESH_GLB};
     const char *names[] = {"ply", "obj", "glb"};
@@ -117,18 +117,18 @@ static void test_roundtrip(const struct gv_trimesh *m)
         uint8_t *b = NULL;
         size_t n = 0;
         struct gv_error err = {0};
-        struct gv_trimesh r;
-        int ok = gv_trimesh_encode(fs[i], m, "test", &b, &n, &err) == 0 &&
+        struct gv_mesh r;
+        int ok = gv_mesh_encode(fs[i], m, NULL, "test", &b, &n, &err) == 0 &&
                  gv_mesh_read(b, n, GV_MESH_IN_AUTO, NULL, &r, &err) == 0;
         check(ok && same_mesh(m, &r), "%s written and read back: same mesh",
               names[i]);
         if (ok)
-            gv_trimesh_free(&r);
+            gv_mesh_free(&r);
         free(b);
     }
 }
 
-static int read_str(const char *s, struct gv_trimesh *m, struct gv_error *err)
+static int read_str(const char *s, struct gv_mesh *m, struct gv_error *err)
 {
     return gv_mesh_read((const uint8_t *)s, strlen(s), GV_MESH_IN_AUTO, NULL,
                         m, err);
@@ -136,7 +136,7 @@ static int read_str(const char *s, struct gv_trimesh *m, struct gv_error *err)
 
 static void test_readers(void)
 {
-    struct gv_trimesh m;
+    struct gv_mesh m;
     struct gv_error err = {0};
     const char *ply =
         "ply\nformat ascii 1.0\ncomment x\nelement vertex 4\n"
@@ -149,7 +149,7 @@ static void test_readers(void)
           m.tris[4] == 2 && m.tris[5] == 3 && m.pos[11] == 0.5f,
           "ascii PLY: extra property skipped, quad fanned");
     if (rc == 0)
-        gv_trimesh_free(&m);
+        gv_mesh_free(&m);
     const char *obj = "# c\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
                       "vn 0 0 1\nf 1//1 2//1 3//1 4//1\nf -4 -3 -2\n";
     rc = read_str(obj, &m, &err);
@@ -157,7 +157,7 @@ static void test_readers(void)
           m.tris[7] == 1 && m.tris[8] == 2, "OBJ: polygon fanned, negative "
           "indices, normals skipped");
     if (rc == 0)
-        gv_trimesh_free(&m);
+        gv_mesh_free(&m);
 
     /* A GLB by hand: primitive 0 indexed (uint16, stride 4), primitive 1
      * without indices. */
@@ -199,7 +199,7 @@ static void test_readers(void)
           m.tris[5] == 5 && m.pos[9] == 5.0f,
           "GLB: two primitives, uint16 indices with a stride, unindexed");
     if (rc == 0)
-        gv_trimesh_free(&m);
+        gv_mesh_free(&m);
     if (rc)
         printf("# %s\n", err.text);
     /* Hostile: each must fail with the code named. */
@@ -277,7 +277,7 @@ static void test_tree(const char *name, const struct gv_cluster_tree *t)
 static struct gv_gpu *gpu;
 #endif
 
-static void test_mesh(const char *name, const struct gv_trimesh *m,
+static void test_mesh(const char *name, const struct gv_mesh *m,
                       int surface)
 {
     struct gv_cluster_tree t;
@@ -299,15 +299,15 @@ static void test_mesh(const char *name, const struct gv_trimesh *m,
     }
     check(bad == 0, "%s: precomputed face counts = faces kept (38 levels)",
           name);
-    struct gv_trimesh r;
+    struct gv_mesh r;
     gv_cluster_select(&t, K, cl, keep);
     check(gv_cluster_collect(&t, cl, keep, NULL, &r, &err) == 0 &&
           same_mesh(&r, m), "%s: the full level gives back the input", name);
-    gv_trimesh_free(&r);
+    gv_mesh_free(&r);
     gv_cluster_select(&t, 0, cl, keep);
     check(gv_cluster_collect(&t, cl, keep, NULL, &r, &err) == 0 &&
           r.ntris == 0 && r.nverts == 0, "%s: level 0 leaves nothing", name);
-    gv_trimesh_free(&r);
+    gv_mesh_free(&r);
 
     const double ratios[] = {0.5, 0.25, 0.1, 0.05, 0.02};
     double worst = 0, worst_paper = 0;
@@ -350,14 +350,14 @@ static void test_mesh(const char *name, const struct gv_trimesh *m,
                 diff++;
                 break;
             }
-            struct gv_trimesh a, b;
+            struct gv_mesh a, b;
             gv_cluster_collect(&t, cl, keep, NULL, &a, &err);
             gv_cluster_collect(&t, gcl, gkeep, vpos, &b, &err);
             if (memcmp(cl, gcl, 4 * (size_t)m->nverts) ||
                 memcmp(keep, gkeep, m->ntris) || !same_mesh(&a, &b))
                 diff++;
-            gv_trimesh_free(&a);
-            gv_trimesh_free(&b);
+            gv_mesh_free(&a);
+            gv_mesh_free(&b);
             levels++;
         }
         check(g && diff == 0 && levels > 0, "%s: GPU clusters and mesh = "
@@ -374,12 +374,12 @@ static void test_mesh(const char *name, const struct gv_trimesh *m,
     gv_cluster_tree_free(&t);
 }
 
-static void test_run(const struct gv_trimesh *m)
+static void test_run(const struct gv_mesh *m)
 {
     uint8_t *in = NULL, *out = NULL, *out2 = NULL;
     size_t n = 0, on = 0, on2 = 0;
     struct gv_error err = {0};
-    gv_trimesh_encode(GV_MESH_PLY, m, NULL, &in, &n, &err);
+    gv_mesh_encode(GV_MESH_PLY, m, NULL, NULL, &in, &n, &err);
     struct gv_simplify_opts o = {.ratio = 0.1, .format = GV_MESH_PLY};
     struct gv_simplify_stats st, st2;
     int rc = gv_simplify(in, n, &o, &out, &on, &st, &err);
@@ -409,7 +409,7 @@ static void test_run(const struct gv_trimesh *m)
 int main(void)
 {
     test_readers();
-    struct gv_trimesh ms[4];
+    struct gv_mesh ms[4];
     const char *names[] = {"sphere", "height field", "torus", "random soup"};
     grid(&ms[0], 120, 60, 0);
     grid(&ms[1], 90, 90, 1);
@@ -429,6 +429,6 @@ int main(void)
     gv_gpu_close(gpu);
 #endif
     for (int i = 0; i < 4; i++)
-        gv_trimesh_free(&ms[i]);
+        gv_mesh_free(&ms[i]);
     return tap_done();
 }

@@ -180,16 +180,28 @@ static int run_dct_encode(uint64_t *h)
     if (!P || !orig || !pred || !recon || !out || !ws)
         fail("out of memory");
     for (int C = 1; C <= 3; C += 2)
-        for (int i = 0; i < 3; i++) {
+        for (int i = 0; i < 4; i++) {
             dct_fixture_tile(P, T, C, 20, &rng);
-            dct_fixture_tile(orig, T, C, 40 * i, &rng);
+            dct_fixture_tile(orig, T, C, 40 * (i % 3), &rng);
             gv_predict(P, C, 1, 0, pred);
+            if (i == 3) {
+                /* The edge: 0/255 blocks against their complement, at a
+                 * lambda that takes step 1, so that the coefficients pass
+                 * the quantizer's cap of 2047 (YCoCg's Co reaches 510). */
+                for (size_t k = 0; k < gv_tile_bytes(C); k++) {
+                    const size_t px = k / (size_t)C, x = px % T, y = px / T;
+                    const int on = ((x / 8 + y / 8) & 1) ^ (int)(k % (size_t)C == 2);
+                    orig[k] = on ? 255 : 0;
+                    pred[k] = on ? 0 : 255;
+                }
+            }
             /* the whole tile, and a part of it (an image's edge) */
             for (int part = 0; part < 2; part++) {
                 const uint32_t vw = part ? 300 : T, vh = part ? 77 : T;
                 uint64_t sse = 0;
                 const size_t len = gv_dct_encode(ws, orig, pred, C, vw, vh,
-                                                 lambdas[i], buf, sizeof buf,
+                                                 i < 3 ? lambdas[i] : 0.01,
+                                                 buf, sizeof buf,
                                                  recon, &sse);
                 /* 0: it does not fit (recon and sse are then undefined) */
                 uint64_t x = hash(H0, &len, sizeof len);

@@ -50,12 +50,12 @@ static float *field(uint32_t w, uint32_t h, int kind, uint32_t seed)
     return f;
 }
 
-static int same_mesh(const struct gv_tin *a, const struct gv_tin *b)
+static int same_mesh(const struct gv_mesh *a, const struct gv_mesh *b)
 {
     if (a->nverts != b->nverts || a->ntris != b->ntris)
         return 0;
     for (uint32_t i = 0; i < a->nverts; i++)
-        if (a->vx[i] != b->vx[i] || a->vy[i] != b->vy[i])
+        if (gv_mesh_gx(a, i) != gv_mesh_gx(b, i) || gv_mesh_gy(a, i) != gv_mesh_gy(b, i))
             return 0;
     return memcmp(a->tris, b->tris, (size_t)a->ntris * 3 * 4) == 0 &&
            a->max_error == b->max_error;
@@ -69,7 +69,7 @@ static int64_t orient(int64_t ax, int64_t ay, int64_t bx, int64_t by,
 
 /* The largest |h - mesh| over every sample, each located by a linear
  * search and interpolated with barycentric weights (not tin.c's planes). */
-static double independent_error(const float *f, const struct gv_tin *t)
+static double independent_error(const float *f, const struct gv_mesh *t)
 {
     double worst = 0;
     for (uint32_t y = 0; y < t->height; y++)
@@ -77,18 +77,18 @@ static double independent_error(const float *f, const struct gv_tin *t)
             int found = 0;
             for (uint32_t k = 0; k < t->ntris && !found; k++) {
                 const uint32_t *v = t->tris + 3 * k;
-                int64_t ax = t->vx[v[0]], ay = t->vy[v[0]];
-                int64_t bx = t->vx[v[1]], by = t->vy[v[1]];
-                int64_t cx = t->vx[v[2]], cy = t->vy[v[2]];
+                int64_t ax = gv_mesh_gx(t, v[0]), ay = gv_mesh_gy(t, v[0]);
+                int64_t bx = gv_mesh_gx(t, v[1]), by = gv_mesh_gy(t, v[1]);
+                int64_t cx = gv_mesh_gx(t, v[2]), cy = gv_mesh_gy(t, v[2]);
                 int64_t wa = orient(bx, by, cx, cy, x, y);
                 int64_t wb = orient(cx, cy, ax, ay, x, y);
                 int64_t wc = orient(ax, ay, bx, by, x, y);
                 if (wa < 0 || wb < 0 || wc < 0)
                     continue;
                 double s = (double)(wa + wb + wc);
-                double z = (wa * (double)t->vz[v[0]] +
-                            wb * (double)t->vz[v[1]] +
-                            wc * (double)t->vz[v[2]]) / s;
+                double z = (wa * (double)gv_mesh_gz(t, v[0]) +
+                            wb * (double)gv_mesh_gz(t, v[1]) +
+                            wc * (double)gv_mesh_gz(t, v[2])) / s;
                 double e = fabs(f[(size_t)y * t->width + x] - z);
                 if (e > worst)
                     worst = e;
@@ -102,23 +102,23 @@ static double independent_error(const float *f, const struct gv_tin *t)
 
 __extension__ typedef __int128 i128;
 
-static int delaunay_and_tiling(const struct gv_tin *t)
+static int delaunay_and_tiling(const struct gv_mesh *t)
 {
     int64_t area = 0;
     for (uint32_t k = 0; k < t->ntris; k++) {
         const uint32_t *v = t->tris + 3 * k;
-        int64_t o = orient(t->vx[v[0]], t->vy[v[0]], t->vx[v[1]], t->vy[v[1]],
-                           t->vx[v[2]], t->vy[v[2]]);
+        int64_t o = orient(gv_mesh_gx(t, v[0]), gv_mesh_gy(t, v[0]), gv_mesh_gx(t, v[1]), gv_mesh_gy(t, v[1]),
+                           gv_mesh_gx(t, v[2]), gv_mesh_gy(t, v[2]));
         if (o <= 0)
             return 0;
         area += o;
         for (uint32_t d = 0; d < t->nverts; d++) {
-            int64_t adx = (int64_t)t->vx[v[0]] - t->vx[d];
-            int64_t ady = (int64_t)t->vy[v[0]] - t->vy[d];
-            int64_t bdx = (int64_t)t->vx[v[1]] - t->vx[d];
-            int64_t bdy = (int64_t)t->vy[v[1]] - t->vy[d];
-            int64_t cdx = (int64_t)t->vx[v[2]] - t->vx[d];
-            int64_t cdy = (int64_t)t->vy[v[2]] - t->vy[d];
+            int64_t adx = (int64_t)gv_mesh_gx(t, v[0]) - gv_mesh_gx(t, d);
+            int64_t ady = (int64_t)gv_mesh_gy(t, v[0]) - gv_mesh_gy(t, d);
+            int64_t bdx = (int64_t)gv_mesh_gx(t, v[1]) - gv_mesh_gx(t, d);
+            int64_t bdy = (int64_t)gv_mesh_gy(t, v[1]) - gv_mesh_gy(t, d);
+            int64_t cdx = (int64_t)gv_mesh_gx(t, v[2]) - gv_mesh_gx(t, d);
+            int64_t cdy = (int64_t)gv_mesh_gy(t, v[2]) - gv_mesh_gy(t, d);
             i128 det = (i128)(adx * adx + ady * ady) * (bdx * cdy - cdx * bdy) -
                        (i128)(bdx * bdx + bdy * bdy) * (adx * cdy - cdx * ady) +
                        (i128)(cdx * cdx + cdy * cdy) * (adx * bdy - bdx * ady);
@@ -134,7 +134,7 @@ static void compare_brute(uint32_t w, uint32_t h, int kind, double e,
 {
     float *f = field(w, h, kind, 99 + (uint32_t)kind);
     struct gv_tin_params p = {e, maxt, border, 0};
-    struct gv_tin a, b;
+    struct gv_mesh a, b;
     struct gv_error err = {0};
     int ra = gv_tin_build(f, w, h, w, &p, &a, &err);
     int rb = gv_tin_build_brute(f, w, h, w, &p, &b, &err);
@@ -156,8 +156,8 @@ static void compare_brute(uint32_t w, uint32_t h, int kind, double e,
         check(a.ntris <= maxt, "%u triangles <= %u", a.ntris, maxt);
     check(delaunay_and_tiling(&a), "Delaunay, counter-clockwise, tiles the "
           "rectangle (%u triangles)", a.ntris);
-    gv_tin_free(&a);
-    gv_tin_free(&b);
+    gv_mesh_free(&a);
+    gv_mesh_free(&b);
     free(f);
 }
 
@@ -220,7 +220,7 @@ static void crack_free(void)
                 g[(size_t)y * 41 + x] += (float)(30 * sin(x * y * 0.3));
         }
     struct gv_tin_params p = {1.5, 0, 1, 0};
-    struct gv_tin a, b, c;
+    struct gv_mesh a, b, c;
     struct gv_error err = {0};
     int ok = gv_tin_build(f, 41, H, W, &p, &a, &err) == 0 &&
              gv_tin_build(f + 40, 41, H, W, &p, &b, &err) == 0 &&
@@ -230,25 +230,25 @@ static void crack_free(void)
     uint8_t ea[57] = {0}, wb[57] = {0}, wc[57] = {0};
     uint32_t n = 0;
     for (uint32_t i = 0; i < a.nverts; i++)
-        if (a.vx[i] == 40) {
-            ea[a.vy[i]] = 1;
+        if (gv_mesh_gx(&a, i) == 40) {
+            ea[gv_mesh_gy(&a, i)] = 1;
             n++;
         }
     for (uint32_t i = 0; i < b.nverts; i++)
-        if (b.vx[i] == 0)
-            wb[b.vy[i]] = 1;
+        if (gv_mesh_gx(&b, i) == 0)
+            wb[gv_mesh_gy(&b, i)] = 1;
     for (uint32_t i = 0; i < c.nverts; i++)
-        if (c.vx[i] == 0)
-            wc[c.vy[i]] = 1;
+        if (gv_mesh_gx(&c, i) == 0)
+            wc[gv_mesh_gy(&c, i)] = 1;
     check(n > 2 && memcmp(ea, wb, H) == 0,
           "shared edge: the same %u vertices on both sides", n);
     check(memcmp(ea, wc, H) == 0 && !same_mesh(&b, &c),
           "a different interior changes the mesh, not the shared edge");
     check(a.max_error <= 1.5 + 1e-9 && b.max_error <= 1.5 + 1e-9 &&
           c.max_error <= 1.5 + 1e-9, "all three within the bound");
-    gv_tin_free(&a);
-    gv_tin_free(&b);
-    gv_tin_free(&c);
+    gv_mesh_free(&a);
+    gv_mesh_free(&b);
+    gv_mesh_free(&c);
     free(f);
     free(g);
 }
@@ -258,12 +258,12 @@ static void edge_cases(void)
     float flat[16 * 9];
     for (int i = 0; i < 16 * 9; i++)
         flat[i] = 7;
-    struct gv_tin t;
+    struct gv_mesh t;
     struct gv_error err = {0};
     struct gv_tin_params p = {0, 0, 1, 0};
     check(gv_tin_build(flat, 16, 9, 16, &p, &t, &err) == 0 && t.ntris == 2 &&
           t.nverts == 4 && t.max_error == 0, "a flat grid is two triangles");
-    gv_tin_free(&t);
+    gv_mesh_free(&t);
     p.max_error = -1;
     p.border_first = 0;
     gv_error_clear(&err);
@@ -290,9 +290,9 @@ static void edge_cases(void)
     int built = gv_tin_build(f, 23, 19, 23, &z, &t, &err) == 0;
     check(built && t.max_error == 0 && independent_error(f, &t) == 0,
           "E = 0 is lossless (%u of %u samples)", t.nverts, 23 * 19);
-    gv_tin_free(&t);
+    gv_mesh_free(&t);
     free(f);
-    gv_tin_free(NULL);
+    gv_mesh_free(NULL);
 }
 
 /* Tiles: the bound, crack-free joins (every vertex once, the triangles
@@ -303,7 +303,7 @@ static void tiled(void)
     uint32_t W = 90, H = 61;
     float *f = field(W, H, 0, 11);
     struct gv_tin_params p = {2.0, 0, 1, 0};
-    struct gv_tin a, b, one;
+    struct gv_mesh a, b, one;
     struct gv_error err = {0};
     int ok = gv_tin_build_tiled(f, W, H, W, &p, 32, 1, &a, &err) == 0 &&
              gv_tin_build_tiled(f, W, H, W, &p, 32, 3, &b, &err) == 0 &&
@@ -319,12 +319,12 @@ static void tiled(void)
     int uniq = 1;
     for (uint32_t k = 0; k < a.ntris; k++) {
         const uint32_t *v = a.tris + 3 * k;
-        area += orient(a.vx[v[0]], a.vy[v[0]], a.vx[v[1]], a.vy[v[1]],
-                       a.vx[v[2]], a.vy[v[2]]);
+        area += orient(gv_mesh_gx(&a, v[0]), gv_mesh_gy(&a, v[0]), gv_mesh_gx(&a, v[1]), gv_mesh_gy(&a, v[1]),
+                       gv_mesh_gx(&a, v[2]), gv_mesh_gy(&a, v[2]));
     }
     for (uint32_t i = 0; i < a.nverts && uniq; i++)
         for (uint32_t k = i + 1; k < a.nverts; k++)
-            if (a.vx[i] == a.vx[k] && a.vy[i] == a.vy[k])
+            if (gv_mesh_gx(&a, i) == gv_mesh_gx(&a, k) && gv_mesh_gy(&a, i) == gv_mesh_gy(&a, k))
                 uniq = 0;
     check(uniq && area == 2 * (int64_t)(W - 1) * (H - 1),
           "tiled: each vertex once, the triangles tile the rectangle");
@@ -333,18 +333,18 @@ static void tiled(void)
     for (uint32_t i = 0; i < one.nverts; i++) {
         int found = 0;
         for (uint32_t k = 0; k < a.nverts && !found; k++)
-            found = a.vx[k] == one.vx[i] && a.vy[k] == one.vy[i];
+            found = gv_mesh_gx(&a, k) == gv_mesh_gx(&one, i) && gv_mesh_gy(&a, k) == gv_mesh_gy(&one, i);
         first &= found;
     }
     check(first, "tiled: tile (0,0) holds the vertices of its region alone");
-    gv_tin_free(&a);
+    gv_mesh_free(&a);
     p.max_error = -1;
     p.max_triangles = 100;
     gv_error_clear(&err);
     check(gv_tin_build_tiled(f, W, H, W, &p, 32, 1, &a, &err) < 0,
           "tiled: a triangle limit is refused");
-    gv_tin_free(&b);
-    gv_tin_free(&one);
+    gv_mesh_free(&b);
+    gv_mesh_free(&one);
     free(f);
 }
 

@@ -1,5 +1,5 @@
 /*
- * test_tin_io.c - the mesh writers (lib/mesh/mesh_write.h) read back.
+ * test_tin_io.c - the mesh writers (lib/mesh/io/mesh_write.h) read back.
  *
  * A small TIN is written in every format and parsed again by the minimal
  * readers below, written from the format specifications and not from the
@@ -16,7 +16,7 @@
 #include <string.h>
 #include <zlib.h>
 
-#include "mesh/mesh_write.h"
+#include "mesh/io/mesh_write.h"
 #include "mesh/tin.h"
 #include "util.h"
 
@@ -47,7 +47,7 @@ static double rdd(const uint8_t *p)
 /* Does the set of triangles (a, b, c) of the file, as vertex positions,
  * equal the TIN's with the winding reversed (a, c, b)?  Positions are
  * compared through map[file vertex] = tin vertex. */
-static int same_tris(const struct gv_tin *t, const uint32_t *idx,
+static int same_tris(const struct gv_mesh *t, const uint32_t *idx,
                      const uint32_t *map)
 {
     for (uint32_t i = 0; i < t->ntris; i++) {
@@ -59,12 +59,12 @@ static int same_tris(const struct gv_tin *t, const uint32_t *idx,
     return 1;
 }
 
-static void test_glb(const struct gv_tin *t, const struct gv_mesh_place *pl)
+static void test_glb(const struct gv_mesh *t, const struct gv_mesh_place *pl)
 {
     uint8_t *b;
     size_t n;
     struct gv_error err = {0};
-    check(gv_mesh_encode(GV_MESH_GLB, t, pl, &b, &n, &err) == 0, "glb: wrote");
+    check(gv_mesh_encode(GV_MESH_GLB, t, pl, NULL, &b, &n, &err) == 0, "glb: wrote");
     check(n >= 28 && rd32(b) == 0x46546C67u && rd32(b + 4) == 2 &&
           rd32(b + 8) == n, "glb: header, version 2, length %zu", n);
     uint32_t jl = rd32(b + 12);
@@ -90,9 +90,9 @@ static void test_glb(const struct gv_tin *t, const struct gv_mesh_place *pl)
     const uint8_t *bin = bc + 8;
     int ok = 1;
     for (uint32_t i = 0; i < t->nverts; i++) {
-        ok &= rdf(bin + 12 * i) == (float)(pl->x0 + t->vx[i]) &&
-              rdf(bin + 12 * i + 4) == t->vz[i] &&
-              rdf(bin + 12 * i + 8) == (float)(pl->y0 + t->vy[i]);
+        ok &= rdf(bin + 12 * i) == (float)(pl->x0 + gv_mesh_gx(t, i)) &&
+              rdf(bin + 12 * i + 4) == gv_mesh_gz(t, i) &&
+              rdf(bin + 12 * i + 8) == (float)(pl->y0 + gv_mesh_gy(t, i));
     }
     check(ok, "glb: positions (x, height, y)");
     uint32_t *idx = malloc((size_t)t->ntris * 3 * 4), *map;
@@ -117,7 +117,7 @@ static void test_glb(const struct gv_tin *t, const struct gv_mesh_place *pl)
 static int unzig(uint16_t v) { return (v >> 1) ^ -(int)(v & 1); }
 
 /* Decode a quantized-mesh tile and compare it with t. */
-static void check_qmesh(const struct gv_tin *t, const uint8_t *b, size_t n,
+static void check_qmesh(const struct gv_mesh *t, const uint8_t *b, size_t n,
                         const char *what)
 {
     check(n > 92, "%s: longer than the header", what);
@@ -144,13 +144,13 @@ static void check_qmesh(const struct gv_tin *t, const uint8_t *b, size_t n,
     for (uint32_t i = 0; i < nv; i++) {
         map[i] = UINT32_MAX;
         for (uint32_t v = 0; v < t->nverts; v++)
-            if (lround((double)t->vx[v] / W * 32767) == q[i] &&
-                lround((double)(H - t->vy[v]) / H * 32767) == q[nv + i])
+            if (lround((double)gv_mesh_gx(t, v) / W * 32767) == q[i] &&
+                lround((double)(H - gv_mesh_gy(t, v)) / H * 32767) == q[nv + i])
                 map[i] = v;
         ok &= map[i] != UINT32_MAX && q[i] >= 0 && q[i] <= 32767;
         if (map[i] != UINT32_MAX) {
             double z = zmin + (zmax - zmin) * q[2 * nv + i] / 32767.0;
-            ok &= fabs(z - t->vz[map[i]]) <= (zmax - zmin) / 32767.0;
+            ok &= fabs(z - gv_mesh_gz(t, map[i])) <= (zmax - zmin) / 32767.0;
         }
     }
     check(ok, "%s: u, v, height of every vertex", what);
@@ -187,8 +187,8 @@ static void check_qmesh(const struct gv_tin *t, const uint8_t *b, size_t n,
             last = along;
         }
         for (uint32_t v = 0; v < t->nverts; v++)
-            want += e == 0 ? t->vx[v] == 0 : e == 1 ? t->vy[v] == H
-                  : e == 2 ? t->vx[v] == W : t->vy[v] == 0;
+            want += e == 0 ? gv_mesh_gx(t, v) == 0 : e == 1 ? gv_mesh_gy(t, v) == H
+                  : e == 2 ? gv_mesh_gx(t, v) == W : gv_mesh_gy(t, v) == 0;
         check(good && c == want, "%s: edge %d lists its %u vertices in order",
               what, e, c);
     }
@@ -204,7 +204,7 @@ static void check_qmesh(const struct gv_tin *t, const uint8_t *b, size_t n,
     free(idx);
 }
 
-static void test_qmesh(const struct gv_tin *t, struct gv_mesh_place pl)
+static void test_qmesh(const struct gv_mesh *t, struct gv_mesh_place pl)
 {
     uint8_t *b, *z;
     size_t n, zn;
@@ -214,7 +214,7 @@ static void test_qmesh(const struct gv_tin *t, struct gv_mesh_place pl)
     pl.east = 6;
     pl.south = 45;
     pl.north = 46;
-    check(gv_mesh_encode(GV_MESH_QMESH, t, &pl, &b, &n, &err) == 0,
+    check(gv_mesh_encode(GV_MESH_QMESH, t, &pl, NULL, &b, &n, &err) == 0,
           "qmesh: wrote");
     check_qmesh(t, b, n, "qmesh");
     /* the centre lies near the surface at 45.5 N, 5.5 E */
@@ -223,7 +223,7 @@ static void test_qmesh(const struct gv_tin *t, struct gv_mesh_place pl)
     check(r > 6.36e6 && r < 6.38e6 && cz > 0 && cy > 0,
           "qmesh: centre in ECEF (%.0f m from the Earth's centre)", r);
     pl.gzip = 1;
-    check(gv_mesh_encode(GV_MESH_QMESH, t, &pl, &z, &zn, &err) == 0 &&
+    check(gv_mesh_encode(GV_MESH_QMESH, t, &pl, NULL, &z, &zn, &err) == 0 &&
           zn > 18 && z[0] == 0x1f && z[1] == 0x8b, "qmesh: gzip'ed");
     uint8_t *u = malloc(n + 16);
     z_stream s;
@@ -242,12 +242,12 @@ static void test_qmesh(const struct gv_tin *t, struct gv_mesh_place pl)
     free(b);
 }
 
-static void test_ply(const struct gv_tin *t, const struct gv_mesh_place *pl)
+static void test_ply(const struct gv_mesh *t, const struct gv_mesh_place *pl)
 {
     uint8_t *b;
     size_t n;
     struct gv_error err = {0};
-    check(gv_mesh_encode(GV_MESH_PLY, t, pl, &b, &n, &err) == 0, "ply: wrote");
+    check(gv_mesh_encode(GV_MESH_PLY, t, pl, NULL, &b, &n, &err) == 0, "ply: wrote");
     const char *end = memmem(b, n, "end_header\n", 11);
     check(end != NULL, "ply: a header");
     if (!end)
@@ -268,8 +268,8 @@ static void test_ply(const struct gv_tin *t, const struct gv_mesh_place *pl)
     check((size_t)(p - b) + 12 * nv + 13 * nf == n, "ply: body length");
     int ok = 1;
     for (uint32_t i = 0; i < nv; i++, p += 12)
-        ok &= rdf(p) == (float)(pl->x0 + t->vx[i]) &&
-              rdf(p + 4) == -(float)(pl->y0 + t->vy[i]) && rdf(p + 8) == t->vz[i];
+        ok &= rdf(p) == (float)(pl->x0 + gv_mesh_gx(t, i)) &&
+              rdf(p + 4) == -(float)(pl->y0 + gv_mesh_gy(t, i)) && rdf(p + 8) == gv_mesh_gz(t, i);
     uint32_t *idx = malloc((size_t)nf * 12), *map = malloc((size_t)nv * 4);
     for (uint32_t i = 0; i < nf; i++, p += 13) {
         ok &= p[0] == 3;
@@ -285,12 +285,12 @@ static void test_ply(const struct gv_tin *t, const struct gv_mesh_place *pl)
     free(b);
 }
 
-static void test_obj(const struct gv_tin *t, const struct gv_mesh_place *pl)
+static void test_obj(const struct gv_mesh *t, const struct gv_mesh_place *pl)
 {
     uint8_t *b;
     size_t n;
     struct gv_error err = {0};
-    check(gv_mesh_encode(GV_MESH_OBJ, t, pl, &b, &n, &err) == 0, "obj: wrote");
+    check(gv_mesh_encode(GV_MESH_OBJ, t, pl, NULL, &b, &n, &err) == 0, "obj: wrote");
     char *s = strndup((const char *)b, n);
     uint32_t nv = 0, nf = 0;
     uint32_t *idx = malloc((size_t)t->ntris * 12), *map = malloc(
@@ -302,8 +302,8 @@ static void test_obj(const struct gv_tin *t, const struct gv_mesh_place *pl)
         double x, y, z;
         unsigned a, c, d;
         if (sscanf(line, "v %lf %lf %lf", &x, &y, &z) == 3) {
-            ok &= nv < t->nverts && x == pl->x0 + t->vx[nv] &&
-                  y == -(double)(pl->y0 + t->vy[nv]) && (float)z == t->vz[nv];
+            ok &= nv < t->nverts && x == pl->x0 + gv_mesh_gx(t, nv) &&
+                  y == -(double)(pl->y0 + gv_mesh_gy(t, nv)) && (float)z == gv_mesh_gz(t, nv);
             nv++;
         } else if (sscanf(line, "f %u %u %u", &a, &c, &d) == 3) {
             ok &= nf < t->ntris;
@@ -334,7 +334,7 @@ int main(void)
         for (uint32_t x = 0; x < w; x++)
             f[y * w + x] = (float)(300 + 80 * sin(x * 0.3) * cos(y * 0.25) +
                                    (x * 7 + y * 3) % 5);
-    struct gv_tin t;
+    struct gv_mesh t;
     struct gv_error err = {0};
     struct gv_tin_params p = {.max_error = 3, .border_first = 1};
     int built = gv_tin_build(f, w, h, w, &p, &t, &err) == 0;
@@ -348,7 +348,7 @@ int main(void)
     check(gv_mesh_format_parse("qmesh", &fmt) == 0 && fmt == GV_MESH_QMESH &&
           gv_mesh_format_parse("terrain", &fmt) == 0 &&
           gv_mesh_format_parse("stl", &fmt) < 0, "format names");
-    gv_tin_free(&t);
+    gv_mesh_free(&t);
     free(f);
     return tap_done();
 }

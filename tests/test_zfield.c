@@ -155,7 +155,7 @@ static int cmp_u64(const void *a, const void *b)
 }
 
 /* Conforming, covering, every enabled vertex used. */
-static int mesh_ok(const struct gv_tin *t, uint32_t n, const uint8_t *en, char *why, size_t wl)
+static int mesh_ok(const struct gv_mesh *t, uint32_t n, const uint8_t *en, char *why, size_t wl)
 {
     const int64_t e = n - 1;
     int64_t area2 = 0;
@@ -167,7 +167,7 @@ static int mesh_ok(const struct gv_tin *t, uint32_t n, const uint8_t *en, char *
         const uint32_t *v = &t->tris[3 * (size_t)i];
         int64_t x[3], y[3];
         for (int k = 0; k < 3; k++) {
-            x[k] = t->vx[v[k]], y[k] = t->vy[v[k]];
+            x[k] = gv_mesh_gx(t, v[k]), y[k] = gv_mesh_gy(t, v[k]);
             used[y[k] * n + x[k]] = 1;
         }
         const int64_t a = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
@@ -217,12 +217,11 @@ static int mesh_ok(const struct gv_tin *t, uint32_t n, const uint8_t *en, char *
 }
 
 #ifdef GV_TEST_GPU
-static int same_mesh(const struct gv_tin *a, const struct gv_tin *b)
+static int same_mesh(const struct gv_mesh *a, const struct gv_mesh *b)
 {
     if (a->nverts != b->nverts || a->ntris != b->ntris)
         return 0;
-    return !memcmp(a->vx, b->vx, a->nverts * sizeof *a->vx) &&
-           !memcmp(a->vy, b->vy, a->nverts * sizeof *a->vy) &&
+    return !memcmp(a->pos, b->pos, (size_t)a->nverts * 3 * sizeof *a->pos) &&
            !memcmp(a->tris, b->tris, (size_t)a->ntris * 3 * sizeof *a->tris);
 }
 #endif
@@ -252,7 +251,7 @@ static void check_case(const char *name, const float *z, uint32_t n, const struc
     check(!memcmp(sweep, bf, cells), "%s: the level sweep's %zu enabled vertices are the "
           "activated ones and their ancestors", name, on);
     check(!memcmp(sweep, coarse, cells), "%s: the coarse phase enables the same vertices", name);
-    struct gv_tin t;
+    struct gv_mesh t;
     if (gv_zfield_mesh(z, n, sweep, 1, &t, &err) < 0)
         fail("%s: mesh: %s", name, err.text);
     if (check_mesh) {
@@ -271,17 +270,17 @@ static void check_case(const char *name, const float *z, uint32_t n, const struc
         size_t differ = 0;
         for (size_t i = 0; i < cells; i++)
             differ += g[i] != sweep[i];
-        struct gv_tin tg;
+        struct gv_mesh tg;
         if (gv_zfield_mesh(z, n, g, 0, &tg, &err) < 0)
             fail("%s: gpu mesh: %s", name, err.text);
         check(differ == 0 && same_mesh(&t, &tg), "%s: the GPU, %s, enables the same "
               "vertices (%zu differ) and gives the same mesh, triangle for triangle", name,
               path_name[path], differ);
-        gv_tin_free(&tg);
+        gv_mesh_free(&tg);
         free(g);
     }
 #endif
-    gv_tin_free(&t);
+    gv_mesh_free(&t);
     free(sweep), free(coarse), free(bf);
 }
 
@@ -316,11 +315,11 @@ int main(void)
     float *pl = plane(65);
     uint8_t *en = malloc(65 * 65);
     gv_zfield_enable(pl, 65, &(struct gv_zfield_params){.threshold = 0.0f}, en, &err);
-    struct gv_tin t;
+    struct gv_mesh t;
     gv_zfield_mesh(pl, 65, en, 1, &t, &err);
     check(t.ntris == 2 && t.nverts == 4 && t.max_error < 1e-3, "a plane at threshold 0: two "
           "triangles, four vertices (%u, %u), error %g", t.ntris, t.nverts, t.max_error);
-    gv_tin_free(&t);
+    gv_mesh_free(&t);
     free(en);
     free(pl);
 

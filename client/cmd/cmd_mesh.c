@@ -25,7 +25,7 @@
 #include "base/pool.h"
 #include "commands.h"
 #include "imageio/imageio.h"
-#include "mesh/mesh_write.h"
+#include "mesh/io/mesh_write.h"
 #include "mesh/tin.h"
 #include "options.h"
 #include "region_arg.h"
@@ -241,7 +241,7 @@ static int parse_geo(const char *s, struct gv_mesh_place *pl)
 /* --method zfield: the enabled vertices on the CPU or the GPU, the mesh
  * and its measured error on the CPU (lib/mesh/zfield.h). */
 static int zfield_build(const float *h, uint32_t w, uint32_t hgt, double threshold,
-                        int use_gpu, struct gv_tin *t, struct gv_error *err)
+                        int use_gpu, struct gv_mesh *t, struct gv_error *err)
 {
     if (w != hgt || !gv_zfield_side_ok(w))
         return gv_fail(err, GV_EINVAL, "--method zfield needs a square grid of "
@@ -341,7 +341,7 @@ int cmd_mesh(int argc, char **argv)
     struct gv_tin_params p = {.max_error = a.max_error,
                               .max_triangles = (uint32_t)a.max_triangles,
                               .border_first = a.max_error >= 0 && !a.no_border};
-    struct gv_tin t;
+    struct gv_mesh t;
     struct timespec t0, t1, c0, c1;
     uint8_t *buf = NULL;
     size_t len = 0;
@@ -372,7 +372,7 @@ int cmd_mesh(int argc, char **argv)
                 (double)(t1.tv_nsec - t0.tv_nsec) * 1e-6;
     double cpu = (double)(c1.tv_sec - c0.tv_sec) * 1e3 +
                  (double)(c1.tv_nsec - c0.tv_nsec) * 1e-6;
-    if (gv_mesh_encode(fmt, &t, &pl, &buf, &len, &err) < 0 ||
+    if (gv_mesh_encode(fmt, &t, &pl, NULL, &buf, &len, &err) < 0 ||
         gv_atomic_file_write(a.output, buf, len, NULL, &err) < 0) {
         fprintf(stderr, ME ": %s\n", err.text);
     } else {
@@ -382,7 +382,7 @@ int cmd_mesh(int argc, char **argv)
                gv_mesh_format_ext(fmt));
         rc = 0;
     }
-    gv_tin_free(&t);
+    gv_mesh_free(&t);
 out:
     free(buf);
     free(h);

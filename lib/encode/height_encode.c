@@ -83,6 +83,116 @@ static int parse_synth(const char *spec, uint32_t *w, uint32_t *h)
 
 /* ---- reading the input into codes ---- */
 
+/* The samples of synth-height:WxH into a new *codes (caller frees).
+ * Returns 0 or -1 with err set. */
+static int read_synth(const char *input, uint64_t limit, uint16_t **codes,
+                      uint32_t *w, uint32_t *h, struct gv_error *err)
+{
+    if (parse_synth(input, w, h) < 0)
+        return gv_fail(err, GV_EINVAL, ME ": bad pattern '%s' (want "
+                       "synth-height:WIDTHxHEIGHT)", input);
+    if ((uint64_t)*w * *h > limit)
+        return gv_fail(err, GV_ELIMIT, ME ": %ux%u is more than %llu "
+                       "pixels", *w, *h, (unsigned long long)limit);
+    *codes = malloc(sizeof **codes * (size_t)*w * *h);
+    if (!*codes)
+        return gv_fail(err, GV_ENOMEM, ME ": out of memory for the input");
+    for (uint32_t y = 0; y < *h; y++)
+        for (uint32_t x = 0; x < *w; x++)
+            (*codes)[(size_t)y * *w + x] = synth_height(x, y);
+    return 0;
+}
+
+/* Map n finite float samples onto the 16-bit codes, lowest to 0 and
+ * highest to 65535 (m's offset, scale, min and max set).  Returns 0, or
+ * -1 with err set when a sample is not a finite number. */
+static int map_float(const float *fl, size_t n, uint16_t *codes,
+                     struct gv_height_result *m, const char *input,
+                     struct gv_error *err)
+{
+    float lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        if (!isfinite(fl[i]))
+            return gv_fail(err, GV_EINVAL, ME ": %s has a sample that is "
+                           "not a finite number", input);
+        lo = fl[i] < lo ? fl[i] : lo;
+        hi = fl[i] > hi ? fl[i] : hi;
+    }
+    m->offset = lo;
+    m->scale = hi > lo ? ((double)hi - lo) / 65535.0 : 1.0;
+    m->min = lo;
+    m->max = hi;
+    for (size_t i = 0; i < n; i++) {
+        double c = floor((fl[i] - m->offset) / m->scale + 0.5);
+        codes[i] = (uint16_t)(c < 0 ? 0 : (c > 65535 ? 65535 : c));
+    }
+    return 0;
+}
+
+/* The one channel of image file `input` into a new *codes (caller frees):
+ * 8- and 16-bit samples as they are, float ones through map_float
+ * (m->src_float set).  Returns 0 or -1 with err set. */
+static int read_image_codes(const char *input, const struct gv_height_opts *o,
+                            uint64_t limit, uint16_t **codes, uint32_t *w,
+                            uint32_t *h, struct gv_height_result *m,
+                            struct gv_error *err)
+{
+    struct gv_image_info ii;
+    const struct gv_image_limits lim = {
+        .max_pixels = limit, .max_decoder_bytes = o->max_decoder_bytes};
+    struct gv_image_in *in = gv_image_open_limits(input, &lim, &ii, err);
+    if (!in)
+        return -1;
+    int rc = -1;
+    void *strip = NULL;
+    float *fl = NULL;
+    if (ii.channels != 1) {
+        gv_fail(err, GV_EINVAL, ME ": %s has %d channels; a height field "
+                "has one", input, ii.channels);
+        goto done;
+    }
+    *w = ii.width;
+    *h = ii.height;
+    const size_t n = (size_t)*w * *h;
+    const int fp = ii.sample == GV_SAMPLE_F32;
+    const size_t ss = ii.sample == GV_SAMPLE_U8 ? 1 : (fp ? 4 : 2);
+    *codes = malloc(sizeof **codes * n);
+    strip = malloc(ss * *w * STRIP);
+    if (fp)
+        fl = malloc(sizeof *fl * n);
+    if (!*codes || !strip || (fp && !fl)) {
+        gv_fail(err, GV_ENOMEM, ME ": out of memory for the input");
+        goto done;
+    }
+    for (uint32_t y = 0; y < *h; y += STRIP) {
+        uint32_t rows = *h - y < STRIP ? *h - y : STRIP;
+        if (gv_image_read(in, rows, strip, err) < 0)
+            goto done;
+        size_t k = (size_t)rows * *w, at = (size_t)y * *w;
+        for (size_t i = 0; i < k; i++) {
+            if (ii.sample == GV_SAMPLE_U8)
+                (*codes)[at + i] = ((const uint8_t *)strip)[i];
+            else if (!fp)
+                (*codes)[at + i] = ((const uint16_t *)strip)[i];
+            else
+                fl[at + i] = ((const float *)strip)[i];
+        }
+    }
+    m->src_float = fp;
+    if (fp && map_float(fl, n, *codes, m, input, err) < 0)
+        goto done;
+    rc = 0;
+done:
+    free(strip);
+    free(fl);
+    gv_image_close(in);
+    if (rc < 0) {
+        free(*codes);
+        *codes = NULL;
+    }
+    return rc;
+}
+
 static int read_input(const char *input, const struct gv_height_opts *o,
                       uint16_t **codes, uint32_t *w, uint32_t *h,
                       struct gv_height_result *m, int *e,
@@ -93,92 +203,11 @@ static int read_input(const char *input, const struct gv_height_opts *o,
     m->scale = o->mapped ? o->scale : 1;
     m->offset = o->mapped ? o->offset : 0;
     if (strncmp(input, "synth-height:", 13) == 0) {
-        if (parse_synth(input, w, h) < 0)
-            return gv_fail(err, GV_EINVAL, ME ": bad pattern '%s' (want "
-                           "synth-height:WIDTHxHEIGHT)", input);
-        if ((uint64_t)*w * *h > limit)
-            return gv_fail(err, GV_ELIMIT, ME ": %ux%u is more than %llu "
-                           "pixels", *w, *h, (unsigned long long)limit);
-        *codes = malloc(sizeof **codes * (size_t)*w * *h);
-        if (!*codes)
-            return gv_fail(err, GV_ENOMEM, ME ": out of memory for the input");
-        for (uint32_t y = 0; y < *h; y++)
-            for (uint32_t x = 0; x < *w; x++)
-                (*codes)[(size_t)y * *w + x] = synth_height(x, y);
+        if (read_synth(input, limit, codes, w, h, err) < 0)
+            return -1;
         m->src_float = 0;
-    } else {
-        struct gv_image_info ii;
-        const struct gv_image_limits lim = {
-            .max_pixels = limit, .max_decoder_bytes = o->max_decoder_bytes};
-        struct gv_image_in *in = gv_image_open_limits(input, &lim, &ii, err);
-        if (!in)
-            return -1;
-        int rc = -1;
-        void *strip = NULL;
-        float *fl = NULL;
-        if (ii.channels != 1) {
-            gv_fail(err, GV_EINVAL, ME ": %s has %d channels; a height field "
-                    "has one", input, ii.channels);
-            goto done;
-        }
-        *w = ii.width;
-        *h = ii.height;
-        const size_t n = (size_t)*w * *h;
-        const int fp = ii.sample == GV_SAMPLE_F32;
-        const size_t ss = ii.sample == GV_SAMPLE_U8 ? 1 : (fp ? 4 : 2);
-        *codes = malloc(sizeof **codes * n);
-        strip = malloc(ss * *w * STRIP);
-        if (fp)
-            fl = malloc(sizeof *fl * n);
-        if (!*codes || !strip || (fp && !fl)) {
-            gv_fail(err, GV_ENOMEM, ME ": out of memory for the input");
-            goto done;
-        }
-        for (uint32_t y = 0; y < *h; y += STRIP) {
-            uint32_t rows = *h - y < STRIP ? *h - y : STRIP;
-            if (gv_image_read(in, rows, strip, err) < 0)
-                goto done;
-            size_t k = (size_t)rows * *w, at = (size_t)y * *w;
-            for (size_t i = 0; i < k; i++) {
-                if (ii.sample == GV_SAMPLE_U8)
-                    (*codes)[at + i] = ((const uint8_t *)strip)[i];
-                else if (!fp)
-                    (*codes)[at + i] = ((const uint16_t *)strip)[i];
-                else
-                    fl[at + i] = ((const float *)strip)[i];
-            }
-        }
-        m->src_float = fp;
-        if (fp) {
-            float lo = INFINITY, hi = -INFINITY;
-            for (size_t i = 0; i < n; i++) {
-                if (!isfinite(fl[i])) {
-                    gv_fail(err, GV_EINVAL, ME ": %s has a sample that is "
-                            "not a finite number", input);
-                    goto done;
-                }
-                lo = fl[i] < lo ? fl[i] : lo;
-                hi = fl[i] > hi ? fl[i] : hi;
-            }
-            m->offset = lo;
-            m->scale = hi > lo ? ((double)hi - lo) / 65535.0 : 1.0;
-            m->min = lo;
-            m->max = hi;
-            for (size_t i = 0; i < n; i++) {
-                double c = floor((fl[i] - m->offset) / m->scale + 0.5);
-                (*codes)[i] = (uint16_t)(c < 0 ? 0 : (c > 65535 ? 65535 : c));
-            }
-        }
-        rc = 0;
-    done:
-        free(strip);
-        free(fl);
-        gv_image_close(in);
-        if (rc < 0) {
-            free(*codes);
-            *codes = NULL;
-            return -1;
-        }
+    } else if (read_image_codes(input, o, limit, codes, w, h, m, err) < 0) {
+        return -1;
     }
     const size_t n = (size_t)*w * *h;
     if (!m->src_float) {
@@ -270,6 +299,28 @@ static void free_tiles(uint16_t **t, size_t n)
     free(t);
 }
 
+/* The header of a height store of w x h codes at bound e (in codes). */
+static void height_header(struct gv_header *hd, uint32_t w, uint32_t h, int e,
+                          const struct gv_height_result *meta, const char *unit)
+{
+    memset(hd, 0, sizeof *hd);
+    hd->width = w;
+    hd->height = h;
+    hd->channels = 1;
+    hd->src_bits = meta->src_float ? 32 : 16;
+    hd->src_float = (uint8_t)meta->src_float;
+    hd->kind = GV_KIND_HEIGHT;
+    hd->height_float = (uint8_t)meta->src_float;
+    hd->height_e = (uint16_t)e;
+    hd->height_scale = meta->scale;
+    hd->height_offset = meta->offset;
+    hd->height_max_error = meta->max_error;
+    hd->height_min = (float)meta->min;
+    hd->height_max = (float)meta->max;
+    if (unit)
+        snprintf(hd->height_unit, sizeof hd->height_unit, "%s", unit);
+}
+
 int gv_height_encode_codes(const uint16_t *codes, uint32_t w, uint32_t h,
                            int e, const struct gv_height_result *meta,
                            const char *unit, int threads, const char *output,
@@ -281,22 +332,7 @@ int gv_height_encode_codes(const uint16_t *codes, uint32_t w, uint32_t h,
     if (gv_geometry_init(&g, w, h, 1) < 0)
         return gv_fail(err, GV_EINVAL, ME ": bad dimensions %ux%u", w, h);
     struct gv_header hd;
-    memset(&hd, 0, sizeof hd);
-    hd.width = w;
-    hd.height = h;
-    hd.channels = 1;
-    hd.src_bits = meta->src_float ? 32 : 16;
-    hd.src_float = (uint8_t)meta->src_float;
-    hd.kind = GV_KIND_HEIGHT;
-    hd.height_float = (uint8_t)meta->src_float;
-    hd.height_e = (uint16_t)e;
-    hd.height_scale = meta->scale;
-    hd.height_offset = meta->offset;
-    hd.height_max_error = meta->max_error;
-    hd.height_min = (float)meta->min;
-    hd.height_max = (float)meta->max;
-    if (unit)
-        snprintf(hd.height_unit, sizeof hd.height_unit, "%s", unit);
+    height_header(&hd, w, h, e, meta, unit);
 
     int rc = -1;
     uint16_t *lv[GV_MAX_LEVELS] = {0};

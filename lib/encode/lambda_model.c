@@ -12,19 +12,17 @@
  * the water and theta for the blocks of the bins wholly above; the bin
  * that straddles it counts min(its mean detail, theta) per block.  The
  * split of RGB rows into even and odd pixels runs in SSSE3 where
- * gv_cpu_flags() (base/cpu.h) has it, picked once into split_rgb.
+ * gv_cpu_flags() (base/cpu.h) has it (x86/lambda_split_ssse3.c), picked
+ * once into split_rgb.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "base/cpu.h"
-#if GV_HAVE_X86_SIMD
-#include <immintrin.h>
-#endif
-
 #include "codec/tile.h"
 #include "encode/lambda_model.h"
+#include "encode/x86/lambda_split_ssse3.h"
 
 /* lambda = K * 2 ln 2 * theta, and the parent's share: chosen together
  * on eight photographs at -q 32 to 44 and on the 58 MP relief of the
@@ -48,7 +46,7 @@ int gv_lambda_model_init(struct gv_lambda_model *m, uint32_t width,
     memset(m, 0, sizeof *m);
     m->channels = channels;
     m->width = width;
-    /* 4 bytes to spare past the split rows (split_rgb_ssse3). */
+    /* 4 bytes to spare past the split rows (gv_lambda_split_rgb_ssse3). */
     const size_t hb = (size_t)(width / 2) * channels + 4;
     const size_t mb = (size_t)((width + 1) / 2 + 2) * channels;
     for (int i = 0; i < 2; i++)
@@ -87,31 +85,6 @@ static int bin_of(uint64_t v)
     return b < GV_LM_BINS ? b : GV_LM_BINS - 1;
 }
 
-#if GV_HAVE_X86_SIMD
-/* Blocks [0, 4 * (bw / 4)) of an RGB row by PSHUFB, four blocks (24
- * bytes, read as 16 at 0 and 16 at 8) into 12 even and 12 odd bytes,
- * stored as 16 (the buffers have 4 bytes to spare); returns the blocks
- * done. */
-__attribute__((target("ssse3"))) static uint32_t
-split_rgb_ssse3(const uint8_t *row, uint32_t bw, uint8_t *even, uint8_t *odd)
-{
-    const __m128i elo = _mm_setr_epi8(0, 1, 2, 6, 7, 8, 12, 13, 14, -1, -1, -1, -1, -1, -1, -1);
-    const __m128i ehi = _mm_setr_epi8(-1, -1, -1, -1, -1, -1, -1, -1, -1, 10, 11, 12, -1, -1, -1, -1);
-    const __m128i olo = _mm_setr_epi8(3, 4, 5, 9, 10, 11, 15, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-    const __m128i ohi = _mm_setr_epi8(-1, -1, -1, -1, -1, -1, -1, 8, 9, 13, 14, 15, -1, -1, -1, -1);
-    uint32_t bx = 0;
-    for (; bx + 4 <= bw; bx += 4) {
-        const __m128i lo = _mm_loadu_si128((const __m128i *)(row + 6 * bx));
-        const __m128i hi = _mm_loadu_si128((const __m128i *)(row + 6 * bx + 8));
-        _mm_storeu_si128((__m128i *)(even + 3 * bx),
-                         _mm_or_si128(_mm_shuffle_epi8(lo, elo), _mm_shuffle_epi8(hi, ehi)));
-        _mm_storeu_si128((__m128i *)(odd + 3 * bx),
-                         _mm_or_si128(_mm_shuffle_epi8(lo, olo), _mm_shuffle_epi8(hi, ohi)));
-    }
-    return bx;
-}
-#endif
-
 /* The whole groups of four RGB blocks a kernel splits (returns how many
  * blocks it did); the rest is plain C. */
 typedef uint32_t split_fn(const uint8_t *, uint32_t, uint8_t *, uint8_t *);
@@ -131,7 +104,7 @@ static void split_dsp_init(unsigned flags)
     split_rgb = split_rgb_none;
 #if GV_HAVE_X86_SIMD
     if (flags & GV_CPU_SSSE3)
-        split_rgb = split_rgb_ssse3;
+        split_rgb = gv_lambda_split_rgb_ssse3;
 #else
     (void)flags;
 #endif

@@ -394,11 +394,10 @@ static void *reader_main(void *arg)
     return NULL;
 }
 
-static int pass1(struct encoder *e, struct gv_source *src)
+/* Rows a chunk of pass 1 holds: about CHUNK_BYTES / 2 of them, even
+ * when the reader reduces pairs of rows (`split`). */
+static uint32_t pass1_chunk(const struct gv_geometry *g, size_t rb0, int split)
 {
-    const int split = e->g.root > 0 && gv_source_reads_raw(src);
-    const struct gv_geometry *g = &e->g;
-    const size_t rb0 = (size_t)g->width * e->c;
     uint32_t chunk = (uint32_t)(CHUNK_BYTES / 2 / rb0);
     /* At least eight chunks (of 64 rows or more) on an image whose rows
      * would fill fewer: the encoder's thread waits for the reader's first
@@ -415,6 +414,49 @@ static int pass1(struct encoder *e, struct gv_source *src)
     /* Pairs of rows reduced by the reader (see struct reader). */
     if (split)
         chunk = chunk < 2 ? 2 : chunk & ~1u;
+    return chunk;
+}
+
+/* Feed the n rows of one chunk of pass 1 (rows; with `split`, also the
+ * reader's n / 2 level-1 rows, red) into the pyramid.  Returns 0 or -1
+ * (e->err set). */
+static int pass1_rows(struct encoder *e, const uint8_t *rows,
+                      const uint8_t *red, uint32_t n, int split)
+{
+    const struct gv_geometry *g = &e->g;
+    const size_t rb0 = (size_t)g->width * e->c;
+    if (split) {
+        const size_t rb1 = (size_t)g->level[1].width * e->c;
+        /* Level 0's rows counted (and a shard's stored), then the
+         * level-1 rows the reader made of them. */
+        for (uint32_t r = 0; r < n; r++)
+            if (store_next(e, 0, rows + (size_t)r * rb0) < 0)
+                return -1;
+        for (uint32_t i = 0; i < n; i += 2)
+            if (push_row(e, 1, red + (size_t)(i / 2) * rb1) < 0)
+                return -1;
+        return 0;
+    }
+    for (uint32_t r = 0; r < n; r++) {
+        const uint8_t *row = rows + (size_t)r * rb0;
+        if (g->root == 0 || e->have_pending[0] || r + 1 == n) {
+            if (push_row(e, 0, row) < 0)
+                return -1;
+        } else {
+            if (push_pair0(e, row, row + rb0) < 0)
+                return -1;
+            r++;
+        }
+    }
+    return 0;
+}
+
+static int pass1(struct encoder *e, struct gv_source *src)
+{
+    const int split = e->g.root > 0 && gv_source_reads_raw(src);
+    const struct gv_geometry *g = &e->g;
+    const size_t rb0 = (size_t)g->width * e->c;
+    const uint32_t chunk = pass1_chunk(g, rb0, split);
     const size_t rb1 = split ? (size_t)g->level[1].width * e->c : 0;
     /* Level 0 in memory: read where it stays, not stored. */
     struct reader rd = {.src = src, .chunk = chunk, .height = g->height,
@@ -473,27 +515,8 @@ static int pass1(struct encoder *e, struct gv_source *src)
         pthread_mutex_unlock(&rd.mu);
         const uint8_t *rows = rd.whole ? rd.whole + (size_t)y * rb0
                                        : rd.buf[slot];
-        if (split) {
-            /* Level 0's rows counted (and a shard's stored), then the
-             * level-1 rows the reader made of them. */
-            for (uint32_t r = 0; r < n; r++)
-                if (store_next(e, 0, rows + (size_t)r * rb0) < 0)
-                    goto out;
-            for (uint32_t i = 0; i < n; i += 2)
-                if (push_row(e, 1, rd.red[slot] + (size_t)(i / 2) * rb1) < 0)
-                    goto out;
-        }
-        for (uint32_t r = 0; !split && r < n; r++) {
-            const uint8_t *row = rows + (size_t)r * rb0;
-            if (g->root == 0 || e->have_pending[0] || r + 1 == n) {
-                if (push_row(e, 0, row) < 0)
-                    goto out;
-            } else {
-                if (push_pair0(e, row, row + rb0) < 0)
-                    goto out;
-                r++;
-            }
-        }
+        if (pass1_rows(e, rows, rd.red[slot], n, split) < 0)
+            goto out;
         pthread_mutex_lock(&rd.mu);
         rd.rows[slot] = 0;
         pthread_cond_broadcast(&rd.cv);

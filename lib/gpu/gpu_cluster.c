@@ -45,7 +45,7 @@ static int do_new(void *arg, struct gv_error *err)
 {
     struct gv_gpu_cluster *c = arg;
     const struct gv_cluster_tree *t = c->t;
-    const struct gv_trimesh *m = t->mesh;
+    const struct gv_mesh *m = t->mesh;
     if (!gv_gpu_info(c->gpu)->ssbo)
         return gv_fail(err, GV_EUNAVAIL, "cluster: the GPU context has no "
                        "storage buffers");
@@ -129,7 +129,7 @@ static int do_select(void *arg, struct gv_error *err)
 {
     struct call *a = arg;
     struct gv_gpu_cluster *c = a->c;
-    const struct gv_trimesh *m = c->t->mesh;
+    const struct gv_mesh *m = c->t->mesh;
     glUseProgram(c->prog);
     for (int i = 0; i < NBUF; i++)
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, (GLuint)i, c->buf[i]);

@@ -64,7 +64,7 @@ static void select_k(struct key *a, size_t n, size_t k)
 }
 
 struct build {
-    const struct gv_trimesh *m;
+    const struct gv_mesh *m;
     uint32_t *perm;
     struct key *keys;
     uint32_t *first, *count;   /* per node: its range of perm */
@@ -153,7 +153,83 @@ static uint32_t lca_rank(const struct gv_cluster_tree *t, uint32_t u,
     return t->rank[a];
 }
 
-int gv_cluster_build(const struct gv_trimesh *m, double time_limit,
+/* Kanaya 2.1, 2.2 for node id: its extent, representative, and its
+ * eight cells of equal vertex counts, appended to the queue at *nn (or
+ * made leaves). */
+static void split_node(struct build *b, struct gv_cluster_tree *t,
+                       uint32_t id, uint32_t *nn)
+{
+    const struct gv_mesh *m = t->mesh;
+    uint32_t f = b->first[id], c = b->count[id];
+    double lo[3] = {INFINITY, INFINITY, INFINITY};
+    double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double sum[3] = {0, 0, 0};
+    for (uint32_t i = f; i < f + c; i++) {
+        const float *p = m->pos + 3 * (size_t)b->perm[i];
+        for (int k = 0; k < 3; k++) {
+            double x = p[k];
+            sum[k] += x;
+            if (x < lo[k]) lo[k] = x;
+            if (x > hi[k]) hi[k] = x;
+        }
+    }
+    double L = 0;
+    for (int k = 0; k < 3; k++)
+        if (hi[k] - lo[k] > L)
+            L = hi[k] - lo[k];
+    b->len[id] = (float)L;
+    for (int k = 0; k < 3; k++)   /* Kanaya 2.2: the mean */
+        t->rep[4 * (size_t)id + k] = (float)(sum[k] / c);
+    /* Kanaya 2.1 step 2 and 4: eight cells of equal vertex counts. */
+    uint32_t cut[9];
+    cut[0] = f;
+    cut[8] = f + c;
+    cut[4] = f + c / 2;
+    split_axis(b, f, c, 0);
+    for (int h = 0; h < 2; h++) {
+        uint32_t a = cut[4 * h], e = cut[4 * h + 4];
+        cut[4 * h + 2] = a + (e - a) / 2;
+        split_axis(b, a, e - a, 1);
+    }
+    for (int q = 0; q < 4; q++) {
+        uint32_t a = cut[2 * q], e = cut[2 * q + 2];
+        cut[2 * q + 1] = a + (e - a) / 2;
+        split_axis(b, a, e - a, 2);
+    }
+    for (int s = 0; s < 8; s++) {
+        uint32_t a = cut[s], cc = cut[s + 1] - cut[s];
+        if (cc == 1) {
+            t->leaf_parent[b->perm[a]] = id;
+        } else if (cc > 1) {
+            b->first[*nn] = a;
+            b->count[*nn] = cc;
+            t->parent[*nn] = id;
+            t->depth[*nn] = t->depth[id] + 1;
+            (*nn)++;
+        }
+    }
+}
+
+/* Kanaya 2.3 / pass 1: each triangle's threshold, counted into
+ * t->faces_at. */
+static void count_faces(struct gv_cluster_tree *t)
+{
+    for (uint32_t i = 0; i < t->mesh->ntris; i++) {
+        const uint32_t *c = t->mesh->tris + 3 * (size_t)i;
+        uint32_t r0 = lca_rank(t, c[0], c[1]);
+        uint32_t r1 = lca_rank(t, c[1], c[2]);
+        uint32_t r2 = lca_rank(t, c[0], c[2]);
+        if (r0 == NONE || r1 == NONE || r2 == NONE)
+            continue;
+        uint32_t r = r0 > r1 ? r0 : r1;
+        r = r > r2 ? r : r2;
+        t->faces_at[r + 1]++;   /* survives once T > r */
+    }
+    for (uint32_t T = 1; T <= t->nnodes; T++)
+        t->faces_at[T] += t->faces_at[T - 1];
+}
+
+int gv_cluster_build(const struct gv_mesh *m, double time_limit,
                      struct gv_cluster_tree *t, struct gv_error *err)
 {
     memset(t, 0, sizeof *t);
@@ -199,54 +275,7 @@ int gv_cluster_build(const struct gv_trimesh *m, double time_limit,
                     time_limit);
             goto fail;
         }
-        uint32_t f = b.first[id], c = b.count[id];
-        double lo[3] = {INFINITY, INFINITY, INFINITY};
-        double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        double sum[3] = {0, 0, 0};
-        for (uint32_t i = f; i < f + c; i++) {
-            const float *p = m->pos + 3 * (size_t)b.perm[i];
-            for (int k = 0; k < 3; k++) {
-                double x = p[k];
-                sum[k] += x;
-                if (x < lo[k]) lo[k] = x;
-                if (x > hi[k]) hi[k] = x;
-            }
-        }
-        double L = 0;
-        for (int k = 0; k < 3; k++)
-            if (hi[k] - lo[k] > L)
-                L = hi[k] - lo[k];
-        b.len[id] = (float)L;
-        for (int k = 0; k < 3; k++)   /* Kanaya 2.2: the mean */
-            t->rep[4 * (size_t)id + k] = (float)(sum[k] / c);
-        /* Kanaya 2.1 step 2 and 4: eight cells of equal vertex counts. */
-        uint32_t cut[9];
-        cut[0] = f;
-        cut[8] = f + c;
-        cut[4] = f + c / 2;
-        split_axis(&b, f, c, 0);
-        for (int h = 0; h < 2; h++) {
-            uint32_t a = cut[4 * h], e = cut[4 * h + 4];
-            cut[4 * h + 2] = a + (e - a) / 2;
-            split_axis(&b, a, e - a, 1);
-        }
-        for (int q = 0; q < 4; q++) {
-            uint32_t a = cut[2 * q], e = cut[2 * q + 2];
-            cut[2 * q + 1] = a + (e - a) / 2;
-            split_axis(&b, a, e - a, 2);
-        }
-        for (int s = 0; s < 8; s++) {
-            uint32_t a = cut[s], cc = cut[s + 1] - cut[s];
-            if (cc == 1) {
-                t->leaf_parent[b.perm[a]] = id;
-            } else if (cc > 1) {
-                b.first[nn] = a;
-                b.count[nn] = cc;
-                t->parent[nn] = id;
-                t->depth[nn] = t->depth[id] + 1;
-                nn++;
-            }
-        }
+        split_node(&b, t, id, &nn);
     }
     t->nnodes = nn;
     /* Kanaya eq. 1 and 2: i_level, then the rank in r_level order. */
@@ -285,20 +314,7 @@ int gv_cluster_build(const struct gv_trimesh *m, double time_limit,
         t->max_ilevel = il;
         r = e;
     }
-    /* Kanaya 2.3 / pass 1: each triangle's threshold, counted. */
-    for (uint32_t i = 0; i < m->ntris; i++) {
-        const uint32_t *c = m->tris + 3 * (size_t)i;
-        uint32_t r0 = lca_rank(t, c[0], c[1]);
-        uint32_t r1 = lca_rank(t, c[1], c[2]);
-        uint32_t r2 = lca_rank(t, c[0], c[2]);
-        if (r0 == NONE || r1 == NONE || r2 == NONE)
-            continue;
-        uint32_t r = r0 > r1 ? r0 : r1;
-        r = r > r2 ? r : r2;
-        t->faces_at[r + 1]++;   /* survives once T > r */
-    }
-    for (uint32_t T = 1; T <= nn; T++)
-        t->faces_at[T] += t->faces_at[T - 1];
+    count_faces(t);
     free(order);
     free(b.perm);
     free(b.keys);
@@ -393,7 +409,7 @@ uint32_t gv_cluster_level(const struct gv_cluster_tree *t, uint64_t faces,
 void gv_cluster_select(const struct gv_cluster_tree *t, uint32_t T,
                        uint32_t *cluster, uint8_t *keep)
 {
-    const struct gv_trimesh *m = t->mesh;
+    const struct gv_mesh *m = t->mesh;
     for (uint32_t v = 0; v < m->nverts; v++) {   /* pass 2 */
         uint32_t p = t->leaf_parent[v];
         if (p == NONE || t->rank[p] < T) {
@@ -413,9 +429,9 @@ void gv_cluster_select(const struct gv_cluster_tree *t, uint32_t T,
 
 int gv_cluster_collect(const struct gv_cluster_tree *t, const uint32_t *cluster,
                        const uint8_t *keep, const float *vpos,
-                       struct gv_trimesh *out, struct gv_error *err)
+                       struct gv_mesh *out, struct gv_error *err)
 {
-    const struct gv_trimesh *m = t->mesh;
+    const struct gv_mesh *m = t->mesh;
     memset(out, 0, sizeof *out);
     size_t ids = (size_t)t->nnodes + m->nverts;
     uint32_t *remap = malloc((ids ? ids : 1) * sizeof *remap);
@@ -465,6 +481,6 @@ int gv_cluster_collect(const struct gv_cluster_tree *t, const uint32_t *cluster,
     return 0;
 oom:
     free(remap);
-    gv_trimesh_free(out);
+    gv_mesh_free(out);
     return gv_fail(err, GV_ENOMEM, "cluster: out of memory for the result");
 }

@@ -47,14 +47,13 @@
 #include <stdint.h>
 
 #include "base/error.h"
-#include "mesh/mesh_read.h"
-#include "mesh/mesh_write.h"
+#include "mesh/mesh.h"
 
 #define GV_CLUSTER_NONE UINT32_MAX
 
 /* The clustering information of one mesh (read-only after the build). */
 struct gv_cluster_tree {
-    const struct gv_trimesh *mesh;  /* borrowed: must outlive the tree */
+    const struct gv_mesh *mesh;  /* borrowed: must outlive the tree */
     uint32_t nnodes;        /* internal nodes; node 0 is the root */
     uint32_t *parent;       /* per node: its parent, GV_CLUSTER_NONE at the root */
     uint32_t *rank;         /* per node: its place in r_level order */
@@ -74,7 +73,7 @@ enum gv_cluster_mode { GV_CLUSTER_EXACT, GV_CLUSTER_PAPER };
 /* Build the tree of m (the CPU part, Kanaya 2.1-2.3).  Returns 0, or -1
  * with *err (GV_ENOMEM, GV_ETIMEOUT past time_limit seconds if > 0).
  * Free with gv_cluster_tree_free.  Thread-safe. */
-int gv_cluster_build(const struct gv_trimesh *m, double time_limit,
+int gv_cluster_build(const struct gv_mesh *m, double time_limit,
                      struct gv_cluster_tree *t, struct gv_error *err);
 void gv_cluster_tree_free(struct gv_cluster_tree *t);
 
@@ -101,14 +100,6 @@ void gv_cluster_select(const struct gv_cluster_tree *t, uint32_t T,
  */
 int gv_cluster_collect(const struct gv_cluster_tree *t, const uint32_t *cluster,
                        const uint8_t *keep, const float *vpos,
-                       struct gv_trimesh *out, struct gv_error *err);
-
-/* A general triangle mesh as GLB, PLY (binary little endian) or OBJ, its
- * axes as given; `comment` (may be NULL) goes into the header.  *out is
- * malloc'ed.  Returns 0, or -1: GV_EFORMAT for quantized-mesh, GV_ENOMEM,
- * GV_EINVAL for a GLB over 4 GiB. */
-int gv_trimesh_encode(enum gv_mesh_format f, const struct gv_trimesh *m,
-                      const char *comment, uint8_t **out, size_t *len,
-                      struct gv_error *err);
+                       struct gv_mesh *out, struct gv_error *err);
 
 #endif

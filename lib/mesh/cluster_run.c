@@ -23,7 +23,7 @@ int gv_simplify(const uint8_t *in, size_t len,
                 size_t *out_len, struct gv_simplify_stats *st,
                 struct gv_error *err)
 {
-    struct gv_trimesh m = {0}, res = {0};
+    struct gv_mesh m = {0}, res = {0};
     struct gv_cluster_tree t = {0};
     uint32_t *cluster = NULL;
     uint8_t *keep = NULL;
@@ -81,7 +81,8 @@ int gv_simplify(const uint8_t *in, size_t len,
              "level %u of %u", res.ntris, m.ntris,
              (unsigned long long)st->asked, st->level, t.nnodes);
     clock_gettime(CLOCK_MONOTONIC, &t0);
-    if (gv_trimesh_encode(o->format, &res, comment, out, out_len, err) < 0)
+    if (gv_mesh_encode(o->format, &res, NULL, comment, out, out_len,
+                       err) < 0)
         goto out;
     st->write_ms = ms_since(&t0);
     rc = 0;
@@ -89,8 +90,8 @@ out:
     free(cluster);
     free(keep);
     free(vpos);
-    gv_trimesh_free(&res);
+    gv_mesh_free(&res);
     gv_cluster_tree_free(&t);
-    gv_trimesh_free(&m);
+    gv_mesh_free(&m);
     return rc;
 }

@@ -9,6 +9,8 @@
 #define GV_MESH_CLUSTER_RUN_H
 
 #include "mesh/cluster.h"
+#include "mesh/io/mesh_read.h"
+#include "mesh/io/mesh_write.h"
 
 typedef int gv_cluster_select_fn(void *ctx, const struct gv_cluster_tree *t,
                                  uint32_t T, uint32_t *cluster, uint8_t *keep,

@@ -642,8 +642,97 @@ static void brute_select(const struct tin *m, double *be_out, int64_t *bi_out,
     *bt_out = bt;
 }
 
+/* Border-first insertion: the vertices of the 1D greedy insertion along
+ * each side (gv_tin_edge_greedy to error goal), inserted on the hull.
+ * bpos has room for the longer side.  Returns 0, or -1 out of memory. */
+static int insert_border(struct tin *m, double goal, uint32_t *bpos)
+{
+    const float *h = m->h;
+    size_t stride = m->stride;
+    uint32_t w = m->w, hgt = m->hgt;
+    int32_t W = (int32_t)w - 1, H = (int32_t)hgt - 1;
+    /* Each side in the hull's direction (counter-clockwise: +x along
+     * the top, +y down the right, -x along the bottom, -y up the
+     * left), from its first corner: each sample lies on the hull edge
+     * leaving the one inserted before it. */
+    struct {
+        const float *s;
+        size_t step;
+        uint32_t n;
+        int32_t x0, y0, dx, dy;
+        int reverse;
+        int32_t corner;
+    } edge[4] = {
+        {h, 1, w, 0, 0, 1, 0, 0, 0},
+        {h + W, stride, hgt, W, 0, 0, 1, 0, 1},
+        {h + (size_t)H * stride, 1, w, 0, H, 1, 0, 1, 2},
+        {h, stride, hgt, 0, 0, 0, 1, 1, 3},
+    };
+    for (int k = 0; k < 4; k++) {
+        uint32_t n;
+        if (gv_tin_edge_greedy(edge[k].s, edge[k].step, edge[k].n, goal,
+                               bpos, &n) < 0)
+            return -1;
+        int32_t prev = edge[k].corner;
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t q = bpos[edge[k].reverse ? n - 1 - i : i];
+            int32_t x = edge[k].x0 + edge[k].dx * (int32_t)q;
+            int32_t y = edge[k].y0 + edge[k].dy * (int32_t)q;
+            if (insert_point(m, hull_out(m, prev) / 3, x, y) < 0)
+                return -1;
+            prev = (int32_t)m->nv - 1;
+        }
+    }
+    return 0;
+}
+
+/* The measured error of the mesh, over every sample (clears used). */
+static double measured_error(struct tin *m)
+{
+    double me = 0;
+    memset(m->used, 0, (size_t)m->w * m->hgt);
+    for (uint32_t t = 0; t < m->nt; t++) {
+        double e;
+        int64_t i;
+        scan_tri(m, (int32_t)t, 1, &e, &i);
+        if (e > me)
+            me = e;
+    }
+    return me;
+}
+
+/* The result of the private state: the one mesh type (mesh/mesh.h), the
+ * vertices as grid coordinates in floats.  Returns 0, or -1 out of
+ * memory (*out then empty). */
+static int hand_out(const struct tin *m, uint32_t w, uint32_t hgt, double me,
+                    struct gv_mesh *out)
+{
+    out->width = w;
+    out->height = hgt;
+    out->nverts = m->nv;
+    out->ntris = m->nt;
+    out->max_error = me;
+    out->pos = malloc((size_t)m->nv * 3 * sizeof *out->pos);
+    out->tris = malloc((size_t)m->nt * 3 * sizeof *out->tris);
+    if (!out->pos || !out->tris) {
+        gv_mesh_free(out);
+        return -1;
+    }
+    out->zmin = out->zmax = m->vz[0];
+    for (uint32_t i = 0; i < m->nv; i++) {
+        out->pos[3 * (size_t)i] = (float)m->vx[i];
+        out->pos[3 * (size_t)i + 1] = (float)m->vy[i];
+        out->pos[3 * (size_t)i + 2] = m->vz[i];
+        if (m->vz[i] < out->zmin) out->zmin = m->vz[i];
+        if (m->vz[i] > out->zmax) out->zmax = m->vz[i];
+    }
+    for (uint32_t i = 0; i < 3 * m->nt; i++)
+        out->tris[i] = (uint32_t)m->tv[i];
+    return 0;
+}
+
 static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
-                 const struct gv_tin_params *p, int brute, struct gv_tin *out,
+                 const struct gv_tin_params *p, int brute, struct gv_mesh *out,
                  struct gv_error *err)
 {
     struct tin m;
@@ -687,38 +776,8 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
     add_tri(&m, 0, 2, 3, t0 + 2, -1, -1, -1);
 
     if (p->border_first) {
-        /* Each side in the hull's direction (counter-clockwise: +x along
-         * the top, +y down the right, -x along the bottom, -y up the
-         * left), from its first corner: each sample lies on the hull edge
-         * leaving the one inserted before it. */
-        struct {
-            const float *s;
-            size_t step;
-            uint32_t n;
-            int32_t x0, y0, dx, dy;
-            int reverse;
-            int32_t corner;
-        } edge[4] = {
-            {h, 1, w, 0, 0, 1, 0, 0, 0},
-            {h + W, stride, hgt, W, 0, 0, 1, 0, 1},
-            {h + (size_t)H * stride, 1, w, 0, H, 1, 0, 1, 2},
-            {h, stride, hgt, 0, 0, 0, 1, 1, 3},
-        };
-        for (int k = 0; k < 4; k++) {
-            uint32_t n;
-            if (gv_tin_edge_greedy(edge[k].s, edge[k].step, edge[k].n, goal,
-                                   bpos, &n) < 0)
-                goto nomem;
-            int32_t prev = edge[k].corner;
-            for (uint32_t i = 0; i < n; i++) {
-                uint32_t q = bpos[edge[k].reverse ? n - 1 - i : i];
-                int32_t x = edge[k].x0 + edge[k].dx * (int32_t)q;
-                int32_t y = edge[k].y0 + edge[k].dy * (int32_t)q;
-                if (insert_point(&m, hull_out(&m, prev) / 3, x, y) < 0)
-                    goto nomem;
-                prev = (int32_t)m.nv - 1;
-            }
-        }
+        if (insert_border(&m, goal, bpos) < 0)
+            goto nomem;
         if (p->max_triangles && m.nt > p->max_triangles) {
             gv_fail(err, GV_ELIMIT, "mesh: the border alone needs %u "
                     "triangles at error %g, over the limit of %u", m.nt,
@@ -768,38 +827,8 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
     }
 
     /* the measured error, over every sample */
-    double me = 0;
-    memset(m.used, 0, (size_t)w * hgt);
-    for (uint32_t t = 0; t < m.nt; t++) {
-        double e;
-        int64_t i;
-        scan_tri(&m, (int32_t)t, 1, &e, &i);
-        if (e > me)
-            me = e;
-    }
-    out->width = w;
-    out->height = hgt;
-    out->nverts = m.nv;
-    out->ntris = m.nt;
-    out->max_error = me;
-    out->vx = malloc((size_t)m.nv * sizeof *out->vx);
-    out->vy = malloc((size_t)m.nv * sizeof *out->vy);
-    out->tris = malloc((size_t)m.nt * 3 * sizeof *out->tris);
-    out->vz = m.vz;
-    m.vz = NULL;
-    if (!out->vx || !out->vy || !out->tris) {
-        gv_tin_free(out);
+    if (hand_out(&m, w, hgt, measured_error(&m), out) < 0)
         goto nomem;
-    }
-    out->zmin = out->zmax = out->vz[0];
-    for (uint32_t i = 0; i < m.nv; i++) {
-        out->vx[i] = (uint32_t)m.vx[i];
-        out->vy[i] = (uint32_t)m.vy[i];
-        if (out->vz[i] < out->zmin) out->zmin = out->vz[i];
-        if (out->vz[i] > out->zmax) out->zmax = out->vz[i];
-    }
-    for (uint32_t i = 0; i < 3 * m.nt; i++)
-        out->tris[i] = (uint32_t)m.tv[i];
     rc = 0;
     goto out;
 nomem:
@@ -811,7 +840,7 @@ out:
 }
 
 int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
-                 const struct gv_tin_params *p, struct gv_tin *out,
+                 const struct gv_tin_params *p, struct gv_mesh *out,
                  struct gv_error *err)
 {
     return build(h, w, hgt, stride, p, 0, out, err);
@@ -819,18 +848,7 @@ int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
 
 int gv_tin_build_brute(const float *h, uint32_t w, uint32_t hgt,
                        size_t stride, const struct gv_tin_params *p,
-                       struct gv_tin *out, struct gv_error *err)
+                       struct gv_mesh *out, struct gv_error *err)
 {
     return build(h, w, hgt, stride, p, 1, out, err);
-}
-
-void gv_tin_free(struct gv_tin *t)
-{
-    if (!t)
-        return;
-    free(t->vx);
-    free(t->vy);
-    free(t->vz);
-    free(t->tris);
-    memset(t, 0, sizeof *t);
 }

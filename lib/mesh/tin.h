@@ -29,6 +29,7 @@
 #include <stdint.h>
 
 #include "base/error.h"
+#include "mesh/mesh.h"
 
 /* The largest side of a grid: coordinates stay exact in the 128-bit
  * circle test and sample indices in 32 bits. */
@@ -44,32 +45,20 @@ struct gv_tin_params {
     double time_limit;       /* seconds of wall time; 0: none */
 };
 
-struct gv_tin {
-    uint32_t width, height;  /* the grid */
-    uint32_t nverts;         /* vertices in insertion order (the corners
-                                first: (0,0), (W-1,0), (W-1,H-1), (0,H-1)) */
-    uint32_t *vx, *vy;       /* grid coordinates of each vertex */
-    float *vz;               /* height of each vertex */
-    uint32_t ntris;
-    uint32_t *tris;          /* 3 vertex indices per triangle, counter-
-                                clockwise in (x, y) with y as a math axis:
-                                orient(a, b, c) > 0 */
-    double max_error;        /* measured: max over every sample of
-                                |height - mesh| */
-    float zmin, zmax;        /* range of the vertex heights */
-};
-
 /*
  * Build the TIN of a W x H grid of heights (row i at h + i * stride
  * floats).  At least one goal must be set (max_error >= 0 or
  * max_triangles > 0); both may be, and the first reached stops.  W and H
- * are 2 .. GV_TIN_MAX_SIDE.  Heights must be finite.  *out is filled
- * (free with gv_tin_free).  Returns 0, or -1: GV_EINVAL for bad sizes or
+ * are 2 .. GV_TIN_MAX_SIDE.  Heights must be finite.  *out is filled with
+ * a grid mesh (mesh/mesh.h; free with gv_mesh_free): the vertices in
+ * insertion order, the corners first: (0,0), (W-1,0), (W-1,H-1), (0,H-1);
+ * the triangles counter-clockwise in (x, y) with y as a math axis
+ * (orient(a, b, c) > 0); max_error measured over every sample.  Returns 0, or -1: GV_EINVAL for bad sizes or
  * goals, GV_ELIMIT when border_first's border vertices alone make more
  * than max_triangles triangles, GV_ETIMEOUT past time_limit, GV_ENOMEM.  Thread-safe (no shared state).
  */
 int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
-                 const struct gv_tin_params *p, struct gv_tin *out,
+                 const struct gv_tin_params *p, struct gv_mesh *out,
                  struct gv_error *err);
 
 /*
@@ -79,14 +68,12 @@ int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
  * tin_tiled.c).  Needs max_error >= 0 and no max_triangles.  The result
  * is the same for any thread count; it is not the single-tile mesh (the
  * tile borders force their own vertices, and the union is Delaunay within
- * each tile only).  Returns 0, or -1 as gv_tin_build.
+ * each tile only).  W and H are at most GV_MESH_MAX_GRID.  Returns 0, or
+ * -1 as gv_tin_build.
  */
 int gv_tin_build_tiled(const float *h, uint32_t w, uint32_t hgt, size_t stride,
                        const struct gv_tin_params *p, uint32_t tile,
-                       int threads, struct gv_tin *out, struct gv_error *err);
-
-/* Free the arrays of *t and zero it.  gv_tin_free(NULL) does nothing. */
-void gv_tin_free(struct gv_tin *t);
+                       int threads, struct gv_mesh *out, struct gv_error *err);
 
 /*
  * The 1D greedy insertion along one edge of samples s[0 .. n-1] (n >= 2):

@@ -15,6 +15,6 @@
 
 int gv_tin_build_brute(const float *h, uint32_t w, uint32_t hgt,
                        size_t stride, const struct gv_tin_params *p,
-                       struct gv_tin *out, struct gv_error *err);
+                       struct gv_mesh *out, struct gv_error *err);
 
 #endif

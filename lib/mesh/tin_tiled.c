@@ -25,7 +25,7 @@ struct job {
     size_t stride;
     uint32_t w, hgt, tile, tx, ty;
     struct gv_tin_params p;
-    struct gv_tin *tins;
+    struct gv_mesh *tins;
     struct gv_error *errs;
     int *rcs;
 };
@@ -44,7 +44,7 @@ static void run_tile(void *ctx, size_t i, int worker)
 
 int gv_tin_build_tiled(const float *h, uint32_t w, uint32_t hgt, size_t stride,
                        const struct gv_tin_params *p, uint32_t tile,
-                       int threads, struct gv_tin *out, struct gv_error *err)
+                       int threads, struct gv_mesh *out, struct gv_error *err)
 {
     memset(out, 0, sizeof *out);
     if (!(p->max_error >= 0) || p->max_triangles)
@@ -52,6 +52,9 @@ int gv_tin_build_tiled(const float *h, uint32_t w, uint32_t hgt, size_t stride,
                        "and no triangle limit");
     if (tile < 1 || w < 2 || hgt < 2)
         return gv_fail(err, GV_EINVAL, "mesh: bad tile size %u", tile);
+    if (w > GV_MESH_MAX_GRID || hgt > GV_MESH_MAX_GRID)
+        return gv_fail(err, GV_EINVAL, "mesh: a grid of %ux%u samples is "
+                       "over %u a side", w, hgt, GV_MESH_MAX_GRID);
     struct job j = {.h = h, .stride = stride, .w = w, .hgt = hgt, .tile = tile,
                     .p = *p};
     j.p.border_first = 1;
@@ -90,19 +93,17 @@ int gv_tin_build_tiled(const float *h, uint32_t w, uint32_t hgt, size_t stride,
     /* map[sample] = vertex + 1 for the samples on tile borders, where
      * vertices repeat */
     map = calloc((size_t)w * hgt, sizeof *map);
-    out->vx = malloc(nv * sizeof *out->vx);
-    out->vy = malloc(nv * sizeof *out->vy);
-    out->vz = malloc(nv * sizeof *out->vz);
+    out->pos = malloc(nv * 3 * sizeof *out->pos);
     out->tris = malloc(nt * 3 * sizeof *out->tris);
     uint32_t *remap = NULL;
-    if (!map || !out->vx || !out->vy || !out->vz || !out->tris) {
+    if (!map || !out->pos || !out->tris) {
         gv_fail(err, GV_ENOMEM, "mesh: out of memory");
         goto out;
     }
     out->width = w;
     out->height = hgt;
     for (size_t i = 0; i < n; i++) {
-        const struct gv_tin *t = &j.tins[i];
+        const struct gv_mesh *t = &j.tins[i];
         uint32_t x0 = (uint32_t)(i % j.tx) * tile;
         uint32_t y0 = (uint32_t)(i / j.tx) * tile;
         free(remap);
@@ -112,12 +113,13 @@ int gv_tin_build_tiled(const float *h, uint32_t w, uint32_t hgt, size_t stride,
             goto out;
         }
         for (uint32_t v = 0; v < t->nverts; v++) {
-            uint32_t x = x0 + t->vx[v], y = y0 + t->vy[v];
+            uint32_t x = x0 + gv_mesh_gx(t, v), y = y0 + gv_mesh_gy(t, v);
             size_t s = (size_t)y * w + x;
             if (!map[s]) {
-                out->vx[out->nverts] = x;
-                out->vy[out->nverts] = y;
-                out->vz[out->nverts] = t->vz[v];
+                float *o = out->pos + 3 * (size_t)out->nverts;
+                o[0] = (float)x;
+                o[1] = (float)y;
+                o[2] = gv_mesh_gz(t, v);
                 map[s] = ++out->nverts;
             }
             remap[v] = map[s] - 1;
@@ -129,18 +131,19 @@ int gv_tin_build_tiled(const float *h, uint32_t w, uint32_t hgt, size_t stride,
             out->max_error = t->max_error;
     }
     free(remap);
-    out->zmin = out->zmax = out->vz[0];
+    out->zmin = out->zmax = gv_mesh_gz(out, 0);
     for (uint32_t v = 0; v < out->nverts; v++) {
-        if (out->vz[v] < out->zmin) out->zmin = out->vz[v];
-        if (out->vz[v] > out->zmax) out->zmax = out->vz[v];
+        float z = gv_mesh_gz(out, v);
+        if (z < out->zmin) out->zmin = z;
+        if (z > out->zmax) out->zmax = z;
     }
     rc = 0;
 out:
     if (rc < 0)
-        gv_tin_free(out);
+        gv_mesh_free(out);
     if (j.tins)
         for (size_t i = 0; i < n; i++)
-            gv_tin_free(&j.tins[i]);
+            gv_mesh_free(&j.tins[i]);
     free(j.tins);
     free(j.errs);
     free(j.rcs);

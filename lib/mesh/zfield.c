@@ -391,7 +391,7 @@ struct builder {
     uint32_t n;
     const uint8_t *en;
     uint32_t *index;              /* n*n: vertex number + 1, 0 = unused */
-    struct gv_tin *t;
+    struct gv_mesh *t;
     uint32_t vcap, tcap;
     int oom;
 };
@@ -401,27 +401,21 @@ static uint32_t vertex(struct builder *b, uint32_t x, uint32_t y)
     uint32_t *slot = &b->index[(size_t)y * b->n + x];
     if (*slot)
         return *slot - 1;
-    struct gv_tin *t = b->t;
+    struct gv_mesh *t = b->t;
     if (t->nverts == b->vcap) {
         const uint32_t c = b->vcap ? 2 * b->vcap : 256;
-        uint32_t *vx = realloc(t->vx, c * sizeof *vx);
-        if (vx)
-            t->vx = vx;
-        uint32_t *vy = realloc(t->vy, c * sizeof *vy);
-        if (vy)
-            t->vy = vy;
-        float *vz = realloc(t->vz, c * sizeof *vz);
-        if (vz)
-            t->vz = vz;
-        if (!vx || !vy || !vz) {
+        float *pos = realloc(t->pos, (size_t)c * 3 * sizeof *pos);
+        if (!pos) {
             b->oom = 1;
             return 0;
         }
+        t->pos = pos;
         b->vcap = c;
     }
-    t->vx[t->nverts] = x;
-    t->vy[t->nverts] = y;
-    t->vz[t->nverts] = b->z[(size_t)y * b->n + x];
+    float *p = t->pos + 3 * (size_t)t->nverts;
+    p[0] = (float)x;
+    p[1] = (float)y;
+    p[2] = b->z[(size_t)y * b->n + x];
     *slot = ++t->nverts;
     return t->nverts - 1;
 }
@@ -429,7 +423,7 @@ static uint32_t vertex(struct builder *b, uint32_t x, uint32_t y)
 static void emit(struct builder *b, uint32_t ax, uint32_t ay, uint32_t px, uint32_t py,
                  uint32_t cx, uint32_t cy)
 {
-    struct gv_tin *t = b->t;
+    struct gv_mesh *t = b->t;
     if (t->ntris == b->tcap) {
         const uint32_t c = b->tcap ? 2 * b->tcap : 256;
         uint32_t *q = realloc(t->tris, (size_t)c * 3 * sizeof *q);
@@ -440,7 +434,7 @@ static void emit(struct builder *b, uint32_t ax, uint32_t ay, uint32_t px, uint3
         t->tris = q;
         b->tcap = c;
     }
-    /* Counter-clockwise with y as a math axis (gv_tin's convention). */
+    /* Counter-clockwise with y as a math axis (the grid mesh's convention). */
     const int64_t o = ((int64_t)px - ax) * ((int64_t)cy - ay) -
                       ((int64_t)py - ay) * ((int64_t)cx - ax);
     uint32_t va = vertex(b, ax, ay), vp = vertex(b, px, py), vc = vertex(b, cx, cy);
@@ -480,14 +474,16 @@ static void refine(struct builder *b, uint32_t ax, uint32_t ay, uint32_t px, uin
 
 /* Largest |z - mesh| over every sample, each triangle scanned over its
  * bounding box with exact inclusion tests. */
-static double measure(const float *z, uint32_t n, const struct gv_tin *t)
+static double measure(const float *z, uint32_t n, const struct gv_mesh *t)
 {
     double worst = 0;
     for (uint32_t i = 0; i < t->ntris; i++) {
         const uint32_t *v = &t->tris[(size_t)i * 3];
-        const int64_t x0 = t->vx[v[0]], y0 = t->vy[v[0]], x1 = t->vx[v[1]], y1 = t->vy[v[1]];
-        const int64_t x2 = t->vx[v[2]], y2 = t->vy[v[2]];
-        const double z0 = t->vz[v[0]], z1 = t->vz[v[1]], z2 = t->vz[v[2]];
+        const int64_t x0 = gv_mesh_gx(t, v[0]), y0 = gv_mesh_gy(t, v[0]);
+        const int64_t x1 = gv_mesh_gx(t, v[1]), y1 = gv_mesh_gy(t, v[1]);
+        const int64_t x2 = gv_mesh_gx(t, v[2]), y2 = gv_mesh_gy(t, v[2]);
+        const double z0 = gv_mesh_gz(t, v[0]), z1 = gv_mesh_gz(t, v[1]);
+        const double z2 = gv_mesh_gz(t, v[2]);
         const int64_t area = (x1 - x0) * (y2 - y0) - (y1 - y0) * (x2 - x0);
         int64_t lx = x0 < x1 ? x0 : x1, hx = x0 > x1 ? x0 : x1;
         int64_t ly = y0 < y1 ? y0 : y1, hy = y0 > y1 ? y0 : y1;
@@ -509,7 +505,7 @@ static double measure(const float *z, uint32_t n, const struct gv_tin *t)
 }
 
 int gv_zfield_mesh(const float *z, uint32_t n, const uint8_t *enabled, int measure_error,
-                   struct gv_tin *out, struct gv_error *err)
+                   struct gv_mesh *out, struct gv_error *err)
 {
     memset(out, 0, sizeof *out);
     if (!gv_zfield_side_ok(n))
@@ -520,7 +516,7 @@ int gv_zfield_mesh(const float *z, uint32_t n, const uint8_t *enabled, int measu
         return gv_fail(err, GV_ENOMEM, "zfield: out of memory");
     out->width = out->height = n;
     const uint32_t e = n - 1;
-    /* The corners first, as gv_tin numbers them. */
+    /* The corners first, as gv_tin_build numbers them. */
     vertex(&b, 0, 0);
     vertex(&b, e, 0);
     vertex(&b, e, e);
@@ -530,13 +526,14 @@ int gv_zfield_mesh(const float *z, uint32_t n, const uint8_t *enabled, int measu
     refine(&b, e, e, 0, e, 0, 0);
     free(b.index);
     if (b.oom) {
-        gv_tin_free(out);
+        gv_mesh_free(out);
         return gv_fail(err, GV_ENOMEM, "zfield: out of memory");
     }
     out->zmin = INFINITY, out->zmax = -INFINITY;
     for (uint32_t i = 0; i < out->nverts; i++) {
-        out->zmin = out->vz[i] < out->zmin ? out->vz[i] : out->zmin;
-        out->zmax = out->vz[i] > out->zmax ? out->vz[i] : out->zmax;
+        const float vz = gv_mesh_gz(out, i);
+        out->zmin = vz < out->zmin ? vz : out->zmin;
+        out->zmax = vz > out->zmax ? vz : out->zmax;
     }
     out->max_error = measure_error ? measure(z, n, out) : -1;
     return 0;

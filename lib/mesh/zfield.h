@@ -48,7 +48,7 @@
 #include <stdint.h>
 
 #include "base/error.h"
-#include "mesh/tin.h"
+#include "mesh/mesh.h"
 
 /* Largest grid side: 2^15 + 1 samples (flags fit in memory; levels < 32). */
 #define GV_ZFIELD_MAX_SIDE 32769u
@@ -83,14 +83,14 @@ int gv_zfield_enable(const float *z, uint32_t n, const struct gv_zfield_params *
 /*
  * The mesh of the enabled vertices: the bintree cut where the hypotenuse
  * midpoint is disabled, triangles in depth-first order from the root
- * triangles, vertices numbered by first use.  Fills *out like
- * gv_tin_build (vx, vy, vz, tris counter-clockwise; free with
- * gv_tin_free); max_error is measured against every sample when
+ * triangles, vertices numbered by first use.  Fills *out with a grid
+ * mesh like gv_tin_build (mesh/mesh.h: triangles counter-clockwise; free
+ * with gv_mesh_free); max_error is measured against every sample when
  * `measure` (a pass over the grid), else -1 (per-frame use).  Returns 0,
  * or -1 with *err (GV_ENOMEM, GV_EINVAL).
  */
 int gv_zfield_mesh(const float *z, uint32_t n, const uint8_t *enabled, int measure,
-                   struct gv_tin *out, struct gv_error *err);
+                   struct gv_mesh *out, struct gv_error *err);
 
 /*
  * Vertex geometry shared with the GPU sweep: level `lev` (0 .. 2k-1) of a

@@ -1,6 +1,6 @@
 /*
  * fuzz_mesh_read.c - libFuzzer target for the mesh readers
- * (lib/mesh/mesh_read.h: PLY ascii and binary, OBJ, GLB) and the
+ * (lib/mesh/io/mesh_read.h: PLY ascii and binary, OBJ, GLB) and the
  * simplifier behind them (lib/mesh/cluster.h).
  *
  * Byte 0 picks the reader (0: sniffed, 1: PLY, 2: OBJ, 3: GLB, modulo 4);
@@ -17,7 +17,7 @@
 
 #include "fuzz.h"
 #include "mesh/cluster.h"
-#include "mesh/mesh_read.h"
+#include "mesh/io/mesh_read.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -33,7 +33,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     memcpy(buf, data + 1, len);
     struct gv_mesh_limits lim = {.max_bytes = 1u << 20, .max_verts = 1u << 16,
                                  .max_tris = 1u << 16};
-    struct gv_trimesh m;
+    struct gv_mesh m;
     struct gv_error err = {0};
     err.text[0] = 0;
     if (gv_mesh_read(buf, len, in, &lim, &m, &err) < 0) {
@@ -65,18 +65,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 n += keep[f];
             if (n != t.faces_at[T])
                 abort();
-            struct gv_trimesh r;
+            struct gv_mesh r;
             if (gv_cluster_collect(&t, cl, keep, NULL, &r, &err) == 0) {
                 if (r.ntris != n)
                     abort();
-                gv_trimesh_free(&r);
+                gv_mesh_free(&r);
             }
         }
         free(cl);
         free(keep);
         gv_cluster_tree_free(&t);
     }
-    gv_trimesh_free(&m);
+    gv_mesh_free(&m);
     free(buf);
     return 0;
 }

@@ -2,7 +2,9 @@
  * mesh_read.h - arbitrary triangle meshes read from outside files: PLY
  * (ascii and binary little endian), Wavefront OBJ (v and f records) and
  * glTF 2.0 binary (GLB), for `gigaview simplify` and POST
- * /v1/meshes/simplify (docs/MESHES.md, "Simplification").
+ * /v1/meshes/simplify (docs/MESHES.md, "Simplification").  The sniffing is
+ * mesh_read.c; each format's reader is mesh_read_FORMAT.c, declared in
+ * mesh_read_int.h so that the readers never see gv_mesh_read.
  *
  * Every reader is a parser of outside input: it never reads past the
  * buffer, checks every count against the limits before it allocates, and
@@ -18,14 +20,8 @@
 #include <stdint.h>
 
 #include "base/error.h"
+#include "mesh/mesh.h"
 
-/* A triangle mesh: nverts positions (x, y, z floats) and ntris triangles
- * (three vertex indices each, counter-clockwise front faces as read). */
-struct gv_trimesh {
-    uint32_t nverts, ntris;
-    float *pos;        /* 3 * nverts */
-    uint32_t *tris;    /* 3 * ntris */
-};
 
 /* Limits on what a reader accepts; 0 in a field means the default. */
 struct gv_mesh_limits {
@@ -40,27 +36,14 @@ enum gv_mesh_in { GV_MESH_IN_AUTO, GV_MESH_IN_PLY, GV_MESH_IN_OBJ,
 /*
  * Parse the file in buf[0 .. len-1] (no terminator needed) as format `in`
  * (GV_MESH_IN_AUTO: "ply" at the start is PLY, "glTF" GLB, anything else
- * OBJ) into *out (free with gv_trimesh_free).  Returns 0, or -1 with *err:
+ * OBJ) into *out, a mesh in the file's axes with no grid (width and
+ * height 0; free with gv_mesh_free).  Returns 0, or -1 with *err:
  * GV_ECORRUPT (malformed, or no triangle at all; the message says where),
  * GV_EFORMAT (valid but unsupported: big-endian PLY, sparse or external
  * glTF buffers), GV_ELIMIT, GV_ENOMEM.  Thread-safe.
  */
 int gv_mesh_read(const uint8_t *buf, size_t len, enum gv_mesh_in in,
-                 const struct gv_mesh_limits *lim, struct gv_trimesh *out,
+                 const struct gv_mesh_limits *lim, struct gv_mesh *out,
                  struct gv_error *err);
-
-/* Free the arrays of *m and zero it; NULL does nothing. */
-void gv_trimesh_free(struct gv_trimesh *m);
-
-/* The readers behind gv_mesh_read (same contract, lim already filled). */
-int gv_mesh_read_ply(const uint8_t *buf, size_t len,
-                     const struct gv_mesh_limits *lim, struct gv_trimesh *out,
-                     struct gv_error *err);
-int gv_mesh_read_obj(const uint8_t *buf, size_t len,
-                     const struct gv_mesh_limits *lim, struct gv_trimesh *out,
-                     struct gv_error *err);
-int gv_mesh_read_glb(const uint8_t *buf, size_t len,
-                     const struct gv_mesh_limits *lim, struct gv_trimesh *out,
-                     struct gv_error *err);
 
 #endif

@@ -1,5 +1,6 @@
 /*
- * mesh_qmesh.c - a TIN as a Cesium quantized-mesh-1.0 tile.
+ * mesh_qmesh.c - a grid mesh (mesh/mesh.h: a TIN, a z-field mesh) as a
+ * Cesium quantized-mesh-1.0 tile.
  *
  * Layout (the quantized-mesh-1.0 specification, all little endian): an
  * 88-byte header (center, min and max height, bounding sphere, horizon
@@ -19,8 +20,7 @@
  */
 #include <math.h>
 
-#include "mesh/mesh_buf.h"
-#include "mesh/mesh_write.h"
+#include "mesh/io/mesh_io.h"
 
 #define QMAX 32767.0
 
@@ -67,19 +67,12 @@ static void put_index(struct mbuf *b, uint32_t i, int wide)
         mb_u16(b, (uint16_t)i);
 }
 
-int mesh_write_qmesh(struct mbuf *b, const struct gv_tin *t,
-                     const struct gv_mesh_place *pl, const char **why)
+/* Number the vertices in order of first use (high-water mark): newi[v]
+ * is the new number of vertex v, old[k] the vertex numbered k. */
+static void number_vertices(const struct gv_mesh *t, uint32_t *newi,
+                            uint32_t *old)
 {
-    uint32_t nv = t->nverts, W = t->width - 1, H = t->height - 1;
-    uint32_t *newi = malloc((size_t)nv * sizeof *newi);
-    uint32_t *old = malloc((size_t)nv * sizeof *old);
-    uint16_t *q = malloc((size_t)nv * 3 * sizeof *q);
-    int rc = 0;
-    if (!newi || !old || !q) {
-        b->oom = 1;
-        goto out;
-    }
-    /* number the vertices in order of first use (high-water mark) */
+    uint32_t nv = t->nverts;
     for (uint32_t i = 0; i < nv; i++)
         newi[i] = UINT32_MAX;
     uint32_t k = 0;
@@ -95,55 +88,78 @@ int mesh_write_qmesh(struct mbuf *b, const struct gv_tin *t,
             newi[i] = k;
             old[k++] = i;
         }
+}
+
+/* The u, v and height arrays (nv each, in the new order) into q. */
+static void quantize(const struct gv_mesh *t, const uint32_t *old,
+                     uint16_t *q)
+{
+    uint32_t nv = t->nverts, W = t->width - 1, H = t->height - 1;
     double zr = (double)t->zmax - t->zmin;
     for (uint32_t i = 0; i < nv; i++) {
         uint32_t v = old[i];
-        q[i] = (uint16_t)lround((double)t->vx[v] / W * QMAX);
-        q[nv + i] = (uint16_t)lround((double)(H - t->vy[v]) / H * QMAX);
-        q[2 * nv + i] = zr > 0 ? (uint16_t)lround(((double)t->vz[v] - t->zmin)
-                                                  / zr * QMAX) : 0;
+        double z = (double)gv_mesh_gz(t, v) - t->zmin;
+        q[i] = (uint16_t)lround((double)gv_mesh_gx(t, v) / W * QMAX);
+        q[nv + i] = (uint16_t)lround((double)(H - gv_mesh_gy(t, v)) / H * QMAX);
+        q[2 * nv + i] = zr > 0 ? (uint16_t)lround(z / zr * QMAX) : 0;
     }
+}
 
-    /* header */
+/* The header's bounds on the globe: centre, bounding sphere (centre and
+ * radius) and horizon occlusion point. */
+static void bounds_geo(const struct gv_mesh *t, const struct gv_mesh_place *pl,
+                       double center[3], double sphere[3], double *radius,
+                       double occl[3])
+{
+    uint32_t nv = t->nverts, W = t->width - 1, H = t->height - 1;
+    double lon0 = pl->west, lat0 = pl->north;
+    double dlon = (pl->east - pl->west) / W;
+    double dlat = (pl->south - pl->north) / H;
+    ecef((pl->west + pl->east) / 2, (pl->south + pl->north) / 2,
+         ((double)t->zmin + t->zmax) / 2, center);
+    const double r[3] = {6378137.0, 6378137.0, 6356752.3142451793};
+    double dir[3] = {center[0] / r[0], center[1] / r[1], center[2] / r[2]};
+    double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    double mag = 0;
+    int bad = 0;
+    for (int j = 0; j < 3; j++)
+        dir[j] /= dl;
+    for (uint32_t i = 0; i < nv; i++) {
+        double p[3];
+        ecef(lon0 + dlon * gv_mesh_gx(t, i), lat0 + dlat * gv_mesh_gy(t, i),
+             gv_mesh_gz(t, i), p);
+        double dx = p[0] - center[0], dy = p[1] - center[1];
+        double dz = p[2] - center[2];
+        double d = sqrt(dx * dx + dy * dy + dz * dz);
+        if (d > *radius) *radius = d;
+        double mm = occl_magnitude(p, dir);
+        if (!(mm > 0) || !isfinite(mm)) bad = 1;
+        else if (mm > mag) mag = mm;
+    }
+    if (bad) /* over a hemisphere or so: nothing occludes it */
+        mag = 1e3;
+    for (int j = 0; j < 3; j++) {
+        sphere[j] = center[j];
+        occl[j] = dir[j] * mag;
+    }
+}
+
+/* The 88-byte header. */
+static void put_header(struct mbuf *b, const struct gv_mesh *t,
+                       const struct gv_mesh_place *pl)
+{
+    uint32_t nv = t->nverts, W = t->width - 1, H = t->height - 1;
     double center[3], sphere[3], radius = 0, occl[3];
     if (pl->has_geo) {
-        double lon0 = pl->west, lat0 = pl->north;
-        double dlon = (pl->east - pl->west) / W;
-        double dlat = (pl->south - pl->north) / H;
-        ecef((pl->west + pl->east) / 2, (pl->south + pl->north) / 2,
-             ((double)t->zmin + t->zmax) / 2, center);
-        const double r[3] = {6378137.0, 6378137.0, 6356752.3142451793};
-        double dir[3] = {center[0] / r[0], center[1] / r[1], center[2] / r[2]};
-        double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-        double mag = 0;
-        int bad = 0;
-        for (int j = 0; j < 3; j++)
-            dir[j] /= dl;
-        for (uint32_t i = 0; i < nv; i++) {
-            double p[3];
-            ecef(lon0 + dlon * t->vx[i], lat0 + dlat * t->vy[i], t->vz[i], p);
-            double dx = p[0] - center[0], dy = p[1] - center[1];
-            double dz = p[2] - center[2];
-            double d = sqrt(dx * dx + dy * dy + dz * dz);
-            if (d > radius) radius = d;
-            double mm = occl_magnitude(p, dir);
-            if (!(mm > 0) || !isfinite(mm)) bad = 1;
-            else if (mm > mag) mag = mm;
-        }
-        if (bad) /* over a hemisphere or so: nothing occludes it */
-            mag = 1e3;
-        for (int j = 0; j < 3; j++) {
-            sphere[j] = center[j];
-            occl[j] = dir[j] * mag;
-        }
+        bounds_geo(t, pl, center, sphere, &radius, occl);
     } else {
         center[0] = (pl->x0 + W / 2.0);
         center[1] = (pl->y0 + H / 2.0);
         center[2] = ((double)t->zmin + t->zmax) / 2;
         for (uint32_t i = 0; i < nv; i++) {
-            double dx = pl->x0 + (double)t->vx[i] - center[0];
-            double dy = pl->y0 + (double)t->vy[i] - center[1];
-            double dz = t->vz[i] - center[2];
+            double dx = pl->x0 + (double)gv_mesh_gx(t, i) - center[0];
+            double dy = pl->y0 + (double)gv_mesh_gy(t, i) - center[1];
+            double dz = gv_mesh_gz(t, i) - center[2];
             double d = sqrt(dx * dx + dy * dy + dz * dz);
             if (d > radius) radius = d;
         }
@@ -159,6 +175,56 @@ int mesh_write_qmesh(struct mbuf *b, const struct gv_tin *t,
     mb_f64(b, radius);
     for (int j = 0; j < 3; j++)
         mb_f64(b, occl[j]);
+}
+
+/* Edges: west (x = 0), south (y = H), east (x = W), north (y = 0); west
+ * and east sorted by v (south to north), south and north by u: one slot
+ * per sample along the edge, filled in one pass.  -1 when out of memory. */
+static int put_edges(struct mbuf *b, const struct gv_mesh *t,
+                     const uint32_t *old, int wide)
+{
+    uint32_t nv = t->nverts, W = t->width - 1, H = t->height - 1;
+    uint32_t side = W > H ? W : H;
+    uint32_t *slot = malloc(((size_t)side + 1) * sizeof *slot);
+    if (!slot)
+        return -1;
+    for (int e = 0; e < 4; e++) {
+        uint32_t len = (e == 0 || e == 2) ? H : W, cnt = 0;
+        for (uint32_t s = 0; s <= len; s++)
+            slot[s] = UINT32_MAX;
+        for (uint32_t i = 0; i < nv; i++) {
+            uint32_t v = old[i], x = gv_mesh_gx(t, v), y = gv_mesh_gy(t, v);
+            if (e == 0 && x == 0) slot[H - y] = i;
+            else if (e == 1 && y == H) slot[x] = i;
+            else if (e == 2 && x == W) slot[H - y] = i;
+            else if (e == 3 && y == 0) slot[x] = i;
+        }
+        for (uint32_t s = 0; s <= len; s++)
+            cnt += slot[s] != UINT32_MAX;
+        mb_u32(b, cnt);
+        for (uint32_t s = 0; s <= len; s++)
+            if (slot[s] != UINT32_MAX)
+                put_index(b, slot[s], wide);
+    }
+    free(slot);
+    return 0;
+}
+
+int mesh_write_qmesh(struct mbuf *b, const struct gv_mesh *t,
+                     const struct gv_mesh_place *pl, const char **why)
+{
+    uint32_t nv = t->nverts;
+    uint32_t *newi = malloc((size_t)nv * sizeof *newi);
+    uint32_t *old = malloc((size_t)nv * sizeof *old);
+    uint16_t *q = malloc((size_t)nv * 3 * sizeof *q);
+    int rc = 0;
+    if (!newi || !old || !q) {
+        b->oom = 1;
+        goto out;
+    }
+    number_vertices(t, newi, old);
+    quantize(t, old, q);
+    put_header(b, t, pl);
 
     /* vertex data */
     mb_u32(b, nv);
@@ -184,35 +250,10 @@ int mesh_write_qmesh(struct mbuf *b, const struct gv_tin *t,
         if (v == highest)
             highest++;
     }
-
-    /* edges: west (x = 0), south (y = H), east (x = W), north (y = 0);
-     * west and east sorted by v (south to north), south and north by u:
-     * one slot per sample along the edge, filled in one pass */
-    uint32_t side = W > H ? W : H;
-    uint32_t *slot = malloc(((size_t)side + 1) * sizeof *slot);
-    if (!slot) {
+    if (put_edges(b, t, old, wide) < 0) {
         b->oom = 1;
         goto out;
     }
-    for (int e = 0; e < 4; e++) {
-        uint32_t len = (e == 0 || e == 2) ? H : W, cnt = 0;
-        for (uint32_t s = 0; s <= len; s++)
-            slot[s] = UINT32_MAX;
-        for (uint32_t i = 0; i < nv; i++) {
-            uint32_t v = old[i], x = t->vx[v], y = t->vy[v];
-            if (e == 0 && x == 0) slot[H - y] = i;
-            else if (e == 1 && y == H) slot[x] = i;
-            else if (e == 2 && x == W) slot[H - y] = i;
-            else if (e == 3 && y == 0) slot[x] = i;
-        }
-        for (uint32_t s = 0; s <= len; s++)
-            cnt += slot[s] != UINT32_MAX;
-        mb_u32(b, cnt);
-        for (uint32_t s = 0; s <= len; s++)
-            if (slot[s] != UINT32_MAX)
-                put_index(b, slot[s], wide);
-    }
-    free(slot);
 
     /* metadata extension (id 4): JSON */
     char json[256];

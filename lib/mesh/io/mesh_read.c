@@ -1,25 +1,17 @@
 /*
- * mesh_read.c - the format sniffing of gv_mesh_read, and
- * gv_trimesh_free; the growing mesh the readers share is mesh_grow.c.
+ * mesh_read.c - the format sniffing of gv_mesh_read, which calls the
+ * reader of the format (mesh_read_FORMAT.c, declared in mesh_read_int.h);
+ * the growing mesh the readers share is mesh_grow.c.
  */
-#include "mesh/mesh_read.h"
+#include "mesh/io/mesh_read.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#include "mesh/mesh_read_int.h"
-
-void gv_trimesh_free(struct gv_trimesh *m)
-{
-    if (!m)
-        return;
-    free(m->pos);
-    free(m->tris);
-    memset(m, 0, sizeof *m);
-}
+#include "mesh/io/mesh_read_int.h"
 
 int gv_mesh_read(const uint8_t *buf, size_t len, enum gv_mesh_in in,
-                 const struct gv_mesh_limits *lim, struct gv_trimesh *out,
+                 const struct gv_mesh_limits *lim, struct gv_mesh *out,
                  struct gv_error *err)
 {
     struct gv_mesh_limits l = {0};
@@ -54,6 +46,6 @@ int gv_mesh_read(const uint8_t *buf, size_t len, enum gv_mesh_in in,
                      "or an empty one", in == GV_MESH_IN_PLY ? "PLY" :
                      in == GV_MESH_IN_GLB ? "glTF binary" : "Wavefront OBJ");
     if (rc < 0)
-        gv_trimesh_free(out);
+        gv_mesh_free(out);
     return rc;
 }

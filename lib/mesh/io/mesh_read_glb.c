@@ -14,7 +14,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "mesh/mesh_read_int.h"
+#include "mesh/io/mesh_read_int.h"
 
 #define MAX_JSON (64u << 20)
 
@@ -177,7 +177,7 @@ static int primitive(json_t *root, json_t *prim, const uint8_t *bin,
 }
 
 int gv_mesh_read_glb(const uint8_t *buf, size_t len,
-                     const struct gv_mesh_limits *lim, struct gv_trimesh *out,
+                     const struct gv_mesh_limits *lim, struct gv_mesh *out,
                      struct gv_error *err)
 {
     if (len < 20 || rd32(buf) != 0x46546C67u)

@@ -1,14 +1,15 @@
 /*
  * mesh_read_int.h - what the mesh readers share (private to lib/mesh): a
- * growing mesh under the limits, and the polygon fan.
+ * growing mesh under the limits (mesh_grow.c), and the reader of each
+ * format, which gv_mesh_read (mesh_read.c) calls.
  */
 #ifndef GV_MESH_READ_INT_H
 #define GV_MESH_READ_INT_H
 
-#include "mesh/mesh_read.h"
+#include "mesh/io/mesh_read.h"
 
 struct mesh_grow {
-    struct gv_trimesh *m;
+    struct gv_mesh *m;
     const struct gv_mesh_limits *lim;
     uint32_t vcap, tcap;
 };
@@ -25,7 +26,18 @@ int mesh_grow_reserve(struct mesh_grow *g, uint64_t nv, uint64_t nt,
                       struct gv_error *err);
 
 /* Check every index < nverts: 0, or -1 with GV_ECORRUPT. */
-int mesh_check_indices(const struct gv_trimesh *m, const char *fmt_name,
+int mesh_check_indices(const struct gv_mesh *m, const char *fmt_name,
                        struct gv_error *err);
+
+/* The readers behind gv_mesh_read (same contract, lim already filled). */
+int gv_mesh_read_ply(const uint8_t *buf, size_t len,
+                     const struct gv_mesh_limits *lim, struct gv_mesh *out,
+                     struct gv_error *err);
+int gv_mesh_read_obj(const uint8_t *buf, size_t len,
+                     const struct gv_mesh_limits *lim, struct gv_mesh *out,
+                     struct gv_error *err);
+int gv_mesh_read_glb(const uint8_t *buf, size_t len,
+                     const struct gv_mesh_limits *lim, struct gv_mesh *out,
+                     struct gv_error *err);
 
 #endif

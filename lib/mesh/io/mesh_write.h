@@ -1,14 +1,20 @@
 /*
- * mesh_write.h - a TIN (mesh/tin.h) as a file: glTF 2.0 binary (GLB),
- * Cesium quantized-mesh-1.0, PLY (binary little endian) or OBJ.
+ * mesh_write.h - a mesh (mesh/mesh.h) as a file: glTF 2.0 binary (GLB),
+ * Cesium quantized-mesh-1.0, PLY (binary little endian) or OBJ; one writer
+ * per format in lib/mesh/io (mesh_glb.c, mesh_qmesh.c, mesh_ply.c,
+ * mesh_obj.c), the table and gzip in mesh_write.c.
  *
- * Every format is written to memory, for files and HTTP bodies alike, and
- * carries the measured maximum error: glTF in asset.extras, quantized-mesh
- * in its metadata extension (id 4), PLY and OBJ in comments.  Positions:
+ * Every format is written to memory, for files and HTTP bodies alike.  A
+ * mesh of a height grid (a TIN, a z-field mesh) is written placed
+ * (struct gv_mesh_place) and carries the measured maximum error: glTF in
+ * asset.extras, quantized-mesh in its metadata extension (id 4), PLY and
+ * OBJ in comments.  Positions:
  * glTF is +Y up, so a vertex is (x, height, y), with x east and y south in
  * samples of the level times xy_scale; PLY and OBJ are +Z up: (x, -y,
  * height).  Triangles face up (counter-clockwise seen from above) in every
- * format.  docs/MESHES.md is the normative description.
+ * format.  Any other mesh (the simplifier's) is written without a
+ * placement: positions and triangles as they are, and no quantized-mesh.
+ * docs/MESHES.md is the normative description.
  */
 #ifndef GV_MESH_WRITE_H
 #define GV_MESH_WRITE_H
@@ -17,7 +23,7 @@
 #include <stdint.h>
 
 #include "base/error.h"
-#include "mesh/tin.h"
+#include "mesh/mesh.h"
 
 enum gv_mesh_format { GV_MESH_GLB, GV_MESH_QMESH, GV_MESH_PLY, GV_MESH_OBJ };
 
@@ -45,12 +51,15 @@ const char *gv_mesh_format_mime(enum gv_mesh_format f);
 const char *gv_mesh_format_ext(enum gv_mesh_format f);
 
 /*
- * Encode t as format f.  *out is malloc'ed (the caller frees it with
- * free()) and *len set.  Returns 0, or -1 with *err: GV_ENOMEM, GV_EINVAL
- * (quantized-mesh over 2^32-1 vertices, gzip failing).  Thread-safe.
+ * Encode m as format f.  pl: m is a grid mesh placed there; NULL: m is
+ * written in its own axes, with `comment` (may be NULL; ignored with pl)
+ * in the header.  *out is malloc'ed (the caller frees it with free()) and
+ * *len set.  Returns 0, or -1 with *err: GV_ENOMEM, GV_EINVAL (a GLB over
+ * 4 GiB, gzip failing), GV_EFORMAT (quantized-mesh without pl).
+ * Thread-safe.
  */
-int gv_mesh_encode(enum gv_mesh_format f, const struct gv_tin *t,
-                   const struct gv_mesh_place *pl, uint8_t **out, size_t *len,
-                   struct gv_error *err);
+int gv_mesh_encode(enum gv_mesh_format f, const struct gv_mesh *m,
+                   const struct gv_mesh_place *pl, const char *comment,
+                   uint8_t **out, size_t *len, struct gv_error *err);
 
 #endif

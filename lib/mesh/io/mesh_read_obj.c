@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "mesh/mesh_read_int.h"
+#include "mesh/io/mesh_read_int.h"
 
 #define MAX_LINE 4096   /* longer v/f records are refused */
 #define MAX_CORNERS 256 /* corners of one polygon */
@@ -18,7 +18,7 @@
 static int is_space(int c) { return c == ' ' || c == '\t' || c == '\r'; }
 
 int gv_mesh_read_obj(const uint8_t *buf, size_t len,
-                     const struct gv_mesh_limits *lim, struct gv_trimesh *out,
+                     const struct gv_mesh_limits *lim, struct gv_mesh *out,
                      struct gv_error *err)
 {
     struct mesh_grow g = {.m = out, .lim = lim};

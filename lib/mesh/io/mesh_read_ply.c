@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "mesh/mesh_read_int.h"
+#include "mesh/io/mesh_read_int.h"
 
 #define MAX_HEADER 65536
 #define MAX_PROPS 64
@@ -249,11 +249,11 @@ static int header_lines(char *hdr, struct elem *el, int *nel, int *ascii,
 
 static int read_body(const uint8_t *buf, size_t len, size_t at,
                      struct elem *el, int nel, int ascii,
-                     const struct gv_mesh_limits *lim, struct gv_trimesh *out,
+                     const struct gv_mesh_limits *lim, struct gv_mesh *out,
                      struct gv_error *err);
 
 int gv_mesh_read_ply(const uint8_t *buf, size_t len,
-                     const struct gv_mesh_limits *lim, struct gv_trimesh *out,
+                     const struct gv_mesh_limits *lim, struct gv_mesh *out,
                      struct gv_error *err)
 {
     if (len < 4 || memcmp(buf, "ply", 3) != 0 ||
@@ -273,7 +273,7 @@ int gv_mesh_read_ply(const uint8_t *buf, size_t len,
 
 static int read_body(const uint8_t *buf, size_t len, size_t at,
                      struct elem *el, int nel, int ascii,
-                     const struct gv_mesh_limits *lim, struct gv_trimesh *out,
+                     const struct gv_mesh_limits *lim, struct gv_mesh *out,
                      struct gv_error *err)
 {
     struct mesh_grow g = {.m = out, .lim = lim};

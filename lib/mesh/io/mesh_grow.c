@@ -7,8 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "mesh/mesh_read.h"
-#include "mesh/mesh_read_int.h"
+#include "mesh/io/mesh_read.h"
+#include "mesh/io/mesh_read_int.h"
 
 static int grow(void **p, uint32_t *cap, uint64_t need, size_t elem)
 {
@@ -75,7 +75,7 @@ int mesh_grow_tri(struct mesh_grow *g, uint32_t a, uint32_t b, uint32_t c,
     return 0;
 }
 
-int mesh_check_indices(const struct gv_trimesh *m, const char *fmt_name,
+int mesh_check_indices(const struct gv_mesh *m, const char *fmt_name,
                        struct gv_error *err)
 {
     for (size_t i = 0; i < 3 * (size_t)m->ntris; i++)

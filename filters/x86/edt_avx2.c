@@ -1,0 +1,34 @@
+/*
+ * edt_avx2.c - the distance transform's line kernels in AVX2
+ * (filters/edt_kernel.h instantiated for both state layouts; edt_int.h
+ * declares the two tables).
+ *
+ * Compiled with -mavx2 (Makefile.am, filters/x86/libgvfilter_avx2.a):
+ * nothing here may run before edt_cpu.c has checked GV_CPU_AVX2.
+ */
+#include "base/cpu.h"
+#include "edt_int.h"
+
+#if GV_HAVE_X86_SIMD
+#include <string.h>
+
+#include <immintrin.h>
+
+#define EDT_ISA 2
+#define EDT_PACKED 0
+#define EDT_SUFFIX avx2_w
+#include "edt_kernel.h"
+#undef EDT_SUFFIX
+#undef EDT_PACKED
+#define EDT_PACKED 1
+#define EDT_SUFFIX avx2_p
+#include "edt_kernel.h"
+#undef EDT_SUFFIX
+#undef EDT_PACKED
+#undef EDT_ISA
+
+const struct edt_kernels gv_edt_avx2_wide = {
+    edt_line_avx2_w, edt_dist_avx2_w, edt_load_avx2_w, edt_store_avx2_w};
+const struct edt_kernels gv_edt_avx2_packed = {
+    edt_line_avx2_p, edt_dist_avx2_p, edt_load_avx2_p, edt_store_avx2_p};
+#endif
