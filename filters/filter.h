@@ -27,10 +27,12 @@
 #include <jansson.h>
 
 #include "base/error.h"
+#include "base/ids.h"
 
 struct gv_gpu;
 
-#define GV_FILTER_ID_MAX 64        /* ids, names of parameters: bytes+1 */
+#define GV_FILTER_ID_MAX (GV_FILTER_ID_LEN + 1) /* ids, names of parameters:
+                                                  bytes+1 (base/ids.h) */
 #define GV_FILTER_MAX_INPUTS 8     /* $(FilterInput1..8) */
 #define GV_FILTER_MAX_PARAMS 16    /* $(1..16) per module */
 #define GV_FILTER_KERNEL_MAX 63    /* kernel width/height, odd */

@@ -20,12 +20,12 @@
  *      supports along a path), merge skipping (section 7.8.5), and
  *      texture slots recycled greedily by liveness.
  */
-#include <ctype.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/ids.h"
 #include "filter.h"
 #include "graph_body.h"
 
@@ -80,17 +80,6 @@ static int check_keys(const json_t *obj, const char *const *allowed,
         }
     }
     return 0;
-}
-
-static int valid_id(const char *s)
-{
-    size_t n = strlen(s);
-    if (n < 1 || n >= GV_FILTER_ID_MAX)
-        return 0;
-    for (size_t i = 0; i < n; i++)
-        if (!isalnum((unsigned char)s[i]) && s[i] != '_' && s[i] != '-')
-            return 0;
-    return 1;
 }
 
 /* An optional string member: 0 absent (out untouched), 1 copied, -1. */
@@ -156,7 +145,7 @@ static int parse_params(struct gv_filter_module *m, const json_t *arr,
         q->name[0] = 0;
         if (get_string(p, "name", q->name, sizeof q->name, m->id, err) < 0)
             return -1;
-        if (!valid_id(q->name))
+        if (!gv_filter_id_valid(q->name))
             return fail_m(err, m->id, GV_EINVAL,
                           "a param needs a \"name\" of [A-Za-z0-9_-], 1-63 bytes",
                           NULL);
@@ -260,7 +249,7 @@ static int parse_module(struct gv_filter_module *m, const json_t *o,
         return fail_m(err, NULL, GV_EINVAL, "each module must be an object", NULL);
     if (get_string(o, "id", m->id, sizeof m->id, NULL, err) < 0)
         return -1;
-    if (!valid_id(m->id))
+    if (!gv_filter_id_valid(m->id))
         return fail_m(err, NULL, GV_EINVAL,
                       "each module needs an \"id\" of [A-Za-z0-9_-], 1-63 bytes",
                       NULL);

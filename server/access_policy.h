@@ -34,11 +34,12 @@
 
 #include "access_token.h"
 #include "base/error.h"
+#include "base/ids.h"
 
 #define ACCESS_POLICY_MAX_BYTES (1u << 20) /* 1 MiB: tens of thousands of rules */
 #define ACCESS_POLICY_MAX_RULES 20000
 #define ACCESS_POLICY_MAX_GROUPS 64
-#define ACCESS_PATTERN_MAX 128   /* an image id's longest (catalog.h) */
+#define ACCESS_PATTERN_MAX GV_IMAGE_ID_MAX /* an image id's longest */
 #define ACCESS_MESSAGE_MAX 1024  /* bytes of one message */
 
 struct access_rule {

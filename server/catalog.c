@@ -17,6 +17,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "base/ids.h"
 #include "catalog.h"
 #include "log.h"
 
@@ -32,20 +33,6 @@ struct catalog {
     void (*on_close)(uint64_t, void *);
     void *on_close_arg;
 };
-
-int catalog_id_valid(const char *id)
-{
-    size_t n = strlen(id);
-    if (n == 0 || n > CATALOG_ID_MAX || id[0] == '.' || strstr(id, ".."))
-        return 0;
-    for (size_t i = 0; i < n; i++) {
-        char ch = id[i];
-        if (!((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
-              (ch >= '0' && ch <= '9') || ch == '.' || ch == '_' || ch == '-'))
-            return 0;
-    }
-    return 1;
-}
 
 struct catalog *catalog_new(const char *dir, struct gv_tile_cache *tiles,
                             int pool_max)
@@ -185,7 +172,7 @@ static struct image *scan_entry(struct catalog *c, const char *name,
         return NULL;
     memcpy(id, name, len - 3);
     id[len - 3] = '\0';
-    if (!catalog_id_valid(id)) {
+    if (!gv_image_id_valid(id)) {
         if (id[0] != '.') /* hidden files are encoders at work */
             log_msg(LOG_WARN, "catalog", "skipping %s: not a valid id", name);
         return NULL;
@@ -293,7 +280,7 @@ int catalog_scan(struct catalog *c)
 
 struct image *catalog_get(struct catalog *c, const char *id)
 {
-    if (!catalog_id_valid(id))
+    if (!gv_image_id_valid(id))
         return NULL;
     struct image *img = NULL;
     pthread_mutex_lock(&c->lock);

@@ -2,9 +2,9 @@
  * catalog.h - the store directory: which images gigaviewd serves.
  *
  * An image is one open store (lib/store/store_read.h) under an id, the file name
- * without ".gv".  Ids are restricted to [A-Za-z0-9._-], 1..128 bytes, no
- * leading dot and no "..", so an id can never name a path outside the
- * directory.  Images are reference counted: catalog_get hands out a
+ * without ".gv".  Ids follow the one rule of lib/base/ids.h ([A-Za-z0-9._-],
+ * 1..128 bytes, no leading dot and no ".."), so an id can never name a
+ * path outside the directory.  Images are reference counted: catalog_get hands out a
  * reference that a request holds while it uses the store, and a rescan
  * (SIGHUP) that drops or replaces a store only drops the catalog's own
  * reference, so the store is closed when the last request lets go.
@@ -25,10 +25,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "base/ids.h"
 #include "render/store_decoder.h"
 #include "store/store_read.h"
 
-#define CATALOG_ID_MAX 128
+#define CATALOG_ID_MAX GV_IMAGE_ID_MAX   /* base/ids.h */
 
 struct image {
     char id[CATALOG_ID_MAX + 1];
@@ -62,8 +63,6 @@ void catalog_free(struct catalog *c);
  * old list is kept). */
 int catalog_scan(struct catalog *c);
 
-/* 1 if `id` is a well-formed image id, else 0. */
-int catalog_id_valid(const char *id);
 
 /* A new reference to image `id`, or NULL if there is none. */
 struct image *catalog_get(struct catalog *c, const char *id);

@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "base/atomic_file.h"
+#include "base/ids.h"
 #include "filter_store.h"
 #include "log.h"
 
@@ -56,20 +57,6 @@ static int entry_cmp(const void *a, const void *b)
     if (x->stock != y->stock)
         return y->stock - x->stock;
     return strcmp(x->id, y->id);
-}
-
-/* A stock id: [A-Za-z0-9_-], 1..63 bytes. */
-static int valid_id(const char *s, size_t n)
-{
-    if (n == 0 || n >= GV_FILTER_ID_MAX)
-        return 0;
-    for (size_t i = 0; i < n; i++) {
-        char c = s[i];
-        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
-              (c >= '0' && c <= '9') || c == '_' || c == '-'))
-            return 0;
-    }
-    return 1;
 }
 
 static int stored_id(const char *s, size_t n)
@@ -196,7 +183,7 @@ static void scan_dir(struct filter_store *fs, const char *dir, int stock,
         if (k < 6 || strcmp(de->d_name + k - 5, ".json") || de->d_name[0] == '.')
             continue;
         k -= 5;
-        if (stock ? !valid_id(de->d_name, k) : !stored_id(de->d_name, k))
+        if (stock ? !gv_filter_id_valid_n(de->d_name, k) : !stored_id(de->d_name, k))
             continue;
         char id[GV_FILTER_ID_MAX];
         memcpy(id, de->d_name, k);

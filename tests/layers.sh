@@ -8,10 +8,13 @@
 # does not allow, fails.  The rules for the folders above lib/ come from
 # the same document's prose: filters/ and server/ may use every lib/
 # folder, server/ also filters/; client/ uses every lib/ folder and
-# nothing of server/ or filters/; lib/ uses nothing above it.
+# nothing of server/ or filters/; lib/ uses nothing above it.  Inside
+# client/, remote/ uses only itself, view/ also remote/, and cmd/ (the
+# commands) every client folder.
 #
 # An include is resolved as the build resolves it: "X/name.h" is
-# lib/X/name.h (or filters/name.h for "filters/..."), a bare "name.h" is
+# lib/X/name.h (or filters/name.h for "filters/..."; from a file of
+# client/, client/X/name.h first: client/cmd, view, remote), a bare "name.h" is
 # the including file's folder, then filters/ (the -I of Makefile.am);
 # what resolves to neither (config.h, generated shaders.h) is skipped.
 #
@@ -53,6 +56,10 @@ function folder(path,   p) {        # lib/X/... -> X; filters/... -> filters
     n = split(path, p, "/")
     return p[1] == "lib" ? p[2] : p[1]
 }
+function label(path,   p) {          # lib/X, client/X, filters, server
+    split(path, p, "/")
+    return p[1] == "lib" || p[1] == "client" ? p[1] "/" p[2] : p[1]
+}
 function dirof(path) { sub(/\/[^\/]*$/, "", path); return path }
 function exists(path,   r, line) {
     if (path in known) return 1
@@ -60,6 +67,8 @@ function exists(path,   r, line) {
 }
 function resolve(from, name,   f, d) {
     if (name ~ /\//) {
+        # client/ includes its own folders by name, as -I client does
+        if (from ~ /^client\// && exists("client/" name)) return "client/" name
         f = name; sub(/\/.*/, "", f)
         if (f == "filters") { d = "filters/" substr(name, 9) }
         else d = "lib/" name
@@ -70,8 +79,15 @@ function resolve(from, name,   f, d) {
     if (exists("filters/" name)) return "filters/" name
     return ""
 }
+# inside client/: remote/ uses only itself, view/ also remote/, cmd/ all
+function client_allowed(from, to,   p, q) {
+    split(from, p, "/"); split(to, q, "/")
+    if (p[2] == q[2] || p[2] == "cmd") return 1
+    return p[2] == "view" && q[2] == "remote"
+}
 function allowed(from, to,   a, b) {
     a = folder(from); b = folder(to)
+    if (a == "client" && b == "client") return client_allowed(from, to)
     if (a == b) return 1
     if (from ~ /^lib\//) return (to ~ /^lib\//) && ((a SUBSEP b) in may)
     if (to ~ /^lib\//) return 1                 # filters, server, client
@@ -144,8 +160,7 @@ FNR == 1 { header = FILENAME ~ /\.h$/ }
     if (to == "") next
     if (!allowed(FILENAME, to)) {
         printf "layers: %s:%d: includes %s (%s may not use %s)\n", FILENAME,
-               FNR, name, FILENAME ~ /^lib\// ? "lib/" folder(FILENAME) : folder(FILENAME),
-               to ~ /^lib\// ? "lib/" folder(to) : folder(to)
+               FNR, name, label(FILENAME), label(to)
         bad++
     }
     if (to != FILENAME) inc[FILENAME, ++ninc[FILENAME]] = to

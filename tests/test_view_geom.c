@@ -1,6 +1,6 @@
 /*
  * test_view_geom.c - the native viewer's view geometry and view links
- * (client/view_geom.c): the browser's formulas (client/web/view.js), the
+ * (client/view/view_geom.c): the browser's formulas (client/web/view.js), the
  * link round trip, and hostile --view arguments and hashes, which come
  * from the command line and from pasted links.
  */

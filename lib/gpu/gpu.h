@@ -10,8 +10,8 @@
  * gv_gpu_call and wait for the result, so GL objects never cross threads.
  *
  * This header includes no GL header, and only lib/gpu/gpu_*.c,
- * filters/run_gpu.c and the native viewer's window code (client/view_*.c,
- * client/cmd_view.c, on a context it adopts) include EGL or GL headers:
+ * filters/run_gpu.c and the native viewer's window code (client/view/view_*.c,
+ * client/cmd/cmd_view.c, on a context it adopts) include EGL or GL headers:
  * everything else talks to
  * the GPU through this API, gpu_decode.h, gpu_cache.h and filter.h.  The
  * whole of lib/gpu is left out of a build configured --without-gpu

@@ -1,6 +1,6 @@
 /*
  * fuzz_batch_frames.c - libFuzzer target for the native client's reader
- * of batch answers (client/batch_frames.c): GVB1 and GVB2 frames as a
+ * of batch answers (client/remote/batch_frames.c): GVB1 and GVB2 frames as a
  * server, or anything pretending to be one, sends them.
  *
  * Byte 0 is the number of tiles the client asked for (0..255); the rest

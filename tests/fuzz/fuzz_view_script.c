@@ -1,6 +1,6 @@
 /*
  * fuzz_view_script.c - libFuzzer target for the native viewer's script
- * files (`gigaview view --script FILE`, client/view_script.c).
+ * files (`gigaview view --script FILE`, client/view/view_script.c).
  *
  * Byte 0 is a selector: bit 0 also loads the text through vs_load (a
  * memfd read as /proc/self/fd/N, as the viewer reads the file); with bit

@@ -22,8 +22,15 @@
 #include <jansson.h>
 
 #include "config.h"
+#include "base/ids.h"
 #include "imageio/imageio.h"
 #include "view_filter.h"
+
+/* A filter id (base/ids.h) fits every name field of struct vx_graph. */
+_Static_assert(GV_FILTER_ID_LEN < sizeof ((struct vx_graph *)0)->module &&
+               GV_FILTER_ID_LEN < sizeof ((struct vx_graph *)0)->name &&
+               GV_FILTER_ID_LEN < sizeof ((struct vx_graph *)0)->id,
+               "filter ids fit struct vx_graph");
 
 #define MAX_BODY ((size_t)256 << 20)
 #define MAX_PIXELS ((uint64_t)64 << 20)
@@ -155,7 +162,7 @@ static void list_graphs(struct vx *x)
          i++) {
         json_t *f = json_array_get(arr, i);
         const char *id = json_string_value(json_object_get(f, "id"));
-        if (!id || strlen(id) >= sizeof g[n].id)
+        if (!id || !gv_filter_id_valid(id))
             continue;
         snprintf(g[n].id, sizeof g[n].id, "%s", id);
         json_t *p = json_array_get(json_object_get(f, "params"), 0);
@@ -163,8 +170,8 @@ static void list_graphs(struct vx *x)
         const char *name = json_string_value(json_object_get(p, "name"));
         json_t *mn = json_object_get(p, "min"), *mx = json_object_get(p, "max"),
                *df = json_object_get(p, "default");
-        if (mod && name && strlen(mod) < 64 && strlen(name) < 64 && json_is_number(mn) &&
-            json_is_number(mx) && json_is_number(df)) {
+        if (mod && name && gv_filter_id_valid(mod) && gv_filter_id_valid(name) &&
+            json_is_number(mn) && json_is_number(mx) && json_is_number(df)) {
             g[n].has_param = 1;
             snprintf(g[n].module, sizeof g[n].module, "%s", mod);
             snprintf(g[n].name, sizeof g[n].name, "%s", name);

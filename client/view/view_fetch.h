@@ -21,7 +21,7 @@
 #include <stdint.h>
 
 #include "base/error.h"
-#include "http_fetch.h"
+#include "remote/http_fetch.h"
 #include "store/geometry.h"
 
 #define VF_BATCH 48          /* tiles per round trip (the browser's batch size) */

@@ -12,12 +12,13 @@
 
 #include "commands.h"
 #include "encode/source.h"
-#include "http_fetch.h"
 #include "options.h"
+#include "remote/http_fetch.h"
+#include "remote_opts.h"
 #include "store/store_read.h"
 
 #define ME "gigaview info"
-#define HTTP_TIMEOUT_MS 30000
+#define HTTP_TIMEOUT_MS (REMOTE_TIMEOUT_DEFAULT * 1000) /* remote_opts.h */
 
 struct info_args {
     int json;

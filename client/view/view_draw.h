@@ -4,7 +4,7 @@
  *
  * The display shader samples, for every window pixel, levels f and f + 1
  * bilinearly at the pixel's centre and blends them by the fraction of the
- * zoom, exactly as `gigaview render` composes a view (client/cmd_render.c)
+ * zoom, exactly as `gigaview render` composes a view (client/cmd/cmd_render.c)
  * and the browser draws one (client/web/display.frag.glsl): each tap is
  * read from the tile that owns its pixel, through the page table, so
  * there are no seams; a pixel whose taps are not all resident at a level

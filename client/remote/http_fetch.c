@@ -31,9 +31,10 @@
 #include <jansson.h>
 
 #include "config.h"
+#include "base/ids.h"
 #include "batch_frames.h"
-#include "http_fetch.h"
 #include "codec/tile.h"
+#include "http_fetch.h"
 
 #define MAX_CONNS 8
 #define MAX_BODY (64u << 20)
@@ -408,21 +409,10 @@ int gv_http_print_images(struct gv_http *h, FILE *out, struct gv_error *err)
     return 0;
 }
 
-static int valid_id(const char *id)
-{
-    size_t n = strlen(id);
-    if (n == 0 || n > 128 || id[0] == '.' || strstr(id, ".."))
-        return 0;
-    for (size_t i = 0; i < n; i++)
-        if (!isalnum((unsigned char)id[i]) && !strchr("._-", id[i]))
-            return 0;
-    return 1;
-}
-
 int gv_http_image(struct gv_http *h, const char *id,
                   struct gv_remote_image *img, struct gv_error *err)
 {
-    if (!valid_id(id))
+    if (!gv_image_id_valid(id))
         return gv_fail(err, GV_ENOTFOUND, "'%s' is not a valid image id", id);
     char path[300], what[200];
     snprintf(path, sizeof path, "/v1/images/%s", id);

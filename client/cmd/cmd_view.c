@@ -40,26 +40,28 @@
 #include <GLES3/gl32.h>
 
 #include "gpu/gpu.h"
-#include "http_fetch.h"
 #include "imageio/imageio.h"
 #include "options.h"
-#include "view_draw.h"
-#include "view_fetch.h"
-#include "view_filter.h"
-#include "view_geom.h"
-#include "view_input.h"
-#include "view_overlay.h"
-#include "view_roi.h"
-#include "view_script.h"
-#include "view_select.h"
-#include "view_tiles.h"
+#include "remote/http_fetch.h"
+#include "remote_opts.h"
+#include "view/view_draw.h"
+#include "view/view_fetch.h"
+#include "view/view_filter.h"
+#include "view/view_geom.h"
+#include "view/view_input.h"
+#include "view/view_overlay.h"
+#include "view/view_roi.h"
+#include "view/view_script.h"
+#include "view/view_select.h"
+#include "view/view_tiles.h"
 
 struct view_args {
-    const char *image, *size, *view, *script, *cache_dir, *stats;
-    int fullscreen, no_cache, no_batch, no_prefetch, no_vsync, no_overlay, verbose;
+    struct remote_opts remote; /* --timeout, --cache-dir, --no-cache, --gpu-cache */
+    const char *image, *size, *view, *script, *stats;
+    int fullscreen, no_batch, no_prefetch, no_vsync, no_overlay, verbose;
     int no_decode_thread;
     int budget;
-    double timeout, gpu_mib, budget_ms;
+    double budget_ms;
 };
 
 #define F(field) offsetof(struct view_args, field)
@@ -77,19 +79,11 @@ static const struct opt_spec view_opts[] = {
              "#image=ID&x=..&y=..&z=..&r=.. (default: the whole image)"},
     {.name = "script", .kind = OPT_STRING, .arg = "FILE", .field = F(script),
      .help = "replay the input in FILE, then exit (docs/VIEWER.md)"},
-    {.name = "timeout", .short_name = 't', .kind = OPT_DOUBLE, .arg = "SEC",
-     .field = F(timeout), .min = 0, .max = 86400, .flags = OPT_FINITE | OPT_MIN_OPEN,
-     .help = "limit for each HTTP request (default 10)"},
-    {.name = "cache-dir", .kind = OPT_STRING, .arg = "DIR", .field = F(cache_dir),
-     .help = "tile cache (default $XDG_CACHE_HOME/gigaview\n"
-             "or ~/.cache/gigaview)"},
-    {.name = "no-cache", .kind = OPT_FLAG, .field = F(no_cache),
-     .help = "do not use the tile cache"},
+    REMOTE_OPT_TIMEOUT(F(remote)),
+    REMOTE_OPT_CACHE(F(remote)),
     {.name = "no-batch", .kind = OPT_FLAG, .field = F(no_batch),
      .help = "fetch each tile with a request of its own"},
-    {.name = "gpu-cache", .kind = OPT_DOUBLE, .arg = "MIB", .field = F(gpu_mib),
-     .min = 16, .max = 65536, .flags = OPT_FINITE,
-     .help = "GPU memory for decoded tiles (default 256)"},
+    REMOTE_OPT_GPU_CACHE(F(remote)),
     {.name = "budget", .kind = OPT_INT, .arg = "N", .field = F(budget), .min = 1,
      .max = 4096, .help = "tile decodes in flight at most (default 4; in\n"
                           "the frame: decodes per frame)"},
@@ -199,7 +193,7 @@ static double now_s(void)
  * gv_http_print_images prints). */
 static int list_images(struct app *app, const char *url, struct gv_error *err)
 {
-    struct gv_http *h = gv_http_new(url, (long)(app->a->timeout * 1000), 0, err);
+    struct gv_http *h = gv_http_new(url, remote_timeout_ms(&app->a->remote), 0, err);
     if (!h)
         return -1;
     char *text = NULL;
@@ -262,8 +256,8 @@ static void take_result(struct app *app, struct vf_result *r, double now)
         return;
     }
     struct vt_options o = {
-        .atlas_bytes = (size_t)(app->a->gpu_mib * 1048576.0 * 0.75),
-        .decode_bytes = (size_t)(app->a->gpu_mib * 1048576.0 * 0.25),
+        .atlas_bytes = (size_t)(app->a->remote.gpu_mib * 1048576.0 * 0.75),
+        .decode_bytes = (size_t)(app->a->remote.gpu_mib * 1048576.0 * 0.25),
         .buffer_bytes = (size_t)256 << 20,
         .budget = app->a->budget,
         .budget_ms = app->a->budget_ms,
@@ -544,169 +538,204 @@ static int settled(const struct app *app)
            !vx_busy(app->filt);
 }
 
+/* A script command that waits (wait, frames, settle, wait-file, shot):
+ * 1 while it still has to wait for later frames, else 0 (also for every
+ * other command). */
+static int script_blocked(struct app *app, const struct vs_cmd *c, double waited)
+{
+    switch (c->op) {
+    case VS_WAIT:
+        if (waited < c->a[0])
+            return 1;
+        break;
+    case VS_FRAMES:
+        if (app->frames < app->pc_frame + (uint64_t)c->a[0])
+            return 1;
+        break;
+    case VS_SETTLE:
+        if (!settled(app)) {
+            if (waited > c->a[0])
+                script_fail(app, c, "the view did not settle in time");
+            return 1;
+        }
+        break;
+    case VS_WAIT_FILE:
+        if (access(c->text, F_OK) != 0) {
+            if (waited > c->a[0])
+                script_fail(app, c, "the file did not appear in time");
+            return 1;
+        }
+        break;
+    case VS_SHOT:
+        if (!app->shot_done) {
+            app->shot_path = c->text;
+            return 1;          /* written by the next draw */
+        }
+        app->shot_done = 0;
+        break;
+    default:
+        break;
+    }
+    return 0;
+}
+
+/* A script command that fakes input (keys, mouse, wheel, gamepad, touch):
+ * fed to view_input as the live event would be.  Returns 1, or 0 for a
+ * command of another kind. */
+static int script_input(struct app *app, const struct vs_cmd *c)
+{
+    switch (c->op) {
+    case VS_KEY: {
+        SDL_Event e;
+        memset(&e, 0, sizeof e);
+        e.type = SDL_KEYDOWN;
+        e.key.state = SDL_PRESSED;
+        e.key.keysym.sym = c->keycode;
+        e.key.keysym.mod = (Uint16)((c->shift ? KMOD_LSHIFT : 0) |
+                                    (c->ctrl ? KMOD_LCTRL : 0));
+        act(app, vi_event(&app->in, &e));
+        break;
+    }
+    case VS_DOWN: fake_button(app, 1, c->a[0], c->a[1], c->shift); break;
+    case VS_MOVE: fake_move(app, c->a[0], c->a[1]); break;
+    case VS_UP: fake_button(app, 0, c->a[0], c->a[1], 0); break;
+    case VS_DRAG: {
+        int n = (int)c->a[4];
+        fake_button(app, 1, c->a[0], c->a[1], 0);
+        for (int i = 1; i <= n; i++)
+            fake_move(app, c->a[0] + (c->a[2] - c->a[0]) * i / n,
+                      c->a[1] + (c->a[3] - c->a[1]) * i / n);
+        fake_button(app, 0, c->a[2], c->a[3], 0);
+        break;
+    }
+    case VS_WHEEL: {
+        fake_move(app, c->a[0], c->a[1]);
+        SDL_Event e;
+        memset(&e, 0, sizeof e);
+        e.type = SDL_MOUSEWHEEL;
+        e.wheel.y = (Sint32)c->a[2];
+        e.wheel.preciseY = (float)c->a[2];
+        act(app, vi_event(&app->in, &e));
+        break;
+    }
+    case VS_PAD_AXIS:
+    case VS_PAD_BUTTON: {
+        SDL_Event e;
+        memset(&e, 0, sizeof e);
+        if (c->op == VS_PAD_AXIS) {
+            e.type = SDL_CONTROLLERAXISMOTION;
+            e.caxis.axis = (Uint8)c->code;
+            e.caxis.value = (Sint16)lround(c->a[0] * 32767);
+            act(app, vi_event(&app->in, &e));
+        } else {
+            e.type = SDL_CONTROLLERBUTTONDOWN;
+            e.cbutton.button = (Uint8)c->code;
+            e.cbutton.state = SDL_PRESSED;
+            act(app, vi_event(&app->in, &e));
+            e.type = SDL_CONTROLLERBUTTONUP;
+            e.cbutton.state = SDL_RELEASED;
+            act(app, vi_event(&app->in, &e));
+        }
+        break;
+    }
+    case VS_PINCH: {
+        SDL_Event e;
+        memset(&e, 0, sizeof e);
+        e.type = SDL_MULTIGESTURE;
+        e.mgesture.x = (float)(c->a[0] * app->in.ratio / app->w);
+        e.mgesture.y = (float)(c->a[1] * app->in.ratio / app->h);
+        e.mgesture.dDist = (float)c->a[2];
+        e.mgesture.dTheta = (float)(c->a[3] * M_PI / 180);
+        e.mgesture.numFingers = 2;
+        act(app, vi_event(&app->in, &e));
+        break;
+    }
+    case VS_TOUCH: {
+        /* One finger down at (a0, a1), N moves to (a2, a3), up. */
+        SDL_Event e;
+        memset(&e, 0, sizeof e);
+        const double ww = app->w / app->in.ratio, wh = app->h / app->in.ratio;
+        int n = (int)c->a[4];
+        e.type = SDL_FINGERDOWN;
+        e.tfinger.x = (float)(c->a[0] / ww);
+        e.tfinger.y = (float)(c->a[1] / wh);
+        act(app, vi_event(&app->in, &e));
+        for (int i = 1; i <= n; i++) {
+            e.type = SDL_FINGERMOTION;
+            e.tfinger.dx = (float)((c->a[2] - c->a[0]) / n / ww);
+            e.tfinger.dy = (float)((c->a[3] - c->a[1]) / n / wh);
+            e.tfinger.x = (float)((c->a[0] + (c->a[2] - c->a[0]) * i / n) / ww);
+            e.tfinger.y = (float)((c->a[1] + (c->a[3] - c->a[1]) * i / n) / wh);
+            act(app, vi_event(&app->in, &e));
+        }
+        e.type = SDL_FINGERUP;
+        e.tfinger.dx = e.tfinger.dy = 0;
+        act(app, vi_event(&app->in, &e));
+        break;
+    }
+    default:
+        return 0;
+    }
+    return 1;
+}
+
+/* Any other script command: views, images, prints, quit, filters. */
+static void script_action(struct app *app, const struct vs_cmd *c)
+{
+    switch (c->op) {
+    case VS_VIEW:
+        if (c->view_image[0] && strcmp(c->view_image, app->want_image))
+            open_image(app, c->view_image);
+        if (!app->tiles || strcmp(vt_image(app->tiles), app->want_image)) {
+            /* Taken when the image comes. */
+            app->have_start_view = 1;
+            app->start_view = c->view;
+        } else {
+            vi_jump(&app->in, &c->view);
+        }
+        break;
+    case VS_IMAGE: open_image(app, c->text); break;
+    case VS_PRINT: {
+        char link[512];
+        vg_format_hash(app->want_image, &app->in.cur, link, sizeof link);
+        printf("%s %s\n", c->text, link);
+        fflush(stdout);
+        break;
+    }
+    case VS_QUIT: app->quit = 1; break;
+    case VS_MESSAGE:
+        printf("%s %s\n", c->text, app->message);
+        fflush(stdout);
+        break;
+    case VS_FILTER:
+        app->in.sel[0] = c->a[0] * app->in.ratio;
+        app->in.sel[1] = c->a[1] * app->in.ratio;
+        app->in.sel[2] = c->a[2] * app->in.ratio;
+        app->in.sel[3] = c->a[3] * app->in.ratio;
+        filter_region(app);
+        break;
+    case VS_GRAPH:
+        if (!strcmp(c->text, "next"))
+            filter_next(app);
+        else
+            filter_choose(app, c->text);
+        break;
+    case VS_PARAM: filter_param(app, c->a[0] > 0 ? 1 : -1); break;
+    default:
+        break;
+    }
+}
+
 /* Run script commands until one has to wait for later frames. */
 static void script_step(struct app *app, double now)
 {
     while (app->pc < app->script.n && !app->quit) {
         const struct vs_cmd *c = &app->script.cmd[app->pc];
         double waited = (now - app->pc_since) * 1000;
-        switch (c->op) {
-        case VS_WAIT:
-            if (waited < c->a[0])
-                return;
-            break;
-        case VS_FRAMES:
-            if (app->frames < app->pc_frame + (uint64_t)c->a[0])
-                return;
-            break;
-        case VS_SETTLE:
-            if (!settled(app)) {
-                if (waited > c->a[0])
-                    script_fail(app, c, "the view did not settle in time");
-                return;
-            }
-            break;
-        case VS_WAIT_FILE:
-            if (access(c->text, F_OK) != 0) {
-                if (waited > c->a[0])
-                    script_fail(app, c, "the file did not appear in time");
-                return;
-            }
-            break;
-        case VS_SHOT:
-            if (!app->shot_done) {
-                app->shot_path = c->text;
-                return;          /* written by the next draw */
-            }
-            app->shot_done = 0;
-            break;
-        case VS_KEY: {
-            SDL_Event e;
-            memset(&e, 0, sizeof e);
-            e.type = SDL_KEYDOWN;
-            e.key.state = SDL_PRESSED;
-            e.key.keysym.sym = c->keycode;
-            e.key.keysym.mod = (Uint16)((c->shift ? KMOD_LSHIFT : 0) |
-                                        (c->ctrl ? KMOD_LCTRL : 0));
-            act(app, vi_event(&app->in, &e));
-            break;
-        }
-        case VS_DOWN: fake_button(app, 1, c->a[0], c->a[1], c->shift); break;
-        case VS_MOVE: fake_move(app, c->a[0], c->a[1]); break;
-        case VS_UP: fake_button(app, 0, c->a[0], c->a[1], 0); break;
-        case VS_DRAG: {
-            int n = (int)c->a[4];
-            fake_button(app, 1, c->a[0], c->a[1], 0);
-            for (int i = 1; i <= n; i++)
-                fake_move(app, c->a[0] + (c->a[2] - c->a[0]) * i / n,
-                          c->a[1] + (c->a[3] - c->a[1]) * i / n);
-            fake_button(app, 0, c->a[2], c->a[3], 0);
-            break;
-        }
-        case VS_WHEEL: {
-            fake_move(app, c->a[0], c->a[1]);
-            SDL_Event e;
-            memset(&e, 0, sizeof e);
-            e.type = SDL_MOUSEWHEEL;
-            e.wheel.y = (Sint32)c->a[2];
-            e.wheel.preciseY = (float)c->a[2];
-            act(app, vi_event(&app->in, &e));
-            break;
-        }
-        case VS_VIEW:
-            if (c->view_image[0] && strcmp(c->view_image, app->want_image))
-                open_image(app, c->view_image);
-            if (!app->tiles || strcmp(vt_image(app->tiles), app->want_image)) {
-                /* Taken when the image comes. */
-                app->have_start_view = 1;
-                app->start_view = c->view;
-            } else {
-                vi_jump(&app->in, &c->view);
-            }
-            break;
-        case VS_IMAGE: open_image(app, c->text); break;
-        case VS_PRINT: {
-            char link[512];
-            vg_format_hash(app->want_image, &app->in.cur, link, sizeof link);
-            printf("%s %s\n", c->text, link);
-            fflush(stdout);
-            break;
-        }
-        case VS_QUIT: app->quit = 1; break;
-        case VS_MESSAGE:
-            printf("%s %s\n", c->text, app->message);
-            fflush(stdout);
-            break;
-        case VS_FILTER:
-            app->in.sel[0] = c->a[0] * app->in.ratio;
-            app->in.sel[1] = c->a[1] * app->in.ratio;
-            app->in.sel[2] = c->a[2] * app->in.ratio;
-            app->in.sel[3] = c->a[3] * app->in.ratio;
-            filter_region(app);
-            break;
-        case VS_GRAPH:
-            if (!strcmp(c->text, "next"))
-                filter_next(app);
-            else
-                filter_choose(app, c->text);
-            break;
-        case VS_PARAM: filter_param(app, c->a[0] > 0 ? 1 : -1); break;
-        case VS_PAD_AXIS:
-        case VS_PAD_BUTTON: {
-            SDL_Event e;
-            memset(&e, 0, sizeof e);
-            if (c->op == VS_PAD_AXIS) {
-                e.type = SDL_CONTROLLERAXISMOTION;
-                e.caxis.axis = (Uint8)c->code;
-                e.caxis.value = (Sint16)lround(c->a[0] * 32767);
-                act(app, vi_event(&app->in, &e));
-            } else {
-                e.type = SDL_CONTROLLERBUTTONDOWN;
-                e.cbutton.button = (Uint8)c->code;
-                e.cbutton.state = SDL_PRESSED;
-                act(app, vi_event(&app->in, &e));
-                e.type = SDL_CONTROLLERBUTTONUP;
-                e.cbutton.state = SDL_RELEASED;
-                act(app, vi_event(&app->in, &e));
-            }
-            break;
-        }
-        case VS_PINCH: {
-            SDL_Event e;
-            memset(&e, 0, sizeof e);
-            e.type = SDL_MULTIGESTURE;
-            e.mgesture.x = (float)(c->a[0] * app->in.ratio / app->w);
-            e.mgesture.y = (float)(c->a[1] * app->in.ratio / app->h);
-            e.mgesture.dDist = (float)c->a[2];
-            e.mgesture.dTheta = (float)(c->a[3] * M_PI / 180);
-            e.mgesture.numFingers = 2;
-            act(app, vi_event(&app->in, &e));
-            break;
-        }
-        case VS_TOUCH: {
-            /* One finger down at (a0, a1), N moves to (a2, a3), up. */
-            SDL_Event e;
-            memset(&e, 0, sizeof e);
-            const double ww = app->w / app->in.ratio, wh = app->h / app->in.ratio;
-            int n = (int)c->a[4];
-            e.type = SDL_FINGERDOWN;
-            e.tfinger.x = (float)(c->a[0] / ww);
-            e.tfinger.y = (float)(c->a[1] / wh);
-            act(app, vi_event(&app->in, &e));
-            for (int i = 1; i <= n; i++) {
-                e.type = SDL_FINGERMOTION;
-                e.tfinger.dx = (float)((c->a[2] - c->a[0]) / n / ww);
-                e.tfinger.dy = (float)((c->a[3] - c->a[1]) / n / wh);
-                e.tfinger.x = (float)((c->a[0] + (c->a[2] - c->a[0]) * i / n) / ww);
-                e.tfinger.y = (float)((c->a[1] + (c->a[3] - c->a[1]) * i / n) / wh);
-                act(app, vi_event(&app->in, &e));
-            }
-            e.type = SDL_FINGERUP;
-            e.tfinger.dx = e.tfinger.dy = 0;
-            act(app, vi_event(&app->in, &e));
-            break;
-        }
-        }
+        if (script_blocked(app, c, waited))
+            return;
+        if (!script_input(app, c))
+            script_action(app, c);
         app->pc++;
         app->pc_since = now;
         app->pc_frame = app->frames;
@@ -1068,14 +1097,14 @@ static int start(struct app *app, const char *url, struct view_args *a)
         fprintf(stderr, ME ": the server at %s has no images\n", url);
         return 1;
     }
-    struct vf_options fo = {.url = url, .timeout_ms = (long)(a->timeout * 1000),
-                            .cache_dir = a->cache_dir, .no_cache = a->no_cache,
+    struct vf_options fo = {.url = url, .timeout_ms = remote_timeout_ms(&a->remote),
+                            .cache_dir = a->remote.cache_dir, .no_cache = a->remote.no_cache,
                             .no_batch = a->no_batch, .verbose = a->verbose};
     if (!(app->fetch = vf_new(&fo, &err))) {
         fprintf(stderr, ME ": %s\n", err.text);
         return 1;
     }
-    if (!(app->filt = vx_new(url, (long)(a->timeout * 1000), a->verbose, &err))) {
+    if (!(app->filt = vx_new(url, remote_timeout_ms(&a->remote), a->verbose, &err))) {
         fprintf(stderr, ME ": %s\n", err.text);
         return 1;
     }
@@ -1091,7 +1120,8 @@ static int start(struct app *app, const char *url, struct view_args *a)
 
 int cmd_view(int argc, char **argv)
 {
-    struct view_args a = {.timeout = 10, .gpu_mib = 256, .budget = 4, .budget_ms = 6};
+    struct view_args a = {.budget = 4, .budget_ms = 6};
+    remote_opts_init(&a.remote);
     int first, rc = opt_parse(&view_command, argc, argv, &a, &first);
     if (rc != OPT_GO_ON)
         return rc;

@@ -41,23 +41,25 @@
 #include "gpu/gpu.h"
 #include "gpu/gpu_cache.h"
 #include "gpu/gpu_decode.h"
-#include "http_fetch.h"
 #include "imageio/imageio.h"
 #include "options.h"
 #include "region_arg.h"
+#include "remote/http_fetch.h"
+#include "remote/tile_cache_disk.h"
+#include "remote_opts.h"
 #include "store/geometry.h"
-#include "tile_cache_disk.h"
 
 #define ME "gigaview render"
 
 #ifdef GV_HAVE_GPU
 
 struct render_args {
-    const char *image, *region, *center, *size, *output, *cache_dir;
+    struct remote_opts remote; /* --timeout, --cache-dir, --no-cache, --gpu-cache */
+    const char *image, *region, *center, *size, *output;
     int level;             /* -1: not given (the region form then uses 0) */
-    int no_cache, no_batch, verbose;
+    int no_batch, verbose;
     double zoom;           /* NAN: not given */
-    double rotate, timeout, gpu_mib;
+    double rotate;
     uint64_t max_pixels;
 };
 
@@ -84,20 +86,12 @@ static const struct opt_spec render_opts[] = {
      .field = F(size), .help = "output size of the view"},
     {.name = "output", .short_name = 'o', .kind = OPT_STRING, .arg = "OUT",
      .field = F(output), .help = "the image to write"},
-    {.name = "timeout", .short_name = 't', .kind = OPT_DOUBLE, .arg = "SEC",
-     .field = F(timeout), .min = 0, .max = 86400, .flags = OPT_FINITE | OPT_MIN_OPEN,
-     .help = "limit for each HTTP request (default 30)"},
-    {.name = "cache-dir", .kind = OPT_STRING, .arg = "DIR", .field = F(cache_dir),
-     .help = "tile cache (default $XDG_CACHE_HOME/gigaview\n"
-             "or ~/.cache/gigaview)"},
-    {.name = "no-cache", .kind = OPT_FLAG, .field = F(no_cache),
-     .help = "do not use the tile cache"},
+    REMOTE_OPT_TIMEOUT(F(remote)),
+    REMOTE_OPT_CACHE(F(remote)),
     {.name = "no-batch", .kind = OPT_FLAG, .field = F(no_batch),
      .help = "fetch each tile with a request of its own\n"
              "(default: batches of up to 64, one request each)"},
-    {.name = "gpu-cache", .kind = OPT_DOUBLE, .arg = "MIB", .field = F(gpu_mib),
-     .min = 0, .max = HUGE_VAL, .flags = OPT_FINITE,
-     .help = "GPU memory for decoded tiles (default 256)"},
+    REMOTE_OPT_GPU_CACHE(F(remote)),
     {.name = "max-pixels", .kind = OPT_COUNT, .arg = "N", .field = F(max_pixels),
      .help = "refuse larger outputs (default " OPT_STR(REGION_DEFAULT_MAX_PIXELS) ")"},
     {.name = "verbose", .short_name = 'v', .kind = OPT_FLAG, .field = F(verbose),
@@ -644,10 +638,10 @@ static int check_args(const struct render_args *a, int noperands, struct view *v
 /* Open the disk cache of the image (a failure is only a warning). */
 static void open_disk_cache(struct session *s, const struct render_args *a)
 {
-    s->dc = gv_disk_cache_open(a->cache_dir, gv_http_base(s->http), a->image);
-    if (!s->dc && a->cache_dir)
+    s->dc = gv_disk_cache_open(a->remote.cache_dir, gv_http_base(s->http), a->image);
+    if (!s->dc && a->remote.cache_dir)
         fprintf(stderr, ME ": warning: cannot use the cache directory %s\n",
-                a->cache_dir);
+                a->remote.cache_dir);
     if (a->verbose && s->dc)
         fprintf(stderr, "render: tile cache %s\n", gv_disk_cache_dir(s->dc));
 }
@@ -661,8 +655,8 @@ static int session_open(struct session *s, const char *url, const struct render_
     struct gv_error err = {0};
     memset(s, 0, sizeof *s);
     s->platform = platform;
-    s->gpu_budget = (size_t)(a->gpu_mib * 1048576.0);
-    if (!(s->http = gv_http_new(url, (long)(a->timeout * 1000), a->verbose, &err)) ||
+    s->gpu_budget = remote_gpu_bytes(&a->remote);
+    if (!(s->http = gv_http_new(url, remote_timeout_ms(&a->remote), a->verbose, &err)) ||
         gv_http_image(s->http, a->image, &s->img, &err) < 0) {
         fprintf(stderr, ME ": %s\n", err.text);
         return -1;
@@ -676,7 +670,7 @@ static int session_open(struct session *s, const char *url, const struct render_
                 a->image);
         return -1;
     }
-    if (!a->no_cache)
+    if (!a->remote.no_cache)
         open_disk_cache(s, a);
     return 0;
 }
@@ -792,8 +786,9 @@ static void print_stats(const struct session *s)
 
 int cmd_render(int argc, char **argv)
 {
-    struct render_args a = {.level = -1, .zoom = NAN, .timeout = 30, .gpu_mib = 256,
+    struct render_args a = {.level = -1, .zoom = NAN,
                             .max_pixels = REGION_DEFAULT_MAX_PIXELS};
+    remote_opts_init(&a.remote);
     int first, rc = opt_parse(&render_command, argc, argv, &a, &first);
     if (rc != OPT_GO_ON)
         return rc;

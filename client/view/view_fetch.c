@@ -20,9 +20,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "http_fetch.h"
+#include "remote/http_fetch.h"
+#include "remote/tile_cache_disk.h"
 #include "store/store_format.h"
-#include "tile_cache_disk.h"
 #include "view_fetch.h"
 
 struct rnode {
