@@ -197,6 +197,15 @@ void http_header_int(struct MHD_Response *resp, const char *name, long long v)
     MHD_add_response_header(resp, name, s);
 }
 
+void http_header_etag_hour(struct MHD_Response *resp, const char *etag)
+{
+    if (!resp)
+        return;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, etag);
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
+                            "public, max-age=3600");
+}
+
 enum MHD_Result http_send_owned(struct req *r, unsigned status,
                                 const char *type, void *body, size_t len)
 {
