@@ -4,7 +4,7 @@
  *
  * Design.  This is the one place that dispatches on the store's kind: a
  * height store's region goes to height_region.c, which maps its codes to
- * 8-bit gray, an image store's region is checked here and copied by the
+ * 8-bit gray, an image store's region is checked and copied by the
  * decoder's tile walk (gv_decoder_copy_region).  Keeping the dispatch out
  * of store_decoder.c lets height_region.c use the decoder without the two
  * needing each other.
@@ -18,23 +18,8 @@ int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
                      uint32_t w, uint32_t h, uint8_t *out,
                      struct gv_error *err)
 {
-    const struct gv_store *s = gv_decoder_store(d);
-    const struct gv_store_info *info = gv_store_info(s);
-    const struct gv_geometry *g = &info->geometry;
+    const struct gv_store_info *info = gv_store_info(gv_decoder_store(d));
     if (info->header.kind == GV_KIND_HEIGHT)   /* the documented gray */
         return gv_height_region_gray(d, level, x, y, w, h, out, err);
-    if (level < 0 || level >= g->root + g->root_mips)
-        return gv_fail(err, GV_EINVAL, "decode: no level %d (levels 0..%d)",
-                       level, g->root + g->root_mips - 1);
-    uint32_t lw, lh;
-    if (level >= g->root) {
-        gv_store_root(s, level - g->root, &lw, &lh);
-    } else {
-        lw = g->level[level].width;
-        lh = g->level[level].height;
-    }
-    if (w == 0 || h == 0 || x >= lw || y >= lh || w > lw - x || h > lh - y)
-        return gv_fail(err, GV_EINVAL, "decode: region %u,%u %ux%u is outside "
-                       "level %d (%ux%u)", x, y, w, h, level, lw, lh);
-    return gv_decoder_copy_region(d, level, x, y, w, h, out, err);
+    return gv_decoder_copy_region(d, "decode", level, x, y, w, h, out, err);
 }

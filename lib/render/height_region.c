@@ -31,19 +31,10 @@ int gv_height_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
                      uint32_t w, uint32_t h, uint16_t *out,
                      struct gv_error *err)
 {
-    const struct gv_store *s = gv_decoder_store(d);
-    const struct gv_store_info *info = gv_store_info(s);
-    const struct gv_geometry *g = &info->geometry;
+    const struct gv_store_info *info = gv_store_info(gv_decoder_store(d));
     if (info->header.kind != GV_KIND_HEIGHT)
         return gv_fail(err, GV_EINVAL, "height: not a height store");
-    uint32_t lw, lh;
-    if (gv_level_size(g, level, &lw, &lh) < 0)
-        return gv_fail(err, GV_EINVAL, "height: no level %d (levels 0..%d)",
-                       level, g->root + g->root_mips - 1);
-    if (w == 0 || h == 0 || x >= lw || y >= lh || w > lw - x || h > lh - y)
-        return gv_fail(err, GV_EINVAL, "height: region %u,%u %ux%u is outside "
-                       "level %d (%ux%u)", x, y, w, h, level, lw, lh);
-    return gv_decoder_copy_region(d, level, x, y, w, h, out, err);
+    return gv_decoder_copy_region(d, "height", level, x, y, w, h, out, err);
 }
 
 uint8_t gv_height_gray(const struct gv_height_meta *m, uint16_t code)

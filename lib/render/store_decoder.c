@@ -192,15 +192,21 @@ int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
     return 0;
 }
 
-int gv_decoder_copy_region(struct gv_decoder *d, int level, uint32_t x,
-                           uint32_t y, uint32_t w, uint32_t h, void *dst,
-                           struct gv_error *err)
+int gv_decoder_copy_region(struct gv_decoder *d, const char *module,
+                           int level, uint32_t x, uint32_t y, uint32_t w,
+                           uint32_t h, void *dst, struct gv_error *err)
 {
     const struct gv_geometry *g = &d->info->geometry;
     const int c = d->channels;
     uint8_t *out = dst;
     const size_t orow = (size_t)w * c;
     uint32_t lw, lh;
+    if (gv_level_size(g, level, &lw, &lh) < 0)
+        return gv_fail(err, GV_EINVAL, "%s: no level %d (levels 0..%d)",
+                       module, level, g->root + g->root_mips - 1);
+    if (w == 0 || h == 0 || x >= lw || y >= lh || w > lw - x || h > lh - y)
+        return gv_fail(err, GV_EINVAL, "%s: region %u,%u %ux%u is outside "
+                       "level %d (%ux%u)", module, x, y, w, h, level, lw, lh);
     if (level >= g->root) {
         const uint8_t *mip = gv_store_root(d->store, level - g->root, &lw, &lh);
         for (uint32_t r = 0; r < h; r++)
@@ -208,8 +214,6 @@ int gv_decoder_copy_region(struct gv_decoder *d, int level, uint32_t x,
         return 0;
     }
     const struct gv_level *l = &g->level[level];
-    lw = l->width;
-    lh = l->height;
     uint32_t t0x = x / GV_STEP, t1x = (x + w - 1) / GV_STEP;
     uint32_t t0y = y / GV_STEP, t1y = (y + h - 1) / GV_STEP;
     if (t1x >= l->tiles_x) t1x = l->tiles_x - 1;
