@@ -33,6 +33,7 @@ struct catalog {
     void *on_close_arg;
 };
 
+/* Same shape as access_group_valid in access_token.c: deliberately separate, image ids also refuse a leading dot and "..". */
 int catalog_id_valid(const char *id)
 {
     size_t n = strlen(id);
