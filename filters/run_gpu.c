@@ -163,6 +163,8 @@ static void report(const char *log, const char *module, const char *what,
         gv_fail(err, GV_EINVAL, "filter: template %s: %.200s", what, log);
 }
 
+/* Same shape as link_stages below: deliberately separate, a stage compiled
+ * here, stages linked there, each failure reported through report(). */
 static GLuint compile_stage(GLenum type, const char *src, const char *module,
                             struct gv_error *err)
 {
@@ -174,7 +176,8 @@ static GLuint compile_stage(GLenum type, const char *src, const char *module,
 }
 
 /* Link the compiled stages (deleted here, whatever happens); link errors
- * are mapped like compile errors. */
+ * are mapped like compile errors.  Same shape as compile_stage above:
+ * deliberately separate, linking is its own GL step. */
 static GLuint link_stages(const GLuint *sh, int n, const char *module,
                           struct gv_error *err)
 {
