@@ -152,34 +152,40 @@ static void map_log(const char *log, const char *module, struct gv_error *err)
     gv_fail(err, GV_EINVAL, "filter: module '%s' %s", module, msg);
 }
 
+/* The driver's log of a failed compile or link: mapped back to the user's
+ * module, or, for a template (module NULL), "filter: template <what>". */
+static void report(const char *log, const char *module, const char *what,
+                   struct gv_error *err)
+{
+    if (module)
+        map_log(log, module, err);
+    else
+        gv_fail(err, GV_EINVAL, "filter: template %s: %.200s", what, log);
+}
+
+/* Same shape as link_stages below: deliberately separate, a stage compiled
+ * here, stages linked there, each failure reported through report(). */
 static GLuint compile_stage(GLenum type, const char *src, const char *module,
                             struct gv_error *err)
 {
     char log[2048];
     GLuint sh = gv_gpu_compile_stage(type, src, log, sizeof log);
-    if (sh)
-        return sh;
-    if (module)
-        map_log(log, module, err);
-    else
-        gv_fail(err, GV_EINVAL, "filter: template shader does not compile: %.200s", log);
-    return 0;
+    if (!sh)
+        report(log, module, "shader does not compile", err);
+    return sh;
 }
 
 /* Link the compiled stages (deleted here, whatever happens); link errors
- * are mapped like compile errors. */
+ * are mapped like compile errors.  Same shape as compile_stage above:
+ * deliberately separate, linking is its own GL step. */
 static GLuint link_stages(const GLuint *sh, int n, const char *module,
                           struct gv_error *err)
 {
     char log[2048];
     GLuint p = gv_gpu_link_stages(sh, n, log, sizeof log);
-    if (p)
-        return p;
-    if (module)
-        map_log(log, module, err);
-    else
-        gv_fail(err, GV_EINVAL, "filter: template program does not link: %.200s", log);
-    return 0;
+    if (!p)
+        report(log, module, "program does not link", err);
+    return p;
 }
 
 static GLuint link_program(const char *vs_src, const char *fs_src,

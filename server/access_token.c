@@ -29,6 +29,9 @@ const char *access_token_status_name(enum access_token_status s)
     return "unknown";
 }
 
+/* Same shape as gv_image_id_valid_n in lib/base/ids.c: deliberately
+ * separate, group names and image ids are two vocabularies with their own
+ * rules (an image id also refuses a leading dot and ".."). */
 int access_group_valid(const char *s, size_t n)
 {
     if (n < 1 || n > ACCESS_GROUP_MAX)
@@ -70,6 +73,7 @@ size_t access_b64url_encode(const void *in, size_t n, char *out, size_t size)
     return o;
 }
 
+/* Same shape as hexval in router.c: deliberately separate, base64url digits here, hex there. */
 static int b64val(char c)
 {
     if (c >= 'A' && c <= 'Z')

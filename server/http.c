@@ -197,6 +197,15 @@ void http_header_int(struct MHD_Response *resp, const char *name, long long v)
     MHD_add_response_header(resp, name, s);
 }
 
+void http_header_etag_hour(struct MHD_Response *resp, const char *etag)
+{
+    if (!resp)
+        return;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, etag);
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
+                            "public, max-age=3600");
+}
+
 enum MHD_Result http_send_owned(struct req *r, unsigned status,
                                 const char *type, void *body, size_t len)
 {
@@ -303,6 +312,7 @@ const char *http_query(struct req *r, const char *name)
     return MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, name);
 }
 
+/* Same shape as parse_uint in iiif.c: deliberately separate, iiif.c (pure, fuzzed) parses a span up to GV_MAX_DIM without http.c. */
 int http_parse_u32(const char *s, uint32_t max, uint32_t *out)
 {
     if (!s || !*s)
@@ -1088,6 +1098,7 @@ static struct MHD_Daemon *start_daemon(struct server *srv, struct http_thread *t
         MHD_OPTION_END);
 }
 
+/* Same shape as acceptor_start in acceptor.c: deliberately separate, each allocates its own per-daemon arrays and reports in its own module. */
 int http_start(struct server *srv)
 {
     const struct settings *cfg = srv->cfg;

@@ -188,6 +188,11 @@ struct MHD_Response *http_response_json(json_t *json, size_t flags,
 /* Add header `name` with the decimal value v. */
 void http_header_int(struct MHD_Response *resp, const char *name, long long v);
 
+/* Add ETag: etag, then Cache-Control: public, max-age=3600 (an answer
+ * that may change when the store is replaced: an hour, revalidated by its
+ * ETag).  A NULL resp (a failed response) does nothing. */
+void http_header_etag_hour(struct MHD_Response *resp, const char *etag);
+
 /* A malloc'ed body that the response frees. */
 enum MHD_Result http_send_owned(struct req *r, unsigned status,
                                 const char *type, void *body, size_t len);

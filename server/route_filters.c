@@ -25,6 +25,7 @@
 #include <string.h>
 
 #include "filter.h"
+#include "filter_call.h"
 #include "filter_jobs.h"
 #include "filter_output.h"
 #include "filter_store.h"
@@ -35,7 +36,6 @@
 /* A request waiting for a worker (r->async). */
 struct call {
     struct filter_job fj;
-    struct MHD_Connection *conn;
     char *doc;
     size_t doc_len;
     double *values;
@@ -61,13 +61,6 @@ static void call_free(struct call *c)
 static void call_free_any(void *c)
 {
     call_free(c);
-}
-
-static void call_done(struct filter_job *j, void *arg)
-{
-    (void)j;
-    struct call *c = arg;
-    MHD_resume_connection(c->conn);
 }
 
 static void limits(const struct settings *cfg, struct gv_filter_limits *lim)
@@ -135,13 +128,7 @@ static int check_auth(struct req *r, enum MHD_Result *ret)
 /* Queue c's job and suspend the connection until it is done. */
 static enum MHD_Result suspend_on(struct req *r, struct call *c)
 {
-    c->conn = r->conn;
-    c->fj.done = call_done;
-    c->fj.arg = c;
-    c->fj.cancel = http_suspend(r, c, call_free_any); /* before the job
-                                                        can resume it */
-    filter_jobs_submit(r->srv->filters, &c->fj);
-    return MHD_YES;
+    return filter_call_suspend(r, &c->fj, c, call_free_any);
 }
 
 /* ------------------------------------------------------------ GET list */
@@ -230,10 +217,8 @@ static enum MHD_Result finish_store(struct req *r, struct call *c)
 enum MHD_Result route_filters_post(struct req *r)
 {
     enum MHD_Result ret;
-    struct call *c = r->async;
+    struct call *c = filter_call_resumed(r);
     if (c) { /* resumed: the worker has compiled it, or failed */
-        r->async = NULL;
-        r->async_free = NULL;
         ret = finish_store(r, c);
         call_free(c);
         return ret;
@@ -611,10 +596,8 @@ static void fill_job(struct call *c, const struct gv_filter_graph *g,
 enum MHD_Result route_image_filter(struct req *r)
 {
     enum MHD_Result ret;
-    struct call *c = r->async;
+    struct call *c = filter_call_resumed(r);
     if (c) { /* resumed */
-        r->async = NULL;
-        r->async_free = NULL;
         ret = finish_run(r, c);
         call_free(c);
         return ret;

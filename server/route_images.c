@@ -227,10 +227,8 @@ enum MHD_Result route_image_root(struct req *r)
         http_header_int(resp, "X-Height", h);
         http_header_int(resp, "X-Channels", g->channels);
         http_header_int(resp, "X-Level", g->root + (int)mip);
-        MHD_add_response_header(resp, "ETag", etag);
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
-                                "public, max-age=3600");
     }
+    http_header_etag_hour(resp, etag);
     ret = http_send(r, 200, resp, len);
 out:
     image_put(img);

@@ -35,6 +35,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "filter_call.h"
 #include "filter_jobs.h"
 #include "mesh/cluster_run.h"
 #include "routes.h"
@@ -42,7 +43,6 @@
 /* A request waiting for a worker (r->async). */
 struct call {
     struct filter_job fj;
-    struct MHD_Connection *conn;
 };
 
 static void call_free(struct call *c)
@@ -58,13 +58,6 @@ static void call_free(struct call *c)
 static void call_free_any(void *c)
 {
     call_free(c);
-}
-
-static void call_done(struct filter_job *j, void *arg)
-{
-    (void)j;
-    struct call *c = arg;
-    MHD_resume_connection(c->conn);
 }
 
 static int parse(struct req *r, struct gv_simplify_opts *o,
@@ -160,10 +153,8 @@ static enum MHD_Result finish(struct req *r, struct call *c)
 enum MHD_Result route_mesh_simplify(struct req *r)
 {
     enum MHD_Result ret;
-    struct call *c = r->async;
+    struct call *c = filter_call_resumed(r);
     if (c) { /* resumed: the worker has answered, or the job failed */
-        r->async = NULL;
-        r->async_free = NULL;
         ret = finish(r, c);
         call_free(c);
         return ret;
@@ -204,11 +195,5 @@ enum MHD_Result route_mesh_simplify(struct req *r)
     double ms = ceil(r->srv->cfg->simplify_time_limit * 1000);
     c->fj.timeout_ms = ms > 3600000 ? 3600000 : (int)ms;
     c->fj.timeout_key = "simplify_time_limit";
-    c->fj.done = call_done;
-    c->fj.arg = c;
-    c->conn = r->conn;
-    c->fj.cancel = http_suspend(r, c, call_free_any); /* before the job
-                                                        can resume it */
-    filter_jobs_submit(r->srv->filters, &c->fj);
-    return MHD_YES;
+    return filter_call_suspend(r, &c->fj, c, call_free_any);
 }

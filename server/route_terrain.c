@@ -182,11 +182,7 @@ enum MHD_Result route_terrain_layer(struct req *r)
     size_t len;
     struct MHD_Response *resp = http_response_json(j, JSON_COMPACT,
                                                    "application/json", &len);
-    if (resp) {
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, etag);
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
-                                "public, max-age=3600");
-    }
+    http_header_etag_hour(resp, etag);
     ret = http_send(r, 200, resp, len);
 out:
     image_put(img);

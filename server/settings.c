@@ -47,6 +47,7 @@ struct settings_key {
 
 #define F(field) offsetof(struct settings, field), sizeof(((struct settings *)0)->field)
 
+/* One key a row: the rows share one shape on purpose (a declarative table). */
 static const struct settings_key keys[] = {
     {"listen", T_STR, F(listen), "127.0.0.1", 0, 0,
      "address to listen on (IPv4 or IPv6 literal)"},

@@ -327,6 +327,20 @@ struct dec {
     uint32_t x;
 };
 
+/* Refill the state from the stream after a step (one 16-bit word when it
+ * fell below RANS_L): 0, or -1 when the stream runs out. */
+static inline int renorm(struct dec *d)
+{
+    if (d->x < RANS_L) {
+        if (!d->left)
+            return -1;
+        d->x = (d->x << 16) | gv_get16(d->w);
+        d->w += 2;
+        d->left--;
+    }
+    return 0;
+}
+
 /* One step with the table cum[0..ntok] (cum[ntok] = 2^15): the symbol, or
  * -1 when the stream runs out. */
 static int step_table(struct dec *d, const uint32_t *cum)
@@ -337,13 +351,8 @@ static int step_table(struct dec *d, const uint32_t *cum)
         s--;
     /* cum[s] <= slot < cum[s+1] so f > 0 */
     d->x = (cum[s + 1] - cum[s]) * (d->x >> PROB_BITS) + slot - cum[s];
-    if (d->x < RANS_L) {
-        if (!d->left)
-            return -1;
-        d->x = (d->x << 16) | gv_get16(d->w);
-        d->w += 2;
-        d->left--;
-    }
+    if (renorm(d) < 0)
+        return -1;
     return s;
 }
 
@@ -353,13 +362,8 @@ static int32_t step_bits(struct dec *d, int k)
     uint32_t slot = d->x & (PROB_SCALE - 1), sh = (uint32_t)(PROB_BITS - k);
     uint32_t v = slot >> sh;
     d->x = (1u << sh) * (d->x >> PROB_BITS) + (slot & ((1u << sh) - 1));
-    if (d->x < RANS_L) {
-        if (!d->left)
-            return -1;
-        d->x = (d->x << 16) | gv_get16(d->w);
-        d->w += 2;
-        d->left--;
-    }
+    if (renorm(d) < 0)
+        return -1;
     return (int32_t)v;
 }
 

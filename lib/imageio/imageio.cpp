@@ -540,6 +540,7 @@ static int read_rows(struct gv_image_in *im, uint32_t rows, void *out,
         im->next_row += rows;
         return 0;
     }
+    /* Same shape as the row loop of native_tiff.c's read: deliberately separate, this one is the OpenImageIO module's (C++, its own binary). */
     while (rows > 0) {
         uint32_t r = im->next_row;
         if (im->buf_rows == 0 || r < im->buf_first
@@ -641,17 +642,8 @@ extern "C" int gv_image_write(const char *path, uint32_t width,
                               uint32_t height, int channels,
                               const uint8_t *pixels, struct gv_error *err)
 {
-    try {
-        return write_impl(path, width, height, channels, GV_SAMPLE_U8, pixels,
-                          err);
-    } catch (const std::bad_alloc &) {
-        return gv_fail(err, GV_ENOMEM, "imageio: %s: out of memory", path);
-    } catch (const std::exception &e) {
-        return gv_fail(err, GV_EIO, "imageio: %s: %s", path, e.what());
-    } catch (...) {
-        return gv_fail(err, GV_EIO, "imageio: %s: unknown encoder exception",
-                       path);
-    }
+    return gv_image_write_typed(path, width, height, channels, GV_SAMPLE_U8,
+                                pixels, err);
 }
 
 /* ---- in-memory encoding ---- */
@@ -750,15 +742,16 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
     return 0;
 }
 
-extern "C" int gv_image_encode(const char *format, uint32_t width,
-                               uint32_t height, int channels,
-                               const uint8_t *pixels, int quality,
-                               uint8_t **out, size_t *len,
-                               struct gv_error *err)
+/* encode_impl with its exceptions turned into *err (no exception leaves
+ * the module). */
+static int encode_guarded(const char *format, uint32_t width, uint32_t height,
+                          int channels, const void *pixels, TypeDesc t,
+                          int quality, uint8_t **out, size_t *len,
+                          struct gv_error *err)
 {
     try {
-        return encode_impl(format, width, height, channels, pixels,
-                           TypeDesc::UINT8, quality, out, len, err);
+        return encode_impl(format, width, height, channels, pixels, t, quality,
+                           out, len, err);
     } catch (const std::bad_alloc &) {
         return gv_fail(err, GV_ENOMEM, "imageio: out of memory encoding");
     } catch (const std::exception &e) {
@@ -766,6 +759,16 @@ extern "C" int gv_image_encode(const char *format, uint32_t width,
     } catch (...) {
         return gv_fail(err, GV_EIO, "imageio: unknown encoder exception");
     }
+}
+
+extern "C" int gv_image_encode(const char *format, uint32_t width,
+                               uint32_t height, int channels,
+                               const uint8_t *pixels, int quality,
+                               uint8_t **out, size_t *len,
+                               struct gv_error *err)
+{
+    return encode_guarded(format, width, height, channels, pixels,
+                          TypeDesc::UINT8, quality, out, len, err);
 }
 
 extern "C" int gv_image_write_typed(const char *path, uint32_t width,
@@ -793,17 +796,9 @@ extern "C" int gv_image_encode_typed(const char *format, uint32_t width,
 {
     TypeDesc t = sample == GV_SAMPLE_U16 ? TypeDesc::UINT16
                : sample == GV_SAMPLE_F32 ? TypeDesc::FLOAT : TypeDesc::UINT8;
-    try {
-        /* 90: visually transparent for JPEG and WebP (8-bit only). */
-        return encode_impl(format, width, height, channels, pixels, t, 90,
-                           out, len, err);
-    } catch (const std::bad_alloc &) {
-        return gv_fail(err, GV_ENOMEM, "imageio: out of memory encoding");
-    } catch (const std::exception &e) {
-        return gv_fail(err, GV_EIO, "imageio: encoding: %s", e.what());
-    } catch (...) {
-        return gv_fail(err, GV_EIO, "imageio: unknown encoder exception");
-    }
+    /* 90: visually transparent for JPEG and WebP (8-bit only). */
+    return encode_guarded(format, width, height, channels, pixels, t, 90, out,
+                          len, err);
 }
 
 /* ---- the module's table (imageio_module.h) ---- */

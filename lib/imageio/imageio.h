@@ -114,13 +114,19 @@ int gv_image_encode(const char *format, uint32_t width, uint32_t height,
 /* gv_image_write and gv_image_encode for 16-bit (png, tif) and float (tif)
  * samples as well: `sample` says what pixels holds (host order).  The
  * height store routes use them (docs/API.md).  Same returns. */
-int gv_image_write_typed(const char *path, uint32_t width, uint32_t height,
-                         int channels, enum gv_sample sample,
-                         const void *pixels, struct gv_error *err);
-int gv_image_encode_typed(const char *format, uint32_t width, uint32_t height,
-                          int channels, enum gv_sample sample,
-                          const void *pixels, uint8_t **out, size_t *len,
-                          struct gv_error *err);
+typedef int gv_image_write_typed_fn(const char *path, uint32_t width,
+                                    uint32_t height, int channels,
+                                    enum gv_sample sample, const void *pixels,
+                                    struct gv_error *err);
+typedef int gv_image_encode_typed_fn(const char *format, uint32_t width,
+                                     uint32_t height, int channels,
+                                     enum gv_sample sample,
+                                     const void *pixels, uint8_t **out,
+                                     size_t *len, struct gv_error *err);
+/* Declared through their types, which the module's table
+ * (imageio_module.h) uses too. */
+gv_image_write_typed_fn gv_image_write_typed;
+gv_image_encode_typed_fn gv_image_encode_typed;
 
 #ifdef __cplusplus
 }

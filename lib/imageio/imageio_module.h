@@ -38,13 +38,8 @@ struct gv_imageio_module {
     int (*encode)(const char *format, uint32_t width, uint32_t height,
                   int channels, const uint8_t *pixels, int quality,
                   uint8_t **out, size_t *len, struct gv_error *err);
-    int (*write_typed)(const char *path, uint32_t width, uint32_t height,
-                       int channels, enum gv_sample sample,
-                       const void *pixels, struct gv_error *err);
-    int (*encode_typed)(const char *format, uint32_t width, uint32_t height,
-                        int channels, enum gv_sample sample,
-                        const void *pixels, uint8_t **out, size_t *len,
-                        struct gv_error *err);
+    gv_image_write_typed_fn *write_typed;
+    gv_image_encode_typed_fn *encode_typed;
 };
 
 #ifdef __cplusplus

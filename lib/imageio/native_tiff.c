@@ -100,6 +100,7 @@ static void lt_load(void)
         void **slot;
         const char *name;
     } const f[] = {
+        /* One libtiff symbol a row: the same shape on purpose (a table). */
         {(void **)&lt.OpenOptionsAlloc, "TIFFOpenOptionsAlloc"},
         {(void **)&lt.OpenOptionsFree, "TIFFOpenOptionsFree"},
         {(void **)&lt.OpenOptionsSetErrorHandlerExtR,
@@ -154,6 +155,7 @@ struct gv_native_tiff {
     char msg[256];                 /* the first error's text */
 };
 
+/* Same shape as the test mode of imageio/native_png.c: deliberately separate, each format has its own test switch. */
 static int test_swap16;
 
 void gv_native_tiff_test_mode(int swap16)
@@ -306,6 +308,7 @@ static int layout(struct gv_native_tiff *t)
     return 0;
 }
 
+/* Same shape as gv_native_jpeg_open in native_jpeg.c: deliberately separate, each opens its own library's reader. */
 struct gv_native_tiff *gv_native_tiff_open(const char *path,
                                            uint64_t max_pixels,
                                            struct gv_image_info *info,
@@ -444,6 +447,7 @@ int gv_native_tiff_read(struct gv_native_tiff *t, uint32_t rows, void *out,
         t->next_row += rows;
         return 0;
     }
+    /* Same shape as the row loop in imageio.cpp: deliberately separate, that one is in the OpenImageIO module, a binary of its own. */
     while (rows > 0) {
         uint32_t r = t->next_row;
         if (t->buf_rows == 0 || r < t->buf_first

@@ -7,12 +7,15 @@
  * page, decodes into the claimed entry and publishes it, so other threads
  * that want the same tile wait for this decode instead of repeating it.
  * A page read for one tile is kept while its neighbours are decoded.
+ * gv_decoder_copy_region is the one tile walk behind both region readers
+ * (decode_region.c for images, height_region.c for height codes): it
+ * copies pixel units, C bytes for an image and a 2-byte code for a height
+ * store.
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "render/store_decoder.h"
-#include "render/height_region.h"
 #include "codec/height_tile.h"
 #include "codec/tile.h"
 
@@ -189,30 +192,23 @@ int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
     return 0;
 }
 
-int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
-                     uint32_t w, uint32_t h, uint8_t *out,
-                     struct gv_error *err)
+int gv_decoder_copy_region(struct gv_decoder *d, const char *module,
+                           int level, uint32_t x, uint32_t y, uint32_t w,
+                           uint32_t h, void *dst, struct gv_error *err)
 {
     const struct gv_geometry *g = &d->info->geometry;
     const int c = d->channels;
-    if (d->height)   /* 8-bit gray through the documented mapping */
-        return gv_height_region_gray(d, level, x, y, w, h, out, err);
-    if (level < 0 || level >= g->root + g->root_mips)
-        return gv_fail(err, GV_EINVAL, "decode: no level %d (levels 0..%d)",
-                       level, g->root + g->root_mips - 1);
-    uint32_t lw, lh;
-    const uint8_t *mip = NULL;
-    if (level >= g->root) {
-        mip = gv_store_root(d->store, level - g->root, &lw, &lh);
-    } else {
-        lw = g->level[level].width;
-        lh = g->level[level].height;
-    }
-    if (w == 0 || h == 0 || x >= lw || y >= lh || w > lw - x || h > lh - y)
-        return gv_fail(err, GV_EINVAL, "decode: region %u,%u %ux%u is outside "
-                       "level %d (%ux%u)", x, y, w, h, level, lw, lh);
+    uint8_t *out = dst;
     const size_t orow = (size_t)w * c;
-    if (mip) {
+    uint32_t lw, lh;
+    if (gv_level_size(g, level, &lw, &lh) < 0)
+        return gv_fail(err, GV_EINVAL, "%s: no level %d (levels 0..%d)",
+                       module, level, g->root + g->root_mips - 1);
+    if (w == 0 || h == 0 || x >= lw || y >= lh || w > lw - x || h > lh - y)
+        return gv_fail(err, GV_EINVAL, "%s: region %u,%u %ux%u is outside "
+                       "level %d (%ux%u)", module, x, y, w, h, level, lw, lh);
+    if (level >= g->root) {
+        const uint8_t *mip = gv_store_root(d->store, level - g->root, &lw, &lh);
         for (uint32_t r = 0; r < h; r++)
             memcpy(out + r * orow, mip + ((size_t)(y + r) * lw + x) * c, orow);
         return 0;

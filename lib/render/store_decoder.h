@@ -60,7 +60,9 @@ int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
 /*
  * Decode the region [x, x+w) x [y, y+h) of `level` into out (w*h*C bytes,
  * rows packed; a height store gives one 8-bit gray channel, its codes
- * mapped by gv_height_gray, and gv_height_region gives the codes).  Levels root..root+root_mips-1 read the stored root mips.
+ * mapped by gv_height_gray, and gv_height_region gives the codes).
+ * Levels root..root+root_mips-1 read the stored root mips.  Defined in
+ * decode_region.c, above both this decoder and height_region.c.
  * Pixel (x,y) of a tiled level comes from tile min(x/512, tiles_x-1) (same
  * for y), so each pixel has exactly one source.  Returns 0 or -1 (region
  * outside the level, or a decoding failure).
@@ -68,6 +70,20 @@ int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
 int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
                      uint32_t w, uint32_t h, uint8_t *out,
                      struct gv_error *err);
+
+/*
+ * The region reader under gv_decode_region and gv_height_region: check
+ * that [x, x+w) x [y, y+h) is a non-empty region inside `level` (0 ..
+ * root + root_mips - 1, as gv_level_size counts them), then copy it into
+ * dst in pixel units (C bytes for an image, one host-order uint16_t code
+ * for a height store), rows packed, from the tiles as gv_decode_region
+ * describes or from the root mips.  Returns 0, or -1 with *err: GV_EINVAL
+ * for a level or region outside the store, its message prefixed with
+ * `module` ("decode: no level 9 (levels 0..4)"), or a decoding failure.
+ */
+int gv_decoder_copy_region(struct gv_decoder *d, const char *module,
+                           int level, uint32_t x, uint32_t y, uint32_t w,
+                           uint32_t h, void *dst, struct gv_error *err);
 
 /* Build the padded root tile (513x513xC) from a w x h root image. */
 void gv_root_tile(const uint8_t *root, uint32_t w, uint32_t h, int channels,
