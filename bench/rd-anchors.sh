@@ -116,12 +116,12 @@ if [ "$QUICK" = 1 ]; then
 	[ ${#images[@]} -gt 0 ] || images=(picosdeeuropa_by_Aitzol_Berasategi.jpg flowers.png)
 else
 	: "${GV_QS:=30 33 36 39 42 45 48}"
-	: "${J2K_RATIOS:=4 6 9 14 22 35 55 85 130 200 300}"
-	: "${HTJ2K_QSTEPS:=0.001 0.0018 0.0032 0.0056 0.01 0.018 0.032 0.056 0.1}"
-	: "${AVIF_QS:=2 8 14 20 26 32 40 48}"
-	: "${JXL_DS:=0.15 0.3 0.5 0.8 1.3 2 3.2 5}"
-	: "${WEBP_QS:=20 40 60 75 85 92 97 100}"
-	: "${JPEG_QS:=20 40 60 75 85 92 96 99}"
+	: "${J2K_RATIOS:=4 6 10 16 28 50 90 160}"
+	: "${HTJ2K_QSTEPS:=0.0015 0.003 0.006 0.012 0.024 0.048 0.1}"
+	: "${AVIF_QS:=4 12 20 28 36 46}"
+	: "${JXL_DS:=0.2 0.4 0.8 1.5 2.8 5}"
+	: "${WEBP_QS:=30 55 75 88 95 100}"
+	: "${JPEG_QS:=30 55 75 88 95 99}"
 	if [ ${#images[@]} -eq 0 ]; then
 		for f in "$P"/*.jpg "$P"/*.png; do images+=("$f"); done
 	fi
