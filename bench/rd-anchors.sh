@@ -82,11 +82,19 @@ for a in $ANCHORS; do
 	*) die "unknown anchor $a" ;; esac
 done
 has() { case " $ANCHORS " in *" $1 "*) return 0 ;; esac; return 1; }
+# plot RESULTS OUT TITLE: plot-rd.sh on a log rate axis around gigaview's
+# rates (a factor 1.5 beyond them each way), where the BD figures are taken
+plot() {
+	local r
+	r=$(awk -F'\t' '$2 == "gigaview" { if (!n++ || $4 < lo) lo = $4; if ($4 > hi) hi = $4 }
+		END { if (n) printf "%.3g %.3g", lo / 1.5, hi * 1.5; else print "0.05 8" }' "$1")
+	LOGX=1 XMIN=${XMIN:-${r% *}} XMAX=${XMAX:-${r#* }} "$BENCH_DIR/plot-rd.sh" "$1" "$2" "$3"
+}
 
 if [ -n "${SUMMARIZE:-}" ]; then
 	[ -r "$SUMMARIZE" ] || die "cannot read $SUMMARIZE"
 	python3 "$BENCH_DIR/bd.py" "$SUMMARIZE" ${BD_TSV:+--tsv "$BD_TSV"}
-	[ -z "${PLOT:-}" ] || LOGX=1 "$BENCH_DIR/plot-rd.sh" "$SUMMARIZE" "$PLOT" "${PLOT_TITLE:-gigaview and the anchors}"
+	[ -z "${PLOT:-}" ] || plot "$SUMMARIZE" "$PLOT" "${PLOT_TITLE:-gigaview and the anchors}"
 	exit 0
 fi
 
@@ -304,7 +312,7 @@ awk -F'\t' '
 echo
 python3 "$BENCH_DIR/bd.py" "$results" ${BD_TSV:+--tsv "$BD_TSV"}
 if [ -n "${PLOT:-}" ]; then
-	LOGX=1 "$BENCH_DIR/plot-rd.sh" "$results" "$PLOT" \
+	plot "$results" "$PLOT" \
 		"${PLOT_TITLE:-gigaview and the anchors, $(date +%F), $( [ "$FULL" = 1 ] && echo "full size, JPEG sources cropped 4 px" || echo "JPEG sources halved")}"
 fi
 echo "Run time: ${elapsed} s for ${#images[@]} image(s)."
