@@ -68,7 +68,7 @@ while [ $# -gt 0 ]; do
 	case $1 in
 	--gigaview) gv_arg=$2; shift 2 ;;
 	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,59p' "$0"; exit 0 ;;
+	-h|--help) sed -n '2,60p' "$0"; exit 0 ;;
 	*) images+=("$1"); shift ;;
 	esac
 done
