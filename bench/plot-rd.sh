@@ -34,10 +34,11 @@ trap 'rm -rf "$work"' EXIT INT TERM
 
 # Images in the order they first appear; codecs in a fixed order.
 mapfile -t images < <(awk -F'\t' '!s[$1]++ { print $1 }' "$in")
-codecs="gigaview gv-pertile j2k htj2k avif-pyr jxl-pyr webp-pyr jpeg-pyr jpeg-dz webp-dz jpeg webp astc8x8 astc6x6"
+codecs="gigaview gv-base gv-pertile j2k htj2k avif-pyr jxl-pyr webp-pyr jpeg-pyr jpeg-dz webp-dz jpeg webp astc8x8 astc6x6"
 declare -A label=(
 	[gigaview]="gigaview (default, whole store)"
 	[gv-pertile]="gigaview --min-tile-psnr (whole store)"
+	[gv-base]="gigaview, baseline binary (whole store)"
 	[j2k]="JPEG 2000, OpenJPEG, one file"
 	[htj2k]="HTJ2K, OpenJPH, one file"
 	[avif-pyr]="AVIF pyramid (sum of levels)"
@@ -53,6 +54,7 @@ declare -A label=(
 declare -A style=(
 	[gigaview]="lw 3 lc rgb '#d62728' pt 7"
 	[gv-pertile]="lw 2 dt 2 lc rgb '#ff9896' pt 6"
+	[gv-base]="lw 2 dt 3 lc rgb '#e377c2' pt 6"
 	[j2k]="lw 2 lc rgb '#000000' pt 13"
 	[htj2k]="lw 2 dt 2 lc rgb '#7f7f7f' pt 12"
 	[avif-pyr]="lw 2 lc rgb '#9467bd' pt 11"

@@ -4,7 +4,7 @@
 # pyramids), on the same images in the same run, summed up as Bjontegaard
 # deltas (BD-PSNR, BD-SSIM-Y, BD-rate) of gigaview minus each anchor.
 #
-#   bench/rd-anchors.sh [--gigaview PATH] [IMAGE...]
+#   bench/rd-anchors.sh [--gigaview PATH] [--baseline PATH] [IMAGE...]
 #
 # Every image (default: the photos in $DATA_DIR/photos) is first made into
 # a metadata-free 8-bit RGB PNG that every codec reads and every result is
@@ -44,6 +44,9 @@
 # Environment:
 #   GIGAVIEW=PATH   binary to measure (or --gigaview PATH); it is copied
 #                   first, so a rebuild during the run cannot change it
+#   BASELINE=PATH   a second binary (or --baseline PATH), run at the same
+#                   -q settings as "gv-base": its column in the BD tables is
+#                   the new binary minus the baseline
 #   IMAGES="A B"    images (paths, or names in $DATA_DIR/photos); the
 #                   arguments, when given, win
 #   QUICK=1         2 images, 4 to 7 settings per codec (a few minutes)
@@ -63,12 +66,15 @@ set -euo pipefail
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 gv_arg=""
+base_arg=""
 images=()
 while [ $# -gt 0 ]; do
 	case $1 in
 	--gigaview) gv_arg=$2; shift 2 ;;
 	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,60p' "$0"; exit 0 ;;
+	--baseline) base_arg=$2; shift 2 ;;
+	--baseline=*) base_arg=${1#*=}; shift ;;
+	-h|--help) sed -n '2,63p' "$0"; exit 0 ;;
 	*) images+=("$1"); shift ;;
 	esac
 done
@@ -108,6 +114,8 @@ has webp-pyr && { need_cmd cwebp webp; need_cmd dwebp webp; }
 has jpeg-pyr && need_cmd djpeg libjpeg-turbo-progs
 [ -z "${PLOT:-}" ] || need_cmd gnuplot gnuplot-nox
 GV_SRC=$(find_gigaview "$gv_arg")
+BASE_SRC=${base_arg:-${BASELINE:-}}
+[ -z "$BASE_SRC" ] || [ -x "$BASE_SRC" ] || die "baseline $BASE_SRC is not an executable"
 
 P=$DATA_DIR/photos
 if [ ${#images[@]} -eq 0 ] && [ -n "${IMAGES:-}" ]; then
@@ -143,6 +151,11 @@ done
 work=$(mktemp -d "${TMPDIR:-/tmp}/gv-rda.XXXXXX")
 trap 'rm -rf "$work"' EXIT INT TERM
 GV=$(snapshot_gigaview "$GV_SRC" "$work")
+BASE=""
+if [ -n "$BASE_SRC" ]; then
+	mkdir "$work/base"
+	BASE=$(snapshot_gigaview "$BASE_SRC" "$work/base")
+fi
 CMP=$(build_imgcompare "$work")
 results=$work/results.tsv   # image codec setting bpp psnr ssim
 : >"$results"
@@ -150,6 +163,7 @@ results=$work/results.tsv   # image codec setting bpp psnr ssim
 echo "# rd-anchors: gigaview vs JPEG 2000, HTJ2K and AVIF / JPEG XL / WebP / JPEG pyramids, same images, same run"
 echo "# $(date '+%F %T %Z'); $(machine_line)"
 echo "# $(describe_build "$GV_SRC")"
+[ -z "$BASE_SRC" ] || echo "# baseline (gv-base rows): $(describe_build "$BASE_SRC")"
 # tool_version COMMAND...: the first line of what it prints (stdout or
 # stderr), whatever its exit status (some version options exit 1)
 tool_version() { { "$@" 2>&1 || true; } | sed -n 1p; }
@@ -203,6 +217,17 @@ enc_jxl() { quiet cjxl "$1" "$2" -d "$set" -e 7; }
 enc_webp() { cwebp -quiet -q "$set" -m 6 "$1" -o "$2"; }
 enc_jpeg() { vips jpegsave "$1" "$2" --Q "$set" --optimize-coding --strip; }
 
+# gv_series BINARY CODEC: the gigaview rows of one binary for this image
+gv_series() {
+	for set in $GV_QS; do
+		# shellcheck disable=SC2086 # GV_ARGS is a list of options
+		"$1" encode "$work/lv0.png" -o "$work/x.gv" -q "$set" --quiet ${GV_ARGS:-}
+		quiet "$1" export "$work/x.gv" --level 0 -o "$work/x.png"
+		read -r ps ss < <(cmp_any "$work/x.png")
+		row "$name" "$2" "q$set" "$(stat -c %s "$work/x.gv")" "$ps" "$ss"
+	done
+}
+
 printf '%-30s %-9s %7s %8s %8s %7s\n' image codec set bpp "PSNR dB" SSIM-Y
 t_start=$(now)
 for img in "${images[@]}"; do
@@ -234,14 +259,12 @@ for img in "${images[@]}"; do
 	echo "# $name: ${w}x${h}, $(awk -v p="$px" 'BEGIN { printf "%.2f", p / 1e6 }') MP; pyramid anchors: $nlev levels down to ${lw}x${lh}"
 
 	laps=""; t_lap=$(now)
-	for set in $GV_QS; do
-		# shellcheck disable=SC2086 # GV_ARGS is a list of options
-		"$GV" encode "$work/lv0.png" -o "$work/x.gv" -q "$set" --quiet ${GV_ARGS:-}
-		quiet "$GV" export "$work/x.gv" --level 0 -o "$work/x.png"
-		read -r ps ss < <(cmp_any "$work/x.png")
-		row "$name" gigaview "q$set" "$(stat -c %s "$work/x.gv")" "$ps" "$ss"
-	done
+	gv_series "$GV" gigaview
 	lap gigaview
+	if [ -n "$BASE" ]; then
+		gv_series "$BASE" gv-base
+		lap gv-base
+	fi
 	if has j2k; then
 		for set in $J2K_RATIOS; do
 			quiet opj_compress -i "$ref" -o "$work/x.jp2" -I -n 6 -r "$set"
