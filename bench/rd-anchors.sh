@@ -52,6 +52,7 @@
 #   QUICK=1         2 images, 4 to 7 settings per codec (a few minutes)
 #   FULL=1          JPEG sources at full size, cropped 4 px (see above)
 #   ANCHORS="j2k htj2k avif-pyr jxl-pyr webp-pyr jpeg-pyr"   which to run
+#                   ("none": gigaview alone, e.g. to merge with saved anchor rows)
 #   GV_QS, J2K_RATIOS, HTJ2K_QSTEPS, AVIF_QS, JXL_DS, WEBP_QS, JPEG_QS
 #                   settings lists (space separated)
 #   GV_ARGS         extra options for gigaview encode
@@ -74,7 +75,7 @@ while [ $# -gt 0 ]; do
 	--gigaview=*) gv_arg=${1#*=}; shift ;;
 	--baseline) base_arg=$2; shift 2 ;;
 	--baseline=*) base_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,63p' "$0"; exit 0 ;;
+	-h|--help) sed -n '2,64p' "$0"; exit 0 ;;
 	*) images+=("$1"); shift ;;
 	esac
 done
@@ -84,7 +85,7 @@ QUICK=${QUICK:-0}
 FULL=${FULL:-0}
 : "${ANCHORS:=j2k htj2k avif-pyr jxl-pyr webp-pyr jpeg-pyr}"
 for a in $ANCHORS; do
-	case $a in j2k|htj2k|avif-pyr|jxl-pyr|webp-pyr|jpeg-pyr) ;;
+	case $a in j2k|htj2k|avif-pyr|jxl-pyr|webp-pyr|jpeg-pyr|none) ;;
 	*) die "unknown anchor $a" ;; esac
 done
 has() { case " $ANCHORS " in *" $1 "*) return 0 ;; esac; return 1; }
