@@ -12,15 +12,20 @@
 # whole .zip pyramid; the single JPEG and WebP files are level 0 alone, and
 # ASTC 8x8 (fixed 2 bpp, level 0 alone) is one point. gv-noroot rows are
 # left out (a diagnostic). The x axis stops at XMAX bpp (default 3).
+# rd-anchors.sh's rows (j2k, htj2k and the *-pyr pyramids) are drawn too;
+# with LOGX=1 the x axis is logarithmic from XMIN (default 0.05) bpp, the
+# axis the Bjontegaard fits use.
 #
-# Needs gnuplot (with the pngcairo terminal). Environment: XMAX, WIDTH
-# (pixels, default 1200), ROW_HEIGHT (pixels per image, default 380).
+# Needs gnuplot (with the pngcairo terminal). Environment: XMAX, XMIN, LOGX,
+# WIDTH (pixels, default 1200), ROW_HEIGHT (pixels per image, default 380).
 set -euo pipefail
 
-[ $# -ge 2 ] || { sed -n '2,17p' "$0"; exit 2; }
+[ $# -ge 2 ] || { sed -n '2,20p' "$0"; exit 2; }
 in=$1 out=$2 title=${3:-rate-distortion}
 command -v gnuplot >/dev/null || { echo "plot-rd.sh: gnuplot is needed" >&2; exit 1; }
 XMAX=${XMAX:-3}
+XMIN=${XMIN:-0.05}
+LOGX=${LOGX:-0}
 WIDTH=${WIDTH:-1200}
 ROW_HEIGHT=${ROW_HEIGHT:-380}
 
@@ -29,10 +34,17 @@ trap 'rm -rf "$work"' EXIT INT TERM
 
 # Images in the order they first appear; codecs in a fixed order.
 mapfile -t images < <(awk -F'\t' '!s[$1]++ { print $1 }' "$in")
-codecs="gigaview gv-pertile jpeg-dz webp-dz jpeg webp astc8x8 astc6x6"
+codecs="gigaview gv-base gv-pertile j2k htj2k avif-pyr jxl-pyr webp-pyr jpeg-pyr jpeg-dz webp-dz jpeg webp astc8x8 astc6x6"
 declare -A label=(
 	[gigaview]="gigaview (default, whole store)"
 	[gv-pertile]="gigaview --min-tile-psnr (whole store)"
+	[gv-base]="gigaview, baseline binary (whole store)"
+	[j2k]="JPEG 2000, OpenJPEG, one file"
+	[htj2k]="HTJ2K, OpenJPH, one file"
+	[avif-pyr]="AVIF pyramid (sum of levels)"
+	[jxl-pyr]="JPEG XL pyramid (sum of levels)"
+	[webp-pyr]="WebP pyramid (sum of levels)"
+	[jpeg-pyr]="JPEG pyramid (sum of levels)"
 	[jpeg-dz]="JPEG pyramid, vips dzsave .zip"
 	[webp-dz]="WebP pyramid, vips dzsave .zip"
 	[jpeg]="single JPEG (level 0 only)"
@@ -42,6 +54,13 @@ declare -A label=(
 declare -A style=(
 	[gigaview]="lw 3 lc rgb '#d62728' pt 7"
 	[gv-pertile]="lw 2 dt 2 lc rgb '#ff9896' pt 6"
+	[gv-base]="lw 2 dt 3 lc rgb '#e377c2' pt 6"
+	[j2k]="lw 2 lc rgb '#000000' pt 13"
+	[htj2k]="lw 2 dt 2 lc rgb '#7f7f7f' pt 12"
+	[avif-pyr]="lw 2 lc rgb '#9467bd' pt 11"
+	[jxl-pyr]="lw 2 lc rgb '#ff7f0e' pt 9"
+	[webp-pyr]="lw 2 lc rgb '#2ca02c' pt 8"
+	[jpeg-pyr]="lw 2 lc rgb '#1f77b4' pt 5"
 	[jpeg-dz]="lw 2 lc rgb '#1f77b4' pt 5"
 	[webp-dz]="lw 2 lc rgb '#2ca02c' pt 9"
 	[jpeg]="lw 1 dt 3 lc rgb '#1f77b4' pt 4"
@@ -54,7 +73,11 @@ n=${#images[@]}
 	echo "set terminal pngcairo noenhanced size $WIDTH,$((n * ROW_HEIGHT + 40)) font 'DejaVu Sans,10'"
 	echo "set output '$out'"
 	echo "set multiplot layout $n,2 title '$title'"
-	echo "set grid; set key bottom right font ',8'; set xrange [0:$XMAX]"
+	if [ "$LOGX" = 1 ]; then
+		echo "set grid; set key bottom right font ',8'; set logscale x; set xrange [$XMIN:$XMAX]"
+	else
+		echo "set grid; set key bottom right font ',8'; set xrange [0:$XMAX]"
+	fi
 	echo "set xlabel 'bits per source pixel'"
 	i=0
 	for img in "${images[@]}"; do
