@@ -16,7 +16,8 @@
 # login through the trusted header sets the cookie, the token service
 # posts an AuthAccessToken2 with the messageId to the origin (and an
 # error to an origin not listed), the logout clears the cookie; a
-# policy rewritten and SIGHUP'ed takes effect; a bad policy or a short
+# policy rewritten and SIGHUP'ed takes effect; `gigaview info URL` sends
+# GIGAVIEW_TOKEN; a bad policy or a short
 # secret stops the daemon from starting.
 # Tokens are minted by scripts/gigaview-token (Python's hmac), so the
 # C verifier is checked against an independent signer, and one by
@@ -257,6 +258,17 @@ check "home page without a token: no board-minutes" sh -c "! grep -q 'board-minu
 check "home page: lists pub" grep -q '#image=pub' "$T/b"
 req -b "gigaview_access=$BOARD" "$(url /)"
 check "home page with board: board-minutes listed" grep -q '#image=board-minutes' "$T/b"
+
+# The native client sends GIGAVIEW_TOKEN as its Bearer token.
+GIGAVIEW_TOKEN= run info "$BASE"
+check "gigaview info URL without a token: no board-minutes" \
+    sh -c "[ $rc -eq 0 ] && ! grep -q board-minutes '$T/out'"
+GIGAVIEW_TOKEN=$BOARD run info "$BASE"
+check "gigaview info URL with GIGAVIEW_TOKEN of board: board-minutes listed" \
+    sh -c "[ $rc -eq 0 ] && grep -q board-minutes '$T/out'"
+GIGAVIEW_TOKEN='not a token' run info "$BASE"
+check "gigaview info URL with a malformed GIGAVIEW_TOKEN: refused, said why" \
+    sh -c "[ $rc -ne 0 ] && grep -q 'GIGAVIEW_TOKEN is not an access token' '$T/err'"
 
 # ------------------------------------------------------------ info.json
 req -H "Authorization: Bearer $STAFF" "$(url /iiif/3/staff-dem/info.json)"

@@ -35,7 +35,8 @@ static const struct opt_command info_command = {
                 "       gigaview info URL\n"
                 "\n"
                 "Describe a store file, or list the images of the gigaviewd at URL\n"
-                "(http:// or https://).\n",
+                "(http:// or https://); GIGAVIEW_TOKEN, if set, is sent as the access\n"
+                "token, which lists the restricted images it opens.\n",
     .opts = info_opts,
     .nopts = sizeof info_opts / sizeof info_opts[0],
 };

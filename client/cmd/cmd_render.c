@@ -109,7 +109,8 @@ static const struct opt_command render_command = {
         "Fetch compressed tiles from the gigaviewd at URL (http:// or https://),\n"
         "decode them on the GPU and write OUT (.png, .tif or .jpg).\n"
         "GIGAVIEW_GPU_PLATFORM=auto|device|surfaceless|default in the environment\n"
-        "chooses the EGL platform (default auto: the first that works).\n",
+        "chooses the EGL platform (default auto: the first that works).\n"
+        "GIGAVIEW_TOKEN, if set, is sent as the access token of restricted images.\n",
     .opts = render_opts,
     .nopts = sizeof render_opts / sizeof render_opts[0],
 };

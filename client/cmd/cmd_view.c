@@ -118,7 +118,8 @@ static const struct opt_command view_command = {
         "Show the images of the gigaviewd at URL in a window: drag to pan, wheel\n"
         "to zoom, R to rotate, Esc to quit (docs/VIEWER.md lists every key).\n"
         "Tiles are decoded on this machine's GPU.  SDL_VIDEODRIVER=offscreen\n"
-        "runs without a display (with --script).\n",
+        "runs without a display (with --script).  GIGAVIEW_TOKEN, if set, is\n"
+        "sent as the access token of restricted images.\n",
     .opts = view_opts,
     .nopts = sizeof view_opts / sizeof view_opts[0],
 };

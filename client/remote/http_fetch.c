@@ -42,12 +42,16 @@
  * default batch_max_tiles (256), and headers of a few KiB. */
 #define BATCH_TILES 64
 #define ETAG_CAP 160
+/* Bytes of an access token (GIGAVIEW_TOKEN): the server's own limit is
+ * far below (server/access_token.h). */
+#define TOKEN_MAX 4096
 
 struct gv_http {
     char base[1024];
     long timeout_ms;
     int verbose;
     int batches;            /* gv_http_use_batches */
+    char *auth;             /* "Authorization: Bearer TOKEN", or NULL */
     CURLM *multi;
     atomic_int aborted;     /* gv_http_abort */
     struct gv_http_stats st;
@@ -68,6 +72,26 @@ struct xfer {
 };
 
 static int curl_ready;
+
+/* The access token of the environment's GIGAVIEW_TOKEN (docs/API.md,
+ * "Access control"), as a header line in h->auth; none when it is unset
+ * or empty.  -1 with err filled for a token of other characters than a
+ * token's (base64url and dots) or longer than TOKEN_MAX. */
+static int set_token(struct gv_http *h, struct gv_error *err)
+{
+    const char *t = getenv("GIGAVIEW_TOKEN");
+    if (!t || !*t)
+        return 0;
+    size_t n = strlen(t);
+    if (n > TOKEN_MAX || strspn(t, "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnop"
+                                   "qrstuvwxyz0123456789-_.") != n)
+        return gv_fail(err, GV_EINVAL, "GIGAVIEW_TOKEN is not an access token "
+                       "(base64url and dots, at most %d bytes)", TOKEN_MAX);
+    if (!(h->auth = malloc(n + 32)))
+        return gv_fail(err, GV_ENOMEM, "http: out of memory");
+    snprintf(h->auth, n + 32, "Authorization: Bearer %s", t);
+    return 0;
+}
 
 struct gv_http *gv_http_new(const char *base, long timeout_ms, int verbose,
                             struct gv_error *err)
@@ -93,6 +117,11 @@ struct gv_http *gv_http_new(const char *base, long timeout_ms, int verbose,
         gv_fail(err, GV_ENOMEM, "http: out of memory");
         return NULL;
     }
+    if (set_token(h, err) < 0) {
+        curl_multi_cleanup(h->multi);
+        free(h);
+        return NULL;
+    }
     snprintf(h->base, sizeof h->base, "%s", base);
     size_t n = strlen(h->base);
     while (n > 0 && h->base[n - 1] == '/')
@@ -110,6 +139,7 @@ void gv_http_free(struct gv_http *h)
     if (!h)
         return;
     curl_multi_cleanup(h->multi);
+    free(h->auth);
     free(h);
 }
 
@@ -198,18 +228,22 @@ static int xfer_init(struct gv_http *h, struct xfer *x, const char *path,
     curl_easy_setopt(x->e, CURLOPT_PROTOCOLS, (long)(CURLPROTO_HTTP | CURLPROTO_HTTPS));
 #endif
     curl_easy_setopt(x->e, CURLOPT_PRIVATE, x);
+    if (h->auth && !(x->hdrs = curl_slist_append(x->hdrs, h->auth)))
+        return -1;
     if (if_none_match && *if_none_match) {
         size_t cap = strlen(if_none_match) + 32;
         char *hdr = malloc(cap);
         if (!hdr)
             return -1;
         snprintf(hdr, cap, "If-None-Match: %s", if_none_match);
-        x->hdrs = curl_slist_append(NULL, hdr);
+        struct curl_slist *l = curl_slist_append(x->hdrs, hdr);
         free(hdr);
-        if (!x->hdrs)
+        if (!l)
             return -1;
-        curl_easy_setopt(x->e, CURLOPT_HTTPHEADER, x->hdrs);
+        x->hdrs = l;
     }
+    if (x->hdrs)
+        curl_easy_setopt(x->e, CURLOPT_HTTPHEADER, x->hdrs);
     return 0;
 }
 
