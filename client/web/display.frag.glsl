@@ -1,7 +1,7 @@
 // display.frag.glsl - draw a decoded tile (RGBA8UI, so no hardware
 // filtering): bilinear interpolation of the four texels around the
 // sample, with the taps clamped to the level's last pixel, exactly the
-// sampling of `gigaview render` (client/cmd_render.c).  At a 1:1 view of
+// sampling of `gigaview render` (client/cmd/cmd_render.c).  At a 1:1 view of
 // a level (integer zoom, no rotation, pixel centres on texel centres) the
 // weights are 0 and 1 and the output is the decoded pixel itself.
 //
@@ -48,14 +48,11 @@ vec3 texel(ivec2 p)
     return vec3(t.rgb);
 }
 
+#include "bilinear.glsl"
+
 void main()
 {
-    vec2 f = floor(v_uv);
-    vec2 a = v_uv - f;
-    ivec2 i = ivec2(f);
-    vec3 top = mix(texel(i), texel(i + ivec2(1, 0)), a.x);
-    vec3 bottom = mix(texel(i + ivec2(0, 1)), texel(i + ivec2(1, 1)), a.x);
-    vec3 c = mix(top, bottom, a.y);
+    vec3 c = bilinear(v_uv);
     if (u_round == 1)
         c = floor(c + 0.5) + 0.25;
     o_color = vec4(c / 255.0, 1.0);

@@ -72,3 +72,23 @@ export function intTexture(gl, format, w, h) {
     gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
     return t;
 }
+
+/**
+ * A vertex array for quads of interleaved floats (x, y, u, v: a_pos and
+ * a_uv of `prog`, 16 bytes a vertex), with its buffer: {vao, vbo}.  The
+ * tile renderer and the ROI layer draw through one each.
+ */
+export function quadArrays(gl, prog) {
+    const vao = gl.createVertexArray();
+    const vbo = gl.createBuffer();
+    gl.bindVertexArray(vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, vbo);
+    const pos = gl.getAttribLocation(prog.program, 'a_pos');
+    const uv = gl.getAttribLocation(prog.program, 'a_uv');
+    gl.enableVertexAttribArray(pos);
+    gl.vertexAttribPointer(pos, 2, gl.FLOAT, false, 16, 0);
+    gl.enableVertexAttribArray(uv);
+    gl.vertexAttribPointer(uv, 2, gl.FLOAT, false, 16, 8);
+    gl.bindVertexArray(null);
+    return { vao, vbo };
+}

@@ -15,7 +15,7 @@
 // come from the neighbour that owns those pixels when it is resident
 // (display.frag.glsl), so the picture has no seams.
 
-import { program } from './gl_util.js';
+import { program, quadArrays } from './gl_util.js';
 import { imageToScreen } from './view.js';
 import { tileDomain, tilesIn, viewCorners } from './pyramid.js';
 import { screenToImage } from './view.js';
@@ -30,17 +30,7 @@ export class Renderer {
         this.W = W;            // level-0 size of the image
         this.H = H;
         this.prog = program(gl, vertSrc, fragSrc, 'display');
-        this.vao = gl.createVertexArray();
-        this.vbo = gl.createBuffer();
-        gl.bindVertexArray(this.vao);
-        gl.bindBuffer(gl.ARRAY_BUFFER, this.vbo);
-        const pos = gl.getAttribLocation(this.prog.program, 'a_pos');
-        const uv = gl.getAttribLocation(this.prog.program, 'a_uv');
-        gl.enableVertexAttribArray(pos);
-        gl.vertexAttribPointer(pos, 2, gl.FLOAT, false, 16, 0);
-        gl.enableVertexAttribArray(uv);
-        gl.vertexAttribPointer(uv, 2, gl.FLOAT, false, 16, 8);
-        gl.bindVertexArray(null);
+        ({ vao: this.vao, vbo: this.vbo } = quadArrays(gl, this.prog));
         this.data = new Float32Array(FLOATS_PER_QUAD * 256);
         this.top = levels.length - 1;
     }

@@ -19,13 +19,10 @@ vec3 texel(ivec2 p)
     return texelFetch(u_img, clamp(p, ivec2(0), u_max), 0).rgb;
 }
 
+#include "bilinear.glsl"
+
 void main()
 {
-    vec2 f = floor(v_uv);
-    vec2 a = v_uv - f;
-    ivec2 i = ivec2(f);
-    vec3 top = mix(texel(i), texel(i + ivec2(1, 0)), a.x);
-    vec3 bottom = mix(texel(i + ivec2(0, 1)), texel(i + ivec2(1, 1)), a.x);
-    vec3 c = mix(top, bottom, a.y) * 255.0;
+    vec3 c = bilinear(v_uv) * 255.0;
     o_color = vec4((floor(c + 0.5) + 0.25) / 255.0, 1.0);
 }

@@ -7,24 +7,14 @@
 // original image shows outside the ROI, the filtered one inside).  The
 // scissor test keeps it inside the ROI, which is fixed on the screen.
 
-import { program } from './gl_util.js';
+import { program, quadArrays } from './gl_util.js';
 import { imageToScreen } from './view.js';
 
 export class RoiLayer {
     constructor(gl, vertSrc, fragSrc) {
         this.gl = gl;
         this.prog = program(gl, vertSrc, fragSrc, 'roi');
-        this.vao = gl.createVertexArray();
-        this.vbo = gl.createBuffer();
-        gl.bindVertexArray(this.vao);
-        gl.bindBuffer(gl.ARRAY_BUFFER, this.vbo);
-        const pos = gl.getAttribLocation(this.prog.program, 'a_pos');
-        const uv = gl.getAttribLocation(this.prog.program, 'a_uv');
-        gl.enableVertexAttribArray(pos);
-        gl.vertexAttribPointer(pos, 2, gl.FLOAT, false, 16, 0);
-        gl.enableVertexAttribArray(uv);
-        gl.vertexAttribPointer(uv, 2, gl.FLOAT, false, 16, 8);
-        gl.bindVertexArray(null);
+        ({ vao: this.vao, vbo: this.vbo } = quadArrays(gl, this.prog));
         this.tex = null;
         this.res = null;
     }

@@ -229,6 +229,18 @@ static void count_faces(struct gv_cluster_tree *t)
         t->faces_at[T] += t->faces_at[T - 1];
 }
 
+/* Free the working arrays of a build and the vertex order. */
+static void free_build(struct build *b, uint32_t *order)
+{
+    free(order);
+    free(b->perm);
+    free(b->keys);
+    free(b->first);
+    free(b->count);
+    free(b->len);
+    free(b->ilevel);
+}
+
 int gv_cluster_build(const struct gv_mesh *m, double time_limit,
                      struct gv_cluster_tree *t, struct gv_error *err)
 {
@@ -315,25 +327,13 @@ int gv_cluster_build(const struct gv_mesh *m, double time_limit,
         r = e;
     }
     count_faces(t);
-    free(order);
-    free(b.perm);
-    free(b.keys);
-    free(b.first);
-    free(b.count);
-    free(b.len);
-    free(b.ilevel);
+    free_build(&b, order);
     return 0;
 oom:
     gv_cluster_tree_free(t);
     gv_fail(err, GV_ENOMEM, "cluster: out of memory for %u vertices", n);
 fail:
-    free(order);
-    free(b.perm);
-    free(b.keys);
-    free(b.first);
-    free(b.count);
-    free(b.len);
-    free(b.ilevel);
+    free_build(&b, order);
     return -1;
 }
 
