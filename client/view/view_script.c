@@ -97,6 +97,36 @@ static int key_name(const char *w, struct vs_cmd *c)
     return 0;
 }
 
+/* The text argument of shot, image, wait-file, print, graph and message
+ * (print and message: the rest of the line) from *p into c->text.
+ * Returns 1, or -1 with *why. */
+static int parse_text(char *p, struct vs_cmd *c, const char **why)
+{
+    const int rest = c->op == VS_PRINT || c->op == VS_MESSAGE;
+    char *t = rest ? p + strspn(p, " \t") : word(&p);
+    if (!t || (!*t && !rest)) {
+        *why = "a name is missing";
+        return -1;
+    }
+    if (c->op == VS_WAIT_FILE) {
+        c->a[0] = 60000;
+        char *ms = word(&p);
+        if (ms && (num(ms, &c->a[0]) < 0 || c->a[0] < 0)) {
+            *why = "wait-file wants PATH [MS]";
+            return -1;
+        }
+    }
+    if (!rest && word(&p)) {
+        *why = "too many arguments";
+        return -1;
+    }
+    if (!(c->text = strdup(t))) {
+        *why = "out of memory";
+        return -1;
+    }
+    return 1;
+}
+
 /* Parse one line (modified in place) into c.  Returns 1 for a command, 0
  * for a blank or comment line, -1 with *why. */
 static int parse_line(char *line, struct vs_cmd *c, const char **why)
@@ -157,31 +187,8 @@ static int parse_line(char *line, struct vs_cmd *c, const char **why)
         return 1;
     }
     if (c->op == VS_SHOT || c->op == VS_IMAGE || c->op == VS_WAIT_FILE ||
-        c->op == VS_PRINT || c->op == VS_GRAPH || c->op == VS_MESSAGE) {
-        const int rest = c->op == VS_PRINT || c->op == VS_MESSAGE;
-        char *t = rest ? p + strspn(p, " \t") : word(&p);
-        if (!t || (!*t && !rest)) {
-            *why = "a name is missing";
-            return -1;
-        }
-        if (c->op == VS_WAIT_FILE) {
-            c->a[0] = 60000;
-            char *ms = word(&p);
-            if (ms && (num(ms, &c->a[0]) < 0 || c->a[0] < 0)) {
-                *why = "wait-file wants PATH [MS]";
-                return -1;
-            }
-        }
-        if (!rest && word(&p)) {
-            *why = "too many arguments";
-            return -1;
-        }
-        if (!(c->text = strdup(t))) {
-            *why = "out of memory";
-            return -1;
-        }
-        return 1;
-    }
+        c->op == VS_PRINT || c->op == VS_GRAPH || c->op == VS_MESSAGE)
+        return parse_text(p, c, why);
     int n = 0;
     if (c->op == VS_SETTLE)
         c->a[0] = 60000;
