@@ -150,6 +150,9 @@ def worker(k):
             counts[r.status] = counts.get(r.status, 0) + 1
             if not os.path.exists('answered'):
                 open('answered', 'w').close()
+            if os.path.exists('mark'):
+                with open('after', 'a') as f:
+                    f.write('%d\n' % r.status)
             if not ok:
                 badbody[0] += 1
 ts = [threading.Thread(target=worker, args=(k,)) for k in range(nthreads)]
@@ -173,6 +176,20 @@ load_start() {
         sleep 0.05
         i=$((i + 1))
     done
+}
+# settled: wait until the clients have had nthreads + 1 answers since
+# now (however loaded the machine): at least one request was sent after
+# the caller's last step, so its outcome is among the statuses.
+settled() {
+    rm -f after
+    touch mark
+    i=0
+    while [ "$(cat after 2>/dev/null | wc -l)" -lt 7 ] && [ $i -lt 600 ] &&
+        kill -0 "$LPID" 2>/dev/null; do
+        sleep 0.05
+        i=$((i + 1))
+    done
+    rm -f mark
 }
 load_stop() {
     touch stop
@@ -209,7 +226,7 @@ load_start deleted
 rm "$S/k.gv"
 sleep 1
 check "deleted: SIGHUP drops it" reload 3
-sleep 0.5
+settled
 load_stop deleted
 check "deleted: only 200 (before the reload) and 404 (after)" test "$statuses" = "200 404"
 expect_status "deleted: 404 now" 404 /v1/images/k/tiles/0/0/0
@@ -221,7 +238,7 @@ cp "$T/b.gv" "$S/.k.tmp"
 mv "$S/.k.tmp" "$S/k.gv"
 sleep 0.5
 check "replaced by rename: SIGHUP" reload 4
-sleep 0.5
+settled
 load_stop renamed
 check "replaced by rename: every answer 200" test "$statuses" = 200
 check "replaced by rename: version b is served" serves refb
@@ -230,7 +247,7 @@ load_start overwritten
 cat "$T/a.gv" >"$S/k.gv"      # same inode, other bytes under the open file
 sleep 1
 check "overwritten in place: SIGHUP" reload 4
-sleep 0.5
+settled
 load_stop overwritten
 check "overwritten in place: only 200 and clean 500s" \
     sh -c "echo '$statuses' | grep -Eq '^200( 500)?\$'"
@@ -240,7 +257,7 @@ load_start truncated
 truncate -s 300000 "$S/k.gv"
 sleep 1
 check "truncated in place: SIGHUP drops it (it no longer validates)" reload 3
-sleep 0.5
+settled
 load_stop truncated
 check "truncated in place: only 200, clean 500s and 404" \
     sh -c "echo '$statuses' | grep -Eq '^200( 404)?( 500)?\$'"
