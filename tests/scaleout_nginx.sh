@@ -8,8 +8,9 @@
 # replicas serve one store directory (four stores).  A Python client with
 # 12 keep-alive connections sends a mix of tiles, POST batches, IIIF
 # images and regions (distinct URLs, so most reach a replica despite the
-# proxy cache) for a few seconds; meanwhile the replica that has served
-# the most requests is SIGKILLed.  Every response must be a complete 200,
+# proxy cache) until the replicas left have served 20 requests after the
+# kill; the replica that has served the most is SIGKILLed once every one
+# has served (waits, not sleeps, so a loaded machine only takes longer).  Every response must be a complete 200,
 # the killed replica must have been serving before the kill, and the
 # others must have served requests after it.  Also checks that a repeated
 # tile is a proxy cache HIT.  Skipped when nginx is not installed.
@@ -150,9 +151,11 @@ check "a repeated tile is a proxy cache hit ($c1, then $c2)" test "$c1" = MISS -
 # ---- load, and a replica killed in the middle of it
 # The client prints one line per second: "t=N served=R1,R2,R3" is not
 # known to it, so the shell reads the replicas' access logs instead.
-python3 - "$B" 12 7 "$T/load.out" <<'PY' &
-import http.client, sys, threading, time, json
-base, conns, secs, out = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), sys.argv[4]
+# It runs until the file $T/stop appears (the shell makes it once the
+# other replicas have served after the kill), 300 s at the most.
+python3 - "$B" 12 300 "$T/load.out" "$T/stop" <<'PY' &
+import http.client, os, sys, threading, time, json
+base, conns, secs, out, stopfile = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), sys.argv[4], sys.argv[5]
 host, port = base[len("http://"):].split(":")
 ids = ["a", "b", "c", "d"]
 lock = threading.Lock()
@@ -178,7 +181,7 @@ def one(i, k):
 def worker(wid):
     c = http.client.HTTPConnection(host, int(port), timeout=30)
     n = 0
-    while time.time() < stop:
+    while time.time() < stop and not os.path.exists(stopfile):
         # Every worker cycles through the four kinds; i numbers requests.
         kind, method, path, body = one(n * conns + wid, (n + wid) % 4)
         n += 1
@@ -211,7 +214,15 @@ with open(out, "w") as f:
         f.write(line + "\n")
 PY
 load=$!
-sleep 2.5
+# served R: requests replica R has logged.
+served() { wc -l <"$T/r$1.access" 2>/dev/null || echo 0; }
+# Until every replica has served (however slowly the machine starts them).
+i=0
+while [ $i -lt 600 ] && kill -0 "$load" 2>/dev/null &&
+    { [ "$(served 1)" -eq 0 ] || [ "$(served 2)" -eq 0 ] || [ "$(served 3)" -eq 0 ]; }; do
+    sleep 0.1
+    i=$((i + 1))
+done
 # The busiest replica so far is the one to kill.
 best=1 most=-1
 for r in 1 2 3; do
@@ -223,6 +234,20 @@ eval "vport=\$port$best"
 kill -KILL "$victim"
 diag "killed replica $best (pid $victim) after it served $most requests"
 for r in 1 2 3; do eval "mark$r=\$(wc -l <\"$T/r$r.access\")"; done
+# Until the two others have served 20 more requests, then stop the load.
+i=0
+while [ $i -lt 600 ] && kill -0 "$load" 2>/dev/null; do
+    more=0
+    for r in 1 2 3; do
+        [ "$r" = "$best" ] && continue
+        eval "m=\$mark$r"
+        more=$((more + $(served "$r") - m))
+    done
+    [ "$more" -ge 20 ] && break
+    sleep 0.1
+    i=$((i + 1))
+done
+touch "$T/stop"
 wait "$load" || bail "the load client failed"
 diag "$(head -n 1 "$T/load.out")"
 check "the killed replica had been serving ($most requests)" test "$most" -gt 0
