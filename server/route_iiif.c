@@ -23,6 +23,7 @@
 #include "iiif.h"
 #include "output_cache.h"
 #include "render_call.h"
+#include "render_stages.h"
 #include "imageio/imageio.h"
 #include "imageio/output_format.h"
 #include "render/region.h"
@@ -212,10 +213,16 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
     uint8_t *pix = NULL;
     uint32_t w, h;
     int ch;
-    int rc = gv_render(d, &c->q.render, &pix, &w, &h, &ch, err) < 0 ||
-                     gv_image_encode(c->q.format, w, h, ch, pix, c->jpeg_quality,
-                                     out, len, err) < 0
-                 ? -1 : 0;
+    gv_decoder_times(d, &(struct gv_decode_times){0}, 1);
+    double t0 = render_stages_now();
+    int rc = gv_render(d, &c->q.render, &pix, &w, &h, &ch, err);
+    double t1 = render_stages_now();
+    render_stages_decoder(d, t1 - t0);
+    if (rc == 0) {
+        rc = gv_image_encode(c->q.format, w, h, ch, pix, c->jpeg_quality, out,
+                             len, err) < 0 ? -1 : 0;
+        render_stages_add(STAGE_ENCODE, render_stages_now() - t1);
+    }
     image_decoder_put(img, d);
     free(pix);
     return rc;

@@ -69,6 +69,20 @@ int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
                      uint32_t w, uint32_t h, uint8_t *out,
                      struct gv_error *err);
 
+/* Where a decoder's time went, in nanoseconds, summed over its calls
+ * since it was made or last reset: reading (and checking) pages, decoding
+ * tiles (each tile's own decode, the missing ancestors included as they
+ * are decoded, and the root tile's padding), and finding tiles in the
+ * cache (mostly the waits for another thread's decode of a tile it
+ * needed). */
+struct gv_decode_times {
+    uint64_t page_ns, decode_ns, wait_ns;
+};
+
+/* d's times into *t; reset: zero them afterwards. */
+void gv_decoder_times(struct gv_decoder *d, struct gv_decode_times *t,
+                      int reset);
+
 /* Build the padded root tile (513x513xC) from a w x h root image. */
 void gv_root_tile(const uint8_t *root, uint32_t w, uint32_t h, int channels,
                   uint8_t *tile);
