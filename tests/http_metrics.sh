@@ -32,6 +32,7 @@ auth_token = "$TOKEN"
 filter_dir = "$T/stored"
 filter_workers = 1
 filter_timeout_ms = 200
+resident_bytes = 0   # y's IIIF renders below must decode
 filter_compile_timeout_ms = 120000
 max_request_bytes = 1K
 drain_timeout = 1

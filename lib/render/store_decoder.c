@@ -275,3 +275,52 @@ int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
         }
     return 0;
 }
+
+int gv_decoder_pin_levels(struct gv_decoder *d, uint64_t budget,
+                          struct gv_tile_entry ***pins, int *npins,
+                          uint64_t *bytes, struct gv_error *err)
+{
+    const struct gv_geometry *g = &d->info->geometry;
+    const uint64_t tile = gv_tile_bytes(d->channels);
+    /* The levels that fit, coarsest first: count their tiles. */
+    uint64_t used = 0;
+    size_t n = 0;
+    int finest = g->root + 1;
+    for (int level = g->root; level >= 0; level--) {
+        uint64_t tiles = level == g->root ? 1 :
+            (uint64_t)g->level[level].tiles_x * g->level[level].tiles_y;
+        if (used + tiles * tile > budget)
+            break;
+        used += tiles * tile;
+        n += (size_t)tiles;
+        finest = level;
+    }
+    *pins = NULL;
+    *npins = 0;
+    *bytes = 0;
+    if (n == 0)
+        return 0;
+    struct gv_tile_entry **p = malloc(n * sizeof *p);
+    if (!p)
+        return gv_fail(err, GV_ENOMEM, "decode: out of memory");
+    size_t k = 0;
+    for (int level = g->root; level >= finest; level--) {
+        uint32_t tx_n = level == g->root ? 1 : g->level[level].tiles_x;
+        uint32_t ty_n = level == g->root ? 1 : g->level[level].tiles_y;
+        for (uint32_t ty = 0; ty < ty_n; ty++)
+            for (uint32_t tx = 0; tx < tx_n; tx++) {
+                struct gv_tile_entry *e = tile_entry(d, level, tx, ty, err);
+                if (!e) {
+                    while (k > 0)
+                        gv_tile_cache_release(d->cache, p[--k]);
+                    free(p);
+                    return -1;
+                }
+                p[k++] = e;
+            }
+    }
+    *pins = p;
+    *npins = (int)k;
+    *bytes = used;
+    return 0;
+}
