@@ -374,7 +374,8 @@ int main(int argc, char **argv)
     uint64_t resident = cfg.resident_bytes < cfg.decoder_cache_bytes / 2
                             ? cfg.resident_bytes : cfg.decoder_cache_bytes / 2;
     srv.catalog = catalog_new(cfg.store_dir, srv.tiles,
-                              (int)(cfg.threads + cfg.render_threads), resident);
+                              (int)(cfg.threads + cfg.render_threads),
+                              resident);
     if (!srv.pages || !srv.catalog) {
         log_msg(LOG_ERROR, "main", "out of memory");
         return 1;

@@ -57,8 +57,9 @@ static void run(struct render_job *j)
         MHD_resume_connection(c->conn);
         return;
     }
-    render_stages_begin(render_stages_now() - ((double)j->queued.tv_sec +
-                                               (double)j->queued.tv_nsec / 1e9));
+    const double queued = (double)j->queued.tv_sec +
+                          (double)j->queued.tv_nsec / 1e9;
+    render_stages_begin(render_stages_now() - queued);
     c->rc = c->spec.render(c->spec.arg, c->img, &c->out, &c->len, &c->err);
     render_stages_end();
     if (c->rc == 0)

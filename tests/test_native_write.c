@@ -103,8 +103,9 @@ int main(void)
     free(px);
 
     /* Declined: 2 channels and a side past libjpeg's 65500. */
-    check(!gv_native_jpeg_encodes(8, 8, 2) && !gv_native_jpeg_encodes(70000, 1, 3)
-          && gv_native_jpeg_encodes(65500, 1, 1),
+    check(!gv_native_jpeg_encodes(8, 8, 2) &&
+          !gv_native_jpeg_encodes(70000, 1, 3) &&
+          gv_native_jpeg_encodes(65500, 1, 1),
           "2 channels and 70000 pixels wide are declined, 65500 taken");
     uint8_t two[8 * 8 * 2] = {0};
     uint8_t *out = NULL;

@@ -210,8 +210,8 @@ static int wait_fill(struct shard *s, struct gv_tile_entry *e,
 
 /* A new PENDING entry for k with a `bytes` buffer (`spare`, a buffer of
  * that size taken over, or a new one), or NULL (spare freed). */
-static struct gv_tile_entry *entry_new(const struct gv_tile_key *k, size_t bytes,
-                                       uint8_t *spare)
+static struct gv_tile_entry *entry_new(const struct gv_tile_key *k,
+                                       size_t bytes, uint8_t *spare)
 {
     struct gv_tile_entry *e = calloc(1, sizeof *e);
     if (!e) {
