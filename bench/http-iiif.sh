@@ -254,6 +254,7 @@ gv_metrics=$(curl -sf "http://127.0.0.1:$GVD_PORT/metrics" || true)
 mib() { echo $(($1 / 1048576)); }
 budget=$(($(gv_key cache_bytes) + $(gv_key decoder_cache_bytes) + $(gv_key output_cache_bytes)))
 
+resident=$(gv_key resident_bytes 2>/dev/null || true)   # absent before 2026-12-02
 echo "## http-iiif.sh, $(date '+%F %H:%M %Z')"
 echo
 echo "- $(machine_line); load average at the end: $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -261,7 +262,7 @@ echo "- $(describe_build "$GV_SRC")"
 echo "- gigaviewd $GVD_SRC (md5 $(md5sum "$GVD_SRC" | cut -c1-12)); iipsrv $(dpkg-query -W -f '${Version}' iipimage-server 2>/dev/null || echo '?') ($IIPSRV); $(nginx -v 2>&1 | sed 's/^nginx version: //'); $(wrk -v 2>&1 | head -1 | cut -d' ' -f1-2); vips $(vips --version | sed 's/^vips-//')"
 echo "- inputs: ${inputs[*]}"
 echo "- $nurls IIIF tile URLs (scale factors $SCALES, 512-px tiles, JPEG); stores $(du -cb "$WORK"/stores/*.gv | tail -1 | cut -f1) bytes, pyramid TIFFs $(du -cb "$WORK"/tif/*.tif | tail -1 | cut -f1) bytes"
-echo "- gigaviewd at its defaults${GV_CONF:+ plus '$GV_CONF'}: threads = $(gv_key threads), render_threads = $(gv_key render_threads), render_queue = $(gv_key render_queue), cache_bytes = $(mib "$(gv_key cache_bytes)") MiB, decoder_cache_bytes = $(mib "$(gv_key decoder_cache_bytes)") MiB, output_cache_bytes = $(mib "$(gv_key output_cache_bytes)") MiB, jpeg_quality = $(gv_key jpeg_quality); iipsrv: $THREADS FastCGI processes (spawn-fcgi -F $THREADS), JPEG_QUALITY=90, MAX_IMAGE_CACHE_SIZE=$IIP_CACHE_MB MB, behind nginx (2 workers, fastcgi_pass, no upstream keepalive)"
+echo "- gigaviewd at its defaults${GV_CONF:+ plus '$GV_CONF'}: threads = $(gv_key threads), render_threads = $(gv_key render_threads), render_queue = $(gv_key render_queue), cache_bytes = $(mib "$(gv_key cache_bytes)") MiB, decoder_cache_bytes = $(mib "$(gv_key decoder_cache_bytes)") MiB${resident:+ (resident_bytes = $(mib "$resident") MiB of it)}, output_cache_bytes = $(mib "$(gv_key output_cache_bytes)") MiB, jpeg_quality = $(gv_key jpeg_quality); iipsrv: $THREADS FastCGI processes (spawn-fcgi -F $THREADS), JPEG_QUALITY=90, MAX_IMAGE_CACHE_SIZE=$IIP_CACHE_MB MB, behind nginx (2 workers, fastcgi_pass, no upstream keepalive)"
 echo
 echo "**Cold** (each server just started; every URL once, the same shuffled order, $COLD_CONNS keep-alive connections, bench/iiif_cold.py):"
 echo
@@ -275,6 +276,13 @@ awk -v a="$(cut -d' ' -f5 <<<"${cold[gigaviewd]}")" -v b="$(cut -d' ' -f5 <<<"${
 	-v pa="$(cut -d' ' -f7 <<<"${cold[gigaviewd]}")" -v pb="$(cut -d' ' -f7 <<<"${cold[iipsrv]}")" 'BEGIN {
 	printf "- **cold: gigaviewd / iipsrv %.2fx req/s**, p99 %.0f ms against %.0f ms\n", (b > 0 ? a / b : 0), pa, pb }'
 echo "- gigaviewd after the cold pass: tile cache $(metric "$gv_cold_metrics" gigaview_tile_cache_misses_total) decodes, $(metric "$gv_cold_metrics" gigaview_tile_cache_hits_total) hits, $(metric "$gv_cold_metrics" gigaview_tile_cache_waits_total) waits for another request's decode, $(metric "$gv_cold_metrics" gigaview_tile_cache_evictions_total) evictions; render queue wait: $(metric "$gv_cold_metrics" gigaview_render_queue_wait_seconds_count) renders, $(awk -v s="$(metric "$gv_cold_metrics" gigaview_render_queue_wait_seconds_sum)" -v n="$(metric "$gv_cold_metrics" gigaview_render_queue_wait_seconds_count)" 'BEGIN { printf "%.1f", n ? 1000 * s / n : 0 }') ms mean"
+stages=$(awk '$1 ~ /^gigaview_render_stage_seconds_(sum|count)[{]/ {
+	match($1, /stage="[^"]*"/); st = substr($1, RSTART + 7, RLENGTH - 8)
+	if ($1 ~ /_sum/) sum[st] = $2; else cnt[st] = $2
+	if (!(st in seen)) { seen[st] = 1; order[n++] = st } }
+	END { for (i = 0; i < n; i++) { st = order[i]
+		printf "%s%s %.2f s (%.1f ms a render)", (i ? ", " : ""), st, sum[st], cnt[st] ? 1000 * sum[st] / cnt[st] : 0 } }' <<<"$gv_cold_metrics")
+echo "- gigaviewd's render stages in the cold pass (gigaview_render_stage_seconds, summed over the renders): ${stages:-none}"
 echo
 echo "**Warm** (wrk -t$WRK_THREADS -c$CONNS -d${DURATION}s --latency --timeout 10s, random URL of the list per request, ${WARM}s warm-up, $REPS rounds alternating, best run shown):"
 echo

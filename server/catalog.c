@@ -25,6 +25,7 @@ struct catalog {
     char *dir;
     struct gv_tile_cache *tiles;
     int pool_max;
+    uint64_t resident_left;   /* resident_bytes not pinned (under lock) */
     pthread_mutex_t lock;     /* guards items, n, every image's refs */
     pthread_mutex_t scan_lock;/* one scan at a time */
     struct image **items;
@@ -35,7 +36,7 @@ struct catalog {
 };
 
 struct catalog *catalog_new(const char *dir, struct gv_tile_cache *tiles,
-                            int pool_max)
+                            int pool_max, uint64_t resident_bytes)
 {
     struct catalog *c = calloc(1, sizeof *c);
     if (!c)
@@ -47,6 +48,7 @@ struct catalog *catalog_new(const char *dir, struct gv_tile_cache *tiles,
     }
     c->tiles = tiles;
     c->pool_max = pool_max > 0 ? pool_max : 1;
+    c->resident_left = resident_bytes;
     c->next_serial = 1;
     pthread_mutex_init(&c->lock, NULL);
     pthread_mutex_init(&c->scan_lock, NULL);
@@ -64,8 +66,15 @@ static void image_destroy(struct image *img)
     for (int i = 0; i < img->npool; i++)
         gv_decoder_free(img->pool[i]);
     free(img->pool);
-    if (img->cat)
+    if (img->cat) {
+        for (int i = 0; i < img->npins; i++)
+            gv_tile_cache_release(img->cat->tiles, img->pins[i]);
+        pthread_mutex_lock(&img->cat->lock);
+        img->cat->resident_left += img->pinned;
+        pthread_mutex_unlock(&img->cat->lock);
         gv_tile_cache_forget(img->cat->tiles, img->serial);
+    }
+    free(img->pins);
     if (img->cat && img->cat->on_close)
         img->cat->on_close(img->serial, img->cat->on_close_arg);
     gv_store_close(img->store);
@@ -148,6 +157,28 @@ static struct image *open_image(struct catalog *c, const char *id,
     img->refs = 1;
     img->cat = c;
     return img;
+}
+
+/* Decode img's coarsest levels and pin them, within what is left of
+ * resident_bytes (img->serial must be set).  A failure is logged: the
+ * image is served all the same, its tiles decoded on demand. */
+static void pin_levels(struct catalog *c, struct image *img)
+{
+    pthread_mutex_lock(&c->lock);
+    uint64_t avail = c->resident_left;
+    c->resident_left = 0;
+    pthread_mutex_unlock(&c->lock);
+    struct gv_error err = {0};
+    struct gv_decoder *d = avail ? gv_decoder_new_shared(img->store, c->tiles,
+                                                         img->serial) : NULL;
+    if (d && gv_decoder_pin_levels(d, avail, &img->pins, &img->npins,
+                                   &img->pinned, &err) < 0)
+        log_msg(LOG_WARN, "catalog", "%s: its coarse levels are not kept "
+                "decoded: %s", img->id, err.text);
+    gv_decoder_free(d);
+    pthread_mutex_lock(&c->lock);
+    c->resident_left += avail - img->pinned;
+    pthread_mutex_unlock(&c->lock);
 }
 
 static int same_file(const struct image *img, const struct stat *st)
@@ -262,9 +293,18 @@ int catalog_scan(struct catalog *c)
         qsort(next, (size_t)n, sizeof *next, by_id);
 
     pthread_mutex_lock(&c->lock);
+    const uint64_t first_new = c->next_serial;
     for (int i = 0; i < n; i++)
         if (next[i]->serial == 0)
             next[i]->serial = c->next_serial++;
+    pthread_mutex_unlock(&c->lock);
+    /* The stores opened now keep their coarse levels, before any request
+     * can reach them (in id order, while the budget lasts). */
+    for (int i = 0; i < n; i++)
+        if (next[i]->serial >= first_new)
+            pin_levels(c, next[i]);
+
+    pthread_mutex_lock(&c->lock);
     struct image **old = c->items;
     int nold = c->n;
     c->items = next;

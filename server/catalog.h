@@ -15,7 +15,8 @@
  * it drops its image reference, so every decoder is freed before its
  * store is closed.  Every decoder of every image keeps its decoded tiles
  * in the catalog's one tile cache (lib/render/tile_cache.h), under the
- * image's serial; an image's tiles are forgotten when it is closed.
+ * image's serial; an image's tiles are forgotten when it is closed.  Its
+ * coarsest levels are decoded when it opens and stay (catalog_new).
  *
  * Every function is thread-safe.
  */
@@ -44,15 +45,23 @@ struct image {
     struct catalog *cat;
     struct gv_decoder **pool;
     int npool;
+    struct gv_tile_entry **pins;       /* the resident levels' tiles */
+    int npins;
+    uint64_t pinned;                   /* their bytes */
 };
 
 struct catalog;
 
 /* A catalog over `dir` whose decoders share `tiles` (borrowed: it must
  * outlive the catalog), with at most pool_max idle decoders per image.
- * Does not scan yet. */
+ * Each store opened keeps its coarsest levels decoded and pinned in
+ * `tiles` until it closes (gv_decoder_pin_levels: the root, then whole
+ * finer levels), all stores together within resident_bytes, taken in
+ * the order the stores open; a store closed gives its share back.  So no
+ * request to a store waits for the decodes near its root.  Does not scan
+ * yet. */
 struct catalog *catalog_new(const char *dir, struct gv_tile_cache *tiles,
-                            int pool_max);
+                            int pool_max, uint64_t resident_bytes);
 
 /* Free (every image must have been put back).  NULL does nothing. */
 void catalog_free(struct catalog *c);

@@ -369,8 +369,13 @@ int main(int argc, char **argv)
     srv.pages = page_cache_new(cfg.cache_bytes);
     if (start_rendering(&srv) < 0)
         return 1;
+    /* The resident levels live in the tile cache: at most half of it, so
+     * that the cache still holds the tiles requests decode. */
+    uint64_t resident = cfg.resident_bytes < cfg.decoder_cache_bytes / 2
+                            ? cfg.resident_bytes : cfg.decoder_cache_bytes / 2;
     srv.catalog = catalog_new(cfg.store_dir, srv.tiles,
-                              (int)(cfg.threads + cfg.render_threads));
+                              (int)(cfg.threads + cfg.render_threads),
+                              resident);
     if (!srv.pages || !srv.catalog) {
         log_msg(LOG_ERROR, "main", "out of memory");
         return 1;

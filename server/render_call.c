@@ -12,6 +12,7 @@
 #include "output_cache.h"
 #include "render_call.h"
 #include "render_pool.h"
+#include "render_stages.h"
 
 struct render_call {
     struct render_job job;        /* first: the pool hands it back */
@@ -56,7 +57,11 @@ static void run(struct render_job *j)
         MHD_resume_connection(c->conn);
         return;
     }
+    const double queued = (double)j->queued.tv_sec +
+                          (double)j->queued.tv_nsec / 1e9;
+    render_stages_begin(render_stages_now() - queued);
     c->rc = c->spec.render(c->spec.arg, c->img, &c->out, &c->len, &c->err);
+    render_stages_end();
     if (c->rc == 0)
         output_cache_put(c->outputs, c->key, c->out, c->len, c->spec.mime);
     MHD_resume_connection(c->conn);

@@ -13,6 +13,7 @@
 #include "metrics.h"
 #include "output_cache.h"
 #include "render_pool.h"
+#include "render_stages.h"
 #include "render/tile_cache.h"
 #include "routes.h"
 
@@ -111,6 +112,7 @@ static void write_rendering(struct prom *p, struct server *srv)
                 "The tile cache bound (decoder_cache_bytes).", "%llu",
                 (unsigned long long)st.limit);
     render_pool_metrics(srv->render, p);
+    render_stages_write(p);
     output_cache_metrics(srv->outputs, p);
 }
 

@@ -16,6 +16,7 @@
  * are 400, since the specification knows no 413).  Image responses carry
  * the canonical URI and the compliance profile in Link headers.
  */
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,6 +24,7 @@
 #include "iiif.h"
 #include "output_cache.h"
 #include "render_call.h"
+#include "render_stages.h"
 #include "imageio/imageio.h"
 #include "imageio/output_format.h"
 #include "render/region.h"
@@ -201,6 +203,42 @@ struct iiif_call {
     char link[1024];   /* canonical URI and profile, as a Link header */
 };
 
+/* Each render thread's pixel buffer, kept between renders (gv_render_to)
+ * up to KEEP_BYTES: a 512-pixel tile's fresh 768 KiB mapping and its page
+ * faults on every render cost a fifth of the CPU of a cold pass
+ * (bench/README.md, 2026-12-02).  Larger answers are let go at once. */
+#define KEEP_BYTES (4u << 20)
+struct pix_buf {
+    uint8_t *p;
+    size_t cap;
+};
+static pthread_key_t pix_key;
+static pthread_once_t pix_once = PTHREAD_ONCE_INIT;
+
+static void pix_free(void *b)
+{
+    free(((struct pix_buf *)b)->p);
+    free(b);
+}
+
+static void pix_key_make(void)
+{
+    (void)pthread_key_create(&pix_key, pix_free);
+}
+
+/* This thread's buffer (freed when the thread ends), or NULL. */
+static struct pix_buf *pix_get(void)
+{
+    pthread_once(&pix_once, pix_key_make);
+    struct pix_buf *b = pthread_getspecific(pix_key);
+    if (!b && (b = calloc(1, sizeof *b)) != NULL &&
+        pthread_setspecific(pix_key, b) != 0) {
+        free(b);
+        b = NULL;
+    }
+    return b;
+}
+
 /* On a render thread: render and encode c's request of img. */
 static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
                   struct gv_error *err)
@@ -209,15 +247,28 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
     struct gv_decoder *d = image_decoder_get(img);
     if (!d)
         return gv_fail(err, GV_ENOMEM, "iiif: out of memory");
-    uint8_t *pix = NULL;
+    struct pix_buf own = {0}, *b = pix_get();
+    if (!b)
+        b = &own;   /* no thread buffer: this render's own */
     uint32_t w, h;
     int ch;
-    int rc = gv_render(d, &c->q.render, &pix, &w, &h, &ch, err) < 0 ||
-                     gv_image_encode(c->q.format, w, h, ch, pix, c->jpeg_quality,
-                                     out, len, err) < 0
-                 ? -1 : 0;
+    gv_decoder_times(d, &(struct gv_decode_times){0}, 1);
+    double t0 = render_stages_now();
+    int rc = gv_render_to(d, &c->q.render, &b->p, &b->cap, &w, &h, &ch, err);
+    const uint8_t *pix = b->p;
+    double t1 = render_stages_now();
+    render_stages_decoder(d, t1 - t0);
+    if (rc == 0) {
+        rc = gv_image_encode(c->q.format, w, h, ch, pix, c->jpeg_quality, out,
+                             len, err) < 0 ? -1 : 0;
+        render_stages_add(STAGE_ENCODE, render_stages_now() - t1);
+    }
     image_decoder_put(img, d);
-    free(pix);
+    if (b == &own || b->cap > KEEP_BYTES) {
+        free(b->p);
+        b->p = NULL;
+        b->cap = 0;
+    }
     return rc;
 }
 

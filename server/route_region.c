@@ -21,6 +21,7 @@
 #include "render/height_region.h"
 #include "output_cache.h"
 #include "render_call.h"
+#include "render_stages.h"
 #include "routes.h"
 #include "store/geometry.h"
 
@@ -134,11 +135,19 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
     int rc = -1;
     if (!pix || !d)
         gv_fail(err, GV_ENOMEM, "region: out of memory");
-    else if (gv_decode_region(d, (int)q->level, q->x, q->y, q->w, q->h, pix,
-                              err) == 0 &&
-             gv_image_encode(q->format->name, q->w, q->h, g->channels, pix,
-                             (int)q->quality, out, len, err) == 0)
-        rc = 0;
+    else {
+        gv_decoder_times(d, &(struct gv_decode_times){0}, 1);
+        double t0 = render_stages_now();
+        int ok = gv_decode_region(d, (int)q->level, q->x, q->y, q->w, q->h,
+                                  pix, err) == 0;
+        double t1 = render_stages_now();
+        render_stages_decoder(d, t1 - t0);
+        if (ok && gv_image_encode(q->format->name, q->w, q->h, g->channels,
+                                  pix, (int)q->quality, out, len, err) == 0)
+            rc = 0;
+        if (ok)
+            render_stages_add(STAGE_ENCODE, render_stages_now() - t1);
+    }
     image_decoder_put(img, d);
     free(pix);
     return rc;

@@ -61,6 +61,9 @@ static const struct settings_key keys[] = {
      "page cache bound in bytes (K, M, G suffixes); 0 disables caching"},
     {"decoder_cache_bytes", T_SIZE, F(decoder_cache_bytes), "128M", 0, 1e12,
      "the one decoded-tile cache, shared by every thread and store"},
+    {"resident_bytes", T_SIZE, F(resident_bytes), "32M", 0, 1e12,
+     "of decoder_cache_bytes, the stores' coarsest levels, kept decoded "
+     "from their opening"},
     {"max_region_pixels", T_SIZE, F(max_region_pixels), "64M", 1, 1e15,
      "largest region decoded for one request, in pixels (413 beyond)"},
     /* meshes of height stores (route_mesh.c) */

@@ -29,6 +29,7 @@ struct settings {
     uint64_t threads;              /* libmicrohttpd thread pool size */
     uint64_t cache_bytes;          /* page cache bound */
     uint64_t decoder_cache_bytes;  /* the shared decoded-tile cache */
+    uint64_t resident_bytes;       /* of it, the coarse levels kept */
     uint64_t max_region_pixels;    /* decoded pixels per region request */
     uint64_t max_mesh_samples;     /* height samples per mesh request */
     uint64_t max_mesh_triangles;   /* triangles per mesh */

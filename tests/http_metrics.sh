@@ -11,13 +11,17 @@
 # is; without one the filter
 # request's 501 or 503), notes each request's route and the status it
 # got, and reads /metrics: every (route, status) counter equals the
-# number of such answers, and no request counts as "other".
+# number of such answers, and no request counts as "other".  Three IIIF
+# renders and an output-cache hit: each render, and only a render, counts
+# once in every stage of gigaview_render_stage_seconds.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
 
 mkdir "$T/s" "$T/stored" || bail "mkdir"
 run encode synth:1100x700 -o "$T/s/x.gv"
 [ "$rc" -eq 0 ] || bail "encode: $(cat "$T/err")"
+# y: only the IIIF renders below read it, so their tiles are not decoded yet
+cp "$T/s/x.gv" "$T/s/y.gv" || bail "cp"
 TOKEN=m3trics
 cat >"$T/m.conf" <<EOF
 listen = 127.0.0.1
@@ -28,6 +32,7 @@ auth_token = "$TOKEN"
 filter_dir = "$T/stored"
 filter_workers = 1
 filter_timeout_ms = 200
+resident_bytes = 0   # y's IIIF renders below must decode
 filter_compile_timeout_ms = 120000
 max_request_bytes = 1K
 drain_timeout = 1
@@ -118,8 +123,30 @@ else # no filters: 501 in a build without the GPU, else 503
         test "$code" = 501 -o "$code" = 503
 fi
 
+# Three IIIF renders of y (one at level 0, which decodes tiles) and a
+# fourth answer from the output cache, which renders nothing.
+ask iiif_image 200 /iiif/3/y/0,0,512,512/512,/0/default.jpg
+ask iiif_image 200 /iiif/3/y/0,0,1024,700/256,/0/default.jpg
+ask iiif_image 200 /iiif/3/y/full/100,/90/gray.png
+ask iiif_image 200 /iiif/3/y/0,0,512,512/512,/0/default.jpg
+
 req "$(url /metrics)"
 cp "$T/b" metrics.txt
+# Each render counts once in every stage's histogram; the buckets are
+# cumulative up to +Inf; the level-0 render decoded tiles and encoded.
+for st in queue_wait page_read decode decode_wait resample encode; do
+    n=$(sed -n "s/^gigaview_render_stage_seconds_count{stage=\"$st\"} //p" metrics.txt)
+    inf=$(sed -n "s/^gigaview_render_stage_seconds_bucket{stage=\"$st\",le=\"+Inf\"} //p" metrics.txt)
+    check "render stage $st: 3 renders (got ${n:-none}), +Inf bucket ${inf:-none}" \
+        test "$n" = 3 -a "$inf" = 3
+    check "render stage $st: buckets never decrease" sh -c "grep '^gigaview_render_stage_seconds_bucket{stage=\"$st\"' metrics.txt |
+        awk '\$2 < p { bad = 1 } { p = \$2 } END { exit bad }'"
+done
+for st in decode encode; do
+    s=$(sed -n "s/^gigaview_render_stage_seconds_sum{stage=\"$st\"} //p" metrics.txt)
+    check "render stage $st took time (${s:-none} s)" \
+        awk -v s="${s:-0}" 'BEGIN { exit !(s > 0) }'
+done
 sort "$T/tally" | uniq -c >"$T/counts"
 while read -r n route status; do
     got=$(sed -n "s/^gigaview_http_requests_total{route=\"$route\",status=\"$status\"} //p" \

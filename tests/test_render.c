@@ -11,6 +11,10 @@
  * on the unrotated render, gray and bitonal against their formulas.  The
  * in-memory encoder must give back exactly the pixels for png and tif
  * (read back through OpenImageIO) and a close image for jpg and webp.
+ * gv_render_to, with one buffer kept across a sequence of renders (tiles
+ * at their level's size, which it decodes into the buffer, resampled,
+ * rotated and gray ones, a larger one after smaller ones), gives
+ * gv_render's pixels each time.
  */
 #include <math.h>
 #include <pthread.h>
@@ -531,6 +535,39 @@ static void check_encode(struct gv_decoder *d)
     img_free(&sm);
 }
 
+/* gv_render_to with one buffer kept across renders equals gv_render. */
+static void check_render_to(struct gv_decoder *d)
+{
+    struct gv_render_req reqs[8] = {
+        req_of(0, 0, 512, 512, 512, 512),       /* a tile, decoded in place */
+        req_of(512, 512, 512, 512, 512, 512),
+        req_of(0, 0, 1024, 1024, 512, 512),     /* level 1, in place */
+        req_of(100, 100, 700, 500, 333, 222),   /* resampled */
+        req_of(0, 0, 512, 512, 512, 512),
+        req_of(0, 0, 1500, 1100, 1500, 1100),   /* larger than before */
+        req_of(512, 0, 512, 512, 512, 512),
+        req_of(0, 0, 1024, 1024, 512, 512)};
+    reqs[4].rotation = 90;
+    reqs[6].quality = GV_QUALITY_GRAY;
+    uint8_t *buf = NULL;
+    size_t cap = 0;
+    for (int i = 0; i < 8; i++) {
+        struct img want;
+        struct gv_error e1 = {0}, e2 = {0};
+        uint32_t w = 0, h = 0;
+        int c = 0;
+        int r1 = render(d, &reqs[i], &want, &e1);
+        int r2 = gv_render_to(d, &reqs[i], &buf, &cap, &w, &h, &c, &e2);
+        check(r1 == 0 && r2 == 0 && w == want.w && h == want.h &&
+              c == want.c && cap >= (size_t)w * h * c &&
+              memcmp(buf, want.px, (size_t)w * h * c) == 0,
+              "gv_render_to, render %d of one kept buffer (%ux%u x%d, "
+              "buffer %zu bytes): gv_render's pixels", i, w, h, c, cap);
+        img_free(&want);
+    }
+    free(buf);
+}
+
 int main(void)
 {
     test_tmpdir_new(dir, sizeof dir, "gv-test-render");
@@ -564,6 +601,7 @@ int main(void)
     check_errors(d);
     check_gray_store(dg);
     check_encode(d);
+    check_render_to(d);
 
     gv_decoder_free(d);
     gv_decoder_free(dg);

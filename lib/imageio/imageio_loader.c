@@ -43,7 +43,11 @@
  * reads the header only) against its strip too: a file whose strip
  * passes the limit goes to the module, which reads a strip a row at a
  * time.
- * Writing always goes through the module.
+ * Writing goes through the module, but for gv_image_encode's JPEG
+ * (native_jpeg_write.c: the module's very bytes, with no module to load,
+ * so that a server's first JPEG answer does not wait for OpenImageIO);
+ * GIGAVIEW_NATIVE_WRITERS=0 sends that to the module too (tests compare
+ * the two).
  */
 #include <dlfcn.h>
 #include <limits.h>
@@ -58,6 +62,8 @@
 #include "imageio/imageio_module.h"
 #include "imageio/native_file.h"
 #include "imageio/native_jpeg.h"
+#include "imageio/native_jpeg_write.h"
+#include "imageio/output_format.h"
 #include "imageio/native_png.h"
 #include "imageio/native_tiff.h"
 #include "imageio/psd_thumbnail.h"
@@ -356,10 +362,24 @@ int gv_image_write(const char *path, uint32_t width, uint32_t height,
     return m ? m->write(path, width, height, channels, pixels, err) : -1;
 }
 
+/* Whether gv_image_encode may write JPEG itself: not with
+ * GIGAVIEW_NATIVE_WRITERS=0. */
+static int native_writer_allowed(void)
+{
+    const char *v = getenv("GIGAVIEW_NATIVE_WRITERS");
+    return !(v && strcmp(v, "0") == 0);
+}
+
 int gv_image_encode(const char *format, uint32_t width, uint32_t height,
                     int channels, const uint8_t *pixels, int quality,
                     uint8_t **out, size_t *len, struct gv_error *err)
 {
+    const struct gv_output_format *f = gv_output_format_image(format);
+    if (f && strcmp(f->name, "jpg") == 0 &&
+        gv_native_jpeg_encodes(width, height, channels) &&
+        native_writer_allowed())
+        return gv_native_jpeg_encode(width, height, channels, pixels, quality,
+                                     out, len, err);
     const struct gv_imageio_module *m = get(err);
     return m ? m->encode(format, width, height, channels, pixels, quality,
                          out, len, err) : -1;

@@ -38,7 +38,11 @@
  * and the clockwise rotation, all in one pass over the scaled image.
  * Memory: the decoded rectangle, the scaled image and the final image, the
  * decoded one freed before the final one is allocated, plus weight tables
- * of a few entries per output column and row.
+ * of a few entries per output column and row.  When the decoded rectangle
+ * is the answer (a tile at its level's size, no rotation or recolouring),
+ * gv_render_to decodes it into the caller's buffer and allocates nothing
+ * else: a server's render thread keeps one such buffer, and pays for
+ * neither a fresh mapping nor its page faults on every tile.
  */
 #include <limits.h>
 #include <math.h>
@@ -371,6 +375,31 @@ int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
               uint8_t **pixels, uint32_t *w, uint32_t *h, int *channels,
               struct gv_error *err)
 {
+    uint8_t *buf = NULL;
+    size_t cap = 0;
+    if (gv_render_to(d, req, &buf, &cap, w, h, channels, err) < 0) {
+        free(buf);
+        return -1;
+    }
+    *pixels = buf;
+    return 0;
+}
+
+/* *buf of at least `need` bytes (its contents dropped): 0 or -1. */
+static int reserve(uint8_t **buf, size_t *cap, size_t need)
+{
+    if (*buf && *cap >= need)
+        return 0;
+    free(*buf);
+    *buf = malloc(need ? need : 1);
+    *cap = *buf ? need : 0;
+    return *buf ? 0 : -1;
+}
+
+int gv_render_to(struct gv_decoder *d, const struct gv_render_req *req,
+                 uint8_t **buf, size_t *cap, uint32_t *w, uint32_t *h,
+                 int *channels, struct gv_error *err)
+{
     const struct gv_geometry *g = &gv_store_info(gv_decoder_store(d))->geometry;
     const int sc = g->channels;
     uint8_t *dec = NULL, *scaled = NULL, *final = NULL;
@@ -387,6 +416,23 @@ int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
         goto out;
     }
 
+    const int copy = ax.n == f.w && ay.n == f.h && axis_is_copy(&ax) &&
+                     axis_is_copy(&ay);
+    if (copy && scaled_is_final(req, sc, oc)) {
+        /* The decoded rectangle is the answer: decode it into *buf. */
+        if (reserve(buf, cap, (size_t)f.w * f.h * sc) < 0) {
+            gv_fail(err, GV_ENOMEM, "render: out of memory decoding %ux%u "
+                    "pixels", f.w, f.h);
+            goto out;
+        }
+        if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, *buf, err) != 0)
+            goto out;
+        *w = req->out_w;
+        *h = req->out_h;
+        *channels = oc;
+        rc = 0;
+        goto out;
+    }
     dec = malloc((size_t)f.w * f.h * sc);
     if (!dec) {
         gv_fail(err, GV_ENOMEM, "render: out of memory decoding %ux%u pixels",
@@ -396,7 +442,7 @@ int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
     if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, dec, err) != 0)
         goto out;
 
-    if (ax.n == f.w && ay.n == f.h && axis_is_copy(&ax) && axis_is_copy(&ay)) {
+    if (copy) {
         /* Level-aligned at the level's own size (an IIIF tile): each output
          * pixel is one decoded pixel, which resample would copy unchanged. */
         scaled = dec;
@@ -424,7 +470,9 @@ int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
         }
         orient(scaled, sc, req, fw, fh, oc, final);
     }
-    *pixels = final;
+    free(*buf);
+    *buf = final;
+    *cap = (size_t)out_px * (scaled_is_final(req, sc, oc) ? sc : oc);
     final = NULL;
     *w = fw;
     *h = fh;

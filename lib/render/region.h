@@ -49,4 +49,18 @@ int gv_render(struct gv_decoder *d, const struct gv_render_req *req,
               uint8_t **pixels, uint32_t *w, uint32_t *h, int *channels,
               struct gv_error *err);
 
+/*
+ * gv_render into a buffer the caller keeps between renders: *buf
+ * (malloc'ed or NULL) of *cap bytes receives the pixels, and is replaced
+ * (the old one freed, *cap updated) when it is too small or when the
+ * render makes its answer elsewhere (resampled, rotated or recoloured).
+ * A render at a level's own size (an IIIF tile) decodes straight into
+ * *buf, so a caller that keeps it allocates nothing for its pixels once
+ * it is large enough.  The same pixels as gv_render; on failure *buf and
+ * *cap stay valid (to free).
+ */
+int gv_render_to(struct gv_decoder *d, const struct gv_render_req *req,
+                 uint8_t **buf, size_t *cap, uint32_t *w, uint32_t *h,
+                 int *channels, struct gv_error *err);
+
 #endif

@@ -11,9 +11,12 @@
  * (decode_region.c for images, height_region.c for height codes): it
  * copies pixel units, C bytes for an image and a 2-byte code for a height
  * store.
+ * The time spent reading pages, decoding and in the cache is summed per
+ * decoder (gv_decoder_times; one clock read before and after each).
  */
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "render/store_decoder.h"
 #include "codec/height_tile.h"
@@ -32,7 +35,24 @@ struct gv_decoder {
     size_t page_len;
     int page_level;
     uint32_t page_px, page_py;
+    struct gv_decode_times times;
 };
+
+/* The monotonic clock in nanoseconds. */
+static uint64_t now_ns(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (uint64_t)t.tv_sec * 1000000000u + (uint64_t)t.tv_nsec;
+}
+
+void gv_decoder_times(struct gv_decoder *d, struct gv_decode_times *t,
+                      int reset)
+{
+    *t = d->times;
+    if (reset)
+        memset(&d->times, 0, sizeof d->times);
+}
 
 struct gv_decoder *gv_decoder_new_shared(const struct gv_store *s,
                                          struct gv_tile_cache *cache,
@@ -106,7 +126,11 @@ static int load_page(struct gv_decoder *d, int level, uint32_t px, uint32_t py,
     free(d->page);
     d->page = NULL;
     d->page_level = -1;
-    if (gv_store_read_page(d->store, level, px, py, &d->page, &d->page_len, err) < 0)
+    const uint64_t t0 = now_ns();
+    int rc = gv_store_read_page(d->store, level, px, py, &d->page,
+                                &d->page_len, err);
+    d->times.page_ns += now_ns() - t0;
+    if (rc < 0)
         return -1;
     d->page_level = level;
     d->page_px = px;
@@ -129,10 +153,11 @@ static int decode_into(struct gv_decoder *d, int level, uint32_t tx,
     const uint8_t *buf;
     size_t len;
     int rc = -1;
+    uint64_t t0 = 0;
     if (load_page(d, level, tx / GV_PAGE_TILES, ty / GV_PAGE_TILES, err) == 0 &&
         gv_page_tile(d->page, d->page_len, d->channels, (int)(tx % GV_PAGE_TILES),
                      (int)(ty % GV_PAGE_TILES), &buf, &len, err) == 0 &&
-        (d->height
+        (t0 = now_ns(), d->height
              ? gv_height_tile_decode(buf, len,
                                      (const uint16_t *)(void *)gv_tile_entry_pixels(parent),
                                      (int)(tx & 1), (int)(ty & 1),
@@ -140,6 +165,8 @@ static int decode_into(struct gv_decoder *d, int level, uint32_t tx,
              : gv_tile_decode(buf, len, d->channels, gv_tile_entry_pixels(parent),
                               (int)(tx & 1), (int)(ty & 1), out, err)) == 0)
         rc = 0;
+    if (t0)
+        d->times.decode_ns += now_ns() - t0;
     gv_tile_cache_release(d->cache, parent);
     return rc;
 }
@@ -162,14 +189,18 @@ static struct gv_tile_entry *tile_entry(struct gv_decoder *d, int level,
     }
     struct gv_tile_key k = {d->store_key, level, tx, ty};
     struct gv_tile_entry *e;
+    const uint64_t t0 = now_ns();
     int rc = gv_tile_cache_acquire(d->cache, &k, gv_tile_bytes(d->channels), &e, err);
+    d->times.wait_ns += now_ns() - t0;
     if (rc != 0)
         return rc > 0 ? e : NULL;
     uint8_t *px = gv_tile_entry_pixels(e);
     if (level == g->root) {
+        const uint64_t t1 = now_ns();
         uint32_t w, h;
         const uint8_t *root = gv_store_root(d->store, 0, &w, &h);
         gv_root_tile(root, w, h, d->channels, px);
+        d->times.decode_ns += now_ns() - t1;
     } else if (decode_into(d, level, tx, ty, px, err) < 0) {
         gv_tile_cache_fail(d->cache, e, err);
         return NULL;
@@ -238,5 +269,54 @@ int gv_decoder_copy_region(struct gv_decoder *d, const char *module,
                        px + ((size_t)(yy - sy0) * GV_TILE + (ax - sx0)) * c,
                        (size_t)(bx - ax) * c);
         }
+    return 0;
+}
+
+int gv_decoder_pin_levels(struct gv_decoder *d, uint64_t budget,
+                          struct gv_tile_entry ***pins, int *npins,
+                          uint64_t *bytes, struct gv_error *err)
+{
+    const struct gv_geometry *g = &d->info->geometry;
+    const uint64_t tile = gv_tile_bytes(d->channels);
+    /* The levels that fit, coarsest first: count their tiles. */
+    uint64_t used = 0;
+    size_t n = 0;
+    int finest = g->root + 1;
+    for (int level = g->root; level >= 0; level--) {
+        uint64_t tiles = level == g->root ? 1 :
+            (uint64_t)g->level[level].tiles_x * g->level[level].tiles_y;
+        if (used + tiles * tile > budget)
+            break;
+        used += tiles * tile;
+        n += (size_t)tiles;
+        finest = level;
+    }
+    *pins = NULL;
+    *npins = 0;
+    *bytes = 0;
+    if (n == 0)
+        return 0;
+    struct gv_tile_entry **p = malloc(n * sizeof *p);
+    if (!p)
+        return gv_fail(err, GV_ENOMEM, "decode: out of memory");
+    size_t k = 0;
+    for (int level = g->root; level >= finest; level--) {
+        uint32_t tx_n = level == g->root ? 1 : g->level[level].tiles_x;
+        uint32_t ty_n = level == g->root ? 1 : g->level[level].tiles_y;
+        for (uint32_t ty = 0; ty < ty_n; ty++)
+            for (uint32_t tx = 0; tx < tx_n; tx++) {
+                struct gv_tile_entry *e = tile_entry(d, level, tx, ty, err);
+                if (!e) {
+                    while (k > 0)
+                        gv_tile_cache_release(d->cache, p[--k]);
+                    free(p);
+                    return -1;
+                }
+                p[k++] = e;
+            }
+    }
+    *pins = p;
+    *npins = (int)k;
+    *bytes = used;
     return 0;
 }

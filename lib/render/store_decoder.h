@@ -85,6 +85,33 @@ int gv_decoder_copy_region(struct gv_decoder *d, const char *module,
                            int level, uint32_t x, uint32_t y, uint32_t w,
                            uint32_t h, void *dst, struct gv_error *err);
 
+/*
+ * Decode the coarsest levels of d's store and keep them pinned in its
+ * cache: the root tile, then each finer tiled level whole, as long as the
+ * level's tiles fit in what is left of `budget` bytes (a level that does
+ * not fit ends the descent).  *pins (malloc'ed; free it) receives *npins
+ * pinned entries, each to be let go with gv_tile_cache_release before
+ * the store is forgotten; *bytes their pixel bytes.  Returns 0, or -1
+ * with *err (a decoding failure: nothing stays pinned).
+ */
+int gv_decoder_pin_levels(struct gv_decoder *d, uint64_t budget,
+                          struct gv_tile_entry ***pins, int *npins,
+                          uint64_t *bytes, struct gv_error *err);
+
+/* Where a decoder's time went, in nanoseconds, summed over its calls
+ * since it was made or last reset: reading (and checking) pages, decoding
+ * tiles (each tile's own decode, the missing ancestors included as they
+ * are decoded, and the root tile's padding), and finding tiles in the
+ * cache (mostly the waits for another thread's decode of a tile it
+ * needed). */
+struct gv_decode_times {
+    uint64_t page_ns, decode_ns, wait_ns;
+};
+
+/* d's times into *t; reset: zero them afterwards. */
+void gv_decoder_times(struct gv_decoder *d, struct gv_decode_times *t,
+                      int reset);
+
 /* Build the padded root tile (513x513xC) from a w x h root image. */
 void gv_root_tile(const uint8_t *root, uint32_t w, uint32_t h, int channels,
                   uint8_t *tile);

@@ -14,7 +14,9 @@
  * others sit on an LRU list and are evicted, least recently used first,
  * whenever the bytes held exceed the budget.  The budget can thus be
  * exceeded only by pinned tiles: at most, per thread, the tile it decodes
- * and that tile's chain of ancestors.  The cache is split into up to 16
+ * and that tile's chain of ancestors.  Beyond the budget, each shard also
+ * keeps one evicted tile's buffer for its next decode (not counted in
+ * `bytes`).  The cache is split into up to 16
  * shards (each with its own lock, hash and LRU, and an equal part of the
  * budget) so that threads seldom contend; a small budget gets fewer shards
  * so that each still holds a useful number of tiles.

@@ -1,0 +1,122 @@
+/*
+ * test_native_write.c - gv_image_encode's JPEG through libjpeg-turbo
+ * (lib/imageio/native_jpeg_write.c) against the OpenImageIO module, which
+ * it must equal byte for byte: the IIIF and region answers are these
+ * bytes, and their ETags and cached copies were made from the module's.
+ *
+ * Images of many sizes (1x1, odd sides that leave partial MCUs, a 512
+ * tile, wide and tall strips), gray and RGB, smooth, noisy and flat, at
+ * qualities 1, 50, 75, 90, 100 and the clamped 0 and 101, are encoded by
+ * the module (GIGAVIEW_NATIVE_WRITERS=0), by gv_native_jpeg_encode and
+ * by gv_image_encode with native writers allowed.  Negative control: the
+ * same image at quality 89 differs from the module's at 90, so the
+ * comparison can fail.  Images the native writer declines (2 channels,
+ * 70000 pixels wide) go to the module, which answers in its own words.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "util.h"
+#include "imageio/imageio.h"
+#include "imageio/native_jpeg_write.h"
+
+/* Pixels of kind 0 (smooth gradients), 1 (noise) or 2 (flat). */
+static uint8_t *make_image(uint32_t w, uint32_t h, int c, int kind,
+                           uint64_t *rng)
+{
+    uint8_t *p = malloc((size_t)w * h * c + 1);
+    for (uint32_t y = 0; y < h; y++)
+        for (uint32_t x = 0; x < w; x++)
+            for (int k = 0; k < c; k++) {
+                size_t i = ((size_t)y * w + x) * c + k;
+                p[i] = kind == 0 ? (uint8_t)((x * 3 + y * 5 + k * 70) & 255)
+                     : kind == 1 ? (uint8_t)test_rand(rng)
+                                 : (uint8_t)(40 + 60 * k);
+            }
+    return p;
+}
+
+static int encode_by(int native, const char *how, uint32_t w, uint32_t h,
+                     int c, const uint8_t *px, int q, uint8_t **out,
+                     size_t *len, struct gv_error *err)
+{
+    if (strcmp(how, "direct") == 0)
+        return gv_native_jpeg_encode(w, h, c, px, q, out, len, err);
+    if (native)
+        unsetenv("GIGAVIEW_NATIVE_WRITERS");
+    else
+        setenv("GIGAVIEW_NATIVE_WRITERS", "0", 1);
+    int rc = gv_image_encode("jpg", w, h, c, px, q, out, len, err);
+    unsetenv("GIGAVIEW_NATIVE_WRITERS");
+    return rc;
+}
+
+/* Encode one image every way; 1 when all equal the module's bytes. */
+static int compare(uint32_t w, uint32_t h, int c, int kind, int q,
+                   uint64_t *rng)
+{
+    uint8_t *px = make_image(w, h, c, kind, rng);
+    uint8_t *ref = NULL, *a = NULL, *b = NULL;
+    size_t nref = 0, na = 0, nb = 0;
+    struct gv_error e1 = {0}, e2 = {0}, e3 = {0};
+    int r1 = encode_by(0, "module", w, h, c, px, q, &ref, &nref, &e1);
+    int r2 = encode_by(1, "direct", w, h, c, px, q, &a, &na, &e2);
+    int r3 = encode_by(1, "loader", w, h, c, px, q, &b, &nb, &e3);
+    int same = r1 == 0 && r2 == 0 && r3 == 0 && nref == na && nref == nb &&
+               memcmp(ref, a, nref) == 0 && memcmp(ref, b, nref) == 0;
+    check(same, "%ux%u x%d kind %d quality %d: module %d (%zu bytes%s%s), "
+          "native %zu, through gv_image_encode %zu, equal bytes", w, h, c,
+          kind, q, r1, nref, r1 ? ": " : "", r1 ? e1.text : "", na, nb);
+    free(px);
+    free(ref);
+    free(a);
+    free(b);
+    return same;
+}
+
+int main(void)
+{
+    uint64_t rng = 12345;
+    static const uint32_t sizes[][2] = {
+        {1, 1}, {7, 5}, {16, 16}, {17, 9}, {512, 512}, {326, 163},
+        {16, 396}, {512, 96}, {1000, 3}, {3, 700}};
+    static const int quality[] = {90, 1, 50, 75, 100, 0, 101};
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
+        for (int c = 1; c <= 3; c += 2)
+            for (int kind = 0; kind < 3; kind++)
+                compare(sizes[s][0], sizes[s][1], c, kind,
+                        quality[(s + (size_t)kind) % 7], &rng);
+    for (size_t i = 0; i < sizeof quality / sizeof quality[0]; i++)
+        compare(64, 48, 3, 1, quality[i], &rng);
+
+    /* Negative control: quality 89 is not the module's 90. */
+    uint8_t *px = make_image(64, 64, 3, 0, &rng), *a = NULL, *b = NULL;
+    size_t na = 0, nb = 0;
+    struct gv_error err = {0};
+    check(encode_by(0, "module", 64, 64, 3, px, 90, &a, &na, &err) == 0 &&
+          gv_native_jpeg_encode(64, 64, 3, px, 89, &b, &nb, &err) == 0 &&
+          !(na == nb && memcmp(a, b, na) == 0),
+          "negative control: quality 89 differs from the module's 90");
+    free(a);
+    free(b);
+    free(px);
+
+    /* Declined: 2 channels and a side past libjpeg's 65500. */
+    check(!gv_native_jpeg_encodes(8, 8, 2) &&
+          !gv_native_jpeg_encodes(70000, 1, 3) &&
+          gv_native_jpeg_encodes(65500, 1, 1),
+          "2 channels and 70000 pixels wide are declined, 65500 taken");
+    uint8_t two[8 * 8 * 2] = {0};
+    uint8_t *out = NULL;
+    size_t len = 0;
+    err = (struct gv_error){0};
+    check(gv_image_encode("jpg", 8, 8, 2, two, 90, &out, &len, &err) < 0 &&
+          err.code == GV_EINVAL && strstr(err.text, "channels"),
+          "2 channels go to the module, which refuses them: %s", err.text);
+    free(out);
+    err = (struct gv_error){0};
+    check(gv_native_jpeg_encode(8, 8, 2, two, 90, &out, &len, &err) < 0 &&
+          err.code == GV_EINVAL, "the native writer refuses 2 channels too");
+    return tap_done();
+}
