@@ -161,3 +161,13 @@ enum MHD_Result render_call_finish(struct req *r)
     call_free(c);
     return ret;
 }
+
+void render_call_cache_day(void *arg, struct req *r, struct image *img,
+                           struct MHD_Response *resp)
+{
+    (void)arg;
+    (void)r;
+    (void)img;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
+                            "public, max-age=86400");
+}

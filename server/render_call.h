@@ -48,6 +48,11 @@ enum MHD_Result render_call_serve(struct req *r, struct image *img,
 /* 1 if r is a resumed render (r->async is a render call), else 0. */
 int render_call_resumed(const struct req *r);
 
+/* A render_spec's headers for answers that may be cached a day, as they
+ * are (Cache-Control: public, max-age=86400): regions and meshes. */
+void render_call_cache_day(void *arg, struct req *r, struct image *img,
+                           struct MHD_Response *resp);
+
 /* Answer a resumed render (render_call_resumed), and free the call. */
 enum MHD_Result render_call_finish(struct req *r);
 

@@ -251,16 +251,6 @@ static void body_headers(const uint8_t *body, size_t len,
     }
 }
 
-static void add_headers(void *arg, struct req *r, struct image *img,
-                        struct MHD_Response *resp)
-{
-    (void)arg;
-    (void)r;
-    (void)img;
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
-                            "public, max-age=86400");
-}
-
 enum MHD_Result route_mesh(struct req *r)
 {
     if (render_call_resumed(r))
@@ -294,6 +284,6 @@ enum MHD_Result route_mesh(struct req *r)
     struct render_spec spec = {
         .module = "mesh", .key = key, .etag = etag,
         .mime = gv_mesh_format_mime(q.format), .render = render,
-        .headers = add_headers, .body_headers = body_headers, .arg = arg};
+        .headers = render_call_cache_day, .body_headers = body_headers, .arg = arg};
     return render_call_serve(r, img, &spec);
 }

@@ -153,16 +153,6 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
     return rc;
 }
 
-static void add_headers(void *arg, struct req *r, struct image *img,
-                        struct MHD_Response *resp)
-{
-    (void)arg;
-    (void)r;
-    (void)img;
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
-                            "public, max-age=86400");
-}
-
 enum MHD_Result route_region(struct req *r)
 {
     if (render_call_resumed(r))
@@ -193,6 +183,6 @@ enum MHD_Result route_region(struct req *r)
     output_cache_etag(img->identity, canon, etag, sizeof etag);
     struct render_spec spec = {
         .module = "region", .key = key, .etag = etag, .mime = q.format->mime,
-        .render = render, .headers = add_headers, .arg = arg};
+        .render = render, .headers = render_call_cache_day, .arg = arg};
     return render_call_serve(r, img, &spec);
 }
