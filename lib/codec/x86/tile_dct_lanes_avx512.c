@@ -63,6 +63,10 @@ static void replay(int16_t *base, const uint32_t *off, const int32_t *val, int n
  * c; p = the previous value's class * 256 (a model is 256 entries); pe
  * and dcp, two bits per channel; h, an escape's first step; bb, the
  * block's first coefficient in the arena (int16), eb its eob's.
+ *
+ * One function of about 200 lines, past the house's 120, on purpose: the
+ * lanes' state lives in vector registers across the whole loop, and a
+ * call between its phases would spill all of them to memory.
  */
 int gv_dct_lanes_run_avx512(const uint8_t *buf,
                             const uint32_t at[GV_DCT_LANES],
