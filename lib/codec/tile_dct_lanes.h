@@ -11,8 +11,7 @@
 
 #include "codec/tile_dct.h"
 #include "codec/tile_dct_pixels.h"
-
-#define GV_DCT_LANES 16
+#include "codec/x86/tile_dct_lanes_avx512.h"   /* GV_DCT_LANES */
 
 /* A thread's scratch: the rows of a group, the eobs of its rows as the
  * lanes write them. */

@@ -10,15 +10,7 @@
 
 #include <stdint.h>
 
-#include "codec/tile_dct.h"
-
-/* A row of blocks' coefficients: co[c][v][X] is coefficient (v, u) of
- * channel c of block X / 8, u = X mod 8. */
-typedef int16_t gv_dct_row[3][8][GV_DCT_PLANE];
-
-/* The rows and columns that the first n coefficients in zigzag order
- * reach: 1 + the largest v, 1 + the largest u (0 for n = 0). */
-extern const uint8_t gv_dct_zz_rows[65], gv_dct_zz_cols[65];
+#include "codec/tile_dct_row.h"
 
 /*
  * Add the residual of block row `by` (0..64) to its predicted pixel rows

@@ -12,7 +12,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "codec/tile_dct_pixels.h"
+#include "codec/tile_dct_row.h"
 #include "codec/tile_layout.h"
 
 /* floor(a / 2^s).  GCC and Clang define >> of a negative number as the

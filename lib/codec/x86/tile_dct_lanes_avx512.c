@@ -12,7 +12,8 @@
 #include <string.h>
 
 #include "base/cpu.h"
-#include "codec/tile_dct_lanes.h"
+#include "codec/tile_dct.h"
+#include "codec/tile_dct_pixels.h"
 #include "codec/x86/tile_dct_lanes_avx512.h"
 
 #if GV_HAVE_X86_SIMD

@@ -7,7 +7,10 @@
 
 #include <stdint.h>
 
-#include "codec/tile_dct_lanes.h"
+/* Rows decoded at once: the kernel's sixteen 32-bit lanes.  Defined
+ * here, not in tile_dct_lanes.h, so that the kernel needs nothing of the
+ * file that calls it. */
+#define GV_DCT_LANES 16
 
 /* Decode n <= GV_DCT_LANES rows, stream i from buf[at[i]] to end[i], into
  * the arena's rows and eobs (base16: its first int16); 0, or -1 when some

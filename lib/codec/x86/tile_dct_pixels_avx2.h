@@ -7,7 +7,7 @@
 
 #include <stdint.h>
 
-#include "codec/tile_dct_pixels.h"
+#include "codec/tile_dct_row.h"
 
 /* gv_dct_add_row, the same bytes; only where gv_cpu_flags() has
  * GV_CPU_AVX2. */
