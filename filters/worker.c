@@ -355,7 +355,8 @@ int gv_worker_recv_hello(int fd, int64_t deadline, int *ok, char *text,
 
 /* The DONE answer to a SIMPLIFY job (header read: type, len): counts
  * within the job's limits and a file of at most job->max_out bytes. */
-/* Same shape as recv_job below: deliberately separate, each unpacks its own message of the worker protocol. */
+/* Same shape as recv_job below: deliberately separate, each unpacks its own
+ * message of the worker protocol. */
 static int recv_simplified(int fd, const struct gv_worker_job *job,
                            uint32_t type, uint64_t len, int64_t deadline,
                            struct gv_worker_result *res, struct gv_error *err)
@@ -613,7 +614,8 @@ static int decode_simplify(struct rbuf *r, struct gv_worker_job *job,
  * *params.  Returns 0, GV_WORKER_EOF at a clean end, or an error.
  * A job that is well framed but inconsistent is 0 with jerr set.
  */
-/* Same shape as recv_simplified above: deliberately separate, each unpacks its own message of the worker protocol. */
+/* Same shape as recv_simplified above: deliberately separate, each unpacks its
+ * own message of the worker protocol. */
 static int recv_job(int fd, uint64_t max_pixels, struct gv_worker_job *job,
                     uint8_t **body, double *params, struct gv_error *jerr,
                     struct gv_error *err)

@@ -199,7 +199,8 @@ static void *accept_loop(void *arg)
     return NULL;
 }
 
-/* Same shape as http_start's thread arrays in http.c: deliberately separate, each allocates its own per-daemon arrays and reports in its own module. */
+/* Same shape as http_start's thread arrays in http.c: deliberately separate,
+ * each allocates its own per-daemon arrays and reports in its own module. */
 struct acceptor *acceptor_start(int listen_fd, struct MHD_Daemon *const *d,
                                 int n, unsigned limit, struct conn_watch *watch,
                                 struct gv_error *err)

@@ -73,7 +73,8 @@ size_t access_b64url_encode(const void *in, size_t n, char *out, size_t size)
     return o;
 }
 
-/* Same shape as hexval in router.c: deliberately separate, base64url digits here, hex there. */
+/* Same shape as hexval in router.c: deliberately separate, base64url digits
+ * here, hex there. */
 static int b64val(char c)
 {
     if (c >= 'A' && c <= 'Z')

@@ -211,7 +211,8 @@ static void leave_epoll(struct conn_watch *w, struct conn_entry *e)
     e->gone = NULL;
 }
 
-/* Same shape as unlink_entry in page_cache.c: deliberately separate, each unlinks its own list (this one also leaves epoll). */
+/* Same shape as unlink_entry in page_cache.c: deliberately separate, each
+ * unlinks its own list (this one also leaves epoll). */
 void conn_watch_close(struct conn_watch *w, struct conn_entry *e)
 {
     if (!w || !e)
@@ -230,7 +231,8 @@ void conn_watch_close(struct conn_watch *w, struct conn_entry *e)
     pthread_mutex_unlock(&w->lock);
 }
 
-/* Same shape as conn_watch_resumed below: deliberately separate, one arms the clock for a request, the other for a resumed answer. */
+/* Same shape as conn_watch_resumed below: deliberately separate, one arms the
+ * clock for a request, the other for a resumed answer. */
 void conn_watch_request_in(struct conn_watch *w, struct conn_entry *e)
 {
     if (!w || !e)
@@ -268,7 +270,8 @@ void conn_watch_suspended(struct conn_watch *w, struct conn_entry *e,
     pthread_mutex_unlock(&w->lock);
 }
 
-/* Same shape as conn_watch_request_in above: deliberately separate, each moves the entry for its own event. */
+/* Same shape as conn_watch_request_in above: deliberately separate, each moves
+ * the entry for its own event. */
 void conn_watch_resumed(struct conn_watch *w, struct conn_entry *e)
 {
     if (!w || !e)

@@ -312,7 +312,8 @@ const char *http_query(struct req *r, const char *name)
     return MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, name);
 }
 
-/* Same shape as parse_uint in iiif.c: deliberately separate, iiif.c (pure, fuzzed) parses a span up to GV_MAX_DIM without http.c. */
+/* Same shape as parse_uint in iiif.c: deliberately separate, iiif.c (pure,
+ * fuzzed) parses a span up to GV_MAX_DIM without http.c. */
 int http_parse_u32(const char *s, uint32_t max, uint32_t *out)
 {
     if (!s || !*s)
@@ -1098,7 +1099,8 @@ static struct MHD_Daemon *start_daemon(struct server *srv, struct http_thread *t
         MHD_OPTION_END);
 }
 
-/* Same shape as acceptor_start in acceptor.c: deliberately separate, each allocates its own per-daemon arrays and reports in its own module. */
+/* Same shape as acceptor_start in acceptor.c: deliberately separate, each
+ * allocates its own per-daemon arrays and reports in its own module. */
 int http_start(struct server *srv)
 {
     const struct settings *cfg = srv->cfg;

@@ -85,7 +85,8 @@ static const char *show(const char *s, size_t n, char *buf, size_t size)
 /* Parse digits [s, e) as an unsigned integer <= GV_MAX_DIM (2^31 - 1, the
  * largest image side a store can have, so no sum of two overflows 32
  * bits). */
-/* Same shape as http_parse_u32 in http.c: deliberately separate, this one parses a span [s, e) and keeps iiif.c free of http.c. */
+/* Same shape as http_parse_u32 in http.c: deliberately separate, this one
+ * parses a span [s, e) and keeps iiif.c free of http.c. */
 static int parse_uint(const char *s, const char *e, uint32_t *out)
 {
     if (s == e)

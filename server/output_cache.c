@@ -168,7 +168,8 @@ void output_cache_put(struct output_cache *c, const char *key,
     }
 }
 
-/* Same shape as page_cache_stats in page_cache.c: deliberately separate, each copies its own counters under its own lock. */
+/* Same shape as page_cache_stats in page_cache.c: deliberately separate, each
+ * copies its own counters under its own lock. */
 void output_cache_stats(struct output_cache *c, struct output_cache_stats *s)
 {
     pthread_mutex_lock(&c->lock);

@@ -73,7 +73,8 @@ void page_release(struct page *p)
 }
 
 /* Unlink e from the hash and the list.  Caller holds the lock. */
-/* Same shape as conn_watch_close in conn_watch.c: deliberately separate, each unlinks its own list. */
+/* Same shape as conn_watch_close in conn_watch.c: deliberately separate, each
+ * unlinks its own list. */
 static void unlink_entry(struct page_cache *pc, struct entry *e)
 {
     struct entry **pp = &pc->bucket[hash(e->serial, e->level, e->px, e->py)];
@@ -238,7 +239,8 @@ void page_cache_forget(struct page_cache *pc, uint64_t serial)
     unref_chain(victims);
 }
 
-/* Same shape as output_cache_stats in output_cache.c: deliberately separate, each copies its own counters under its own lock. */
+/* Same shape as output_cache_stats in output_cache.c: deliberately separate,
+ * each copies its own counters under its own lock. */
 void page_cache_stats(struct page_cache *pc, struct page_cache_stats *st)
 {
     pthread_mutex_lock(&pc->lock);

@@ -43,7 +43,8 @@ const struct router_route router_routes[ROUTE_COUNT] = {
                            ROUTER_NO_IMAGE},
 };
 
-/* Same shape as b64val in access_token.c: deliberately separate, hex digits here, base64url there. */
+/* Same shape as b64val in access_token.c: deliberately separate, hex digits
+ * here, base64url there. */
 static int hexval(char c)
 {
     if (c >= '0' && c <= '9')

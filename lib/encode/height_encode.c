@@ -24,7 +24,9 @@
 
 /* ---- synth-height: integer value-noise fBm, a function of (x, y) ---- */
 
-/* Same shape as mix32 in encode/source.c and id_final in store/store_read.c: deliberately separate, other constants, and each output is part of what a store holds. */
+/* Same shape as mix32 in encode/source.c and id_final in store/store_read.c:
+ * deliberately separate, other constants, and each output is part of what a
+ * store holds. */
 static uint32_t hash2(uint32_t x, uint32_t y, uint32_t o)
 {
     uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u ^ o * 0xcb1ab31fu;

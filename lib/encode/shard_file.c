@@ -40,7 +40,9 @@ struct shard_head {
     uint64_t first;           /* offset of the first record */
 };
 
-/* Same shape as gv_header_pack in store/store_format.c and record_pack below: deliberately separate, each writes its own on-disk layout (docs/FORMAT.md). */
+/* Same shape as gv_header_pack in store/store_format.c and record_pack below:
+ * deliberately separate, each writes its own on-disk layout (docs/FORMAT.md).
+ */
 static void head_pack(const struct shard_head *s, uint8_t h[GV_SHARD_HEADER])
 {
     memset(h, 0, GV_SHARD_HEADER);
@@ -57,7 +59,8 @@ static void head_pack(const struct shard_head *s, uint8_t h[GV_SHARD_HEADER])
 }
 
 /* The fields only: magic, CRC and version are checked by the caller. */
-/* Same shape as gv_header_unpack in store/store_format.c and record_unpack below: deliberately separate, each reads its own on-disk layout. */
+/* Same shape as gv_header_unpack in store/store_format.c and record_unpack
+ * below: deliberately separate, each reads its own on-disk layout. */
 static void head_unpack(const uint8_t h[GV_SHARD_HEADER], struct shard_head *s)
 {
     s->index = gv_get32(h + 12);
@@ -69,7 +72,8 @@ static void head_unpack(const uint8_t h[GV_SHARD_HEADER], struct shard_head *s)
 }
 
 /* The 64-byte header of a tile record (rec->offset is not stored). */
-/* Same shape as head_pack above and gv_header_pack in store/store_format.c: deliberately separate, a record is its own layout. */
+/* Same shape as head_pack above and gv_header_pack in store/store_format.c:
+ * deliberately separate, a record is its own layout. */
 static void record_pack(const struct gv_shard_record *rec,
                         uint8_t h[GV_SHARD_RECORD])
 {
@@ -88,7 +92,8 @@ static void record_pack(const struct gv_shard_record *rec,
 }
 
 /* The fields only, offset 0: magic and CRC are checked by the caller. */
-/* Same shape as head_unpack above and gv_header_unpack in store/store_format.c: deliberately separate, a record is its own layout. */
+/* Same shape as head_unpack above and gv_header_unpack in store/store_format.c:
+ * deliberately separate, a record is its own layout. */
 static void record_unpack(const uint8_t h[GV_SHARD_RECORD],
                           struct gv_shard_record *rec)
 {
@@ -253,7 +258,8 @@ static int read_at(struct gv_shard_reader *r, void *buf, size_t len,
     return 0;
 }
 
-/* Same shape as gv_store_close in store/store_read.c and gv_raw_regions_free in imageio/raw_regions.c: deliberately separate, each frees its own struct. */
+/* Same shape as gv_store_close in store/store_read.c and gv_raw_regions_free in
+ * imageio/raw_regions.c: deliberately separate, each frees its own struct. */
 void gv_shard_close(struct gv_shard_reader *r)
 {
     if (!r)
@@ -265,7 +271,9 @@ void gv_shard_close(struct gv_shard_reader *r)
     free(r);
 }
 
-/* Same shape as open_file in store/store_read.c: deliberately separate, the messages differ ("shard: cannot open") and a store is also checked to be a regular file. */
+/* Same shape as open_file in store/store_read.c: deliberately separate, the
+ * messages differ ("shard: cannot open") and a store is also checked to be a
+ * regular file. */
 /* Open path; *size is its length. */
 static int open_file(struct gv_shard_reader *r, const char *path,
                      uint64_t *size, struct gv_error *err)

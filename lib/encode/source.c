@@ -230,7 +230,8 @@ static void convert(const struct gv_source *s, const void *raw, int chin,
 
 /* A 32-bit integer mixer (the "lowbias32" constants of Chris Wellons'
  * hash-prospector): cheap, and every input bit affects every output bit. */
-/* Same shape as hash2 in encode/height_encode.c and id_final in store/store_read.c: deliberately separate, other constants and outputs. */
+/* Same shape as hash2 in encode/height_encode.c and id_final in
+ * store/store_read.c: deliberately separate, other constants and outputs. */
 static inline uint32_t mix32(uint32_t h)
 {
     h ^= h >> 16;

@@ -540,7 +540,8 @@ static int read_rows(struct gv_image_in *im, uint32_t rows, void *out,
         im->next_row += rows;
         return 0;
     }
-    /* Same shape as the row loop of native_tiff.c's read: deliberately separate, this one is the OpenImageIO module's (C++, its own binary). */
+    /* Same shape as the row loop of native_tiff.c's read: deliberately
+     * separate, this one is the OpenImageIO module's (C++, its own binary). */
     while (rows > 0) {
         uint32_t r = im->next_row;
         if (im->buf_rows == 0 || r < im->buf_first

@@ -292,7 +292,8 @@ static int supported(const struct jpeg_decompress_struct *c)
     return 0;
 }
 
-/* Same shape as gv_native_tiff_open in native_tiff.c: deliberately separate, each opens its own library's reader. */
+/* Same shape as gv_native_tiff_open in native_tiff.c: deliberately separate,
+ * each opens its own library's reader. */
 struct gv_native_jpeg *gv_native_jpeg_open(const char *path,
                                            const struct gv_image_limits *lim,
                                            struct gv_image_info *info,

@@ -7,7 +7,8 @@
 #ifndef GV_NATIVE_JPEG_H
 #define GV_NATIVE_JPEG_H
 
-/* Same shape as native_png.h: deliberately parallel, one native reader a format behind the same four calls. */
+/* Same shape as native_png.h: deliberately parallel, one native reader a format
+ * behind the same four calls. */
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>

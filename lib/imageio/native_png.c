@@ -72,7 +72,8 @@ struct gv_native_png {
     char msg[256];                 /* the first error's text */
 };
 
-/* Same shape as the test mode of imageio/native_tiff.c: deliberately separate, each format has its own test switch. */
+/* Same shape as the test mode of imageio/native_tiff.c: deliberately separate,
+ * each format has its own test switch. */
 static int test_raw16;
 
 void gv_native_png_test_mode(int raw16)

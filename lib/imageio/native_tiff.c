@@ -155,7 +155,8 @@ struct gv_native_tiff {
     char msg[256];                 /* the first error's text */
 };
 
-/* Same shape as the test mode of imageio/native_png.c: deliberately separate, each format has its own test switch. */
+/* Same shape as the test mode of imageio/native_png.c: deliberately separate,
+ * each format has its own test switch. */
 static int test_swap16;
 
 void gv_native_tiff_test_mode(int swap16)
@@ -308,7 +309,8 @@ static int layout(struct gv_native_tiff *t)
     return 0;
 }
 
-/* Same shape as gv_native_jpeg_open in native_jpeg.c: deliberately separate, each opens its own library's reader. */
+/* Same shape as gv_native_jpeg_open in native_jpeg.c: deliberately separate,
+ * each opens its own library's reader. */
 struct gv_native_tiff *gv_native_tiff_open(const char *path,
                                            uint64_t max_pixels,
                                            struct gv_image_info *info,
@@ -447,7 +449,8 @@ int gv_native_tiff_read(struct gv_native_tiff *t, uint32_t rows, void *out,
         t->next_row += rows;
         return 0;
     }
-    /* Same shape as the row loop in imageio.cpp: deliberately separate, that one is in the OpenImageIO module, a binary of its own. */
+    /* Same shape as the row loop in imageio.cpp: deliberately separate, that
+     * one is in the OpenImageIO module, a binary of its own. */
     while (rows > 0) {
         uint32_t r = t->next_row;
         if (t->buf_rows == 0 || r < t->buf_first

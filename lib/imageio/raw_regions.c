@@ -36,7 +36,8 @@ struct gv_raw_regions {
     uint64_t *offsets;
 };
 
-/* Same shape as gv_store_close in store/store_read.c and gv_shard_close in encode/shard_file.c: deliberately separate, each frees its own struct. */
+/* Same shape as gv_store_close in store/store_read.c and gv_shard_close in
+ * encode/shard_file.c: deliberately separate, each frees its own struct. */
 void gv_raw_regions_free(struct gv_raw_regions *r)
 {
     if (!r)

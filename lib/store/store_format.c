@@ -42,7 +42,9 @@ static float gv_get_f32(const uint8_t *p)
     return v;
 }
 
-/* Same shape as head_pack and record_pack in encode/shard_file.c, and its own height fields below: deliberately separate, one field of the store header a line. */
+/* Same shape as head_pack and record_pack in encode/shard_file.c, and its own
+ * height fields below: deliberately separate, one field of the store header a
+ * line. */
 void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE])
 {
     memset(out, 0, GV_HEADER_SIZE);
@@ -82,7 +84,8 @@ void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE])
     gv_put32(out + 124, gv_crc32(0, out, 124));
 }
 
-/* Same shape as head_unpack and record_unpack in encode/shard_file.c: deliberately separate, the store header is its own layout. */
+/* Same shape as head_unpack and record_unpack in encode/shard_file.c:
+ * deliberately separate, the store header is its own layout. */
 int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
                      struct gv_error *err)
 {

@@ -70,7 +70,8 @@ static int check_header(struct gv_store *s, uint64_t file_size,
     return 0;
 }
 
-/* Same shape as open_file in encode/shard_file.c: deliberately separate, the messages differ and only a store must be a regular file. */
+/* Same shape as open_file in encode/shard_file.c: deliberately separate, the
+ * messages differ and only a store must be a regular file. */
 /* Open path as a regular file of at least a header's size; *size is its
  * length. */
 static int open_file(struct gv_store *s, const char *path, uint64_t *size,
@@ -213,7 +214,9 @@ static uint64_t id_bytes(uint64_t h, const uint8_t *p, size_t n)
     return id_word(h, (uint64_t)n);
 }
 
-/* Same shape as hash2 in encode/height_encode.c and mix32 in encode/source.c: deliberately separate, a 64-bit finaliser whose output is a store's identity. */
+/* Same shape as hash2 in encode/height_encode.c and mix32 in encode/source.c:
+ * deliberately separate, a 64-bit finaliser whose output is a store's identity.
+ */
 static uint64_t id_final(uint64_t h)
 {
     h ^= h >> 33;
@@ -258,7 +261,9 @@ struct gv_store *gv_store_open(const char *path, struct gv_error *err)
     return s;
 }
 
-/* Same shape as gv_shard_close in encode/shard_file.c and gv_raw_regions_free in imageio/raw_regions.c: deliberately separate, each frees its own struct. */
+/* Same shape as gv_shard_close in encode/shard_file.c and gv_raw_regions_free
+ * in imageio/raw_regions.c: deliberately separate, each frees its own struct.
+ */
 void gv_store_close(struct gv_store *s)
 {
     if (!s)
