@@ -6,9 +6,13 @@
 # kills uniformly over a whole encode, so that every phase (probing,
 # reading the input, building the pyramid, coding pages, writing the
 # index and root, linking the file into place) gets hit over the runs.
-# The encode's duration D is measured first (the faster of two runs,
-# which also give the reference store); the delays are drawn from [0, 0.9 D) with a seed that
-# is printed, and can be replayed with GV_FAULT_SEED=N.  After each kill:
+# The kills land at points of the work, not of the clock: each run is
+# killed once the encoder's progress line (--progress) reaches a
+# percentage drawn with a seed that is printed, and can be replayed with
+# GV_FAULT_SEED=N (see "points" below); at 100 the index, the root and
+# the link into place are still to come.  (Delays drawn from a measured
+# duration landed after the end whenever the machine's load dropped or
+# rose between runs.)  After each kill:
 #  - killed (exit 137): no file at the output path, nothing else in the
 #    output directory or the scratch directory; where a good store was
 #    already at that path (every other run), it is byte-identical;
@@ -30,32 +34,23 @@ mkdir "$dir" "$scratch" || bail "mkdir"
 img=synth:3000x3000
 args="-r 3 -q 32"
 
-now() {
-    date +%s.%N
-}
-
-# The faster of two runs: a first run on a loaded machine, with cold
-# caches, can take twice as long as the runs that follow, and then most
-# kills would come after the end.
-dur=
-for run_ in 1 2; do
-    t0=$(now)
-    "$GIGAVIEW" encode $img $args --quiet -o "$T/ref.gv" >"$T/out.txt" 2>"$T/err" ||
-        bail "reference encode failed: $(cat "$T/err")"
-    t1=$(now)
-    dur=$(echo "$t0 $t1 $dur" | awk '{ d = $2 - $1; if ($3 != "" && $3 < d) d = $3; printf "%.3f", d }')
-done
+run encode $img $args --quiet -o "$T/ref.gv"
+[ "$rc" -eq 0 ] || bail "reference encode failed: $(cat "$T/err")"
 seed=${GV_FAULT_SEED:-$(date +%s)}
-diag "reference encode of $img: ${dur}s, $(wc -c <"$T/ref.gv" | tr -d ' ') bytes; seed $seed"
+diag "reference store of $img: $(wc -c <"$T/ref.gv" | tr -d ' ') bytes; seed $seed"
 
-delays=$(awk -v d="$dur" -v s="$seed" 'BEGIN {
+# Four runs in five at a point of the pyramid or the pages (the progress
+# line moves in steps up to about 35 % on this image, then jumps to 100
+# with its last page), every fifth at 100: the index, the root and the
+# link into place.
+points=$(awk -v s="$seed" 'BEGIN {
     srand(s)
-    for (i = 0; i < 30; i++) printf "%.3f\n", rand() * d * 0.9
+    for (i = 0; i < 30; i++) printf "%d\n", i % 5 == 4 ? 100 : int(rand() * 36)
 }')
 i=0
 killed=0
 finished=0
-for delay in $delays; do
+for point in $points; do
     i=$((i + 1))
     rm -rf "$dir" "$scratch"
     mkdir "$dir" "$scratch"
@@ -68,14 +63,21 @@ for delay in $delays; do
     fi
     tmpdir="--tmpdir $scratch"
     [ $((i % 3)) -eq 0 ] && tmpdir=
-    "$GIGAVIEW" encode $img $args $tmpdir --quiet -o "$dir/out.gv" \
+    "$GIGAVIEW" encode $img $args $tmpdir --quiet --progress -o "$dir/out.gv" \
         >"$T/out.txt" 2>"$T/err" &
     pid=$!
-    sleep "$delay"
+    # Until the progress line reaches the point (or the encoder ends).
+    j=0
+    while kill -0 "$pid" 2>/dev/null && [ $j -lt 12000 ]; do
+        got=$(tr '\r' '\n' <"$T/err" | sed -n 's/.* \([0-9][0-9]*\)\.[0-9]%.*/\1/p' | tail -n 1)
+        [ -n "$got" ] && [ "$got" -ge "$point" ] && break
+        sleep 0.01
+        j=$((j + 1))
+    done
     kill -KILL "$pid" 2>/dev/null
     status=0
     wait "$pid" || status=$?
-    what="kill $i after ${delay}s${old:+ (over a store)}${tmpdir:+ (--tmpdir)}"
+    what="kill $i at ${point} %${old:+ (over a store)}${tmpdir:+ (--tmpdir)}"
     case $status in
     137)
         killed=$((killed + 1))
@@ -108,11 +110,11 @@ for delay in $delays; do
     esac
 done
 diag "$killed runs killed mid-encode, $finished finished before the kill"
-# The delays cover the encode up to 90% of its measured duration; most
-# must land inside it, or the test has not tested anything (runs much
-# faster than the reference one, e.g. on a machine whose load dropped,
-# would show it here).
-check "at least 15 of 30 kills landed mid-encode ($killed)" test "$killed" -ge 15
+# Four points in five come before the encoder's last page; if most runs
+# finished first, the test would not have tested anything.  (A point
+# between two redraws of the progress line, 0.1 s apart, lands at the
+# next: on a fast machine some land at 100 and the run may finish.)
+check "at least 10 of 30 kills landed mid-encode ($killed)" test "$killed" -ge 10
 
 rm -rf "$dir" "$scratch"
 mkdir "$dir" "$scratch"
