@@ -66,19 +66,8 @@ set -euo pipefail
 
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
-gv_arg=""
-base_arg=""
-images=()
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	--baseline) base_arg=$2; shift 2 ;;
-	--baseline=*) base_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,64p' "$0"; exit 0 ;;
-	*) images+=("$1"); shift ;;
-	esac
-done
+parse_binary_args '2,64p' "$@"
+images=(${inputs[@]+"${inputs[@]}"})
 
 need_cmd python3 python3
 QUICK=${QUICK:-0}
