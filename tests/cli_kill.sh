@@ -30,17 +30,7 @@ kill_at() {
     pct=$1 sig=$2
     shift 2
     "$GIGAVIEW" encode "$@" --progress >"$T/out" 2>"$T/err" &
-    pid=$!
-    i=0
-    while kill -0 "$pid" 2>/dev/null && [ $i -lt 12000 ]; do
-        got=$(tr '\r' '\n' <"$T/err" | sed -n 's/.* \([0-9][0-9]*\)\.[0-9]%.*/\1/p' | tail -n 1)
-        [ -n "$got" ] && [ "$got" -ge "$pct" ] && break
-        sleep 0.01
-        i=$((i + 1))
-    done
-    kill -s "$sig" "$pid" 2>/dev/null
-    status=0
-    wait "$pid" || status=$?
+    kill_at_progress $! "$T/err" "$pct" "$sig"
 }
 
 for pct in 1 4 8 12 20 35; do

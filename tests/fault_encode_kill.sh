@@ -65,18 +65,7 @@ for point in $points; do
     [ $((i % 3)) -eq 0 ] && tmpdir=
     "$GIGAVIEW" encode $img $args $tmpdir --quiet --progress -o "$dir/out.gv" \
         >"$T/out.txt" 2>"$T/err" &
-    pid=$!
-    # Until the progress line reaches the point (or the encoder ends).
-    j=0
-    while kill -0 "$pid" 2>/dev/null && [ $j -lt 12000 ]; do
-        got=$(tr '\r' '\n' <"$T/err" | sed -n 's/.* \([0-9][0-9]*\)\.[0-9]%.*/\1/p' | tail -n 1)
-        [ -n "$got" ] && [ "$got" -ge "$point" ] && break
-        sleep 0.01
-        j=$((j + 1))
-    done
-    kill -KILL "$pid" 2>/dev/null
-    status=0
-    wait "$pid" || status=$?
+    kill_at_progress $! "$T/err" "$point" KILL
     what="kill $i at ${point} %${old:+ (over a store)}${tmpdir:+ (--tmpdir)}"
     case $status in
     137)
