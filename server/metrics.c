@@ -16,6 +16,8 @@ const double metrics_bucket_le[METRICS_BUCKETS] = {
     0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05,
     0.1, 0.25, 0.5, 1, 2.5, 5, 10};
 
+_Static_assert(METRICS_BUCKETS <= METRICS_HIST_MAX, "bounds fit a histogram");
+
 /* This thread's slot in the per-thread counters; -1 until its first
  * connection. */
 static _Thread_local int thread_slot = -1;
@@ -41,15 +43,52 @@ void metrics_record(int route, unsigned status, uint64_t usec, uint64_t bytes)
     if (status >= METRICS_STATUS_MIN && status <= METRICS_STATUS_MAX)
         s = (int)(status - METRICS_STATUS_MIN);
     atomic_fetch_add(&r->by_status[s], 1);
-    double sec = (double)usec / 1e6;
-    for (int i = 0; i < METRICS_BUCKETS; i++)
-        if (sec <= metrics_bucket_le[i]) {
-            atomic_fetch_add(&r->bucket[i], 1);
+    metrics_hist_add(&r->duration, metrics_bucket_le, METRICS_BUCKETS,
+                     (double)usec / 1e6);
+    atomic_fetch_add(&metrics.bytes_sent, bytes);
+}
+
+void metrics_hist_add(struct metrics_hist *h, const double *le, int n,
+                      double sec)
+{
+    for (int i = 0; i < n; i++)
+        if (sec <= le[i]) {
+            atomic_fetch_add(&h->bucket[i], 1);
             break;
         }
-    atomic_fetch_add(&r->count, 1);
-    atomic_fetch_add(&r->usec_sum, usec);
-    atomic_fetch_add(&metrics.bytes_sent, bytes);
+    atomic_fetch_add(&h->count, 1);
+    atomic_fetch_add(&h->nsec_sum, (uint_fast64_t)(sec > 0 ? sec * 1e9 + 0.5 : 0));
+}
+
+void metrics_hist_write(struct prom *p, const char *name, const char *label,
+                        const char *value, const double *le, int n,
+                        const struct metrics_hist *h)
+{
+    /* "{label="value",", or "{" alone; closed after le or left out. */
+    char lab[200];
+    if (label)
+        snprintf(lab, sizeof lab, "%s=\"%s\"", label, value);
+    else
+        lab[0] = '\0';
+    const char *sep = label ? "," : "";
+    uint64_t cum = 0;
+    for (int b = 0; b < n; b++) {
+        cum += atomic_load(&h->bucket[b]);
+        prom_printf(p, "%s_bucket{%s%sle=\"%g\"} %llu\n", name, lab, sep,
+                    le[b], (unsigned long long)cum);
+    }
+    uint64_t count = atomic_load(&h->count);
+    prom_printf(p, "%s_bucket{%s%sle=\"+Inf\"} %llu\n", name, lab, sep,
+                (unsigned long long)count);
+    double sum = (double)atomic_load(&h->nsec_sum) / 1e9;
+    if (label) {
+        prom_printf(p, "%s_sum{%s} %.6f\n", name, lab, sum);
+        prom_printf(p, "%s_count{%s} %llu\n", name, lab,
+                    (unsigned long long)count);
+    } else {
+        prom_printf(p, "%s_sum %.6f\n%s_count %llu\n", name, sum, name,
+                    (unsigned long long)count);
+    }
 }
 
 void metrics_connection(int opened)
@@ -154,20 +193,9 @@ static void write_requests(struct prom *p, const struct metrics_route *m)
 
 static void write_durations(struct prom *p, const struct metrics_route *m)
 {
-    const char *name = "gigaview_http_request_duration_seconds";
-    uint64_t cum = 0;
-    for (int b = 0; b < METRICS_BUCKETS; b++) {
-        cum += atomic_load(&m->bucket[b]);
-        prom_printf(p, "%s_bucket{route=\"%s\",le=\"%g\"} %llu\n", name, m->name,
-                    metrics_bucket_le[b], (unsigned long long)cum);
-    }
-    uint64_t count = atomic_load(&m->count);
-    prom_printf(p, "%s_bucket{route=\"%s\",le=\"+Inf\"} %llu\n", name, m->name,
-                (unsigned long long)count);
-    prom_printf(p, "%s_sum{route=\"%s\"} %.6f\n", name, m->name,
-                (double)atomic_load(&m->usec_sum) / 1e6);
-    prom_printf(p, "%s_count{route=\"%s\"} %llu\n", name, m->name,
-                (unsigned long long)count);
+    metrics_hist_write(p, "gigaview_http_request_duration_seconds", "route",
+                       m->name, metrics_bucket_le, METRICS_BUCKETS,
+                       &m->duration);
 }
 
 /* Connections by thread: how evenly the thread pool shares them. */

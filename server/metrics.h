@@ -32,12 +32,22 @@ extern const double metrics_bucket_le[METRICS_BUCKETS];
  * thread pool); connections of further threads count under the last. */
 #define METRICS_THREADS 256
 
+/* A histogram of seconds, lock-free: non-cumulative counts over the
+ * caller's bounds (at most METRICS_HIST_MAX; a value past the last
+ * counts only in +Inf), the count and the sum in nanoseconds.  The one
+ * histogram of /metrics: requests by route, render stages, the render
+ * queue's wait. */
+#define METRICS_HIST_MAX 20
+struct metrics_hist {
+    atomic_uint_fast64_t bucket[METRICS_HIST_MAX];
+    atomic_uint_fast64_t count;
+    atomic_uint_fast64_t nsec_sum;
+};
+
 struct metrics_route {
     const char *name;
     atomic_uint_fast64_t by_status[METRICS_STATUSES + 1];
-    atomic_uint_fast64_t bucket[METRICS_BUCKETS]; /* non-cumulative */
-    atomic_uint_fast64_t count;
-    atomic_uint_fast64_t usec_sum;
+    struct metrics_hist duration;
 };
 
 struct metrics {
@@ -95,6 +105,17 @@ void prom_printf(struct prom *p, const char *fmt, ...)
 void prom_metric(struct prom *p, const char *name, const char *type,
                  const char *help, const char *fmt, ...)
     __attribute__((format(printf, 5, 6)));
+
+/* Count `sec` seconds in h, whose n bounds are le. */
+void metrics_hist_add(struct metrics_hist *h, const double *le, int n,
+                      double sec);
+
+/* h (bounds le, n of them) as the samples of histogram family `name`
+ * (its prom_family written by the caller), each with the label
+ * label="value" (label NULL: no label). */
+void metrics_hist_write(struct prom *p, const char *name, const char *label,
+                        const char *value, const double *le, int n,
+                        const struct metrics_hist *h);
 
 /* The request counters by route and status and the latency histograms by
  * route, each route name once (routes that share a name share counters),

@@ -20,9 +20,8 @@ struct render_pool {
     int stopping;
     int nthreads;
     pthread_t *threads;
-    uint64_t jobs, rejected;
-    uint64_t wait_bucket[METRICS_BUCKETS]; /* non-cumulative */
-    double wait_sum;
+    uint64_t rejected;
+    struct metrics_hist wait;  /* seconds each job waited in the queue */
 };
 
 static double since(const struct timespec *t0)
@@ -30,18 +29,6 @@ static double since(const struct timespec *t0)
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)(t.tv_sec - t0->tv_sec) + (double)(t.tv_nsec - t0->tv_nsec) / 1e9;
-}
-
-/* Account a job that waited `sec` seconds.  Caller holds the lock. */
-static void record_wait(struct render_pool *p, double sec)
-{
-    p->jobs++;
-    p->wait_sum += sec;
-    for (int i = 0; i < METRICS_BUCKETS; i++)
-        if (sec <= metrics_bucket_le[i]) {
-            p->wait_bucket[i]++;
-            break;
-        }
 }
 
 /* The next job, or NULL once stopping with an empty queue. */
@@ -55,7 +42,8 @@ static struct render_job *take(struct render_pool *p)
     if (j) {
         p->reserved--;
         p->running++;
-        record_wait(p, since(&j->queued));
+        metrics_hist_add(&p->wait, metrics_bucket_le, METRICS_BUCKETS,
+                         since(&j->queued));
     }
     pthread_mutex_unlock(&p->lock);
     return j;
@@ -157,11 +145,7 @@ void render_pool_metrics(struct render_pool *p, struct prom *out)
         return;
     pthread_mutex_lock(&p->lock);
     int queued = p->queue.count, running = p->running;
-    uint64_t jobs = p->jobs, rejected = p->rejected;
-    uint64_t bucket[METRICS_BUCKETS];
-    for (int i = 0; i < METRICS_BUCKETS; i++)
-        bucket[i] = p->wait_bucket[i];
-    double sum = p->wait_sum;
+    uint64_t rejected = p->rejected;
     pthread_mutex_unlock(&p->lock);
     prom_metric(out, "gigaview_render_queue_depth", "gauge",
                 "IIIF and region renders waiting for a render thread.", "%d",
@@ -174,14 +158,6 @@ void render_pool_metrics(struct render_pool *p, struct prom *out)
     const char *name = "gigaview_render_queue_wait_seconds";
     prom_family(out, name, "histogram",
                 "Time a render waited in the queue before a thread took it.");
-    uint64_t cum = 0;
-    for (int i = 0; i < METRICS_BUCKETS; i++) {
-        cum += bucket[i];
-        prom_printf(out, "%s_bucket{le=\"%g\"} %llu\n", name,
-                    metrics_bucket_le[i], (unsigned long long)cum);
-    }
-    prom_printf(out, "%s_bucket{le=\"+Inf\"} %llu\n", name,
-                (unsigned long long)jobs);
-    prom_printf(out, "%s_sum %.6f\n%s_count %llu\n", name, sum, name,
-                (unsigned long long)jobs);
+    metrics_hist_write(out, name, NULL, NULL, metrics_bucket_le,
+                       METRICS_BUCKETS, &p->wait);
 }

@@ -3,7 +3,6 @@
  * The bounds start at 0.1 ms, finer than the request histograms', since a
  * page read or a tile decode takes well under a millisecond.
  */
-#include <stdatomic.h>
 #include <time.h>
 
 #include "render_stages.h"
@@ -12,15 +11,11 @@
 static const double stage_le[STAGE_BUCKETS] = {
     0.0001, 0.00025, 0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05,
     0.1, 0.25, 0.5, 1, 2.5, 5, 10, 30};
+_Static_assert(STAGE_BUCKETS <= METRICS_HIST_MAX, "stage bounds fit a histogram");
 static const char *const stage_name[RENDER_STAGES] = {
     "queue_wait", "page_read", "decode", "decode_wait", "resample", "encode"};
 
-struct stage_hist {
-    atomic_uint_fast64_t bucket[STAGE_BUCKETS];   /* non-cumulative */
-    atomic_uint_fast64_t count;
-    atomic_uint_fast64_t nsec_sum;
-};
-static struct stage_hist hist[RENDER_STAGES];
+static struct metrics_hist hist[RENDER_STAGES];
 
 /* This thread's job: its stages so far, and whether any was added. */
 static _Thread_local double job[RENDER_STAGES];
@@ -64,16 +59,8 @@ void render_stages_end(void)
 {
     if (!job_staged)
         return;
-    for (int s = 0; s < RENDER_STAGES; s++) {
-        double sec = job[s];
-        int i = 0;
-        while (i < STAGE_BUCKETS - 1 && sec > stage_le[i])
-            i++;
-        if (sec <= stage_le[i])
-            atomic_fetch_add(&hist[s].bucket[i], 1);
-        atomic_fetch_add(&hist[s].count, 1);
-        atomic_fetch_add(&hist[s].nsec_sum, (uint_fast64_t)(sec * 1e9));
-    }
+    for (int s = 0; s < RENDER_STAGES; s++)
+        metrics_hist_add(&hist[s], stage_le, STAGE_BUCKETS, job[s]);
     job_staged = 0;
 }
 
@@ -85,19 +72,7 @@ void render_stages_write(struct prom *p)
                 "stage: queue_wait, page_read, decode (tiles and their "
                 "missing ancestors), decode_wait (the tile cache, mostly "
                 "waiting for another render's decode), resample, encode.");
-    for (int s = 0; s < RENDER_STAGES; s++) {
-        uint64_t cum = 0;
-        for (int i = 0; i < STAGE_BUCKETS; i++) {
-            cum += atomic_load(&hist[s].bucket[i]);
-            prom_printf(p, "%s_bucket{stage=\"%s\",le=\"%g\"} %llu\n", name,
-                        stage_name[s], stage_le[i], (unsigned long long)cum);
-        }
-        uint64_t n = atomic_load(&hist[s].count);
-        prom_printf(p, "%s_bucket{stage=\"%s\",le=\"+Inf\"} %llu\n", name,
-                    stage_name[s], (unsigned long long)n);
-        prom_printf(p, "%s_sum{stage=\"%s\"} %.6f\n", name, stage_name[s],
-                    (double)atomic_load(&hist[s].nsec_sum) / 1e9);
-        prom_printf(p, "%s_count{stage=\"%s\"} %llu\n", name, stage_name[s],
-                    (unsigned long long)n);
-    }
+    for (int s = 0; s < RENDER_STAGES; s++)
+        metrics_hist_write(p, name, "stage", stage_name[s], stage_le,
+                           STAGE_BUCKETS, &hist[s]);
 }
