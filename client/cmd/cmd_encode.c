@@ -145,7 +145,8 @@ static const struct opt_spec encode_opts[] = {
      .wants = "a number of dB in (0, 99]",
      .help = "quality: the PSNR of the whole image (level 0)\n"
              "to aim for, in dB (default " OPT_STR(GV_DEFAULT_PSNR) "); lands within\n"
-             "2.5 dB on photographs (docs/FORMAT.md 8)"},
+             "1 dB on photographs, unless the rate cap or the\n"
+             "prediction alone binds (docs/FORMAT.md 8)"},
     {.name = "min-tile-psnr", .kind = OPT_DOUBLE, .arg = "DB",
      .field = F(min_tile_psnr), .min = 0, .max = 99, .flags = OPT_MIN_OPEN,
      .wants = "a number of dB in (0, 99]",

@@ -37,6 +37,10 @@ void print_store_summary(const char *output, const struct gv_encode_result *r,
     else
         printf("psnr       %.2f dB at level 0 (target %.1f dB, %+.2f)\n", r->psnr0,
                target, r->psnr0 - target);
+    if (r->lambda_tries)   /* not for a merge */
+        printf("lambda     %.4g, after %d trial encode%s of a sample of tiles "
+               "(the rate model's gave %.2f dB)\n", r->lambda, r->lambda_tries,
+               r->lambda_tries == 1 ? "" : "s", r->model_psnr);
     if (r->scratch_bytes || r->level0_from_input)   /* not for a merge */
         printf("scratch    %.1f MB%s\n", (double)r->scratch_bytes / 1e6,
                r->level0_from_input ? ", level 0 read again from the input"

@@ -23,6 +23,7 @@
 #include "codec/tile.h"
 #include "encode/lambda_model.h"
 #include "encode/x86/lambda_split_ssse3.h"
+#include "store/geometry.h"
 
 /* lambda = K * 2 ln 2 * theta, and the parent's share: chosen together
  * on eight photographs at -q 32 to 44 and on the 58 MP relief of the
@@ -73,6 +74,30 @@ void gv_lambda_model_free(struct gv_lambda_model *m)
     }
     free(m->detail);
     m->detail = NULL;
+}
+
+void gv_lambda_model_free_tiles(struct gv_lambda_model *m)
+{
+    gv_lambda_model_free(m);
+    free(m->t_count);
+    free(m->t_sum);
+    m->t_count = NULL;
+    m->t_sum = NULL;
+}
+
+int gv_lambda_model_set_tiles(struct gv_lambda_model *m, uint32_t tiles_x,
+                              uint32_t tiles_y)
+{
+    const size_t n = (size_t)tiles_x * tiles_y * GV_LM_TBINS;
+    free(m->t_count);
+    free(m->t_sum);
+    m->t_count = calloc(n ? n : 1, sizeof *m->t_count);
+    m->t_sum = calloc(n ? n : 1, sizeof *m->t_sum);
+    if (!m->t_count || !m->t_sum)
+        return -1;
+    m->tiles_x = tiles_x;
+    m->tiles_y = tiles_y;
+    return 0;
 }
 
 /* 8 bins per octave of v + 1: the octave, then the next 3 bits. */
@@ -184,12 +209,26 @@ static void add_block_row(struct gv_lambda_model *m)
     uint32_t *det = m->detail;
     block_detail(bw * (uint32_t)c, c, m->mean[0], m->mean[1], m->mean[2],
                  m->even[0], m->odd[0], m->even[1], m->odd[1], det);
+    /* Each block also goes into its tile's coarse bins, where there are
+     * tiles: 256 blocks a tile, either way. */
+    const uint32_t ty = m->block_rows++ / (GV_STEP / 2);
+    uint32_t *tcount = NULL;
+    uint64_t *tsum = NULL;
+    if (m->t_count && ty < m->tiles_y) {
+        tcount = m->t_count + (size_t)ty * m->tiles_x * GV_LM_TBINS;
+        tsum = m->t_sum + (size_t)ty * m->tiles_x * GV_LM_TBINS;
+    }
     for (uint32_t bx = 0; bx < bw; bx++) {
         const uint32_t v = c == 3 ? det[3 * bx] + det[3 * bx + 1] + det[3 * bx + 2]
                                   : det[bx];
         int k = bin_of(v);
         m->count[k]++;
         m->sum[k] += v;
+        if (tcount) {
+            const size_t at = (size_t)(bx / (GV_STEP / 2)) * GV_LM_TBINS + (size_t)(k >> 2);
+            tcount[at]++;
+            tsum[at] += v;
+        }
     }
     m->blocks += bw;
 }
@@ -270,18 +309,90 @@ double gv_lambda_model_theta(const struct gv_lambda_model *lv, int n,
     return 0.5 * (lo + hi);
 }
 
+/* One tile's modelled error per sample and its blocks (*blocks). */
+static double tile_mse(const struct gv_lambda_model *m, size_t tile,
+                       double theta, double shift, uint64_t *blocks)
+{
+    const uint32_t *count = m->t_count + tile * GV_LM_TBINS;
+    const uint64_t *sum = m->t_sum + tile * GV_LM_TBINS;
+    const double scale = V_PER_SAMPLE * m->channels;
+    double d = 0;
+    uint64_t nb = 0;
+    for (int k = 0; k < GV_LM_TBINS; k++) {
+        if (!count[k])
+            continue;
+        double mean = (double)sum[k] / (double)count[k] / scale + shift;
+        d += (mean < theta ? mean : theta) * (double)count[k];
+        nb += count[k];
+    }
+    *blocks = nb;
+    return nb ? d / (double)nb : shift;
+}
+
+double gv_lambda_model_tiles_mse(const struct gv_lambda_model *lv, int n,
+                                 double theta, const uint8_t *mask0)
+{
+    if (n <= 0)
+        return 0;
+    for (int k = 0; k < n; k++)
+        if (!lv[k].t_count)
+            return 0;
+    /* err[k & 1]: each tile's error at level k, from level n-1 down. */
+    double *err[2] = {NULL, NULL};
+    size_t cap = 0;
+    for (int k = 0; k < n; k++) {
+        size_t t = (size_t)lv[k].tiles_x * lv[k].tiles_y;
+        cap = t > cap ? t : cap;
+    }
+    err[0] = malloc((cap ? cap : 1) * sizeof *err[0]);
+    err[1] = malloc((cap ? cap : 1) * sizeof *err[1]);
+    double total = 0, blocks = 0;
+    if (!err[0] || !err[1]) {
+        free(err[0]);
+        free(err[1]);
+        return -1;
+    }
+    for (int k = n - 1; k >= 0; k--) {
+        const struct gv_lambda_model *m = &lv[k];
+        const struct gv_lambda_model *up = k + 1 < n ? &lv[k + 1] : NULL;
+        double *e = err[k & 1];
+        const double *pe = err[(k + 1) & 1];
+        for (uint32_t ty = 0; ty < m->tiles_y; ty++)
+            for (uint32_t tx = 0; tx < m->tiles_x; tx++) {
+                const size_t t = (size_t)ty * m->tiles_x + tx;
+                double parent = 0;
+                if (up && tx / 2 < up->tiles_x && ty / 2 < up->tiles_y)
+                    parent = pe[(size_t)(ty / 2) * up->tiles_x + tx / 2];
+                uint64_t nb;
+                e[t] = tile_mse(m, t, theta, LM_ALPHA * parent, &nb);
+                if (k == 0 && (!mask0 || mask0[t])) {
+                    total += e[t] * (double)nb;
+                    blocks += (double)nb;
+                }
+            }
+    }
+    free(err[0]);
+    free(err[1]);
+    return blocks > 0 ? total / blocks : 0;
+}
+
+double gv_lambda_model_k(double target_mse, int dct)
+{
+    if (!dct)
+        return LM_K;
+    /* Above 40 dB layout D's tiles fell short of the target by more
+     * the higher it was (halved photographs: -1.2 dB at 44, -1.6 at
+     * 46 with K = 4.5): K halves every 4 dB from there. */
+    const double q = 10.0 * log10(65025.0 / target_mse);
+    return q > 40.0 ? LM_K_DCT * pow(2.0, -(q - 40.0) / 4.0) : LM_K_DCT;
+}
+
 double gv_lambda_model_lambda(const struct gv_lambda_model *lv, int n,
                               double target_mse, int dct)
 {
-    double k = LM_K;
-    if (dct) {
-        /* Above 40 dB layout D's tiles fell short of the target by more
-         * the higher it was (halved photographs: -1.2 dB at 44, -1.6 at
-         * 46 with K = 4.5): K halves every 4 dB from there. */
-        const double q = 10.0 * log10(65025.0 / target_mse);
-        k = q > 40.0 ? LM_K_DCT * pow(2.0, -(q - 40.0) / 4.0) : LM_K_DCT;
-    }
+    const double k = gv_lambda_model_k(target_mse, dct);
     double lambda = k * 2.0 * log(2.0) * gv_lambda_model_theta(lv, n, target_mse);
     double floor = gv_rd_lambda(target_mse) / LM_FLOOR;
     return lambda > floor ? lambda : floor;
 }
+

@@ -29,6 +29,7 @@
 #include <stdint.h>
 
 #define GV_LM_BINS 256   /* 8 per octave of the block's detail */
+#define GV_LM_TBINS 64   /* per tile: 2 per octave */
 
 struct gv_lambda_model {
     int channels;
@@ -43,6 +44,13 @@ struct gv_lambda_model {
     uint64_t blocks;
     uint64_t count[GV_LM_BINS];   /* blocks per bin of detail */
     uint64_t sum[GV_LM_BINS];     /* ... and their detail, summed */
+    /* Each tile's blocks again, in coarser bins (2 per octave), where
+     * gv_lambda_model_set_tiles asked for them: the lambda trial's
+     * model of where the error is (lambda_trial.h). */
+    uint32_t tiles_x, tiles_y;
+    uint32_t block_rows;          /* block rows added so far */
+    uint32_t *t_count;            /* [tile][GV_LM_TBINS] */
+    uint64_t *t_sum;
 };
 
 /* Start an empty model for a level 0 of `width` pixels of `channels`
@@ -59,14 +67,36 @@ void gv_lambda_model_rows(struct gv_lambda_model *m, const uint8_t *r0,
 /* Add the last block row (the level-1 row below it repeats the last). */
 void gv_lambda_model_finish(struct gv_lambda_model *m);
 
-/* Release the row buffers (the histogram stays usable). */
+/* Keep a histogram per tile too, for a level of tiles_x x tiles_y tiles
+ * (a block belongs to the tile its top left pixel is the source of).
+ * Before the first row.  Returns 0, or -1 out of memory. */
+int gv_lambda_model_set_tiles(struct gv_lambda_model *m, uint32_t tiles_x,
+                              uint32_t tiles_y);
+
+/* Release the row buffers (the histograms stay usable). */
 void gv_lambda_model_free(struct gv_lambda_model *m);
+
+/* Release the per-tile histograms too. */
+void gv_lambda_model_free_tiles(struct gv_lambda_model *m);
 
 /* The water level theta (squared error per sample, at most 255^2) at
  * which level 0's modelled error is target_mse, given the models of
  * levels 0 .. n-1 (the levels below the root); 0 if level 0's is empty. */
 double gv_lambda_model_theta(const struct gv_lambda_model *lv, int n,
                              double target_mse);
+
+/* Level 0's modelled error per sample at water level theta, tile by
+ * tile: each tile's blocks carry LM_ALPHA of their parent tile's error
+ * (not the level's, as in gv_lambda_model_theta), from the level below
+ * the root down.  Over the tiles marked in mask0 (level 0's tiles, row
+ * by row), or all of them with mask0 NULL; 0 without per-tile
+ * histograms (gv_lambda_model_set_tiles on every level) or marked
+ * blocks, -1 out of memory. */
+double gv_lambda_model_tiles_mse(const struct gv_lambda_model *lv, int n,
+                                 double theta, const uint8_t *mask0);
+
+/* K of gv_lambda_model_lambda for target_mse: lambda = K * 2 ln 2 * theta. */
+double gv_lambda_model_k(double target_mse, int dct);
 
 /* The price of a bit for a level-0 MSE of target_mse: K * 2 ln 2 * theta
  * (at least gv_rd_lambda(target_mse) / 64, so that a flat image still has

@@ -55,9 +55,11 @@
 #include "codec/tile.h"
 #include "encode/encode_int.h"
 #include "encode/lambda_model.h"
+#include "encode/lambda_trial.h"
 #include "encode/shard_file.h"
 #include "encode/shard_plan.h"
 #include "encode/stream_encoder.h"
+#include "encode/tile_seed.h"
 #include "imageio/raw_regions.h"
 #include "render/store_decoder.h"
 #include "store/store_format.h"
@@ -80,6 +82,9 @@ struct encoder {
     double target_mse;        /* gv_psnr_to_mse(opts->target_psnr) */
     double lambda;            /* equal-slope mode: the price of a bit */
     struct gv_lambda_model model[GV_MAX_LEVELS]; /* levels' detail, pass 1 */
+    struct gv_lambda_trial trial; /* the tiles that correct lambda before
+                                   * pass 2 (equal-slope mode) */
+    struct gv_lambda_trial_result trial_res; /* ... and their chosen coding */
     struct gv_geometry g;
     int c;
     struct gv_spill *spill;   /* levels 1 .. root, decoded tiles */
@@ -224,8 +229,17 @@ static int store_columns(struct encoder *e, int k, uint32_t y,
     return 0;
 }
 
+/* A shard keeps the original of tile (tx, ty) of level k: its own, and
+ * the lambda trial's sample, which every shard encodes alike. */
+static int shard_keeps(const struct encoder *e, int k, uint32_t tx, uint32_t ty)
+{
+    return gv_shard_plan_wants(&e->plan, &e->g, k, tx, ty) ||
+           gv_lambda_trial_wants(&e->trial, k, tx, ty);
+}
+
 /* Store row `rows_out[k]` of level k in the scratch file: all of it, or
- * for a shard the runs of columns that its tiles of level k cover. */
+ * for a shard the runs of columns that its tiles of level k (and the
+ * trial's) cover. */
 static int store_row(struct encoder *e, int k, const uint8_t *row)
 {
     const struct gv_level *l = &e->g.level[k];
@@ -239,8 +253,7 @@ static int store_row(struct encoder *e, int k, const uint8_t *row)
     int in_run = 0;
     for (uint32_t tx = 0; tx <= l->tiles_x; tx++) {
         int want = tx < l->tiles_x &&
-                   (gv_shard_plan_wants(&e->plan, &e->g, k, tx, ta) ||
-                    (above && gv_shard_plan_wants(&e->plan, &e->g, k, tx, ta - 1)));
+                   (shard_keeps(e, k, tx, ta) || (above && shard_keeps(e, k, tx, ta - 1)));
         if (want && !in_run) {
             run = tx;
             in_run = 1;
@@ -554,10 +567,20 @@ out:
 
 /* ------------------------------------------------------------ pass 2 */
 
-static uint64_t tile_seed(int level, uint32_t tx, uint32_t ty)
+
+/* Repeat the last of the w x h pixels read into orig (513x513xC) to the
+ * tile's right and bottom edges. */
+static void pad_tile(uint8_t *orig, uint32_t w, uint32_t h, int c)
 {
-    return ((uint64_t)(unsigned)level << 56) ^ ((uint64_t)tx << 28) ^ ty ^
-           0x6a09e667f3bcc909ull;
+    const size_t row = (size_t)GV_TILE * c;
+    for (uint32_t v = 0; v < GV_TILE; v++) {
+        uint8_t *dst = orig + v * row;
+        if (v >= h)
+            memcpy(dst, orig + (h - 1) * row, row);
+        else
+            for (uint32_t u = w; u < GV_TILE; u++)
+                memcpy(dst + u * c, dst + (size_t)(w - 1) * c, (size_t)c);
+    }
 }
 
 /* Read the original of level-0 tile (i, j) of the current page from the
@@ -575,14 +598,7 @@ static int read_tile0(const struct encoder *e, int i, int j, uint8_t *orig,
     if (gv_raw_regions_read(e->level0_file, e->px * PAGE_W + x0,
                             e->py * PAGE_W + y0, w, h, orig, row, err) < 0)
         return -1;
-    for (uint32_t v = 0; v < GV_TILE; v++) {
-        uint8_t *dst = orig + v * row;
-        if (v >= h)
-            memcpy(dst, orig + (h - 1) * row, row);
-        else
-            for (uint32_t u = w; u < GV_TILE; u++)
-                memcpy(dst + u * c, dst + (size_t)(w - 1) * c, (size_t)c);
-    }
+    pad_tile(orig, w, h, c);
     return 0;
 }
 
@@ -609,6 +625,85 @@ static int cut_tile(const struct encoder *e, int i, int j, uint8_t *orig,
         for (uint32_t u = avail; u < GV_TILE; u++)
             memcpy(dst + u * c, src + (size_t)(e->win_w - 1) * c, (size_t)c);
     }
+    return 0;
+}
+
+/* The lambda trial's read_orig (lambda_trial.h): the original of tile
+ * (tx, ty) of level k, from where pass 2 will read it: level 0 kept
+ * whole, the input file, or the scratch file's strip (which holds the
+ * trial's tiles in a shard too, shard_keeps).  Between the passes only. */
+static int read_orig_tile(void *ctx, int k, uint32_t tx, uint32_t ty,
+                          uint8_t *orig, struct gv_error *err)
+{
+    const struct encoder *e = ctx;
+    const struct gv_level *l = &e->g.level[k];
+    const int c = e->c;
+    const size_t row = (size_t)GV_TILE * c;
+    const uint32_t x0 = tx * GV_STEP, y0 = ty * GV_STEP;
+    const uint32_t w = l->width - x0 < GV_TILE ? l->width - x0 : GV_TILE;
+    const uint32_t h = l->height - y0 < GV_TILE ? l->height - y0 : GV_TILE;
+    if (k == 0 && e->level0_file) {
+        if (gv_raw_regions_read(e->level0_file, x0, y0, w, h, orig, row, err) < 0)
+            return -1;
+    } else if (k == 0 && e->level0_resident) {
+        const size_t rb = (size_t)l->width * c;
+        for (uint32_t v = 0; v < h; v++)
+            memcpy(orig + v * row, e->window + (size_t)(y0 + v) * rb + (size_t)x0 * c,
+                   (size_t)w * c);
+    } else {
+        /* A tile lies within the strip of its column of pages. */
+        const uint32_t p = x0 / PAGE_W;
+        for (uint32_t v = 0; v < h; v++)
+            if (gv_spill_read(level_spill(e, k), orig + v * row, (size_t)w * c,
+                              strip_at(e, k, p, y0 + v) +
+                                  (uint64_t)(x0 - p * PAGE_W) * c, err) < 0)
+                return -1;
+    }
+    pad_tile(orig, w, h, c);
+    return 0;
+}
+
+static int env_off(const char *name);
+
+/* Correct the model's lambda by trial encodes of the sample
+ * (lambda_trial.h), with pass 2's workers and buffers, which are free
+ * until it starts. */
+static int trial_lambda(struct encoder *e)
+{
+    _Static_assert(GV_TRIAL_RECON <= GV_PAGE_SLOTS, "the trial borrows recon");
+    _Static_assert(GV_TRIAL_MAX <= GV_PAGE_SLOTS, "the trial borrows bufs");
+    const struct gv_lambda_trial_env env = {
+        .g = &e->g,
+        .c = e->c,
+        .root_tile = e->root_tile,
+        .params = {
+            .target_mse = e->target_mse,
+            .max_rate = e->opts->max_rate,
+            .dct = e->opts->dct,
+        },
+        .pool = e->pool,
+        .ws = e->ws,
+        .origs = e->origs,
+        .wrecon = e->wrecon,
+        .recon = e->recon,
+        .bufs = e->bufs,
+        .read_orig = read_orig_tile,
+        .ctx = e,
+        .model = e->model,
+        .model_levels = e->g.root,
+        .dct = e->opts->dct != GV_LAYOUTS_VQ,
+    };
+    struct gv_lambda_trial_result *r = &e->trial_res;
+    if (gv_lambda_trial_search(&e->trial, &env, e->opts->target_psnr, e->lambda,
+                               r, e->err) < 0)
+        return -1;
+    e->lambda = r->lambda;
+    e->res->lambda_tries = r->tries;
+    e->res->model_psnr = r->first_psnr;
+    /* GIGAVIEW_TRIAL_REUSE=0 (tests): pass 2 codes the sample again,
+     * which must give the same bytes. */
+    if (env_off("GIGAVIEW_TRIAL_REUSE"))
+        gv_lambda_trial_result_free(r);
     return 0;
 }
 
@@ -646,7 +741,28 @@ static void encode_tile(void *ctx, size_t slot, int worker)
      * does: fewer fresh pages to fault in than one per slot. */
     uint8_t *recon = e->level == 0 ? e->wrecon + (size_t)worker * gv_tile_bytes(c)
                                    : e->recon[slot];
+    const uint8_t *parent = e->parent_at[(j / 2) * 4 + i / 2];
     struct gv_error err = {0};
+    const struct gv_trial_coded *tc =
+        gv_lambda_trial_coded(&e->trial, &e->trial_res, e->level, tx, ty);
+    if (tc) {
+        /* Coded by the lambda trial at this lambda, from the same parent:
+         * the same bytes; decoded where it is a parent. */
+        memcpy(e->bufs[slot], tc->buf, tc->len);
+        e->stats[slot] = tc->stats;
+        e->canon_sse[slot] = tc->canon_sse;
+        if (e->level > 0 &&
+            gv_tile_decode(tc->buf, tc->len, c, parent, (int)(tx & 1), (int)(ty & 1),
+                           recon, &err) < 0) {
+            if (!atomic_exchange(&e->job_failed, 1))
+                e->job_err = err;
+            return;
+        }
+        e->lens[slot] = tc->len;
+        if (e->tile_rate[e->level])
+            e->tile_rate[e->level][(size_t)ty * l->tiles_x + tx] = (uint8_t)tc->stats.rate;
+        return;
+    }
     if (cut_tile(e, i, j, orig, &err) < 0) {
         /* The first failure is kept; encode_page reports it. */
         if (!atomic_exchange(&e->job_failed, 1))
@@ -657,11 +773,10 @@ static void encode_tile(void *ctx, size_t slot, int worker)
                              l->width - tx * GV_STEP : GV_TILE;
     const uint32_t valid_h = l->height - ty * GV_STEP < GV_TILE ?
                              l->height - ty * GV_STEP : GV_TILE;
-    const uint8_t *parent = e->parent_at[(j / 2) * 4 + i / 2];
     struct gv_tile_params params = {
         .target_mse = e->target_mse,
         .max_rate = e->opts->max_rate,
-        .seed = tile_seed(e->level, tx, ty),
+        .seed = gv_encode_tile_seed(e->level, tx, ty),
         .lambda = e->opts->per_tile ? 0.0 : e->lambda,
         .dct = e->opts->dct,
     };
@@ -1048,6 +1163,7 @@ static void teardown(struct encoder *e)
 {
     root_packer_join(&e->packer);
     free(e->packer.z);
+    gv_lambda_trial_result_free(&e->trial_res);
     gv_pool_free(e->pool);
     gv_shard_plan_free(&e->plan);
     for (int i = 0; i < e->nws; i++)
@@ -1073,7 +1189,7 @@ static void teardown(struct encoder *e)
     free(e->root);
     free(e->root_tile);
     for (int k = 0; k < GV_MAX_LEVELS; k++)
-        gv_lambda_model_free(&e->model[k]);
+        gv_lambda_model_free_tiles(&e->model[k]);
     gv_spill_free(e->spill);
     gv_spill_free(e->spill0);
     gv_raw_regions_free(e->level0_file);
@@ -1109,6 +1225,19 @@ static void make_header(const struct encoder *e, struct gv_header *h)
 
 /* The geometry of the opened source, and the output: a shard file (with
  * the shard's plan) or a store. */
+/* The lambda trial's sample (whose originals a shard keeps too), and the
+ * rate model's histograms per tile, which it estimates the whole level
+ * by. */
+static int plan_trial(struct encoder *e)
+{
+    gv_lambda_trial_plan(&e->g, &e->trial);
+    for (int k = 0; k < e->g.root; k++)
+        if (gv_lambda_model_set_tiles(&e->model[k], e->g.level[k].tiles_x,
+                                      e->g.level[k].tiles_y) < 0)
+            return gv_fail(e->err, GV_ENOMEM, "encode: out of memory for the rate model");
+    return 0;
+}
+
 static int open_output(struct encoder *e, const char *output)
 {
     const struct gv_encode_opts *opts = e->opts;
@@ -1123,6 +1252,8 @@ static int open_output(struct encoder *e, const char *output)
     for (int k = 0; k < e->g.root && !opts->per_tile; k++)
         if (gv_lambda_model_init(&e->model[k], e->g.level[k].width, e->c) < 0)
             return gv_fail(e->err, GV_ENOMEM, "encode: out of memory for the rate model");
+    if (!opts->per_tile && plan_trial(e) < 0)
+        return -1;
     if (opts->shard_count <= 0) {
         e->writer = gv_store_writer_new(output, &h, e->err);
         return e->writer ? 0 : -1;
@@ -1240,10 +1371,13 @@ int gv_encode(const char *const *inputs, int n, const char *output,
         gv_lambda_model_finish(&e.model[k]);
     e.lambda = gv_lambda_model_lambda(e.model, e.g.root, e.target_mse,
                                       opts->dct != GV_LAYOUTS_VQ);
+    if (!opts->per_tile && trial_lambda(&e) < 0)
+        goto out;
     res->per_tile = opts->per_tile;
     res->lambda = opts->per_tile ? 0.0 : e.lambda;
     if (pass2(&e, &sse0, &samples0) < 0)
         goto out;
+    gv_lambda_trial_result_free(&e.trial_res);
     /* Level 0 was read twice from the input: it must not have changed. */
     if (e.level0_file && gv_raw_regions_unchanged(e.level0_file, err) < 0)
         goto out;

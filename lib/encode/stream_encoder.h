@@ -77,6 +77,11 @@ struct gv_encode_result {
     int per_tile;             /* the mode it was encoded in (opts) */
     double lambda;            /* equal-slope mode: the price of a bit in
                                * squared error (0 in per_tile mode) */
+    int lambda_tries;         /* equal-slope mode: encodes of the lambda
+                               * trial's sample (lambda_trial.h) */
+    double model_psnr;        /* ... and its level-0 PSNR at the rate
+                               * model's lambda, before the trial's
+                               * correction (dB) */
     double seconds;
     uint64_t scratch_bytes;   /* disk the scratch files took at the end of
                                * pass 2 (their most) */
