@@ -29,8 +29,19 @@
  * the quantized-mesh name them.  The vertical error bound of level z is
  * terrain_error_scale x 77067 m / 2^z: the scale times Cesium's own
  * geometric error of a level (its levelZeroMaximumGeometricError for two
- * root tiles of 65 samples); the measured error is in the tile's metadata
- * extension (JSON "maxError"), under id 0x67 (TERRAIN_METADATA_ID).
+ * root tiles of 65 samples).
+ *
+ * Extensions (layer.json lists them; docs/API.md): every tile carries the
+ * metadata extension (id 4: JSON with the measured "maxError", and on
+ * levels 0, 10, 20 the availability of the ten levels below the tile, as
+ * layer.json's metadataAvailability 10 tells CesiumJS and cesium-native
+ * to expect); the oct-encoded vertex normals (id 1) when the request asks
+ * for "octvertexnormals" (server/terrain_ext.h: the Accept header, or the
+ * query's extensions=); the water mask (id 2) when it asks for
+ * "watermask" and terrain_water_below names a water height for the store:
+ * 256 x 256 samples of the store at the mask's pixel centres, water where
+ * below (1 byte when the tile is all land or all water).  The response
+ * varies with Accept.
  *
  * Levels: 0 .. maxzoom, the first level whose grid spacing reaches the
  * store's level-0 spacing (Cesium upsamples beyond).  Tiles are gzipped
@@ -50,6 +61,7 @@
 #include "render_call.h"
 #include "routes.h"
 #include "store/geometry.h"
+#include "terrain_ext.h"
 
 #define TERRAIN_STEPS 64u     /* grid steps per tile side */
 #define TERRAIN_MAX_ZOOM 24u
@@ -57,11 +69,10 @@
  * maximumRadius * 2 pi * 0.25 / (65 * 2 root tiles), metres. */
 #define LEVEL0_ERROR (6378137.0 * 2 * M_PI * 0.25 / (65.0 * 2))
 #define TERRAIN_MIME "application/vnd.quantized-mesh"
-/* The id of the tiles' metadata extension (JSON: maxError, level, region).
- * Not 4: CesiumJS parses an extension 4 whatever the layer declares and
- * then expects metadataAvailability (tile availability in the metadata),
- * which this service does not use; readers skip unknown ids. */
-#define TERRAIN_METADATA_ID 0x67
+/* Tiles of levels 0, 10, 20 carry the availability of the ten levels
+ * below them (layer.json's metadataAvailability). */
+#define AVAILABILITY_LEVELS 10u
+#define MASK_SIDE 256u        /* the water mask's samples a side (the spec's) */
 
 /* The store's frame: level 0 is W x H; global stores wrap in x. */
 struct frame {
@@ -136,6 +147,9 @@ enum MHD_Result route_terrain_layer(struct req *r)
         return ret;
     struct gv_height_meta hm;
     struct frame f;
+    double water;
+    int has_water = settings_water_below(r->srv->cfg->terrain_water_below,
+                                         img->id, &water) > 0;
     int is = height_meta(img, &hm);
     if (is <= 0) {
         ret = is < 0 ? http_send_errorf(r, GV_ENOMEM, "terrain: out of memory")
@@ -144,9 +158,10 @@ enum MHD_Result route_terrain_layer(struct req *r)
         goto out;
     }
     frame_of(img, lon0, &f);
-    char canon[96], etag[OUTPUT_ETAG_SIZE], tiles[96];
-    snprintf(canon, sizeof canon, "terrain-layer %.17g %.17g",
-             r->srv->cfg->terrain_error_scale, lon0);
+    char canon[128], etag[OUTPUT_ETAG_SIZE], tiles[96];
+    snprintf(canon, sizeof canon, "terrain-layer %.17g %.17g w%d %.17g",
+             r->srv->cfg->terrain_error_scale, lon0, has_water,
+             has_water ? water : 0.0);
     if (http_query(r, "lon0"))
         snprintf(tiles, sizeof tiles, "{z}/{x}/{y}.terrain?v={version}"
                  "&lon0=%.17g", lon0);
@@ -166,19 +181,27 @@ enum MHD_Result route_terrain_layer(struct req *r)
     json_t *errs = json_array();
     for (uint32_t z = 0; errs && z <= f.maxzoom; z++)
         json_array_append_new(errs, json_real(level_error(r->srv->cfg, z)));
+    json_t *exts = has_water ? json_pack("[s,s,s]", "octvertexnormals",
+                                         "watermask", "metadata")
+                             : json_pack("[s,s]", "octvertexnormals",
+                                         "metadata");
     json_t *j = json_pack(
         "{s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:[s], s:s, s:[f,f,f,f], "
-        "s:o, s:i, s:i, s:[], s:{s:s, s:o, s:f, s:f, s:f, s:i, s:b, s:f}}",
+        "s:o, s:i, s:i, s:o, s:i, s:{s:s, s:o, s:f, s:f, s:f, s:i, s:b, s:f}}",
         "tilejson", "2.1.0", "name", img->id, "description",
         "gigaview height store as quantized-mesh tiles (docs/MESHES.md)",
         "version", "1.0.0", "format", "quantized-mesh-1.0", "attribution", "",
         "scheme", "tms", "tiles", tiles,
         "projection", "EPSG:4326", "bounds", -180.0, -90.0, 180.0, 90.0,
         "available", avail, "minzoom", 0, "maxzoom", (int)f.maxzoom,
-        "extensions", "gigaview", "unit", hm.unit, "maxError", errs,
+        "extensions", exts, "metadataAvailability", (int)AVAILABILITY_LEVELS,
+        "gigaview", "unit", hm.unit, "maxError", errs,
         "heightMin", hm.min, "heightMax", hm.max, "storeMaxError",
         hm.max_error, "gridSteps", (int)TERRAIN_STEPS, "global", f.global,
         "lon0", lon0);
+    if (j && has_water)
+        json_object_set_new(json_object_get(j, "gigaview"), "waterBelow",
+                            json_real(water));
     size_t len;
     struct MHD_Response *resp = http_response_json(j, JSON_COMPACT,
                                                    "application/json", &len);
@@ -194,37 +217,45 @@ out:
 struct tile_query {
     uint32_t z, x, y;        /* TMS */
     int gzip;
+    unsigned ext;            /* TERRAIN_EXT_* asked for */
+    int water;               /* a water mask: asked for, and configured */
+    double water_below;      /* its height */
     struct frame f;
     double max_error;
     uint32_t max_triangles;
     double time_limit;
 };
 
-/* Level-0 sample coordinates of grid point (gx, gy) of level z (gy from
- * the north). */
-static double grid_px(const struct frame *f, uint32_t z, uint64_t gx)
+/* Level-0 sample coordinates of point gx, gy of level z's grid of
+ * `steps` steps a tile (gy from the north). */
+static double grid_px(const struct frame *f, uint32_t z, uint32_t steps,
+                      double gx)
 {
-    return (double)gx * f->wx / ((double)TERRAIN_STEPS * (2u << z)) -
-           f->shift;
+    return gx * f->wx / ((double)steps * (2u << z)) - f->shift;
 }
 
-static double grid_py(const struct frame *f, uint32_t z, uint64_t gy)
+static double grid_py(const struct frame *f, uint32_t z, uint32_t steps,
+                      double gy)
 {
-    return (double)gy * f->hy / ((double)TERRAIN_STEPS * (1u << z));
+    return gy * f->hy / ((double)steps * (1u << z));
 }
 
-/* Fill h[(N+1)^2] with the tile's heights.  0, or -1 with *err. */
+/* Fill h[n^2] with the tile's heights at points i + off, j + off
+ * (0 <= i, j < n) of a grid of `steps` steps a tile side, row 0 north:
+ * the mesh's grid is steps = n - 1 = TERRAIN_STEPS, off = 0; the water
+ * mask's pixel centres steps = n = MASK_SIDE, off = 0.5.  0, or -1 with
+ * *err. */
 static int tile_heights(struct gv_decoder *d, const struct image *img,
                         const struct tile_query *q,
-                        const struct gv_height_meta *hm, float *h,
+                        const struct gv_height_meta *hm, uint32_t steps,
+                        uint32_t n, double off, float *h,
                         struct gv_error *err)
 {
     const struct gv_geometry *g = &img->info->geometry;
     const struct frame *f = &q->f;
-    const uint32_t n = TERRAIN_STEPS + 1;
     int last = g->root + g->root_mips - 1, s = 0;
-    double step = fmin(f->wx / ((double)TERRAIN_STEPS * (2u << q->z)),
-                       f->hy / ((double)TERRAIN_STEPS * (1u << q->z)));
+    double step = fmin(f->wx / ((double)steps * (2u << q->z)),
+                       f->hy / ((double)steps * (1u << q->z)));
     while (s < last && step >= 2.0) {
         step /= 2;
         s++;
@@ -233,8 +264,8 @@ static int tile_heights(struct gv_decoder *d, const struct image *img,
     if (gv_level_size(g, s, &ws, &hs) < 0)
         return gv_fail(err, GV_EINVAL, "terrain: no level %d", s);
     double sx = (double)ws / f->w, sy = (double)hs / f->h;
-    uint64_t gx0 = (uint64_t)q->x * TERRAIN_STEPS;
-    uint64_t gy0 = (uint64_t)((1u << q->z) - 1 - q->y) * TERRAIN_STEPS;
+    double gx0 = (double)q->x * steps;
+    double gy0 = (double)((1u << q->z) - 1 - q->y) * steps;
     /* coordinates in level s of every column and row of the grid */
     double *qx = malloc(n * sizeof *qx), *qy = malloc(n * sizeof *qy);
     uint16_t *codes = NULL;
@@ -244,8 +275,8 @@ static int tile_heights(struct gv_decoder *d, const struct image *img,
         goto out;
     }
     for (uint32_t i = 0; i < n; i++) {
-        qx[i] = (grid_px(f, q->z, gx0 + i) + 0.5) * sx - 0.5;
-        qy[i] = (grid_py(f, q->z, gy0 + i) + 0.5) * sy - 0.5;
+        qx[i] = (grid_px(f, q->z, steps, gx0 + i + off) + 0.5) * sx - 0.5;
+        qy[i] = (grid_py(f, q->z, steps, gy0 + i + off) + 0.5) * sy - 0.5;
     }
     /* the rectangle of samples to read: columns bx .. bx+bw-1 (the whole
      * width when a global grid wraps), rows by .. by+bh-1 */
@@ -302,6 +333,58 @@ out:
     return rc;
 }
 
+/* The metadata's "available" member for tile q: for each level z + 1 ..
+ * z + AVAILABILITY_LEVELS up to maxzoom, the tile's descendants (one
+ * range, TMS), into buf.  Only on levels 0, 10, 20 (else buf is ""). */
+static void availability(const struct tile_query *q, char *buf, size_t size)
+{
+    size_t n = 0;
+    buf[0] = 0;
+    if (q->z % AVAILABILITY_LEVELS)
+        return;
+    n += (size_t)snprintf(buf, size, "\"available\":[");
+    for (uint32_t k = 1; k <= AVAILABILITY_LEVELS && q->z + k <= q->f.maxzoom;
+         k++) {
+        unsigned long long x0 = (unsigned long long)q->x << k;
+        unsigned long long y0 = (unsigned long long)q->y << k;
+        unsigned long long side = 1ull << k;
+        if (n < size)
+            n += (size_t)snprintf(buf + n, size - n, "%s[{\"startX\":%llu,"
+                                  "\"startY\":%llu,\"endX\":%llu,"
+                                  "\"endY\":%llu}]", k > 1 ? "," : "", x0,
+                                  y0, x0 + side - 1, y0 + side - 1);
+    }
+    if (n < size)
+        snprintf(buf + n, size - n, "]");
+}
+
+/* The water mask of tile q into mask[MASK_SIDE^2] (255 water, 0 land,
+ * rows north to south), returning its length: MASK_SIDE^2, or 1 when the
+ * tile is all land or all water (mask[0]).  0 with *err on failure. */
+static size_t water_mask(struct gv_decoder *d, const struct image *img,
+                         const struct tile_query *q,
+                         const struct gv_height_meta *hm, uint8_t *mask,
+                         struct gv_error *err)
+{
+    const size_t n = (size_t)MASK_SIDE * MASK_SIDE;
+    float *h = malloc(n * sizeof *h);
+    size_t water = 0;
+    if (!h) {
+        gv_fail(err, GV_ENOMEM, "terrain: out of memory");
+        return 0;
+    }
+    if (tile_heights(d, img, q, hm, MASK_SIDE, MASK_SIDE, 0.5, h, err) < 0) {
+        free(h);
+        return 0;
+    }
+    for (size_t i = 0; i < n; i++) {
+        mask[i] = h[i] < q->water_below ? 255 : 0;
+        water += mask[i] != 0;
+    }
+    free(h);
+    return water == 0 || water == n ? 1 : n;
+}
+
 /* On a render thread: heights, TIN, quantized-mesh. */
 static int render_tile(void *arg, struct image *img, uint8_t **out,
                        size_t *len, struct gv_error *err)
@@ -312,8 +395,12 @@ static int render_tile(void *arg, struct image *img, uint8_t **out,
     struct gv_height_meta hm;
     struct gv_mesh t = {0};
     float *h = malloc((size_t)n * n * sizeof *h);
+    uint8_t *mask = q->water ? malloc((size_t)MASK_SIDE * MASK_SIDE) : NULL;
+    size_t mask_len = 0;
+    /* ten levels of one range each, about 90 bytes a level */
+    char avail[AVAILABILITY_LEVELS * 128 + 32];
     int rc = -1;
-    if (!d || !h) {
+    if (!d || !h || (q->water && !mask)) {
         gv_fail(err, GV_ENOMEM, "terrain: out of memory");
         goto out;
     }
@@ -321,7 +408,10 @@ static int render_tile(void *arg, struct image *img, uint8_t **out,
         gv_fail(err, GV_EINVAL, "terrain: %s is not a height store", img->id);
         goto out;
     }
-    if (tile_heights(d, img, q, &hm, h, err) < 0)
+    if (tile_heights(d, img, q, &hm, TERRAIN_STEPS, n, 0, h, err) < 0)
+        goto out;
+    if (q->water &&
+        !(mask_len = water_mask(d, img, q, &hm, mask, err)))
         goto out;
     struct gv_tin_params p = {.max_error = q->max_error,
                               .max_triangles = q->max_triangles,
@@ -334,11 +424,15 @@ static int render_tile(void *arg, struct image *img, uint8_t **out,
         .x0 = q->x * TERRAIN_STEPS, .y0 = q->y * TERRAIN_STEPS, .level = q->z,
         .has_geo = 1, .west = -180.0 + q->x * side, .east = -180.0 + (q->x + 1) * side,
         .south = -90.0 + q->y * side, .north = -90.0 + (q->y + 1) * side,
-        .gzip = q->gzip, .metadata_id = TERRAIN_METADATA_ID};
+        .gzip = q->gzip, .normals = !!(q->ext & TERRAIN_EXT_NORMALS),
+        .water_mask = mask, .water_mask_len = mask_len};
+    availability(q, avail, sizeof avail);
+    pl.metadata_more = avail[0] ? avail : NULL;
     rc = gv_mesh_encode(GV_MESH_QMESH, &t, &pl, NULL, out, len, err);
 out:
     gv_mesh_free(&t);
     free(h);
+    free(mask);
     if (d)
         image_decoder_put(img, d);
     return rc;
@@ -352,7 +446,8 @@ static void tile_headers(void *arg, struct req *r, struct image *img,
     (void)img;
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
                             "public, max-age=86400");
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Accept-Encoding");
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY,
+                            "Accept-Encoding, Accept");
     if (q->gzip)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_ENCODING, "gzip");
 }
@@ -424,6 +519,11 @@ enum MHD_Result route_terrain_tile(struct req *r)
     }
     const struct settings *cfg = r->srv->cfg;
     q.gzip = accepts_gzip(http_header(r, "Accept-Encoding"));
+    q.ext = terrain_extensions(http_header(r, "Accept"),
+                               http_query(r, "extensions"));
+    q.water = (q.ext & TERRAIN_EXT_WATERMASK) &&
+              settings_water_below(cfg->terrain_water_below, img->id,
+                                   &q.water_below) > 0;
     q.max_error = level_error(cfg, q.z);
     q.max_triangles = (uint32_t)cfg->max_mesh_triangles;
     q.time_limit = cfg->mesh_time_limit;
@@ -433,10 +533,12 @@ enum MHD_Result route_terrain_tile(struct req *r)
         return http_send_errorf(r, GV_ENOMEM, "terrain: out of memory");
     }
     *arg = q;
-    char canon[300], key[320], etag[OUTPUT_ETAG_SIZE];
-    snprintf(canon, sizeof canon, "terrain/%s/%u/%u/%u e%.17g n%u l%.17g%s",
-             img->id, q.z, q.x, q.y, q.max_error, q.max_triangles, lon0,
-             q.gzip ? " gz" : "");
+    char canon[360], key[384], etag[OUTPUT_ETAG_SIZE];
+    snprintf(canon, sizeof canon, "terrain/%s/%u/%u/%u e%.17g n%u l%.17g%s%s"
+             " w%.17g", img->id, q.z, q.x, q.y, q.max_error, q.max_triangles,
+             lon0, q.gzip ? " gz" : "",
+             q.ext & TERRAIN_EXT_NORMALS ? " nrm" : "",
+             q.water ? q.water_below : NAN);
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial,
              canon);
     output_cache_etag(img->identity, canon, etag, sizeof etag);

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "settings.h"
+#include "base/ids.h"
 #include "base/parse_uint.h"
 #include "log.h"
 
@@ -33,7 +34,7 @@
 #endif
 
 enum settings_type { T_STR, T_UINT, T_SIZE, T_DOUBLE, T_LEVEL, T_GPU,
-                     T_GPU_PLATFORM };
+                     T_GPU_PLATFORM, T_WATER };
 
 struct settings_key {
     const char *name;
@@ -76,6 +77,10 @@ static const struct settings_key keys[] = {
     /* terrain tiles (route_terrain.c) */
     {"terrain_error_scale", T_DOUBLE, F(terrain_error_scale), "0.03125", 0, 1000,
      "terrain tile error bound of level z: this times 77067 m / 2^z"},
+    {"terrain_water_below", T_WATER, F(terrain_water_below), "", 0, 0,
+     "height stores whose terrain tiles carry a water mask: ID:HEIGHT "
+     "entries (* for every store), water where the height is below HEIGHT "
+     "(\"\": none)"},
     /* mesh simplification (route_mesh_simplify.c) */
     {"simplify_max_bytes", T_SIZE, F(simplify_max_bytes), "64M", 1024, 4294967295.0,
      "largest mesh file POSTed to /v1/meshes/simplify (413 beyond)"},
@@ -216,6 +221,18 @@ static int set_key(struct settings *c, const struct settings_key *k,
                            "surfaceless or default", where, k->name, value);
         snprintf(field, k->size, "%s", value);
         return 0;
+    case T_WATER: {
+        double h;
+        if (strlen(value) >= k->size)
+            return gv_fail(err, GV_EINVAL, "%s: %s: value longer than %zu bytes",
+                           where, k->name, k->size - 1);
+        if (settings_water_below(value, "*", &h) < 0)
+            return gv_fail(err, GV_EINVAL, "%s: %s: '%s' is not a list of "
+                           "ID:HEIGHT (an image id or *, a number)", where,
+                           k->name, value);
+        memcpy(field, value, strlen(value) + 1);
+        return 0;
+    }
     case T_UINT:
     case T_SIZE: {
         uint64_t v;
@@ -245,6 +262,47 @@ static int set_key(struct settings *c, const struct settings_key *k,
     }
     }
     return gv_fail(err, GV_EINVAL, "%s: %s: bad type", where, k->name);
+}
+
+int settings_water_below(const char *spec, const char *id, double *height)
+{
+    int found = 0, exact = 0;
+    size_t idn = strlen(id);
+    for (const char *p = spec;;) {
+        while (*p == ' ' || *p == '\t' || *p == ',')
+            p++;
+        if (!*p)
+            return found;
+        const char *colon = p;
+        while (*colon && *colon != ':' && *colon != ' ' && *colon != '\t' &&
+               *colon != ',')
+            colon++;
+        size_t n = (size_t)(colon - p);
+        int star = n == 1 && *p == '*';
+        if (*colon != ':' || (!star && !gv_image_id_valid_n(p, n)))
+            return -1;
+        char num[64], *end;
+        const char *e = colon + 1;
+        while (*e && *e != ' ' && *e != '\t' && *e != ',')
+            e++;
+        size_t nn = (size_t)(e - colon - 1);
+        if (nn == 0 || nn >= sizeof num)
+            return -1;
+        memcpy(num, colon + 1, nn);
+        num[nn] = 0;
+        errno = 0;
+        double v = strtod(num, &end);
+        if (*end || errno || !isfinite(v))
+            return -1;
+        if (n == idn && !memcmp(p, id, n)) {
+            *height = v;
+            found = exact = 1;
+        } else if (star && !exact) {
+            *height = v;
+            found = 1;
+        }
+        p = e;
+    }
 }
 
 void settings_defaults(struct settings *c)
@@ -360,8 +418,10 @@ void settings_resolve(struct settings *c)
 
 void settings_print_sample(void)
 {
-    for (size_t i = 0; i < NKEYS; i++)
-        printf("# %s\n%s = %s%s%s\n\n", keys[i].help, keys[i].name,
-               keys[i].type == T_STR ? "\"" : "", keys[i].def,
-               keys[i].type == T_STR ? "\"" : "");
+    for (size_t i = 0; i < NKEYS; i++) {
+        const char *q =
+            keys[i].type == T_STR || keys[i].type == T_WATER ? "\"" : "";
+        printf("# %s\n%s = %s%s%s\n\n", keys[i].help, keys[i].name, q,
+               keys[i].def, q);
+    }
 }

@@ -35,6 +35,7 @@ struct settings {
     uint64_t max_mesh_triangles;   /* triangles per mesh */
     double mesh_time_limit;        /* seconds of meshing per request */
     double terrain_error_scale;    /* terrain tiles: times Cesium's level error */
+    char terrain_water_below[SETTINGS_PATH]; /* "ID:HEIGHT ..." water masks */
     uint64_t simplify_max_bytes;   /* mesh upload to /v1/meshes/simplify */
     uint64_t simplify_max_faces;   /* its triangles, in and asked */
     double simplify_time_limit;    /* seconds of one job in its worker */
@@ -109,6 +110,16 @@ int settings_set(struct settings *c, const char *key, const char *value,
  * set in the file is kept as it is.
  */
 void settings_resolve(struct settings *c);
+
+/*
+ * The water height of image id in spec, a terrain_water_below value:
+ * entries ID:HEIGHT separated by spaces, tabs or commas, ID an image id
+ * or * (every image not named), HEIGHT a finite number (strtod).  Returns
+ * 1 with *height, 0 when no entry applies, -1 when spec is malformed
+ * (gigaviewd refuses such a configuration, so a loaded one never is).
+ * Pure; any thread.
+ */
+int settings_water_below(const char *spec, const char *id, double *height);
 
 /* Print every key with its default and help, as a sample file. */
 void settings_print_sample(void);

@@ -6,7 +6,9 @@
 #      lists its checks): layer.json and the quantized-mesh tiles load and
 #      parse with no failed request and no console error, sampled heights
 #      are those of the store, the screenshot shows relief where the
-#      ellipsoid alone is flat, and without skirts no crack shows;
+#      ellipsoid alone is flat, without skirts no crack shows, and with
+#      requestVertexNormals the tiles come with their normals (asked in
+#      the Accept header) and CesiumJS lights the globe through them;
 #   2. the viewer's 3D terrain mode (client/web/terrain*.js;
 #      tests/browser/terrain_viewer.mjs lists its checks);
 #   3. z-field simplification in the browser (client/web/zfield*.js;

@@ -161,6 +161,11 @@ max_request_bytes = 65M|max_request_bytes: 65M is outside 1024..67108864
 max_region_pixels = 0|max_region_pixels: 0 is outside 1..1000000000000000
 max_output_side = 0|max_output_side: 0 is outside 1..2147483647
 batch_max_tiles = 0|batch_max_tiles: 0 is outside 1..65536
+terrain_water_below = "world"|terrain_water_below: 'world' is not a list of ID:HEIGHT (an image id or *, a number)
+terrain_water_below = "../x:0"|terrain_water_below: '../x:0' is not a list of ID:HEIGHT (an image id or *, a number)
+terrain_water_below = "world:1e999"|terrain_water_below: 'world:1e999' is not a list of ID:HEIGHT (an image id or *, a number)
+terrain_water_below = "world:0 :3"|terrain_water_below: 'world:0 :3' is not a list of ID:HEIGHT (an image id or *, a number)
+terrain_water_below = "world:0x"|terrain_water_below: 'world:0x' is not a list of ID:HEIGHT (an image id or *, a number)
 EOF2
 
 expect_status "the daemon is healthy after it all" 200 /healthz

@@ -31,7 +31,18 @@
 //     above MIN_STDDEV and it has more than MIN_COLOURS colours, while the
 //     same view with Cesium's EllipsoidTerrainProvider (the ellipsoid
 //     alone, height 0 everywhere) is one flat colour (stddev below
-//     MAX_FLAT_STDDEV): the relief comes from the tiles.
+//     MAX_FLAT_STDDEV): the relief comes from the tiles;
+//   - lighting from the tiles' normals: the same view, white and lit by a
+//     low sun from the west (globe.enableLighting), drawn twice, with
+//     CesiumTerrainProvider's requestVertexNormals and without.  With it,
+//     every tile request named octvertexnormals in its Accept header, the
+//     tiles CesiumJS drew carry vertex normals (their mesh's encoding), and
+//     Cesium shades by them (vertex lighting: luma stddev above
+//     MIN_LIT_STDDEV, where without normals its day-night shading of the
+//     ellipsoid is one shade, below MAX_FLAT_STDDEV).  That slopes tilt
+//     the normals as they should is checked byte for byte in
+//     tests/http_terrain.sh: at this scale the half-degree relief moves
+//     the shading less than the normals' 8-bit quantisation would.
 // Exit status 0 when everything passed, 1 otherwise, 2 on a usage error.
 import { createServer } from 'node:http';
 import { readFile } from 'node:fs/promises';
@@ -45,6 +56,7 @@ import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 const MIN_STDDEV = 12;       // luma, 8-bit units, terrain
 const MIN_COLOURS = 50;      // distinct RGB values, terrain
 const MAX_FLAT_STDDEV = 3;   // luma, the ellipsoid alone
+const MIN_LIT_STDDEV = 8;    // luma, lit through the tiles' normals
 const W = 480, H = 320;
 
 const here = dirname(fileURLToPath(import.meta.url));
@@ -71,8 +83,9 @@ const page = `<!doctype html>
 <style>html, body, #c { margin: 0; width: 100%; height: 100%; overflow: hidden; }</style>
 </head><body><div id="c"></div>
 <script>
-window.run = async (layerUrl) => {
-    const terrain = layerUrl ? await Cesium.CesiumTerrainProvider.fromUrl(layerUrl)
+window.run = async (layerUrl, lit) => {
+    const terrain = layerUrl ? await Cesium.CesiumTerrainProvider.fromUrl(layerUrl,
+        { requestVertexNormals: lit === 'normals' })
         : new Cesium.EllipsoidTerrainProvider();
     const viewer = new Cesium.Viewer('c', {
         baseLayer: false, terrainProvider: terrain, animation: false,
@@ -94,6 +107,21 @@ czm_material czm_getMaterial(czm_materialInput materialInput) {
     m.diffuse = mix(vec3(0.0, 0.1, 0.5), vec3(1.0, 0.85, 0.5), t);
     return m;
 }\` } });
+    if (lit) {
+        // white, lit by a sun 20 degrees above the western horizon
+        s.globe.material = undefined;
+        s.globe.baseColor = Cesium.Color.WHITE;
+        s.globe.enableLighting = true;
+        s.globe.dynamicAtmosphereLighting = false;
+        const lo = Cesium.Math.toRadians(88), la = Cesium.Math.toRadians(24);
+        const east = new Cesium.Cartesian3(-Math.sin(lo), Math.cos(lo), 0);
+        const up = new Cesium.Cartesian3(Math.cos(la) * Math.cos(lo),
+            Math.cos(la) * Math.sin(lo), Math.sin(la));
+        const dir = Cesium.Cartesian3.add(Cesium.Cartesian3.multiplyByScalar(east,
+            Math.cos(0.349), new Cesium.Cartesian3()), Cesium.Cartesian3.multiplyByScalar(
+            up, -Math.sin(0.349), new Cesium.Cartesian3()), new Cesium.Cartesian3());
+        s.light = new Cesium.DirectionalLight({ direction: Cesium.Cartesian3.normalize(dir, dir) });
+    }
     viewer.camera.setView({
         destination: Cesium.Cartesian3.fromDegrees(88, 24, 3.0e6),
         orientation: { heading: 0, pitch: -Cesium.Math.PI_OVER_TWO, roll: 0 },
@@ -120,6 +148,13 @@ window.stats = () => {
     const mean = s / n;
     return { mean, dark, stddev: Math.sqrt(Math.max(0, s2 / n - mean * mean)), colours: colours.size,
         width: c.width, height: c.height };
+};
+// How many of the tiles drawn carry vertex normals, of how many.
+window.normalsDrawn = () => {
+    const tiles = window.viewer.scene.globe._surface._tilesToRender;
+    const withNormals = tiles.filter((t) => t.data && t.data.mesh &&
+        t.data.mesh.encoding.hasVertexNormals).length;
+    return { tiles: tiles.length, withNormals };
 };
 window.sample = async (pts) => {
     const c = pts.map(([lon, lat]) => Cesium.Cartographic.fromDegrees(lon, lat));
@@ -154,15 +189,19 @@ const pageBase = `http://127.0.0.1:${server.address().port}`;
 
 // ------------------------------------------------------------ browser
 const scratch = mkdtempSync(join(tmpdir(), 'gv-cesium-'));
-const consoleErrors = [], failedRequests = [], answers = [];
+const consoleErrors = [], failedRequests = [], answers = [], accepts = [];
 let ctx;
 
-async function render(layer, name) {
+async function render(layer, name, lit) {
     const pg = await ctx.newPage();
     pg.setDefaultTimeout(45000);
     pg.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(`${name}: ${m.text()}`); });
     pg.on('pageerror', (e) => consoleErrors.push(`${name}: page error: ${e.message}`));
     pg.on('requestfailed', (r) => failedRequests.push(`${r.url()}: ${r.failure() && r.failure().errorText}`));
+    pg.on('request', (r) => {
+        if (/\.terrain(\?|$)/.test(r.url()))
+            accepts.push({ name, accept: r.headers()['accept'] || '' });
+    });
     pg.on('response', (r) => {
         if (r.url().startsWith(base))
             answers.push({ url: r.url(), status: r.status(), type: r.headers()['content-type'] || '' });
@@ -170,7 +209,7 @@ async function render(layer, name) {
             failedRequests.push(`${r.url()}: HTTP ${r.status()}`);
     });
     await pg.goto(`${pageBase}/`);
-    await pg.evaluate((u) => window.run(u), layer);
+    await pg.evaluate(([u, l]) => window.run(u, l), [layer, lit || '']);
     // a complete picture: every tile the view wants is loaded and drawn
     await pg.waitForFunction(() => {
         const s = window.viewer.scene;
@@ -211,6 +250,22 @@ try {
         `no crack: without Cesium's skirts no pixel shows the black background (${a.st.dark})`);
     check(e.st.stddev < MAX_FLAT_STDDEV,
         `the ellipsoid alone is flat (stddev ${e.st.stddev.toFixed(1)} < ${MAX_FLAT_STDDEV}): the relief is the tiles'`);
+    const ln = await render(layerUrl, 'lit-normals', 'normals');
+    const drawn = await ln.pg.evaluate(() => window.normalsDrawn());
+    const lf = await render(layerUrl, 'lit-flat', 'flat');
+    const asked = accepts.filter((a) => a.name === 'lit-normals');
+    const askedNot = accepts.filter((a) => a.name === 'lit-flat');
+    check(asked.length >= 4 && asked.every((a) => /extensions=[^,]*octvertexnormals/.test(a.accept)) &&
+        askedNot.every((a) => !/octvertexnormals/.test(a.accept)),
+        `with requestVertexNormals every tile request asks for octvertexnormals (${asked.length}), without none`,
+        ...asked.slice(0, 2).map((a) => `Accept: ${a.accept}`));
+    check(drawn.tiles > 0 && drawn.withNormals === drawn.tiles,
+        `CesiumJS decoded the normals: ${drawn.withNormals} of the ${drawn.tiles} tiles drawn carry them`);
+    note(`lit: with normals luma mean ${ln.st.mean.toFixed(1)} stddev ${ln.st.stddev.toFixed(1)}; ` +
+        `without mean ${lf.st.mean.toFixed(1)} stddev ${lf.st.stddev.toFixed(1)}`);
+    check(ln.st.stddev > MIN_LIT_STDDEV && lf.st.stddev < MAX_FLAT_STDDEV,
+        `Cesium lights the globe through the tiles' normals: luma stddev ${ln.st.stddev.toFixed(1)} > ` +
+        `${MIN_LIT_STDDEV}; without normals one shade (${lf.st.stddev.toFixed(1)} < ${MAX_FLAT_STDDEV})`);
     check(failedRequests.length === 0, 'no failed request', ...failedRequests.slice(0, 5));
     check(consoleErrors.length === 0, 'nothing logged to the console as an error', ...consoleErrors.slice(0, 5));
 } catch (e) {

@@ -4,7 +4,7 @@
 #   tests/fuzz/campaign.sh BUILDDIR [SECONDS-PER-TARGET] [JOBS]
 #
 # FUZZ_TARGETS picks targets (default: store tile iiif router filter_graph
-# worker settings batch imageio batch_frames listen_fds mesh_read, and
+# worker settings batch imageio batch_frames listen_fds terrain_ext mesh_read, and
 # view_script when BUILDDIR has SDL2, the native viewer's).
 # BUILDDIR was configured with --enable-fuzzing CC=clang CXX=clang++ (the
 # targets are built here if needed).  Each target starts from a copy of
@@ -38,7 +38,7 @@ secs=${2:-60}
 jobs=${3:-1}
 here=$(cd "$(dirname "$0")" && pwd)
 work=${FUZZ_WORK:-$(mktemp -d "${TMPDIR:-/tmp}/gvfuzz.XXXXXX")}
-targets=${FUZZ_TARGETS:-store tile iiif router filter_graph worker settings batch imageio batch_frames listen_fds mesh_read}
+targets=${FUZZ_TARGETS:-store tile iiif router filter_graph worker settings batch imageio batch_frames listen_fds terrain_ext mesh_read}
 if [ -z "${FUZZ_TARGETS:-}" ] && grep -q '^#define GV_HAVE_SDL2 1' "$build/config.h" 2>/dev/null; then
     targets="$targets view_script"
 fi

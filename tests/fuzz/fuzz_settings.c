@@ -11,7 +11,7 @@
  *  - success: every string field is NUL-terminated inside its array;
  *    the enumerated and bounded keys hold values the table allows
  *    (spot checks: port, threads, log_level, gpu, jpeg_quality,
- *    max_upscale, filter_max_json_depth);
+ *    max_upscale, filter_max_json_depth), and terrain_water_below parses;
  *  - loading the same file again over the result changes nothing, and
  *    over fresh defaults gives the same struct byte for byte.
  * Anything else aborts.
@@ -52,7 +52,11 @@ static void check_values(const struct settings *c)
         !TERMINATED(c->filter_worker) || !TERMINATED(c->filter_dir) ||
         !TERMINATED(c->filter_library_dir) || !TERMINATED(c->access_policy) ||
         !TERMINATED(c->access_token_secret_file) ||
-        !TERMINATED(c->access_trusted_header) || !TERMINATED(c->access_origins))
+        !TERMINATED(c->access_trusted_header) || !TERMINATED(c->access_origins) ||
+        !TERMINATED(c->terrain_water_below))
+        abort();
+    double water; /* a loaded terrain_water_below always parses */
+    if (settings_water_below(c->terrain_water_below, "x", &water) < 0)
         abort();
     if (c->access_token_ttl < 60 || c->access_token_ttl > 31536000)
         abort();

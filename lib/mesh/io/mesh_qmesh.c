@@ -11,14 +11,29 @@
  * coding, which needs the vertices numbered in order of first use; then the
  * indices of the vertices on the west, south, east and north edges (plain,
  * each list sorted along its edge), which Cesium uses to join tiles with
- * skirts.  Last, the metadata extension (id 4) holds JSON with the measured
- * error.  u runs west to east, v south to north, so grid row 0 is v = 32767
- * and triangles are written reversed, counter-clockwise in (u, v).
+ * skirts.  Then the extensions the place asks for, each an id byte and a
+ * 32-bit length: the oct-encoded vertex normals (id 1: two bytes a vertex,
+ * in the vertices' order), the water mask (id 2), and always the metadata
+ * (id 4: a 32-bit length and JSON with the measured error, and what the
+ * caller adds, e.g. tile availability).  u runs west to east, v south to
+ * north, so grid row 0 is v = 32767 and triangles are written reversed,
+ * counter-clockwise in (u, v).
+ *
+ * A normal is the sum of the normals of the triangles around the vertex,
+ * each as long as twice its area (the cross product of two edges), taken
+ * in the vertex's own east-north-up frame (ground distances on WGS84,
+ * height up) and turned into Earth-centred fixed axes: a level surface
+ * gets the ellipsoid's normal even from a triangle many degrees wide
+ * (whose chord would tilt it), and a slope tilts it by its angle; then
+ * oct-encoded as CesiumJS's AttributeCompression.octEncode does (8 bits a
+ * component).
  *
  * Without has_geo the grid is not on the globe: the header then holds the
  * bounding sphere in grid units and the occlusion point at its centre.
  */
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "mesh/io/mesh_io.h"
 
@@ -210,6 +225,115 @@ static int put_edges(struct mbuf *b, const struct gv_mesh *t,
     return 0;
 }
 
+/* Geodetic longitude and latitude (radians, WGS84) of vertex i, with
+ * has_geo; else its grid x and -y scaled by xy_scale (east, north). */
+static void vertex_en(const struct gv_mesh *t, const struct gv_mesh_place *pl,
+                      uint32_t i, double *e, double *n)
+{
+    if (pl->has_geo) {
+        double W = t->width - 1, H = t->height - 1;
+        *e = (pl->west + (pl->east - pl->west) * gv_mesh_gx(t, i) / W) *
+             M_PI / 180;
+        *n = (pl->north + (pl->south - pl->north) * gv_mesh_gy(t, i) / H) *
+             M_PI / 180;
+    } else {
+        double s = pl->xy_scale > 0 ? pl->xy_scale : 1;
+        *e = gv_mesh_gx(t, i) * s;
+        *n = -(double)gv_mesh_gy(t, i) * s;
+    }
+}
+
+/* Vertex j relative to vertex v in v's east-north-up frame, metres:
+ * on the globe the east offset is the longitude difference along the
+ * parallel halfway between them, the north one along v's meridian
+ * (WGS84 radii of curvature at v), so that a level surface is level
+ * however large the triangle; off the globe, grid units. */
+static void enu_offset(const struct gv_mesh *t, const struct gv_mesh_place *pl,
+                       uint32_t v, uint32_t j, double o[3])
+{
+    double ev, nv, ej, nj;
+    vertex_en(t, pl, v, &ev, &nv);
+    vertex_en(t, pl, j, &ej, &nj);
+    o[2] = (double)gv_mesh_gz(t, j) - gv_mesh_gz(t, v);
+    if (!pl->has_geo) {
+        o[0] = ej - ev;
+        o[1] = nj - nv;
+        return;
+    }
+    const double a = 6378137.0, e2 = 6.69437999014e-3;
+    double w = 1 - e2 * sin(nv) * sin(nv);
+    double rn = a / sqrt(w), rm = a * (1 - e2) / (w * sqrt(w));
+    o[0] = (ej - ev) * rn * cos((nj + nv) / 2);
+    o[1] = (nj - nv) * rm;
+}
+
+/* One component in -1 .. 1 as CesiumJS's AttributeCompression.toSNorm
+ * (rangeMaximum 255). */
+static uint8_t snorm8(double v)
+{
+    v = v < -1 ? -1 : v > 1 ? 1 : v;
+    return (uint8_t)lround((v * 0.5 + 0.5) * 255.0);
+}
+
+/* The normals extension (id 1) of the vertices numbered old[0 .. nv-1]:
+ * at each vertex the sum of its triangles' normals (cross products: twice
+ * their areas) in the vertex's east-north-up frame, then turned into
+ * Earth-centred fixed axes on the globe.  -1 when out of memory. */
+static int put_normals(struct mbuf *b, const struct gv_mesh *t,
+                       const struct gv_mesh_place *pl, const uint32_t *old)
+{
+    uint32_t nv = t->nverts;
+    double *n = calloc((size_t)nv * 3, sizeof *n);
+    if (!n)
+        return -1;
+    for (uint32_t k = 0; k < t->ntris; k++) {
+        /* in the order written, counter-clockwise seen from above */
+        const uint32_t *tr = t->tris + 3 * (size_t)k;
+        const uint32_t w[3] = {tr[0], tr[2], tr[1]};
+        for (int c = 0; c < 3; c++) {
+            double e1[3], e2[3];
+            enu_offset(t, pl, w[c], w[(c + 1) % 3], e1);
+            enu_offset(t, pl, w[c], w[(c + 2) % 3], e2);
+            double *f = n + 3 * (size_t)w[c];
+            f[0] += e1[1] * e2[2] - e1[2] * e2[1];
+            f[1] += e1[2] * e2[0] - e1[0] * e2[2];
+            f[2] += e1[0] * e2[1] - e1[1] * e2[0];
+        }
+    }
+    mb_u8(b, 1);
+    mb_u32(b, 2 * nv);
+    for (uint32_t i = 0; i < nv; i++) {
+        const double *v = n + 3 * (size_t)old[i];
+        double x = v[0], y = v[1], z = v[2];
+        if (!(fabs(x) + fabs(y) + fabs(z) > 0)) { /* in no triangle: up */
+            x = y = 0;
+            z = 1;
+        }
+        if (pl->has_geo) { /* east, north, up to Earth-centred fixed */
+            double lo, la;
+            vertex_en(t, pl, old[i], &lo, &la);
+            double so = sin(lo), co = cos(lo), sa = sin(la), ca = cos(la);
+            double gx = -so * x - sa * co * y + ca * co * z;
+            double gy = co * x - sa * so * y + ca * so * z;
+            double gz = ca * y + sa * z;
+            x = gx;
+            y = gy;
+            z = gz;
+        }
+        double l1 = fabs(x) + fabs(y) + fabs(z);
+        double ox = x / l1, oy = y / l1;
+        if (z < 0) {
+            double tx = ox;
+            ox = (1 - fabs(oy)) * (tx < 0 ? -1 : 1);
+            oy = (1 - fabs(tx)) * (oy < 0 ? -1 : 1);
+        }
+        mb_u8(b, snorm8(ox));
+        mb_u8(b, snorm8(oy));
+    }
+    free(n);
+    return 0;
+}
+
 int mesh_write_qmesh(struct mbuf *b, const struct gv_mesh *t,
                      const struct gv_mesh_place *pl, const char **why)
 {
@@ -255,22 +379,44 @@ int mesh_write_qmesh(struct mbuf *b, const struct gv_mesh *t,
         goto out;
     }
 
+    if (pl->normals && put_normals(b, t, pl, old) < 0) {
+        b->oom = 1;
+        goto out;
+    }
+    if (pl->water_mask) {
+        if (pl->water_mask_len != 1 && pl->water_mask_len != 256 * 256) {
+            *why = "a water mask is 1 or 65536 bytes";
+            rc = -1;
+            goto out;
+        }
+        mb_u8(b, 2);
+        mb_u32(b, (uint32_t)pl->water_mask_len);
+        mb_put(b, pl->water_mask, pl->water_mask_len);
+    }
+
     /* metadata extension (id 4): JSON */
     char json[256];
     int jn = snprintf(json, sizeof json,
                       "{\"maxError\":%.9g,\"level\":%u,"
-                      "\"region\":[%u,%u,%u,%u]}",
+                      "\"region\":[%u,%u,%u,%u]",
                       t->max_error, pl->level, pl->x0, pl->y0, t->width,
                       t->height);
-    if (jn < 0 || (size_t)jn >= sizeof json) {
+    size_t more = pl->metadata_more ? strlen(pl->metadata_more) : 0;
+    if (jn < 0 || (size_t)jn >= sizeof json || more > UINT32_MAX / 2) {
         *why = "metadata too long";
         rc = -1;
         goto out;
     }
-    mb_u8(b, pl->metadata_id ? pl->metadata_id : 4);
-    mb_u32(b, 4 + (uint32_t)jn);
-    mb_u32(b, (uint32_t)jn);
+    uint32_t total = (uint32_t)jn + (more ? 1 + (uint32_t)more : 0) + 1;
+    mb_u8(b, 4);
+    mb_u32(b, 4 + total);
+    mb_u32(b, total);
     mb_put(b, json, (size_t)jn);
+    if (more) {
+        mb_u8(b, ',');
+        mb_put(b, pl->metadata_more, more);
+    }
+    mb_u8(b, '}');
 out:
     free(newi);
     free(old);

@@ -36,10 +36,18 @@ struct gv_mesh_place {
                             degrees (WGS84), corner samples on the corners */
     double west, south, east, north;
     int gzip;            /* quantized-mesh: gzip the whole file */
-    uint8_t metadata_id; /* quantized-mesh: the metadata extension's id;
-                            0 means 4, the standard one (the terrain route
-                            uses another: CesiumJS reads id 4 only with
-                            metadataAvailability in layer.json) */
+    /* quantized-mesh extensions, written in this order after the edges: */
+    int normals;         /* the oct-encoded vertex normals (id 1): unit,
+                            area-weighted in each vertex's east-north-up
+                            frame; Earth-centred fixed with has_geo, else
+                            (east, north, up) = (x, -y, z) */
+    const uint8_t *water_mask; /* the water mask (id 2): water_mask_len
+                            bytes, 1 (0 land, 255 water) or 256 x 256 (rows
+                            north to south); NULL: none */
+    size_t water_mask_len;
+    const char *metadata_more; /* more members of the metadata JSON (id 4,
+                            always written), e.g. "\"available\":[...]",
+                            trusted; NULL: none */
 };
 
 /* "glb", "qmesh" (or "terrain"), "ply", "obj" -> *f.  Returns 0, or -1
@@ -55,7 +63,8 @@ const char *gv_mesh_format_ext(enum gv_mesh_format f);
  * written in its own axes, with `comment` (may be NULL; ignored with pl)
  * in the header.  *out is malloc'ed (the caller frees it with free()) and
  * *len set.  Returns 0, or -1 with *err: GV_ENOMEM, GV_EINVAL (a GLB over
- * 4 GiB, gzip failing), GV_EFORMAT (quantized-mesh without pl).
+ * 4 GiB, gzip failing, a water mask of another length), GV_EFORMAT
+ * (quantized-mesh without pl).
  * Thread-safe.
  */
 int gv_mesh_encode(enum gv_mesh_format f, const struct gv_mesh *m,
