@@ -28,10 +28,11 @@ PACKAGES="$PACKAGES libtiff-dev libtiff-tools"
 # (http-*), iipsrv behind spawn-fcgi (http-iiif), vips (encode-speed,
 # rate-distortion, browser-bytes, http-iiif), cjpeg/djpeg and cwebp/dwebp
 # (rate-distortion, browser-bytes), astcenc (rate-distortion), OpenCV and
-# SciPy (edt-speed), GNU parallel (conf/parallel-encode.sh).
+# SciPy (edt-speed), GNU parallel (conf/parallel-encode.sh), gnuplot (the
+# plots of tin-speed and others).
 BENCH_PACKAGES="nginx-light wrk curl jq iipimage-server spawn-fcgi
   libvips-tools libjpeg-turbo-progs webp astcenc
-  python3-opencv python3-scipy parallel"
+  python3-opencv python3-scipy parallel gnuplot-nox"
 # bench/simplify-speed.sh (mesh simplification)
 BENCH_PACKAGES="$BENCH_PACKAGES libmeshoptimizer-dev python3-open3d assimp-testmodels"
 

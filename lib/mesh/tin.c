@@ -3,20 +3,28 @@
  * (Garland & Heckbert, CMU-CS-95-181, section 4.4, algorithm III).
  *
  * The mesh is a half-edge array: triangle t owns half-edges 3t, 3t+1,
- * 3t+2; half-edge e runs from vertex tv[e] to tv[next(e)], and he[e] is the
+ * 3t+2; half-edge e runs from vertex TV(e) to TV(next(e)), and HE(e) is the
  * opposite half-edge or -1 on the hull.  Triangle slots are reused in place
  * by splits and flips, never freed, so the slot count is the triangle
  * count.
  *
  * Each triangle holds its candidate (section 4.3): the unused sample of
  * largest error inside it, found by scan converting it row by row with
- * exact integer edge functions (samples on an edge belong to both sides, as
- * the paper allows in 4.3.1).  The candidates live in a binary max-heap
- * keyed on (error, -sample index).  Inserting a point splits its triangle
- * (or the two triangles of the edge it lies on), then Lawson's flips restore
- * the Delaunay property (section 4.2.1, figure 4); every triangle created
- * or flipped is queued and scanned once after the insertion, which is the
- * update region of section 4.2.2.
+ * exact edge functions (samples on an edge belong to both sides, as the
+ * paper allows in 4.3.1).  The candidates over the error goal live in an
+ * indexed binary max-heap keyed on (error, -sample index); the others can
+ * never be chosen and stay out of it.  Inserting a point splits its
+ * triangle (or the two triangles of the edge it lies on), then Lawson's
+ * flips restore the Delaunay property (section 4.2.1, figure 4); every
+ * triangle created or flipped is queued and scanned once after the
+ * insertion, which is the update region of section 4.2.2.
+ *
+ * The cost (profiled on 1025^2 ETOPO5 grids, bench/tin-speed.sh) is memory
+ * latency as much as the rescans: a split or flip touches one 32-byte
+ * triangle record (corners, twins, candidate, heap place), heap entries
+ * carry their keys, the vertices' half-edges are kept up only while the
+ * border is inserted (hull_out), the in-circle test runs in 64 bits on
+ * grids up to 16384 a side, and no row of a scan divides.
  *
  * The plane of a triangle is computed from its vertices in a canonical
  * rotation (the smallest sample index first), so its errors depend on the
@@ -35,22 +43,49 @@
 
 __extension__ typedef __int128 gv_i128;
 
+/* A vertex: its sample and height, and a half-edge leaving it. */
+struct vert {
+    int32_t x, y;
+    float z;
+    int32_t he;
+};
+
+/* A heap entry carries its key, so that sifting reads the heap alone:
+ * larger error first, then the smaller sample index. */
+struct hent {
+    double err;
+    uint32_t idx;
+    int32_t t;
+};
+
+/* A triangle: half-edge 3t + k runs from v[k] to v[k + 1 mod 3], he[k] is
+ * its opposite half-edge or -1 on the hull.  What a split, a flip and a
+ * heap move touch shares one 32-byte record. */
+struct tri {
+    int32_t v[3], he[3];
+    uint32_t cidx;           /* candidate sample index, NONE: none */
+    int32_t hpos;            /* position in heap, -1: not there */
+};
+
+#define TV(m, e) ((m)->t[(unsigned)(e) / 3].v[(unsigned)(e) % 3])
+#define HE(m, e) ((m)->t[(unsigned)(e) / 3].he[(unsigned)(e) % 3])
+
 struct tin {
     const float *h;
     uint32_t w, hgt;
     size_t stride;
+    double goal;             /* candidates at or below it never enter the
+                                heap; -1 with no error goal */
+    int small;               /* sides <= 16384: incircle in 64 bits */
     uint8_t *used;           /* w*hgt: a vertex, or a border sample in
                                 border-first mode */
     uint32_t nv, capv;
-    int32_t *vx, *vy;
-    float *vz;
-    int32_t *vhe;            /* a half-edge starting at each vertex */
+    struct vert *v;
+    int track;               /* keep vert.he (border insertion only) */
     uint32_t nt, capt;
-    int32_t *tv, *he;        /* 3 per triangle */
+    struct tri *t;           /* 64-byte aligned, 2 a cache line */
     double *cerr;            /* candidate error per triangle */
-    int64_t *cidx;           /* candidate sample index, -1: none */
-    int32_t *hpos;           /* position in heap, -1: not there */
-    int32_t *heap;
+    struct hent *heap;
     uint32_t nheap;
     int32_t *pend;           /* triangles to scan after this insertion */
     uint8_t *pflag;
@@ -58,6 +93,8 @@ struct tin {
     int32_t *stack;          /* half-edges to legalize */
     uint32_t nstack, capstack;
 };
+
+#define NONE UINT32_MAX
 
 struct plane {
     double z0, gx, gy;
@@ -102,27 +139,18 @@ static int reserve_tris(struct tin *m, uint32_t need)
     uint32_t c = m->capt ? m->capt : 64;
     while (c < need)
         c *= 2;
-    int32_t *tv = realloc(m->tv, (size_t)c * 3 * sizeof *tv);
-    if (!tv)
+    struct tri *nt = aligned_alloc(64, (size_t)c * sizeof *nt);
+    if (!nt)
         return -1;
-    m->tv = tv;
-    int32_t *he = realloc(m->he, (size_t)c * 3 * sizeof *he);
-    if (!he)
-        return -1;
-    m->he = he;
+    if (m->nt)
+        memcpy(nt, m->t, (size_t)m->nt * sizeof *nt);
+    free(m->t);
+    m->t = nt;
     double *ce = realloc(m->cerr, (size_t)c * sizeof *ce);
     if (!ce)
         return -1;
     m->cerr = ce;
-    int64_t *ci = realloc(m->cidx, (size_t)c * sizeof *ci);
-    if (!ci)
-        return -1;
-    m->cidx = ci;
-    int32_t *hp = realloc(m->hpos, (size_t)c * sizeof *hp);
-    if (!hp)
-        return -1;
-    m->hpos = hp;
-    int32_t *hh = realloc(m->heap, (size_t)c * sizeof *hh);
+    struct hent *hh = realloc(m->heap, (size_t)c * sizeof *hh);
     if (!hh)
         return -1;
     m->heap = hh;
@@ -141,97 +169,72 @@ static int reserve_tris(struct tin *m, uint32_t need)
 
 static int add_vertex(struct tin *m, int32_t x, int32_t y)
 {
-    if (m->nv == m->capv) {
-        uint32_t c = m->capv ? m->capv * 2 : 64;
-        int32_t *vx = realloc(m->vx, (size_t)c * sizeof *vx);
-        if (!vx)
-            return -1;
-        m->vx = vx;
-        int32_t *vy = realloc(m->vy, (size_t)c * sizeof *vy);
-        if (!vy)
-            return -1;
-        m->vy = vy;
-        float *vz = realloc(m->vz, (size_t)c * sizeof *vz);
-        if (!vz)
-            return -1;
-        m->vz = vz;
-        int32_t *vhe = realloc(m->vhe, (size_t)c * sizeof *vhe);
-        if (!vhe)
-            return -1;
-        m->vhe = vhe;
-        m->capv = c;
-    }
-    m->vx[m->nv] = x;
-    m->vy[m->nv] = y;
-    m->vz[m->nv] = hat(m, x, y);
+    if (m->nv == m->capv &&
+        grow((void **)&m->v, &m->capv, m->nv + 1, sizeof *m->v) < 0)
+        return -1;
+    m->v[m->nv].x = x;
+    m->v[m->nv].y = y;
+    m->v[m->nv].z = hat(m, x, y);
     m->used[(size_t)y * m->w + (size_t)x] = 1;
     return (int)m->nv++;
 }
 
 /* ------------------------------------------------------------ the heap */
 
-static inline int better(const struct tin *m, int32_t a, int32_t b)
+/* An indexed binary max-heap of the triangles whose candidate is over the
+ * goal (section 4.3): hpos[t] is t's place, so a rescanned triangle moves
+ * to its new key and a replaced one leaves; no stale entries.  Sifting
+ * moves a hole instead of swapping. */
+static inline int better(const struct hent *a, const struct hent *b)
 {
-    return m->cerr[a] > m->cerr[b] ||
-           (m->cerr[a] == m->cerr[b] && m->cidx[a] < m->cidx[b]);
+    return a->err > b->err || (a->err == b->err && a->idx < b->idx);
 }
 
-static void heap_swap(struct tin *m, uint32_t i, uint32_t j)
-{
-    int32_t a = m->heap[i], b = m->heap[j];
-    m->heap[i] = b;
-    m->heap[j] = a;
-    m->hpos[b] = (int32_t)i;
-    m->hpos[a] = (int32_t)j;
-}
-
-static void heap_up(struct tin *m, uint32_t i)
+static void heap_place(struct tin *m, uint32_t i, struct hent e)
 {
     while (i > 0) {
         uint32_t p = (i - 1) / 2;
-        if (!better(m, m->heap[i], m->heap[p]))
+        if (!better(&e, &m->heap[p]))
             break;
-        heap_swap(m, i, p);
+        m->heap[i] = m->heap[p];
+        m->t[m->heap[i].t].hpos = (int32_t)i;
         i = p;
     }
-}
-
-static void heap_down(struct tin *m, uint32_t i)
-{
     for (;;) {
-        uint32_t l = 2 * i + 1, r = l + 1, b = i;
-        if (l < m->nheap && better(m, m->heap[l], m->heap[b]))
-            b = l;
-        if (r < m->nheap && better(m, m->heap[r], m->heap[b]))
-            b = r;
-        if (b == i)
+        uint32_t l = 2 * i + 1, b;
+        if (l >= m->nheap)
             break;
-        heap_swap(m, i, b);
+        b = l + 1 < m->nheap && better(&m->heap[l + 1], &m->heap[l]) ? l + 1
+                                                                    : l;
+        if (!better(&m->heap[b], &e))
+            break;
+        m->heap[i] = m->heap[b];
+        m->t[m->heap[i].t].hpos = (int32_t)i;
         i = b;
     }
+    m->heap[i] = e;
+    m->t[e.t].hpos = (int32_t)i;
 }
 
 static void heap_remove(struct tin *m, int32_t t)
 {
-    int32_t i = m->hpos[t];
+    int32_t i = m->t[t].hpos;
     if (i < 0)
         return;
-    m->hpos[t] = -1;
+    m->t[t].hpos = -1;
     uint32_t last = --m->nheap;
-    if ((uint32_t)i == last)
-        return;
-    int32_t moved = m->heap[last];
-    m->heap[i] = moved;
-    m->hpos[moved] = i;
-    heap_up(m, (uint32_t)i);
-    heap_down(m, (uint32_t)m->hpos[moved]);
+    if ((uint32_t)i != last)
+        heap_place(m, (uint32_t)i, m->heap[last]);
 }
 
-static void heap_push(struct tin *m, int32_t t)
+/* Put t in the heap with its key, or move it there. */
+static void heap_set(struct tin *m, int32_t t)
 {
-    m->heap[m->nheap] = t;
-    m->hpos[t] = (int32_t)m->nheap;
-    heap_up(m, m->nheap++);
+    struct hent e = {m->cerr[t], m->t[t].cidx, t};
+    if (m->t[t].hpos < 0)
+        heap_place(m, m->nheap++, e);
+    else
+        heap_place(m, (uint32_t)m->t[t].hpos, e);
 }
 
 /* ------------------------------------------------------------ planes */
@@ -241,23 +244,21 @@ static void heap_push(struct tin *m, int32_t t)
  * slot holds. */
 static void plane_of(const struct tin *m, int32_t t, struct plane *pl)
 {
-    int32_t v[3] = {m->tv[3 * t], m->tv[3 * t + 1], m->tv[3 * t + 2]};
+    const struct vert *v[3] = {&m->v[TV(m, 3 * t)], &m->v[TV(m, 3 * t + 1)],
+                               &m->v[TV(m, 3 * t + 2)]};
     int k = 0;
-    for (int i = 1; i < 3; i++) {
-        int64_t ki = (int64_t)m->vy[v[i]] * m->w + m->vx[v[i]];
-        int64_t kk = (int64_t)m->vy[v[k]] * m->w + m->vx[v[k]];
-        if (ki < kk)
+    for (int i = 1; i < 3; i++)
+        if (v[i]->y < v[k]->y || (v[i]->y == v[k]->y && v[i]->x < v[k]->x))
             k = i;
-    }
-    int32_t a = v[k], b = v[(k + 1) % 3], c = v[(k + 2) % 3];
-    double dx1 = m->vx[b] - m->vx[a], dy1 = m->vy[b] - m->vy[a];
-    double dx2 = m->vx[c] - m->vx[a], dy2 = m->vy[c] - m->vy[a];
-    double dz1 = (double)m->vz[b] - m->vz[a];
-    double dz2 = (double)m->vz[c] - m->vz[a];
+    const struct vert *a = v[k], *b = v[(k + 1) % 3], *c = v[(k + 2) % 3];
+    double dx1 = b->x - a->x, dy1 = b->y - a->y;
+    double dx2 = c->x - a->x, dy2 = c->y - a->y;
+    double dz1 = (double)b->z - a->z;
+    double dz2 = (double)c->z - a->z;
     double det = dx1 * dy2 - dx2 * dy1;
-    pl->x0 = m->vx[a];
-    pl->y0 = m->vy[a];
-    pl->z0 = m->vz[a];
+    pl->x0 = a->x;
+    pl->y0 = a->y;
+    pl->z0 = a->z;
     pl->gx = (dz1 * dy2 - dz2 * dy1) / det;
     pl->gy = (dx1 * dz2 - dx2 * dz1) / det;
 }
@@ -275,64 +276,84 @@ static inline double plane_at(const struct plane *pl, int32_t x, int32_t y)
     return row_at(pl, y) + pl->gx * (double)x;
 }
 
-static inline int64_t floordiv(int64_t a, int64_t b)
+/*
+ * floor(b / a) for integers |b| < 2^34 and 0 < a < 2^17, as b * (1 / a)
+ * in doubles, clamped to +-2^17 (beyond any coordinate).  Exact: the
+ * quotient's fraction is 0 or at least 1 / a >= 2^-17, the product's
+ * rounding error below 2^-33 where it matters (|b / a| < 2^18), and the
+ * nudge of 2^-20 lies between the two.  No integer division per row.
+ */
+#define FLOOR_OFF 262144.0 /* 2^18: truncation is floor above 0 */
+static inline int32_t floor_q(double b, double inv)
 {
-    int64_t q = a / b;
-    if ((a % b != 0) && ((a < 0) != (b < 0)))
-        q--;
-    return q;
+    double q = b * inv + 0x1p-20;
+    q = q < -131072.0 ? -131072.0 : q > 131072.0 ? 131072.0 : q;
+    return (int32_t)(q + FLOOR_OFF) - (int32_t)FLOOR_OFF;
 }
 
 /*
  * Scan convert triangle t (edges included) row by row: for each row the
- * span where all three edge functions are >= 0, exact in integers.  With
+ * span where all three edge functions are >= 0, exact (floor_q).  With
  * all = 0, used samples are skipped.  The sample of largest error (the
  * first in raster order on ties) comes back in *best_err / *best_idx
- * (index -1 and error 0 when there is none).
+ * (index NONE and error 0 when there is none).
  */
 static void scan_tri(const struct tin *m, int32_t t, int all,
-                     double *best_err, int64_t *best_idx)
+                     double *best_err, uint32_t *best_idx)
 {
     struct plane pl;
     plane_of(m, t, &pl);
-    int32_t v[3] = {m->tv[3 * t], m->tv[3 * t + 1], m->tv[3 * t + 2]};
-    int64_t px[3], py[3];
+    int32_t px[3], py[3];
     for (int i = 0; i < 3; i++) {
-        px[i] = m->vx[v[i]];
-        py[i] = m->vy[v[i]];
+        const struct vert *v = &m->v[TV(m, 3 * t + i)];
+        px[i] = v->x;
+        py[i] = v->y;
     }
-    int64_t miny = py[0], maxy = py[0], minx = px[0], maxx = px[0];
+    int32_t miny = py[0], maxy = py[0], minx = px[0], maxx = px[0];
     for (int i = 1; i < 3; i++) {
         if (py[i] < miny) miny = py[i];
         if (py[i] > maxy) maxy = py[i];
         if (px[i] < minx) minx = px[i];
         if (px[i] > maxx) maxx = px[i];
     }
+    /* edge i -> j: orient(p_i, p_j, (x, y)) = A x + B(y) >= 0, B(y) =
+     * (xj - xi) (y - yi) + (yj - yi) xi, stepped by xj - xi a row.  A > 0
+     * bounds x from below (x >= -floor(B / A)), A < 0 from above
+     * (x <= floor(B / -A)), A = 0 keeps the row or not (B >= 0). */
+    double eb[3], edx[3], einv[3];
+    int ekind[3]; /* 1: lower bound, -1: upper, 0: horizontal */
+    for (int i = 0; i < 3; i++) {
+        int j = i == 2 ? 0 : i + 1;
+        int32_t A = py[i] - py[j];
+        edx[i] = (double)(px[j] - px[i]);
+        eb[i] = edx[i] * (double)(miny - py[i]) +
+                (double)(py[j] - py[i]) * (double)px[i];
+        ekind[i] = A > 0 ? 1 : A < 0 ? -1 : 0;
+        einv[i] = A ? 1.0 / (double)(A > 0 ? A : -A) : 0;
+    }
     double be = 0;
-    int64_t bi = -1;
-    for (int64_t y = miny; y <= maxy; y++) {
-        int64_t lo = minx, hi = maxx;
-        for (int i = 0; i < 3 && lo <= hi; i++) {
-            int j = (i + 1) % 3;
-            /* orient(p_i, p_j, (x, y)) = A x + B >= 0 */
-            int64_t A = -(py[j] - py[i]);
-            int64_t B = (px[j] - px[i]) * (y - py[i]) + (py[j] - py[i]) * px[i];
-            if (A > 0) {
-                int64_t x0 = -floordiv(B, A); /* ceil(-B / A) */
+    uint32_t bi = NONE;
+    const double gx = pl.gx;
+    for (int32_t y = miny; y <= maxy; y++) {
+        int32_t lo = minx, hi = maxx;
+        for (int i = 0; i < 3; i++) {
+            if (ekind[i] > 0) {
+                int32_t x0 = -floor_q(eb[i], einv[i]);
                 if (x0 > lo) lo = x0;
-            } else if (A < 0) {
-                int64_t x1 = floordiv(B, -A);
+            } else if (ekind[i] < 0) {
+                int32_t x1 = floor_q(eb[i], einv[i]);
                 if (x1 < hi) hi = x1;
-            } else if (B < 0) {
+            } else if (eb[i] < 0) {
                 hi = lo - 1;
             }
+            eb[i] += edx[i];
         }
         const float *row = m->h + (size_t)y * m->stride;
         const uint8_t *urow = m->used + (size_t)y * m->w;
-        double zr = row_at(&pl, (int32_t)y), gx = pl.gx;
-        int64_t bx = -1;
+        double zr = row_at(&pl, y);
+        int32_t bx = -1;
         double xd = (double)lo; /* exact: x < 2^16 */
-        for (int64_t x = lo; x <= hi; x++, xd += 1.0) {
+        for (int32_t x = lo; x <= hi; x++, xd += 1.0) {
             double e = fabs((double)row[x] - (zr + gx * xd));
             /* used samples are skipped only where they would win: the
              * same maximum, one load and branch less per sample */
@@ -342,7 +363,7 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
             }
         }
         if (bx >= 0)
-            bi = y * (int64_t)m->w + bx;
+            bi = (uint32_t)y * m->w + (uint32_t)bx;
     }
     *best_err = be;
     *best_idx = bi;
@@ -358,7 +379,8 @@ static void mark(struct tin *m, int32_t t)
     }
 }
 
-/* Scan the queued triangles and put those with a candidate in the heap. */
+/* Scan the queued triangles; those with a candidate over the goal go in
+ * the heap (or move in it), the others leave it. */
 static void flush(struct tin *m, int use_heap)
 {
     for (uint32_t i = 0; i < m->npend; i++) {
@@ -366,17 +388,11 @@ static void flush(struct tin *m, int use_heap)
         m->pflag[t] = 0;
         if (!use_heap)
             continue;
-        scan_tri(m, t, 0, &m->cerr[t], &m->cidx[t]);
-        int has = m->cidx[t] >= 0 && m->cerr[t] > 0;
-        if (m->hpos[t] < 0) {
-            if (has)
-                heap_push(m, t);
-        } else if (!has) {
+        scan_tri(m, t, 0, &m->cerr[t], &m->t[t].cidx);
+        if (m->t[t].cidx != NONE && m->cerr[t] > 0 && m->cerr[t] > m->goal)
+            heap_set(m, t);
+        else
             heap_remove(m, t);
-        } else { /* the new key, either way */
-            heap_up(m, (uint32_t)m->hpos[t]);
-            heap_down(m, (uint32_t)m->hpos[t]);
-        }
     }
     m->npend = 0;
 }
@@ -390,40 +406,50 @@ static int add_tri(struct tin *m, int32_t a, int32_t b, int32_t c, int ab,
 {
     if (e < 0) {
         e = (int)(3 * m->nt++);
-        m->hpos[e / 3] = -1;
+        m->t[e / 3].hpos = -1;
         m->pflag[e / 3] = 0;
     }
-    m->tv[e] = a;
-    m->tv[e + 1] = b;
-    m->tv[e + 2] = c;
-    m->he[e] = ab;
-    m->he[e + 1] = bc;
-    m->he[e + 2] = ca;
-    if (ab >= 0) m->he[ab] = e;
-    if (bc >= 0) m->he[bc] = e + 1;
-    if (ca >= 0) m->he[ca] = e + 2;
+    TV(m, e) = a;
+    TV(m, e + 1) = b;
+    TV(m, e + 2) = c;
+    HE(m, e) = ab;
+    HE(m, e + 1) = bc;
+    HE(m, e + 2) = ca;
+    if (ab >= 0) HE(m, ab) = e;
+    if (bc >= 0) HE(m, bc) = e + 1;
+    if (ca >= 0) HE(m, ca) = e + 2;
     /* every split and flip rewrites each vertex it touches, so these stay
      * valid */
-    m->vhe[a] = e;
-    m->vhe[b] = e + 1;
-    m->vhe[c] = e + 2;
+    if (m->track) {
+        m->v[a].he = e;
+        m->v[b].he = e + 1;
+        m->v[c].he = e + 2;
+    }
     mark(m, e / 3);
     return e;
 }
 
+/* d strictly inside the circle of counter-clockwise a, b, c (exact).
+ * With sides <= 16384 every term fits 64 bits (|d| < 2^14: lifts and
+ * cross products < 2^29, the determinant < 2^61). */
 static int incircle(const struct tin *m, int32_t a, int32_t b, int32_t c,
                     int32_t d)
 {
-    int64_t adx = m->vx[a] - m->vx[d], ady = m->vy[a] - m->vy[d];
-    int64_t bdx = m->vx[b] - m->vx[d], bdy = m->vy[b] - m->vy[d];
-    int64_t cdx = m->vx[c] - m->vx[d], cdy = m->vy[c] - m->vy[d];
-    gv_i128 al = (gv_i128)(adx * adx + ady * ady);
-    gv_i128 bl = (gv_i128)(bdx * bdx + bdy * bdy);
-    gv_i128 cl = (gv_i128)(cdx * cdx + cdy * cdy);
-    gv_i128 det = al * (gv_i128)(bdx * cdy - cdx * bdy) -
-                  bl * (gv_i128)(adx * cdy - cdx * ady) +
-                  cl * (gv_i128)(adx * bdy - bdx * ady);
-    return det > 0; /* d strictly inside the circle of CCW a, b, c */
+    const struct vert *A = &m->v[a], *B = &m->v[b], *C = &m->v[c];
+    const struct vert *D = &m->v[d];
+    int64_t adx = A->x - D->x, ady = A->y - D->y;
+    int64_t bdx = B->x - D->x, bdy = B->y - D->y;
+    int64_t cdx = C->x - D->x, cdy = C->y - D->y;
+    int64_t al = adx * adx + ady * ady;
+    int64_t bl = bdx * bdx + bdy * bdy;
+    int64_t cl = cdx * cdx + cdy * cdy;
+    int64_t bc = bdx * cdy - cdx * bdy;
+    int64_t ac = adx * cdy - cdx * ady;
+    int64_t ab = adx * bdy - bdx * ady;
+    if (m->small)
+        return al * bc - bl * ac + cl * ab > 0;
+    gv_i128 det = (gv_i128)al * bc - (gv_i128)bl * ac + (gv_i128)cl * ab;
+    return det > 0;
 }
 
 static int push_edge(struct tin *m, int e)
@@ -444,18 +470,18 @@ static int legalize(struct tin *m, int a0)
         return -1;
     while (m->nstack) {
         int a = m->stack[--m->nstack];
-        int b = m->he[a];
+        int b = HE(m, a);
         if (b < 0)
             continue;
         int ta = a - a % 3, tb = b - b % 3;
         int al = ta + (a + 1) % 3, ar = ta + (a + 2) % 3;
         int bl = tb + (b + 2) % 3, br = tb + (b + 1) % 3;
-        int32_t p0 = m->tv[ar], pr = m->tv[a], pl = m->tv[al];
-        int32_t p1 = m->tv[bl];
+        int32_t p0 = TV(m, ar), pr = TV(m, a), pl = TV(m, al);
+        int32_t p1 = TV(m, bl);
         if (!incircle(m, pr, pl, p0, p1))
             continue;
-        int hal = m->he[al], har = m->he[ar];
-        int hbl = m->he[bl], hbr = m->he[br];
+        int hal = HE(m, al), har = HE(m, ar);
+        int hbl = HE(m, bl), hbr = HE(m, br);
         int t0 = add_tri(m, p0, p1, pl, -1, hbl, hal, ta);
         int t1 = add_tri(m, p1, p0, pr, t0, har, hbr, tb);
         if (push_edge(m, t1 + 2) < 0 || push_edge(m, t0 + 1) < 0)
@@ -476,12 +502,12 @@ static int insert_point(struct tin *m, int32_t t, int32_t x, int32_t y)
         return -1;
     int on = -1;
     for (int k = 0; k < 3; k++) {
-        int32_t a = m->tv[3 * t + k], b = m->tv[3 * t + (k + 1) % 3];
-        if (orient(m->vx[a], m->vy[a], m->vx[b], m->vy[b], x, y) == 0)
+        int32_t a = TV(m, 3 * t + k), b = TV(m, 3 * t + (k + 1) % 3);
+        if (orient(m->v[a].x, m->v[a].y, m->v[b].x, m->v[b].y, x, y) == 0)
             on = 3 * t + k;
     }
-    if (on >= 0 && m->he[on] >= 0 && m->he[on] / 3 < t) {
-        on = m->he[on];
+    if (on >= 0 && HE(m, on) >= 0 && HE(m, on) / 3 < t) {
+        on = HE(m, on);
         t = on / 3;
     }
     int p = add_vertex(m, x, y);
@@ -489,8 +515,8 @@ static int insert_point(struct tin *m, int32_t t, int32_t x, int32_t y)
         return -1;
     if (on < 0) {
         int e0 = 3 * t;
-        int32_t a = m->tv[e0], b = m->tv[e0 + 1], c = m->tv[e0 + 2];
-        int hab = m->he[e0], hbc = m->he[e0 + 1], hca = m->he[e0 + 2];
+        int32_t a = TV(m, e0), b = TV(m, e0 + 1), c = TV(m, e0 + 2);
+        int hab = HE(m, e0), hbc = HE(m, e0 + 1), hca = HE(m, e0 + 2);
         int t0 = add_tri(m, a, b, p, hab, -1, -1, e0);
         int t1 = add_tri(m, b, c, p, hbc, -1, t0 + 1, -1);
         int t2 = add_tri(m, c, a, p, hca, t0 + 2, t1 + 1, -1);
@@ -499,9 +525,9 @@ static int insert_point(struct tin *m, int32_t t, int32_t x, int32_t y)
             return -1;
         return 0;
     }
-    int e = on, h = m->he[on];
-    int32_t a = m->tv[e], b = m->tv[next_he(e)], c = m->tv[prev_he(e)];
-    int hbc = m->he[next_he(e)], hca = m->he[prev_he(e)];
+    int e = on, h = HE(m, on);
+    int32_t a = TV(m, e), b = TV(m, next_he(e)), c = TV(m, prev_he(e));
+    int hbc = HE(m, next_he(e)), hca = HE(m, prev_he(e));
     if (h < 0) {
         int t0 = add_tri(m, c, a, p, hca, -1, -1, e - e % 3);
         int t1 = add_tri(m, b, c, p, hbc, t0 + 2, -1, -1);
@@ -509,8 +535,8 @@ static int insert_point(struct tin *m, int32_t t, int32_t x, int32_t y)
             return -1;
         return 0;
     }
-    int32_t d = m->tv[prev_he(h)];
-    int had = m->he[next_he(h)], hdb = m->he[prev_he(h)];
+    int32_t d = TV(m, prev_he(h));
+    int had = HE(m, next_he(h)), hdb = HE(m, prev_he(h));
     int t0 = add_tri(m, c, a, p, hca, -1, -1, e - e % 3);
     int t1 = add_tri(m, b, c, p, hbc, t0 + 2, -1, -1);
     int t2 = add_tri(m, a, d, p, had, -1, t0 + 1, h - h % 3);
@@ -525,9 +551,9 @@ static int insert_point(struct tin *m, int32_t t, int32_t x, int32_t y)
  * half-edges that leave it until one has no twin. */
 static int hull_out(const struct tin *m, int32_t v)
 {
-    int e = m->vhe[v];
-    while (m->he[e] >= 0)
-        e = next_he(m->he[e]);
+    int e = m->v[v].he;
+    while (HE(m, e) >= 0)
+        e = next_he(HE(m, e));
     return e;
 }
 
@@ -586,15 +612,9 @@ int gv_tin_edge_greedy(const float *s, size_t step, uint32_t n,
 static void tin_release(struct tin *m)
 {
     free(m->used);
-    free(m->vx);
-    free(m->vy);
-    free(m->vz);
-    free(m->vhe);
-    free(m->tv);
-    free(m->he);
+    free(m->v);
+    free(m->t);
     free(m->cerr);
-    free(m->cidx);
-    free(m->hpos);
     free(m->heap);
     free(m->pend);
     free(m->pflag);
@@ -615,12 +635,12 @@ static void brute_select(const struct tin *m, double *be_out, int64_t *bi_out,
             if (m->used[idx])
                 continue;
             for (uint32_t t = 0; t < m->nt; t++) {
-                const int32_t *v = m->tv + 3 * t;
+                const int32_t *v = m->t[t].v;
                 int in = 1;
                 for (int k = 0; k < 3 && in; k++) {
                     int32_t a = v[k], b = v[(k + 1) % 3];
-                    in = orient(m->vx[a], m->vy[a], m->vx[b], m->vy[b], x,
-                                y) >= 0;
+                    in = orient(m->v[a].x, m->v[a].y, m->v[b].x, m->v[b].y,
+                                x, y) >= 0;
                 }
                 if (!in)
                     continue;
@@ -686,15 +706,35 @@ static int insert_border(struct tin *m, double goal, uint32_t *bpos)
     return 0;
 }
 
-/* The measured error of the mesh, over every sample (clears used). */
-static double measured_error(struct tin *m)
+/*
+ * The measured error of the mesh, over every sample: each triangle scanned
+ * in full.  After the heap's scans (scanned != 0) most of that is known:
+ * cerr is a triangle's largest error over its unused samples, and the used
+ * samples in it are its corners and, on a hull edge, border samples; so
+ * only the hull triangles are scanned again, and the others add their
+ * corners' errors on their plane.  The same values either way, and so the
+ * same maximum.
+ */
+static double measured_error(const struct tin *m, int scanned)
 {
     double me = 0;
-    memset(m->used, 0, (size_t)m->w * m->hgt);
     for (uint32_t t = 0; t < m->nt; t++) {
+        const int32_t *he = m->t[t].he;
         double e;
-        int64_t i;
-        scan_tri(m, (int32_t)t, 1, &e, &i);
+        if (!scanned || he[0] < 0 || he[1] < 0 || he[2] < 0) {
+            uint32_t i;
+            scan_tri(m, (int32_t)t, 1, &e, &i);
+        } else {
+            struct plane pl;
+            plane_of(m, (int32_t)t, &pl);
+            e = m->cerr[t];
+            for (int k = 0; k < 3; k++) {
+                const struct vert *v = &m->v[TV(m, 3 * (size_t)t + k)];
+                double d = fabs((double)v->z - plane_at(&pl, v->x, v->y));
+                if (d > e)
+                    e = d;
+            }
+        }
         if (e > me)
             me = e;
     }
@@ -718,16 +758,16 @@ static int hand_out(const struct tin *m, uint32_t w, uint32_t hgt, double me,
         gv_mesh_free(out);
         return -1;
     }
-    out->zmin = out->zmax = m->vz[0];
+    out->zmin = out->zmax = m->v[0].z;
     for (uint32_t i = 0; i < m->nv; i++) {
-        out->pos[3 * (size_t)i] = (float)m->vx[i];
-        out->pos[3 * (size_t)i + 1] = (float)m->vy[i];
-        out->pos[3 * (size_t)i + 2] = m->vz[i];
-        if (m->vz[i] < out->zmin) out->zmin = m->vz[i];
-        if (m->vz[i] > out->zmax) out->zmax = m->vz[i];
+        out->pos[3 * (size_t)i] = (float)m->v[i].x;
+        out->pos[3 * (size_t)i + 1] = (float)m->v[i].y;
+        out->pos[3 * (size_t)i + 2] = m->v[i].z;
+        if (m->v[i].z < out->zmin) out->zmin = m->v[i].z;
+        if (m->v[i].z > out->zmax) out->zmax = m->v[i].z;
     }
     for (uint32_t i = 0; i < 3 * m->nt; i++)
-        out->tris[i] = (uint32_t)m->tv[i];
+        out->tris[i] = (uint32_t)TV(m, i);
     return 0;
 }
 
@@ -757,6 +797,8 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
     m.hgt = hgt;
     m.stride = stride;
     double goal = p->max_error >= 0 ? p->max_error : -1;
+    m.goal = goal;
+    m.small = w <= 16384 && hgt <= 16384;
     m.used = calloc((size_t)w * hgt, 1);
     bpos = malloc((size_t)(w > hgt ? w : hgt) * sizeof *bpos);
     if (!m.used || !bpos || reserve_tris(&m, 64) < 0)
@@ -772,6 +814,7 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
     if (add_vertex(&m, 0, 0) < 0 || add_vertex(&m, W, 0) < 0 ||
         add_vertex(&m, W, H) < 0 || add_vertex(&m, 0, H) < 0)
         goto nomem;
+    m.track = 1;
     int t0 = add_tri(&m, 0, 1, 2, -1, -1, -1, -1);
     add_tri(&m, 0, 2, 3, t0 + 2, -1, -1, -1);
 
@@ -789,6 +832,7 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
         for (uint32_t y = 0; y < hgt; y++)
             m.used[(size_t)y * w] = m.used[(size_t)y * w + (size_t)W] = 1;
     }
+    m.track = 0;
     flush(&m, !brute);
 
     struct timespec t0s;
@@ -813,9 +857,9 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
         } else {
             if (m.nheap == 0)
                 break;
-            bt = m.heap[0];
-            be = m.cerr[bt];
-            bi = m.cidx[bt];
+            bt = m.heap[0].t;
+            be = m.heap[0].err;
+            bi = (int64_t)m.heap[0].idx;
         }
         if (bi < 0 || be <= 0 || (goal >= 0 && be <= goal))
             break;
@@ -827,7 +871,7 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
     }
 
     /* the measured error, over every sample */
-    if (hand_out(&m, w, hgt, measured_error(&m), out) < 0)
+    if (hand_out(&m, w, hgt, measured_error(&m, !brute), out) < 0)
         goto nomem;
     rc = 0;
     goto out;
