@@ -21,7 +21,10 @@ nogpu_tests="tests/test_render tests/test_filter_graph tests/test_edt_cpu \
 for variant in build:--enable-werror build-asan:--enable-sanitizers \
     build-nogpu:--without-gpu; do
     dir=${variant%%:*}
-    scripts/build.sh "$dir" --enable-werror "${variant#*:}"
+    # OpenSlide and GDAL are optional to configure, but install-deps.sh
+    # installs them: CI builds and tests their readers, never skips them.
+    scripts/build.sh "$dir" --enable-werror --with-openslide --with-gdal \
+        "${variant#*:}"
     tests=
     [ "$dir" = build-nogpu ] && tests="TESTS=$nogpu_tests"
     if ! make -C "$dir" -j"$(nproc)" check ${tests:+"$tests"}; then

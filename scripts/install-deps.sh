@@ -23,6 +23,10 @@ PACKAGES="$PACKAGES libjpeg62-turbo-dev libpng-dev"
 # libtiff: the native TIFF reader (lib/imageio); its tools (tiffcp) make
 # tests/data/native's TIFF variants.
 PACKAGES="$PACKAGES libtiff-dev libtiff-tools"
+# OpenSlide and GDAL: whole-slide images and georeferenced rasters in
+# (lib/imageio, optional at configure); openslide-tools and gdal-bin read
+# the generated slide and GeoTIFF of tests/input_slide_geo.sh.
+PACKAGES="$PACKAGES libopenslide-dev openslide-tools libgdal-dev"
 
 # bench/*.sh and conf/: nginx (http-tiles, http-iiif), wrk, curl and jq
 # (http-*), iipsrv behind spawn-fcgi (http-iiif), vips (encode-speed,

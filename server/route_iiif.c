@@ -92,6 +92,25 @@ static json_t *sizes_json(const struct image *img, const struct iiif_limits *lim
 }
 
 /* The image information document (spec 5), or NULL. */
+/* The IIIF Physical Dimensions service (IIIF Services Annex) of a store
+ * whose metadata gives microns per pixel (a whole slide's slide.mpp_x),
+ * in millimetres per pixel; NULL for any other. */
+static json_t *physdim_json(const struct image *img)
+{
+    const char *meta = gv_store_meta(img->store);
+    json_t *m = meta ? json_loads(meta, 0, NULL) : NULL;
+    json_t *mpp = json_object_get(m, "slide.mpp_x");
+    json_t *s = NULL;
+    if (json_is_number(mpp) && json_number_value(mpp) > 0)
+        s = json_pack("{s:s,s:s,s:f,s:s}",
+                      "@context", "http://iiif.io/api/annex/services/physdim/1/context.json",
+                      "profile", "http://iiif.io/api/annex/services/physdim",
+                      "physicalScale", json_number_value(mpp) / 1000.0,
+                      "physicalUnits", "mm");
+    json_decref(m);
+    return s;
+}
+
 static json_t *info_json(struct req *r, const struct image *img)
 {
     const struct gv_geometry *g = &img->info->geometry;
@@ -123,6 +142,11 @@ static json_t *info_json(struct req *r, const struct image *img)
     for (int i = 0; info && i < 3; i++)
         if (max[i].v)
             json_object_set_new(info, max[i].key, json_integer((json_int_t)max[i].v));
+    json_t *physdim = physdim_json(img);
+    if (info && physdim)
+        json_object_set_new(info, "service", json_pack("[o]", physdim));
+    else
+        json_decref(physdim);
     return info;
 }
 
@@ -140,7 +164,9 @@ enum MHD_Result route_iiif_info(struct req *r)
     if (j && http_access(r, img->id) == ACCESS_GRANTED) {
         json_object_set_new(j, "@context", json_pack(
             "[s,s]", "http://iiif.io/api/auth/2/context.json", IIIF_CONTEXT));
-        json_object_set_new(j, "service", auth_services_json(r, img->id));
+        json_t *services = auth_services_json(r, img->id);
+        json_array_extend(services, json_object_get(j, "service"));
+        json_object_set_new(j, "service", services);
     }
     image_put(img);
     /* JSON-LD only when asked for (spec 5.1); otherwise plain JSON with

@@ -116,6 +116,12 @@ enum MHD_Result route_image_info(struct req *r)
             "min", (double)h->height_min, "max", (double)h->height_max,
             "max_error", h->height_max_error, "error_codes", (int)h->height_e,
             "float_source", (int)h->height_float));
+    /* What the input said of its pixels (docs/FORMAT.md section 6,
+     * metadata section): a slide's microns per pixel, a raster's
+     * georeference. */
+    const char *meta = gv_store_meta(img->store);
+    if (j && meta)
+        json_object_set_new(j, "metadata", json_loads(meta, 0, NULL));
     image_put(img);
     if (!j)
         return http_send_errorf(r, GV_ENOMEM, "images: cannot build JSON");

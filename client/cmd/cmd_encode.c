@@ -222,6 +222,8 @@ static const struct opt_command encode_command = {
         "\n"
         "INPUT is an image in TIFF/BigTIFF, JPEG, PNG, OpenEXR, WebP, JPEG 2000,\n"
         "PNM, BMP, Targa, HDR, PSD, FITS or GIF (16-bit and float included),\n"
+        "a whole-slide image through OpenSlide (SVS, NDPI, MIRAX, SCN...) or\n"
+        "a GeoTIFF, COG or JPEG 2000 through GDAL, in builds with them,\n"
         "several images with --mosaic, or\n"
         "synth:WIDTHxHEIGHT[:gray] for a procedural test image.\n"
         "With --height, one single-channel INPUT (PNG-16, TIFF, EXR...) or\n"

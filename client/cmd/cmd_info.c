@@ -8,7 +8,9 @@
  */
 #include <stddef.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <jansson.h>
 
 #include "commands.h"
 #include "encode/source.h"
@@ -101,6 +103,8 @@ static void print_json(struct gv_store *s)
            8.0 * h->file_size / src_px, h->psnr0_mdb / 1000.0,
            h->target_mpsnr / 1000.0, h->max_rate);
     print_height_json(h);
+    if (gv_store_meta(s))   /* a JSON object, checked at open */
+        printf("\"metadata\":%s,", gv_store_meta(s));
     printf("\"level\":[");
     for (int k = 0; k <= g->root; k++) {
         const struct gv_level *l = &g->level[k];
@@ -111,6 +115,39 @@ static void print_json(struct gv_store *s)
                (unsigned long long)b, 8.0 * b / ((double)l->width * l->height));
     }
     printf("]}\n");
+}
+
+/* The store's metadata (store/store_meta.h), one key a line; strings
+ * longer than a line (a CRS's WKT) are cut, `info --json` gives them
+ * whole. */
+static void print_meta(const struct gv_store *s)
+{
+    const char *text = gv_store_meta(s);
+    json_t *o = text ? json_loads(text, 0, NULL) : NULL;
+    if (!o)
+        return;
+    const char *k;
+    json_t *v;
+    int first = 1;
+    json_object_foreach(o, k, v) {
+        printf("%-13s%s = ", first ? "metadata" : "", k);
+        first = 0;
+        if (json_is_string(v)) {
+            const char *str = json_string_value(v);
+            size_t n = strcspn(str, "\n");
+            if (n > 60 || str[n])
+                printf("%.*s... (%zu bytes)\n", (int)(n < 60 ? n : 60), str,
+                       strlen(str));
+            else
+                printf("%s\n", str);
+        } else {
+            char *d = json_dumps(v, JSON_COMPACT | JSON_ENCODE_ANY |
+                                        JSON_REAL_PRECISION(10));
+            printf("%s\n", d ? d : "?");
+            free(d);
+        }
+    }
+    json_decref(o);
 }
 
 /* The per-level table of the text form. */
@@ -175,6 +212,7 @@ static void print_text(struct gv_store *s, const char *path)
            (unsigned long long)h->pages);
     printf("size         %llu bytes, %.3f bits per source pixel\n",
            (unsigned long long)h->file_size, 8.0 * h->file_size / src_px);
+    print_meta(s);
     print_levels(s);
 }
 

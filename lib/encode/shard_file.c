@@ -16,6 +16,7 @@
 #include "base/atomic_file.h"
 #include "base/file_io.h"
 #include "store/geometry.h"
+#include "store/store_meta.h"
 #include "encode/shard_file.h"
 #include "encode/shard_plan.h"
 
@@ -117,15 +118,22 @@ struct gv_shard_writer {
     int index, count;
     uint32_t flags;
     uint64_t off, records;
+    uint64_t first;           /* the first record: after root and metadata */
     int have_root;
 };
 
 struct gv_shard_writer *gv_shard_writer_new(const char *path,
                                             const struct gv_header *h,
-                                            int index, int count,
-                                            uint32_t flags,
+                                            const uint8_t *meta,
+                                            size_t meta_len, int index,
+                                            int count, uint32_t flags,
                                             struct gv_error *err)
 {
+    if (meta_len > GV_META_MAX_SECTION) {
+        gv_fail(err, GV_EINVAL, "shard: metadata section of %zu bytes",
+                meta_len);
+        return NULL;
+    }
     struct gv_shard_writer *w = calloc(1, sizeof *w);
     if (!w) {
         gv_fail(err, GV_ENOMEM, "shard: out of memory");
@@ -151,13 +159,19 @@ struct gv_shard_writer *gv_shard_writer_new(const char *path,
     t.pages = w->g.pages;
     t.psnr0_mdb = 0;
     t.root_offset = t.root_size = t.index_offset = t.file_size = 0;
+    t.meta_offset = 0;
+    t.meta_size = (uint32_t)meta_len;
+    t.meta_crc = meta_len ? gv_crc32(0, meta, meta_len) : 0;
     uint8_t head[ROOT_AT] = {0};
     gv_header_pack(&t, head + TEMPLATE_AT);
-    if (gv_atomic_file_pwrite(&w->f, head, sizeof head, 0, err) < 0) {
+    const uint64_t meta_at = ROOT_AT + root_bytes(&w->g) + 4;
+    if (gv_atomic_file_pwrite(&w->f, head, sizeof head, 0, err) < 0 ||
+        (meta_len &&
+         gv_atomic_file_pwrite(&w->f, meta, meta_len, meta_at, err) < 0)) {
         gv_shard_writer_abort(w);
         return NULL;
     }
-    w->off = ROOT_AT + root_bytes(&w->g) + 4;
+    w->first = w->off = meta_at + meta_len;
     return w;
 }
 
@@ -214,7 +228,7 @@ int gv_shard_writer_finish(struct gv_shard_writer *w, struct gv_error *err)
     const struct shard_head head = {
         .index = (uint32_t)w->index, .count = (uint32_t)w->count,
         .flags = w->flags, .records = w->records, .file_size = w->off,
-        .first = ROOT_AT + root_bytes(&w->g) + 4};
+        .first = w->first};
     uint8_t h[GV_SHARD_HEADER];
     head_pack(&head, h);
     if (gv_atomic_file_pwrite(&w->f, h, sizeof h, 0, err) < 0)
@@ -244,6 +258,8 @@ struct gv_shard_reader {
     struct gv_geometry g;
     uint8_t *root;
     size_t root_len;
+    uint8_t *meta;            /* the metadata section, or NULL */
+    size_t meta_len;
     uint64_t next_off, seen;
 };
 
@@ -268,6 +284,7 @@ void gv_shard_close(struct gv_shard_reader *r)
         close(r->fd);
     free(r->path);
     free(r->root);
+    free(r->meta);
     free(r);
 }
 
@@ -347,6 +364,22 @@ static int read_root(struct gv_shard_reader *r, struct gv_error *err)
     return 0;
 }
 
+/* Read the metadata section, if any, and check its CRC. */
+static int read_meta(struct gv_shard_reader *r, struct gv_error *err)
+{
+    if (r->meta_len == 0)
+        return 0;
+    r->meta = malloc(r->meta_len);
+    if (!r->meta)
+        return gv_fail(err, GV_ENOMEM, "shard: out of memory");
+    if (read_at(r, r->meta, r->meta_len, ROOT_AT + r->root_len + 4, err) < 0)
+        return -1;
+    if (gv_crc32(0, r->meta, r->meta_len) != r->info.header.meta_crc)
+        return gv_fail(err, GV_ECORRUPT, "shard: %s: metadata CRC mismatch",
+                       r->path);
+    return 0;
+}
+
 struct gv_shard_reader *gv_shard_open(const char *path, struct gv_error *err)
 {
     struct gv_shard_reader *r = calloc(1, sizeof *r);
@@ -360,11 +393,14 @@ struct gv_shard_reader *gv_shard_open(const char *path, struct gv_error *err)
         read_headers(r, size, &first, err) < 0)
         goto fail;
     r->root_len = (size_t)root_bytes(&r->g);
-    if (first != ROOT_AT + r->root_len + 4 || first > r->info.file_size) {
+    r->meta_len = r->info.header.meta_size;
+    if (r->meta_len > GV_META_MAX_SECTION ||
+        first != ROOT_AT + r->root_len + 4 + r->meta_len ||
+        first > r->info.file_size) {
         gv_fail(err, GV_ECORRUPT, "shard: %s: bad record offset", path);
         goto fail;
     }
-    if (read_root(r, err) < 0)
+    if (read_root(r, err) < 0 || read_meta(r, err) < 0)
         goto fail;
     r->next_off = first;
     return r;
@@ -376,6 +412,12 @@ fail:
 const struct gv_shard_info *gv_shard_get_info(const struct gv_shard_reader *r)
 {
     return &r->info;
+}
+
+const uint8_t *gv_shard_meta(const struct gv_shard_reader *r, size_t *len)
+{
+    *len = r->meta_len;
+    return r->meta;
 }
 
 const uint8_t *gv_shard_root(const struct gv_shard_reader *r, size_t *len)

@@ -8,6 +8,8 @@
  *   64   128         the store header the merge will write (offsets and
  *                    level-0 PSNR zero), with its own CRC
  *   192  w*h*C + 4   the root level's pixels, then their CRC32
+ *   ...              the store's metadata section, if any (its size and
+ *                    CRC32 in the store header)
  *   ...              tile records: a 64-byte record header (CRC32 in its
  *                    last 4 bytes) and the tile buffer, padded to 4 bytes
  *
@@ -57,11 +59,13 @@ struct gv_shard_record {
 struct gv_shard_writer;
 
 /* Start shard `index` of `count` at `path` for the store header *h (as
- * gv_store_writer_new takes it) and flags. */
+ * gv_store_writer_new takes it), the store's metadata section (meta,
+ * meta_len bytes from gv_meta_pack; NULL, 0 for none) and flags. */
 struct gv_shard_writer *gv_shard_writer_new(const char *path,
                                             const struct gv_header *h,
-                                            int index, int count,
-                                            uint32_t flags,
+                                            const uint8_t *meta,
+                                            size_t meta_len, int index,
+                                            int count, uint32_t flags,
                                             struct gv_error *err);
 
 /* Record the root level's pixels (root width x height x channels). */
@@ -94,6 +98,10 @@ struct gv_shard_reader *gv_shard_open(const char *path, struct gv_error *err);
 void gv_shard_close(struct gv_shard_reader *r);
 
 const struct gv_shard_info *gv_shard_get_info(const struct gv_shard_reader *r);
+
+/* The store's metadata section as the encoder packed it, CRC checked
+ * (valid until close); NULL with *len 0 when there is none. */
+const uint8_t *gv_shard_meta(const struct gv_shard_reader *r, size_t *len);
 
 /* The root level's pixels (valid until close). */
 const uint8_t *gv_shard_root(const struct gv_shard_reader *r, size_t *len);

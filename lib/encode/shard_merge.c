@@ -166,8 +166,12 @@ static int write_store(struct merge *m, struct gv_store_writer *w)
                     return -1;
             }
     }
-    size_t rootlen;
-    return gv_store_writer_root(w, gv_shard_root(m->r[0], &rootlen), m->err);
+    size_t rootlen, metalen;
+    if (gv_store_writer_root(w, gv_shard_root(m->r[0], &rootlen), m->err) < 0)
+        return -1;
+    /* After the root, as a single encode writes it (stream_encoder.c). */
+    const uint8_t *meta = gv_shard_meta(m->r[0], &metalen);
+    return meta ? gv_store_writer_meta(w, meta, metalen, m->err) : 0;
 }
 
 /* Buffers for copying tiles, and one slot per tile of every level. */

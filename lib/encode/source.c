@@ -454,6 +454,13 @@ static int open_images(struct gv_source *s, const char *const *inputs,
     return 0;
 }
 
+const char *gv_source_meta(const struct gv_source *s)
+{
+    if (s->kind != KIND_IMAGES || s->cols * s->rows != 1 || !s->probed)
+        return NULL;
+    return gv_image_meta(s->probed);
+}
+
 struct gv_source *gv_source_open(const char *const *inputs, int n,
                                  const struct gv_source_opts *opts,
                                  struct gv_source_info *info,

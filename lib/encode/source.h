@@ -74,6 +74,13 @@ struct gv_source *gv_source_open(const char *const *inputs, int n,
 int gv_source_read(struct gv_source *s, uint32_t rows, uint8_t *out,
                    struct gv_error *err);
 
+/* What a single input image says of its pixels, as the JSON object of
+ * store metadata (store/store_meta.h; gv_image_meta says which readers
+ * give it: a whole slide's scanner metadata, a raster's georeference),
+ * or NULL (a mosaic, a pattern, a file without any).  Valid until the
+ * first gv_source_read. */
+const char *gv_source_meta(const struct gv_source *s);
+
 /* Close every input.  gv_source_free(NULL) does nothing. */
 /* A reader of any rectangle of the rows gv_source_read delivers, read
  * from the input file where they lie (raw_regions.h), for a source that

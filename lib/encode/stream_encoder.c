@@ -63,6 +63,7 @@
 #include "imageio/raw_regions.h"
 #include "render/store_decoder.h"
 #include "store/store_format.h"
+#include "store/store_meta.h"
 #include "store/store_write.h"
 
 #define WINDOW (GV_PAGE_TILES * GV_STEP + 1)  /* 4097: a page plus overlap */
@@ -79,6 +80,9 @@ void gv_encode_opts_default(struct gv_encode_opts *o)
 
 struct encoder {
     const struct gv_encode_opts *opts;
+    uint8_t *meta;            /* the store's metadata section (store_meta.h)
+                               * from the input's, or NULL */
+    size_t meta_len;
     double target_mse;        /* gv_psnr_to_mse(opts->target_psnr) */
     double lambda;            /* equal-slope mode: the price of a bit */
     struct gv_lambda_model model[GV_MAX_LEVELS]; /* levels' detail, pass 1 */
@@ -1161,6 +1165,7 @@ static void root_packer_join(struct root_packer *p)
 
 static void teardown(struct encoder *e)
 {
+    free(e->meta);
     root_packer_join(&e->packer);
     free(e->packer.z);
     gv_lambda_trial_result_free(&e->trial_res);
@@ -1262,7 +1267,8 @@ static int open_output(struct encoder *e, const char *output)
                            opts->shard_count, e->err) < 0)
         return -1;
     e->sharded = 1;
-    e->shard = gv_shard_writer_new(output, &h, opts->shard_index,
+    e->shard = gv_shard_writer_new(output, &h, e->meta, e->meta_len,
+                                   opts->shard_index,
                                    opts->shard_count,
                                    opts->per_tile ? 0 : GV_SHARD_FLAG_RD, e->err);
     return e->shard ? 0 : -1;
@@ -1332,7 +1338,9 @@ static int finish_store(struct encoder *e, const char *output, uint64_t sse0,
         *e->err = p->err;
         return -1;
     }
-    if (gv_store_writer_root_packed(e->writer, p->z, p->zlen, e->err) < 0)
+    if (gv_store_writer_root_packed(e->writer, p->z, p->zlen, e->err) < 0 ||
+        (e->meta &&
+         gv_store_writer_meta(e->writer, e->meta, e->meta_len, e->err) < 0))
         return -1;
     e->res->psnr0 = gv_encode_psnr0(sse0, samples0);
     struct gv_store_writer *w = e->writer;
@@ -1359,6 +1367,11 @@ int gv_encode(const char *const *inputs, int n, const char *output,
                                            &res->source, err);
     if (!src)
         return -1;
+    /* What the input says of its pixels (a slide's microns per pixel, a
+     * raster's georeference), kept in the store. */
+    const char *meta = gv_source_meta(src);
+    if (meta && gv_meta_pack(meta, strlen(meta), &e.meta, &e.meta_len, err) < 0)
+        goto out;
     if (open_output(&e, output) < 0 || open_spill(&e, output) < 0 ||
         choose_level0(&e, src) < 0 || layout_scratch(&e) < 0 || start_workers(&e) < 0 || pass1(&e, src) < 0)
         goto out;

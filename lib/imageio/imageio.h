@@ -78,6 +78,13 @@ int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,
 /* Close.  gv_image_close(NULL) does nothing. */
 void gv_image_close(struct gv_image_in *in);
 
+/* What the file says of its pixels, as a JSON object of store metadata
+ * (store/store_meta.h), valid until close; NULL for files without any.
+ * A whole-slide image read through OpenSlide gives the scanner's
+ * (slide.*: vendor, microns per pixel, objective power), a raster read
+ * through GDAL its georeference (geo.*: geotransform, CRS, EPSG code). */
+const char *gv_image_meta(const struct gv_image_in *in);
+
 /* Where the file stores its pixels uncompressed, as gv_image_read
  * delivers them (today: an uncompressed TIFF of 8-bit samples read by
  * the native reader), a reader of any rectangle of them that outlives in

@@ -43,6 +43,12 @@
  * reads the header only) against its strip too: a file whose strip
  * passes the limit goes to the module, which reads a strip a row at a
  * time.
+ * Whole-slide images and georeferenced rasters go, before any of these,
+ * to OpenSlide (slide_openslide.c) and GDAL (raster_gdal.c) where the
+ * build has them: a TIFF whose first directory carries a scanner's mark
+ * or GeoTIFF tags (tiff_sniff.c), a JPEG 2000, or a file named as a
+ * MIRAX, VMS or Sakura slide is offered to them, and what they decline
+ * goes on as above.  GIGAVIEW_NATIVE_READERS does not change this.
  * Writing goes through the module, but for gv_image_encode's JPEG
  * (native_jpeg_write.c: the module's very bytes, with no module to load,
  * so that a server's first JPEG answer does not wait for OpenImageIO);
@@ -55,9 +61,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "config.h"
 #include "imageio/imageio.h"
 #include "imageio/imageio_module.h"
 #include "imageio/native_file.h"
@@ -68,6 +76,13 @@
 #include "imageio/native_tiff.h"
 #include "imageio/psd_thumbnail.h"
 #include "imageio/tiff_limits.h"
+#include "imageio/tiff_sniff.h"
+#ifdef GV_HAVE_OPENSLIDE
+#include "imageio/slide_openslide.h"
+#endif
+#ifdef GV_HAVE_GDAL
+#include "imageio/raster_gdal.h"
+#endif
 
 #ifndef PKGLIBDIR
 #define PKGLIBDIR "/usr/local/lib/gigaview"
@@ -181,7 +196,7 @@ static const struct gv_imageio_module *get(struct gv_error *err)
 }
 
 /* Who reads an opened image. */
-enum reader { BY_MODULE, BY_JPEG, BY_PNG, BY_TIFF };
+enum reader { BY_MODULE, BY_JPEG, BY_PNG, BY_TIFF, BY_SLIDE, BY_RASTER };
 
 struct gv_image_in {
     enum reader by;
@@ -190,6 +205,12 @@ struct gv_image_in {
         struct gv_native_jpeg *jpeg;
         struct gv_native_png *png;
         struct gv_native_tiff *tiff;
+#ifdef GV_HAVE_OPENSLIDE
+        struct gv_slide *slide;
+#endif
+#ifdef GV_HAVE_GDAL
+        struct gv_raster *raster;
+#endif
     } u;
 };
 
@@ -200,21 +221,97 @@ static int native_allowed(void)
     return !(v && strcmp(v, "0") == 0);
 }
 
+/* Which domain reader a file wants, from its first bytes and name:
+ * OpenSlide for a scanner's slide, GDAL for a georeferenced raster or a
+ * JPEG 2000.  The library decides; these only say whom to ask. */
+struct gv_domain {
+    int slide, raster;
+};
+
+/* A slide format that is not a TIFF, by the name OpenSlide detects it
+ * by: MIRAX (.mrxs), Hamamatsu VMS/VMU, Sakura (.svslide). */
+static int slide_name(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    static const char *const ext[] = {".mrxs", ".vms", ".vmu", ".svslide"};
+    for (size_t i = 0; dot && i < sizeof ext / sizeof ext[0]; i++)
+        if (strcasecmp(dot, ext[i]) == 0)
+            return 1;
+    return 0;
+}
+
+/* Offer the file to OpenSlide, then GDAL, as dom says.  1 when one took
+ * it (in->by and in->u set), 0 when both declined, -1 when one refused
+ * it (*err filled). */
+static int open_domain(struct gv_image_in *in, const char *path,
+                       const struct gv_domain *dom,
+                       const struct gv_image_limits *lim,
+                       struct gv_image_info *info, struct gv_error *err)
+{
+    struct gv_error e = {0};
+    gv_error_clear(&e);
+#ifdef GV_HAVE_OPENSLIDE
+    if (dom->slide) {
+        in->u.slide = gv_slide_open(path, lim, info, &e);
+        if (in->u.slide) {
+            in->by = BY_SLIDE;
+            return 1;
+        }
+        if (e.code != GV_OK)
+            goto refused;
+    }
+#endif
+#ifdef GV_HAVE_GDAL
+    if (dom->raster) {
+        in->u.raster = gv_raster_open(path, lim, info, &e);
+        if (in->u.raster) {
+            in->by = BY_RASTER;
+            return 1;
+        }
+        if (e.code != GV_OK)
+            goto refused;
+    }
+#endif
+    (void)in, (void)path, (void)dom, (void)lim, (void)info, (void)err;
+    return 0;
+#if defined(GV_HAVE_OPENSLIDE) || defined(GV_HAVE_GDAL)
+refused:
+    if (err)
+        *err = e;
+    return -1;
+#endif
+}
+
 /* The native reader for `path`'s first bytes, or BY_MODULE (also when it
  * is not a regular file or cannot be read: the module says why in its
  * words).  *soi: whether they are a JPEG's start of image, FF D8, as
  * libjpeg (which skips bytes between markers, with a warning) and so the
  * module take them even when the native reader does not.  *psd: whether
  * they are a Photoshop file's, whose thumbnail the module decodes. */
-static enum reader sniff(const char *path, int *soi, int *psd)
+static enum reader sniff(const char *path, int *soi, int *psd,
+                         struct gv_domain *dom)
 {
-    uint8_t head[8];
+    uint8_t head[12];
     *soi = *psd = 0;
+    memset(dom, 0, sizeof *dom);
     FILE *f = gv_native_open_regular(path);
     if (!f)
         return BY_MODULE;
     size_t n = fread(head, 1, sizeof head, f);
+    if (gv_native_tiff_sniff(head, n)) {
+        struct gv_tiff_sniff t;
+        gv_tiff_sniff(f, &t);
+        dom->slide = t.slide;
+        dom->raster = t.geo;
+    }
     fclose(f);
+    static const uint8_t jp2[12] = {0, 0, 0, 12, 'j', 'P', ' ', ' ',
+                                    0x0d, 0x0a, 0x87, 0x0a};
+    static const uint8_t j2k[4] = {0xFF, 0x4F, 0xFF, 0x51};
+    if ((n == 12 && memcmp(head, jp2, 12) == 0) ||
+        (n >= 4 && memcmp(head, j2k, 4) == 0))
+        dom->raster = 1;
+    dom->slide |= slide_name(path);
     *soi = n >= 2 && head[0] == 0xFF && head[1] == 0xD8;
     *psd = gv_psd_sniff(head, n);
     if (gv_native_jpeg_sniff(head, n))
@@ -237,7 +334,17 @@ struct gv_image_in *gv_image_open_limits(const char *path,
         return NULL;
     }
     int soi, psd;
-    in->by = sniff(path, &soi, &psd);
+    struct gv_domain dom;
+    in->by = sniff(path, &soi, &psd, &dom);
+    switch (open_domain(in, path, &dom, lim, info, err)) {
+    case 1:
+        return in;
+    case -1:
+        free(in);
+        return NULL;
+    default:
+        break;
+    }
     const int png = in->by == BY_PNG;   /* the PNG signature */
     const int tiff = in->by == BY_TIFF;   /* a TIFF's or BigTIFF's */
     if (!native_allowed())
@@ -315,7 +422,15 @@ int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,
         return gv_native_png_read(in->u.png, rows, out, err);
     case BY_TIFF:
         return gv_native_tiff_read(in->u.tiff, rows, out, err);
-    case BY_MODULE:
+#ifdef GV_HAVE_OPENSLIDE
+    case BY_SLIDE:
+        return gv_slide_read(in->u.slide, rows, out, err);
+#endif
+#ifdef GV_HAVE_GDAL
+    case BY_RASTER:
+        return gv_raster_read(in->u.raster, rows, out, err);
+#endif
+    default:
         break;
     }
     /* An image was opened by the module, so it is loaded. */
@@ -351,8 +466,34 @@ void gv_image_close(struct gv_image_in *in)
     case BY_MODULE:
         module->close(in->u.module);
         break;
+#ifdef GV_HAVE_OPENSLIDE
+    case BY_SLIDE:
+        gv_slide_close(in->u.slide);
+        break;
+#endif
+#ifdef GV_HAVE_GDAL
+    case BY_RASTER:
+        gv_raster_close(in->u.raster);
+        break;
+#endif
+    default:
+        break;
     }
     free(in);
+}
+
+const char *gv_image_meta(const struct gv_image_in *in)
+{
+#ifdef GV_HAVE_OPENSLIDE
+    if (in->by == BY_SLIDE)
+        return gv_slide_meta(in->u.slide);
+#endif
+#ifdef GV_HAVE_GDAL
+    if (in->by == BY_RASTER)
+        return gv_raster_meta(in->u.raster);
+#endif
+    (void)in;
+    return NULL;
 }
 
 int gv_image_write(const char *path, uint32_t width, uint32_t height,

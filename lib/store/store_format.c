@@ -80,6 +80,10 @@ void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE])
         gv_put_f32(out + 108, h->height_min);
         gv_put_f32(out + 112, h->height_max);
         memcpy(out + 116, h->height_unit, strnlen(h->height_unit, GV_HEIGHT_UNIT));
+    } else {
+        gv_put64(out + 80, h->meta_offset);
+        gv_put32(out + 88, h->meta_size);
+        gv_put32(out + 92, h->meta_crc);
     }
     gv_put32(out + 124, gv_crc32(0, out, 124));
 }
@@ -125,6 +129,14 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
     h->height_offset = h->height_max_error = 0;
     h->height_min = h->height_max = 0;
     memset(h->height_unit, 0, sizeof h->height_unit);
+    h->meta_offset = 0;
+    h->meta_size = h->meta_crc = 0;
+    if (h->version != GV_VERSION_HEIGHT) {
+        /* Image stores: the metadata section, or zeros (section 6). */
+        h->meta_offset = gv_get64(in + 80);
+        h->meta_size = gv_get32(in + 88);
+        h->meta_crc = gv_get32(in + 92);
+    }
     if (h->version == GV_VERSION_HEIGHT) {
         /* Version 3 is the height store: one channel, finite mapping. */
         h->kind = in[80];

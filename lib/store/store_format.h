@@ -10,6 +10,8 @@
  *   pages    one per 8x8 tiles of a level, written coarse to fine
  *   root     the root level as a lossless WebP image, then a CRC32; its
  *            mips down to 1x1 are derived by the box filter
+ *   meta     optional (image stores): the metadata section
+ *            (store_meta.h), its offset, size and CRC32 in the header
  *   index    16 bytes per page {u64 offset, u32 size, u32 crc32}, then a
  *            CRC32 of the index
  *
@@ -70,6 +72,10 @@ struct gv_header {
     double height_scale, height_offset, height_max_error;
     float height_min, height_max;   /* range of the input values */
     char height_unit[GV_HEIGHT_UNIT + 1];
+    /* Image stores (not version 3): the optional metadata section
+     * (store_meta.h), size 0 when there is none. */
+    uint64_t meta_offset;
+    uint32_t meta_size, meta_crc;   /* the whole section, its CRC32 */
 };
 
 /* Serialize h into 128 bytes, CRC included. */

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "base/file_io.h"
+#include "store/store_meta.h"
 #include "store/store_read.h"
 #include "codec/height_tile.h"
 #include "codec/tile.h"
@@ -26,6 +27,7 @@ struct gv_store {
     uint32_t root_crc;        /* the root section's CRC, as stored */
     uint64_t identity;        /* gv_store_identity */
     char *path;
+    char *meta;               /* gv_store_meta: the metadata's JSON */
 };
 
 static int read_exact(int fd, void *buf, size_t len, uint64_t off,
@@ -67,7 +69,31 @@ static int check_header(struct gv_store *s, uint64_t file_size,
     if (h->index_offset < GV_HEADER_SIZE || h->index_offset > file_size ||
         index_bytes > file_size - h->index_offset)
         return gv_fail(err, GV_ECORRUPT, "store: page index out of bounds");
+    if (h->meta_size != 0 &&
+        (h->meta_size > GV_META_MAX_SECTION || h->meta_offset < GV_HEADER_SIZE ||
+         h->meta_offset > file_size || h->meta_size > file_size - h->meta_offset))
+        return gv_fail(err, GV_ECORRUPT, "store: metadata section out of bounds");
     return 0;
+}
+
+/* Read and check the metadata section, if any (a newer version of it is
+ * ignored: s->meta stays NULL). */
+static int load_meta(struct gv_store *s, struct gv_error *err)
+{
+    const struct gv_header *h = &s->info.header;
+    if (h->meta_size == 0)
+        return 0;
+    uint8_t *b = malloc(h->meta_size);
+    if (!b)
+        return gv_fail(err, GV_ENOMEM, "store: out of memory for metadata");
+    int rc = read_exact(s->fd, b, h->meta_size, h->meta_offset,
+                        "metadata section", err);
+    if (rc == 0 && gv_crc32(0, b, h->meta_size) != h->meta_crc)
+        rc = gv_fail(err, GV_ECORRUPT, "store: metadata section CRC mismatch");
+    if (rc == 0)
+        rc = gv_meta_unpack(b, h->meta_size, &s->meta, err);
+    free(b);
+    return rc;
 }
 
 /* Same shape as open_file in encode/shard_file.c: deliberately separate, the
@@ -252,7 +278,7 @@ struct gv_store *gv_store_open(const char *path, struct gv_error *err)
         read_exact(s->fd, hb, sizeof hb, 0, "header", err) < 0 ||
         gv_header_unpack(hb, &s->info.header, err) < 0 ||
         check_header(s, size, err) < 0 || load_root(s, err) < 0 ||
-        load_index(s, err) < 0) {
+        load_index(s, err) < 0 || load_meta(s, err) < 0) {
         gv_store_close(s);
         return NULL;
     }
@@ -273,12 +299,18 @@ void gv_store_close(struct gv_store *s)
     free(s->root);
     free(s->index);
     free(s->path);
+    free(s->meta);
     free(s);
 }
 
 const struct gv_store_info *gv_store_info(const struct gv_store *s)
 {
     return &s->info;
+}
+
+const char *gv_store_meta(const struct gv_store *s)
+{
+    return s->meta;
 }
 
 uint64_t gv_store_identity(const struct gv_store *s)

@@ -3,7 +3,7 @@
  *
  * gv_store_open validates everything it reads up front: header CRC, the
  * geometry, the root section (with its CRC; it is at most ~1 MiB and kept
- * in memory) and the page index (CRC, every extent inside the file).
+ * in memory), the metadata section if any (store_meta.h) and the page index (CRC, every extent inside the file).
  * Pages are read on demand with pread and checked against their CRC before
  * any byte of them is used, so a damaged page fails alone and clearly.
  * A store is immutable; an open store may be shared by threads, since
@@ -35,6 +35,12 @@ struct gv_store *gv_store_open(const char *path, struct gv_error *err);
 void gv_store_close(struct gv_store *s);
 
 const struct gv_store_info *gv_store_info(const struct gv_store *s);
+
+/* The store's metadata (store_meta.h: a JSON object of at most
+ * GV_META_MAX_JSON bytes, checked at open), NUL-terminated and valid
+ * until close; NULL when the store has none (or one of a newer section
+ * version).  Any thread. */
+const char *gv_store_meta(const struct gv_store *s);
 
 /*
  * The store's identity: a 64-bit hash, computed at open, of the header,

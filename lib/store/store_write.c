@@ -6,6 +6,7 @@
 
 #include "base/atomic_file.h"
 #include "store/geometry.h"
+#include "store/store_meta.h"
 #include "store/store_write.h"
 
 /* Error messages of the file itself start "store:", as every other message
@@ -48,6 +49,8 @@ struct gv_store_writer *gv_store_writer_new(const char *path,
     }
     w->f.fd = -1;
     w->h = *h;
+    w->h.meta_offset = 0;   /* gv_store_writer_meta fills them */
+    w->h.meta_size = w->h.meta_crc = 0;
     /* An image store is version 2 unless the caller asks for 4 (tiles in
      * layout D). */
     w->h.version = h->kind == GV_KIND_HEIGHT ? GV_VERSION_HEIGHT :
@@ -155,6 +158,22 @@ int gv_store_writer_root_packed(struct gv_store_writer *w, const uint8_t *z,
         w->have_root = 1;
     }
     return rc;
+}
+
+int gv_store_writer_meta(struct gv_store_writer *w, const uint8_t *section,
+                         size_t len, struct gv_error *err)
+{
+    if (w->h.kind == GV_KIND_HEIGHT || w->h.meta_offset != 0 ||
+        len == 0 || len > GV_META_MAX_SECTION)
+        return gv_fail(err, GV_EINVAL, "store: a metadata section of %zu "
+                       "bytes cannot be written here", len);
+    if (write_at(w, section, len, w->off, err) < 0)
+        return -1;
+    w->h.meta_offset = w->off;
+    w->h.meta_size = (uint32_t)len;
+    w->h.meta_crc = gv_crc32(0, section, len);
+    w->off += len;
+    return 0;
 }
 
 void gv_store_writer_set_psnr(struct gv_store_writer *w, uint32_t psnr0_mdb)

@@ -48,6 +48,12 @@ int gv_store_writer_root(struct gv_store_writer *w, const uint8_t *pixels,
 int gv_store_writer_root_packed(struct gv_store_writer *w, const uint8_t *z,
                                 size_t zlen, struct gv_error *err);
 
+/* Append the metadata section (store_meta.h: `section`, len bytes, as
+ * gv_meta_pack made it) and point the header at it.  Image stores only;
+ * at most once.  0, or -1 with *err filled. */
+int gv_store_writer_meta(struct gv_store_writer *w, const uint8_t *section,
+                         size_t len, struct gv_error *err);
+
 /* Record the level-0 PSNR in millidecibels for the header. */
 void gv_store_writer_set_psnr(struct gv_store_writer *w, uint32_t psnr0_mdb);
 

@@ -1,0 +1,59 @@
+/*
+ * fuzz_store_meta.c - libFuzzer target for the metadata section of an
+ * image store (lib/store/store_meta.c, docs/FORMAT.md section 6).
+ *
+ * The input is a whole section as a reader finds it after its CRC:
+ * "GVMD", version, length, JSON.  gv_meta_unpack must either refuse it
+ * with a "store: metadata" message and GV_ECORRUPT (GV_ENOMEM aside), or
+ * accept it; an accepted section of the current version must hold at
+ * most GV_META_MAX_JSON bytes of JSON, pass gv_meta_check, and pack back
+ * to the very same bytes (gv_meta_pack), so that writer and reader agree
+ * on every rule and the size limit is enforced on both sides.  Input is
+ * also tried as bare JSON through gv_meta_check.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fuzz.h"
+#include "store/store_meta.h"
+
+#define MAX_INPUT (GV_META_MAX_SECTION + 4096)   /* just past the limit */
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    if (size > MAX_INPUT)
+        return 0;
+    struct gv_error err = {0};
+    char *json = NULL;
+    int rc = gv_meta_unpack(data, size, &json, &err);
+    if (rc < 0) {
+        if (json || (err.code != GV_ECORRUPT && err.code != GV_ENOMEM) ||
+            strncmp(err.text, "store: metadata", 15) != 0) {
+            fprintf(stderr, "refusal without its code or message: %d %s\n",
+                    err.code, err.text);
+            abort();
+        }
+    } else if (json) {
+        size_t n = strlen(json);
+        uint8_t *packed = NULL;
+        size_t plen = 0;
+        if (n > GV_META_MAX_JSON || n + GV_META_HEAD != size ||
+            gv_meta_check(json, n, &err) < 0 ||
+            gv_meta_pack(json, n, &packed, &plen, &err) < 0 || plen != size ||
+            memcmp(packed, data, size) != 0) {
+            fprintf(stderr, "accepted section does not round-trip: %s\n",
+                    err.text);
+            abort();
+        }
+        free(packed);
+        free(json);
+    }
+    gv_error_clear(&err);
+    if (gv_meta_check((const char *)data, size, &err) == 0 &&
+        size > GV_META_MAX_JSON) {
+        fprintf(stderr, "check accepted %zu bytes\n", size);
+        abort();
+    }
+    return 0;
+}
