@@ -175,7 +175,7 @@ enum MHD_Result route_iiif_info(struct req *r)
     int ld = accept && strstr(accept, "application/ld+json");
     size_t len;
     struct MHD_Response *resp = http_response_json(
-        j, JSON_INDENT(2),
+        j, JSON_INDENT(2) | JSON_REAL_PRECISION(10),
         ld ? "application/ld+json;profile=\"" IIIF_CONTEXT "\"" : "application/json",
         &len);
     if (!resp)
