@@ -273,8 +273,8 @@ static uint32_t ilevel_of(double L, double lmax)
  */
 static int rank_order(const float *len, uint32_t nn, uint32_t *order)
 {
-    uint32_t *key = malloc((size_t)nn * 2 * sizeof *key);
-    uint32_t *tmp = malloc((size_t)nn * sizeof *tmp);
+    uint32_t *key = malloc(((size_t)nn * 2 + 1) * sizeof *key);
+    uint32_t *tmp = malloc(((size_t)nn + 1) * sizeof *tmp);
     uint32_t *cnt = malloc(65536 * sizeof *cnt);
     if (!key || !tmp || !cnt) {
         free(key);
