@@ -7,7 +7,7 @@ tsv=$1 png=$2
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 for m in ours-cpu ours-gpu sloppy open3d quadric; do
-	awk -F'\t' -v m="$m" 'NR > 1 && $4 == m && $1 == "volume" {print $3, $6, $7}' "$tsv" >"$tmp/$m.dat"
+	awk -F'\t' -v m="$m" 'NR > 1 && $4 == m && $1 == "volume300" {print $3, $6, $7}' "$tsv" >"$tmp/$m.dat"
 done
 gnuplot <<EOG
 set terminal pngcairo size 1100,450

@@ -6,18 +6,19 @@
 # collapse: error), every method at the same face count, in one run on
 # the same meshes: Debian's assimp-testmodels (WusonOBJ.obj, spider.obj),
 # a dense TIN of a height field (`gigaview mesh` of ETOPO), and a
-# marching-tetrahedra surface of a synthetic volume (bench/simplify_volume.c,
-# about 2.1M triangles).  Error: symmetric Hausdorff and RMS surface
+# marching-tetrahedra surface of a synthetic volume (bench/simplify_volume.c:
+# N = 300, 2.1M triangles, and N = 650, 10.0M).  Error: symmetric Hausdorff and RMS surface
 # distance to the input by bench/mesh_distance.c, in % of the input's
 # bounding-box diagonal.  Prints the figures and the ratios to the
-# anchors; asserts nothing.  Writes bench/results/simplify-DATE.tsv and,
+# anchors (time / meshopt_simplifySloppy's, Hausdorff / Open3D's);
+# asserts nothing.  Writes bench/results/simplify-DATE.tsv and,
 # with gnuplot, bench/simplify-DATE.png.  CGAL's edge collapse is not run
 # (libcgal-dev not installed; left for later).
 #
 #   bench/simplify-speed.sh [RATIO...]     (default: 0.2 0.05 0.01)
 #
 # Environment: BUILD (the build directory, default ../build), VOLUME_N
-# (default 300), SAMPLES (distance samples per mesh, default 100000).
+# (the volumes' N, default "300 650"), SAMPLES (distance samples per mesh, default 100000).
 # Needs python3-open3d and assimp-testmodels (scripts/install-deps.sh) and
 # `make bench` in BUILD.  The times are the simplification alone, read and
 # write excluded: ours = octree build + selection ("gpu": the build on the
@@ -47,15 +48,17 @@ done
 	-o "$work/etopo-tin.ply" >/dev/null
 meshes+=("$work/etopo-tin.ply")
 cc -O2 -o "$work/volume" "$here/simplify_volume.c" -lm
-"$work/volume" "${VOLUME_N:-300}" "$work/volume.ply" >/dev/null
-meshes+=("$work/volume.ply")
+for vn in ${VOLUME_N:-300 650}; do
+	"$work/volume" "$vn" "$work/volume$vn.ply" >/dev/null
+	meshes+=("$work/volume$vn.ply")
+done
 
 date=$(date -u +%Y-%m-%d)
 mkdir -p "$here/results"
 tsv=$here/results/simplify-$date.tsv
 printf 'mesh\tin_faces\tasked\tmethod\tfaces\tms\thausdorff_pct\trms_pct\n' >"$tsv"
-printf '%-14s %9s %8s %-14s %8s %6s %9s %8s %9s %8s\n' mesh in asked method \
-	faces dev% ms "x sloppy" "haus%" "rms%"
+printf '%-14s %9s %8s %-14s %8s %6s %9s %8s %9s %8s %8s\n' mesh in asked method \
+	faces dev% ms "x sloppy" "haus%" "x o3d" "rms%"
 for m in "${meshes[@]}"; do
 	name=$(basename "$m"); name=${name%.*}
 	nin=$("$gv" simplify "$m" --ratio 1 --cpu -o "$work/in.ply" | sed 's/.*vertices, \([0-9]*\) triangles -> .*/\1/')
@@ -78,23 +81,28 @@ for m in "${meshes[@]}"; do
 		read -r _ _ ms[quadric] _ faces[quadric] <<<"$out"
 		out=$($py "$here/simplify_open3d.py" "$m" "$asked" "$work/open3d.ply" 2>/dev/null | grep '^open3d ms')
 		read -r _ _ ms[open3d] _ faces[open3d] _ _ <<<"$out"
+		declare -A hs rms
 		for meth in ours-cpu ours-gpu ours-select sloppy open3d quadric; do
 			case $meth in
 			ours-cpu) out=$work/ours.ply ;;
 			ours-gpu|ours-select) out= ;;
 			*) out=$work/$meth.ply ;;
 			esac
-			h=- rm=-
+			hs[$meth]=- rms[$meth]=-
 			if [ -n "$out" ]; then
 				dl=$("$dist" "$work/in.ply" "$out" "$samples")
 				read -r _ hd _ rr _ _ _ _ _ dg <<<"$dl"
-				h=$(python3 -c "print('%.3f' % (100 * $hd / $dg))")
-				rm=$(python3 -c "print('%.3f' % (100 * $rr / $dg))")
+				hs[$meth]=$(python3 -c "print('%.4f' % (100 * $hd / $dg))")
+				rms[$meth]=$(python3 -c "print('%.4f' % (100 * $rr / $dg))")
 			fi
+		done
+		for meth in ours-cpu ours-gpu ours-select sloppy open3d quadric; do
+			h=${hs[$meth]} rm=${rms[$meth]} hrel=-
+			[ "$h" = - ] || hrel=$(python3 -c "print('%.2f' % ($h / max(${hs[open3d]}, 1e-9)))")
 			dev=$(python3 -c "print('%+.2f' % (100 * (${faces[$meth]} - $asked) / $asked))")
 			rel=$(python3 -c "print('%.2f' % (${ms[$meth]} / max(${ms[sloppy]}, 1e-3)))")
-			printf '%-14s %9s %8s %-14s %8s %6s %9.2f %8s %9s %8s\n' "$name" "$nin" \
-				"$asked" "$meth" "${faces[$meth]}" "$dev" "${ms[$meth]}" "$rel" "$h" "$rm"
+			printf '%-14s %9s %8s %-14s %8s %6s %9.2f %8s %9s %8s %8s\n' "$name" "$nin" \
+				"$asked" "$meth" "${faces[$meth]}" "$dev" "${ms[$meth]}" "$rel" "$h" "$hrel" "$rm"
 			printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$nin" "$asked" \
 				"$meth" "${faces[$meth]}" "${ms[$meth]}" "$h" "$rm" >>"$tsv"
 		done

@@ -13,8 +13,10 @@
  * each other; the precomputed face counts equal the faces the selection
  * keeps at every tested level; the full level gives back the input and
  * level 0 nothing; the faces achieved for a ratio stay within the
- * documented tolerance (docs/MESHES.md); and the GPU selection on EGL
- * (llvmpipe in CI) gives the same clusters, flags and mesh as the CPU.
+ * documented tolerance (docs/MESHES.md); the GPU selection on EGL
+ * (llvmpipe in CI) gives the same clusters, flags and mesh as the CPU;
+ * and on a cube the quadric-optimal representatives lie on the surface
+ * where the cells' means do not.
  */
 #include <math.h>
 #include <stdint.h>
@@ -374,6 +376,123 @@ static void test_mesh(const char *name, const struct gv_mesh *m,
     gv_cluster_tree_free(&t);
 }
 
+/*
+ * Quadric-optimal representatives (lib/mesh/cluster_quadric.c) on a
+ * finely tessellated cube ([0, 40]^3, each side a 40 x 40 grid of its
+ * own), at 10 % and 2 % of its faces: every representative of an output
+ * vertex lies within REP_OFF of the surface and inside its cell's box,
+ * where the mean of the same cell's vertices (Kanaya 2.2, the
+ * representative before) of a cell at an edge or a corner lies inside
+ * the cube, far from it.
+ */
+#define REP_OFF 1e-3
+#define CUBE 40
+static double cube_off(const double p[3])
+{
+    double in = INFINITY, out = 0;
+    for (int k = 0; k < 3; k++) {
+        in = fmin(in, fmin(p[k], CUBE - p[k]));
+        double e = p[k] < 0 ? -p[k] : p[k] > CUBE ? p[k] - CUBE : 0;
+        out += e * e;
+    }
+    return out > 0 ? sqrt(out) : in;
+}
+
+static void cube(struct gv_mesh *m)
+{
+    uint32_t g = CUBE + 1, nv = 6 * g * g;
+    alloc_mesh(m, nv, 6 * 2 * CUBE * CUBE);
+    uint32_t t = 0;
+    for (int f = 0; f < 6; f++) {
+        int ax = f / 2, u = (ax + 1) % 3, w = (ax + 2) % 3;
+        for (uint32_t j = 0; j < g; j++)
+            for (uint32_t i = 0; i < g; i++) {
+                float *p = m->pos + 3 * (f * g * g + j * g + i);
+                p[ax] = (float)(f % 2 ? CUBE : 0);
+                p[u] = (float)i;
+                p[w] = (float)j;
+            }
+        for (uint32_t j = 0; j < CUBE; j++)
+            for (uint32_t i = 0; i < CUBE; i++) {
+                uint32_t a = f * g * g + j * g + i, b = a + 1, c = a + g,
+                         d = c + 1, *q = m->tris + 6 * (size_t)t++;
+                q[0] = a; q[1] = b; q[2] = d;
+                q[3] = a; q[4] = d; q[5] = c;
+            }
+    }
+}
+
+static void test_reps(void)
+{
+    struct gv_mesh m;
+    cube(&m);
+    struct gv_cluster_tree t;
+    struct gv_error err = {0};
+    if (gv_cluster_build(&m, 0, &t, &err) < 0) {
+        fail("cube: build: %s", err.text);
+        gv_mesh_free(&m);
+        return;
+    }
+    uint32_t K = t.nnodes, *cl = malloc(4 * (size_t)m.nverts);
+    uint8_t *keep = malloc(m.ntris);
+    double *acc = malloc((size_t)K * 10 * sizeof *acc);  /* sum, n, box */
+    uint8_t *used = malloc(K ? K : 1);
+    const double ratios[2] = {0.1, 0.02};
+    for (int i = 0; i < 2; i++) {
+        uint32_t T = gv_cluster_level(&t, (uint64_t)(ratios[i] * m.ntris),
+                                      GV_CLUSTER_EXACT, NULL);
+        gv_cluster_select(&t, T, cl, keep);
+        for (size_t k = 0; k < (size_t)K * 10; k++)
+            acc[k] = k % 10 < 4 ? 0 : k % 10 < 7 ? INFINITY : -INFINITY;
+        memset(used, 0, K ? K : 1);
+        for (uint32_t v = 0; v < m.nverts; v++) {
+            if (cl[v] >= K)
+                continue;
+            double *a = acc + 10 * (size_t)cl[v];
+            for (int k = 0; k < 3; k++) {
+                double x = m.pos[3 * (size_t)v + k];
+                a[k] += x;
+                a[4 + k] = fmin(a[4 + k], x);
+                a[7 + k] = fmax(a[7 + k], x);
+            }
+            a[3]++;
+        }
+        for (uint32_t f = 0; f < m.ntris; f++)
+            for (int k = 0; keep[f] && k < 3; k++)
+                if (cl[m.tris[3 * (size_t)f + k]] < K)
+                    used[cl[m.tris[3 * (size_t)f + k]]] = 1;
+        double rep_off = 0, mean_off = 0;
+        uint32_t outside = 0, n = 0;
+        for (uint32_t c = 0; c < K; c++) {
+            if (!used[c])
+                continue;
+            const double *a = acc + 10 * (size_t)c;
+            const float *r = t.rep + 4 * (size_t)c;
+            for (int k = 0; k < 3; k++)
+                outside += r[k] < a[4 + k] || r[k] > a[7 + k];
+            double rp[3] = {r[0], r[1], r[2]};
+            double mp[3] = {a[0] / a[3], a[1] / a[3], a[2] / a[3]};
+            double ro = cube_off(rp), mo = cube_off(mp);
+            rep_off = fmax(rep_off, ro);
+            mean_off = fmax(mean_off, mo);
+            n++;
+        }
+        check(n > 0 && rep_off <= REP_OFF && outside == 0,
+              "cube at %.0f%% of its faces: the %u representatives within "
+              "%g of the surface (worst %.2g) and inside their cells",
+              100 * ratios[i], n, REP_OFF, rep_off);
+        check(mean_off > 100 * REP_OFF, "cube at %.0f%%: the cells' means "
+              "are off by up to %.2g: the bound tests the placement",
+              100 * ratios[i], mean_off);
+    }
+    free(used);
+    free(acc);
+    free(cl);
+    free(keep);
+    gv_cluster_tree_free(&t);
+    gv_mesh_free(&m);
+}
+
 static void test_run(const struct gv_mesh *m)
 {
     uint8_t *in = NULL, *out = NULL, *out2 = NULL;
@@ -425,6 +544,7 @@ int main(void)
     for (int i = 0; i < 4; i++)
         test_mesh(names[i], &ms[i], i < 3);
     test_run(&ms[1]);
+    test_reps();
 #ifdef GV_HAVE_GPU
     gv_gpu_close(gpu);
 #endif

@@ -8,7 +8,11 @@
  * octree whose every cell is cut into eight by vertex count (median in x,
  * then in y within each half, then in z within each quarter; ties by
  * vertex index), down to one vertex per cell.  Each internal node gets
- * the mean position of its vertices as its representative, an integer
+ * as its representative the point that minimizes the quadric error of
+ * the triangles touching its vertices (Lindstrom 2000, the alternative of
+ * Kanaya 2.2; lib/mesh/cluster_quadric.c), from the mean of its vertices
+ * along the well-conditioned directions and clamped to their bounding
+ * box, an integer
  * i_level = INT(log2(Length_max / Length_current)) from the longest edge
  * of its vertices' bounding box (eq. 1), and the fractional r_level =
  * i_level + k / number_i, k its rank by descending length among the nodes
