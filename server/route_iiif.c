@@ -14,7 +14,10 @@
  * Access-Control-Allow-Origin: * (the IIIF routes ignore cors_origin), and
  * errors use the statuses the specification lists (400, 404, 501; limits
  * are 400, since the specification knows no 413).  Image responses carry
- * the canonical URI and the compliance profile in Link headers.
+ * the canonical URI and the compliance profile in Link headers.  An
+ * extra query parameter `window` (render/window.h) maps the decoded
+ * samples through a display window before resampling; it is part of the
+ * cache key and the ETag (the canonical URI stays the IIIF one).
  */
 #include <pthread.h>
 #include <stdio.h>
@@ -28,6 +31,7 @@
 #include "imageio/imageio.h"
 #include "imageio/output_format.h"
 #include "render/region.h"
+#include "render/window.h"
 #include "routes.h"
 
 #define IIIF_CONTEXT "http://iiif.io/api/image/3/context.json"
@@ -225,6 +229,7 @@ static void canonical_path(const struct image *img, const struct iiif_request *q
 /* A request being rendered (render_call.h's arg). */
 struct iiif_call {
     struct iiif_request q;
+    struct gv_window window;   /* count 0: none */
     int jpeg_quality;
     char link[1024];   /* canonical URI and profile, as a Link header */
 };
@@ -328,6 +333,16 @@ static int parse(struct req *r, const struct image *img, struct iiif_call *c,
     c->q.render.max_decode_pixels = 4 * (r->srv->cfg->max_output_pixels +
                                          2 * r->srv->cfg->max_output_side + 1);
     c->jpeg_quality = (int)r->srv->cfg->jpeg_quality;
+    const char *ws = http_query(r, "window");
+    if (ws) {
+        if (gv_window_parse(ws, 255, &c->window, err) < 0)
+            return -1;
+        if (c->window.count > 1 && c->window.count != g->channels)
+            return gv_fail(err, GV_EINVAL, "window: %d windows for an image "
+                           "of %d channels (give one, or one per channel)",
+                           c->window.count, g->channels);
+        c->q.render.window = &c->window;
+    }
     return 0;
 }
 
@@ -350,14 +365,22 @@ enum MHD_Result route_iiif_image(struct req *r)
         image_put(img);
         return http_send_error(r, &err);
     }
-    char id[600], path[200], canon[900], key[920], etag[OUTPUT_ETAG_SIZE];
+    char id[600], path[200], canon[900 + GV_WINDOW_MAX_CHANNELS * 32];
+    char key[sizeof canon + 24], etag[OUTPUT_ETAG_SIZE];
+    char win[GV_WINDOW_MAX_CHANNELS * 32 + 4] = "";
+    if (c->window.count) {
+        win[0] = ' ';
+        win[1] = 'w';
+        gv_window_format(&c->window, win + 2, sizeof win - 2);
+    }
     service_id(r, img, id, sizeof id);
     canonical_path(img, &c->q, path, sizeof path);
     snprintf(c->link, sizeof c->link, "<%s/%s>;rel=\"canonical\", "
              IIIF_PROFILE_LINK, id, path);
     /* The ETag and the cache key name the image, not the host it was
      * asked through: the bytes do not depend on it. */
-    snprintf(canon, sizeof canon, "iiif/%s/%s q%d", img->id, path, c->jpeg_quality);
+    snprintf(canon, sizeof canon, "iiif/%s/%s q%d%s", img->id, path,
+             c->jpeg_quality, win);
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);
     output_cache_etag(img->identity, canon, etag, sizeof etag);
     struct render_spec spec = {

@@ -8,7 +8,9 @@
  * as png (default), jpeg, webp or tiff.  A height store (docs/FORMAT.md
  * section 12) gives its gray mapping in those, and also png16 (its 16-bit
  * codes) and tiff32 (float values in its unit).  w*h is capped by
- * max_region_pixels (413 beyond).  The query is checked here; the render
+ * max_region_pixels (413 beyond).  `window` (render/window.h) maps the
+ * decoded 8-bit samples through a display window before they are encoded,
+ * and is part of the cache key and the ETag.  The query is checked here; the render
  * runs on a render thread, and the answer is kept in the output cache
  * with a strong ETag (render_call.h).
  */
@@ -19,6 +21,7 @@
 #include "imageio/imageio.h"
 #include "imageio/output_format.h"
 #include "render/height_region.h"
+#include "render/window.h"
 #include "output_cache.h"
 #include "render_call.h"
 #include "render_stages.h"
@@ -30,6 +33,7 @@ struct region_query {
     uint32_t level, x, y, w, h, quality;
     const struct gv_output_format *format;
     int height;            /* HEIGHT_PNG16 or HEIGHT_TIFF32, else 0 */
+    struct gv_window window;   /* count 0: none */
 };
 
 /* The formats of height stores only. */
@@ -64,6 +68,12 @@ static int parse_query(struct req *r, struct region_query *q,
     const char *qs = http_query(r, "quality");
     if (qs && (http_parse_u32(qs, 100, &q->quality) < 0 || q->quality == 0))
         return gv_fail(err, GV_EINVAL, "region: quality must be 1..100");
+    const char *ws = http_query(r, "window");
+    q->window.count = 0;
+    if (ws && gv_window_parse(ws, 255, &q->window, err) < 0)
+        return -1;
+    if (ws && q->height)
+        return gv_fail(err, GV_EINVAL, "window: not with png16 or tiff32");
     uint64_t pixels = (uint64_t)q->w * q->h;
     if (pixels > r->srv->cfg->max_region_pixels)
         return gv_fail(err, GV_ELIMIT, "region: %llu pixels, at most %llu "
@@ -87,6 +97,10 @@ static int place(const struct image *img, const struct region_query *q,
     if (q->height && img->info->header.kind != GV_KIND_HEIGHT)
         return gv_fail(err, GV_EINVAL, "region: png16 and tiff32 are for "
                        "height stores; this image is not one");
+    if (q->window.count > 1 && q->window.count != g->channels)
+        return gv_fail(err, GV_EINVAL, "window: %d windows for an image of "
+                       "%d channels (give one, or one per channel)",
+                       q->window.count, g->channels);
     return 0;
 }
 
@@ -139,7 +153,10 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
         gv_decoder_times(d, &(struct gv_decode_times){0}, 1);
         double t0 = render_stages_now();
         int ok = gv_decode_region(d, (int)q->level, q->x, q->y, q->w, q->h,
-                                  pix, err) == 0;
+                                  pix, err) == 0 &&
+                 (q->window.count == 0 ||
+                  gv_window_apply8(&q->window, pix, (size_t)q->w * q->h,
+                                   g->channels, err) == 0);
         double t1 = render_stages_now();
         render_stages_decoder(d, t1 - t0);
         if (ok && gv_image_encode(q->format->name, q->w, q->h, g->channels,
@@ -174,11 +191,19 @@ enum MHD_Result route_region(struct req *r)
         return http_send_error(r, &err);
     }
     *arg = q;
-    char canon[400], key[420], etag[OUTPUT_ETAG_SIZE];
-    snprintf(canon, sizeof canon, "region/%s/%u/%u,%u,%u,%u.%s q%u", img->id,
+    char canon[400 + GV_WINDOW_MAX_CHANNELS * 32], key[sizeof canon + 24];
+    char win[GV_WINDOW_MAX_CHANNELS * 32 + 4] = "";
+    if (q.window.count) {
+        win[0] = ' ';
+        win[1] = 'w';
+        gv_window_format(&q.window, win + 2, sizeof win - 2);
+    }
+    char etag[OUTPUT_ETAG_SIZE];
+    snprintf(canon, sizeof canon, "region/%s/%u/%u,%u,%u,%u.%s q%u%s", img->id,
              q.level, q.x, q.y, q.w, q.h,
              q.height == HEIGHT_PNG16 ? "png16"
-             : q.height == HEIGHT_TIFF32 ? "tiff32" : q.format->name, q.quality);
+             : q.height == HEIGHT_TIFF32 ? "tiff32" : q.format->name, q.quality,
+             win);
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);
     output_cache_etag(img->identity, canon, etag, sizeof etag);
     struct render_spec spec = {

@@ -17,6 +17,12 @@
 // 8 bits that truncates gives the same byte as one that rounds.  0 when
 // it is blended with the coarser level (renderer.js), which rounds once
 // at the end.
+//
+// u_window: 1 when a display window is set (client/web/window.js): the
+// bilinear value, rounded to a sample, is looked up in u_lut (256 x 1
+// RGBA8UI, texel v holding the red, green and blue tables at v), so the
+// window changes by a texture upload, never a tile.  At a 1:1 view the
+// output is the server's `window=` region byte for byte.
 
 precision highp float;
 precision highp int;
@@ -29,6 +35,8 @@ uniform usampler2D u_diag;    // tile (tx + 1, ty + 1)
 uniform ivec3 u_has;          // 1 where that neighbour is bound
 uniform ivec2 u_max;          // last valid texel of the level in this texture
 uniform int u_round;
+uniform usampler2D u_lut;
+uniform int u_window;
 
 in vec2 v_uv;
 out vec4 o_color;
@@ -53,6 +61,12 @@ vec3 texel(ivec2 p)
 void main()
 {
     vec3 c = bilinear(v_uv);
+    if (u_window == 1) {
+        ivec3 s = ivec3(clamp(floor(c + 0.5), 0.0, 255.0));
+        c = vec3(float(texelFetch(u_lut, ivec2(s.r, 0), 0).r),
+                 float(texelFetch(u_lut, ivec2(s.g, 0), 0).g),
+                 float(texelFetch(u_lut, ivec2(s.b, 0), 0).b));
+    }
     if (u_round == 1)
         c = floor(c + 0.5) + 0.25;
     o_color = vec4(c / 255.0, 1.0);

@@ -73,6 +73,13 @@ export class GlBackend {
         this.last = null;
     }
 
+    /** The display window's tables (window.js lutBytes) or null: the
+     * next frame redraws from the tiles already decoded. */
+    setLut(bytes) {
+        this.draw.setLut(bytes);
+        this.last = null;
+    }
+
     /** The filter result to draw in the ROI ({bitmap, level, x, y, w, h})
      * or null. */
     setFilterResult(res) {

@@ -18,6 +18,8 @@ import { formatHash, imageToScreen, parseHash, screenToImage } from './view.js';
 import { FilterRunner } from './roi_filter.js';
 import { TerrainMode } from './terrain.js';
 import { Viewer } from './viewer.js';
+import { formatWindow, parseWindow } from './window.js';
+import { WindowPanel } from './window_panel.js';
 
 const $ = (id) => document.getElementById(id);
 const q = new URLSearchParams(location.search);
@@ -31,6 +33,9 @@ const viewer = new Viewer($('view'), {
 });
 const runner = new FilterRunner(viewer, { box: $('roi-box'), canvas: $('view') });
 const panel = new FilterPanel(viewer, runner);
+const windowPanel = new WindowPanel(viewer, {
+    box: $('window'), linked: $('w-linked'), auto: $('w-auto'), reset: $('w-reset'), channels: $('w-channels'),
+});
 const modes = { roi: runner.roiTool };
 const terrain = new TerrainMode(viewer, $('terrain'), $('terrain-btn'));
 attachInput(viewer, $('view'), modes);
@@ -85,7 +90,13 @@ async function routeFilter(st) {
 // Show what the hash says.
 async function route() {
     const st = parseHash(location.hash);
-    viewer.extra = { roi: viewer.extra.roi, filter: panel.id, params: runner.params, terrain: terrain.source };
+    viewer.extra = { ...viewer.extra, roi: viewer.extra.roi, filter: panel.id, params: runner.params, terrain: terrain.source };
+    // The display window of the link (none when absent or malformed).
+    const win = st.window ? parseWindow(st.window) : null;
+    if ((win ? formatWindow(win) : null) !== (viewer.window ? formatWindow(viewer.window) : null)) {
+        viewer.setWindow(win);
+        windowPanel.rebuild(win);
+    }
     $('status').hidden = !st.image;
     if (!st.image) {
         terrain.set(null);
@@ -144,6 +155,7 @@ $('picker').addEventListener('change', (e) => {
 });
 $('help-btn').addEventListener('click', () => { $('help').hidden = !$('help').hidden; });
 $('filter-btn').addEventListener('click', () => { $('filters').hidden = !$('filters').hidden; });
+$('window-btn').addEventListener('click', () => { $('window').hidden = !$('window').hidden; });
 window.addEventListener('keydown', (e) => {
     if (e.target && /^(INPUT|TEXTAREA|SELECT)$/.test(e.target.tagName))
         return;
@@ -153,7 +165,7 @@ window.addEventListener('keydown', (e) => {
 window.addEventListener('hashchange', route);
 
 window.gigaview = {
-    viewer, modes, errors, terrain, parseHash, auth: () => auth, formatHash, screenToImage, imageToScreen, runner, panel,
+    viewer, modes, errors, terrain, parseHash, auth: () => auth, formatHash, screenToImage, imageToScreen, runner, panel, windowPanel,
     /** Resolves once the image named in the hash is open (or failed). */
     ready: (async () => { await Promise.all([loadList(), panel.load()]); await route(); })(),
 };

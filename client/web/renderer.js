@@ -33,6 +33,30 @@ export class Renderer {
         ({ vao: this.vao, vbo: this.vbo } = quadArrays(gl, this.prog));
         this.data = new Float32Array(FLOATS_PER_QUAD * 256);
         this.top = levels.length - 1;
+        this.lut = null;       // the display window's tables (setLut)
+        this.windowOn = false;
+    }
+
+    /**
+     * The display window's tables: bytes, 256 RGBA texels (window.js
+     * lutBytes), or null for none.  An upload of 1 KiB: no tile is
+     * fetched or decoded again.
+     */
+    setLut(bytes) {
+        const gl = this.gl;
+        this.windowOn = !!bytes;
+        if (!bytes)
+            return;
+        if (!this.lut) {
+            this.lut = gl.createTexture();
+            gl.bindTexture(gl.TEXTURE_2D, this.lut);
+            gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA8UI, 256, 1);
+            for (const [k, v] of [[gl.TEXTURE_MIN_FILTER, gl.NEAREST], [gl.TEXTURE_MAG_FILTER, gl.NEAREST]])
+                gl.texParameteri(gl.TEXTURE_2D, k, v);
+        }
+        gl.bindTexture(gl.TEXTURE_2D, this.lut);
+        gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, 256, 1, gl.RGBA_INTEGER, gl.UNSIGNED_BYTE, bytes);
+        gl.bindTexture(gl.TEXTURE_2D, null);
     }
 
     /**
@@ -140,6 +164,12 @@ export class Renderer {
         gl.uniform1i(P.loc('u_right'), 1);
         gl.uniform1i(P.loc('u_below'), 2);
         gl.uniform1i(P.loc('u_diag'), 3);
+        gl.uniform1i(P.loc('u_lut'), 4);
+        gl.uniform1i(P.loc('u_window'), this.windowOn ? 1 : 0);
+        if (this.windowOn) {
+            gl.activeTexture(gl.TEXTURE4);
+            gl.bindTexture(gl.TEXTURE_2D, this.lut);
+        }
         gl.blendColor(0, 0, 0, 1 - p.t);
         gl.blendFunc(gl.CONSTANT_ALPHA, gl.ONE_MINUS_CONSTANT_ALPHA);
         for (const [i, tex, lim, blend, nb] of draws) {
@@ -166,6 +196,8 @@ export class Renderer {
     dispose() {
         const gl = this.gl;
         gl.deleteProgram(this.prog.program);
+        if (this.lut)
+            gl.deleteTexture(this.lut);
         gl.deleteBuffer(this.vbo);
         gl.deleteVertexArray(this.vao);
     }

@@ -14,6 +14,7 @@
 import { GlBackend, webgl2 } from './gl_backend.js';
 import { RegionBackend } from './fallback.js';
 import { levelsOf } from './pyramid.js';
+import { formatWindow, lutBytes } from './window.js';
 import { anchored, clampView, formatHash, homeView, normRot, screenToImage } from './view.js';
 
 const TAU_MS = 90;            // time constant of animated moves
@@ -85,7 +86,8 @@ export class Viewer {
         this.lastResult = null;
         this.listeners = [];
         this.hashTimer = 0;
-        this.extra = {};              // roi, filter, params: kept in the hash
+        this.extra = {};              // roi, filter, params, window: kept in the hash
+        this.window = null;           // the display window (window.js) or null
         this.filterShown = false;     // a filter result is set (roi_filter.js)
         this.timing = {};
         this.ro = new ResizeObserver(() => this.resize());
@@ -176,10 +178,32 @@ export class Viewer {
         }
         this.image = image;
         this.backend = backend;
+        if (this.window && this.window.length !== 1 && this.window.length !== info.channels)
+            this.window = null;       // one window a channel, for another image
+        this.applyWindow();
         this.view = clampView(view || this.home(), info.width, info.height, this.cssW, this.cssH);
         this.goal = null;
         this.invalidate();
         this.emit('open');
+    }
+
+    /**
+     * Set the display window: [{black, white, gammaMilli}] (window.js), one
+     * for every channel or one per channel, or null for none.  The WebGL2
+     * picture changes at the next frame from the tiles already decoded
+     * (no tile is fetched); the hash follows.
+     */
+    setWindow(w) {
+        this.window = w && w.length ? w : null;
+        this.applyWindow();
+        this.invalidate();
+        this.viewChanged();
+    }
+
+    applyWindow() {
+        this.extra = { ...this.extra, window: this.window ? formatWindow(this.window) : null };
+        if (this.backend && this.backend.setLut)
+            this.backend.setLut(this.window ? lutBytes(this.window, this.image.info.channels) : null);
     }
 
     close() {

@@ -33,6 +33,9 @@
  * its level's own size), the decoded rectangle is the scaled image as it
  * is, and resampling is skipped.
  *
+ * A display window (render/window.h), when the request has one, maps the
+ * decoded samples through its tables before any resampling.
+ *
  * Then quality (gray = (299 R + 587 G + 114 B + 500) / 1000, bitonal =
  * gray >= 128 ? 255 : 0, colour of a gray store replicates), the mirror
  * and the clockwise rotation, all in one pass over the scaled image.
@@ -396,6 +399,15 @@ static int reserve(uint8_t **buf, size_t *cap, size_t need)
     return *buf ? 0 : -1;
 }
 
+/* req's window, if any, on n decoded pixels of sc channels. */
+static int apply_window(const struct gv_render_req *req, uint8_t *pix,
+                        size_t n, int sc, struct gv_error *err)
+{
+    if (!req->window || req->window->count == 0)
+        return 0;
+    return gv_window_apply8(req->window, pix, n, sc, err);
+}
+
 int gv_render_to(struct gv_decoder *d, const struct gv_render_req *req,
                  uint8_t **buf, size_t *cap, uint32_t *w, uint32_t *h,
                  int *channels, struct gv_error *err)
@@ -425,7 +437,8 @@ int gv_render_to(struct gv_decoder *d, const struct gv_render_req *req,
                     "pixels", f.w, f.h);
             goto out;
         }
-        if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, *buf, err) != 0)
+        if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, *buf, err) != 0
+            || apply_window(req, *buf, (size_t)f.w * f.h, sc, err) != 0)
             goto out;
         *w = req->out_w;
         *h = req->out_h;
@@ -439,7 +452,8 @@ int gv_render_to(struct gv_decoder *d, const struct gv_render_req *req,
                 f.w, f.h);
         goto out;
     }
-    if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, dec, err) != 0)
+    if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, dec, err) != 0
+        || apply_window(req, dec, (size_t)f.w * f.h, sc, err) != 0)
         goto out;
 
     if (copy) {

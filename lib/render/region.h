@@ -17,6 +17,7 @@
 #include <stdint.h>
 
 #include "render/store_decoder.h"
+#include "render/window.h"
 #include "base/error.h"
 
 enum gv_quality {
@@ -37,6 +38,9 @@ struct gv_render_req {
     /* Refuse (GV_ELIMIT) if the rectangle decoded at the chosen level
      * would have more pixels than this; 0: no limit. */
     uint64_t max_decode_pixels;
+    /* A display window (render/window.h) applied to the decoded samples
+     * before resampling, or NULL / count 0 for none. */
+    const struct gv_window *window;
 };
 
 /*

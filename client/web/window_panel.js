@@ -1,0 +1,99 @@
+// window_panel.js - the display window panel: black, white and gamma
+// sliders, for all channels at once or one set per channel, and "auto",
+// which sets black and white per channel at the 0.5 % and 99.5 % points
+// of the histogram of the root (the coarsest level, which the viewer holds
+// from the start).  Every change goes to Viewer.setWindow, which redraws
+// from the tiles already decoded and writes the window into the link.
+
+import { autoPoints, channelWindow } from './window.js';
+
+const NAMES = ['red', 'green', 'blue'];
+
+export class WindowPanel {
+    /** viewer: the Viewer; el: {box, linked, auto, reset, channels}. */
+    constructor(viewer, el) {
+        this.viewer = viewer;
+        this.el = el;
+        this.sliders = [];
+        el.linked.addEventListener('change', () => this.rebuild(this.current()));
+        el.auto.addEventListener('click', () => this.auto());
+        el.reset.addEventListener('click', () => this.set(null));
+        viewer.on('open', () => this.rebuild(viewer.window));
+    }
+
+    channels() {
+        return this.viewer.image ? this.viewer.image.info.channels : 1;
+    }
+
+    /** The window the sliders show (one per channel, or one). */
+    current() {
+        return this.viewer.window || [{ black: 0, white: 255, gammaMilli: 1000 }];
+    }
+
+    /** Show window w (or none) and set it on the viewer. */
+    set(w) {
+        this.viewer.setWindow(w);
+        this.rebuild(w);
+    }
+
+    /** Black and white from the root's histogram, per channel; gamma kept. */
+    auto() {
+        const root = this.viewer.image && this.viewer.image.root;
+        if (!root)
+            return;
+        const c = this.channels();
+        // A gray root may come as three equal channels (viewer.js loadRoot).
+        const stride = root.px.length / (root.w * root.h);
+        const pts = autoPoints(root.px, c, stride);
+        const cur = this.current();
+        let w = pts.map(([lo, hi], k) => ({ black: lo, white: hi, gammaMilli: channelWindow(cur, k).gammaMilli }));
+        if (this.el.linked.checked || c === 1)
+            w = [{ black: Math.min(...w.map((x) => x.black)), white: Math.max(...w.map((x) => x.white)),
+                gammaMilli: w[0].gammaMilli }];
+        this.set(w);
+    }
+
+    // Sliders for window w: one set when linked, else one per channel.
+    rebuild(w) {
+        const c = this.channels();
+        const linked = this.el.linked.checked || c === 1;
+        const cur = w || [{ black: 0, white: 255, gammaMilli: 1000 }];
+        if (!linked && cur.length === 1 && c > 1)
+            w = Array.from({ length: c }, () => ({ ...cur[0] }));
+        else if (linked && cur.length > 1)
+            w = [{ ...cur[0] }];
+        else
+            w = cur.map((x) => ({ ...x }));
+        this.el.channels.replaceChildren();
+        this.work = w;
+        w.forEach((ch, k) => {
+            const fs = document.createElement('fieldset');
+            const lg = document.createElement('legend');
+            lg.textContent = linked ? 'all channels' : NAMES[k] || `channel ${k + 1}`;
+            fs.append(lg);
+            const add = (label, min, max, step, value, put, show) => {
+                const l = document.createElement('label');
+                l.className = 'slider';
+                const input = document.createElement('input');
+                Object.assign(input, { type: 'range', min, max, step, value });
+                input.setAttribute('aria-label', `${lg.textContent} ${label}`);
+                const out = document.createElement('output');
+                out.textContent = show(value);
+                input.addEventListener('input', () => {
+                    put(Number(input.value));
+                    out.textContent = show(Number(input.value));
+                    this.viewer.setWindow(this.work);
+                });
+                l.append(label, input, out);
+                fs.append(l);
+            };
+            add('black', 0, 254, 1, ch.black, (v) => { ch.black = Math.min(v, ch.white - 1); }, String);
+            add('white', 1, 255, 1, ch.white, (v) => { ch.white = Math.max(v, ch.black + 1); }, String);
+            // gamma on a log scale, 0.1 .. 10, in thousandths
+            add('gamma', -1000, 1000, 1, Math.round(Math.log10(ch.gammaMilli / 1000) * 1000),
+                (v) => { ch.gammaMilli = Math.min(10000, Math.max(100, Math.round(1000 * 10 ** (v / 1000)))); },
+                (v) => (10 ** (v / 1000)).toFixed(3));
+            this.el.channels.append(fs);
+        });
+    }
+}

@@ -1,0 +1,159 @@
+/*
+ * window.c - the display window (window.h): its text, parsed strictly,
+ * and its lookup table.
+ *
+ * The table is the definition.  Entry v of channel window (B, W, G) is 0
+ * up to B, 255 from W, and between them floor(255 * p + 0.500000001)
+ * with t = (v - B) / (W - B) and p = t when G is 1, else pow(t, 1000 /
+ * Gmilli): IEEE double, each operation once and in this order, as
+ * client/web/window.js does it.  The constant above a half rounds exact
+ * ties up (t = 1/2 at gamma 1 gives 128) whatever the last bit of pow,
+ * so that the C library's pow and the browser's Math.pow, which may
+ * differ in their last bit, give the same byte; a value closer than
+ * 1e-9 to a half without being one would need integers far past 16 bits.
+ */
+#include "render/window.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/* Decimal digits at *p into *v, at most max; advances *p.  0 or -1. */
+static int parse_int(const char **p, uint32_t max, uint32_t *v)
+{
+    const char *s = *p;
+    uint64_t x = 0;
+    if (*s < '0' || *s > '9')
+        return -1;
+    while (*s >= '0' && *s <= '9') {
+        x = x * 10 + (uint64_t)(*s - '0');
+        if (x > max)
+            return -1;
+        s++;
+    }
+    *p = s;
+    *v = (uint32_t)x;
+    return 0;
+}
+
+/* A gamma, "D[.D[D[D]]]", into thousandths.  0 or -1. */
+static int parse_gamma(const char **p, uint32_t *milli)
+{
+    uint32_t whole;
+    if (parse_int(p, GV_WINDOW_GAMMA_MAX / 1000, &whole) < 0)
+        return -1;
+    uint32_t frac = 0, scale = 100;
+    const char *s = *p;
+    if (*s == '.') {
+        s++;
+        if (*s < '0' || *s > '9')
+            return -1;
+        for (int i = 0; *s >= '0' && *s <= '9'; i++, s++) {
+            if (i == 3)
+                return -1;
+            frac += (uint32_t)(*s - '0') * scale;
+            scale /= 10;
+        }
+    }
+    *p = s;
+    *milli = whole * 1000 + frac;
+    return *milli >= GV_WINDOW_GAMMA_MIN && *milli <= GV_WINDOW_GAMMA_MAX ? 0 : -1;
+}
+
+int gv_window_parse(const char *s, uint32_t max, struct gv_window *w,
+                    struct gv_error *err)
+{
+    memset(w, 0, sizeof *w);
+    size_t len = strnlen(s, GV_WINDOW_MAX_TEXT + 1);
+    if (len > GV_WINDOW_MAX_TEXT)
+        return gv_fail(err, GV_EINVAL, "window: longer than %d bytes",
+                       GV_WINDOW_MAX_TEXT);
+    const char *p = s;
+    for (int n = 0;; n++) {
+        if (n == GV_WINDOW_MAX_CHANNELS) {
+            memset(w, 0, sizeof *w);
+            return gv_fail(err, GV_EINVAL, "window: more than %d channels",
+                           GV_WINDOW_MAX_CHANNELS);
+        }
+        struct gv_window_channel *c = &w->ch[n];
+        c->gamma_milli = 1000;
+        if (parse_int(&p, max, &c->black) < 0 || *p++ != ','
+            || parse_int(&p, max, &c->white) < 0
+            || (*p == ',' && (p++, parse_gamma(&p, &c->gamma_milli) < 0))
+            || (*p != ';' && *p != '\0')) {
+            memset(w, 0, sizeof *w);
+            return gv_fail(err, GV_EINVAL, "window: channel %d: want B,W[,G] "
+                           "with B < W integers 0..%u and G 0.1..10 with at "
+                           "most three decimals", n + 1, max);
+        }
+        if (c->black >= c->white) {
+            memset(w, 0, sizeof *w);
+            return gv_fail(err, GV_EINVAL, "window: channel %d: black %u is "
+                           "not below white %u", n + 1, c->black, c->white);
+        }
+        w->count = n + 1;
+        if (*p == '\0')
+            return 0;
+        p++;       /* ';' */
+    }
+}
+
+int gv_window_format(const struct gv_window *w, char *buf, size_t size)
+{
+    int len = 0;
+    if (size)
+        buf[0] = '\0';
+    for (int i = 0; i < w->count; i++) {
+        const struct gv_window_channel *c = &w->ch[i];
+        size_t at = (size_t)len < size ? (size_t)len : size;
+        int k = snprintf(buf + at, size - at, "%s%u,%u,%u.%03u",
+                         i ? ";" : "", c->black, c->white,
+                         c->gamma_milli / 1000, c->gamma_milli % 1000);
+        if (k < 0)
+            return k;
+        len += k;
+    }
+    return len;
+}
+
+const struct gv_window_channel *gv_window_of(const struct gv_window *w, int c)
+{
+    return &w->ch[w->count == 1 ? 0 : c];
+}
+
+void gv_window_table8(const struct gv_window_channel *c, uint8_t table[256])
+{
+    const double range = (double)c->white - (double)c->black;
+    const double e = 1000.0 / (double)c->gamma_milli;
+    for (uint32_t v = 0; v < 256; v++) {
+        if (v <= c->black) {
+            table[v] = 0;
+            continue;
+        }
+        if (v >= c->white) {
+            table[v] = 255;
+            continue;
+        }
+        double t = ((double)v - (double)c->black) / range;
+        double p = c->gamma_milli == 1000 ? t : pow(t, e);
+        double y = floor(255.0 * p + 0.500000001);
+        table[v] = y >= 255.0 ? 255 : y <= 0.0 ? 0 : (uint8_t)y;
+    }
+}
+
+int gv_window_apply8(const struct gv_window *w, uint8_t *pix, size_t n,
+                     int channels, struct gv_error *err)
+{
+    if (channels < 1 || channels > GV_WINDOW_MAX_CHANNELS
+        || (w->count != 1 && w->count != channels))
+        return gv_fail(err, GV_EINVAL, "window: %d windows for an image of "
+                       "%d channels (give one, or one per channel)",
+                       w->count, channels);
+    uint8_t table[GV_WINDOW_MAX_CHANNELS][256];
+    for (int c = 0; c < channels; c++)
+        gv_window_table8(gv_window_of(w, c), table[c]);
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < channels; c++, pix++)
+            *pix = table[c][*pix];
+    return 0;
+}

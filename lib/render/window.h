@@ -1,0 +1,68 @@
+/*
+ * window.h - the display window of an image: per channel a black point,
+ * a white point (sample values) and a gamma, mapping a sample v to
+ *
+ *     out = round(255 * clamp((v - black) / (white - black), 0, 1) ^ (1 / gamma))
+ *
+ * applied through a lookup table per channel that is computed one way
+ * only: gv_window_table here, and its twin buildTable in
+ * client/web/window.js, which must give the same bytes (tests/window.sh
+ * compares them over many windows).  The server applies it to decoded
+ * regions and IIIF images, the browser viewer in its display shader.
+ *
+ * The text form (docs/API.md, the viewer's link) is "B,W,G" for every
+ * channel or "B,W,G;B,W,G;..." one per channel, B and W decimal integers
+ * 0 .. max (255 for 8-bit samples), B < W, G a decimal gamma 0.1 .. 10
+ * with at most three decimals (",G" may be left out: 1).  Gamma is kept
+ * in thousandths, so the text has one canonical form (gv_window_format).
+ * Built for 8-bit samples today; the sample maximum and the channel count
+ * are parameters so that 16-bit and multichannel stores take the same
+ * text and the same table rule (a table of max + 1 entries).
+ */
+#ifndef GV_WINDOW_H
+#define GV_WINDOW_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+
+#define GV_WINDOW_MAX_CHANNELS 8
+#define GV_WINDOW_MAX_TEXT 512       /* bytes of text accepted */
+#define GV_WINDOW_GAMMA_MIN 100      /* thousandths */
+#define GV_WINDOW_GAMMA_MAX 10000
+
+struct gv_window_channel {
+    uint32_t black, white;      /* black < white <= the sample maximum */
+    uint32_t gamma_milli;       /* GV_WINDOW_GAMMA_MIN .. _MAX */
+};
+
+struct gv_window {
+    int count;                  /* 0: no window; 1: all channels; else one each */
+    struct gv_window_channel ch[GV_WINDOW_MAX_CHANNELS];
+};
+
+/* Parse text s (NUL-terminated) into *w for samples of 0 .. max.  Returns
+ * 0, or -1 with *err (GV_EINVAL, a message starting "window: ") for
+ * anything but the form above. */
+int gv_window_parse(const char *s, uint32_t max, struct gv_window *w,
+                    struct gv_error *err);
+
+/* The canonical text of w (gamma with its thousandths, "B,W,G.GGG" per
+ * channel, ';' between) into buf of size bytes, always terminated.
+ * Returns the length it needs (as snprintf). */
+int gv_window_format(const struct gv_window *w, char *buf, size_t size);
+
+/* The window of channel c (0-based) of w: its own, or the one for all. */
+const struct gv_window_channel *gv_window_of(const struct gv_window *w, int c);
+
+/* The 256-entry table of channel window c for 8-bit samples. */
+void gv_window_table8(const struct gv_window_channel *c, uint8_t table[256]);
+
+/* Apply w to n pixels of `channels` interleaved 8-bit samples in place.
+ * w->count must be 1 or `channels` (GV_EINVAL otherwise, pixels
+ * untouched).  Returns 0 or -1 with *err. */
+int gv_window_apply8(const struct gv_window *w, uint8_t *pix, size_t n,
+                     int channels, struct gv_error *err);
+
+#endif

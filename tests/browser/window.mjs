@@ -1,0 +1,174 @@
+// window.mjs - the display window in the browser viewer (client/web/,
+// window.js, window_panel.js, display.frag.glsl), run by
+// tests/browser_window.sh against a gigaviewd serving "picos" (a colour
+// photograph) and "gray" (a gray store):
+//   1. a link with window= opens with that window, and the canvas at a 1:1
+//      view of level 0 equals the server's region with the same window,
+//      bit for bit (every pixel identical: at 1:1 the display shader's
+//      bilinear weights are 0 and 1, so no tolerance is needed);
+//   2. changing the window (per channel, then through the panel's auto
+//      button) makes no request at all, and the canvas again equals the
+//      server's windowed region bit for bit;
+//   3. the hash carries the window, and a new page opened at that hash
+//      shows the same pixels;
+//   4. a gray store likewise (one table for its one channel);
+//   5. negative control: the display tables with red shifted by one must
+//      FAIL the match (so the comparison can see a wrong table);
+//   6. no console errors.
+// Exit status 0 when everything passed, 1 otherwise.
+import { mkdtempSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { launchChromium } from './chromium.mjs';
+import { check, fail, failed, note, parseArgs } from './report.mjs';
+
+const W = 800, H = 500;
+const opt = { chromium: '/usr/bin/chromium', base: '' };
+parseArgs(opt, 'usage: node window.mjs --base URL [--chromium PATH]', 'window.mjs', ['base']);
+const base = opt.base.replace(/\/+$/, '');
+const consoleErrors = [];
+
+async function newPage(c) {
+    const pg = await c.newPage();
+    pg.setDefaultTimeout(60000);
+    pg.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+    pg.on('pageerror', (e) => consoleErrors.push(`page error: ${e.message}`));
+    return pg;
+}
+
+async function open(pg, h) {
+    await pg.goto(`${base}/${h}`);
+    await pg.evaluate(() => window.gigaview.ready);
+    const id = new URLSearchParams(h.slice(1)).get('image');
+    await pg.waitForFunction((id) => window.gigaview.viewer.image && window.gigaview.viewer.image.id === id &&
+        window.gigaview.viewer.view, id);
+    return pg.evaluate(() => window.gigaview.viewer.settled());
+}
+
+// The canvas against the region (level 0, x, y, W x H) with window text
+// win: {n, same, max}.  lut: display tables to force (negative control).
+function compare(pg, id, x, y, win, lut = null) {
+    const url = `${base}/v1/images/${id}/region?level=0&x=${x}&y=${y}&w=${W}&h=${H}&format=png` +
+        `&window=${encodeURIComponent(win)}`;
+    return pg.evaluate(async ({ url, W, H, lut }) => {
+        const v = window.gigaview.viewer;
+        if (lut) v.backend.setLut(new Uint8Array(lut));
+        const a = v.snapshot();
+        const r = await fetch(url);
+        if (!r.ok) return { error: `${url}: HTTP ${r.status}` };
+        const b = await createImageBitmap(await r.blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+        const c = new OffscreenCanvas(b.width, b.height);
+        const g = c.getContext('2d', { willReadFrequently: true });
+        g.drawImage(b, 0, 0);
+        const ref = g.getImageData(0, 0, W, H).data;
+        let same = 0, max = 0;
+        for (let i = 0; i < W * H; i++) {
+            let eq = true;
+            for (let k = 0; k < 3; k++) {
+                const d = Math.abs(a[4 * i + k] - ref[4 * i + k]);
+                if (d) eq = false;
+                if (d > max) max = d;
+            }
+            same += eq;
+        }
+        return { n: W * H, same, max };
+    }, { url, W, H, lut });
+}
+
+async function match(pg, label, id, x, y, win) {
+    const r = await compare(pg, id, x, y, win);
+    if (r.error) return fail(`${label}`, r.error);
+    check(r.same === r.n, `${label}: the canvas equals region&window=${win} bit for bit (${r.same}/${r.n} pixels identical)`,
+        `${r.same}/${r.n} pixels identical, largest difference ${r.max}`);
+}
+
+// Requests the page makes while fn runs and the picture settles.
+async function requestsDuring(pg, fn) {
+    const seen = [];
+    const on = (r) => seen.push(r.url());
+    pg.on('request', on);
+    await fn();
+    await pg.evaluate(() => new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(res))));
+    await pg.evaluate(() => window.gigaview.viewer.settled());
+    pg.off('request', on);
+    return seen;
+}
+
+async function run(c) {
+    const pg = await newPage(c);
+    // 1. picos, level 0 at 1:1 centred on (550, 350): canvas (i, j) is (150 + i, 100 + j).
+    const r0 = await open(pg, '#image=picos&x=550&y=350&z=0&r=0&window=30,200,0.7');
+    check(r0.complete && r0.level === 0, 'picos opens complete at level 0 with a window from the link', JSON.stringify(r0));
+    const w0 = await pg.evaluate(() => window.gigaview.viewer.extra.window);
+    check(w0 === '30,200,0.700', `the link's window is set (${w0})`, String(w0));
+    await match(pg, 'picos level 0 1:1, window 30,200,0.7', 'picos', 150, 100, '30,200,0.7');
+
+    // 2. per-channel window, then auto: no request at all.
+    const per = '10,250,1;50,150,0.5;0,100,3.333';
+    const reqs = await requestsDuring(pg, () => pg.evaluate((t) => {
+        const g = window.gigaview;
+        g.viewer.setWindow(t.split(';').map((s) => {
+            const [b, w, gm] = s.split(',');
+            return { black: +b, white: +w, gammaMilli: Math.round(+gm * 1000) };
+        }));
+    }, per));
+    check(reqs.length === 0, `changing the window makes no request (${reqs.length})`, reqs.slice(0, 5).join(' '));
+    await match(pg, 'picos level 0 1:1, per-channel window', 'picos', 150, 100, per);
+    await pg.click('#window-btn');
+    await pg.click('#w-linked');             // one set of sliders per channel
+    const reqs2 = await requestsDuring(pg, () => pg.click('#w-auto'));
+    const auto = await pg.evaluate(() => window.gigaview.viewer.extra.window);
+    check(reqs2.length === 0 && /^[0-9]+,[0-9]+,1\.000;/.test(auto || ''),
+        `the auto button sets a window per channel from the root's histogram (${auto}) without a request (${reqs2.length})`,
+        `window ${auto}, requests ${reqs2.join(' ')}`);
+    await match(pg, 'picos level 0 1:1, auto window', 'picos', 150, 100, auto);
+    const sliders = await pg.locator('#w-channels input[type=range]').count();
+    check(sliders === 9, `the panel shows black, white and gamma for each of the 3 channels (${sliders} sliders)`);
+    // Moving a slider changes the window (no request either).
+    const reqs3 = await requestsDuring(pg, () => pg.locator('#w-channels input[type=range]').nth(2).fill('500'));
+    const slid = await pg.evaluate(() => window.gigaview.viewer.extra.window);
+    check(reqs3.length === 0 && slid && slid.split(';')[0].endsWith(',3.162'),
+        `the red gamma slider sets gamma 3.162 (${slid}) without a request`, `${slid}; ${reqs3.join(' ')}`);
+    await match(pg, 'picos level 0 1:1, after the slider', 'picos', 150, 100, slid);
+
+    // 3. the hash carries the window; a new page at that hash shows the same.
+    await pg.waitForFunction((w) => decodeURIComponent(location.hash).includes(`window=${w}`), slid, { timeout: 5000 })
+        .catch(() => {});
+    const hash = await pg.evaluate(() => location.hash);
+    check(new URLSearchParams(hash.slice(1)).get('window') === slid, `the hash carries the window (${hash})`, hash);
+    const pg2 = await newPage(c);
+    await open(pg2, hash);
+    await match(pg2, 'a new page at that hash', 'picos', 150, 100, slid);
+    await pg2.close();
+
+    // 4. a gray store.
+    await open(pg, '#image=gray&x=550&y=350&z=0&r=0&window=20,180,1.8');
+    await match(pg, 'gray level 0 1:1, window 20,180,1.8', 'gray', 150, 100, '20,180,1.8');
+
+    // 5. negative control: red's table shifted by one must fail the match.
+    const bad = await pg.evaluate(() => {
+        const t = new Uint8Array(1024);
+        for (let v = 0; v < 256; v++) {
+            const y = Math.min(255, Math.max(0, Math.floor(255 * ((v - 20) / 160) ** (1 / 1.8) + 0.500000001)));
+            t.set([Math.min(255, (v <= 20 ? 0 : v >= 180 ? 255 : y) + 1), 0, 0, 255], 4 * v);
+        }
+        return Array.from(t);
+    });
+    const r5 = await compare(pg, 'gray', 150, 100, '20,180,1.8', bad);
+    check(r5.same < r5.n, `negative control: a table off by one fails the match (${r5.same}/${r5.n} pixels identical)`,
+        JSON.stringify(r5));
+    check(consoleErrors.length === 0, 'no console errors', consoleErrors.join('\n'));
+}
+
+const profile = mkdtempSync(join(tmpdir(), 'gv-window-'));
+const c = await launchChromium(profile, opt.chromium, W, H);
+try {
+    await run(c);
+} catch (e) {
+    fail('window.mjs ran', e.stack || String(e));
+} finally {
+    await c.close();
+    rmSync(profile, { recursive: true, force: true });
+}
+note(`${failed} failed`);
+process.exit(failed ? 1 : 0);

@@ -1,0 +1,37 @@
+#!/bin/sh
+# browser_window.sh - the display window in the browser viewer, in
+# headless Chromium with WebGL2 on SwiftShader (tests/browser/window.mjs
+# lists the checks): a window from the link, per channel, from the panel's
+# auto button and a slider, each drawn without a single request and equal,
+# bit for bit at a 1:1 view, to the server's region with the same
+# `window`; the hash carries it; a gray store too; a table off by one
+# fails the match (negative control).
+#
+# Skipped when /usr/bin/chromium, node or tests/browser/node_modules is
+# missing, and under valgrind.  Needs curl and python3 (http_util.sh).
+. "$(dirname "$0")/lib.sh"
+
+browser_preflight
+. "$(dirname "$0")/http_util.sh"
+
+S=$T/stores
+mkdir "$S" || bail "mkdir"
+run encode "$TESTDATA/picos-1100x700.jpg" -o "$S/picos.gv"
+[ "$rc" -eq 0 ] || bail "encode picos: $(cat "$T/err")"
+run encode synth:1100x700:gray -o "$S/gray.gv"
+[ "$rc" -eq 0 ] || bail "encode gray: $(cat "$T/err")"
+cat >"$T/w.conf" <<EOF2
+listen = 127.0.0.1
+port = 0
+store_dir = "$S"
+threads = 4
+access_log = stderr
+log_level = info
+EOF2
+start_daemon "$T/w.conf"
+wrc=0
+timeout 300 node "$BROWSER_DIR/window.mjs" --base "$BASE" --chromium "$CHROMIUM" >"$T/window.out" 2>&1 || wrc=$?
+browser_relay "$T/window.out" "$wrc" window.mjs
+stop_daemon
+check "gigaviewd exits 0 on SIGTERM" [ "$drc" -eq 0 ]
+done_testing
