@@ -101,7 +101,7 @@ static void test_etopo(const char *data)
                                    .mapped = 1, .scale = 1, .offset = -11000};
         struct gv_height_result r;
         struct gv_error err = {0};
-        if (gv_height_encode(png, out, &o, &r, &err) < 0)
+        if (gv_height_encode((const char *[]){png}, 1, out, &o, &r, &err) < 0)
             fail("encode E=%g: %s", errors[i], err.text);
         check(r.e == (int)errors[i] && r.max_error == errors[i],
               "E=%g: e %d, bound %g", errors[i], r.e, r.max_error);
@@ -159,7 +159,7 @@ static void test_synth(void)
     struct gv_height_opts o = {.max_error = 2, .threads = 1};
     struct gv_height_result r;
     struct gv_error err = {0};
-    if (gv_height_encode("synth-height:2100x1100", out, &o, &r, &err) < 0)
+    if (gv_height_encode((const char *[]){"synth-height:2100x1100"}, 1, out, &o, &r, &err) < 0)
         fail("synth: %s", err.text);
     check(r.geometry.root == 3, "synth: root level %d", r.geometry.root);
     /* The same terrain again: synth-height is a function of (x, y). */
@@ -167,7 +167,7 @@ static void test_synth(void)
     char out2[1200];
     snprintf(out2, sizeof out2, "%s/synth-lossless.gv", dir);
     o.max_error = 0;
-    if (gv_height_encode("synth-height:2100x1100", out2, &o, &r, &err) < 0)
+    if (gv_height_encode((const char *[]){"synth-height:2100x1100"}, 1, out2, &o, &r, &err) < 0)
         fail("synth: %s", err.text);
     struct gv_store *s = gv_store_open(out2, &err);
     struct gv_decoder *d = s ? gv_decoder_new(s, 64u << 20) : NULL;
@@ -190,7 +190,7 @@ static void test_synth(void)
     snprintf(out3, sizeof out3, "%s/synth-j3.gv", dir);
     o.max_error = 2;
     o.threads = 3;
-    if (gv_height_encode("synth-height:2100x1100", out3, &o, &r, &err) < 0)
+    if (gv_height_encode((const char *[]){"synth-height:2100x1100"}, 1, out3, &o, &r, &err) < 0)
         fail("synth -j3: %s", err.text);
     char cmd[2600];
     snprintf(cmd, sizeof cmd, "cmp -s %s %s", out, out3);
@@ -216,7 +216,7 @@ static void test_float(void)
     for (size_t i = 0; i < 2; i++) {
         struct gv_height_opts o = {.max_error = errors[i]};
         struct gv_height_result r;
-        if (gv_height_encode(tif, out, &o, &r, &err) < 0)
+        if (gv_height_encode((const char *[]){tif}, 1, out, &o, &r, &err) < 0)
             fail("float E=%g: %s", errors[i], err.text);
         check(r.src_float && (errors[i] == 0 ? r.max_error < 0.02 :
                               r.max_error <= errors[i]),
