@@ -667,7 +667,7 @@ int gv_source_read(struct gv_source *s, uint32_t rows, uint8_t *out,
     }
     if (s->kind == KIND_SYNTH_HEIGHT) {
         for (uint32_t i = 0; i < rows; i++)
-            gv_synth_height_row(s->next_row + i, s->width,
+            gv_synth_height_row(s->next_row + i, 0, s->width,
                                 (uint16_t *)(void *)(out + out_row * i));
         s->next_row += rows;
         return 0;

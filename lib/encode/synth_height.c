@@ -68,8 +68,8 @@ int gv_synth_height_parse(const char *spec, uint32_t *w, uint32_t *h)
     return 0;
 }
 
-void gv_synth_height_row(uint32_t y, uint32_t w, uint16_t *out)
+void gv_synth_height_row(uint32_t y, uint32_t x0, uint32_t w, uint16_t *out)
 {
     for (uint32_t x = 0; x < w; x++)
-        out[x] = synth_height(x, y);
+        out[x] = synth_height(x0 + x, y);
 }

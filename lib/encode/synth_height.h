@@ -14,7 +14,7 @@
  * into *w, *h.  Returns 0, or -1 when spec is not such a pattern. */
 int gv_synth_height_parse(const char *spec, uint32_t *w, uint32_t *h);
 
-/* Row y, columns 0 .. w-1, of the terrain into out (w codes). */
-void gv_synth_height_row(uint32_t y, uint32_t w, uint16_t *out);
+/* Row y, columns x0 .. x0+w-1, of the terrain into out (w codes). */
+void gv_synth_height_row(uint32_t y, uint32_t x0, uint32_t w, uint16_t *out);
 
 #endif
