@@ -113,7 +113,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double e,
     struct gv_height_opts o = {.max_error = e};
     struct gv_height_result r;
     struct gv_error err = {0};
-    if (gv_height_encode(input, out, &o, &r, &err) < 0)
+    if (gv_height_encode((const char *[]){input}, 1, out, &o, &r, &err) < 0)
         fail("encode %s: %s", input, err.text);
     check_path(gpu, out, name, GV_GPU_PATH_COMPUTE);
     check_path(gpu, out, name, GV_GPU_PATH_WEBGL2);

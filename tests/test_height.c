@@ -6,7 +6,8 @@
  *
  * Inputs: tests/data/etopo5-himalaya-1030x300-u16.png (three tiles
  * across at level 0, two at level 1: the rule of FORMAT.md section 2),
- * synth-height: terrain, and a float field written by the test.
+ * also cut into a 2 x 2 mosaic; synth-height: terrain, one of them two
+ * pages wide; and a float field written by the test.
  */
 #include <math.h>
 #include <stdio.h>
@@ -101,7 +102,7 @@ static void test_etopo(const char *data)
                                    .mapped = 1, .scale = 1, .offset = -11000};
         struct gv_height_result r;
         struct gv_error err = {0};
-        if (gv_height_encode(png, out, &o, &r, &err) < 0)
+        if (gv_height_encode((const char *[]){png}, 1, out, &o, &r, &err) < 0)
             fail("encode E=%g: %s", errors[i], err.text);
         check(r.e == (int)errors[i] && r.max_error == errors[i],
               "E=%g: e %d, bound %g", errors[i], r.e, r.max_error);
@@ -159,7 +160,7 @@ static void test_synth(void)
     struct gv_height_opts o = {.max_error = 2, .threads = 1};
     struct gv_height_result r;
     struct gv_error err = {0};
-    if (gv_height_encode("synth-height:2100x1100", out, &o, &r, &err) < 0)
+    if (gv_height_encode((const char *[]){"synth-height:2100x1100"}, 1, out, &o, &r, &err) < 0)
         fail("synth: %s", err.text);
     check(r.geometry.root == 3, "synth: root level %d", r.geometry.root);
     /* The same terrain again: synth-height is a function of (x, y). */
@@ -167,7 +168,7 @@ static void test_synth(void)
     char out2[1200];
     snprintf(out2, sizeof out2, "%s/synth-lossless.gv", dir);
     o.max_error = 0;
-    if (gv_height_encode("synth-height:2100x1100", out2, &o, &r, &err) < 0)
+    if (gv_height_encode((const char *[]){"synth-height:2100x1100"}, 1, out2, &o, &r, &err) < 0)
         fail("synth: %s", err.text);
     struct gv_store *s = gv_store_open(out2, &err);
     struct gv_decoder *d = s ? gv_decoder_new(s, 64u << 20) : NULL;
@@ -190,7 +191,7 @@ static void test_synth(void)
     snprintf(out3, sizeof out3, "%s/synth-j3.gv", dir);
     o.max_error = 2;
     o.threads = 3;
-    if (gv_height_encode("synth-height:2100x1100", out3, &o, &r, &err) < 0)
+    if (gv_height_encode((const char *[]){"synth-height:2100x1100"}, 1, out3, &o, &r, &err) < 0)
         fail("synth -j3: %s", err.text);
     char cmd[2600];
     snprintf(cmd, sizeof cmd, "cmp -s %s %s", out, out3);
@@ -216,7 +217,7 @@ static void test_float(void)
     for (size_t i = 0; i < 2; i++) {
         struct gv_height_opts o = {.max_error = errors[i]};
         struct gv_height_result r;
-        if (gv_height_encode(tif, out, &o, &r, &err) < 0)
+        if (gv_height_encode((const char *[]){tif}, 1, out, &o, &r, &err) < 0)
             fail("float E=%g: %s", errors[i], err.text);
         check(r.src_float && (errors[i] == 0 ? r.max_error < 0.02 :
                               r.max_error <= errors[i]),
@@ -240,6 +241,105 @@ static void test_float(void)
         gv_store_close(s);
     }
     free(f);
+}
+
+/* The columns x0 .. x0+tw-1 and rows y0 .. y0+th-1 of w-wide codes
+ * written to `path` (PNG-16 or TIFF by its name). */
+static void write_part(const char *path, const uint16_t *codes, uint32_t w,
+                       uint32_t x0, uint32_t y0, uint32_t tw, uint32_t th)
+{
+    uint16_t *t = malloc(sizeof *t * tw * th);
+    for (uint32_t y = 0; y < th; y++)
+        memcpy(t + (size_t)y * tw, codes + (size_t)(y0 + y) * w + x0, sizeof *t * tw);
+    struct gv_error err = {0};
+    if (gv_image_write_typed(path, tw, th, 1, GV_SAMPLE_U16, t, &err) < 0)
+        fail("write %s: %s", path, err.text);
+    free(t);
+}
+
+/* A 2 x 2 mosaic of PNG-16 and TIFF tiles cut from the Himalaya crop
+ * writes the store of the crop itself, every level within the bound. */
+static void test_mosaic(const char *data)
+{
+    char png[1024], part[4][1200], one[1200], mos[1200];
+    snprintf(png, sizeof png, "%s/etopo5-himalaya-1030x300-u16.png", data);
+    uint32_t w, h;
+    uint16_t *codes = read_png(png, &w, &h);
+    const uint32_t cx = 600, cy = 170;   /* not on a tile boundary */
+    const char *names[4] = {"p00.png", "p10.tif", "p01.tif", "p11.png"};
+    for (int i = 0; i < 4; i++) {
+        snprintf(part[i], sizeof part[i], "%s/%s", dir, names[i]);
+        const uint32_t x0 = i % 2 ? cx : 0, y0 = i / 2 ? cy : 0;
+        write_part(part[i], codes, w, x0, y0, i % 2 ? w - cx : cx, i / 2 ? h - cy : cy);
+    }
+    snprintf(one, sizeof one, "%s/whole.gv", dir);
+    snprintf(mos, sizeof mos, "%s/mosaic.gv", dir);
+    struct gv_height_opts o = {.max_error = 3, .threads = 2};
+    struct gv_height_result r;
+    struct gv_error err = {0};
+    if (gv_height_encode((const char *[]){png}, 1, one, &o, &r, &err) < 0)
+        fail("mosaic: whole: %s", err.text);
+    o.mosaic_cols = 2;
+    o.mosaic_rows = 2;
+    const char *inputs[4] = {part[0], part[1], part[2], part[3]};
+    if (gv_height_encode(inputs, 4, mos, &o, &r, &err) < 0)
+        fail("mosaic: %s", err.text);
+    char cmd[2600];
+    snprintf(cmd, sizeof cmd, "cmp -s %s %s", one, mos);
+    check(system(cmd) == 0, "mosaic: 2x2 tiles write the store of the whole");
+    int worst = max_diff(mos, codes, w, h);
+    check(worst >= 0 && worst <= 3, "mosaic: every sample of every level "
+          "within 3 (largest %d)", worst);
+    free(codes);
+}
+
+struct seen {
+    double last;
+    int backwards, done;
+};
+
+static void on_progress(void *ctx, const struct gv_encode_progress *p)
+{
+    struct seen *s = ctx;
+    s->backwards |= p->fraction < s->last;
+    s->last = p->fraction;
+    s->done += strcmp(p->phase, "done") == 0 && p->fraction == 1.0;
+}
+
+/* Two columns of pages at level 0 (ragged): every level within the bound,
+ * and progress that only moves forward to "done". */
+static void test_pages(void)
+{
+    const uint32_t w = 4700, h = 600;
+    char lossless[1200], out[1200];
+    snprintf(lossless, sizeof lossless, "%s/pages-0.gv", dir);
+    snprintf(out, sizeof out, "%s/pages-4.gv", dir);
+    const char *in[1] = {"synth-height:4700x600"};
+    struct gv_height_opts o = {.threads = 2};
+    struct gv_height_result r;
+    struct gv_error err = {0};
+    if (gv_height_encode(in, 1, lossless, &o, &r, &err) < 0)
+        fail("pages: %s", err.text);
+    check(r.geometry.level[0].pages_x == 2, "pages: %u pages across level 0",
+          r.geometry.level[0].pages_x);
+    uint16_t *codes = malloc(sizeof *codes * w * h);
+    struct gv_store *s = gv_store_open(lossless, &err);
+    struct gv_decoder *d = s ? gv_decoder_new(s, 64u << 20) : NULL;
+    if (!d || gv_height_region(d, 0, 0, 0, w, h, codes, &err) < 0)
+        fail("pages lossless: %s", err.text);
+    gv_decoder_free(d);
+    gv_store_close(s);
+    struct seen seen = {0};
+    o.max_error = 4;
+    o.progress = on_progress;
+    o.progress_ctx = &seen;
+    if (gv_height_encode(in, 1, out, &o, &r, &err) < 0)
+        fail("pages: %s", err.text);
+    check(!seen.backwards && seen.done == 1, "pages: progress forward to done");
+    int worst = max_diff(out, codes, w, h);
+    check(worst >= 0 && worst <= 4, "pages: every sample of every level "
+          "within 4 (largest %d)", worst);
+    free(codes);
 }
 
 /* Damaged buffers fail as GV_ECORRUPT, never crash. */
@@ -287,6 +387,8 @@ int main(void)
     test_etopo(data);
     test_synth();
     test_float();
+    test_mosaic(data);
+    test_pages();
     test_tmpdir_free(dir);
     return tap_done();
 }

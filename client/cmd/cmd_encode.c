@@ -200,7 +200,7 @@ static const struct opt_spec encode_opts[] = {
              "store, identical to an unsharded encode"},
     {.name = "height", .kind = OPT_FLAG, .field = F(height),
      .help = "write a height store: one 16-bit or float\n"
-             "channel of elevations (docs/FORMAT.md 9)"},
+             "channel of elevations (docs/FORMAT.md 12)"},
     {.name = "max-error", .kind = OPT_DOUBLE, .arg = "E", .field = F(max_error),
      .min = 0, .max = 1e30, .flags = OPT_FINITE, .wants = "a number >= 0",
      .help = "--height: largest error in source units\n(default 0: lossless)"},
@@ -226,8 +226,9 @@ static const struct opt_command encode_command = {
         "a GeoTIFF, COG or JPEG 2000 through GDAL, in builds with them,\n"
         "several images with --mosaic, or\n"
         "synth:WIDTHxHEIGHT[:gray] for a procedural test image.\n"
-        "With --height, one single-channel INPUT (PNG-16, TIFF, EXR...) or\n"
-        "synth-height:WIDTHxHEIGHT (fractal terrain) gives a height store.\n",
+        "With --height, one single-channel INPUT (PNG-16, TIFF, EXR...), a\n"
+        "--mosaic of them, or synth-height:WIDTHxHEIGHT (fractal terrain)\n"
+        "gives a height store.\n",
     .opts = encode_opts,
     .nopts = sizeof encode_opts / sizeof encode_opts[0],
 };
@@ -310,9 +311,12 @@ static void print_shard_summary(const struct encode_args *a,
     printf("time       %.2f s\n", r->seconds);
 }
 
-/* encode --height: one input, no image options.  Returns the exit code. */
-static int encode_height(const struct encode_args *a, const char *input)
+/* encode --height: one input or a mosaic, no image options.  Returns the
+ * exit code. */
+static int encode_height(const struct encode_args *a, const char *const *inputs,
+                         int ninputs)
 {
+    struct progress *bar = progress_new(stderr, a->progress);
     struct gv_height_opts ho = {.max_error = a->max_error,
                                 .mapped = a->hscale > 0 || a->hoffset_given,
                                 .scale = a->hscale > 0 ? a->hscale : 1,
@@ -320,11 +324,18 @@ static int encode_height(const struct encode_args *a, const char *input)
                                 .max_pixels = a->o.source.max_pixels,
                                 .max_decoder_bytes =
                                     a->o.source.max_decoder_bytes,
-                                .threads = a->o.threads};
+                                .threads = a->o.threads,
+                                .mosaic_cols = a->o.source.mosaic_cols,
+                                .mosaic_rows = a->o.source.mosaic_rows,
+                                .tmpdir = a->o.tmpdir,
+                                .progress = on_progress,
+                                .progress_ctx = bar};
     struct gv_height_result r;
     struct gv_error err = {0};
     gv_error_clear(&err);
-    if (gv_height_encode(input, a->output, &ho, &r, &err) < 0) {
+    int rc = gv_height_encode(inputs, ninputs, a->output, &ho, &r, &err);
+    progress_free(bar);
+    if (rc < 0) {
         fprintf(stderr, ME ": %s\n", err.text);
         return 1;
     }
@@ -340,6 +351,7 @@ static int encode_height(const struct encode_args *a, const char *input)
     printf("size       %llu bytes, %.3f bits per sample\n",
            (unsigned long long)r.file_bytes,
            8.0 * (double)r.file_bytes / ((double)r.geometry.width * r.geometry.height));
+    printf("scratch    %llu bytes\n", (unsigned long long)r.scratch_bytes);
     printf("time       %.2f s\n", r.seconds);
     return 0;
 }
@@ -353,13 +365,15 @@ int cmd_encode(int argc, char **argv)
         return rc;
     const int ninputs = argc - first;
     if (a.height) {
-        if (!a.output || ninputs != 1 || a.o.source.mosaic_cols ||
-            a.o.shard_count > 0 || a.psnr > 0 || a.min_tile_psnr > 0) {
-            fprintf(stderr, ME ": --height takes one INPUT and -o STORE "
-                    "(not -q, --mosaic or --shard)\n");
+        if (!a.output || a.o.shard_count > 0 || a.psnr > 0 ||
+            a.min_tile_psnr > 0) {
+            fprintf(stderr, ME ": --height takes INPUT (or --mosaic's "
+                    "INPUTs) and -o STORE (not -q or --shard)\n");
             return 2;
         }
-        return encode_height(&a, argv[first]);
+        if ((rc = check_inputs(&a, ninputs)) != OPT_GO_ON)
+            return rc;
+        return encode_height(&a, (const char *const *)argv + first, ninputs);
     }
     if (a.max_error > 0 || a.unit || a.hscale > 0 || a.hoffset_given) {
         fprintf(stderr, ME ": --max-error, --unit, --scale and --offset "

@@ -1,470 +1,601 @@
 /*
- * height_encode.c - the height store encoder (see height_encode.h).
+ * height_encode.c - the streaming height store encoder (see
+ * height_encode.h).
  *
- * Steps: read the raster into codes (imageio, or the synthetic terrain),
- * build the code pyramid with the box filter, then code levels root-1 ..
- * 0 page by page, each tile against its parent as the decoder will have
- * decoded it (the decoded tiles of the level above are kept until the
- * level is done).  The root is stored losslessly.
+ * Steps: (float input only) read the input once for its range; pass 1
+ * reads it again row by row, maps the samples to codes and pushes each
+ * row up the pyramid (one pending row per level, the box filter on pairs
+ * of rows), writing every level, the root's included, to the scratch
+ * file in strips (strips.h) at orig_base[k]; pass 2 codes levels root-1
+ * .. 0 page by page: the page's window is mapped from (or copied out of)
+ * its strip, its 64 tiles are cut from it clamp-padded and coded on the
+ * pool, each against its decoded parent, and the decoded tiles of levels
+ * >= 1 go to the scratch file at recon_base[k] (513x513 codes each,
+ * row-major by tile), where the level below finds them.  The root is
+ * stored losslessly.  Every step computes what the in-memory encoder
+ * before it did, tile for tile, so stores are byte for byte the same.
  */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "base/pool.h"
+#include "base/spill.h"
 #include "codec/height_tile.h"
+#include "encode/encode_int.h"
 #include "encode/height_encode.h"
-#include "imageio/imageio.h"
+#include "encode/source.h"
+#include "encode/strips.h"
+#include "store/store_format.h"
 #include "store/store_write.h"
 
 #define ME "height"
-#define STRIP 64   /* rows read at a time */
+#define WINDOW GV_STRIP_WINDOW
+#define PAGE_W GV_STRIP_PAGE_W
+#define CHUNK_BYTES (4u << 20)  /* input rows read at a time */
+#define PASS1_SHARE 0.15        /* progress weight of pass 1 */
+#define TILE_BYTES ((size_t)GV_HT_SAMPLES * sizeof(uint16_t))
 
-/* ---- synth-height: integer value-noise fBm, a function of (x, y) ---- */
+struct henc {
+    const struct gv_height_opts *o;
+    const char *const *inputs;
+    int n;
+    const char *name;            /* the input, for messages */
+    struct gv_error *err;
+    struct gv_source_opts so;
+    struct gv_geometry g;
+    int e;                       /* the half-step in codes */
+    struct gv_height_result m;   /* mapping, range, bound */
+    struct gv_spill *spill;
+    uint64_t orig_base[GV_MAX_LEVELS], recon_base[GV_MAX_LEVELS];
+    /* pass 1 */
+    uint16_t *pending[GV_MAX_LEVELS], *reduced[GV_MAX_LEVELS];
+    int have_pending[GV_MAX_LEVELS];
+    uint32_t rows_out[GV_MAX_LEVELS];
+    uint16_t lo, hi;             /* integer input: smallest, largest code */
+    /* pass 2 */
+    struct gv_pool *pool;
+    int level;
+    uint32_t px, py;
+    const uint16_t *win;         /* the page's window: a view, or copy */
+    uint32_t win_w, win_h;       /* win_w is also its stride */
+    uint16_t *copy;
+    struct gv_spill_view view;
+    uint16_t *root, *root_tile;
+    uint16_t *parents[16];
+    const uint16_t *parent_at[16];
+    uint16_t *dec[GV_PAGE_SLOTS];
+    uint8_t *bufs[GV_PAGE_SLOTS];
+    size_t lens[GV_PAGE_SLOTS];
+    uint16_t *orig[GV_PAGE_SLOTS];  /* per worker */
+    struct gv_store_writer *wr;
+    uint64_t tiles;
+    double work_total, work_done;
+};
 
-/* Same shape as mix32 in encode/source.c and id_final in store/store_read.c:
- * deliberately separate, other constants, and each output is part of what a
- * store holds. */
-static uint32_t hash2(uint32_t x, uint32_t y, uint32_t o)
+static void report(struct henc *h, const char *phase, double fraction)
 {
-    uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u ^ o * 0xcb1ab31fu;
-    h ^= h >> 15;
-    h *= 0x2c1b3c6du;
-    h ^= h >> 12;
-    h *= 0x297a2d39u;
-    h ^= h >> 15;
-    return h;
+    if (!h->o->progress)
+        return;
+    struct gv_encode_progress p = {
+        .fraction = fraction > 1.0 ? 1.0 : fraction,
+        .source_pixels = (uint64_t)h->g.width * h->g.height,
+        .phase = phase,
+        .level = h->level,
+    };
+    h->o->progress(h->o->progress_ctx, &p);
 }
 
-/* Smoothstep in 16-bit fixed point: t in 0..65536. */
-static int64_t smooth(int64_t t)
+/* ------------------------------------------------------ the input */
+
+/* Open the input as native samples; fills *si.  NULL with h->err. */
+static struct gv_source *open_input(struct henc *h, struct gv_source_info *si)
 {
-    return (t * t * (3 * 65536 - 2 * t)) >> 32;
+    struct gv_source *src = gv_source_open(h->inputs, h->n, &h->so, si, h->err);
+    if (src && si->channels != 1) {
+        gv_fail(h->err, GV_EINVAL, ME ": %s has %d channels; a height field "
+                "has one", h->name, si->channels);
+        gv_source_free(src);
+        return NULL;
+    }
+    return src;
 }
 
-/* One octave of cell size 2^shift at (x, y): -32768..32767. */
-static int64_t octave(uint32_t x, uint32_t y, int shift, uint32_t o)
+/* Rows of the input read at a time. */
+static uint32_t chunk_rows(const struct gv_source_info *si)
 {
-    uint32_t cx = x >> shift, cy = y >> shift;
-    int64_t fx = smooth((int64_t)(x & ((1u << shift) - 1)) << (16 - shift));
-    int64_t fy = smooth((int64_t)(y & ((1u << shift) - 1)) << (16 - shift));
-    int64_t a = (int64_t)(hash2(cx, cy, o) >> 16) - 32768;
-    int64_t b = (int64_t)(hash2(cx + 1, cy, o) >> 16) - 32768;
-    int64_t c = (int64_t)(hash2(cx, cy + 1, o) >> 16) - 32768;
-    int64_t d = (int64_t)(hash2(cx + 1, cy + 1, o) >> 16) - 32768;
-    int64_t top = a + (((b - a) * fx) >> 16), bot = c + (((d - c) * fx) >> 16);
-    return top + (((bot - top) * fy) >> 16);
+    uint32_t c = (uint32_t)(CHUNK_BYTES / ((size_t)si->width * si->sample_bytes));
+    c = c ? c : 1;
+    return c < si->height ? c : si->height;
 }
 
-/* Terrain code at (x, y): 11 octaves from 2048-pixel cells down to 2,
- * amplitude halving (fractal dimension about 2.0 + 0.5), ridged a little
- * by folding, in metres, about 0 .. 7000. */
-static uint16_t synth_height(uint32_t x, uint32_t y)
+/* Float input: read it once for its range and set the mapping (offset =
+ * the smallest sample, scale = the range / 65535).  Non-finite samples
+ * are refused. */
+static int float_range(struct henc *h)
 {
-    int64_t s = 0;
-    for (int k = 11, amp = 1024; k >= 1; k--, amp = amp * 5 / 9)
-        s += octave(x, y, k, (uint32_t)k) * amp;
-    s >>= 11;                       /* about -6000 .. 6000 */
-    int64_t v = s < 0 ? -s / 4 : s; /* shallow "sea floor" below 0 */
-    v += 1000;
-    return (uint16_t)(v < 0 ? 0 : (v > 65535 ? 65535 : v));
-}
-
-static int parse_synth(const char *spec, uint32_t *w, uint32_t *h)
-{
-    unsigned long long a, b;
-    char tail;
-    if (sscanf(spec, "synth-height:%llux%llu%c", &a, &b, &tail) != 2 || !a ||
-        !b || a > GV_MAX_DIM || b > GV_MAX_DIM)
+    struct gv_source_info si;
+    struct gv_source *src = open_input(h, &si);
+    if (!src)
         return -1;
-    *w = (uint32_t)a;
-    *h = (uint32_t)b;
-    return 0;
-}
-
-/* ---- reading the input into codes ---- */
-
-/* The samples of synth-height:WxH into a new *codes (caller frees).
- * Returns 0 or -1 with err set. */
-static int read_synth(const char *input, uint64_t limit, uint16_t **codes,
-                      uint32_t *w, uint32_t *h, struct gv_error *err)
-{
-    if (parse_synth(input, w, h) < 0)
-        return gv_fail(err, GV_EINVAL, ME ": bad pattern '%s' (want "
-                       "synth-height:WIDTHxHEIGHT)", input);
-    if ((uint64_t)*w * *h > limit)
-        return gv_fail(err, GV_ELIMIT, ME ": %ux%u is more than %llu "
-                       "pixels", *w, *h, (unsigned long long)limit);
-    *codes = malloc(sizeof **codes * (size_t)*w * *h);
-    if (!*codes)
-        return gv_fail(err, GV_ENOMEM, ME ": out of memory for the input");
-    for (uint32_t y = 0; y < *h; y++)
-        for (uint32_t x = 0; x < *w; x++)
-            (*codes)[(size_t)y * *w + x] = synth_height(x, y);
-    return 0;
-}
-
-/* Map n finite float samples onto the 16-bit codes, lowest to 0 and
- * highest to 65535 (m's offset, scale, min and max set).  Returns 0, or
- * -1 with err set when a sample is not a finite number. */
-static int map_float(const float *fl, size_t n, uint16_t *codes,
-                     struct gv_height_result *m, const char *input,
-                     struct gv_error *err)
-{
+    const uint32_t chunk = chunk_rows(&si);
+    float *buf = malloc((size_t)chunk * si.width * sizeof *buf);
     float lo = INFINITY, hi = -INFINITY;
-    for (size_t i = 0; i < n; i++) {
-        if (!isfinite(fl[i]))
-            return gv_fail(err, GV_EINVAL, ME ": %s has a sample that is "
-                           "not a finite number", input);
-        lo = fl[i] < lo ? fl[i] : lo;
-        hi = fl[i] > hi ? fl[i] : hi;
-    }
-    m->offset = lo;
-    m->scale = hi > lo ? ((double)hi - lo) / 65535.0 : 1.0;
-    m->min = lo;
-    m->max = hi;
-    for (size_t i = 0; i < n; i++) {
-        double c = floor((fl[i] - m->offset) / m->scale + 0.5);
-        codes[i] = (uint16_t)(c < 0 ? 0 : (c > 65535 ? 65535 : c));
-    }
-    return 0;
-}
-
-/* The one channel of image file `input` into a new *codes (caller frees):
- * 8- and 16-bit samples as they are, float ones through map_float
- * (m->src_float set).  Returns 0 or -1 with err set. */
-static int read_image_codes(const char *input, const struct gv_height_opts *o,
-                            uint64_t limit, uint16_t **codes, uint32_t *w,
-                            uint32_t *h, struct gv_height_result *m,
-                            struct gv_error *err)
-{
-    struct gv_image_info ii;
-    const struct gv_image_limits lim = {
-        .max_pixels = limit, .max_decoder_bytes = o->max_decoder_bytes};
-    struct gv_image_in *in = gv_image_open_limits(input, &lim, &ii, err);
-    if (!in)
-        return -1;
     int rc = -1;
-    void *strip = NULL;
-    float *fl = NULL;
-    if (ii.channels != 1) {
-        gv_fail(err, GV_EINVAL, ME ": %s has %d channels; a height field "
-                "has one", input, ii.channels);
-        goto done;
+    if (!buf) {
+        gv_fail(h->err, GV_ENOMEM, ME ": out of memory for input rows");
+        goto out;
     }
-    *w = ii.width;
-    *h = ii.height;
-    const size_t n = (size_t)*w * *h;
-    const int fp = ii.sample == GV_SAMPLE_F32;
-    const size_t ss = ii.sample == GV_SAMPLE_U8 ? 1 : (fp ? 4 : 2);
-    *codes = malloc(sizeof **codes * n);
-    strip = malloc(ss * *w * STRIP);
-    if (fp)
-        fl = malloc(sizeof *fl * n);
-    if (!*codes || !strip || (fp && !fl)) {
-        gv_fail(err, GV_ENOMEM, ME ": out of memory for the input");
-        goto done;
-    }
-    for (uint32_t y = 0; y < *h; y += STRIP) {
-        uint32_t rows = *h - y < STRIP ? *h - y : STRIP;
-        if (gv_image_read(in, rows, strip, err) < 0)
-            goto done;
-        size_t k = (size_t)rows * *w, at = (size_t)y * *w;
-        for (size_t i = 0; i < k; i++) {
-            if (ii.sample == GV_SAMPLE_U8)
-                (*codes)[at + i] = ((const uint8_t *)strip)[i];
-            else if (!fp)
-                (*codes)[at + i] = ((const uint16_t *)strip)[i];
-            else
-                fl[at + i] = ((const float *)strip)[i];
+    for (uint32_t y = 0; y < si.height; y += chunk) {
+        const uint32_t k = si.height - y < chunk ? si.height - y : chunk;
+        if (gv_source_read(src, k, (uint8_t *)buf, h->err) < 0)
+            goto out;
+        for (size_t i = 0; i < (size_t)k * si.width; i++) {
+            if (!isfinite(buf[i])) {
+                gv_fail(h->err, GV_EINVAL, ME ": %s has a sample that is "
+                        "not a finite number", h->name);
+                goto out;
+            }
+            lo = buf[i] < lo ? buf[i] : lo;
+            hi = buf[i] > hi ? buf[i] : hi;
         }
     }
-    m->src_float = fp;
-    if (fp && map_float(fl, n, *codes, m, input, err) < 0)
-        goto done;
+    h->m.offset = lo;
+    h->m.scale = hi > lo ? ((double)hi - lo) / 65535.0 : 1.0;
+    h->m.min = lo;
+    h->m.max = hi;
     rc = 0;
-done:
-    free(strip);
-    free(fl);
-    gv_image_close(in);
-    if (rc < 0) {
-        free(*codes);
-        *codes = NULL;
-    }
+out:
+    free(buf);
+    gv_source_free(src);
     return rc;
 }
 
-static int read_input(const char *input, const struct gv_height_opts *o,
-                      uint16_t **codes, uint32_t *w, uint32_t *h,
-                      struct gv_height_result *m, int *e,
-                      struct gv_error *err)
+/* The half-step e in codes: the largest whose bound fits --max-error.
+ * After the mapping is known. */
+static int pick_e(struct henc *h)
 {
-    uint64_t limit = o->max_pixels ? o->max_pixels : GV_HEIGHT_MAX_PIXELS;
-    *codes = NULL;
-    m->scale = o->mapped ? o->scale : 1;
-    m->offset = o->mapped ? o->offset : 0;
-    if (strncmp(input, "synth-height:", 13) == 0) {
-        if (read_synth(input, limit, codes, w, h, err) < 0)
-            return -1;
-        m->src_float = 0;
-    } else if (read_image_codes(input, o, limit, codes, w, h, m, err) < 0) {
-        return -1;
-    }
-    const size_t n = (size_t)*w * *h;
-    if (!m->src_float) {
-        uint16_t lo = 65535, hi = 0;
-        for (size_t i = 0; i < n; i++) {
-            lo = (*codes)[i] < lo ? (*codes)[i] : lo;
-            hi = (*codes)[i] > hi ? (*codes)[i] : hi;
-        }
-        m->min = lo * m->scale + m->offset;
-        m->max = hi * m->scale + m->offset;
-    }
-    /* The half-step in codes: the largest e whose bound fits E. */
+    struct gv_height_result *m = &h->m;
     double q = m->src_float ? 0.5 : 0.0;   /* quantization, in codes */
-    double ec = floor(o->max_error / m->scale - q + 1e-9);
-    if (o->max_error > 0 && ec < 0) {
-        free(*codes);
-        *codes = NULL;
-        return gv_fail(err, GV_EINVAL, ME ": --max-error %g is below the "
+    double ec = floor(h->o->max_error / m->scale - q + 1e-9);
+    if (h->o->max_error > 0 && ec < 0)
+        return gv_fail(h->err, GV_EINVAL, ME ": --max-error %g is below the "
                        "16-bit quantization of this float input (%g)",
-                       o->max_error, m->scale / 2);
-    }
-    *e = ec < 0 ? 0 : (ec > GV_HT_MAX_E ? GV_HT_MAX_E : (int)ec);
-    m->e = *e;
-    /* Float input: quantizing adds scale/2, and the double arithmetic of
-     * the mapping a few ulps of the values (1e-12 of the largest
-     * magnitude covers it with room to spare). */
-    m->max_error = m->src_float
-        ? m->scale * (*e + 0.5) + 1e-12 * fmax(fabs(m->min), fabs(m->max))
-        : m->scale * *e;
+                       h->o->max_error, m->scale / 2);
+    h->e = ec < 0 ? 0 : (ec > GV_HT_MAX_E ? GV_HT_MAX_E : (int)ec);
+    m->e = h->e;
     return 0;
 }
 
-/* ---- coding the pyramid ---- */
+/* The bound in source units, once the range is known.  Float input:
+ * quantizing adds scale/2, and the double arithmetic of the mapping a few
+ * ulps of the values (1e-12 of the largest magnitude covers it with room
+ * to spare). */
+static void set_bound(struct henc *h)
+{
+    struct gv_height_result *m = &h->m;
+    m->max_error = m->src_float
+        ? m->scale * (h->e + 0.5) + 1e-12 * fmax(fabs(m->min), fabs(m->max))
+        : m->scale * h->e;
+}
 
-/* Tile (tx,ty) of a w x h level, clamp-padded, into t. */
-static void extract(const uint16_t *lv, uint32_t w, uint32_t h, uint32_t tx,
-                    uint32_t ty, uint16_t *t)
+/* Map w samples of the row `raw` (sample_bytes each) to codes. */
+static void to_codes(struct henc *h, const void *raw, int sample_bytes,
+                     uint32_t w, uint16_t *codes)
+{
+    if (sample_bytes == 4) {
+        const float *f = raw;
+        for (uint32_t x = 0; x < w; x++) {
+            double c = floor((f[x] - h->m.offset) / h->m.scale + 0.5);
+            codes[x] = (uint16_t)(c < 0 ? 0 : (c > 65535 ? 65535 : c));
+        }
+        return;
+    }
+    if (sample_bytes == 1)
+        for (uint32_t x = 0; x < w; x++)
+            codes[x] = ((const uint8_t *)raw)[x];
+    else if (codes != raw)
+        memcpy(codes, raw, (size_t)w * sizeof *codes);
+    uint16_t lo = h->lo, hi = h->hi;
+    for (uint32_t x = 0; x < w; x++) {
+        lo = codes[x] < lo ? codes[x] : lo;
+        hi = codes[x] > hi ? codes[x] : hi;
+    }
+    h->lo = lo;
+    h->hi = hi;
+}
+
+/* ------------------------------------------------------------ pass 1 */
+
+/* Store row rows_out[k] of level k and feed the level above. */
+static int push_row(struct henc *h, int k, const uint16_t *row)
+{
+    const struct gv_level *l = &h->g.level[k];
+    if (gv_strips_store(h->spill, l, h->orig_base[k], 2, h->rows_out[k], row,
+                        0, l->width, h->err) < 0)
+        return -1;
+    h->rows_out[k]++;
+    if (k == h->g.root)
+        return 0;
+    if (!h->have_pending[k]) {
+        memcpy(h->pending[k], row, (size_t)l->width * sizeof *row);
+        h->have_pending[k] = 1;
+        return 0;
+    }
+    h->have_pending[k] = 0;
+    gv_height_box_reduce_row(h->pending[k], row, l->width, h->reduced[k + 1]);
+    return push_row(h, k + 1, h->reduced[k + 1]);
+}
+
+static int pass1(struct henc *h, struct gv_source *src,
+                 const struct gv_source_info *si)
+{
+    const struct gv_geometry *g = &h->g;
+    const uint32_t chunk = chunk_rows(si);
+    const size_t raw_row = (size_t)g->width * si->sample_bytes;
+    uint8_t *buf = malloc((size_t)chunk * raw_row);
+    uint16_t *codes = malloc((size_t)g->width * sizeof *codes);
+    int rc = -1;
+    if (!buf || !codes)
+        goto nomem;
+    for (int k = 0; k <= g->root; k++) {
+        const size_t rb = (size_t)g->level[k].width * sizeof(uint16_t);
+        if (!(h->pending[k] = malloc(rb)) || !(h->reduced[k] = malloc(rb)))
+            goto nomem;
+    }
+    h->lo = 65535;
+    h->hi = 0;
+    for (uint32_t y = 0; y < g->height; y += chunk) {
+        const uint32_t n = g->height - y < chunk ? g->height - y : chunk;
+        if (gv_source_read(src, n, buf, h->err) < 0)
+            goto out;
+        for (uint32_t i = 0; i < n; i++) {
+            const uint8_t *raw = buf + (size_t)i * raw_row;
+            /* 16-bit rows are codes as they are */
+            uint16_t *row = si->sample_bytes == 2 ? (uint16_t *)(void *)raw
+                                                  : codes;
+            to_codes(h, raw, si->sample_bytes, g->width, row);
+            if (push_row(h, 0, row) < 0)
+                goto out;
+        }
+        report(h, "pyramid", PASS1_SHARE * (double)(y + n) / g->height);
+    }
+    /* Odd heights: the last row of a level pairs with itself. */
+    for (int k = 0; k < g->root; k++)
+        if (h->have_pending[k]) {
+            h->have_pending[k] = 0;
+            gv_height_box_reduce_row(h->pending[k], h->pending[k],
+                                     g->level[k].width, h->reduced[k + 1]);
+            if (push_row(h, k + 1, h->reduced[k + 1]) < 0)
+                goto out;
+        }
+    if (!h->m.src_float) {
+        h->m.min = h->lo * h->m.scale + h->m.offset;
+        h->m.max = h->hi * h->m.scale + h->m.offset;
+    }
+    rc = 0;
+    goto out;
+nomem:
+    gv_fail(h->err, GV_ENOMEM, ME ": out of memory for input rows");
+out:
+    free(buf);
+    free(codes);
+    return rc;
+}
+
+/* ------------------------------------------------------------ pass 2 */
+
+/* Tile (tx,ty) of a w x h level of codes with `stride` codes from row to
+ * row, clamp-padded to 513x513, into t. */
+static void extract(const uint16_t *lv, size_t stride, uint32_t w, uint32_t h,
+                    uint32_t tx, uint32_t ty, uint16_t *t)
 {
     for (uint32_t v = 0; v < GV_HT_SIDE; v++) {
         uint32_t y = ty * GV_STEP + v;
-        const uint16_t *row = lv + (size_t)(y < h ? y : h - 1) * w;
-        for (uint32_t u = 0; u < GV_HT_SIDE; u++) {
-            uint32_t x = tx * GV_STEP + u;
-            t[v * GV_HT_SIDE + u] = row[x < w ? x : w - 1];
-        }
+        const uint16_t *row = lv + (size_t)(y < h ? y : h - 1) * stride;
+        uint32_t x0 = tx * GV_STEP;
+        uint32_t avail = w - x0 < GV_HT_SIDE ? w - x0 : GV_HT_SIDE;
+        memcpy(t + v * GV_HT_SIDE, row + x0, avail * sizeof *t);
+        for (uint32_t u = avail; u < GV_HT_SIDE; u++)
+            t[v * GV_HT_SIDE + u] = row[w - 1];
     }
 }
 
-/* One page of level k: its tiles are coded in parallel (each from its
- * parent, all of the level above done), then written in order. */
-struct page_job {
-    const struct gv_level *l;
-    const uint16_t *lv;           /* level k's exact codes */
-    uint16_t **dec, **dec_up;     /* decoded tiles of level k and k+1 */
-    uint32_t up_tx, px, py;
-    int e;
-    uint8_t **bufs;               /* per slot */
-    size_t *lens;                 /* per slot; 0 on failure */
-    uint16_t **orig;              /* per worker */
-};
-
+/* Pool job: code slot `item` of the current page; lens[item] stays 0 for
+ * a slot outside the level and on allocation failure. */
 static void encode_slot(void *ctx, size_t item, int worker)
 {
-    struct page_job *pj = ctx;
-    const struct gv_level *l = pj->l;
-    uint32_t tx = pj->px * GV_PAGE_TILES + (uint32_t)(item % GV_PAGE_TILES);
-    uint32_t ty = pj->py * GV_PAGE_TILES + (uint32_t)(item / GV_PAGE_TILES);
-    pj->lens[item] = 0;
+    struct henc *h = ctx;
+    const struct gv_level *l = &h->g.level[h->level];
+    const uint32_t i = (uint32_t)(item % GV_PAGE_TILES), j = (uint32_t)(item / GV_PAGE_TILES);
+    const uint32_t tx = h->px * GV_PAGE_TILES + i, ty = h->py * GV_PAGE_TILES + j;
+    h->lens[item] = 0;
     if (tx >= l->tiles_x || ty >= l->tiles_y)
         return;
-    size_t ti = (size_t)ty * l->tiles_x + tx;
-    if (!(pj->dec[ti] = malloc(sizeof **pj->dec * GV_HT_SAMPLES)))
-        return;
-    uint16_t *orig = pj->orig[worker];
-    extract(pj->lv, l->width, l->height, tx, ty, orig);
-    uint32_t vw = l->width - tx * GV_STEP, vh = l->height - ty * GV_STEP;
-    pj->lens[item] = gv_height_tile_encode(
-        orig, pj->dec_up[(size_t)(ty / 2) * pj->up_tx + tx / 2], (int)(tx & 1),
-        (int)(ty & 1), pj->e, vw < GV_TILE ? (int)vw : GV_TILE,
-        vh < GV_TILE ? (int)vh : GV_TILE, pj->bufs[item], pj->dec[ti]);
+    uint16_t *orig = h->orig[worker];
+    /* The window's columns and rows are the level's, from the page on. */
+    extract(h->win, h->win_w, h->win_w, h->win_h, i, j, orig);
+    const uint32_t vw = l->width - tx * GV_STEP, vh = l->height - ty * GV_STEP;
+    h->lens[item] = gv_height_tile_encode(
+        orig, h->parent_at[(j / 2) * 4 + i / 2], (int)(tx & 1), (int)(ty & 1),
+        h->e, vw < GV_TILE ? (int)vw : GV_TILE, vh < GV_TILE ? (int)vh : GV_TILE,
+        h->bufs[item], h->dec[item]);
 }
 
-static void free_tiles(uint16_t **t, size_t n)
+/* Map (or copy) the current page's window out of its strip. */
+static int load_window(struct henc *h)
 {
-    if (!t)
-        return;
-    for (size_t i = 0; i < n; i++)
-        free(t[i]);
-    free(t);
+    const struct gv_level *l = &h->g.level[h->level];
+    const uint32_t y0 = h->py * PAGE_W;
+    h->win_w = gv_strip_width(l->width, h->px);
+    h->win_h = l->height - y0 < WINDOW ? l->height - y0 : WINDOW;
+    const uint64_t at = gv_strip_at(l, h->orig_base[h->level], 2, h->px, y0);
+    const size_t span = (size_t)h->win_h * h->win_w * sizeof(uint16_t);
+    gv_spill_unview(&h->view);
+    if (gv_spill_view(h->spill, at, span, &h->view) == 0) {
+        h->win = (const uint16_t *)(const void *)h->view.data;
+        return 0;
+    }
+    if (!h->copy && !(h->copy = malloc((size_t)WINDOW * WINDOW * sizeof *h->copy)))
+        return gv_fail(h->err, GV_ENOMEM, ME ": out of memory");
+    h->win = h->copy;
+    return gv_spill_read(h->spill, h->copy, span, at, h->err);
 }
 
-/* The header of a height store of w x h codes at bound e (in codes). */
-static void height_header(struct gv_header *hd, uint32_t w, uint32_t h, int e,
-                          const struct gv_height_result *meta, const char *unit)
+/* The 16 decoded parents of the current page: the root tile, or tiles of
+ * the level above from the scratch file. */
+static int load_parents(struct henc *h)
 {
-    memset(hd, 0, sizeof *hd);
-    hd->width = w;
-    hd->height = h;
-    hd->channels = 1;
-    hd->src_bits = meta->src_float ? 32 : 16;
-    hd->src_float = (uint8_t)meta->src_float;
-    hd->kind = GV_KIND_HEIGHT;
-    hd->height_float = (uint8_t)meta->src_float;
-    hd->height_e = (uint16_t)e;
-    hd->height_scale = meta->scale;
-    hd->height_offset = meta->offset;
-    hd->height_max_error = meta->max_error;
-    hd->height_min = (float)meta->min;
-    hd->height_max = (float)meta->max;
-    if (unit)
-        snprintf(hd->height_unit, sizeof hd->height_unit, "%s", unit);
+    const int pl = h->level + 1;
+    const struct gv_level *l = &h->g.level[pl];
+    for (int s = 0; s < 16; s++) {
+        const uint32_t ptx = h->px * 4 + (uint32_t)(s % 4);
+        const uint32_t pty = h->py * 4 + (uint32_t)(s / 4);
+        h->parent_at[s] = pl == h->g.root ? h->root_tile : h->parents[s];
+        if (pl == h->g.root || ptx >= l->tiles_x || pty >= l->tiles_y)
+            continue;
+        if (gv_spill_read(h->spill, h->parents[s], TILE_BYTES,
+                          h->recon_base[pl] +
+                              ((uint64_t)pty * l->tiles_x + ptx) * TILE_BYTES,
+                          h->err) < 0)
+            return -1;
+    }
+    return 0;
 }
 
-int gv_height_encode_codes(const uint16_t *codes, uint32_t w, uint32_t h,
-                           int e, const struct gv_height_result *meta,
-                           const char *unit, int threads, const char *output,
-                           struct gv_height_result *r, struct gv_error *err)
+static int encode_page(struct henc *h)
 {
-    struct timespec t0, t1;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    struct gv_geometry g;
-    if (gv_geometry_init(&g, w, h, 1) < 0)
-        return gv_fail(err, GV_EINVAL, ME ": bad dimensions %ux%u", w, h);
-    struct gv_header hd;
-    height_header(&hd, w, h, e, meta, unit);
+    const struct gv_level *l = &h->g.level[h->level];
+    if (load_window(h) < 0 || load_parents(h) < 0)
+        return -1;
+    gv_pool_run(h->pool, encode_slot, h, GV_PAGE_SLOTS);
+    const uint8_t *tb[GV_PAGE_SLOTS] = {0};
+    for (int s = 0; s < GV_PAGE_SLOTS; s++) {
+        const uint32_t tx = h->px * GV_PAGE_TILES + (uint32_t)(s % GV_PAGE_TILES);
+        const uint32_t ty = h->py * GV_PAGE_TILES + (uint32_t)(s / GV_PAGE_TILES);
+        if (tx >= l->tiles_x || ty >= l->tiles_y)
+            continue;
+        if (!h->lens[s])
+            return gv_fail(h->err, GV_ENOMEM, ME ": out of memory");
+        tb[s] = h->bufs[s];
+        h->tiles++;
+        const uint32_t vw = l->width - tx * GV_STEP, vh = l->height - ty * GV_STEP;
+        h->work_done += (double)(vw < GV_TILE ? vw : GV_TILE) * (vh < GV_TILE ? vh : GV_TILE);
+        /* Level 0 is nobody's parent. */
+        if (h->level > 0 &&
+            gv_spill_write(h->spill, h->dec[s], TILE_BYTES,
+                           h->recon_base[h->level] +
+                               ((uint64_t)ty * l->tiles_x + tx) * TILE_BYTES,
+                           h->err) < 0)
+            return -1;
+    }
+    if (gv_store_writer_page(h->wr, h->level, h->px, h->py, tb, h->lens, h->err) < 0)
+        return -1;
+    report(h, "encode", PASS1_SHARE + (1.0 - PASS1_SHARE) * h->work_done / h->work_total);
+    return 0;
+}
 
-    int rc = -1;
-    uint16_t *lv[GV_MAX_LEVELS] = {0};
-    uint16_t **dec_up = NULL, **dec = NULL;   /* decoded tiles: above, this */
-    uint8_t *bufs[GV_PAGE_SLOTS] = {0};
-    lv[0] = (uint16_t *)(uintptr_t)codes;   /* read only, not copied */
-    struct gv_store_writer *wr = NULL;
-    uint64_t tiles = 0;
-    size_t up_n = 0, cur_n = 0;
-    /* More workers than a page has tiles would idle. */
-    if (threads <= 0)
-        threads = gv_cpu_count();
+static int pass2(struct henc *h)
+{
+    for (int k = h->g.root - 1; k >= 0; k--) {
+        const struct gv_level *l = &h->g.level[k];
+        h->level = k;
+        for (h->py = 0; h->py < l->pages_y; h->py++)
+            for (h->px = 0; h->px < l->pages_x; h->px++)
+                if (encode_page(h) < 0)
+                    return -1;
+    }
+    return 0;
+}
+
+/* ------------------------------------------------------------ driver */
+
+/* Where each level's codes and decoded tiles lie in the scratch file. */
+static void layout_scratch(struct henc *h)
+{
+    const struct gv_geometry *g = &h->g;
+    uint64_t off = 0;
+    for (int k = 0; k <= g->root; k++) {
+        h->orig_base[k] = off;
+        off += gv_strips_bytes(&g->level[k], 2);
+    }
+    h->work_total = 0;
+    for (int k = 1; k < g->root; k++) {
+        h->recon_base[k] = off;
+        off += (uint64_t)g->level[k].tiles_x * g->level[k].tiles_y * TILE_BYTES;
+    }
+    for (int k = 0; k < g->root; k++)
+        h->work_total += (double)g->level[k].width * g->level[k].height;
+    if (h->work_total <= 0)
+        h->work_total = 1;
+}
+
+/* The pool (no more workers than a page has tiles: they would idle) and
+ * pass 2's buffers. */
+static int start_workers(struct henc *h)
+{
+    int threads = h->o->threads > 0 ? h->o->threads : gv_cpu_count();
     if (threads > GV_PAGE_SLOTS)
         threads = GV_PAGE_SLOTS;
-    struct gv_pool *pool = gv_pool_new(threads);
-    uint16_t *orig[GV_PAGE_SLOTS] = {0};
-    if (!pool)
-        goto nomem;
-    for (int i = 0; i < gv_pool_size(pool); i++)
-        if (!(orig[i] = malloc(sizeof *orig[i] * GV_HT_SAMPLES)))
-            goto nomem;
-    /* The code pyramid: lv[0] is the input. */
-    for (int k = 1; k <= g.root; k++) {
-        lv[k] = malloc(sizeof **lv * (size_t)g.level[k].width * g.level[k].height);
-        if (!lv[k])
-            goto nomem;
-        gv_height_box_reduce(lv[k - 1], g.level[k - 1].width,
-                             g.level[k - 1].height, lv[k]);
-    }
+    if (!(h->pool = gv_pool_new(threads)))
+        return gv_fail(h->err, GV_ENOMEM, ME ": cannot start %d threads", threads);
+    for (int i = 0; i < gv_pool_size(h->pool); i++)
+        if (!(h->orig[i] = malloc(TILE_BYTES)))
+            return gv_fail(h->err, GV_ENOMEM, ME ": out of memory");
+    for (int s = 0; s < 16; s++)
+        if (!(h->parents[s] = malloc(TILE_BYTES)))
+            return gv_fail(h->err, GV_ENOMEM, ME ": out of memory");
     for (int s = 0; s < GV_PAGE_SLOTS; s++)
-        if (!(bufs[s] = malloc(GV_HT_BUF_MAX)))
-            goto nomem;
-    wr = gv_store_writer_new(output, &hd, err);
-    if (!wr)
-        goto out;
-    /* The root tile is the parent of level root-1. */
-    dec_up = calloc(1, sizeof *dec_up);
-    if (!dec_up || !(dec_up[0] = malloc(sizeof **dec_up * GV_HT_SAMPLES)))
-        goto nomem;
-    extract(lv[g.root], g.level[g.root].width, g.level[g.root].height, 0, 0,
-            dec_up[0]);
-    uint32_t up_tx = 1;
-    up_n = 1;
-    for (int k = g.root - 1; k >= 0; k--) {
-        const struct gv_level *l = &g.level[k];
-        size_t nt = (size_t)l->tiles_x * l->tiles_y;
-        dec = calloc(nt, sizeof *dec);
-        if (!dec)
-            goto nomem;
-        cur_n = nt;
-        for (uint32_t py = 0; py < l->pages_y; py++)
-            for (uint32_t px = 0; px < l->pages_x; px++) {
-                const uint8_t *tb[GV_PAGE_SLOTS] = {0};
-                size_t lens[GV_PAGE_SLOTS] = {0};
-                struct page_job pj = {l, lv[k], dec, dec_up, up_tx, px, py, e,
-                                      bufs, lens, orig};
-                gv_pool_run(pool, encode_slot, &pj, GV_PAGE_SLOTS);
-                for (int sl = 0; sl < GV_PAGE_SLOTS; sl++) {
-                    uint32_t tx = px * GV_PAGE_TILES + (uint32_t)(sl % GV_PAGE_TILES);
-                    uint32_t ty = py * GV_PAGE_TILES + (uint32_t)(sl / GV_PAGE_TILES);
-                    if (tx >= l->tiles_x || ty >= l->tiles_y)
-                        continue;
-                    if (!lens[sl])
-                        goto nomem;
-                    tb[sl] = bufs[sl];
-                    tiles++;
-                }
-                if (gv_store_writer_page(wr, k, px, py, tb, lens, err) < 0)
-                    goto out;
-            }
-        free_tiles(dec_up, up_n);
-        dec_up = dec;
-        up_n = cur_n;
-        dec = NULL;
-        cur_n = 0;
-        up_tx = l->tiles_x;
+        if (!(h->dec[s] = malloc(TILE_BYTES)) || !(h->bufs[s] = malloc(GV_HT_BUF_MAX)))
+            return gv_fail(h->err, GV_ENOMEM, ME ": out of memory");
+    return 0;
+}
+
+/* After pass 1: the root level's codes, and its clamp-padded tile (the
+ * parent of level root-1). */
+static int load_root(struct henc *h)
+{
+    const struct gv_level *rl = &h->g.level[h->g.root];
+    const size_t n = (size_t)rl->width * rl->height;
+    h->root = malloc(n * sizeof *h->root);
+    h->root_tile = malloc(TILE_BYTES);
+    if (!h->root || !h->root_tile)
+        return gv_fail(h->err, GV_ENOMEM, ME ": out of memory for the root");
+    if (gv_spill_read(h->spill, h->root, n * sizeof *h->root,
+                      h->orig_base[h->g.root], h->err) < 0)
+        return -1;
+    extract(h->root, rl->width, rl->width, rl->height, 0, 0, h->root_tile);
+    return 0;
+}
+
+/* The header of the store, once the range is known. */
+static void height_header(const struct henc *h, struct gv_header *hd)
+{
+    const struct gv_height_result *m = &h->m;
+    memset(hd, 0, sizeof *hd);
+    hd->width = h->g.width;
+    hd->height = h->g.height;
+    hd->channels = 1;
+    hd->src_bits = m->src_float ? 32 : 16;
+    hd->src_float = (uint8_t)m->src_float;
+    hd->kind = GV_KIND_HEIGHT;
+    hd->height_float = (uint8_t)m->src_float;
+    hd->height_e = (uint16_t)h->e;
+    hd->height_scale = m->scale;
+    hd->height_offset = m->offset;
+    hd->height_max_error = m->max_error;
+    hd->height_min = (float)m->min;
+    hd->height_max = (float)m->max;
+    if (h->o->unit)
+        snprintf(hd->height_unit, sizeof hd->height_unit, "%s", h->o->unit);
+}
+
+static void teardown(struct henc *h)
+{
+    gv_store_writer_abort(h->wr);
+    gv_pool_free(h->pool);
+    gv_spill_unview(&h->view);
+    free(h->copy);
+    free(h->root);
+    free(h->root_tile);
+    for (int s = 0; s < 16; s++)
+        free(h->parents[s]);
+    for (int s = 0; s < GV_PAGE_SLOTS; s++) {
+        free(h->dec[s]);
+        free(h->bufs[s]);
+        free(h->orig[s]);
     }
-    if (gv_store_writer_root(wr, (const uint8_t *)(const void *)lv[g.root], err) < 0)
-        goto out;
-    uint64_t bytes = gv_store_writer_bytes(wr);
-    rc = gv_store_writer_finish(wr, err);
-    wr = NULL;
-    if (rc == 0 && r) {
-        *r = *meta;
-        r->geometry = g;
-        r->tiles = tiles;
-        r->e = e;
-        /* the index and header follow the pages and the root */
-        r->file_bytes = bytes + g.pages * GV_INDEX_ENTRY + 4;
-        clock_gettime(CLOCK_MONOTONIC, &t1);
-        r->seconds = (double)(t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) / 1e9;
+    for (int k = 0; k < GV_MAX_LEVELS; k++) {
+        free(h->pending[k]);
+        free(h->reduced[k]);
     }
-    goto out;
-nomem:
-    gv_fail(err, GV_ENOMEM, ME ": out of memory");
+    gv_spill_free(h->spill);
+}
+
+/* Everything after the options are checked.  0 or -1 with h->err. */
+static int encode(struct henc *h, const char *output, struct gv_height_result *r)
+{
+    struct gv_source_info si;
+    struct gv_source *src = open_input(h, &si);
+    if (!src)
+        return -1;
+    h->m.src_float = si.src_float;
+    /* Only the size so far: float input is read first for its range. */
+    if (gv_geometry_init(&h->g, si.width, si.height, 1) < 0) {
+        gv_source_free(src);
+        return gv_fail(h->err, GV_EINVAL, ME ": bad dimensions %ux%u",
+                       si.width, si.height);
+    }
+    if (si.src_float) {
+        gv_source_free(src);
+        if (float_range(h) < 0 || !(src = open_input(h, &si)))
+            return -1;
+    }
+    int rc = -1;
+    if (pick_e(h) < 0)
+        goto out;
+    layout_scratch(h);
+    if (!(h->spill = gv_strips_spill_new(h->o->tmpdir, output, h->err)) ||
+        pass1(h, src, &si) < 0)
+        goto out;
+    gv_source_free(src);
+    src = NULL;
+    set_bound(h);
+    struct gv_header hd;
+    height_header(h, &hd);
+    if (load_root(h) < 0 || start_workers(h) < 0 ||
+        !(h->wr = gv_store_writer_new(output, &hd, h->err)) || pass2(h) < 0 ||
+        gv_store_writer_root(h->wr, (const uint8_t *)(const void *)h->root,
+                             h->err) < 0)
+        goto out;
+    uint64_t bytes = gv_store_writer_bytes(h->wr);
+    struct gv_store_writer *w = h->wr;
+    h->wr = NULL;
+    if (gv_store_writer_finish(w, h->err) < 0)
+        goto out;
+    *r = h->m;
+    r->geometry = h->g;
+    r->tiles = h->tiles;
+    r->e = h->e;
+    /* the index and header follow the pages and the root */
+    r->file_bytes = bytes + h->g.pages * GV_INDEX_ENTRY + 4;
+    r->scratch_bytes = gv_spill_bytes(h->spill);
+    report(h, "done", 1.0);
+    rc = 0;
 out:
-    gv_store_writer_abort(wr);
-    /* dec_up holds the decoded tiles of the last level finished (or the
-     * root tile), dec those of the level in progress. */
-    free_tiles(dec_up, up_n);
-    free_tiles(dec, cur_n);
-    for (int i = 0; i < GV_PAGE_SLOTS; i++)
-        free(orig[i]);
-    gv_pool_free(pool);
-    for (int k = 1; k <= g.root; k++)
-        free(lv[k]);
-    for (int s = 0; s < GV_PAGE_SLOTS; s++)
-        free(bufs[s]);
+    gv_source_free(src);
     return rc;
 }
 
-int gv_height_encode(const char *input, const char *output,
+int gv_height_encode(const char *const *inputs, int n, const char *output,
                      const struct gv_height_opts *o,
                      struct gv_height_result *r, struct gv_error *err)
 {
-    uint16_t *codes = NULL;
-    uint32_t w = 0, h = 0;
-    int e = 0;
-    struct gv_height_result m;
-    memset(&m, 0, sizeof m);
+    const double t0 = gv_encode_now();
     if (o->unit && (strlen(o->unit) > GV_HEIGHT_UNIT ||
                     strspn(o->unit, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
                                     "0123456789-_.^/%") != strlen(o->unit)))
         return gv_fail(err, GV_EINVAL, ME ": --unit wants up to %d letters, "
                        "digits or -_.^/%%", GV_HEIGHT_UNIT);
-    if (read_input(input, o, &codes, &w, &h, &m, &e, err) < 0)
-        return -1;
-    int rc = gv_height_encode_codes(codes, w, h, e, &m, o->unit, o->threads,
-                                    output, r, err);
-    free(codes);
+    struct henc h;
+    memset(&h, 0, sizeof h);
+    h.o = o;
+    h.inputs = inputs;
+    h.n = n;
+    h.name = n == 1 ? inputs[0] : "the mosaic";
+    h.err = err;
+    h.so.mosaic_cols = o->mosaic_cols;
+    h.so.mosaic_rows = o->mosaic_rows;
+    h.so.max_pixels = o->max_pixels;
+    h.so.max_decoder_bytes = o->max_decoder_bytes;
+    h.so.native = 1;
+    h.m.scale = o->mapped ? o->scale : 1;
+    h.m.offset = o->mapped ? o->offset : 0;
+    struct gv_height_result tmp;
+    int rc = encode(&h, output, r ? r : &tmp);
+    teardown(&h);
+    if (rc == 0 && r)
+        r->seconds = gv_encode_now() - t0;
     return rc;
 }

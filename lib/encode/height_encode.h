@@ -1,7 +1,7 @@
 /*
  * height_encode.h - `gigaview encode --height`: a single-channel raster
  * (16-bit or float; 8-bit too) to a height store with a guaranteed
- * maximum error (docs/FORMAT.md section 9).
+ * maximum error (docs/FORMAT.md section 12).
  *
  * The input is mapped to 16-bit codes (value = code * scale + offset):
  * integer input is kept as it is (scale 1, offset 0) unless the caller
@@ -9,10 +9,20 @@
  * 65535, so that quantizing costs at most scale/2.  The pyramid of codes
  * is built by the 2x2 box filter of section 1, and every tile of every
  * level is coded against its decoded parent (closed loop) within e codes
- * of that level's exact codes (height_tile.h).  The encoder holds the
- * code pyramid in memory (about 2.7 bytes per input sample): it is meant
- * for DEMs up to a few hundred megapixels.  Single-threaded; output is
- * byte-identical on every machine.
+ * of that level's exact codes (height_tile.h).
+ *
+ * The encoder streams, as the image encoder does (stream_encoder.h):
+ * pass 1 reads the input's rows top to bottom (encode/source.h, native
+ * samples: one image, a mosaic of images, or synth-height:) and writes
+ * every level of the code pyramid to a scratch file in strips
+ * (strips.h); pass 2 codes the levels from the root down, page by page,
+ * each page's tiles in parallel against their decoded parents, which the
+ * level above left in the scratch file.  Float input is read once more
+ * before pass 1, for its range.  Memory is one page's working set (about
+ * 80 MB: the 4097^2 window, 64 decoded tiles, 16 parents) plus a few rows
+ * of the widest level, whatever the area; the scratch file takes about
+ * 2.9 bytes per input sample (docs/FORMAT.md section 12).  Output is
+ * byte-identical on every machine and for any number of threads.
  */
 #ifndef GV_HEIGHT_ENCODE_H
 #define GV_HEIGHT_ENCODE_H
@@ -20,21 +30,26 @@
 #include <stdint.h>
 
 #include "base/error.h"
+#include "encode/stream_encoder.h"
 #include "store/geometry.h"
-
-/* Default cap on width x height: 2^30 samples (about 2.9 GB of memory
- * for 16-bit input, 7 GB for float) since the encoder holds them all. */
-#define GV_HEIGHT_MAX_PIXELS (1ull << 30)
 
 struct gv_height_opts {
     double max_error;      /* E in source units; 0 = lossless */
     int mapped;            /* integer input: use scale/offset below */
     double scale, offset;  /* value = code * scale + offset */
     const char *unit;      /* up to 8 printable characters, or NULL */
-    uint64_t max_pixels;   /* refuse larger inputs (0: GV_HEIGHT_MAX_PIXELS) */
+    uint64_t max_pixels;   /* refuse larger inputs (0: GV_SOURCE_MAX_PIXELS) */
     uint64_t max_decoder_bytes; /* a decoder's memory for the whole image
                                  * (gv_image_limits; 0: the default) */
     int threads;           /* workers; 0 = every CPU */
+    int mosaic_cols;       /* > 0: the inputs are a mosaic of this many */
+    int mosaic_rows;       /* columns and rows (source.h) */
+    const char *tmpdir;    /* scratch directory; NULL = output's */
+    /* Called from the encoding thread every few rows of pass 1 and after
+     * each page of pass 2 (phases "pyramid", "encode", "done"); may be
+     * NULL. */
+    void (*progress)(void *ctx, const struct gv_encode_progress *p);
+    void *progress_ctx;
 };
 
 struct gv_height_result {
@@ -43,29 +58,21 @@ struct gv_height_result {
     int e;                 /* the half-step in codes */
     double scale, offset, max_error, min, max;
     int src_float;
+    uint64_t scratch_bytes; /* the scratch file's size at the end */
     double seconds;
 };
 
 /*
- * Encode `input` (an image path, or "synth-height:WIDTHxHEIGHT", a
- * reproducible fractal terrain in metres) into the height store `output`
+ * Encode `n` inputs (one image path, or "synth-height:WIDTHxHEIGHT", a
+ * reproducible fractal terrain in metres; or with o->mosaic_cols the
+ * tiles of a mosaic, row by row) into the height store `output`
  * (published atomically).  Returns 0 with *r filled, or -1 with *err:
  * GV_EINVAL for input that is not one channel or an error bound that the
- * float quantization cannot meet, the input's and the store's errors.
+ * float quantization cannot meet, GV_ELIMIT past o->max_pixels, the
+ * input's, the scratch file's and the store's errors.
  */
-int gv_height_encode(const char *input, const char *output,
+int gv_height_encode(const char *const *inputs, int n, const char *output,
                      const struct gv_height_opts *o,
                      struct gv_height_result *r, struct gv_error *err);
-
-/*
- * Encode w x h codes already mapped (the core of gv_height_encode, and
- * what tests use): e is the half-step in codes; scale, offset, min, max,
- * max_error, unit and src_float go to the header as given; `threads`
- * workers (0: every CPU).
- */
-int gv_height_encode_codes(const uint16_t *codes, uint32_t w, uint32_t h,
-                           int e, const struct gv_height_result *meta,
-                           const char *unit, int threads, const char *output,
-                           struct gv_height_result *r, struct gv_error *err);
 
 #endif

@@ -42,6 +42,10 @@
  *                      out = round((v - lo) * 255 / (hi - lo)) clamped to
  *                      [0, 255]; NaN gives 0.
  * Integer rules go through a table of 256 or 65536 entries.
+ *
+ * Native mode (opts->native, for height stores) skips all of the above:
+ * samples are copied as gv_image_read delivers them, every channel, and
+ * the terrain pattern synth-height: is one more kind of input.
  */
 #include <errno.h>
 #include <inttypes.h>
@@ -51,12 +55,13 @@
 
 #include "imageio/imageio.h"
 #include "encode/source.h"
+#include "encode/synth_height.h"
 
 /* Rows read from a tile per gv_image_read call are capped so that the
  * scratch buffer stays near this size (but always at least one row). */
 #define CHUNK_BYTES (4u << 20)
 
-enum kind { KIND_IMAGES, KIND_SYNTH };
+enum kind { KIND_IMAGES, KIND_SYNTH, KIND_SYNTH_HEIGHT };
 
 struct tile {
     char *path;
@@ -67,7 +72,9 @@ struct tile {
 struct gv_source {
     enum kind kind;
     uint32_t width, height;
-    int channels;           /* 1 or 3 */
+    int channels;           /* 1 or 3 (native: the input's) */
+    int native;             /* samples copied as they are */
+    size_t px_bytes;        /* bytes of a delivered pixel */
     uint32_t next_row;
     int failed;             /* an input failed: refuse further reads */
 
@@ -195,7 +202,9 @@ static void convert(const struct gv_source *s, const void *raw, int chin,
 {
     int chout = s->channels;
     size_t step = (size_t)chin;
-    if (s->sample == GV_SAMPLE_U8) {
+    if (s->native) {
+        memcpy(dst, raw, (size_t)w * s->px_bytes);
+    } else if (s->sample == GV_SAMPLE_U8) {
         const uint8_t *p = raw;
         if (s->lut) {
             for (uint32_t x = 0; x < w; x++, p += step)
@@ -334,9 +343,39 @@ static int open_synth(struct gv_source *s, const char *spec,
     s->kx = w > 1 ? (255ull << 24) / (w - 1) : 0;
     s->ky = h > 1 ? (255ull << 24) / (h - 1) : 0;
     s->tone = GV_TONE_NONE;
+    s->px_bytes = (size_t)s->channels;
     info->src_bits = 8;
     info->src_float = 0;
+    info->sample_bytes = 1;
     return 0;
+}
+
+static int open_synth_height(struct gv_source *s, const char *spec,
+                             struct gv_source_info *info, struct gv_error *err)
+{
+    uint32_t w = 0, h = 0;
+    if (gv_synth_height_parse(spec, &w, &h) < 0)
+        return gv_fail(err, GV_EINVAL, "source: bad pattern '%s' (want "
+                       "synth-height:WIDTHxHEIGHT)", spec);
+    if ((uint64_t)w * h > s->max_pixels)
+        return gv_fail(err, GV_ELIMIT, "source: %s: %" PRIu64 " pixels "
+                       "exceed the limit of %" PRIu64, spec,
+                       (uint64_t)w * h, s->max_pixels);
+    s->kind = KIND_SYNTH_HEIGHT;
+    s->width = w;
+    s->height = h;
+    s->channels = 1;
+    s->px_bytes = 2;
+    s->tone = GV_TONE_NONE;
+    info->src_bits = 16;
+    info->src_float = 0;
+    info->sample_bytes = 2;
+    return 0;
+}
+
+static size_t sample_bytes(enum gv_sample smp)
+{
+    return smp == GV_SAMPLE_U8 ? 1 : smp == GV_SAMPLE_U16 ? 2 : 4;
 }
 
 static const char *sample_name(const struct gv_image_info *i)
@@ -354,7 +393,8 @@ static int probe_tiles(struct gv_source *s, const char *const *inputs,
     uint64_t total_w = 0, total_h = 0;
     for (int i = 0; i < cols * rows; i++) {
         struct tile *t = &s->tiles[i];
-        if (strncmp(inputs[i], "synth:", 6) == 0)
+        if (strncmp(inputs[i], "synth:", 6) == 0 ||
+            strncmp(inputs[i], "synth-height:", 13) == 0)
             return gv_fail(err, GV_EINVAL, "source: %s: a pattern cannot be "
                            "a mosaic tile", inputs[i]);
         t->path = strdup(inputs[i]);
@@ -392,6 +432,10 @@ static int probe_tiles(struct gv_source *s, const char *const *inputs,
                                "%s is %s", t->path,
                                t->info.channels >= 3 ? "colour" : "gray",
                                s->tiles[0].path, colour ? "colour" : "gray");
+            if (s->native && t->info.channels != f->channels)
+                return gv_fail(err, GV_EINVAL, "source: mosaic: %s has %d "
+                               "channels but %s has %d", t->path,
+                               t->info.channels, s->tiles[0].path, f->channels);
             if (t->info.sample != f->sample || t->info.bits != f->bits)
                 return gv_fail(err, GV_EINVAL, "source: mosaic: %s has %d-bit "
                                "%s samples but %s has %d-bit %s", t->path,
@@ -412,7 +456,7 @@ static int probe_tiles(struct gv_source *s, const char *const *inputs,
                        " pixels", total_w, total_h, s->max_pixels);
     s->width = (uint32_t)total_w;
     s->height = (uint32_t)total_h;
-    s->channels = colour ? 3 : 1;
+    s->channels = s->native ? f->channels : colour ? 3 : 1;
     return 0;
 }
 
@@ -420,8 +464,8 @@ static int probe_tiles(struct gv_source *s, const char *const *inputs,
  * no tone rule, no channel dropped. */
 static int unchanged(const struct gv_source *s, const struct tile *t)
 {
-    return t->info.sample == GV_SAMPLE_U8 && !s->lut
-           && t->info.channels == s->channels;
+    return s->native || (t->info.sample == GV_SAMPLE_U8 && !s->lut
+                         && t->info.channels == s->channels);
 }
 
 /* Whether the rows are one image's samples unchanged, not read yet (its
@@ -429,7 +473,7 @@ static int unchanged(const struct gv_source *s, const struct tile *t)
 static int raw_eligible(const struct gv_source *s)
 {
     return s->kind == KIND_IMAGES && s->probed && s->cols * s->rows == 1
-           && unchanged(s, &s->tiles[0]);
+           && !s->native && unchanged(s, &s->tiles[0]);
 }
 
 static int open_images(struct gv_source *s, const char *const *inputs,
@@ -447,10 +491,13 @@ static int open_images(struct gv_source *s, const char *const *inputs,
     if (probe_tiles(s, inputs, err) != 0)
         return -1;
     const struct gv_image_info *f = &s->tiles[0].info;
-    if (setup_tone(s, opts, f, err) != 0)
+    s->sample = f->sample;
+    if (!s->native && setup_tone(s, opts, f, err) != 0)
         return -1;
     info->src_bits = f->bits;
     info->src_float = f->sample == GV_SAMPLE_F32;
+    info->sample_bytes = s->native ? (int)sample_bytes(f->sample) : 1;
+    s->px_bytes = (size_t)s->channels * (size_t)info->sample_bytes;
     return 0;
 }
 
@@ -479,6 +526,7 @@ struct gv_source *gv_source_open(const char *const *inputs, int n,
     s->limits.max_decoder_bytes = opts ? opts->max_decoder_bytes : 0;
     s->cols = 1;
     s->rows = 1;
+    s->native = opts && opts->native;
     if (opts && opts->mosaic_cols > 0) {
         if (opts->mosaic_rows <= 0
             || (int64_t)opts->mosaic_cols * opts->mosaic_rows != n) {
@@ -496,6 +544,15 @@ struct gv_source *gv_source_open(const char *const *inputs, int n,
     }
     if (s->cols * s->rows == 1 && strncmp(inputs[0], "synth:", 6) == 0) {
         if (open_synth(s, inputs[0], &tmp, err) != 0)
+            goto fail;
+    } else if (s->cols * s->rows == 1 &&
+               strncmp(inputs[0], "synth-height:", 13) == 0) {
+        if (!s->native) {
+            gv_fail(err, GV_EINVAL, "source: %s is a height field: it "
+                    "needs a height store (--height)", inputs[0]);
+            goto fail;
+        }
+        if (open_synth_height(s, inputs[0], &tmp, err) != 0)
             goto fail;
     } else if (open_images(s, inputs, opts, &tmp, err) != 0) {
         goto fail;
@@ -548,16 +605,11 @@ static int open_grid_row(struct gv_source *s, int r, struct gv_error *err)
     return 0;
 }
 
-static size_t sample_bytes(enum gv_sample smp)
-{
-    return smp == GV_SAMPLE_U8 ? 1 : smp == GV_SAMPLE_U16 ? 2 : 4;
-}
-
 /* Deliver `n` rows (n <= grid_row_left) of the open grid row. */
 static int read_grid_rows(struct gv_source *s, uint32_t n, uint8_t *out,
                           struct gv_error *err)
 {
-    size_t out_row = (size_t)s->width * (size_t)s->channels;
+    size_t out_row = (size_t)s->width * s->px_bytes;
     /* One column of samples kept as they are: read straight into out,
      * without the scratch buffer and convert()'s copy. */
     if (s->cols == 1 && unchanged(s, &s->tiles[s->grid_row]))
@@ -589,7 +641,7 @@ static int read_grid_rows(struct gv_source *s, uint32_t n, uint8_t *out,
                 convert(s, s->scratch + raw_row * i, t->info.channels,
                         t->info.width,
                         out + out_row * (done + i)
-                            + (size_t)t->x0 * (size_t)s->channels);
+                            + (size_t)t->x0 * s->px_bytes);
             done += k;
         }
     }
@@ -606,10 +658,17 @@ int gv_source_read(struct gv_source *s, uint32_t rows, uint8_t *out,
         return gv_fail(err, GV_EINVAL, "source: read of %" PRIu32 " rows at "
                        "row %" PRIu32 " passes the last row (height %" PRIu32
                        ")", rows, s->next_row, s->height);
-    size_t out_row = (size_t)s->width * (size_t)s->channels;
+    size_t out_row = (size_t)s->width * s->px_bytes;
     if (s->kind == KIND_SYNTH) {
         for (uint32_t i = 0; i < rows; i++)
             synth_row(s, s->next_row + i, out + out_row * i);
+        s->next_row += rows;
+        return 0;
+    }
+    if (s->kind == KIND_SYNTH_HEIGHT) {
+        for (uint32_t i = 0; i < rows; i++)
+            gv_synth_height_row(s->next_row + i, 0, s->width,
+                                (uint16_t *)(void *)(out + out_row * i));
         s->next_row += rows;
         return 0;
     }

@@ -12,6 +12,11 @@
  * linearly onto [0,255] instead.  One-channel and gray+alpha input
  * gives a gray (1-channel) image; three or more channels give RGB (alpha
  * and extra channels are dropped).
+ *
+ * With opts->native the samples come as the input holds them instead
+ * (8-bit, 16-bit or 32-bit float, every channel, no tone rule): what the
+ * height encoder reads (height_encode.h), from the same files, mosaics,
+ * and the terrain pattern "synth-height:WIDTHxHEIGHT" (synth_height.h).
  */
 #ifndef GV_SOURCE_H
 #define GV_SOURCE_H
@@ -37,6 +42,9 @@ struct gv_source_opts {
                                  * imageio/imageio.h) */
     double range_lo;       /* used when range_hi > range_lo */
     double range_hi;
+    int native;            /* 1: samples as the input holds them (see
+                            * the top); every mosaic tile must have the
+                            * same channels and sample type */
 };
 
 /* Default cap on width x height: 2^40 pixels (a terapixel). */
@@ -44,7 +52,10 @@ struct gv_source_opts {
 
 struct gv_source_info {
     uint32_t width, height;
-    int channels;          /* 1 or 3: what the rows hold */
+    int channels;          /* 1 or 3: what the rows hold (native: the
+                            * input's channels) */
+    int sample_bytes;      /* bytes of a sample in the rows: 1, or when
+                            * native 2 (16-bit) or 4 (float) */
     int src_bits;          /* bits per sample of the input (8, 16, 32...) */
     int src_float;         /* 1 for half/float input */
     enum gv_tone_rule tone;
@@ -55,7 +66,8 @@ struct gv_source;
 /*
  * Open `n` inputs.  A single input is an image path or a pattern
  * "synth:WIDTHxHEIGHT[:gray]" (a deterministic procedural image, used for
- * tests and benchmarks at any size).  With opts->mosaic_cols > 0 the
+ * tests and benchmarks at any size), or with opts->native also
+ * "synth-height:WIDTHxHEIGHT".  With opts->mosaic_cols > 0 the
  * inputs are cols x rows tiles given row by row; every tile of a grid
  * column must have the same width and of a grid row the same height, and
  * all must agree on gray or colour.  Fills *info.  Returns NULL with *err
@@ -67,7 +79,8 @@ struct gv_source *gv_source_open(const char *const *inputs, int n,
                                  struct gv_error *err);
 
 /*
- * Read the next `rows` rows (width * channels bytes each) into out.
+ * Read the next `rows` rows (width * channels * sample_bytes bytes each,
+ * native-endian) into out, aligned for its samples.
  * Returns 0, or -1 with *err filled when an input is truncated or corrupt
  * (decoder warnings about damaged data count as errors).
  */

@@ -3,10 +3,9 @@
  *
  * Scratch layout, in two unnamed files: level 0 of the original pyramid
  * alone in one, and in the other levels k = 1..root, each at orig_base[k]
- * (level 0's is 0, in its own file) as one strip per column of pages:
- * the 4097 columns of the page's window (fewer in the last strip), all
- * of the level's rows, row-major, so that a page's window is one
- * contiguous span of the file and can be mapped as it is; decoded tiles
+ * (level 0's is 0, in its own file) in strips (strips.h: one per column
+ * of pages, so that a page's window is one contiguous span of the file
+ * and can be mapped as it is); decoded tiles
  * of level k (1..root-1) are stored as 513x513xC records at
  * recon_base[k], row-major by tile, because level k-1 is predicted from
  * decoded tiles, not from a decoded image.
@@ -59,6 +58,7 @@
 #include "encode/shard_file.h"
 #include "encode/shard_plan.h"
 #include "encode/stream_encoder.h"
+#include "encode/strips.h"
 #include "encode/tile_seed.h"
 #include "imageio/raw_regions.h"
 #include "render/store_decoder.h"
@@ -66,8 +66,8 @@
 #include "store/store_meta.h"
 #include "store/store_write.h"
 
-#define WINDOW (GV_PAGE_TILES * GV_STEP + 1)  /* 4097: a page plus overlap */
-#define PAGE_W (GV_PAGE_TILES * GV_STEP)      /* 4096: from page to page */
+#define WINDOW GV_STRIP_WINDOW                /* 4097: a page plus overlap */
+#define PAGE_W GV_STRIP_PAGE_W                /* 4096: from page to page */
 #define CHUNK_BYTES (16u << 20)               /* input rows in memory (two halves) */
 #define PASS1_SHARE 0.15                      /* progress weight of pass 1 */
 
@@ -191,27 +191,10 @@ static struct gv_spill *level_spill(const struct encoder *e, int k)
     return k == 0 ? e->spill0 : e->spill;
 }
 
-/* Width of strip p (page column p's window) of a level `width` wide. */
-static uint32_t strip_width(uint32_t width, uint32_t p)
-{
-    const uint32_t w = width - p * PAGE_W;
-    return w < WINDOW ? w : WINDOW;
-}
-
-/* Strips of a level: one per column of pages (the root, which has no
- * pages, is one strip). */
-static uint32_t strip_count(const struct gv_level *l)
-{
-    return l->pages_x ? l->pages_x : 1;
-}
-
-/* Offset of row y of strip p of level k in its scratch file: every strip
- * before the last is WINDOW wide. */
+/* Offset of row y of strip p of level k in its scratch file. */
 static uint64_t strip_at(const struct encoder *e, int k, uint32_t p, uint32_t y)
 {
-    const struct gv_level *l = &e->g.level[k];
-    return e->orig_base[k] + ((uint64_t)p * WINDOW * l->height +
-                              (uint64_t)y * strip_width(l->width, p)) * e->c;
+    return gv_strip_at(&e->g.level[k], e->orig_base[k], (size_t)e->c, p, y);
 }
 
 /* Store columns x0 .. x1-1 of row y of level k (row holds the whole
@@ -219,18 +202,8 @@ static uint64_t strip_at(const struct encoder *e, int k, uint32_t p, uint32_t y)
 static int store_columns(struct encoder *e, int k, uint32_t y,
                          const uint8_t *row, uint32_t x0, uint32_t x1)
 {
-    const struct gv_level *l = &e->g.level[k];
-    for (uint32_t p = 0; p < strip_count(l); p++) {
-        const uint32_t s0 = p * PAGE_W, s1 = s0 + strip_width(l->width, p);
-        const uint32_t a = x0 > s0 ? x0 : s0, b = x1 < s1 ? x1 : s1;
-        if (a < b &&
-            gv_spill_write(level_spill(e, k), row + (size_t)a * e->c,
-                           (size_t)(b - a) * e->c,
-                           strip_at(e, k, p, y) + (uint64_t)(a - s0) * e->c,
-                           e->err) < 0)
-            return -1;
-    }
-    return 0;
+    return gv_strips_store(level_spill(e, k), &e->g.level[k], e->orig_base[k],
+                           (size_t)e->c, y, row, x0, x1, e->err);
 }
 
 /* A shard keeps the original of tile (tx, ty) of level k: its own, and
@@ -382,10 +355,10 @@ static void *reader_main(void *arg)
         /* Each strip's rows lie end to end in the file (strip_at). */
         const struct gv_level *l0 = &r->e->g.level[0];
         const int c = r->e->c;
-        for (uint32_t p = 0; rc == 0 && r->spill && p < strip_count(l0); p++)
+        for (uint32_t p = 0; rc == 0 && r->spill && p < gv_strip_count(l0); p++)
             rc = gv_spill_write_rows(
                 r->spill, dst + (size_t)p * PAGE_W * c, r->row_bytes,
-                (size_t)strip_width(l0->width, p) * c, n,
+                (size_t)gv_strip_width(l0->width, p) * c, n,
                 strip_at(r->e, 0, p, y), &err);
         const size_t rb1 = (size_t)r->e->g.level[1].width * c;
         for (uint32_t i = 0; rc == 0 && r->red[slot] && i < n; i += 2) {
@@ -844,7 +817,7 @@ static int load_window(struct encoder *e)
     const struct gv_level *l = &e->g.level[e->level];
     const int c = e->c;
     const uint32_t x0 = e->px * PAGE_W, y0 = e->py * PAGE_W;
-    e->win_w = strip_width(l->width, e->px);
+    e->win_w = gv_strip_width(l->width, e->px);
     e->win_h = l->height - y0 < WINDOW ? l->height - y0 : WINDOW;
     if (e->level == 0 && e->level0_resident) {
         const size_t rb = (size_t)l->width * c;
@@ -1035,8 +1008,7 @@ static int layout_scratch(struct encoder *e)
      * holds n - 1 columns twice (the windows' overlap). */
     uint64_t bytes[GV_MAX_LEVELS] = {0};
     for (int k = 0; k <= g->root; k++)
-        bytes[k] = ((uint64_t)g->level[k].width +
-                    strip_count(&g->level[k]) - 1) * g->level[k].height * c;
+        bytes[k] = gv_strips_bytes(&g->level[k], (size_t)c);
     uint64_t off = 0;
     e->orig_base[0] = 0;
     for (int k = 1; k <= g->root; k++) {
@@ -1277,18 +1249,9 @@ static int open_output(struct encoder *e, const char *output)
 /* The scratch file, in --tmpdir or else in the output's directory. */
 static int open_spill(struct encoder *e, const char *output)
 {
-    char *outdir = NULL;
-    const char *tmpdir = e->opts->tmpdir;
-    if (!tmpdir) {
-        outdir = strdup(output);
-        char *slash = outdir ? strrchr(outdir, '/') : NULL;
-        if (slash)
-            *(slash == outdir ? slash + 1 : slash) = '\0';
-        tmpdir = slash ? outdir : ".";
-    }
-    e->spill = gv_spill_new(tmpdir, e->err);
-    e->spill0 = e->spill ? gv_spill_new(tmpdir, e->err) : NULL;
-    free(outdir);
+    e->spill = gv_strips_spill_new(e->opts->tmpdir, output, e->err);
+    e->spill0 = e->spill ? gv_strips_spill_new(e->opts->tmpdir, output, e->err)
+                         : NULL;
     return e->spill0 ? 0 : -1;
 }
 

@@ -407,6 +407,16 @@ int gv_height_root_unpack(const uint8_t *in, size_t len, uint32_t w,
     return 0;
 }
 
+void gv_height_box_reduce_row(const uint16_t *r0, const uint16_t *r1,
+                              uint32_t sw, uint16_t *dst)
+{
+    const uint32_t dw = (sw + 1) / 2;
+    for (uint32_t x = 0; x < dw; x++) {
+        uint32_t a = 2 * x, b = 2 * x + 1 < sw ? 2 * x + 1 : 2 * x;
+        dst[x] = (uint16_t)((r0[a] + r0[b] + r1[a] + r1[b] + 2u) >> 2);
+    }
+}
+
 void gv_height_box_reduce(const uint16_t *src, uint32_t sw, uint32_t sh,
                           uint16_t *dst)
 {
@@ -414,10 +424,6 @@ void gv_height_box_reduce(const uint16_t *src, uint32_t sw, uint32_t sh,
     for (uint32_t y = 0; y < dh; y++) {
         const uint16_t *r0 = src + (size_t)(2 * y) * sw;
         const uint16_t *r1 = 2 * y + 1 < sh ? r0 + sw : r0;
-        for (uint32_t x = 0; x < dw; x++) {
-            uint32_t a = 2 * x, b = 2 * x + 1 < sw ? 2 * x + 1 : 2 * x;
-            dst[(size_t)y * dw + x] =
-                (uint16_t)((r0[a] + r0[b] + r1[a] + r1[b] + 2u) >> 2);
-        }
+        gv_height_box_reduce_row(r0, r1, sw, dst + (size_t)y * dw);
     }
 }

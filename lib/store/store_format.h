@@ -101,6 +101,10 @@ int gv_height_root_unpack(const uint8_t *in, size_t len, uint32_t w,
  * replicated): src sw x sh -> dst ceil(sw/2) x ceil(sh/2). */
 void gv_height_box_reduce(const uint16_t *src, uint32_t sw, uint32_t sh,
                           uint16_t *dst);
+/* One row of it: rows r0 and r1 (r1 = r0 for an odd last row) of sw
+ * codes -> ceil(sw/2) codes in dst. */
+void gv_height_box_reduce_row(const uint16_t *r0, const uint16_t *r1,
+                              uint32_t sw, uint16_t *dst);
 
 /* Bytes of every mip of a w x h root, channels interleaved (what a reader
  * holds in memory). */

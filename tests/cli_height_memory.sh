@@ -1,0 +1,89 @@
+#!/bin/sh
+# cli_height_memory.sh - the height encoder's peak memory does not grow
+# with the height field's area.
+#
+# Encodes two mosaics of tests/data/etopo5-720x361-u16.png (PNG-16):
+# 6 x 12 tiles (4320 x 4332, 18.7 M samples) and 12 x 24 tiles (8640 x
+# 8664, 74.9 M samples: 4x the area), --max-error 2, 2 threads, and
+# measures peak RSS with /usr/bin/time -f %M.  The smaller one is more
+# than a page (4096) across and down, so that it already has the whole
+# page window of pass 2.
+#
+# The bound (docs/FORMAT.md section 12, "Encoder memory"):
+#   page window             4097^2 * 2            = 33.6 MB
+#   64 decoded tiles        64 * 513^2 * 2        = 33.7 MB
+#   16 parent tiles         16 * 513^2 * 2        =  8.4 MB
+#   64 tile buffers         what is written: ~2 bytes a sample = 33.7 MB
+#   per thread              tile + prediction     =  1.6 MB
+#   input rows              4 MiB + the source's 4 MiB + 12 PNG decoders
+#                                                 ~ 10 MB
+#                                         total ~ 121 MB = 115 MiB
+# over the process's own (`gigaview --version`).  Assert: both peaks <=
+# baseline + 115 MiB + 15%, and the 4x-area run within +15% of the
+# smaller one's peak.  The in-memory encoder this one replaced held
+# 2.7 bytes a sample of code pyramid plus the decoded tiles of a whole
+# level: over 350 MB for the larger mosaic.
+#
+# Skipped without /usr/bin/time, under valgrind and in sanitizer builds.
+. "$(dirname "$0")/lib.sh"
+
+TIME=/usr/bin/time
+if [ ! -x "$TIME" ]; then
+    echo "1..0 # SKIP $TIME not installed (apt-get install time)"
+    exit 0
+fi
+if under_valgrind; then
+    echo "1..0 # SKIP peak memory is meaningless under valgrind"
+    exit 0
+fi
+if ldd "$GIGAVIEW" 2>/dev/null | grep -q libasan; then
+    echo "1..0 # SKIP peak memory is meaningless in a sanitizer build"
+    exit 0
+fi
+
+# peak_kib ARGS...: run gigaview ARGS, print its peak RSS in KiB.
+peak_kib() {
+    "$TIME" -f '%M' -o "$T/rss" "$GIGAVIEW" "$@" >"$T/out" 2>"$T/err" ||
+        bail "gigaview $* failed: $(cat "$T/err")"
+    tail -n 1 "$T/rss"
+}
+
+# mosaic COLS ROWS: the arguments of a COLSxROWS mosaic of the one tile.
+mosaic() {
+    i=0
+    args="--mosaic $1x$2"
+    while [ "$i" -lt $(($1 * $2)) ]; do
+        args="$args $TESTDATA/etopo5-720x361-u16.png"
+        i=$((i + 1))
+    done
+    echo "$args"
+}
+
+base=$(peak_kib --version)
+diag "baseline (gigaview --version): $((base / 1024)) MiB"
+bound=$(( (base + 115 * 1024) * 115 / 100 ))
+
+start=$(date +%s)
+# shellcheck disable=SC2046
+small=$(peak_kib encode --height --max-error 2 -j 2 --quiet $(mosaic 6 12) -o "$T/a.gv")
+# shellcheck disable=SC2046
+large=$(peak_kib encode --height --max-error 2 -j 2 --quiet $(mosaic 12 24) -o "$T/b.gv")
+diag "peak RSS: 4320x4332 $((small / 1024)) MiB, 8640x8664 $((large / 1024)) MiB" \
+    "(bound $((bound / 1024)) MiB) in $(( $(date +%s) - start )) s"
+
+for pair in "4320x4332 $small" "8640x8664 $large"; do
+    set -- $pair
+    if [ "$2" -le "$bound" ]; then
+        ok "$1: peak $(($2 / 1024)) MiB <= $((bound / 1024)) MiB"
+    else
+        not_ok "$1: peak $(($2 / 1024)) MiB exceeds $((bound / 1024)) MiB"
+    fi
+done
+if [ "$large" -le $((small * 115 / 100)) ]; then
+    ok "4x the area: peak grows by $(( (large - small) / 1024 )) MiB (<= 15%)"
+else
+    not_ok "4x the area: peak grows from $((small / 1024)) to $((large / 1024)) MiB"
+fi
+check "both stores were written" test -s "$T/a.gv" -a -s "$T/b.gv"
+
+done_testing
