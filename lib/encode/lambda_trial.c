@@ -14,10 +14,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec/sse.h"
 #include "encode/lambda_model.h"
 #include "encode/lambda_trial.h"
-#include "encode/tile_seed.h"
+#include "encode/tile_pass.h"
 
 #define TRIAL_TOLERANCE 0.5          /* dB: close enough, stop */
 #define TRIAL_NEAR 1.0               /* dB: ... after TRIAL_TRIES_NEAR tries */
@@ -137,10 +136,8 @@ static void trial_tile(void *ctx, size_t i, int worker)
             r->err = err;
         return;
     }
-    const uint32_t vw = l->width - tile->tx * GV_STEP < GV_TILE ?
-                        l->width - tile->tx * GV_STEP : GV_TILE;
-    const uint32_t vh = l->height - tile->ty * GV_STEP < GV_TILE ?
-                        l->height - tile->ty * GV_STEP : GV_TILE;
+    const uint32_t vw = gv_tile_span(l->width, tile->tx);
+    const uint32_t vh = gv_tile_span(l->height, tile->ty);
     struct gv_tile_params params = env->params;
     params.lambda = r->lambda;
     params.seed = gv_encode_tile_seed(r->level, tile->tx, tile->ty);
@@ -149,13 +146,9 @@ static void trial_tile(void *ctx, size_t i, int worker)
                                (int)(tile->tx & 1), (int)(tile->ty & 1), c,
                                vw, vh, &params, recon, env->bufs[i],
                                &r->stats[i]);
-    if (r->level == 0) {
-        /* The pixels this tile is the source of, as pass 2 counts them. */
-        const uint32_t cw = tile->tx + 1 == l->tiles_x ? vw : GV_STEP;
-        const uint32_t ch = tile->ty + 1 == l->tiles_y ? vh : GV_STEP;
-        r->sse[i] = gv_sse_u8(orig, recon, cw * (uint32_t)c, ch, (size_t)GV_TILE * c);
-        r->samples[i] = (uint64_t)cw * ch * (uint64_t)c;
-    }
+    if (r->level == 0)
+        r->sse[i] = gv_level0_tile_sse(l, tile->tx, tile->ty, c, orig, recon,
+                                       &r->samples[i]);
 }
 
 typedef struct gv_trial_coded coded_level[GV_TRIAL_MAX];

@@ -50,7 +50,6 @@
 
 #include "base/pool.h"
 #include "base/spill.h"
-#include "codec/sse.h"
 #include "codec/tile.h"
 #include "encode/encode_int.h"
 #include "encode/lambda_model.h"
@@ -59,7 +58,7 @@
 #include "encode/shard_plan.h"
 #include "encode/stream_encoder.h"
 #include "encode/strips.h"
-#include "encode/tile_seed.h"
+#include "encode/tile_pass.h"
 #include "imageio/raw_regions.h"
 #include "render/store_decoder.h"
 #include "store/store_format.h"
@@ -617,8 +616,7 @@ static int read_orig_tile(void *ctx, int k, uint32_t tx, uint32_t ty,
     const int c = e->c;
     const size_t row = (size_t)GV_TILE * c;
     const uint32_t x0 = tx * GV_STEP, y0 = ty * GV_STEP;
-    const uint32_t w = l->width - x0 < GV_TILE ? l->width - x0 : GV_TILE;
-    const uint32_t h = l->height - y0 < GV_TILE ? l->height - y0 : GV_TILE;
+    const uint32_t w = gv_tile_span(l->width, tx), h = gv_tile_span(l->height, ty);
     if (k == 0 && e->level0_file) {
         if (gv_raw_regions_read(e->level0_file, x0, y0, w, h, orig, row, err) < 0)
             return -1;
@@ -684,19 +682,6 @@ static int trial_lambda(struct encoder *e)
     return 0;
 }
 
-/* Squared error of a level-0 tile over the pixels it is the source of
- * (513 minus the overlap, except in the last column and row of tiles). */
-static uint64_t level0_sse(const struct encoder *e, uint32_t tx, uint32_t ty,
-                           uint32_t valid_w, uint32_t valid_h,
-                           const uint8_t *orig, const uint8_t *recon)
-{
-    const struct gv_level *l = &e->g.level[0];
-    const size_t row = (size_t)GV_TILE * e->c;
-    uint32_t cw = tx + 1 == l->tiles_x ? valid_w : GV_STEP;
-    uint32_t ch = ty + 1 == l->tiles_y ? valid_h : GV_STEP;
-    return gv_sse_u8(orig, recon, cw * (uint32_t)e->c, ch, row);
-}
-
 /* Pool job: encode slot `slot` of the current page with the workspace of
  * `worker`; lens[slot] stays 0 for a slot outside the level or the shard,
  * and for one whose original cannot be read (job_failed, job_err). */
@@ -746,10 +731,8 @@ static void encode_tile(void *ctx, size_t slot, int worker)
             e->job_err = err;
         return;
     }
-    const uint32_t valid_w = l->width - tx * GV_STEP < GV_TILE ?
-                             l->width - tx * GV_STEP : GV_TILE;
-    const uint32_t valid_h = l->height - ty * GV_STEP < GV_TILE ?
-                             l->height - ty * GV_STEP : GV_TILE;
+    const uint32_t valid_w = gv_tile_span(l->width, tx);
+    const uint32_t valid_h = gv_tile_span(l->height, ty);
     struct gv_tile_params params = {
         .target_mse = e->target_mse,
         .max_rate = e->opts->max_rate,
@@ -763,8 +746,7 @@ static void encode_tile(void *ctx, size_t slot, int worker)
     if (e->tile_rate[e->level])
         e->tile_rate[e->level][(size_t)ty * l->tiles_x + tx] = (uint8_t)e->stats[slot].rate;
     if (e->level == 0)
-        e->canon_sse[slot] = level0_sse(e, tx, ty, valid_w, valid_h, orig,
-                                        recon);
+        e->canon_sse[slot] = gv_level0_tile_sse(l, tx, ty, c, orig, recon, NULL);
 }
 
 /* Pool job: the i-th slot of the page's order. */
