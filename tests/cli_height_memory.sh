@@ -27,26 +27,7 @@
 # Skipped without /usr/bin/time, under valgrind and in sanitizer builds.
 . "$(dirname "$0")/lib.sh"
 
-TIME=/usr/bin/time
-if [ ! -x "$TIME" ]; then
-    echo "1..0 # SKIP $TIME not installed (apt-get install time)"
-    exit 0
-fi
-if under_valgrind; then
-    echo "1..0 # SKIP peak memory is meaningless under valgrind"
-    exit 0
-fi
-if ldd "$GIGAVIEW" 2>/dev/null | grep -q libasan; then
-    echo "1..0 # SKIP peak memory is meaningless in a sanitizer build"
-    exit 0
-fi
-
-# peak_kib ARGS...: run gigaview ARGS, print its peak RSS in KiB.
-peak_kib() {
-    "$TIME" -f '%M' -o "$T/rss" "$GIGAVIEW" "$@" >"$T/out" 2>"$T/err" ||
-        bail "gigaview $* failed: $(cat "$T/err")"
-    tail -n 1 "$T/rss"
-}
+peak_rss_preflight
 
 # mosaic COLS ROWS: the arguments of a COLSxROWS mosaic of the one tile.
 mosaic() {

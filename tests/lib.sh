@@ -197,6 +197,33 @@ kill_at_progress() {
     wait "$1" || status=$?
 }
 
+# peak_rss_preflight: end the test as skipped (exit 0) where a peak RSS
+# measures nothing: without GNU time (Debian package `time`), under
+# valgrind, and in a sanitizer build (AddressSanitizer's shadow memory and
+# quarantine inflate RSS).
+peak_rss_preflight() {
+    if [ ! -x /usr/bin/time ]; then
+        echo "1..0 # SKIP /usr/bin/time not installed (apt-get install time)"
+        exit 0
+    fi
+    if under_valgrind; then
+        echo "1..0 # SKIP peak memory is meaningless under valgrind"
+        exit 0
+    fi
+    if ldd "$GIGAVIEW" 2>/dev/null | grep -q libasan; then
+        echo "1..0 # SKIP peak memory is meaningless in a sanitizer build"
+        exit 0
+    fi
+}
+
+# peak_kib ARGS...: run gigaview ARGS (stdout in $T/out, stderr in
+# $T/err), print its peak RSS in KiB; bail if it fails.
+peak_kib() {
+    /usr/bin/time -f '%M' -o "$T/rss" "$GIGAVIEW" "$@" >"$T/out" 2>"$T/err" ||
+        bail "gigaview $* failed: $(cat "$T/err")"
+    tail -n 1 "$T/rss"
+}
+
 # json_field FILE NAME: the first numeric value of "NAME": in FILE.
 json_field() {
     grep -o "\"$2\":[-0-9.]*" "$1" | head -n 1 | cut -d: -f2
