@@ -325,6 +325,17 @@ bad:
 
 /* ---- opening ---- */
 
+/* A procedural input of w x h pixels within max_pixels: 0, or -1 with *err. */
+static int check_pixels(const struct gv_source *s, const char *spec,
+                        uint32_t w, uint32_t h, struct gv_error *err)
+{
+    if ((uint64_t)w * h > s->max_pixels)
+        return gv_fail(err, GV_ELIMIT, "source: %s: %" PRIu64 " pixels "
+                       "exceed the limit of %" PRIu64, spec,
+                       (uint64_t)w * h, s->max_pixels);
+    return 0;
+}
+
 static int open_synth(struct gv_source *s, const char *spec,
                       struct gv_source_info *info, struct gv_error *err)
 {
@@ -332,10 +343,8 @@ static int open_synth(struct gv_source *s, const char *spec,
     int gray = 0;
     if (parse_synth(spec, &w, &h, &gray, err) != 0)
         return -1;
-    if ((uint64_t)w * h > s->max_pixels)
-        return gv_fail(err, GV_ELIMIT, "source: %s: %" PRIu64 " pixels "
-                       "exceed the limit of %" PRIu64, spec,
-                       (uint64_t)w * h, s->max_pixels);
+    if (check_pixels(s, spec, w, h, err) < 0)
+        return -1;
     s->kind = KIND_SYNTH;
     s->width = w;
     s->height = h;
@@ -357,10 +366,8 @@ static int open_synth_height(struct gv_source *s, const char *spec,
     if (gv_synth_height_parse(spec, &w, &h) < 0)
         return gv_fail(err, GV_EINVAL, "source: bad pattern '%s' (want "
                        "synth-height:WIDTHxHEIGHT)", spec);
-    if ((uint64_t)w * h > s->max_pixels)
-        return gv_fail(err, GV_ELIMIT, "source: %s: %" PRIu64 " pixels "
-                       "exceed the limit of %" PRIu64, spec,
-                       (uint64_t)w * h, s->max_pixels);
+    if (check_pixels(s, spec, w, h, err) < 0)
+        return -1;
     s->kind = KIND_SYNTH_HEIGHT;
     s->width = w;
     s->height = h;
