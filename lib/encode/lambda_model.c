@@ -74,11 +74,6 @@ void gv_lambda_model_free(struct gv_lambda_model *m)
     }
     free(m->detail);
     m->detail = NULL;
-}
-
-void gv_lambda_model_free_tiles(struct gv_lambda_model *m)
-{
-    gv_lambda_model_free(m);
     free(m->t_count);
     free(m->t_sum);
     m->t_count = NULL;

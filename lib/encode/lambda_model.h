@@ -73,11 +73,9 @@ void gv_lambda_model_finish(struct gv_lambda_model *m);
 int gv_lambda_model_set_tiles(struct gv_lambda_model *m, uint32_t tiles_x,
                               uint32_t tiles_y);
 
-/* Release the row buffers (the histograms stay usable). */
+/* Release the row buffers and the per-tile histograms (the level's
+ * histogram stays usable). */
 void gv_lambda_model_free(struct gv_lambda_model *m);
-
-/* Release the per-tile histograms too. */
-void gv_lambda_model_free_tiles(struct gv_lambda_model *m);
 
 /* The water level theta (squared error per sample, at most 255^2) at
  * which level 0's modelled error is target_mse, given the models of

@@ -1148,7 +1148,7 @@ static void teardown(struct encoder *e)
     free(e->root);
     free(e->root_tile);
     for (int k = 0; k < GV_MAX_LEVELS; k++)
-        gv_lambda_model_free_tiles(&e->model[k]);
+        gv_lambda_model_free(&e->model[k]);
     gv_spill_free(e->spill);
     gv_spill_free(e->spill0);
     gv_raw_regions_free(e->level0_file);
