@@ -65,9 +65,9 @@ struct gv_lambda_trial_env {
     uint8_t *origs, *wrecon;         /* per worker: gv_tile_bytes(c) each */
     uint8_t *const *recon;           /* GV_TRIAL_RECON decoded tiles */
     uint8_t *const *bufs;            /* GV_TRIAL_MAX buffers of GV_TILEBUF_MAX */
-    int (*read_orig)(void *ctx, int level, uint32_t tx, uint32_t ty,
+    int (*read_orig)(const void *ctx, int level, uint32_t tx, uint32_t ty,
                      uint8_t *orig, struct gv_error *err);
-    void *ctx;
+    const void *ctx;
     /* The rate model of levels 0 .. model_levels-1, level 0's with the
      * sample marked (gv_lambda_model_set_sample), and whether it was
      * fitted for layout D (gv_lambda_model_k); NULL: the sample's own

@@ -559,56 +559,13 @@ static void pad_tile(uint8_t *orig, uint32_t w, uint32_t h, int c)
     }
 }
 
-/* Read the original of level-0 tile (i, j) of the current page from the
- * input file into orig (513x513xC), repeating the last row and column
- * past the image's edge, as cut_tile does from a window.  Returns 0 or
- * -1 with *err. */
-static int read_tile0(const struct encoder *e, int i, int j, uint8_t *orig,
-                      struct gv_error *err)
-{
-    const int c = e->c;
-    const size_t row = (size_t)GV_TILE * c;
-    const uint32_t x0 = (uint32_t)i * GV_STEP, y0 = (uint32_t)j * GV_STEP;
-    const uint32_t w = e->win_w - x0 < GV_TILE ? e->win_w - x0 : GV_TILE;
-    const uint32_t h = e->win_h - y0 < GV_TILE ? e->win_h - y0 : GV_TILE;
-    if (gv_raw_regions_read(e->level0_file, e->px * PAGE_W + x0,
-                            e->py * PAGE_W + y0, w, h, orig, row, err) < 0)
-        return -1;
-    pad_tile(orig, w, h, c);
-    return 0;
-}
-
-/* Cut the original of tile (i, j) of the current page out of the page
- * window into orig (513x513xC), repeating the last row and column past
- * the image's edge; at level 0 read from the input file where it is
- * (read_tile0).  Returns 0 or -1 with *err. */
-static int cut_tile(const struct encoder *e, int i, int j, uint8_t *orig,
-                    struct gv_error *err)
-{
-    if (e->level == 0 && e->level0_file)
-        return read_tile0(e, i, j, orig, err);
-    const int c = e->c;
-    const size_t row = (size_t)GV_TILE * c;
-    for (uint32_t v = 0; v < GV_TILE; v++) {
-        uint32_t wy = (uint32_t)j * GV_STEP + v;
-        if (wy >= e->win_h)
-            wy = e->win_h - 1;
-        const uint8_t *src = e->win + (size_t)wy * e->win_stride;
-        uint8_t *dst = orig + v * row;
-        uint32_t x0 = (uint32_t)i * GV_STEP;
-        uint32_t avail = e->win_w - x0 < GV_TILE ? e->win_w - x0 : GV_TILE;
-        memcpy(dst, src + (size_t)x0 * c, (size_t)avail * c);
-        for (uint32_t u = avail; u < GV_TILE; u++)
-            memcpy(dst + u * c, src + (size_t)(e->win_w - 1) * c, (size_t)c);
-    }
-    return 0;
-}
-
-/* The lambda trial's read_orig (lambda_trial.h): the original of tile
- * (tx, ty) of level k, from where pass 2 will read it: level 0 kept
- * whole, the input file, or the scratch file's strip (which holds the
- * trial's tiles in a shard too, shard_keeps).  Between the passes only. */
-static int read_orig_tile(void *ctx, int k, uint32_t tx, uint32_t ty,
+/* The original of tile (tx, ty) of level k, the last row and column
+ * repeated past the image's edge: from level 0 kept whole, the input
+ * file, or the scratch file's strip (which holds the lambda trial's tiles
+ * in a shard too, shard_keeps).  The lambda trial's read_orig
+ * (lambda_trial.h), between the passes, and pass 2's reader of level 0
+ * from the input file (cut_tile).  Returns 0 or -1 with *err. */
+static int read_orig_tile(const void *ctx, int k, uint32_t tx, uint32_t ty,
                           uint8_t *orig, struct gv_error *err)
 {
     const struct encoder *e = ctx;
@@ -637,6 +594,34 @@ static int read_orig_tile(void *ctx, int k, uint32_t tx, uint32_t ty,
     pad_tile(orig, w, h, c);
     return 0;
 }
+
+/* Cut the original of tile (i, j) of the current page out of the page
+ * window into orig (513x513xC), repeating the last row and column past
+ * the image's edge; at level 0 read from the input file where it is
+ * (read_orig_tile).  Returns 0 or -1 with *err. */
+static int cut_tile(const struct encoder *e, int i, int j, uint8_t *orig,
+                    struct gv_error *err)
+{
+    if (e->level == 0 && e->level0_file)
+        return read_orig_tile(e, 0, e->px * GV_PAGE_TILES + (uint32_t)i,
+                              e->py * GV_PAGE_TILES + (uint32_t)j, orig, err);
+    const int c = e->c;
+    const size_t row = (size_t)GV_TILE * c;
+    for (uint32_t v = 0; v < GV_TILE; v++) {
+        uint32_t wy = (uint32_t)j * GV_STEP + v;
+        if (wy >= e->win_h)
+            wy = e->win_h - 1;
+        const uint8_t *src = e->win + (size_t)wy * e->win_stride;
+        uint8_t *dst = orig + v * row;
+        uint32_t x0 = (uint32_t)i * GV_STEP;
+        uint32_t avail = e->win_w - x0 < GV_TILE ? e->win_w - x0 : GV_TILE;
+        memcpy(dst, src + (size_t)x0 * c, (size_t)avail * c);
+        for (uint32_t u = avail; u < GV_TILE; u++)
+            memcpy(dst + u * c, src + (size_t)(e->win_w - 1) * c, (size_t)c);
+    }
+    return 0;
+}
+
 
 static int env_off(const char *name);
 
@@ -808,7 +793,7 @@ static int load_window(struct encoder *e)
         return 0;
     }
     if (e->level == 0 && e->level0_file) {
-        /* Each tile is read from the file by its worker (read_tile0): no
+        /* Each tile is read from the file by its worker (read_orig_tile): no
          * window, and the copies' memory is given back. */
         gv_spill_unview(&e->view);
         if (e->window_resident)
