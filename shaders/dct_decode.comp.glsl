@@ -1,6 +1,6 @@
 // dct_decode.comp.glsl - decode the 65 coefficient streams of each
-// transform-coded tile buffer of a group (layout D, docs/FORMAT.md section
-// 4.3), one invocation per row of 8x8 blocks and one row of work groups per
+// transform-coded tile buffer of a group (layouts D and D2, docs/FORMAT.md
+// sections 4.3 and 4.4), one invocation per row of 8x8 blocks and one row of work groups per
 // tile (gl_WorkGroupID.y), into the tile's 520x520 coefficient plane: two
 // uints per texel, (D_0 & 0xffff) | D_1 << 16 and (D_2 & 0xffff) | A << 16,
 // the texel the WebGL2 path uploads as RGBA16I.  A is 0 but in the first
@@ -106,11 +106,14 @@ void main()
     int step_q[3];
     for (int c = 0; c < 3; c++)
         step_q[c] = int(u16_at(2 + 2 * c));
+    // Layout D2 (byte 0 = 0x21) has models 30 and 31 for each block's
+    // last value; D (0x20) has 30 models.
+    bool last_models = (u16_at(0) & 0xffu) == 0x21u;
     // Byte offsets of the stored models (-1: not stored), in order of m.
     uint mask = u16_at(8) | (u16_at(10) << 16);
-    int model_at[30];
+    int model_at[32];
     int at = 12;
-    for (int m = 0; m < 30; m++) {
+    for (int m = 0; m < 32; m++) {
         model_at[m] = -1;
         if ((mask & (1u << uint(m))) != 0u) {
             model_at[m] = at;
@@ -137,7 +140,9 @@ void main()
             for (int k = 0; k < n; k++) {
                 int band = k == 0 ? 0 : (k <= 2 ? 1 : (k <= 9 ? 2 : 3));
                 int p = k == 0 ? dcp[c] : class_of(prev);
-                int tok = min(rans_step(model_at[6 + 3 * (4 * cc + band) + p], 16), 15);
+                int m = last_models && k == n - 1 ? 30 + cc
+                                                  : 6 + 3 * (4 * cc + band) + p;
+                int tok = min(rans_step(model_at[m], 16), 15);
                 int q;
                 if (tok == 15) {
                     int h = rans_step(-1, 64);

@@ -12,7 +12,8 @@
 // tiles (byte 0 bit 7) need their indices decoded first: by
 // rans_decode.comp.glsl where there are compute shaders, on the CPU
 // otherwise (WebGL2), uploaded as a texture.  Transform-coded tiles
-// (layout D, byte 0 = 0x20, FORMAT.md 4.3) likewise need their 520x520
+// (layouts D and D2, byte 0 = 0x20 and 0x21, FORMAT.md 4.3 and 4.4)
+// likewise need their 520x520
 // coefficient plane: with compute shaders, from dct_decode.comp.glsl (two
 // uints per texel), whose row pass dct_rows.comp.glsl then takes, so that
 // this shader takes the column pass (8 texels a pixel); in WebGL2, as the
@@ -178,7 +179,7 @@ void main()
 
     ivec3 res = ivec3(0);
     int r = byte_at(0) & 15;
-    if (byte_at(0) == 0x20) {
+    if (byte_at(0) == 0x20 || byte_at(0) == 0x21) {   // layouts D and D2
         res = dct_residual(uv);
     } else if (r > 0) {
         int dim = 4 * u_channels;

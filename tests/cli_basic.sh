@@ -58,7 +58,7 @@ for spec in \
     run info "$s"
     expect_rc "info $f" 0
     check "info $f: size and kind" grep -q "^image  *$w x $h, $kind\$" "$T/out"
-    check "info $f: format version 4" grep -q "(format version 4)" "$T/out"
+    check "info $f: format version 5" grep -q "(format version 5)" "$T/out"
 
     run info --json "$s"
     expect_rc "info --json $f" 0
@@ -331,6 +331,11 @@ run info "$T/vq.gv"
 check "--layouts vq: format version 2" grep -q "(format version 2)" "$T/out"
 run export "$T/vq.gv" -o "$T/vq.png"
 expect_rc "--layouts vq: the store exports" 0
+# A store of format version 4 (tiles in layout D, before D2) still reads.
+run info "$TESTDATA/v4-picos-1100x700.gv"
+check "version 4: info names it" grep -q "(format version 4)" "$T/out"
+run export "$TESTDATA/v4-picos-1100x700.gv" -o "$T/v4.png"
+expect_rc "version 4: the store exports" 0
 
 usage_case "no command" "$U_TOP"
 usage_case "unknown command" "gigaview: unknown command 'frobnicate'" frobnicate

@@ -137,7 +137,7 @@ expect_status "GET /v1/images" 200 /v1/images
 check "list names x with its size" test "$(json_get '[(i["id"],i["width"],i["height"],i["levels"]) for i in j["images"]]')" = "[('x', 3000, 2000, 4)]"
 check "CORS header on /v1" test "$(header Access-Control-Allow-Origin)" = "*"
 expect_status "GET /v1/images/x" 200 /v1/images/x
-check "metadata: geometry" test "$(json_get '(j["width"],j["height"],j["channels"],j["tile_size"],j["tile_overlap"],j["tile_step"],j["format_version"],j["root"]["level"],j["root"]["width"],j["root"]["height"])')" = "(3000, 2000, 3, 513, 1, 512, 4, 3, 375, 250)"
+check "metadata: geometry" test "$(json_get '(j["width"],j["height"],j["channels"],j["tile_size"],j["tile_overlap"],j["tile_step"],j["format_version"],j["root"]["level"],j["root"]["width"],j["root"]["height"])')" = "(3000, 2000, 3, 513, 1, 512, 5, 3, 375, 250)"
 check "metadata: tile grid per level" test "$(json_get '[(l["level"],l["width"],l["height"],l["tiles_x"],l["tiles_y"]) for l in j["levels"]]')" = "[(0, 3000, 2000, 6, 4), (1, 1500, 1000, 3, 2), (2, 750, 500, 2, 1)]"
 check "metadata: IIIF link" test "$(json_get 'j["links"]["iiif"]')" = "http://127.0.0.1:$PORT/iiif/3/x/info.json"
 # bytes is the store file's size and bpp is 8 bytes / pixels, as gigaviewd

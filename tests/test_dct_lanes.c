@@ -1,7 +1,7 @@
 /*
- * test_dct_lanes.c - layout D's rANS rows in SIMD lanes (lib/codec/
- * tile_dct_lanes.c) against the scalar rows of tile_dct.c, through
- * gv_dct_decode with the lanes on and off: the same bytes on the
+ * test_dct_lanes.c - the rANS rows of layouts D and D2 in SIMD lanes
+ * (lib/codec/tile_dct_lanes.c) against the scalar rows of tile_dct.c,
+ * through gv_dct_decode with the lanes on and off: the same bytes on the
  * fixtures of tests/dct_fixture.h (escapes at both ends of their range,
  * steps of 4095, every coefficient coded, none), on tiles the encoder
  * wrote from synthetic and real photographs, and the same return and
@@ -154,13 +154,21 @@ static size_t test_encoded(void)
     return len;
 }
 
-/* The offsets of a D buffer's parts, as FORMAT.md 4.3 lays them out. */
-static size_t lengths_at(const uint8_t *bb, size_t model_size[GV_DCT_MODELS])
+/* The models of a D or D2 buffer. */
+static int models_of(const uint8_t *bb)
+{
+    return bb[0] == GV_TILE_DCT2 ? GV_DCT_MODELS_D2 : GV_DCT_MODELS;
+}
+
+/* The offsets of a D or D2 buffer's parts, as FORMAT.md 4.3 and 4.4 lay
+ * them out. */
+static size_t lengths_at(const uint8_t *bb, size_t model_size[GV_DCT_MODELS_D2])
 {
     size_t at = 12;
     uint32_t mask = gv_get32(bb + 8);
-    for (int m = 0; m < GV_DCT_MODELS; m++) {
-        model_size[m] = (mask >> m & 1) ? (size_t)gv_dct_model_symbols(m) : 0;
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++) {
+        model_size[m] = m < models_of(bb) && (mask >> m & 1)
+                        ? (size_t)gv_dct_model_symbols(m) : 0;
         at += model_size[m];
     }
     return (at + 1) & ~(size_t)1;
@@ -170,11 +178,11 @@ static size_t lengths_at(const uint8_t *bb, size_t model_size[GV_DCT_MODELS])
  * streams then meet an absent model (frequency 0).  Returns its length. */
 static size_t drop_model(const uint8_t *src, size_t len, int m, uint8_t *dst)
 {
-    size_t size[GV_DCT_MODELS], at = 12, w = 12;
+    size_t size[GV_DCT_MODELS_D2], at = 12, w = 12;
     const size_t lengths = lengths_at(src, size);
     memcpy(dst, src, 12);
     gv_put32(dst + 8, gv_get32(src + 8) & ~(1u << m));
-    for (int i = 0; i < GV_DCT_MODELS; i++) {
+    for (int i = 0; i < GV_DCT_MODELS_D2; i++) {
         if (i != m) {
             memcpy(dst + w, src + at, size[i]);
             w += size[i];
@@ -197,7 +205,7 @@ static size_t drop_model(const uint8_t *src, size_t len, int m, uint8_t *dst)
 
 static void test_damaged(const uint8_t *good, size_t len, int C)
 {
-    size_t size[GV_DCT_MODELS];
+    size_t size[GV_DCT_MODELS_D2];
     const size_t lengths = lengths_at(good, size);
     const size_t streams = lengths + 2 * GV_DCT_BLOCKS;
     int agree = 0, tries = 0, refused = 0, rc;
@@ -225,7 +233,7 @@ static void test_damaged(const uint8_t *good, size_t len, int C)
           tries, refused);
     /* Each model left out in turn. */
     agree = tries = refused = 0;
-    for (int m = 0; m < GV_DCT_MODELS; m++) {
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++) {
         if (!size[m])
             continue;
         size_t n = drop_model(good, len, m, b);

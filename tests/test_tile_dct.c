@@ -164,7 +164,7 @@ static void test_round_trip(int C, int amp, double lambda, uint32_t vw,
     uint64_t sse = 0;
     size_t len = gv_dct_encode(ws, orig, pred, C, vw, vh, lambda,
                                buf, GV_TILEBUF_MAX, recon, &sse);
-    check(len > 0 && len % 4 == 0 && buf[0] == GV_TILE_DCT,
+    check(len > 0 && len % 4 == 0 && gv_tile_is_dct(buf[0]),
           "C=%d amp %d lambda %.0f %ux%u: a D buffer of %zu bytes", C, amp,
           lambda, vw, vh, len);
     check(gv_tilebuf_check(buf, len, C, &err) == 0, "it passes the check");
@@ -221,14 +221,14 @@ static void test_choice(void)
                                .lambda = 20, .seed = 7};
     struct gv_tile_stats st;
     size_t vq = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &p, recon, buf, &st);
-    check(buf[0] != GV_TILE_DCT && st.rate <= GV_MAX_RATE,
+    check(!gv_tile_is_dct(buf[0]) && st.rate <= GV_MAX_RATE,
           "without .dct the buffer is VQ (rate %d, %zu bytes)", st.rate, vq);
     double jvq = (double)st.sse + 20 * 8.0 * (double)vq;
     p.dct = 1;
     size_t d = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &p, recon, buf, &st);
     double jd = (double)st.sse + 20 * 8.0 * (double)d;
     check(jd <= jvq, "with .dct the cost is no higher (%.0f vs %.0f)", jd, jvq);
-    check(buf[0] == GV_TILE_DCT && st.rate == GV_RATE_DCT,
+    check(gv_tile_is_dct(buf[0]) && st.rate == GV_RATE_DCT,
           "noise is cheaper as a transform (%zu bytes against %zu)", d, vq);
     check(gv_tile_decode(buf, d, 3, parent, 0, 0, out, &err) == 0 &&
           !memcmp(out, recon, sizeof out), "and decodes to its reconstruction");
@@ -236,7 +236,7 @@ static void test_choice(void)
     p.dct = GV_LAYOUTS_D;
     make_tile(orig, 3, 6);
     d = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &p, recon, buf, &st);
-    check(buf[0] == GV_TILE_DCT && st.rate == GV_RATE_DCT &&
+    check(gv_tile_is_dct(buf[0]) && st.rate == GV_RATE_DCT &&
           gv_tile_decode(buf, d, 3, parent, 0, 0, out, &err) == 0 &&
           !memcmp(out, recon, sizeof out), "layouts D: a D buffer, decoded "
           "to its reconstruction (%zu bytes)", d);
@@ -246,7 +246,7 @@ static void test_choice(void)
     struct gv_tile_params fine = p;
     fine.lambda = 0.5;
     d = gv_tile_encode(ws, orig, parent, 0, 0, 3, T, T, &fine, recon, buf, &st);
-    check(buf[0] != GV_TILE_DCT && st.rate >= 1 && st.rate <= GV_MAX_RATE &&
+    check(!gv_tile_is_dct(buf[0]) && st.rate >= 1 && st.rate <= GV_MAX_RATE &&
           gv_tile_decode(buf, d, 3, parent, 0, 0, out, &err) == 0 &&
           !memcmp(out, recon, sizeof out), "layouts D, too fine for D: VQ "
           "at rate %d (%zu bytes), decoded to its reconstruction", st.rate, d);
@@ -291,7 +291,12 @@ static void test_hostile(void)
     MUTATE(b[1] = 1, "byte 1 set");
     MUTATE(gv_put16(b + 2, 0), "step 0");
     MUTATE(gv_put16(b + 4, 4096), "step 4096");
-    MUTATE(gv_put32(b + 8, gv_get32(b + 8) | 1u << 30), "mask bit 30");
+    /* The buffer is layout D2, whose last-value models are bits 30 and
+     * 31 of the mask: named layout D, it has models D does not know. */
+    check(buf[0] == GV_TILE_DCT2 && gv_get32(buf + 8) >> 30,
+          "the encoder writes layout D2 with last-value models");
+    MUTATE(b[0] = GV_TILE_DCT, "mask bit 30 or 31 in layout D");
+    MUTATE(b[0] = GV_TILE_DCT2 + 1, "byte 0 past layout D2");
     MUTATE(b[12] = 5, "a model not starting at 0");
     MUTATE(b[13] = 200; b[14] = 100, "a decreasing model");
     MUTATE(n = len - 4, "four bytes short");
@@ -301,7 +306,7 @@ static void test_hostile(void)
     /* Streams: every length moved by one word between two streams. */
     size_t at = 12;
     uint32_t mask = gv_get32(buf + 8);
-    for (int m = 0; m < GV_DCT_MODELS; m++)
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++)
         if (mask >> m & 1)
             at += m < GV_DCT_EOB_MODELS ? 65 : 16;
     at = (at + 1) & ~(size_t)1;
@@ -328,7 +333,7 @@ static void test_hostile(void)
     }
     /* Clearing a model the streams use. */
     int used = -1;
-    for (int m = GV_DCT_MODELS - 1; m >= 0 && used < 0; m--)
+    for (int m = GV_DCT_MODELS_D2 - 1; m >= 0 && used < 0; m--)
         if (mask >> m & 1)
             used = m;
     (void)used;

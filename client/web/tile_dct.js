@@ -1,6 +1,7 @@
-// tile_dct.js - checking a layout-D tile buffer (byte 0 = 0x20, the
-// transform-coded residual of docs/FORMAT.md section 4.3) and decoding
-// its 65 rANS streams into the dequantized coefficient plane.
+// tile_dct.js - checking a layout-D or layout-D2 tile buffer (byte 0 =
+// 0x20 or 0x21, the transform-coded residual of docs/FORMAT.md sections
+// 4.3 and 4.4) and decoding its 65 rANS streams into the dequantized
+// coefficient plane.
 //
 // A port of gv_dct_check / gv_dct_unpack (lib/codec/tile_dct.c), statement
 // for statement, so that the browser refuses exactly the buffers the C
@@ -11,11 +12,17 @@
 // Pure: no DOM, no GL, so it runs in a worker too.
 
 export const DCT = 0x20;           // byte 0 of a layout-D buffer
+export const DCT2 = 0x21;         // byte 0 of a layout-D2 buffer: D with
+                                   // a model for each block's last value
+/** Whether byte 0 of a tile buffer names layout D or D2. */
+export const isDct = (b0) => b0 === DCT || b0 === DCT2;
 export const DCT_SIDE = 520;       // coefficient plane edge: 65 blocks of 8
 export const DCT_BLOCKS = 65;      // 8 x 8 blocks per plane edge = streams
 export const DCT_PLANE = DCT_SIDE * DCT_SIDE * 4;   // Int16 elements
 
 const MODELS = 30;                 // 6 eob models, 24 token models
+const MODELS_D2 = 32;               // layout D2: and 2 last-value models
+const LAST_MODEL = 30;             // layout D2: model 30 + cc
 const EOB_SYMBOLS = 65;
 const TOKEN_SYMBOLS = 16;
 const ESCAPE = 15;
@@ -55,18 +62,19 @@ const symbolsOf = (m) => (m < 6 ? EOB_SYMBOLS : TOKEN_SYMBOLS);
  */
 function dctLayout(buf, channels) {
     const len = buf.length;
-    if (len < HEADER || (len & 3) || buf[0] !== DCT || buf[1])
+    if (len < HEADER || (len & 3) || !isDct(buf[0]) || buf[1])
         throw corrupt('bad layout D header');
+    const last = buf[0] === DCT2, models = last ? MODELS_D2 : MODELS;
     for (let c = 0; c < 3; c++) {
         const s = u16(buf, 2 + 2 * c);
         if (c < channels ? s < 1 || s > MAX_STEP : s !== 0)
             throw corrupt(`bad quantizer step ${s} of channel ${c}`);
     }
-    const l = { mask: u32(buf, 8), at: new Int32Array(MODELS), lengths: 0, streams: 0 };
-    if (l.mask >>> MODELS)
+    const l = { mask: u32(buf, 8), last, at: new Int32Array(MODELS_D2), lengths: 0, streams: 0 };
+    if (!last && l.mask >>> MODELS)
         throw corrupt(`bad model mask 0x${l.mask.toString(16).padStart(8, '0')}`);
     let at = HEADER;
-    for (let m = 0; m < MODELS; m++) {
+    for (let m = 0; m < models; m++) {
         l.at[m] = 0;
         if (!((l.mask >>> m) & 1))
             continue;
@@ -144,7 +152,7 @@ export function dctUnpack(buf, channels, coefs, bounds = false) {
     // symbol of every slot; a model whose bit is clear has every slot on
     // symbol 0 of frequency 0, which a step reports as damage.
     const cum = [], sym = [];
-    for (let m = 0; m < MODELS; m++) {
+    for (let m = 0; m < MODELS_D2; m++) {
         if (!l.at[m]) {
             cum.push(new Uint16Array(2));
             sym.push(new Uint8Array(256));
@@ -202,7 +210,8 @@ export function dctUnpack(buf, channels, coefs, bounds = false) {
                 for (let k = 0; k < nc; k++) {
                     const band = k === 0 ? 0 : k <= 2 ? 1 : k <= 9 ? 2 : 3;
                     const p = k === 0 ? dcp[c] : cls(prev < 0 ? -prev : prev);
-                    const t = dec(6 + 3 * (4 * cc + band) + p);
+                    const t = dec(l.last && k === nc - 1 ? LAST_MODEL + cc
+                                                         : 6 + 3 * (4 * cc + band) + p);
                     let q;
                     if (t === 0)
                         q = 0;

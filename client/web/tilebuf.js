@@ -12,7 +12,7 @@
 // dequantized coefficients.
 // Everything here is pure: no DOM, no GL, so it runs in a worker too.
 
-import { DCT, DCT_PLANE, dctCheck, dctUnpack } from './tile_dct.js';
+import { DCT_PLANE, isDct, dctCheck, dctUnpack } from './tile_dct.js';
 
 export const TILE = 513;          // tile edge in pixels
 export const STEP = 512;          // distance between tile origins
@@ -149,13 +149,13 @@ export function ransCheck(buf, rate, channels) {
 /**
  * gv_tilebuf_check: throws an Error (code 'corrupt') unless buf (a
  * Uint8Array) is a well-formed tile buffer for `channels` (1 or 3).
- * Returns the rate r (0 for layout D, which has none).
+ * Returns the rate r (0 for layouts D and D2, which have none).
  */
 export function checkTile(buf, channels) {
     const len = buf.length;
     if (len < 4 || (len & 3))
         throw corrupt(`buffer of ${len} bytes is not a positive multiple of 4`);
-    if (buf[0] === DCT) {
+    if (isDct(buf[0])) {
         dctCheck(buf, channels);
         return 0;
     }
@@ -286,7 +286,7 @@ export const WORDS_ROWS_MAX = Math.ceil(TILEBUF_MAX / 4 / WORDS_WIDTH);
  */
 export function prepareTile(buf, channels) {
     const rate = checkTile(buf, channels);
-    const dct = buf[0] === DCT;
+    const dct = isDct(buf[0]);
     const nwords = dct ? Math.min(buf.length >> 2, WORDS_WIDTH) : buf.length >> 2;
     const rows = Math.max(1, Math.ceil(nwords / WORDS_WIDTH));
     const words = new Uint32Array(rows * WORDS_WIDTH);

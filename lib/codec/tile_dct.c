@@ -1,6 +1,8 @@
 /*
- * tile_dct.c - layout D (docs/FORMAT.md section 4.3): its layout check and
- * the CPU reference decoder.
+ * tile_dct.c - layouts D and D2 (docs/FORMAT.md sections 4.3 and 4.4):
+ * their layout check and the CPU reference decoder.  D2 is D with two more
+ * models, in which each block's last coded value is coded: the value
+ * that the block's count says is nonzero.
  *
  * A buffer is decoded two rows of 8x8 blocks at a time: the rows' rANS
  * streams in lockstep into their coefficients (2 x 3 x 8 x 520 int16 on
@@ -44,7 +46,8 @@ const uint8_t gv_dct_band_model[64] = {
 /* Offsets of a checked buffer's parts. */
 struct dct_layout {
     uint32_t mask;
-    size_t model_at[GV_DCT_MODELS];  /* 0 for an absent model */
+    int last;                          /* layout D2: last-value models */
+    size_t model_at[GV_DCT_MODELS_D2];  /* 0 for an absent model */
     size_t lengths, streams;
 };
 
@@ -53,8 +56,10 @@ static int parse_layout(const uint8_t *buf, size_t len, int channels,
 {
     if (channels != 1 && channels != 3)
         return gv_fail(err, GV_EINVAL, "tile: bad channel count %d", channels);
-    if (len < HEADER_BYTES || (len & 3) || buf[0] != GV_TILE_DCT || buf[1])
+    if (len < HEADER_BYTES || (len & 3) || !gv_tile_is_dct(buf[0]) || buf[1])
         return gv_fail(err, GV_ECORRUPT, "tile: bad layout D header");
+    l->last = buf[0] == GV_TILE_DCT2;
+    const int models = l->last ? GV_DCT_MODELS_D2 : GV_DCT_MODELS;
     for (int c = 0; c < 3; c++) {
         unsigned s = gv_get16(buf + 2 + 2 * c);
         if (c < channels ? (s < 1 || s > GV_DCT_MAX_STEP) : s != 0)
@@ -62,12 +67,14 @@ static int parse_layout(const uint8_t *buf, size_t len, int channels,
                            "of channel %d", s, c);
     }
     l->mask = gv_get32(buf + 8);
-    if (l->mask >> GV_DCT_MODELS)
+    if (!l->last && l->mask >> GV_DCT_MODELS)
         return gv_fail(err, GV_ECORRUPT, "tile: bad model mask 0x%08x",
                        (unsigned)l->mask);
     size_t at = HEADER_BYTES;
-    for (int m = 0; m < GV_DCT_MODELS; m++) {
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++) {
         l->model_at[m] = 0;
+        if (m >= models)
+            continue;
         if (!(l->mask >> m & 1))
             continue;
         const int k = gv_dct_model_symbols(m);
@@ -123,7 +130,8 @@ int gv_dct_check(const uint8_t *buf, size_t len, int channels,
 #define E_OFFSET(e) ((e) >> 12 & 255)
 #define E_SYMBOL(e) ((int)((e) >> 20))
 struct dct_models {
-    uint32_t slot[GV_DCT_MODELS][256];
+    uint32_t slot[GV_DCT_MODELS_D2][256];
+    int last;                       /* layout D2: last-value models */
 };
 
 /* The value of token t < GV_DCT_ESCAPE: 0, 1, -1, 2, -2, ... */
@@ -135,7 +143,8 @@ static inline int token_value(int t)
 static void load_models(const uint8_t *buf, const struct dct_layout *l,
                         struct dct_models *md)
 {
-    for (int m = 0; m < GV_DCT_MODELS; m++) {
+    md->last = l->last;
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++) {
         const int k = gv_dct_model_symbols(m);
         uint32_t *e = md->slot[m];
         if (!l->model_at[m]) {
@@ -244,12 +253,17 @@ static const uint16_t band_bytes[64] = {
     B(3), B(3), B(3), B(3),
 };
 
-/* Coefficient k (zigzag order) of the block. */
+/* Coefficient k (zigzag order) of the block, with its band's model for
+ * the previous value's class. */
 #define TOKEN(L, k)                                                         \
+    TOKEN_WITH(L, k, (const uint32_t *)((const char *)tok + band_bytes[k] + \
+                                        p##L))
+
+/* Coefficient k of the block, with the model of entries tab. */
+#define TOKEN_WITH(L, k, tab)                                               \
     do {                                                                    \
         uint32_t e_;                                                        \
-        STEP(L, (const uint32_t *)((const char *)tok + band_bytes[k] +       \
-                                   p##L), e_);                              \
+        STEP(L, (tab), e_);                                                 \
         const int t_ = E_SYMBOL(e_);                                        \
         int16_t *d_ = dst##L + zz_offset[k];                                \
         if (t_ != GV_DCT_ESCAPE) {                                          \
@@ -266,13 +280,25 @@ static const uint16_t band_bytes[64] = {
     } while (0)
 
 /* The block's first coefficient, when it has one: its class is the next
- * block's DC context. */
+ * block's DC context.  In layout D2 (last non-NULL: the channel class's
+ * last-value model) a block's last value has a model of its own, so a
+ * block of one value codes it with that. */
 #define FIRST_TOKEN(L)                                                      \
     do {                                                                    \
         if (eob##L) {                                                       \
-            TOKEN(L, 0);                                                    \
+            if (last && eob##L == 1)                                        \
+                TOKEN_WITH(L, 0, last);                                     \
+            else                                                            \
+                TOKEN(L, 0);                                                \
             dcp##L[c] = p##L;                                               \
         }                                                                   \
+    } while (0)
+
+/* Layout D2: a block's last value (eob >= 2), after the others. */
+#define LAST_TOKEN(L)                                                       \
+    do {                                                                    \
+        if (last && eob##L > 1)                                             \
+            TOKEN_WITH(L, eob##L - 1, last);                                \
     } while (0)
 
 /* After the last block: the state back at its start, every word read. */
@@ -312,10 +338,13 @@ static int decode_row(const uint8_t *buf, size_t at, unsigned words, int row,
         for (int c = 0; c < channels; c++) {
             const int cc = c > 0;
             const uint32_t(*tok)[256] = md->slot + GV_DCT_EOB_MODELS + 12 * cc;
+            const uint32_t *last = md->last ? md->slot[GV_DCT_LAST_MODEL + cc] : NULL;
             BLOCK_EOB(A);
             FIRST_TOKEN(A);
-            for (int k = 1; k < eobA; k++)
+            const int endA = eobA - (last != NULL);
+            for (int k = 1; k < endA; k++)
                 TOKEN(A, k);
+            LAST_TOKEN(A);
         }
     LANE_END(A, row);
     return 0;
@@ -342,20 +371,24 @@ static int decode_row_pair(const uint8_t *buf, size_t atA, unsigned wordsA,
         for (int c = 0; c < channels; c++) {
             const int cc = c > 0;
             const uint32_t(*tok)[256] = md->slot + GV_DCT_EOB_MODELS + 12 * cc;
+            const uint32_t *last = md->last ? md->slot[GV_DCT_LAST_MODEL + cc] : NULL;
             BLOCK_EOB(A);
             BLOCK_EOB(B);
             FIRST_TOKEN(A);
             FIRST_TOKEN(B);
-            const int both = eobA < eobB ? eobA : eobB;
+            const int endA = eobA - (last != NULL), endB = eobB - (last != NULL);
+            const int both = endA < endB ? endA : endB;
             int k = 1;
             for (; k < both; k++) {
                 TOKEN(A, k);
                 TOKEN(B, k);
             }
-            for (; k < eobA; k++)
+            for (; k < endA; k++)
                 TOKEN(A, k);
-            for (; k < eobB; k++)
+            for (; k < endB; k++)
                 TOKEN(B, k);
+            LAST_TOKEN(A);
+            LAST_TOKEN(B);
         }
     if (xA == RANS_L && nextA == nA && xB == RANS_L && nextB == nB)
         return 0;
@@ -495,7 +528,7 @@ int gv_dct_decode(const uint8_t *buf, size_t len, int channels,
             end[i] = (uint32_t)a;
         }
         if (gv_dct_lanes_rows(buf, at, end, GV_DCT_LANES, channels,
-                              &it.md.slot[0][0], it.steps, lanes,
+                              &it.md.slot[0][0], it.md.last, it.steps, lanes,
                               lane_eobs) < 0) {
             lanes_to = by;
             break;

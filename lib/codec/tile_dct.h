@@ -1,6 +1,8 @@
 /*
- * tile_dct.h - layout D of a tile buffer (docs/FORMAT.md section 4.3,
- * format version 4): the residual coded without a codebook, by a YCoCg-R
+ * tile_dct.h - layouts D and D2 of a tile buffer (docs/FORMAT.md sections
+ * 4.3 and 4.4, format versions 4 and 5; D2, which the encoder writes, is
+ * D with a model for each block's last value): the residual coded
+ * without a codebook, by a YCoCg-R
  * colour transform, an 8x8 integer DCT (the HEVC matrix), one uniform
  * quantizer step per channel and rANS-coded coefficients, one stream per
  * row of 8x8 blocks so that a GPU decodes a tile with 65 threads.
@@ -25,14 +27,26 @@
 #include "base/error.h"
 
 #define GV_TILE_DCT 0x20        /* byte 0 of a layout D buffer */
+#define GV_TILE_DCT2 0x21      /* byte 0 of a layout D2 buffer: D with a
+                                 * model for each block's last value */
 #define GV_DCT_BLOCKS 65        /* 8x8 blocks per tile edge: ceil(513 / 8) */
 #define GV_DCT_PLANE 520        /* coefficient plane edge: 8 * 65 */
 #define GV_DCT_EOB_MODELS 6     /* eob models: channel class x previous eob */
 #define GV_DCT_MODELS 30        /* eob models, then 24 token models */
+#define GV_DCT_MODELS_D2 32      /* layout D2: and the 2 last-value models */
+#define GV_DCT_LAST_MODEL 30    /* layout D2: model 30 + cc codes a block's
+                                 * last value (channel class cc) */
 #define GV_DCT_EOB_SYMBOLS 65   /* an eob model codes 0..64 coefficients */
 #define GV_DCT_TOKEN_SYMBOLS 16 /* 0, +-1..+-7, escape */
 #define GV_DCT_ESCAPE 15
 #define GV_DCT_MAX_STEP 4095
+
+/* Whether byte 0 of a tile buffer names layout D or D2 (both decode
+ * through this file and the same GPU passes). */
+static inline int gv_tile_is_dct(uint8_t b0)
+{
+    return b0 == GV_TILE_DCT || b0 == GV_TILE_DCT2;
+}
 
 /* The zigzag order: zz[k] = 8 * v + u for coefficient k (row v, column u). */
 extern const uint8_t gv_dct_zigzag[64];
@@ -55,7 +69,8 @@ static inline int gv_dct_eob_class(int n)
     return n == 0 ? 0 : (n <= 4 ? 1 : 2);
 }
 
-/* Symbols of model m: 65 for an eob model, 16 for a token model. */
+/* Symbols of model m: 65 for an eob model, 16 for a token model (the
+ * last-value models included). */
 static inline int gv_dct_model_symbols(int m)
 {
     return m < GV_DCT_EOB_MODELS ? GV_DCT_EOB_SYMBOLS : GV_DCT_TOKEN_SYMBOLS;

@@ -1,5 +1,6 @@
 /*
- * tile_dct_encode.c - the layout D encoder (docs/FORMAT.md section 4.3).
+ * tile_dct_encode.c - the layout D2 encoder (docs/FORMAT.md sections 4.3
+ * and 4.4): layout D, each block's last value coded in a model of its own.
  *
  * The residual against the prediction is taken to YCoCg (floating point:
  * the decoder's YCoCg-R lifting inverts it to within its rounding), the
@@ -189,7 +190,7 @@ static size_t build_models(struct models *md, uint32_t *mask)
 {
     size_t bytes = 0;
     *mask = 0;
-    for (int m = 0; m < GV_DCT_MODELS; m++) {
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++) {
         const int k = gv_dct_model_symbols(m);
         uint32_t total = 0;
         for (int s = 0; s < k; s++)
@@ -231,7 +232,7 @@ static void init_log2(void)
 static double estimate_bytes(const struct models *md, size_t model_bytes)
 {
     double bits = 6.0 * (double)md->uniform;
-    for (int m = 0; m < GV_DCT_MODELS; m++) {
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++) {
         if (!md->total[m])
             continue;
         for (int s = 0; s < gv_dct_model_symbols(m); s++)
@@ -294,12 +295,17 @@ static int collect_row(const struct candidate *cd, int channels, int by,
                 continue;
             }
             const int tokens = enc_at(GV_DCT_EOB_MODELS) + TOKEN_SLOTS * cc;
+            /* The last value's token, in its own model (layout D2). */
+            const uint16_t last = (uint16_t)(enc_at(GV_DCT_LAST_MODEL + cc) +
+                                             (gv_dct_enc_tc[q[n - 1] + 2048] & 15));
             if (!block_slots(q, n, dcp[c], tokens, sy + k)) {
+                sy[k + n - 1] = last;
                 k += n;
             } else {
                 /* Escapes: their uniform steps go in after them. */
                 _Alignas(16) uint16_t slot[64];
                 block_slots(q, n, dcp[c], tokens, slot);
+                slot[n - 1] = last;
                 for (int j = 0; j < n; j++) {
                     sy[k++] = slot[j];
                     if (q[j] > 7 || q[j] < -7) {
@@ -374,7 +380,7 @@ static void code_rows(struct gv_dct_workspace *ws, int rows, int *left,
 static size_t mask_model_bytes(uint32_t mask)
 {
     size_t bytes = 0;
-    for (int m = 0; m < GV_DCT_MODELS; m++)
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++)
         if (mask >> m & 1)
             bytes += (size_t)gv_dct_model_symbols(m);
     return bytes;
@@ -394,18 +400,18 @@ static size_t write_buffer(struct gv_dct_workspace *ws,
     if (streams > cap)
         return 0;
     memset(buf, 0, streams);
-    buf[0] = GV_TILE_DCT;
+    buf[0] = GV_TILE_DCT2;
     for (int c = 0; c < channels && c < 3; c++)
         gv_put16(buf + 2 + 2 * c, (uint16_t)steps[c]);
     gv_put32(buf + 8, mask);
     at = HEADER_BYTES;
-    for (int m = 0; m < GV_DCT_MODELS; m++) {
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++) {
         if (!(mask >> m & 1))
             continue;
         for (int s = 0; s < gv_dct_model_symbols(m); s++)
             buf[at++] = (uint8_t)md->cum[m][s];
     }
-    for (int m = 0; m < GV_DCT_MODELS; m++)
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++)
         if (mask >> m & 1)
             for (int v = 0; v < gv_dct_model_symbols(m); v++)
                 set_enc(&ws->enc[enc_at(m) + v], md->freq[m][v],
@@ -506,13 +512,13 @@ static void count_symbols(struct candidate *cd, int channels)
 {
     struct models *md = &cd->md;
     memset(md->count, 0, sizeof md->count);
-    uint32_t tokh[2 * TOKEN_SLOTS];
+    uint32_t tokh[TOKEN_COUNTS];
     memset(tokh, 0, sizeof tokh);
     uint64_t uniform = 0;
     for (int c = 0; c < channels; c++) {
         const int cc = c > 0;
         uint32_t *eobc = md->count[3 * cc];
-        uint32_t *tokc = tokh + TOKEN_SLOTS * cc;
+        uint32_t *tokc = tokh + TOKEN_SLOTS * cc, *lastc = tokh + LAST_SLOTS(cc);
         for (int by = 0; by < GV_DCT_BLOCKS; by++) {
             int pe = 0, dcp = 0;
             for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
@@ -524,7 +530,7 @@ static void count_symbols(struct candidate *cd, int channels)
                     continue;
                 }
                 const int16_t *q = cd->q[c][b];
-                uniform += count_block(q, n, dcp, tokc);
+                uniform += count_block(q, n, dcp, tokc, lastc);
                 dcp = gv_dct_class(q[0]);
             }
         }
@@ -567,9 +573,9 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
         uint16_t block;
         uint8_t was;
     } cut[3 * NB];
-    static _Thread_local double bits[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
+    static _Thread_local double bits[GV_DCT_MODELS_D2][GV_DCT_EOB_SYMBOLS];
     int ncut = 0;
-    for (int m = 0; m < GV_DCT_MODELS; m++)
+    for (int m = 0; m < GV_DCT_MODELS_D2; m++)
         for (int v = 0; v < gv_dct_model_symbols(m); v++)
             bits[m][v] = symbol_bits(md, m, v);
     const double j_old = lambda * 8.0 * estimate_bytes(md, mask_model_bytes(*mask));
@@ -580,6 +586,7 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
         const int cc = c > 0;
         const double *eob_bits = bits[3 * cc];
         const double(*tok_bits)[GV_DCT_EOB_SYMBOLS] = bits + GV_DCT_EOB_MODELS + 12 * cc;
+        const double *last_bits = bits[GV_DCT_LAST_MODEL + cc];
         for (int by = 0; by < GV_DCT_BLOCKS; by++) {
             int pe = 0, dcp = 0;
             for (int bx = 0; bx < GV_DCT_BLOCKS; bx++) {
@@ -602,7 +609,8 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
                 for (int k = n - 1; k >= 0; k--) {
                     const int t = y & 15;
                     const int yp = k ? gv_dct_enc_tc[q[k - 1] + 2048] : dcp << 4;
-                    tail_bits += tok_bits[gv_dct_band_model[k] + (yp >> 4)][t];
+                    tail_bits += k == n - 1 ? last_bits[t]
+                               : tok_bits[gv_dct_band_model[k] + (yp >> 4)][t];
                     if (t == GV_DCT_ESCAPE)
                         tail_bits += 12.0;
                     y = yp;
@@ -614,7 +622,18 @@ static void truncate_tails(const struct gv_dct_workspace *ws,
                     }
                     if (k > 0 && !q[k - 1])
                         continue;
-                    const double j = tail_err + lambda * (eob_pe[k] - eob_n - tail_bits);
+                    /* Cut to k values, value k - 1 becomes the last: its
+                     * token moves from its band's model to the last
+                     * value's. */
+                    double relast = 0;
+                    if (k > 0) {
+                        const int tl = yp & 15;
+                        const int ypp = k > 1 ? gv_dct_enc_tc[q[k - 2] + 2048] : dcp << 4;
+                        relast = last_bits[tl] -
+                                 tok_bits[gv_dct_band_model[k - 1] + (ypp >> 4)][tl];
+                    }
+                    const double j = tail_err +
+                        lambda * (eob_pe[k] - eob_n - tail_bits + relast);
                     if (j < best) {
                         best = j;
                         best_n = k;

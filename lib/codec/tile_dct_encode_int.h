@@ -44,14 +44,14 @@ struct enc_sym {
 };
 
 #define ENC_UNIFORM (GV_DCT_EOB_MODELS * GV_DCT_EOB_SYMBOLS +                \
-                     (GV_DCT_MODELS - GV_DCT_EOB_MODELS) * GV_DCT_TOKEN_SYMBOLS)
+                     (GV_DCT_MODELS_D2 - GV_DCT_EOB_MODELS) * GV_DCT_TOKEN_SYMBOLS)
 #define ENC_SYMBOLS (ENC_UNIFORM + 64)
 
 struct models {
-    uint32_t count[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
-    uint32_t freq[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS];
-    uint32_t cum[GV_DCT_MODELS][GV_DCT_EOB_SYMBOLS + 1];
-    uint32_t total[GV_DCT_MODELS];
+    uint32_t count[GV_DCT_MODELS_D2][GV_DCT_EOB_SYMBOLS];
+    uint32_t freq[GV_DCT_MODELS_D2][GV_DCT_EOB_SYMBOLS];
+    uint32_t cum[GV_DCT_MODELS_D2][GV_DCT_EOB_SYMBOLS + 1];
+    uint32_t total[GV_DCT_MODELS_D2];
     uint64_t uniform;            /* uniform steps */
 };
 
@@ -323,8 +323,12 @@ static inline uint64_t quantize_block(const float *x, float inv, float s,
 }
 
 /* The token counts of quantize_count: the 24 token models (12 per
- * channel class, 16 symbols each), packed, copied into the models after. */
+ * channel class, 16 symbols each), then the 2 last-value models (layout
+ * D2, FORMAT.md 4.4), packed, copied into the models after. */
 #define TOKEN_SLOTS (12 * GV_DCT_TOKEN_SYMBOLS)     /* one channel class */
+#define TOKEN_COUNTS (2 * TOKEN_SLOTS + 2 * GV_DCT_TOKEN_SYMBOLS)
+/* The first count of channel class cc's last-value model. */
+#define LAST_SLOTS(cc) (2 * TOKEN_SLOTS + GV_DCT_TOKEN_SYMBOLS * (cc))
 
 /* The slot of token k's band within its channel class's counts. */
 extern _Alignas(16) uint16_t gv_dct_enc_tok_base[64];
@@ -378,23 +382,25 @@ block_slots(const int16_t *q, int n, int dcp, int add, uint16_t *slot)
 }
 
 /* Count the tokens of block q (eob n >= 1, dcp as block_slots) into h,
- * the counts of its channel class; returns its uniform steps. */
+ * the counts of its channel class, but its last value's into hl, those
+ * of the class's last-value model; returns its uniform steps. */
 __attribute__((always_inline)) static inline uint64_t
-count_block(const int16_t *q, int n, int dcp, uint32_t *h)
+count_block(const int16_t *q, int n, int dcp, uint32_t *h, uint32_t *hl)
 {
     _Alignas(16) uint16_t slot[64];
     const int esc = block_slots(q, n, dcp, 0, slot);
-    for (int k = 0; k < n; k++)
+    for (int k = 0; k < n - 1; k++)
         h[slot[k]]++;
+    hl[gv_dct_enc_tc[q[n - 1] + 2048] & 15]++;
     return (uint64_t)esc;
 }
 
-/* The token counts of both channel classes (tokh, TOKEN_SLOTS each) and
- * the uniform steps into the models' counts. */
+/* The token counts of both channel classes and their last values (tokh,
+ * TOKEN_COUNTS) and the uniform steps into the models' counts. */
 static inline void tokens_to_models(struct models *md,
                                     const uint32_t *tokh, uint64_t uniform)
 {
-    for (int m = 0; m < 2 * 12; m++)
+    for (int m = 0; m < GV_DCT_MODELS_D2 - GV_DCT_EOB_MODELS; m++)
         memcpy(md->count[GV_DCT_EOB_MODELS + m],
                tokh + m * GV_DCT_TOKEN_SYMBOLS,
                GV_DCT_TOKEN_SYMBOLS * sizeof *tokh);
@@ -417,7 +423,7 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
 {
     struct models *md = &cd->md;
     memset(md->count, 0, sizeof md->count);
-    uint32_t tokh[2 * TOKEN_SLOTS];
+    uint32_t tokh[TOKEN_COUNTS];
     memset(tokh, 0, sizeof tokh);
     uint64_t uniform = 0;
     double sse = 0;
@@ -427,7 +433,7 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
         const double w = channels == 1 ? 1.0 : channel_weight[c];
         const int cc = c > 0;
         uint32_t *eobc = md->count[3 * cc];
-        uint32_t *tokc = tokh + TOKEN_SLOTS * cc;
+        uint32_t *tokc = tokh + TOKEN_SLOTS * cc, *lastc = tokh + LAST_SLOTS(cc);
         double e2 = 0;
         for (int by = 0; by < GV_DCT_BLOCKS; by++) {
             int pe = 0, dcp = 0;
@@ -470,7 +476,7 @@ quantize_count_body(const struct gv_dct_workspace *ws, struct candidate *cd,
                 }
                 const int dc_ctx = dcp;
                 dcp = gv_dct_class(q[0]);
-                uniform += count_block(q, n, dc_ctx, tokc);
+                uniform += count_block(q, n, dc_ctx, tokc, lastc);
             }
         }
         sse += w * e2 / 64.0;

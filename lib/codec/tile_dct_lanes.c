@@ -102,7 +102,7 @@ struct gv_dct_lanes_arena *gv_dct_lanes_arena(void)
 
 int gv_dct_lanes_rows(const uint8_t *buf, const uint32_t at[GV_DCT_LANES],
                       const uint32_t end[GV_DCT_LANES], int n, int channels,
-                      const uint32_t *slot, const int32_t steps[3],
+                      const uint32_t *slot, int last, const int32_t steps[3],
                       struct gv_dct_lanes_arena *a,
                       uint8_t eobs[][3][GV_DCT_BLOCKS])
 {
@@ -110,7 +110,7 @@ int gv_dct_lanes_rows(const uint8_t *buf, const uint32_t at[GV_DCT_LANES],
     int16_t *base = &a->rows[0][0][0][0];
     groups_tried++;
     const int rc = gv_dct_lanes_run_avx512(buf, at, end, n, channels, slot,
-                                           steps, base);
+                                           last, steps, base);
     if (rc < 0) {
         groups_refused++;
         memset(a->rows, 0, sizeof a->rows[0] * (size_t)n);
@@ -124,7 +124,7 @@ int gv_dct_lanes_rows(const uint8_t *buf, const uint32_t at[GV_DCT_LANES],
     return rc;
 #else
     (void)buf, (void)at, (void)end, (void)n, (void)channels, (void)slot,
-        (void)steps, (void)a, (void)eobs;
+        (void)last, (void)steps, (void)a, (void)eobs;
     return -1;
 #endif
 }

@@ -42,18 +42,19 @@ void gv_dct_lanes_counts(unsigned long *tried, unsigned long *refused);
 struct gv_dct_lanes_arena *gv_dct_lanes_arena(void);
 
 /*
- * Decode the n <= 16 streams of a checked layout D buffer whose words
- * lie at buf + at[i] up to buf + end[i] (end[i] - at[i] >= 4, even) into
- * a->rows[i] and eobs[i], as tile_dct.c's decode_row does: slot is its
- * table of model entries (GV_DCT_MODELS x 256, see load_models), steps
- * the channels' quantizer steps.  a must be all zero and are
+ * Decode the n <= 16 streams of a checked layout D or D2 buffer whose
+ * words lie at buf + at[i] up to buf + end[i] (end[i] - at[i] >= 4, even)
+ * into a->rows[i] and eobs[i], as tile_dct.c's decode_row does: slot is
+ * its table of model entries (GV_DCT_MODELS_D2 x 256, see load_models),
+ * last 1 for layout D2 (a block's last value in model 30 + cc), steps the
+ * channels' quantizer steps.  a must be all zero and are
  * written only at coded coefficients.  Returns 0, or -1 when any stream
  * is damaged, with a all zero again and no message (the caller
  * decodes the rows again by the scalar code for its message).
  */
 int gv_dct_lanes_rows(const uint8_t *buf, const uint32_t at[GV_DCT_LANES],
                       const uint32_t end[GV_DCT_LANES], int n, int channels,
-                      const uint32_t *slot, const int32_t steps[3],
+                      const uint32_t *slot, int last, const int32_t steps[3],
                       struct gv_dct_lanes_arena *a,
                       uint8_t eobs[][3][GV_DCT_BLOCKS]);
 

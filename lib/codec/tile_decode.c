@@ -25,7 +25,7 @@ int gv_tilebuf_check(const uint8_t *buf, size_t len, int channels,
     if (len < 4 || (len & 3))
         return gv_fail(err, GV_ECORRUPT, "tile: buffer of %zu bytes is not a "
                        "positive multiple of 4", len);
-    if (buf[0] == GV_TILE_DCT)
+    if (gv_tile_is_dct(buf[0]))
         return gv_dct_check(buf, len, channels, err) < 0 ? -1 : 0;
     int rate = buf[0] & 0x0f;
     const int ctx_without_e = (buf[0] & GV_TILE_CONTEXT) && !(buf[0] & GV_TILE_ENTROPY);
@@ -64,7 +64,7 @@ int gv_tile_decode(const uint8_t *buf, size_t len, int channels,
     int rate = gv_tilebuf_check(buf, len, channels, err);
     if (rate < 0)
         return -1;
-    if (buf[0] == GV_TILE_DCT)
+    if (gv_tile_is_dct(buf[0]))
         return gv_dct_decode(buf, len, channels, parent, qx, qy, out, err);
     if (rate == 0) {
         gv_predict(parent, channels, qx, qy, out);

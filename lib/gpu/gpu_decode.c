@@ -381,7 +381,7 @@ static int upload_webgl2(struct gv_gpu_decoder *d, const uint8_t *buf,
     }
     glActiveTexture(GL_TEXTURE3);
     glBindTexture(GL_TEXTURE_2D, d->coefs_tex);
-    if (buf[0] == GV_TILE_DCT) {
+    if (gv_tile_is_dct(buf[0])) {
         if (gv_dct_unpack(buf, len, d->channels, d->cpu_coefs, err) < 0)
             return -1;
         glPixelStorei(GL_UNPACK_ALIGNMENT, 2);
@@ -543,7 +543,7 @@ static int decode_group(struct gv_gpu_decoder *d, struct gv_gpu_tile_job *all,
         memcpy(d->staging + off[i], jobs[i].buf, jobs[i].len);
         entropy |= (jobs[i].buf[0] & GV_TILE_ENTROPY) != 0;
         inner |= jobs[i].parent_job >= (long)first;
-        dslot[i] = jobs[i].buf[0] == GV_TILE_DCT ? (long)nd++ : -1;
+        dslot[i] = gv_tile_is_dct(jobs[i].buf[0]) ? (long)nd++ : -1;
     }
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, d->ssbo[set]);
     glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)total, d->staging,

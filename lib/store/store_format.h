@@ -31,8 +31,9 @@
 #define GV_MAGIC "GIGAVIEW"
 #define GV_VERSION 2       /* what the writer writes for an image store */
 #define GV_VERSION_HEIGHT 3 /* what it writes for a height store */
-#define GV_VERSION_DCT 4   /* an image store whose tiles may use layout D */
-#define GV_VERSION_MAX 4   /* the newest version the reader reads */
+#define GV_VERSION_DCT 5   /* an image store whose tiles may use layouts D
+                            * and D2 (version 4: D only; read the same) */
+#define GV_VERSION_MAX 5   /* the newest version the reader reads */
 #define GV_VERSION_MIN 1   /* the oldest version the reader reads */
 
 /* Store kinds (header byte 80, format version 3 only). */

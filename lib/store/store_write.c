@@ -51,8 +51,8 @@ struct gv_store_writer *gv_store_writer_new(const char *path,
     w->h = *h;
     w->h.meta_offset = 0;   /* gv_store_writer_meta fills them */
     w->h.meta_size = w->h.meta_crc = 0;
-    /* An image store is version 2 unless the caller asks for 4 (tiles in
-     * layout D). */
+    /* An image store is version 2 unless the caller asks for 5 (tiles in
+     * layouts D and D2). */
     w->h.version = h->kind == GV_KIND_HEIGHT ? GV_VERSION_HEIGHT :
                    h->version == GV_VERSION_DCT ? GV_VERSION_DCT : GV_VERSION;
     if (gv_geometry_init(&w->g, h->width, h->height, h->channels) < 0) {

@@ -25,7 +25,7 @@
 // 2 on a usage error.
 import { spawnSync } from 'node:child_process';
 import { parseBatch } from '../../client/web/batch.js';
-import { DCT, DCT_PLANE, dctUnpack } from '../../client/web/tile_dct.js';
+import { DCT, DCT2, DCT_PLANE, dctUnpack, isDct } from '../../client/web/tile_dct.js';
 import { check, fail, failed, note, parseArgs } from './report.mjs';
 
 const opt = { base: '', helper: '', images: '' };
@@ -65,8 +65,8 @@ function partsOf(buf) {
     const mask = (buf[8] | buf[9] << 8 | buf[10] << 16 | buf[11] << 24) >>> 0;
     const models = [];
     let off = 12;
-    for (let m = 0; m < 30; m++)
-        if (mask & (1 << m)) {
+    for (let m = 0; m < (buf[0] === DCT2 ? 32 : 30); m++)
+        if ((mask >>> m) & 1) {
             models.push([m, off, m < 6 ? 65 : 16]);
             off += m < 6 ? 65 : 16;
         }
@@ -134,6 +134,11 @@ function variants(buf, channels, rand) {
     const b30 = buf.slice();
     b30[11] |= 0x40;
     out.push(['mask bit 30 set', b30, channels]);
+    if (buf[0] === DCT2) {
+        const bd = buf.slice();
+        bd[0] = DCT;
+        out.push(['named layout D', bd, channels]);
+    }
     out.push(['the other channel count', buf, channels === 3 ? 1 : 3]);
     return out;
 }
@@ -170,8 +175,8 @@ try {
     const cases = [];
     for (const id of opt.images.split(',')) {
         const { channels, tiles } = await tilesOf(id);
-        const d = tiles.filter((t) => t.buf[0] === DCT);
-        check(d.length > 0, `${id}: ${d.length} of its ${tiles.length} tiles are layout D (${channels === 3 ? 'RGB' : 'gray'})`);
+        const d = tiles.filter((t) => isDct(t.buf[0]));
+        check(d.length > 0, `${id}: ${d.length} of its ${tiles.length} tiles are layout D or D2 (${channels === 3 ? 'RGB' : 'gray'})`);
         const rand = rng(12 + d.length);
         for (const t of d)
             for (const [what, buf, c] of variants(t.buf, channels, rand))

@@ -365,10 +365,10 @@ async function checkDctStores(c) {
         await installCompare(pg);
         check((await pg.evaluate(() => window.gigaview.viewer.stats.kind)) === 'webgl2',
             `${id}: the viewer opened with WebGL2`);
-        await checkRegion(pg, `${id} (layout D, ${kind}) level 0 1:1`, 0, 150, 100, W, H, 0, 0, false);
-        const r = await checkTiles(pg, `${id} (layout D, ${kind})`);
+        await checkRegion(pg, `${id} (layout D2, ${kind}) level 0 1:1`, 0, 150, 100, W, H, 0, 0, false);
+        const r = await checkTiles(pg, `${id} (layout D2, ${kind})`);
         const n = r.entropy + r.fixed;
-        check(r.dct > 0, `${id}: layout-D tiles were decoded (${r.dct} of ${n})`);
+        check(r.dct > 0, `${id}: layout-D2 tiles were decoded (${r.dct} of ${n})`);
         if (opt.dctcoefs)
             await checkDctFixtures(pg, id, kind === 'RGB' ? 3 : 1);
     }

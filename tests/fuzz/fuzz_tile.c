@@ -60,7 +60,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     int rate = gv_tilebuf_check(buf, len, channels, &err);
     int rc = gv_tile_decode(buf, len, channels, parent, qx, qy, out, &err);
     const int entropy = len > 0 && (buf[0] & GV_TILE_ENTROPY);
-    const int dct = len > 0 && buf[0] == GV_TILE_DCT;
+    const int dct = len > 0 && gv_tile_is_dct(buf[0]);
     if (rate >= 0 && dct) {
         if ((gv_dct_unpack(buf, len, channels, plane, &err) == 0) != (rc == 0))
             abort();  /* the unpacker and the decoder disagree */

@@ -61,7 +61,8 @@ static void replay(int16_t *base, const uint32_t *off, const int32_t *val, int n
  * the phase; kk = 257 k + K0 for token k (byte 0 is k, byte 1 is k + 64:
  * one VPERMT2B reads a 16-bit table entry, and bytes 2-3, 0, read entry
  * 0, which is 0 in both tables' low halves), neobk the same of the eob;
- * c; p = the previous value's class * 256 (a model is 256 entries); pe
+ * c; p = the previous value's class * 256 (a model is 256 entries; in
+ * layout D2 (last) a block's last token takes model 30 + cc instead); pe
  * and dcp, two bits per channel; h, an escape's first step; bb, the
  * block's first coefficient in the arena (int16), eb its eob's.
  *
@@ -72,7 +73,7 @@ static void replay(int16_t *base, const uint32_t *off, const int32_t *val, int n
 int gv_dct_lanes_run_avx512(const uint8_t *buf,
                             const uint32_t at[GV_DCT_LANES],
                             const uint32_t end_[GV_DCT_LANES], int n,
-                            int channels, const uint32_t *slot,
+                            int channels, const uint32_t *slot, int last,
                             const int32_t steps[3], int16_t *base16)
 {
     uint32_t logo[LOG_CAP];
@@ -109,11 +110,12 @@ int gv_dct_lanes_run_avx512(const uint8_t *buf,
     __mmask16 live = used;
 
     struct {
-        __m512i blocks, c2048, c255, c257, c3072, c511, c65535, c768, escape, four, k0, l16, one, plane8, smax, smin, three, two, wrapbb, wrapeb, zero;
+        __m512i blocks, c2048, c255, c256, c257, c3072, c511, c65535, c768, escape, four, k0, l16, lastm, one, plane8, smax, smin, three, two, wrapbb, wrapeb, zero;
     } kc, *K = &kc;
     kc.blocks = V(GV_DCT_BLOCKS);
     kc.c2048 = V(2048);
     kc.c255 = V(255);
+    kc.c256 = V(256);
     kc.c257 = V(257);
     kc.c3072 = V(12 * 256);
     kc.c511 = V(511);
@@ -123,6 +125,7 @@ int gv_dct_lanes_run_avx512(const uint8_t *buf,
     kc.four = V(4);
     kc.k0 = V(K0);
     kc.l16 = V(1 << 16);
+    kc.lastm = V(GV_DCT_LAST_MODEL * 256);
     kc.one = V(1);
     kc.plane8 = V(PLANE8);
     kc.smax = V(32767);
@@ -167,6 +170,15 @@ int gv_dct_lanes_run_avx512(const uint8_t *buf,
         __m512i idx_t = _mm512_add_epi32(_mm512_permutex2var_epi8(K->zero, kk, band_hi),
                                          _mm512_add_epi32(p, xl));
         idx_t = _mm512_mask_add_epi32(idx_t, cc, idx_t, K->c3072);
+        if (last) {
+            /* Layout D2: token k = eob - 1 (kk + 257 = neobk) in the last
+             * value's model, 30 + cc. */
+            const __mmask16 m_last = _mm512_mask_cmpeq_epi32_mask(
+                m_tok, _mm512_add_epi32(kk, K->c257), neobk);
+            __m512i idx_l = _mm512_add_epi32(K->lastm, xl);
+            idx_l = _mm512_mask_add_epi32(idx_l, cc, idx_l, K->c256);
+            idx_t = _mm512_mask_mov_epi32(idx_t, m_last, idx_l);
+        }
         const __m512i e = _mm512_mask_i32gather_epi32(
             K->zero, m_model, _mm512_mask_mov_epi32(idx_t, m_eob, idx_e), slot, 4);
 
