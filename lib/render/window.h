@@ -10,7 +10,8 @@
  * compares them over many windows).  The server applies it to decoded
  * regions and IIIF images, the browser viewer in its display shader.
  *
- * The text form (docs/API.md, the viewer's link) is "B,W,G" for every
+ * The text form (docs/API.md, the viewers' links, --window of render,
+ * view and encode, a store's display.window) is "B,W,G" for every
  * channel or "B,W,G;B,W,G;..." one per channel, B and W decimal integers
  * 0 .. max (255 for 8-bit samples), B < W, G a decimal gamma 0.1 .. 10
  * with at most three decimals (",G" may be left out: 1).  Gamma is kept
