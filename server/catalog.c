@@ -154,6 +154,13 @@ static struct image *open_image(struct catalog *c, const char *id,
     img->ino = (uint64_t)st->st_ino;
     img->mtime_ns = (uint64_t)st->st_mtim.tv_sec * 1000000000u +
                     (uint64_t)st->st_mtim.tv_nsec;
+    /* A default window that does not fit the image is left out, logged:
+     * the image is served as if it had none. */
+    if (img->info->header.kind != GV_KIND_HEIGHT &&
+        gv_window_from_meta(gv_store_meta(s), 255, img->info->geometry.channels,
+                            &img->window, &err) < 0)
+        log_msg(LOG_WARN, "catalog", "%s: default window ignored: %s", path,
+                err.text);
     img->refs = 1;
     img->cat = c;
     return img;

@@ -28,6 +28,7 @@
 
 #include "base/ids.h"
 #include "render/store_decoder.h"
+#include "render/window.h"
 #include "store/store_read.h"
 
 #define CATALOG_ID_MAX GV_IMAGE_ID_MAX   /* base/ids.h */
@@ -39,6 +40,9 @@ struct image {
     uint64_t serial;                   /* unique per opened instance */
     uint64_t identity;                 /* gv_store_identity: ETag seed */
     uint64_t bytes;                    /* file size */
+    struct gv_window window;           /* the store's default display window
+                                        * (its metadata's display.window;
+                                        * count 0: none) */
     /* private */
     int refs;
     uint64_t dev, ino, mtime_ns;

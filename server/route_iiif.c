@@ -17,7 +17,9 @@
  * the canonical URI and the compliance profile in Link headers.  An
  * extra query parameter `window` (render/window.h) maps the decoded
  * samples through a display window before resampling; it is part of the
- * cache key and the ETag (the canonical URI stays the IIIF one).
+ * cache key and the ETag (the canonical URI stays the IIIF one).  Without
+ * it the store's default window applies (catalog.h), so the output stays
+ * 8-bit through it; `window=none` asks for none.
  */
 #include <pthread.h>
 #include <stdio.h>
@@ -334,7 +336,10 @@ static int parse(struct req *r, const struct image *img, struct iiif_call *c,
                                          2 * r->srv->cfg->max_output_side + 1);
     c->jpeg_quality = (int)r->srv->cfg->jpeg_quality;
     const char *ws = http_query(r, "window");
-    if (ws) {
+    if (!ws && img->window.count) {   /* the store's default */
+        c->window = img->window;
+        c->q.render.window = &c->window;
+    } else if (ws && strcmp(ws, "none") != 0) {
         if (gv_window_parse(ws, 255, &c->window, err) < 0)
             return -1;
         if (c->window.count > 1 && c->window.count != g->channels)

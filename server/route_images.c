@@ -122,6 +122,12 @@ enum MHD_Result route_image_info(struct req *r)
     const char *meta = gv_store_meta(img->store);
     if (j && meta)
         json_object_set_new(j, "metadata", json_loads(meta, 0, NULL));
+    /* The default display window the server applies (docs/API.md). */
+    if (j && img->window.count) {
+        char win[GV_WINDOW_MAX_CHANNELS * 32];
+        gv_window_format(&img->window, win, sizeof win);
+        json_object_set_new(j, "window", json_string(win));
+    }
     image_put(img);
     if (!j)
         return http_send_errorf(r, GV_ENOMEM, "images: cannot build JSON");

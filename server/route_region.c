@@ -10,7 +10,8 @@
  * codes) and tiff32 (float values in its unit).  w*h is capped by
  * max_region_pixels (413 beyond).  `window` (render/window.h) maps the
  * decoded 8-bit samples through a display window before they are encoded,
- * and is part of the cache key and the ETag.  The query is checked here; the render
+ * and is part of the cache key and the ETag; without it the store's
+ * default window applies (catalog.h), and `window=none` asks for none.  The query is checked here; the render
  * runs on a render thread, and the answer is kept in the output cache
  * with a strong ETag (render_call.h).
  */
@@ -34,6 +35,7 @@ struct region_query {
     const struct gv_output_format *format;
     int height;            /* HEIGHT_PNG16 or HEIGHT_TIFF32, else 0 */
     struct gv_window window;   /* count 0: none */
+    int window_given;          /* 1: the query named one (or none) */
 };
 
 /* The formats of height stores only. */
@@ -70,7 +72,9 @@ static int parse_query(struct req *r, struct region_query *q,
         return gv_fail(err, GV_EINVAL, "region: quality must be 1..100");
     const char *ws = http_query(r, "window");
     q->window.count = 0;
-    if (ws && gv_window_parse(ws, 255, &q->window, err) < 0)
+    q->window_given = ws != NULL;
+    if (ws && strcmp(ws, "none") != 0 &&
+        gv_window_parse(ws, 255, &q->window, err) < 0)
         return -1;
     if (ws && q->height)
         return gv_fail(err, GV_EINVAL, "window: not with png16 or tiff32");
@@ -190,6 +194,8 @@ enum MHD_Result route_region(struct req *r)
             return http_send_errorf(r, GV_ENOMEM, "region: out of memory");
         return http_send_error(r, &err);
     }
+    if (!q.window_given && !q.height)
+        q.window = img->window;   /* the store's default, if any */
     *arg = q;
     char canon[400 + GV_WINDOW_MAX_CHANNELS * 32], key[sizeof canon + 24];
     char win[GV_WINDOW_MAX_CHANNELS * 32 + 4] = "";

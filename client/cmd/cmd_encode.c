@@ -167,6 +167,10 @@ static const struct opt_spec encode_opts[] = {
     {.name = "range", .kind = OPT_CUSTOM, .arg = "LO:HI", .parse = parse_range,
      .flags = OPT_NO_ECHO, .wants = "LO:HI",
      .help = "map input values LO..HI to 0..255"},
+    {.name = "window", .kind = OPT_STRING, .arg = "B,W,G[;...]",
+     .field = F(o.window),
+     .help = "the image's default display window, kept in the\n"
+             "store (black, white, gamma; one, or one a channel)"},
     {.name = "max-pixels", .kind = OPT_COUNT, .arg = "N",
      .field = F(o.source.max_pixels), .flags = OPT_NO_ECHO,
      .wants = "a positive count", .help = "refuse inputs larger than N pixels"},
@@ -366,9 +370,9 @@ int cmd_encode(int argc, char **argv)
     const int ninputs = argc - first;
     if (a.height) {
         if (!a.output || a.o.shard_count > 0 || a.psnr > 0 ||
-            a.min_tile_psnr > 0) {
+            a.min_tile_psnr > 0 || a.o.window) {
             fprintf(stderr, ME ": --height takes INPUT (or --mosaic's "
-                    "INPUTs) and -o STORE (not -q or --shard)\n");
+                    "INPUTs) and -o STORE (not -q, --shard or --window)\n");
             return 2;
         }
         if ((rc = check_inputs(&a, ninputs)) != OPT_GO_ON)

@@ -46,6 +46,7 @@
 #include "region_arg.h"
 #include "remote/http_fetch.h"
 #include "remote/tile_cache_disk.h"
+#include "render/window.h"
 #include "remote_opts.h"
 #include "store/geometry.h"
 
@@ -55,7 +56,7 @@
 
 struct render_args {
     struct remote_opts remote; /* --timeout, --cache-dir, --no-cache, --gpu-cache */
-    const char *image, *region, *center, *size, *output;
+    const char *image, *region, *center, *size, *output, *window;
     int level;             /* -1: not given (the region form then uses 0) */
     int no_batch, verbose;
     double zoom;           /* NAN: not given */
@@ -86,6 +87,10 @@ static const struct opt_spec render_opts[] = {
      .field = F(size), .help = "output size of the view"},
     {.name = "output", .short_name = 'o', .kind = OPT_STRING, .arg = "OUT",
      .field = F(output), .help = "the image to write"},
+    {.name = "window", .kind = OPT_STRING, .arg = "B,W,G[;...]|none",
+     .field = F(window),
+     .help = "display window: black, white, gamma (one, or one\n"
+             "a channel; default the store's, none for none)"},
     REMOTE_OPT_TIMEOUT(F(remote)),
     REMOTE_OPT_CACHE(F(remote)),
     {.name = "no-batch", .kind = OPT_FLAG, .field = F(no_batch),
@@ -763,6 +768,26 @@ static int draw_region(struct session *s, const struct render_args *a,
     return 0;
 }
 
+/* The display window (--window, else the store's default) over the
+ * picture, as gigaviewd applies it to a region: the same tables
+ * (render/window.h) on the same 8-bit samples.  Returns the exit status. */
+static int apply_window(const struct session *s, const struct render_args *a,
+                        struct picture *pic)
+{
+    const char *text = a->window ? a->window : s->img.window;
+    if (!*text || !strcmp(text, "none"))
+        return 0;
+    struct gv_window w;
+    struct gv_error err = {0};
+    if (gv_window_parse(text, 255, &w, &err) < 0 ||
+        gv_window_apply8(&w, pic->px, (size_t)pic->w * pic->h, s->img.channels,
+                         &err) < 0) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return a->window ? 2 : 1;
+    }
+    return 0;
+}
+
 /* --verbose: what was fetched over HTTP and decoded on the GPU. */
 static void print_stats(const struct session *s)
 {
@@ -805,6 +830,8 @@ int cmd_render(int argc, char **argv)
     rc = 1;
     if (session_open(&s, argv[first], &a, platform) == 0) {
         rc = is_view_form(&a) ? draw_view(&s, &a, &v, &pic) : draw_region(&s, &a, &pic);
+        if (rc == 0)
+            rc = apply_window(&s, &a, &pic);
         if (rc == 0 && gv_image_write(a.output, pic.w, pic.h, s.img.channels, pic.px,
                                       &err) < 0) {
             fprintf(stderr, ME ": %s\n", err.text);

@@ -54,10 +54,11 @@
 #include "view/view_script.h"
 #include "view/view_select.h"
 #include "view/view_tiles.h"
+#include "render/window.h"
 
 struct view_args {
     struct remote_opts remote; /* --timeout, --cache-dir, --no-cache, --gpu-cache */
-    const char *image, *size, *view, *script, *stats;
+    const char *image, *size, *view, *script, *stats, *window;
     int fullscreen, no_batch, no_prefetch, no_vsync, no_overlay, verbose;
     int no_decode_thread;
     int budget;
@@ -77,6 +78,11 @@ static const struct opt_spec view_opts[] = {
      .help = "start at CX,CY,ZOOM[,ROT] (level-0 centre, level of\n"
              "detail, degrees clockwise) or a browser link's\n"
              "#image=ID&x=..&y=..&z=..&r=.. (default: the whole image)"},
+    {.name = "window", .kind = OPT_STRING, .arg = "B,W,G[;...]|none",
+     .field = F(window),
+     .help = "start with this display window: black, white,\n"
+             "gamma, one or one a channel (default: the\n"
+             "store's; keys b B w W y Y a x X change it)"},
     {.name = "script", .kind = OPT_STRING, .arg = "FILE", .field = F(script),
      .help = "replay the input in FILE, then exit (docs/VIEWER.md)"},
     REMOTE_OPT_TIMEOUT(F(remote)),
@@ -154,6 +160,11 @@ struct app {
     char want_image[129];        /* asked of the fetch thread */
     int have_start_view;
     struct vg_view start_view;
+    /* the display window (render/window.h): now, and the image's start */
+    struct gv_window dwin, dwin_start;
+    uint8_t *root_px;            /* the root level's samples, for auto */
+    size_t root_n;
+    int channels;
     int show_overlay, show_list, fullscreen, quit, rc, vsync;
     int w, h;
     char message[VO_LINE];       /* last error worth showing */
@@ -235,6 +246,88 @@ static void open_image(struct app *app, const char *id)
     vf_open(app->fetch, id);
 }
 
+/* ---------------------------------------------------------------- window */
+
+/* Show window w (count 0: none) from the next frame: a new table, no tile
+ * fetched or decoded again. */
+static void window_set(struct app *app, const struct gv_window *w)
+{
+    app->dwin = *w;
+    vd_set_window(app->draw, &app->dwin, app->channels);
+    app->force_draw = 1;
+}
+
+/* The window an image opens with: --window (where it fits the image's
+ * channels), else the store's default; and the root's samples for auto. */
+static void window_start(struct app *app, const struct vf_result *r)
+{
+    struct gv_error err = {0};
+    struct gv_window w = {0};
+    const char *text = app->a->window ? app->a->window : r->img.window;
+    app->channels = r->img.channels;
+    if (*text && strcmp(text, "none") != 0 &&
+        (gv_window_parse(text, 255, &w, &err) < 0 ||
+         (w.count != 1 && w.count != app->channels))) {
+        if (!err.text[0])
+            snprintf(err.text, sizeof err.text, "window: %d windows for an "
+                     "image of %d channels", w.count, app->channels);
+        fprintf(stderr, ME ": %s\n", err.text);
+        snprintf(app->message, sizeof app->message, "%.90s", err.text);
+        memset(&w, 0, sizeof w);
+    }
+    app->dwin_start = w;
+    window_set(app, &w);
+    free(app->root_px);
+    app->root_n = (size_t)r->mip_w[0] * r->mip_h[0];
+    app->root_px = malloc(app->root_n * (size_t)app->channels);
+    if (app->root_px)
+        memcpy(app->root_px, r->mip[0], app->root_n * (size_t)app->channels);
+    else
+        app->root_n = 0;
+}
+
+/* A window key (view_input.h's VI_WIN_*): black and white move by 5
+ * sample values, gamma by a factor of 1.1, every channel alike. */
+static void window_key(struct app *app, enum vi_action a)
+{
+    struct gv_window w = app->dwin;
+    if (w.count == 0)
+        w = (struct gv_window){.count = 1, .ch = {{0, 255, 1000}}};
+    if (a == VI_WIN_AUTO) {
+        if (app->root_n)
+            gv_window_auto8(app->root_px, app->root_n, app->channels, 1,
+                            w.ch[0].gamma_milli, &w);
+        window_set(app, &w);
+        return;
+    }
+    if (a == VI_WIN_RESET || a == VI_WIN_NONE) {
+        struct gv_window none = {0};
+        window_set(app, a == VI_WIN_RESET ? &app->dwin_start : &none);
+        return;
+    }
+    for (int k = 0; k < w.count; k++) {
+        struct gv_window_channel *c = &w.ch[k];
+        switch (a) {
+        case VI_WIN_BLACK_UP: c->black = c->black + 5 < c->white ? c->black + 5 : c->white - 1; break;
+        case VI_WIN_BLACK_DOWN: c->black = c->black > 5 ? c->black - 5 : 0; break;
+        case VI_WIN_WHITE_DOWN: c->white = c->white > c->black + 5 ? c->white - 5 : c->black + 1; break;
+        case VI_WIN_WHITE_UP: c->white = c->white + 5 < 255 ? c->white + 5 : 255; break;
+        case VI_WIN_GAMMA_UP: {
+            uint32_t g = (uint32_t)lround(c->gamma_milli * 1.1);
+            c->gamma_milli = g > GV_WINDOW_GAMMA_MAX ? GV_WINDOW_GAMMA_MAX : g;
+            break;
+        }
+        case VI_WIN_GAMMA_DOWN: {
+            uint32_t g = (uint32_t)lround(c->gamma_milli / 1.1);
+            c->gamma_milli = g < GV_WINDOW_GAMMA_MIN ? GV_WINDOW_GAMMA_MIN : g;
+            break;
+        }
+        default: break;
+        }
+    }
+    window_set(app, &w);
+}
+
 /* A result of the fetch thread. */
 static void take_result(struct app *app, struct vf_result *r, double now)
 {
@@ -267,6 +360,7 @@ static void take_result(struct app *app, struct vf_result *r, double now)
         .decode_gpu = app->dgpu,
     };
     double iw = r->img.width, ih = r->img.height;
+    window_start(app, r);
     struct vt *t = vt_new(app->gpu, r, &o, &err);
     vf_result_free(r);
     if (!t) {
@@ -491,6 +585,11 @@ static void act(struct app *app, enum vi_action a)
         vr_clear(app->roi);
         app->have_roi = app->have_job = 0;
         app->force_draw = 1;
+        break;
+    case VI_WIN_BLACK_UP: case VI_WIN_BLACK_DOWN: case VI_WIN_WHITE_DOWN:
+    case VI_WIN_WHITE_UP: case VI_WIN_GAMMA_UP: case VI_WIN_GAMMA_DOWN:
+    case VI_WIN_AUTO: case VI_WIN_RESET: case VI_WIN_NONE:
+        window_key(app, a);
         break;
     case VI_NONE: break;
     }
@@ -722,6 +821,29 @@ static void script_action(struct app *app, const struct vs_cmd *c)
             filter_choose(app, c->text);
         break;
     case VS_PARAM: filter_param(app, c->a[0] > 0 ? 1 : -1); break;
+    case VS_COUNTERS: {
+        char win[GV_WINDOW_MAX_CHANNELS * 32] = "none";
+        if (app->dwin.count)
+            gv_window_format(&app->dwin, win, sizeof win);
+        printf("%s fetched=%llu decodes=%llu window=%s\n", c->text,
+               (unsigned long long)app->st.fetched,
+               (unsigned long long)app->st.decodes, win);
+        fflush(stdout);
+        break;
+    }
+    case VS_WINDOW: {
+        struct gv_error err = {0};
+        struct gv_window w = {0};
+        if (strcmp(c->text, "none") != 0 &&
+            gv_window_parse(c->text, 255, &w, &err) < 0) {
+            fprintf(stderr, ME ": script line %d: %s\n", c->line, err.text);
+            app->quit = 1;
+            app->rc = 2;
+        } else {
+            window_set(app, &w);
+        }
+        break;
+    }
     default:
         break;
     }
@@ -754,9 +876,13 @@ static void overlay_content(struct app *app, const struct vt_plan *p,
     const struct vg_view *v = &app->in.cur;
     const struct gv_gpu_info *gi = gv_gpu_info(app->gpu);
     double mag = exp2(-v->zoom);
-    snprintf(c->bottom[0], VO_LINE, "ZOOM %s%.3g  LEVEL %d%s  ROT %.1f",
+    char win[GV_WINDOW_MAX_CHANNELS * 32] = "";
+    if (app->dwin.count)
+        gv_window_format(&app->dwin, win, sizeof win);
+    snprintf(c->bottom[0], VO_LINE, "ZOOM %s%.3g  LEVEL %d%s  ROT %.1f%s%.40s",
              mag >= 1 ? "" : "1:", mag >= 1 ? mag : 1 / mag, p->f,
-             p->t > 0 ? "+" : "", vg_norm_rot(v->rot));
+             p->t > 0 ? "+" : "", vg_norm_rot(v->rot), win[0] ? "  WINDOW " : "",
+             win);
     if (app->tiles) {
         const struct gv_geometry *g = vt_geometry(app->tiles);
         snprintf(c->bottom[1], VO_LINE, "%.40s  %ux%u  [%d/%d]", vt_image(app->tiles),
@@ -1012,6 +1138,7 @@ static void close_app(struct app *app)
     vr_free(app->roi);
     vsel_free(app->sel);
     vt_free(app->tiles);
+    free(app->root_px);
     vo_free(app->overlay);
     vd_free(app->draw);
     gv_gpu_close(app->dgpu);     /* after vt_free joined the decode thread */
@@ -1128,6 +1255,13 @@ int cmd_view(int argc, char **argv)
         return rc;
     if (argc - first != 1) {
         opt_usage(&view_command, stderr);
+        return 2;
+    }
+    struct gv_window w;
+    struct gv_error werr = {0};
+    if (a.window && strcmp(a.window, "none") != 0 &&
+        gv_window_parse(a.window, 255, &w, &werr) < 0) {
+        fprintf(stderr, ME ": --window: %s\n", werr.text);
         return 2;
     }
     struct app *app = calloc(1, sizeof *app);

@@ -468,6 +468,9 @@ int gv_http_image(struct gv_http *h, const char *id,
                          "height", &rh, "mip_count", &img->root_mips);
     /* A height store (docs/FORMAT.md section 12) has tiles of another codec. */
     int height_store = json_object_get(j, "elevation") != NULL;
+    const char *win = json_string_value(json_object_get(j, "window"));
+    if (win && strlen(win) < sizeof img->window)
+        snprintf(img->window, sizeof img->window, "%s", win);
     json_decref(j);
     if (height_store)
         return gv_fail(err, GV_EFORMAT, "%s is a height store, which this client "

@@ -67,6 +67,8 @@ struct gv_remote_image {
     int levels_tiled;      /* = the root level */
     uint32_t root_w, root_h;
     int root_mips;
+    char window[256];      /* the default display window the server
+                            * applies (render/window.h text; "" none) */
 };
 
 /* Fetch an image's metadata into *img.  An unknown image, or an id that

@@ -8,7 +8,11 @@
  * zooms and rotations a weight may round differently in the last bit.
  * The rounded value is nudged by a quarter step before the conversion to
  * 8 bits, so a GPU that truncates there writes the same byte as one that
- * rounds (as display.frag.glsl does in the browser).
+ * rounds (as display.frag.glsl does in the browser).  The display window
+ * maps that 8-bit value through a table texture built by lib/render's
+ * gv_window_table8, the server's own tables, so a windowed frame at 1:1
+ * equals the server's windowed region; changing it uploads 1 KiB and
+ * draws again from the resident tiles.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -31,9 +35,10 @@ static const char fragment_src[] =
     "precision highp usampler2DArray;\n"
     "uniform usampler2DArray u_atlas;\n"
     "uniform usampler2D u_pt;\n"
+    "uniform usampler2D u_lut;\n"
     "uniform ivec4 u_lv[40];\n"
     "uniform int u_row[40];\n"
-    "uniform int u_f, u_top, u_root, u_sabotage;\n"
+    "uniform int u_f, u_top, u_root, u_sabotage, u_lut_on;\n"
     "uniform float u_t, u_scale, u_cs, u_sn;\n"
     "uniform vec2 u_c, u_win, u_img;\n"
     "out vec4 o_color;\n"
@@ -93,15 +98,22 @@ static const char fragment_src[] =
     "    }\n"
     "    for (int k = u_f + 1; !done && k <= u_top; k++)\n"
     "        c = level_sample(k, p, done);\n"
-    "    c = floor(c + 0.5) + 0.25;\n"
+    "    c = floor(c + 0.5);\n"
+    "    if (u_lut_on == 1) {\n"
+    "        ivec3 i = clamp(ivec3(c), ivec3(0), ivec3(255));\n"
+    "        c = vec3(float(texelFetch(u_lut, ivec2(i.r, 0), 0).r),\n"
+    "                 float(texelFetch(u_lut, ivec2(i.g, 0), 0).g),\n"
+    "                 float(texelFetch(u_lut, ivec2(i.b, 0), 0).b));\n"
+    "    }\n"
+    "    c += 0.25;\n"
     "    o_color = vec4(c / 255.0, 1.0);\n"
     "}\n";
 
 struct vd {
-    unsigned prog, vao;
-    int sabotage;
-    GLint u_atlas, u_pt, u_lv, u_row, u_f, u_top, u_root, u_sabotage, u_t, u_scale,
-        u_cs, u_sn, u_c, u_win, u_img;
+    unsigned prog, vao, lut;
+    int sabotage, lut_on;
+    GLint u_atlas, u_pt, u_lut, u_lut_on, u_lv, u_row, u_f, u_top, u_root,
+        u_sabotage, u_t, u_scale, u_cs, u_sn, u_c, u_win, u_img;
 };
 
 struct vd *vd_new(struct gv_gpu *g, struct gv_error *err)
@@ -122,11 +134,39 @@ struct vd *vd_new(struct gv_gpu *g, struct gv_error *err)
     const char *sab = getenv("GIGAVIEW_VIEW_SABOTAGE");
     d->sabotage = sab && !strcmp(sab, "decode");
 #define U(name) d->name = glGetUniformLocation(d->prog, #name)
-    U(u_atlas); U(u_pt); U(u_lv); U(u_row); U(u_f); U(u_top); U(u_root);
+    U(u_atlas); U(u_pt); U(u_lut); U(u_lut_on); U(u_lv); U(u_row); U(u_f); U(u_top); U(u_root);
     U(u_sabotage); U(u_t); U(u_scale); U(u_cs); U(u_sn); U(u_c); U(u_win); U(u_img);
 #undef U
     glGenVertexArrays(1, &d->vao);
+    glGenTextures(1, &d->lut);
+    glBindTexture(GL_TEXTURE_2D, d->lut);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA8UI, 256, 1);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glBindTexture(GL_TEXTURE_2D, 0);
     return d;
+}
+
+void vd_set_window(struct vd *d, const struct gv_window *w, int channels)
+{
+    d->lut_on = w && w->count > 0;
+    if (!d->lut_on)
+        return;
+    uint8_t tab[3][256], px[256 * 4];
+    for (int c = 0; c < 3; c++)
+        gv_window_table8(gv_window_of(w, channels == 1 ? 0 : c), tab[c]);
+    for (int v = 0; v < 256; v++) {
+        for (int c = 0; c < 3; c++)
+            px[v * 4 + c] = tab[c][v];
+        px[v * 4 + 3] = 255;
+    }
+    glBindTexture(GL_TEXTURE_2D, d->lut);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, 256, 1, GL_RGBA_INTEGER,
+                    GL_UNSIGNED_BYTE, px);
+    glBindTexture(GL_TEXTURE_2D, 0);
 }
 
 void vd_free(struct vd *d)
@@ -135,6 +175,7 @@ void vd_free(struct vd *d)
         return;
     glDeleteProgram(d->prog);
     glDeleteVertexArrays(1, &d->vao);
+    glDeleteTextures(1, &d->lut);
     free(d);
 }
 
@@ -153,9 +194,13 @@ void vd_draw(struct vd *d, const struct vt *t, const struct vt_plan *p,
     glBindTexture(GL_TEXTURE_2D_ARRAY, gl->atlas);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, gl->page_table);
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D, d->lut);
     glActiveTexture(GL_TEXTURE0);
     glUniform1i(d->u_atlas, 0);
     glUniform1i(d->u_pt, 1);
+    glUniform1i(d->u_lut, 2);
+    glUniform1i(d->u_lut_on, d->lut_on);
     glUniform4iv(d->u_lv, gl->nlevels, &gl->lv[0][0]);
     glUniform1iv(d->u_row, gl->nlevels, gl->row);
     glUniform1i(d->u_f, p->f);

@@ -11,7 +11,8 @@
  * takes the nearest coarser level that has them, down to the pinned root
  * mips.  Outside the image is black.  At 1:1 (an integer zoom, no
  * rotation, pixel centres on texel centres) the weights are 0 and 1 and
- * every pixel is a decoded texel, bit for bit.
+ * every pixel is a decoded texel, bit for bit.  A display window, if set
+ * (vd_set_window), maps each composed 8-bit sample through its table.
  *
  * GIGAVIEW_VIEW_SABOTAGE=decode (for tests only) flips the low bit of
  * texel (100, 100) of every tiled level's tile as the shader reads it, so
@@ -25,6 +26,7 @@
 
 #include "base/error.h"
 #include "gpu/gpu.h"
+#include "render/window.h"
 #include "view_geom.h"
 #include "view_tiles.h"
 
@@ -37,6 +39,11 @@ void vd_free(struct vd *d);
 /* Draw plan p of view v (tiles of t) into the bound framebuffer, w x h. */
 void vd_draw(struct vd *d, const struct vt *t, const struct vt_plan *p,
              const struct vg_view *v, int w, int h);
+
+/* Draw through display window w (render/window.h; NULL or count 0: none)
+ * for an image of `channels` channels (1 or 3) from now on: the same
+ * tables as the server's.  GL thread; no tile is touched. */
+void vd_set_window(struct vd *d, const struct gv_window *w, int channels);
 
 /* Read the w x h framebuffer back as `channels`-channel rows, top row
  * first, into px (w * h * channels bytes). */

@@ -19,6 +19,10 @@ enum vi_action {
     VI_NONE, VI_QUIT, VI_FULLSCREEN, VI_SCREENSHOT, VI_NEXT_IMAGE, VI_PREV_IMAGE,
     VI_TOGGLE_OVERLAY, VI_TOGGLE_LIST, VI_COPY_VIEW, VI_ROI, VI_PARAM_UP,
     VI_PARAM_DOWN, VI_ROI_CLEAR, VI_NEXT_FILTER,
+    /* the display window: b (black up), Shift+B, w (white down), Shift+W,
+     * y (gamma up), Shift+Y, a (auto), x (reset), Shift+X (none) */
+    VI_WIN_BLACK_UP, VI_WIN_BLACK_DOWN, VI_WIN_WHITE_DOWN, VI_WIN_WHITE_UP,
+    VI_WIN_GAMMA_UP, VI_WIN_GAMMA_DOWN, VI_WIN_AUTO, VI_WIN_RESET, VI_WIN_NONE,
     VI_REDRAW                    /* the selection changed: draw again */
 };
 

@@ -36,6 +36,7 @@ static const struct {
     {"param", VS_PARAM, -1, -1},     {"pad-axis", VS_PAD_AXIS, -1, -1},
     {"pad-button", VS_PAD_BUTTON, -1, -1}, {"pinch", VS_PINCH, 4, 4},
     {"touch", VS_TOUCH, 4, 5},       {"message", VS_MESSAGE, -1, -1},
+    {"counters", VS_COUNTERS, -1, -1}, {"window", VS_WINDOW, -1, -1},
 };
 
 void vs_free(struct vs_script *s)
@@ -97,12 +98,13 @@ static int key_name(const char *w, struct vs_cmd *c)
     return 0;
 }
 
-/* The text argument of shot, image, wait-file, print, graph and message
- * (print and message: the rest of the line) from *p into c->text.
+/* The text argument of shot, image, wait-file, print, graph, message,
+ * counters and window (print, message and counters: the rest of the line) from *p into c->text.
  * Returns 1, or -1 with *why. */
 static int parse_text(char *p, struct vs_cmd *c, const char **why)
 {
-    const int rest = c->op == VS_PRINT || c->op == VS_MESSAGE;
+    const int rest = c->op == VS_PRINT || c->op == VS_MESSAGE ||
+                     c->op == VS_COUNTERS;
     char *t = rest ? p + strspn(p, " \t") : word(&p);
     if (!t || (!*t && !rest)) {
         *why = "a name is missing";
@@ -187,7 +189,8 @@ static int parse_line(char *line, struct vs_cmd *c, const char **why)
         return 1;
     }
     if (c->op == VS_SHOT || c->op == VS_IMAGE || c->op == VS_WAIT_FILE ||
-        c->op == VS_PRINT || c->op == VS_GRAPH || c->op == VS_MESSAGE)
+        c->op == VS_PRINT || c->op == VS_GRAPH || c->op == VS_MESSAGE ||
+        c->op == VS_COUNTERS || c->op == VS_WINDOW)
         return parse_text(p, c, why);
     int n = 0;
     if (c->op == VS_SETTLE)

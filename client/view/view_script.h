@@ -30,6 +30,9 @@
  *   wait-file PATH [MS]     wait until PATH exists (default 60000)
  *   print TEXT              print TEXT and the view's link on stdout
  *   message TEXT            print TEXT and the overlay's error line
+ *   counters TEXT           print TEXT, the tiles fetched and decoded so
+ *                           far and the display window on stdout
+ *   window SPEC|none        set the display window (as --window)
  *   quit                    exit now
  *
  * Filters (a region filtered by the server, shown in place):
@@ -63,7 +66,8 @@
 enum vs_op {
     VS_WAIT, VS_FRAMES, VS_KEY, VS_DOWN, VS_MOVE, VS_UP, VS_DRAG, VS_WHEEL,
     VS_VIEW, VS_IMAGE, VS_SETTLE, VS_SHOT, VS_WAIT_FILE, VS_PRINT, VS_QUIT,
-    VS_FILTER, VS_GRAPH, VS_PARAM, VS_PAD_AXIS, VS_PAD_BUTTON, VS_PINCH, VS_TOUCH, VS_MESSAGE
+    VS_FILTER, VS_GRAPH, VS_PARAM, VS_PAD_AXIS, VS_PAD_BUTTON, VS_PINCH, VS_TOUCH, VS_MESSAGE,
+    VS_COUNTERS, VS_WINDOW
 };
 
 struct vs_cmd {

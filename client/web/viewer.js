@@ -14,7 +14,7 @@
 import { GlBackend, webgl2 } from './gl_backend.js';
 import { RegionBackend } from './fallback.js';
 import { levelsOf } from './pyramid.js';
-import { formatWindow, lutBytes } from './window.js';
+import { formatWindow, lutBytes, parseWindow } from './window.js';
 import { anchored, clampView, formatHash, homeView, normRot, screenToImage } from './view.js';
 
 const TAU_MS = 90;            // time constant of animated moves
@@ -180,6 +180,13 @@ export class Viewer {
         this.backend = backend;
         if (this.window && this.window.length !== 1 && this.window.length !== info.channels)
             this.window = null;       // one window a channel, for another image
+        // No window from the link: the store's default (the image
+        // document's "window", the one gigaviewd applies to regions).
+        const dflt = !this.window && info.window ? parseWindow(info.window) : null;
+        if (dflt && (dflt.length === 1 || dflt.length === info.channels)) {
+            this.window = dflt;
+            this.extra = { ...this.extra, window: formatWindow(dflt) };
+        }
         this.applyWindow();
         this.view = clampView(view || this.home(), info.width, info.height, this.cssW, this.cssH);
         this.goal = null;

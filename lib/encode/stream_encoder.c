@@ -61,6 +61,7 @@
 #include "encode/tile_pass.h"
 #include "imageio/raw_regions.h"
 #include "render/store_decoder.h"
+#include "render/window.h"
 #include "store/store_format.h"
 #include "store/store_meta.h"
 #include "store/store_write.h"
@@ -1300,7 +1301,23 @@ int gv_encode(const char *const *inputs, int n, const char *output,
     /* What the input says of its pixels (a slide's microns per pixel, a
      * raster's georeference), kept in the store. */
     const char *meta = gv_source_meta(src);
-    if (meta && gv_meta_pack(meta, strlen(meta), &e.meta, &e.meta_len, err) < 0)
+    char *merged = NULL;
+    if (opts->window) {   /* and the default display window, if given */
+        struct gv_window w;
+        if (gv_window_parse(opts->window, 255, &w, err) < 0)
+            goto out;
+        if (w.count != 1 && w.count != res->source.channels) {
+            gv_fail(err, GV_EINVAL, "window: %d windows for an image of %d "
+                    "channels (give one, or one per channel)", w.count,
+                    res->source.channels);
+            goto out;
+        }
+        if (!(meta = merged = gv_window_meta_set(meta, &w, err)))
+            goto out;
+    }
+    int mrc = meta ? gv_meta_pack(meta, strlen(meta), &e.meta, &e.meta_len, err) : 0;
+    free(merged);
+    if (mrc < 0)
         goto out;
     if (open_output(&e, output) < 0 || open_spill(&e, output) < 0 ||
         choose_level0(&e, src) < 0 || layout_scratch(&e) < 0 || start_workers(&e) < 0 || pass1(&e, src) < 0)

@@ -56,6 +56,9 @@ struct gv_encode_opts {
     int shard_count;          /* shard_index of shard_count (0-based) to
                                * `output` as a shard file, not a store */
     const char *tmpdir;       /* scratch directory; NULL = output's */
+    const char *window;       /* the store's default display window
+                               * (render/window.h text), kept in its
+                               * metadata; NULL = none */
     struct gv_source_opts source;
     /* Called from the encoding thread after each page and every few rows
      * of pass 1; may be NULL. */

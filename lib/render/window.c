@@ -14,7 +14,9 @@
  */
 #include "render/window.h"
 
+#include <jansson.h>
 #include <math.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -156,4 +158,98 @@ int gv_window_apply8(const struct gv_window *w, uint8_t *pix, size_t n,
         for (int c = 0; c < channels; c++, pix++)
             *pix = table[c][*pix];
     return 0;
+}
+
+int gv_window_from_meta(const char *json, uint32_t max, int channels,
+                        struct gv_window *w, struct gv_error *err)
+{
+    memset(w, 0, sizeof *w);
+    if (!json)
+        return 0;
+    json_t *root = json_loads(json, JSON_REJECT_DUPLICATES, NULL);
+    if (!root)
+        return gv_fail(err, GV_ECORRUPT, "window: metadata is not JSON");
+    json_t *v = json_object_get(root, GV_WINDOW_META_KEY);
+    int rc = 0;
+    if (!v)
+        rc = 0;
+    else if (!json_is_string(v))
+        rc = gv_fail(err, GV_ECORRUPT, "window: metadata %s is not a string",
+                     GV_WINDOW_META_KEY);
+    else if (gv_window_parse(json_string_value(v), max, w, err) < 0)
+        rc = -1;
+    else if (w->count != 1 && w->count != channels) {
+        rc = gv_fail(err, GV_ECORRUPT, "window: metadata %s has %d windows "
+                     "for an image of %d channels", GV_WINDOW_META_KEY,
+                     w->count, channels);
+    } else
+        rc = 1;
+    if (rc < 0)
+        memset(w, 0, sizeof *w);
+    json_decref(root);
+    return rc;
+}
+
+char *gv_window_meta_set(const char *json, const struct gv_window *w,
+                         struct gv_error *err)
+{
+    char text[GV_WINDOW_MAX_CHANNELS * 32];
+    gv_window_format(w, text, sizeof text);
+    json_t *root = json && *json ? json_loads(json, JSON_REJECT_DUPLICATES, NULL)
+                                 : json_object();
+    if (!json_is_object(root)) {
+        json_decref(root);
+        gv_fail(err, GV_EINVAL, "window: metadata is not a JSON object");
+        return NULL;
+    }
+    char *out = NULL;
+    if (json_object_set_new(root, GV_WINDOW_META_KEY, json_string(text)) == 0)
+        out = json_dumps(root, JSON_COMPACT | JSON_SORT_KEYS);
+    json_decref(root);
+    if (!out)
+        gv_fail(err, GV_ENOMEM, "window: out of memory for metadata");
+    return out;
+}
+
+void gv_window_auto8(const uint8_t *px, size_t n, int channels, int linked,
+                     uint32_t gamma_milli, struct gv_window *w)
+{
+    memset(w, 0, sizeof *w);
+    if (channels < 1 || channels > GV_WINDOW_MAX_CHANNELS)
+        return;
+    for (int k = 0; k < channels; k++) {
+        size_t h[256] = {0};
+        for (size_t i = 0; i < n; i++)
+            h[px[i * (size_t)channels + (size_t)k]]++;
+        const double low = (double)n * 0.005, high = (double)n * 0.995;
+        uint32_t lo = 0, hi = 255;
+        size_t acc = 0;
+        for (uint32_t v = 0; v < 256; v++)
+            if ((double)(acc += h[v]) > low) {
+                lo = v;
+                break;
+            }
+        acc = 0;
+        for (uint32_t v = 0; v < 256; v++)
+            if ((double)(acc += h[v]) >= high) {
+                hi = v;
+                break;
+            }
+        if (hi <= lo) {
+            if (lo >= 255)
+                lo = 254;
+            hi = lo + 1;
+        }
+        w->ch[k] = (struct gv_window_channel){lo, hi, gamma_milli};
+    }
+    w->count = channels;
+    if (linked || channels == 1) {
+        for (int k = 1; k < channels; k++) {
+            if (w->ch[k].black < w->ch[0].black)
+                w->ch[0].black = w->ch[k].black;
+            if (w->ch[k].white > w->ch[0].white)
+                w->ch[0].white = w->ch[k].white;
+        }
+        w->count = 1;
+    }
 }

@@ -10,7 +10,8 @@
  * compares them over many windows).  The server applies it to decoded
  * regions and IIIF images, the browser viewer in its display shader.
  *
- * The text form (docs/API.md, the viewer's link) is "B,W,G" for every
+ * The text form (docs/API.md, the viewers' links, --window of render,
+ * view and encode, a store's display.window) is "B,W,G" for every
  * channel or "B,W,G;B,W,G;..." one per channel, B and W decimal integers
  * 0 .. max (255 for 8-bit samples), B < W, G a decimal gamma 0.1 .. 10
  * with at most three decimals (",G" may be left out: 1).  Gamma is kept
@@ -64,5 +65,33 @@ void gv_window_table8(const struct gv_window_channel *c, uint8_t table[256]);
  * untouched).  Returns 0 or -1 with *err. */
 int gv_window_apply8(const struct gv_window *w, uint8_t *pix, size_t n,
                      int channels, struct gv_error *err);
+
+/* The automatic window of the browser viewer's "auto" (client/web/
+ * window.js autoPoints, the same rule): per channel, black at the first
+ * value whose cumulative count passes 0.5 % of the n pixels of px
+ * (`channels` interleaved 8-bit samples, e.g. the root level's) and white
+ * at the first reaching 99.5 %, white at least black + 1; gamma_milli for
+ * each.  linked: one window for all channels (the lowest black, the
+ * highest white), else one each. */
+void gv_window_auto8(const uint8_t *px, size_t n, int channels, int linked,
+                     uint32_t gamma_milli, struct gv_window *w);
+
+/* The store metadata key (docs/FORMAT.md section 6) that holds an
+ * image's default window, in the text form above. */
+#define GV_WINDOW_META_KEY "display.window"
+
+/* The default window of a store from its metadata JSON (NULL: none), for
+ * samples of 0 .. max and an image of `channels` channels.  Returns 1 with
+ * *w set, 0 (w->count 0) when the metadata has no such key; -1 with *err
+ * when the key is there but is not a string, does not parse, or has a
+ * window count that is neither 1 nor `channels`. */
+int gv_window_from_meta(const char *json, uint32_t max, int channels,
+                        struct gv_window *w, struct gv_error *err);
+
+/* The metadata JSON `json` (NULL or "" for none: an empty object) with
+ * the key above set to the canonical text of w (w->count >= 1), compact
+ * and with sorted keys.  Returns a malloc'ed string, or NULL with *err. */
+char *gv_window_meta_set(const char *json, const struct gv_window *w,
+                         struct gv_error *err);
 
 #endif

@@ -8,14 +8,19 @@
  * accept it; an accepted section of the current version must hold at
  * most GV_META_MAX_JSON bytes of JSON, pass gv_meta_check, and pack back
  * to the very same bytes (gv_meta_pack), so that writer and reader agree
- * on every rule and the size limit is enforced on both sides.  Input is
- * also tried as bare JSON through gv_meta_check.
+ * on every rule and the size limit is enforced on both sides.  An
+ * accepted section's default display window (display.window,
+ * render/window.h) is read as a reader does: refused with a "window:"
+ * message, or a window of 1 or 3 channels whose canonical text parses
+ * back to the same window.  Input is also tried as bare JSON through
+ * gv_meta_check.
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "fuzz.h"
+#include "render/window.h"
 #include "store/store_meta.h"
 
 #define MAX_INPUT (GV_META_MAX_SECTION + 4096)   /* just past the limit */
@@ -47,6 +52,19 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             abort();
         }
         free(packed);
+        struct gv_window w, back;
+        char text[GV_WINDOW_MAX_CHANNELS * 32];
+        gv_error_clear(&err);
+        int wrc = gv_window_from_meta(json, 255, 3, &w, &err);
+        if ((wrc < 0 && (w.count != 0 || strncmp(err.text, "window:", 7) != 0)) ||
+            (wrc == 0 && w.count != 0) ||
+            (wrc == 1 && ((w.count != 1 && w.count != 3) ||
+                          gv_window_format(&w, text, sizeof text) >= (int)sizeof text ||
+                          gv_window_parse(text, 255, &back, &err) < 0 ||
+                          memcmp(&w, &back, sizeof w) != 0))) {
+            fprintf(stderr, "default window misread: %d %s\n", wrc, err.text);
+            abort();
+        }
         free(json);
     }
     gv_error_clear(&err);

@@ -5,7 +5,10 @@ as the encoder writes them for a slide and a raster, and hostile ones -
 bad magic, version 0, a newer version, lengths that disagree, JSON that is
 not an object, nested values, bad keys, NUL in a string, duplicate keys,
 non-finite numbers, too many keys, an array too long, a string too long,
-JSON one byte over the size limit, deep nesting.  Deterministic; past
+JSON one byte over the size limit, deep nesting; default display windows
+(display.window) as encode writes them and hostile ones: not a string,
+black not below white, past 255, a bad gamma, too many channels, the wrong
+channel count, text past the window's limit, a NUL.  Deterministic; past
 findings (finding-*) stay."""
 import json
 import os
@@ -72,3 +75,29 @@ put("long-string", section(json.dumps({"a": "x" * 16385}, **compact)))
 pad = MAX_JSON - len('{"a":""}') + 1
 put("over-limit", section('{"a":"' + "x" * pad + '"}'))
 put("deep", section("[" * 3000 + "]" * 3000))
+
+# The default display window (display.window, render/window.h).
+def win(v):
+    return section(json.dumps({"display.window": v, "slide.mpp_x": 0.5}, **compact))
+
+
+put("window", win("30,200,1.500"))
+put("window-per-channel", win("10,250,1.000;50,150,0.500;0,100,3.333"))
+put("window-number", win(30))
+put("window-array", section('{"display.window":[30,200,1]}'))
+put("window-equal", win("5,5,1"))
+put("window-inverted", win("200,30,1"))
+put("window-past-255", win("0,256,1"))
+put("window-negative", win("-1,255,1"))
+put("window-gamma-low", win("0,255,0.099"))
+put("window-gamma-high", win("0,255,10.001"))
+put("window-gamma-digits", win("0,255,1.2345"))
+put("window-gamma-nan", win("0,255,nan"))
+put("window-two", win("0,255,1;0,255,1"))
+put("window-nine", win(";".join(["0,255,1"] * 9)))
+put("window-trailing", win("0,255,1;"))
+put("window-huge", win("99999999999999999999,255,1"))
+put("window-long", win("0,255,1" + " " * 600))
+put("window-nul", section('{"display.window":"0,255,1\\u00000,1"}'))
+put("window-empty", win(""))
+put("window-duplicate", section('{"display.window":"0,255,1","display.window":"1,2,1"}'))
