@@ -12,7 +12,7 @@
  * largest error inside it, found by scan converting it row by row with
  * exact edge functions (samples on an edge belong to both sides, as the
  * paper allows in 4.3.1).  The candidates over the error goal live in an
- * indexed binary max-heap keyed on (error, -sample index); the others can
+ * indexed 4-ary max-heap keyed on (error, -sample index); the others can
  * never be chosen and stay out of it.  Inserting a point splits its
  * triangle (or the two triangles of the edge it lies on), then Lawson's
  * flips restore the Delaunay property (section 4.2.1, figure 4); every
@@ -85,7 +85,8 @@ struct tin {
     uint32_t nt, capt;
     struct tri *t;           /* 64-byte aligned, 2 a cache line */
     double *cerr;            /* candidate error per triangle */
-    struct hent *heap;
+    struct hent *heap;       /* heapmem + HEAP_OFF */
+    struct hent *heapmem;    /* 64-byte aligned */
     uint32_t nheap;
     int32_t *pend;           /* triangles to scan after this insertion */
     uint8_t *pflag;
@@ -95,6 +96,7 @@ struct tin {
 };
 
 #define NONE UINT32_MAX
+#define HEAP_OFF 3u /* see the heap */
 
 struct plane {
     double z0, gx, gy;
@@ -150,21 +152,42 @@ static int reserve_tris(struct tin *m, uint32_t need)
     if (!ce)
         return -1;
     m->cerr = ce;
-    struct hent *hh = realloc(m->heap, (size_t)c * sizeof *hh);
+    /* c + 4 entries from a line: the heap proper starts HEAP_OFF in */
+    struct hent *hh = aligned_alloc(64, ((size_t)c + 4) * sizeof *hh);
     if (!hh)
         return -1;
-    m->heap = hh;
+    if (m->nheap)
+        memcpy(hh + HEAP_OFF, m->heap, (size_t)m->nheap * sizeof *hh);
+    free(m->heapmem);
+    m->heapmem = hh;
+    m->heap = hh + HEAP_OFF;
     int32_t *pe = realloc(m->pend, (size_t)c * sizeof *pe);
     if (!pe)
         return -1;
     m->pend = pe;
+    /* add_tri clears a slot's flag when it takes the slot */
     uint8_t *pf = realloc(m->pflag, (size_t)c);
     if (!pf)
         return -1;
-    memset(pf + m->capt, 0, c - m->capt);
     m->pflag = pf;
     m->capt = c;
     return 0;
+}
+
+/* Frees what reserve_tris holds (before any triangle), to try again. */
+static void release_tris(struct tin *m)
+{
+    free(m->t);
+    free(m->cerr);
+    free(m->heapmem);
+    free(m->pend);
+    free(m->pflag);
+    m->t = NULL;
+    m->cerr = NULL;
+    m->heapmem = m->heap = NULL;
+    m->pend = NULL;
+    m->pflag = NULL;
+    m->capt = 0;
 }
 
 static int add_vertex(struct tin *m, int32_t x, int32_t y)
@@ -181,10 +204,14 @@ static int add_vertex(struct tin *m, int32_t x, int32_t y)
 
 /* ------------------------------------------------------------ the heap */
 
-/* An indexed binary max-heap of the triangles whose candidate is over the
+/* An indexed 4-ary max-heap of the triangles whose candidate is over the
  * goal (section 4.3): hpos[t] is t's place, so a rescanned triangle moves
  * to its new key and a replaced one leaves; no stale entries.  Sifting
- * moves a hole instead of swapping. */
+ * moves a hole instead of swapping.  Four children of 16 bytes share one
+ * cache line (the array starts HEAP_OFF entries before a 64-byte line, so
+ * that entry 4i + 1 begins one): half the depth of a binary heap, and one
+ * line missed per level.  The order is strict and total on the keys, so
+ * the top does not depend on the arity. */
 static inline int better(const struct hent *a, const struct hent *b)
 {
     return a->err > b->err || (a->err == b->err && a->idx < b->idx);
@@ -192,27 +219,31 @@ static inline int better(const struct hent *a, const struct hent *b)
 
 static void heap_place(struct tin *m, uint32_t i, struct hent e)
 {
+    struct hent *hp = m->heap;
     while (i > 0) {
-        uint32_t p = (i - 1) / 2;
-        if (!better(&e, &m->heap[p]))
+        uint32_t p = (i - 1) / 4;
+        if (!better(&e, &hp[p]))
             break;
-        m->heap[i] = m->heap[p];
-        m->t[m->heap[i].t].hpos = (int32_t)i;
+        hp[i] = hp[p];
+        m->t[hp[i].t].hpos = (int32_t)i;
         i = p;
     }
     for (;;) {
-        uint32_t l = 2 * i + 1, b;
+        uint32_t l = 4 * i + 1, b;
         if (l >= m->nheap)
             break;
-        b = l + 1 < m->nheap && better(&m->heap[l + 1], &m->heap[l]) ? l + 1
-                                                                    : l;
-        if (!better(&m->heap[b], &e))
+        b = l;
+        uint32_t end = l + 4 < m->nheap ? l + 4 : m->nheap;
+        for (uint32_t c = l + 1; c < end; c++)
+            if (better(&hp[c], &hp[b]))
+                b = c;
+        if (!better(&hp[b], &e))
             break;
-        m->heap[i] = m->heap[b];
-        m->t[m->heap[i].t].hpos = (int32_t)i;
+        hp[i] = hp[b];
+        m->t[hp[i].t].hpos = (int32_t)i;
         i = b;
     }
-    m->heap[i] = e;
+    hp[i] = e;
     m->t[e.t].hpos = (int32_t)i;
 }
 
@@ -615,7 +646,7 @@ static void tin_release(struct tin *m)
     free(m->v);
     free(m->t);
     free(m->cerr);
-    free(m->heap);
+    free(m->heapmem);
     free(m->pend);
     free(m->pflag);
     free(m->stack);
@@ -801,6 +832,16 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
     m.small = w <= 16384 && hgt <= 16384;
     m.used = calloc((size_t)w * hgt, 1);
     bpos = malloc((size_t)(w > hgt ? w : hgt) * sizeof *bpos);
+    /* Room for every triangle the grid can have (2 per sample, up to
+     * 2^22: the pages untouched stay unmapped), so that the arrays are
+     * not copied as they grow; the doubling from 64 if that fails. */
+    uint64_t guess = 2 * (uint64_t)w * hgt;
+    if (p->max_triangles && guess > (uint64_t)p->max_triangles + 4)
+        guess = (uint64_t)p->max_triangles + 4;
+    if (guess > (1u << 22))
+        guess = 1u << 22;
+    if (m.used && bpos && reserve_tris(&m, (uint32_t)guess) < 0)
+        release_tris(&m);
     if (!m.used || !bpos || reserve_tris(&m, 64) < 0)
         goto nomem;
     for (uint32_t y = 0; y < hgt; y++)
