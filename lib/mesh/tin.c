@@ -270,13 +270,11 @@ static void heap_set(struct tin *m, int32_t t)
 
 /* ------------------------------------------------------------ planes */
 
-/* The plane of triangle t from its vertices rotated so that the smallest
- * sample index comes first: the same plane whichever half-edge order the
- * slot holds. */
-static void plane_of(const struct tin *m, int32_t t, struct plane *pl)
+/* The plane through corners v[0..2] of a triangle, from its vertices
+ * rotated so that the smallest sample index comes first: the same plane
+ * whichever half-edge order the slot holds. */
+static void plane_from(const struct vert *const v[3], struct plane *pl)
 {
-    const struct vert *v[3] = {&m->v[TV(m, 3 * t)], &m->v[TV(m, 3 * t + 1)],
-                               &m->v[TV(m, 3 * t + 2)]};
     int k = 0;
     for (int i = 1; i < 3; i++)
         if (v[i]->y < v[k]->y || (v[i]->y == v[k]->y && v[i]->x < v[k]->x))
@@ -292,6 +290,13 @@ static void plane_of(const struct tin *m, int32_t t, struct plane *pl)
     pl->z0 = a->z;
     pl->gx = (dz1 * dy2 - dz2 * dy1) / det;
     pl->gy = (dx1 * dz2 - dx2 * dz1) / det;
+}
+
+static void plane_of(const struct tin *m, int32_t t, struct plane *pl)
+{
+    const struct vert *v[3] = {&m->v[TV(m, 3 * t)], &m->v[TV(m, 3 * t + 1)],
+                               &m->v[TV(m, 3 * t + 2)]};
+    plane_from(v, pl);
 }
 
 /* The plane's value on row y at x = 0; plane_at adds gx * x.  Scan
@@ -332,13 +337,14 @@ static inline int32_t floor_q(double b, double inv)
 static void scan_tri(const struct tin *m, int32_t t, int all,
                      double *best_err, uint32_t *best_idx)
 {
+    const int32_t *tv = m->t[t].v;
+    const struct vert *vv[3] = {&m->v[tv[0]], &m->v[tv[1]], &m->v[tv[2]]};
     struct plane pl;
-    plane_of(m, t, &pl);
+    plane_from(vv, &pl);
     int32_t px[3], py[3];
     for (int i = 0; i < 3; i++) {
-        const struct vert *v = &m->v[TV(m, 3 * t + i)];
-        px[i] = v->x;
-        py[i] = v->y;
+        px[i] = vv[i]->x;
+        py[i] = vv[i]->y;
     }
     int32_t miny = py[0], maxy = py[0], minx = px[0], maxx = px[0];
     for (int i = 1; i < 3; i++) {
