@@ -446,12 +446,13 @@ static int add_tri(struct tin *m, int32_t a, int32_t b, int32_t c, int ab,
         m->t[e / 3].hpos = -1;
         m->pflag[e / 3] = 0;
     }
-    TV(m, e) = a;
-    TV(m, e + 1) = b;
-    TV(m, e + 2) = c;
-    HE(m, e) = ab;
-    HE(m, e + 1) = bc;
-    HE(m, e + 2) = ca;
+    struct tri *T = &m->t[e / 3]; /* e is 3 t: no remainder below */
+    T->v[0] = a;
+    T->v[1] = b;
+    T->v[2] = c;
+    T->he[0] = ab;
+    T->he[1] = bc;
+    T->he[2] = ca;
     if (ab >= 0) HE(m, ab) = e;
     if (bc >= 0) HE(m, bc) = e + 1;
     if (ca >= 0) HE(m, ca) = e + 2;
@@ -505,20 +506,25 @@ static int legalize(struct tin *m, int a0)
 {
     if (push_edge(m, a0) < 0)
         return -1;
+    static const uint8_t nx[3] = {1, 2, 0}, pv[3] = {2, 0, 1};
     while (m->nstack) {
         int a = m->stack[--m->nstack];
-        int b = HE(m, a);
+        uint32_t ia = (uint32_t)a / 3, ka = (uint32_t)a - 3 * ia;
+        struct tri *A = &m->t[ia];
+        int b = A->he[ka];
         if (b < 0)
             continue;
-        int ta = a - a % 3, tb = b - b % 3;
-        int al = ta + (a + 1) % 3, ar = ta + (a + 2) % 3;
-        int bl = tb + (b + 2) % 3, br = tb + (b + 1) % 3;
-        int32_t p0 = TV(m, ar), pr = TV(m, a), pl = TV(m, al);
-        int32_t p1 = TV(m, bl);
+        uint32_t ib = (uint32_t)b / 3, kb = (uint32_t)b - 3 * ib;
+        struct tri *B = &m->t[ib];
+        int ta = (int)(3 * ia), tb = (int)(3 * ib);
+        /* al, ar: a's next and previous; bl, br: b's previous and next */
+        uint32_t kal = nx[ka], kar = pv[ka], kbl = pv[kb], kbr = nx[kb];
+        int32_t p0 = A->v[kar], pr = A->v[ka], pl = A->v[kal];
+        int32_t p1 = B->v[kbl];
         if (!incircle(m, pr, pl, p0, p1))
             continue;
-        int hal = HE(m, al), har = HE(m, ar);
-        int hbl = HE(m, bl), hbr = HE(m, br);
+        int hal = A->he[kal], har = A->he[kar];
+        int hbl = B->he[kbl], hbr = B->he[kbr];
         int t0 = add_tri(m, p0, p1, pl, -1, hbl, hal, ta);
         int t1 = add_tri(m, p1, p0, pr, t0, har, hbr, tb);
         if (push_edge(m, t1 + 2) < 0 || push_edge(m, t0 + 1) < 0)
