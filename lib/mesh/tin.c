@@ -356,35 +356,56 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
     /* edge i -> j: orient(p_i, p_j, (x, y)) = A x + B(y) >= 0, B(y) =
      * (xj - xi) (y - yi) + (yj - yi) xi, stepped by xj - xi a row.  A > 0
      * bounds x from below (x >= -floor(B / A)), A < 0 from above
-     * (x <= floor(B / -A)), A = 0 keeps the row or not (B >= 0). */
-    double eb[3], edx[3], einv[3];
-    int ekind[3]; /* 1: lower bound, -1: upper, 0: horizontal */
+     * (x <= floor(B / -A)).  A = 0 (a horizontal edge) never cuts a row
+     * of the box: the triangle lies on its inner side.  A triangle has
+     * one or two edges of each kind; a lone one is taken twice, so that
+     * every row computes two bounds each way without a branch. */
+    double lb[2], ldx[2], linv[2], ub[2], udx[2], uinv[2];
+    int nl = 0, nu = 0;
     for (int i = 0; i < 3; i++) {
         int j = i == 2 ? 0 : i + 1;
         int32_t A = py[i] - py[j];
-        edx[i] = (double)(px[j] - px[i]);
-        eb[i] = edx[i] * (double)(miny - py[i]) +
-                (double)(py[j] - py[i]) * (double)px[i];
-        ekind[i] = A > 0 ? 1 : A < 0 ? -1 : 0;
-        einv[i] = A ? 1.0 / (double)(A > 0 ? A : -A) : 0;
+        if (!A)
+            continue;
+        double dx = (double)(px[j] - px[i]);
+        double b0 = dx * (double)(miny - py[i]) +
+                    (double)(py[j] - py[i]) * (double)px[i];
+        double inv = 1.0 / (double)(A > 0 ? A : -A);
+        if (A > 0) {
+            lb[nl] = b0;
+            ldx[nl] = dx;
+            linv[nl++] = inv;
+        } else {
+            ub[nu] = b0;
+            udx[nu] = dx;
+            uinv[nu++] = inv;
+        }
+    }
+    if (nl == 1) {
+        lb[1] = lb[0];
+        ldx[1] = ldx[0];
+        linv[1] = linv[0];
+    }
+    if (nu == 1) {
+        ub[1] = ub[0];
+        udx[1] = udx[0];
+        uinv[1] = uinv[0];
     }
     double be = 0;
     uint32_t bi = NONE;
     const double gx = pl.gx;
     for (int32_t y = miny; y <= maxy; y++) {
         int32_t lo = minx, hi = maxx;
-        for (int i = 0; i < 3; i++) {
-            if (ekind[i] > 0) {
-                int32_t x0 = -floor_q(eb[i], einv[i]);
-                if (x0 > lo) lo = x0;
-            } else if (ekind[i] < 0) {
-                int32_t x1 = floor_q(eb[i], einv[i]);
-                if (x1 < hi) hi = x1;
-            } else if (eb[i] < 0) {
-                hi = lo - 1;
-            }
-            eb[i] += edx[i];
-        }
+        int32_t l0 = -floor_q(lb[0], linv[0]), l1 = -floor_q(lb[1], linv[1]);
+        int32_t u0 = floor_q(ub[0], uinv[0]), u1 = floor_q(ub[1], uinv[1]);
+        lo = l0 > lo ? l0 : lo;
+        lo = l1 > lo ? l1 : lo;
+        hi = u0 < hi ? u0 : hi;
+        hi = u1 < hi ? u1 : hi;
+        lb[0] += ldx[0];
+        lb[1] += ldx[1];
+        ub[0] += udx[0];
+        ub[1] += udx[1];
         const float *row = m->h + (size_t)y * m->stride;
         const uint8_t *urow = m->used + (size_t)y * m->w;
         double zr = row_at(&pl, y);
