@@ -275,11 +275,15 @@ static void heap_set(struct tin *m, int32_t t)
  * whichever half-edge order the slot holds. */
 static void plane_from(const struct vert *const v[3], struct plane *pl)
 {
-    int k = 0;
-    for (int i = 1; i < 3; i++)
-        if (v[i]->y < v[k]->y || (v[i]->y == v[k]->y && v[i]->x < v[k]->x))
-            k = i;
-    const struct vert *a = v[k], *b = v[(k + 1) % 3], *c = v[(k + 2) % 3];
+    /* the smallest (y, x), as one integer key: no branch */
+    int64_t k0 = ((int64_t)v[0]->y << 20) + v[0]->x;
+    int64_t k1 = ((int64_t)v[1]->y << 20) + v[1]->x;
+    int64_t k2 = ((int64_t)v[2]->y << 20) + v[2]->x;
+    int k = k1 < k0;
+    int64_t kk = k ? k1 : k0;
+    k = k2 < kk ? 2 : k;
+    static const uint8_t n1[3] = {1, 2, 0}, n2[3] = {2, 0, 1};
+    const struct vert *a = v[k], *b = v[n1[k]], *c = v[n2[k]];
     double dx1 = b->x - a->x, dy1 = b->y - a->y;
     double dx2 = c->x - a->x, dy2 = c->y - a->y;
     double dz1 = (double)b->z - a->z;
