@@ -20,11 +20,13 @@
  * insertion, which is the update region of section 4.2.2.
  *
  * The cost (profiled on 1025^2 ETOPO5 grids, bench/tin-speed.sh) is memory
- * latency as much as the rescans: a split or flip touches one 32-byte
- * triangle record (corners, twins, candidate, heap place), heap entries
- * carry their keys, the vertices' half-edges are kept up only while the
- * border is inserted (hull_out), the in-circle test runs in 64 bits on
- * grids up to 16384 a side, and no row of a scan divides.
+ * latency and branches as much as the rescans: a split or flip touches
+ * one 32-byte triangle record (corners, twins, candidate, heap place),
+ * heap entries carry their keys and four siblings share a cache line,
+ * the arrays are reserved once, the vertices' half-edges are kept up only
+ * while the border is inserted (hull_out), the in-circle test runs in 64
+ * bits on grids up to 16384 a side, and no row of a scan divides or
+ * branches on its edges.
  *
  * The plane of a triangle is computed from its vertices in a canonical
  * rotation (the smallest sample index first), so its errors depend on the
