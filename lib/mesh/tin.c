@@ -12,7 +12,7 @@
  * largest error inside it, found by scan converting it row by row with
  * exact edge functions (samples on an edge belong to both sides, as the
  * paper allows in 4.3.1).  The candidates over the error goal live in an
- * indexed binary max-heap keyed on (error, -sample index); the others can
+ * indexed 4-ary max-heap keyed on (error, -sample index); the others can
  * never be chosen and stay out of it.  Inserting a point splits its
  * triangle (or the two triangles of the edge it lies on), then Lawson's
  * flips restore the Delaunay property (section 4.2.1, figure 4); every
@@ -20,11 +20,13 @@
  * insertion, which is the update region of section 4.2.2.
  *
  * The cost (profiled on 1025^2 ETOPO5 grids, bench/tin-speed.sh) is memory
- * latency as much as the rescans: a split or flip touches one 32-byte
- * triangle record (corners, twins, candidate, heap place), heap entries
- * carry their keys, the vertices' half-edges are kept up only while the
- * border is inserted (hull_out), the in-circle test runs in 64 bits on
- * grids up to 16384 a side, and no row of a scan divides.
+ * latency and branches as much as the rescans: a split or flip touches
+ * one 32-byte triangle record (corners, twins, candidate, heap place),
+ * heap entries carry their keys and four siblings share a cache line,
+ * the arrays are reserved once, the vertices' half-edges are kept up only
+ * while the border is inserted (hull_out), the in-circle test runs in 64
+ * bits on grids up to 16384 a side, and no row of a scan divides or
+ * branches on its edges.
  *
  * The plane of a triangle is computed from its vertices in a canonical
  * rotation (the smallest sample index first), so its errors depend on the
@@ -85,7 +87,8 @@ struct tin {
     uint32_t nt, capt;
     struct tri *t;           /* 64-byte aligned, 2 a cache line */
     double *cerr;            /* candidate error per triangle */
-    struct hent *heap;
+    struct hent *heap;       /* heapmem + HEAP_OFF */
+    struct hent *heapmem;    /* 64-byte aligned */
     uint32_t nheap;
     int32_t *pend;           /* triangles to scan after this insertion */
     uint8_t *pflag;
@@ -95,6 +98,7 @@ struct tin {
 };
 
 #define NONE UINT32_MAX
+#define HEAP_OFF 3u /* see the heap */
 
 struct plane {
     double z0, gx, gy;
@@ -150,21 +154,42 @@ static int reserve_tris(struct tin *m, uint32_t need)
     if (!ce)
         return -1;
     m->cerr = ce;
-    struct hent *hh = realloc(m->heap, (size_t)c * sizeof *hh);
+    /* c + 4 entries from a line: the heap proper starts HEAP_OFF in */
+    struct hent *hh = aligned_alloc(64, ((size_t)c + 4) * sizeof *hh);
     if (!hh)
         return -1;
-    m->heap = hh;
+    if (m->nheap)
+        memcpy(hh + HEAP_OFF, m->heap, (size_t)m->nheap * sizeof *hh);
+    free(m->heapmem);
+    m->heapmem = hh;
+    m->heap = hh + HEAP_OFF;
     int32_t *pe = realloc(m->pend, (size_t)c * sizeof *pe);
     if (!pe)
         return -1;
     m->pend = pe;
+    /* add_tri clears a slot's flag when it takes the slot */
     uint8_t *pf = realloc(m->pflag, (size_t)c);
     if (!pf)
         return -1;
-    memset(pf + m->capt, 0, c - m->capt);
     m->pflag = pf;
     m->capt = c;
     return 0;
+}
+
+/* Frees what reserve_tris holds (before any triangle), to try again. */
+static void release_tris(struct tin *m)
+{
+    free(m->t);
+    free(m->cerr);
+    free(m->heapmem);
+    free(m->pend);
+    free(m->pflag);
+    m->t = NULL;
+    m->cerr = NULL;
+    m->heapmem = m->heap = NULL;
+    m->pend = NULL;
+    m->pflag = NULL;
+    m->capt = 0;
 }
 
 static int add_vertex(struct tin *m, int32_t x, int32_t y)
@@ -181,10 +206,14 @@ static int add_vertex(struct tin *m, int32_t x, int32_t y)
 
 /* ------------------------------------------------------------ the heap */
 
-/* An indexed binary max-heap of the triangles whose candidate is over the
+/* An indexed 4-ary max-heap of the triangles whose candidate is over the
  * goal (section 4.3): hpos[t] is t's place, so a rescanned triangle moves
  * to its new key and a replaced one leaves; no stale entries.  Sifting
- * moves a hole instead of swapping. */
+ * moves a hole instead of swapping.  Four children of 16 bytes share one
+ * cache line (the array starts HEAP_OFF entries before a 64-byte line, so
+ * that entry 4i + 1 begins one): half the depth of a binary heap, and one
+ * line missed per level.  The order is strict and total on the keys, so
+ * the top does not depend on the arity. */
 static inline int better(const struct hent *a, const struct hent *b)
 {
     return a->err > b->err || (a->err == b->err && a->idx < b->idx);
@@ -192,27 +221,31 @@ static inline int better(const struct hent *a, const struct hent *b)
 
 static void heap_place(struct tin *m, uint32_t i, struct hent e)
 {
+    struct hent *hp = m->heap;
     while (i > 0) {
-        uint32_t p = (i - 1) / 2;
-        if (!better(&e, &m->heap[p]))
+        uint32_t p = (i - 1) / 4;
+        if (!better(&e, &hp[p]))
             break;
-        m->heap[i] = m->heap[p];
-        m->t[m->heap[i].t].hpos = (int32_t)i;
+        hp[i] = hp[p];
+        m->t[hp[i].t].hpos = (int32_t)i;
         i = p;
     }
     for (;;) {
-        uint32_t l = 2 * i + 1, b;
+        uint32_t l = 4 * i + 1, b;
         if (l >= m->nheap)
             break;
-        b = l + 1 < m->nheap && better(&m->heap[l + 1], &m->heap[l]) ? l + 1
-                                                                    : l;
-        if (!better(&m->heap[b], &e))
+        b = l;
+        uint32_t end = l + 4 < m->nheap ? l + 4 : m->nheap;
+        for (uint32_t c = l + 1; c < end; c++)
+            if (better(&hp[c], &hp[b]))
+                b = c;
+        if (!better(&hp[b], &e))
             break;
-        m->heap[i] = m->heap[b];
-        m->t[m->heap[i].t].hpos = (int32_t)i;
+        hp[i] = hp[b];
+        m->t[hp[i].t].hpos = (int32_t)i;
         i = b;
     }
-    m->heap[i] = e;
+    hp[i] = e;
     m->t[e.t].hpos = (int32_t)i;
 }
 
@@ -239,18 +272,20 @@ static void heap_set(struct tin *m, int32_t t)
 
 /* ------------------------------------------------------------ planes */
 
-/* The plane of triangle t from its vertices rotated so that the smallest
- * sample index comes first: the same plane whichever half-edge order the
- * slot holds. */
-static void plane_of(const struct tin *m, int32_t t, struct plane *pl)
+/* The plane through corners v[0..2] of a triangle, from its vertices
+ * rotated so that the smallest sample index comes first: the same plane
+ * whichever half-edge order the slot holds. */
+static void plane_from(const struct vert *const v[3], struct plane *pl)
 {
-    const struct vert *v[3] = {&m->v[TV(m, 3 * t)], &m->v[TV(m, 3 * t + 1)],
-                               &m->v[TV(m, 3 * t + 2)]};
-    int k = 0;
-    for (int i = 1; i < 3; i++)
-        if (v[i]->y < v[k]->y || (v[i]->y == v[k]->y && v[i]->x < v[k]->x))
-            k = i;
-    const struct vert *a = v[k], *b = v[(k + 1) % 3], *c = v[(k + 2) % 3];
+    /* the smallest (y, x), as one integer key: no branch */
+    int64_t k0 = ((int64_t)v[0]->y << 20) + v[0]->x;
+    int64_t k1 = ((int64_t)v[1]->y << 20) + v[1]->x;
+    int64_t k2 = ((int64_t)v[2]->y << 20) + v[2]->x;
+    int k = k1 < k0;
+    int64_t kk = k ? k1 : k0;
+    k = k2 < kk ? 2 : k;
+    static const uint8_t n1[3] = {1, 2, 0}, n2[3] = {2, 0, 1};
+    const struct vert *a = v[k], *b = v[n1[k]], *c = v[n2[k]];
     double dx1 = b->x - a->x, dy1 = b->y - a->y;
     double dx2 = c->x - a->x, dy2 = c->y - a->y;
     double dz1 = (double)b->z - a->z;
@@ -261,6 +296,13 @@ static void plane_of(const struct tin *m, int32_t t, struct plane *pl)
     pl->z0 = a->z;
     pl->gx = (dz1 * dy2 - dz2 * dy1) / det;
     pl->gy = (dx1 * dz2 - dx2 * dz1) / det;
+}
+
+static void plane_of(const struct tin *m, int32_t t, struct plane *pl)
+{
+    const struct vert *v[3] = {&m->v[TV(m, 3 * t)], &m->v[TV(m, 3 * t + 1)],
+                               &m->v[TV(m, 3 * t + 2)]};
+    plane_from(v, pl);
 }
 
 /* The plane's value on row y at x = 0; plane_at adds gx * x.  Scan
@@ -301,13 +343,14 @@ static inline int32_t floor_q(double b, double inv)
 static void scan_tri(const struct tin *m, int32_t t, int all,
                      double *best_err, uint32_t *best_idx)
 {
+    const int32_t *tv = m->t[t].v;
+    const struct vert *vv[3] = {&m->v[tv[0]], &m->v[tv[1]], &m->v[tv[2]]};
     struct plane pl;
-    plane_of(m, t, &pl);
+    plane_from(vv, &pl);
     int32_t px[3], py[3];
     for (int i = 0; i < 3; i++) {
-        const struct vert *v = &m->v[TV(m, 3 * t + i)];
-        px[i] = v->x;
-        py[i] = v->y;
+        px[i] = vv[i]->x;
+        py[i] = vv[i]->y;
     }
     int32_t miny = py[0], maxy = py[0], minx = px[0], maxx = px[0];
     for (int i = 1; i < 3; i++) {
@@ -319,35 +362,56 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
     /* edge i -> j: orient(p_i, p_j, (x, y)) = A x + B(y) >= 0, B(y) =
      * (xj - xi) (y - yi) + (yj - yi) xi, stepped by xj - xi a row.  A > 0
      * bounds x from below (x >= -floor(B / A)), A < 0 from above
-     * (x <= floor(B / -A)), A = 0 keeps the row or not (B >= 0). */
-    double eb[3], edx[3], einv[3];
-    int ekind[3]; /* 1: lower bound, -1: upper, 0: horizontal */
+     * (x <= floor(B / -A)).  A = 0 (a horizontal edge) never cuts a row
+     * of the box: the triangle lies on its inner side.  A triangle has
+     * one or two edges of each kind; a lone one is taken twice, so that
+     * every row computes two bounds each way without a branch. */
+    double lb[2], ldx[2], linv[2], ub[2], udx[2], uinv[2];
+    int nl = 0, nu = 0;
     for (int i = 0; i < 3; i++) {
         int j = i == 2 ? 0 : i + 1;
         int32_t A = py[i] - py[j];
-        edx[i] = (double)(px[j] - px[i]);
-        eb[i] = edx[i] * (double)(miny - py[i]) +
-                (double)(py[j] - py[i]) * (double)px[i];
-        ekind[i] = A > 0 ? 1 : A < 0 ? -1 : 0;
-        einv[i] = A ? 1.0 / (double)(A > 0 ? A : -A) : 0;
+        if (!A)
+            continue;
+        double dx = (double)(px[j] - px[i]);
+        double b0 = dx * (double)(miny - py[i]) +
+                    (double)(py[j] - py[i]) * (double)px[i];
+        double inv = 1.0 / (double)(A > 0 ? A : -A);
+        if (A > 0) {
+            lb[nl] = b0;
+            ldx[nl] = dx;
+            linv[nl++] = inv;
+        } else {
+            ub[nu] = b0;
+            udx[nu] = dx;
+            uinv[nu++] = inv;
+        }
+    }
+    if (nl == 1) {
+        lb[1] = lb[0];
+        ldx[1] = ldx[0];
+        linv[1] = linv[0];
+    }
+    if (nu == 1) {
+        ub[1] = ub[0];
+        udx[1] = udx[0];
+        uinv[1] = uinv[0];
     }
     double be = 0;
     uint32_t bi = NONE;
     const double gx = pl.gx;
     for (int32_t y = miny; y <= maxy; y++) {
         int32_t lo = minx, hi = maxx;
-        for (int i = 0; i < 3; i++) {
-            if (ekind[i] > 0) {
-                int32_t x0 = -floor_q(eb[i], einv[i]);
-                if (x0 > lo) lo = x0;
-            } else if (ekind[i] < 0) {
-                int32_t x1 = floor_q(eb[i], einv[i]);
-                if (x1 < hi) hi = x1;
-            } else if (eb[i] < 0) {
-                hi = lo - 1;
-            }
-            eb[i] += edx[i];
-        }
+        int32_t l0 = -floor_q(lb[0], linv[0]), l1 = -floor_q(lb[1], linv[1]);
+        int32_t u0 = floor_q(ub[0], uinv[0]), u1 = floor_q(ub[1], uinv[1]);
+        lo = l0 > lo ? l0 : lo;
+        lo = l1 > lo ? l1 : lo;
+        hi = u0 < hi ? u0 : hi;
+        hi = u1 < hi ? u1 : hi;
+        lb[0] += ldx[0];
+        lb[1] += ldx[1];
+        ub[0] += udx[0];
+        ub[1] += udx[1];
         const float *row = m->h + (size_t)y * m->stride;
         const uint8_t *urow = m->used + (size_t)y * m->w;
         double zr = row_at(&pl, y);
@@ -409,12 +473,13 @@ static int add_tri(struct tin *m, int32_t a, int32_t b, int32_t c, int ab,
         m->t[e / 3].hpos = -1;
         m->pflag[e / 3] = 0;
     }
-    TV(m, e) = a;
-    TV(m, e + 1) = b;
-    TV(m, e + 2) = c;
-    HE(m, e) = ab;
-    HE(m, e + 1) = bc;
-    HE(m, e + 2) = ca;
+    struct tri *T = &m->t[e / 3]; /* e is 3 t: no remainder below */
+    T->v[0] = a;
+    T->v[1] = b;
+    T->v[2] = c;
+    T->he[0] = ab;
+    T->he[1] = bc;
+    T->he[2] = ca;
     if (ab >= 0) HE(m, ab) = e;
     if (bc >= 0) HE(m, bc) = e + 1;
     if (ca >= 0) HE(m, ca) = e + 2;
@@ -468,20 +533,25 @@ static int legalize(struct tin *m, int a0)
 {
     if (push_edge(m, a0) < 0)
         return -1;
+    static const uint8_t nx[3] = {1, 2, 0}, pv[3] = {2, 0, 1};
     while (m->nstack) {
         int a = m->stack[--m->nstack];
-        int b = HE(m, a);
+        uint32_t ia = (uint32_t)a / 3, ka = (uint32_t)a - 3 * ia;
+        struct tri *A = &m->t[ia];
+        int b = A->he[ka];
         if (b < 0)
             continue;
-        int ta = a - a % 3, tb = b - b % 3;
-        int al = ta + (a + 1) % 3, ar = ta + (a + 2) % 3;
-        int bl = tb + (b + 2) % 3, br = tb + (b + 1) % 3;
-        int32_t p0 = TV(m, ar), pr = TV(m, a), pl = TV(m, al);
-        int32_t p1 = TV(m, bl);
+        uint32_t ib = (uint32_t)b / 3, kb = (uint32_t)b - 3 * ib;
+        struct tri *B = &m->t[ib];
+        int ta = (int)(3 * ia), tb = (int)(3 * ib);
+        /* al, ar: a's next and previous; bl, br: b's previous and next */
+        uint32_t kal = nx[ka], kar = pv[ka], kbl = pv[kb], kbr = nx[kb];
+        int32_t p0 = A->v[kar], pr = A->v[ka], pl = A->v[kal];
+        int32_t p1 = B->v[kbl];
         if (!incircle(m, pr, pl, p0, p1))
             continue;
-        int hal = HE(m, al), har = HE(m, ar);
-        int hbl = HE(m, bl), hbr = HE(m, br);
+        int hal = A->he[kal], har = A->he[kar];
+        int hbl = B->he[kbl], hbr = B->he[kbr];
         int t0 = add_tri(m, p0, p1, pl, -1, hbl, hal, ta);
         int t1 = add_tri(m, p1, p0, pr, t0, har, hbr, tb);
         if (push_edge(m, t1 + 2) < 0 || push_edge(m, t0 + 1) < 0)
@@ -615,7 +685,7 @@ static void tin_release(struct tin *m)
     free(m->v);
     free(m->t);
     free(m->cerr);
-    free(m->heap);
+    free(m->heapmem);
     free(m->pend);
     free(m->pflag);
     free(m->stack);
@@ -801,6 +871,16 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
     m.small = w <= 16384 && hgt <= 16384;
     m.used = calloc((size_t)w * hgt, 1);
     bpos = malloc((size_t)(w > hgt ? w : hgt) * sizeof *bpos);
+    /* Room for every triangle the grid can have (2 per sample, up to
+     * 2^22: the pages untouched stay unmapped), so that the arrays are
+     * not copied as they grow; the doubling from 64 if that fails. */
+    uint64_t guess = 2 * (uint64_t)w * hgt;
+    if (p->max_triangles && guess > (uint64_t)p->max_triangles + 4)
+        guess = (uint64_t)p->max_triangles + 4;
+    if (guess > (1u << 22))
+        guess = 1u << 22;
+    if (m.used && bpos && reserve_tris(&m, (uint32_t)guess) < 0)
+        release_tris(&m);
     if (!m.used || !bpos || reserve_tris(&m, 64) < 0)
         goto nomem;
     for (uint32_t y = 0; y < hgt; y++)
