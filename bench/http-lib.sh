@@ -225,7 +225,8 @@ sum_col() { awk -v l="$2" -v c="$3" '$1 == l { s += $c } END { print s + 0 }' "$
 worker_ticks() {
 	local t
 	for t in /proc/"$1"/task/*; do
-		[ "$(cat "$t/comm" 2>/dev/null)" = MHD-worker ] || continue
+		# MHD-single: each daemon's one thread (http.c), MHD-worker: a pool's
+		case $(cat "$t/comm" 2>/dev/null) in MHD-single|MHD-worker) ;; *) continue ;; esac
 		printf '%s:%s ' "${t##*/}" "$(sed 's/.*) //' "$t/stat" | awk '{ print $12 + $13 }')"
 	done
 }

@@ -841,7 +841,6 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *conn,
         r->method = method;
         r->head = !strcmp(method, MHD_HTTP_METHOD_HEAD);
         clock_gettime(CLOCK_MONOTONIC, &r->t0);
-        remote_address(conn, r->remote, sizeof r->remote);
         atomic_fetch_add(&metrics.in_flight, 1);
         enum MHD_Result ret;
         if (check_head(r, &ret) < 0)
@@ -936,7 +935,6 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
                          void **req_cls, enum MHD_RequestTerminationCode why)
 {
     (void)cls;
-    (void)conn;
     struct req *r = *req_cls;
     if (!r)
         return;
@@ -960,11 +958,14 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
         status = 499;
         bytes = 0;
     }
-    char target[2048];
-    snprintf(target, sizeof target, "%s%s%s", r->path, r->query ? "?" : "",
-             r->query ? r->query : "");
-    log_access(r->remote, r->method, target, status,
-               (unsigned long long)bytes, (unsigned long long)usec);
+    if (log_access_on()) {
+        char target[2048], remote[64];
+        snprintf(target, sizeof target, "%s%s%s", r->path, r->query ? "?" : "",
+                 r->query ? r->query : "");
+        remote_address(conn, remote, sizeof remote);
+        log_access(remote, r->method, target, status,
+                   (unsigned long long)bytes, (unsigned long long)usec);
+    }
     metrics_record(metrics_id(r->route), status, usec, bytes);
     atomic_fetch_sub(&metrics.in_flight, 1);
     free_req(r);
@@ -1066,14 +1067,27 @@ static void stop_threads(struct http_threads *h)
     free(h);
 }
 
-/* libmicrohttpd's memory for one connection: the head must fit in it
- * (beyond, libmicrohttpd answers 414 or 431 itself, in HTML), so it holds
- * a head at our limits twice over, so that our JSON answers those; the
- * rest is the response's header lines and the first body bytes. */
+/* Header lines a head within max_header_bytes may carry before
+ * libmicrohttpd runs out of room to record them (it keeps about 64 bytes
+ * per line, per query argument too, beside the head's bytes). */
+#define POOL_HEADER_LINES 256
+
+/* libmicrohttpd's memory for one connection.  The head must fit in it
+ * (beyond, libmicrohttpd answers 414 or 431 itself, in HTML): a head at
+ * our limits (max_header_bytes bounds the target and the header lines
+ * together; max_url_bytes may be set larger) with libmicrohttpd's record
+ * of up to POOL_HEADER_LINES lines and max_query_args arguments, and
+ * 8 KiB for the response's header lines, which also lets our JSON answer
+ * a head a little over the limits.  No more: libmicrohttpd zeroes the
+ * whole of it before every request of a keep-alive connection
+ * (MHD_pool_reset), which was the largest cost of a small response when
+ * it held the limits twice over (bench/README.md, 2026-12-02). */
 static size_t pool_bytes(const struct settings *cfg)
 {
-    return (size_t)(2 * (cfg->max_url_bytes + cfg->max_header_bytes) +
-                    64 * cfg->max_query_args + 32768);
+    uint64_t head = cfg->max_header_bytes > cfg->max_url_bytes
+                        ? cfg->max_header_bytes : cfg->max_url_bytes;
+    return (size_t)(head + 64 * (cfg->max_query_args + POOL_HEADER_LINES) +
+                    8192);
 }
 
 /* One daemon without a listen socket, on its own internal thread. */
