@@ -5,7 +5,9 @@
 # auto button and a slider, each drawn without a single request and equal,
 # bit for bit at a 1:1 view, to the server's region with the same
 # `window`; the hash carries it; a gray store too; a table off by one
-# fails the match (negative control).
+# fails the match (negative control); a store encoded with --window opens
+# with that default (the first frame equal to the server's region) when
+# the link names no window, and with none when it says window=none.
 #
 # Skipped when /usr/bin/chromium, node or tests/browser/node_modules is
 # missing, and under valgrind.  Needs curl and python3 (http_util.sh).
@@ -18,6 +20,8 @@ S=$T/stores
 mkdir "$S" || bail "mkdir"
 run encode "$TESTDATA/picos-1100x700.jpg" -o "$S/picos.gv"
 [ "$rc" -eq 0 ] || bail "encode picos: $(cat "$T/err")"
+run encode "$TESTDATA/picos-1100x700.jpg" --window 30,200,0.7 -o "$S/dflt.gv"
+[ "$rc" -eq 0 ] || bail "encode dflt: $(cat "$T/err")"
 run encode synth:1100x700:gray -o "$S/gray.gv"
 [ "$rc" -eq 0 ] || bail "encode gray: $(cat "$T/err")"
 cat >"$T/w.conf" <<EOF2

@@ -17,7 +17,11 @@
 # store's window, its frame at 1:1 equals render's, and the window keys
 # (b, w, y, a, x) and a scripted window redraw with no tile fetched or
 # decoded again (the viewer's counters and the daemon's access log), the
-# final frame equal to render's with that window.
+# final frame equal to render's with that window.  The link of key c
+# carries the window as the browser writes it (window=none when it is off
+# in a store with a default, no key when there is none at all); --view
+# LINK opens with the link's window (--window wins over it) and a frame
+# equal to render's with it; a malformed window in a link is refused.
 # Needs oiiotool and idiff; the viewer part skips without a window.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
@@ -211,6 +215,54 @@ same_as_render "the viewer's frame after a scripted window equals render's" v1.p
     "10,250,1;50,150,0.5;0,100,3.333"
 check "the daemon saw no request for the window changes ($n_first for the first frame alone, $n_all with them)" \
     sh -c "[ '$n_first' -gt 0 ] && [ '$n_first' = '$n_all' ]"
+
+# ---------------------------------------------------------------- links
+# The link of key c carries the window as the browser writes it
+# (URLSearchParams: ',' %2C, ';' %3B), and --view reads it back.
+PER='10,250,1;50,150,0.5;0,100,3.333'
+PERF='10,250,1.000;50,150,0.500;0,100,3.333'
+PERQ='10%2C250%2C1.000%3B50%2C150%2C0.500%3B0%2C100%2C3.333'
+# view_link NAME ARGS...: run a view whose script is $T/NAME.txt; its
+# stdout is $T/NAME.out.
+view_link() {
+    n=$1
+    shift
+    run view "$BASE" --size 640x480 --no-prefetch --script "$T/$n.txt" "$@"
+    cp "$T/out" "$T/$n.out"
+}
+printf 'view 700,500,0\nsettle\nwindow %s\nframes 3\nkey c\nquit\n' "$PER" >"$T/copy.txt"
+view_link copy --image d
+link=$(grep '^#image=' "$T/copy.out" | head -n 1)
+check "key c's link carries the window as the browser writes it ($link)" \
+    test "$link" = "#image=d&x=700&y=500&z=0&r=0&window=$PERQ"
+printf 'settle\ncounters rt\nshot rt.png\nquit\n' >"$T/open.txt"
+rm -f rt.png
+view_link open --view "http://h/$link"
+check "--view LINK opens with the link's window ($(grep '^rt ' "$T/open.out"))" \
+    grep -q "^rt .* window=$PERF\$" "$T/open.out"
+same_as_render "the frame opened from the link equals render's with its window" rt.png "$PER"
+view_link open --view "$link" --window 0,255,2
+check "--window wins over the link's ($(grep '^rt ' "$T/open.out"))" \
+    grep -q '^rt .* window=0,255,2.000$' "$T/open.out"
+view_link open --view "${link%%&window=*}"
+check "a link without a window opens with the store's ($(grep '^rt ' "$T/open.out"))" \
+    grep -q '^rt .* window=30,200,1.500$' "$T/open.out"
+printf 'view 700,500,0\nsettle\nkey shift+X\nframes 3\nkey c\nquit\n' >"$T/copy.txt"
+view_link copy --image d
+nlink=$(grep '^#image=' "$T/copy.out" | head -n 1)
+check "with the window off, the link of a store with a default says window=none ($nlink)" \
+    test "$nlink" = "#image=d&x=700&y=500&z=0&r=0&window=none"
+view_link open --view "$nlink"
+check "and opens with none ($(grep '^rt ' "$T/open.out"))" grep -q '^rt .* window=none$' "$T/open.out"
+printf 'view 700,500,0\nsettle\nkey c\nquit\n' >"$T/copy.txt"
+view_link copy --image x
+xlink=$(grep '^#image=' "$T/copy.out" | head -n 1)
+check "no window set, none by default: the link has no window ($xlink)" \
+    test "$xlink" = "#image=x&x=700&y=500&z=0&r=0"
+for bad in '9,3' '1%2' '0,255,1;0,255,1;0,255,1;0,255,1;0,255,1;0,255,1;0,255,1;0,255,1;0,255,1'; do
+    run view "$BASE" --size 64x64 --script "$T/quit.txt" --view "#image=d&x=1&y=1&z=0&window=$bad"
+    check "--view with the link's window '$bad' is refused" sh -c "[ $rc -eq 2 ] && grep -q \"link's window\" '$T/err'"
+done
 
 stop_daemon
 check "gigaviewd exits 0 on SIGTERM" [ "$drc" -eq 0 ]

@@ -44,7 +44,7 @@ static void links(void)
     check(vg_parse("#z=1&y=2&x=3&roi=1,2,3,4&filter=f", &v, id, sizeof id) == 0 &&
           v.cx == 3 && !id[0], "keys in any order, others ignored");
     struct vg_view w = {1234.567, 0.001, -0.5, -15.25};
-    vg_format_hash("img", &w, out, sizeof out);
+    vg_format_hash("img", &w, NULL, out, sizeof out);
     check_str(out, "#image=img&x=1234.57&y=0&z=-0.5&r=-15.25", "the browser's rounding");
     check(vg_parse(out, &v, id, sizeof id) == 0 && !strcmp(id, "img") &&
           v.cx == 1234.57 && v.zoom == -0.5, "round trip");
@@ -67,9 +67,43 @@ static void links(void)
           "an id longer than the room is refused");
 }
 
+/* The display window in a link: written as URLSearchParams writes it,
+ * read back percent-decoded; hostile values refused. */
+static void window_links(void)
+{
+    struct vg_view w = {550, 350, 0, 0};
+    char out[256], win[64];
+    vg_format_hash("picos", &w, "10,250,1.000;50,150,0.500", out, sizeof out);
+    check_str(out, "#image=picos&x=550&y=350&z=0&r=0&window=10%2C250%2C1.000%3B50%2C150%2C0.500",
+              "the window as the browser writes it");
+    check(vg_hash_window(out, win, sizeof win) == 1 &&
+              !strcmp(win, "10,250,1.000;50,150,0.500"), "and read back (%s)", win);
+    vg_format_hash("picos", &w, "", out, sizeof out);
+    check_str(out, "#image=picos&x=550&y=350&z=0&r=0", "no window: no key");
+    vg_format_hash("picos", &w, "none", out, sizeof out);
+    check_str(out, "#image=picos&x=550&y=350&z=0&r=0&window=none", "window=none");
+    char tiny[40];
+    vg_format_hash("picos", &w, "10,250,1.000", tiny, sizeof tiny);
+    check(strlen(tiny) < sizeof tiny, "a small buffer stays terminated");
+    check(vg_hash_window("http://h/#image=a&window=30,200,0.7&x=1", win, sizeof win) == 1 &&
+              !strcmp(win, "30,200,0.7"), "raw commas are read too");
+    check(vg_hash_window("#window=1,2&window=3%2c4", win, sizeof win) == 1 && !strcmp(win, "3,4"),
+          "the last key wins, lower-case escapes");
+    check(vg_hash_window("#image=a&x=1&y=2&z=0", win, sizeof win) == 0 && !win[0], "no window key");
+    check(vg_hash_window("30,200,1", win, sizeof win) == 0 && !win[0], "no hash");
+    check(vg_hash_window("#xwindow=1,2&windows=3", win, sizeof win) == 0, "only the key window");
+    static const char *bad[] = {"#window=1%2", "#window=%", "#window=1%zz2", "#window=%00",
+        "#window=0123456789012345678901234567890123456789012345678901234567890123456789"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        strcpy(win, "x");
+        check(vg_hash_window(bad[i], win, sizeof win) < 0 && !win[0], "refused: '%.30s'", bad[i]);
+    }
+}
+
 int main(void)
 {
     geometry();
     links();
+    window_links();
     return tap_done();
 }

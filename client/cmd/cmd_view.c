@@ -162,6 +162,8 @@ struct app {
     struct vg_view start_view;
     /* the display window (render/window.h): now, and the image's start */
     struct gv_window dwin, dwin_start;
+    int store_window;            /* the image has a store default window */
+    char link_window[GV_WINDOW_MAX_TEXT]; /* --view link's, for its image */
     uint8_t *root_px;            /* the root level's samples, for auto */
     size_t root_n;
     int channels;
@@ -258,12 +260,15 @@ static void window_set(struct app *app, const struct gv_window *w)
 }
 
 /* The window an image opens with: --window (where it fits the image's
- * channels), else the store's default; and the root's samples for auto. */
+ * channels), else the window of the --view link (the first image opened
+ * only), else the store's default; and the root's samples for auto. */
 static void window_start(struct app *app, const struct vf_result *r)
 {
     struct gv_error err = {0};
     struct gv_window w = {0};
-    const char *text = app->a->window ? app->a->window : r->img.window;
+    const char *text = app->a->window ? app->a->window :
+                       app->link_window[0] ? app->link_window : r->img.window;
+    app->store_window = r->img.window[0] != 0;
     app->channels = r->img.channels;
     if (*text && strcmp(text, "none") != 0 &&
         (gv_window_parse(text, 255, &w, &err) < 0 ||
@@ -276,6 +281,7 @@ static void window_start(struct app *app, const struct vf_result *r)
         memset(&w, 0, sizeof w);
     }
     app->dwin_start = w;
+    app->link_window[0] = 0;
     window_set(app, &w);
     free(app->root_px);
     app->root_n = (size_t)r->mip_w[0] * r->mip_h[0];
@@ -394,10 +400,22 @@ static void shot_name(struct app *app, char *out, size_t cap)
     while (access(out, F_OK) == 0 && app->shot_no < 999);
 }
 
+/* The link's window text (as the browser writes it): the window shown;
+ * "none" when none is shown but the store has a default (which the link
+ * would otherwise bring back); "" when there is neither. */
+static void link_window(const struct app *app, char *out, size_t cap)
+{
+    if (app->dwin.count)
+        gv_window_format(&app->dwin, out, cap);
+    else
+        snprintf(out, cap, "%s", app->store_window ? "none" : "");
+}
+
 static void copy_view(struct app *app)
 {
-    char link[512];
-    vg_format_hash(app->want_image, &app->in.goal, link, sizeof link);
+    char link[1024], win[GV_WINDOW_MAX_CHANNELS * 32];
+    link_window(app, win, sizeof win);
+    vg_format_hash(app->want_image, &app->in.goal, win, link, sizeof link);
     printf("%s\n", link);
     fflush(stdout);
     SDL_SetClipboardText(link);
@@ -796,8 +814,9 @@ static void script_action(struct app *app, const struct vs_cmd *c)
         break;
     case VS_IMAGE: open_image(app, c->text); break;
     case VS_PRINT: {
-        char link[512];
-        vg_format_hash(app->want_image, &app->in.cur, link, sizeof link);
+        char link[1024], win[GV_WINDOW_MAX_CHANNELS * 32];
+        link_window(app, win, sizeof win);
+        vg_format_hash(app->want_image, &app->in.cur, win, link, sizeof link);
         printf("%s %s\n", c->text, link);
         fflush(stdout);
         break;
@@ -1204,6 +1223,17 @@ static int start(struct app *app, const char *url, struct view_args *a)
             return 2;
         }
         app->have_start_view = 1;
+        /* The link's window, unless --window says otherwise. */
+        struct gv_window lw;
+        int lr = vg_hash_window(a->view, app->link_window, sizeof app->link_window);
+        if (lr < 0 || (lr > 0 && app->link_window[0] && strcmp(app->link_window, "none") != 0 &&
+                       gv_window_parse(app->link_window, 255, &lw, &err) < 0)) {
+            fprintf(stderr, ME ": --view: the link's window: %s\n",
+                    err.text[0] ? err.text : "malformed or too long");
+            return 2;
+        }
+        if (a->window)
+            app->link_window[0] = 0;
     }
     if (a->script && vs_load(a->script, &app->script, &err) < 0) {
         fprintf(stderr, ME ": %s\n", err.text);

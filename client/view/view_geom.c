@@ -172,13 +172,82 @@ static void fmt(char *out, size_t cap, double x, int d)
         snprintf(out, cap, "0");
 }
 
-void vg_format_hash(const char *image, const struct vg_view *v, char *out,
-                    size_t cap)
+static int hexval(char c)
+{
+    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 :
+           c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+}
+
+/* Percent-decode s[0..n) into out (cap bytes): 0, or -1. */
+static int unescape(const char *s, size_t n, char *out, size_t cap)
+{
+    size_t o = 0;
+    for (size_t i = 0; i < n; i++) {
+        char c = s[i];
+        if (c == '+') {
+            c = ' ';
+        } else if (c == '%') {
+            if (i + 2 >= n || hexval(s[i + 1]) < 0 || hexval(s[i + 2]) < 0)
+                return -1;
+            c = (char)(hexval(s[i + 1]) * 16 + hexval(s[i + 2]));
+            i += 2;
+        }
+        if (c == 0 || o + 1 >= cap)
+            return -1;
+        out[o++] = c;
+    }
+    out[o] = 0;
+    return 0;
+}
+
+int vg_hash_window(const char *s, char *out, size_t cap)
+{
+    const char *hash = strchr(s, '#');
+    const char *val = NULL;
+    size_t vl = 0;
+    if (cap)
+        out[0] = 0;
+    if (!hash)
+        return 0;
+    for (const char *p = hash + 1; *p;) {
+        size_t len = strcspn(p, "&");
+        if (len >= 7 && !memcmp(p, "window=", 7))
+            val = p + 7, vl = len - 7;
+        p += len;
+        if (*p)
+            p++;
+    }
+    if (!val || !cap)
+        return val ? -1 : 0;
+    if (unescape(val, vl, out, cap) < 0) {
+        out[0] = 0;
+        return -1;
+    }
+    return 1;
+}
+
+void vg_format_hash(const char *image, const struct vg_view *v,
+                    const char *window, char *out, size_t cap)
 {
     char x[48], y[48], z[48], r[48];
     fmt(x, sizeof x, v->cx, 2);
     fmt(y, sizeof y, v->cy, 2);
     fmt(z, sizeof z, v->zoom, 4);
     fmt(r, sizeof r, v->rot, 2);
-    snprintf(out, cap, "#image=%s&x=%s&y=%s&z=%s&r=%s", image, x, y, z, r);
+    int n = snprintf(out, cap, "#image=%s&x=%s&y=%s&z=%s&r=%s", image, x, y, z, r);
+    if (!window || !*window || n < 0 || (size_t)n + 8 >= cap)
+        return;
+    size_t o = (size_t)n;
+    memcpy(out + o, "&window=", 8);
+    o += 8;
+    for (const char *p = window; *p && o + 1 < cap; p++) {
+        if (*p == ',' || *p == ';') {
+            if (o + 4 > cap)
+                break;
+            o += (size_t)snprintf(out + o, 4, "%%%s", *p == ',' ? "2C" : "3B");
+        } else {
+            out[o++] = *p;
+        }
+    }
+    out[o] = 0;
 }

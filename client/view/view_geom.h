@@ -10,8 +10,8 @@
  * pixel's sample is taken at its centre (i + 0.5, j + 0.5).
  *
  * Views are exchanged as the browser's URL hash,
- * "#image=ID&x=CX&y=CY&z=ZOOM&r=DEG" (docs/VIEWER.md), or as the
- * `--view CX,CY,ZOOM[,ROT]` argument.  Pure functions, any thread.
+ * "#image=ID&x=CX&y=CY&z=ZOOM&r=DEG[&window=B,W,G...]" (docs/VIEWER.md),
+ * or as the `--view CX,CY,ZOOM[,ROT]` argument.  Pure functions, any thread.
  */
 #ifndef GV_VIEW_GEOM_H
 #define GV_VIEW_GEOM_H
@@ -55,10 +55,24 @@ struct vg_view vg_clamp(const struct vg_view *v, double iw, double ih, double w,
  */
 int vg_parse(const char *s, struct vg_view *v, char *image, size_t cap);
 
+/*
+ * The display window of a browser link: the value of the hash's `window`
+ * key (s as vg_parse takes it; the text after '#'), percent-decoded as the
+ * browser's URLSearchParams decodes it ("%2C" is ',', "%3B" ';', '+' a
+ * space), into out (cap bytes).  The text is not checked as a window here
+ * (render/window.h's gv_window_parse does that, or it is "none").
+ * Returns 1 with the text, 0 when s has no hash or the hash no window
+ * (out ""), -1 when the value has a malformed escape, a NUL, or does not
+ * fit out (out "").  The last `window` key wins, as in the browser.
+ */
+int vg_hash_window(const char *s, char *out, size_t cap);
+
 /* The browser's hash of `image` at v ("#image=..&x=..&y=..&z=..&r=..",
  * numbers as the browser rounds them: 2, 2, 4 and 2 decimals, trailing
- * zeros dropped) into out (cap bytes, always terminated). */
-void vg_format_hash(const char *image, const struct vg_view *v, char *out,
-                    size_t cap);
+ * zeros dropped), then "&window=TEXT" when window is neither NULL nor "",
+ * TEXT's ',' and ';' escaped as the browser's URLSearchParams writes them
+ * (%2C, %3B), into out (cap bytes, always terminated). */
+void vg_format_hash(const char *image, const struct vg_view *v,
+                    const char *window, char *out, size_t cap);
 
 #endif

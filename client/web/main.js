@@ -91,10 +91,13 @@ async function routeFilter(st) {
 async function route() {
     const st = parseHash(location.hash);
     viewer.extra = { ...viewer.extra, roi: viewer.extra.roi, filter: panel.id, params: runner.params, terrain: terrain.source };
-    // The display window of the link (none when absent or malformed).
+    // The display window of the link (none when absent or malformed;
+    // window=none also keeps the store's default off).
     const win = st.window ? parseWindow(st.window) : null;
-    if ((win ? formatWindow(win) : null) !== (viewer.window ? formatWindow(viewer.window) : null)) {
-        viewer.setWindow(win);
+    const none = st.window === 'none';
+    if ((win ? formatWindow(win) : null) !== (viewer.window ? formatWindow(viewer.window) : null) ||
+        none !== viewer.windowNone) {
+        viewer.setWindow(win, none);
         windowPanel.rebuild(win);
     }
     $('status').hidden = !st.image;

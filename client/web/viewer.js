@@ -88,6 +88,7 @@ export class Viewer {
         this.hashTimer = 0;
         this.extra = {};              // roi, filter, params, window: kept in the hash
         this.window = null;           // the display window (window.js) or null
+        this.windowNone = false;      // none, the store's default refused (link's window=none)
         this.filterShown = false;     // a filter result is set (roi_filter.js)
         this.timing = {};
         this.ro = new ResizeObserver(() => this.resize());
@@ -181,8 +182,9 @@ export class Viewer {
         if (this.window && this.window.length !== 1 && this.window.length !== info.channels)
             this.window = null;       // one window a channel, for another image
         // No window from the link: the store's default (the image
-        // document's "window", the one gigaviewd applies to regions).
-        const dflt = !this.window && info.window ? parseWindow(info.window) : null;
+        // document's "window", the one gigaviewd applies to regions),
+        // unless the link says window=none.
+        const dflt = !this.window && !this.windowNone && info.window ? parseWindow(info.window) : null;
         if (dflt && (dflt.length === 1 || dflt.length === info.channels)) {
             this.window = dflt;
             this.extra = { ...this.extra, window: formatWindow(dflt) };
@@ -198,17 +200,19 @@ export class Viewer {
      * Set the display window: [{black, white, gammaMilli}] (window.js), one
      * for every channel or one per channel, or null for none.  The WebGL2
      * picture changes at the next frame from the tiles already decoded
-     * (no tile is fetched); the hash follows.
+     * (no tile is fetched); the hash follows.  none: with no window, the
+     * hash says window=none (so that the store's default stays off).
      */
-    setWindow(w) {
+    setWindow(w, none = false) {
         this.window = w && w.length ? w : null;
+        this.windowNone = !this.window && none;
         this.applyWindow();
         this.invalidate();
         this.viewChanged();
     }
 
     applyWindow() {
-        this.extra = { ...this.extra, window: this.window ? formatWindow(this.window) : null };
+        this.extra = { ...this.extra, window: this.window ? formatWindow(this.window) : this.windowNone ? 'none' : null };
         if (this.backend && this.backend.setLut)
             this.backend.setLut(this.window ? lutBytes(this.window, this.image.info.channels) : null);
     }

@@ -17,7 +17,9 @@ export class WindowPanel {
         this.sliders = [];
         el.linked.addEventListener('change', () => this.rebuild(this.current()));
         el.auto.addEventListener('click', () => this.auto());
-        el.reset.addEventListener('click', () => this.set(null));
+        // Off: in a store with a default window the link then says
+        // window=none, so that the default does not come back.
+        el.reset.addEventListener('click', () => this.set(null, !!(viewer.image && viewer.image.info.window)));
         viewer.on('open', () => this.rebuild(viewer.window));
     }
 
@@ -31,8 +33,8 @@ export class WindowPanel {
     }
 
     /** Show window w (or none) and set it on the viewer. */
-    set(w) {
-        this.viewer.setWindow(w);
+    set(w, none = false) {
+        this.viewer.setWindow(w, none);
         this.rebuild(w);
     }
 

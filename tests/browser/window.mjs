@@ -14,7 +14,12 @@
 //   4. a gray store likewise (one table for its one channel);
 //   5. negative control: the display tables with red shifted by one must
 //      FAIL the match (so the comparison can see a wrong table);
-//   6. no console errors.
+//   6. "dflt" (picos encoded with `gigaview encode --window`): a link with
+//      no window opens with the store's default, its first frame equal to
+//      the server's region with that window (and to the plain store's
+//      region with it); a link with window=none opens with no window, the
+//      canvas equal to the plain region, and the hash keeps window=none;
+//   7. no console errors.
 // Exit status 0 when everything passed, 1 otherwise.
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -46,10 +51,11 @@ async function open(pg, h) {
 }
 
 // The canvas against the region (level 0, x, y, W x H) with window text
-// win: {n, same, max}.  lut: display tables to force (negative control).
+// win: {n, same, max}; win null: the region with no window asked (the
+// store's default, if any).  lut: display tables to force (negative control).
 function compare(pg, id, x, y, win, lut = null) {
     const url = `${base}/v1/images/${id}/region?level=0&x=${x}&y=${y}&w=${W}&h=${H}&format=png` +
-        `&window=${encodeURIComponent(win)}`;
+        (win === null ? '' : `&window=${encodeURIComponent(win)}`);
     return pg.evaluate(async ({ url, W, H, lut }) => {
         const v = window.gigaview.viewer;
         if (lut) v.backend.setLut(new Uint8Array(lut));
@@ -78,7 +84,7 @@ function compare(pg, id, x, y, win, lut = null) {
 async function match(pg, label, id, x, y, win) {
     const r = await compare(pg, id, x, y, win);
     if (r.error) return fail(`${label}`, r.error);
-    check(r.same === r.n, `${label}: the canvas equals region&window=${win} bit for bit (${r.same}/${r.n} pixels identical)`,
+    check(r.same === r.n, `${label}: the canvas equals ${win === null ? 'the region with no window asked' : `region&window=${win}`} bit for bit (${r.same}/${r.n} pixels identical)`,
         `${r.same}/${r.n} pixels identical, largest difference ${r.max}`);
 }
 
@@ -157,6 +163,27 @@ async function run(c) {
     const r5 = await compare(pg, 'gray', 150, 100, '20,180,1.8', bad);
     check(r5.same < r5.n, `negative control: a table off by one fails the match (${r5.same}/${r5.n} pixels identical)`,
         JSON.stringify(r5));
+
+    // 6. the store's default window, and window=none.
+    const D = '30,200,0.7', DF = '30,200,0.700';
+    const pg3 = await newPage(c);
+    const r6 = await open(pg3, '#image=dflt&x=550&y=350&z=0&r=0');
+    const w6 = await pg3.evaluate(() => window.gigaview.viewer.extra.window);
+    check(r6.complete && w6 === DF, `a link with no window opens with the store's default (${w6})`, `${w6} ${JSON.stringify(r6)}`);
+    await match(pg3, 'dflt level 0 1:1, the first frame against the server\'s region', 'dflt', 150, 100, null);
+    await match(pg3, 'dflt level 0 1:1, against picos with the same window', 'picos', 150, 100, D);
+    await pg3.close();
+    const pg4 = await newPage(c);
+    const r7 = await open(pg4, '#image=dflt&x=550&y=350&z=0&r=0&window=none');
+    const w7 = await pg4.evaluate(() => [window.gigaview.viewer.window, window.gigaview.viewer.extra.window]);
+    check(r7.complete && w7[0] === null && w7[1] === 'none', `window=none opens with no window (${JSON.stringify(w7)})`,
+        `${JSON.stringify(w7)} ${JSON.stringify(r7)}`);
+    await match(pg4, 'dflt level 0 1:1 with window=none', 'dflt', 150, 100, 'none');
+    await pg4.waitForFunction(() => location.hash.includes('window=none'), null, { timeout: 5000 }).catch(() => {});
+    const h7 = await pg4.evaluate(() => location.hash);
+    check(new URLSearchParams(h7.slice(1)).get('window') === 'none', `the hash keeps window=none (${h7})`, h7);
+    await pg4.close();
+
     check(consoleErrors.length === 0, 'no console errors', consoleErrors.join('\n'));
 }
 
