@@ -1067,27 +1067,16 @@ static void stop_threads(struct http_threads *h)
     free(h);
 }
 
-/* Header lines a head within max_header_bytes may carry before
- * libmicrohttpd runs out of room to record them (it keeps about 64 bytes
- * per line, per query argument too, beside the head's bytes). */
-#define POOL_HEADER_LINES 256
-
-/* libmicrohttpd's memory for one connection.  The head must fit in it
- * (beyond, libmicrohttpd answers 414 or 431 itself, in HTML): a head at
- * our limits (max_header_bytes bounds the target and the header lines
- * together; max_url_bytes may be set larger) with libmicrohttpd's record
- * of up to POOL_HEADER_LINES lines and max_query_args arguments, and
- * 8 KiB for the response's header lines, which also lets our JSON answer
- * a head a little over the limits.  No more: libmicrohttpd zeroes the
- * whole of it before every request of a keep-alive connection
- * (MHD_pool_reset), which was the largest cost of a small response when
- * it held the limits twice over (bench/README.md, 2026-12-02). */
+/* libmicrohttpd's memory for one connection: the head must fit in it
+ * (beyond, libmicrohttpd answers 414 or 431 itself, in HTML), so it holds
+ * a head at our limits twice over, so that our JSON answers those; the
+ * rest is the response's header lines and the first body bytes.  (Sized
+ * to the limits once, 2026-12-02, it made requests proxied by nginx go
+ * unanswered by some replicas: tests/scaleout_nginx.sh.) */
 static size_t pool_bytes(const struct settings *cfg)
 {
-    uint64_t head = cfg->max_header_bytes > cfg->max_url_bytes
-                        ? cfg->max_header_bytes : cfg->max_url_bytes;
-    return (size_t)(head + 64 * (cfg->max_query_args + POOL_HEADER_LINES) +
-                    8192);
+    return (size_t)(2 * (cfg->max_url_bytes + cfg->max_header_bytes) +
+                    64 * cfg->max_query_args + 32768);
 }
 
 /* One daemon without a listen socket, on its own internal thread. */
