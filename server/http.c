@@ -841,6 +841,7 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *conn,
         r->method = method;
         r->head = !strcmp(method, MHD_HTTP_METHOD_HEAD);
         clock_gettime(CLOCK_MONOTONIC, &r->t0);
+        remote_address(conn, r->remote, sizeof r->remote);
         atomic_fetch_add(&metrics.in_flight, 1);
         enum MHD_Result ret;
         if (check_head(r, &ret) < 0)
@@ -935,6 +936,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
                          void **req_cls, enum MHD_RequestTerminationCode why)
 {
     (void)cls;
+    (void)conn;
     struct req *r = *req_cls;
     if (!r)
         return;
@@ -958,14 +960,11 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
         status = 499;
         bytes = 0;
     }
-    if (log_access_on()) {
-        char target[2048], remote[64];
-        snprintf(target, sizeof target, "%s%s%s", r->path, r->query ? "?" : "",
-                 r->query ? r->query : "");
-        remote_address(conn, remote, sizeof remote);
-        log_access(remote, r->method, target, status,
-                   (unsigned long long)bytes, (unsigned long long)usec);
-    }
+    char target[2048];
+    snprintf(target, sizeof target, "%s%s%s", r->path, r->query ? "?" : "",
+             r->query ? r->query : "");
+    log_access(r->remote, r->method, target, status,
+               (unsigned long long)bytes, (unsigned long long)usec);
     metrics_record(metrics_id(r->route), status, usec, bytes);
     atomic_fetch_sub(&metrics.in_flight, 1);
     free_req(r);
@@ -1070,9 +1069,7 @@ static void stop_threads(struct http_threads *h)
 /* libmicrohttpd's memory for one connection: the head must fit in it
  * (beyond, libmicrohttpd answers 414 or 431 itself, in HTML), so it holds
  * a head at our limits twice over, so that our JSON answers those; the
- * rest is the response's header lines and the first body bytes.  (Sized
- * to the limits once, 2026-12-02, it made requests proxied by nginx go
- * unanswered by some replicas: tests/scaleout_nginx.sh.) */
+ * rest is the response's header lines and the first body bytes. */
 static size_t pool_bytes(const struct settings *cfg)
 {
     return (size_t)(2 * (cfg->max_url_bytes + cfg->max_header_bytes) +

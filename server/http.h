@@ -122,6 +122,7 @@ struct req {
     unsigned status;
     uint64_t bytes;
     struct timespec t0;
+    char remote[64];
     /* Access control: the policy snapshot the request judges by (held on
      * first use, released with the request) and the caller's token, read
      * once (http_caller). */

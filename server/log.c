@@ -100,11 +100,6 @@ void log_msg(enum log_level level, const char *module, const char *fmt, ...)
     write_line(2, line, (size_t)n + (size_t)m, sizeof line);
 }
 
-int log_access_on(void)
-{
-    return access_fd >= 0;
-}
-
 void log_access(const char *remote, const char *method, const char *path,
                 unsigned status, unsigned long long bytes,
                 unsigned long long usec)

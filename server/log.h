@@ -31,10 +31,6 @@ int log_level_parse(const char *s);
 void log_msg(enum log_level level, const char *module, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
-/* 1 when access lines are written (access_log is not "off"): callers
- * skip building what only the line would show. */
-int log_access_on(void);
-
 /* One access line: remote, method, path (escaped here), status, body
  * bytes, duration in microseconds. */
 void log_access(const char *remote, const char *method, const char *path,
