@@ -62,11 +62,6 @@ log_level = info
 EOF2
 start_daemon "$T/d.conf"
 
-# pnm PATH OUT: fetch PATH (a PNG) as OUT.pnm; 0 on success.
-pnm() {
-    req "$(url "$1")"
-    [ "$code" = 200 ] && cp "$T/b" "$2.png" && oiiotool "$2.png" -o "$2.pnm" 2>/dev/null
-}
 # same DESC A B: A.pnm and B.pnm are the same bytes.
 same() {
     if [ -f "$2.pnm" ] && [ -f "$3.pnm" ] && cmp -s "$2.pnm" "$3.pnm"; then

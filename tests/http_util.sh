@@ -149,3 +149,10 @@ else:
     assert all(px[k::3] == raw for k in range(3)), 'a channel differs'
 PY
 }
+
+# pnm PATH OUT: fetch PATH (a PNG) into OUT.png and convert it to OUT.pnm
+# (oiiotool); 0 on success.
+pnm() {
+    req "$(url "$1")"
+    [ "$code" = 200 ] && cp "$T/b" "$2.png" && oiiotool "$2.png" -o "$2.pnm" 2>/dev/null
+}

@@ -37,11 +37,6 @@ log_level = info
 EOF2
 start_daemon "$T/w.conf"
 
-# pnm PATH OUT: fetch PATH (a PNG) and write it as PNM; 0 on success.
-pnm() {
-    req "$(url "$1")"
-    [ "$code" = 200 ] && cp "$T/b" "$2.png" && oiiotool "$2.png" -o "$2.pnm" 2>/dev/null
-}
 
 # window_case DESCRIPTION PATH WINDOW: PATH with window=WINDOW equals PATH
 # through the reference's tables.
