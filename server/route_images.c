@@ -92,7 +92,7 @@ enum MHD_Result route_image_info(struct req *r)
     snprintf(iiif, sizeof iiif, "%s/iiif/3/%s/info.json", base, img->id);
     json_t *j = json_pack(
         "{s:s,s:I,s:I,s:i,s:i,s:I,s:f,s:i,s:i,s:i,s:i,s:i,s:i,s:f,s:f,"
-        "s:{s:i,s:I,s:I,s:I,s:i,s:o},s:o,s:{s:s,s:s,s:s,s:s,s:s,s:s}}",
+        "s:{s:i,s:I,s:I,s:I,s:i,s:I,s:o},s:o,s:{s:s,s:s,s:s,s:s,s:s,s:s}}",
         "id", img->id, "width", (json_int_t)g->width,
         "height", (json_int_t)g->height, "channels", g->channels,
         "format_version", (int)h->version, "bytes", (json_int_t)img->bytes,
@@ -105,6 +105,7 @@ enum MHD_Result route_image_info(struct req *r)
         "root", "level", g->root, "width", (json_int_t)g->level[g->root].width,
         "height", (json_int_t)g->level[g->root].height,
         "bytes", (json_int_t)h->root_size, "mip_count", g->root_mips,
+        "side", (json_int_t)g->root_side,
         "mips", mips,
         "levels", levels,
         "links", "self", self, "tiles", tiles, "batch", batch, "root", root,

@@ -358,7 +358,10 @@ check "export hitting the file size limit: no image, no temporary" \
 
 # A damaged store: every command fails cleanly.
 cp "$T/good.copy" "$in/damaged.gv"
-python3 -c 'import sys; f=open(sys.argv[1],"r+b"); f.seek(200); f.write(b"\x00"*16)' \
+# 16 bytes of level 0's page (the last in the index) zeroed.
+python3 -c 'import struct, sys; f=open(sys.argv[1],"r+b"); h=f.read(128)
+ix, n = struct.unpack_from("<QQ", h, 56); f.seek(ix + 16 * (n - 1))
+off = struct.unpack("<Q", f.read(8))[0]; f.seek(off + 72); f.write(b"\x00"*16)' \
     "$in/damaged.gv" || bail "python3"
 run export "$in/damaged.gv" -o "$out/d.png"
 check "export of a store with a damaged page fails" test "$rc" -eq 1

@@ -16,17 +16,6 @@ need_tool oiiotool idiff
 srcroot=$(cd "$(dirname "$0")/.." && pwd)
 mkdir "$T/w" && cd "$T/w" || bail "cd $T/w"
 
-# close_to A B EPS: |A - B| <= EPS (decimal numbers).
-close_to() {
-    awk -v a="$1" -v b="$2" -v e="$3" \
-        'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a != "" && b != "" && d <= e) }'
-}
-
-# idiff_psnr REF TEST: the "Peak SNR" idiff prints.
-idiff_psnr() {
-    idiff "$1" "$2" 2>/dev/null | sed -n 's/.*Peak SNR = *//p'
-}
-
 # check_size DESCRIPTION FILE "W H C"
 check_size() {
     got=$(image_size "$2")
@@ -58,7 +47,7 @@ for spec in \
     run info "$s"
     expect_rc "info $f" 0
     check "info $f: size and kind" grep -q "^image  *$w x $h, $kind\$" "$T/out"
-    check "info $f: format version 5" grep -q "(format version 5)" "$T/out"
+    check "info $f: format version 6" grep -q "(format version 6)" "$T/out"
 
     run info --json "$s"
     expect_rc "info --json $f" 0
@@ -84,12 +73,14 @@ for spec in \
     case $f in
     *.exr)
         # Float input: clip to [0,1] and sRGB-encode like the encoder
-        # (docs/FORMAT.md).  The root-only store is lossless, so only
-        # the curve's rounding may differ: at most one code value.
+        # (docs/FORMAT.md).  Only the curve's rounding differs from the
+        # encoder's (at most one code value), so the export's PSNR
+        # against this is within 0.3 dB of the stored psnr0.
         oiiotool "$TESTDATA/$f" --clamp:min=0:max=1 \
             --colorconvert linear sRGB -d uint8 -o ref8.png
-        check "export $f: within 1/255 of the sRGB-encoded input" \
-            idiff -q -fail 0.0040 -failpercent 0 ref8.png l0.png
+        p=$(idiff_psnr ref8.png l0.png)
+        check "export $f: decoded PSNR $p near the stored psnr0 $psnr0" \
+            close_to "$p" "$psnr0" 0.3
         ;;
     *)
         oiiotool "$TESTDATA/$f" -d uint8 -o ref8.png
@@ -180,15 +171,16 @@ done
 rm -f edge.gv
 
 # ------------------------------------------------- lossless root stores
-# A store whose level 0 is its root (<= 512 a side) keeps the pixels
-# exactly: export == input, and psnr0 is reported as 99.
+# A store whose level 0 is its root (<= 128 a side, the root side of
+# format version 6) keeps the pixels exactly: export == input, and psnr0
+# is reported as 99.
 oiiotool --pattern fill:topleft=0,0,0:topright=1,0,0:bottomleft=0,1,0:bottomright=0,0,1 \
-    512x512 3 --noise:type=uniform:min=0:max=0.3:seed=7 -d uint8 -o n512.png ||
+    128x128 3 --noise:type=uniform:min=0:max=0.3:seed=7 -d uint8 -o n128.png ||
     bail "oiiotool --pattern"
-oiiotool n512.png --ch R -o g512.png || bail "oiiotool --ch"
+oiiotool n128.png --ch R -o g128.png || bail "oiiotool --ch"
 oiiotool --pattern constant:color=0.2,0.4,0.6 1x1 3 -d uint8 -o one.png ||
     bail "oiiotool 1x1"
-for f in n512.png g512.png one.png; do
+for f in n128.png g128.png one.png; do
     run encode "$f" -o ll.gv --quiet
     expect_rc "encode $f" 0
     gv info --json ll.gv >info.json
@@ -198,15 +190,15 @@ for f in n512.png g512.png one.png; do
     check "$f: export is identical to the input" idiff -q -fail 0 "$f" back.png
     rm -f ll.gv back.png
 done
-# One more than the root size is tiled and lossy, but still right-sized.
-oiiotool n512.png --resize 513x513 -o n513.png
-gv encode n513.png -o t.gv --quiet || bail "encode n513"
+# One more than the root side is tiled and lossy, but still right-sized.
+oiiotool n128.png --resize 129x129 -o n129.png
+gv encode n129.png -o t.gv --quiet || bail "encode n129"
 run export t.gv -o back.png
-check_size "513x513 tiled store" back.png "513 513 3"
-p=$(idiff_psnr n513.png back.png)
-check "513x513: decoded PSNR $p = stored psnr0" \
+check_size "129x129 tiled store" back.png "129 129 3"
+p=$(idiff_psnr n129.png back.png)
+check "129x129: decoded PSNR $p = stored psnr0" \
     close_to "$p" "$(gv info --json t.gv | grep -o '"psnr0":[0-9.]*' | cut -d: -f2)" 0.01
-rm -f t.gv back.png n513.png
+rm -f t.gv back.png n129.png
 
 # ------------------------------------------------------------- mosaic
 # A 2x2 mosaic of the cut-up image encodes to the very same bytes.
@@ -250,19 +242,21 @@ for level in c avx2 avx512; do
     check "GIGAVIEW_SIMD=$level gives the same store" cmp -s simd-$level.gv simd-max.gv
 done
 # The encoder cuts blocks short where their last values cost more bits
-# than the error they remove (FORMAT.md 8): the store is smaller than
-# without the cut (GIGAVIEW_RDO_TAILS=0), and its PSNR only a little lower
-# (bench/encoder-rd-diff.sh measures the gain at equal bytes).
-run encode "$TESTDATA/picos-1100x700.jpg" -q 40 -o cut.gv
-cut_bytes=$(sed -n 's/^size *\([0-9]*\) bytes.*/\1/p' "$T/out")
-cut_psnr=$(sed -n 's/^psnr *\([0-9.]*\) dB.*/\1/p' "$T/out")
-GIGAVIEW_RDO_TAILS=0 run encode "$TESTDATA/picos-1100x700.jpg" -q 40 -o uncut.gv
-uncut_bytes=$(sed -n 's/^size *\([0-9]*\) bytes.*/\1/p' "$T/out")
-uncut_psnr=$(sed -n 's/^psnr *\([0-9.]*\) dB.*/\1/p' "$T/out")
-check "cutting blocks short saves bytes ($cut_bytes against $uncut_bytes)" \
-    test "${cut_bytes:-0}" -gt 0 -a "${cut_bytes:-0}" -lt "${uncut_bytes:-0}"
-check "and its PSNR is at most 0.5 dB lower ($cut_psnr against $uncut_psnr dB)" \
-    awk -v p="${cut_psnr:-0}" -v q="${uncut_psnr:-99}" 'BEGIN { exit !(p > 0 && q - p <= 0.5) }'
+# than the error they remove (FORMAT.md 8): at equal PSNR the store is
+# smaller than without the cut (GIGAVIEW_RDO_TAILS=0).  Each way is
+# encoded at -q 38 and 42 (the lambda trial lands each at its own PSNR),
+# and its bytes at the PSNR between the four are interpolated (log bytes
+# linear in dB); bench/encoder-rd-diff.sh measures the gain over a curve.
+rd_point() { # TAIL-SETTING Q: "bytes psnr" of picos at -q Q
+    GIGAVIEW_RDO_TAILS=$1 run encode "$TESTDATA/picos-1100x700.jpg" -q "$2" -o cut.gv
+    echo "$(sed -n 's/^size *\([0-9]*\) bytes.*/\1/p' "$T/out") $(sed -n 's/^psnr *\([0-9.]*\) dB.*/\1/p' "$T/out")"
+}
+pts="$(rd_point 1 38) $(rd_point 1 42) $(rd_point 0 38) $(rd_point 0 42)"
+check "cutting blocks short saves bytes at equal PSNR ($pts: cut 38, 42, uncut 38, 42)" \
+    awk -v s="$pts" 'function at(b1, p1, b2, p2, p) { return exp(log(b1) + (log(b2) - log(b1)) * (p - p1) / (p2 - p1)) }
+        BEGIN { n = split(s, v, " "); if (n != 8 || v[4] <= v[2] || v[8] <= v[6]) exit 1
+                p = (v[2] + v[4] + v[6] + v[8]) / 4
+                exit !(at(v[1], v[2], v[3], v[4], p) < at(v[5], v[6], v[7], v[8], p)) }'
 rm -f cut.gv uncut.gv
 # Pass 2 maps each page's window from the scratch file; copying it
 # (GIGAVIEW_SPILL_VIEWS=0, the fallback where mapping fails) gives the
@@ -441,7 +435,7 @@ expect_err_is "export to an unknown format: message" \
 check "run-time errors created no file" test ! -e u.png -a ! -e u.bogusformat
 
 check "no stray files left in the work directory" \
-    test -z "$(listing . | grep -v -e '\.gv$' -e '^info\.json$' -e '^n512\.png$' \
-        -e '^g512\.png$' -e '^one\.png$' -e '^r\.jpg$')"
+    test -z "$(listing . | grep -v -e '\.gv$' -e '^info\.json$' -e '^n128\.png$' \
+        -e '^g128\.png$' -e '^one\.png$' -e '^r\.jpg$')"
 
 done_testing

@@ -48,7 +48,7 @@ start_daemon "$T/d.conf"
 
 # ---------------------------------------------------------------- info URL
 run info "$BASE"
-if [ "$rc" -eq 0 ] && grep -Eq '^x +3000 +2000 +4 +3 ' "$T/out" &&
+if [ "$rc" -eq 0 ] && grep -Eq '^x +3000 +2000 +6 +3 ' "$T/out" &&
     grep -Eq '^g +1300 +1100 ' "$T/out"; then
     ok "info URL lists the server's images"
 else
@@ -168,9 +168,10 @@ if [ -z "$no_gpu" ]; then
     after=$(grep -c '" 304 ' "$T/daemon.log")
     batches=$(($(grep -cE '"POST /v1/images/x/batch(\?[^"]*)?" 200 ' "$T/daemon.log") - batches))
     n=${down%% *}
-    # 1100x600 at level 0: 6 tiles there, 2 at level 1, 1 at level 2; the
-    # requests: the metadata, the batch and the root (a 304).
-    if [ "$rc" -eq 0 ] && [ "$down" = "9 0" ] && [ "$again" = "0 $n" ] &&
+    # 1100x600 at level 0: 6 tiles there, 2 at level 1, 1 at each of
+    # levels 2 to 4 (the root is level 5); the requests: the metadata, the
+    # batch and the root (a 304).
+    if [ "$rc" -eq 0 ] && [ "$down" = "11 0" ] && [ "$again" = "0 $n" ] &&
         [ $((after - before)) -eq 1 ] && [ "$batches" -eq 1 ] &&
         grep -q "^render: $n tiles needed (ancestors included); http: 3 requests," "$T/err" &&
         cmp -s c1.png c2.png; then
@@ -193,10 +194,10 @@ if [ -z "$no_gpu" ]; then
         not_ok "cache entry 0-0-0 exists under \$XDG_CACHE_HOME/gigaview" "$(find "$T/cache")"
     fi
     run render "$BASE" --image x --level 0 --region 0,0,600,600 -o c4.png -v --no-cache
-    # 4 tiles at level 0, 1 at level 1, 1 at level 2 in one batch; the
+    # 4 tiles at level 0, 1 at each of levels 1 to 4 in one batch; the
     # metadata and the root are the other requests (the byte count varies
     # with the port).
-    if [ "$rc" -eq 0 ] && grep -q '^render: 6 tiles needed (ancestors included); http: 3 requests, 6 tiles downloaded, 0 revalidated (304), ' "$T/err"; then
+    if [ "$rc" -eq 0 ] && grep -q '^render: 8 tiles needed (ancestors included); http: 3 requests, 8 tiles downloaded, 0 revalidated (304), ' "$T/err"; then
         ok "--no-cache downloads everything"
     else
         not_ok "--no-cache (exit $rc)" "$(cat "$T/err")"
@@ -360,8 +361,8 @@ if [ -z "$no_gpu" ]; then
     # tiles come one by one, and the picture is the same.
     stub_start 413
     run render "$STUB" --image x --level 0 --region 0,0,600,600 --no-cache -o s413.png -v
-    check "a batch refused with 413: the 6 tiles come one by one, render still equals export" \
-        sh -c "[ $rc -eq 0 ] && grep -q '^render: 6 tiles needed (ancestors included); http: 9 requests, 6 tiles downloaded' '$T/err' &&
+    check "a batch refused with 413: the 8 tiles come one by one, render still equals export" \
+        sh -c "[ $rc -eq 0 ] && grep -q '^render: 8 tiles needed (ancestors included); http: 11 requests, 8 tiles downloaded' '$T/err' &&
             idiff -a s413.png se.png >/dev/null 2>&1"
     stub_stop
 else

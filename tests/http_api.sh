@@ -134,11 +134,11 @@ grep -q ' info gpu: not built ' "$T/start.log" && not_built=yes
 
 # ---------------------------------------------------------------- list, metadata
 expect_status "GET /v1/images" 200 /v1/images
-check "list names x with its size" test "$(json_get '[(i["id"],i["width"],i["height"],i["levels"]) for i in j["images"]]')" = "[('x', 3000, 2000, 4)]"
+check "list names x with its size" test "$(json_get '[(i["id"],i["width"],i["height"],i["levels"]) for i in j["images"]]')" = "[('x', 3000, 2000, 6)]"
 check "CORS header on /v1" test "$(header Access-Control-Allow-Origin)" = "*"
 expect_status "GET /v1/images/x" 200 /v1/images/x
-check "metadata: geometry" test "$(json_get '(j["width"],j["height"],j["channels"],j["tile_size"],j["tile_overlap"],j["tile_step"],j["format_version"],j["root"]["level"],j["root"]["width"],j["root"]["height"])')" = "(3000, 2000, 3, 513, 1, 512, 5, 3, 375, 250)"
-check "metadata: tile grid per level" test "$(json_get '[(l["level"],l["width"],l["height"],l["tiles_x"],l["tiles_y"]) for l in j["levels"]]')" = "[(0, 3000, 2000, 6, 4), (1, 1500, 1000, 3, 2), (2, 750, 500, 2, 1)]"
+check "metadata: geometry" test "$(json_get '(j["width"],j["height"],j["channels"],j["tile_size"],j["tile_overlap"],j["tile_step"],j["format_version"],j["root"]["level"],j["root"]["width"],j["root"]["height"],j["root"]["side"])')" = "(3000, 2000, 3, 513, 1, 512, 6, 5, 94, 63, 128)"
+check "metadata: tile grid per level" test "$(json_get '[(l["level"],l["width"],l["height"],l["tiles_x"],l["tiles_y"]) for l in j["levels"]]')" = "[(0, 3000, 2000, 6, 4), (1, 1500, 1000, 3, 2), (2, 750, 500, 2, 1), (3, 375, 250, 1, 1), (4, 188, 125, 1, 1)]"
 check "metadata: IIIF link" test "$(json_get 'j["links"]["iiif"]')" = "http://127.0.0.1:$PORT/iiif/3/x/info.json"
 # bytes is the store file's size and bpp is 8 bytes / pixels, as gigaviewd
 # computes it and prints it (8 significant digits: JSON_REAL_PRECISION(8));
@@ -161,7 +161,7 @@ if j["bpp"] != bpp(size, j["width"], j["height"]) or info["bpp"] != float("%.6f"
 for l, il in zip(j["levels"], info["level"]):
     if l["bytes"] != il["bytes"] or l["bpp"] != bpp(l["bytes"], l["width"], l["height"]):
         bad.append("level %d: bytes %d (info %d), bpp %r" % (l["level"], l["bytes"], il["bytes"], l["bpp"]))
-if len(j["levels"]) != 3:
+if len(j["levels"]) != 5:
     bad.append("%d tiled levels" % len(j["levels"]))
 print("; ".join(bad) if bad else "bpp %.6f from %d bytes" % (j["bpp"], size))
 sys.exit(1 if bad else 0)
@@ -281,16 +281,16 @@ expect_status "batch GET: missing t" 400 "/v1/images/x/batch"
 expect_status "batch: unknown image" 404 /v1/images/nope/batch -X POST --data '{"tiles":[[0,0,0]]}'
 
 # ---------------------------------------------------------------- root
-run export "$S/x.gv" --level 3 -o e_root.png
+run export "$S/x.gv" --level 5 -o e_root.png
 expect_status "root PNG" 200 /v1/images/x/root
 cp "$T/b" root.png
 check "root: image/png" test "$(header Content-Type)" = "image/png"
-check "root PNG equals export --level 3" idiff -q e_root.png root.png
+check "root PNG equals export --level 5" idiff -q e_root.png root.png
 expect_status "root raw" 200 "/v1/images/x/root?format=raw"
-check "root raw: headers" test "$(header X-Width)x$(header X-Height)x$(header X-Channels)" = "375x250x3"
-check "root raw: w*h*c bytes" test "$(wc -c <"$T/b")" -eq $((375 * 250 * 3))
+check "root raw: headers" test "$(header X-Width)x$(header X-Height)x$(header X-Channels)" = "94x63x3"
+check "root raw: w*h*c bytes" test "$(wc -c <"$T/b")" -eq $((94 * 63 * 3))
 expect_status "root mip 1" 200 "/v1/images/x/root?mip=1&format=raw"
-check "root mip 1 is 188x125" test "$(header X-Width)x$(header X-Height)" = "188x125"
+check "root mip 1 is 47x32" test "$(header X-Width)x$(header X-Height)" = "47x32"
 expect_status "root: mip out of range" 404 "/v1/images/x/root?mip=10"
 expect_status "root: bad format" 400 "/v1/images/x/root?format=gif"
 # The root level as the store keeps it: a lossless WebP that decodes to
@@ -303,7 +303,7 @@ png_etag=$(header ETag)
 expect_status "root WebP" 200 "/v1/images/x/root?format=webp"
 cp "$T/b" root.webp
 webp_etag=$(header ETag)
-check "root WebP: image/webp, cacheable, headers" test "$(header Content-Type) $(header Cache-Control) $(header X-Width)x$(header X-Height)x$(header X-Channels)" = "image/webp public, max-age=3600 375x250x3"
+check "root WebP: image/webp, cacheable, headers" test "$(header Content-Type) $(header Cache-Control) $(header X-Width)x$(header X-Height)x$(header X-Channels)" = "image/webp public, max-age=3600 94x63x3"
 check "root WebP: smaller than the raw samples" test "$(wc -c <root.webp)" -lt "$(wc -c <root.raw)"
 check "root WebP decodes to exactly the raw root" webp_is_raw root.webp root.raw 3
 check "root WebP: an ETag of its own ($webp_etag)" sh -c "[ -n '$webp_etag' ] &&
@@ -364,7 +364,7 @@ expect_status "tile: negative" 400 /v1/images/x/tiles/0/-1/0
 expect_status "tile: overflowing" 400 /v1/images/x/tiles/0/99999999999999999999/0
 expect_status "tile: plus sign" 400 /v1/images/x/tiles/0/+1/0
 expect_status "tile: outside the grid" 404 /v1/images/x/tiles/0/6/0
-expect_status "tile: root level has no tiles" 404 /v1/images/x/tiles/3/0/0
+expect_status "tile: root level has no tiles" 404 /v1/images/x/tiles/5/0/0
 expect_status "tile: level past the pyramid" 404 /v1/images/x/tiles/39/0/0
 expect_status "tile: unknown image" 404 /v1/images/nope/tiles/0/0/0
 expect_status "unknown image" 404 /v1/images/nope

@@ -11,7 +11,7 @@
 # with the same options (level 0 is one page), and the store whose level-0
 # page is larger gets the other's level-0 page grafted into its place (the
 # index entry's size and CRC, and the index CRC, updated; the slack after
-# it zero): a valid store with the same header, root and level 1 and other
+# it zero): a valid store with the same header, root and levels 1 to 3 and other
 # level-0 pixels.
 # Needs curl, python3 and oiiotool (openimageio-tools).
 . "$(dirname "$0")/lib.sh"
@@ -40,7 +40,7 @@ def entry(s, p):
 
 pages = struct.unpack_from('<Q', a, 64)[0]
 last = pages - 1            # level 0's only page: levels are coarse first
-assert pages == struct.unpack_from('<Q', b, 64)[0] == 2, pages
+assert pages == struct.unpack_from('<Q', b, 64)[0] == 4, pages
 if entry(a, last)[1] < entry(b, last)[1]:
     a, b = b, a             # graft the smaller page into the larger's room
 off, size, _ = entry(a, last)

@@ -2,15 +2,16 @@
 # http_resident.sh - the coarse levels every store keeps decoded from its
 # opening (resident_bytes; server/catalog.c, gv_decoder_pin_levels).
 #
-# Store x (synth:3000x2000) has tiled levels 0 (6x4 tiles), 1 (3x2) and 2
-# (2x1) under its root tile; an RGB tile is 513x513x3 = 789507 bytes.
-#   - resident_bytes = 8M: the root and levels 2 and 1 (9 tiles) are
+# Store x (synth:3000x2000) has tiled levels 0 (6x4 tiles), 1 (3x2), 2
+# (2x1), 3 and 4 (one tile each) under its root tile (94x63, root side
+# 128); an RGB tile is 513x513x3 = 789507 bytes.
+#   - resident_bytes = 10M: the root and levels 4 to 1 (11 tiles) are
 #     decoded before the first request, level 0 (24 more) is not; IIIF
 #     answers from levels 1 and 2 then decode nothing, one from level 0
 #     decodes its own tile only (its parent is resident);
 #   - the answers are the bytes of a server that keeps nothing resident;
 #   - the budget is shared, in id order: y after x gets the rest (its root
-#     tile alone); and it is at most half of decoder_cache_bytes;
+#     tile and level 4); and it is at most half of decoder_cache_bytes;
 #   - a store dropped on a rescan (SIGHUP) lets its tiles go.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
@@ -51,19 +52,19 @@ fetch() {
     done
 }
 
-conf 8M 64M
+conf 10M 64M
 start_daemon "$T/r.conf"
-check "resident: 9 tiles (root, levels 2 and 1) decoded at the start" \
-    test "$(metric gigaview_tile_cache_misses_total) $(metric gigaview_tile_cache_bytes)" = "9 $((9 * TILE))"
+check "resident: 11 tiles (root, levels 4 to 1) decoded at the start" \
+    test "$(metric gigaview_tile_cache_misses_total) $(metric gigaview_tile_cache_bytes)" = "11 $((11 * TILE))"
 expect_status "IIIF from level 1" 200 /iiif/3/x/1024,0,1024,1024/512,/0/default.jpg
 expect_status "IIIF from level 2" 200 /iiif/3/x/0,0,2048,2000/512,/0/default.jpg
 check "levels 1 and 2 are answered without a decode" \
-    test "$(metric gigaview_tile_cache_misses_total)" = 9
+    test "$(metric gigaview_tile_cache_misses_total)" = 11
 check "...and with no decode time" test \
     "$(metric 'gigaview_render_stage_seconds_sum{stage="decode"}')" = 0.000000
 expect_status "IIIF from level 0" 200 /iiif/3/x/512,512,512,512/max/0/default.jpg
 check "a level-0 tile decodes itself alone: its parent is resident" \
-    test "$(metric gigaview_tile_cache_misses_total)" = 10
+    test "$(metric gigaview_tile_cache_misses_total)" = 12
 fetch with
 stop_daemon
 check "the daemon stopped cleanly" test "$drc" -eq 0
@@ -82,10 +83,10 @@ done
 stop_daemon
 
 cp "$S/x.gv" "$S/y.gv" || bail "cp"
-conf 8M 64M
+conf 10M 64M
 start_daemon "$T/r.conf"
-check "x then y: x keeps 9 tiles, y what is left (its root): 10 tiles" \
-    test "$(metric gigaview_tile_cache_misses_total) $(metric gigaview_tile_cache_bytes)" = "10 $((10 * TILE))"
+check "x then y: x keeps 11 tiles, y what is left (its root, level 4): 13 tiles" \
+    test "$(metric gigaview_tile_cache_misses_total) $(metric gigaview_tile_cache_bytes)" = "13 $((13 * TILE))"
 rm "$S/x.gv"
 kill -HUP "$DPID"
 n=0
@@ -93,13 +94,13 @@ while [ "$(metric gigaview_stores)" != 1 ] && [ $n -lt 100 ]; do
     sleep 0.1
     n=$((n + 1))
 done
-check "x dropped on a rescan lets its 9 tiles go" \
-    test "$(metric gigaview_tile_cache_bytes)" = "$TILE"
+check "x dropped on a rescan lets its 11 tiles go" \
+    test "$(metric gigaview_tile_cache_bytes)" = "$((2 * TILE))"
 stop_daemon
 
-conf 32M 4M
+conf 32M 3M
 start_daemon "$T/r.conf"
-check "at most half of decoder_cache_bytes: 2 MB holds the root alone" \
+check "at most half of decoder_cache_bytes: 1.5 MB holds the root alone" \
     test "$(metric gigaview_tile_cache_misses_total)" = 1
 stop_daemon
 check "the daemon stopped cleanly" test "$drc" -eq 0

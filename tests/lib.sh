@@ -224,6 +224,17 @@ peak_kib() {
     tail -n 1 "$T/rss"
 }
 
+# close_to A B EPS: |A - B| <= EPS (decimal numbers).
+close_to() {
+    awk -v a="$1" -v b="$2" -v e="$3" \
+        'BEGIN { d = a - b; if (d < 0) d = -d; exit !(a != "" && b != "" && d <= e) }'
+}
+
+# idiff_psnr REF TEST: the "Peak SNR" idiff prints.
+idiff_psnr() {
+    idiff "$1" "$2" 2>/dev/null | sed -n 's/.*Peak SNR = *//p'
+}
+
 # json_field FILE NAME: the first numeric value of "NAME": in FILE.
 json_field() {
     grep -o "\"$2\":[-0-9.]*" "$1" | head -n 1 | cut -d: -f2

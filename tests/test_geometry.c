@@ -11,18 +11,18 @@ int main(void)
 {
     struct gv_geometry g;
 
-    check(gv_geometry_init(&g, 1, 1, 3) == 0 && g.root == 0 && g.pages == 0 &&
+    check(gv_geometry_init(&g, 1, 1, 3, GV_ROOT_MAX) == 0 && g.root == 0 && g.pages == 0 &&
           g.root_mips == 1, "1x1 is its own root, no pages");
-    check(gv_geometry_init(&g, 512, 512, 3) == 0 && g.root == 0,
+    check(gv_geometry_init(&g, 512, 512, 3, GV_ROOT_MAX) == 0 && g.root == 0,
           "512x512 fits the root");
-    check(gv_geometry_init(&g, 513, 513, 3) == 0 && g.root == 1 &&
+    check(gv_geometry_init(&g, 513, 513, 3, GV_ROOT_MAX) == 0 && g.root == 1 &&
           g.level[0].tiles_x == 1 && g.level[0].tiles_y == 1 &&
           g.level[1].width == 257, "513x513: one tile and a 257^2 root");
-    check(gv_geometry_init(&g, 514, 514, 3) == 0 && g.level[0].tiles_x == 2 &&
+    check(gv_geometry_init(&g, 514, 514, 3, GV_ROOT_MAX) == 0 && g.level[0].tiles_x == 2 &&
           g.level[0].tiles_y == 2, "514x514 needs 2x2 tiles");
     check(gv_tiles_for(1025) == 2 && gv_tiles_for(1026) == 3,
           "tiles overlap by one pixel: 1025 px = 2 tiles, 1026 px = 3");
-    check(gv_geometry_init(&g, 70000, 1, 3) == 0 && g.root == 8 &&
+    check(gv_geometry_init(&g, 70000, 1, 3, GV_ROOT_MAX) == 0 && g.root == 8 &&
           g.level[0].tiles_x == 137 && g.level[0].tiles_y == 1 &&
           g.level[8].width == 274 && g.level[8].height == 1,
           "70000x1: 8 tiled levels, 137 tiles wide, 274x1 root");
@@ -35,17 +35,38 @@ int main(void)
     lw = lh = 7;
     check(gv_level_size(&g, 18, &lw, &lh) < 0 && gv_level_size(&g, -1, &lw, &lh) < 0 &&
           lw == 7 && lh == 7, "no level 18 or -1; sizes untouched");
-    check(gv_geometry_init(&g, 1, 70000, 1) == 0 && g.root == 8 &&
+    check(gv_geometry_init(&g, 1, 70000, 1, GV_ROOT_MAX) == 0 && g.root == 8 &&
           g.level[0].tiles_y == 137 && g.channels == 1, "1x70000 gray");
-    check(gv_geometry_init(&g, 0, 5, 3) < 0, "zero width is refused");
-    check(gv_geometry_init(&g, 5, 5, 2) < 0, "two channels are refused");
-    check(gv_geometry_init(&g, 0x80000000u, 5, 3) < 0, "2^31 wide is refused");
-    check(gv_geometry_init(&g, 0x7fffffffu, 0x7fffffffu, 3) == 0 &&
+    check(gv_geometry_init(&g, 0, 5, 3, GV_ROOT_MAX) < 0, "zero width is refused");
+    check(gv_geometry_init(&g, 5, 5, 2, GV_ROOT_MAX) < 0, "two channels are refused");
+    check(gv_geometry_init(&g, 0x80000000u, 5, 3, GV_ROOT_MAX) < 0, "2^31 wide is refused");
+    check(gv_geometry_init(&g, 0x7fffffffu, 0x7fffffffu, 3, GV_ROOT_MAX) == 0 &&
           g.root < GV_MAX_LEVELS && g.level[g.root].width <= 512,
           "2^31-1 square fits in %d levels (root %d)", GV_MAX_LEVELS, g.root);
 
+    /* A smaller root side (format version 6): more tiled levels, one tile
+     * each above the level that needs two. */
+    check(gv_geometry_init(&g, 1632, 1224, 3, 32) == 0 && g.root == 6 &&
+          g.root_side == 32 && g.level[6].width == 26 && g.level[6].height == 20 &&
+          g.level[5].tiles_x == 1 && g.level[1].tiles_x == 2 &&
+          g.level[0].tiles_x == 4 && g.root_mips == 6 && g.pages == 6,
+          "1632x1224 with root side 32: root 6 (%ux%u), %d mips, %llu pages",
+          g.level[g.root].width, g.level[g.root].height, g.root_mips,
+          (unsigned long long)g.pages);
+    check(gv_geometry_init(&g, 32, 20, 3, 32) == 0 && g.root == 0,
+          "an image within the root side is all root");
+    check(gv_geometry_init(&g, 33, 20, 1, 32) == 0 && g.root == 1 &&
+          g.level[1].width == 17 && g.level[0].tiles_x == 1,
+          "33 pixels over a root side of 32: one tiled level");
+    check(gv_geometry_init(&g, 70000, 1, 3, 1) == 0 && g.root == 17 &&
+          g.level[17].width == 1, "root side 1: down to one pixel (root %d)",
+          g.root);
+    check(gv_geometry_init(&g, 5, 5, 3, 0) < 0 &&
+          gv_geometry_init(&g, 5, 5, 3, GV_ROOT_MAX + 1) < 0,
+          "root sides 0 and 513 are refused");
+
     /* Page numbering: coarse levels first, row-major. */
-    check(gv_geometry_init(&g, 40000, 20000, 3) == 0, "40000x20000");
+    check(gv_geometry_init(&g, 40000, 20000, 3, GV_ROOT_MAX) == 0, "40000x20000");
     int ok = 1;
     uint64_t expect = 0;
     for (int k = g.root - 1; k >= 0; k--)

@@ -26,7 +26,7 @@ static uint64_t area(const struct gv_level *l, uint32_t tx, uint32_t ty)
 static int check_plans(uint32_t w, uint32_t h, int n)
 {
     struct gv_geometry g;
-    if (gv_geometry_init(&g, w, h, 3) < 0)
+    if (gv_geometry_init(&g, w, h, 3, GV_ROOT_MAX) < 0)
         fail("geometry %ux%u", w, h);
     struct gv_shard_plan *p = calloc((size_t)n, sizeof *p);
     if (!p)
@@ -104,11 +104,11 @@ int main(void)
     struct gv_geometry g;
     struct gv_shard_plan p;
     struct gv_error err = {0};
-    gv_geometry_init(&g, 300, 200, 3);
+    gv_geometry_init(&g, 300, 200, 3, GV_ROOT_MAX);
     check(gv_shard_plan_init(&p, &g, 1, 2, &err) == 0 && p.tiles == 0,
           "an image that is all root has no tiles to shard");
     gv_shard_plan_free(&p);
-    gv_geometry_init(&g, 1100, 700, 3);
+    gv_geometry_init(&g, 1100, 700, 3, GV_ROOT_MAX);
     gv_error_clear(&err);
     check(gv_shard_plan_init(&p, &g, 2, 2, &err) < 0 &&
           gv_shard_plan_init(&p, &g, -1, 2, &err) < 0 &&
@@ -117,7 +117,7 @@ int main(void)
      * parent), so it shards like any other size.  Shard 0 of 2 takes the
      * full 513x513 tile 0,0 (the even split of the pixels, to within a
      * tile) and its parent. */
-    gv_geometry_init(&g, 1026, 600, 3);
+    gv_geometry_init(&g, 1026, 600, 3, GV_ROOT_MAX);
     int rc = gv_shard_plan_init(&p, &g, 0, 2, &err);
     check(rc == 0 && p.own_tiles == 1 && p.tiles == 2 && gv_shard_plan_wants(&p, &g, 0, 0, 0) &&
               gv_shard_plan_wants(&p, &g, 1, 0, 0),

@@ -40,7 +40,7 @@ static int write_store(const char *path, int salt, struct gv_error *err)
     if (!w)
         return -1;
     struct gv_geometry g;
-    gv_geometry_init(&g, 1100, 600, 1);
+    gv_geometry_init(&g, 1100, 600, 1, GV_ROOT_MAX);
     static uint8_t zero4[4];
     size_t l2 = gv_tilebuf_size(2, 1);
     uint8_t *r2 = calloc(1, l2);
@@ -291,8 +291,37 @@ int main(void)
     spit(bad, copy, len);
     gv_error_clear(&err);
     check(!gv_store_open(bad, &err) && err.code == GV_EFORMAT, "bad version: GV_EFORMAT");
-    check_str(err.text, "store: format version 9 is not supported (this build reads versions 1 to 5)",
+    check_str(err.text, "store: format version 9 is not supported (this build reads versions 1 to 6)",
               "bad version: the message");
+
+    /* Version 6 names its root side in bytes 96-97: a store with the
+     * 512-pixel root is the same store as version 6 with side 512; sides
+     * 0 and 513 are refused, and a side that gives other levels than the
+     * header's is corrupt. */
+    static const struct { uint16_t side; int opens; const char *text; } sides[] = {
+        {512, 1, NULL},
+        {0, 0, "store: root side 0 is not 1..512"},
+        {513, 0, "store: root side 513 is not 1..512"},
+        {64, 0, "store: level count does not match the dimensions"},
+    };
+    for (size_t i = 0; i < sizeof sides / sizeof sides[0]; i++) {
+        memcpy(copy, orig, len);
+        gv_put16(copy + 8, 6);
+        gv_put16(copy + 96, sides[i].side);
+        gv_put32(copy + 124, gv_crc32(0, copy, 124));
+        spit(bad, copy, len);
+        gv_error_clear(&err);
+        struct gv_store *v6 = gv_store_open(bad, &err);
+        if (sides[i].opens)
+            check(v6 && gv_store_info(v6)->header.root_side == 512 &&
+                  gv_store_info(v6)->geometry.root == orig[21],
+                  "version 6 with root side 512 opens as the same store");
+        else
+            check(!v6 && err.code == GV_ECORRUPT && !strcmp(err.text, sides[i].text),
+                  "version 6 with root side %u: %s (got %s)", sides[i].side,
+                  sides[i].text, err.text);
+        gv_store_close(v6);
+    }
 
     char want[512];
     spit(bad, orig, len - 7);

@@ -668,7 +668,8 @@ static int session_open(struct session *s, const char *url, const struct render_
         return -1;
     }
     gv_http_use_batches(s->http, !a->no_batch);
-    if (gv_geometry_init(&s->geo, s->img.width, s->img.height, s->img.channels) < 0 ||
+    if (gv_geometry_init(&s->geo, s->img.width, s->img.height, s->img.channels,
+                         s->img.root_side) < 0 ||
         s->geo.root != s->img.levels_tiled ||
         s->geo.level[s->geo.root].width != s->img.root_w ||
         s->geo.level[s->geo.root].height != s->img.root_h) {

@@ -461,11 +461,12 @@ int gv_http_image(struct gv_http *h, const char *id,
     }
     memset(img, 0, sizeof *img);
     snprintf(img->id, sizeof img->id, "%s", id);
-    json_int_t w = 0, hh = 0, rw = 0, rh = 0;
-    int rc = json_unpack(j, "{s:I,s:I,s:i,s:i,s:{s:I,s:I,s:i}}", "width", &w,
+    json_int_t w = 0, hh = 0, rw = 0, rh = 0, side = 512;
+    /* root.side: servers before format version 6 do not say it (512). */
+    int rc = json_unpack(j, "{s:I,s:I,s:i,s:i,s:{s:I,s:I,s:i,s?I}}", "width", &w,
                          "height", &hh, "channels", &img->channels,
                          "levels_tiled", &img->levels_tiled, "root", "width", &rw,
-                         "height", &rh, "mip_count", &img->root_mips);
+                         "height", &rh, "mip_count", &img->root_mips, "side", &side);
     /* A height store (docs/FORMAT.md section 12) has tiles of another codec. */
     int height_store = json_object_get(j, "elevation") != NULL;
     const char *win = json_string_value(json_object_get(j, "window"));
@@ -477,13 +478,15 @@ int gv_http_image(struct gv_http *h, const char *id,
                        "does not draw (its regions: format=png16 or tiff32)", what);
     if (rc < 0 || w <= 0 || hh <= 0 || w > 0x7fffffff || hh > 0x7fffffff ||
         (img->channels != 1 && img->channels != 3) || rw <= 0 || rh <= 0 ||
-        rw > 512 || rh > 512 || img->levels_tiled < 0 || img->root_mips < 1)
+        rw > 512 || rh > 512 || side < 1 || side > 512 || img->levels_tiled < 0 ||
+        img->root_mips < 1)
         return gv_fail(err, GV_ECORRUPT, "%s: unexpected metadata from the server",
                        what);
     img->width = (uint32_t)w;
     img->height = (uint32_t)hh;
     img->root_w = (uint32_t)rw;
     img->root_h = (uint32_t)rh;
+    img->root_side = (uint32_t)side;
     return 0;
 }
 

@@ -66,6 +66,7 @@ struct gv_remote_image {
     int channels;
     int levels_tiled;      /* = the root level */
     uint32_t root_w, root_h;
+    uint32_t root_side;    /* the root is the first level within this */
     int root_mips;
     char window[256];      /* the default display window the server
                             * applies (render/window.h text; "" none) */

@@ -289,7 +289,8 @@ struct vt *vt_new(struct gv_gpu *g, struct vf_result *res,
     t->img = res->img;
     t->frame = 1;
     const struct gv_remote_image *im = &res->img;
-    if (gv_geometry_init(&t->geo, im->width, im->height, im->channels) < 0 ||
+    if (gv_geometry_init(&t->geo, im->width, im->height, im->channels,
+                         im->root_side) < 0 ||
         t->geo.root != im->levels_tiled ||
         t->geo.level[t->geo.root].width != im->root_w ||
         t->geo.level[t->geo.root].height != im->root_h) {

@@ -522,7 +522,7 @@ static int encode(struct henc *h, const char *output, struct gv_height_result *r
         return -1;
     h->m.src_float = si.src_float;
     /* Only the size so far: float input is read first for its range. */
-    if (gv_geometry_init(&h->g, si.width, si.height, 1) < 0) {
+    if (gv_geometry_init(&h->g, si.width, si.height, 1, GV_ROOT_MAX) < 0) {
         gv_source_free(src);
         return gv_fail(h->err, GV_EINVAL, ME ": bad dimensions %ux%u",
                        si.width, si.height);

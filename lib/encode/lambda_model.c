@@ -391,3 +391,23 @@ double gv_lambda_model_lambda(const struct gv_lambda_model *lv, int n,
     return lambda > floor ? lambda : floor;
 }
 
+
+double gv_lambda_model_level_factor(const struct gv_lambda_model *lv, int n,
+                                    double target_mse)
+{
+    if (n <= 0 || !lv[0].blocks)
+        return 1.0;
+    const struct gv_lambda_model *m = &lv[0];
+    const double theta = gv_lambda_model_theta(lv, n, target_mse);
+    const double scale = V_PER_SAMPLE * m->channels;
+    double above = 0;
+    for (int k = 0; k < GV_LM_BINS; k++)
+        if (m->count[k] && (double)m->sum[k] / (double)m->count[k] / scale > theta)
+            above += (double)m->count[k];
+    return 0.5 + 0.5 * above / (double)m->blocks;
+}
+
+double gv_level_lambda(double lambda, double f, int level)
+{
+    return lambda * pow(f, level);
+}

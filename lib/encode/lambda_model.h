@@ -103,4 +103,17 @@ double gv_lambda_model_k(double target_mse, int dct);
 double gv_lambda_model_lambda(const struct gv_lambda_model *lv, int n,
                               double target_mse, int dct);
 
+/* The factor f of gv_level_lambda for an image whose level-0 MSE target
+ * is target_mse: 1/2 + 1/2 p, p the share of level 0's blocks whose detail
+ * is above the model's water level (the blocks that get coded).  Pure. */
+double gv_lambda_model_level_factor(const struct gv_lambda_model *lv, int n,
+                                    double target_mse);
+
+/* The price of a bit in a tile of level k, for level 0's price lambda:
+ * lambda * f^k.  A coarse level's error is the prediction of every level
+ * below: where they code little (smooth images, low rates) it reaches
+ * level 0 as it is, where they code much it costs only their bits, so f
+ * goes from 1/2 to 1 with the share of level 0 that is coded. */
+double gv_level_lambda(double lambda, double f, int level);
+
 #endif

@@ -139,7 +139,7 @@ static void trial_tile(void *ctx, size_t i, int worker)
     const uint32_t vw = gv_tile_span(l->width, tile->tx);
     const uint32_t vh = gv_tile_span(l->height, tile->ty);
     struct gv_tile_params params = env->params;
-    params.lambda = r->lambda;
+    params.lambda = gv_level_lambda(r->lambda, env->level_f, r->level);
     params.seed = gv_encode_tile_seed(r->level, tile->tx, tile->ty);
     uint8_t *recon = r->level == 0 ? env->wrecon + (size_t)worker * tb : r->out[i];
     r->len[i] = gv_tile_encode(env->ws[worker], orig, r->parent[i],

@@ -74,6 +74,7 @@ struct gv_lambda_trial_env {
      * PSNR is taken for the whole level's. */
     const struct gv_lambda_model *model;
     int model_levels, dct;
+    double level_f;                  /* gv_level_lambda's f */
 };
 
 /* One tile of the sample as the chosen try coded it: what pass 2 would

@@ -139,7 +139,8 @@ struct gv_shard_writer *gv_shard_writer_new(const char *path,
         gv_fail(err, GV_ENOMEM, "shard: out of memory");
         return NULL;
     }
-    if (gv_geometry_init(&w->g, h->width, h->height, h->channels) < 0) {
+    if (gv_geometry_init(&w->g, h->width, h->height, h->channels,
+                         h->root_side ? h->root_side : GV_ROOT_MAX) < 0) {
         gv_fail(err, GV_EINVAL, "shard: bad dimensions %ux%u", h->width, h->height);
         free(w);
         return NULL;
@@ -153,7 +154,8 @@ struct gv_shard_writer *gv_shard_writer_new(const char *path,
     w->flags = flags;
     /* The template: what gv_store_writer_new would start from. */
     struct gv_header t = *h;
-    t.version = h->version == GV_VERSION_DCT ? GV_VERSION_DCT : GV_VERSION;
+    t.root_side = (uint16_t)w->g.root_side;
+    t.version = gv_image_version(h->version, t.root_side);
     t.root = (uint8_t)w->g.root;
     t.root_mips = (uint8_t)w->g.root_mips;
     t.pages = w->g.pages;
@@ -341,7 +343,7 @@ static int read_headers(struct gv_shard_reader *r, uint64_t size,
     if (gv_header_unpack(in->header_raw, &in->header, err) < 0)
         return -1;
     if (gv_geometry_init(&r->g, in->header.width, in->header.height,
-                         in->header.channels) < 0 ||
+                         in->header.channels, in->header.root_side) < 0 ||
         in->header.root != r->g.root || in->header.pages != r->g.pages)
         return gv_fail(err, GV_ECORRUPT, "shard: %s: inconsistent store header",
                        path);

@@ -212,7 +212,8 @@ static int describe_source(struct merge *m)
 {
     const struct gv_header *h = &m->info->header;
     struct gv_encode_result *res = m->res;
-    if (gv_geometry_init(&m->g, h->width, h->height, h->channels) < 0)
+    if (gv_geometry_init(&m->g, h->width, h->height, h->channels,
+                         h->root_side) < 0)
         return gv_fail(m->err, GV_ECORRUPT, "merge: bad dimensions %ux%u",
                        h->width, h->height);
     res->geometry = m->g;

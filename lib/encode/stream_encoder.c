@@ -85,6 +85,7 @@ struct encoder {
     size_t meta_len;
     double target_mse;        /* gv_psnr_to_mse(opts->target_psnr) */
     double lambda;            /* equal-slope mode: the price of a bit */
+    double level_f;           /* ... in level k: lambda * level_f^k */
     struct gv_lambda_model model[GV_MAX_LEVELS]; /* levels' detail, pass 1 */
     struct gv_lambda_trial trial; /* the tiles that correct lambda before
                                    * pass 2 (equal-slope mode) */
@@ -653,6 +654,7 @@ static int trial_lambda(struct encoder *e)
         .model = e->model,
         .model_levels = e->g.root,
         .dct = e->opts->dct != GV_LAYOUTS_VQ,
+        .level_f = e->level_f,
     };
     struct gv_lambda_trial_result *r = &e->trial_res;
     if (gv_lambda_trial_search(&e->trial, &env, e->opts->target_psnr, e->lambda,
@@ -723,7 +725,8 @@ static void encode_tile(void *ctx, size_t slot, int worker)
         .target_mse = e->target_mse,
         .max_rate = e->opts->max_rate,
         .seed = gv_encode_tile_seed(e->level, tx, ty),
-        .lambda = e->opts->per_tile ? 0.0 : e->lambda,
+        .lambda = e->opts->per_tile ? 0.0 : gv_level_lambda(e->lambda, e->level_f,
+                                                            e->level),
         .dct = e->opts->dct,
     };
     e->lens[slot] = gv_tile_encode(e->ws[worker], orig, parent, (int)(tx & 1),
@@ -1151,6 +1154,19 @@ static int check_opts(const struct gv_encode_opts *opts, struct gv_error *err)
     return 0;
 }
 
+/* The VQ-only stores (the per-tile mode, --layouts vq) are version 2
+ * with a 512-pixel root, for every reader; the default writes version 6,
+ * a root within GV_ROOT_SIDE and tiles in any layout. */
+static int vq_only(const struct gv_encode_opts *opts)
+{
+    return opts->per_tile || opts->dct == GV_LAYOUTS_VQ;
+}
+
+static uint16_t root_side_of(const struct gv_encode_opts *opts)
+{
+    return vq_only(opts) ? GV_ROOT_MAX : GV_ROOT_SIDE;
+}
+
 /* The store header before any page: geometry, source and settings. */
 static void make_header(const struct encoder *e, struct gv_header *h)
 {
@@ -1164,8 +1180,9 @@ static void make_header(const struct encoder *e, struct gv_header *h)
     h->src_float = (uint8_t)src->src_float;
     h->tone = (uint8_t)src->tone;
     h->target_mpsnr = (uint32_t)lround(e->opts->target_psnr * 1000.0);
-    h->version = e->opts->dct != GV_LAYOUTS_VQ && !e->opts->per_tile ?
-                 GV_VERSION_DCT : GV_VERSION;
+    h->root_side = root_side_of(e->opts);
+    h->version = gv_image_version(vq_only(e->opts) ? GV_VERSION : GV_VERSION_DCT,
+                                  h->root_side);
 }
 
 /* The geometry of the opened source, and the output: a shard file (with
@@ -1188,7 +1205,8 @@ static int open_output(struct encoder *e, const char *output)
     const struct gv_encode_opts *opts = e->opts;
     struct gv_encode_result *res = e->res;
     e->c = res->source.channels;
-    if (gv_geometry_init(&e->g, res->source.width, res->source.height, e->c) < 0)
+    if (gv_geometry_init(&e->g, res->source.width, res->source.height, e->c,
+                         root_side_of(opts)) < 0)
         return gv_fail(e->err, GV_EINVAL, "encode: unsupported size %ux%u",
                        res->source.width, res->source.height);
     res->geometry = e->g;
@@ -1331,6 +1349,7 @@ int gv_encode(const char *const *inputs, int n, const char *output,
         gv_lambda_model_finish(&e.model[k]);
     e.lambda = gv_lambda_model_lambda(e.model, e.g.root, e.target_mse,
                                       opts->dct != GV_LAYOUTS_VQ);
+    e.level_f = gv_lambda_model_level_factor(e.model, e.g.root, e.target_mse);
     if (!opts->per_tile && trial_lambda(&e) < 0)
         goto out;
     res->per_tile = opts->per_tile;

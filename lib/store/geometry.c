@@ -11,8 +11,10 @@ uint32_t gv_tiles_for(uint32_t pixels)
 }
 
 int gv_geometry_init(struct gv_geometry *g, uint32_t width, uint32_t height,
-                     int channels)
+                     int channels, uint32_t root_side)
 {
+    if (root_side < 1 || root_side > GV_ROOT_MAX)
+        return -1;
     if (width == 0 || height == 0 || width > GV_MAX_DIM || height > GV_MAX_DIM)
         return -1;
     if (channels != 1 && channels != 3)
@@ -20,13 +22,14 @@ int gv_geometry_init(struct gv_geometry *g, uint32_t width, uint32_t height,
     g->width = width;
     g->height = height;
     g->channels = channels;
+    g->root_side = root_side;
     uint32_t w = width, h = height;
     int k = 0;
     for (;;) {
         struct gv_level *l = &g->level[k];
         l->width = w;
         l->height = h;
-        if (w <= GV_ROOT_MAX && h <= GV_ROOT_MAX)
+        if (w <= root_side && h <= root_side)
             break;
         w = (w + 1) / 2;
         h = (h + 1) / 2;

@@ -84,6 +84,8 @@ void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE])
         gv_put64(out + 80, h->meta_offset);
         gv_put32(out + 88, h->meta_size);
         gv_put32(out + 92, h->meta_crc);
+        if (h->version >= GV_VERSION_SMALL_ROOT)
+            gv_put16(out + 96, h->root_side);
     }
     gv_put32(out + 124, gv_crc32(0, out, 124));
 }
@@ -136,6 +138,13 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
         h->meta_offset = gv_get64(in + 80);
         h->meta_size = gv_get32(in + 88);
         h->meta_crc = gv_get32(in + 92);
+    }
+    h->root_side = GV_ROOT_MAX;
+    if (h->version >= GV_VERSION_SMALL_ROOT) {
+        h->root_side = gv_get16(in + 96);
+        if (h->root_side < 1 || h->root_side > GV_ROOT_MAX)
+            return gv_fail(err, GV_ECORRUPT, "store: root side %u is not "
+                           "1..%d", h->root_side, GV_ROOT_MAX);
     }
     if (h->version == GV_VERSION_HEIGHT) {
         /* Version 3 is the height store: one channel, finite mapping. */

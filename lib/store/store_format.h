@@ -33,7 +33,10 @@
 #define GV_VERSION_HEIGHT 3 /* what it writes for a height store */
 #define GV_VERSION_DCT 5   /* an image store whose tiles may use layouts D
                             * and D2 (version 4: D only; read the same) */
-#define GV_VERSION_MAX 5   /* the newest version the reader reads */
+#define GV_VERSION_SMALL_ROOT 6 /* an image store whose root is the first
+                            * level within root_side (header bytes 96-97),
+                            * tiles in any layout */
+#define GV_VERSION_MAX 6   /* the newest version the reader reads */
 #define GV_VERSION_MIN 1   /* the oldest version the reader reads */
 
 /* Store kinds (header byte 80, format version 3 only). */
@@ -77,7 +80,25 @@ struct gv_header {
      * (store_meta.h), size 0 when there is none. */
     uint64_t meta_offset;
     uint32_t meta_size, meta_crc;   /* the whole section, its CRC32 */
+    /* The root is the first level within root_side x root_side pixels:
+     * header bytes 96-97 from version 6 on, GV_ROOT_MAX before. */
+    uint16_t root_side;
 };
+
+/* root_side of the stores the encoder writes: every level larger than
+ * 128 x 128 is coded at the store's quality (docs/FORMAT.md section 1;
+ * 32, 64 and 256 measured worse on the bench photographs). */
+#define GV_ROOT_SIDE 128
+
+/* The version an image store is written with: version 6 (GV_VERSION_SMALL_ROOT)
+ * for any root_side other than GV_ROOT_MAX; otherwise `version` when it is
+ * 5 (layouts D and D2 in use), else 2. */
+static inline uint16_t gv_image_version(uint16_t version, uint16_t root_side)
+{
+    if (root_side != GV_ROOT_MAX || version == GV_VERSION_SMALL_ROOT)
+        return GV_VERSION_SMALL_ROOT;
+    return version == GV_VERSION_DCT ? GV_VERSION_DCT : GV_VERSION;
+}
 
 /* Serialize h into 128 bytes, CRC included. */
 void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE]);

@@ -46,7 +46,7 @@ static int check_header(struct gv_store *s, uint64_t file_size,
 {
     const struct gv_header *h = &s->info.header;
     struct gv_geometry *g = &s->info.geometry;
-    if (gv_geometry_init(g, h->width, h->height, h->channels) < 0)
+    if (gv_geometry_init(g, h->width, h->height, h->channels, h->root_side) < 0)
         return gv_fail(err, GV_ECORRUPT, "store: bad dimensions %ux%u or "
                        "channels %u", h->width, h->height, h->channels);
     if (g->root != h->root || g->root_mips != h->root_mips)

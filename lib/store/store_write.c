@@ -52,10 +52,13 @@ struct gv_store_writer *gv_store_writer_new(const char *path,
     w->h.meta_offset = 0;   /* gv_store_writer_meta fills them */
     w->h.meta_size = w->h.meta_crc = 0;
     /* An image store is version 2 unless the caller asks for 5 (tiles in
-     * layouts D and D2). */
+     * layouts D and D2) or 6 (any root_side, gv_image_version). */
+    if (h->kind == GV_KIND_HEIGHT || !h->root_side)
+        w->h.root_side = GV_ROOT_MAX;
     w->h.version = h->kind == GV_KIND_HEIGHT ? GV_VERSION_HEIGHT :
-                   h->version == GV_VERSION_DCT ? GV_VERSION_DCT : GV_VERSION;
-    if (gv_geometry_init(&w->g, h->width, h->height, h->channels) < 0) {
+                   gv_image_version(h->version, w->h.root_side);
+    if (gv_geometry_init(&w->g, h->width, h->height, h->channels,
+                         w->h.root_side) < 0) {
         gv_fail(err, GV_EINVAL, "store: bad dimensions %ux%u", h->width, h->height);
         goto fail;
     }

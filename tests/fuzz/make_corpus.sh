@@ -72,6 +72,14 @@ for name in ["rgb-600x300"]:
     struct.pack_into("<II", e, 12, 0x7fffffff, 3)
     struct.pack_into("<I", e, 124, crc(bytes(e[:124])))
     save("store", name + "-huge-header", bytes(e))
+    # Root sides (header bytes 96-97, format version 6) out of range or
+    # giving other levels than the header's, CRC fixed.
+    for side in (0, 64, 513):
+        e = bytearray(d)
+        struct.pack_into("<HH", e, 8, 6, 128)
+        struct.pack_into("<H", e, 96, side)
+        struct.pack_into("<I", e, 124, crc(bytes(e[:124])))
+        save("store", "%s-root-side-%d" % (name, side), bytes(e))
     # A page index entry pointing past the end, index CRC fixed.
     index, pages = struct.unpack_from("<QQ", d, 56)
     if pages:
