@@ -31,7 +31,9 @@
 #             (vips' default chroma: 4:2:0 below Q 90, 4:4:4 from 90); djpeg.
 # A pyramid's levels are the image and its 2x2 box shrinks (vips shrink 2 2)
 # down to the first level whose longer side is under 512 px, i.e. 256..511
-# px, where gigaview keeps its root; its bytes are the sum of one file per
+# px (where gigaview kept its root before format version 6; its root is
+# now at most 128 px, the levels above coded as tiles and counted in its
+# bytes); a pyramid's bytes are the sum of one file per
 # level (no tiles: no tile overhead, which favours the anchor); its quality
 # is level 0's. PSNR is over RGB from the total MSE, SSIM is the mean SSIM
 # of BT.601 luma (11x11 Gaussian window); both by bench/imgcompare.c against

@@ -38,6 +38,10 @@
                          * lowered the landing by 0.17 dB on average */
 #define LM_ALPHA 0.75   /* share of a parent's error its children inherit */
 #define LM_FLOOR 64.0   /* lambda >= gv_rd_lambda(target) / LM_FLOOR */
+#define LM_CEIL 64.0    /* lambda <= K * gv_rd_lambda(target) * LM_CEIL: where
+                         * the model says the prediction alone reaches the
+                         * target (theta saturates), a first guess the
+                         * lambda trial can leave in two steps */
 
 #define V_PER_SAMPLE 1024.0   /* V / (this x C): detail per sample */
 
@@ -388,7 +392,8 @@ double gv_lambda_model_lambda(const struct gv_lambda_model *lv, int n,
     const double k = gv_lambda_model_k(target_mse, dct);
     double lambda = k * 2.0 * log(2.0) * gv_lambda_model_theta(lv, n, target_mse);
     double floor = gv_rd_lambda(target_mse) / LM_FLOOR;
-    return lambda > floor ? lambda : floor;
+    double ceil = k * gv_rd_lambda(target_mse) * LM_CEIL;
+    return lambda > ceil ? ceil : lambda > floor ? lambda : floor;
 }
 
 

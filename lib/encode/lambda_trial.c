@@ -291,7 +291,10 @@ static double next_lambda(const struct search *s, const double *lam,
     for (int i = 0; i < n; i++) {
         if (p[i] > target && (above < 0 || p[i] < p[above]))
             above = i;
-        if (p[i] < target && (below < 0 || p[i] > p[below]))
+        /* Below the target, the closest; of equal ones (the prediction
+         * alone at every lambda above some), the lowest lambda. */
+        if (p[i] < target && (below < 0 || p[i] > p[below] ||
+                              (p[i] == p[below] && lam[i] < lam[below])))
             below = i;
     }
     double next;
@@ -361,9 +364,17 @@ int gv_lambda_trial_search(const struct gv_lambda_trial *t,
         }
         n++;
         /* Close enough, out of tries, or a step that changed nothing (the
-         * sample coded with the prediction alone, or at the rate cap). */
+         * sample coded with the prediction alone, or at the rate cap).
+         * Where the target lies above and a lower lambda still far above
+         * the high-rate price changed nothing, the sample is all
+         * prediction and the model's first guess was far too high (a
+         * smooth image whose model says the prediction alone reaches
+         * the target): lower it on. */
+        const int all_prediction = n >= 2 && p[n - 1] < target_psnr &&
+                                   lam[n - 1] < lam[n - 2] &&
+                                   lam[n - 1] > 16.0 * gv_rd_lambda(target_mse);
         if (fabs(p[n - 1] - target_psnr) <= TRIAL_TOLERANCE || n == GV_TRIAL_TRIES ||
-            (n >= 2 && mse[n - 1] == mse[n - 2]) ||
+            (n >= 2 && mse[n - 1] == mse[n - 2] && !all_prediction) ||
             (n >= TRIAL_TRIES_NEAR && fabs(p[best] - target_psnr) <= TRIAL_NEAR))
             break;
         cur = next_lambda(&s, lam, p, est, n, target_psnr);
