@@ -10,7 +10,10 @@
 # Default images: the eight photographs of $DATA_DIR/photos, the JPEGs
 # halved (vips resize 0.5, lanczos3, as rate-distortion.sh does) and the
 # PNGs as they are.  Environment: QS="32 36 40 44 46" (the -q values),
-# TMPDIR.  Nothing is asserted: the script only reports.
+# FULL=1 (the JPEGs at full size, cropped 4 px off the left and top so
+# that their 8x8 grid does not line up with the coder's, as rd-anchors.sh
+# FULL=1; rows named "/crop4"), TMPDIR.  Nothing is asserted: the script
+# only reports.
 set -euo pipefail
 
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -40,9 +43,15 @@ for img in "${inputs[@]}"; do
 	case $img in
 	*.jpg|*.jpeg|*.JPG)
 		need_cmd vips libvips-tools
-		src=$work/${name%.*}-half.png
-		vips resize "$img" "${src}[strip,compression=1]" 0.5 --kernel lanczos3
-		name="$name/2" ;;
+		src=$work/${name%.*}-prep.png
+		if [ "${FULL:-0}" = 1 ]; then
+			vips crop "$img" "${src}[strip,compression=1]" 4 4 \
+				$(($(vipsheader -f width "$img") - 4)) $(($(vipsheader -f height "$img") - 4))
+			name="$name/crop4"
+		else
+			vips resize "$img" "${src}[strip,compression=1]" 0.5 --kernel lanczos3
+			name="$name/2"
+		fi ;;
 	esac
 	for q in $QS; do
 		p=$(reached "$GV" "$src" "$q")
