@@ -396,7 +396,6 @@ double gv_lambda_model_lambda(const struct gv_lambda_model *lv, int n,
     return lambda > ceil ? ceil : lambda > floor ? lambda : floor;
 }
 
-
 double gv_lambda_model_level_factor(const struct gv_lambda_model *lv, int n,
                                     double target_mse)
 {

@@ -100,8 +100,9 @@ double gv_lambda_model_k(double target_mse, int dct);
  * (at least gv_rd_lambda(target_mse) / 64, so that a flat image still has
  * a positive price, and at most K * gv_rd_lambda(target_mse) * 64, where
  * theta saturates because the model takes the prediction alone for
- * enough: a guess the lambda trial corrects in a step or two).  dct: the factor K fitted for stores that may use
- * layout D, whose tiles reach a lower error at the same price. */
+ * enough: a guess the lambda trial corrects in a step or two).  dct: the
+ * factor K fitted for stores that may use layout D, whose tiles reach a
+ * lower error at the same price. */
 double gv_lambda_model_lambda(const struct gv_lambda_model *lv, int n,
                               double target_mse, int dct);
 

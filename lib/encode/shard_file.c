@@ -140,7 +140,7 @@ struct gv_shard_writer *gv_shard_writer_new(const char *path,
         return NULL;
     }
     if (gv_geometry_init(&w->g, h->width, h->height, h->channels,
-                         h->root_side ? h->root_side : GV_ROOT_MAX) < 0) {
+                         h->root_side) < 0) {
         gv_fail(err, GV_EINVAL, "shard: bad dimensions %ux%u", h->width, h->height);
         free(w);
         return NULL;

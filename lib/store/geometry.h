@@ -4,8 +4,9 @@
  * Level 0 is the full image; level k+1 is the 2x2 box average of level k
  * (ceil halving).  The first level that fits in root_side x root_side
  * pixels is the root (root_side is 512 before format version 6, a header
- * field from it on).  Every level below the root is cut into 513x513 tiles on a 512-pixel step (one
- * pixel of overlap to the right and below) and 8x8 tiles make a page.
+ * field from it on).  Every level below the root is cut into 513x513
+ * tiles on a 512-pixel step (one pixel of overlap to the right and below)
+ * and 8x8 tiles make a page.
  * Everything here is pure arithmetic on the header fields; see
  * docs/FORMAT.md for the definitions.
  */
@@ -45,11 +46,11 @@ struct gv_geometry {
  * count, whose root is the first level that fits in root_side x root_side
  * pixels (GV_ROOT_MAX for stores before format version 6).  Returns 0, or
  * -1 if a dimension is 0 or above GV_MAX_DIM, channels is not 1 or 3, or
- * root_side is not 1..GV_ROOT_MAX.  A level has at least half (rounded up) the
- * tiles of the level below in each direction, so every tile has a parent
- * (which can add a column or row of tiles past a level's edge).  Page
- * numbering runs from the level just below the root down to level 0 (the
- * order the encoder writes them), row-major inside a level.
+ * root_side is not 1..GV_ROOT_MAX.  A level has at least half (rounded
+ * up) the tiles of the level below in each direction, so every tile has a
+ * parent (which can add a column or row of tiles past a level's edge).
+ * Page numbering runs from the level just below the root down to level 0
+ * (the order the encoder writes them), row-major inside a level.
  */
 int gv_geometry_init(struct gv_geometry *g, uint32_t width, uint32_t height,
                      int channels, uint32_t root_side);
