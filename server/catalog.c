@@ -157,7 +157,9 @@ static struct image *open_image(struct catalog *c, const char *id,
     /* A default window that does not fit the image is left out, logged:
      * the image is served as if it had none. */
     if (img->info->header.kind != GV_KIND_HEIGHT &&
-        gv_window_from_meta(gv_store_meta(s), 255, img->info->geometry.channels,
+        gv_window_from_meta(gv_store_meta(s),
+                            img->info->header.kind == GV_KIND_SAMPLES ? 65535 : 255,
+                            img->info->geometry.channels,
                             &img->window, &err) < 0)
         log_msg(LOG_WARN, "catalog", "%s: default window ignored: %s", path,
                 err.text);

@@ -340,7 +340,9 @@ static int parse(struct req *r, const struct image *img, struct iiif_call *c,
         c->window = img->window;
         c->q.render.window = &c->window;
     } else if (ws && strcmp(ws, "none") != 0) {
-        if (gv_window_parse(ws, 255, &c->window, err) < 0)
+        if (gv_window_parse(ws, 65535, &c->window, err) < 0 ||
+            (img->info->header.kind != GV_KIND_SAMPLES &&
+             gv_window_check_max(&c->window, 255, err) < 0))
             return -1;
         if (c->window.count > 1 && c->window.count != g->channels)
             return gv_fail(err, GV_EINVAL, "window: %d windows for an image "

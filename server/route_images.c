@@ -117,6 +117,14 @@ enum MHD_Result route_image_info(struct req *r)
             "min", (double)h->height_min, "max", (double)h->height_max,
             "max_error", h->height_max_error, "error_codes", (int)h->height_e,
             "float_source", (int)h->height_float));
+    if (j && h->kind == GV_KIND_SAMPLES)   /* docs/FORMAT.md section 13 */
+        json_object_set_new(j, "samples", json_pack(
+            "{s:i,s:f,s:f,s:f,s:f,s:f,s:i,s:b,s:i,s:i}", "bits", 16,
+            "scale", h->height_scale, "offset", h->height_offset,
+            "min", (double)h->height_min, "max", (double)h->height_max,
+            "max_error", h->height_max_error, "error_codes", (int)h->height_e,
+            "float_source", (int)h->height_float,
+            "code_min", (int)h->samples_lo, "code_max", (int)h->samples_hi));
     /* What the input said of its pixels (docs/FORMAT.md section 6,
      * metadata section): a slide's microns per pixel, a raster's
      * georeference. */
@@ -156,10 +164,14 @@ static int root_response(const struct image *img, const uint8_t *px,
         *resp = http_response_owned(webp, *len, "image/webp");
         return 0;
     }
-    /* A height store's root holds 16-bit codes (host order, which is
-     * little-endian on every supported host): raw gives them, png a
-     * 16-bit PNG. */
-    int height = img->info->header.kind == GV_KIND_HEIGHT;
+    /* A height or sample store's root holds 16-bit codes (host order,
+     * which is little-endian on every supported host): raw gives them,
+     * png a 16-bit PNG (a sample store of more than 4 channels has raw
+     * only). */
+    int height = gv_header_codes(&img->info->header);
+    if (height && c > 4 && form == ROOT_PNG)
+        return gv_fail(err, GV_EINVAL, "root: a PNG holds up to 4 channels, "
+                       "this image has %d (ask for format=raw)", c);
     int raw = form == ROOT_RAW;
     const struct gv_output_format *f = gv_output_format_find(raw ? "raw" : "png");
     *len = (size_t)w * h * (size_t)c * (height ? 2 : 1);
@@ -209,10 +221,10 @@ enum MHD_Result route_image_root(struct req *r)
                                "filter of it (or format=raw&mip=%u)", mip);
         goto out;
     }
-    if (form == ROOT_WEBP && img->info->header.kind == GV_KIND_HEIGHT) {
-        ret = http_send_errorf(r, GV_EINVAL, "root: a height store's root "
-                               "holds 16-bit codes and has no WebP form: "
-                               "use format=png (16-bit) or raw");
+    if (form == ROOT_WEBP && gv_header_codes(&img->info->header)) {
+        ret = http_send_errorf(r, GV_EINVAL, "root: a height or sample "
+                               "store's root holds 16-bit codes and has no "
+                               "WebP form: use format=png (16-bit) or raw");
         goto out;
     }
     const uint8_t *px = gv_store_root(img->store, (int)mip, &w, &h);
@@ -228,7 +240,7 @@ enum MHD_Result route_image_root(struct req *r)
         ret = http_send_empty(r, 304, "ETag", etag);
         goto out;
     }
-    struct MHD_Response *resp;
+    struct MHD_Response *resp = NULL;
     size_t len;
     struct gv_error err = {0};
     if (root_response(img, px, w, h, form, &resp, &len, &err) < 0) {

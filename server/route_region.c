@@ -7,9 +7,13 @@
  * decoder exactly as `gigaview export --level --region` does, and encoded
  * as png (default), jpeg, webp or tiff.  A height store (docs/FORMAT.md
  * section 12) gives its gray mapping in those, and also png16 (its 16-bit
- * codes) and tiff32 (float values in its unit).  w*h is capped by
+ * codes) and tiff32 (float values in its unit).  A sample store (section
+ * 13) gives its display pixels (gray, or its channels' colours added)
+ * through the window in those, and png16 (up to 4 channels), tiff16 (its
+ * codes, every channel) and tiff32 (values).  w*h is capped by
  * max_region_pixels (413 beyond).  `window` (render/window.h) maps the
- * decoded 8-bit samples through a display window before they are encoded,
+ * decoded samples (a sample store's 16-bit codes, any other store's
+ * 8-bit samples) through a display window before they are encoded,
  * and is part of the cache key and the ETag; without it the store's
  * default window applies (catalog.h), and `window=none` asks for none.  The query is checked here; the render
  * runs on a render thread, and the answer is kept in the output cache
@@ -22,6 +26,7 @@
 #include "imageio/imageio.h"
 #include "imageio/output_format.h"
 #include "render/height_region.h"
+#include "render/samples_region.h"
 #include "render/window.h"
 #include "output_cache.h"
 #include "render_call.h"
@@ -33,13 +38,13 @@
 struct region_query {
     uint32_t level, x, y, w, h, quality;
     const struct gv_output_format *format;
-    int height;            /* HEIGHT_PNG16 or HEIGHT_TIFF32, else 0 */
+    int height;            /* HEIGHT_PNG16, _TIFF16 or _TIFF32, else 0 */
     struct gv_window window;   /* count 0: none */
     int window_given;          /* 1: the query named one (or none) */
 };
 
-/* The formats of height stores only. */
-enum { HEIGHT_PNG16 = 1, HEIGHT_TIFF32 = 2 };
+/* The formats of the codes of height and sample stores only. */
+enum { HEIGHT_PNG16 = 1, HEIGHT_TIFF32 = 2, HEIGHT_TIFF16 = 3 };
 
 /* Parse and check the query against the limits (not yet the image).  0,
  * or -1 with *err. */
@@ -60,12 +65,14 @@ static int parse_query(struct req *r, struct region_query *q,
         return gv_fail(err, GV_EINVAL, "region: w and h must be at least 1");
     const char *fs = http_query(r, "format");
     q->height = fs && !strcmp(fs, "png16") ? HEIGHT_PNG16
+              : fs && !strcmp(fs, "tiff16") ? HEIGHT_TIFF16
               : fs && !strcmp(fs, "tiff32") ? HEIGHT_TIFF32 : 0;
-    q->format = gv_output_format_find(q->height == HEIGHT_TIFF32 ? "tif"
-                                      : q->height ? "png" : fs ? fs : "png");
+    q->format = gv_output_format_find(q->height == HEIGHT_PNG16 ? "png"
+                                      : q->height ? "tif" : fs ? fs : "png");
     if (!q->format || !q->format->oiio)
         return gv_fail(err, GV_EINVAL, "region: format must be png, jpeg, webp "
-                       "or tiff (png16 or tiff32 for a height store)");
+                       "or tiff (png16 or tiff32 for a height store, png16, "
+                       "tiff16 or tiff32 for a sample store)");
     q->quality = (uint32_t)r->srv->cfg->jpeg_quality;
     const char *qs = http_query(r, "quality");
     if (qs && (http_parse_u32(qs, 100, &q->quality) < 0 || q->quality == 0))
@@ -74,10 +81,11 @@ static int parse_query(struct req *r, struct region_query *q,
     q->window.count = 0;
     q->window_given = ws != NULL;
     if (ws && strcmp(ws, "none") != 0 &&
-        gv_window_parse(ws, 255, &q->window, err) < 0)
+        gv_window_parse(ws, 65535, &q->window, err) < 0)
         return -1;
     if (ws && q->height)
-        return gv_fail(err, GV_EINVAL, "window: not with png16 or tiff32");
+        return gv_fail(err, GV_EINVAL, "window: not with png16, tiff16 or "
+                       "tiff32");
     uint64_t pixels = (uint64_t)q->w * q->h;
     if (pixels > r->srv->cfg->max_region_pixels)
         return gv_fail(err, GV_ELIMIT, "region: %llu pixels, at most %llu "
@@ -98,9 +106,19 @@ static int place(const struct image *img, const struct region_query *q,
     if ((uint64_t)q->x + q->w > lw || (uint64_t)q->y + q->h > lh)
         return gv_fail(err, GV_EINVAL, "region: %u,%u,%u,%u outside level %u "
                        "(%ux%u)", q->x, q->y, q->w, q->h, q->level, lw, lh);
-    if (q->height && img->info->header.kind != GV_KIND_HEIGHT)
-        return gv_fail(err, GV_EINVAL, "region: png16 and tiff32 are for "
-                       "height stores; this image is not one");
+    const struct gv_header *hd = &img->info->header;
+    if (q->height && !gv_header_codes(hd))
+        return gv_fail(err, GV_EINVAL, "region: png16, tiff16 and tiff32 are "
+                       "for height and sample stores; this image is neither");
+    if (q->height == HEIGHT_TIFF16 && hd->kind != GV_KIND_SAMPLES)
+        return gv_fail(err, GV_EINVAL, "region: tiff16 is for sample stores "
+                       "(png16 gives a height store's codes)");
+    if (q->height == HEIGHT_PNG16 && g->channels > 4)
+        return gv_fail(err, GV_EINVAL, "region: png16 holds up to 4 channels, "
+                       "this image has %d (ask for tiff16)", g->channels);
+    if (hd->kind != GV_KIND_SAMPLES &&
+        gv_window_check_max(&q->window, 255, err) < 0)
+        return -1;
     if (q->window.count > 1 && q->window.count != g->channels)
         return gv_fail(err, GV_EINVAL, "window: %d windows for an image of "
                        "%d channels (give one, or one per channel)",
@@ -108,27 +126,28 @@ static int place(const struct image *img, const struct region_query *q,
     return 0;
 }
 
-/* Render a height format: the codes (png16) or the values as floats
- * (tiff32).  0, or -1 with *err. */
+/* Render a format of codes: the codes (png16, tiff16) or the values as
+ * floats (tiff32), every channel.  0, or -1 with *err. */
 static int render_height(const struct region_query *q, struct gv_decoder *d,
                          uint8_t **out, size_t *len, struct gv_error *err)
 {
-    struct gv_height_meta m;
-    const size_t n = (size_t)q->w * q->h;
+    const struct gv_header *hd = &gv_store_info(gv_decoder_store(d))->header;
+    const int c = hd->channels;
+    const size_t n = (size_t)q->w * q->h * (size_t)c;
     uint16_t *codes = malloc(sizeof *codes * n);
     float *values = q->height == HEIGHT_TIFF32 ? malloc(sizeof *values * n) : NULL;
     int rc = -1;
     if (!codes || (q->height == HEIGHT_TIFF32 && !values))
         gv_fail(err, GV_ENOMEM, "region: out of memory");
-    else if (gv_height_meta_get(d, &m) &&
-             gv_height_region(d, (int)q->level, q->x, q->y, q->w, q->h, codes,
-                              err) == 0) {
+    else if (gv_decoder_copy_region(d, "region", (int)q->level, q->x, q->y,
+                                    q->w, q->h, codes, err) == 0) {
         if (values)
             for (size_t i = 0; i < n; i++)
-                values[i] = (float)(codes[i] * m.scale + m.offset);
-        rc = values ? gv_image_encode_typed("tif", q->w, q->h, 1, GV_SAMPLE_F32,
+                values[i] = (float)(codes[i] * hd->height_scale + hd->height_offset);
+        rc = values ? gv_image_encode_typed("tif", q->w, q->h, c, GV_SAMPLE_F32,
                                             values, out, len, err)
-                    : gv_image_encode_typed("png", q->w, q->h, 1, GV_SAMPLE_U16,
+                    : gv_image_encode_typed(q->height == HEIGHT_TIFF16 ? "tif" : "png",
+                                            q->w, q->h, c, GV_SAMPLE_U16,
                                             codes, out, len, err);
     }
     free(codes);
@@ -142,28 +161,25 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
                   struct gv_error *err)
 {
     const struct region_query *q = arg;
-    const struct gv_geometry *g = &img->info->geometry;
     struct gv_decoder *d = image_decoder_get(img);
     if (q->height && d) {
         int hrc = render_height(q, d, out, len, err);
         image_decoder_put(img, d);
         return hrc;
     }
-    uint8_t *pix = malloc((size_t)q->w * q->h * (size_t)g->channels);
+    const int dc = gv_display_channels(&img->info->header);
+    uint8_t *pix = malloc((size_t)q->w * q->h * (size_t)dc);
     int rc = -1;
     if (!pix || !d)
         gv_fail(err, GV_ENOMEM, "region: out of memory");
     else {
         gv_decoder_times(d, &(struct gv_decode_times){0}, 1);
         double t0 = render_stages_now();
-        int ok = gv_decode_region(d, (int)q->level, q->x, q->y, q->w, q->h,
-                                  pix, err) == 0 &&
-                 (q->window.count == 0 ||
-                  gv_window_apply8(&q->window, pix, (size_t)q->w * q->h,
-                                   g->channels, err) == 0);
+        int ok = gv_decode_region_window(d, (int)q->level, q->x, q->y, q->w,
+                                         q->h, &q->window, pix, err) == 0;
         double t1 = render_stages_now();
         render_stages_decoder(d, t1 - t0);
-        if (ok && gv_image_encode(q->format->name, q->w, q->h, g->channels,
+        if (ok && gv_image_encode(q->format->name, q->w, q->h, dc,
                                   pix, (int)q->quality, out, len, err) == 0)
             rc = 0;
         if (ok)
@@ -208,6 +224,7 @@ enum MHD_Result route_region(struct req *r)
     snprintf(canon, sizeof canon, "region/%s/%u/%u,%u,%u,%u.%s q%u%s", img->id,
              q.level, q.x, q.y, q.w, q.h,
              q.height == HEIGHT_PNG16 ? "png16"
+             : q.height == HEIGHT_TIFF16 ? "tiff16"
              : q.height == HEIGHT_TIFF32 ? "tiff32" : q.format->name, q.quality,
              win);
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);

@@ -38,7 +38,10 @@ int main(void)
     check(gv_geometry_init(&g, 1, 70000, 1, GV_ROOT_MAX) == 0 && g.root == 8 &&
           g.level[0].tiles_y == 137 && g.channels == 1, "1x70000 gray");
     check(gv_geometry_init(&g, 0, 5, 3, GV_ROOT_MAX) < 0, "zero width is refused");
-    check(gv_geometry_init(&g, 5, 5, 2, GV_ROOT_MAX) < 0, "two channels are refused");
+    check(gv_geometry_init(&g, 5, 5, 9, GV_ROOT_MAX) < 0 &&
+          gv_geometry_init(&g, 5, 5, 0, GV_ROOT_MAX) < 0, "0 and 9 channels are refused");
+    check(gv_geometry_init(&g, 5, 5, 8, GV_ROOT_MAX) == 0 && g.channels == 8,
+          "8 channels (a sample store) are taken");
     check(gv_geometry_init(&g, 0x80000000u, 5, 3, GV_ROOT_MAX) < 0, "2^31 wide is refused");
     check(gv_geometry_init(&g, 0x7fffffffu, 0x7fffffffu, 3, GV_ROOT_MAX) == 0 &&
           g.root < GV_MAX_LEVELS && g.level[g.root].width <= 512,

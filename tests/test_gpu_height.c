@@ -4,7 +4,10 @@
  * the CPU reference decoder for every tile of every level of height
  * stores: ETOPO5 lossless and at 2 m, and synthetic terrain at e = 1 (on
  * llvmpipe in CI).  The WebGL2 path is the browser's: its fragment shader
- * compiled as GLSL ES 3.00, q decoded on the CPU.
+ * compiled as GLSL ES 3.00, q decoded on the CPU.  Sample stores
+ * (docs/FORMAT.md section 13) are decoded the same way one channel at a
+ * time, each channel's buffer against the same channel of the parent,
+ * and compared with that channel of the CPU decoder's tile.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,6 +15,7 @@
 #include <unistd.h>
 
 #include "codec/height_tile.h"
+#include "codec/samples_tile.h"
 #include "encode/height_encode.h"
 #include "gpu/gpu.h"
 #include "gpu/gpu_height.h"
@@ -22,10 +26,10 @@
 
 static char dir[128];
 
-/* Decode every tile of `path` on the GPU, level by level from the
- * uploaded root tile, and compare each with the CPU decoder. */
-static void check_path(struct gv_gpu *gpu, const char *path, const char *name,
-                       enum gv_gpu_path gp)
+/* Decode channel ch of every tile of `path` on the GPU, level by level
+ * from the uploaded root tile, and compare each with the CPU decoder. */
+static void check_channel(struct gv_gpu *gpu, const char *path, const char *name,
+                          enum gv_gpu_path gp, int ch)
 {
     const char *pn = gp == GV_GPU_PATH_COMPUTE ? "ssbo" : "webgl2";
     struct gv_error err = {0};
@@ -42,14 +46,18 @@ static void check_path(struct gv_gpu *gpu, const char *path, const char *name,
     if (!s)
         fail("open %s: %s", path, err.text);
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
+    const int nc = g->channels;   /* 1 for a height store */
     struct gv_decoder *cpu = gv_decoder_new(s, 256u << 20);
     uint16_t *got = malloc(sizeof *got * GV_HT_SAMPLES);
+    uint16_t *want = malloc(sizeof *want * GV_HT_SAMPLES);
     const uint8_t *px;
     uint32_t *up = calloc(1, sizeof *up), *cur = NULL;
     uint32_t up_tx = 1;
     size_t up_n = 1;
-    if (gv_decoder_tile(cpu, g->root, 0, 0, &px, &err) < 0 ||
-        gv_gpu_height_upload(gh, (const uint16_t *)(const void *)px, &up[0], &err) < 0)
+    if (gv_decoder_tile(cpu, g->root, 0, 0, &px, &err) < 0)
+        fail("%s: root: %s", name, err.text);
+    gv_samples_plane_get((const uint16_t *)(const void *)px, GV_HT_SAMPLES, nc, ch, want);
+    if (gv_gpu_height_upload(gh, want, &up[0], &err) < 0)
         fail("%s: root: %s", name, err.text);
     long tiles = 0, same = 0;
     for (int k = g->root - 1; k >= 0; k--) {
@@ -59,14 +67,16 @@ static void check_path(struct gv_gpu *gpu, const char *path, const char *name,
         for (uint32_t ty = 0; ty < l->tiles_y; ty++)
             for (uint32_t tx = 0; tx < l->tiles_x; tx++) {
                 uint8_t *page;
-                size_t plen, tlen;
-                const uint8_t *tb;
+                size_t plen, tlen, part_len[GV_SAMPLES_MAX_CHANNELS];
+                const uint8_t *tb, *part[GV_SAMPLES_MAX_CHANNELS];
                 if (gv_store_read_page(s, k, tx / 8, ty / 8, &page, &plen, &err) < 0 ||
                     gv_page_tile(page, plen, 1, (int)(tx % 8), (int)(ty % 8), &tb,
-                                 &tlen, &err) < 0)
+                                 &tlen, &err) < 0 ||
+                    gv_samples_tile_split(tb, tlen, nc, part, part_len, &err) < 0)
                     fail("%s: page: %s", name, err.text);
                 uint32_t *h = &cur[(size_t)ty * l->tiles_x + tx];
-                if (gv_gpu_height_decode(gh, tb, tlen, up[(ty / 2) * up_tx + tx / 2],
+                if (gv_gpu_height_decode(gh, part[ch], part_len[ch],
+                                         up[(ty / 2) * up_tx + tx / 2],
                                          (int)(tx & 1), (int)(ty & 1), h, &err) < 0 ||
                     gv_gpu_height_read(gh, *h, got, &err) < 0)
                     fail("%s %s: GPU decode %d/%u/%u: %s", name, pn, k, tx, ty, err.text);
@@ -74,10 +84,12 @@ static void check_path(struct gv_gpu *gpu, const char *path, const char *name,
                 if (gv_decoder_tile(cpu, k, tx, ty, &px, &err) < 0)
                     fail("%s: CPU decode: %s", name, err.text);
                 tiles++;
-                if (memcmp(got, px, sizeof *got * GV_HT_SAMPLES) == 0) {
+                gv_samples_plane_get((const uint16_t *)(const void *)px,
+                                     GV_HT_SAMPLES, nc, ch, want);
+                if (memcmp(got, want, sizeof *got * GV_HT_SAMPLES) == 0) {
                     same++;
                 } else {
-                    const uint16_t *c = (const uint16_t *)(const void *)px;
+                    const uint16_t *c = want;
                     for (int i = 0; i < GV_HT_SAMPLES; i++)
                         if (got[i] != c[i]) {
                             printf("# %s %s tile %d/%u/%u first differs at (%d,%d): "
@@ -97,26 +109,31 @@ static void check_path(struct gv_gpu *gpu, const char *path, const char *name,
     for (size_t i = 0; i < up_n; i++)
         gv_gpu_height_release(gh, up[i]);
     free(up);
-    check(tiles > 0 && same == tiles, "%s %s: %ld of %ld tiles bit-exact", name,
-          pn, same, tiles);
+    check(tiles > 0 && same == tiles, "%s %s channel %d: %ld of %ld tiles "
+          "bit-exact", name, pn, ch, same, tiles);
     free(got);
+    free(want);
     gv_decoder_free(cpu);
     gv_store_close(s);
     gv_gpu_height_free(gh);
 }
 
+/* Encode `input` as a height store (samples 0) or a sample store of its
+ * channels (1) within e, and check every channel on both paths. */
 static void check_store(struct gv_gpu *gpu, const char *input, double e,
-                        const char *name)
+                        const char *name, int samples)
 {
     char out[256];
     snprintf(out, sizeof out, "%s/h.gv", dir);
-    struct gv_height_opts o = {.max_error = e};
+    struct gv_height_opts o = {.max_error = e, .samples = samples};
     struct gv_height_result r;
     struct gv_error err = {0};
     if (gv_height_encode((const char *[]){input}, 1, out, &o, &r, &err) < 0)
         fail("encode %s: %s", input, err.text);
-    check_path(gpu, out, name, GV_GPU_PATH_COMPUTE);
-    check_path(gpu, out, name, GV_GPU_PATH_WEBGL2);
+    for (int ch = 0; ch < r.channels; ch++) {
+        check_channel(gpu, out, name, GV_GPU_PATH_COMPUTE, ch);
+        check_channel(gpu, out, name, GV_GPU_PATH_WEBGL2, ch);
+    }
     unlink(out);
 }
 
@@ -134,7 +151,7 @@ int main(int argc, char **argv)
         /* Explicit inputs (for a machine without the test data, e.g. one
          * with a real GPU): INPUT MAX-ERROR pairs. */
         for (int i = 1; i + 1 < argc; i += 2)
-            check_store(gpu, argv[i], atof(argv[i + 1]), argv[i]);
+            check_store(gpu, argv[i], atof(argv[i + 1]), argv[i], 0);
         test_tmpdir_free(dir);
         gv_gpu_close(gpu);
         return tap_done();
@@ -142,9 +159,13 @@ int main(int argc, char **argv)
     const char *data = test_data_dir();
     char dem[512];
     snprintf(dem, sizeof dem, "%s/etopo5-himalaya-1030x300-u16.png", data);
-    check_store(gpu, dem, 0, "etopo lossless");
-    check_store(gpu, dem, 2, "etopo e=2");
-    check_store(gpu, "synth-height:1100x1030", 1, "synth e=1");
+    check_store(gpu, dem, 0, "etopo lossless", 0);
+    check_store(gpu, dem, 2, "etopo e=2", 0);
+    check_store(gpu, "synth-height:1100x1030", 1, "synth e=1", 0);
+    /* Sample stores: an 8-bit RGB picture's three channels at e = 1. */
+    char rgb[512];
+    snprintf(rgb, sizeof rgb, "%s/picos-1100x700.jpg", data);
+    check_store(gpu, rgb, 1, "samples rgb e=1", 1);
     test_tmpdir_free(dir);
     gv_gpu_close(gpu);
     return tap_done();

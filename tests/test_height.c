@@ -73,7 +73,7 @@ static int max_diff(const char *path, const uint16_t *codes, uint32_t w,
             int dd = abs((int)got[i] - (int)exact[i]);
             worst = dd > worst ? dd : worst;
         }
-        gv_height_box_reduce(exact, lw, lh, next);
+        gv_codes_box_reduce(exact, lw, lh, 1, next);
         lw = (lw + 1) / 2;
         lh = (lh + 1) / 2;
         uint16_t *t = exact;

@@ -291,7 +291,7 @@ int main(void)
     spit(bad, copy, len);
     gv_error_clear(&err);
     check(!gv_store_open(bad, &err) && err.code == GV_EFORMAT, "bad version: GV_EFORMAT");
-    check_str(err.text, "store: format version 9 is not supported (this build reads versions 1 to 6)",
+    check_str(err.text, "store: format version 9 is not supported (this build reads versions 1 to 7)",
               "bad version: the message");
 
     /* Version 6 names its root side in bytes 96-97: a store with the

@@ -38,6 +38,7 @@ struct encode_args {
     int rd;                       /* --rd: the default mode, accepted */
     int layouts_given;            /* --layouts was given */
     int height;                   /* --height: a height store */
+    int bits;                     /* --bits: 16 for a sample store */
     double max_error;             /* --max-error, source units */
     const char *unit;             /* --unit */
     double hscale, hoffset;       /* --scale, --offset (0 scale: not given) */
@@ -202,12 +203,17 @@ static const struct opt_spec encode_opts[] = {
              "with the same input and options, then\n"
              "'gigaview merge -o STORE SHARD...' writes the\n"
              "store, identical to an unsharded encode"},
+    {.name = "bits", .kind = OPT_INT, .arg = "N", .field = F(bits),
+     .min = 8, .max = 16, .wants = "8 or 16",
+     .help = "16: keep every channel (1 to 8) at 16 bits in\n"
+             "a sample store (docs/FORMAT.md 13), lossless\n"
+             "unless -q or --max-error; 8: the default"},
     {.name = "height", .kind = OPT_FLAG, .field = F(height),
      .help = "write a height store: one 16-bit or float\n"
              "channel of elevations (docs/FORMAT.md 12)"},
     {.name = "max-error", .kind = OPT_DOUBLE, .arg = "E", .field = F(max_error),
      .min = 0, .max = 1e30, .flags = OPT_FINITE, .wants = "a number >= 0",
-     .help = "--height: largest error in source units\n(default 0: lossless)"},
+     .help = "--height, --bits 16: largest error in\nsource units (default 0: lossless)"},
     {.name = "unit", .kind = OPT_STRING, .arg = "NAME", .field = F(unit),
      .help = "--height: unit of the values, e.g. m"},
     {.name = "scale", .kind = OPT_DOUBLE, .arg = "S", .field = F(hscale),
@@ -232,7 +238,9 @@ static const struct opt_command encode_command = {
         "synth:WIDTHxHEIGHT[:gray] for a procedural test image.\n"
         "With --height, one single-channel INPUT (PNG-16, TIFF, EXR...), a\n"
         "--mosaic of them, or synth-height:WIDTHxHEIGHT (fractal terrain)\n"
-        "gives a height store.\n",
+        "gives a height store.\n"
+        "With --bits 16, one image (or a --mosaic) of 1 to 8 channels of 8, 16\n"
+        "or float samples gives a sample store that keeps them.\n",
     .opts = encode_opts,
     .nopts = sizeof encode_opts / sizeof encode_opts[0],
 };
@@ -315,13 +323,17 @@ static void print_shard_summary(const struct encode_args *a,
     printf("time       %.2f s\n", r->seconds);
 }
 
-/* encode --height: one input or a mosaic, no image options.  Returns the
- * exit code. */
-static int encode_height(const struct encode_args *a, const char *const *inputs,
-                         int ninputs)
+/* encode --height, or --bits 16: one input or a mosaic, no other image
+ * options.  Returns the exit code. */
+static int encode_codes(const struct encode_args *a, const char *const *inputs,
+                        int ninputs)
 {
     struct progress *bar = progress_new(stderr, a->progress);
-    struct gv_height_opts ho = {.max_error = a->max_error,
+    const int samples = a->bits == 16;
+    struct gv_height_opts ho = {.samples = samples,
+                                .max_error = a->max_error,
+                                .target_psnr = a->psnr,
+                                .window = a->o.window,
                                 .mapped = a->hscale > 0 || a->hoffset_given,
                                 .scale = a->hscale > 0 ? a->hscale : 1,
                                 .offset = a->hoffset, .unit = a->unit,
@@ -345,16 +357,25 @@ static int encode_height(const struct encode_args *a, const char *const *inputs,
     }
     if (a->quiet)
         return 0;
-    printf("height     %u x %u, %d levels -> %s\n", r.geometry.width,
-           r.geometry.height, r.geometry.root + r.geometry.root_mips, a->output);
+    if (samples)
+        printf("samples    %u x %u x %d channels, %d levels -> %s\n",
+               r.geometry.width, r.geometry.height, r.channels,
+               r.geometry.root + r.geometry.root_mips, a->output);
+    else
+        printf("height     %u x %u, %d levels -> %s\n", r.geometry.width,
+               r.geometry.height, r.geometry.root + r.geometry.root_mips,
+               a->output);
     printf("values     %.9g .. %.9g %s (code * %.9g + %.9g)\n", r.min, r.max,
            a->unit ? a->unit : "", r.scale, r.offset);
     printf("max error  %.9g (%d codes%s)\n", r.max_error, r.e,
            r.src_float ? " + float quantization" : "");
+    if (samples)
+        printf("psnr       %.2f dB over the full range (99: lossless)\n", r.psnr0);
     printf("tiles      %llu\n", (unsigned long long)r.tiles);
     printf("size       %llu bytes, %.3f bits per sample\n",
            (unsigned long long)r.file_bytes,
-           8.0 * (double)r.file_bytes / ((double)r.geometry.width * r.geometry.height));
+           8.0 * (double)r.file_bytes /
+               ((double)r.geometry.width * r.geometry.height * r.channels));
     printf("scratch    %llu bytes\n", (unsigned long long)r.scratch_bytes);
     printf("time       %.2f s\n", r.seconds);
     return 0;
@@ -368,6 +389,15 @@ int cmd_encode(int argc, char **argv)
     if (rc != OPT_GO_ON)
         return rc;
     const int ninputs = argc - first;
+    if (a.bits != 0 && a.bits != 8 && a.bits != 16) {
+        fprintf(stderr, ME ": --bits wants 8 or 16\n");
+        return 2;
+    }
+    if (a.height && a.bits) {
+        fprintf(stderr, ME ": --height stores are 16-bit already: give "
+                "--height or --bits, not both\n");
+        return 2;
+    }
     if (a.height) {
         if (!a.output || a.o.shard_count > 0 || a.psnr > 0 ||
             a.min_tile_psnr > 0 || a.o.window) {
@@ -377,11 +407,26 @@ int cmd_encode(int argc, char **argv)
         }
         if ((rc = check_inputs(&a, ninputs)) != OPT_GO_ON)
             return rc;
-        return encode_height(&a, (const char *const *)argv + first, ninputs);
+        return encode_codes(&a, (const char *const *)argv + first, ninputs);
+    }
+    if (a.bits == 16) {
+        if (!a.output || a.o.shard_count > 0 || a.min_tile_psnr > 0 ||
+            a.layouts_given || a.o.source.range_hi > a.o.source.range_lo ||
+            a.unit || a.hscale > 0 || a.hoffset_given ||
+            (a.psnr > 0 && a.max_error > 0)) {
+            fprintf(stderr, ME ": --bits 16 takes INPUT (or --mosaic's "
+                    "INPUTs), -o STORE, -q or --max-error, --window (not "
+                    "--shard, --layouts, --min-tile-psnr, --range, --unit, "
+                    "--scale or --offset)\n");
+            return 2;
+        }
+        if ((rc = check_inputs(&a, ninputs)) != OPT_GO_ON)
+            return rc;
+        return encode_codes(&a, (const char *const *)argv + first, ninputs);
     }
     if (a.max_error > 0 || a.unit || a.hscale > 0 || a.hoffset_given) {
-        fprintf(stderr, ME ": --max-error, --unit, --scale and --offset "
-                "need --height\n");
+        fprintf(stderr, ME ": --max-error needs --height or --bits 16; "
+                "--unit, --scale and --offset need --height\n");
         return 2;
     }
     if ((rc = check_inputs(&a, ninputs)) != OPT_GO_ON ||

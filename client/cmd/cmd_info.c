@@ -75,9 +75,19 @@ static uint64_t tile_count(const struct gv_geometry *g)
     return tiles;
 }
 
-/* The JSON members of a height store (after a comma), or nothing. */
+/* The JSON members of a height or sample store (after a comma), or
+ * nothing. */
 static void print_height_json(const struct gv_header *h)
 {
+    if (h->kind == GV_KIND_SAMPLES) {
+        printf("\"kind\":\"samples\",\"bits\":16,\"scale\":%.17g,"
+               "\"offset\":%.17g,\"min\":%.9g,\"max\":%.9g,"
+               "\"max_error\":%.17g,\"error_codes\":%u,\"float_source\":%s,",
+               h->height_scale, h->height_offset, (double)h->height_min,
+               (double)h->height_max, h->height_max_error, h->height_e,
+               h->height_float ? "true" : "false");
+        return;
+    }
     if (h->kind != GV_KIND_HEIGHT)
         return;
     printf("\"kind\":\"height\",\"unit\":\"%s\",\"scale\":%.17g,"
@@ -162,7 +172,7 @@ static void print_levels(struct gv_store *s)
         if (k == g->root) {
             printf("%5d %10u %10u   root, lossless %-15s %12llu %6.3f\n",
                    k, l->width, l->height,
-                   h->kind == GV_KIND_HEIGHT ? "deflate" : "WebP",
+                   gv_header_codes(h) ? "deflate" : "WebP",
                    (unsigned long long)h->root_size, 8.0 * h->root_size / lp);
             continue;
         }
@@ -197,6 +207,29 @@ static void print_text(struct gv_store *s, const char *path)
                (unsigned long long)h->pages);
         printf("size         %llu bytes, %.3f bits per source sample\n",
                (unsigned long long)h->file_size, 8.0 * h->file_size / src_px);
+        print_levels(s);
+        return;
+    }
+    if (h->kind == GV_KIND_SAMPLES) {
+        printf("samples      %u x %u, %u channels of 16-bit codes: value = "
+               "code * %.9g + %.9g\n", g->width, g->height, g->channels,
+               h->height_scale, h->height_offset);
+        printf("source       %d-bit%s, range %.9g .. %.9g\n", h->src_bits,
+               h->height_float ? " float" : "", (double)h->height_min,
+               (double)h->height_max);
+        printf("max error    %.9g (%u codes%s)%s, level-0 PSNR %.2f dB\n",
+               h->height_max_error, h->height_e,
+               h->height_float ? " + float quantization" : "",
+               h->height_max_error == 0 ? ", lossless" : "",
+               h->psnr0_mdb / 1000.0);
+        printf("levels       %d (0..%d; %d is the root, with %d mips)\n",
+               g->root + 1, g->root, g->root, g->root_mips);
+        printf("tiles        %llu in %llu pages\n",
+               (unsigned long long)tile_count(g), (unsigned long long)h->pages);
+        printf("size         %llu bytes, %.3f bits per source sample\n",
+               (unsigned long long)h->file_size,
+               8.0 * h->file_size / (src_px * g->channels));
+        print_meta(s);
         print_levels(s);
         return;
     }

@@ -467,8 +467,10 @@ int gv_http_image(struct gv_http *h, const char *id,
                          "height", &hh, "channels", &img->channels,
                          "levels_tiled", &img->levels_tiled, "root", "width", &rw,
                          "height", &rh, "mip_count", &img->root_mips, "side", &side);
-    /* A height store (docs/FORMAT.md section 12) has tiles of another codec. */
+    /* Height and sample stores (docs/FORMAT.md sections 12 and 13) have
+     * tiles of another codec. */
     int height_store = json_object_get(j, "elevation") != NULL;
+    int sample_store = json_object_get(j, "samples") != NULL;
     const char *win = json_string_value(json_object_get(j, "window"));
     if (win && strlen(win) < sizeof img->window)
         snprintf(img->window, sizeof img->window, "%s", win);
@@ -476,6 +478,10 @@ int gv_http_image(struct gv_http *h, const char *id,
     if (height_store)
         return gv_fail(err, GV_EFORMAT, "%s is a height store, which this client "
                        "does not draw (its regions: format=png16 or tiff32)", what);
+    if (sample_store)
+        return gv_fail(err, GV_EFORMAT, "%s is a sample store of 16-bit "
+                       "codes, which this client does not draw yet (its "
+                       "regions: png, or format=png16, tiff16 or tiff32)", what);
     if (rc < 0 || w <= 0 || hh <= 0 || w > 0x7fffffff || hh > 0x7fffffff ||
         (img->channels != 1 && img->channels != 3) || rw <= 0 || rh <= 0 ||
         rw > 512 || rh > 512 || side < 1 || side > 512 || img->levels_tiled < 0 ||

@@ -8,7 +8,7 @@
 // MAX_PIXELS.  PNG up to a megapixel (exact), JPEG above.
 
 import { screenToImage } from './view.js';
-import { viewCorners } from './pyramid.js';
+import { displayChannels, viewCorners } from './pyramid.js';
 
 const MAX_PIXELS = 4 << 20;
 const REST_MS = 120;
@@ -27,7 +27,7 @@ export class RegionBackend {
         this.timer = 0;
         this.ctl = null;
         this.stats = { regions: 0, bytes: 0, errors: 0, lastError: '' };
-        const { px, w, h } = image.root, c = image.info.channels;
+        const { px, w, h } = image.root, c = displayChannels(image.info);
         const rgba = new Uint8ClampedArray(w * h * 4);
         for (let i = 0; i < w * h; i++) {
             for (let k = 0; k < 3; k++)

@@ -127,3 +127,9 @@ export function tilesInCircle(levels, W, H, k, cx, cy, r) {
     out.sort((a, b) => a.d2 - b.d2);
     return out.map((o) => o.t);
 }
+
+/** The channels of an image's 8-bit pixels: a sample store of several
+ * channels is shown in RGB (docs/API.md), every other store as it is. */
+export function displayChannels(info) {
+    return info.samples && info.channels > 1 ? 3 : info.channels;
+}

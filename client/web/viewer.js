@@ -13,7 +13,7 @@
 
 import { GlBackend, webgl2 } from './gl_backend.js';
 import { RegionBackend } from './fallback.js';
-import { levelsOf } from './pyramid.js';
+import { displayChannels, levelsOf } from './pyramid.js';
 import { formatWindow, lutBytes, parseWindow } from './window.js';
 import { anchored, clampView, formatHash, homeView, normRot, screenToImage } from './view.js';
 
@@ -26,12 +26,14 @@ const TAU_MS = 90;            // time constant of animated moves
  * has three equal channels), the lossless PNG, each decoded without colour
  * management or premultiplication into a canvas (exact for lossless
  * images with no transparency), then the raw samples.  `via` names the
- * form used.  A height store's root holds 16-bit codes: its gray mapping
- * (docs/API.md) comes through the region endpoint instead.
+ * form used.  A height or sample store's root holds 16-bit codes: its
+ * 8-bit picture (docs/API.md: a height store's gray, a sample store's
+ * window and colours, gray or RGB) comes through the region endpoint
+ * instead.
  */
 async function loadRoot(url, info) {
-    const w = info.root.width, h = info.root.height, c = info.channels;
-    const forms = info.elevation
+    const w = info.root.width, h = info.root.height, c = displayChannels(info);
+    const forms = info.elevation || info.samples
         ? [['region', `${url}/region?level=${info.root.level}&x=0&y=0&w=${w}&h=${h}&format=png`]]
         : [['webp', `${url}/root?format=webp`], ['png', `${url}/root`]];
     for (const [via, src] of forms) {
@@ -157,10 +159,10 @@ export class Viewer {
         this.timing = { openStart: t0, metaMs: performance.now() - t0, firstCompleteMs: null };
         const onChange = () => this.schedule();
         let backend = null;
-        // Height stores (docs/FORMAT.md 12) are drawn from the server's gray
-        // regions: the tile decoder here is the image one
-        // (height_decode.js decodes their codes).
-        if (this.opts.renderer !== 'region' && !info.elevation) {
+        // Height and sample stores (docs/FORMAT.md 12, 13) are drawn from
+        // the server's 8-bit regions: the tile decoder here is the image
+        // one (height_decode.js decodes their codes, a channel at a time).
+        if (this.opts.renderer !== 'region' && !info.elevation && !info.samples) {
             const gl = this.gl || (this.gl = webgl2(this.canvas));
             if (gl)
                 backend = await GlBackend.create(gl, image, { ...this.opts, onChange });

@@ -282,6 +282,24 @@ out:
 
 /* ---- the decoder ---- */
 
+size_t gv_height_tile_span(const uint8_t *buf, size_t len)
+{
+    if (len < 4 || buf[0] > 1)
+        return 0;
+    if (buf[0] == 0)
+        return 4;
+    if (len < GV_HT_CUM_AT)
+        return 0;
+    unsigned mask = gv_get16(buf + GV_HT_MASK_AT);
+    if (!mask || mask >> GV_HT_CONTEXTS)
+        return 0;
+    size_t words = 0;
+    for (int s = 0; s < GV_HT_STREAMS; s++)
+        words += gv_get16(buf + GV_HT_LEN_AT + 2 * s);
+    size_t end = (streams_at(mask) + 2 * words + 3) & ~(size_t)3;
+    return end <= len ? end : 0;
+}
+
 int gv_height_tile_check(const uint8_t *buf, size_t len, struct gv_error *err)
 {
     if (len < 4 || (len & 3) || buf[1] != 0 || buf[0] > 1 ||

@@ -70,6 +70,13 @@ size_t gv_height_tile_encode(const uint16_t *orig, const uint16_t *parent,
                              int qx, int qy, int e, int valid_w, int valid_h,
                              uint8_t *out, uint16_t *dec);
 
+/* The length of the one tile buffer that starts at buf (of len bytes
+ * available), read from its header (mode, mask, stream lengths): what
+ * splits a sample store's tile into its channels (samples_tile.h).  0 when
+ * the header is malformed or the buffer runs past len; the rest is
+ * checked by gv_height_tile_check. */
+size_t gv_height_tile_span(const uint8_t *buf, size_t len);
+
 /* Check the layout of a tile buffer (mode, e, tables, stream lengths);
  * the streams themselves are checked while decoding.  0 or -1. */
 int gv_height_tile_check(const uint8_t *buf, size_t len, struct gv_error *err);

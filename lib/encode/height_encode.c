@@ -1,5 +1,6 @@
 /*
- * height_encode.c - the streaming height store encoder (see
+ * height_encode.c - the streaming encoder of stores of 16-bit codes:
+ * height stores, and sample stores of 1 to 8 channels (see
  * height_encode.h).
  *
  * Steps: (float input only) read the input once for its range; pass 1
@@ -14,6 +15,11 @@
  * row-major by tile), where the level below finds them.  The root is
  * stored losslessly.  Every step computes what the in-memory encoder
  * before it did, tile for tile, so stores are byte for byte the same.
+ *
+ * A sample store's levels hold c codes a pixel, interleaved, in the strips;
+ * its decoded tiles are kept as c planes of 513 x 513 codes (what the
+ * height codec reads as a parent), and a tile's buffer is its channels'
+ * height buffers one after another (codec/samples_tile.h).
  */
 #include <math.h>
 #include <stdio.h>
@@ -23,6 +29,9 @@
 #include "base/pool.h"
 #include "base/spill.h"
 #include "codec/height_tile.h"
+#include "codec/samples_tile.h"
+#include "render/window.h"
+#include "store/store_meta.h"
 #include "encode/encode_int.h"
 #include "encode/height_encode.h"
 #include "encode/source.h"
@@ -35,7 +44,7 @@
 #define PAGE_W GV_STRIP_PAGE_W
 #define CHUNK_BYTES (4u << 20)  /* input rows read at a time */
 #define PASS1_SHARE 0.15        /* progress weight of pass 1 */
-#define TILE_BYTES ((size_t)GV_HT_SAMPLES * sizeof(uint16_t))
+#define PLANE_BYTES ((size_t)GV_HT_SAMPLES * sizeof(uint16_t))
 
 struct henc {
     const struct gv_height_opts *o;
@@ -45,6 +54,10 @@ struct henc {
     struct gv_error *err;
     struct gv_source_opts so;
     struct gv_geometry g;
+    int c;                       /* channels: 1 for a height store */
+    int kind;                    /* GV_KIND_HEIGHT or GV_KIND_SAMPLES */
+    size_t tile_bytes;           /* a decoded tile: c planes */
+    int src_bits;                /* bits of an input sample */
     int e;                       /* the half-step in codes */
     struct gv_height_result m;   /* mapping, range, bound */
     struct gv_spill *spill;
@@ -67,8 +80,13 @@ struct henc {
     const uint16_t *parent_at[16];
     uint16_t *dec[GV_PAGE_SLOTS];
     uint8_t *bufs[GV_PAGE_SLOTS];
-    size_t lens[GV_PAGE_SLOTS];
+    size_t lens[GV_PAGE_SLOTS], caps[GV_PAGE_SLOTS];
+    double sse[GV_PAGE_SLOTS];   /* level 0: the slot's squared error */
+    double sse0;                 /* level 0's, summed */
     uint16_t *orig[GV_PAGE_SLOTS];  /* per worker */
+    uint8_t *chan[GV_PAGE_SLOTS];   /* per worker: one channel's buffer */
+    uint8_t *meta;               /* the packed metadata section, or NULL */
+    size_t meta_len;
     struct gv_store_writer *wr;
     uint64_t tiles;
     double work_total, work_done;
@@ -93,9 +111,15 @@ static void report(struct henc *h, const char *phase, double fraction)
 static struct gv_source *open_input(struct henc *h, struct gv_source_info *si)
 {
     struct gv_source *src = gv_source_open(h->inputs, h->n, &h->so, si, h->err);
-    if (src && si->channels != 1) {
+    if (src && !h->o->samples && si->channels != 1) {
         gv_fail(h->err, GV_EINVAL, ME ": %s has %d channels; a height field "
                 "has one", h->name, si->channels);
+        gv_source_free(src);
+        return NULL;
+    }
+    if (src && si->channels > GV_SAMPLES_MAX_CHANNELS) {
+        gv_fail(h->err, GV_EINVAL, ME ": %s has %d channels; a sample store "
+                "holds at most %d", h->name, si->channels, GV_SAMPLES_MAX_CHANNELS);
         gv_source_free(src);
         return NULL;
     }
@@ -105,7 +129,8 @@ static struct gv_source *open_input(struct henc *h, struct gv_source_info *si)
 /* Rows of the input read at a time. */
 static uint32_t chunk_rows(const struct gv_source_info *si)
 {
-    uint32_t c = (uint32_t)(CHUNK_BYTES / ((size_t)si->width * si->sample_bytes));
+    uint32_t c = (uint32_t)(CHUNK_BYTES / ((size_t)si->width * si->sample_bytes *
+                                           (size_t)si->channels));
     c = c ? c : 1;
     return c < si->height ? c : si->height;
 }
@@ -120,7 +145,8 @@ static int float_range(struct henc *h)
     if (!src)
         return -1;
     const uint32_t chunk = chunk_rows(&si);
-    float *buf = malloc((size_t)chunk * si.width * sizeof *buf);
+    const size_t row = (size_t)si.width * (size_t)si.channels;
+    float *buf = malloc((size_t)chunk * row * sizeof *buf);
     float lo = INFINITY, hi = -INFINITY;
     int rc = -1;
     if (!buf) {
@@ -131,7 +157,7 @@ static int float_range(struct henc *h)
         const uint32_t k = si.height - y < chunk ? si.height - y : chunk;
         if (gv_source_read(src, k, (uint8_t *)buf, h->err) < 0)
             goto out;
-        for (size_t i = 0; i < (size_t)k * si.width; i++) {
+        for (size_t i = 0; i < (size_t)k * row; i++) {
             if (!isfinite(buf[i])) {
                 gv_fail(h->err, GV_EINVAL, ME ": %s has a sample that is "
                         "not a finite number", h->name);
@@ -157,6 +183,18 @@ out:
 static int pick_e(struct henc *h)
 {
     struct gv_height_result *m = &h->m;
+    if (h->o->target_psnr > 0) {
+        /* The largest e whose uniform error, e (e + 1) / 3 in mean square,
+         * reaches the target over the samples' full range. */
+        const double peak = m->src_float ? 65535.0
+                                         : (double)((1u << h->src_bits) - 1);
+        const double mse = peak * peak / pow(10.0, h->o->target_psnr / 10.0);
+        int e = 0;
+        while (e < GV_HT_MAX_E && (e + 1.0) * (e + 2.0) / 3.0 <= mse)
+            e++;
+        h->e = m->e = e;
+        return 0;
+    }
     double q = m->src_float ? 0.5 : 0.0;   /* quantization, in codes */
     double ec = floor(h->o->max_error / m->scale - q + 1e-9);
     if (h->o->max_error > 0 && ec < 0)
@@ -180,7 +218,8 @@ static void set_bound(struct henc *h)
         : m->scale * h->e;
 }
 
-/* Map w samples of the row `raw` (sample_bytes each) to codes. */
+/* Map w samples of the row `raw` (sample_bytes each) to codes, and keep
+ * their range in lo, hi. */
 static void to_codes(struct henc *h, const void *raw, int sample_bytes,
                      uint32_t w, uint16_t *codes)
 {
@@ -190,9 +229,7 @@ static void to_codes(struct henc *h, const void *raw, int sample_bytes,
             double c = floor((f[x] - h->m.offset) / h->m.scale + 0.5);
             codes[x] = (uint16_t)(c < 0 ? 0 : (c > 65535 ? 65535 : c));
         }
-        return;
-    }
-    if (sample_bytes == 1)
+    } else if (sample_bytes == 1)
         for (uint32_t x = 0; x < w; x++)
             codes[x] = ((const uint8_t *)raw)[x];
     else if (codes != raw)
@@ -212,19 +249,19 @@ static void to_codes(struct henc *h, const void *raw, int sample_bytes,
 static int push_row(struct henc *h, int k, const uint16_t *row)
 {
     const struct gv_level *l = &h->g.level[k];
-    if (gv_strips_store(h->spill, l, h->orig_base[k], 2, h->rows_out[k], row,
-                        0, l->width, h->err) < 0)
+    if (gv_strips_store(h->spill, l, h->orig_base[k], 2 * h->c, h->rows_out[k],
+                        row, 0, l->width, h->err) < 0)
         return -1;
     h->rows_out[k]++;
     if (k == h->g.root)
         return 0;
     if (!h->have_pending[k]) {
-        memcpy(h->pending[k], row, (size_t)l->width * sizeof *row);
+        memcpy(h->pending[k], row, (size_t)l->width * h->c * sizeof *row);
         h->have_pending[k] = 1;
         return 0;
     }
     h->have_pending[k] = 0;
-    gv_height_box_reduce_row(h->pending[k], row, l->width, h->reduced[k + 1]);
+    gv_codes_box_reduce_row(h->pending[k], row, l->width, h->c, h->reduced[k + 1]);
     return push_row(h, k + 1, h->reduced[k + 1]);
 }
 
@@ -233,14 +270,15 @@ static int pass1(struct henc *h, struct gv_source *src,
 {
     const struct gv_geometry *g = &h->g;
     const uint32_t chunk = chunk_rows(si);
-    const size_t raw_row = (size_t)g->width * si->sample_bytes;
+    const size_t row_samples = (size_t)g->width * h->c;
+    const size_t raw_row = row_samples * si->sample_bytes;
     uint8_t *buf = malloc((size_t)chunk * raw_row);
-    uint16_t *codes = malloc((size_t)g->width * sizeof *codes);
+    uint16_t *codes = malloc(row_samples * sizeof *codes);
     int rc = -1;
     if (!buf || !codes)
         goto nomem;
     for (int k = 0; k <= g->root; k++) {
-        const size_t rb = (size_t)g->level[k].width * sizeof(uint16_t);
+        const size_t rb = (size_t)g->level[k].width * h->c * sizeof(uint16_t);
         if (!(h->pending[k] = malloc(rb)) || !(h->reduced[k] = malloc(rb)))
             goto nomem;
     }
@@ -255,7 +293,7 @@ static int pass1(struct henc *h, struct gv_source *src,
             /* 16-bit rows are codes as they are */
             uint16_t *row = si->sample_bytes == 2 ? (uint16_t *)(void *)raw
                                                   : codes;
-            to_codes(h, raw, si->sample_bytes, g->width, row);
+            to_codes(h, raw, si->sample_bytes, (uint32_t)row_samples, row);
             if (push_row(h, 0, row) < 0)
                 goto out;
         }
@@ -265,8 +303,8 @@ static int pass1(struct henc *h, struct gv_source *src,
     for (int k = 0; k < g->root; k++)
         if (h->have_pending[k]) {
             h->have_pending[k] = 0;
-            gv_height_box_reduce_row(h->pending[k], h->pending[k],
-                                     g->level[k].width, h->reduced[k + 1]);
+            gv_codes_box_reduce_row(h->pending[k], h->pending[k],
+                                    g->level[k].width, h->c, h->reduced[k + 1]);
             if (push_row(h, k + 1, h->reduced[k + 1]) < 0)
                 goto out;
         }
@@ -286,20 +324,38 @@ out:
 
 /* ------------------------------------------------------------ pass 2 */
 
-/* Tile (tx,ty) of a w x h level of codes with `stride` codes from row to
- * row, clamp-padded to 513x513, into t. */
+/* Channel k of tile (tx,ty) of a w x h level of c-channel codes with
+ * `stride` pixels from row to row, clamp-padded to 513x513, into the
+ * plane t. */
 static void extract(const uint16_t *lv, size_t stride, uint32_t w, uint32_t h,
-                    uint32_t tx, uint32_t ty, uint16_t *t)
+                    int c, int k, uint32_t tx, uint32_t ty, uint16_t *t)
 {
     for (uint32_t v = 0; v < GV_HT_SIDE; v++) {
         uint32_t y = ty * GV_STEP + v;
-        const uint16_t *row = lv + (size_t)(y < h ? y : h - 1) * stride;
+        const uint16_t *row = lv + (size_t)(y < h ? y : h - 1) * stride * c + k;
         uint32_t x0 = tx * GV_STEP;
         uint32_t avail = w - x0 < GV_HT_SIDE ? w - x0 : GV_HT_SIDE;
-        memcpy(t + v * GV_HT_SIDE, row + x0, avail * sizeof *t);
+        uint16_t *o = t + v * GV_HT_SIDE;
+        if (c == 1)
+            memcpy(o, row + x0, avail * sizeof *t);
+        else
+            for (uint32_t u = 0; u < avail; u++)
+                o[u] = row[(size_t)(x0 + u) * c];
         for (uint32_t u = avail; u < GV_HT_SIDE; u++)
-            t[v * GV_HT_SIDE + u] = row[w - 1];
+            o[u] = row[(size_t)(w - 1) * c];
     }
+}
+
+/* Level 0's squared error over the valid vw x vh of one decoded plane. */
+static double plane_sse(const uint16_t *a, const uint16_t *b, int vw, int vh)
+{
+    double s = 0;
+    for (int y = 0; y < vh; y++)
+        for (int x = 0; x < vw; x++) {
+            double d = (double)a[y * GV_HT_SIDE + x] - b[y * GV_HT_SIDE + x];
+            s += d * d;
+        }
+    return s;
 }
 
 /* Pool job: code slot `item` of the current page; lens[item] stays 0 for
@@ -314,13 +370,40 @@ static void encode_slot(void *ctx, size_t item, int worker)
     if (tx >= l->tiles_x || ty >= l->tiles_y)
         return;
     uint16_t *orig = h->orig[worker];
-    /* The window's columns and rows are the level's, from the page on. */
-    extract(h->win, h->win_w, h->win_w, h->win_h, i, j, orig);
     const uint32_t vw = l->width - tx * GV_STEP, vh = l->height - ty * GV_STEP;
-    h->lens[item] = gv_height_tile_encode(
-        orig, h->parent_at[(j / 2) * 4 + i / 2], (int)(tx & 1), (int)(ty & 1),
-        h->e, vw < GV_TILE ? (int)vw : GV_TILE, vh < GV_TILE ? (int)vh : GV_TILE,
-        h->bufs[item], h->dec[item]);
+    const int w = vw < GV_TILE ? (int)vw : GV_TILE, hh = vh < GV_TILE ? (int)vh : GV_TILE;
+    size_t at = 0;
+    h->sse[item] = 0;
+    for (int k = 0; k < h->c; k++) {
+        /* The window's columns and rows are the level's, from the page on. */
+        extract(h->win, h->win_w, h->win_w, h->win_h, h->c, k, i, j, orig);
+        uint16_t *dec = h->dec[item] + (size_t)k * GV_HT_SAMPLES;
+        /* One channel codes straight into the slot; more go through the
+         * worker's buffer and are appended. */
+        uint8_t *out = h->c == 1 ? h->bufs[item] : h->chan[worker];
+        size_t n = gv_height_tile_encode(
+            orig, h->parent_at[(j / 2) * 4 + i / 2] + (size_t)k * GV_HT_SAMPLES,
+            (int)(tx & 1), (int)(ty & 1), h->e, w, hh, out, dec);
+        if (!n)
+            return;
+        if (h->c > 1) {
+            if (at + n > h->caps[item]) {
+                size_t cap = 2 * (at + n);
+                uint8_t *b = realloc(h->bufs[item], cap);
+                if (!b)
+                    return;
+                h->bufs[item] = b;
+                h->caps[item] = cap;
+            }
+            memcpy(h->bufs[item] + at, out, n);
+        }
+        at += n;
+        if (h->level == 0)   /* the pixels this tile is the source of */
+            h->sse[item] += plane_sse(orig, dec,
+                                      tx + 1 < l->tiles_x && w > GV_STEP ? GV_STEP : w,
+                                      ty + 1 < l->tiles_y && hh > GV_STEP ? GV_STEP : hh);
+    }
+    h->lens[item] = at;
 }
 
 /* Map (or copy) the current page's window out of its strip. */
@@ -330,14 +413,14 @@ static int load_window(struct henc *h)
     const uint32_t y0 = h->py * PAGE_W;
     h->win_w = gv_strip_width(l->width, h->px);
     h->win_h = l->height - y0 < WINDOW ? l->height - y0 : WINDOW;
-    const uint64_t at = gv_strip_at(l, h->orig_base[h->level], 2, h->px, y0);
-    const size_t span = (size_t)h->win_h * h->win_w * sizeof(uint16_t);
+    const uint64_t at = gv_strip_at(l, h->orig_base[h->level], 2 * h->c, h->px, y0);
+    const size_t span = (size_t)h->win_h * h->win_w * h->c * sizeof(uint16_t);
     gv_spill_unview(&h->view);
     if (gv_spill_view(h->spill, at, span, &h->view) == 0) {
         h->win = (const uint16_t *)(const void *)h->view.data;
         return 0;
     }
-    if (!h->copy && !(h->copy = malloc((size_t)WINDOW * WINDOW * sizeof *h->copy)))
+    if (!h->copy && !(h->copy = malloc((size_t)WINDOW * WINDOW * h->c * sizeof *h->copy)))
         return gv_fail(h->err, GV_ENOMEM, ME ": out of memory");
     h->win = h->copy;
     return gv_spill_read(h->spill, h->copy, span, at, h->err);
@@ -355,9 +438,9 @@ static int load_parents(struct henc *h)
         h->parent_at[s] = pl == h->g.root ? h->root_tile : h->parents[s];
         if (pl == h->g.root || ptx >= l->tiles_x || pty >= l->tiles_y)
             continue;
-        if (gv_spill_read(h->spill, h->parents[s], TILE_BYTES,
+        if (gv_spill_read(h->spill, h->parents[s], h->tile_bytes,
                           h->recon_base[pl] +
-                              ((uint64_t)pty * l->tiles_x + ptx) * TILE_BYTES,
+                              ((uint64_t)pty * l->tiles_x + ptx) * h->tile_bytes,
                           h->err) < 0)
             return -1;
     }
@@ -380,13 +463,14 @@ static int encode_page(struct henc *h)
             return gv_fail(h->err, GV_ENOMEM, ME ": out of memory");
         tb[s] = h->bufs[s];
         h->tiles++;
+        h->sse0 += h->sse[s];
         const uint32_t vw = l->width - tx * GV_STEP, vh = l->height - ty * GV_STEP;
         h->work_done += (double)(vw < GV_TILE ? vw : GV_TILE) * (vh < GV_TILE ? vh : GV_TILE);
         /* Level 0 is nobody's parent. */
         if (h->level > 0 &&
-            gv_spill_write(h->spill, h->dec[s], TILE_BYTES,
+            gv_spill_write(h->spill, h->dec[s], h->tile_bytes,
                            h->recon_base[h->level] +
-                               ((uint64_t)ty * l->tiles_x + tx) * TILE_BYTES,
+                               ((uint64_t)ty * l->tiles_x + tx) * h->tile_bytes,
                            h->err) < 0)
             return -1;
     }
@@ -418,12 +502,12 @@ static void layout_scratch(struct henc *h)
     uint64_t off = 0;
     for (int k = 0; k <= g->root; k++) {
         h->orig_base[k] = off;
-        off += gv_strips_bytes(&g->level[k], 2);
+        off += gv_strips_bytes(&g->level[k], 2 * h->c);
     }
     h->work_total = 0;
     for (int k = 1; k < g->root; k++) {
         h->recon_base[k] = off;
-        off += (uint64_t)g->level[k].tiles_x * g->level[k].tiles_y * TILE_BYTES;
+        off += (uint64_t)g->level[k].tiles_x * g->level[k].tiles_y * h->tile_bytes;
     }
     for (int k = 0; k < g->root; k++)
         h->work_total += (double)g->level[k].width * g->level[k].height;
@@ -441,14 +525,19 @@ static int start_workers(struct henc *h)
     if (!(h->pool = gv_pool_new(threads)))
         return gv_fail(h->err, GV_ENOMEM, ME ": cannot start %d threads", threads);
     for (int i = 0; i < gv_pool_size(h->pool); i++)
-        if (!(h->orig[i] = malloc(TILE_BYTES)))
+        if (!(h->orig[i] = malloc(PLANE_BYTES)) ||
+            (h->c > 1 && !(h->chan[i] = malloc(GV_HT_BUF_MAX))))
             return gv_fail(h->err, GV_ENOMEM, ME ": out of memory");
     for (int s = 0; s < 16; s++)
-        if (!(h->parents[s] = malloc(TILE_BYTES)))
+        if (!(h->parents[s] = malloc(h->tile_bytes)))
             return gv_fail(h->err, GV_ENOMEM, ME ": out of memory");
-    for (int s = 0; s < GV_PAGE_SLOTS; s++)
-        if (!(h->dec[s] = malloc(TILE_BYTES)) || !(h->bufs[s] = malloc(GV_HT_BUF_MAX)))
+    /* A sample store's tile buffers grow as its channels are appended. */
+    const size_t cap = h->c == 1 ? GV_HT_BUF_MAX : 4096;
+    for (int s = 0; s < GV_PAGE_SLOTS; s++) {
+        if (!(h->dec[s] = malloc(h->tile_bytes)) || !(h->bufs[s] = malloc(cap)))
             return gv_fail(h->err, GV_ENOMEM, ME ": out of memory");
+        h->caps[s] = cap;
+    }
     return 0;
 }
 
@@ -457,16 +546,51 @@ static int start_workers(struct henc *h)
 static int load_root(struct henc *h)
 {
     const struct gv_level *rl = &h->g.level[h->g.root];
-    const size_t n = (size_t)rl->width * rl->height;
+    const size_t n = (size_t)rl->width * rl->height * h->c;
     h->root = malloc(n * sizeof *h->root);
-    h->root_tile = malloc(TILE_BYTES);
+    h->root_tile = malloc(h->tile_bytes);
     if (!h->root || !h->root_tile)
         return gv_fail(h->err, GV_ENOMEM, ME ": out of memory for the root");
     if (gv_spill_read(h->spill, h->root, n * sizeof *h->root,
                       h->orig_base[h->g.root], h->err) < 0)
         return -1;
-    extract(h->root, rl->width, rl->width, rl->height, 0, 0, h->root_tile);
+    for (int k = 0; k < h->c; k++)
+        extract(h->root, rl->width, rl->width, rl->height, h->c, k, 0, 0,
+                h->root_tile + (size_t)k * GV_HT_SAMPLES);
     return 0;
+}
+
+/* Level 0's PSNR over the samples' full range (section 13), once pass 2
+ * is done, capped at 99 dB (lossless) as an image store's. */
+static double psnr0(const struct henc *h)
+{
+    const double peak = h->m.src_float ? 65535.0 : (double)((1u << h->src_bits) - 1);
+    const double n = (double)h->g.width * h->g.height * h->c;
+    const double p = h->sse0 > 0 ? 10.0 * log10(peak * peak * n / h->sse0) : 99.0;
+    return p > 99.0 ? 99.0 : p;
+}
+
+/* A sample store's metadata: what the input says of its pixels, and the
+ * default display window if given (on codes, 0..65535), packed. */
+static int samples_meta(struct henc *h, struct gv_source *src)
+{
+    const char *meta = gv_source_meta(src);
+    char *merged = NULL;
+    if (h->o->window) {
+        struct gv_window w;
+        if (gv_window_parse(h->o->window, 65535, &w, h->err) < 0)
+            return -1;
+        if (w.count != 1 && w.count != h->c)
+            return gv_fail(h->err, GV_EINVAL, "window: %d windows for an "
+                           "image of %d channels (give one, or one per "
+                           "channel)", w.count, h->c);
+        if (!(meta = merged = gv_window_meta_set(meta, &w, h->err)))
+            return -1;
+    }
+    int rc = meta ? gv_meta_pack(meta, strlen(meta), &h->meta, &h->meta_len,
+                                 h->err) : 0;
+    free(merged);
+    return rc;
 }
 
 /* The header of the store, once the range is known. */
@@ -476,10 +600,10 @@ static void height_header(const struct henc *h, struct gv_header *hd)
     memset(hd, 0, sizeof *hd);
     hd->width = h->g.width;
     hd->height = h->g.height;
-    hd->channels = 1;
-    hd->src_bits = m->src_float ? 32 : 16;
+    hd->channels = (uint8_t)h->c;
+    hd->src_bits = m->src_float ? 32 : h->kind == GV_KIND_SAMPLES ? (uint8_t)h->src_bits : 16;
     hd->src_float = (uint8_t)m->src_float;
-    hd->kind = GV_KIND_HEIGHT;
+    hd->kind = (uint8_t)h->kind;
     hd->height_float = (uint8_t)m->src_float;
     hd->height_e = (uint16_t)h->e;
     hd->height_scale = m->scale;
@@ -489,6 +613,12 @@ static void height_header(const struct henc *h, struct gv_header *hd)
     hd->height_max = (float)m->max;
     if (h->o->unit)
         snprintf(hd->height_unit, sizeof hd->height_unit, "%s", h->o->unit);
+    if (h->kind == GV_KIND_SAMPLES) {
+        hd->samples_lo = h->lo;
+        hd->samples_hi = h->hi;
+        hd->root_side = (uint16_t)h->g.root_side;
+        gv_samples_derive(hd);
+    }
 }
 
 static void teardown(struct henc *h)
@@ -505,7 +635,9 @@ static void teardown(struct henc *h)
         free(h->dec[s]);
         free(h->bufs[s]);
         free(h->orig[s]);
+        free(h->chan[s]);
     }
+    free(h->meta);
     for (int k = 0; k < GV_MAX_LEVELS; k++) {
         free(h->pending[k]);
         free(h->reduced[k]);
@@ -521,8 +653,15 @@ static int encode(struct henc *h, const char *output, struct gv_height_result *r
     if (!src)
         return -1;
     h->m.src_float = si.src_float;
+    h->c = si.channels;
+    h->kind = h->o->samples ? GV_KIND_SAMPLES : GV_KIND_HEIGHT;
+    h->tile_bytes = PLANE_BYTES * (size_t)h->c;
+    h->src_bits = si.src_bits > 16 ? 16 : si.src_bits;
     /* Only the size so far: float input is read first for its range. */
-    if (gv_geometry_init(&h->g, si.width, si.height, 1, GV_ROOT_MAX) < 0) {
+    /* A sample store's root is small, as an image store's (the root is
+     * lossless, the tiles below it at the store's bound). */
+    const uint32_t side = h->kind == GV_KIND_SAMPLES ? GV_ROOT_SIDE : GV_ROOT_MAX;
+    if (gv_geometry_init(&h->g, si.width, si.height, h->c, side) < 0) {
         gv_source_free(src);
         return gv_fail(h->err, GV_EINVAL, ME ": bad dimensions %ux%u",
                        si.width, si.height);
@@ -533,7 +672,7 @@ static int encode(struct henc *h, const char *output, struct gv_height_result *r
             return -1;
     }
     int rc = -1;
-    if (pick_e(h) < 0)
+    if (pick_e(h) < 0 || (h->kind == GV_KIND_SAMPLES && samples_meta(h, src) < 0))
         goto out;
     layout_scratch(h);
     if (!(h->spill = gv_strips_spill_new(h->o->tmpdir, output, h->err)) ||
@@ -544,11 +683,19 @@ static int encode(struct henc *h, const char *output, struct gv_height_result *r
     set_bound(h);
     struct gv_header hd;
     height_header(h, &hd);
+    if (h->kind == GV_KIND_SAMPLES) {   /* as a reader will see them */
+        h->m.min = hd.height_min;
+        h->m.max = hd.height_max;
+        h->m.max_error = hd.height_max_error;
+    }
     if (load_root(h) < 0 || start_workers(h) < 0 ||
         !(h->wr = gv_store_writer_new(output, &hd, h->err)) || pass2(h) < 0 ||
+        (h->meta && gv_store_writer_meta(h->wr, h->meta, h->meta_len, h->err) < 0) ||
         gv_store_writer_root(h->wr, (const uint8_t *)(const void *)h->root,
                              h->err) < 0)
         goto out;
+    if (h->kind == GV_KIND_SAMPLES)
+        gv_store_writer_set_psnr(h->wr, (uint32_t)lround(psnr0(h) * 1000.0));
     uint64_t bytes = gv_store_writer_bytes(h->wr);
     struct gv_store_writer *w = h->wr;
     h->wr = NULL;
@@ -558,6 +705,8 @@ static int encode(struct henc *h, const char *output, struct gv_height_result *r
     r->geometry = h->g;
     r->tiles = h->tiles;
     r->e = h->e;
+    r->channels = h->c;
+    r->psnr0 = psnr0(h);
     /* the index and header follow the pages and the root */
     r->file_bytes = bytes + h->g.pages * GV_INDEX_ENTRY + 4;
     r->scratch_bytes = gv_spill_bytes(h->spill);

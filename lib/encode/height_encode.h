@@ -1,7 +1,9 @@
 /*
  * height_encode.h - `gigaview encode --height`: a single-channel raster
  * (16-bit or float; 8-bit too) to a height store with a guaranteed
- * maximum error (docs/FORMAT.md section 12).
+ * maximum error (docs/FORMAT.md section 12); and `gigaview encode
+ * --bits 16`: an image of 1 to 8 channels to a sample store, the same
+ * codes and tiles a channel (section 13).
  *
  * The input is mapped to 16-bit codes (value = code * scale + offset):
  * integer input is kept as it is (scale 1, offset 0) unless the caller
@@ -34,7 +36,15 @@
 #include "store/geometry.h"
 
 struct gv_height_opts {
+    int samples;           /* 1: a sample store (docs/FORMAT.md section 13)
+                            * of the input's 1..8 channels, not a height
+                            * store of one */
     double max_error;      /* E in source units; 0 = lossless */
+    double target_psnr;    /* > 0: e from this PSNR (dB, over the samples'
+                            * full range) instead of max_error: the
+                            * largest e with e (e + 1) / 3 <= the MSE */
+    const char *window;    /* sample stores: the default display window
+                            * (render/window.h, on codes), or NULL */
     int mapped;            /* integer input: use scale/offset below */
     double scale, offset;  /* value = code * scale + offset */
     const char *unit;      /* up to 8 printable characters, or NULL */
@@ -56,6 +66,8 @@ struct gv_height_result {
     struct gv_geometry geometry;
     uint64_t file_bytes, tiles;
     int e;                 /* the half-step in codes */
+    int channels;
+    double psnr0;          /* level 0's PSNR (dB, 99 when lossless) */
     double scale, offset, max_error, min, max;
     int src_float;
     uint64_t scratch_bytes; /* the scratch file's size at the end */

@@ -669,9 +669,14 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
         return gv_fail(err, GV_EFORMAT, "imageio: cannot encode format "
                        "\"%s\" (png, jpg, webp or tif)",
                        format ? format : "(null)");
-    if (channels != 1 && channels != 3)
+    /* 8-bit images are gray or RGB; 16-bit and float ones (a sample
+     * store's codes) 1 to 4 channels in PNG, 1 to 8 in TIFF. */
+    const int max_channels = type == TypeDesc::UINT8 ? 3
+                           : std::string(oiio_name) == "png" ? 4 : 8;
+    if (channels < 1 || channels > max_channels ||
+        (type == TypeDesc::UINT8 && channels == 2))
         return gv_fail(err, GV_EINVAL, "imageio: cannot encode %d channels "
-                       "(1 or 3)", channels);
+                       "as %s here", channels, format);
     if (width == 0 || height == 0 || width > 0x7fffffffu
         || height > 0x7fffffffu)
         return gv_fail(err, GV_EINVAL, "imageio: bad image size %ux%u",
@@ -711,6 +716,10 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
     std::vector<unsigned char> buf;
     OIIO::Filesystem::IOVecOutput vec(buf);
     ImageSpec spec((int)width, (int)height, channels, type);
+    /* Samples, not colour with alpha: written as they are (OIIO would
+     * otherwise take channel 2 or 4 as an associated alpha). */
+    spec.alpha_channel = -1;
+    spec.attribute("oiio:UnassociatedAlpha", 1);
     if (fmt == "jpeg" || fmt == "webp")
         spec.attribute("CompressionQuality", quality);
     /* OIIO 2.4.7 with libtiff 4.5 records "failed TIFFWriteCustomDirectory()

@@ -119,8 +119,9 @@ int gv_image_encode(const char *format, uint32_t width, uint32_t height,
                     uint8_t **out, size_t *len, struct gv_error *err);
 
 /* gv_image_write and gv_image_encode for 16-bit (png, tif) and float (tif)
- * samples as well: `sample` says what pixels holds (host order).  The
- * height store routes use them (docs/API.md).  Same returns. */
+ * samples as well: `sample` says what pixels holds (host order), in 1 to 4
+ * channels for png and 1 to 8 for tif (written as samples, no alpha).  The
+ * height and sample store routes use them (docs/API.md).  Same returns. */
 typedef int gv_image_write_typed_fn(const char *path, uint32_t width,
                                     uint32_t height, int channels,
                                     enum gv_sample sample, const void *pixels,

@@ -53,6 +53,7 @@
 #include <string.h>
 
 #include "render/region.h"
+#include "render/samples_region.h"
 #include "store/store_read.h"
 
 #define WBITS 14                  /* fixed-point weight precision */
@@ -399,21 +400,14 @@ static int reserve(uint8_t **buf, size_t *cap, size_t need)
     return *buf ? 0 : -1;
 }
 
-/* req's window, if any, on n decoded pixels of sc channels. */
-static int apply_window(const struct gv_render_req *req, uint8_t *pix,
-                        size_t n, int sc, struct gv_error *err)
-{
-    if (!req->window || req->window->count == 0)
-        return 0;
-    return gv_window_apply8(req->window, pix, n, sc, err);
-}
 
 int gv_render_to(struct gv_decoder *d, const struct gv_render_req *req,
                  uint8_t **buf, size_t *cap, uint32_t *w, uint32_t *h,
                  int *channels, struct gv_error *err)
 {
     const struct gv_geometry *g = &gv_store_info(gv_decoder_store(d))->geometry;
-    const int sc = g->channels;
+    /* 8-bit pixels: a sample store's codes through req's window */
+    const int sc = gv_display_channels(&gv_store_info(gv_decoder_store(d))->header);
     uint8_t *dec = NULL, *scaled = NULL, *final = NULL;
     struct axis ax = {0}, ay = {0};
     struct footprint f;
@@ -437,8 +431,8 @@ int gv_render_to(struct gv_decoder *d, const struct gv_render_req *req,
                     "pixels", f.w, f.h);
             goto out;
         }
-        if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, *buf, err) != 0
-            || apply_window(req, *buf, (size_t)f.w * f.h, sc, err) != 0)
+        if (gv_decode_region_window(d, f.k, f.x, f.y, f.w, f.h, req->window,
+                                    *buf, err) != 0)
             goto out;
         *w = req->out_w;
         *h = req->out_h;
@@ -452,8 +446,8 @@ int gv_render_to(struct gv_decoder *d, const struct gv_render_req *req,
                 f.w, f.h);
         goto out;
     }
-    if (gv_decode_region(d, f.k, f.x, f.y, f.w, f.h, dec, err) != 0
-        || apply_window(req, dec, (size_t)f.w * f.h, sc, err) != 0)
+    if (gv_decode_region_window(d, f.k, f.x, f.y, f.w, f.h, req->window, dec,
+                                err) != 0)
         goto out;
 
     if (copy) {

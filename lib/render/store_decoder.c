@@ -8,9 +8,9 @@
  * that want the same tile wait for this decode instead of repeating it.
  * A page read for one tile is kept while its neighbours are decoded.
  * gv_decoder_copy_region is the one tile walk behind both region readers
- * (decode_region.c for images, height_region.c for height codes): it
- * copies pixel units, C bytes for an image and a 2-byte code for a height
- * store.
+ * (decode_region.c for images, height_region.c for height and sample
+ * codes): it copies pixel units, C bytes for an image and C 2-byte codes
+ * for a height or sample store.
  * The time spent reading pages, decoding and in the cache is summed per
  * decoder (gv_decoder_times; one clock read before and after each).
  */
@@ -20,13 +20,15 @@
 
 #include "render/store_decoder.h"
 #include "codec/height_tile.h"
+#include "codec/samples_tile.h"
 #include "codec/tile.h"
 
 struct gv_decoder {
     const struct gv_store *store;
     const struct gv_store_info *info;
-    int channels;        /* bytes per pixel: 2 for a height store's codes */
-    int height;          /* a height store (docs/FORMAT.md section 9) */
+    int channels;        /* bytes per pixel: 2 C for a store of codes */
+    int kind;            /* header.kind: GV_KIND_HEIGHT (FORMAT.md section
+                          * 12) and GV_KIND_SAMPLES (13) hold codes */
     struct gv_tile_cache *cache;
     int owns_cache;
     uint64_t store_key;
@@ -63,8 +65,9 @@ struct gv_decoder *gv_decoder_new_shared(const struct gv_store *s,
         return NULL;
     d->store = s;
     d->info = gv_store_info(s);
-    d->height = d->info->header.kind == GV_KIND_HEIGHT;
-    d->channels = d->height ? 2 : d->info->geometry.channels;
+    d->kind = d->info->header.kind;
+    d->channels = d->info->geometry.channels *
+                  (gv_header_codes(&d->info->header) ? 2 : 1);
     d->cache = cache;
     d->store_key = store_key;
     d->page_level = -1;
@@ -157,11 +160,16 @@ static int decode_into(struct gv_decoder *d, int level, uint32_t tx,
     if (load_page(d, level, tx / GV_PAGE_TILES, ty / GV_PAGE_TILES, err) == 0 &&
         gv_page_tile(d->page, d->page_len, d->channels, (int)(tx % GV_PAGE_TILES),
                      (int)(ty % GV_PAGE_TILES), &buf, &len, err) == 0 &&
-        (t0 = now_ns(), d->height
+        (t0 = now_ns(), d->kind == GV_KIND_HEIGHT
              ? gv_height_tile_decode(buf, len,
                                      (const uint16_t *)(void *)gv_tile_entry_pixels(parent),
                                      (int)(tx & 1), (int)(ty & 1),
                                      (uint16_t *)(void *)out, err)
+             : d->kind == GV_KIND_SAMPLES
+             ? gv_samples_tile_decode(buf, len, d->info->geometry.channels,
+                                      (const uint16_t *)(void *)gv_tile_entry_pixels(parent),
+                                      (int)(tx & 1), (int)(ty & 1),
+                                      (uint16_t *)(void *)out, err)
              : gv_tile_decode(buf, len, d->channels, gv_tile_entry_pixels(parent),
                               (int)(tx & 1), (int)(ty & 1), out, err)) == 0)
         rc = 0;

@@ -21,6 +21,7 @@
 #include "store/store_read.h"
 
 struct gv_decoder;
+struct gv_window;
 
 /* New decoder over s (borrowed; it must outlive the decoder) with a
  * private tile cache of at most cache_bytes (beyond the tiles in use: the
@@ -59,8 +60,10 @@ int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
 
 /*
  * Decode the region [x, x+w) x [y, y+h) of `level` into out (w*h*C bytes,
- * rows packed; a height store gives one 8-bit gray channel, its codes
- * mapped by gv_height_gray, and gv_height_region gives the codes).
+ * rows packed, C = gv_display_channels; a height store gives one 8-bit
+ * gray channel, its codes mapped by gv_height_gray, and gv_height_region
+ * gives the codes; a sample store gives gray or RGB through its default
+ * window, samples_region.h).
  * Levels root..root+root_mips-1 read the stored root mips.  Defined in
  * decode_region.c, above both this decoder and height_region.c.
  * Pixel (x,y) of a tiled level comes from tile min(x/512, tiles_x-1) (same
@@ -70,6 +73,17 @@ int gv_decoder_tile(struct gv_decoder *d, int level, uint32_t tx, uint32_t ty,
 int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
                      uint32_t w, uint32_t h, uint8_t *out,
                      struct gv_error *err);
+
+/* gv_decode_region through display window `win` (window.h; NULL or count
+ * 0: none; for a sample store, NULL is its default window and count 0 its
+ * range, samples_region.h): applied to a
+ * sample store's codes before they become 8-bit, to the 8-bit pixels of
+ * any other store.  0 or -1 (also GV_EINVAL for a window of another
+ * channel count). */
+int gv_decode_region_window(struct gv_decoder *d, int level, uint32_t x,
+                            uint32_t y, uint32_t w, uint32_t h,
+                            const struct gv_window *win, uint8_t *out,
+                            struct gv_error *err);
 
 /*
  * The region reader under gv_decode_region and gv_height_region: check

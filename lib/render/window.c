@@ -123,11 +123,12 @@ const struct gv_window_channel *gv_window_of(const struct gv_window *w, int c)
     return &w->ch[w->count == 1 ? 0 : c];
 }
 
-void gv_window_table8(const struct gv_window_channel *c, uint8_t table[256])
+void gv_window_table(const struct gv_window_channel *c, uint32_t max,
+                     uint8_t *table)
 {
     const double range = (double)c->white - (double)c->black;
     const double e = 1000.0 / (double)c->gamma_milli;
-    for (uint32_t v = 0; v < 256; v++) {
+    for (uint32_t v = 0; v <= max; v++) {
         if (v <= c->black) {
             table[v] = 0;
             continue;
@@ -141,6 +142,22 @@ void gv_window_table8(const struct gv_window_channel *c, uint8_t table[256])
         double y = floor(255.0 * p + 0.500000001);
         table[v] = y >= 255.0 ? 255 : y <= 0.0 ? 0 : (uint8_t)y;
     }
+}
+
+void gv_window_table8(const struct gv_window_channel *c, uint8_t table[256])
+{
+    gv_window_table(c, 255, table);
+}
+
+int gv_window_check_max(const struct gv_window *w, uint32_t max,
+                        struct gv_error *err)
+{
+    for (int k = 0; k < w->count; k++)
+        if (w->ch[k].white > max)
+            return gv_fail(err, GV_EINVAL, "window: white point %u is past "
+                           "this image's largest sample, %u", w->ch[k].white,
+                           max);
+    return 0;
 }
 
 int gv_window_apply8(const struct gv_window *w, uint8_t *pix, size_t n,

@@ -16,9 +16,10 @@
  * 0 .. max (255 for 8-bit samples), B < W, G a decimal gamma 0.1 .. 10
  * with at most three decimals (",G" may be left out: 1).  Gamma is kept
  * in thousandths, so the text has one canonical form (gv_window_format).
- * Built for 8-bit samples today; the sample maximum and the channel count
- * are parameters so that 16-bit and multichannel stores take the same
- * text and the same table rule (a table of max + 1 entries).
+ * The sample maximum and the channel count are parameters: 8-bit image
+ * stores take 0 .. 255, sample stores (16-bit codes, 1 to 8 channels)
+ * 0 .. 65535, with the same text and the same table rule (a table of
+ * max + 1 entries).
  */
 #ifndef GV_WINDOW_H
 #define GV_WINDOW_H
@@ -56,6 +57,16 @@ int gv_window_format(const struct gv_window *w, char *buf, size_t size);
 
 /* The window of channel c (0-based) of w: its own, or the one for all. */
 const struct gv_window_channel *gv_window_of(const struct gv_window *w, int c);
+
+/* The table of channel window c for samples 0 .. max: max + 1 entries
+ * (65536 for a sample store's codes) into table. */
+void gv_window_table(const struct gv_window_channel *c, uint32_t max,
+                     uint8_t *table);
+
+/* 0 when every point of w is within 0 .. max (a window parsed for 16-bit
+ * samples, checked against an 8-bit image), else -1 with GV_EINVAL. */
+int gv_window_check_max(const struct gv_window *w, uint32_t max,
+                        struct gv_error *err);
 
 /* The 256-entry table of channel window c for 8-bit samples. */
 void gv_window_table8(const struct gv_window_channel *c, uint8_t table[256]);

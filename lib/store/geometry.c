@@ -17,7 +17,7 @@ int gv_geometry_init(struct gv_geometry *g, uint32_t width, uint32_t height,
         return -1;
     if (width == 0 || height == 0 || width > GV_MAX_DIM || height > GV_MAX_DIM)
         return -1;
-    if (channels != 1 && channels != 3)
+    if (channels < 1 || channels > GV_MAX_CHANNELS)
         return -1;
     g->width = width;
     g->height = height;

@@ -23,6 +23,7 @@
                               * many pixels a side */
 #define GV_MAX_LEVELS 40     /* a 2^31-pixel side needs 23; room to spare */
 #define GV_MAX_DIM 0x7fffffffu /* width and height must stay below 2^31 */
+#define GV_MAX_CHANNELS 8      /* a sample store's; image stores have 1 or 3 */
 
 struct gv_level {
     uint32_t width, height;   /* pixels of this level */
@@ -33,7 +34,8 @@ struct gv_level {
 
 struct gv_geometry {
     uint32_t width, height;
-    int channels;             /* 1 (gray) or 3 (RGB) */
+    int channels;             /* image stores 1 (gray) or 3 (RGB); sample
+                               * stores 1..GV_MAX_CHANNELS */
     uint32_t root_side;       /* the root is the first level within this */
     int root;                 /* index of the root level: levels 0..root */
     int root_mips;            /* mip levels stored for the root, root..1x1 */
@@ -45,7 +47,8 @@ struct gv_geometry {
  * Fill *g for an image of width x height pixels with the given channel
  * count, whose root is the first level that fits in root_side x root_side
  * pixels (GV_ROOT_MAX for stores before format version 6).  Returns 0, or
- * -1 if a dimension is 0 or above GV_MAX_DIM, channels is not 1 or 3, or
+ * -1 if a dimension is 0 or above GV_MAX_DIM, channels is not 1 ..
+ * GV_MAX_CHANNELS (the store header checks an image store's 1 or 3), or
  * root_side is not 1..GV_ROOT_MAX.  A level has at least half (rounded
  * up) the tiles of the level below in each direction, so every tile has a
  * parent (which can add a column or row of tiles past a level's edge).

@@ -87,6 +87,14 @@ void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE])
         if (h->version >= GV_VERSION_SMALL_ROOT)
             gv_put16(out + 96, h->root_side);
     }
+    if (h->kind == GV_KIND_SAMPLES) {   /* version 7: section 13 */
+        out[98] = h->height_float;
+        gv_put16(out + 100, h->height_e);
+        gv_put_f64(out + 102, h->height_scale);
+        gv_put_f64(out + 110, h->height_offset);
+        gv_put16(out + 118, h->samples_lo);
+        gv_put16(out + 120, h->samples_hi);
+    }
     gv_put32(out + 124, gv_crc32(0, out, 124));
 }
 
@@ -131,6 +139,7 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
     h->height_offset = h->height_max_error = 0;
     h->height_min = h->height_max = 0;
     memset(h->height_unit, 0, sizeof h->height_unit);
+    h->samples_lo = h->samples_hi = 0;
     h->meta_offset = 0;
     h->meta_size = h->meta_crc = 0;
     if (h->version != GV_VERSION_HEIGHT) {
@@ -168,8 +177,38 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
             !isfinite(h->height_min) || !isfinite(h->height_max) ||
             h->height_min > h->height_max)
             return gv_fail(err, GV_ECORRUPT, "store: bad height store header");
+    } else if (h->version == GV_VERSION_SAMPLES) {
+        /* Version 7 is the sample store: 1..8 channels, finite mapping. */
+        h->kind = GV_KIND_SAMPLES;
+        h->height_float = in[98];
+        h->height_e = gv_get16(in + 100);
+        h->height_scale = gv_get_f64(in + 102);
+        h->height_offset = gv_get_f64(in + 110);
+        h->samples_lo = gv_get16(in + 118);
+        h->samples_hi = gv_get16(in + 120);
+        if (h->channels < 1 || h->channels > GV_SAMPLES_MAX_CHANNELS ||
+            in[98] > 1 || in[99] || gv_get16(in + 122) ||
+            h->height_e > 32767 || !isfinite(h->height_scale) ||
+            !(h->height_scale > 0) || !isfinite(h->height_offset) ||
+            h->samples_lo > h->samples_hi)
+            return gv_fail(err, GV_ECORRUPT, "store: bad sample store header");
+        gv_samples_derive(h);
+    } else if (h->channels != 1 && h->channels != 3) {
+        return gv_fail(err, GV_ECORRUPT, "store: an image store has %u "
+                       "channels (1 or 3)", h->channels);
     }
     return 0;
+}
+
+void gv_samples_derive(struct gv_header *h)
+{
+    const double s = h->height_scale, o = h->height_offset;
+    h->height_min = (float)(h->samples_lo * s + o);
+    h->height_max = (float)(h->samples_hi * s + o);
+    h->height_max_error = h->height_float
+        ? s * (h->height_e + 0.5) + 1e-12 * fmax(fabs((double)h->height_min),
+                                                 fabs((double)h->height_max))
+        : s * h->height_e;
 }
 
 uint64_t gv_root_pixels_size(uint32_t w, uint32_t h, int channels)
@@ -365,10 +404,10 @@ void gv_root_build_mips(uint8_t *buf, uint32_t w, uint32_t h, int channels)
     }
 }
 
-int gv_height_root_pack(const uint16_t *codes, uint32_t w, uint32_t h,
-                        uint8_t **out, size_t *len, struct gv_error *err)
+int gv_codes_root_pack(const uint16_t *codes, uint32_t w, uint32_t h, int c,
+                       uint8_t **out, size_t *len, struct gv_error *err)
 {
-    const size_t n = (size_t)w * h;
+    const size_t n = (size_t)w * h * (size_t)c, row = (size_t)w * c;
     uint8_t *raw = malloc(2 * n);
     uLongf zlen = compressBound((uLong)(2 * n));
     uint8_t *z = malloc(zlen);
@@ -378,9 +417,9 @@ int gv_height_root_pack(const uint16_t *codes, uint32_t w, uint32_t h,
         return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
     }
     for (uint32_t y = 0; y < h; y++)
-        for (uint32_t x = 0; x < w; x++) {
-            size_t i = (size_t)y * w + x;
-            gv_put16(raw + 2 * i, (uint16_t)(codes[i] - (x ? codes[i - 1] : 0)));
+        for (size_t x = 0; x < row; x++) {
+            size_t i = (size_t)y * row + x;
+            gv_put16(raw + 2 * i, (uint16_t)(codes[i] - (x >= (size_t)c ? codes[i - c] : 0)));
         }
     int zr = compress2(z, &zlen, raw, (uLong)(2 * n), 9);
     free(raw);
@@ -393,10 +432,11 @@ int gv_height_root_pack(const uint16_t *codes, uint32_t w, uint32_t h,
     return 0;
 }
 
-int gv_height_root_unpack(const uint8_t *in, size_t len, uint32_t w,
-                          uint32_t h, uint16_t *out, struct gv_error *err)
+int gv_codes_root_unpack(const uint8_t *in, size_t len, uint32_t w,
+                         uint32_t h, int c, uint16_t *out,
+                         struct gv_error *err)
 {
-    const size_t n = (size_t)w * h;
+    const size_t n = (size_t)w * h * (size_t)c, row = (size_t)w * c;
     uint8_t *raw = malloc(2 * n + 1);
     if (!raw)
         return gv_fail(err, GV_ENOMEM, "store: out of memory for the root");
@@ -404,35 +444,39 @@ int gv_height_root_unpack(const uint8_t *in, size_t len, uint32_t w,
     int zr = uncompress(raw, &got, in, (uLong)len);
     if (zr != Z_OK || got != 2 * n) {
         free(raw);
-        return gv_fail(err, GV_ECORRUPT, "store: the height root does not "
-                       "inflate to %ux%u codes", w, h);
+        return gv_fail(err, GV_ECORRUPT, "store: the root does not inflate "
+                       "to %ux%u pixels of %d codes", w, h, c);
     }
     for (uint32_t y = 0; y < h; y++)
-        for (uint32_t x = 0; x < w; x++) {
-            size_t i = (size_t)y * w + x;
-            out[i] = (uint16_t)(gv_get16(raw + 2 * i) + (x ? out[i - 1] : 0));
+        for (size_t x = 0; x < row; x++) {
+            size_t i = (size_t)y * row + x;
+            out[i] = (uint16_t)(gv_get16(raw + 2 * i) + (x >= (size_t)c ? out[i - c] : 0));
         }
     free(raw);
     return 0;
 }
 
-void gv_height_box_reduce_row(const uint16_t *r0, const uint16_t *r1,
-                              uint32_t sw, uint16_t *dst)
+void gv_codes_box_reduce_row(const uint16_t *r0, const uint16_t *r1,
+                             uint32_t sw, int c, uint16_t *dst)
 {
     const uint32_t dw = (sw + 1) / 2;
     for (uint32_t x = 0; x < dw; x++) {
-        uint32_t a = 2 * x, b = 2 * x + 1 < sw ? 2 * x + 1 : 2 * x;
-        dst[x] = (uint16_t)((r0[a] + r0[b] + r1[a] + r1[b] + 2u) >> 2);
+        size_t a = (size_t)2 * x * c;
+        size_t b = (2 * x + 1 < sw ? (size_t)(2 * x + 1) : (size_t)2 * x) * c;
+        for (int k = 0; k < c; k++)
+            dst[(size_t)x * c + k] =
+                (uint16_t)((r0[a + k] + r0[b + k] + r1[a + k] + r1[b + k] + 2u) >> 2);
     }
 }
 
-void gv_height_box_reduce(const uint16_t *src, uint32_t sw, uint32_t sh,
-                          uint16_t *dst)
+void gv_codes_box_reduce(const uint16_t *src, uint32_t sw, uint32_t sh, int c,
+                         uint16_t *dst)
 {
     const uint32_t dw = (sw + 1) / 2, dh = (sh + 1) / 2;
+    const size_t srow = (size_t)sw * c;
     for (uint32_t y = 0; y < dh; y++) {
-        const uint16_t *r0 = src + (size_t)(2 * y) * sw;
-        const uint16_t *r1 = 2 * y + 1 < sh ? r0 + sw : r0;
-        gv_height_box_reduce_row(r0, r1, sw, dst + (size_t)y * dw);
+        const uint16_t *r0 = src + (size_t)(2 * y) * srow;
+        const uint16_t *r1 = 2 * y + 1 < sh ? r0 + srow : r0;
+        gv_codes_box_reduce_row(r0, r1, sw, c, dst + (size_t)y * dw * c);
     }
 }

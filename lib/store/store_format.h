@@ -36,12 +36,18 @@
 #define GV_VERSION_SMALL_ROOT 6 /* an image store whose root is the first
                             * level within root_side (header bytes 96-97),
                             * tiles in any layout */
-#define GV_VERSION_MAX 6   /* the newest version the reader reads */
+#define GV_VERSION_SAMPLES 7 /* a sample store: 1 to 8 channels of 16-bit
+                            * codes (docs/FORMAT.md section 13) */
+#define GV_VERSION_MAX 7   /* the newest version the reader reads */
 #define GV_VERSION_MIN 1   /* the oldest version the reader reads */
 
-/* Store kinds (header byte 80, format version 3 only). */
+/* Store kinds: header byte 80 in format version 3, the version itself in
+ * 7; every other version is an image store. */
 #define GV_KIND_IMAGE 0
-#define GV_KIND_HEIGHT 1   /* 16-bit codes of a height field (section 9) */
+#define GV_KIND_HEIGHT 1   /* 16-bit codes of a height field (section 12) */
+#define GV_KIND_SAMPLES 2  /* 1..8 channels of 16-bit image samples
+                            * (section 13, format version 7) */
+#define GV_SAMPLES_MAX_CHANNELS 8
 #define GV_HEIGHT_UNIT 8   /* bytes of the unit name, NUL-padded */
 #define GV_HEADER_SIZE 128
 #define GV_INDEX_ENTRY 16
@@ -66,17 +72,20 @@ struct gv_header {
     uint64_t root_offset, root_size;   /* root_size includes its CRC */
     uint64_t index_offset, pages;
     uint64_t file_size;
-    /* Height stores (kind GV_KIND_HEIGHT, version 3): value = code *
+    /* Height and sample stores (gv_header_codes): value = code *
      * height_scale + height_offset, every decoded code within height_e
      * codes of its level's exact code, every level-0 value within
-     * height_max_error source units of the input. */
+     * height_max_error source units of the input.  A sample store has no
+     * unit, and its min and max are those of every channel together. */
     uint8_t kind;
     uint8_t height_float;    /* the input was floating point */
     uint16_t height_e;
     double height_scale, height_offset, height_max_error;
     float height_min, height_max;   /* range of the input values */
     char height_unit[GV_HEIGHT_UNIT + 1];
-    /* Image stores (not version 3): the optional metadata section
+    uint16_t samples_lo, samples_hi;   /* sample stores: smallest and
+                                        * largest code of the input */
+    /* Image and sample stores (not version 3): the optional metadata section
      * (store_meta.h), size 0 when there is none. */
     uint64_t meta_offset;
     uint32_t meta_size, meta_crc;   /* the whole section, its CRC32 */
@@ -100,6 +109,18 @@ static inline uint16_t gv_image_version(uint16_t version, uint16_t root_side)
     return version == GV_VERSION_DCT ? GV_VERSION_DCT : GV_VERSION;
 }
 
+/* Whether a store holds 16-bit codes (a height or a sample store) rather
+ * than 8-bit image tiles. */
+static inline int gv_header_codes(const struct gv_header *h)
+{
+    return h->kind == GV_KIND_HEIGHT || h->kind == GV_KIND_SAMPLES;
+}
+
+/* A sample store's height_min, height_max and height_max_error, from its
+ * codes' range, mapping, e and float flag (section 13: the bound of
+ * section 12's rule). */
+void gv_samples_derive(struct gv_header *h);
+
 /* Serialize h into 128 bytes, CRC included. */
 void gv_header_pack(const struct gv_header *h, uint8_t out[GV_HEADER_SIZE]);
 
@@ -110,23 +131,26 @@ int gv_header_unpack(const uint8_t in[GV_HEADER_SIZE], struct gv_header *h,
                      struct gv_error *err);
 
 /*
- * The root of a height store: w x h codes, stored as zlib (deflate) of the
- * codes' differences from their left neighbours (mod 2^16, the first of
- * a row from 0), u16 little-endian.  *out is malloc'ed.  0 or -1.
+ * The root of a height or sample store: w x h pixels of c interleaved
+ * codes, stored as zlib (deflate) of each code's difference from the same
+ * channel's code of its left neighbour (mod 2^16, the first pixel of a
+ * row from 0), u16 little-endian.  *out is malloc'ed.  0 or -1.
  */
-int gv_height_root_pack(const uint16_t *codes, uint32_t w, uint32_t h,
-                        uint8_t **out, size_t *len, struct gv_error *err);
-/* Inverse of gv_height_root_pack: exactly w*h codes or GV_ECORRUPT. */
-int gv_height_root_unpack(const uint8_t *in, size_t len, uint32_t w,
-                          uint32_t h, uint16_t *out, struct gv_error *err);
-/* The u16 box filter of section 1 for height levels (odd edges
- * replicated): src sw x sh -> dst ceil(sw/2) x ceil(sh/2). */
-void gv_height_box_reduce(const uint16_t *src, uint32_t sw, uint32_t sh,
-                          uint16_t *dst);
+int gv_codes_root_pack(const uint16_t *codes, uint32_t w, uint32_t h, int c,
+                       uint8_t **out, size_t *len, struct gv_error *err);
+/* Inverse of gv_codes_root_pack: exactly w*h*c codes or GV_ECORRUPT. */
+int gv_codes_root_unpack(const uint8_t *in, size_t len, uint32_t w,
+                         uint32_t h, int c, uint16_t *out,
+                         struct gv_error *err);
+/* The u16 box filter of section 1 for levels of codes (odd edges
+ * replicated), c channels interleaved: src sw x sh -> dst ceil(sw/2) x
+ * ceil(sh/2). */
+void gv_codes_box_reduce(const uint16_t *src, uint32_t sw, uint32_t sh, int c,
+                         uint16_t *dst);
 /* One row of it: rows r0 and r1 (r1 = r0 for an odd last row) of sw
- * codes -> ceil(sw/2) codes in dst. */
-void gv_height_box_reduce_row(const uint16_t *r0, const uint16_t *r1,
-                              uint32_t sw, uint16_t *dst);
+ * pixels -> ceil(sw/2) pixels in dst. */
+void gv_codes_box_reduce_row(const uint16_t *r0, const uint16_t *r1,
+                             uint32_t sw, int c, uint16_t *dst);
 
 /* Bytes of every mip of a w x h root, channels interleaved (what a reader
  * holds in memory). */

@@ -16,6 +16,7 @@
 #include "store/store_meta.h"
 #include "store/store_read.h"
 #include "codec/height_tile.h"
+#include "codec/samples_tile.h"
 #include "codec/tile.h"
 
 struct gv_store {
@@ -60,8 +61,12 @@ static int check_header(struct gv_store *s, uint64_t file_size,
         return gv_fail(err, GV_ECORRUPT, "store: file is %llu bytes, header "
                        "says %llu (truncated?)", (unsigned long long)file_size,
                        (unsigned long long)h->file_size);
-    /* Lossless WebP never needs twice the raw samples. */
-    if (h->root_size < 5 || h->root_size > 2 * GV_ROOT_MAX_BYTES + 4096 ||
+    /* Lossless WebP never needs twice the raw samples, nor deflate twice
+     * the raw codes. */
+    const uint64_t root_max = gv_header_codes(h)
+        ? (uint64_t)4 * GV_ROOT_MAX * GV_ROOT_MAX * (unsigned)h->channels + 4096
+        : 2 * GV_ROOT_MAX_BYTES + 4096;
+    if (h->root_size < 5 || h->root_size > root_max ||
         h->root_offset < GV_HEADER_SIZE ||
         h->root_offset > file_size || h->root_size > file_size - h->root_offset)
         return gv_fail(err, GV_ECORRUPT, "store: root section out of bounds");
@@ -123,13 +128,13 @@ static int open_file(struct gv_store *s, const char *path, uint64_t *size,
     return 0;
 }
 
-/* Build the mips of a height root in place (codes, as gv_root_build_mips
- * does for 8-bit samples). */
-static void height_mips(uint16_t *buf, uint32_t w, uint32_t h)
+/* Build the mips of a root of codes in place (c interleaved channels, as
+ * gv_root_build_mips does for 8-bit samples). */
+static void code_mips(uint16_t *buf, uint32_t w, uint32_t h, int c)
 {
     while (w > 1 || h > 1) {
-        uint16_t *next = buf + (size_t)w * h;
-        gv_height_box_reduce(buf, w, h, next);
+        uint16_t *next = buf + (size_t)w * h * c;
+        gv_codes_box_reduce(buf, w, h, c, next);
         buf = next;
         w = (w + 1) / 2;
         h = (h + 1) / 2;
@@ -141,8 +146,8 @@ static int load_root(struct gv_store *s, struct gv_error *err)
 {
     const struct gv_header *h = &s->info.header;
     const struct gv_geometry *g = &s->info.geometry;
-    const int height = h->kind == GV_KIND_HEIGHT;
-    const int bpp = height ? 2 : g->channels;   /* bytes per pixel */
+    const int codes = gv_header_codes(h);
+    const int bpp = codes ? 2 * g->channels : g->channels;   /* bytes per pixel */
     uint32_t w = g->level[g->root].width, hh = g->level[g->root].height;
     uint8_t *packed = malloc(h->root_size);
     s->root = malloc(gv_root_pixels_size(w, hh, bpp));
@@ -153,8 +158,9 @@ static int load_root(struct gv_store *s, struct gv_error *err)
     if (read_exact(s->fd, packed, h->root_size, h->root_offset, "root", err) < 0 ||
         (gv_crc32(0, packed, h->root_size - 4) != gv_get32(packed + h->root_size - 4) &&
          gv_fail(err, GV_ECORRUPT, "store: root CRC mismatch")) ||
-        (height ? gv_height_root_unpack(packed, h->root_size - 4, w, hh,
-                                        (uint16_t *)(void *)s->root, err)
+        (codes ? gv_codes_root_unpack(packed, h->root_size - 4, w, hh,
+                                      g->channels, (uint16_t *)(void *)s->root,
+                                      err)
                 : gv_root_unpack(packed, h->root_size - 4, w, hh, g->channels,
                                  s->root, err)) < 0) {
         free(packed);
@@ -162,8 +168,8 @@ static int load_root(struct gv_store *s, struct gv_error *err)
     }
     s->root_crc = gv_get32(packed + h->root_size - 4);
     free(packed);
-    if (height)
-        height_mips((uint16_t *)(void *)s->root, w, hh);
+    if (codes)
+        code_mips((uint16_t *)(void *)s->root, w, hh, g->channels);
     else
         gv_root_build_mips(s->root, w, hh, g->channels);
     uint64_t off = 0;
@@ -338,9 +344,9 @@ int gv_store_read_root_webp(const struct gv_store *s, uint8_t **data,
                             size_t *len, struct gv_error *err)
 {
     const struct gv_header *h = &s->info.header;
-    if (h->kind == GV_KIND_HEIGHT)
-        return gv_fail(err, GV_EFORMAT, "store: a height store's root is not "
-                       "a WebP image");
+    if (gv_header_codes(h))
+        return gv_fail(err, GV_EFORMAT, "store: a height or sample store's "
+                       "root is not a WebP image");
     /* root_size (5 .. about 1.5 MiB, its CRC included) was checked at open. */
     uint8_t *b = malloc(h->root_size);
     if (!b)
@@ -408,6 +414,8 @@ int gv_page_check(const struct gv_store *s, const uint8_t *page, size_t len,
             struct gv_error why = {0};
             if ((s->info.header.kind == GV_KIND_HEIGHT
                      ? gv_height_tile_check(page + to, ts, &why)
+                     : s->info.header.kind == GV_KIND_SAMPLES
+                     ? gv_samples_tile_check(page + to, ts, g->channels, &why)
                      : gv_tilebuf_check(page + to, ts, g->channels, &why)) < 0)
                 /* why, not err: snprintf must not read the buffer it
                  * writes (found by fuzz_store's valgrind replay). */

@@ -56,7 +56,14 @@ struct gv_store_writer *gv_store_writer_new(const char *path,
     if (h->kind == GV_KIND_HEIGHT || !h->root_side)
         w->h.root_side = GV_ROOT_MAX;
     w->h.version = h->kind == GV_KIND_HEIGHT ? GV_VERSION_HEIGHT :
+                   h->kind == GV_KIND_SAMPLES ? GV_VERSION_SAMPLES :
                    gv_image_version(h->version, w->h.root_side);
+    if ((h->kind == GV_KIND_IMAGE && h->channels != 1 && h->channels != 3) ||
+        (h->kind == GV_KIND_HEIGHT && h->channels != 1)) {
+        gv_fail(err, GV_EINVAL, "store: %u channels for this kind of store",
+                h->channels);
+        goto fail;
+    }
     if (gv_geometry_init(&w->g, h->width, h->height, h->channels,
                          w->h.root_side) < 0) {
         gv_fail(err, GV_EINVAL, "store: bad dimensions %ux%u", h->width, h->height);
@@ -135,9 +142,10 @@ int gv_store_writer_root(struct gv_store_writer *w, const uint8_t *pixels,
     const struct gv_level *r = &w->g.level[w->g.root];
     uint8_t *z;
     size_t zlen;
-    if ((w->h.kind == GV_KIND_HEIGHT
-             ? gv_height_root_pack((const uint16_t *)(const void *)pixels,
-                                   r->width, r->height, &z, &zlen, err)
+    if ((gv_header_codes(&w->h)
+             ? gv_codes_root_pack((const uint16_t *)(const void *)pixels,
+                                  r->width, r->height, w->g.channels, &z,
+                                  &zlen, err)
              : gv_root_pack(pixels, r->width, r->height, w->g.channels, &z,
                             &zlen, err)) < 0)
         return -1;

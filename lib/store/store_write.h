@@ -36,9 +36,9 @@ int gv_store_writer_page(struct gv_store_writer *w, int level, uint32_t px,
                          uint32_t py, const uint8_t *const *tiles,
                          const size_t *lens, struct gv_error *err);
 
-/* Append the root level (root width x height x channels; for a height
- * store, h->kind GV_KIND_HEIGHT, width x height uint16_t codes); its mips
- * are computed by the reader. */
+/* Append the root level (root width x height x channels; for a height or
+ * sample store, gv_header_codes, width x height x channels interleaved
+ * uint16_t codes); its mips are computed by the reader. */
 int gv_store_writer_root(struct gv_store_writer *w, const uint8_t *pixels,
                          struct gv_error *err);
 

@@ -19,6 +19,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include "render/samples_region.h"
 #include "render/store_decoder.h"
 #include "fuzz.h"
 #include "store/store_read.h"
@@ -136,11 +137,13 @@ static void walk(struct gv_store *s)
         }
         uint32_t rw = lw < MAX_REGION ? lw : MAX_REGION;
         uint32_t rh = lh < MAX_REGION ? lh : MAX_REGION;
-        uint8_t *out = malloc((size_t)rw * rh * c);
+        /* 8-bit pixels: a sample store's are gray or RGB */
+        const int dc = gv_display_channels(&gv_store_info(s)->header);
+        uint8_t *out = malloc((size_t)rw * rh * dc);
         if (!out)
             continue;
         if (gv_decode_region(d, level, lw - rw, lh - rh, rw, rh, out, &err) == 0)
-            touch(out, (size_t)rw * rh * c);
+            touch(out, (size_t)rw * rh * dc);
         free(out);
     }
     gv_decoder_free(d);

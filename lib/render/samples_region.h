@@ -1,0 +1,70 @@
+/*
+ * samples_region.h - what a sample store (docs/FORMAT.md section 13)
+ * looks like on a screen: its 16-bit codes through a display window to
+ * 8-bit gray (one channel) or RGB (two to eight channels, each in its
+ * colour, added), for regions, IIIF and the viewers that take 8-bit
+ * pixels.  The codes themselves come from gv_decoder_copy_region (the
+ * decoder holds a sample tile as 513 x 513 pixels of C interleaved
+ * uint16_t codes); png16 and tiff16 regions serve them as they are.
+ *
+ * The display rule (docs/API.md, "Sample stores"):
+ *   t_c = the window's table of channel c (window.h, samples 0 .. 65535)
+ *         applied to the code; the window is the request's, else the
+ *         store's default (display.window), else black and white at the
+ *         smallest and largest code of the input, gamma 1;
+ *   one channel:  gray = t_0;
+ *   more:         RGB_j = min(255, floor((sum_c t_c * colour_c[j] + 127) / 255))
+ *                 with colour_c the c-th of red, green, blue, magenta, cyan,
+ *                 yellow, orange (255,128,0) and white; three channels are
+ *                 thus the RGB of the codes' windows.
+ * Integers and the window's table only, so any client can reproduce it.
+ */
+#ifndef GV_SAMPLES_REGION_H
+#define GV_SAMPLES_REGION_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/error.h"
+#include "render/store_decoder.h"
+#include "render/window.h"
+#include "store/store_format.h"
+
+/* The colour of channel c (0..7) of a sample store of several channels:
+ * rgb[3], each 0..255. */
+void gv_samples_colour(int c, uint8_t rgb[3]);
+
+/* The channels of a store's 8-bit pixels: an image store's own, 1 for a
+ * height store, 1 or 3 for a sample store of 1 or more channels. */
+int gv_display_channels(const struct gv_header *h);
+
+/* A sample store's default window when it keeps none: black and white at
+ * its smallest and largest code (white at least black + 1), gamma 1, one
+ * for every channel. */
+void gv_samples_default_window(const struct gv_header *h, struct gv_window *w);
+
+/*
+ * Map n pixels of c interleaved codes to display pixels (1 byte for
+ * c = 1, else 3) through window w (count 1 or c).  tables holds c * 65536
+ * bytes of scratch (the window's tables, built here).  0, or -1 with
+ * GV_EINVAL for a window of another channel count.
+ */
+int gv_samples_display(const uint16_t *codes, size_t n, int c,
+                       const struct gv_window *w, uint8_t *tables,
+                       uint8_t *out, struct gv_error *err);
+
+/*
+ * The display pixels of rectangle x,y,w,h of `level` of a sample store
+ * (gv_display_channels of them a pixel) into out, through window `win`
+ * (NULL: the store's default window, its metadata's display.window, else
+ * gv_samples_default_window; count 0, "none": gv_samples_default_window).
+ * 0 or -1 with
+ * *err (GV_EINVAL outside the level or for another kind of store,
+ * GV_ENOMEM, decoding failures).
+ */
+int gv_samples_region8(struct gv_decoder *d, int level, uint32_t x,
+                       uint32_t y, uint32_t w, uint32_t h,
+                       const struct gv_window *win, uint8_t *out,
+                       struct gv_error *err);
+
+#endif
