@@ -371,6 +371,10 @@ static int encode_codes(const struct encode_args *a, const char *const *inputs,
            r.src_float ? " + float quantization" : "");
     if (samples)
         printf("psnr       %.2f dB over the full range (99: lossless)\n", r.psnr0);
+    if (samples && r.trial_tries)
+        printf("trial      e = %d after %d tries (the sample: %.2f dB; the "
+               "uniform rule: e = %d)\n", r.e, r.trial_tries, r.trial_psnr,
+               r.uniform_e);
     printf("tiles      %llu\n", (unsigned long long)r.tiles);
     printf("size       %llu bytes, %.3f bits per sample\n",
            (unsigned long long)r.file_bytes,

@@ -32,6 +32,7 @@
 #include "codec/samples_tile.h"
 #include "render/window.h"
 #include "store/store_meta.h"
+#include "encode/codes_trial.h"
 #include "encode/encode_int.h"
 #include "encode/height_encode.h"
 #include "encode/source.h"
@@ -570,6 +571,25 @@ static double psnr0(const struct henc *h)
     return p > 99.0 ? 99.0 : p;
 }
 
+/* -q: refine pick_e's uniform rule by coding a sample (codes_trial.h). */
+static int choose_e(struct henc *h)
+{
+    if (h->o->target_psnr <= 0)
+        return 0;
+    struct gv_codes_trial t = {
+        .spill = h->spill, .g = &h->g, .orig_base = h->orig_base, .c = h->c,
+        .root_tile = h->root_tile, .pool = h->pool,
+        .peak = h->m.src_float ? 65535.0 : (double)((1u << h->src_bits) - 1),
+    };
+    int e;
+    if (gv_codes_trial(&t, h->o->target_psnr, h->e, &e, &h->m.trial_tries,
+                       &h->m.trial_psnr, h->err) < 0)
+        return -1;
+    h->m.uniform_e = h->e;
+    h->e = h->m.e = e;
+    return 0;
+}
+
 /* A sample store's metadata: what the input says of its pixels, and the
  * default display window if given (on codes, 0..65535), packed. */
 static int samples_meta(struct henc *h, struct gv_source *src)
@@ -680,6 +700,8 @@ static int encode(struct henc *h, const char *output, struct gv_height_result *r
         goto out;
     gv_source_free(src);
     src = NULL;
+    if (load_root(h) < 0 || start_workers(h) < 0 || choose_e(h) < 0)
+        goto out;
     set_bound(h);
     struct gv_header hd;
     height_header(h, &hd);
@@ -688,8 +710,7 @@ static int encode(struct henc *h, const char *output, struct gv_height_result *r
         h->m.max = hd.height_max;
         h->m.max_error = hd.height_max_error;
     }
-    if (load_root(h) < 0 || start_workers(h) < 0 ||
-        !(h->wr = gv_store_writer_new(output, &hd, h->err)) || pass2(h) < 0 ||
+    if (!(h->wr = gv_store_writer_new(output, &hd, h->err)) || pass2(h) < 0 ||
         (h->meta && gv_store_writer_meta(h->wr, h->meta, h->meta_len, h->err) < 0) ||
         gv_store_writer_root(h->wr, (const uint8_t *)(const void *)h->root,
                              h->err) < 0)

@@ -68,6 +68,9 @@ struct gv_height_result {
     int e;                 /* the half-step in codes */
     int channels;
     double psnr0;          /* level 0's PSNR (dB, 99 when lossless) */
+    int trial_tries;       /* -q: tries of the trial (codes_trial.h), */
+    double trial_psnr;     /* the sample's PSNR at e, */
+    int uniform_e;         /* and the uniform rule's e it started from */
     double scale, offset, max_error, min, max;
     int src_float;
     uint64_t scratch_bytes; /* the scratch file's size at the end */
