@@ -10,6 +10,8 @@
 #   - --max-error 40: every sample of levels 0, 1 and 2 within 40 of the
 #     exact pyramid, and not all exact; -q 60: the PSNR `info` reports
 #     is the PSNR measured here, and within 60 .. 61 dB (the trial);
+#   - a 4-band GeoTIFF through GDAL keeps every band and its
+#     georeference (builds with GDAL);
 #   - info and info --json; a default window kept as metadata;
 #   - over HTTP: the samples object, tiff16 and png16 regions equal to
 #     `export --bits 16`, png16 of 8 channels refused, the 8-bit picture
@@ -125,6 +127,25 @@ check "lossless 8 channels: level 1 equals the exact pyramid" \
 run export --bits 16 "$S/c8.gv" -o c8.png
 expect_rc "export --bits 16 of 8 channels to PNG is refused" 1
 expect_err "... naming the channels" "channels"
+
+# A 4-band GeoTIFF through GDAL: every band, and the georeference.
+builddir=$(cd "${top_builddir:-.}" && pwd)
+if grep -q "^#define GV_HAVE_GDAL 1" "$builddir/config.h"; then
+    gdal_translate -q -a_srs EPSG:4326 -a_ullr -10 50 10 40 -co INTERLEAVE=PIXEL \
+        c4.raw geo4.tif || bail "gdal_translate geo4"
+    run encode --bits 16 geo4.tif -o "$S/geo4.gv"
+    expect_rc "encode --bits 16 of a 4-band GeoTIFF (GDAL)" 0
+    check "... every band is a channel" grep -q '^samples    1100 x 700 x 4 channels' "$T/out"
+    run export --bits 16 "$S/geo4.gv" -o geo4-0.tif
+    toraw geo4-0.tif geo4-0.raw
+    check "... lossless: level 0 equals the input" cmp -s c4.raw geo4-0.raw
+    run info --json "$S/geo4.gv"
+    check "... the georeference is kept" python3 -c "
+import json,sys; m=json.load(open(sys.argv[1]))['metadata']
+assert m['geo.epsg']==4326 and m['geo.bands']==4 and m['geo.transform'][0]==-10, m" "$T/out"
+else
+    skip "a GeoTIFF through GDAL" "built without GDAL"
+fi
 
 # ----------------------------------------------------------- near-lossless
 run encode --bits 16 --max-error 40 c4.tif -o "$S/c4e.gv"

@@ -36,6 +36,7 @@
 #include "imageio/size_limit.h"
 
 #define STRIP_BYTES (64u << 20)   /* as slide_openslide.c */
+#define MAX_BANDS 16              /* bands delivered at most */
 #define CACHE_BYTES (64 << 20)    /* more than a strip's blocks */
 #define WKT_MAX 16384             /* store_meta.h GV_META_MAX_STRING */
 
@@ -103,7 +104,7 @@ struct gv_raster {
     GDALDatasetH ds;
     char *path;
     uint32_t width, height, next_row;
-    int bands;                 /* delivered: 1 to 3 */
+    int bands;                 /* delivered: 1 to MAX_BANDS */
     GDALDataType type;         /* delivered */
     size_t sample_bytes;
     uint32_t strip_h, strip_y, strip_n;
@@ -228,7 +229,10 @@ struct gv_raster *gv_raster_open(const char *path,
         goto fail;
     r->width = (uint32_t)w;
     r->height = (uint32_t)h;
-    r->bands = count >= 3 ? 3 : count;
+    /* Every band, up to MAX_BANDS: an 8-bit image keeps the first three
+     * (source.h), a sample store all of them (at most 8, so a raster of
+     * more than MAX_BANDS is refused there, not cut here). */
+    r->bands = count >= MAX_BANDS ? MAX_BANDS : count;
     GDALRasterBandH b1 = g.GDALGetRasterBand(ds, 1);
     GDALDataType t1 = g.GDALGetRasterDataType(b1);
     for (int i = 2; i <= r->bands; i++)
@@ -286,7 +290,9 @@ static int fill(struct gv_raster *r, uint32_t y, struct gv_error *err)
                            "strip of %u rows", r->path, r->strip_h);
     }
     uint32_t n = r->height - y < r->strip_h ? r->height - y : r->strip_h;
-    int map[3] = {1, 2, 3};
+    int map[MAX_BANDS];
+    for (int i = 0; i < MAX_BANDS; i++)
+        map[i] = i + 1;
     g.CPLErrorReset();
     if (g.GDALDatasetRasterIOEx(r->ds, GF_Read, 0, (int)y, (int)r->width,
                                 (int)n, r->strip, (int)r->width, (int)n,
