@@ -26,6 +26,7 @@
 need_tool gdal_translate
 need_tool oiiotool
 
+builddir=$(cd "${top_builddir:-.}" && pwd)
 S=$T/stores
 mkdir "$S" "$T/w" || bail "mkdir"
 cd "$T/w" || bail "cd"
@@ -129,7 +130,6 @@ expect_rc "export --bits 16 of 8 channels to PNG is refused" 1
 expect_err "... naming the channels" "channels"
 
 # A 4-band GeoTIFF through GDAL: every band, and the georeference.
-builddir=$(cd "${top_builddir:-.}" && pwd)
 if grep -q "^#define GV_HAVE_GDAL 1" "$builddir/config.h"; then
     gdal_translate -q -a_srs EPSG:4326 -a_ullr -10 50 10 40 -co INTERLEAVE=PIXEL \
         c4.raw geo4.tif || bail "gdal_translate geo4"
