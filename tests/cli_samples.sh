@@ -322,6 +322,7 @@ check "render refuses a sample store (exit 1)" test "$rc" -eq 1
 expect_err "... saying what it is" "sample store"
 stop_daemon
 check "the daemon exits cleanly" test "$drc" -eq 0
+no_sanitizer_report
 
 # ------------------------------------------------------------ bad options
 run encode --bits 12 c4.tif -o "$S/x.gv"

@@ -3,7 +3,8 @@
 // shaders/height_decode.frag.glsl (WebGL2 has no compute shaders).
 //
 // A port of gv_height_tile_check and gv_height_tile_residuals
-// (lib/codec/height_tile.c), statement for statement, so that the browser
+// (lib/codec/height_tile.c), and of gv_samples_tile_split
+// (lib/codec/samples_tile.c), statement for statement, so that the browser
 // refuses the buffers the C decoder refuses and yields the same q.  Pure:
 // no DOM, no GL, so it runs in a worker too.
 
@@ -28,6 +29,38 @@ function bitlen(n) {
 
 function streamsAt(mask) {
     return (CUM_AT + bitCount(mask) * 2 * TOKENS + 3) & ~3;
+}
+
+/**
+ * The channel buffers of a sample store's tile (docs/FORMAT.md section
+ * 13): c height-tile buffers one after another, each saying its own
+ * length, which must fill buf exactly (gv_samples_tile_split).  Returns c
+ * subarrays of buf; throws on a malformed tile.
+ */
+export function splitSampleTile(buf, c) {
+    const parts = [];
+    let at = 0;
+    for (let k = 0; k < c; k++) {
+        const left = buf.length - at;
+        let n = 0;
+        if (left >= 4 && buf[at] === 0)
+            n = 4;
+        else if (left >= CUM_AT && buf[at] === 1) {
+            const mask = u16(buf, at + MASK_AT);
+            if (mask && !(mask >> CONTEXTS)) {
+                let words = 0;
+                for (let s = 0; s < STREAMS; s++) words += u16(buf, at + LEN_AT + 2 * s);
+                n = (streamsAt(mask) + 2 * words + 3) & ~3;
+            }
+        }
+        if (!n || n > left)
+            throw new Error(`samples: channel ${k}'s buffer is malformed or runs past the tile`);
+        parts.push(buf.subarray(at, at + n));
+        at += n;
+    }
+    if (at !== buf.length)
+        throw new Error(`samples: ${buf.length - at} bytes past the last channel`);
+    return parts;
 }
 
 /** Throw unless buf (a Uint8Array) is a well-formed height tile buffer. */

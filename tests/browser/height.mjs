@@ -4,9 +4,12 @@
 // `--id` decoded in the page from the root and the tile buffers the daemon
 // serves, compared with the CPU reference decoder's codes
 // (/region?format=png16 over the pixels the tile is the source of),
-// sample for sample.  Prints TAP lines; tests/browser_height.sh runs it.
+// sample for sample.  A sample store (docs/FORMAT.md section 13) is
+// decoded one channel at a time, each tile split by heighttile.js's
+// splitSampleTile, against channel K of the png16 region.  Prints TAP
+// lines; tests/browser_height.sh runs it.
 //
-//   node height.mjs --base URL --id ID --chromium PATH
+//   node height.mjs --base URL --id ID --chromium PATH [--channel K]
 import { inflateSync } from 'node:zlib';
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -24,22 +27,24 @@ function check(ok, what, ...why) {
     if (!ok) { failed++; for (const w of why) console.log(`#   ${w}`); }
 }
 
-// A 16-bit gray PNG (what /region?format=png16 sends) as a Uint16Array.
-function png16(bytes) {
+// Channel `ch` of a 16-bit PNG of 1 to 4 channels (what
+// /region?format=png16 sends) as a Uint16Array.
+function png16(bytes, ch = 0) {
     const b = Buffer.from(bytes);
-    let at = 8, w = 0, h = 0;
+    let at = 8, w = 0, h = 0, nc = 1;
     const idat = [];
     while (at < b.length) {
         const len = b.readUInt32BE(at), type = b.toString('latin1', at + 4, at + 8);
         const data = b.subarray(at + 8, at + 8 + len);
         if (type === 'IHDR') {
             w = data.readUInt32BE(0); h = data.readUInt32BE(4);
-            if (data[8] !== 16 || data[9] !== 0 || data[12] !== 0)
-                throw new Error('not a non-interlaced 16-bit gray PNG');
+            nc = { 0: 1, 4: 2, 2: 3, 6: 4 }[data[9]];
+            if (data[8] !== 16 || !nc || data[12] !== 0)
+                throw new Error('not a non-interlaced 16-bit PNG');
         } else if (type === 'IDAT') idat.push(data);
         at += 12 + len;
     }
-    const raw = inflateSync(Buffer.concat(idat)), stride = 2 * w, bpp = 2;
+    const raw = inflateSync(Buffer.concat(idat)), stride = 2 * nc * w, bpp = 2 * nc;
     const out = Buffer.alloc(stride * h);
     for (let y = 0; y < h; y++) {
         const f = raw[y * (stride + 1)], src = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
@@ -59,7 +64,7 @@ function png16(bytes) {
         }
     }
     const codes = new Uint16Array(w * h);
-    for (let i = 0; i < w * h; i++) codes[i] = out.readUInt16BE(2 * i);
+    for (let i = 0; i < w * h; i++) codes[i] = out.readUInt16BE(2 * (i * nc + ch));
     return { w, h, codes };
 }
 
@@ -77,8 +82,10 @@ try {
     pg.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
     pg.on('pageerror', (e) => errors.push(String(e)));
     await pg.goto(`${opt.base}/`);
-    const r = await pg.evaluate(async (id) => {
+    const ch = Number(opt.channel || 0);
+    const r = await pg.evaluate(async ([id, ch]) => {
         const { HeightDecoder } = await import('/web/height_decode.js');
+        const { splitSampleTile } = await import('/web/heighttile.js');
         const text = async (u) => (await fetch(u)).text();
         const bytes = async (u) => new Uint8Array(await (await fetch(u)).arrayBuffer());
         const info = await (await fetch(`/v1/images/${id}`)).json();
@@ -86,20 +93,21 @@ try {
         if (!gl) return { error: 'no WebGL2' };
         const d = new HeightDecoder(gl, await text('/web/fullscreen.vert.glsl'),
             await text('/web/height_decode.frag.glsl'));
-        // The root tile: the root clamp-padded to 513 x 513.
-        const rw = info.root.width, rh = info.root.height;
+        // The root tile: channel ch of the root clamp-padded to 513 x 513.
+        const rw = info.root.width, rh = info.root.height, nc = info.samples ? info.channels : 1;
         const rootBytes = await bytes(`/v1/images/${id}/root?format=raw`);
-        const root = new Uint16Array(rootBytes.buffer, 0, rw * rh), pad = new Uint16Array(513 * 513);
+        const root = new Uint16Array(rootBytes.buffer, 0, rw * rh * nc), pad = new Uint16Array(513 * 513);
         for (let v = 0; v < 513; v++)
             for (let u = 0; u < 513; u++)
-                pad[v * 513 + u] = root[Math.min(v, rh - 1) * rw + Math.min(u, rw - 1)];
+                pad[v * 513 + u] = root[(Math.min(v, rh - 1) * rw + Math.min(u, rw - 1)) * nc + ch];
         let up = [d.upload(pad)], upTx = 1;
         const tiles = [];
         for (let k = info.levels_tiled - 1; k >= 0; k--) {
             const L = info.levels[k], cur = [];
             for (let ty = 0; ty < L.tiles_y; ty++)
                 for (let tx = 0; tx < L.tiles_x; tx++) {
-                    const buf = await bytes(`/v1/images/${id}/tiles/${k}/${tx}/${ty}`);
+                    const whole = await bytes(`/v1/images/${id}/tiles/${k}/${tx}/${ty}`);
+                    const buf = info.samples ? splitSampleTile(whole, nc)[ch] : whole;
                     const tex = d.decode(buf, up[(ty >> 1) * upTx + (tx >> 1)], tx & 1, ty & 1);
                     cur.push(tex);
                     const codes = d.read(tex);
@@ -116,7 +124,7 @@ try {
             upTx = L.tiles_x;
         }
         return { tiles };
-    }, opt.id);
+    }, [opt.id, ch]);
     if (r.error) {
         console.log(`1..0 # SKIP ${r.error}`);
         process.exit(0);
@@ -125,7 +133,7 @@ try {
     const bad = [];
     for (const t of r.tiles) {
         const res = await fetch(`${opt.base}/v1/images/${opt.id}/region?level=${t.k}&x=${t.x}&y=${t.y}&w=${t.w}&h=${t.h}&format=png16`);
-        const ref = png16(new Uint8Array(await res.arrayBuffer()));
+        const ref = png16(new Uint8Array(await res.arrayBuffer()), ch);
         let diff = 0, first = '';
         for (let i = 0; i < ref.codes.length; i++)
             if (ref.codes[i] !== t.mine[i]) {
@@ -137,7 +145,7 @@ try {
         coded += t.mode === 1;
     }
     check(r.tiles.length > 0 && exact === r.tiles.length,
-        `${opt.id}: all ${r.tiles.length} height tiles decoded by WebGL2 equal the CPU decoder sample for sample (${coded} rANS-coded)`,
+        `${opt.id}${opt.channel ? ` channel ${ch}` : ''}: all ${r.tiles.length} height tiles decoded by WebGL2 equal the CPU decoder sample for sample (${coded} rANS-coded)`,
         ...bad.slice(0, 8));
     check(errors.length === 0, `${opt.id}: no console errors`, ...errors.slice(0, 5));
 } catch (e) {
