@@ -33,6 +33,7 @@
 #include "imageio/imageio.h"
 #include "imageio/output_format.h"
 #include "render/region.h"
+#include "render/samples_region.h"
 #include "render/window.h"
 #include "routes.h"
 
@@ -232,6 +233,7 @@ static void canonical_path(const struct image *img, const struct iiif_request *q
 struct iiif_call {
     struct iiif_request q;
     struct gv_window window;   /* count 0: none */
+    struct gv_colours colours; /* a sample store's; count 0: not given */
     int jpeg_quality;
     char link[1024];   /* canonical URI and profile, as a Link header */
 };
@@ -349,6 +351,19 @@ static int parse(struct req *r, const struct image *img, struct iiif_call *c,
                            "of %d channels (give one, or one per channel)",
                            c->window.count, g->channels);
         c->q.render.window = &c->window;
+    } else if (ws) {   /* none: a sample store's codes' range */
+        c->window.count = 0;
+        c->q.render.window = &c->window;
+    }
+    const char *cs = http_query(r, "colours");
+    if (cs) {
+        if (gv_colours_parse(cs, &c->colours, err) < 0)
+            return -1;
+        if (img->info->header.kind != GV_KIND_SAMPLES)
+            return gv_fail(err, GV_EINVAL, "colours: for sample stores only");
+        if (gv_colours_check(&c->colours, g->channels, err) < 0)
+            return -1;
+        c->q.render.colours = &c->colours;
     }
     return 0;
 }
@@ -372,13 +387,18 @@ enum MHD_Result route_iiif_image(struct req *r)
         image_put(img);
         return http_send_error(r, &err);
     }
-    char id[600], path[200], canon[900 + GV_WINDOW_MAX_CHANNELS * 32];
+    char id[600], path[200], canon[900 + GV_WINDOW_MAX_CHANNELS * 32 + GV_COLOURS_MAX_TEXT];
     char key[sizeof canon + 24], etag[OUTPUT_ETAG_SIZE];
-    char win[GV_WINDOW_MAX_CHANNELS * 32 + 4] = "";
+    char win[GV_WINDOW_MAX_CHANNELS * 32 + GV_COLOURS_MAX_TEXT + 8] = "";
     if (c->window.count) {
         win[0] = ' ';
         win[1] = 'w';
         gv_window_format(&c->window, win + 2, sizeof win - 2);
+    }
+    if (c->colours.count) {
+        size_t at = strlen(win);
+        snprintf(win + at, sizeof win - at, " c");
+        gv_colours_format(&c->colours, win + at + 2, sizeof win - at - 2);
     }
     service_id(r, img, id, sizeof id);
     canonical_path(img, &c->q, path, sizeof path);

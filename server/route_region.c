@@ -41,6 +41,7 @@ struct region_query {
     int height;            /* HEIGHT_PNG16, _TIFF16 or _TIFF32, else 0 */
     struct gv_window window;   /* count 0: none */
     int window_given;          /* 1: the query named one (or none) */
+    struct gv_colours colours; /* a sample store's; count 0: not given */
 };
 
 /* The formats of the codes of height and sample stores only. */
@@ -86,6 +87,13 @@ static int parse_query(struct req *r, struct region_query *q,
     if (ws && q->height)
         return gv_fail(err, GV_EINVAL, "window: not with png16, tiff16 or "
                        "tiff32");
+    const char *cs = http_query(r, "colours");
+    q->colours.count = 0;
+    if (cs && (gv_colours_parse(cs, &q->colours, err) < 0))
+        return -1;
+    if (cs && q->height)
+        return gv_fail(err, GV_EINVAL, "colours: not with png16, tiff16 or "
+                       "tiff32");
     uint64_t pixels = (uint64_t)q->w * q->h;
     if (pixels > r->srv->cfg->max_region_pixels)
         return gv_fail(err, GV_ELIMIT, "region: %llu pixels, at most %llu "
@@ -118,6 +126,10 @@ static int place(const struct image *img, const struct region_query *q,
                        "this image has %d (ask for tiff16)", g->channels);
     if (hd->kind != GV_KIND_SAMPLES &&
         gv_window_check_max(&q->window, 255, err) < 0)
+        return -1;
+    if (q->colours.count && hd->kind != GV_KIND_SAMPLES)
+        return gv_fail(err, GV_EINVAL, "colours: for sample stores only");
+    if (gv_colours_check(&q->colours, g->channels, err) < 0)
         return -1;
     if (q->window.count > 1 && q->window.count != g->channels)
         return gv_fail(err, GV_EINVAL, "window: %d windows for an image of "
@@ -176,7 +188,9 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
         gv_decoder_times(d, &(struct gv_decode_times){0}, 1);
         double t0 = render_stages_now();
         int ok = gv_decode_region_window(d, (int)q->level, q->x, q->y, q->w,
-                                         q->h, &q->window, pix, err) == 0;
+                                         q->h, &q->window,
+                                         q->colours.count ? &q->colours : NULL,
+                                         pix, err) == 0;
         double t1 = render_stages_now();
         render_stages_decoder(d, t1 - t0);
         if (ok && gv_image_encode(q->format->name, q->w, q->h, dc,
@@ -213,12 +227,17 @@ enum MHD_Result route_region(struct req *r)
     if (!q.window_given && !q.height)
         q.window = img->window;   /* the store's default, if any */
     *arg = q;
-    char canon[400 + GV_WINDOW_MAX_CHANNELS * 32], key[sizeof canon + 24];
-    char win[GV_WINDOW_MAX_CHANNELS * 32 + 4] = "";
+    char canon[400 + GV_WINDOW_MAX_CHANNELS * 32 + GV_COLOURS_MAX_TEXT], key[sizeof canon + 24];
+    char win[GV_WINDOW_MAX_CHANNELS * 32 + GV_COLOURS_MAX_TEXT + 8] = "";
     if (q.window.count) {
         win[0] = ' ';
         win[1] = 'w';
         gv_window_format(&q.window, win + 2, sizeof win - 2);
+    }
+    if (q.colours.count) {
+        size_t at = strlen(win);
+        snprintf(win + at, sizeof win - at, " c");
+        gv_colours_format(&q.colours, win + at + 2, sizeof win - at - 2);
     }
     char etag[OUTPUT_ETAG_SIZE];
     snprintf(canon, sizeof canon, "region/%s/%u/%u,%u,%u,%u.%s q%u%s", img->id,

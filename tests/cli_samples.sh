@@ -194,6 +194,17 @@ import json,sys; j=json.load(open(sys.argv[1]))
 assert j['metadata']['display.window']=='1000,60000,1.000;0,65535,1.000;900,4200,2.000;0,40000,1.000', j" "$T/out"
 run encode --bits 16 --window '0,100;0,100' c4.tif -o "$S/bad.gv"
 expect_rc "two windows for four channels are refused" 1
+run encode --bits 16 --colours '0000ff;00ff00;ff8000;ffffff' c4.tif -o "$S/c4c.gv"
+expect_rc "encode --bits 16 --colours (one per channel)" 0
+run info --json "$S/c4c.gv"
+check "the colours are the store's display.colours" python3 -c "
+import json,sys; j=json.load(open(sys.argv[1]))
+assert j['metadata']['display.colours']=='0000ff;00ff00;ff8000;ffffff', j" "$T/out"
+crange=$(python3 -c "import json,sys; j=json.load(open(sys.argv[1])); print('%d,%d' % (j['min'], j['max']))" "$T/out")
+run encode --bits 16 --colours '0000ff;00ff00' c4.tif -o "$S/bad.gv"
+expect_rc "two colours for four channels are refused" 1
+run encode --colours '0000ff;00ff00;ff0000' c4.tif -o "$S/bad.gv"
+expect_rc "--colours without --bits 16 is a usage error" 2
 
 # ------------------------------------------------------------------- HTTP
 run encode synth:300x200 -o "$S/img.gv"
@@ -227,8 +238,9 @@ expect_status "png16 of 8 channels is 400" 400 '/v1/images/c8/region?level=0&x=0
 expect_status "tiff16 of 8 channels" 200 '/v1/images/c8/region?level=0&x=0&y=0&w=10&h=10&format=tiff16'
 expect_status "tiff16 of an 8-bit image store is 400" 400 '/v1/images/img/region?level=0&x=0&y=0&w=10&h=10&format=tiff16'
 
-# display REF_RAW C W H WINDOW PPM: the 8-bit picture of the rule in
-# docs/API.md from raw codes, against the server's PNG (as PPM/PGM).
+# display REF_RAW C W H WINDOW PPM [COLOURS]: the 8-bit picture of the
+# rule in docs/API.md from raw codes, against the server's PNG (as
+# PPM/PGM); COLOURS "RRGGBB;..." (default: the palette).
 display() {
     python3 - "$@" <<'PY'
 import array, math, sys
@@ -248,6 +260,8 @@ def table(wd):
     return t
 tabs = [table(wins[0 if len(wins) == 1 else k]) for k in range(c)]
 col = [(255,0,0),(0,255,0),(0,0,255),(255,0,255),(0,255,255),(255,255,0),(255,128,0),(255,255,255)]
+if len(sys.argv) > 7:
+    col = [tuple(int(x[i:i + 2], 16) for i in (0, 2, 4)) for x in sys.argv[7].split(';')]
 d = open(ppm, 'rb').read()
 parts = d.split(maxsplit=4)
 assert parts[1] == str(w).encode() and parts[2] == str(h).encode(), parts[:4]
@@ -300,6 +314,31 @@ check "... is one gray channel through the window" display g16.raw 1 200 100 '20
 run export --region 450,300,300,200 "$S/c4w.gv" -o x8.png
 oiiotool x8.png -o x8.ppm
 check "export (8-bit) gives the server's picture with the default window" cmp -s x8.ppm d.ppm
+
+# Colours: the store's (display.colours), and the request's over them.
+C4='0000ff;00ff00;ff8000;ffffff'
+expect_status "a region of c4c (colours kept at encode)" 200 "/v1/images/c4c/region?$R"
+cp "$T/b" cc.png
+oiiotool cc.png -o cc.ppm
+run export --bits 16 --region 450,300,300,200 "$S/c4c.gv" -o c16.tif
+toraw c16.tif c16.raw
+check "... is the picture in the store's colours" \
+    display c16.raw 4 300 200 "$crange" cc.ppm "$C4"
+CQ='ff0000;00ffff;ffff00;102030'
+expect_status "colours= over them" 200 "/v1/images/c4c/region?$R&colours=$(printf %s "$CQ" | sed 's/;/%3B/g')"
+cp "$T/b" cq.png
+oiiotool cq.png -o cq.ppm
+check "... is the picture in the request's colours" \
+    display c16.raw 4 300 200 "$crange" cq.ppm "$CQ"
+expect_status "IIIF with colours= gives the same picture" 200 \
+    "/iiif/3/c4c/450,300,300,200/max/0/default.png?colours=$(printf %s "$CQ" | sed 's/;/%3B/g')"
+cp "$T/b" icq.png
+oiiotool icq.png -o icq.ppm
+check "... byte for byte" cmp -s icq.ppm cq.ppm
+expect_status "malformed colours are 400" 400 "/v1/images/c4c/region?$R&colours=12345"
+expect_status "two colours for four channels are 400" 400 "/v1/images/c4c/region?$R&colours=ff0000%3B00ff00"
+expect_status "colours for a one-channel store are 400" 400 '/v1/images/g1/region?level=0&x=0&y=0&w=10&h=10&colours=ff0000'
+expect_status "colours for an 8-bit image store are 400" 400 '/v1/images/img/region?level=0&x=0&y=0&w=10&h=10&colours=ff0000%3B00ff00%3B0000ff'
 
 expect_status "IIIF info.json" 200 /iiif/3/c4/info.json
 expect_status "IIIF full/max" 200 /iiif/3/c4/full/max/0/default.png

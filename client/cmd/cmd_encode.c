@@ -39,6 +39,7 @@ struct encode_args {
     int layouts_given;            /* --layouts was given */
     int height;                   /* --height: a height store */
     int bits;                     /* --bits: 16 for a sample store */
+    const char *colours;          /* --colours, with --bits 16 */
     double max_error;             /* --max-error, source units */
     const char *unit;             /* --unit */
     double hscale, hoffset;       /* --scale, --offset (0 scale: not given) */
@@ -208,6 +209,10 @@ static const struct opt_spec encode_opts[] = {
      .help = "16: keep every channel (1 to 8) at 16 bits in\n"
              "a sample store (docs/FORMAT.md 13), lossless\n"
              "unless -q or --max-error; 8: the default"},
+    {.name = "colours", .kind = OPT_STRING, .arg = "RRGGBB;...",
+     .field = F(colours),
+     .help = "--bits 16: each channel's colour on screen,\n"
+             "one per channel (docs/API.md, Sample stores)"},
     {.name = "height", .kind = OPT_FLAG, .field = F(height),
      .help = "write a height store: one 16-bit or float\n"
              "channel of elevations (docs/FORMAT.md 12)"},
@@ -334,6 +339,7 @@ static int encode_codes(const struct encode_args *a, const char *const *inputs,
                                 .max_error = a->max_error,
                                 .target_psnr = a->psnr,
                                 .window = a->o.window,
+                                .colours = a->colours,
                                 .mapped = a->hscale > 0 || a->hoffset_given,
                                 .scale = a->hscale > 0 ? a->hscale : 1,
                                 .offset = a->hoffset, .unit = a->unit,
@@ -404,9 +410,10 @@ int cmd_encode(int argc, char **argv)
     }
     if (a.height) {
         if (!a.output || a.o.shard_count > 0 || a.psnr > 0 ||
-            a.min_tile_psnr > 0 || a.o.window) {
+            a.min_tile_psnr > 0 || a.o.window || a.colours) {
             fprintf(stderr, ME ": --height takes INPUT (or --mosaic's "
-                    "INPUTs) and -o STORE (not -q, --shard or --window)\n");
+                    "INPUTs) and -o STORE (not -q, --shard, --window or "
+                    "--colours)\n");
             return 2;
         }
         if ((rc = check_inputs(&a, ninputs)) != OPT_GO_ON)
@@ -419,7 +426,8 @@ int cmd_encode(int argc, char **argv)
             a.unit || a.hscale > 0 || a.hoffset_given ||
             (a.psnr > 0 && a.max_error > 0)) {
             fprintf(stderr, ME ": --bits 16 takes INPUT (or --mosaic's "
-                    "INPUTs), -o STORE, -q or --max-error, --window (not "
+                    "INPUTs), -o STORE, -q or --max-error, --window, "
+                    "--colours (not "
                     "--shard, --layouts, --min-tile-psnr, --range, --unit, "
                     "--scale or --offset)\n");
             return 2;
@@ -427,6 +435,10 @@ int cmd_encode(int argc, char **argv)
         if ((rc = check_inputs(&a, ninputs)) != OPT_GO_ON)
             return rc;
         return encode_codes(&a, (const char *const *)argv + first, ninputs);
+    }
+    if (a.colours) {
+        fprintf(stderr, ME ": --colours needs --bits 16\n");
+        return 2;
     }
     if (a.max_error > 0 || a.unit || a.hscale > 0 || a.hoffset_given) {
         fprintf(stderr, ME ": --max-error needs --height or --bits 16; "

@@ -30,6 +30,7 @@
 #include "base/spill.h"
 #include "codec/height_tile.h"
 #include "codec/samples_tile.h"
+#include "render/samples_region.h"
 #include "render/window.h"
 #include "store/store_meta.h"
 #include "encode/codes_trial.h"
@@ -591,25 +592,35 @@ static int choose_e(struct henc *h)
 }
 
 /* A sample store's metadata: what the input says of its pixels, and the
- * default display window if given (on codes, 0..65535), packed. */
+ * default display window (on codes, 0..65535) and colours if given,
+ * packed. */
 static int samples_meta(struct henc *h, struct gv_source *src)
 {
     const char *meta = gv_source_meta(src);
-    char *merged = NULL;
+    char *merged = NULL, *coloured = NULL;
+    if (h->o->colours) {
+        struct gv_colours c;
+        if (gv_colours_parse(h->o->colours, &c, h->err) < 0 ||
+            gv_colours_check(&c, h->c, h->err) < 0 ||
+            !(meta = coloured = gv_colours_meta_set(meta, &c, h->err)))
+            return -1;
+    }
     if (h->o->window) {
         struct gv_window w;
-        if (gv_window_parse(h->o->window, 65535, &w, h->err) < 0)
+        int bad = gv_window_parse(h->o->window, 65535, &w, h->err) < 0;
+        if (!bad && w.count != 1 && w.count != h->c)
+            bad = gv_fail(h->err, GV_EINVAL, "window: %d windows for an "
+                          "image of %d channels (give one, or one per "
+                          "channel)", w.count, h->c) < 0;
+        if (bad || !(meta = merged = gv_window_meta_set(meta, &w, h->err))) {
+            free(coloured);
             return -1;
-        if (w.count != 1 && w.count != h->c)
-            return gv_fail(h->err, GV_EINVAL, "window: %d windows for an "
-                           "image of %d channels (give one, or one per "
-                           "channel)", w.count, h->c);
-        if (!(meta = merged = gv_window_meta_set(meta, &w, h->err)))
-            return -1;
+        }
     }
     int rc = meta ? gv_meta_pack(meta, strlen(meta), &h->meta, &h->meta_len,
                                  h->err) : 0;
     free(merged);
+    free(coloured);
     return rc;
 }
 

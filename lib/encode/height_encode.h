@@ -45,6 +45,8 @@ struct gv_height_opts {
                             * largest e with e (e + 1) / 3 <= the MSE */
     const char *window;    /* sample stores: the default display window
                             * (render/window.h, on codes), or NULL */
+    const char *colours;   /* sample stores: the channels' colours
+                            * (render/samples_region.h), or NULL */
     int mapped;            /* integer input: use scale/offset below */
     double scale, offset;  /* value = code * scale + offset */
     const char *unit;      /* up to 8 printable characters, or NULL */

@@ -25,18 +25,19 @@ int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
     if (info->header.kind == GV_KIND_HEIGHT)   /* the documented gray */
         return gv_height_region_gray(d, level, x, y, w, h, out, err);
     if (info->header.kind == GV_KIND_SAMPLES)  /* the default window */
-        return gv_samples_region8(d, level, x, y, w, h, NULL, out, err);
+        return gv_samples_region8(d, level, x, y, w, h, NULL, NULL, out, err);
     return gv_decoder_copy_region(d, "decode", level, x, y, w, h, out, err);
 }
 
 int gv_decode_region_window(struct gv_decoder *d, int level, uint32_t x,
                             uint32_t y, uint32_t w, uint32_t h,
-                            const struct gv_window *win, uint8_t *out,
+                            const struct gv_window *win,
+                            const struct gv_colours *col, uint8_t *out,
                             struct gv_error *err)
 {
     const struct gv_header *hd = &gv_store_info(gv_decoder_store(d))->header;
     if (hd->kind == GV_KIND_SAMPLES)
-        return gv_samples_region8(d, level, x, y, w, h, win, out, err);
+        return gv_samples_region8(d, level, x, y, w, h, win, col, out, err);
     if (gv_decode_region(d, level, x, y, w, h, out, err) < 0)
         return -1;
     if (!win || win->count == 0)

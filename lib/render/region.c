@@ -432,7 +432,7 @@ int gv_render_to(struct gv_decoder *d, const struct gv_render_req *req,
             goto out;
         }
         if (gv_decode_region_window(d, f.k, f.x, f.y, f.w, f.h, req->window,
-                                    *buf, err) != 0)
+                                    req->colours, *buf, err) != 0)
             goto out;
         *w = req->out_w;
         *h = req->out_h;
@@ -446,8 +446,8 @@ int gv_render_to(struct gv_decoder *d, const struct gv_render_req *req,
                 f.w, f.h);
         goto out;
     }
-    if (gv_decode_region_window(d, f.k, f.x, f.y, f.w, f.h, req->window, dec,
-                                err) != 0)
+    if (gv_decode_region_window(d, f.k, f.x, f.y, f.w, f.h, req->window,
+                                req->colours, dec, err) != 0)
         goto out;
 
     if (copy) {

@@ -41,6 +41,9 @@ struct gv_render_req {
     /* A display window (render/window.h) applied to the decoded samples
      * before resampling, or NULL / count 0 for none. */
     const struct gv_window *window;
+    /* A sample store's channel colours (render/samples_region.h), or NULL
+     * for the store's own. */
+    const struct gv_colours *colours;
 };
 
 /*

@@ -2,6 +2,8 @@
  * samples_region.c - the display of sample stores (see samples_region.h):
  * the window's tables on codes, then gray or the additive colours.
  */
+#include <jansson.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -12,9 +14,127 @@ static const uint8_t colours[GV_SAMPLES_MAX_CHANNELS][3] = {
     {0, 255, 255}, {255, 255, 0}, {255, 128, 0}, {255, 255, 255},
 };
 
-void gv_samples_colour(int c, uint8_t rgb[3])
+void gv_samples_colour(const struct gv_colours *c, int k, uint8_t rgb[3])
 {
-    memcpy(rgb, colours[c & 7], 3);
+    memcpy(rgb, c && c->count ? c->rgb[k & 7] : colours[k & 7], 3);
+}
+
+static int hex(char ch)
+{
+    return ch >= '0' && ch <= '9' ? ch - '0'
+         : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10
+         : ch >= 'A' && ch <= 'F' ? ch - 'A' + 10 : -1;
+}
+
+/* gv_colours_parse into *c, which a failure may leave half filled. */
+static int colours_parse(const char *s, struct gv_colours *c, struct gv_error *err)
+{
+    if (strlen(s) > GV_COLOURS_MAX_TEXT)
+        return gv_fail(err, GV_EINVAL, "colours: longer than %d bytes",
+                       GV_COLOURS_MAX_TEXT);
+    for (;;) {
+        if (c->count == GV_SAMPLES_MAX_CHANNELS)
+            return gv_fail(err, GV_EINVAL, "colours: more than %d",
+                           GV_SAMPLES_MAX_CHANNELS);
+        for (int j = 0; j < 3; j++) {
+            int hi = hex(s[0]), lo = hi < 0 ? -1 : hex(s[1]);
+            if (hi < 0 || lo < 0)
+                return gv_fail(err, GV_EINVAL, "colours: colour %d: want "
+                               "RRGGBB in hexadecimal, ';' between them",
+                               c->count + 1);
+            c->rgb[c->count][j] = (uint8_t)(hi * 16 + lo);
+            s += 2;
+        }
+        c->count++;
+        if (*s == '\0')
+            return 0;
+        if (*s++ != ';')
+            return gv_fail(err, GV_EINVAL, "colours: colour %d: want RRGGBB "
+                           "in hexadecimal, ';' between them", c->count);
+    }
+}
+
+int gv_colours_parse(const char *s, struct gv_colours *c, struct gv_error *err)
+{
+    memset(c, 0, sizeof *c);
+    if (colours_parse(s, c, err) < 0) {
+        memset(c, 0, sizeof *c);
+        return -1;
+    }
+    return 0;
+}
+
+int gv_colours_format(const struct gv_colours *c, char *buf, size_t size)
+{
+    int n = 0;
+    if (size)
+        buf[0] = '\0';
+    for (int k = 0; k < c->count; k++)
+        n += snprintf(buf + (n < (int)size ? n : (int)size),
+                      (size_t)n < size ? size - (size_t)n : 0, "%s%02x%02x%02x",
+                      k ? ";" : "", c->rgb[k][0], c->rgb[k][1], c->rgb[k][2]);
+    return n;
+}
+
+int gv_colours_check(const struct gv_colours *c, int channels,
+                     struct gv_error *err)
+{
+    if (c->count == 0)
+        return 0;
+    if (channels < 2)
+        return gv_fail(err, GV_EINVAL, "colours: a one-channel image is "
+                       "shown in gray");
+    if (c->count != channels)
+        return gv_fail(err, GV_EINVAL, "colours: %d colours for an image of "
+                       "%d channels (give one per channel)", c->count, channels);
+    return 0;
+}
+
+int gv_colours_from_meta(const char *json, int channels, struct gv_colours *c,
+                         struct gv_error *err)
+{
+    memset(c, 0, sizeof *c);
+    if (!json)
+        return 0;
+    json_t *root = json_loads(json, JSON_REJECT_DUPLICATES, NULL);
+    if (!root)
+        return gv_fail(err, GV_ECORRUPT, "colours: metadata is not JSON");
+    json_t *v = json_object_get(root, GV_COLOURS_META_KEY);
+    struct gv_error why = {0};
+    int rc = 0;
+    if (v && (!json_is_string(v) ||
+              gv_colours_parse(json_string_value(v), c, &why) < 0 ||
+              gv_colours_check(c, channels, &why) < 0))
+        rc = gv_fail(err, GV_ECORRUPT, "colours: metadata %s: %s",
+                     GV_COLOURS_META_KEY, json_is_string(v) ? why.text
+                                                            : "not a string");
+    else if (v)
+        rc = 1;
+    if (rc < 0)
+        memset(c, 0, sizeof *c);
+    json_decref(root);
+    return rc;
+}
+
+char *gv_colours_meta_set(const char *json, const struct gv_colours *c,
+                          struct gv_error *err)
+{
+    char text[GV_COLOURS_MAX_TEXT];
+    gv_colours_format(c, text, sizeof text);
+    json_t *root = json && *json ? json_loads(json, JSON_REJECT_DUPLICATES, NULL)
+                                 : json_object();
+    if (!json_is_object(root)) {
+        json_decref(root);
+        gv_fail(err, GV_EINVAL, "colours: metadata is not a JSON object");
+        return NULL;
+    }
+    char *out = NULL;
+    if (json_object_set_new(root, GV_COLOURS_META_KEY, json_string(text)) == 0)
+        out = json_dumps(root, JSON_COMPACT | JSON_SORT_KEYS);
+    json_decref(root);
+    if (!out)
+        gv_fail(err, GV_ENOMEM, "colours: out of memory for metadata");
+    return out;
 }
 
 int gv_display_channels(const struct gv_header *h)
@@ -42,13 +162,18 @@ void gv_samples_default_window(const struct gv_header *h, struct gv_window *w)
 }
 
 int gv_samples_display(const uint16_t *codes, size_t n, int c,
-                       const struct gv_window *w, uint8_t *tables,
-                       uint8_t *out, struct gv_error *err)
+                       const struct gv_window *w, const struct gv_colours *col,
+                       uint8_t *tables, uint8_t *out, struct gv_error *err)
 {
     if (c < 1 || c > GV_SAMPLES_MAX_CHANNELS || (w->count != 1 && w->count != c))
         return gv_fail(err, GV_EINVAL, "window: %d windows for an image of "
                        "%d channels (give one, or one per channel)",
                        w->count, c);
+    if (col && gv_colours_check(col, c, err) < 0)
+        return -1;
+    uint8_t rgb[GV_SAMPLES_MAX_CHANNELS][3];
+    for (int k = 0; k < c; k++)
+        gv_samples_colour(col, k, rgb[k]);
     for (int k = 0; k < c; k++)
         if (k < w->count)
             gv_window_table(gv_window_of(w, k), 65535, tables + (size_t)k * 65536);
@@ -64,7 +189,7 @@ int gv_samples_display(const uint16_t *codes, size_t n, int c,
         for (int k = 0; k < c; k++) {
             uint32_t t = tables[(size_t)k * 65536 + codes[i * (size_t)c + (size_t)k]];
             for (int j = 0; j < 3; j++)
-                acc[j] += t * colours[k][j];
+                acc[j] += t * rgb[k][j];
         }
         for (int j = 0; j < 3; j++) {
             uint32_t v = (acc[j] + 127) / 255;
@@ -76,7 +201,8 @@ int gv_samples_display(const uint16_t *codes, size_t n, int c,
 
 int gv_samples_region8(struct gv_decoder *d, int level, uint32_t x,
                        uint32_t y, uint32_t w, uint32_t h,
-                       const struct gv_window *win, uint8_t *out,
+                       const struct gv_window *win,
+                       const struct gv_colours *col, uint8_t *out,
                        struct gv_error *err)
 {
     const struct gv_header *hd = &gv_store_info(gv_decoder_store(d))->header;
@@ -94,6 +220,12 @@ int gv_samples_region8(struct gv_decoder *d, int level, uint32_t x,
             gv_samples_default_window(hd, &dw);
         win = &dw;
     }
+    struct gv_colours dc;
+    if (!col) {   /* the store's, else the palette */
+        struct gv_error ignored = {0};
+        gv_colours_from_meta(gv_store_meta(gv_decoder_store(d)), c, &dc, &ignored);
+        col = &dc;
+    }
     uint16_t *codes = malloc(n * (size_t)c * sizeof *codes);
     uint8_t *tables = malloc((size_t)c * 65536);
     int rc = -1;
@@ -101,7 +233,7 @@ int gv_samples_region8(struct gv_decoder *d, int level, uint32_t x,
         gv_fail(err, GV_ENOMEM, "samples: out of memory for a region");
     else if (gv_decoder_copy_region(d, "samples", level, x, y, w, h, codes,
                                     err) == 0)
-        rc = gv_samples_display(codes, n, c, win, tables, out, err);
+        rc = gv_samples_display(codes, n, c, win, col, tables, out, err);
     free(codes);
     free(tables);
     return rc;

@@ -22,6 +22,7 @@
 
 struct gv_decoder;
 struct gv_window;
+struct gv_colours;
 
 /* New decoder over s (borrowed; it must outlive the decoder) with a
  * private tile cache of at most cache_bytes (beyond the tiles in use: the
@@ -76,13 +77,15 @@ int gv_decode_region(struct gv_decoder *d, int level, uint32_t x, uint32_t y,
 
 /* gv_decode_region through display window `win` (window.h; NULL or count
  * 0: none; for a sample store, NULL is its default window and count 0 its
- * range, samples_region.h): applied to a
+ * range, and `col` its colours, NULL the store's: samples_region.h;
+ * ignored for other stores): applied to a
  * sample store's codes before they become 8-bit, to the 8-bit pixels of
  * any other store.  0 or -1 (also GV_EINVAL for a window of another
  * channel count). */
 int gv_decode_region_window(struct gv_decoder *d, int level, uint32_t x,
                             uint32_t y, uint32_t w, uint32_t h,
-                            const struct gv_window *win, uint8_t *out,
+                            const struct gv_window *win,
+                            const struct gv_colours *col, uint8_t *out,
                             struct gv_error *err);
 
 /*
