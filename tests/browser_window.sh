@@ -7,7 +7,9 @@
 # `window`; the hash carries it; a gray store too; a table off by one
 # fails the match (negative control); a store encoded with --window opens
 # with that default (the first frame equal to the server's region) when
-# the link names no window, and with none when it says window=none.
+# the link names no window, and with none when it says window=none; a
+# 16-bit sample store takes windows on its codes through the server's
+# regions, equal to them bit for bit.
 #
 # Skipped when /usr/bin/chromium, node or tests/browser/node_modules is
 # missing, and under valgrind.  Needs curl and python3 (http_util.sh).
@@ -24,6 +26,9 @@ run encode "$TESTDATA/picos-1100x700.jpg" --window 30,200,0.7 -o "$S/dflt.gv"
 [ "$rc" -eq 0 ] || bail "encode dflt: $(cat "$T/err")"
 run encode synth:1100x700:gray -o "$S/gray.gv"
 [ "$rc" -eq 0 ] || bail "encode gray: $(cat "$T/err")"
+oiiotool "$TESTDATA/picos-1100x700.jpg" -d uint16 -o "$T/p16.png" || bail "oiiotool p16"
+run encode --bits 16 "$T/p16.png" -o "$S/s16.gv"
+[ "$rc" -eq 0 ] || bail "encode s16: $(cat "$T/err")"
 cat >"$T/w.conf" <<EOF2
 listen = 127.0.0.1
 port = 0

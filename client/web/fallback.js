@@ -5,7 +5,10 @@
 // the view) until the region for the new view arrives.  A region is asked
 // for once the view has rested for a moment; it covers the view's
 // bounding box at level floor(Z), or coarser while that would exceed
-// MAX_PIXELS.  PNG up to a megapixel (exact), JPEG above.
+// MAX_PIXELS.  PNG up to a megapixel (exact), JPEG above.  A display
+// window (setWindow) goes with each request, the root's included: the
+// server applies it (a sample store's to its 16-bit codes), so a window
+// change fetches the view again.
 
 import { screenToImage } from './view.js';
 import { displayChannels, viewCorners } from './pyramid.js';
@@ -27,6 +30,7 @@ export class RegionBackend {
         this.timer = 0;
         this.ctl = null;
         this.stats = { regions: 0, bytes: 0, errors: 0, lastError: '' };
+        this.winq = '';           // '&window=...' of every request
         const { px, w, h } = image.root, c = displayChannels(image.info);
         const rgba = new Uint8ClampedArray(w * h * 4);
         for (let i = 0; i < w * h; i++) {
@@ -63,7 +67,7 @@ export class RegionBackend {
             this.ctl.abort();
         const ctl = this.ctl = new AbortController();
         const fmt = r.w * r.h <= 1 << 20 ? 'png' : 'jpeg';
-        const url = `${this.image.url}/region?level=${r.level}&x=${r.x}&y=${r.y}&w=${r.w}&h=${r.h}&format=${fmt}`;
+        const url = `${this.image.url}/region?level=${r.level}&x=${r.x}&y=${r.y}&w=${r.w}&h=${r.h}&format=${fmt}${this.winq}`;
         try {
             const resp = await fetch(url, { signal: ctl.signal });
             if (!resp.ok)
@@ -73,7 +77,7 @@ export class RegionBackend {
             const bitmap = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
             if (this.shown && this.shown.bitmap)
                 this.shown.bitmap.close();
-            this.shown = { bitmap, level: r.level, x: r.x, y: r.y, key: this.want };
+            this.shown = { bitmap, level: r.level, x: r.x, y: r.y, key: `${r.level}/${r.x}/${r.y}/${r.w}/${r.h}${this.winq}` };
             this.stats.regions++;
         } catch (e) {
             if (e.name !== 'AbortError') {
@@ -86,6 +90,33 @@ export class RegionBackend {
                 this.ctl = null;
             this.onChange();
         }
+    }
+
+    /** Window text (window.js formatWindow), 'none', or null for the
+     * store's default: the view and the root are fetched again with it. */
+    setWindow(text) {
+        const q = text ? `&window=${encodeURIComponent(text)}` : '';
+        if (q === this.winq)
+            return;
+        this.winq = q;
+        this.want = '';
+        const info = this.image.info, root = this.root;
+        const w = info.root.width, h = info.root.height;
+        fetch(`${this.image.url}/region?level=${info.root.level}&x=0&y=0&w=${w}&h=${h}&format=png${q}`)
+            .then((r) => (r.ok ? r.blob() : Promise.reject(new Error(`root: HTTP ${r.status}`))))
+            .then((b) => createImageBitmap(b, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' }))
+            .then((b) => {
+                if (this.winq !== q) {
+                    b.close();
+                    return;
+                }
+                if (root.bitmap)
+                    root.bitmap.close();
+                root.bitmap = b;
+                this.onChange();
+            })
+            .catch((e) => { this.stats.errors++; this.stats.lastError = e.message; });
+        this.onChange();
     }
 
     // Draw an image of level `k` pixels placed at (x, y) of that level.
@@ -111,7 +142,7 @@ export class RegionBackend {
 
     frame(v, w, h, redraw, roi) {
         const r = this.region(v, w, h);
-        const want = r ? `${r.level}/${r.x}/${r.y}/${r.w}/${r.h}` : '';
+        const want = r ? `${r.level}/${r.x}/${r.y}/${r.w}/${r.h}${this.winq}` : '';
         if (want !== this.want) {
             this.want = want;
             clearTimeout(this.timer);

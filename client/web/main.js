@@ -93,7 +93,9 @@ async function route() {
     viewer.extra = { ...viewer.extra, roi: viewer.extra.roi, filter: panel.id, params: runner.params, terrain: terrain.source };
     // The display window of the link (none when absent or malformed;
     // window=none also keeps the store's default off).
-    const win = st.window ? parseWindow(st.window) : null;
+    // (16-bit points are a sample store's; the viewer drops them for an
+    // 8-bit image when it opens.)
+    const win = st.window ? parseWindow(st.window, 65535) : null;
     const none = st.window === 'none';
     if ((win ? formatWindow(win) : null) !== (viewer.window ? formatWindow(viewer.window) : null) ||
         none !== viewer.windowNone) {

@@ -181,12 +181,14 @@ export class Viewer {
         }
         this.image = image;
         this.backend = backend;
-        if (this.window && this.window.length !== 1 && this.window.length !== info.channels)
-            this.window = null;       // one window a channel, for another image
+        if (this.window && ((this.window.length !== 1 && this.window.length !== info.channels) ||
+            (!info.samples && this.window.some((c) => c.white > 255))))
+            this.window = null;       // one window a channel, or 16-bit points, for another image
         // No window from the link: the store's default (the image
         // document's "window", the one gigaviewd applies to regions),
         // unless the link says window=none.
-        const dflt = !this.window && !this.windowNone && info.window ? parseWindow(info.window) : null;
+        const dflt = !this.window && !this.windowNone && info.window
+            ? parseWindow(info.window, info.samples ? 65535 : 255) : null;
         if (dflt && (dflt.length === 1 || dflt.length === info.channels)) {
             this.window = dflt;
             this.extra = { ...this.extra, window: formatWindow(dflt) };
@@ -217,6 +219,9 @@ export class Viewer {
         this.extra = { ...this.extra, window: this.window ? formatWindow(this.window) : this.windowNone ? 'none' : null };
         if (this.backend && this.backend.setLut)
             this.backend.setLut(this.window ? lutBytes(this.window, this.image.info.channels) : null);
+        // The server's regions: the window goes with each request.
+        if (this.backend && this.backend.setWindow)
+            this.backend.setWindow(this.extra.window);
     }
 
     close() {

@@ -86,26 +86,26 @@ export function lutBytes(w, channels) {
 /** Per channel, the 0.5 % and 99.5 % points of the samples px (interleaved,
  * `channels` a pixel; a store's gray root may come as three equal
  * channels, then give channels 1 and stride 3): [[lo, hi], ...], hi > lo. */
-export function autoPoints(px, channels, stride = channels, lowFrac = 0.005, highFrac = 0.995) {
+export function autoPoints(px, channels, stride = channels, lowFrac = 0.005, highFrac = 0.995, max = 255) {
     const out = [];
     for (let k = 0; k < channels; k++) {
-        const h = new Uint32Array(256);
+        const h = new Uint32Array(max + 1);
         let n = 0;
         for (let i = k; i < px.length; i += stride, n++)
             h[px[i]]++;
         const lowN = n * lowFrac, highN = n * highFrac;
-        let lo = 0, hi = 255, acc = 0;
-        for (let v = 0; v < 256; v++) {
+        let lo = 0, hi = max, acc = 0;
+        for (let v = 0; v <= max; v++) {
             acc += h[v];
             if (acc > lowN) { lo = v; break; }
         }
         acc = 0;
-        for (let v = 0; v < 256; v++) {
+        for (let v = 0; v <= max; v++) {
             acc += h[v];
             if (acc >= highN) { hi = v; break; }
         }
         if (hi <= lo) {
-            if (lo >= 255) lo = 254;
+            if (lo >= max) lo = max - 1;
             hi = lo + 1;
         }
         out.push([lo, hi]);

@@ -27,9 +27,18 @@ export class WindowPanel {
         return this.viewer.image ? this.viewer.image.info.channels : 1;
     }
 
-    /** The window the sliders show (one per channel, or one). */
+    /** The largest sample a window point may name: a sample store's 16-bit
+     * codes, else 8-bit samples. */
+    max() {
+        return this.viewer.image && this.viewer.image.info.samples ? 65535 : 255;
+    }
+
+    /** The window the sliders show (one per channel, or one): without
+     * one, a sample store's codes' range, else 0 .. 255. */
     current() {
-        return this.viewer.window || [{ black: 0, white: 255, gammaMilli: 1000 }];
+        const s = this.viewer.image && this.viewer.image.info.samples;
+        return this.viewer.window ||
+            [{ black: s ? s.code_min : 0, white: s ? Math.max(s.code_max, s.code_min + 1) : 255, gammaMilli: 1000 }];
     }
 
     /** Show window w (or none) and set it on the viewer. */
@@ -39,14 +48,23 @@ export class WindowPanel {
     }
 
     /** Black and white from the root's histogram, per channel; gamma kept. */
-    auto() {
-        const root = this.viewer.image && this.viewer.image.root;
+    async auto() {
+        const image = this.viewer.image, root = image && image.root;
         if (!root)
             return;
         const c = this.channels();
-        // A gray root may come as three equal channels (viewer.js loadRoot).
-        const stride = root.px.length / (root.w * root.h);
-        const pts = autoPoints(root.px, c, stride);
+        let pts;
+        if (image.info.samples) {
+            // A sample store: the root's 16-bit codes (its picture is 8-bit).
+            const r = await fetch(`${image.url}/root?format=raw`);
+            if (!r.ok || this.viewer.image !== image)
+                return;
+            pts = autoPoints(new Uint16Array(await r.arrayBuffer()), c, c, 0.005, 0.995, 65535);
+        } else {
+            // A gray root may come as three equal channels (viewer.js loadRoot).
+            const stride = root.px.length / (root.w * root.h);
+            pts = autoPoints(root.px, c, stride);
+        }
         const cur = this.current();
         let w = pts.map(([lo, hi], k) => ({ black: lo, white: hi, gammaMilli: channelWindow(cur, k).gammaMilli }));
         if (this.el.linked.checked || c === 1)
@@ -59,7 +77,8 @@ export class WindowPanel {
     rebuild(w) {
         const c = this.channels();
         const linked = this.el.linked.checked || c === 1;
-        const cur = w || [{ black: 0, white: 255, gammaMilli: 1000 }];
+        const cur = w || this.current();
+        const max = this.max();
         if (!linked && cur.length === 1 && c > 1)
             w = Array.from({ length: c }, () => ({ ...cur[0] }));
         else if (linked && cur.length > 1)
@@ -71,7 +90,8 @@ export class WindowPanel {
         w.forEach((ch, k) => {
             const fs = document.createElement('fieldset');
             const lg = document.createElement('legend');
-            lg.textContent = linked ? 'all channels' : NAMES[k] || `channel ${k + 1}`;
+            const samples = this.viewer.image && this.viewer.image.info.samples;
+            lg.textContent = linked ? 'all channels' : (!samples && NAMES[k]) || `channel ${k + 1}`;
             fs.append(lg);
             const add = (label, min, max, step, value, put, show) => {
                 const l = document.createElement('label');
@@ -89,8 +109,8 @@ export class WindowPanel {
                 l.append(label, input, out);
                 fs.append(l);
             };
-            add('black', 0, 254, 1, ch.black, (v) => { ch.black = Math.min(v, ch.white - 1); }, String);
-            add('white', 1, 255, 1, ch.white, (v) => { ch.white = Math.max(v, ch.black + 1); }, String);
+            add('black', 0, max - 1, 1, ch.black, (v) => { ch.black = Math.min(v, ch.white - 1); }, String);
+            add('white', 1, max, 1, ch.white, (v) => { ch.white = Math.max(v, ch.black + 1); }, String);
             // gamma on a log scale, 0.1 .. 10, in thousandths
             add('gamma', -1000, 1000, 1, Math.round(Math.log10(ch.gammaMilli / 1000) * 1000),
                 (v) => { ch.gammaMilli = Math.min(10000, Math.max(100, Math.round(1000 * 10 ** (v / 1000)))); },

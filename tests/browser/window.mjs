@@ -19,7 +19,12 @@
 //      the server's region with that window (and to the plain store's
 //      region with it); a link with window=none opens with no window, the
 //      canvas equal to the plain region, and the hash keeps window=none;
-//   7. no console errors.
+//   7. "s16" (a 16-bit RGB sample store, drawn from the server's regions):
+//      a link's window on its 16-bit codes opens with it, the canvas at 1:1
+//      equal to the server's region with that window bit for bit; a new
+//      window fetches the view again (the server applies it) and matches
+//      too; the panel's sliders reach 65535;
+//   8. no console errors.
 // Exit status 0 when everything passed, 1 otherwise.
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -183,6 +188,30 @@ async function run(c) {
     const h7 = await pg4.evaluate(() => location.hash);
     check(new URLSearchParams(h7.slice(1)).get('window') === 'none', `the hash keeps window=none (${h7})`, h7);
     await pg4.close();
+
+    // 7. a sample store: windows on 16-bit codes, applied by the server.
+    const pg5 = await newPage(c);
+    const S1 = '5000,60000,0.8';
+    const r8 = await open(pg5, `#image=s16&x=550&y=350&z=0&r=0&window=${S1}`);
+    const k8 = await pg5.evaluate(() => [window.gigaview.viewer.backend.kind, window.gigaview.viewer.extra.window]);
+    check(r8.complete && k8[0] === 'region' && k8[1] === '5000,60000,0.800',
+        `a sample store opens on the server's regions with the link's 16-bit window (${JSON.stringify(k8)})`,
+        `${JSON.stringify(k8)} ${JSON.stringify(r8)}`);
+    await match(pg5, `s16 level 0 1:1, window ${S1}`, 's16', 150, 100, S1);
+    const S2 = '0,30000,1;20000,65535,2;1000,40000,0.5';
+    const reqs8 = await requestsDuring(pg5, () => pg5.evaluate((t) => {
+        window.gigaview.viewer.setWindow(t.split(';').map((s) => {
+            const [b, w, gm] = s.split(',');
+            return { black: +b, white: +w, gammaMilli: Math.round(+gm * 1000) };
+        }));
+    }, S2));
+    check(reqs8.some((u) => u.includes('/region?') && u.includes('window=')),
+        `a new window fetches the view again with it (${reqs8.length} requests)`, reqs8.slice(0, 4).join(' '));
+    await match(pg5, 's16 level 0 1:1, a window per channel', 's16', 150, 100, S2);
+    await pg5.click('#window-btn');
+    const maxes = await pg5.locator('#w-channels input[type=range]').evaluateAll((l) => l.map((e) => e.max));
+    check(maxes.includes('65535'), `the sliders reach 65535 (${maxes.join(',')})`, maxes.join(','));
+    await pg5.close();
 
     check(consoleErrors.length === 0, 'no console errors', consoleErrors.join('\n'));
 }
