@@ -238,6 +238,11 @@ expect_status "png16 of 8 channels is 400" 400 '/v1/images/c8/region?level=0&x=0
 expect_status "tiff16 of 8 channels" 200 '/v1/images/c8/region?level=0&x=0&y=0&w=10&h=10&format=tiff16'
 expect_status "tiff16 of an 8-bit image store is 400" 400 '/v1/images/img/region?level=0&x=0&y=0&w=10&h=10&format=tiff16'
 
+# picture OUT.ppm|OUT.pgm: the last response (a PNG) as PNM, for display.
+picture() {
+    cp "$T/b" "${1%.*}.png" && oiiotool "${1%.*}.png" -o "$1"
+}
+
 # display REF_RAW C W H WINDOW PPM [COLOURS]: the 8-bit picture of the
 # rule in docs/API.md from raw codes, against the server's PNG (as
 # PPM/PGM); COLOURS "RRGGBB;..." (default: the palette).
@@ -285,13 +290,11 @@ PY
 }
 W='2000,50000,1.5;0,65535;900,4200;100,60000,0.7'
 expect_status "an 8-bit region with a window per channel" 200 "/v1/images/c4e/region?$R&window=$(printf %s "$W" | sed 's/;/%3B/g')"
-cp "$T/b" w.png
-oiiotool w.png -o w.ppm
+picture w.ppm
 check "the picture is the windows' colours added, as the reference gives" \
     display r16.raw 4 300 200 "$W" w.ppm
 expect_status "an 8-bit region of c4w (the store's default window)" 200 "/v1/images/c4w/region?$R"
-cp "$T/b" d.png
-oiiotool d.png -o d.ppm
+picture d.ppm
 run export --bits 16 --region 450,300,300,200 "$S/c4w.gv" -o w16.tif
 toraw w16.tif w16.raw
 check "... is the default window's picture" \
@@ -301,13 +304,11 @@ range=$(json_get "'%d,%d' % (j['samples']['code_min'], j['samples']['code_max'])
 check "... has the default window" test "$(json_get "j['window']")" = \
     '1000,60000,1.000;0,65535,1.000;900,4200,2.000;0,40000,1.000'
 expect_status "window=none over the default: the codes' range" 200 "/v1/images/c4w/region?$R&window=none"
-cp "$T/b" n.png
-oiiotool n.png -o n.ppm
+picture n.ppm
 check "... is the picture of one window from the smallest to the largest code ($range)" \
     display w16.raw 4 300 200 "$range" n.ppm
 expect_status "gray: a region of the one-channel store" 200 '/v1/images/g1/region?level=0&x=0&y=0&w=200&h=100&window=20000,40000'
-cp "$T/b" g.png
-oiiotool g.png -o g.pgm
+picture g.pgm
 run export --bits 16 --region 0,0,200,100 "$S/g1.gv" -o g16.png
 toraw g16.png g16.raw
 check "... is one gray channel through the window" display g16.raw 1 200 100 '20000,40000' g.pgm
@@ -318,22 +319,19 @@ check "export (8-bit) gives the server's picture with the default window" cmp -s
 # Colours: the store's (display.colours), and the request's over them.
 C4='0000ff;00ff00;ff8000;ffffff'
 expect_status "a region of c4c (colours kept at encode)" 200 "/v1/images/c4c/region?$R"
-cp "$T/b" cc.png
-oiiotool cc.png -o cc.ppm
+picture cc.ppm
 run export --bits 16 --region 450,300,300,200 "$S/c4c.gv" -o c16.tif
 toraw c16.tif c16.raw
 check "... is the picture in the store's colours" \
     display c16.raw 4 300 200 "$crange" cc.ppm "$C4"
 CQ='ff0000;00ffff;ffff00;102030'
 expect_status "colours= over them" 200 "/v1/images/c4c/region?$R&colours=$(printf %s "$CQ" | sed 's/;/%3B/g')"
-cp "$T/b" cq.png
-oiiotool cq.png -o cq.ppm
+picture cq.ppm
 check "... is the picture in the request's colours" \
     display c16.raw 4 300 200 "$crange" cq.ppm "$CQ"
 expect_status "IIIF with colours= gives the same picture" 200 \
     "/iiif/3/c4c/450,300,300,200/max/0/default.png?colours=$(printf %s "$CQ" | sed 's/;/%3B/g')"
-cp "$T/b" icq.png
-oiiotool icq.png -o icq.ppm
+picture icq.ppm
 check "... byte for byte" cmp -s icq.ppm cq.ppm
 expect_status "malformed colours are 400" 400 "/v1/images/c4c/region?$R&colours=12345"
 expect_status "two colours for four channels are 400" 400 "/v1/images/c4c/region?$R&colours=ff0000%3B00ff00"
@@ -344,8 +342,7 @@ expect_status "IIIF info.json" 200 /iiif/3/c4/info.json
 expect_status "IIIF full/max" 200 /iiif/3/c4/full/max/0/default.png
 expect_status "IIIF a region at full size, with a window" 200 \
     "/iiif/3/c4e/450,300,300,200/max/0/default.png?window=$(printf %s "$W" | sed 's/;/%3B/g')"
-cp "$T/b" iw.png
-oiiotool iw.png -o iw.ppm
+picture iw.ppm
 check "IIIF gives the region's picture" cmp -s iw.ppm w.ppm
 expect_status "a window past 255 on an 8-bit image store is 400" 400 \
     '/v1/images/img/region?level=0&x=0&y=0&w=10&h=10&window=0,300'

@@ -2,12 +2,12 @@
  * samples_region.c - the display of sample stores (see samples_region.h):
  * the window's tables on codes, then gray or the additive colours.
  */
-#include <jansson.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "render/samples_region.h"
+#include "store/store_meta.h"
 
 static const uint8_t colours[GV_SAMPLES_MAX_CHANNELS][3] = {
     {255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {255, 0, 255},
@@ -93,27 +93,20 @@ int gv_colours_check(const struct gv_colours *c, int channels,
 int gv_colours_from_meta(const char *json, int channels, struct gv_colours *c,
                          struct gv_error *err)
 {
+    char text[GV_COLOURS_MAX_TEXT + 1];
     memset(c, 0, sizeof *c);
-    if (!json)
-        return 0;
-    json_t *root = json_loads(json, JSON_REJECT_DUPLICATES, NULL);
-    if (!root)
-        return gv_fail(err, GV_ECORRUPT, "colours: metadata is not JSON");
-    json_t *v = json_object_get(root, GV_COLOURS_META_KEY);
     struct gv_error why = {0};
-    int rc = 0;
-    if (v && (!json_is_string(v) ||
-              gv_colours_parse(json_string_value(v), c, &why) < 0 ||
-              gv_colours_check(c, channels, &why) < 0))
-        rc = gv_fail(err, GV_ECORRUPT, "colours: metadata %s: %s",
-                     GV_COLOURS_META_KEY, json_is_string(v) ? why.text
-                                                            : "not a string");
-    else if (v)
-        rc = 1;
+    int rc = gv_meta_get_string(json, GV_COLOURS_META_KEY, text, sizeof text, &why);
     if (rc < 0)
+        return gv_fail(err, GV_ECORRUPT, "colours: %s", why.text);
+    if (rc == 0)
+        return 0;
+    if (gv_colours_parse(text, c, &why) < 0 || gv_colours_check(c, channels, &why) < 0) {
         memset(c, 0, sizeof *c);
-    json_decref(root);
-    return rc;
+        return gv_fail(err, GV_ECORRUPT, "colours: metadata %s: %s",
+                       GV_COLOURS_META_KEY, why.text);
+    }
+    return 1;
 }
 
 char *gv_colours_meta_set(const char *json, const struct gv_colours *c,
@@ -121,20 +114,7 @@ char *gv_colours_meta_set(const char *json, const struct gv_colours *c,
 {
     char text[GV_COLOURS_MAX_TEXT];
     gv_colours_format(c, text, sizeof text);
-    json_t *root = json && *json ? json_loads(json, JSON_REJECT_DUPLICATES, NULL)
-                                 : json_object();
-    if (!json_is_object(root)) {
-        json_decref(root);
-        gv_fail(err, GV_EINVAL, "colours: metadata is not a JSON object");
-        return NULL;
-    }
-    char *out = NULL;
-    if (json_object_set_new(root, GV_COLOURS_META_KEY, json_string(text)) == 0)
-        out = json_dumps(root, JSON_COMPACT | JSON_SORT_KEYS);
-    json_decref(root);
-    if (!out)
-        gv_fail(err, GV_ENOMEM, "colours: out of memory for metadata");
-    return out;
+    return gv_meta_set_string(json, GV_COLOURS_META_KEY, text, err);
 }
 
 int gv_display_channels(const struct gv_header *h)

@@ -13,8 +13,8 @@
  * 1e-9 to a half without being one would need integers far past 16 bits.
  */
 #include "render/window.h"
+#include "store/store_meta.h"
 
-#include <jansson.h>
 #include <math.h>
 #include <stdlib.h>
 #include <stdio.h>
@@ -180,30 +180,22 @@ int gv_window_apply8(const struct gv_window *w, uint8_t *pix, size_t n,
 int gv_window_from_meta(const char *json, uint32_t max, int channels,
                         struct gv_window *w, struct gv_error *err)
 {
+    char text[GV_WINDOW_MAX_TEXT + 1];
     memset(w, 0, sizeof *w);
-    if (!json)
+    struct gv_error why = {0};
+    int rc = gv_meta_get_string(json, GV_WINDOW_META_KEY, text, sizeof text, &why);
+    if (rc < 0)
+        return gv_fail(err, GV_ECORRUPT, "window: %s", why.text);
+    if (rc == 0)
         return 0;
-    json_t *root = json_loads(json, JSON_REJECT_DUPLICATES, NULL);
-    if (!root)
-        return gv_fail(err, GV_ECORRUPT, "window: metadata is not JSON");
-    json_t *v = json_object_get(root, GV_WINDOW_META_KEY);
-    int rc = 0;
-    if (!v)
-        rc = 0;
-    else if (!json_is_string(v))
-        rc = gv_fail(err, GV_ECORRUPT, "window: metadata %s is not a string",
-                     GV_WINDOW_META_KEY);
-    else if (gv_window_parse(json_string_value(v), max, w, err) < 0)
+    if (gv_window_parse(text, max, w, err) < 0)
         rc = -1;
-    else if (w->count != 1 && w->count != channels) {
+    else if (w->count != 1 && w->count != channels)
         rc = gv_fail(err, GV_ECORRUPT, "window: metadata %s has %d windows "
                      "for an image of %d channels", GV_WINDOW_META_KEY,
                      w->count, channels);
-    } else
-        rc = 1;
     if (rc < 0)
         memset(w, 0, sizeof *w);
-    json_decref(root);
     return rc;
 }
 
@@ -212,20 +204,7 @@ char *gv_window_meta_set(const char *json, const struct gv_window *w,
 {
     char text[GV_WINDOW_MAX_CHANNELS * 32];
     gv_window_format(w, text, sizeof text);
-    json_t *root = json && *json ? json_loads(json, JSON_REJECT_DUPLICATES, NULL)
-                                 : json_object();
-    if (!json_is_object(root)) {
-        json_decref(root);
-        gv_fail(err, GV_EINVAL, "window: metadata is not a JSON object");
-        return NULL;
-    }
-    char *out = NULL;
-    if (json_object_set_new(root, GV_WINDOW_META_KEY, json_string(text)) == 0)
-        out = json_dumps(root, JSON_COMPACT | JSON_SORT_KEYS);
-    json_decref(root);
-    if (!out)
-        gv_fail(err, GV_ENOMEM, "window: out of memory for metadata");
-    return out;
+    return gv_meta_set_string(json, GV_WINDOW_META_KEY, text, err);
 }
 
 void gv_window_auto8(const uint8_t *px, size_t n, int channels, int linked,

@@ -149,3 +149,43 @@ int gv_meta_unpack(const uint8_t *in, size_t len, char **json,
     *json = copy;
     return 0;
 }
+
+char *gv_meta_set_string(const char *json, const char *key, const char *value,
+                         struct gv_error *err)
+{
+    json_t *root = json && *json ? json_loads(json, JSON_REJECT_DUPLICATES, NULL)
+                                 : json_object();
+    if (!json_is_object(root)) {
+        json_decref(root);
+        gv_fail(err, GV_EINVAL, "store: metadata is not a JSON object");
+        return NULL;
+    }
+    char *out = NULL;
+    if (json_object_set_new(root, key, json_string(value)) == 0)
+        out = json_dumps(root, JSON_COMPACT | JSON_SORT_KEYS);
+    json_decref(root);
+    if (!out)
+        gv_fail(err, GV_ENOMEM, "store: out of memory for metadata");
+    return out;
+}
+
+int gv_meta_get_string(const char *json, const char *key, char *buf,
+                       size_t size, struct gv_error *err)
+{
+    if (!json)
+        return 0;
+    json_t *root = json_loads(json, JSON_REJECT_DUPLICATES, NULL);
+    if (!root)
+        return gv_fail(err, GV_ECORRUPT, "store: metadata is not JSON");
+    json_t *v = json_object_get(root, key);
+    int rc = 0;
+    if (v && (!json_is_string(v) || json_string_length(v) >= size))
+        rc = gv_fail(err, GV_ECORRUPT, "store: metadata %s is not a string "
+                     "of under %zu bytes", key, size);
+    else if (v) {
+        memcpy(buf, json_string_value(v), json_string_length(v) + 1);
+        rc = 1;
+    }
+    json_decref(root);
+    return rc;
+}

@@ -55,4 +55,18 @@ int gv_meta_pack(const char *json, size_t len, uint8_t **out, size_t *outlen,
 int gv_meta_unpack(const uint8_t *in, size_t len, char **json,
                    struct gv_error *err);
 
+/* json (NULL or "" for {}) with string key `key` set to `value`: a new
+ * malloc'ed string (compact, keys sorted, as the encoder writes
+ * metadata), or NULL with *err (GV_EINVAL for json that is not an
+ * object, GV_ENOMEM).  What `--window` and `--colours` add. */
+char *gv_meta_set_string(const char *json, const char *key, const char *value,
+                         struct gv_error *err);
+
+/* The string value of `key` in json (NULL: none): 1 with it copied into
+ * buf (size bytes), 0 when json or the key is absent, -1 with
+ * GV_ECORRUPT when json is not JSON or the value is not a string that
+ * fits. */
+int gv_meta_get_string(const char *json, const char *key, char *buf,
+                       size_t size, struct gv_error *err);
+
 #endif

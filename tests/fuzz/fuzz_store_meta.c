@@ -12,14 +12,17 @@
  * accepted section's default display window (display.window,
  * render/window.h) is read as a reader does: refused with a "window:"
  * message, or a window of 1 or 3 channels whose canonical text parses
- * back to the same window.  Input is also tried as bare JSON through
- * gv_meta_check.
+ * back to the same window; its channel colours (display.colours,
+ * render/samples_region.h) likewise: refused with a "colours:" message,
+ * or four colours whose canonical text parses back to the same.  Input
+ * is also tried as bare JSON through gv_meta_check.
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "fuzz.h"
+#include "render/samples_region.h"
 #include "render/window.h"
 #include "store/store_meta.h"
 
@@ -63,6 +66,19 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                           gv_window_parse(text, 255, &back, &err) < 0 ||
                           memcmp(&w, &back, sizeof w) != 0))) {
             fprintf(stderr, "default window misread: %d %s\n", wrc, err.text);
+            abort();
+        }
+        struct gv_colours col, cback;
+        char ctext[GV_COLOURS_MAX_TEXT + 1];
+        gv_error_clear(&err);
+        int crc = gv_colours_from_meta(json, 4, &col, &err);
+        if ((crc < 0 && (col.count != 0 || strncmp(err.text, "colours:", 8) != 0)) ||
+            (crc == 0 && col.count != 0) ||
+            (crc == 1 && (col.count != 4 ||
+                          gv_colours_format(&col, ctext, sizeof ctext) >= (int)sizeof ctext ||
+                          gv_colours_parse(ctext, &cback, &err) < 0 ||
+                          memcmp(&col, &cback, sizeof col) != 0))) {
+            fprintf(stderr, "colours misread: %d %s\n", crc, err.text);
             abort();
         }
         free(json);
