@@ -24,17 +24,25 @@
 # 2.7 bytes a sample of code pyramid plus the decoded tiles of a whole
 # level: over 350 MB for the larger mosaic.
 #
+# A sample store (`encode --bits 16`, docs/FORMAT.md section 13) streams
+# the same way with C codes a pixel: a 4 x 7 and an 8 x 14 mosaic of a
+# 16-bit RGB tile (1100 x 700, 3 channels), --max-error 2: the 4x-area run
+# within +15% of the smaller one's peak, both under 4 times the bound
+# above (the page's window, decoded tiles and buffers hold 3 channels:
+# 368 and 382 MiB measured on 2026-12-03).
+#
 # Skipped without /usr/bin/time, under valgrind and in sanitizer builds.
 . "$(dirname "$0")/lib.sh"
 
 peak_rss_preflight
 
-# mosaic COLS ROWS: the arguments of a COLSxROWS mosaic of the one tile.
+# mosaic COLS ROWS [TILE]: the arguments of a COLSxROWS mosaic of one tile
+# (default the ETOPO5 PNG-16).
 mosaic() {
     i=0
     args="--mosaic $1x$2"
     while [ "$i" -lt $(($1 * $2)) ]; do
-        args="$args $TESTDATA/etopo5-720x361-u16.png"
+        args="$args ${3:-$TESTDATA/etopo5-720x361-u16.png}"
         i=$((i + 1))
     done
     echo "$args"
@@ -66,5 +74,31 @@ else
     not_ok "4x the area: peak grows from $((small / 1024)) to $((large / 1024)) MiB"
 fi
 check "both stores were written" test -s "$T/a.gv" -a -s "$T/b.gv"
+rm -f "$T/a.gv" "$T/b.gv"
+
+# Sample stores: three channels.
+oiiotool "$TESTDATA/picos-1100x700.jpg" -d uint16 -o "$T/rgb16.png" || bail "oiiotool"
+bound3=$(( (base + 4 * 115 * 1024) * 115 / 100 ))
+start=$(date +%s)
+# shellcheck disable=SC2046
+small=$(peak_kib encode --bits 16 --max-error 2 -j 2 --quiet $(mosaic 4 7 "$T/rgb16.png") -o "$T/a.gv")
+# shellcheck disable=SC2046
+large=$(peak_kib encode --bits 16 --max-error 2 -j 2 --quiet $(mosaic 8 14 "$T/rgb16.png") -o "$T/b.gv")
+diag "sample stores, peak RSS: 4400x4900x3 $((small / 1024)) MiB, 8800x9800x3 $((large / 1024)) MiB" \
+    "(bound $((bound3 / 1024)) MiB) in $(( $(date +%s) - start )) s"
+for pair in "4400x4900x3 $small" "8800x9800x3 $large"; do
+    set -- $pair
+    if [ "$2" -le "$bound3" ]; then
+        ok "sample store $1: peak $(($2 / 1024)) MiB <= $((bound3 / 1024)) MiB"
+    else
+        not_ok "sample store $1: peak $(($2 / 1024)) MiB exceeds $((bound3 / 1024)) MiB"
+    fi
+done
+if [ "$large" -le $((small * 115 / 100)) ]; then
+    ok "sample store, 4x the area: peak grows by $(( (large - small) / 1024 )) MiB (<= 15%)"
+else
+    not_ok "sample store, 4x the area: peak grows from $((small / 1024)) to $((large / 1024)) MiB"
+fi
+check "both sample stores were written" test -s "$T/a.gv" -a -s "$T/b.gv"
 
 done_testing
