@@ -30,7 +30,9 @@ export class RegionBackend {
         this.timer = 0;
         this.ctl = null;
         this.stats = { regions: 0, bytes: 0, errors: 0, lastError: '' };
-        this.winq = '';           // '&window=...' of every request
+        this.winq = '';           // '&window=...&colours=...' of every request
+        this.winText = null;      // the window of winq
+        this.colours = null;      // the colours of winq
         const { px, w, h } = image.root, c = displayChannels(image.info);
         const rgba = new Uint8ClampedArray(w * h * 4);
         for (let i = 0; i < w * h; i++) {
@@ -93,12 +95,16 @@ export class RegionBackend {
     }
 
     /** Window text (window.js formatWindow), 'none', or null for the
-     * store's default: the view and the root are fetched again with it. */
-    setWindow(text) {
-        const q = text ? `&window=${encodeURIComponent(text)}` : '';
+     * store's default, and a sample store's colours ("RRGGBB;...", or null
+     * for its own): the view and the root are fetched again with them. */
+    setWindow(text, colours = this.colours) {
+        this.colours = colours || null;
+        const q = (text ? `&window=${encodeURIComponent(text)}` : '') +
+            (this.colours ? `&colours=${encodeURIComponent(this.colours)}` : '');
         if (q === this.winq)
             return;
         this.winq = q;
+        this.winText = text;
         this.want = '';
         const info = this.image.info, root = this.root;
         const w = info.root.width, h = info.root.height;
@@ -117,6 +123,11 @@ export class RegionBackend {
             })
             .catch((e) => { this.stats.errors++; this.stats.lastError = e.message; });
         this.onChange();
+    }
+
+    /** A sample store's colours (or null): as setWindow, with its window. */
+    setColours(colours) {
+        this.setWindow(this.winText, colours);
     }
 
     // Draw an image of level `k` pixels placed at (x, y) of that level.

@@ -102,6 +102,8 @@ async function route() {
         viewer.setWindow(win, none);
         windowPanel.rebuild(win);
     }
+    if ((st.colours || null) !== (viewer.colours || null))
+        viewer.setColours(st.colours);
     $('status').hidden = !st.image;
     if (!st.image) {
         terrain.set(null);

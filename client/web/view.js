@@ -16,7 +16,8 @@
 //
 // The hash: #image=ID&x=CX&y=CY&z=ZOOM&r=DEG[&roi=X,Y,W,H][&filter=FID][&terrain=hillshade|ID]
 // [&p=MODULE.PARAM:VALUE,...][&window=B,W,G[;B,W,G...]] (the display
-// window, window.js; docs/API.md `window`).  The ROI is in CSS pixels relative to the
+// window, window.js; docs/API.md `window`)[&colours=RRGGBB;...] (a sample
+// store's channel colours, docs/API.md).  The ROI is in CSS pixels relative to the
 // viewport centre (so it stays put when the window is resized).
 
 export const deg = Math.PI / 180;
@@ -86,6 +87,8 @@ export function formatHash(st) {
         q.set('terrain', st.terrain);
     if (st.window)
         q.set('window', st.window);
+    if (st.colours)
+        q.set('colours', st.colours);
     if (st.params && Object.keys(st.params).length)
         q.set('p', Object.entries(st.params).map(([k, v]) => `${k}:${fmt(v, 6)}`).join(','));
     return '#' + q.toString();
@@ -103,7 +106,8 @@ export function parseHash(hash) {
         return Number.isFinite(v) ? v : null;
     };
     const st = { image: q.get('image') || null, view: null, roi: null, filter: q.get('filter') || null, params: {},
-        terrain: q.get('terrain') || null, window: q.get('window') || null };
+        terrain: q.get('terrain') || null, window: q.get('window') || null,
+        colours: q.get('colours') || null };
     const x = num('x'), y = num('y'), z = num('z'), r = num('r');
     if (x !== null && y !== null && z !== null)
         st.view = { cx: x, cy: y, zoom: z, rot: r === null ? 0 : r };

@@ -88,7 +88,8 @@ export class Viewer {
         this.lastResult = null;
         this.listeners = [];
         this.hashTimer = 0;
-        this.extra = {};              // roi, filter, params, window: kept in the hash
+        this.extra = {};              // roi, filter, params, window, colours: kept in the hash
+        this.colours = null;          // a sample store's channel colours, "RRGGBB;..."
         this.window = null;           // the display window (window.js) or null
         this.windowNone = false;      // none, the store's default refused (link's window=none)
         this.filterShown = false;     // a filter result is set (roi_filter.js)
@@ -189,6 +190,11 @@ export class Viewer {
         // unless the link says window=none.
         const dflt = !this.window && !this.windowNone && info.window
             ? parseWindow(info.window, info.samples ? 65535 : 255) : null;
+        // Colours: a sample store's of several channels, one per channel.
+        if (this.colours && !(info.samples && this.colours.split(';').length === info.channels && info.channels > 1)) {
+            this.colours = null;
+            this.extra = { ...this.extra, colours: null };
+        }
         if (dflt && (dflt.length === 1 || dflt.length === info.channels)) {
             this.window = dflt;
             this.extra = { ...this.extra, window: formatWindow(dflt) };
@@ -215,13 +221,28 @@ export class Viewer {
         this.viewChanged();
     }
 
+    /**
+     * Set a sample store's channel colours: "RRGGBB;..." one per channel
+     * (docs/API.md, "Sample stores"), or null for the store's own.  The
+     * server draws them: the view is fetched again.  The hash follows.
+     */
+    setColours(text) {
+        const ok = typeof text === 'string' && /^[0-9a-fA-F]{6}(;[0-9a-fA-F]{6}){0,7}$/.test(text);
+        this.colours = ok ? text.toLowerCase() : null;
+        this.extra = { ...this.extra, colours: this.colours };
+        if (this.backend && this.backend.setColours)
+            this.backend.setColours(this.colours);
+        this.invalidate();
+        this.viewChanged();
+    }
+
     applyWindow() {
         this.extra = { ...this.extra, window: this.window ? formatWindow(this.window) : this.windowNone ? 'none' : null };
         if (this.backend && this.backend.setLut)
             this.backend.setLut(this.window ? lutBytes(this.window, this.image.info.channels) : null);
-        // The server's regions: the window goes with each request.
+        // The server's regions: the window and colours go with each request.
         if (this.backend && this.backend.setWindow)
-            this.backend.setWindow(this.extra.window);
+            this.backend.setWindow(this.extra.window, this.colours);
     }
 
     close() {

@@ -8,6 +8,8 @@
 import { autoPoints, channelWindow } from './window.js';
 
 const NAMES = ['red', 'green', 'blue'];
+// A sample store's default colours (docs/API.md, "Sample stores").
+const PALETTE = ['ff0000', '00ff00', '0000ff', 'ff00ff', '00ffff', 'ffff00', 'ff8000', 'ffffff'];
 
 export class WindowPanel {
     /** viewer: the Viewer; el: {box, linked, auto, reset, channels}. */
@@ -39,6 +41,16 @@ export class WindowPanel {
         const s = this.viewer.image && this.viewer.image.info.samples;
         return this.viewer.window ||
             [{ black: s ? s.code_min : 0, white: s ? Math.max(s.code_max, s.code_min + 1) : 255, gammaMilli: 1000 }];
+    }
+
+    /** A sample store's channel colours as the viewer draws them: the
+     * link's, else the store's (metadata display.colours), else the
+     * palette; ["rrggbb", ...] one per channel. */
+    colours() {
+        const info = this.viewer.image ? this.viewer.image.info : null, c = this.channels();
+        const text = this.viewer.colours || (info && info.metadata && info.metadata['display.colours']);
+        const list = typeof text === 'string' ? text.toLowerCase().split(';') : [];
+        return list.length === c ? list : PALETTE.slice(0, c);
     }
 
     /** Show window w (or none) and set it on the viewer. */
@@ -109,6 +121,21 @@ export class WindowPanel {
                 l.append(label, input, out);
                 fs.append(l);
             };
+            // A sample store's channel: its colour (the server adds them up).
+            if (samples && !linked && c > 1) {
+                const l = document.createElement('label');
+                l.className = 'slider';
+                const input = document.createElement('input');
+                Object.assign(input, { type: 'color', value: `#${this.colours()[k]}` });
+                input.setAttribute('aria-label', `${lg.textContent} colour`);
+                input.addEventListener('input', () => {
+                    const cols = this.colours();
+                    cols[k] = input.value.replace('#', '').toLowerCase();
+                    this.viewer.setColours(cols.join(';'));
+                });
+                l.append('colour', input);
+                fs.append(l);
+            }
             add('black', 0, max - 1, 1, ch.black, (v) => { ch.black = Math.min(v, ch.white - 1); }, String);
             add('white', 1, max, 1, ch.white, (v) => { ch.white = Math.max(v, ch.black + 1); }, String);
             // gamma on a log scale, 0.1 .. 10, in thousandths

@@ -23,7 +23,9 @@
 //      a link's window on its 16-bit codes opens with it, the canvas at 1:1
 //      equal to the server's region with that window bit for bit; a new
 //      window fetches the view again (the server applies it) and matches
-//      too; the panel's sliders reach 65535;
+//      too; the panel's sliders reach 65535; colours from the link and
+//      from the panel's colour inputs equal the server's region with them,
+//      and the hash carries them;
 //   8. no console errors.
 // Exit status 0 when everything passed, 1 otherwise.
 import { mkdtempSync, rmSync } from 'node:fs';
@@ -58,9 +60,9 @@ async function open(pg, h) {
 // The canvas against the region (level 0, x, y, W x H) with window text
 // win: {n, same, max}; win null: the region with no window asked (the
 // store's default, if any).  lut: display tables to force (negative control).
-function compare(pg, id, x, y, win, lut = null) {
+function compare(pg, id, x, y, win, lut = null, extra = '') {
     const url = `${base}/v1/images/${id}/region?level=0&x=${x}&y=${y}&w=${W}&h=${H}&format=png` +
-        (win === null ? '' : `&window=${encodeURIComponent(win)}`);
+        (win === null ? '' : `&window=${encodeURIComponent(win)}`) + extra;
     return pg.evaluate(async ({ url, W, H, lut }) => {
         const v = window.gigaview.viewer;
         if (lut) v.backend.setLut(new Uint8Array(lut));
@@ -86,10 +88,10 @@ function compare(pg, id, x, y, win, lut = null) {
     }, { url, W, H, lut });
 }
 
-async function match(pg, label, id, x, y, win) {
-    const r = await compare(pg, id, x, y, win);
+async function match(pg, label, id, x, y, win, extra = '') {
+    const r = await compare(pg, id, x, y, win, null, extra);
     if (r.error) return fail(`${label}`, r.error);
-    check(r.same === r.n, `${label}: the canvas equals ${win === null ? 'the region with no window asked' : `region&window=${win}`} bit for bit (${r.same}/${r.n} pixels identical)`,
+    check(r.same === r.n, `${label}: the canvas equals ${win === null ? 'the region with no window asked' : `region&window=${win}`}${extra} bit for bit (${r.same}/${r.n} pixels identical)`,
         `${r.same}/${r.n} pixels identical, largest difference ${r.max}`);
 }
 
@@ -212,6 +214,29 @@ async function run(c) {
     const maxes = await pg5.locator('#w-channels input[type=range]').evaluateAll((l) => l.map((e) => e.max));
     check(maxes.includes('65535'), `the sliders reach 65535 (${maxes.join(',')})`, maxes.join(','));
     await pg5.close();
+    // Colours: from the link, then a colour input; the hash carries them.
+    const pg6 = await newPage(c);
+    const C1 = '0000ff;00ff00;ff8000';
+    const r9 = await open(pg6, `#image=s16&x=550&y=350&z=0&r=0&window=${S1}&colours=${encodeURIComponent(C1)}`);
+    const k9 = await pg6.evaluate(() => window.gigaview.viewer.colours);
+    check(r9.complete && k9 === C1, `the link's colours are set (${k9})`, `${k9} ${JSON.stringify(r9)}`);
+    await match(pg6, 's16 level 0 1:1, the link\'s colours', 's16', 150, 100, S1, `&colours=${encodeURIComponent(C1)}`);
+    await pg6.click('#window-btn');
+    await pg6.click('#w-linked');            // one set per channel, with its colour
+    const nColour = await pg6.locator('#w-channels input[type=color]').count();
+    check(nColour === 3, `the panel shows a colour for each of the 3 channels (${nColour})`);
+    await pg6.locator('#w-channels input[type=color]').nth(1).fill('#ff00ff');
+    await pg6.evaluate(() => window.gigaview.viewer.settled());
+    const C2 = '0000ff;ff00ff;ff8000';
+    const k10 = await pg6.evaluate(() => window.gigaview.viewer.colours);
+    check(k10 === C2, `the colour input sets the second channel's colour (${k10})`, String(k10));
+    const w10 = await pg6.evaluate(() => window.gigaview.viewer.extra.window);
+    await match(pg6, 's16 level 0 1:1, after the colour input', 's16', 150, 100, w10, `&colours=${encodeURIComponent(C2)}`);
+    await pg6.waitForFunction((t) => decodeURIComponent(location.hash).includes(`colours=${t}`), C2, { timeout: 5000 })
+        .catch(() => {});
+    const h10 = await pg6.evaluate(() => location.hash);
+    check(new URLSearchParams(h10.slice(1)).get('colours') === C2, `the hash carries the colours (${h10})`, h10);
+    await pg6.close();
 
     check(consoleErrors.length === 0, 'no console errors', consoleErrors.join('\n'));
 }
