@@ -11,7 +11,8 @@
 #     exact pyramid, and not all exact; -q 60: the PSNR `info` reports
 #     is the PSNR measured here, and within 60 .. 61 dB (the trial);
 #   - a 4-band GeoTIFF through GDAL keeps every band and its
-#     georeference (builds with GDAL);
+#     georeference (builds with GDAL); a 4-page OME-TIFF every page, its
+#     channels' names and colours;
 #   - info and info --json; a default window kept as metadata;
 #   - over HTTP: the samples object, tiff16 and png16 regions equal to
 #     `export --bits 16`, png16 of 8 channels refused, the 8-bit picture
@@ -146,6 +147,32 @@ assert m['geo.epsg']==4326 and m['geo.bands']==4 and m['geo.transform'][0]==-10,
 else
     skip "a GeoTIFF through GDAL" "built without GDAL"
 fi
+
+# An OME-TIFF whose channels are pages (lib/imageio/ome_tiff.h): the
+# four bands as four 16-bit pages, OME-XML on the first with names and
+# colours.
+for k in 1 2 3 4; do
+    gdal_translate -q -b $k -co COMPRESS=DEFLATE c4.raw band$k.tif || bail "band $k"
+done
+tiffcp band1.tif band2.tif band3.tif band4.tif ome.tif || bail "tiffcp"
+OMEXML='<?xml version="1.0" encoding="UTF-8"?><OME xmlns="http://www.openmicroscopy.org/Schemas/OME/2016-06"><Image ID="Image:0"><Pixels ID="Pixels:0" DimensionOrder="XYCZT" Type="uint16" SizeX="1100" SizeY="700" SizeC="4" SizeZ="1" SizeT="1"><Channel ID="Channel:0:0" Name="DAPI" Color="65535" SamplesPerPixel="1"/><Channel ID="Channel:0:1" Name="GFP" Color="16711935" SamplesPerPixel="1"/><Channel ID="Channel:0:2" Name="Cy3" Color="-16776961" SamplesPerPixel="1"/><Channel ID="Channel:0:3" Name="Cy5;far red" Color="-16711681" SamplesPerPixel="1"/><TiffData/></Pixels></Image></OME>'
+tiffset -s 270 "$OMEXML" ome.tif || bail "tiffset"
+run encode --bits 16 ome.tif -o "$S/ome.gv"
+expect_rc "encode --bits 16 of a 4-page OME-TIFF" 0
+check "... every page is a channel" grep -q '^samples    1100 x 700 x 4 channels' "$T/out"
+run export --bits 16 "$S/ome.gv" -o ome-0.tif
+toraw ome-0.tif ome-0.raw
+check "... lossless: level 0 equals the four bands" cmp -s c4.raw ome-0.raw
+run info --json "$S/ome.gv"
+check "... the channels' names and colours are kept" python3 -c "
+import json,sys; m=json.load(open(sys.argv[1]))['metadata']
+assert m['ome.channels']=='DAPI;GFP;Cy3;Cy5,far red', m
+assert m['display.colours']=='0000ff;00ff00;ff0000;ff00ff', m" "$T/out"
+tiffset -s 270 "$(printf %s "$OMEXML" | sed 's/SizeC="4"/SizeC="6"/')" ome.tif || bail "tiffset"
+run encode --bits 16 ome.tif -o "$S/ome6.gv"
+check "an OME-TIFF claiming more channels than pages is read as its first page" \
+    grep -q '^samples    1100 x 700 x 1 channels' "$T/out"
+rm -f "$S/ome6.gv"
 
 # ----------------------------------------------------------- near-lossless
 run encode --bits 16 --max-error 40 c4.tif -o "$S/c4e.gv"

@@ -74,6 +74,7 @@
 #include "imageio/output_format.h"
 #include "imageio/native_png.h"
 #include "imageio/native_tiff.h"
+#include "imageio/ome_tiff.h"
 #include "imageio/psd_thumbnail.h"
 #include "imageio/tiff_limits.h"
 #include "imageio/tiff_sniff.h"
@@ -196,7 +197,7 @@ static const struct gv_imageio_module *get(struct gv_error *err)
 }
 
 /* Who reads an opened image. */
-enum reader { BY_MODULE, BY_JPEG, BY_PNG, BY_TIFF, BY_SLIDE, BY_RASTER };
+enum reader { BY_MODULE, BY_JPEG, BY_PNG, BY_TIFF, BY_OME, BY_SLIDE, BY_RASTER };
 
 struct gv_image_in {
     enum reader by;
@@ -205,6 +206,7 @@ struct gv_image_in {
         struct gv_native_jpeg *jpeg;
         struct gv_native_png *png;
         struct gv_native_tiff *tiff;
+        struct gv_ome *ome;
 #ifdef GV_HAVE_OPENSLIDE
         struct gv_slide *slide;
 #endif
@@ -371,6 +373,13 @@ struct gv_image_in *gv_image_open_limits(const char *path,
         native = NULL;
         gv_error_clear(&e);
     }
+    /* An OME-TIFF whose channels are pages: all of them (ome_tiff.h). */
+    struct gv_ome *ome;
+    if (in->by == BY_TIFF && native &&
+        (ome = gv_ome_take(path, in->u.tiff, lim->max_pixels, info))) {
+        in->by = BY_OME;
+        in->u.ome = ome;
+    }
     if (native)
         return in;
     /* For the module, whose libjpeg takes no limit on its memory and
@@ -422,6 +431,8 @@ int gv_image_read(struct gv_image_in *in, uint32_t rows, void *out,
         return gv_native_png_read(in->u.png, rows, out, err);
     case BY_TIFF:
         return gv_native_tiff_read(in->u.tiff, rows, out, err);
+    case BY_OME:
+        return gv_ome_read(in->u.ome, rows, out, err);
 #ifdef GV_HAVE_OPENSLIDE
     case BY_SLIDE:
         return gv_slide_read(in->u.slide, rows, out, err);
@@ -463,6 +474,9 @@ void gv_image_close(struct gv_image_in *in)
     case BY_TIFF:
         gv_native_tiff_close(in->u.tiff);
         break;
+    case BY_OME:
+        gv_ome_close(in->u.ome);
+        break;
     case BY_MODULE:
         module->close(in->u.module);
         break;
@@ -484,6 +498,8 @@ void gv_image_close(struct gv_image_in *in)
 
 const char *gv_image_meta(const struct gv_image_in *in)
 {
+    if (in->by == BY_OME)
+        return gv_ome_meta(in->u.ome);
 #ifdef GV_HAVE_OPENSLIDE
     if (in->by == BY_SLIDE)
         return gv_slide_meta(in->u.slide);

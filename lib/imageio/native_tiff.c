@@ -87,6 +87,7 @@ static struct {
     tmsize_t (*ReadEncodedStrip)(TIFF *, uint32_t, void *, tmsize_t);
     uint32_t (*NumberOfTiles)(TIFF *);
     uint32_t (*NumberOfStrips)(TIFF *);
+    int (*SetDirectory)(TIFF *, tdir_t);
 } lt;
 static int lt_ok;
 static pthread_once_t lt_once = PTHREAD_ONCE_INIT;
@@ -120,6 +121,7 @@ static void lt_load(void)
         {(void **)&lt.ReadEncodedStrip, "TIFFReadEncodedStrip"},
         {(void **)&lt.NumberOfTiles, "TIFFNumberOfTiles"},
         {(void **)&lt.NumberOfStrips, "TIFFNumberOfStrips"},
+        {(void **)&lt.SetDirectory, "TIFFSetDirectory"},
     };
     for (size_t i = 0; i < sizeof f / sizeof f[0]; i++) {
         /* POSIX: a function pointer may be stored through void *. */
@@ -152,6 +154,7 @@ struct gv_native_tiff {
     struct gv_raw_regions *raw;    /* uncompressed 8-bit: rows read where
                                     * they lie, no strip or tile buffer */
     int broken;                    /* a read failed: every later one fails */
+    char *desc;                    /* the directory's ImageDescription */
     char msg[256];                 /* the first error's text */
 };
 
@@ -202,6 +205,7 @@ void gv_native_tiff_close(struct gv_native_tiff *t)
 {
     if (!t)
         return;
+    free(t->desc);
     if (t->tif)
         lt.Close(t->tif);   /* closes fd */
     else if (t->fd >= 0)
@@ -316,6 +320,19 @@ struct gv_native_tiff *gv_native_tiff_open(const char *path,
                                            struct gv_image_info *info,
                                            struct gv_error *err)
 {
+    return gv_native_tiff_open_dir(path, 0, max_pixels, info, err);
+}
+
+const char *gv_native_tiff_description(const struct gv_native_tiff *t)
+{
+    return t->desc;
+}
+
+struct gv_native_tiff *gv_native_tiff_open_dir(const char *path, uint32_t dir,
+                                               uint64_t max_pixels,
+                                               struct gv_image_info *info,
+                                               struct gv_error *err)
+{
     gv_error_clear(err);
     struct gv_native_tiff *t = calloc(1, sizeof *t);
     if (!t)
@@ -343,7 +360,7 @@ struct gv_native_tiff *gv_native_tiff_open(const char *path,
      * an error, not SIGBUS. */
     t->tif = lt.FdOpenExt(t->fd, path, "rm", opts);
     lt.OpenOptionsFree(opts);
-    if (!t->tif || t->msg[0])
+    if (!t->tif || t->msg[0] || (dir && !lt.SetDirectory(t->tif, dir)) || t->msg[0])
         goto decline;
     uint32_t w = 0, h = 0;
     if (!lt.GetField(t->tif, TIFFTAG_IMAGEWIDTH, &w)
@@ -357,6 +374,10 @@ struct gv_native_tiff *gv_native_tiff_open(const char *path,
     t->width = w;
     t->height = h;
     t->row_bytes = (size_t)w * t->pixel_bytes;   /* < 2^31 * 6 */
+    char *desc = NULL;
+    if (lt.GetField(t->tif, TIFFTAG_IMAGEDESCRIPTION, &desc) && desc &&
+        !(t->desc = strdup(desc)))
+        goto decline;
     if (layout(t) != 0 || t->msg[0])
         goto decline;
     t->swap16 = test_swap16 && t->bits == 16;

@@ -37,6 +37,18 @@ struct gv_native_tiff *gv_native_tiff_open(const char *path,
 /* The next `rows` rows, as gv_image_read: 0, or -1 with *err filled
  * (GV_ECORRUPT for damaged or truncated data, after which every read
  * fails; GV_EINVAL for a read past the last row; GV_ENOMEM). */
+/* gv_native_tiff_open of directory `dir` (0: the first; an OME-TIFF's
+ * channels are directories 0 .. C-1, ome_tiff.h), declined as above and
+ * also when there is no such directory. */
+struct gv_native_tiff *gv_native_tiff_open_dir(const char *path, uint32_t dir,
+                                               uint64_t max_pixels,
+                                               struct gv_image_info *info,
+                                               struct gv_error *err);
+
+/* The opened directory's ImageDescription (NUL-terminated, until close),
+ * or NULL when it has none. */
+const char *gv_native_tiff_description(const struct gv_native_tiff *t);
+
 int gv_native_tiff_read(struct gv_native_tiff *t, uint32_t rows, void *out,
                         struct gv_error *err);
 

@@ -34,6 +34,7 @@
 #include <unistd.h>
 
 #include "fuzz.h"
+#include "store/store_meta.h"
 #include "encode/source.h"
 #include "imageio/raw_regions.h"
 
@@ -118,6 +119,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if ((uint64_t)info.width * info.height > MAX_PIXELS || info.width == 0 ||
         info.height == 0 || (info.channels != 1 && info.channels != 3))
         abort();
+    /* What a reader says of the pixels (a slide's, a raster's, an
+     * OME-TIFF's channels) must be metadata the encoder can keep. */
+    const char *meta = gv_source_meta(s);
+    if (meta && gv_meta_check(meta, strlen(meta), &err) < 0) {
+        fprintf(stderr, "fuzz_imageio: reader metadata refused: %s\n", err.text);
+        abort();
+    }
     size_t row = (size_t)info.width * (size_t)info.channels;
     uint32_t step = (uint32_t)(READ_BYTES / row);
     if (step == 0)
