@@ -8,7 +8,6 @@
 
 #include "codec/height_tile.h"
 #include "codec/samples_tile.h"
-#include "store/store_format.h"
 
 int gv_samples_tile_split(const uint8_t *buf, size_t len, int c,
                           const uint8_t **part, size_t *part_len,

@@ -20,6 +20,9 @@
 
 #include "base/error.h"
 
+/* The most channels a sample store holds (docs/FORMAT.md section 13). */
+#define GV_SAMPLES_MAX_CHANNELS 8
+
 /* Split a tile of c channels (1..8) into its channel buffers: part[k] and
  * part_len[k] for k < c.  0, or -1 with GV_ECORRUPT when a buffer's
  * header is malformed or the buffers do not fill len exactly. */

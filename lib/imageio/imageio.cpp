@@ -673,10 +673,13 @@ static int encode_impl(const char *format, uint32_t width, uint32_t height,
      * store's codes) 1 to 4 channels in PNG, 1 to 8 in TIFF. */
     const int max_channels = type == TypeDesc::UINT8 ? 3
                            : std::string(oiio_name) == "png" ? 4 : 8;
-    if (channels < 1 || channels > max_channels ||
-        (type == TypeDesc::UINT8 && channels == 2))
+    if (type == TypeDesc::UINT8 && channels != 1 && channels != 3)
         return gv_fail(err, GV_EINVAL, "imageio: cannot encode %d channels "
-                       "as %s here", channels, format);
+                       "(1 or 3)", channels);
+    if (channels < 1 || channels > max_channels)
+        return gv_fail(err, GV_EINVAL, "imageio: cannot encode %d channels "
+                       "of 16-bit or float samples as %s (1 to 4 in PNG, 1 "
+                       "to 8 in TIFF)", channels, format);
     if (width == 0 || height == 0 || width > 0x7fffffffu
         || height > 0x7fffffffu)
         return gv_fail(err, GV_EINVAL, "imageio: bad image size %ux%u",

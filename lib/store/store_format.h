@@ -26,6 +26,7 @@
 
 #include "base/byteorder.h"
 #include "base/crc32.h"
+#include "codec/samples_tile.h"
 #include "store/geometry.h"
 
 #define GV_MAGIC "GIGAVIEW"
@@ -45,9 +46,9 @@
  * 7; every other version is an image store. */
 #define GV_KIND_IMAGE 0
 #define GV_KIND_HEIGHT 1   /* 16-bit codes of a height field (section 12) */
-#define GV_KIND_SAMPLES 2  /* 1..8 channels of 16-bit image samples
-                            * (section 13, format version 7) */
-#define GV_SAMPLES_MAX_CHANNELS 8
+#define GV_KIND_SAMPLES 2  /* 1..GV_SAMPLES_MAX_CHANNELS (codec/samples_tile.h)
+                            * channels of 16-bit image samples (section 13,
+                            * format version 7) */
 #define GV_HEIGHT_UNIT 8   /* bytes of the unit name, NUL-padded */
 #define GV_HEADER_SIZE 128
 #define GV_INDEX_ENTRY 16
