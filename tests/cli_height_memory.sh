@@ -52,53 +52,46 @@ base=$(peak_kib --version)
 diag "baseline (gigaview --version): $((base / 1024)) MiB"
 bound=$(( (base + 115 * 1024) * 115 / 100 ))
 
-start=$(date +%s)
-# shellcheck disable=SC2046
-small=$(peak_kib encode --height --max-error 2 -j 2 --quiet $(mosaic 6 12) -o "$T/a.gv")
-# shellcheck disable=SC2046
-large=$(peak_kib encode --height --max-error 2 -j 2 --quiet $(mosaic 12 24) -o "$T/b.gv")
-diag "peak RSS: 4320x4332 $((small / 1024)) MiB, 8640x8664 $((large / 1024)) MiB" \
-    "(bound $((bound / 1024)) MiB) in $(( $(date +%s) - start )) s"
-
-for pair in "4320x4332 $small" "8640x8664 $large"; do
-    set -- $pair
-    if [ "$2" -le "$bound" ]; then
-        ok "$1: peak $(($2 / 1024)) MiB <= $((bound / 1024)) MiB"
+# peaks WHAT BOUND SMALL_NAME LARGE_NAME ARGS...: gigaview ARGS on the
+# mosaic $small_mosaic, then on $large_mosaic (4x the area); both peaks
+# within BOUND (KiB) and the larger within +15% of the smaller.
+peaks() {
+    what=$1 bnd=$2 sn=$3 ln=$4
+    shift 4
+    start=$(date +%s)
+    # shellcheck disable=SC2046,SC2086
+    small=$(peak_kib "$@" $small_mosaic -o "$T/a.gv")
+    # shellcheck disable=SC2046,SC2086
+    large=$(peak_kib "$@" $large_mosaic -o "$T/b.gv")
+    diag "$what, peak RSS: $sn $((small / 1024)) MiB, $ln $((large / 1024)) MiB" \
+        "(bound $((bnd / 1024)) MiB) in $(( $(date +%s) - start )) s"
+    for pair in "$sn $small" "$ln $large"; do
+        set -- $pair
+        if [ "$2" -le "$bnd" ]; then
+            ok "$what $1: peak $(($2 / 1024)) MiB <= $((bnd / 1024)) MiB"
+        else
+            not_ok "$what $1: peak $(($2 / 1024)) MiB exceeds $((bnd / 1024)) MiB"
+        fi
+    done
+    if [ "$large" -le $((small * 115 / 100)) ]; then
+        ok "$what, 4x the area: peak grows by $(( (large - small) / 1024 )) MiB (<= 15%)"
     else
-        not_ok "$1: peak $(($2 / 1024)) MiB exceeds $((bound / 1024)) MiB"
+        not_ok "$what, 4x the area: peak grows from $((small / 1024)) to $((large / 1024)) MiB"
     fi
-done
-if [ "$large" -le $((small * 115 / 100)) ]; then
-    ok "4x the area: peak grows by $(( (large - small) / 1024 )) MiB (<= 15%)"
-else
-    not_ok "4x the area: peak grows from $((small / 1024)) to $((large / 1024)) MiB"
-fi
-check "both stores were written" test -s "$T/a.gv" -a -s "$T/b.gv"
-rm -f "$T/a.gv" "$T/b.gv"
+    check "$what: both stores were written" test -s "$T/a.gv" -a -s "$T/b.gv"
+    rm -f "$T/a.gv" "$T/b.gv"
+}
+
+small_mosaic=$(mosaic 6 12)
+large_mosaic=$(mosaic 12 24)
+peaks "height store" "$bound" 4320x4332 8640x8664 \
+    encode --height --max-error 2 -j 2 --quiet
 
 # Sample stores: three channels.
 oiiotool "$TESTDATA/picos-1100x700.jpg" -d uint16 -o "$T/rgb16.png" || bail "oiiotool"
-bound3=$(( (base + 4 * 115 * 1024) * 115 / 100 ))
-start=$(date +%s)
-# shellcheck disable=SC2046
-small=$(peak_kib encode --bits 16 --max-error 2 -j 2 --quiet $(mosaic 4 7 "$T/rgb16.png") -o "$T/a.gv")
-# shellcheck disable=SC2046
-large=$(peak_kib encode --bits 16 --max-error 2 -j 2 --quiet $(mosaic 8 14 "$T/rgb16.png") -o "$T/b.gv")
-diag "sample stores, peak RSS: 4400x4900x3 $((small / 1024)) MiB, 8800x9800x3 $((large / 1024)) MiB" \
-    "(bound $((bound3 / 1024)) MiB) in $(( $(date +%s) - start )) s"
-for pair in "4400x4900x3 $small" "8800x9800x3 $large"; do
-    set -- $pair
-    if [ "$2" -le "$bound3" ]; then
-        ok "sample store $1: peak $(($2 / 1024)) MiB <= $((bound3 / 1024)) MiB"
-    else
-        not_ok "sample store $1: peak $(($2 / 1024)) MiB exceeds $((bound3 / 1024)) MiB"
-    fi
-done
-if [ "$large" -le $((small * 115 / 100)) ]; then
-    ok "sample store, 4x the area: peak grows by $(( (large - small) / 1024 )) MiB (<= 15%)"
-else
-    not_ok "sample store, 4x the area: peak grows from $((small / 1024)) to $((large / 1024)) MiB"
-fi
-check "both sample stores were written" test -s "$T/a.gv" -a -s "$T/b.gv"
+small_mosaic=$(mosaic 4 7 "$T/rgb16.png")
+large_mosaic=$(mosaic 8 14 "$T/rgb16.png")
+peaks "sample store" "$(( (base + 4 * 115 * 1024) * 115 / 100 ))" 4400x4900x3 8800x9800x3 \
+    encode --bits 16 --max-error 2 -j 2 --quiet
 
 done_testing
