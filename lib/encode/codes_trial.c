@@ -11,6 +11,7 @@
 
 #include "codec/height_tile.h"
 #include "codec/samples_tile.h"
+#include "encode/codes_pass.h"
 #include "encode/codes_trial.h"
 #include "encode/strips.h"
 
@@ -79,15 +80,12 @@ static void code_tile(void *ctx, size_t item, int worker)
     tt->failed = 1;
     if (rows && orig && buf && tt->dec &&
         read_tile(t, tt->level, tt->tx, tt->ty, rows, orig, &err) == 0) {
-        const uint32_t vw = l->width - tt->tx * GV_STEP, vh = l->height - tt->ty * GV_STEP;
-        const int w = vw < GV_TILE ? (int)vw : GV_TILE, h = vh < GV_TILE ? (int)vh : GV_TILE;
+        const int w = (int)gv_tile_span(l->width, tt->tx);
+        const int h = (int)gv_tile_span(l->height, tt->ty);
         const uint16_t *parent = tt->parent < 0 ? t->root_tile : r->tiles[tt->parent].dec;
-        /* the pixels this tile is the source of */
-        const int ow = tt->tx + 1 < l->tiles_x && w > GV_STEP ? GV_STEP : w;
-        const int oh = tt->ty + 1 < l->tiles_y && h > GV_STEP ? GV_STEP : h;
         tt->failed = 0;
         tt->sse = 0;
-        tt->pixels = (uint64_t)ow * oh * c;
+        tt->pixels = 0;
         for (int k = 0; k < c && !tt->failed; k++) {
             const uint16_t *o = orig + (size_t)k * PLANE;
             uint16_t *d = tt->dec + (size_t)k * PLANE;
@@ -95,11 +93,8 @@ static void code_tile(void *ctx, size_t item, int worker)
                                        (int)(tt->tx & 1), (int)(tt->ty & 1),
                                        r->e, w, h, buf, d))
                 tt->failed = 1;
-            for (int y = 0; y < oh && tt->level == 0; y++)
-                for (int x = 0; x < ow; x++) {
-                    double dd = (double)o[y * GV_HT_SIDE + x] - d[y * GV_HT_SIDE + x];
-                    tt->sse += dd * dd;
-                }
+            else if (tt->level == 0)
+                tt->sse += gv_codes_level0_sse(l, tt->tx, tt->ty, o, d, &tt->pixels);
         }
     } else if (err.code != GV_OK) {
         r->err = err;
@@ -130,9 +125,7 @@ static int try_e(struct trial_run *r, int ntiles, const int *level_first,
             sse += r->tiles[i].sse;
             n += r->tiles[i].pixels;
         }
-    *psnr = sse > 0 ? 10.0 * log10(r->t->peak * r->t->peak * (double)n / sse) : 99.0;
-    if (*psnr > 99.0)
-        *psnr = 99.0;
+    *psnr = gv_codes_psnr(sse, (double)n, r->t->peak);
     return 0;
 }
 

@@ -33,6 +33,7 @@
 #include "render/samples_region.h"
 #include "render/window.h"
 #include "store/store_meta.h"
+#include "encode/codes_pass.h"
 #include "encode/codes_trial.h"
 #include "encode/encode_int.h"
 #include "encode/height_encode.h"
@@ -180,6 +181,13 @@ out:
     return rc;
 }
 
+/* The samples' full range, what -q's PSNR is over (docs/FORMAT.md
+ * section 13): every code for float input, 2^bits - 1 for integers. */
+static double full_range(const struct henc *h)
+{
+    return h->m.src_float ? 65535.0 : (double)((1u << h->src_bits) - 1);
+}
+
 /* The half-step e in codes: the largest whose bound fits --max-error.
  * After the mapping is known. */
 static int pick_e(struct henc *h)
@@ -188,8 +196,7 @@ static int pick_e(struct henc *h)
     if (h->o->target_psnr > 0) {
         /* The largest e whose uniform error, e (e + 1) / 3 in mean square,
          * reaches the target over the samples' full range. */
-        const double peak = m->src_float ? 65535.0
-                                         : (double)((1u << h->src_bits) - 1);
+        const double peak = full_range(h);
         const double mse = peak * peak / pow(10.0, h->o->target_psnr / 10.0);
         int e = 0;
         while (e < GV_HT_MAX_E && (e + 1.0) * (e + 2.0) / 3.0 <= mse)
@@ -348,18 +355,6 @@ static void extract(const uint16_t *lv, size_t stride, uint32_t w, uint32_t h,
     }
 }
 
-/* Level 0's squared error over the valid vw x vh of one decoded plane. */
-static double plane_sse(const uint16_t *a, const uint16_t *b, int vw, int vh)
-{
-    double s = 0;
-    for (int y = 0; y < vh; y++)
-        for (int x = 0; x < vw; x++) {
-            double d = (double)a[y * GV_HT_SIDE + x] - b[y * GV_HT_SIDE + x];
-            s += d * d;
-        }
-    return s;
-}
-
 /* Pool job: code slot `item` of the current page; lens[item] stays 0 for
  * a slot outside the level and on allocation failure. */
 static void encode_slot(void *ctx, size_t item, int worker)
@@ -372,8 +367,7 @@ static void encode_slot(void *ctx, size_t item, int worker)
     if (tx >= l->tiles_x || ty >= l->tiles_y)
         return;
     uint16_t *orig = h->orig[worker];
-    const uint32_t vw = l->width - tx * GV_STEP, vh = l->height - ty * GV_STEP;
-    const int w = vw < GV_TILE ? (int)vw : GV_TILE, hh = vh < GV_TILE ? (int)vh : GV_TILE;
+    const int w = (int)gv_tile_span(l->width, tx), hh = (int)gv_tile_span(l->height, ty);
     size_t at = 0;
     h->sse[item] = 0;
     for (int k = 0; k < h->c; k++) {
@@ -400,10 +394,8 @@ static void encode_slot(void *ctx, size_t item, int worker)
             memcpy(h->bufs[item] + at, out, n);
         }
         at += n;
-        if (h->level == 0)   /* the pixels this tile is the source of */
-            h->sse[item] += plane_sse(orig, dec,
-                                      tx + 1 < l->tiles_x && w > GV_STEP ? GV_STEP : w,
-                                      ty + 1 < l->tiles_y && hh > GV_STEP ? GV_STEP : hh);
+        if (h->level == 0)
+            h->sse[item] += gv_codes_level0_sse(l, tx, ty, orig, dec, NULL);
     }
     h->lens[item] = at;
 }
@@ -466,8 +458,7 @@ static int encode_page(struct henc *h)
         tb[s] = h->bufs[s];
         h->tiles++;
         h->sse0 += h->sse[s];
-        const uint32_t vw = l->width - tx * GV_STEP, vh = l->height - ty * GV_STEP;
-        h->work_done += (double)(vw < GV_TILE ? vw : GV_TILE) * (vh < GV_TILE ? vh : GV_TILE);
+        h->work_done += (double)gv_tile_span(l->width, tx) * gv_tile_span(l->height, ty);
         /* Level 0 is nobody's parent. */
         if (h->level > 0 &&
             gv_spill_write(h->spill, h->dec[s], h->tile_bytes,
@@ -566,10 +557,8 @@ static int load_root(struct henc *h)
  * is done, capped at 99 dB (lossless) as an image store's. */
 static double psnr0(const struct henc *h)
 {
-    const double peak = h->m.src_float ? 65535.0 : (double)((1u << h->src_bits) - 1);
-    const double n = (double)h->g.width * h->g.height * h->c;
-    const double p = h->sse0 > 0 ? 10.0 * log10(peak * peak * n / h->sse0) : 99.0;
-    return p > 99.0 ? 99.0 : p;
+    return gv_codes_psnr(h->sse0, (double)h->g.width * h->g.height * h->c,
+                         full_range(h));
 }
 
 /* -q: refine pick_e's uniform rule by coding a sample (codes_trial.h). */
@@ -580,7 +569,7 @@ static int choose_e(struct henc *h)
     struct gv_codes_trial t = {
         .spill = h->spill, .g = &h->g, .orig_base = h->orig_base, .c = h->c,
         .root_tile = h->root_tile, .pool = h->pool,
-        .peak = h->m.src_float ? 65535.0 : (double)((1u << h->src_bits) - 1),
+        .peak = full_range(h),
     };
     int e;
     if (gv_codes_trial(&t, h->o->target_psnr, h->e, &e, &h->m.trial_tries,
