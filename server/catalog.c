@@ -163,6 +163,10 @@ static struct image *open_image(struct catalog *c, const char *id,
                             &img->window, &err) < 0)
         log_msg(LOG_WARN, "catalog", "%s: default window ignored: %s", path,
                 err.text);
+    if (img->info->header.kind == GV_KIND_SAMPLES &&
+        gv_colours_from_meta(gv_store_meta(s), img->info->geometry.channels,
+                             &img->colours, &err) < 0)
+        log_msg(LOG_WARN, "catalog", "%s: colours ignored: %s", path, err.text);
     img->refs = 1;
     img->cat = c;
     return img;

@@ -28,6 +28,7 @@
 
 #include "base/ids.h"
 #include "render/store_decoder.h"
+#include "render/samples_region.h"
 #include "render/window.h"
 #include "store/store_read.h"
 
@@ -43,6 +44,9 @@ struct image {
     struct gv_window window;           /* the store's default display window
                                         * (its metadata's display.window;
                                         * count 0: none) */
+    struct gv_colours colours;         /* a sample store's channel colours
+                                        * (display.colours; count 0: the
+                                        * palette) */
     /* private */
     int refs;
     uint64_t dev, ino, mtime_ns;

@@ -337,34 +337,17 @@ static int parse(struct req *r, const struct image *img, struct iiif_call *c,
     c->q.render.max_decode_pixels = 4 * (r->srv->cfg->max_output_pixels +
                                          2 * r->srv->cfg->max_output_side + 1);
     c->jpeg_quality = (int)r->srv->cfg->jpeg_quality;
-    const char *ws = http_query(r, "window");
-    if (!ws && img->window.count) {   /* the store's default */
-        c->window = img->window;
-        c->q.render.window = &c->window;
-    } else if (ws && strcmp(ws, "none") != 0) {
-        if (gv_window_parse(ws, 65535, &c->window, err) < 0 ||
-            (img->info->header.kind != GV_KIND_SAMPLES &&
-             gv_window_check_max(&c->window, 255, err) < 0))
-            return -1;
-        if (c->window.count > 1 && c->window.count != g->channels)
-            return gv_fail(err, GV_EINVAL, "window: %d windows for an image "
-                           "of %d channels (give one, or one per channel)",
-                           c->window.count, g->channels);
-        c->q.render.window = &c->window;
-    } else if (ws) {   /* none: a sample store's codes' range */
-        c->window.count = 0;
-        c->q.render.window = &c->window;
-    }
-    const char *cs = http_query(r, "colours");
-    if (cs) {
-        if (gv_colours_parse(cs, &c->colours, err) < 0)
-            return -1;
-        if (img->info->header.kind != GV_KIND_SAMPLES)
-            return gv_fail(err, GV_EINVAL, "colours: for sample stores only");
-        if (gv_colours_check(&c->colours, g->channels, err) < 0)
-            return -1;
-        c->q.render.colours = &c->colours;
-    }
+    /* No window: the store's default (count 0: none, or a sample store's
+     * codes' range); "none": none.  No colours: the store's. */
+    const char *ws = http_query(r, "window"), *cs = http_query(r, "colours");
+    c->window = ws ? (struct gv_window){0} : img->window;
+    if ((ws && strcmp(ws, "none") != 0 &&
+         gv_window_parse(ws, 65535, &c->window, err) < 0) ||
+        (cs && gv_colours_parse(cs, &c->colours, err) < 0) ||
+        gv_display_check(&img->info->header, &c->window, &c->colours, err) < 0)
+        return -1;
+    c->q.render.window = &c->window;
+    c->q.render.colours = cs ? &c->colours : &img->colours;
     return 0;
 }
 
@@ -387,19 +370,10 @@ enum MHD_Result route_iiif_image(struct req *r)
         image_put(img);
         return http_send_error(r, &err);
     }
-    char id[600], path[200], canon[900 + GV_WINDOW_MAX_CHANNELS * 32 + GV_COLOURS_MAX_TEXT];
+    char id[600], path[200], canon[900 + GV_DISPLAY_KEY_MAX];
     char key[sizeof canon + 24], etag[OUTPUT_ETAG_SIZE];
-    char win[GV_WINDOW_MAX_CHANNELS * 32 + GV_COLOURS_MAX_TEXT + 8] = "";
-    if (c->window.count) {
-        win[0] = ' ';
-        win[1] = 'w';
-        gv_window_format(&c->window, win + 2, sizeof win - 2);
-    }
-    if (c->colours.count) {
-        size_t at = strlen(win);
-        snprintf(win + at, sizeof win - at, " c");
-        gv_colours_format(&c->colours, win + at + 2, sizeof win - at - 2);
-    }
+    char win[GV_DISPLAY_KEY_MAX];
+    gv_display_key(&c->window, &c->colours, win);
     service_id(r, img, id, sizeof id);
     canonical_path(img, &c->q, path, sizeof path);
     snprintf(c->link, sizeof c->link, "<%s/%s>;rel=\"canonical\", "

@@ -124,18 +124,7 @@ static int place(const struct image *img, const struct region_query *q,
     if (q->height == HEIGHT_PNG16 && g->channels > 4)
         return gv_fail(err, GV_EINVAL, "region: png16 holds up to 4 channels, "
                        "this image has %d (ask for tiff16)", g->channels);
-    if (hd->kind != GV_KIND_SAMPLES &&
-        gv_window_check_max(&q->window, 255, err) < 0)
-        return -1;
-    if (q->colours.count && hd->kind != GV_KIND_SAMPLES)
-        return gv_fail(err, GV_EINVAL, "colours: for sample stores only");
-    if (gv_colours_check(&q->colours, g->channels, err) < 0)
-        return -1;
-    if (q->window.count > 1 && q->window.count != g->channels)
-        return gv_fail(err, GV_EINVAL, "window: %d windows for an image of "
-                       "%d channels (give one, or one per channel)",
-                       q->window.count, g->channels);
-    return 0;
+    return gv_display_check(hd, &q->window, &q->colours, err);
 }
 
 /* Render a format of codes: the codes (png16, tiff16) or the values as
@@ -189,7 +178,7 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
         double t0 = render_stages_now();
         int ok = gv_decode_region_window(d, (int)q->level, q->x, q->y, q->w,
                                          q->h, &q->window,
-                                         q->colours.count ? &q->colours : NULL,
+                                         q->colours.count ? &q->colours : &img->colours,
                                          pix, err) == 0;
         double t1 = render_stages_now();
         render_stages_decoder(d, t1 - t0);
@@ -227,18 +216,9 @@ enum MHD_Result route_region(struct req *r)
     if (!q.window_given && !q.height)
         q.window = img->window;   /* the store's default, if any */
     *arg = q;
-    char canon[400 + GV_WINDOW_MAX_CHANNELS * 32 + GV_COLOURS_MAX_TEXT], key[sizeof canon + 24];
-    char win[GV_WINDOW_MAX_CHANNELS * 32 + GV_COLOURS_MAX_TEXT + 8] = "";
-    if (q.window.count) {
-        win[0] = ' ';
-        win[1] = 'w';
-        gv_window_format(&q.window, win + 2, sizeof win - 2);
-    }
-    if (q.colours.count) {
-        size_t at = strlen(win);
-        snprintf(win + at, sizeof win - at, " c");
-        gv_colours_format(&q.colours, win + at + 2, sizeof win - at - 2);
-    }
+    char canon[400 + GV_DISPLAY_KEY_MAX], key[sizeof canon + 24];
+    char win[GV_DISPLAY_KEY_MAX];
+    gv_display_key(&q.window, &q.colours, win);
     char etag[OUTPUT_ETAG_SIZE];
     snprintf(canon, sizeof canon, "region/%s/%u/%u,%u,%u,%u.%s q%u%s", img->id,
              q.level, q.x, q.y, q.w, q.h,

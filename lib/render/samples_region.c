@@ -90,6 +90,36 @@ int gv_colours_check(const struct gv_colours *c, int channels,
     return 0;
 }
 
+int gv_display_check(const struct gv_header *h, const struct gv_window *w,
+                     const struct gv_colours *c, struct gv_error *err)
+{
+    if (h->kind != GV_KIND_SAMPLES && gv_window_check_max(w, 255, err) < 0)
+        return -1;
+    if (w->count > 1 && w->count != h->channels)
+        return gv_fail(err, GV_EINVAL, "window: %d windows for an image of "
+                       "%d channels (give one, or one per channel)",
+                       w->count, h->channels);
+    if (c->count && h->kind != GV_KIND_SAMPLES)
+        return gv_fail(err, GV_EINVAL, "colours: for sample stores only");
+    return gv_colours_check(c, h->channels, err);
+}
+
+void gv_display_key(const struct gv_window *w, const struct gv_colours *c,
+                    char buf[GV_DISPLAY_KEY_MAX])
+{
+    size_t at = 0;
+    buf[0] = '\0';
+    if (w->count) {
+        memcpy(buf, " w", 3);
+        gv_window_format(w, buf + 2, GV_DISPLAY_KEY_MAX - 2);
+        at = strlen(buf);
+    }
+    if (c->count) {
+        memcpy(buf + at, " c", 3);
+        gv_colours_format(c, buf + at + 2, GV_DISPLAY_KEY_MAX - at - 2);
+    }
+}
+
 int gv_colours_from_meta(const char *json, int channels, struct gv_colours *c,
                          struct gv_error *err)
 {

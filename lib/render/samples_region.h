@@ -70,6 +70,23 @@ int gv_colours_from_meta(const char *json, int channels, struct gv_colours *c,
 char *gv_colours_meta_set(const char *json, const struct gv_colours *c,
                           struct gv_error *err);
 
+/* A request's display window w and colours c (count 0: not given)
+ * against the store of header h: a window's points within 255 unless it
+ * is a sample store, one window or one per channel; colours only for a
+ * sample store, one per channel (gv_colours_check).  0, or -1 with
+ * GV_EINVAL.  What the region and IIIF routes check alike. */
+int gv_display_check(const struct gv_header *h, const struct gv_window *w,
+                     const struct gv_colours *c, struct gv_error *err);
+
+/* Bytes gv_display_key writes at most, its NUL included. */
+#define GV_DISPLAY_KEY_MAX (GV_WINDOW_MAX_CHANNELS * 32 + GV_COLOURS_MAX_TEXT + 8)
+
+/* What a window and colours add to an output's cache key and ETag: ""
+ * when neither is given, else " w" and the window's canonical text
+ * and/or " c" and the colours', into buf (GV_DISPLAY_KEY_MAX bytes). */
+void gv_display_key(const struct gv_window *w, const struct gv_colours *c,
+                    char buf[GV_DISPLAY_KEY_MAX]);
+
 /* The colour of channel k (0..7) under c (NULL or count 0: the default
  * palette): rgb[3], each 0..255. */
 void gv_samples_colour(const struct gv_colours *c, int k, uint8_t rgb[3]);
