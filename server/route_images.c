@@ -168,20 +168,20 @@ static int root_response(const struct image *img, const uint8_t *px,
      * which is little-endian on every supported host): raw gives them,
      * png a 16-bit PNG (a sample store of more than 4 channels has raw
      * only). */
-    int height = gv_header_codes(&img->info->header);
-    if (height && c > 4 && form == ROOT_PNG)
+    int codes = gv_header_codes(&img->info->header);
+    if (codes && c > 4 && form == ROOT_PNG)
         return gv_fail(err, GV_EINVAL, "root: a PNG holds up to 4 channels, "
                        "this image has %d (ask for format=raw)", c);
     int raw = form == ROOT_RAW;
     const struct gv_output_format *f = gv_output_format_find(raw ? "raw" : "png");
-    *len = (size_t)w * h * (size_t)c * (height ? 2 : 1);
+    *len = (size_t)w * h * (size_t)c * (codes ? 2 : 1);
     if (raw) { /* The pixels live as long as the store; copy, since the
                 * store may be closed (rescan) before the response is sent. */
         *resp = http_response_copy(px, *len, f->mime);
         return 0;
     }
     uint8_t *png;
-    if ((height ? gv_image_encode_typed(f->name, w, h, c, GV_SAMPLE_U16, px,
+    if ((codes ? gv_image_encode_typed(f->name, w, h, c, GV_SAMPLE_U16, px,
                                         &png, len, err)
                 : gv_image_encode(f->name, w, h, c, px, 0, &png, len, err)) < 0)
         return -1;

@@ -38,14 +38,14 @@
 struct region_query {
     uint32_t level, x, y, w, h, quality;
     const struct gv_output_format *format;
-    int height;            /* HEIGHT_PNG16, _TIFF16 or _TIFF32, else 0 */
+    int codes;             /* CODES_PNG16, _TIFF16 or _TIFF32, else 0 */
     struct gv_window window;   /* count 0: none */
     int window_given;          /* 1: the query named one (or none) */
     struct gv_colours colours; /* a sample store's; count 0: not given */
 };
 
 /* The formats of the codes of height and sample stores only. */
-enum { HEIGHT_PNG16 = 1, HEIGHT_TIFF32 = 2, HEIGHT_TIFF16 = 3 };
+enum { CODES_PNG16 = 1, CODES_TIFF32 = 2, CODES_TIFF16 = 3 };
 
 /* Parse and check the query against the limits (not yet the image).  0,
  * or -1 with *err. */
@@ -65,11 +65,11 @@ static int parse_query(struct req *r, struct region_query *q,
     if (q->w == 0 || q->h == 0)
         return gv_fail(err, GV_EINVAL, "region: w and h must be at least 1");
     const char *fs = http_query(r, "format");
-    q->height = fs && !strcmp(fs, "png16") ? HEIGHT_PNG16
-              : fs && !strcmp(fs, "tiff16") ? HEIGHT_TIFF16
-              : fs && !strcmp(fs, "tiff32") ? HEIGHT_TIFF32 : 0;
-    q->format = gv_output_format_find(q->height == HEIGHT_PNG16 ? "png"
-                                      : q->height ? "tif" : fs ? fs : "png");
+    q->codes = fs && !strcmp(fs, "png16") ? CODES_PNG16
+              : fs && !strcmp(fs, "tiff16") ? CODES_TIFF16
+              : fs && !strcmp(fs, "tiff32") ? CODES_TIFF32 : 0;
+    q->format = gv_output_format_find(q->codes == CODES_PNG16 ? "png"
+                                      : q->codes ? "tif" : fs ? fs : "png");
     if (!q->format || !q->format->oiio)
         return gv_fail(err, GV_EINVAL, "region: format must be png, jpeg, webp "
                        "or tiff (png16 or tiff32 for a height store, png16, "
@@ -84,14 +84,14 @@ static int parse_query(struct req *r, struct region_query *q,
     if (ws && strcmp(ws, "none") != 0 &&
         gv_window_parse(ws, 65535, &q->window, err) < 0)
         return -1;
-    if (ws && q->height)
+    if (ws && q->codes)
         return gv_fail(err, GV_EINVAL, "window: not with png16, tiff16 or "
                        "tiff32");
     const char *cs = http_query(r, "colours");
     q->colours.count = 0;
     if (cs && (gv_colours_parse(cs, &q->colours, err) < 0))
         return -1;
-    if (cs && q->height)
+    if (cs && q->codes)
         return gv_fail(err, GV_EINVAL, "colours: not with png16, tiff16 or "
                        "tiff32");
     uint64_t pixels = (uint64_t)q->w * q->h;
@@ -115,13 +115,13 @@ static int place(const struct image *img, const struct region_query *q,
         return gv_fail(err, GV_EINVAL, "region: %u,%u,%u,%u outside level %u "
                        "(%ux%u)", q->x, q->y, q->w, q->h, q->level, lw, lh);
     const struct gv_header *hd = &img->info->header;
-    if (q->height && !gv_header_codes(hd))
+    if (q->codes && !gv_header_codes(hd))
         return gv_fail(err, GV_EINVAL, "region: png16, tiff16 and tiff32 are "
                        "for height and sample stores; this image is neither");
-    if (q->height == HEIGHT_TIFF16 && hd->kind != GV_KIND_SAMPLES)
+    if (q->codes == CODES_TIFF16 && hd->kind != GV_KIND_SAMPLES)
         return gv_fail(err, GV_EINVAL, "region: tiff16 is for sample stores "
                        "(png16 gives a height store's codes)");
-    if (q->height == HEIGHT_PNG16 && g->channels > 4)
+    if (q->codes == CODES_PNG16 && g->channels > 4)
         return gv_fail(err, GV_EINVAL, "region: png16 holds up to 4 channels, "
                        "this image has %d (ask for tiff16)", g->channels);
     return gv_display_check(hd, &q->window, &q->colours, err);
@@ -129,16 +129,16 @@ static int place(const struct image *img, const struct region_query *q,
 
 /* Render a format of codes: the codes (png16, tiff16) or the values as
  * floats (tiff32), every channel.  0, or -1 with *err. */
-static int render_height(const struct region_query *q, struct gv_decoder *d,
+static int render_codes(const struct region_query *q, struct gv_decoder *d,
                          uint8_t **out, size_t *len, struct gv_error *err)
 {
     const struct gv_header *hd = &gv_store_info(gv_decoder_store(d))->header;
     const int c = hd->channels;
     const size_t n = (size_t)q->w * q->h * (size_t)c;
     uint16_t *codes = malloc(sizeof *codes * n);
-    float *values = q->height == HEIGHT_TIFF32 ? malloc(sizeof *values * n) : NULL;
+    float *values = q->codes == CODES_TIFF32 ? malloc(sizeof *values * n) : NULL;
     int rc = -1;
-    if (!codes || (q->height == HEIGHT_TIFF32 && !values))
+    if (!codes || (q->codes == CODES_TIFF32 && !values))
         gv_fail(err, GV_ENOMEM, "region: out of memory");
     else if (gv_decoder_copy_region(d, "region", (int)q->level, q->x, q->y,
                                     q->w, q->h, codes, err) == 0) {
@@ -147,7 +147,7 @@ static int render_height(const struct region_query *q, struct gv_decoder *d,
                 values[i] = (float)(codes[i] * hd->height_scale + hd->height_offset);
         rc = values ? gv_image_encode_typed("tif", q->w, q->h, c, GV_SAMPLE_F32,
                                             values, out, len, err)
-                    : gv_image_encode_typed(q->height == HEIGHT_TIFF16 ? "tif" : "png",
+                    : gv_image_encode_typed(q->codes == CODES_TIFF16 ? "tif" : "png",
                                             q->w, q->h, c, GV_SAMPLE_U16,
                                             codes, out, len, err);
     }
@@ -163,8 +163,8 @@ static int render(void *arg, struct image *img, uint8_t **out, size_t *len,
 {
     const struct region_query *q = arg;
     struct gv_decoder *d = image_decoder_get(img);
-    if (q->height && d) {
-        int hrc = render_height(q, d, out, len, err);
+    if (q->codes && d) {
+        int hrc = render_codes(q, d, out, len, err);
         image_decoder_put(img, d);
         return hrc;
     }
@@ -213,7 +213,7 @@ enum MHD_Result route_region(struct req *r)
             return http_send_errorf(r, GV_ENOMEM, "region: out of memory");
         return http_send_error(r, &err);
     }
-    if (!q.window_given && !q.height)
+    if (!q.window_given && !q.codes)
         q.window = img->window;   /* the store's default, if any */
     *arg = q;
     char canon[400 + GV_DISPLAY_KEY_MAX], key[sizeof canon + 24];
@@ -222,9 +222,9 @@ enum MHD_Result route_region(struct req *r)
     char etag[OUTPUT_ETAG_SIZE];
     snprintf(canon, sizeof canon, "region/%s/%u/%u,%u,%u,%u.%s q%u%s", img->id,
              q.level, q.x, q.y, q.w, q.h,
-             q.height == HEIGHT_PNG16 ? "png16"
-             : q.height == HEIGHT_TIFF16 ? "tiff16"
-             : q.height == HEIGHT_TIFF32 ? "tiff32" : q.format->name, q.quality,
+             q.codes == CODES_PNG16 ? "png16"
+             : q.codes == CODES_TIFF16 ? "tiff16"
+             : q.codes == CODES_TIFF32 ? "tiff32" : q.format->name, q.quality,
              win);
     snprintf(key, sizeof key, "%llu %s", (unsigned long long)img->serial, canon);
     output_cache_etag(img->identity, canon, etag, sizeof etag);
