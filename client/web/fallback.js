@@ -6,9 +6,9 @@
 // for once the view has rested for a moment; it covers the view's
 // bounding box at level floor(Z), or coarser while that would exceed
 // MAX_PIXELS.  PNG up to a megapixel (exact), JPEG above.  A display
-// window (setWindow) goes with each request, the root's included: the
-// server applies it (a sample store's to its 16-bit codes), so a window
-// change fetches the view again.
+// window and a sample store's colours (setDisplay) go with each request,
+// the root's included: the server applies them (a sample store's window
+// to its 16-bit codes), so a change fetches the view again.
 
 import { screenToImage } from './view.js';
 import { displayChannels, viewCorners } from './pyramid.js';
@@ -31,8 +31,6 @@ export class RegionBackend {
         this.ctl = null;
         this.stats = { regions: 0, bytes: 0, errors: 0, lastError: '' };
         this.winq = '';           // '&window=...&colours=...' of every request
-        this.winText = null;      // the window of winq
-        this.colours = null;      // the colours of winq
         const { px, w, h } = image.root, c = displayChannels(image.info);
         const rgba = new Uint8ClampedArray(w * h * 4);
         for (let i = 0; i < w * h; i++) {
@@ -79,7 +77,7 @@ export class RegionBackend {
             const bitmap = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
             if (this.shown && this.shown.bitmap)
                 this.shown.bitmap.close();
-            this.shown = { bitmap, level: r.level, x: r.x, y: r.y, key: `${r.level}/${r.x}/${r.y}/${r.w}/${r.h}${this.winq}` };
+            this.shown = { bitmap, level: r.level, x: r.x, y: r.y, key: this.keyOf(r) };
             this.stats.regions++;
         } catch (e) {
             if (e.name !== 'AbortError') {
@@ -94,17 +92,20 @@ export class RegionBackend {
         }
     }
 
+    // What region r shows: its rectangle and the display parameters.
+    keyOf(r) {
+        return `${r.level}/${r.x}/${r.y}/${r.w}/${r.h}${this.winq}`;
+    }
+
     /** Window text (window.js formatWindow), 'none', or null for the
      * store's default, and a sample store's colours ("RRGGBB;...", or null
      * for its own): the view and the root are fetched again with them. */
-    setWindow(text, colours = this.colours) {
-        this.colours = colours || null;
+    setDisplay(text, colours) {
         const q = (text ? `&window=${encodeURIComponent(text)}` : '') +
-            (this.colours ? `&colours=${encodeURIComponent(this.colours)}` : '');
+            (colours ? `&colours=${encodeURIComponent(colours)}` : '');
         if (q === this.winq)
             return;
         this.winq = q;
-        this.winText = text;
         this.want = '';
         const info = this.image.info, root = this.root;
         const w = info.root.width, h = info.root.height;
@@ -123,11 +124,6 @@ export class RegionBackend {
             })
             .catch((e) => { this.stats.errors++; this.stats.lastError = e.message; });
         this.onChange();
-    }
-
-    /** A sample store's colours (or null): as setWindow, with its window. */
-    setColours(colours) {
-        this.setWindow(this.winText, colours);
     }
 
     // Draw an image of level `k` pixels placed at (x, y) of that level.
@@ -153,7 +149,7 @@ export class RegionBackend {
 
     frame(v, w, h, redraw, roi) {
         const r = this.region(v, w, h);
-        const want = r ? `${r.level}/${r.x}/${r.y}/${r.w}/${r.h}${this.winq}` : '';
+        const want = r ? this.keyOf(r) : '';
         if (want !== this.want) {
             this.want = want;
             clearTimeout(this.timer);

@@ -230,8 +230,7 @@ export class Viewer {
         const ok = typeof text === 'string' && /^[0-9a-fA-F]{6}(;[0-9a-fA-F]{6}){0,7}$/.test(text);
         this.colours = ok ? text.toLowerCase() : null;
         this.extra = { ...this.extra, colours: this.colours };
-        if (this.backend && this.backend.setColours)
-            this.backend.setColours(this.colours);
+        this.applyWindow();
         this.invalidate();
         this.viewChanged();
     }
@@ -241,8 +240,8 @@ export class Viewer {
         if (this.backend && this.backend.setLut)
             this.backend.setLut(this.window ? lutBytes(this.window, this.image.info.channels) : null);
         // The server's regions: the window and colours go with each request.
-        if (this.backend && this.backend.setWindow)
-            this.backend.setWindow(this.extra.window, this.colours);
+        if (this.backend && this.backend.setDisplay)
+            this.backend.setDisplay(this.extra.window, this.colours);
     }
 
     close() {
