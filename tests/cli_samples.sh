@@ -130,17 +130,24 @@ run export --bits 16 "$S/c8.gv" -o c8.png
 expect_rc "export --bits 16 of 8 channels to PNG is refused" 1
 expect_err "... naming the channels" "channels"
 
+# four_channels WHAT INPUT NAME: INPUT (c4.raw's four channels in another
+# file) encodes losslessly to $S/NAME.gv with all four, level 0 equal to
+# c4.raw; then `info --json` of it is in $T/out.
+four_channels() {
+    run encode --bits 16 "$2" -o "$S/$3.gv"
+    expect_rc "encode --bits 16 of $1" 0
+    check "... every channel is kept" grep -q '^samples    1100 x 700 x 4 channels' "$T/out"
+    run export --bits 16 "$S/$3.gv" -o "$3-0.tif"
+    toraw "$3-0.tif" "$3-0.raw"
+    check "... lossless: level 0 equals the input" cmp -s c4.raw "$3-0.raw"
+    run info --json "$S/$3.gv"
+}
+
 # A 4-band GeoTIFF through GDAL: every band, and the georeference.
 if grep -q "^#define GV_HAVE_GDAL 1" "$builddir/config.h"; then
     gdal_translate -q -a_srs EPSG:4326 -a_ullr -10 50 10 40 -co INTERLEAVE=PIXEL \
         c4.raw geo4.tif || bail "gdal_translate geo4"
-    run encode --bits 16 geo4.tif -o "$S/geo4.gv"
-    expect_rc "encode --bits 16 of a 4-band GeoTIFF (GDAL)" 0
-    check "... every band is a channel" grep -q '^samples    1100 x 700 x 4 channels' "$T/out"
-    run export --bits 16 "$S/geo4.gv" -o geo4-0.tif
-    toraw geo4-0.tif geo4-0.raw
-    check "... lossless: level 0 equals the input" cmp -s c4.raw geo4-0.raw
-    run info --json "$S/geo4.gv"
+    four_channels "a 4-band GeoTIFF (GDAL)" geo4.tif geo4
     check "... the georeference is kept" python3 -c "
 import json,sys; m=json.load(open(sys.argv[1]))['metadata']
 assert m['geo.epsg']==4326 and m['geo.bands']==4 and m['geo.transform'][0]==-10, m" "$T/out"
@@ -157,13 +164,7 @@ done
 tiffcp band1.tif band2.tif band3.tif band4.tif ome.tif || bail "tiffcp"
 OMEXML='<?xml version="1.0" encoding="UTF-8"?><OME xmlns="http://www.openmicroscopy.org/Schemas/OME/2016-06"><Image ID="Image:0"><Pixels ID="Pixels:0" DimensionOrder="XYCZT" Type="uint16" SizeX="1100" SizeY="700" SizeC="4" SizeZ="1" SizeT="1"><Channel ID="Channel:0:0" Name="DAPI" Color="65535" SamplesPerPixel="1"/><Channel ID="Channel:0:1" Name="GFP" Color="16711935" SamplesPerPixel="1"/><Channel ID="Channel:0:2" Name="Cy3" Color="-16776961" SamplesPerPixel="1"/><Channel ID="Channel:0:3" Name="Cy5;far red" Color="-16711681" SamplesPerPixel="1"/><TiffData/></Pixels></Image></OME>'
 tiffset -s 270 "$OMEXML" ome.tif || bail "tiffset"
-run encode --bits 16 ome.tif -o "$S/ome.gv"
-expect_rc "encode --bits 16 of a 4-page OME-TIFF" 0
-check "... every page is a channel" grep -q '^samples    1100 x 700 x 4 channels' "$T/out"
-run export --bits 16 "$S/ome.gv" -o ome-0.tif
-toraw ome-0.tif ome-0.raw
-check "... lossless: level 0 equals the four bands" cmp -s c4.raw ome-0.raw
-run info --json "$S/ome.gv"
+four_channels "a 4-page OME-TIFF" ome.tif ome
 check "... the channels' names and colours are kept" python3 -c "
 import json,sys; m=json.load(open(sys.argv[1]))['metadata']
 assert m['ome.channels']=='DAPI;GFP;Cy3;Cy5,far red', m
