@@ -8,13 +8,26 @@
 // (GLSL ES 3.10, GLSL 4.30) q comes from the storage buffer that
 // height_rans.comp.glsl filled; without (WebGL2, GLSL ES 3.00) from an
 // R32I texture the CPU decoded (client/web/heighttile.js in the browser).
+//
+// With GV_LAYERED (the browser's sample stores, client/web/codes_decode.js)
+// the parent is one layer, u_layer, of a 513x513xC R16UI array texture that
+// holds a tile's C channels, and the target a layer of the child's: one
+// texture a tile whatever its channels, the arithmetic unchanged.
 
 precision highp float;
 precision highp int;
 precision highp usampler2D;
 precision highp isampler2D;
 
+#ifdef GV_LAYERED
+precision highp usampler2DArray;
+uniform usampler2DArray u_parent;   // decoded parent tile, 513x513xC, R16UI
+uniform int u_layer;                // the channel decoded
+int parent_at(ivec2 p) { return int(texelFetch(u_parent, ivec3(p, u_layer), 0).r); }
+#else
 uniform usampler2D u_parent;   // decoded parent tile, 513x513, R16UI
+int parent_at(ivec2 p) { return int(texelFetch(u_parent, p, 0).r); }
+#endif
 uniform ivec2 u_quadrant;      // (tx & 1, ty & 1)
 uniform int u_e;               // the half-step e of the buffer
 uniform int u_coded;           // 0: prediction only (q = 0)
@@ -49,8 +62,7 @@ void main()
         int row = clamp(py + j, 0, 512);
         int h = 0;
         for (int i = 0; i < 4; i++)
-            h += weight(p.x & 1, i) *
-                 int(texelFetch(u_parent, ivec2(clamp(px + i, 0, 512), row), 0).r);
+            h += weight(p.x & 1, i) * parent_at(ivec2(clamp(px + i, 0, 512), row));
         s += weight(p.y & 1, j) * h;
     }
     int pred = clamp(s + 8192, 0, 65535 * 16384 + 16383) >> 14;

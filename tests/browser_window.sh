@@ -8,8 +8,10 @@
 # fails the match (negative control); a store encoded with --window opens
 # with that default (the first frame equal to the server's region) when
 # the link names no window, and with none when it says window=none; a
-# 16-bit sample store takes windows on its codes through the server's
-# regions, equal to them bit for bit.
+# 16-bit sample store is drawn from its codes in WebGL2: windows and
+# colours on the codes (the link's, the panel's, the store's own) without
+# a request, equal to the server's regions bit for bit, and through the
+# server's regions without WebGL2.
 #
 # Skipped when /usr/bin/chromium, node or tests/browser/node_modules is
 # missing, and under valgrind.  Needs curl and python3 (http_util.sh).
@@ -29,6 +31,14 @@ run encode synth:1100x700:gray -o "$S/gray.gv"
 oiiotool "$TESTDATA/picos-1100x700.jpg" -d uint16 -o "$T/p16.png" || bail "oiiotool p16"
 run encode --bits 16 "$T/p16.png" -o "$S/s16.gv"
 [ "$rc" -eq 0 ] || bail "encode s16: $(cat "$T/err")"
+# Five channels (two groups of three in the display shader), near-lossless.
+oiiotool --pattern "noise:type=uniform:min=0.1:max=0.9" 1100x700 5 \
+    --pattern "checker:width=64:height=64:color1=0.2,0.4,0.6,0.8,1:color2=0,0.1,0.2,0.3,0.4" 1100x700 5 \
+    --add -d uint16 -o "$T/c5.tif" || bail "oiiotool c5"
+run encode --bits 16 --max-error 40 "$T/c5.tif" -o "$S/c5.gv"
+[ "$rc" -eq 0 ] || bail "encode c5: $(cat "$T/err")"
+run encode --bits 16 "$T/p16.png" --window 2000,50000,1.5 --colours '00ffff;ff00ff;ffff00' -o "$S/s16d.gv"
+[ "$rc" -eq 0 ] || bail "encode s16d: $(cat "$T/err")"
 cat >"$T/w.conf" <<EOF2
 listen = 127.0.0.1
 port = 0

@@ -112,6 +112,15 @@ if command -v node >/dev/null 2>&1; then
     else
         not_ok "window.js: the reference's tables" "$(cat js.err; cmp ref.tables js.tables)"
     fi
+    # A sample store's tables on 16-bit codes (the WebGL2 viewer's).
+    python3 "$srcdir/tests/window_cases.py" 200 11 65535 >cases16
+    python3 "$srcdir/tests/window_ref.py" tables cases16 65535 >ref16.tables
+    if node "$srcdir/tests/browser/window_tables.mjs" cases16 65535 >js16.tables 2>js16.err &&
+        cmp -s ref16.tables js16.tables; then
+        ok "window.js: the reference's 16-bit tables for $(wc -l <cases16) windows ($(grep -c '^error$' ref16.tables) refused by both)"
+    else
+        not_ok "window.js: the reference's 16-bit tables" "$(cat js16.err; cmp ref16.tables js16.tables)"
+    fi
 else
     skip "window.js against the reference" "no node"
 fi

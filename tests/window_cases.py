@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
-"""window_cases.py N SEED - N window texts, one a line: the edge cases, then
-random windows of 1 or 3 channels (every black/white pair is reachable,
-gammas 0.1 .. 10 with 0 to 3 decimals), then malformed texts."""
+"""window_cases.py N SEED [MAX] - N window texts, one a line: the edge cases,
+then random windows of 1 or 3 channels (every black/white pair up to MAX,
+default 255, is reachable, gammas 0.1 .. 10 with 0 to 3 decimals), then
+malformed texts."""
 import random
 import sys
 
 n, seed = int(sys.argv[1]), int(sys.argv[2])
+vmax = int(sys.argv[3]) if len(sys.argv) > 3 else 255
 rnd = random.Random(seed)
 fixed = ['0,255', '0,255,1', '0,2,1', '0,1,0.1', '254,255,10', '0,255,0.5',
          '0,255,2', '1,3,1', '10,200,2.2', '0,254,1.999', '0,3,0.333',
@@ -24,12 +26,14 @@ def gamma():
 
 
 def one():
-    b = rnd.randint(0, 254)
-    w = rnd.randint(b + 1, 255)
+    b = rnd.randint(0, vmax - 1)
+    w = rnd.randint(b + 1, vmax)
     return f'{b},{w},{gamma()}'
 
 
 out = list(fixed)
+if vmax > 255:
+    out += [f'0,{vmax},1', f'{vmax - 1},{vmax},1', f'1000,{vmax},0.45', '0,1,1', f'0,{vmax},0.1']
 while len(out) < n:
     out.append(one() if rnd.random() < 0.7 else ';'.join(one() for _ in range(3)))
 out += bad

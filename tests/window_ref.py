@@ -6,13 +6,17 @@
                                         bytes per channel window
   window_ref.py apply WINDOW RAW OUT    check that PNM OUT is PNM RAW
                                         through WINDOW's tables; exit 1 if not
-  window_ref.py tables FILE             one line per window text of FILE:
-                                        its tables joined by ';', or "error"
+  window_ref.py tables FILE [MAX]       one line per window text of FILE
+                                        (points up to MAX, default 255):
+                                        its tables joined by ';', or "error";
+                                        past 255 each table as the SHA-256
+                                        of its MAX + 1 bytes
 
 The window text is parsed here with a regular expression, the table built
 from its definition: 0 up to black, 255 from white, else
 floor(255 * t ** (1 / gamma) + 0.500000001), t = (v - black) / (white - black).
 """
+import hashlib
 import re
 import sys
 
@@ -42,9 +46,9 @@ def parse(text, vmax=255):
     return out
 
 
-def table(b, w, g):
+def table(b, w, g, vmax=255):
     t = []
-    for v in range(256):
+    for v in range(vmax + 1):
         if v <= b:
             t.append(0)
         elif v >= w:
@@ -83,10 +87,16 @@ def main():
         for c in parse(sys.argv[2]):
             print(' '.join(map(str, table(*c))))
     elif cmd == 'tables':
+        vmax = int(sys.argv[3]) if len(sys.argv) > 3 else 255
+
+        def text(t):
+            if vmax > 255:
+                return hashlib.sha256(bytes(t)).hexdigest()
+            return ' '.join(map(str, t))
         for line in open(sys.argv[2]):
-            win = parse(line.rstrip('\n'))
+            win = parse(line.rstrip('\n'), vmax)
             print('error' if win is None else
-                  ';'.join(' '.join(map(str, table(*c))) for c in win))
+                  ';'.join(text(table(*c, vmax)) for c in win))
     elif cmd == 'apply':
         win = parse(sys.argv[2])
         w, h, ch, raw = read_pnm(sys.argv[3])

@@ -4,9 +4,11 @@
 // proxies keep whole batches (a batch of 200s is immutable).
 //
 // fetchPrepared() also checks every tile and decodes entropy-coded
-// indices (tilebuf.js): it is what tile_worker.js runs off the main
-// thread, and what the viewer runs itself where workers are unavailable.
+// indices (tilebuf.js), or a sample store's residuals (heighttile.js): it
+// is what tile_worker.js runs off the main thread, and what the viewer
+// runs itself where workers are unavailable.
 
+import { prepareSampleTile } from './heighttile.js';
 import { prepareTile } from './tilebuf.js';
 
 /** The batch URL for tiles [[level, tx, ty], ...] of image base `imageUrl`. */
@@ -45,14 +47,22 @@ export function parseBatch(buf) {
     return out;
 }
 
+/** The typed arrays a prepared tile holds (what a worker transfers and
+ * the tile cache counts). */
+export function prepArrays(prep) {
+    return [prep.words, prep.indices, prep.coefs, prep.q, prep.e, prep.coded].filter((a) => a);
+}
+
 /**
  * Fetch tiles [[level, tx, ty], ...] and prepare each for the GPU.
- * Resolves to {bytes, ms, tiles: [{level, tx, ty, status, error?,
- * prep?}]}: prep from prepareTile for a well-formed 200 tile, error
+ * form: {channels, samples}: the image's channels, and whether it is a
+ * sample store (docs/FORMAT.md section 13).  Resolves to {bytes, ms,
+ * tiles: [{level, tx, ty, status, error?, prep?}]}: prep from prepareTile
+ * (prepareSampleTile for a sample store) for a well-formed 200 tile, error
  * (a message) for a damaged or missing one.  Rejects on a network error,
  * an HTTP error status or an abort (signal).
  */
-export async function fetchPrepared(imageUrl, tiles, channels, signal) {
+export async function fetchPrepared(imageUrl, tiles, form, signal) {
     const t0 = performance.now();
     const resp = await fetch(batchUrl(imageUrl, tiles), { signal });
     if (!resp.ok)
@@ -65,7 +75,8 @@ export async function fetchPrepared(imageUrl, tiles, channels, signal) {
         const r = { level: f.level, tx: f.tx, ty: f.ty, status: f.status };
         if (f.status === 200) {
             try {
-                r.prep = prepareTile(f.tile, channels);
+                r.prep = form.samples ? prepareSampleTile(f.tile, form.channels)
+                    : prepareTile(f.tile, form.channels);
             } catch (e) {
                 r.status = 500;
                 r.error = e.message;

@@ -41,7 +41,7 @@ export class Fetcher {
         for (const [id, j] of this.jobs)
             if (j.worker) {
                 this.jobs.delete(id);
-                this.fetch(j.args.imageUrl, j.args.tiles, j.args.channels).then(j.resolve, j.reject);
+                this.fetch(j.args.imageUrl, j.args.tiles, j.args.form).then(j.resolve, j.reject);
             }
     }
 
@@ -61,11 +61,12 @@ export class Fetcher {
     }
 
     /** Fetch and prepare tiles [[level, tx, ty], ...]: a promise of
-     * fetchPrepared's result, with an id for abort(). */
-    fetch(imageUrl, tiles, channels) {
+     * fetchPrepared's result, with an id for abort().  form: as
+     * fetchPrepared's, {channels, samples}. */
+    fetch(imageUrl, tiles, form) {
         const id = this.next++;
         const p = new Promise((resolve, reject) => {
-            const args = { imageUrl, tiles, channels };
+            const args = { imageUrl, tiles, form };
             if (this.workers.length) {
                 const w = this.workers[this.rr++ % this.workers.length];
                 this.jobs.set(id, { resolve, reject, worker: w, args });
@@ -73,7 +74,7 @@ export class Fetcher {
             } else {
                 const ctl = new AbortController();
                 this.jobs.set(id, { resolve, reject, ctl, args });
-                fetchPrepared(imageUrl, tiles, channels, ctl.signal).then(
+                fetchPrepared(imageUrl, tiles, form, ctl.signal).then(
                     (r) => { this.jobs.delete(id); resolve(r); },
                     (e) => { this.jobs.delete(id); reject(e); });
             }

@@ -1,13 +1,17 @@
 // gl_backend.js - the WebGL2 picture of a view: tiles fetched in batches
-// (fetcher.js), decoded on the GPU by the shared decode shader
-// (gpu_decode.js), cached (tile_cache.js) and drawn as textured quads
-// (renderer.js).  The viewer (viewer.js) owns the view and calls
+// (fetcher.js), decoded on the GPU by the shared decode shaders
+// (gpu_decode.js for image stores, codes_decode.js for a sample store's
+// 16-bit codes), cached (tile_cache.js) and drawn as textured quads
+// (renderer.js) through the store's look (looks.js): a window or a sample
+// store's colours change the look, never a tile.  The viewer (viewer.js) owns the view and calls
 // frame() once per animation frame; the backend says whether the picture
 // is complete and whether it has more work.
 
+import { CodesDecoder } from './codes_decode.js';
 import { Fetcher } from './fetcher.js';
 import { fetchText } from './gl_util.js';
 import { GpuDecoder } from './gpu_decode.js';
+import { CodesLook, ImageLook } from './looks.js';
 import { tilesInCircle } from './pyramid.js';
 import { Renderer } from './renderer.js';
 import { RoiLayer } from './roi_layer.js';
@@ -37,18 +41,23 @@ export function rendererString(gl) {
 export class GlBackend {
     /**
      * gl: the context; image: {id, info (metadata), url (absolute),
-     * levels, root: {px, w, h}}; opts: {cacheMiB, workers, budgetMs,
-     * onChange}.
+     * levels, root: {px, w, h}} (a sample store's root px: its codes, a
+     * Uint16Array); opts: {cacheMiB, workers, budgetMs, onChange}.
      */
     static async create(gl, image, opts) {
         if (!sources) {
-            const [vert, decode, dvert, dfrag, rfrag] = await Promise.all([
-                fetchText('fullscreen.vert.glsl'), fetchText('tile_decode.frag.glsl'),
-                fetchText('display.vert.glsl'), fetchText('display.frag.glsl'),
-                fetchText('roi.frag.glsl')]);
-            sources = { vert, decode, dvert, dfrag, rfrag };
+            const names = ['fullscreen.vert.glsl', 'tile_decode.frag.glsl', 'display.vert.glsl',
+                'display.frag.glsl', 'roi.frag.glsl', 'height_decode.frag.glsl', 'display_codes.frag.glsl'];
+            const [vert, decode, dvert, dfrag, rfrag, hdecode, cfrag] = await Promise.all(names.map(fetchText));
+            sources = { vert, decode, dvert, dfrag, rfrag, hdecode, cfrag };
         }
         return new GlBackend(gl, image, opts);
+    }
+
+    /** Whether this backend draws the store of image document info: image
+     * stores and sample stores (a height store's picture is the server's). */
+    static draws(info) {
+        return !info.elevation;
     }
 
     constructor(gl, image, opts) {
@@ -59,8 +68,15 @@ export class GlBackend {
         gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
         gl.pixelStorei(gl.PACK_ALIGNMENT, 1);
         const info = image.info;
-        this.decoder = new GpuDecoder(gl, info.channels, sources.vert, sources.decode);
-        this.draw = new Renderer(gl, sources.dvert, sources.dfrag, image.levels, info.width, info.height);
+        if (info.samples) {
+            this.decoder = new CodesDecoder(gl, info.channels, sources.vert, sources.hdecode);
+            this.look = new CodesLook(gl, info);
+        } else {
+            this.decoder = new GpuDecoder(gl, info.channels, sources.vert, sources.decode);
+            this.look = new ImageLook(gl);
+        }
+        this.draw = new Renderer(gl, sources.dvert, info.samples ? sources.cfrag : sources.dfrag,
+            image.levels, info.width, info.height, this.look);
         this.roiLayer = new RoiLayer(gl, sources.dvert, sources.rfrag);
         this.fetcher = new Fetcher(opts.workers);
         this.cache = new TileCache({
@@ -73,11 +89,23 @@ export class GlBackend {
         this.last = null;
     }
 
-    /** The display window's tables (window.js lutBytes) or null: the
-     * next frame redraws from the tiles already decoded. */
+    /** An image store's display window: its tables (window.js lutBytes)
+     * or null.  The next frame redraws from the tiles already decoded. */
     setLut(bytes) {
-        this.draw.setLut(bytes);
-        this.last = null;
+        if (this.look.setLut) {
+            this.look.setLut(bytes);
+            this.last = null;
+        }
+    }
+
+    /** A sample store's window and colours, as texts (looks.js CodesLook
+     * set: null for the store's own, window 'none' for the codes' range).
+     * The next frame redraws from the tiles already decoded. */
+    setDisplay(win, colours) {
+        if (this.look.set) {
+            this.look.set(win, colours);
+            this.last = null;
+        }
     }
 
     /** The filter result to draw in the ROI ({bitmap, level, x, y, w, h})
@@ -133,7 +161,8 @@ export class GlBackend {
         return out;
     }
 
-    /** A decoded tile's pixels (channels bytes each, 513 x 513), or null. */
+    /** A decoded tile's pixels (channels bytes each, or a sample store's
+     * codes, 513 x 513), or null. */
     readTile(k, tx, ty) {
         const tex = this.cache.get(k, tx, ty);
         return tex ? this.decoder.read(tex, 513, 513) : null;
@@ -161,6 +190,7 @@ export class GlBackend {
         this.cache.dispose();
         this.fetcher.dispose();
         this.draw.dispose();
+        this.look.dispose();
         this.decoder.dispose();
     }
 }

@@ -37,6 +37,7 @@ export class GpuDecoder {
     constructor(gl, channels, vertSrc, decodeSrc) {
         this.gl = gl;
         this.channels = channels;
+        this.tileBytes = TILE_BYTES;
         this.prog = program(gl, vertSrc, decodeSrc, 'tile_decode.frag.glsl');
         this.words = intTexture(gl, gl.R32UI, WORDS_WIDTH, WORDS_ROWS_MAX);
         this.indices = intTexture(gl, gl.R16UI, BLOCKS, BLOCKS);

@@ -161,3 +161,22 @@ export function heightResiduals(buf) {
     }
     return { e, coded: 1, q };
 }
+
+/**
+ * A sample store's tile made ready for the GPU (client/web/codes_decode.js):
+ * every channel's buffer split off, checked and its residuals decoded.
+ * Returns {q, e, coded}: q an Int32Array(c * 513 * 513), channel k's
+ * residuals at k * 513 * 513; e and coded c entries each, as
+ * heightResiduals gives them.  Throws on a malformed tile.
+ */
+export function prepareSampleTile(buf, c) {
+    const q = new Int32Array(c * SAMPLES), e = new Int32Array(c), coded = new Uint8Array(c);
+    splitSampleTile(buf, c).forEach((part, k) => {
+        const r = heightResiduals(part);
+        e[k] = r.e;
+        coded[k] = r.coded;
+        if (r.coded)
+            q.set(r.q, k * SAMPLES);
+    });
+    return { q, e, coded };
+}

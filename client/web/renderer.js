@@ -14,6 +14,11 @@
 // inside the tile thanks to the one-pixel overlap; taps on the overlap
 // come from the neighbour that owns those pixels when it is resident
 // (display.frag.glsl), so the picture has no seams.
+//
+// What a tile's texels become on the screen is the look's (looks.js): an
+// image store's pixels, optionally windowed, or a sample store's codes
+// through the window and the channels' colours, each with its own
+// fragment shader and the same sampling.
 
 import { program, quadArrays } from './gl_util.js';
 import { imageToScreen } from './view.js';
@@ -24,7 +29,8 @@ import { STEP } from './tilebuf.js';
 const FLOATS_PER_QUAD = 6 * 4;
 
 export class Renderer {
-    constructor(gl, vertSrc, fragSrc, levels, W, H) {
+    /** look: a looks.js look, fragSrc its shader. */
+    constructor(gl, vertSrc, fragSrc, levels, W, H, look) {
         this.gl = gl;
         this.levels = levels;
         this.W = W;            // level-0 size of the image
@@ -33,30 +39,7 @@ export class Renderer {
         ({ vao: this.vao, vbo: this.vbo } = quadArrays(gl, this.prog));
         this.data = new Float32Array(FLOATS_PER_QUAD * 256);
         this.top = levels.length - 1;
-        this.lut = null;       // the display window's tables (setLut)
-        this.windowOn = false;
-    }
-
-    /**
-     * The display window's tables: bytes, 256 RGBA texels (window.js
-     * lutBytes), or null for none.  An upload of 1 KiB: no tile is
-     * fetched or decoded again.
-     */
-    setLut(bytes) {
-        const gl = this.gl;
-        this.windowOn = !!bytes;
-        if (!bytes)
-            return;
-        if (!this.lut) {
-            this.lut = gl.createTexture();
-            gl.bindTexture(gl.TEXTURE_2D, this.lut);
-            gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA8UI, 256, 1);
-            for (const [k, v] of [[gl.TEXTURE_MIN_FILTER, gl.NEAREST], [gl.TEXTURE_MAG_FILTER, gl.NEAREST]])
-                gl.texParameteri(gl.TEXTURE_2D, k, v);
-        }
-        gl.bindTexture(gl.TEXTURE_2D, this.lut);
-        gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, 256, 1, gl.RGBA_INTEGER, gl.UNSIGNED_BYTE, bytes);
-        gl.bindTexture(gl.TEXTURE_2D, null);
+        this.look = look;
     }
 
     /**
@@ -164,12 +147,7 @@ export class Renderer {
         gl.uniform1i(P.loc('u_right'), 1);
         gl.uniform1i(P.loc('u_below'), 2);
         gl.uniform1i(P.loc('u_diag'), 3);
-        gl.uniform1i(P.loc('u_lut'), 4);
-        gl.uniform1i(P.loc('u_window'), this.windowOn ? 1 : 0);
-        if (this.windowOn) {
-            gl.activeTexture(gl.TEXTURE4);
-            gl.bindTexture(gl.TEXTURE_2D, this.lut);
-        }
+        this.look.bind(gl, P);
         gl.blendColor(0, 0, 0, 1 - p.t);
         gl.blendFunc(gl.CONSTANT_ALPHA, gl.ONE_MINUS_CONSTANT_ALPHA);
         for (const [i, tex, lim, blend, nb] of draws) {
@@ -183,7 +161,7 @@ export class Renderer {
             // Missing neighbours: the tile itself, never read (u_has 0).
             for (let u = 0; u < 4; u++) {
                 gl.activeTexture(gl.TEXTURE0 + u);
-                gl.bindTexture(gl.TEXTURE_2D, u === 0 ? tex : nb[u - 1] || tex);
+                gl.bindTexture(this.look.target, u === 0 ? tex : nb[u - 1] || tex);
             }
             gl.drawArrays(gl.TRIANGLES, i * 6, 6);
         }
@@ -196,8 +174,6 @@ export class Renderer {
     dispose() {
         const gl = this.gl;
         gl.deleteProgram(this.prog.program);
-        if (this.lut)
-            gl.deleteTexture(this.lut);
         gl.deleteBuffer(this.vbo);
         gl.deleteVertexArray(this.vao);
     }

@@ -2,7 +2,8 @@
 // next, and what to forget (thesis section 7.5).
 //
 // Three stores, each keyed "level/tx/ty":
-//   - textures: decoded tiles (513^2 RGBA8UI, TILE_BYTES each), an LRU
+//   - textures: decoded tiles (the decoder's, tileBytes each: 513^2
+//     RGBA8UI for an image store, 513^2 R16UI a channel for codes), an LRU
 //     bounded in bytes.  The root tile and the root mips are uploaded at
 //     start and never evicted.  Tiles the current view draws and all their
 //     ancestors are pinned for the frame: the ancestors are what a missing
@@ -26,7 +27,7 @@
 // tile's parent is often outside both; evicting it left a tile decoded
 // from no texture, drawn wrong once the view reached it).
 
-import { TILE_BYTES } from './gpu_decode.js';
+import { prepArrays } from './batch.js';
 import { TILE } from './tilebuf.js';
 
 export const key = (k, x, y) => `${k}/${x}/${y}`;
@@ -41,7 +42,7 @@ const DECODES_PER_FRAME = 12;
 
 export class TileCache {
     /**
-     * decoder: a GpuDecoder; info: /v1/images/{id} metadata; imageUrl: its
+     * decoder: a GpuDecoder or a CodesDecoder (sample stores); info: /v1/images/{id} metadata; imageUrl: its
      * absolute URL; levels: pyramid.levelsOf(info); fetcher: a Fetcher;
      * budget: bytes of decoded tiles to keep (soft for pinned tiles);
      * onChange(): called when fetched data arrives (schedule a frame).
@@ -52,7 +53,9 @@ export class TileCache {
         this.imageUrl = imageUrl;
         this.levels = levels;
         this.R = info.levels_tiled;
+        this.form = { channels: info.channels, samples: !!info.samples };
         this.channels = info.channels;
+        this.tileBytes = decoder.tileBytes;
         this.fetcher = fetcher;
         this.budget = budget;
         this.prepBudget = prepBudget || 64 << 20;
@@ -73,10 +76,11 @@ export class TileCache {
     }
 
     /** Upload the root tile (level R, the root clamp-padded to 513^2) and
-     * the root mips (levels R+1 ..) from the root's raw samples. */
+     * the root mips (levels R+1 ..) from the root's raw samples (bytes, or
+     * 16-bit codes in a Uint16Array: the same box filter serves both). */
     setRoot(px, w, h) {
-        const c = this.channels;
-        const padded = new Uint8Array(TILE * TILE * c);
+        const c = this.channels, Px = px.constructor;
+        const padded = new Px(TILE * TILE * c);
         for (let v = 0; v < TILE; v++) {
             const sy = Math.min(v, h - 1);
             for (let u = 0; u < TILE; u++) {
@@ -89,7 +93,7 @@ export class TileCache {
         // Mips: the 2x2 box filter with odd edges replicated (FORMAT.md 1).
         let cur = px, cw = w, ch = h;
         for (let k = this.R + 1; k < this.levels.length; k++) {
-            const nw = (cw + 1) >> 1, nh = (ch + 1) >> 1, next = new Uint8Array(nw * nh * c);
+            const nw = (cw + 1) >> 1, nh = (ch + 1) >> 1, next = new Px(nw * nh * c);
             for (let y = 0; y < nh; y++) {
                 const r0 = 2 * y, r1 = Math.min(2 * y + 1, ch - 1);
                 for (let x = 0; x < nw; x++) {
@@ -180,7 +184,7 @@ export class TileCache {
         const pending = needed.filter((t) => !this.settled(t)).length;
         // Prefetch only once every tile of the view is resident.
         if (pending === 0 && this.batches < PREFETCH_INFLIGHT) {
-            const room = Math.max(0, Math.floor((this.budget - pinned.size * TILE_BYTES) / TILE_BYTES));
+            const room = Math.max(0, Math.floor((this.budget - pinned.size * this.tileBytes) / this.tileBytes));
             const circle = prefetch.filter((t) => !pinned.has(key(...t))).slice(0, room);
             this.request(this.wanted(circle).filter(() => this.prepBytes < this.prepBudget), PREFETCH_INFLIGHT);
             if (performance.now() - t0 < budgetMs) {
@@ -219,7 +223,7 @@ export class TileCache {
                 this.inflight.add(key(...t));
             this.batches++;
             this.stats.batches++;
-            this.fetcher.fetch(this.imageUrl, part, this.channels).then((r) => {
+            this.fetcher.fetch(this.imageUrl, part, this.form).then((r) => {
                 if (this.disposed)
                     return;
                 this.stats.bytes += r.bytes;
@@ -257,8 +261,7 @@ export class TileCache {
     }
 
     putPrep(kk, prep) {
-        const bytes = prep.words.byteLength + (prep.indices ? prep.indices.byteLength : 0) +
-            (prep.coefs ? prep.coefs.byteLength : 0);
+        const bytes = prepArrays(prep).reduce((n, a) => n + a.byteLength, 0);
         this.prep.set(kk, { prep, used: this.clock, bytes });
         this.prepBytes += bytes;
         if (this.prepBytes > this.prepBudget) {
@@ -305,7 +308,7 @@ export class TileCache {
                     this.stats.prefetched++;
                 p.used = this.clock;
                 this.tex.set(kk, { tex, used: this.clock, fixed: false, entropy: p.prep.entropy, dct: p.prep.dct });
-                this.texBytes += TILE_BYTES;
+                this.texBytes += this.tileBytes;
                 n++;
                 if (max !== null && n >= max)
                     return n;
@@ -317,7 +320,7 @@ export class TileCache {
     // For prefetching: is there room for one more tile, evicting only
     // tiles outside `keep` and other than `spare`?
     makeRoom(keep, spare) {
-        if (this.texBytes + TILE_BYTES <= this.budget)
+        if (this.texBytes + this.tileBytes <= this.budget)
             return true;
         return this.evictOne(keep, spare);
     }
@@ -333,7 +336,7 @@ export class TileCache {
             return false;
         this.dec.release(old[1].tex);
         this.tex.delete(old[0]);
-        this.texBytes -= TILE_BYTES;
+        this.texBytes -= this.tileBytes;
         this.stats.evicted++;
         return true;
     }

@@ -1,15 +1,14 @@
 // tile_worker.js - a module worker that fetches batches of compressed
-// tiles, checks them and decodes their rANS indices (batch.js,
-// tilebuf.js) off the main thread, which then only uploads and draws.
+// tiles, checks them and decodes their rANS indices or residuals
+// (batch.js, tilebuf.js, heighttile.js) off the main thread, which then only uploads and draws.
 //
-// Messages in:  {type: 'fetch', id, imageUrl, tiles, channels}
+// Messages in:  {type: 'fetch', id, imageUrl, tiles, form}
 //               {type: 'abort', id}
 // Messages out: {type: 'done', id, result} (result as fetchPrepared,
-//               the word, index and coefficient arrays transferred,
-//               not copied)
+//               its prepared arrays transferred, not copied)
 //               {type: 'failed', id, error, aborted}
 
-import { fetchPrepared } from './batch.js';
+import { fetchPrepared, prepArrays } from './batch.js';
 
 const pending = new Map();   // id -> AbortController
 
@@ -26,16 +25,11 @@ self.onmessage = async (ev) => {
     const ctl = new AbortController();
     pending.set(m.id, ctl);
     try {
-        const result = await fetchPrepared(m.imageUrl, m.tiles, m.channels, ctl.signal);
+        const result = await fetchPrepared(m.imageUrl, m.tiles, m.form, ctl.signal);
         const transfer = [];
         for (const t of result.tiles)
-            if (t.prep) {
-                transfer.push(t.prep.words.buffer);
-                if (t.prep.indices)
-                    transfer.push(t.prep.indices.buffer);
-                if (t.prep.coefs)
-                    transfer.push(t.prep.coefs.buffer);
-            }
+            if (t.prep)
+                transfer.push(...prepArrays(t.prep).map((a) => a.buffer));
         self.postMessage({ type: 'done', id: m.id, result }, transfer);
     } catch (e) {
         self.postMessage({ type: 'failed', id: m.id, error: String(e && e.message || e),

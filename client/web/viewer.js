@@ -26,13 +26,23 @@ const TAU_MS = 90;            // time constant of animated moves
  * has three equal channels), the lossless PNG, each decoded without colour
  * management or premultiplication into a canvas (exact for lossless
  * images with no transparency), then the raw samples.  `via` names the
- * form used.  A height or sample store's root holds 16-bit codes: its
- * 8-bit picture (docs/API.md: a height store's gray, a sample store's
- * window and colours, gray or RGB) comes through the region endpoint
- * instead.
+ * form used.  A height or sample store's root holds 16-bit codes: with
+ * `codes` (the WebGL2 backend draws a sample store from its codes) they
+ * come raw, in a Uint16Array; else its 8-bit picture (docs/API.md: a
+ * height store's gray, a sample store's window and colours, gray or RGB)
+ * comes through the region endpoint.
  */
-async function loadRoot(url, info) {
+async function loadRoot(url, info, codes) {
     const w = info.root.width, h = info.root.height, c = displayChannels(info);
+    if (codes) {
+        const rr = await fetch(`${url}/root?format=raw`);
+        if (!rr.ok)
+            throw new Error(`cannot load the root: HTTP ${rr.status}`);
+        const buf = await rr.arrayBuffer();
+        if (buf.byteLength !== w * h * info.channels * 2)
+            throw new Error(`root: ${buf.byteLength} bytes for ${w}x${h}x${info.channels} codes`);
+        return { px: new Uint16Array(buf), w, h, via: 'raw codes' };
+    }
     const forms = info.elevation || info.samples
         ? [['region', `${url}/region?level=${info.root.level}&x=0&y=0&w=${w}&h=${h}&format=png`]]
         : [['webp', `${url}/root?format=webp`], ['png', `${url}/root`]];
@@ -155,21 +165,20 @@ export class Viewer {
             throw err;
         }
         const info = await r.json();
-        const root = await loadRoot(url, info);
+        // Image and sample stores are drawn from their tiles on the GPU
+        // where there is WebGL2; height stores (docs/FORMAT.md 12), and
+        // every store without WebGL2, from the server's 8-bit regions.
+        let gl = null;
+        if (this.opts.renderer !== 'region' && GlBackend.draws(info)) {
+            gl = this.gl || (this.gl = webgl2(this.canvas));
+            if (!gl && this.opts.renderer === 'webgl2')
+                throw new Error('this browser has no WebGL2');
+        }
+        const root = await loadRoot(url, info, gl && info.samples);
         const image = { id, info, url, levels: levelsOf(info), root };
         this.timing = { openStart: t0, metaMs: performance.now() - t0, firstCompleteMs: null };
         const onChange = () => this.schedule();
-        let backend = null;
-        // Height and sample stores (docs/FORMAT.md 12, 13) are drawn from
-        // the server's 8-bit regions: the tile decoder here is the image
-        // one (height_decode.js decodes their codes, a channel at a time).
-        if (this.opts.renderer !== 'region' && !info.elevation && !info.samples) {
-            const gl = this.gl || (this.gl = webgl2(this.canvas));
-            if (gl)
-                backend = await GlBackend.create(gl, image, { ...this.opts, onChange });
-            else if (this.opts.renderer === 'webgl2')
-                throw new Error('this browser has no WebGL2');
-        }
+        let backend = gl ? await GlBackend.create(gl, image, { ...this.opts, onChange }) : null;
         if (!backend) {
             const ctx = this.ctx2d || (this.ctx2d = this.canvas.getContext('2d', { alpha: false }));
             if (!ctx)
@@ -223,8 +232,10 @@ export class Viewer {
 
     /**
      * Set a sample store's channel colours: "RRGGBB;..." one per channel
-     * (docs/API.md, "Sample stores"), or null for the store's own.  The
-     * server draws them: the view is fetched again.  The hash follows.
+     * (docs/API.md, "Sample stores"), or null for the store's own.  With
+     * WebGL2 the next frame draws them from the tiles already decoded;
+     * without, the server draws them and the view is fetched again.  The
+     * hash follows.
      */
     setColours(text) {
         const ok = typeof text === 'string' && /^[0-9a-fA-F]{6}(;[0-9a-fA-F]{6}){0,7}$/.test(text);
@@ -237,9 +248,10 @@ export class Viewer {
 
     applyWindow() {
         this.extra = { ...this.extra, window: this.window ? formatWindow(this.window) : this.windowNone ? 'none' : null };
-        if (this.backend && this.backend.setLut)
+        if (this.backend && this.backend.setLut && !this.image.info.samples)
             this.backend.setLut(this.window ? lutBytes(this.window, this.image.info.channels) : null);
-        // The server's regions: the window and colours go with each request.
+        // A sample store's codes on the GPU, or the server's regions (with
+        // each request): the window and colours as texts.
         if (this.backend && this.backend.setDisplay)
             this.backend.setDisplay(this.extra.window, this.colours);
     }

@@ -2,9 +2,11 @@
 // channel): its text, its lookup tables and the histogram that sets it
 // automatically.  The twin of lib/render/window.c: parseWindow accepts
 // exactly what gv_window_parse accepts, formatWindow writes its canonical
-// text, and buildTable gives the same 256 bytes as gv_window_table8, by
-// the same double operations in the same order (tests/window.sh compares
-// the two over many windows).  The text: "B,W[,G]" for every channel or
+// text, and buildTable gives the same bytes as gv_window_table (256 for
+// 8-bit samples, 65536 for a sample store's codes), by the same double
+// operations in the same order (tests/window.sh compares the two over many
+// windows).  A sample store's colours resolve here as in
+// lib/render/samples_region.c.  The text: "B,W[,G]" for every channel or
 // one per channel joined by ';' (docs/API.md, `window`).
 
 export const MAX_CHANNELS = 8;
@@ -44,12 +46,12 @@ export function formatWindow(w) {
         String(c.gammaMilli % 1000).padStart(3, '0')).join(';');
 }
 
-/** The 256-entry table of channel window c for 8-bit samples
- * (gv_window_table8). */
-export function buildTable(c) {
-    const t = new Uint8Array(256);
+/** The table of channel window c for samples 0 .. max (gv_window_table):
+ * max + 1 bytes, 256 by default (gv_window_table8). */
+export function buildTable(c, max = 255) {
+    const t = new Uint8Array(max + 1);
     const range = c.white - c.black, e = 1000 / c.gammaMilli;
-    for (let v = 0; v < 256; v++) {
+    for (let v = 0; v <= max; v++) {
         if (v <= c.black) {
             t[v] = 0;
             continue;
@@ -64,6 +66,35 @@ export function buildTable(c) {
         t[v] = y >= 255 ? 255 : y <= 0 ? 0 : y;
     }
     return t;
+}
+
+/** The default colours of a sample store's channels, in order
+ * (lib/render/samples_region.c). */
+export const PALETTE = ['ff0000', '00ff00', '0000ff', 'ff00ff', '00ffff', 'ffff00', 'ff8000', 'ffffff'];
+
+/** The colours a sample store of `channels` channels is drawn in:
+ * ["rrggbb", ...] one per channel: text (a `colours` value) when it gives
+ * one per channel, else the store's (metadata display.colours, `meta`
+ * the image document's metadata), else the palette.  One channel is gray
+ * and takes none (gv_colours_check). */
+export function sampleColours(text, meta, channels) {
+    const ok = (t) => typeof t === 'string' && channels > 1 &&
+        /^[0-9a-fA-F]{6}(;[0-9a-fA-F]{6}){0,7}$/.test(t) && t.split(';').length === channels;
+    const store = meta && meta['display.colours'];
+    const t = ok(text) ? text : ok(store) ? store : null;
+    return t ? t.toLowerCase().split(';') : PALETTE.slice(0, channels);
+}
+
+/** A sample store's window when it keeps none (gv_samples_default_window):
+ * black and white at the smallest and largest code, gamma 1.  s: the image
+ * document's `samples`. */
+export function defaultSampleWindow(s) {
+    let lo = s.code_min, hi = s.code_max;
+    if (hi <= lo) {
+        if (lo === 65535) lo--;
+        hi = lo + 1;
+    }
+    return [{ black: lo, white: hi, gammaMilli: 1000 }];
 }
 
 /** The window of channel k of w: its own, or the one for all. */

@@ -5,11 +5,10 @@
 // from the start).  Every change goes to Viewer.setWindow, which redraws
 // from the tiles already decoded and writes the window into the link.
 
-import { autoPoints, channelWindow } from './window.js';
+import { autoPoints, channelWindow, defaultSampleWindow, sampleColours } from './window.js';
 
 const NAMES = ['red', 'green', 'blue'];
 // A sample store's default colours (docs/API.md, "Sample stores").
-const PALETTE = ['ff0000', '00ff00', '0000ff', 'ff00ff', '00ffff', 'ffff00', 'ff8000', 'ffffff'];
 
 export class WindowPanel {
     /** viewer: the Viewer; el: {box, linked, auto, reset, channels}. */
@@ -39,18 +38,15 @@ export class WindowPanel {
      * one, a sample store's codes' range, else 0 .. 255. */
     current() {
         const s = this.viewer.image && this.viewer.image.info.samples;
-        return this.viewer.window ||
-            [{ black: s ? s.code_min : 0, white: s ? Math.max(s.code_max, s.code_min + 1) : 255, gammaMilli: 1000 }];
+        return this.viewer.window || (s ? defaultSampleWindow(s) : [{ black: 0, white: 255, gammaMilli: 1000 }]);
     }
 
     /** A sample store's channel colours as the viewer draws them: the
      * link's, else the store's (metadata display.colours), else the
      * palette; ["rrggbb", ...] one per channel. */
     colours() {
-        const info = this.viewer.image ? this.viewer.image.info : null, c = this.channels();
-        const text = this.viewer.colours || (info && info.metadata && info.metadata['display.colours']);
-        const list = typeof text === 'string' ? text.toLowerCase().split(';') : [];
-        return list.length === c ? list : PALETTE.slice(0, c);
+        const info = this.viewer.image ? this.viewer.image.info : null;
+        return sampleColours(this.viewer.colours, info && info.metadata, this.channels());
     }
 
     /** Show window w (or none) and set it on the viewer. */

@@ -1,13 +1,13 @@
-// height.mjs - the browser's WebGL2 height decoder (client/web/heighttile.js,
-// client/web/height_decode.js, shaders/height_decode.frag.glsl as GLSL ES
-// 3.00) in headless Chromium: every tile of every level of the height store
-// `--id` decoded in the page from the root and the tile buffers the daemon
-// serves, compared with the CPU reference decoder's codes
-// (/region?format=png16 over the pixels the tile is the source of),
-// sample for sample.  A sample store (docs/FORMAT.md section 13) is
-// decoded one channel at a time, each tile split by heighttile.js's
-// splitSampleTile, against channel K of the png16 region.  Prints TAP
-// lines; tests/browser_height.sh runs it.
+// height.mjs - the browser's WebGL2 decoder of codes (client/web/heighttile.js,
+// client/web/codes_decode.js, shaders/height_decode.frag.glsl as GLSL ES
+// 3.00 with GV_LAYERED) in headless Chromium: every tile of every level of
+// the height store `--id` decoded in the page from the root and the tile
+// buffers the daemon serves, compared with the CPU reference decoder's
+// codes (/region?format=png16 over the pixels the tile is the source of),
+// sample for sample.  A sample store (docs/FORMAT.md section 13) has every
+// channel decoded, each tile split by heighttile.js's prepareSampleTile
+// into the layers of one texture; channel K is compared with channel K of
+// the png16 region.  Prints TAP lines; tests/browser_height.sh runs it.
 //
 //   node height.mjs --base URL --id ID --chromium PATH [--channel K]
 import { inflateSync } from 'node:zlib';
@@ -84,31 +84,34 @@ try {
     await pg.goto(`${opt.base}/`);
     const ch = Number(opt.channel || 0);
     const r = await pg.evaluate(async ([id, ch]) => {
-        const { HeightDecoder } = await import('/web/height_decode.js');
-        const { splitSampleTile } = await import('/web/heighttile.js');
+        const { CodesDecoder } = await import('/web/codes_decode.js');
+        const { prepareSampleTile } = await import('/web/heighttile.js');
         const text = async (u) => (await fetch(u)).text();
         const bytes = async (u) => new Uint8Array(await (await fetch(u)).arrayBuffer());
         const info = await (await fetch(`/v1/images/${id}`)).json();
         const gl = document.createElement('canvas').getContext('webgl2');
         if (!gl) return { error: 'no WebGL2' };
-        const d = new HeightDecoder(gl, await text('/web/fullscreen.vert.glsl'),
+        // Every channel decoded at once, into the layers of one texture.
+        const nc = info.samples ? info.channels : 1;
+        const d = new CodesDecoder(gl, nc, await text('/web/fullscreen.vert.glsl'),
             await text('/web/height_decode.frag.glsl'));
-        // The root tile: channel ch of the root clamp-padded to 513 x 513.
-        const rw = info.root.width, rh = info.root.height, nc = info.samples ? info.channels : 1;
+        // The root tile: the root clamp-padded to 513 x 513.
+        const rw = info.root.width, rh = info.root.height;
         const rootBytes = await bytes(`/v1/images/${id}/root?format=raw`);
-        const root = new Uint16Array(rootBytes.buffer, 0, rw * rh * nc), pad = new Uint16Array(513 * 513);
+        const root = new Uint16Array(rootBytes.buffer, 0, rw * rh * nc), pad = new Uint16Array(513 * 513 * nc);
         for (let v = 0; v < 513; v++)
             for (let u = 0; u < 513; u++)
-                pad[v * 513 + u] = root[(Math.min(v, rh - 1) * rw + Math.min(u, rw - 1)) * nc + ch];
-        let up = [d.upload(pad)], upTx = 1;
+                for (let k = 0; k < nc; k++)
+                    pad[(v * 513 + u) * nc + k] = root[(Math.min(v, rh - 1) * rw + Math.min(u, rw - 1)) * nc + k];
+        let up = [d.upload(pad, 513, 513)], upTx = 1;
         const tiles = [];
         for (let k = info.levels_tiled - 1; k >= 0; k--) {
             const L = info.levels[k], cur = [];
             for (let ty = 0; ty < L.tiles_y; ty++)
                 for (let tx = 0; tx < L.tiles_x; tx++) {
                     const whole = await bytes(`/v1/images/${id}/tiles/${k}/${tx}/${ty}`);
-                    const buf = info.samples ? splitSampleTile(whole, nc)[ch] : whole;
-                    const tex = d.decode(buf, up[(ty >> 1) * upTx + (tx >> 1)], tx & 1, ty & 1);
+                    const prep = prepareSampleTile(whole, nc);
+                    const tex = d.decode(prep, up[(ty >> 1) * upTx + (tx >> 1)], tx & 1, ty & 1);
                     cur.push(tex);
                     const codes = d.read(tex);
                     // The pixels this tile is the source of (FORMAT.md 2).
@@ -116,8 +119,8 @@ try {
                     const w = tx === L.tiles_x - 1 ? L.width - x : 512, h = ty === L.tiles_y - 1 ? L.height - y : 512;
                     const mine = [];
                     for (let j = 0; j < h; j++)
-                        for (let i = 0; i < w; i++) mine.push(codes[j * 513 + i]);
-                    tiles.push({ k, tx, ty, x, y, w, h, mode: buf[0], mine });
+                        for (let i = 0; i < w; i++) mine.push(codes[(j * 513 + i) * nc + ch]);
+                    tiles.push({ k, tx, ty, x, y, w, h, mode: prep.coded[ch], mine });
                 }
             for (const t of up) gl.deleteTexture(t);
             up = cur;

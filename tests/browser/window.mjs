@@ -19,13 +19,18 @@
 //      the server's region with that window (and to the plain store's
 //      region with it); a link with window=none opens with no window, the
 //      canvas equal to the plain region, and the hash keeps window=none;
-//   7. "s16" (a 16-bit RGB sample store, drawn from the server's regions):
-//      a link's window on its 16-bit codes opens with it, the canvas at 1:1
-//      equal to the server's region with that window bit for bit; a new
-//      window fetches the view again (the server applies it) and matches
-//      too; the panel's sliders reach 65535; colours from the link and
-//      from the panel's colour inputs equal the server's region with them,
-//      and the hash carries them;
+//   7. "s16" (a 16-bit RGB sample store, drawn from its codes on the GPU:
+//      codes_decode.js, looks.js, display_codes.frag.glsl): a link's window
+//      on its 16-bit codes opens with it, the canvas at 1:1 equal to the
+//      server's region with that window bit for bit; a new window (per
+//      channel) and new colours make no request at all and match too; the
+//      panel's sliders reach 65535; colours from the link and from the
+//      panel's colour inputs equal the server's region with them, and the
+//      hash carries them; the store's default window and the codes' range
+//      (window=none) likewise, and a five-channel store ("c5"); without WebGL2 (renderer=region) the
+//      server's regions carry the window, fetched again when it changes,
+//      and equal the same region; negative control: tables for a black
+//      point one code off must fail the match;
 //   8. no console errors.
 // Exit status 0 when everything passed, 1 otherwise.
 import { mkdtempSync, rmSync } from 'node:fs';
@@ -51,7 +56,7 @@ async function newPage(c) {
 async function open(pg, h) {
     await pg.goto(`${base}/${h}`);
     await pg.evaluate(() => window.gigaview.ready);
-    const id = new URLSearchParams(h.slice(1)).get('image');
+    const id = new URLSearchParams(h.slice(h.indexOf('#') + 1)).get('image');
     await pg.waitForFunction((id) => window.gigaview.viewer.image && window.gigaview.viewer.image.id === id &&
         window.gigaview.viewer.view, id);
     return pg.evaluate(() => window.gigaview.viewer.settled());
@@ -191,13 +196,13 @@ async function run(c) {
     check(new URLSearchParams(h7.slice(1)).get('window') === 'none', `the hash keeps window=none (${h7})`, h7);
     await pg4.close();
 
-    // 7. a sample store: windows on 16-bit codes, applied by the server.
+    // 7. a sample store: windows on 16-bit codes, drawn on the GPU.
     const pg5 = await newPage(c);
     const S1 = '5000,60000,0.8';
     const r8 = await open(pg5, `#image=s16&x=550&y=350&z=0&r=0&window=${S1}`);
     const k8 = await pg5.evaluate(() => [window.gigaview.viewer.backend.kind, window.gigaview.viewer.extra.window]);
-    check(r8.complete && k8[0] === 'region' && k8[1] === '5000,60000,0.800',
-        `a sample store opens on the server's regions with the link's 16-bit window (${JSON.stringify(k8)})`,
+    check(r8.complete && k8[0] === 'webgl2' && k8[1] === '5000,60000,0.800',
+        `a sample store opens in WebGL2 with the link's 16-bit window (${JSON.stringify(k8)})`,
         `${JSON.stringify(k8)} ${JSON.stringify(r8)}`);
     await match(pg5, `s16 level 0 1:1, window ${S1}`, 's16', 150, 100, S1);
     const S2 = '0,30000,1;20000,65535,2;1000,40000,0.5';
@@ -207,12 +212,21 @@ async function run(c) {
             return { black: +b, white: +w, gammaMilli: Math.round(+gm * 1000) };
         }));
     }, S2));
-    check(reqs8.some((u) => u.includes('/region?') && u.includes('window=')),
-        `a new window fetches the view again with it (${reqs8.length} requests)`, reqs8.slice(0, 4).join(' '));
+    check(reqs8.length === 0, `a new window on the codes makes no request (${reqs8.length})`, reqs8.slice(0, 4).join(' '));
     await match(pg5, 's16 level 0 1:1, a window per channel', 's16', 150, 100, S2);
+    // Negative control: the GPU's tables for a black point one code off
+    // must fail the match with the server's window.
+    await pg5.evaluate(() => window.gigaview.viewer.backend.setDisplay('5001,60000,0.8', null));
+    const off = await compare(pg5, 's16', 150, 100, S1);
+    check(!off.error && off.same < off.n, `negative control: a black point one code off differs from the server's region (${off.n - off.same} pixels)`,
+        JSON.stringify(off));
     await pg5.click('#window-btn');
     const maxes = await pg5.locator('#w-channels input[type=range]').evaluateAll((l) => l.map((e) => e.max));
     check(maxes.includes('65535'), `the sliders reach 65535 (${maxes.join(',')})`, maxes.join(','));
+    // The codes' range (window=none) and a zoomed-out level, drawn alike.
+    const reqsNone = await requestsDuring(pg5, () => pg5.evaluate(() => window.gigaview.viewer.setWindow(null, true)));
+    check(reqsNone.length === 0, `window=none makes no request (${reqsNone.length})`, reqsNone.slice(0, 4).join(' '));
+    await match(pg5, 's16 level 0 1:1, window=none (the codes\' range)', 's16', 150, 100, 'none');
     await pg5.close();
     // Colours: from the link, then a colour input; the hash carries them.
     const pg6 = await newPage(c);
@@ -225,11 +239,12 @@ async function run(c) {
     await pg6.click('#w-linked');            // one set per channel, with its colour
     const nColour = await pg6.locator('#w-channels input[type=color]').count();
     check(nColour === 3, `the panel shows a colour for each of the 3 channels (${nColour})`);
-    await pg6.locator('#w-channels input[type=color]').nth(1).fill('#ff00ff');
-    await pg6.evaluate(() => window.gigaview.viewer.settled());
+    const reqs10 = await requestsDuring(pg6, () => pg6.locator('#w-channels input[type=color]').nth(1).fill('#ff00ff'));
     const C2 = '0000ff;ff00ff;ff8000';
     const k10 = await pg6.evaluate(() => window.gigaview.viewer.colours);
-    check(k10 === C2, `the colour input sets the second channel's colour (${k10})`, String(k10));
+    check(k10 === C2 && reqs10.length === 0,
+        `the colour input sets the second channel's colour (${k10}) without a request (${reqs10.length})`,
+        `${k10}; ${reqs10.slice(0, 4).join(' ')}`);
     const w10 = await pg6.evaluate(() => window.gigaview.viewer.extra.window);
     await match(pg6, 's16 level 0 1:1, after the colour input', 's16', 150, 100, w10, `&colours=${encodeURIComponent(C2)}`);
     await pg6.waitForFunction((t) => decodeURIComponent(location.hash).includes(`colours=${t}`), C2, { timeout: 5000 })
@@ -237,6 +252,40 @@ async function run(c) {
     const h10 = await pg6.evaluate(() => location.hash);
     check(new URLSearchParams(h10.slice(1)).get('colours') === C2, `the hash carries the colours (${h10})`, h10);
     await pg6.close();
+    // A store's default window and colours (gigaview encode --window
+    // --colours), with no window in the link: the GPU's first frame is the
+    // server's default region.
+    const pg7 = await newPage(c);
+    const r11 = await open(pg7, '#image=s16d&x=550&y=350&z=0&r=0');
+    const k11 = await pg7.evaluate(() => [window.gigaview.viewer.backend.kind, window.gigaview.viewer.extra.window]);
+    check(r11.complete && k11[0] === 'webgl2' && k11[1] === '2000,50000,1.500',
+        `a sample store with a default window opens in WebGL2 with it (${JSON.stringify(k11)})`, JSON.stringify(k11));
+    await match(pg7, 's16d level 0 1:1, the store\'s window and colours', 's16d', 150, 100, null);
+    await pg7.close();
+    // Five channels, a window and a colour each.
+    const pg9 = await newPage(c);
+    const S5 = '7000,60000,1;10000,50000,0.6;5000,65535,2;0,40000,1;20000,62000,1.3';
+    const C5 = 'ff0000;00ff00;0000ff;ffff00;808080';
+    const r13 = await open(pg9, `#image=c5&x=550&y=350&z=0&r=0&window=${encodeURIComponent(S5)}&colours=${encodeURIComponent(C5)}`);
+    const k13 = await pg9.evaluate(() => window.gigaview.viewer.backend.kind);
+    check(r13.complete && k13 === 'webgl2', `a five-channel sample store opens in WebGL2 (${k13})`, JSON.stringify(r13));
+    await match(pg9, 'c5 level 0 1:1, five windows and colours', 'c5', 150, 100, S5, `&colours=${encodeURIComponent(C5)}`);
+    await pg9.close();
+    // Without WebGL2: the server's regions, fetched again for a new window.
+    const pg8 = await newPage(c);
+    const r12 = await open(pg8, `?renderer=region#image=s16&x=550&y=350&z=0&r=0&window=${S1}`);
+    const k12 = await pg8.evaluate(() => window.gigaview.viewer.backend.kind);
+    check(r12.complete && k12 === 'region', `renderer=region draws a sample store from the server's regions (${k12})`, k12);
+    const reqs12 = await requestsDuring(pg8, () => pg8.evaluate((t) => {
+        window.gigaview.viewer.setWindow(t.split(';').map((s) => {
+            const [b, w, gm] = s.split(',');
+            return { black: +b, white: +w, gammaMilli: Math.round(+gm * 1000) };
+        }));
+    }, S2));
+    check(reqs12.some((u) => u.includes('/region?') && u.includes('window=')),
+        `there a new window fetches the view again with it (${reqs12.length} requests)`, reqs12.slice(0, 4).join(' '));
+    await match(pg8, 's16 level 0 1:1 from regions, a window per channel', 's16', 150, 100, S2);
+    await pg8.close();
 
     check(consoleErrors.length === 0, 'no console errors', consoleErrors.join('\n'));
 }
