@@ -10,9 +10,10 @@
 // colours are an upload of C * 64 KiB: no tile is fetched or decoded again.
 //
 // Sampling as display.frag.glsl: each channel's codes bilinear
-// (bilinear.glsl, three channels a call), rounded to a code, with the
-// overlap's taps from the neighbours that own them; at a 1:1 view the
-// weights are 0 and 1 and the output is the server's region byte for byte.
+// (bilinear.glsl, up to three channels a call, only the store's fetched),
+// rounded to a code, with the overlap's taps from the neighbours that own
+// them; at a 1:1 view the weights are 0 and 1 and the output is the
+// server's region byte for byte.
 
 precision highp float;
 precision highp int;
@@ -32,28 +33,34 @@ uniform uvec3 u_colour[8];         // each channel's colour, 0 .. 255
 in vec2 v_uv;
 out vec4 o_color;
 
-int g_first;    // the first of the three channels texel() returns
+int g_first;    // the first of the channels texel() returns
+int g_count;    // how many, 1 .. 3 (the same for every fragment of a draw)
 
-float code(ivec2 p, int k)
+// Layers g_first .. g_first + g_count - 1 of texel q of s (0 past them).
+uvec3 layers(usampler2DArray s, ivec2 q)
 {
-    if (k >= u_channels)
-        return 0.0;
-    uvec4 t;
-    if (p.x == 512 && p.y == 512 && u_has.z == 1)
-        t = texelFetch(u_diag, ivec3(0, 0, k), 0);
-    else if (p.x == 512 && u_has.x == 1)
-        t = texelFetch(u_right, ivec3(0, p.y, k), 0);
-    else if (p.y == 512 && u_has.y == 1)
-        t = texelFetch(u_below, ivec3(p.x, 0, k), 0);
-    else
-        t = texelFetch(u_tile, ivec3(p, k), 0);
-    return float(t.r);
+    uvec3 t = uvec3(texelFetch(s, ivec3(q, g_first), 0).r, 0u, 0u);
+    if (g_count > 1)
+        t.y = texelFetch(s, ivec3(q, g_first + 1), 0).r;
+    if (g_count > 2)
+        t.z = texelFetch(s, ivec3(q, g_first + 2), 0).r;
+    return t;
 }
 
+// Those channels of texel p (clamped to the level), from the texture that
+// owns it, chosen once for them (most texels are the tile's own).
 vec3 texel(ivec2 p)
 {
     p = clamp(p, ivec2(0), u_max);
-    return vec3(code(p, g_first), code(p, g_first + 1), code(p, g_first + 2));
+    if (p.x < 512 && p.y < 512)
+        return vec3(layers(u_tile, p));
+    if (p.x == 512 && p.y == 512 && u_has.z == 1)
+        return vec3(layers(u_diag, ivec2(0)));
+    if (p.x == 512 && u_has.x == 1)
+        return vec3(layers(u_right, ivec2(0, p.y)));
+    if (p.y == 512 && u_has.y == 1)
+        return vec3(layers(u_below, ivec2(p.x, 0)));
+    return vec3(layers(u_tile, p));
 }
 
 #include "bilinear.glsl"
@@ -67,18 +74,21 @@ uint windowed(float c, int k)
 void main()
 {
     uvec3 acc = uvec3(0u);
-    uint gray = 0u;
     for (g_first = 0; g_first < u_channels; g_first += 3) {
+        g_count = min(3, u_channels - g_first);
         vec3 c = bilinear(v_uv);
-        for (int j = 0; j < 3 && g_first + j < u_channels; j++) {
-            int k = g_first + j;
-            uint t = windowed(c[j], k);
-            gray = t;
-            acc += t * u_colour[k];
+        uint t = windowed(c.x, g_first);
+        if (u_channels == 1) {
+            acc = uvec3(t * 255u);   // gray: (255 t + 127) / 255 = t
+            break;
         }
+        acc += t * u_colour[g_first];
+        if (g_count > 1)
+            acc += windowed(c.y, g_first + 1) * u_colour[g_first + 1];
+        if (g_count > 2)
+            acc += windowed(c.z, g_first + 2) * u_colour[g_first + 2];
     }
-    vec3 rgb = u_channels == 1 ? vec3(float(gray))
-                               : vec3(min((acc + 127u) / 255u, uvec3(255u)));
+    vec3 rgb = vec3(min((acc + 127u) / 255u, uvec3(255u)));
     if (u_round == 1)
         rgb += 0.25;
     o_color = vec4(rgb / 255.0, 1.0);
