@@ -121,7 +121,7 @@ async function decodeAll(id) {
                     for (let tx = 0; tx < L.tiles_x; tx++)
                         all.push([k, tx, ty]);
                 for (let i = 0; i < all.length; i += 64) {
-                    const r = await fetchPrepared(url, all.slice(i, i + 64), { channels: info.channels, samples: false });
+                    const r = await fetchPrepared(url, all.slice(i, i + 64), { channels: info.channels, codes: false });
                     fetchMs += r.fetchMs;
                     prepMs += r.prepMs;
                     bytes += r.bytes;

@@ -11,7 +11,8 @@
 # 16-bit sample store is drawn from its codes in WebGL2: windows and
 # colours on the codes (the link's, the panel's, the store's own) without
 # a request, equal to the server's regions bit for bit, and through the
-# server's regions without WebGL2.
+# server's regions without WebGL2; a height store likewise, its window on
+# the gray the server draws of its codes.
 #
 # Skipped when /usr/bin/chromium, node or tests/browser/node_modules is
 # missing, and under valgrind.  Needs curl and python3 (http_util.sh).
@@ -37,6 +38,8 @@ oiiotool --pattern "noise:type=uniform:min=0.1:max=0.9" 1100x700 5 \
     --add -d uint16 -o "$T/c5.tif" || bail "oiiotool c5"
 run encode --bits 16 --max-error 40 "$T/c5.tif" -o "$S/c5.gv"
 [ "$rc" -eq 0 ] || bail "encode c5: $(cat "$T/err")"
+run encode --height --max-error 2 synth-height:1100x700 -o "$S/dem.gv"
+[ "$rc" -eq 0 ] || bail "encode dem: $(cat "$T/err")"
 run encode --bits 16 "$T/p16.png" --window 2000,50000,1.5 --colours '00ffff;ff00ff;ffff00' -o "$S/s16d.gv"
 [ "$rc" -eq 0 ] || bail "encode s16d: $(cat "$T/err")"
 cat >"$T/w.conf" <<EOF2

@@ -4,7 +4,7 @@
 // proxies keep whole batches (a batch of 200s is immutable).
 //
 // fetchPrepared() also checks every tile and decodes entropy-coded
-// indices (tilebuf.js), or a sample store's residuals (heighttile.js): it
+// indices (tilebuf.js), or the residuals of codes (heighttile.js): it
 // is what tile_worker.js runs off the main thread, and what the viewer
 // runs itself where workers are unavailable.
 
@@ -55,10 +55,11 @@ export function prepArrays(prep) {
 
 /**
  * Fetch tiles [[level, tx, ty], ...] and prepare each for the GPU.
- * form: {channels, samples}: the image's channels, and whether it is a
- * sample store (docs/FORMAT.md section 13).  Resolves to {bytes, ms,
+ * form: {channels, codes}: the image's channels, and whether its tiles
+ * are 16-bit codes (a sample or height store, docs/FORMAT.md sections 12
+ * and 13: a height tile buffer a channel).  Resolves to {bytes, ms,
  * tiles: [{level, tx, ty, status, error?, prep?}]}: prep from prepareTile
- * (prepareSampleTile for a sample store) for a well-formed 200 tile, error
+ * (prepareSampleTile for codes) for a well-formed 200 tile, error
  * (a message) for a damaged or missing one.  Rejects on a network error,
  * an HTTP error status or an abort (signal).
  */
@@ -75,7 +76,7 @@ export async function fetchPrepared(imageUrl, tiles, form, signal) {
         const r = { level: f.level, tx: f.tx, ty: f.ty, status: f.status };
         if (f.status === 200) {
             try {
-                r.prep = form.samples ? prepareSampleTile(f.tile, form.channels)
+                r.prep = form.codes ? prepareSampleTile(f.tile, form.channels)
                     : prepareTile(f.tile, form.channels);
             } catch (e) {
                 r.status = 500;

@@ -62,7 +62,7 @@ export class Fetcher {
 
     /** Fetch and prepare tiles [[level, tx, ty], ...]: a promise of
      * fetchPrepared's result, with an id for abort().  form: as
-     * fetchPrepared's, {channels, samples}. */
+     * fetchPrepared's, {channels, codes}. */
     fetch(imageUrl, tiles, form) {
         const id = this.next++;
         const p = new Promise((resolve, reject) => {

@@ -1,7 +1,7 @@
 // gl_backend.js - the WebGL2 picture of a view: tiles fetched in batches
 // (fetcher.js), decoded on the GPU by the shared decode shaders
-// (gpu_decode.js for image stores, codes_decode.js for a sample store's
-// 16-bit codes), cached (tile_cache.js) and drawn as textured quads
+// (gpu_decode.js for image stores, codes_decode.js for the 16-bit codes of
+// sample and height stores), cached (tile_cache.js) and drawn as textured quads
 // (renderer.js) through the store's look (looks.js): a window or a sample
 // store's colours change the look, never a tile.  The viewer (viewer.js) owns the view and calls
 // frame() once per animation frame; the backend says whether the picture
@@ -41,8 +41,8 @@ export function rendererString(gl) {
 export class GlBackend {
     /**
      * gl: the context; image: {id, info (metadata), url (absolute),
-     * levels, root: {px, w, h}} (a sample store's root px: its codes, a
-     * Uint16Array); opts: {cacheMiB, workers, budgetMs, onChange}.
+     * levels, root: {px, w, h}} (a sample or height store's root px: its
+     * codes, a Uint16Array); opts: {cacheMiB, workers, budgetMs, onChange}.
      */
     static async create(gl, image, opts) {
         if (!sources) {
@@ -54,11 +54,6 @@ export class GlBackend {
         return new GlBackend(gl, image, opts);
     }
 
-    /** Whether this backend draws the store of image document info: image
-     * stores and sample stores (a height store's picture is the server's). */
-    static draws(info) {
-        return !info.elevation;
-    }
 
     constructor(gl, image, opts) {
         this.gl = gl;
@@ -68,14 +63,15 @@ export class GlBackend {
         gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
         gl.pixelStorei(gl.PACK_ALIGNMENT, 1);
         const info = image.info;
-        if (info.samples) {
+        const codes = !!(info.samples || info.elevation);
+        if (codes) {
             this.decoder = new CodesDecoder(gl, info.channels, sources.vert, sources.hdecode);
             this.look = new CodesLook(gl, info);
         } else {
             this.decoder = new GpuDecoder(gl, info.channels, sources.vert, sources.decode);
             this.look = new ImageLook(gl);
         }
-        this.draw = new Renderer(gl, sources.dvert, info.samples ? sources.cfrag : sources.dfrag,
+        this.draw = new Renderer(gl, sources.dvert, codes ? sources.cfrag : sources.dfrag,
             image.levels, info.width, info.height, this.look);
         this.roiLayer = new RoiLayer(gl, sources.dvert, sources.rfrag);
         this.fetcher = new Fetcher(opts.workers);
@@ -90,7 +86,8 @@ export class GlBackend {
     }
 
     /** An image store's display window: its tables (window.js lutBytes)
-     * or null.  The next frame redraws from the tiles already decoded. */
+     * or null.  The next frame redraws from the tiles already decoded.
+     * Other stores take setDisplay. */
     setLut(bytes) {
         if (this.look.setLut) {
             this.look.setLut(bytes);
@@ -98,8 +95,8 @@ export class GlBackend {
         }
     }
 
-    /** A sample store's window and colours, as texts (looks.js CodesLook
-     * set: null for the store's own, window 'none' for the codes' range).
+    /** A sample or height store's window and colours, as texts (looks.js
+     * CodesLook set: null for the store's own, window 'none' for none).
      * The next frame redraws from the tiles already decoded. */
     setDisplay(win, colours) {
         if (this.look.set) {

@@ -4,10 +4,12 @@
 // One look a kind of store, each with its shader:
 //   - ImageLook (display.frag.glsl): 8-bit tiles, optionally through the
 //     display window's 256-entry tables (window.js lutBytes);
-//   - CodesLook (display_codes.frag.glsl): a sample store's 16-bit codes
-//     through the window's tables on codes and the channels' colours,
-//     resolved as gigaviewd resolves them for a region (docs/API.md,
-//     "Sample stores").
+//   - CodesLook (display_codes.frag.glsl): 16-bit codes through a table
+//     of 65,536 entries per channel, resolved as gigaviewd resolves a
+//     region (docs/API.md): a sample store's window on its codes and its
+//     channels' colours ("Sample stores"), or a height store's gray
+//     (lib/render/height_region.c gv_height_gray) through the optional
+//     8-bit window, composed into one table.
 // Changing a look uploads a small texture: no tile is fetched or decoded.
 
 import { buildTable, channelWindow, defaultSampleWindow, parseWindow, sampleColours } from './window.js';
@@ -64,51 +66,80 @@ export class ImageLook {
     }
 }
 
+// A height store's gray for each code (gv_height_gray, the same double
+// operations in the same order): e the image document's `elevation`.
+function heightGray(e) {
+    const t = new Uint8Array(65536);
+    if (!(e.max > e.min))
+        return t;
+    for (let c = 0; c < 65536; c++) {
+        const v = c * e.scale + e.offset;
+        const g = Math.floor(255 * (v - e.min) / (e.max - e.min) + 0.5);
+        t[c] = g < 0 ? 0 : g > 255 ? 255 : g;
+    }
+    return t;
+}
+
 export class CodesLook {
-    /** gl; info: the image document of a sample store. */
+    /** gl; info: the image document of a sample or height store. */
     constructor(gl, info) {
         this.gl = gl;
         this.info = info;
         this.channels = info.channels;
         this.target = gl.TEXTURE_2D_ARRAY;
+        this.gray = info.samples ? null : heightGray(info.elevation);
         this.tables = tableTexture(gl, gl.TEXTURE_2D_ARRAY, gl.R8UI, 256, 256, this.channels);
         this.built = new Array(this.channels).fill('');   // each layer's window, as text
         this.colour = new Uint32Array(24);
         this.set(null, null);
     }
 
+    // Channel k's table for window channel ck (null: none).
+    table(ck) {
+        if (!this.gray)
+            return buildTable(ck, 65535);
+        if (!ck)
+            return this.gray;
+        const w8 = buildTable(ck), t = new Uint8Array(65536);
+        for (let c = 0; c < 65536; c++)
+            t[c] = w8[this.gray[c]];
+        return t;
+    }
+
     /**
      * Show the codes through window text `win` (a `window` value; null:
-     * the store's default, else the codes' range; 'none': the codes'
-     * range) and colours text `colours` (null: the store's, else the
-     * palette): what a region request with those parameters gets.
-     * Returns the window and colours used: {window, colours}.
+     * the store's default, else none; 'none': none) and colours text
+     * `colours` (null: the store's, else the palette): what a region
+     * request with those parameters gets.  A sample store's window is on
+     * its codes (none: the codes' range), a height store's on its 8-bit
+     * gray (none: the gray itself).
      */
     set(win, colours) {
-        const gl = this.gl, info = this.info, c = this.channels;
-        let w = win && win !== 'none' ? parseWindow(win, 65535) : null;
+        const gl = this.gl, info = this.info, c = this.channels, max = info.samples ? 65535 : 255;
+        let w = win && win !== 'none' ? parseWindow(win, max) : null;
         if (!w && win !== 'none' && info.window)
-            w = parseWindow(info.window, 65535);
-        if (!w || (w.length !== 1 && w.length !== c))
+            w = parseWindow(info.window, max);
+        if (w && w.length !== 1 && w.length !== c)
+            w = null;
+        if (!w && info.samples)
             w = defaultSampleWindow(info.samples);
         gl.activeTexture(gl.TEXTURE0);
         gl.bindTexture(gl.TEXTURE_2D_ARRAY, this.tables);
         for (let k = 0; k < c; k++) {
-            const ck = channelWindow(w, k), text = `${ck.black},${ck.white},${ck.gammaMilli}`;
+            const ck = w ? channelWindow(w, k) : null;
+            const text = ck ? `${ck.black},${ck.white},${ck.gammaMilli}` : 'none';
             if (this.built[k] === text)
                 continue;
             gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, k, 256, 256, 1, gl.RED_INTEGER,
-                gl.UNSIGNED_BYTE, buildTable(ck, 65535));
+                gl.UNSIGNED_BYTE, this.table(ck));
             this.built[k] = text;
         }
         gl.bindTexture(gl.TEXTURE_2D_ARRAY, null);
-        const list = sampleColours(colours, info.metadata, c);
         this.colour.fill(0);
-        list.forEach((hex, k) => {
+        sampleColours(colours, info.metadata, c).forEach((hex, k) => {
             for (let j = 0; j < 3; j++)
                 this.colour[3 * k + j] = parseInt(hex.slice(2 * j, 2 * j + 2), 16);
         });
-        return { window: w, colours: list };
     }
 
     bind(gl, P) {

@@ -53,7 +53,7 @@ export class TileCache {
         this.imageUrl = imageUrl;
         this.levels = levels;
         this.R = info.levels_tiled;
-        this.form = { channels: info.channels, samples: !!info.samples };
+        this.form = { channels: info.channels, codes: !!(info.samples || info.elevation) };
         this.channels = info.channels;
         this.tileBytes = decoder.tileBytes;
         this.fetcher = fetcher;

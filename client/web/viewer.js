@@ -27,7 +27,7 @@ const TAU_MS = 90;            // time constant of animated moves
  * management or premultiplication into a canvas (exact for lossless
  * images with no transparency), then the raw samples.  `via` names the
  * form used.  A height or sample store's root holds 16-bit codes: with
- * `codes` (the WebGL2 backend draws a sample store from its codes) they
+ * `codes` (the WebGL2 backend draws such a store from its codes) they
  * come raw, in a Uint16Array; else its 8-bit picture (docs/API.md: a
  * height store's gray, a sample store's window and colours, gray or RGB)
  * comes through the region endpoint.
@@ -165,16 +165,15 @@ export class Viewer {
             throw err;
         }
         const info = await r.json();
-        // Image and sample stores are drawn from their tiles on the GPU
-        // where there is WebGL2; height stores (docs/FORMAT.md 12), and
-        // every store without WebGL2, from the server's 8-bit regions.
+        // Every store is drawn from its tiles on the GPU where there is
+        // WebGL2, else from the server's 8-bit regions.
         let gl = null;
-        if (this.opts.renderer !== 'region' && GlBackend.draws(info)) {
+        if (this.opts.renderer !== 'region') {
             gl = this.gl || (this.gl = webgl2(this.canvas));
             if (!gl && this.opts.renderer === 'webgl2')
                 throw new Error('this browser has no WebGL2');
         }
-        const root = await loadRoot(url, info, gl && info.samples);
+        const root = await loadRoot(url, info, gl && (info.samples || info.elevation));
         const image = { id, info, url, levels: levelsOf(info), root };
         this.timing = { openStart: t0, metaMs: performance.now() - t0, firstCompleteMs: null };
         const onChange = () => this.schedule();
@@ -248,7 +247,7 @@ export class Viewer {
 
     applyWindow() {
         this.extra = { ...this.extra, window: this.window ? formatWindow(this.window) : this.windowNone ? 'none' : null };
-        if (this.backend && this.backend.setLut && !this.image.info.samples)
+        if (this.backend && this.backend.setLut && !this.image.info.samples && !this.image.info.elevation)
             this.backend.setLut(this.window ? lutBytes(this.window, this.image.info.channels) : null);
         // A sample store's codes on the GPU, or the server's regions (with
         // each request): the window and colours as texts.

@@ -12,12 +12,12 @@
  * Every function may be called from any thread but the GPU's own (the
  * work runs there, through gv_gpu_call).
  *
- * For tests only, so far: no program of gigaview decodes height tiles on
- * its GPU (gigaviewd and `gigaview mesh` read heights through the CPU
- * decoder, lib/render/height_region.c).  tests/test_gpu_height runs both paths against the CPU
- * decoder, which checks shaders/height_*.glsl; the WebGL2 path compiles
- * the very fragment shader the browser's client/web/height_decode.js
- * does.  A native client that draws terrain would be its first caller.
+ * No native program of gigaview calls it yet (gigaviewd and `gigaview
+ * mesh` read heights through the CPU decoder, lib/render/height_region.c);
+ * tests/test_gpu_height runs both paths against the CPU decoder, which
+ * checks shaders/height_*.glsl.  The WebGL2 path compiles the very
+ * fragment shader with which the browser viewer (client/web/
+ * codes_decode.js, with GV_LAYERED) decodes height and sample stores.
  */
 #ifndef GV_GPU_HEIGHT_H
 #define GV_GPU_HEIGHT_H

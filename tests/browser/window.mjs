@@ -29,7 +29,8 @@
 //      hash carries them; the store's default window and the codes' range
 //      (window=none) likewise, and a five-channel store ("c5"); without WebGL2 (renderer=region) the
 //      server's regions carry the window, fetched again when it changes,
-//      and equal the same region; negative control: tables for a black
+//      and equal the same region; a height store ("dem") likewise, its
+//      window on the server's gray of its codes; negative control: tables for a black
 //      point one code off must fail the match;
 //   8. no console errors.
 // Exit status 0 when everything passed, 1 otherwise.
@@ -271,6 +272,18 @@ async function run(c) {
     check(r13.complete && k13 === 'webgl2', `a five-channel sample store opens in WebGL2 (${k13})`, JSON.stringify(r13));
     await match(pg9, 'c5 level 0 1:1, five windows and colours', 'c5', 150, 100, S5, `&colours=${encodeURIComponent(C5)}`);
     await pg9.close();
+    // A height store: its codes on the GPU, the server's gray through an
+    // 8-bit window.
+    const pg10 = await newPage(c);
+    const r14 = await open(pg10, '#image=dem&x=550&y=350&z=0&r=0');
+    const k14 = await pg10.evaluate(() => window.gigaview.viewer.backend.kind);
+    check(r14.complete && k14 === 'webgl2', `a height store opens in WebGL2 (${k14})`, JSON.stringify(r14));
+    await match(pg10, 'dem level 0 1:1, no window (the server\'s gray)', 'dem', 150, 100, null);
+    const reqs14 = await requestsDuring(pg10, () => pg10.evaluate(() =>
+        window.gigaview.viewer.setWindow([{ black: 40, white: 200, gammaMilli: 700 }])));
+    check(reqs14.length === 0, `a window on a height store makes no request (${reqs14.length})`, reqs14.slice(0, 4).join(' '));
+    await match(pg10, 'dem level 0 1:1, window 40,200,0.7 on its gray', 'dem', 150, 100, '40,200,0.7');
+    await pg10.close();
     // Without WebGL2: the server's regions, fetched again for a new window.
     const pg8 = await newPage(c);
     const r12 = await open(pg8, `?renderer=region#image=s16&x=550&y=350&z=0&r=0&window=${S1}`);
