@@ -31,7 +31,7 @@ export class RegionBackend {
         this.ctl = null;
         this.stats = { regions: 0, bytes: 0, errors: 0, lastError: '' };
         this.winq = '';           // '&window=...&colours=...' of every request
-        const { px, w, h } = image.root, c = displayChannels(image.info);
+        const { picture: px, w, h } = image.root, c = displayChannels(image.info);
         const rgba = new Uint8ClampedArray(w * h * 4);
         for (let i = 0; i < w * h; i++) {
             for (let k = 0; k < 3; k++)

@@ -4,6 +4,7 @@
 // bar in image pixels) and the loading indicator (tiles on the wire or
 // waiting to be decoded).
 
+import { displayChannels } from './pyramid.js';
 import { screenToImage } from './view.js';
 
 const MINI = 180;   // overview box, CSS pixels
@@ -36,7 +37,7 @@ export class Overlay {
 
     opened() {
         const img = this.viewer.image, info = img.info;
-        const { px, w, h } = img.root, c = info.channels;
+        const { picture: px, w, h } = img.root, c = displayChannels(info);
         const rgba = new Uint8ClampedArray(w * h * 4);
         for (let i = 0; i < w * h; i++) {
             for (let k = 0; k < 3; k++)

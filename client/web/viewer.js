@@ -20,29 +20,19 @@ import { anchored, clampView, formatHash, homeView, normRot, screenToImage } fro
 const TAU_MS = 90;            // time constant of animated moves
 
 /**
- * The root level's samples ({px, w, h, via}, `channels` bytes a pixel):
- * every decode starts from them, so they must be exact.  Tried in order of
- * size: the lossless WebP the store keeps (root?format=webp; a gray root
- * has three equal channels), the lossless PNG, each decoded without colour
- * management or premultiplication into a canvas (exact for lossless
- * images with no transparency), then the raw samples.  `via` names the
- * form used.  A height or sample store's root holds 16-bit codes: with
- * `codes` (the WebGL2 backend draws such a store from its codes) they
- * come raw, in a Uint16Array; else its 8-bit picture (docs/API.md: a
- * height store's gray, a sample store's window and colours, gray or RGB)
- * comes through the region endpoint.
+ * The root level's 8-bit picture ({px, w, h, via}, displayChannels bytes
+ * a pixel): every decode of an image store starts from it, so it must be
+ * exact.  Tried in order of size: the lossless WebP the store keeps
+ * (root?format=webp; a gray root has three equal channels), the lossless
+ * PNG, each decoded without colour management or premultiplication into a
+ * canvas (exact for lossless images with no transparency), then the raw
+ * samples.  `via` names the form used.  A height or sample store's root
+ * holds 16-bit codes: its 8-bit picture (docs/API.md: a height store's
+ * gray, a sample store's window and colours, gray or RGB) comes through
+ * the region endpoint.
  */
-async function loadRoot(url, info, codes) {
+async function loadPicture(url, info) {
     const w = info.root.width, h = info.root.height, c = displayChannels(info);
-    if (codes) {
-        const rr = await fetch(`${url}/root?format=raw`);
-        if (!rr.ok)
-            throw new Error(`cannot load the root: HTTP ${rr.status}`);
-        const buf = await rr.arrayBuffer();
-        if (buf.byteLength !== w * h * info.channels * 2)
-            throw new Error(`root: ${buf.byteLength} bytes for ${w}x${h}x${info.channels} codes`);
-        return { px: new Uint16Array(buf), w, h, via: 'raw codes' };
-    }
     const forms = info.elevation || info.samples
         ? [['region', `${url}/region?level=${info.root.level}&x=0&y=0&w=${w}&h=${h}&format=png`]]
         : [['webp', `${url}/root?format=webp`], ['png', `${url}/root`]];
@@ -79,6 +69,28 @@ async function loadRoot(url, info, codes) {
         throw new Error(`root: ${px.length} bytes for ${w}x${h}x${c}`);
     return { px, w, h, via: 'raw' };
 }
+
+/**
+ * The root level ({px, w, h, via, picture}): loadPicture's, and with
+ * `codes` (the WebGL2 backend draws a height or sample store from its
+ * codes) px holds the root's codes instead (root?format=raw, a
+ * Uint16Array of info.channels a pixel) and picture the 8-bit picture
+ * (the overview map and the window's auto points use it).
+ */
+async function loadRoot(url, info, codes) {
+    const pic = await loadPicture(url, info);
+    if (!codes)
+        return { ...pic, picture: pic.px };
+    const w = info.root.width, h = info.root.height;
+    const rr = await fetch(`${url}/root?format=raw`);
+    if (!rr.ok)
+        throw new Error(`cannot load the root: HTTP ${rr.status}`);
+    const buf = await rr.arrayBuffer();
+    if (buf.byteLength !== w * h * info.channels * 2)
+        throw new Error(`root: ${buf.byteLength} bytes for ${w}x${h}x${info.channels} codes`);
+    return { px: new Uint16Array(buf), w, h, via: 'raw codes', picture: pic.px };
+}
+
 const HASH_REST_MS = 250;     // the view rests this long before the hash follows
 
 export class Viewer {

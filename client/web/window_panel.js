@@ -63,15 +63,21 @@ export class WindowPanel {
         const c = this.channels();
         let pts;
         if (image.info.samples) {
-            // A sample store: the root's 16-bit codes (its picture is 8-bit).
-            const r = await fetch(`${image.url}/root?format=raw`);
-            if (!r.ok || this.viewer.image !== image)
-                return;
-            pts = autoPoints(new Uint16Array(await r.arrayBuffer()), c, c, 0.005, 0.995, 65535);
+            // A sample store: the root's 16-bit codes (its picture is
+            // 8-bit), which the WebGL2 viewer holds already.
+            let codes = root.px instanceof Uint16Array ? root.px : null;
+            if (!codes) {
+                const r = await fetch(`${image.url}/root?format=raw`);
+                if (!r.ok || this.viewer.image !== image)
+                    return;
+                codes = new Uint16Array(await r.arrayBuffer());
+            }
+            pts = autoPoints(codes, c, c, 0.005, 0.995, 65535);
         } else {
-            // A gray root may come as three equal channels (viewer.js loadRoot).
-            const stride = root.px.length / (root.w * root.h);
-            pts = autoPoints(root.px, c, stride);
+            // The 8-bit picture: a height store's gray; a gray root may
+            // come as three equal channels (viewer.js loadPicture).
+            const stride = root.picture.length / (root.w * root.h);
+            pts = autoPoints(root.picture, c, stride);
         }
         const cur = this.current();
         let w = pts.map(([lo, hi], k) => ({ black: lo, white: hi, gammaMilli: channelWindow(cur, k).gammaMilli }));

@@ -271,6 +271,28 @@ async function run(c) {
     const k13 = await pg9.evaluate(() => window.gigaview.viewer.backend.kind);
     check(r13.complete && k13 === 'webgl2', `a five-channel sample store opens in WebGL2 (${k13})`, JSON.stringify(r13));
     await match(pg9, 'c5 level 0 1:1, five windows and colours', 'c5', 150, 100, S5, `&colours=${encodeURIComponent(C5)}`);
+    // The overview is the server's 8-bit picture of the root (not codes
+    // clamped to white): compare it with the root region it was made from.
+    const mini = await pg9.evaluate(async () => {
+        const v = window.gigaview.viewer, info = v.image.info, pic = v.image.root.picture;
+        const r = await fetch(`${v.image.url}/region?level=${info.root.level}&x=0&y=0&w=${info.root.width}&h=${info.root.height}&format=png`);
+        const b = await createImageBitmap(await r.blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+        const cv = new OffscreenCanvas(b.width, b.height), g = cv.getContext('2d');
+        g.drawImage(b, 0, 0);
+        const ref = g.getImageData(0, 0, b.width, b.height).data;
+        let same = 0;
+        for (let i = 0; i < b.width * b.height; i++)
+            same += pic[3 * i] === ref[4 * i] && pic[3 * i + 1] === ref[4 * i + 1] && pic[3 * i + 2] === ref[4 * i + 2];
+        return { same, n: b.width * b.height, len: pic.length, hidden: document.getElementById('mini').hidden };
+    });
+    check(mini.same === mini.n && mini.len === 3 * mini.n && !mini.hidden,
+        `the overview of a five-channel store is its root's 8-bit picture (${mini.same}/${mini.n} pixels)`, JSON.stringify(mini));
+    await pg9.click('#window-btn');
+    const reqs16 = await requestsDuring(pg9, () => pg9.click('#w-auto'));
+    const auto16 = await pg9.evaluate(() => window.gigaview.viewer.extra.window);
+    check(reqs16.length === 0 && !!auto16, `auto on a sample store reads the codes it holds, without a request (${auto16}; ${reqs16.length})`,
+        reqs16.join(' '));
+    await match(pg9, 'c5 level 0 1:1, auto window', 'c5', 150, 100, auto16, `&colours=${encodeURIComponent(C5)}`);
     await pg9.close();
     // A height store: its codes on the GPU, the server's gray through an
     // 8-bit window.
@@ -283,6 +305,13 @@ async function run(c) {
         window.gigaview.viewer.setWindow([{ black: 40, white: 200, gammaMilli: 700 }])));
     check(reqs14.length === 0, `a window on a height store makes no request (${reqs14.length})`, reqs14.slice(0, 4).join(' '));
     await match(pg10, 'dem level 0 1:1, window 40,200,0.7 on its gray', 'dem', 150, 100, '40,200,0.7');
+    await pg10.click('#window-btn');
+    const reqs15 = await requestsDuring(pg10, () => pg10.click('#w-auto'));
+    const auto15 = await pg10.evaluate(() => window.gigaview.viewer.extra.window);
+    check(reqs15.length === 0 && /^[0-9]+,[0-9]+,0\.700$/.test(auto15 || '') && auto15 !== '0,255,0.700',
+        `auto on a height store sets black and white from its gray root (${auto15}) without a request (${reqs15.length})`,
+        `${auto15}; ${reqs15.join(' ')}`);
+    await match(pg10, 'dem level 0 1:1, auto window', 'dem', 150, 100, auto15);
     await pg10.close();
     // Without WebGL2: the server's regions, fetched again for a new window.
     const pg8 = await newPage(c);
