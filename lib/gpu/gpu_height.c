@@ -1,7 +1,9 @@
 /*
- * gpu_height.c - the GPU height tile decoder (see gpu_height.h).
+ * gpu_height.c - the GPU decoder of codes (see gpu_height.h).
  *
- * One tile per call.  On the compute path the storage buffers are reused
+ * A tile is a 513x513xC R16UI array texture (shaders/height_decode.frag.glsl
+ * with GV_LAYERED, as the browser compiles it), each layer decoded from the
+ * same layer of its parent, a channel at a time.  One tile per call.  On the compute path the storage buffers are reused
  * from tile to tile, so each decode waits for a fence after its draw:
  * shader storage is not ordered after earlier draws' reads (the image
  * decoder, gpu_decode.c, found llvmpipe deferring draws past a later
@@ -14,6 +16,7 @@
 
 #include "base/byteorder.h"
 #include "codec/height_tile.h"
+#include "codec/samples_tile.h"
 #include "gpu/gpu_height.h"
 #include "gpu/gpu_module_int.h"
 #include "shaders.h"
@@ -21,15 +24,16 @@
 struct gv_gpu_height {
     struct gv_gpu *gpu;
     enum gv_gpu_path path;
+    int channels;                      /* layers of a tile */
     GLuint decode, rans, fbo, vao, words, qbuf, qtex;
-    GLint u_parent, u_quadrant, u_e, u_coded, u_q;
+    GLint u_parent, u_quadrant, u_e, u_coded, u_q, u_layer;
     int32_t *cpu_q;                    /* WebGL2 path */
 };
 
 struct job {
     struct gv_gpu_height *h;
-    const uint8_t *buf;
-    size_t len;
+    const uint8_t *part[GV_SAMPLES_MAX_CHANNELS];   /* a buffer a channel */
+    size_t part_len[GV_SAMPLES_MAX_CHANNELS];
     const uint16_t *codes_in;
     uint16_t *codes_out;
     uint32_t parent, handle;
@@ -42,11 +46,12 @@ static int setup(void *arg, struct gv_error *err)
     const struct gv_gpu_uniform decode_u[] = {
         {"u_parent", &h->u_parent}, {"u_quadrant", &h->u_quadrant},
         {"u_e", &h->u_e}, {"u_coded", &h->u_coded}, {"u_q", &h->u_q},
-        {NULL, NULL},
+        {"u_layer", &h->u_layer}, {NULL, NULL},
     };
     const struct gv_gpu_program_def defs[] = {
         {&h->decode, {{GL_VERTEX_SHADER, {gv_shader_fullscreen_vert}},
-                      {GL_FRAGMENT_SHADER, {gv_shader_height_decode_frag}}},
+                      {GL_FRAGMENT_SHADER, {"#define GV_LAYERED 1\n",
+                                            gv_shader_height_decode_frag}}},
          decode_u},
         {&h->rans, {{GL_COMPUTE_SHADER, {gv_shader_height_rans_comp}}}, NULL},
     };
@@ -79,6 +84,12 @@ struct gv_gpu_height *gv_gpu_height_new(struct gv_gpu *g,
                                         struct gv_error *err)
 {
     const enum gv_gpu_path path = o ? o->path : GV_GPU_PATH_COMPUTE;
+    const int channels = o && o->channels ? o->channels : 1;
+    if (channels < 1 || channels > GV_SAMPLES_MAX_CHANNELS) {
+        gv_fail(err, GV_EINVAL, "gpu: %d channels of codes (1 to %d)", channels,
+                GV_SAMPLES_MAX_CHANNELS);
+        return NULL;
+    }
     struct gv_gpu_height *h = calloc(1, sizeof *h);
     if (!h) {
         gv_fail(err, GV_ENOMEM, "gpu: out of memory");
@@ -86,6 +97,7 @@ struct gv_gpu_height *gv_gpu_height_new(struct gv_gpu *g,
     }
     h->gpu = g;
     h->path = path;
+    h->channels = channels;
     if (path == GV_GPU_PATH_WEBGL2 && !gv_gpu_info(g)->es) {
         gv_fail(err, GV_EFORMAT, "gpu: the WebGL2 path needs OpenGL ES");
         free(h);
@@ -123,24 +135,35 @@ void gv_gpu_height_free(struct gv_gpu_height *h)
     free(h);
 }
 
-static GLuint new_texture(void)
+/* A new tile texture of h->channels layers, bound on the active unit. */
+static GLuint new_texture(const struct gv_gpu_height *h)
 {
     GLuint tex;
     glGenTextures(1, &tex);
-    glBindTexture(GL_TEXTURE_2D, tex);
-    glTexStorage2D(GL_TEXTURE_2D, 1, GL_R16UI, GV_HT_SIDE, GV_HT_SIDE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, tex);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R16UI, GV_HT_SIDE, GV_HT_SIDE,
+                   h->channels);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     return tex;
 }
 
 static int upload(void *arg, struct gv_error *err)
 {
     struct job *j = arg;
-    GLuint tex = new_texture();
+    const int c = j->h->channels;
+    uint16_t *plane = malloc(sizeof *plane * GV_HT_SAMPLES);
+    if (!plane)
+        return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+    GLuint tex = new_texture(j->h);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 2);
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, GV_HT_SIDE, GV_HT_SIDE,
-                    GL_RED_INTEGER, GL_UNSIGNED_SHORT, j->codes_in);
+    for (int k = 0; k < c; k++) {
+        for (size_t i = 0; i < GV_HT_SAMPLES; i++)
+            plane[i] = j->codes_in[i * (size_t)c + (size_t)k];
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, k, GV_HT_SIDE, GV_HT_SIDE, 1,
+                        GL_RED_INTEGER, GL_UNSIGNED_SHORT, plane);
+    }
+    free(plane);
     j->handle = tex;
     return gv_gpu_gl_check(err, "height tile upload");
 }
@@ -155,19 +178,18 @@ int gv_gpu_height_upload(struct gv_gpu_height *h, const uint16_t *codes,
     return 0;
 }
 
-static int decode(void *arg, struct gv_error *err)
+/* Channel k of job j's tile into layer k of texture tex (bound to the
+ * framebuffer here), from layer k of the parent. */
+static int decode_layer(struct job *j, GLuint tex, int k, struct gv_error *err)
 {
-    struct job *j = arg;
     struct gv_gpu_height *h = j->h;
-    const int coded = j->buf[0] == 1;
-    /* The target first: new_texture binds it on the active unit. */
-    GLuint tex = new_texture();
+    const uint8_t *buf = j->part[k];
+    const size_t len = j->part_len[k];
+    const int coded = buf[0] == 1;
     if (coded && h->path == GV_GPU_PATH_WEBGL2) {
         int e;
-        if (gv_height_tile_residuals(j->buf, j->len, h->cpu_q, &e, err) < 0) {
-            glDeleteTextures(1, &tex);
+        if (gv_height_tile_residuals(buf, len, h->cpu_q, &e, err) < 0)
             return -1;
-        }
         glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, h->qtex);
         glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
@@ -175,8 +197,7 @@ static int decode(void *arg, struct gv_error *err)
                         GL_RED_INTEGER, GL_INT, h->cpu_q);
     } else if (coded) {
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, h->words);
-        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)j->len, j->buf,
-                     GL_STREAM_DRAW);
+        glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)len, buf, GL_STREAM_DRAW);
         glUseProgram(h->rans);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, h->words);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, h->qbuf);
@@ -186,27 +207,41 @@ static int decode(void *arg, struct gv_error *err)
 
     glBindVertexArray(h->vao);
     glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, j->parent);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, j->parent);
     glUseProgram(h->decode);
     glUniform1i(h->u_parent, 0);
+    glUniform1i(h->u_layer, k);
     glUniform2i(h->u_quadrant, j->qx, j->qy);
-    glUniform1i(h->u_e, gv_get16(j->buf + 2));
+    glUniform1i(h->u_e, gv_get16(buf + 2));
     glUniform1i(h->u_coded, coded);
     if (h->path == GV_GPU_PATH_WEBGL2)
         glUniform1i(h->u_q, 1);
     else
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, h->qbuf);
     glBindFramebuffer(GL_FRAMEBUFFER, h->fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
-                           tex, 0);
+    glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, tex, 0, k);
     glViewport(0, 0, GV_HT_SIDE, GV_HT_SIDE);
     glDrawArrays(GL_TRIANGLES, 0, 3);
-    /* The next tile reuses the buffers: wait for this draw. */
+    /* The next channel or tile reuses the buffers: wait for this draw. */
     GLsync fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
     while (glClientWaitSync(fence, GL_SYNC_FLUSH_COMMANDS_BIT, 1000000000) ==
            GL_TIMEOUT_EXPIRED)
         ;
     glDeleteSync(fence);
+    return 0;
+}
+
+static int decode(void *arg, struct gv_error *err)
+{
+    struct job *j = arg;
+    /* The target first: new_texture binds it on the active unit. */
+    glActiveTexture(GL_TEXTURE0);
+    GLuint tex = new_texture(j->h);
+    for (int k = 0; k < j->h->channels; k++)
+        if (decode_layer(j, tex, k, err) < 0) {
+            glDeleteTextures(1, &tex);
+            return -1;
+        }
     j->handle = tex;
     return gv_gpu_gl_check(err, "height tile decode");
 }
@@ -215,10 +250,10 @@ int gv_gpu_height_decode(struct gv_gpu_height *h, const uint8_t *buf,
                          size_t len, uint32_t parent, int qx, int qy,
                          uint32_t *handle, struct gv_error *err)
 {
-    if (gv_height_tile_check(buf, len, err) < 0)
+    struct job j = {.h = h, .parent = parent, .qx = qx, .qy = qy};
+    if (gv_samples_tile_check(buf, len, h->channels, err) < 0 ||
+        gv_samples_tile_split(buf, len, h->channels, j.part, j.part_len, err) < 0)
         return -1;
-    struct job j = {.h = h, .buf = buf, .len = len, .parent = parent,
-                    .qx = qx, .qy = qy};
     if (gv_gpu_call(h->gpu, decode, &j, err) < 0)
         return -1;
     *handle = j.handle;
@@ -228,16 +263,18 @@ int gv_gpu_height_decode(struct gv_gpu_height *h, const uint8_t *buf,
 static int readback(void *arg, struct gv_error *err)
 {
     struct job *j = arg;
+    const int c = j->h->channels;
     GLuint *rgba = malloc(sizeof *rgba * 4 * GV_HT_SAMPLES);
     if (!rgba)
         return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
     glBindFramebuffer(GL_FRAMEBUFFER, j->h->fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
-                           j->handle, 0);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    glReadPixels(0, 0, GV_HT_SIDE, GV_HT_SIDE, GL_RGBA_INTEGER, GL_UNSIGNED_INT, rgba);
-    for (int i = 0; i < GV_HT_SAMPLES; i++)
-        j->codes_out[i] = (uint16_t)rgba[4 * i];
+    for (int k = 0; k < c; k++) {
+        glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, j->handle, 0, k);
+        glReadPixels(0, 0, GV_HT_SIDE, GV_HT_SIDE, GL_RGBA_INTEGER, GL_UNSIGNED_INT, rgba);
+        for (size_t i = 0; i < GV_HT_SAMPLES; i++)
+            j->codes_out[i * (size_t)c + (size_t)k] = (uint16_t)rgba[4 * i];
+    }
     free(rgba);
     return gv_gpu_gl_check(err, "height tile read-back");
 }

@@ -1,9 +1,10 @@
 /*
- * gpu_height.h - decoding height tiles on the GPU (docs/FORMAT.md section
- * 12), bit for bit what lib/codec/height_tile.c does.
+ * gpu_height.h - decoding tiles of 16-bit codes on the GPU: height stores
+ * (docs/FORMAT.md section 12) and sample stores (section 13, a height tile
+ * buffer a channel), bit for bit what lib/codec/height_tile.c does.
  *
- * A decoded height tile lives on the GPU as a 513x513 R16UI texture named
- * by a handle.  On the compute path (GLSL ES 3.10 / GL 4.30) a compute pass
+ * A decoded tile lives on the GPU as a 513x513xC R16UI array texture (a
+ * layer a channel, C = 1 for a height store) named by a handle.  On the compute path (GLSL ES 3.10 / GL 4.30) a compute pass
  * (shaders/height_rans.comp.glsl, one invocation per stream) entropy-
  * decodes the buffer into a storage buffer of q, then a fragment pass
  * (shaders/height_decode.frag.glsl) predicts from the parent texture and
@@ -26,6 +27,7 @@
 #include <stdint.h>
 
 #include "base/error.h"
+#include "codec/samples_tile.h"
 #include "gpu/gpu.h"
 
 struct gv_gpu_height;
@@ -35,6 +37,9 @@ struct gv_gpu_height_opts {
     /* GV_GPU_PATH_COMPUTE (0) or GV_GPU_PATH_WEBGL2 (needs an ES context,
      * else GV_EFORMAT) */
     enum gv_gpu_path path;
+    /* channels of codes a tile, 1 to GV_SAMPLES_MAX_CHANNELS (0: 1; else
+     * GV_EINVAL) */
+    int channels;
 };
 
 /* Compile the programs described by *o (NULL: every option 0).  g is
@@ -47,19 +52,20 @@ struct gv_gpu_height *gv_gpu_height_new(struct gv_gpu *g,
 /* Free every texture and program.  NULL does nothing. */
 void gv_gpu_height_free(struct gv_gpu_height *h);
 
-/* Upload 513x513 codes (the root tile) as a new texture: 0 with *handle,
- * or -1. */
+/* Upload 513x513 pixels of C interleaved codes (the root tile) as a new
+ * texture: 0 with *handle, or -1. */
 int gv_gpu_height_upload(struct gv_gpu_height *h, const uint16_t *codes,
                          uint32_t *handle, struct gv_error *err);
 
-/* Decode buffer buf (checked with gv_height_tile_check first) against the
- * parent texture and quadrant (qx,qy) into a new texture: 0 with
- * *handle, or -1 with *err. */
+/* Decode tile buffer buf (C height tile buffers one after another,
+ * checked with gv_samples_tile_check first) against the parent texture
+ * and quadrant (qx,qy) into a new texture: 0 with *handle, or -1 with
+ * *err. */
 int gv_gpu_height_decode(struct gv_gpu_height *h, const uint8_t *buf,
                          size_t len, uint32_t parent, int qx, int qy,
                          uint32_t *handle, struct gv_error *err);
 
-/* Read a tile back as 513x513 codes.  0 or -1. */
+/* Read a tile back as 513x513 pixels of C interleaved codes.  0 or -1. */
 int gv_gpu_height_read(struct gv_gpu_height *h, uint32_t handle,
                        uint16_t *codes, struct gv_error *err);
 
