@@ -111,10 +111,11 @@ static void check_prepare(struct gv_gpu_decoder *gd, const struct gv_geometry *g
 {
     struct gv_error err = {0};
     const size_t tb = gv_tile_bytes(g->channels);
+    const struct gv_gpu_tiles tiles = gv_gpu_tiles_image(gd, g->channels);
     uint8_t *px = malloc(tb);
     const uint8_t *ref;
     struct gv_gpu_cache *gc;
-    gc = gv_gpu_cache_new(gd, g, root, rw, rh, n * GV_GPU_TILE_BYTES, fetch, src, &err);
+    gc = gv_gpu_cache_new(&tiles, g, root, rw, rh, n * GV_GPU_TILE_BYTES, fetch, src, &err);
     if (!gc)
         fail("gpu cache: %s", err.text);
     const uint32_t lx = g->level[0].tiles_x, ly = g->level[0].tiles_y;
@@ -138,7 +139,7 @@ static void check_prepare(struct gv_gpu_decoder *gd, const struct gv_geometry *g
           "(%d differ)", name, n, (unsigned long long)ps.decodes,
           (unsigned long long)ps.fetches, lx * ly, bad);
     gv_gpu_cache_free(gc);
-    gc = gv_gpu_cache_new(gd, g, root, rw, rh, 2 * GV_GPU_TILE_BYTES, fetch, src, &err);
+    gc = gv_gpu_cache_new(&tiles, g, root, rw, rh, 2 * GV_GPU_TILE_BYTES, fetch, src, &err);
     if (!gc)
         fail("gpu cache: %s", err.text);
     prc = gv_gpu_cache_prepare(gc, 0, 0, 0, lx - 1, ly - 1, &err);
@@ -174,11 +175,12 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     struct gv_gpu_decoder *gd = gv_gpu_decoder_new(gpu, &(struct gv_gpu_decoder_opts){.channels = c}, &err);
     if (!gd)
         fail("gpu decoder: %s", err.text);
+    const struct gv_gpu_tiles tiles = gv_gpu_tiles_image(gd, c);
     uint32_t rw, rh;
     const uint8_t *root = gv_store_root(s, 0, &rw, &rh);
     struct source src = {.s = s, .channels = c, .fail_level = -1};
     const size_t budget = budget_tiles * GV_GPU_TILE_BYTES;
-    struct gv_gpu_cache *gc = gv_gpu_cache_new(gd, g, root, rw, rh, budget,
+    struct gv_gpu_cache *gc = gv_gpu_cache_new(&tiles, g, root, rw, rh, budget,
                                                fetch, &src, &err);
     if (!gc)
         fail("gpu cache: %s", err.text);
@@ -221,7 +223,7 @@ static void check_store(struct gv_gpu *gpu, const char *input, double psnr,
     /* Faults: a fetch error, then a truncated buffer, on a level-0 tile
      * whose ancestors are fine.  Each request fails alone. */
     gv_gpu_cache_free(gc);
-    gc = gv_gpu_cache_new(gd, g, root, rw, rh, budget, fetch, &src, &err);
+    gc = gv_gpu_cache_new(&tiles, g, root, rw, rh, budget, fetch, &src, &err);
     if (!gc)
         fail("gpu cache: %s", err.text);
     src.fail_level = 0;

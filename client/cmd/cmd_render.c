@@ -297,7 +297,8 @@ static int start_decoding(struct session *s, struct gv_error *err)
     if (gv_http_root(s->http, &s->img, 0, s->dc, &root, &rw, &rh, err) < 0)
         return -1;
     s->fetch = (struct fetch_ctx){&s->nd, s->http, &s->img, s->dc};
-    s->cache = gv_gpu_cache_new(s->dec, &s->geo, root, rw, rh, s->gpu_budget,
+    const struct gv_gpu_tiles tiles = gv_gpu_tiles_image(s->dec, s->img.channels);
+    s->cache = gv_gpu_cache_new(&tiles, &s->geo, root, rw, rh, s->gpu_budget,
                                 fetch_tile, &s->fetch, err);
     free(root);
     return s->cache ? 0 : -1;

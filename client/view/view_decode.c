@@ -166,8 +166,10 @@ static void *decode_thread(void *arg)
     struct gv_error err = {0};
     if (!(d->dec = gv_gpu_decoder_new(d->gpu, &(struct gv_gpu_decoder_opts){
                                           .channels = d->geo.channels}, &err)) ||
-        !(d->cache = gv_gpu_cache_new(d->dec, &d->geo, d->root, d->root_w, d->root_h,
-                                      d->decode_bytes, from_job, d, &err))) {
+        !(d->cache = gv_gpu_cache_new(
+              &(struct gv_gpu_tiles[]){gv_gpu_tiles_image(d->dec, d->geo.channels)}[0],
+              &d->geo, d->root, d->root_w, d->root_h, d->decode_bytes, from_job, d,
+              &err))) {
         struct node *n = calloc(1, sizeof *n);
         if (n) {
             n->done.slot = -1;

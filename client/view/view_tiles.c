@@ -317,7 +317,8 @@ struct vt *vt_new(struct gv_gpu *g, struct vf_result *res,
     if (!(t->dec = gv_gpu_decoder_new(g, &(struct gv_gpu_decoder_opts){
                                           .channels = im->channels}, err)))
         goto fail;
-    t->cache = gv_gpu_cache_new(t->dec, &t->geo, res->mip[0], res->mip_w[0],
+    const struct gv_gpu_tiles tiles = gv_gpu_tiles_image(t->dec, im->channels);
+    t->cache = gv_gpu_cache_new(&tiles, &t->geo, res->mip[0], res->mip_w[0],
                                 res->mip_h[0], o->decode_bytes, from_memory, t, err);
     if (!t->cache)
         goto fail;

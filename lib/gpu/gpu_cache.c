@@ -9,7 +9,7 @@
  * survives until the child is made, whatever the budget.  A range of tiles
  * can be prepared in one batch: the missing tiles and their missing
  * ancestors, found level by level upwards, go to the GPU in one call,
- * top level first.
+ * top level first (where the decoder batches: image tiles).
  */
 #include <stdlib.h>
 #include <string.h>
@@ -26,9 +26,9 @@ struct entry {
 };
 
 struct gv_gpu_cache {
-    struct gv_gpu_decoder *dec;
+    struct gv_gpu_tiles t;
     struct gv_geometry geo;
-    uint8_t *root_tile;             /* padded root tile, 513x513xC */
+    uint8_t *root_tile;             /* padded root tile, 513x513 pixels */
     size_t budget;
     gv_tile_fetch_fn fetch;
     void *ctx;
@@ -38,9 +38,74 @@ struct gv_gpu_cache {
     struct gv_gpu_cache_stats st;
 };
 
-struct gv_gpu_cache *gv_gpu_cache_new(struct gv_gpu_decoder *d,
+static int image_upload(void *dec, const void *tile, uint32_t *handle,
+                        struct gv_error *err)
+{
+    return gv_gpu_upload_tile(dec, tile, handle, err);
+}
+
+static int image_decode(void *dec, const uint8_t *buf, size_t len, uint32_t parent,
+                        int qx, int qy, uint32_t *handle, struct gv_error *err)
+{
+    return gv_gpu_decode_tile(dec, buf, len, parent, qx, qy, handle, err);
+}
+
+static int image_batch(void *dec, struct gv_gpu_tile_job *jobs, size_t n,
+                       struct gv_error *err)
+{
+    return gv_gpu_decode_batch(dec, jobs, n, err);
+}
+
+static int image_read(void *dec, uint32_t handle, void *pixels, struct gv_error *err)
+{
+    return gv_gpu_read_tile(dec, handle, 0, pixels, err);
+}
+
+static void image_release(void *dec, uint32_t handle)
+{
+    gv_gpu_release(dec, handle);
+}
+
+struct gv_gpu_tiles gv_gpu_tiles_image(struct gv_gpu_decoder *d, int channels)
+{
+    return (struct gv_gpu_tiles){d, GV_GPU_TILE_BYTES, (size_t)channels,
+                                 image_upload, image_decode, image_batch,
+                                 image_read, image_release};
+}
+
+static int codes_upload(void *dec, const void *tile, uint32_t *handle,
+                        struct gv_error *err)
+{
+    return gv_gpu_height_upload(dec, tile, handle, err);
+}
+
+static int codes_decode(void *dec, const uint8_t *buf, size_t len, uint32_t parent,
+                        int qx, int qy, uint32_t *handle, struct gv_error *err)
+{
+    return gv_gpu_height_decode(dec, buf, len, parent, qx, qy, handle, err);
+}
+
+static int codes_read(void *dec, uint32_t handle, void *pixels, struct gv_error *err)
+{
+    return gv_gpu_height_read(dec, handle, pixels, err);
+}
+
+static void codes_release(void *dec, uint32_t handle)
+{
+    gv_gpu_height_release(dec, handle);
+}
+
+struct gv_gpu_tiles gv_gpu_tiles_codes(struct gv_gpu_height *h, int channels)
+{
+    const size_t px = sizeof(uint16_t) * (size_t)channels;
+    return (struct gv_gpu_tiles){h, (size_t)GV_TILE * GV_TILE * px, px,
+                                 codes_upload, codes_decode, NULL, codes_read,
+                                 codes_release};
+}
+
+struct gv_gpu_cache *gv_gpu_cache_new(const struct gv_gpu_tiles *t,
                                       const struct gv_geometry *g,
-                                      const uint8_t *root, uint32_t root_w,
+                                      const void *root, uint32_t root_w,
                                       uint32_t root_h, size_t budget,
                                       gv_tile_fetch_fn fetch, void *ctx,
                                       struct gv_error *err)
@@ -50,14 +115,15 @@ struct gv_gpu_cache *gv_gpu_cache_new(struct gv_gpu_decoder *d,
         return NULL;
     }
     struct gv_gpu_cache *c = calloc(1, sizeof *c);
-    if (!c || !(c->root_tile = malloc(gv_tile_bytes(g->channels)))) {
+    if (!c || !(c->root_tile = malloc((size_t)GV_TILE * GV_TILE * t->pixel_bytes))) {
         free(c);
         gv_fail(err, GV_ENOMEM, "gpu cache: out of memory");
         return NULL;
     }
-    c->dec = d;
+    c->t = *t;
     c->geo = *g;
-    gv_root_tile(root, root_w, root_h, g->channels, c->root_tile);
+    /* The clamp padding moves whole pixels, whatever their bytes. */
+    gv_root_tile(root, root_w, root_h, (int)t->pixel_bytes, c->root_tile);
     c->budget = budget;
     c->fetch = fetch;
     c->ctx = ctx;
@@ -69,7 +135,7 @@ void gv_gpu_cache_free(struct gv_gpu_cache *c)
     if (!c)
         return;
     for (size_t i = 0; i < c->n; i++)
-        gv_gpu_release(c->dec, c->e[i].handle);
+        c->t.release(c->t.dec, c->e[i].handle);
     free(c->e);
     free(c->root_tile);
     free(c);
@@ -95,9 +161,9 @@ static void evict(struct gv_gpu_cache *c)
         for (size_t i = 1; i < c->n; i++)
             if (c->e[i].stamp < c->e[old].stamp)
                 old = i;
-        gv_gpu_release(c->dec, c->e[old].handle);
+        c->t.release(c->t.dec, c->e[old].handle);
         c->e[old] = c->e[--c->n];
-        c->st.bytes -= GV_GPU_TILE_BYTES;
+        c->st.bytes -= c->t.gpu_bytes;
         c->st.evictions++;
     }
     c->st.tiles = c->n;
@@ -110,14 +176,14 @@ static int insert(struct gv_gpu_cache *c, int level, uint32_t tx, uint32_t ty,
         size_t cap = c->cap ? 2 * c->cap : 16;
         struct entry *e = realloc(c->e, cap * sizeof *e);
         if (!e) {
-            gv_gpu_release(c->dec, handle);
+            c->t.release(c->t.dec, handle);
             return gv_fail(err, GV_ENOMEM, "gpu cache: out of memory");
         }
         c->e = e;
         c->cap = cap;
     }
     c->e[c->n++] = (struct entry){level, tx, ty, handle, ++c->clock};
-    c->st.bytes += GV_GPU_TILE_BYTES;
+    c->st.bytes += c->t.gpu_bytes;
     if (c->st.bytes > c->st.peak_bytes)
         c->st.peak_bytes = c->st.bytes;
     evict(c);
@@ -142,7 +208,7 @@ int gv_gpu_cache_get(struct gv_gpu_cache *c, int level, uint32_t tx,
     }
     uint32_t h;
     if (level == g->root) {
-        if (gv_gpu_upload_tile(c->dec, c->root_tile, &h, err) < 0)
+        if (c->t.upload(c->t.dec, c->root_tile, &h, err) < 0)
             return -1;
     } else {
         /* The parent first (recursively); it is the newest entry when the
@@ -155,7 +221,7 @@ int gv_gpu_cache_get(struct gv_gpu_cache *c, int level, uint32_t tx,
         c->st.fetches++;
         if (c->fetch(c->ctx, level, tx, ty, &buf, &len, err) < 0)
             return -1;
-        int rc = gv_gpu_decode_tile(c->dec, buf, len, parent, (int)(tx & 1),
+        int rc = c->t.decode(c->t.dec, buf, len, parent, (int)(tx & 1),
                                     (int)(ty & 1), &h, err);
         free(buf);
         if (rc < 0)
@@ -239,8 +305,8 @@ int gv_gpu_cache_prepare(struct gv_gpu_cache *c, int level, uint32_t t0x,
                          struct gv_error *err)
 {
     const struct gv_geometry *g = &c->geo;
-    if (level < 0 || level >= g->root)
-        return 0;
+    if (level < 0 || level >= g->root || !c->t.batch)
+        return 0;   /* a decoder without batches decodes tile by tile */
     const struct gv_level *l = &g->level[level];
     if (t1x >= l->tiles_x)
         t1x = l->tiles_x - 1;
@@ -252,7 +318,7 @@ int gv_gpu_cache_prepare(struct gv_gpu_cache *c, int level, uint32_t t0x,
     uint32_t root_h;
     if (gv_gpu_cache_get(c, g->root, 0, 0, &root_h, err) < 0)
         return -1;
-    const size_t max = c->budget / GV_GPU_TILE_BYTES;
+    const size_t max = c->budget / c->t.gpu_bytes;
     struct want *w = NULL;
     const long n = missing_tiles(c, level, t0x, t0y, t1x, t1y, max, &w);
     if (n <= 0) {
@@ -277,14 +343,14 @@ int gv_gpu_cache_prepare(struct gv_gpu_cache *c, int level, uint32_t t0x,
             .qx = (int)(t->tx & 1), .qy = (int)(t->ty & 1)};
     }
     if (rc == 0)
-        rc = gv_gpu_decode_batch(c->dec, jobs, (size_t)n, err);
+        rc = c->t.batch(c->t.dec, jobs, (size_t)n, err);
     for (long j = 0; j < n && rc == 0; j++) {
         const struct want *t = &w[n - 1 - j];
         c->st.decodes++;
         if (insert(c, t->level, t->tx, t->ty, jobs[j].handle, err) < 0) {
             /* insert released this one; the rest were never cached */
             for (long k = j + 1; k < n; k++)
-                gv_gpu_release(c->dec, jobs[k].handle);
+                c->t.release(c->t.dec, jobs[k].handle);
             rc = -1;
         }
     }
@@ -296,12 +362,12 @@ int gv_gpu_cache_prepare(struct gv_gpu_cache *c, int level, uint32_t t0x,
 }
 
 int gv_gpu_cache_read(struct gv_gpu_cache *c, int level, uint32_t tx,
-                      uint32_t ty, uint8_t *pixels, struct gv_error *err)
+                      uint32_t ty, void *pixels, struct gv_error *err)
 {
     uint32_t h = 0;
     if (gv_gpu_cache_get(c, level, tx, ty, &h, err) < 0)
         return -1;
-    return gv_gpu_read_tile(c->dec, h, 0, pixels, err);
+    return c->t.read(c->t.dec, h, pixels, err);
 }
 
 void gv_gpu_cache_stats(const struct gv_gpu_cache *c,

@@ -3,12 +3,13 @@
  * LRU cache bounded in bytes (section 7.5).
  *
  * Asking for tile T of level k decodes it on the GPU from its tile buffer
- * and its parent's texture; a parent that is not cached is obtained the
+ * and its parent's texture (an image tile, or a tile of 16-bit codes:
+ * struct gv_gpu_tiles); a parent that is not cached is obtained the
  * same way first, up to the root tile, which is uploaded from the root
  * image.  Tile buffers come from a callback the caller supplies, so the
  * cache works the same over HTTP and over a local store.  Every texture
- * (514x514 RGBA8UI plus its 257x257 mip, GV_GPU_TILE_BYTES) counts against
- * the budget; the least recently used ones are deleted first, and the tile
+ * (an image tile's 514x514 RGBA8UI plus its 257x257 mip,
+ * GV_GPU_TILE_BYTES) counts against the budget; the least recently used ones are deleted first, and the tile
  * just decoded is always kept, so any budget works (a small one merely
  * re-pulls ancestors more often).  Not thread-safe: one cache per thread.
  */
@@ -21,6 +22,7 @@
 #include "base/error.h"
 #include "store/geometry.h"
 #include "gpu/gpu_decode.h"
+#include "gpu/gpu_height.h"
 
 /* GPU memory of one decoded tile: 514^2 + 257^2 texels of 4 bytes. */
 #define GV_GPU_TILE_BYTES ((size_t)(514 * 514 + 257 * 257) * 4)
@@ -47,15 +49,44 @@ struct gv_gpu_cache_stats {
 };
 
 /*
- * New cache over decoder d (borrowed) for an image of geometry g (copied).
- * root: the root level image (root_w x root_h x g->channels, copied into
- * the padded root tile).  budget: bytes of textures to keep.  fetch(ctx,
- * ...) supplies tile buffers.  Returns the cache, or NULL with *err
- * (GV_EINVAL: a root empty or larger than a tile; GV_ENOMEM).
+ * What the cache decodes tiles with: the image decoder (gpu_decode.h) or
+ * the decoder of 16-bit codes (gpu_height.h), behind one table.  Made by
+ * gv_gpu_tiles_image and gv_gpu_tiles_codes; the decoder is borrowed.
  */
-struct gv_gpu_cache *gv_gpu_cache_new(struct gv_gpu_decoder *d,
+struct gv_gpu_tiles {
+    void *dec;
+    size_t gpu_bytes;     /* GPU memory one decoded tile counts */
+    size_t pixel_bytes;   /* bytes of a pixel of the root and of a read-back tile */
+    int (*upload)(void *dec, const void *tile, uint32_t *handle,
+                  struct gv_error *err);
+    int (*decode)(void *dec, const uint8_t *buf, size_t len, uint32_t parent,
+                  int qx, int qy, uint32_t *handle, struct gv_error *err);
+    /* Many tiles in one call (gv_gpu_decode_batch), or NULL: one by one. */
+    int (*batch)(void *dec, struct gv_gpu_tile_job *jobs, size_t n,
+                 struct gv_error *err);
+    int (*read)(void *dec, uint32_t handle, void *pixels, struct gv_error *err);
+    void (*release)(void *dec, uint32_t handle);
+};
+
+/* Tiles of an image store of `channels` (1 or 3) bytes a pixel, decoded by
+ * d (GV_GPU_TILE_BYTES each). */
+struct gv_gpu_tiles gv_gpu_tiles_image(struct gv_gpu_decoder *d, int channels);
+
+/* Tiles of 16-bit codes, `channels` (as h was made with) a pixel, decoded
+ * by h: 513x513 x channels x 2 bytes each. */
+struct gv_gpu_tiles gv_gpu_tiles_codes(struct gv_gpu_height *h, int channels);
+
+/*
+ * New cache over the decoder of *t (the table copied, its decoder
+ * borrowed) for an image of geometry g (copied).  root: the root level
+ * (root_w x root_h pixels of t->pixel_bytes, copied into the padded root
+ * tile).  budget: bytes of textures to keep.  fetch(ctx, ...) supplies
+ * tile buffers.  Returns the cache, or NULL with *err (GV_EINVAL: a root
+ * empty or larger than a tile; GV_ENOMEM).
+ */
+struct gv_gpu_cache *gv_gpu_cache_new(const struct gv_gpu_tiles *t,
                                       const struct gv_geometry *g,
-                                      const uint8_t *root, uint32_t root_w,
+                                      const void *root, uint32_t root_w,
                                       uint32_t root_h, size_t budget,
                                       gv_tile_fetch_fn fetch, void *ctx,
                                       struct gv_error *err);
@@ -85,9 +116,10 @@ int gv_gpu_cache_prepare(struct gv_gpu_cache *c, int level, uint32_t t0x,
                          uint32_t t0y, uint32_t t1x, uint32_t t1y,
                          struct gv_error *err);
 
-/* gv_gpu_cache_get, then read mip 0 back into pixels (513x513xC). */
+/* gv_gpu_cache_get, then read the tile back into pixels (513x513 pixels
+ * of the table's pixel_bytes; an image tile's mip 0). */
 int gv_gpu_cache_read(struct gv_gpu_cache *c, int level, uint32_t tx,
-                      uint32_t ty, uint8_t *pixels, struct gv_error *err);
+                      uint32_t ty, void *pixels, struct gv_error *err);
 
 /* Copy the counters so far into *st. */
 void gv_gpu_cache_stats(const struct gv_gpu_cache *c,
