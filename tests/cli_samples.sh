@@ -20,7 +20,6 @@
 #     written here in Python from the rule in docs/API.md, with a window
 #     given and with the store's default, IIIF, windows past 255 refused
 #     for an 8-bit image store;
-#   - `gigaview render` refuses a sample store clearly;
 #   - bad options and inputs are refused.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
@@ -381,9 +380,6 @@ expect_status "root of 8 channels raw" 200 '/v1/images/c8/root?format=raw'
 check "raw root: 8 channels of 2 bytes" test "$(wc -c <"$T/b")" -eq \
     "$(( $(header X-Width) * $(header X-Height) * 16 ))"
 
-run render "$BASE" --image c4 -o rr.png
-check "render refuses a sample store (exit 1)" test "$rc" -eq 1
-expect_err "... saying what it is" "sample store"
 stop_daemon
 check "the daemon exits cleanly" test "$drc" -eq 0
 no_sanitizer_report

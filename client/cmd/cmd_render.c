@@ -25,6 +25,14 @@
  * (start_decoding), decode and read back (lvl_load, render_region),
  * compose (compose_view), write (cmd_render) and report (print_stats).
  *
+ * Stores of 16-bit codes (height and sample stores) decode on the GPU as
+ * 513x513xC R16UI textures (lib/gpu/gpu_height.c behind the same cache)
+ * and become 8-bit pictures as gigaviewd draws them (to_display): a
+ * height store's gray, a sample store's window on its codes (--window,
+ * else the store's, else the codes' range) and its channels' colours
+ * (--colours, else the store's, else the palette).  The region form then
+ * equals `gigaview export` of the same store bit for bit.
+ *
  * GIGAVIEW_GPU_PLATFORM (auto, device, surfaceless or default) forces an
  * EGL platform, as gigaviewd's gpu_platform does.  A build configured
  * --without-gpu has only a cmd_render that says it needs the GPU.
@@ -46,6 +54,8 @@
 #include "region_arg.h"
 #include "remote/http_fetch.h"
 #include "remote/tile_cache_disk.h"
+#include "render/height_region.h"
+#include "render/samples_region.h"
 #include "render/window.h"
 #include "remote_opts.h"
 #include "store/geometry.h"
@@ -56,7 +66,7 @@
 
 struct render_args {
     struct remote_opts remote; /* --timeout, --cache-dir, --no-cache, --gpu-cache */
-    const char *image, *region, *center, *size, *output, *window;
+    const char *image, *region, *center, *size, *output, *window, *colours;
     int level;             /* -1: not given (the region form then uses 0) */
     int no_batch, verbose;
     double zoom;           /* NAN: not given */
@@ -90,7 +100,12 @@ static const struct opt_spec render_opts[] = {
     {.name = "window", .kind = OPT_STRING, .arg = "B,W,G[;...]|none",
      .field = F(window),
      .help = "display window: black, white, gamma (one, or one\n"
-             "a channel; default the store's, none for none)"},
+             "a channel; default the store's, none for none;\n"
+             "a sample store's on its 16-bit codes)"},
+    {.name = "colours", .alias = "colors", .kind = OPT_STRING, .arg = "RRGGBB;...",
+     .field = F(colours),
+     .help = "a sample store's channel colours, one a channel\n"
+             "(default the store's, else a palette)"},
     REMOTE_OPT_TIMEOUT(F(remote)),
     REMOTE_OPT_CACHE(F(remote)),
     {.name = "no-batch", .kind = OPT_FLAG, .field = F(no_batch),
@@ -255,12 +270,76 @@ struct session {
     struct gv_disk_cache *dc;
     struct need nd;
     struct gv_gpu *gpu;
-    struct gv_gpu_decoder *dec;
+    struct gv_gpu_decoder *dec;      /* image stores */
+    struct gv_gpu_height *hdec;      /* stores of codes */
     struct gv_gpu_cache *cache;
     struct fetch_ctx fetch;
     size_t gpu_budget;
     enum gv_gpu_platform platform;
+    int pc;                          /* channels of the picture */
+    /* Stores of codes: the read-back tile, and how codes become the
+     * picture (to_display). */
+    uint16_t *codes;
+    struct gv_height_meta hm;
+    struct gv_window win;            /* a sample store's, on codes */
+    struct gv_colours col;
+    uint8_t *tables;                 /* C x 65536 */
 };
+
+/* n pixels of codes (s->img.channels a pixel) to the picture's pixels
+ * (s->pc a pixel), as gigaviewd draws them: a height store's gray
+ * (gv_height_gray; its window comes after, as for images), a sample
+ * store's window and colours (gv_samples_display). */
+static int to_display(struct session *s, const uint16_t *codes, size_t n,
+                      uint8_t *out, struct gv_error *err)
+{
+    if (s->img.codes == GV_REMOTE_SAMPLES)
+        return gv_samples_display(codes, n, s->img.channels, &s->win, &s->col,
+                                  s->tables, out, err);
+    for (size_t i = 0; i < n; i++)
+        out[i] = gv_height_gray(&s->hm, codes[i]);
+    return 0;
+}
+
+/* Little-endian codes (the server's raw form) in place as host order. */
+static void codes_from_le(uint8_t *b, size_t n)
+{
+    uint16_t *c = (uint16_t *)(void *)b;
+    for (size_t i = 0; i < n; i++)
+        c[i] = (uint16_t)(b[2 * i] | b[2 * i + 1] << 8);
+}
+
+/* Root mip `mip` as the picture's pixels (*px malloc'ed, *w x *h). */
+static int root_mip(struct session *s, int mip, uint8_t **px, uint32_t *w,
+                    uint32_t *h, struct gv_error *err)
+{
+    uint8_t *raw;
+    if (gv_http_root(s->http, &s->img, mip, s->dc, &raw, w, h, err) < 0)
+        return -1;
+    if (!s->img.codes) {
+        *px = raw;
+        return 0;
+    }
+    const size_t n = (size_t)*w * *h;
+    codes_from_le(raw, n * s->img.channels);
+    *px = malloc(n * s->pc);
+    int rc = *px ? to_display(s, (const uint16_t *)(void *)raw, n, *px, err)
+                 : gv_fail(err, GV_ENOMEM, "out of memory");
+    free(raw);
+    return rc;
+}
+
+/* Tile (tx, ty) of `level` from the GPU cache as the picture's pixels
+ * (513 x 513 x s->pc) into px. */
+static int read_tile(struct session *s, int level, uint32_t tx, uint32_t ty,
+                     uint8_t *px, struct gv_error *err)
+{
+    if (!s->img.codes)
+        return gv_gpu_cache_read(s->cache, level, tx, ty, px, err);
+    if (gv_gpu_cache_read(s->cache, level, tx, ty, s->codes, err) < 0)
+        return -1;
+    return to_display(s, s->codes, (size_t)GV_TILE * GV_TILE, px, err);
+}
 
 /* The EGL platform GIGAVIEW_GPU_PLATFORM names (unset or empty: auto).
  * 0, or -1 after saying what it accepts. */
@@ -289,15 +368,28 @@ static int start_decoding(struct session *s, struct gv_error *err)
         return 0;
     if (!(s->gpu = gv_gpu_open(s->platform, err)))
         return -1;
-    if (!(s->dec = gv_gpu_decoder_new(s->gpu, &(struct gv_gpu_decoder_opts){
-                                          .channels = s->img.channels}, err)))
-        return -1;
+    const int c = s->img.channels;
+    struct gv_gpu_tiles tiles;
+    if (s->img.codes) {
+        if (!(s->hdec = gv_gpu_height_new(s->gpu, &(struct gv_gpu_height_opts){
+                                              .channels = c}, err)))
+            return -1;
+        if (!(s->codes = malloc(sizeof *s->codes * GV_TILE * GV_TILE * (size_t)c)))
+            return gv_fail(err, GV_ENOMEM, "out of memory");
+        tiles = gv_gpu_tiles_codes(s->hdec, c);
+    } else {
+        if (!(s->dec = gv_gpu_decoder_new(s->gpu, &(struct gv_gpu_decoder_opts){
+                                              .channels = c}, err)))
+            return -1;
+        tiles = gv_gpu_tiles_image(s->dec, c);
+    }
     uint8_t *root;
     uint32_t rw, rh;
     if (gv_http_root(s->http, &s->img, 0, s->dc, &root, &rw, &rh, err) < 0)
         return -1;
+    if (s->img.codes)
+        codes_from_le(root, (size_t)rw * rh * c);
     s->fetch = (struct fetch_ctx){&s->nd, s->http, &s->img, s->dc};
-    const struct gv_gpu_tiles tiles = gv_gpu_tiles_image(s->dec, s->img.channels);
     s->cache = gv_gpu_cache_new(&tiles, &s->geo, root, rw, rh, s->gpu_budget,
                                 fetch_tile, &s->fetch, err);
     free(root);
@@ -314,8 +406,7 @@ static int lvl_load(struct session *s, struct lvl *l, int k, uint32_t t0x,
     memset(l, 0, sizeof *l);
     l->k = k;
     if (k >= g->root)
-        return gv_http_root(s->http, &s->img, k - g->root, s->dc, &l->mip, &l->w,
-                            &l->h, err);
+        return root_mip(s, k - g->root, &l->mip, &l->w, &l->h, err);
     const struct gv_level *gl = &g->level[k];
     l->w = gl->width;
     l->h = gl->height;
@@ -329,9 +420,9 @@ static int lvl_load(struct session *s, struct lvl *l, int k, uint32_t t0x,
     for (uint32_t ty = t0y; ty <= t1y; ty++)
         for (uint32_t tx = t0x; tx <= t1x; tx++) {
             uint8_t **p = &l->tile[(size_t)ty * l->tiles_x + tx];
-            if (!(*p = malloc(gv_tile_bytes(g->channels))))
+            if (!(*p = malloc((size_t)GV_TILE * GV_TILE * s->pc)))
                 return gv_fail(err, GV_ENOMEM, "out of memory");
-            if (gv_gpu_cache_read(s->cache, k, tx, ty, *p, err) < 0)
+            if (read_tile(s, k, tx, ty, *p, err) < 0)
                 return -1;
         }
     return 0;
@@ -471,9 +562,9 @@ static int plan_view_tiles(struct session *s, const struct view_plan *p,
 /* Every output pixel of the view inside the image: the blend of its
  * bilinear samples of the loaded levels L[0..p->nl). */
 static void compose_view(const struct view *v, const struct view_plan *p,
-                         const struct gv_geometry *g, const struct lvl *L, uint8_t *out)
+                         const struct gv_geometry *g, const struct lvl *L, int c,
+                         uint8_t *out)
 {
-    const int c = g->channels;
     for (uint32_t j = 0; j < v->h; j++)
         for (uint32_t i = 0; i < v->w; i++) {
             double dx = (i + 0.5 - v->w / 2.0) * p->scale;
@@ -502,7 +593,7 @@ static int render_view(struct session *s, const struct view *v, uint8_t *out,
     struct view_plan p;
     double b[4];
     plan_view(v, g->root + s->img.root_mips - 1, &p);
-    memset(out, 0, (size_t)v->w * v->h * g->channels);
+    memset(out, 0, (size_t)v->w * v->h * s->pc);
     if (!view_bounds(v, &p, g, b))
         return 0;                                   /* nothing of the image */
     struct lvl L[2];
@@ -517,7 +608,7 @@ static int render_view(struct session *s, const struct view *v, uint8_t *out,
         if (lvl_load(s, &L[i], p.f + i, span[i][0], span[i][1], span[i][2],
                      span[i][3], err) < 0)
             goto out;
-    compose_view(v, &p, g, L, out);
+    compose_view(v, &p, g, L, s->pc, out);
     rc = 0;
 out:
     lvl_free(&L[0]);
@@ -529,11 +620,11 @@ out:
 static int copy_root_region(struct session *s, int mip, const struct region *r,
                             uint8_t *out, struct gv_error *err)
 {
-    const int c = s->geo.channels;
+    const int c = s->pc;
     const size_t orow = (size_t)r->w * c;
     uint8_t *px;
     uint32_t mw, mh;
-    if (gv_http_root(s->http, &s->img, mip, s->dc, &px, &mw, &mh, err) < 0)
+    if (root_mip(s, mip, &px, &mw, &mh, err) < 0)
         return -1;
     for (uint32_t row = 0; row < r->h; row++)
         memcpy(out + row * orow, px + ((size_t)(r->y + row) * mw + r->x) * c, orow);
@@ -565,7 +656,7 @@ static int render_region(struct session *s, int level, const struct region *r,
                          uint8_t *out, struct gv_error *err)
 {
     const struct gv_geometry *g = &s->geo;
-    const int c = g->channels;
+    const int c = s->pc;
     if (level >= g->root)
         return copy_root_region(s, level - g->root, r, out, err);
     const struct gv_level *l = &g->level[level];
@@ -577,12 +668,12 @@ static int render_region(struct session *s, int level, const struct region *r,
         return -1;
     if (gv_gpu_cache_prepare(s->cache, level, sp[0], sp[1], sp[2], sp[3], err) < 0)
         return -1;
-    uint8_t *px = malloc(gv_tile_bytes(c));
+    uint8_t *px = malloc((size_t)GV_TILE * GV_TILE * c);
     if (!px)
         return gv_fail(err, GV_ENOMEM, "out of memory");
     for (uint32_t ty = sp[1]; ty <= sp[3]; ty++)
         for (uint32_t tx = sp[0]; tx <= sp[2]; tx++) {
-            if (gv_gpu_cache_read(s->cache, level, tx, ty, px, err) < 0) {
+            if (read_tile(s, level, tx, ty, px, err) < 0) {
                 free(px);
                 return -1;
             }
@@ -678,8 +769,64 @@ static int session_open(struct session *s, const char *url, const struct render_
                 a->image);
         return -1;
     }
+    const int c = s->img.channels;
+    s->pc = s->img.codes == GV_REMOTE_SAMPLES ? (c == 1 ? 1 : 3)
+          : s->img.codes ? 1 : c;
+    if (s->img.codes == GV_REMOTE_HEIGHT)
+        s->hm = (struct gv_height_meta){.scale = s->img.scale, .offset = s->img.offset,
+                                        .min = s->img.min, .max = s->img.max};
     if (!a->remote.no_cache)
         open_disk_cache(s, a);
+    return 0;
+}
+
+/* A sample store's picture: the window on its codes (--window, else the
+ * store's, else the codes' range) and the channels' colours (--colours,
+ * else the store's, else the palette), as gigaviewd resolves them for a
+ * region.  --colours for another store is refused.  Returns the exit
+ * status (2 for a bad option). */
+static int samples_display_setup(struct session *s, const struct render_args *a)
+{
+    struct gv_error err = {0};
+    if (a->colours && s->img.codes != GV_REMOTE_SAMPLES) {
+        fprintf(stderr, ME ": --colours: for sample stores only ('%s' is not one)\n",
+                a->image);
+        return 2;
+    }
+    if (s->img.codes != GV_REMOTE_SAMPLES)
+        return 0;
+    const int c = s->img.channels;
+    const char *text = a->window ? a->window : s->img.window;
+    if (*text && strcmp(text, "none")) {
+        if (gv_window_parse(text, 65535, &s->win, &err) < 0 ||
+            (s->win.count > 1 && s->win.count != c &&
+             gv_fail(&err, GV_EINVAL, "window: %d windows for an image of %d "
+                     "channels (give one, or one per channel)", s->win.count, c) < 0)) {
+            fprintf(stderr, ME ": %s\n", err.text);
+            return a->window ? 2 : 1;
+        }
+    }
+    if (s->win.count == 0) {
+        const struct gv_header h = {.samples_lo = (uint16_t)s->img.code_min,
+                                    .samples_hi = (uint16_t)s->img.code_max};
+        gv_samples_default_window(&h, &s->win);
+    }
+    if (a->colours) {
+        if (gv_colours_parse(a->colours, &s->col, &err) < 0 ||
+            gv_colours_check(&s->col, c, &err) < 0) {
+            fprintf(stderr, ME ": --colours: %s\n", err.text);
+            return 2;
+        }
+    } else if (*s->img.colours) {
+        /* The store's, when they fit it (else the palette, as the server). */
+        if (gv_colours_parse(s->img.colours, &s->col, &err) < 0 ||
+            gv_colours_check(&s->col, c, &err) < 0)
+            memset(&s->col, 0, sizeof s->col);
+    }
+    if (!(s->tables = malloc((size_t)c * 65536))) {
+        fprintf(stderr, ME ": out of memory\n");
+        return 1;
+    }
     return 0;
 }
 
@@ -687,7 +834,10 @@ static void session_close(struct session *s)
 {
     gv_gpu_cache_free(s->cache);
     gv_gpu_decoder_free(s->dec);
+    gv_gpu_height_free(s->hdec);
     gv_gpu_close(s->gpu);
+    free(s->codes);
+    free(s->tables);
     for (size_t i = 0; i < s->nd.n; i++)
         free(s->nd.t[i].buf);
     free(s->nd.t);
@@ -734,7 +884,7 @@ static int draw_view(struct session *s, const struct render_args *a, struct view
         fprintf(stderr, ME ": the view needs too many decoded pixels\n");
         return 1;
     }
-    if (picture_alloc(pic, v->w, v->h, s->img.channels) < 0)
+    if (picture_alloc(pic, v->w, v->h, s->pc) < 0)
         return 1;
     if (render_view(s, v, pic->px, &err) < 0) {
         fprintf(stderr, ME ": %s\n", err.text);
@@ -761,7 +911,7 @@ static int draw_region(struct session *s, const struct render_args *a,
     int rc = region_arg_check(ME, a->region, level, lw, lh, a->max_pixels, &r);
     if (rc)
         return rc;
-    if (picture_alloc(pic, r.w, r.h, s->img.channels) < 0)
+    if (picture_alloc(pic, r.w, r.h, s->pc) < 0)
         return 1;
     if (render_region(s, level, &r, pic->px, &err) < 0) {
         fprintf(stderr, ME ": %s\n", err.text);
@@ -772,18 +922,21 @@ static int draw_region(struct session *s, const struct render_args *a,
 
 /* The display window (--window, else the store's default) over the
  * picture, as gigaviewd applies it to a region: the same tables
- * (render/window.h) on the same 8-bit samples.  Returns the exit status. */
+ * (render/window.h) on the same 8-bit samples (a height store's gray; a
+ * sample store's window went on its codes, to_display).  Returns the exit
+ * status. */
 static int apply_window(const struct session *s, const struct render_args *a,
                         struct picture *pic)
 {
+    if (s->img.codes == GV_REMOTE_SAMPLES)
+        return 0;
     const char *text = a->window ? a->window : s->img.window;
     if (!*text || !strcmp(text, "none"))
         return 0;
     struct gv_window w;
     struct gv_error err = {0};
     if (gv_window_parse(text, 255, &w, &err) < 0 ||
-        gv_window_apply8(&w, pic->px, (size_t)pic->w * pic->h, s->img.channels,
-                         &err) < 0) {
+        gv_window_apply8(&w, pic->px, (size_t)pic->w * pic->h, s->pc, &err) < 0) {
         fprintf(stderr, ME ": %s\n", err.text);
         return a->window ? 2 : 1;
     }
@@ -830,11 +983,12 @@ int cmd_render(int argc, char **argv)
     struct picture pic = {NULL, 0, 0};
     struct gv_error err = {0};
     rc = 1;
-    if (session_open(&s, argv[first], &a, platform) == 0) {
+    if (session_open(&s, argv[first], &a, platform) == 0 &&
+        (rc = samples_display_setup(&s, &a)) == 0) {
         rc = is_view_form(&a) ? draw_view(&s, &a, &v, &pic) : draw_region(&s, &a, &pic);
         if (rc == 0)
             rc = apply_window(&s, &a, &pic);
-        if (rc == 0 && gv_image_write(a.output, pic.w, pic.h, s.img.channels, pic.px,
+        if (rc == 0 && gv_image_write(a.output, pic.w, pic.h, s.pc, pic.px,
                                       &err) < 0) {
             fprintf(stderr, ME ": %s\n", err.text);
             rc = 1;

@@ -33,6 +33,7 @@
 #include "config.h"
 #include "base/ids.h"
 #include "batch_frames.h"
+#include "codec/samples_tile.h"
 #include "codec/tile.h"
 #include "http_fetch.h"
 
@@ -467,23 +468,39 @@ int gv_http_image(struct gv_http *h, const char *id,
                          "height", &hh, "channels", &img->channels,
                          "levels_tiled", &img->levels_tiled, "root", "width", &rw,
                          "height", &rh, "mip_count", &img->root_mips, "side", &side);
-    /* Height and sample stores (docs/FORMAT.md sections 12 and 13) have
-     * tiles of another codec. */
-    int height_store = json_object_get(j, "elevation") != NULL;
-    int sample_store = json_object_get(j, "samples") != NULL;
+    /* Height and sample stores (docs/FORMAT.md sections 12 and 13): tiles
+     * of 16-bit codes, and what their picture is made from. */
+    json_t *el = json_object_get(j, "elevation"), *sa = json_object_get(j, "samples");
     const char *win = json_string_value(json_object_get(j, "window"));
     if (win && strlen(win) < sizeof img->window)
         snprintf(img->window, sizeof img->window, "%s", win);
+    int codes_ok = 1;
+    if (el) {
+        img->codes = GV_REMOTE_HEIGHT;
+        codes_ok = json_unpack(el, "{s:F,s:F,s:F,s:F}", "scale", &img->scale, "offset",
+                               &img->offset, "min", &img->min, "max", &img->max) == 0;
+    } else if (sa) {
+        int lo = -1, hi = -1;
+        img->codes = GV_REMOTE_SAMPLES;
+        codes_ok = json_unpack(sa, "{s:F,s:F,s:i,s:i}", "scale", &img->scale, "offset",
+                               &img->offset, "code_min", &lo, "code_max", &hi) == 0 &&
+                   lo >= 0 && hi >= lo && hi <= 65535;
+        img->code_min = (unsigned)lo;
+        img->code_max = (unsigned)hi;
+        const char *col = json_string_value(
+            json_object_get(json_object_get(j, "metadata"), "display.colours"));
+        if (col && strlen(col) < sizeof img->colours)
+            snprintf(img->colours, sizeof img->colours, "%s", col);
+    }
     json_decref(j);
-    if (height_store)
-        return gv_fail(err, GV_EFORMAT, "%s is a height store, which this client "
-                       "does not draw (its regions: format=png16 or tiff32)", what);
-    if (sample_store)
-        return gv_fail(err, GV_EFORMAT, "%s is a sample store of 16-bit "
-                       "codes, which this client does not draw yet (its "
-                       "regions: png, or format=png16, tiff16 or tiff32)", what);
+    const int max_channels = img->codes == GV_REMOTE_SAMPLES ? GV_SAMPLES_MAX_CHANNELS
+                           : img->codes ? 1 : 3;
+    if (!codes_ok || img->channels < 1 || img->channels > max_channels ||
+        (!img->codes && img->channels == 2))
+        return gv_fail(err, GV_ECORRUPT, "%s: unexpected metadata from the server",
+                       what);
     if (rc < 0 || w <= 0 || hh <= 0 || w > 0x7fffffff || hh > 0x7fffffff ||
-        (img->channels != 1 && img->channels != 3) || rw <= 0 || rh <= 0 ||
+        rw <= 0 || rh <= 0 ||
         rw > 512 || rh > 512 || side < 1 || side > 512 || img->levels_tiled < 0 ||
         img->root_mips < 1)
         return gv_fail(err, GV_ECORRUPT, "%s: unexpected metadata from the server",
@@ -581,13 +598,26 @@ static int get_cached(struct gv_http *h, const char *path, const char *name,
     return 0;
 }
 
+int gv_remote_sample_bytes(const struct gv_remote_image *img)
+{
+    return img->codes ? 2 : 1;
+}
+
+/* A tile buffer of img checked as its kind of store wants. */
+static int tile_check(const struct gv_remote_image *img, const uint8_t *buf,
+                      size_t len, struct gv_error *err)
+{
+    return img->codes ? gv_samples_tile_check(buf, len, img->channels, err)
+                      : gv_tilebuf_check(buf, len, img->channels, err);
+}
+
 int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
                  struct gv_disk_cache *dc, uint8_t **pixels, uint32_t *w,
                  uint32_t *hh, struct gv_error *err)
 {
     uint32_t mw, mh;
     gv_remote_mip_size(img, mip, &mw, &mh);
-    const size_t want = (size_t)mw * mh * img->channels;
+    const size_t want = (size_t)mw * mh * img->channels * gv_remote_sample_bytes(img);
     char path[400], name[32], what[64];
     snprintf(path, sizeof path, "/v1/images/%s/root?mip=%d&format=raw", img->id, mip);
     snprintf(name, sizeof name, "root-%d", mip);
@@ -641,7 +671,7 @@ static int tiles_one_by_one(struct gv_http *h, const struct gv_remote_image *img
                  t[i].level, t[i].tx, t[i].ty);
         snprintf(name, sizeof name, "%d-%u-%u", t[i].level, t[i].tx, t[i].ty);
         if (gv_disk_cache_get(dc, name, &cached[i], &clen[i], etag, sizeof etag) == 0 &&
-            gv_tilebuf_check(cached[i], clen[i], img->channels, NULL) < 0) {
+            tile_check(img, cached[i], clen[i], NULL) < 0) {
             free(cached[i]);   /* damaged entry: fetch afresh */
             cached[i] = NULL;
         }
@@ -661,7 +691,7 @@ static int tiles_one_by_one(struct gv_http *h, const struct gv_remote_image *img
             break;
         }
         struct gv_error te = {0};
-        if (gv_tilebuf_check(t[i].buf, t[i].len, img->channels, &te) < 0) {
+        if (tile_check(img, t[i].buf, t[i].len, &te) < 0) {
             rc = gv_fail(err, GV_ECORRUPT, "%s from %s is corrupt (%zu bytes): %s",
                          what, h->base, t[i].len, te.text);
             break;
@@ -695,7 +725,7 @@ static void cached_tile(struct gv_disk_cache *dc, const struct gv_remote_image *
     etag[0] = 0;
     if (gv_disk_cache_get(dc, name, data, len, etag, ETAG_CAP) < 0) {
         *data = NULL;
-    } else if (gv_tilebuf_check(*data, *len, img->channels, NULL) < 0) {
+    } else if (tile_check(img, *data, *len, NULL) < 0) {
         free(*data);   /* damaged entry: fetch afresh */
         *data = NULL;
     }
@@ -771,7 +801,7 @@ static int batch_take(struct gv_http *h, const struct gv_remote_image *img,
     memcpy(t->buf, f->data, f->len);
     t->len = f->len;
     struct gv_error te = {0};
-    if (gv_tilebuf_check(t->buf, t->len, img->channels, &te) < 0)
+    if (tile_check(img, t->buf, t->len, &te) < 0)
         return gv_fail(err, GV_ECORRUPT, "%s from %s is corrupt (%zu bytes): %s",
                        what, h->base, t->len, te.text);
     h->st.downloaded++;

@@ -70,7 +70,20 @@ struct gv_remote_image {
     int root_mips;
     char window[256];      /* the default display window the server
                             * applies (render/window.h text; "" none) */
+    /* Stores of 16-bit codes (docs/FORMAT.md sections 12 and 13): tiles
+     * of height tile buffers, a root of 2 bytes a sample. */
+    int codes;             /* 0 an image store, else GV_REMOTE_HEIGHT or _SAMPLES */
+    double scale, offset;  /* value = code * scale + offset */
+    double min, max;       /* a height store's range of values (its gray) */
+    unsigned code_min, code_max;   /* a sample store's codes' range */
+    char colours[96];      /* a sample store's display.colours ("" none) */
 };
+
+#define GV_REMOTE_HEIGHT 1
+#define GV_REMOTE_SAMPLES 2
+
+/* Bytes of one sample of img: 1, or 2 for a store of codes. */
+int gv_remote_sample_bytes(const struct gv_remote_image *img);
 
 /* Fetch an image's metadata into *img.  An unknown image, or an id that
  * cannot be one, is GV_ENOTFOUND; metadata out of bounds is GV_ECORRUPT. */
@@ -82,8 +95,9 @@ int gv_http_image(struct gv_http *h, const char *id,
 void gv_remote_mip_size(const struct gv_remote_image *img, int mip, uint32_t *w,
                         uint32_t *h);
 
-/* Root mip `mip` as raw samples (w x h x channels, malloc'ed, the
- * caller's), through the disk cache dc (may be NULL); a body of another
+/* Root mip `mip` as raw samples (w x h x channels of
+ * gv_remote_sample_bytes each, little-endian codes for a store of codes,
+ * malloc'ed, the caller's), through the disk cache dc (may be NULL); a body of another
  * size than the metadata implies is GV_ECORRUPT. */
 int gv_http_root(struct gv_http *h, const struct gv_remote_image *img, int mip,
                  struct gv_disk_cache *dc, uint8_t **pixels, uint32_t *w,
@@ -111,7 +125,7 @@ struct gv_tile_want {
  * cached entries are revalidated with If-None-Match, in batch requests
  * of up to 64 tiles (304 frames) unless gv_http_use_batches said no, or
  * a batch is refused (413: then one request per tile).  Each buffer is
- * checked with gv_tilebuf_check.  On failure the buffers already filled
+ * checked with gv_tilebuf_check (gv_samples_tile_check for codes).  On failure the buffers already filled
  * stay filled (the caller frees them all). */
 int gv_http_tiles(struct gv_http *h, const struct gv_remote_image *img,
                   struct gv_tile_want *t, size_t n, struct gv_disk_cache *dc,

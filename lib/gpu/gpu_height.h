@@ -13,10 +13,11 @@
  * Every function may be called from any thread but the GPU's own (the
  * work runs there, through gv_gpu_call).
  *
- * No native program of gigaview calls it yet (gigaviewd and `gigaview
- * mesh` read heights through the CPU decoder, lib/render/height_region.c);
- * tests/test_gpu_height runs both paths against the CPU decoder, which
- * checks shaders/height_*.glsl.  The WebGL2 path compiles the very
+ * `gigaview render` decodes height and sample stores with it, behind the
+ * GPU tile cache (gpu_cache.h, gv_gpu_tiles_codes); gigaviewd and
+ * `gigaview mesh` read heights through the CPU decoder
+ * (lib/render/height_region.c).  tests/test_gpu_height runs both paths
+ * against the CPU decoder, which checks shaders/height_*.glsl.  The WebGL2 path compiles the very
  * fragment shader with which the browser viewer (client/web/
  * codes_decode.js, with GV_LAYERED) decodes height and sample stores.
  */
