@@ -20,7 +20,8 @@
 #include <stdio.h>
 #include <string.h>
 
-/* Decimal digits at *p into *v, at most max; advances *p.  0 or -1. */
+/* Decimal digits at *p into *v, at most max; advances *p.  0, -1 when
+ * there are none, or -2 when they are past max. */
 static int parse_int(const char **p, uint32_t max, uint32_t *v)
 {
     const char *s = *p;
@@ -30,7 +31,7 @@ static int parse_int(const char **p, uint32_t max, uint32_t *v)
     while (*s >= '0' && *s <= '9') {
         x = x * 10 + (uint64_t)(*s - '0');
         if (x > max)
-            return -1;
+            return -2;
         s++;
     }
     *p = s;
@@ -79,14 +80,18 @@ int gv_window_parse(const char *s, uint32_t max, struct gv_window *w,
         }
         struct gv_window_channel *c = &w->ch[n];
         c->gamma_milli = 1000;
-        if (parse_int(&p, max, &c->black) < 0 || *p++ != ','
-            || parse_int(&p, max, &c->white) < 0
+        int rb = 0, rw = 0;
+        if ((rb = parse_int(&p, max, &c->black)) < 0 || *p++ != ','
+            || (rw = parse_int(&p, max, &c->white)) < 0
             || (*p == ',' && (p++, parse_gamma(&p, &c->gamma_milli) < 0))
             || (*p != ';' && *p != '\0')) {
             memset(w, 0, sizeof *w);
-            return gv_fail(err, GV_EINVAL, "window: channel %d: want B,W[,G] "
-                           "with B < W integers 0..%u and G 0.1..10 with at "
-                           "most three decimals", n + 1, max);
+            if (rb == -2 || rw == -2)
+                return gv_fail(err, GV_EINVAL, "window: channel %d: a point "
+                               "past %u", n + 1, max);
+            return gv_fail(err, GV_EINVAL, "window: channel %d: want B,W[,G]: "
+                           "integers B < W, and a gamma G from 0.1 to 10 with "
+                           "at most three decimals", n + 1);
         }
         if (c->black >= c->white) {
             memset(w, 0, sizeof *w);
