@@ -97,6 +97,16 @@ for w in '' ',' '5,5,1' '6,5,1' '0,256,1' '-1,255,1' '%2B1,255,1' '0,255,1e1' \
     "$(python3 -c "print('0,255,1%3B' * 100)")"; do
     expect_status "region window=$(printf '%.40s' "$w")" 400 "$R&window=$w"
 done
+# The messages say what is wrong (the values as given).
+for pair in '0,9%3B7,7|window: channel 2: black 7 is not below white 7' \
+    '0,70000|window: channel 1: a point past 65535' \
+    '0,300|window: white point 300 is past this image'"'"'s largest sample, 255' \
+    'abc|window: channel 1: want B,W[,G]: integers B < W'; do
+    req "$(url "$R&window=${pair%%|*}")"
+    m=$(json_get 'j["error"]["message"]')
+    check "window=${pair%%|*}: 400 saying '${pair#*|}' ($m)" \
+        sh -c "[ '$code' = 400 ] && case \"\$1\" in \"\$2\"*) true ;; *) false ;; esac" - "$m" "${pair#*|}"
+done
 expect_status "three windows for a gray store" 400 \
     "/v1/images/gray/region?level=1&x=0&y=0&w=30&h=20&window=0,255,1%3B0,255,1%3B0,255,1"
 expect_status "IIIF window=5,5,1" 400 "$I?window=5,5,1"

@@ -94,9 +94,10 @@ int gv_window_parse(const char *s, uint32_t max, struct gv_window *w,
                            "at most three decimals", n + 1);
         }
         if (c->black >= c->white) {
+            const uint32_t b = c->black, wh = c->white;
             memset(w, 0, sizeof *w);
             return gv_fail(err, GV_EINVAL, "window: channel %d: black %u is "
-                           "not below white %u", n + 1, c->black, c->white);
+                           "not below white %u", n + 1, b, wh);
         }
         w->count = n + 1;
         if (*p == '\0')
