@@ -14,7 +14,8 @@
 #     fractional zoom with a rotation it writes a picture of the right
 #     size and channels;
 #   - bad --colours, --colours for another store and a window of another
-#     channel count are refused (exit 2), and nothing is written.
+#     channel count are refused (exit 2), and nothing is written;
+#   - `gigaview view` refuses a sample store, saying what draws it.
 # Skips where the build or the machine has no GPU context.  Needs curl,
 # python3, oiiotool and idiff.
 . "$(dirname "$0")/lib.sh"
@@ -156,6 +157,19 @@ expect_err "... for sample stores only" "for sample stores only"
 run render "$BASE" --image c5 --window '0,100;0,200' -o x.png
 expect_rc "two windows for five channels: exit 2" 2
 check "nothing written by a refused render" test ! -e x.png
+
+# ---------------------------------------------------------------- view
+# The window viewer does not draw stores of codes yet: it says so.
+printf 'settle\nquit\n' >q.txt
+SDL_VIDEODRIVER=offscreen
+export SDL_VIDEODRIVER
+run view "$BASE" --image c5 --script q.txt --size 64x64
+if grep -q 'needs a build with\|no window\|SDL' "$T/err"; then
+    skip "gigaview view refuses a sample store" "no viewer here: $(head -c 200 "$T/err")"
+else
+    expect_rc "gigaview view refuses a sample store (exit 1)" 1
+    expect_err "... saying what it is and what draws it" "is a sample store of 16-bit codes.*'gigaview render'"
+fi
 
 stop_daemon
 check "gigaviewd exits 0 on SIGTERM" [ "$drc" -eq 0 ]
