@@ -29,6 +29,7 @@ gvd() {
     if under_valgrind; then
         exec valgrind -q --error-exitcode=99 --leak-check=full \
             --errors-for-leak-kinds=definite --show-leak-kinds=definite \
+            --suppressions="$(dirname "$0")/valgrind.supp" \
             "$GIGAVIEWD" "$@"
     else
         exec "$GIGAVIEWD" "$@"

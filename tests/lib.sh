@@ -4,7 +4,8 @@
 # at the end), a private scratch directory removed on exit, and `gv`, which
 # runs the gigaview binary - under valgrind when VALGRIND is set to
 # anything but "" or 0 (make check VALGRIND=1), so that memory errors and
-# definite leaks fail the test with status 99.
+# definite leaks fail the test with status 99 (tests/valgrind.supp lists
+# what is not ours).
 #
 # Environment (set by make check; defaults let a test run by hand from the
 # build directory): GIGAVIEW, the binary; TESTDATA, tests/data.
@@ -122,6 +123,7 @@ gv() {
     if under_valgrind; then
         valgrind -q --error-exitcode=99 --leak-check=full \
             --errors-for-leak-kinds=definite --show-leak-kinds=definite \
+            --suppressions="$(dirname "$0")/valgrind.supp" \
             "$GIGAVIEW" "$@"
     else
         "$GIGAVIEW" "$@"
