@@ -42,6 +42,14 @@ run encode --height --max-error 2 synth-height:1100x700 -o "$S/dem.gv"
 [ "$rc" -eq 0 ] || bail "encode dem: $(cat "$T/err")"
 run encode --bits 16 "$T/p16.png" --window 2000,50000,1.5 --colours '00ffff;ff00ff;ffff00' -o "$S/s16d.gv"
 [ "$rc" -eq 0 ] || bail "encode s16d: $(cat "$T/err")"
+# A slide that says its microns per pixel (tests/make_slide, read through
+# OpenSlide), for the scale bar; without OpenSlide window.mjs skips it.
+builddir=$(cd "${top_builddir:-.}" && pwd)
+if grep -q '^#define GV_HAVE_OPENSLIDE 1' "$builddir/config.h" 2>/dev/null &&
+    "$builddir/tests/make_slide" "$T/slide.svs" 1500 1100 none 0.2527 40; then
+    run encode "$T/slide.svs" -o "$S/slide.gv"
+    [ "$rc" -eq 0 ] || bail "encode slide: $(cat "$T/err")"
+fi
 cat >"$T/w.conf" <<EOF2
 listen = 127.0.0.1
 port = 0

@@ -100,8 +100,28 @@ static void window_links(void)
     }
 }
 
+/* The scale bar: round lengths of pixels, or of microns for a slide. */
+static void scale_bars(void)
+{
+    double bar;
+    char label[32];
+    vg_scale_bar(0, 0, 128, &bar, label, sizeof label);
+    check(bar == 100 && !strcmp(label, "100 PX"), "1:1, 128 px at most: 100 PX over 100 px (%g, %s)", bar, label);
+    vg_scale_bar(3, 0, 128, &bar, label, sizeof label);
+    check(bar == 125 && !strcmp(label, "1000 PX"), "zoom 3: 1000 PX over 125 px (%g, %s)", bar, label);
+    vg_scale_bar(0, 0.25, 128, &bar, label, sizeof label);
+    check(bar == 80 && !strcmp(label, "20 UM"), "0.25 um a pixel at 1:1: 20 UM over 80 px (%g, %s)", bar, label);
+    vg_scale_bar(6, 0.25, 128, &bar, label, sizeof label);
+    check(bar == 125 && !strcmp(label, "2 MM"), "zoom 6: 2 MM over 125 px (%g, %s)", bar, label);
+    vg_scale_bar(-3, 0.5, 100, &bar, label, sizeof label);
+    check(bar == 80 && !strcmp(label, "5 UM"), "magnified 8x: 5 UM over 80 px (%g, %s)", bar, label);
+    vg_scale_bar(-6, 0, 100, &bar, label, sizeof label);
+    check(fabs(bar - 64) < 1e-9 && !strcmp(label, "1 PX"), "magnified 64x: 1 PX over 64 px (%g, %s)", bar, label);
+}
+
 int main(void)
 {
+    scale_bars();
     geometry();
     links();
     window_links();

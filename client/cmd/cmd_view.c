@@ -167,6 +167,7 @@ struct app {
     uint8_t *root_px;            /* the root level's samples, for auto */
     size_t root_n;
     int channels;
+    double mpp;                  /* microns per level-0 pixel, 0: unknown */
     int show_overlay, show_list, fullscreen, quit, rc, vsync;
     int w, h;
     char message[VO_LINE];       /* last error worth showing */
@@ -270,6 +271,7 @@ static void window_start(struct app *app, const struct vf_result *r)
                        app->link_window[0] ? app->link_window : r->img.window;
     app->store_window = r->img.window[0] != 0;
     app->channels = r->img.channels;
+    app->mpp = r->img.mpp;
     if (*text && strcmp(text, "none") != 0 &&
         (gv_window_parse(text, 255, &w, &err) < 0 ||
          (w.count != 1 && w.count != app->channels))) {
@@ -925,7 +927,8 @@ static void overlay_content(struct app *app, const struct vt_plan *p,
         snprintf(c->bottom[5], VO_LINE, "FILTER %.30s%s%s", g->id, prm,
                  vx_busy(app->filt) ? "  RUNNING" : "");
     }
-    vo_scale_bar(v->zoom, app->w / 5.0, &c->bar_px, c->bar_label, sizeof c->bar_label);
+    vg_scale_bar(v->zoom, app->mpp, app->w / 5.0, &c->bar_px, c->bar_label,
+                 sizeof c->bar_label);
     if (app->show_list) {
         snprintf(c->panel[c->npanel++], VO_LINE, "IMAGES (TAB: NEXT)");
         for (int i = 0; i < app->nids && c->npanel < VO_LINES; i++)

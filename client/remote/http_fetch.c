@@ -492,6 +492,10 @@ int gv_http_image(struct gv_http *h, const char *id,
         if (col && strlen(col) < sizeof img->colours)
             snprintf(img->colours, sizeof img->colours, "%s", col);
     }
+    json_t *mpp = json_object_get(json_object_get(j, "metadata"), "slide.mpp_x");
+    if (json_is_number(mpp) && json_number_value(mpp) > 0 &&
+        json_number_value(mpp) < 1e6)
+        img->mpp = json_number_value(mpp);
     json_decref(j);
     const int max_channels = img->codes == GV_REMOTE_SAMPLES ? GV_SAMPLES_MAX_CHANNELS
                            : img->codes ? 1 : 3;

@@ -77,6 +77,8 @@ struct gv_remote_image {
     double min, max;       /* a height store's range of values (its gray) */
     unsigned code_min, code_max;   /* a sample store's codes' range */
     char colours[96];      /* a sample store's display.colours ("" none) */
+    double mpp;            /* microns per level-0 pixel (a slide's
+                            * slide.mpp_x metadata), 0 when not given */
 };
 
 #define GV_REMOTE_HEIGHT 1

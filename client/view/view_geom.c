@@ -251,3 +251,19 @@ void vg_format_hash(const char *image, const struct vg_view *v,
     }
     out[o] = 0;
 }
+
+void vg_scale_bar(double zoom, double mpp, double max_px, double *bar_px,
+                  char *label, int cap)
+{
+    /* Units (level-0 pixels or microns) per window pixel. */
+    double per_px = exp2(zoom) * (mpp > 0 ? mpp : 1);
+    double most = max_px * per_px;
+    double p10 = pow(10, floor(log10(most)));
+    double n = most >= 5 * p10 ? 5 * p10 : most >= 2 * p10 ? 2 * p10 : p10;
+    *bar_px = n / per_px;
+    if (mpp > 0 && n >= 1000)
+        snprintf(label, (size_t)cap, "%g MM", n / 1000);
+    else
+        snprintf(label, (size_t)cap, n >= 1 ? "%.0f %s" : "%g %s", n,
+                 mpp > 0 ? "UM" : "PX");
+}

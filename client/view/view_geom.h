@@ -75,4 +75,12 @@ int vg_hash_window(const char *s, char *out, size_t cap);
 void vg_format_hash(const char *image, const struct vg_view *v,
                     const char *window, char *out, size_t cap);
 
+/* The scale bar for a zoom: a round length (1, 2 or 5 times a power of
+ * ten) at most max_px window pixels long, of level-0 pixels, or of
+ * microns when mpp (microns per level-0 pixel) is more than 0 (a slide's
+ * metadata slide.mpp_x): its length in window pixels in *bar_px, its label
+ * ("200 PX", "50 UM", "2 MM" from a millimetre) into label[cap]. */
+void vg_scale_bar(double zoom, double mpp, double max_px, double *bar_px,
+                  char *label, int cap);
+
 #endif

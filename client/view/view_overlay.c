@@ -78,19 +78,6 @@ void vo_free(struct vo *o)
     free(o);
 }
 
-void vo_scale_bar(double zoom, double max_px, double *bar_px, char *label, int cap)
-{
-    double per_px = exp2(zoom);          /* level-0 pixels per window pixel */
-    double most = max_px * per_px;
-    double p10 = pow(10, floor(log10(most)));
-    double n = most >= 5 * p10 ? 5 * p10 : most >= 2 * p10 ? 2 * p10 : p10;
-    *bar_px = n / per_px;
-    if (n >= 1)
-        snprintf(label, (size_t)cap, "%.0f PX", n);
-    else
-        snprintf(label, (size_t)cap, "%g PX", n);
-}
-
 static void fill(struct vo *o, int x0, int y0, int x1, int y1, uint32_t rgba)
 {
     for (int y = y0 < 0 ? 0 : y0; y < y1 && y < o->ch; y++)

@@ -42,9 +42,4 @@ int vo_label(const char *s, uint8_t **rgba, int *w, int *h);
  * space or a character the font lacks.  Small letters give capitals. */
 const unsigned char *vo_glyph(char c);
 
-/* The scale bar for a zoom: a round length (1, 2 or 5 times a power of
- * ten) of level-0 pixels at most max_px window pixels long. */
-void vo_scale_bar(double zoom, double max_px, double *bar_px, char *label,
-                  int cap);
-
 #endif

@@ -89,13 +89,19 @@ export class Overlay {
         const mag = 100 / 2 ** v.zoom;
         const pct = mag >= 10 ? mag.toFixed(0) : mag >= 1 ? mag.toFixed(1) : mag.toFixed(2);
         const lod = r ? `level ${(r.level + r.t).toFixed(2)}` : '';
-        // Scale bar: a round number of level-0 pixels about 100 CSS px long.
-        const per = 2 ** v.zoom * 100;
+        // Scale bar: a round length about 100 CSS px long, of level-0
+        // pixels, or of microns for a slide that says its microns per
+        // pixel (metadata slide.mpp_x).
+        const meta = this.viewer.image.info.metadata, mpp = meta && meta['slide.mpp_x'] > 0 ? meta['slide.mpp_x'] : 0;
+        const unit = 2 ** v.zoom * (mpp || 1);       // units per CSS px
+        const per = unit * 100;
         const p10 = 10 ** Math.floor(Math.log10(per));
         const nice = [1, 2, 5, 10].map((m) => m * p10).find((n) => n >= per * 0.75) || per;
         this.els.zoom.textContent = `${pct}% · ${lod} · ${v.rot.toFixed(0)}°`;
-        this.els.scale.style.width = `${(nice / 2 ** v.zoom).toFixed(1)}px`;
-        this.els.scaleText.textContent = `${nice >= 1000 ? `${nice / 1000}k` : nice} px`;
+        this.els.scale.style.width = `${(nice / unit).toFixed(1)}px`;
+        const num = (x) => String(Number(x.toPrecision(6)));
+        this.els.scaleText.textContent = mpp ? (nice >= 1000 ? `${num(nice / 1000)} mm` : `${num(nice)} µm`)
+            : `${nice >= 1000 ? `${nice / 1000}k` : nice} px`;
         const busy = r && (r.inflight > 0 || r.pending > 0);
         this.els.loading.hidden = !busy;
         if (busy)

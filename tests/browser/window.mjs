@@ -313,6 +313,24 @@ async function run(c) {
         `${auto15}; ${reqs15.join(' ')}`);
     await match(pg10, 'dem level 0 1:1, auto window', 'dem', 150, 100, auto15);
     await pg10.close();
+    // A slide's scale bar in microns (metadata slide.mpp_x 0.2527): at a
+    // 1:1 view about 100 CSS px, a round 20 or 25 µm.
+    const slide = await fetch(`${base}/v1/images/slide`);
+    if (slide.ok) {
+        const pg11 = await newPage(c);
+        await open(pg11, '#image=slide&x=750&y=550&z=0&r=0');
+        const bar = await pg11.evaluate(() => [document.getElementById('scale-text').textContent,
+            parseFloat(document.getElementById('scale').style.width)]);
+        check(bar[0] === '20 µm' && Math.abs(bar[1] - 20 / 0.2527) < 0.1,
+            `a slide's scale bar is in microns at 1:1 (${bar[0]} over ${bar[1]} px)`, JSON.stringify(bar));
+        await pg11.evaluate(() => window.gigaview.viewer.setView({ ...window.gigaview.viewer.view, zoom: 3 }));
+        await pg11.evaluate(() => window.gigaview.viewer.settled());
+        const bar3 = await pg11.evaluate(() => document.getElementById('scale-text').textContent);
+        check(bar3 === '200 µm', `... and at zoom 3 (${bar3})`, bar3);
+        await pg11.close();
+    } else {
+        note('no slide store (built without OpenSlide): the microns scale bar is not checked');
+    }
     // Without WebGL2: the server's regions, fetched again for a new window.
     const pg8 = await newPage(c);
     const r12 = await open(pg8, `?renderer=region#image=s16&x=550&y=350&z=0&r=0&window=${S1}`);
