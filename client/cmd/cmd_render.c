@@ -45,6 +45,7 @@
 
 #include "config.h" /* autoconf: GV_HAVE_GPU */
 
+#include "base/byteorder.h"
 #include "commands.h"
 #include "gpu/gpu.h"
 #include "gpu/gpu_cache.h"
@@ -276,6 +277,9 @@ struct session {
     struct fetch_ctx fetch;
     size_t gpu_budget;
     enum gv_gpu_platform platform;
+    /* What the display rules of render/samples_region.h need of the
+     * image: its kind, channels and a sample store's codes' range. */
+    struct gv_header hdr;
     int pc;                          /* channels of the picture */
     /* Stores of codes: the read-back tile, and how codes become the
      * picture (to_display). */
@@ -293,7 +297,7 @@ struct session {
 static int to_display(struct session *s, const uint16_t *codes, size_t n,
                       uint8_t *out, struct gv_error *err)
 {
-    if (s->img.codes == GV_REMOTE_SAMPLES)
+    if (s->hdr.kind == GV_KIND_SAMPLES)
         return gv_samples_display(codes, n, s->img.channels, &s->win, &s->col,
                                   s->tables, out, err);
     for (size_t i = 0; i < n; i++)
@@ -306,7 +310,7 @@ static void codes_from_le(uint8_t *b, size_t n)
 {
     uint16_t *c = (uint16_t *)(void *)b;
     for (size_t i = 0; i < n; i++)
-        c[i] = (uint16_t)(b[2 * i] | b[2 * i + 1] << 8);
+        c[i] = gv_get16(b + 2 * i);
 }
 
 /* Root mip `mip` as the picture's pixels (*px malloc'ed, *w x *h). */
@@ -316,7 +320,7 @@ static int root_mip(struct session *s, int mip, uint8_t **px, uint32_t *w,
     uint8_t *raw;
     if (gv_http_root(s->http, &s->img, mip, s->dc, &raw, w, h, err) < 0)
         return -1;
-    if (!s->img.codes) {
+    if (!gv_header_codes(&s->hdr)) {
         *px = raw;
         return 0;
     }
@@ -334,7 +338,7 @@ static int root_mip(struct session *s, int mip, uint8_t **px, uint32_t *w,
 static int read_tile(struct session *s, int level, uint32_t tx, uint32_t ty,
                      uint8_t *px, struct gv_error *err)
 {
-    if (!s->img.codes)
+    if (!gv_header_codes(&s->hdr))
         return gv_gpu_cache_read(s->cache, level, tx, ty, px, err);
     if (gv_gpu_cache_read(s->cache, level, tx, ty, s->codes, err) < 0)
         return -1;
@@ -370,7 +374,7 @@ static int start_decoding(struct session *s, struct gv_error *err)
         return -1;
     const int c = s->img.channels;
     struct gv_gpu_tiles tiles;
-    if (s->img.codes) {
+    if (gv_header_codes(&s->hdr)) {
         if (!(s->hdec = gv_gpu_height_new(s->gpu, &(struct gv_gpu_height_opts){
                                               .channels = c}, err)))
             return -1;
@@ -387,7 +391,7 @@ static int start_decoding(struct session *s, struct gv_error *err)
     uint32_t rw, rh;
     if (gv_http_root(s->http, &s->img, 0, s->dc, &root, &rw, &rh, err) < 0)
         return -1;
-    if (s->img.codes)
+    if (gv_header_codes(&s->hdr))
         codes_from_le(root, (size_t)rw * rh * c);
     s->fetch = (struct fetch_ctx){&s->nd, s->http, &s->img, s->dc};
     s->cache = gv_gpu_cache_new(&tiles, &s->geo, root, rw, rh, s->gpu_budget,
@@ -769,10 +773,11 @@ static int session_open(struct session *s, const char *url, const struct render_
                 a->image);
         return -1;
     }
-    const int c = s->img.channels;
-    s->pc = s->img.codes == GV_REMOTE_SAMPLES ? (c == 1 ? 1 : 3)
-          : s->img.codes ? 1 : c;
-    if (s->img.codes == GV_REMOTE_HEIGHT)
+    s->hdr = (struct gv_header){.kind = (uint8_t)s->img.kind, .channels = (uint8_t)s->img.channels,
+                                .samples_lo = (uint16_t)s->img.code_min,
+                                .samples_hi = (uint16_t)s->img.code_max};
+    s->pc = gv_display_channels(&s->hdr);
+    if (s->hdr.kind == GV_KIND_HEIGHT)
         s->hm = (struct gv_height_meta){.scale = s->img.scale, .offset = s->img.offset,
                                         .min = s->img.min, .max = s->img.max};
     if (!a->remote.no_cache)
@@ -788,36 +793,26 @@ static int session_open(struct session *s, const char *url, const struct render_
 static int samples_display_setup(struct session *s, const struct render_args *a)
 {
     struct gv_error err = {0};
-    if (a->colours && s->img.codes != GV_REMOTE_SAMPLES) {
-        fprintf(stderr, ME ": --colours: for sample stores only ('%s' is not one)\n",
-                a->image);
+    const struct gv_window none = {0};
+    /* gv_display_check: colours for a sample store only, one a channel. */
+    if (a->colours && (gv_colours_parse(a->colours, &s->col, &err) < 0 ||
+                       gv_display_check(&s->hdr, &none, &s->col, &err) < 0)) {
+        fprintf(stderr, ME ": --colours: %s ('%s')\n", err.text, a->image);
         return 2;
     }
-    if (s->img.codes != GV_REMOTE_SAMPLES)
+    if (s->hdr.kind != GV_KIND_SAMPLES)
         return 0;
     const int c = s->img.channels;
     const char *text = a->window ? a->window : s->img.window;
-    if (*text && strcmp(text, "none")) {
-        if (gv_window_parse(text, 65535, &s->win, &err) < 0 ||
-            (s->win.count > 1 && s->win.count != c &&
-             gv_fail(&err, GV_EINVAL, "window: %d windows for an image of %d "
-                     "channels (give one, or one per channel)", s->win.count, c) < 0)) {
-            fprintf(stderr, ME ": %s\n", err.text);
-            return a->window ? 2 : 1;
-        }
+    if (*text && strcmp(text, "none") &&
+        (gv_window_parse(text, 65535, &s->win, &err) < 0 ||
+         gv_display_check(&s->hdr, &s->win, &s->col, &err) < 0)) {
+        fprintf(stderr, ME ": %s\n", err.text);
+        return a->window ? 2 : 1;
     }
-    if (s->win.count == 0) {
-        const struct gv_header h = {.samples_lo = (uint16_t)s->img.code_min,
-                                    .samples_hi = (uint16_t)s->img.code_max};
-        gv_samples_default_window(&h, &s->win);
-    }
-    if (a->colours) {
-        if (gv_colours_parse(a->colours, &s->col, &err) < 0 ||
-            gv_colours_check(&s->col, c, &err) < 0) {
-            fprintf(stderr, ME ": --colours: %s\n", err.text);
-            return 2;
-        }
-    } else if (*s->img.colours) {
+    if (s->win.count == 0)
+        gv_samples_default_window(&s->hdr, &s->win);
+    if (!a->colours && *s->img.colours) {
         /* The store's, when they fit it (else the palette, as the server). */
         if (gv_colours_parse(s->img.colours, &s->col, &err) < 0 ||
             gv_colours_check(&s->col, c, &err) < 0)
@@ -928,7 +923,7 @@ static int draw_region(struct session *s, const struct render_args *a,
 static int apply_window(const struct session *s, const struct render_args *a,
                         struct picture *pic)
 {
-    if (s->img.codes == GV_REMOTE_SAMPLES)
+    if (s->hdr.kind == GV_KIND_SAMPLES)
         return 0;
     const char *text = a->window ? a->window : s->img.window;
     if (!*text || !strcmp(text, "none"))

@@ -476,12 +476,12 @@ int gv_http_image(struct gv_http *h, const char *id,
         snprintf(img->window, sizeof img->window, "%s", win);
     int codes_ok = 1;
     if (el) {
-        img->codes = GV_REMOTE_HEIGHT;
+        img->kind = GV_KIND_HEIGHT;
         codes_ok = json_unpack(el, "{s:F,s:F,s:F,s:F}", "scale", &img->scale, "offset",
                                &img->offset, "min", &img->min, "max", &img->max) == 0;
     } else if (sa) {
         int lo = -1, hi = -1;
-        img->codes = GV_REMOTE_SAMPLES;
+        img->kind = GV_KIND_SAMPLES;
         codes_ok = json_unpack(sa, "{s:F,s:F,s:i,s:i}", "scale", &img->scale, "offset",
                                &img->offset, "code_min", &lo, "code_max", &hi) == 0 &&
                    lo >= 0 && hi >= lo && hi <= 65535;
@@ -497,10 +497,10 @@ int gv_http_image(struct gv_http *h, const char *id,
         json_number_value(mpp) < 1e6)
         img->mpp = json_number_value(mpp);
     json_decref(j);
-    const int max_channels = img->codes == GV_REMOTE_SAMPLES ? GV_SAMPLES_MAX_CHANNELS
-                           : img->codes ? 1 : 3;
+    const int max_channels = img->kind == GV_KIND_SAMPLES ? GV_SAMPLES_MAX_CHANNELS
+                           : img->kind == GV_KIND_HEIGHT ? 1 : 3;
     if (!codes_ok || img->channels < 1 || img->channels > max_channels ||
-        (!img->codes && img->channels == 2))
+        (img->kind == GV_KIND_IMAGE && img->channels == 2))
         return gv_fail(err, GV_ECORRUPT, "%s: unexpected metadata from the server",
                        what);
     if (rc < 0 || w <= 0 || hh <= 0 || w > 0x7fffffff || hh > 0x7fffffff ||
@@ -604,14 +604,14 @@ static int get_cached(struct gv_http *h, const char *path, const char *name,
 
 int gv_remote_sample_bytes(const struct gv_remote_image *img)
 {
-    return img->codes ? 2 : 1;
+    return img->kind == GV_KIND_IMAGE ? 1 : 2;
 }
 
 /* A tile buffer of img checked as its kind of store wants. */
 static int tile_check(const struct gv_remote_image *img, const uint8_t *buf,
                       size_t len, struct gv_error *err)
 {
-    return img->codes ? gv_samples_tile_check(buf, len, img->channels, err)
+    return img->kind != GV_KIND_IMAGE ? gv_samples_tile_check(buf, len, img->channels, err)
                       : gv_tilebuf_check(buf, len, img->channels, err);
 }
 

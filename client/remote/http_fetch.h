@@ -17,6 +17,7 @@
 #include <stdio.h>
 
 #include "base/error.h"
+#include "store/store_format.h"
 #include "tile_cache_disk.h"
 
 struct gv_http;
@@ -72,7 +73,7 @@ struct gv_remote_image {
                             * applies (render/window.h text; "" none) */
     /* Stores of 16-bit codes (docs/FORMAT.md sections 12 and 13): tiles
      * of height tile buffers, a root of 2 bytes a sample. */
-    int codes;             /* 0 an image store, else GV_REMOTE_HEIGHT or _SAMPLES */
+    int kind;              /* GV_KIND_IMAGE, _HEIGHT or _SAMPLES (store_format.h) */
     double scale, offset;  /* value = code * scale + offset */
     double min, max;       /* a height store's range of values (its gray) */
     unsigned code_min, code_max;   /* a sample store's codes' range */
@@ -80,9 +81,6 @@ struct gv_remote_image {
     double mpp;            /* microns per level-0 pixel (a slide's
                             * slide.mpp_x metadata), 0 when not given */
 };
-
-#define GV_REMOTE_HEIGHT 1
-#define GV_REMOTE_SAMPLES 2
 
 /* Bytes of one sample of img: 1, or 2 for a store of codes. */
 int gv_remote_sample_bytes(const struct gv_remote_image *img);
