@@ -15,7 +15,12 @@
 #     size and channels;
 #   - bad --colours, --colours for another store and a window of another
 #     channel count are refused (exit 2), and nothing is written;
-#   - `gigaview view` refuses a sample store, saying what draws it.
+#   - `gigaview view` draws them as well: its frames at 1:1 equal render's
+#     views (five channels with a window each, a height store's gray with
+#     and without a window, a store's own window and colours; with and
+#     without the decode thread), a window
+#     change fetches and decodes no tile, and auto sets a window from the
+#     root's codes.
 # Skips where the build or the machine has no GPU context.  Needs curl,
 # python3, oiiotool and idiff.
 . "$(dirname "$0")/lib.sh"
@@ -159,16 +164,80 @@ expect_rc "two windows for five channels: exit 2" 2
 check "nothing written by a refused render" test ! -e x.png
 
 # ---------------------------------------------------------------- view
-# The window viewer does not draw stores of codes yet: it says so.
-printf 'settle\nquit\n' >q.txt
+# gigaview view draws them too (the atlas holds a layer a channel, the
+# display pass maps each tap through the tables): its frames at 1:1 equal
+# render's views, with windows; a window change fetches and decodes no
+# tile (its counters), and auto sets one from the root's codes.
 SDL_VIDEODRIVER=offscreen
 export SDL_VIDEODRIVER
-run view "$BASE" --image c5 --script q.txt --size 64x64
+cat >views.txt <<'EOF2'
+view 512,512,0
+settle
+shot v1.png
+view 300,300,1
+settle
+shot v2.png
+counters before
+window 7000,60000,1;10000,50000,0.6;5000,65535,2;0,40000,1;20000,62000,1.3
+settle
+shot v3.png
+counters after
+key a
+settle
+counters auto
+view #image=dem&x=512&y=512&z=0&r=0
+settle
+shot v4.png
+window 40,200,0.7
+settle
+shot v5.png
+view #image=s3&x=550&y=350&z=0&r=0
+settle
+shot v6.png
+EOF2
+run view "$BASE" --image c5 --size 640x480 --script views.txt
+cp "$T/out" view.out
 if grep -q 'needs a build with\|no window\|SDL' "$T/err"; then
-    skip "gigaview view refuses a sample store" "no viewer here: $(head -c 200 "$T/err")"
+    skip "gigaview view on stores of codes" "no viewer here: $(head -c 200 "$T/err")"
 else
-    expect_rc "gigaview view refuses a sample store (exit 1)" 1
-    expect_err "... saying what it is and what draws it" "is a sample store of 16-bit codes.*'gigaview render'"
+    expect_rc "the views script runs" 0
+    # view_same DESC SHOT RENDER-ARGS...: a frame equals render's view.
+    view_same() {
+        d=$1 shot=$2
+        shift 2
+        rm -f r.png
+        run render "$BASE" --size 640x480 "$@" -o r.png
+        if [ "$rc" -ne 0 ] || [ ! -f "$shot" ]; then
+            not_ok "$d (render exit $rc)" "$(cat "$T/err")"
+        elif idiff -a "$shot" r.png >"$T/idiff" 2>&1; then
+            ok "$d"
+        else
+            not_ok "$d" "$(tail -n 4 "$T/idiff")"
+        fi
+    }
+    view_same "view: c5 at 1:1 across tiles equals render" v1.png --image c5 --center 512,512 --zoom 0
+    view_same "view: c5 level 1 at 1:1 equals render" v2.png --image c5 --center 300,300 --zoom 1
+    view_same "view: c5 with a window a channel equals render with it" v3.png --image c5 \
+        --center 300,300 --zoom 1 \
+        --window '7000,60000,1;10000,50000,0.6;5000,65535,2;0,40000,1;20000,62000,1.3'
+    view_same "view: a height store's gray equals render" v4.png --image dem --center 512,512 --zoom 0
+    view_same "view: ... with a window on its gray" v5.png --image dem --center 512,512 --zoom 0 \
+        --window 40,200,0.7
+    view_same "view: a sample store's own window and colours equal render" v6.png --image s3 \
+        --center 550,350 --zoom 0
+    check "view: negative control: the windowed frame is not the plain one" \
+        sh -c "! idiff -a v3.png v2.png >/dev/null 2>&1"
+    # Without the decode thread the render thread decodes into the atlas.
+    printf 'view 512,512,0\nsettle\nshot n1.png\n' >nt.txt
+    run view "$BASE" --image c5 --size 640x480 --no-decode-thread --script nt.txt
+    view_same "view --no-decode-thread: c5 at 1:1 equals render" n1.png --image c5 \
+        --center 512,512 --zoom 0
+    b=$(sed -n 's/^before fetched=\([0-9]*\) decodes=\([0-9]*\).*/\1 \2/p' view.out)
+    a=$(sed -n 's/^after fetched=\([0-9]*\) decodes=\([0-9]*\).*/\1 \2/p' view.out)
+    check "view: a window change fetches and decodes no tile ($b, then $a)" \
+        sh -c "[ -n '$b' ] && [ '$b' = '$a' ]"
+    check "view: auto sets a window from the root's codes" \
+        sh -c "grep -q '^auto .* window=[0-9]*,[0-9]*,1.000$' view.out && ! grep -q '^auto .* window=7000,60000' view.out"
 fi
 
 stop_daemon

@@ -773,9 +773,7 @@ static int session_open(struct session *s, const char *url, const struct render_
                 a->image);
         return -1;
     }
-    s->hdr = (struct gv_header){.kind = (uint8_t)s->img.kind, .channels = (uint8_t)s->img.channels,
-                                .samples_lo = (uint16_t)s->img.code_min,
-                                .samples_hi = (uint16_t)s->img.code_max};
+    s->hdr = gv_remote_header(&s->img);
     s->pc = gv_display_channels(&s->hdr);
     if (s->hdr.kind == GV_KIND_HEIGHT)
         s->hm = (struct gv_height_meta){.scale = s->img.scale, .offset = s->img.offset,

@@ -7,6 +7,8 @@
  * decode shader (lib/gpu, whose context here is the window's:
  * gv_gpu_adopt) and drawn from the resident set (view_tiles.h) by one
  * full-window pass that blends two levels of detail (view_draw.h).
+ * Height and sample stores decode to 16-bit codes and are drawn through
+ * tables of their window (codes_set), as gigaviewd draws them.
  *
  * The frame loop: events (view_input.h) and the script's commands
  * (view_script.h), results from the fetch thread, the view's animation,
@@ -54,6 +56,8 @@
 #include "view/view_script.h"
 #include "view/view_select.h"
 #include "view/view_tiles.h"
+#include "render/height_region.h"
+#include "render/samples_region.h"
 #include "render/window.h"
 
 struct view_args {
@@ -164,9 +168,15 @@ struct app {
     struct gv_window dwin, dwin_start;
     int store_window;            /* the image has a store default window */
     char link_window[GV_WINDOW_MAX_TEXT]; /* --view link's, for its image */
-    uint8_t *root_px;            /* the root level's samples, for auto */
+    uint8_t *root_px;            /* the root level's samples, for auto: bytes
+                                  * (a height store's gray), or a sample
+                                  * store's codes (uint16_t) */
     size_t root_n;
     int channels;
+    /* Stores of codes: what the window applies to, and the picture. */
+    struct gv_remote_image img;
+    uint32_t wmax;               /* a window point's largest value */
+    uint8_t *tables;             /* channels x 65536 (vd_set_codes) */
     double mpp;                  /* microns per level-0 pixel, 0: unknown */
     int show_overlay, show_list, fullscreen, quit, rc, vsync;
     int w, h;
@@ -251,12 +261,54 @@ static void open_image(struct app *app, const char *id)
 
 /* ---------------------------------------------------------------- window */
 
+/* The codes' tables of a store of codes under window w: a sample
+ * store's window on its codes (none: the codes' range), with its colours
+ * (the store's, else the palette); a height store's gray, its window then
+ * applied to the composed gray as an image's.  Returns the window left
+ * for the 8-bit pass. */
+static const struct gv_window *codes_set(struct app *app, const struct gv_window *w)
+{
+    static const struct gv_window none = {0};
+    const struct gv_remote_image *im = &app->img;
+    const int c = app->channels;
+    if (!app->tables && !(app->tables = malloc((size_t)c * 65536)))
+        return &none;
+    uint8_t rgb[GV_SAMPLES_MAX_CHANNELS][3] = {{0}};
+    struct gv_colours col = {0};
+    if (im->kind == GV_KIND_HEIGHT) {
+        const struct gv_height_meta m = {.scale = im->scale, .offset = im->offset,
+                                         .min = im->min, .max = im->max};
+        for (uint32_t v = 0; v < 65536; v++)
+            app->tables[v] = gv_height_gray(&m, (uint16_t)v);
+        vd_set_codes(app->draw, app->tables, (const uint8_t (*)[3])rgb, 1);
+        return w;
+    }
+    struct gv_window dw;
+    if (!w->count) {
+        const struct gv_header h = gv_remote_header(im);
+        gv_samples_default_window(&h, &dw);
+        w = &dw;
+    }
+    for (int k = 0; k < c; k++)
+        gv_window_table(gv_window_of(w, k), 65535, app->tables + (size_t)k * 65536);
+    struct gv_error ignored = {0};
+    if (*im->colours && (gv_colours_parse(im->colours, &col, &ignored) < 0 ||
+                         gv_colours_check(&col, c, &ignored) < 0))
+        memset(&col, 0, sizeof col);
+    for (int k = 0; k < c; k++)
+        gv_samples_colour(&col, k, rgb[k]);
+    vd_set_codes(app->draw, app->tables, (const uint8_t (*)[3])rgb, c);
+    return &none;
+}
+
 /* Show window w (count 0: none) from the next frame: a new table, no tile
  * fetched or decoded again. */
 static void window_set(struct app *app, const struct gv_window *w)
 {
     app->dwin = *w;
-    vd_set_window(app->draw, &app->dwin, app->channels);
+    const struct gv_header hdr = gv_remote_header(&app->img);
+    const struct gv_window *w8 = gv_header_codes(&hdr) ? codes_set(app, &app->dwin) : &app->dwin;
+    vd_set_window(app->draw, w8, gv_display_channels(&hdr));
     app->force_draw = 1;
 }
 
@@ -270,10 +322,16 @@ static void window_start(struct app *app, const struct vf_result *r)
     const char *text = app->a->window ? app->a->window :
                        app->link_window[0] ? app->link_window : r->img.window;
     app->store_window = r->img.window[0] != 0;
+    if (app->channels != r->img.channels) {
+        free(app->tables);
+        app->tables = NULL;
+    }
     app->channels = r->img.channels;
     app->mpp = r->img.mpp;
+    app->img = r->img;
+    app->wmax = r->img.kind == GV_KIND_SAMPLES ? 65535 : 255;
     if (*text && strcmp(text, "none") != 0 &&
-        (gv_window_parse(text, 255, &w, &err) < 0 ||
+        (gv_window_parse(text, app->wmax, &w, &err) < 0 ||
          (w.count != 1 && w.count != app->channels))) {
         if (!err.text[0])
             snprintf(err.text, sizeof err.text, "window: %d windows for an "
@@ -285,26 +343,45 @@ static void window_start(struct app *app, const struct vf_result *r)
     app->dwin_start = w;
     app->link_window[0] = 0;
     window_set(app, &w);
+    /* The root's samples the window's auto points come from: an image's
+     * bytes, a height store's gray, a sample store's codes. */
     free(app->root_px);
-    app->root_n = (size_t)r->mip_w[0] * r->mip_h[0];
-    app->root_px = malloc(app->root_n * (size_t)app->channels);
-    if (app->root_px)
-        memcpy(app->root_px, r->mip[0], app->root_n * (size_t)app->channels);
-    else
+    const size_t n = app->root_n = (size_t)r->mip_w[0] * r->mip_h[0];
+    const size_t c = (size_t)app->channels;
+    app->root_px = malloc(n * c * (r->img.kind == GV_KIND_SAMPLES ? 2 : 1));
+    if (!app->root_px) {
         app->root_n = 0;
+    } else if (r->img.kind == GV_KIND_SAMPLES) {
+        uint16_t *codes = (uint16_t *)(void *)app->root_px;
+        for (size_t i = 0; i < n * c; i++)
+            codes[i] = (uint16_t)(r->mip[0][2 * i] | r->mip[0][2 * i + 1] << 8);
+    } else if (r->img.kind != GV_KIND_IMAGE) {
+        for (size_t i = 0; i < n; i++)
+            app->root_px[i] = app->tables[r->mip[0][2 * i] | r->mip[0][2 * i + 1] << 8];
+    } else {
+        memcpy(app->root_px, r->mip[0], n * c);
+    }
 }
 
 /* A window key (view_input.h's VI_WIN_*): black and white move by 5
  * sample values, gamma by a factor of 1.1, every channel alike. */
 static void window_key(struct app *app, enum vi_action a)
 {
+    const uint32_t max = app->wmax, step = max == 255 ? 5 : 5 * 257;
     struct gv_window w = app->dwin;
-    if (w.count == 0)
+    if (w.count == 0 && app->img.kind == GV_KIND_SAMPLES) {
+        const struct gv_header h = gv_remote_header(&app->img);
+        gv_samples_default_window(&h, &w);
+    } else if (w.count == 0) {
         w = (struct gv_window){.count = 1, .ch = {{0, 255, 1000}}};
+    }
     if (a == VI_WIN_AUTO) {
-        if (app->root_n)
-            gv_window_auto8(app->root_px, app->root_n, app->channels, 1,
-                            w.ch[0].gamma_milli, &w);
+        if (app->root_n && app->img.kind == GV_KIND_SAMPLES)
+            gv_window_auto16((const uint16_t *)(void *)app->root_px, app->root_n,
+                             app->channels, 1, w.ch[0].gamma_milli, &w);
+        else if (app->root_n)
+            gv_window_auto8(app->root_px, app->root_n, app->img.kind != GV_KIND_IMAGE ? 1 : app->channels,
+                            1, w.ch[0].gamma_milli, &w);
         window_set(app, &w);
         return;
     }
@@ -316,10 +393,10 @@ static void window_key(struct app *app, enum vi_action a)
     for (int k = 0; k < w.count; k++) {
         struct gv_window_channel *c = &w.ch[k];
         switch (a) {
-        case VI_WIN_BLACK_UP: c->black = c->black + 5 < c->white ? c->black + 5 : c->white - 1; break;
-        case VI_WIN_BLACK_DOWN: c->black = c->black > 5 ? c->black - 5 : 0; break;
-        case VI_WIN_WHITE_DOWN: c->white = c->white > c->black + 5 ? c->white - 5 : c->black + 1; break;
-        case VI_WIN_WHITE_UP: c->white = c->white + 5 < 255 ? c->white + 5 : 255; break;
+        case VI_WIN_BLACK_UP: c->black = c->black + step < c->white ? c->black + step : c->white - 1; break;
+        case VI_WIN_BLACK_DOWN: c->black = c->black > step ? c->black - step : 0; break;
+        case VI_WIN_WHITE_DOWN: c->white = c->white > c->black + step ? c->white - step : c->black + 1; break;
+        case VI_WIN_WHITE_UP: c->white = c->white + step < max ? c->white + step : max; break;
         case VI_WIN_GAMMA_UP: {
             uint32_t g = (uint32_t)lround(c->gamma_milli * 1.1);
             c->gamma_milli = g > GV_WINDOW_GAMMA_MAX ? GV_WINDOW_GAMMA_MAX : g;
@@ -856,7 +933,7 @@ static void script_action(struct app *app, const struct vs_cmd *c)
         struct gv_error err = {0};
         struct gv_window w = {0};
         if (strcmp(c->text, "none") != 0 &&
-            gv_window_parse(c->text, 255, &w, &err) < 0) {
+            gv_window_parse(c->text, app->wmax ? app->wmax : 255, &w, &err) < 0) {
             fprintf(stderr, ME ": script line %d: %s\n", c->line, err.text);
             app->quit = 1;
             app->rc = 2;
@@ -939,7 +1016,8 @@ static void overlay_content(struct app *app, const struct vt_plan *p,
 
 static void write_shot(struct app *app)
 {
-    const int ch = app->tiles ? vt_geometry(app->tiles)->channels : 3;
+    const struct gv_header hdr = gv_remote_header(&app->img);
+    const int ch = app->tiles ? gv_display_channels(&hdr) : 3;
     uint8_t *px = malloc((size_t)app->w * app->h * ch);
     struct gv_error err = {0};
     if (!px) {
@@ -1161,6 +1239,7 @@ static void close_app(struct app *app)
     vsel_free(app->sel);
     vt_free(app->tiles);
     free(app->root_px);
+    free(app->tables);
     vo_free(app->overlay);
     vd_free(app->draw);
     gv_gpu_close(app->dgpu);     /* after vt_free joined the decode thread */
@@ -1230,7 +1309,7 @@ static int start(struct app *app, const char *url, struct view_args *a)
         struct gv_window lw;
         int lr = vg_hash_window(a->view, app->link_window, sizeof app->link_window);
         if (lr < 0 || (lr > 0 && app->link_window[0] && strcmp(app->link_window, "none") != 0 &&
-                       gv_window_parse(app->link_window, 255, &lw, &err) < 0)) {
+                       gv_window_parse(app->link_window, 65535, &lw, &err) < 0)) {
             fprintf(stderr, ME ": --view: the link's window: %s\n",
                     err.text[0] ? err.text : "malformed or too long");
             return 2;

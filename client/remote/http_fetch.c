@@ -607,6 +607,13 @@ int gv_remote_sample_bytes(const struct gv_remote_image *img)
     return img->kind == GV_KIND_IMAGE ? 1 : 2;
 }
 
+struct gv_header gv_remote_header(const struct gv_remote_image *img)
+{
+    return (struct gv_header){.kind = (uint8_t)img->kind, .channels = (uint8_t)img->channels,
+                              .samples_lo = (uint16_t)img->code_min,
+                              .samples_hi = (uint16_t)img->code_max};
+}
+
 /* A tile buffer of img checked as its kind of store wants. */
 static int tile_check(const struct gv_remote_image *img, const uint8_t *buf,
                       size_t len, struct gv_error *err)

@@ -85,6 +85,10 @@ struct gv_remote_image {
 /* Bytes of one sample of img: 1, or 2 for a store of codes. */
 int gv_remote_sample_bytes(const struct gv_remote_image *img);
 
+/* The store header fields the display rules read (render/samples_region.h:
+ * kind, channels, a sample store's codes' range) of img, the rest 0. */
+struct gv_header gv_remote_header(const struct gv_remote_image *img);
+
 /* Fetch an image's metadata into *img.  An unknown image, or an id that
  * cannot be one, is GV_ENOTFOUND; metadata out of bounds is GV_ECORRUPT. */
 int gv_http_image(struct gv_http *h, const char *id,

@@ -44,6 +44,8 @@ struct vdt {
     struct node *done, **done_tail;  /* FIFO */
     /* the thread's own */
     struct gv_gpu_decoder *dec;
+    struct gv_gpu_height *hdec;   /* stores of codes */
+    int codes;                    /* 1: tiles of 16-bit codes, a layer a channel */
     struct gv_gpu_cache *cache;
     struct vdt_job *cur;
 };
@@ -81,6 +83,8 @@ struct copy_arg {
     GLuint from;          /* in: the decoded tile (0: none, only wait) */
     GLuint atlas;
     int slot;
+    int layers;           /* 0: an image tile (RGBA8UI); else a tile of codes'
+                           * channels, into layers slot * layers ... */
     GLsync fence;         /* out */
 };
 
@@ -97,8 +101,13 @@ static int copy_gl(void *arg, struct gv_error *err)
         return 0;
     while (glGetError() != GL_NO_ERROR)
         ;
-    glCopyImageSubData(c->from, GL_TEXTURE_2D, 0, 0, 0, 0, c->atlas, GL_TEXTURE_2D_ARRAY,
-                       0, 0, 0, c->slot, GV_TILE, GV_TILE, 1);
+    if (c->layers)
+        glCopyImageSubData(c->from, GL_TEXTURE_2D_ARRAY, 0, 0, 0, 0, c->atlas,
+                           GL_TEXTURE_2D_ARRAY, 0, 0, 0, c->slot * c->layers, GV_TILE,
+                           GV_TILE, c->layers);
+    else
+        glCopyImageSubData(c->from, GL_TEXTURE_2D, 0, 0, 0, 0, c->atlas,
+                           GL_TEXTURE_2D_ARRAY, 0, 0, 0, c->slot, GV_TILE, GV_TILE, 1);
     c->fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
     glFlush();
     GLenum e = glGetError();
@@ -136,7 +145,8 @@ static void run_job(struct vdt *d, struct node *n)
     struct vdt_done *r = &n->done;
     struct gv_error err = {0};
     *r = (struct vdt_done){.level = j->level, .tx = j->tx, .ty = j->ty, .slot = j->slot};
-    struct copy_arg c = {.wait = j->fence, .atlas = d->atlas, .slot = j->slot};
+    struct copy_arg c = {.wait = j->fence, .atlas = d->atlas, .slot = j->slot,
+                         .layers = d->codes ? d->geo.channels : 0};
     j->fence = NULL;
     uint32_t h = 0;
     d->cur = j;
@@ -164,12 +174,16 @@ static void *decode_thread(void *arg)
 {
     struct vdt *d = arg;
     struct gv_error err = {0};
-    if (!(d->dec = gv_gpu_decoder_new(d->gpu, &(struct gv_gpu_decoder_opts){
-                                          .channels = d->geo.channels}, &err)) ||
-        !(d->cache = gv_gpu_cache_new(
-              &(struct gv_gpu_tiles[]){gv_gpu_tiles_image(d->dec, d->geo.channels)}[0],
-              &d->geo, d->root, d->root_w, d->root_h, d->decode_bytes, from_job, d,
-              &err))) {
+    const int c = d->geo.channels;
+    struct gv_gpu_tiles tiles = {0};
+    if (d->codes ? !!(d->hdec = gv_gpu_height_new(d->gpu, &(struct gv_gpu_height_opts){
+                                                      .channels = c}, &err))
+                 : !!(d->dec = gv_gpu_decoder_new(d->gpu, &(struct gv_gpu_decoder_opts){
+                                                      .channels = c}, &err)))
+        tiles = d->codes ? gv_gpu_tiles_codes(d->hdec, c) : gv_gpu_tiles_image(d->dec, c);
+    if (!tiles.dec ||
+        !(d->cache = gv_gpu_cache_new(&tiles, &d->geo, d->root, d->root_w, d->root_h,
+                                      d->decode_bytes, from_job, d, &err))) {
         struct node *n = calloc(1, sizeof *n);
         if (n) {
             n->done.slot = -1;
@@ -195,20 +209,22 @@ static void *decode_thread(void *arg)
     pthread_mutex_unlock(&d->lock);
     gv_gpu_cache_free(d->cache);
     gv_gpu_decoder_free(d->dec);
+    gv_gpu_height_free(d->hdec);
     d->cache = NULL;
     d->dec = NULL;
+    d->hdec = NULL;
     /* Nothing of this context's may still run on the atlas once the
      * render thread deletes it. */
     gv_gpu_call(d->gpu, finish_gl, NULL, NULL);
     return NULL;
 }
 
-struct vdt *vdt_new(struct gv_gpu *g, const struct gv_geometry *geo,
-                    const uint8_t *root, uint32_t root_w, uint32_t root_h,
+struct vdt *vdt_new(struct gv_gpu *g, const struct gv_geometry *geo, int codes,
+                    const void *root, uint32_t root_w, uint32_t root_h,
                     size_t decode_bytes, unsigned atlas, struct gv_error *err)
 {
     struct vdt *d = calloc(1, sizeof *d);
-    size_t rb = (size_t)root_w * root_h * (size_t)geo->channels;
+    size_t rb = (size_t)root_w * root_h * (size_t)geo->channels * (codes ? 2 : 1);
     if (!d || !(d->root = malloc(rb ? rb : 1))) {
         free(d);
         gv_fail(err, GV_ENOMEM, "out of memory");
@@ -217,6 +233,7 @@ struct vdt *vdt_new(struct gv_gpu *g, const struct gv_geometry *geo,
     memcpy(d->root, root, rb);
     d->gpu = g;
     d->geo = *geo;
+    d->codes = codes;
     d->root_w = root_w;
     d->root_h = root_h;
     d->decode_bytes = decode_bytes;

@@ -65,13 +65,14 @@ struct vdt;
  * vdt_free) for an image of geometry geo (copied) whose root level image is
  * root (root_w x root_h x geo->channels, copied), decoding into atlas
  * texture `atlas` (a GL_TEXTURE_2D_ARRAY of GV_TILE x GV_TILE RGBA8UI
- * layers, made on the render context and complete before the first job's
- * fence).  decode_bytes bounds the thread's decoded-tile cache.  The
+ * layers, or with `codes` R16UI layers, geo->channels a tile, made on the
+ * render context and complete before the first job's fence); root: the
+ * root level, bytes or (codes) host-order 16-bit codes.  decode_bytes bounds the thread's decoded-tile cache.  The
  * decoder is made on the thread, so its failure comes back as a result
  * with slot -1.  Returns NULL with *err (memory, no thread).
  */
-struct vdt *vdt_new(struct gv_gpu *g, const struct gv_geometry *geo,
-                    const uint8_t *root, uint32_t root_w, uint32_t root_h,
+struct vdt *vdt_new(struct gv_gpu *g, const struct gv_geometry *geo, int codes,
+                    const void *root, uint32_t root_w, uint32_t root_h,
                     size_t decode_bytes, unsigned atlas, struct gv_error *err);
 
 /* Post job j (its buffers and fence are moved in, whatever happens).

@@ -41,6 +41,11 @@ static const char fragment_src[] =
     "uniform int u_f, u_top, u_root, u_sabotage, u_lut_on;\n"
     "uniform float u_t, u_scale, u_cs, u_sn;\n"
     "uniform vec2 u_c, u_win, u_img;\n"
+    "#ifdef GV_CODES\n"
+    "uniform usampler2DArray u_tables;\n"
+    "uniform int u_channels;\n"
+    "uniform uvec3 u_colour[8];\n"
+    "#endif\n"
     "out vec4 o_color;\n"
     "\n"
     "vec3 tap(int k, ivec2 p, inout bool ok)\n"
@@ -53,10 +58,22 @@ static const char fragment_src[] =
     "        return vec3(0.0);\n"
     "    }\n"
     "    ivec2 q = p - t * 512;\n"
-    "    uvec4 v = texelFetch(u_atlas, ivec3(q, int(s) - 1), 0);\n"
-    "    if (u_sabotage == 1 && k < u_root && q == ivec2(100))\n"
-    "        v ^= uvec4(1u);\n"
+    "    uint flip = u_sabotage == 1 && k < u_root && q == ivec2(100) ? 1u : 0u;\n"
+    "#ifdef GV_CODES\n"
+    "    int base = (int(s) - 1) * u_channels;\n"
+    "    uvec3 acc = uvec3(0u);\n"
+    "    uint gray = 0u;\n"
+    "    for (int c = 0; c < u_channels; c++) {\n"
+    "        uint code = texelFetch(u_atlas, ivec3(q, base + c), 0).r ^ flip;\n"
+    "        gray = texelFetch(u_tables, ivec3(int(code & 255u), int(code >> 8), c), 0).r;\n"
+    "        acc += gray * u_colour[c];\n"
+    "    }\n"
+    "    return u_channels == 1 ? vec3(float(gray))\n"
+    "                           : vec3(min((acc + 127u) / 255u, uvec3(255u)));\n"
+    "#else\n"
+    "    uvec4 v = texelFetch(u_atlas, ivec3(q, int(s) - 1), 0) ^ uvec4(flip);\n"
     "    return vec3(v.rgb);\n"
+    "#endif\n"
     "}\n"
     "\n"
     "vec3 level_sample(int k, vec2 p, out bool ok)\n"
@@ -109,12 +126,49 @@ static const char fragment_src[] =
     "    o_color = vec4(c / 255.0, 1.0);\n"
     "}\n";
 
-struct vd {
-    unsigned prog, vao, lut;
-    int sabotage, lut_on;
+/* One display program and its uniforms: [0] for image stores, [1] for
+ * stores of codes (GV_CODES: the atlas holds a layer a channel, and each
+ * tap goes through the tables and colours of vd_set_codes). */
+struct vd_prog {
+    unsigned prog;
     GLint u_atlas, u_pt, u_lut, u_lut_on, u_lv, u_row, u_f, u_top, u_root,
-        u_sabotage, u_t, u_scale, u_cs, u_sn, u_c, u_win, u_img;
+        u_sabotage, u_t, u_scale, u_cs, u_sn, u_c, u_win, u_img, u_tables,
+        u_channels, u_colour;
 };
+
+struct vd {
+    struct vd_prog p[2];
+    unsigned vao, lut, tables;
+    int sabotage, lut_on;
+    int channels;                  /* layers of the tables */
+    GLuint colour[24];
+};
+
+static int prog_new(struct gv_gpu *g, int codes, struct vd_prog *v,
+                    struct gv_error *err)
+{
+    char *listing = NULL;
+    char *src = malloc(sizeof fragment_src + 32);
+    if (!src)
+        return gv_fail(err, GV_ENOMEM, "out of memory");
+    snprintf(src, sizeof fragment_src + 32, "%s%s", codes ? "#define GV_CODES 1\n" : "",
+             fragment_src);
+    v->prog = gv_gpu_program(g, vertex_src, src, &listing, err);
+    free(src);
+    if (!v->prog) {
+        if (listing)
+            fprintf(stderr, "%s\n", listing);
+        free(listing);
+        return -1;
+    }
+#define U(name) v->name = glGetUniformLocation(v->prog, #name)
+    U(u_atlas); U(u_pt); U(u_lut); U(u_lut_on); U(u_lv); U(u_row); U(u_f); U(u_top); U(u_root);
+    U(u_sabotage); U(u_t); U(u_scale); U(u_cs); U(u_sn); U(u_c); U(u_win); U(u_img);
+    U(u_tables); U(u_channels);
+#undef U
+    v->u_colour = glGetUniformLocation(v->prog, "u_colour[0]");
+    return 0;
+}
 
 struct vd *vd_new(struct gv_gpu *g, struct gv_error *err)
 {
@@ -123,20 +177,12 @@ struct vd *vd_new(struct gv_gpu *g, struct gv_error *err)
         gv_fail(err, GV_ENOMEM, "out of memory");
         return NULL;
     }
-    char *listing = NULL;
-    if (!(d->prog = gv_gpu_program(g, vertex_src, fragment_src, &listing, err))) {
-        if (listing)
-            fprintf(stderr, "%s\n", listing);
-        free(listing);
-        free(d);
+    if (prog_new(g, 0, &d->p[0], err) < 0 || prog_new(g, 1, &d->p[1], err) < 0) {
+        vd_free(d);
         return NULL;
     }
     const char *sab = getenv("GIGAVIEW_VIEW_SABOTAGE");
     d->sabotage = sab && !strcmp(sab, "decode");
-#define U(name) d->name = glGetUniformLocation(d->prog, #name)
-    U(u_atlas); U(u_pt); U(u_lut); U(u_lut_on); U(u_lv); U(u_row); U(u_f); U(u_top); U(u_root);
-    U(u_sabotage); U(u_t); U(u_scale); U(u_cs); U(u_sn); U(u_c); U(u_win); U(u_img);
-#undef U
     glGenVertexArrays(1, &d->vao);
     glGenTextures(1, &d->lut);
     glBindTexture(GL_TEXTURE_2D, d->lut);
@@ -145,6 +191,35 @@ struct vd *vd_new(struct gv_gpu *g, struct gv_error *err)
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glBindTexture(GL_TEXTURE_2D, 0);
     return d;
+}
+
+void vd_set_codes(struct vd *d, const uint8_t *tables, const uint8_t (*colour)[3],
+                  int channels)
+{
+    if (d->tables && d->channels != channels) {
+        glDeleteTextures(1, &d->tables);
+        d->tables = 0;
+    }
+    if (!d->tables) {
+        glGenTextures(1, &d->tables);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, d->tables);
+        glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R8UI, 256, 256, channels);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        d->channels = channels;
+    }
+    glBindTexture(GL_TEXTURE_2D_ARRAY, d->tables);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+    glPixelStorei(GL_UNPACK_IMAGE_HEIGHT, 0);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, 0, 256, 256, channels,
+                    GL_RED_INTEGER, GL_UNSIGNED_BYTE, tables);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
+    memset(d->colour, 0, sizeof d->colour);
+    for (int k = 0; k < channels && k < 8; k++)
+        for (int j = 0; j < 3; j++)
+            d->colour[3 * k + j] = colour[k][j];
 }
 
 void vd_set_window(struct vd *d, const struct gv_window *w, int channels)
@@ -173,9 +248,13 @@ void vd_free(struct vd *d)
 {
     if (!d)
         return;
-    glDeleteProgram(d->prog);
+    for (int i = 0; i < 2; i++)
+        if (d->p[i].prog)
+            glDeleteProgram(d->p[i].prog);
     glDeleteVertexArrays(1, &d->vao);
     glDeleteTextures(1, &d->lut);
+    if (d->tables)
+        glDeleteTextures(1, &d->tables);
     free(d);
 }
 
@@ -184,36 +263,44 @@ void vd_draw(struct vd *d, const struct vt *t, const struct vt_plan *p,
 {
     const struct vt_gl *gl = vt_gl(t);
     const struct gv_geometry *g = vt_geometry(t);
+    const struct vd_prog *P = &d->p[gl->codes ? 1 : 0];
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glViewport(0, 0, w, h);
     glDisable(GL_BLEND);
     glDisable(GL_SCISSOR_TEST);
     glDisable(GL_DEPTH_TEST);
-    glUseProgram(d->prog);
+    glUseProgram(P->prog);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D_ARRAY, gl->atlas);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, gl->page_table);
     glActiveTexture(GL_TEXTURE2);
     glBindTexture(GL_TEXTURE_2D, d->lut);
+    if (gl->codes) {
+        glActiveTexture(GL_TEXTURE3);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, d->tables);
+        glUniform1i(P->u_tables, 3);
+        glUniform1i(P->u_channels, g->channels);
+        glUniform3uiv(P->u_colour, 8, d->colour);
+    }
     glActiveTexture(GL_TEXTURE0);
-    glUniform1i(d->u_atlas, 0);
-    glUniform1i(d->u_pt, 1);
-    glUniform1i(d->u_lut, 2);
-    glUniform1i(d->u_lut_on, d->lut_on);
-    glUniform4iv(d->u_lv, gl->nlevels, &gl->lv[0][0]);
-    glUniform1iv(d->u_row, gl->nlevels, gl->row);
-    glUniform1i(d->u_f, p->f);
-    glUniform1i(d->u_top, gl->nlevels - 1);
-    glUniform1i(d->u_root, gl->root);
-    glUniform1i(d->u_sabotage, d->sabotage);
-    glUniform1f(d->u_t, (float)p->t);
-    glUniform1f(d->u_scale, (float)p->scale);
-    glUniform1f(d->u_cs, (float)p->cs);
-    glUniform1f(d->u_sn, (float)p->sn);
-    glUniform2f(d->u_c, (float)v->cx, (float)v->cy);
-    glUniform2f(d->u_win, (float)w, (float)h);
-    glUniform2f(d->u_img, (float)g->width, (float)g->height);
+    glUniform1i(P->u_atlas, 0);
+    glUniform1i(P->u_pt, 1);
+    glUniform1i(P->u_lut, 2);
+    glUniform1i(P->u_lut_on, d->lut_on);
+    glUniform4iv(P->u_lv, gl->nlevels, &gl->lv[0][0]);
+    glUniform1iv(P->u_row, gl->nlevels, gl->row);
+    glUniform1i(P->u_f, p->f);
+    glUniform1i(P->u_top, gl->nlevels - 1);
+    glUniform1i(P->u_root, gl->root);
+    glUniform1i(P->u_sabotage, d->sabotage);
+    glUniform1f(P->u_t, (float)p->t);
+    glUniform1f(P->u_scale, (float)p->scale);
+    glUniform1f(P->u_cs, (float)p->cs);
+    glUniform1f(P->u_sn, (float)p->sn);
+    glUniform2f(P->u_c, (float)v->cx, (float)v->cy);
+    glUniform2f(P->u_win, (float)w, (float)h);
+    glUniform2f(P->u_img, (float)g->width, (float)g->height);
     glBindVertexArray(d->vao);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glBindVertexArray(0);

@@ -14,6 +14,12 @@
  * every pixel is a decoded texel, bit for bit.  A display window, if set
  * (vd_set_window), maps each composed 8-bit sample through its table.
  *
+ * A store of 16-bit codes (height and sample stores) has a layer a
+ * channel in the atlas; each tap's codes go through the tables and colours
+ * of vd_set_codes to the 8-bit value gigaviewd draws (gray, or the
+ * channels' colours added), which is then sampled as an image's: the
+ * same order as `gigaview render` (its to_display before composing).
+ *
  * GIGAVIEW_VIEW_SABOTAGE=decode (for tests only) flips the low bit of
  * texel (100, 100) of every tiled level's tile as the shader reads it, so
  * that a test can show that its comparison catches a wrong decode.
@@ -44,6 +50,13 @@ void vd_draw(struct vd *d, const struct vt *t, const struct vt_plan *p,
  * for an image of `channels` channels (1 or 3) from now on: the same
  * tables as the server's.  GL thread; no tile is touched. */
 void vd_set_window(struct vd *d, const struct gv_window *w, int channels);
+
+/* The picture of a store of codes from now on: tables holds, for each of
+ * `channels` channels, 65536 bytes (a code's 8-bit value: a sample store's
+ * window on its codes, a height store's gray), colour each channel's RGB
+ * (used when channels > 1).  GL thread; no tile is touched. */
+void vd_set_codes(struct vd *d, const uint8_t *tables, const uint8_t (*colour)[3],
+                  int channels);
 
 /* Read the w x h framebuffer back as `channels`-channel rows, top row
  * first, into px (w * h * channels bytes). */

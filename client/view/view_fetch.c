@@ -155,12 +155,6 @@ static void do_open(struct vf *f, const char *id, unsigned gen)
     f->dc = NULL;
     if (gv_http_image(f->http, id, &r.img, &err) < 0)
         goto fail;
-    if (r.img.kind != GV_KIND_IMAGE) {
-        gv_fail(&err, GV_EFORMAT, "image '%s' is a %s store of 16-bit codes, which "
-                "this viewer does not draw yet ('gigaview render' and the browser "
-                "viewer do)", id, r.img.kind == GV_KIND_HEIGHT ? "height" : "sample");
-        goto fail;
-    }
     if (r.img.levels_tiled + r.img.root_mips > GV_MAX_LEVELS) {
         gv_fail(&err, GV_ECORRUPT, "image '%s': too many levels", id);
         goto fail;

@@ -69,6 +69,9 @@ struct slot {
 struct vt {
     struct gv_gpu *gpu;
     struct gv_gpu_decoder *dec;
+    struct gv_gpu_height *hdec;   /* stores of codes */
+    int layers;               /* atlas layers a tile: 1, or a store of codes' channels */
+    size_t slot_bytes;        /* GPU bytes of one atlas slot */
     struct gv_gpu_cache *cache;
     struct vdt *dt;           /* the decode thread, or NULL */
     int dt_broken;            /* it failed to start: nothing more is posted */
@@ -183,10 +186,36 @@ static void pt_set(struct vt *t, int level, uint32_t tx, uint32_t ty, unsigned v
                     GL_RED_INTEGER, GL_UNSIGNED_INT, &v);
 }
 
+/* Upload root mip m (w x h x c codes, little-endian) of a store of codes
+ * into pinned slot `slot`: a layer a channel. */
+static int upload_mip_codes(struct vt *t, int slot, const uint8_t *px, uint32_t w,
+                            uint32_t h, struct gv_error *err)
+{
+    const int c = t->geo.channels;
+    uint16_t *plane = malloc(sizeof *plane * (size_t)w * h);
+    if (!plane)
+        return gv_fail(err, GV_ENOMEM, "out of memory");
+    glBindTexture(GL_TEXTURE_2D_ARRAY, t->gl.atlas);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 2);
+    for (int k = 0; k < c; k++) {
+        for (size_t i = 0; i < (size_t)w * h; i++) {
+            const uint8_t *b = px + 2 * (i * c + (size_t)k);
+            plane[i] = (uint16_t)(b[0] | b[1] << 8);
+        }
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, slot * c + k, (GLsizei)w,
+                        (GLsizei)h, 1, GL_RED_INTEGER, GL_UNSIGNED_SHORT, plane);
+    }
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    free(plane);
+    return 0;
+}
+
 /* Upload root mip m (w x h x c) into a pinned layer. */
 static int upload_mip(struct vt *t, int layer, const uint8_t *px, uint32_t w,
                       uint32_t h, struct gv_error *err)
 {
+    if (t->gl.codes)
+        return upload_mip_codes(t, layer, px, w, h, err);
     const int c = t->geo.channels;
     uint8_t *rgba = malloc((size_t)w * h * 4);
     if (!rgba)
@@ -232,11 +261,11 @@ static int gl_setup(struct vt *t, struct vf_result *res, struct gv_error *err)
                        "GPU's page table (%dx%d texels, the limit is %d)",
                        ptw, rows, (int)max_size);
     int pinned = t->top - g->root + 1;
-    long want = (long)(t->o.atlas_bytes / TILE_TEX_BYTES);
+    long want = (long)(t->o.atlas_bytes / t->slot_bytes);
     if (want < pinned + 8)
         want = pinned + 8;
-    if (want > max_layers)
-        want = max_layers;
+    if (want > max_layers / t->layers)
+        want = max_layers / t->layers;
     t->nslots = (int)want;
     if (!(t->slots = calloc((size_t)t->nslots, sizeof *t->slots)))
         return gv_fail(err, GV_ENOMEM, "out of memory");
@@ -248,7 +277,8 @@ static int gl_setup(struct vt *t, struct vf_result *res, struct gv_error *err)
     glPixelStorei(GL_UNPACK_SKIP_IMAGES, 0);
     glGenTextures(1, &t->gl.atlas);
     glBindTexture(GL_TEXTURE_2D_ARRAY, t->gl.atlas);
-    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RGBA8UI, GV_TILE, GV_TILE, t->nslots);
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, t->gl.codes ? GL_R16UI : GL_RGBA8UI, GV_TILE,
+                   GV_TILE, t->nslots * t->layers);
     /* Integer textures are incomplete (read as 0) with linear filters. */
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
@@ -300,24 +330,44 @@ struct vt *vt_new(struct gv_gpu *g, struct vf_result *res,
     }
     t->geo.root_mips = im->root_mips;
     t->top = t->geo.root + im->root_mips - 1;
+    t->gl.codes = im->kind != GV_KIND_IMAGE;
+    t->layers = t->gl.codes ? im->channels : 1;
+    t->slot_bytes = t->gl.codes ? (size_t)GV_TILE * GV_TILE * 2 * (size_t)im->channels
+                                : TILE_TEX_BYTES;
     if (gl_setup(t, res, err) < 0)
         goto fail;
+    /* The root tile of a store of codes: host-order codes. */
+    if (t->gl.codes) {
+        uint8_t *b = res->mip[0];
+        uint16_t *c = (uint16_t *)(void *)b;
+        for (size_t i = 0; i < (size_t)res->mip_w[0] * res->mip_h[0] * im->channels; i++)
+            c[i] = (uint16_t)(b[2 * i] | b[2 * i + 1] << 8);
+    }
     if (o->decode_gpu) {
         /* The atlas must be complete before the decode context writes to
          * it: every job waits for a fence made after this. */
         glFlush();
-        t->dt = vdt_new(o->decode_gpu, &t->geo, res->mip[0], res->mip_w[0],
-                        res->mip_h[0], o->decode_bytes, t->gl.atlas, err);
+        t->dt = vdt_new(o->decode_gpu, &t->geo, t->gl.codes, res->mip[0],
+                        res->mip_w[0], res->mip_h[0], o->decode_bytes, t->gl.atlas,
+                        err);
         if (!t->dt)
             goto fail;
         t->st.threaded = 1;
         vf_result_free(res);
         return t;
     }
-    if (!(t->dec = gv_gpu_decoder_new(g, &(struct gv_gpu_decoder_opts){
-                                          .channels = im->channels}, err)))
-        goto fail;
-    const struct gv_gpu_tiles tiles = gv_gpu_tiles_image(t->dec, im->channels);
+    struct gv_gpu_tiles tiles;
+    if (t->gl.codes) {
+        if (!(t->hdec = gv_gpu_height_new(g, &(struct gv_gpu_height_opts){
+                                              .channels = im->channels}, err)))
+            goto fail;
+        tiles = gv_gpu_tiles_codes(t->hdec, im->channels);
+    } else {
+        if (!(t->dec = gv_gpu_decoder_new(g, &(struct gv_gpu_decoder_opts){
+                                              .channels = im->channels}, err)))
+            goto fail;
+        tiles = gv_gpu_tiles_image(t->dec, im->channels);
+    }
     t->cache = gv_gpu_cache_new(&tiles, &t->geo, res->mip[0], res->mip_w[0],
                                 res->mip_h[0], o->decode_bytes, from_memory, t, err);
     if (!t->cache)
@@ -339,6 +389,7 @@ void vt_free(struct vt *t)
     free(t->pend);
     gv_gpu_cache_free(t->cache);
     gv_gpu_decoder_free(t->dec);
+    gv_gpu_height_free(t->hdec);
     if (t->gl.atlas)
         glDeleteTextures(1, &t->gl.atlas);
     if (t->gl.page_table)
@@ -698,8 +749,13 @@ static int make_resident(struct vt *t, struct entry *e, uint64_t before, double 
         decode_failed(t, e, err.text, now);
         return -1;
     }
-    glCopyImageSubData(h, GL_TEXTURE_2D, 0, 0, 0, 0, t->gl.atlas, GL_TEXTURE_2D_ARRAY,
-                       0, 0, 0, s, GV_TILE, GV_TILE, 1);
+    if (t->gl.codes)
+        glCopyImageSubData(h, GL_TEXTURE_2D_ARRAY, 0, 0, 0, 0, t->gl.atlas,
+                           GL_TEXTURE_2D_ARRAY, 0, 0, 0, s * t->layers, GV_TILE, GV_TILE,
+                           t->layers);
+    else
+        glCopyImageSubData(h, GL_TEXTURE_2D, 0, 0, 0, 0, t->gl.atlas, GL_TEXTURE_2D_ARRAY,
+                           0, 0, 0, s, GV_TILE, GV_TILE, 1);
     t->slots[s].e = e;
     t->slots[s].used = t->frame;
     e->slot = s;

@@ -6,7 +6,8 @@
  * per-frame budget, and the resident set the display shader reads.
  *
  * Resident tiles live in one texture array (the atlas: 513 x 513 RGBA8UI
- * layers, as the decoder makes them, copied there), found through a page
+ * layers, as the decoder makes them, copied there; for a store of 16-bit
+ * codes R16UI layers, a channel each, C a tile), found through a page
  * table (an R32UI texture, one texel per tile of every level: layer + 1,
  * or 0 when not resident), so the display shader can take each bilinear
  * tap from the tile that owns its pixel (docs/FORMAT.md section 2: the
@@ -117,6 +118,7 @@ void vt_frame(struct vt *t, const struct vt_plan *p, double vx, double vy,
 /* GL names and geometry the display shader reads. */
 struct vt_gl {
     unsigned atlas, page_table;
+    int codes;                      /* 1: 16-bit codes, a layer a channel */
     int nlevels;                    /* top + 1 */
     int root;
     int lv[VT_MAX_LEVELS][4];       /* width, height, tiles_x, tiles_y */

@@ -213,6 +213,50 @@ char *gv_window_meta_set(const char *json, const struct gv_window *w,
     return gv_meta_set_string(json, GV_WINDOW_META_KEY, text, err);
 }
 
+/* The 0.5 % and 99.5 % points of histogram h (max + 1 bins, n samples):
+ * white above black, within 0 .. max. */
+static void auto_points(const size_t *h, uint32_t max, size_t n, uint32_t *black,
+                        uint32_t *white)
+{
+    const double low = (double)n * 0.005, high = (double)n * 0.995;
+    uint32_t lo = 0, hi = max;
+    size_t acc = 0;
+    for (uint32_t v = 0; v <= max; v++)
+        if ((double)(acc += h[v]) > low) {
+            lo = v;
+            break;
+        }
+    acc = 0;
+    for (uint32_t v = 0; v <= max; v++)
+        if ((double)(acc += h[v]) >= high) {
+            hi = v;
+            break;
+        }
+    if (hi <= lo) {
+        if (lo >= max)
+            lo = max - 1;
+        hi = lo + 1;
+    }
+    *black = lo;
+    *white = hi;
+}
+
+/* One window for every channel of w when linked (or for one channel):
+ * the lowest black and the highest white. */
+static void auto_link(struct gv_window *w, int channels, int linked)
+{
+    w->count = channels;
+    if (!linked && channels > 1)
+        return;
+    for (int k = 1; k < channels; k++) {
+        if (w->ch[k].black < w->ch[0].black)
+            w->ch[0].black = w->ch[k].black;
+        if (w->ch[k].white > w->ch[0].white)
+            w->ch[0].white = w->ch[k].white;
+    }
+    w->count = 1;
+}
+
 void gv_window_auto8(const uint8_t *px, size_t n, int channels, int linked,
                      uint32_t gamma_milli, struct gv_window *w)
 {
@@ -223,35 +267,29 @@ void gv_window_auto8(const uint8_t *px, size_t n, int channels, int linked,
         size_t h[256] = {0};
         for (size_t i = 0; i < n; i++)
             h[px[i * (size_t)channels + (size_t)k]]++;
-        const double low = (double)n * 0.005, high = (double)n * 0.995;
-        uint32_t lo = 0, hi = 255;
-        size_t acc = 0;
-        for (uint32_t v = 0; v < 256; v++)
-            if ((double)(acc += h[v]) > low) {
-                lo = v;
-                break;
-            }
-        acc = 0;
-        for (uint32_t v = 0; v < 256; v++)
-            if ((double)(acc += h[v]) >= high) {
-                hi = v;
-                break;
-            }
-        if (hi <= lo) {
-            if (lo >= 255)
-                lo = 254;
-            hi = lo + 1;
-        }
-        w->ch[k] = (struct gv_window_channel){lo, hi, gamma_milli};
+        w->ch[k].gamma_milli = gamma_milli;
+        auto_points(h, 255, n, &w->ch[k].black, &w->ch[k].white);
     }
-    w->count = channels;
-    if (linked || channels == 1) {
-        for (int k = 1; k < channels; k++) {
-            if (w->ch[k].black < w->ch[0].black)
-                w->ch[0].black = w->ch[k].black;
-            if (w->ch[k].white > w->ch[0].white)
-                w->ch[0].white = w->ch[k].white;
-        }
-        w->count = 1;
+    auto_link(w, channels, linked);
+}
+
+int gv_window_auto16(const uint16_t *px, size_t n, int channels, int linked,
+                     uint32_t gamma_milli, struct gv_window *w)
+{
+    memset(w, 0, sizeof *w);
+    if (channels < 1 || channels > GV_WINDOW_MAX_CHANNELS)
+        return 0;
+    size_t *h = malloc(sizeof *h * 65536);
+    if (!h)
+        return -1;
+    for (int k = 0; k < channels; k++) {
+        memset(h, 0, sizeof *h * 65536);
+        for (size_t i = 0; i < n; i++)
+            h[px[i * (size_t)channels + (size_t)k]]++;
+        w->ch[k].gamma_milli = gamma_milli;
+        auto_points(h, 65535, n, &w->ch[k].black, &w->ch[k].white);
     }
+    free(h);
+    auto_link(w, channels, linked);
+    return 0;
 }

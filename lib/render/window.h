@@ -87,6 +87,11 @@ int gv_window_apply8(const struct gv_window *w, uint8_t *pix, size_t n,
 void gv_window_auto8(const uint8_t *px, size_t n, int channels, int linked,
                      uint32_t gamma_milli, struct gv_window *w);
 
+/* The same on 16-bit codes (a sample store's root): points 0 .. 65535.
+ * 0, or -1 when out of memory (*w count 0). */
+int gv_window_auto16(const uint16_t *px, size_t n, int channels, int linked,
+                     uint32_t gamma_milli, struct gv_window *w);
+
 /* The store metadata key (docs/FORMAT.md section 6) that holds an
  * image's default window, in the text form above. */
 #define GV_WINDOW_META_KEY "display.window"
