@@ -53,8 +53,18 @@ enum gv_filter_format {
     GV_FILTER_RGBA32I
 };
 
-/* An input names the source image (GV_FILTER_SOURCE) or a module. */
+/* An input names a module (its index) or one of the reserved inputs
+ * (negative): the source image as 8-bit RGBA in [0, 1], or the store's
+ * samples as values in its unit (code * scale + offset), channels 1-4
+ * (GV_FILTER_VALUES) and 5-8 (GV_FILTER_VALUES2). */
 #define GV_FILTER_SOURCE (-1)
+#define GV_FILTER_VALUES (-2)
+#define GV_FILTER_VALUES2 (-3)
+#define GV_FILTER_RESERVED_INPUTS 3    /* -1 .. -3 */
+
+/* The name of reserved input `in` (GV_FILTER_SOURCE ...): "source",
+ * "values", "values2". */
+const char *gv_filter_reserved_name(int in);
 
 struct gv_filter_param {
     char name[GV_FILTER_ID_MAX];
@@ -70,7 +80,7 @@ struct gv_filter_module {
     int dir_x, dir_y;        /* propagation: (1,0) +x, (-1,0) -x, (0,1) +y,
                                 (0,-1) -y */
     int ninputs;
-    int input[GV_FILTER_MAX_INPUTS];   /* module index or GV_FILTER_SOURCE */
+    int input[GV_FILTER_MAX_INPUTS];   /* module index or a reserved input */
     int nparams;
     struct gv_filter_param param[GV_FILTER_MAX_PARAMS];
     int param_base;          /* index of $(1) in the run's flat value array */
@@ -99,6 +109,10 @@ struct gv_filter_graph {
     /* Padding of the region of interest: the largest sum of supports
      * along any path from the source to the output, per side. */
     int pad_left, pad_top, pad_right, pad_bottom;
+    /* The store channels the graph reads as values: 0 (it reads no
+     * values), 4 (values) or 8 (values2); the caller sends that many,
+     * those past the store's own channels read 0. */
+    int value_channels;
     /* The padded region's left and top edges must be multiples of this
      * in level coordinates (2^max_passes of the deepest log-reduce, else
      * 1), so that log-reduce blocks are aligned to the image. */
@@ -167,6 +181,14 @@ struct gv_filter_input {
     int64_t abs_x, abs_y;     /* level coordinates of the padded region's
                                  top-left texel (abs_pos = these + texel) */
     uint32_t viewport_w, viewport_h;  /* backBufferSize; 0: the ROI size */
+    /* The store's samples for the values inputs: w*h*nvalues codes, 2
+     * bytes each little-endian, channel-interleaved, rows packed; the
+     * value of a code is code * values_scale + values_offset, rounded to
+     * float.  nvalues 0 (values NULL) when the graph reads no values, else
+     * 1..8: channels past nvalues read 0. */
+    const uint8_t *values;
+    int nvalues;
+    double values_scale, values_offset;
     const double *params;     /* g->nparams values (gv_filter_params) */
     enum gv_filter_path path;
 };

@@ -29,6 +29,23 @@
 #include "filter.h"
 #include "graph_body.h"
 
+static const char *const reserved_names[GV_FILTER_RESERVED_INPUTS] = {
+    "source", "values", "values2"};
+
+const char *gv_filter_reserved_name(int in)
+{
+    return in < 0 && in >= -GV_FILTER_RESERVED_INPUTS ? reserved_names[-in - 1] : "?";
+}
+
+/* The reserved input (GV_FILTER_SOURCE ...) named `name`, else 0. */
+static int reserved_input(const char *name)
+{
+    for (int k = 0; k < GV_FILTER_RESERVED_INPUTS; k++)
+        if (!strcmp(name, reserved_names[k]))
+            return -k - 1;
+    return 0;
+}
+
 static int fail_m(struct gv_error *err, const char *mod, enum gv_code code,
                   const char *fmt, const char *what)
 {
@@ -253,8 +270,11 @@ static int parse_module(struct gv_filter_module *m, const json_t *o,
         return fail_m(err, NULL, GV_EINVAL,
                       "each module needs an \"id\" of [A-Za-z0-9_-], 1-63 bytes",
                       NULL);
-    if (!strcmp(m->id, "source"))
-        return fail_m(err, m->id, GV_EINVAL, "the id \"source\" is reserved", NULL);
+    if (reserved_input(m->id)) {
+        char msg[GV_FILTER_ID_MAX + 32];
+        snprintf(msg, sizeof msg, "the id \"%s\" is reserved", m->id);
+        return fail_m(err, m->id, GV_EINVAL, msg, NULL);
+    }
     if (check_keys(o, keys, m->id, err) < 0)
         return -1;
     snprintf(m->name, sizeof m->name, "%s", m->id);
@@ -373,11 +393,13 @@ static int resolve_inputs(struct gv_filter_module *mods, int n,
             if (!json_is_string(v))
                 return fail_m(err, m->id, GV_EINVAL, "inputs must be strings", NULL);
             const char *name = json_string_value(v);
-            int idx = !strcmp(name, "source") ? GV_FILTER_SOURCE : find(mods, n, name);
+            int idx = reserved_input(name);
+            if (!idx)
+                idx = find(mods, n, name);
             if (idx == i)
                 return fail_m(err, m->id, GV_EINVAL,
                               "a module cannot read its own output (cycle)", NULL);
-            if (idx == -1 && strcmp(name, "source")) {
+            if (idx == -1 && reserved_input(name) != GV_FILTER_SOURCE) {
                 char msg[128];
                 snprintf(msg, sizeof msg, "input %zu names no module: \"%.60s\"",
                          k + 1, name);
@@ -388,7 +410,7 @@ static int resolve_inputs(struct gv_filter_module *mods, int n,
         m->ninputs = (int)json_array_size(in);
         const int integer = m->format == GV_FILTER_RGBA32UI ||
                             m->format == GV_FILTER_RGBA32I;
-        if (m->tpl != GV_FILTER_POINT && m->input[0] != GV_FILTER_SOURCE) {
+        if (m->tpl != GV_FILTER_POINT && m->input[0] >= 0) {
             /* The state of a sweep or a mip chain has the module's own
              * format, so input 1 must have it too. */
             enum gv_filter_format f = mods[m->input[0]].format;
@@ -400,7 +422,8 @@ static int resolve_inputs(struct gv_filter_module *mods, int n,
         } else if (m->tpl != GV_FILTER_POINT && integer) {
             return fail_m(err, m->id, GV_EINVAL,
                           "an integer logreduce or propagation module cannot start "
-                          "from the source (add a point module that converts it)",
+                          "from the source or values (add a point module that "
+                          "converts it)",
                           NULL);
         }
         if (m->kernel) {
@@ -408,7 +431,7 @@ static int resolve_inputs(struct gv_filter_module *mods, int n,
                 return fail_m(err, m->id, GV_EINVAL,
                               "a kernel module takes exactly one input", NULL);
             int src = m->input[0];
-            if (src != GV_FILTER_SOURCE &&
+            if (src >= 0 &&
                 (mods[src].format == GV_FILTER_RGBA32UI ||
                  mods[src].format == GV_FILTER_RGBA32I))
                 return fail_m(err, m->id, GV_EINVAL,
@@ -547,9 +570,13 @@ static int plan_padding(struct gv_filter_graph *g, const struct gv_filter_limits
         long want = need[i] + s;
         for (int k = 0; k < m[i].ninputs; k++) {
             int in = m[i].input[k];
-            if (in == GV_FILTER_SOURCE) {
+            if (in < 0) {
                 if (want > src_need)
                     src_need = want;
+                if (in == GV_FILTER_VALUES && g->value_channels < 4)
+                    g->value_channels = 4;
+                if (in == GV_FILTER_VALUES2)
+                    g->value_channels = 8;
             } else {
                 used[in] = 1;
                 if (want > need[in])
@@ -923,7 +950,7 @@ json_t *gv_filter_graph_describe(const struct gv_filter_graph *g)
         json_t *in = json_array(), *params = json_array();
         for (int k = 0; k < m->ninputs; k++)
             json_array_append_new(in, json_string(m->input[k] < 0
-                                                      ? "source"
+                                                      ? gv_filter_reserved_name(m->input[k])
                                                       : g->module[m->input[k]].id));
         for (int p = 0; p < m->nparams; p++)
             json_array_append_new(params,

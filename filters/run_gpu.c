@@ -75,6 +75,7 @@ struct run {
     GLuint *prog;                 /* per module, 0 if unused */
     GLuint copy[3];               /* per family */
     GLuint source_tex;
+    GLuint values_tex[2];         /* values: channels 1-4, values2: 5-8 */
     struct slot *slots;
     int nslots;
     GLuint vao;
@@ -435,7 +436,10 @@ static void bind_sampler(GLuint prog, const char *name, int unit, GLuint tex)
 
 static GLuint module_tex(const struct run *r, int mod)
 {
-    return mod < 0 ? r->source_tex : r->slots[r->g->module[mod].texture].tex;
+    if (mod >= 0)
+        return r->slots[r->g->module[mod].texture].tex;
+    return mod == GV_FILTER_SOURCE ? r->source_tex
+                                   : r->values_tex[mod == GV_FILTER_VALUES ? 0 : 1];
 }
 
 /* Copy all of `src` (level 0) into the framebuffer fbo, or only the lines
@@ -811,6 +815,32 @@ static int read_result(struct run *r, struct gv_error *err)
     return gl_check("reading the result", err);
 }
 
+/* The values textures the graph reads (RGBA32F, 4 channels each): each
+ * code c of in->values as the float nearest c * scale + offset, channels
+ * past in->nvalues 0. */
+static int upload_values(struct run *r, struct gv_error *err)
+{
+    const struct gv_filter_input *in = r->in;
+    const size_t n = (size_t)r->w * (size_t)r->h;
+    float *v = r->g->value_channels ? malloc(n * 4 * sizeof *v) : NULL;
+    if (r->g->value_channels && !v)
+        return gv_fail(err, GV_ENOMEM, "filter: out of memory");
+    for (int t = 0; t < r->g->value_channels / 4; t++) {
+        for (size_t i = 0; i < n; i++)
+            for (int c = 0; c < 4; c++) {
+                const int ch = 4 * t + c;
+                const uint8_t *b = in->values + (i * (size_t)in->nvalues + (size_t)ch) * 2;
+                v[i * 4 + (size_t)c] = ch < in->nvalues
+                    ? (float)((b[0] | b[1] << 8) * in->values_scale + in->values_offset)
+                    : 0.0f;
+            }
+        r->values_tex[t] = new_texture(GL_RGBA32F, r->w, r->h, 1);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, r->w, r->h, GL_RGBA, GL_FLOAT, v);
+    }
+    free(v);
+    return gl_check("uploading the values", err);
+}
+
 static int execute(struct run *r, struct gv_error *err)
 {
     const struct gv_filter_graph *g = r->g;
@@ -832,7 +862,7 @@ static int execute(struct run *r, struct gv_error *err)
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, r->w, r->h, GL_RGBA, GL_UNSIGNED_BYTE,
                     in->rgba);
-    if (gl_check("uploading the region", err) < 0)
+    if (gl_check("uploading the region", err) < 0 || upload_values(r, err) < 0)
         return -1;
     glDisable(GL_BLEND);
     glDisable(GL_DEPTH_TEST);
@@ -905,6 +935,9 @@ static void release(struct run *r)
     }
     if (r->source_tex)
         glDeleteTextures(1, &r->source_tex);
+    for (int t = 0; t < 2; t++)
+        if (r->values_tex[t])
+            glDeleteTextures(1, &r->values_tex[t]);
     if (r->spare_tex) {
         glDeleteFramebuffers(1, &r->spare_fbo);
         glDeleteTextures(1, &r->spare_tex);
@@ -979,6 +1012,11 @@ int gv_filter_run(struct gv_gpu *gpu, const struct gv_filter_graph *g,
         in->roi_x > in->w || in->roi_y > in->h || in->roi_w > in->w - in->roi_x ||
         in->roi_h > in->h - in->roi_y || (g->nparams && !in->params))
         return gv_fail(err, GV_EINVAL, "filter: bad run geometry");
+    if (g->value_channels &&
+        (!in->values || in->nvalues < 1 || in->nvalues > 8 ||
+         !isfinite(in->values_scale) || !isfinite(in->values_offset)))
+        return gv_fail(err, GV_EINVAL, "filter: the graph reads values but the run "
+                       "gives none");
     if (g->nmodules > 64)
         return gv_fail(err, GV_ELIMIT, "filter: too many modules");
     struct run r;

@@ -33,7 +33,8 @@
  * most (graph.c caps max_modules there). */
 #define PARAMS_MAX (64 * GV_FILTER_MAX_PARAMS)
 #define LIMITS_BYTES 28   /* u64 + u32 + u32 + u64 + u32 */
-#define GEOMETRY_BYTES 48 /* 6 u32, 2 i64, 2 u32 */
+#define GEOMETRY_BYTES 68 /* 6 u32, 2 i64, 2 u32; values: u32, 2 f64 */
+#define VALUES_MAX 8      /* channels of values a run may carry */
 #define STATS_BYTES 36    /* 5 u32, f64, roi_w, roi_h */
 #define HELLO_FIXED 12
 
@@ -245,8 +246,10 @@ static uint64_t job_body_len(const struct gv_worker_job *job)
     if (job->op == GV_WORKER_RUN) {
         if (job->nparams < 0 || job->nparams > PARAMS_MAX)
             return 0;
+        if (job->in.nvalues < 0 || job->in.nvalues > VALUES_MAX)
+            return 0;
         n += 4 + 8 * (uint64_t)job->nparams + GEOMETRY_BYTES +
-             (uint64_t)job->in.w * job->in.h * 4;
+             (uint64_t)job->in.w * job->in.h * (4 + 2 * (uint64_t)job->in.nvalues);
     }
     return n;
 }
@@ -315,9 +318,15 @@ int gv_worker_send_job(int fd, const struct gv_worker_job *job,
     put_u64(&w, (uint64_t)in->abs_y);
     put_u32(&w, in->viewport_w);
     put_u32(&w, in->viewport_h);
+    put_u32(&w, (uint32_t)in->nvalues);
+    put_f64(&w, in->values_scale);
+    put_f64(&w, in->values_offset);
     rc = io_write(fd, w.b, w.n, deadline, err);
     if (!rc)
         rc = io_write(fd, in->rgba, (size_t)in->w * in->h * 4, deadline, err);
+    if (!rc && in->nvalues)
+        rc = io_write(fd, in->values, (size_t)in->w * in->h * 2 * (size_t)in->nvalues,
+                      deadline, err);
     return rc;
 }
 
@@ -629,7 +638,7 @@ static int recv_job(int fd, uint64_t max_pixels, struct gv_worker_job *job,
     if (rc)
         return rc;
     uint64_t cap = LIMITS_BYTES + 4 + DOC_MAX + 4 + 8 * PARAMS_MAX +
-                   GEOMETRY_BYTES + max_pixels * 4;
+                   GEOMETRY_BYTES + max_pixels * (4 + 2 * VALUES_MAX);
     if (type == GV_WORKER_SIMPLIFY)
         cap = GV_WORKER_SIMPLIFY_FIXED + GV_WORKER_MESH_MAX;
     if ((type != GV_WORKER_COMPILE && type != GV_WORKER_RUN &&
@@ -671,14 +680,19 @@ static int recv_job(int fd, uint64_t max_pixels, struct gv_worker_job *job,
         in->abs_y = (int64_t)get_u64(&r);
         in->viewport_w = get_u32(&r);
         in->viewport_h = get_u32(&r);
+        uint32_t nv = get_u32(&r);
+        in->values_scale = get_f64(&r);
+        in->values_offset = get_f64(&r);
         in->params = params;
         uint64_t px = (uint64_t)in->w * in->h;
-        if (!r.bad && (len - r.off) != px * 4) {
-            gv_fail(err, GV_EIO, "worker: %llu texel bytes for %ux%u",
-                    (unsigned long long)(len - r.off), in->w, in->h);
+        if (!r.bad && (nv > VALUES_MAX || (len - r.off) != px * (4 + 2 * (uint64_t)nv))) {
+            gv_fail(err, GV_EIO, "worker: %llu texel bytes for %ux%u and %u channels "
+                    "of values", (unsigned long long)(len - r.off), in->w, in->h, nv);
             return GV_WORKER_BAD;
         }
+        in->nvalues = (int)nv;
         in->rgba = take(&r, (size_t)(px * 4));
+        in->values = nv ? take(&r, (size_t)(px * 2 * nv)) : NULL;
         if (!r.bad && (in->w == 0 || in->h == 0 || px > max_pixels ||
                        in->roi_w == 0 || in->roi_h == 0 ||
                        in->roi_x >= in->w || in->roi_w > in->w - in->roi_x ||

@@ -29,6 +29,8 @@
 #include "filter_jobs.h"
 #include "filter_output.h"
 #include "filter_store.h"
+#include "render/samples_region.h"
+#include "render/store_decoder.h"
 #include "store/geometry.h"
 #include "log.h"
 #include "routes.h"
@@ -40,6 +42,9 @@ struct call {
     size_t doc_len;
     double *values;
     uint8_t *rgba;
+    uint8_t *codes;     /* the values inputs' samples (gv_filter_input) */
+    int ncodes;         /* their channels, 0 when the graph reads none */
+    double codes_scale, codes_offset;
     enum filter_output_form form;
     double scale;
     int channels;
@@ -53,6 +58,7 @@ static void call_free(struct call *c)
     free(c->doc);
     free(c->values);
     free(c->rgba);
+    free(c->codes);
     free(c->fj.res.out);
     free(c);
 }
@@ -551,10 +557,45 @@ static int place_region(struct req *r, const struct image *img,
     return 0;
 }
 
-/* Decode c's padded region of img as RGBA into c->rgba.  0 or -1. */
-static int decode_input(struct image *img, struct call *c, struct gv_error *err)
+/* The store's samples of c's padded region into c->codes, little-endian
+ * 16-bit (docs/FILTERS.md section 3.1, values): a store of codes' own
+ * codes, with its scale and offset; an image's 8-bit samples, scale 1. */
+static int decode_values(struct gv_decoder *d, const struct gv_header *h, int channels,
+                         struct call *c, struct gv_error *err)
+{
+    const size_t n = (size_t)c->pw * c->ph * (size_t)channels;
+    const int codes = gv_header_codes(h);
+    if (!(c->codes = malloc(n * 2)))
+        return gv_fail(err, GV_ENOMEM, "filter: out of memory");
+    if (gv_decoder_copy_region(d, "filter", (int)c->level, c->px, c->py, c->pw, c->ph,
+                               c->codes, err) < 0)
+        return -1;
+    c->ncodes = channels;
+    c->codes_scale = codes ? h->height_scale : 1.0;
+    c->codes_offset = codes ? h->height_offset : 0.0;
+    if (codes) {   /* host order to little-endian, in place */
+        for (size_t i = 0; i < n; i++) {
+            uint16_t v;
+            memcpy(&v, c->codes + 2 * i, 2);
+            c->codes[2 * i] = (uint8_t)(v & 255);
+            c->codes[2 * i + 1] = (uint8_t)(v >> 8);
+        }
+    } else {       /* bytes to codes, from the end */
+        for (size_t i = n; i-- > 0;) {
+            c->codes[2 * i] = c->codes[i];
+            c->codes[2 * i + 1] = 0;
+        }
+    }
+    return 0;
+}
+
+/* Decode c's padded region of img as RGBA (its 8-bit picture) into
+ * c->rgba, and its samples where graph g reads values.  0 or -1. */
+static int decode_input(struct image *img, const struct gv_filter_graph *g,
+                        struct call *c, struct gv_error *err)
 {
     size_t pixels = (size_t)c->pw * c->ph;
+    const struct gv_header *h = &img->info->header;
     c->rgba = malloc(pixels * 4);
     struct gv_decoder *d = image_decoder_get(img);
     int rc = 0;
@@ -563,8 +604,11 @@ static int decode_input(struct image *img, struct call *c, struct gv_error *err)
     else if (gv_decode_region(d, (int)c->level, c->px, c->py, c->pw, c->ph,
                               c->rgba, err) < 0)
         rc = -1;
+    else if (g->value_channels &&
+             decode_values(d, h, img->info->geometry.channels, c, err) < 0)
+        rc = -1;
     else
-        expand_rgba(c->rgba, pixels, img->info->geometry.channels);
+        expand_rgba(c->rgba, pixels, gv_display_channels(h));
     image_decoder_put(img, d);
     return rc;
 }
@@ -591,6 +635,10 @@ static void fill_job(struct call *c, const struct gv_filter_graph *g,
     job->in.viewport_w = viewport[0];
     job->in.viewport_h = viewport[1];
     job->in.params = c->values;
+    job->in.values = c->codes;
+    job->in.nvalues = c->ncodes;
+    job->in.values_scale = c->codes_scale;
+    job->in.values_offset = c->codes_offset;
 }
 
 enum MHD_Result route_image_filter(struct req *r)
@@ -629,7 +677,7 @@ enum MHD_Result route_image_filter(struct req *r)
         goto fail;
     }
     reserved = 1;
-    if (decode_input(img, c, &err) < 0) {
+    if (decode_input(img, g, c, &err) < 0) {
         ret = http_send_error(r, &err);
         goto fail;
     }

@@ -126,8 +126,16 @@ static void test_errors(void)
         "\"glsl\":\"return uvec4(0u);\"}]}",
         GV_EINVAL,
         "filter: module 'a': an integer logreduce or propagation module cannot start "
-        "from the source (add a point module that converts it)",
+        "from the source or values (add a point module that converts it)",
         "an integer sweep over the source");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[{\"id\":\"values2\",\"template\":\"point\","
+        "\"inputs\":[\"source\"],\"glsl\":\"return vec4(0.0);\"}]}",
+        GV_EINVAL,
+        "filter: module 'values2': the id \"values2\" is reserved",
+        "the reserved id values2");
+    bad("{\"name\":\"x\",\"output\":\"a\",\"modules\":[" PT("a", "\"values3\"") "]}",
+        GV_EINVAL, "filter: module 'a': input 1 names no module: \"values3\"",
+        "values3 is no input");
 
     /* Limits. */
     char deep[256] = "";
@@ -306,10 +314,57 @@ static void test_params(void)
     gv_filter_graph_free(g);
 }
 
+/* The values inputs: which store channels a graph reads (only those of
+ * modules the output needs), padding from them as from the source, and
+ * their names in the description. */
+static void test_values(void)
+{
+    static const struct {
+        const char *doc;
+        int channels;
+        const char *what;
+    } cases[] = {
+        {"{\"name\":\"v\",\"output\":\"a\",\"modules\":[" PT("a", "\"source\"") "]}", 0,
+         "a graph of the source reads no values"},
+        {"{\"name\":\"v\",\"output\":\"a\",\"modules\":[" PT("a", "\"values\"") "]}", 4,
+         "values: channels 1-4"},
+        {"{\"name\":\"v\",\"output\":\"b\",\"modules\":[" PT("a", "\"values2\"") ","
+         PT("b", "\"a\",\"values\"") "]}", 8, "values2 through a module: channels 1-8"},
+        {"{\"name\":\"v\",\"output\":\"b\",\"modules\":[" PT("a", "\"values2\"") ","
+         PT("b", "\"source\"") "]}", 0, "values read only by an unused module: none"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        struct gv_error err = {0};
+        struct gv_filter_graph *g = try_parse(cases[i].doc, &err);
+        check(g && g->value_channels == cases[i].channels, "%s (%d)", cases[i].what,
+              g ? g->value_channels : -1);
+        gv_filter_graph_free(g);
+    }
+    const char *doc = "{\"name\":\"v\",\"output\":\"b\",\"modules\":["
+                      "{\"id\":\"a\",\"template\":\"point\",\"support\":3,"
+                      "\"inputs\":[\"values\"],\"glsl\":\"return vec4(0.0);\"},"
+                      PT("b", "\"a\",\"values2\",\"source\"") "]}";
+    struct gv_error err = {0};
+    struct gv_filter_graph *g = try_parse(doc, &err);
+    if (!g)
+        fail("%s", err.text);
+    check(g->pad_left == 3 && g->pad_bottom == 3, "a support over values pads (%d)",
+          g->pad_left);
+    json_t *d = gv_filter_graph_describe(g);
+    char *s = d ? json_dumps(json_object_get(json_array_get(json_object_get(d, "modules"),
+                                                            1), "inputs"), JSON_COMPACT)
+                : NULL;
+    check_str(s, "[\"a\",\"values2\",\"source\"]", "describe names the reserved inputs");
+    free(s);
+    json_decref(d);
+    gv_filter_graph_free(g);
+}
+
 int main(void)
 {
     test_errors();
     test_order_and_plan();
     test_params();
+    test_values();
     return tap_done();
 }

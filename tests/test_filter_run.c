@@ -13,6 +13,10 @@
  *     compute shaders;
  *   - the distance transform of FILTERS.md's four sweeps against a scalar
  *     implementation of the same rules (sites identical);
+ *   - values: 6 channels of 16-bit codes through values and values2 as
+ *     code * scale + offset rounded to float, exact, channels past the
+ *     sample's 0, a kernel over values at the region's edge, and a run
+ *     that gives no values refused;
  *   - a GLSL error reported with the module and the body's line.
  */
 #include <math.h>
@@ -437,6 +441,83 @@ static void test_compile_error(struct gv_gpu *gpu)
     gv_filter_graph_free(g);
 }
 
+/* The values inputs: codes of 6 channels as code * scale + offset. */
+static void test_values(struct gv_gpu *gpu)
+{
+    enum { W = 29, H = 17, C = 6 };
+    uint8_t *img = random_image(W, H), codes[W * H * C * 2];
+    for (size_t i = 0; i < sizeof codes; i++)
+        codes[i] = (uint8_t)rnd();
+    const double scale = 0.0137, offset = -123.25;
+    struct gv_filter_graph *g = parse(
+        "{\"name\":\"v\",\"output\":\"o\",\"output_channels\":4,\"modules\":["
+        "{\"id\":\"o\",\"template\":\"point\",\"inputs\":[\"values\",\"values2\"],"
+        "\"glsl\":\"vec4 a = $(FilterInput1)(rel_pos), b = $(FilterInput2)(rel_pos);\\n"
+        "return rel_pos.x % 2 == 0 ? a : b;\"}]}");
+    struct gv_filter_input in = {
+        .w = W, .h = H, .rgba = img, .roi_x = 2, .roi_y = 1, .roi_w = 25, .roi_h = 15,
+        .values = codes, .nvalues = C, .values_scale = scale, .values_offset = offset,
+        .path = path};
+    float *out = NULL;
+    struct gv_error err = {0};
+    if (gv_filter_run(gpu, g, &in, &out, NULL, &err) < 0)
+        printf("# run: %s\n", err.text);
+    int bad = out ? 0 : 1;
+    for (int y = 0; out && y < 15; y++)
+        for (int x = 0; x < 25; x++)
+            for (int k = 0; k < 4; k++) {
+                const int ch = (x % 2 ? 4 : 0) + k;
+                const uint8_t *b = &codes[(((size_t)(y + 1) * W + x + 2) * C + ch) * 2];
+                const float want = ch < C ? (float)((b[0] | b[1] << 8) * scale + offset) : 0.0f;
+                if (out[((size_t)y * 25 + x) * 4 + k] != want)
+                    bad++;
+            }
+    check(bad == 0, "values and values2: 6 channels of codes as code * scale + offset, "
+          "channels 7 and 8 zero, exact (%d wrong)", bad);
+    free(out);
+    out = NULL;
+    in.values = NULL;
+    in.nvalues = 0;
+    check(gv_filter_run(gpu, g, &in, &out, NULL, &err) < 0 && err.code == GV_EINVAL,
+          "a graph reading values refuses a run without them: %s", err.text);
+    gv_filter_graph_free(g);
+
+    /* A 3x3 box sum over values, at the padded region's edge (clamped). */
+    g = parse("{\"name\":\"k\",\"output\":\"k\",\"modules\":[{\"id\":\"k\","
+              "\"template\":\"point\",\"inputs\":[\"values\"],\"kernel\":{\"width\":3,"
+              "\"height\":3,\"weights\":[1,1,1,1,1,1,1,1,1]}}]}");
+    in.values = codes;
+    in.nvalues = C;
+    in.roi_x = 0;
+    in.roi_y = 0;
+    in.roi_w = W;
+    in.roi_h = H;
+    double maxd = 1e9;
+    if (gv_filter_run(gpu, g, &in, &out, NULL, &err) == 0) {
+        maxd = 0;
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                double want = 0;
+                for (int j = -1; j <= 1; j++)
+                    for (int i = -1; i <= 1; i++) {
+                        int xx = x + i < 0 ? 0 : x + i >= W ? W - 1 : x + i;
+                        int yy = y + j < 0 ? 0 : y + j >= H ? H - 1 : y + j;
+                        const uint8_t *b = &codes[((size_t)yy * W + xx) * C * 2];
+                        want += (float)((b[0] | b[1] << 8) * scale + offset);
+                    }
+                double d = fabs(out[((size_t)y * W + x) * 4] - want) / (1 + fabs(want));
+                if (d > maxd)
+                    maxd = d;
+            }
+    } else {
+        printf("# run: %s\n", err.text);
+    }
+    check(maxd < 1e-6, "a kernel over values, edges clamped: relative difference %g", maxd);
+    free(out);
+    gv_filter_graph_free(g);
+    free(img);
+}
+
 int main(void)
 {
     struct gv_error err = {0};
@@ -450,6 +531,7 @@ int main(void)
     test_logreduce(gpu);
     test_propagation(gpu);
     test_edt(gpu);
+    test_values(gpu);
     if (gv_gpu_info(gpu)->ssbo) {
         /* The same sweeps as compute shaders, 32 lines per dispatch. */
         path = GV_FILTER_PATH_COMPUTE;

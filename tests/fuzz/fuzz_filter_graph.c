@@ -29,6 +29,8 @@ static void check_graph(const struct gv_filter_graph *g,
         abort();
     if (g->ntextures < 1 || g->ntextures > 2 * g->nmodules)
         abort();
+    if (g->value_channels != 0 && g->value_channels != 4 && g->value_channels != 8)
+        abort();
     int nparams = 0;
     for (int i = 0; i < g->nmodules; i++) {
         const struct gv_filter_module *m = &g->module[i];
@@ -39,7 +41,7 @@ static void check_graph(const struct gv_filter_graph *g,
             abort();
         for (int k = 0; k < m->ninputs; k++) {
             int in = m->input[k];
-            if (in >= i || in < GV_FILTER_SOURCE)
+            if (in >= i || in < -GV_FILTER_RESERVED_INPUTS)
                 abort();
             if (m->texture >= 0 && in >= 0 && g->module[in].texture < 0)
                 abort();
