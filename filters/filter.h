@@ -184,8 +184,9 @@ struct gv_filter_input {
     /* The store's samples for the values inputs: w*h*nvalues codes, 2
      * bytes each little-endian, channel-interleaved, rows packed; the
      * value of a code is code * values_scale + values_offset, rounded to
-     * float.  nvalues 0 (values NULL) when the graph reads no values, else
-     * 1..8: channels past nvalues read 0. */
+     * float; channels past nvalues read 0.  nvalues 0 (values NULL): an
+     * image's run, whose values are the source's RGBA bytes as 0..255
+     * (values2 0).  At most 8. */
     const uint8_t *values;
     int nvalues;
     double values_scale, values_offset;

@@ -817,7 +817,8 @@ static int read_result(struct run *r, struct gv_error *err)
 
 /* The values textures the graph reads (RGBA32F, 4 channels each): each
  * code c of in->values as the float nearest c * scale + offset, channels
- * past in->nvalues 0. */
+ * past in->nvalues 0; without values (an image), the source's RGBA bytes
+ * as 0..255 and values2 0. */
 static int upload_values(struct run *r, struct gv_error *err)
 {
     const struct gv_filter_input *in = r->in;
@@ -829,10 +830,14 @@ static int upload_values(struct run *r, struct gv_error *err)
         for (size_t i = 0; i < n; i++)
             for (int c = 0; c < 4; c++) {
                 const int ch = 4 * t + c;
-                const uint8_t *b = in->values + (i * (size_t)in->nvalues + (size_t)ch) * 2;
-                v[i * 4 + (size_t)c] = ch < in->nvalues
-                    ? (float)((b[0] | b[1] << 8) * in->values_scale + in->values_offset)
-                    : 0.0f;
+                float x = 0.0f;
+                if (!in->nvalues && !t) {
+                    x = (float)in->rgba[i * 4 + (size_t)c];
+                } else if (ch < in->nvalues) {
+                    const uint8_t *b = in->values + (i * (size_t)in->nvalues + (size_t)ch) * 2;
+                    x = (float)((b[0] | b[1] << 8) * in->values_scale + in->values_offset);
+                }
+                v[i * 4 + (size_t)c] = x;
             }
         r->values_tex[t] = new_texture(GL_RGBA32F, r->w, r->h, 1);
         glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, r->w, r->h, GL_RGBA, GL_FLOAT, v);
@@ -1012,11 +1017,9 @@ int gv_filter_run(struct gv_gpu *gpu, const struct gv_filter_graph *g,
         in->roi_x > in->w || in->roi_y > in->h || in->roi_w > in->w - in->roi_x ||
         in->roi_h > in->h - in->roi_y || (g->nparams && !in->params))
         return gv_fail(err, GV_EINVAL, "filter: bad run geometry");
-    if (g->value_channels &&
-        (!in->values || in->nvalues < 1 || in->nvalues > 8 ||
-         !isfinite(in->values_scale) || !isfinite(in->values_offset)))
-        return gv_fail(err, GV_EINVAL, "filter: the graph reads values but the run "
-                       "gives none");
+    if (in->nvalues < 0 || in->nvalues > 8 || (in->nvalues && !in->values) ||
+        (in->nvalues && (!isfinite(in->values_scale) || !isfinite(in->values_offset))))
+        return gv_fail(err, GV_EINVAL, "filter: bad values for the run");
     if (g->nmodules > 64)
         return gv_fail(err, GV_ELIMIT, "filter: too many modules");
     struct run r;

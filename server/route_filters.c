@@ -557,34 +557,26 @@ static int place_region(struct req *r, const struct image *img,
     return 0;
 }
 
-/* The store's samples of c's padded region into c->codes, little-endian
- * 16-bit (docs/FILTERS.md section 3.1, values): a store of codes' own
- * codes, with its scale and offset; an image's 8-bit samples, scale 1. */
+/* A store of codes' samples of c's padded region into c->codes,
+ * little-endian, with its scale and offset (docs/FILTERS.md section 3.1,
+ * values; an image's values are its picture, made by the worker). */
 static int decode_values(struct gv_decoder *d, const struct gv_header *h, int channels,
                          struct call *c, struct gv_error *err)
 {
     const size_t n = (size_t)c->pw * c->ph * (size_t)channels;
-    const int codes = gv_header_codes(h);
     if (!(c->codes = malloc(n * 2)))
         return gv_fail(err, GV_ENOMEM, "filter: out of memory");
     if (gv_decoder_copy_region(d, "filter", (int)c->level, c->px, c->py, c->pw, c->ph,
                                c->codes, err) < 0)
         return -1;
     c->ncodes = channels;
-    c->codes_scale = codes ? h->height_scale : 1.0;
-    c->codes_offset = codes ? h->height_offset : 0.0;
-    if (codes) {   /* host order to little-endian, in place */
-        for (size_t i = 0; i < n; i++) {
-            uint16_t v;
-            memcpy(&v, c->codes + 2 * i, 2);
-            c->codes[2 * i] = (uint8_t)(v & 255);
-            c->codes[2 * i + 1] = (uint8_t)(v >> 8);
-        }
-    } else {       /* bytes to codes, from the end */
-        for (size_t i = n; i-- > 0;) {
-            c->codes[2 * i] = c->codes[i];
-            c->codes[2 * i + 1] = 0;
-        }
+    c->codes_scale = h->height_scale;
+    c->codes_offset = h->height_offset;
+    for (size_t i = 0; i < n; i++) {   /* host order to little-endian, in place */
+        uint16_t v;
+        memcpy(&v, c->codes + 2 * i, 2);
+        c->codes[2 * i] = (uint8_t)(v & 255);
+        c->codes[2 * i + 1] = (uint8_t)(v >> 8);
     }
     return 0;
 }
@@ -604,7 +596,7 @@ static int decode_input(struct image *img, const struct gv_filter_graph *g,
     else if (gv_decode_region(d, (int)c->level, c->px, c->py, c->pw, c->ph,
                               c->rgba, err) < 0)
         rc = -1;
-    else if (g->value_channels &&
+    else if (g->value_channels && gv_header_codes(h) &&
              decode_values(d, h, img->info->geometry.channels, c, err) < 0)
         rc = -1;
     else

@@ -15,8 +15,8 @@
  *     implementation of the same rules (sites identical);
  *   - values: 6 channels of 16-bit codes through values and values2 as
  *     code * scale + offset rounded to float, exact, channels past the
- *     sample's 0, a kernel over values at the region's edge, and a run
- *     that gives no values refused;
+ *     sample's 0, an image's bytes where a run gives no values, a kernel
+ *     over values at the region's edge;
  *   - a GLSL error reported with the module and the body's line.
  */
 #include <math.h>
@@ -478,8 +478,21 @@ static void test_values(struct gv_gpu *gpu)
     out = NULL;
     in.values = NULL;
     in.nvalues = 0;
+    bad = gv_filter_run(gpu, g, &in, &out, NULL, &err) < 0;
+    for (int y = 0; out && y < 15; y++)
+        for (int x = 0; x < 25; x++)
+            for (int k = 0; k < 4; k++) {
+                const float want = x % 2 ? 0.0f : img[((size_t)(y + 1) * W + x + 2) * 4 + k];
+                if (out[((size_t)y * 25 + x) * 4 + k] != want)
+                    bad++;
+            }
+    check(bad == 0, "a run without values (an image): values are the source's bytes, "
+          "values2 zero (%d wrong)", bad);
+    free(out);
+    out = NULL;
+    in.nvalues = 9;
     check(gv_filter_run(gpu, g, &in, &out, NULL, &err) < 0 && err.code == GV_EINVAL,
-          "a graph reading values refuses a run without them: %s", err.text);
+          "9 channels of values are refused: %s", err.text);
     gv_filter_graph_free(g);
 
     /* A 3x3 box sum over values, at the padded region's edge (clamped). */
