@@ -174,6 +174,56 @@ check "an OME-TIFF claiming more channels than pages is read as its first page" 
     grep -q '^samples    1100 x 700 x 1 channels' "$T/out"
 rm -f "$S/ome6.gv"
 
+# An OME-TIFF stack: 2 channels x 3 Z planes in 6 pages, the plane chosen
+# with --plane; the pages of a plane follow the DimensionOrder.
+gdal_translate -q -b 1 -scale 0 65535 65535 0 -ot UInt16 c4.raw band5.tif || bail "band 5"
+gdal_translate -q -b 2 -scale 0 65535 65535 0 -ot UInt16 c4.raw band6.tif || bail "band 6"
+for k in 1 2 3 4 5 6; do toraw band$k.tif band$k.raw; done
+tiffcp band1.tif band2.tif band3.tif band4.tif band5.tif band6.tif stack.tif || bail "tiffcp stack"
+STACKXML=$(printf %s "$OMEXML" | sed 's/DimensionOrder="XYCZT"/DimensionOrder="XYZCT"/; s/SizeC="4" SizeZ="1"/SizeC="2" SizeZ="3"/; s|<Channel ID="Channel:0:2".*<TiffData/>|<TiffData/>|')
+tiffset -s 270 "$STACKXML" stack.tif || bail "tiffset stack"
+# plane_is DESC STORE PAGE PAGE: the store's level 0 is those two pages.
+plane_is() {
+    run export --bits 16 "$2" -o plane.tif
+    toraw plane.tif plane.raw
+    check "$1" python3 -c "
+import sys
+a, b, p = (open(f, 'rb').read() for f in ('band$3.raw', 'band$4.raw', 'plane.raw'))
+want = b''.join(a[i:i + 2] + b[i:i + 2] for i in range(0, len(a), 2))
+sys.exit(p != want)"
+}
+run encode --bits 16 stack.tif -o "$S/stack.gv"
+expect_rc "an OME-TIFF Z stack without --plane is refused" 1
+expect_err "... saying how to choose a plane" "stack of 3 Z planes and 1 time point: choose a plane with --plane Z\[,T\]"
+check "... and writes nothing" test ! -e "$S/stack.gv"
+run encode --bits 16 --plane 1 stack.tif -o "$S/stack.gv"
+expect_rc "encode --plane 1 of a XYZCT stack" 0
+plane_is "--plane 1, XYZCT: its channels are pages 2 and 5 (Z varies fastest)" "$S/stack.gv" 2 5
+run info --json "$S/stack.gv"
+check "... the plane and the stack's size are in the metadata" python3 -c "
+import json,sys; m=json.load(open(sys.argv[1]))['metadata']
+assert (m['ome.plane_z'], m['ome.plane_t'], m['ome.size_z'], m['ome.size_t']) == (1, 0, 3, 1), m
+assert m['ome.channels'] == 'DAPI;GFP', m" "$T/out"
+tiffset -s 270 "$(printf %s "$STACKXML" | sed 's/XYZCT/XYCZT/')" stack.tif || bail "tiffset XYCZT"
+run encode --bits 16 --plane 2,0 stack.tif -o "$S/stack2.gv"
+expect_rc "encode --plane 2,0 of a XYCZT stack" 0
+plane_is "--plane 2,0, XYCZT: pages 5 and 6 (C varies fastest)" "$S/stack2.gv" 5 6
+run encode --bits 16 --plane 3 stack.tif -o "$S/stack3.gv"
+expect_rc "--plane past the stack's Z planes is refused" 1
+expect_err "... naming the stack's planes" "--plane 3,0 is outside the stack \\(Z 0..2, T 0..0\\)"
+run encode --bits 16 --plane 0,1 stack.tif -o "$S/stack3.gv"
+expect_rc "--plane past its time points is refused" 1
+run encode --bits 16 --plane 0 c4.tif -o "$S/stack3.gv"
+expect_rc "--plane of a file that is not an OME-TIFF is refused" 1
+expect_err "... saying so" "--plane picks a plane of an OME-TIFF stack, and this is not one"
+run encode --bits 16 --plane x stack.tif -o "$S/stack3.gv"
+expect_rc "--plane x is a usage error" 2
+tiffset -s 270 "$(printf %s "$STACKXML" | sed 's/SizeZ="3"/SizeZ="4"/')" stack.tif || bail "tiffset Z4"
+run encode --bits 16 --plane 3 stack.tif -o "$S/stack3.gv"
+expect_rc "a stack claiming more pages than it has is refused, not read as its first page" 1
+check "nothing written by the refused encodes" test ! -e "$S/stack3.gv"
+rm -f "$S/stack.gv" "$S/stack2.gv"
+
 # ----------------------------------------------------------- near-lossless
 run encode --bits 16 --max-error 40 c4.tif -o "$S/c4e.gv"
 expect_rc "encode --bits 16 --max-error 40" 0

@@ -9,6 +9,8 @@
  * --shard I/N it writes one shard file instead (docs/OPERATIONS.md,
  * "Encoding on many machines"), which `gigaview merge` assembles.
  */
+#include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -127,6 +129,28 @@ static int parse_decoder_memory(const char *arg, void *fields,
     return 0;
 }
 
+/* --plane Z[,T]: an OME-TIFF stack's plane, from 0 (T 0 when not given). */
+static int parse_plane(const char *arg, void *fields, const char **wants)
+{
+    struct gv_source_opts *src = &((struct encode_args *)fields)->o.source;
+    char *end;
+    (void)wants;
+    errno = 0;
+    unsigned long z = strtoul(arg, &end, 10), t = 0;
+    if (end == arg || !isdigit((unsigned char)*arg) || errno || z > 999999)
+        return -1;
+    if (*end == ',') {
+        const char *p = end + 1;
+        t = strtoul(p, &end, 10);
+        if (end == p || !isdigit((unsigned char)*p) || errno || t > 999999)
+            return -1;
+    }
+    if (*end)
+        return -1;
+    src->plane = (struct gv_image_plane){.set = 1, .z = (uint32_t)z, .t = (uint32_t)t};
+    return 0;
+}
+
 /* --shard I/N */
 static int parse_shard(const char *arg, void *fields, const char **wants)
 {
@@ -183,6 +207,10 @@ static const struct opt_spec encode_opts[] = {
              "(a progressive JPEG: 3 to 6 bytes a pixel;\n"
              "an interlaced PNG: its pixels);\n"
              "larger ones are refused (default 1G)"},
+    {.name = "plane", .kind = OPT_CUSTOM, .arg = "Z[,T]", .parse = parse_plane,
+     .wants = "Z or Z,T: integers from 0",
+     .help = "the plane of an OME-TIFF Z stack or time\n"
+             "series to encode (from 0; T 0 when not given)"},
     {.name = "tmpdir", .kind = OPT_STRING, .arg = "DIR", .field = F(o.tmpdir),
      .help = "scratch directory (default: the output's)"},
     {.name = "progress", .kind = OPT_FLAG, .field = F(progress),
@@ -346,6 +374,7 @@ static int encode_codes(const struct encode_args *a, const char *const *inputs,
                                 .max_pixels = a->o.source.max_pixels,
                                 .max_decoder_bytes =
                                     a->o.source.max_decoder_bytes,
+                                .plane = a->o.source.plane,
                                 .threads = a->o.threads,
                                 .mosaic_cols = a->o.source.mosaic_cols,
                                 .mosaic_rows = a->o.source.mosaic_rows,

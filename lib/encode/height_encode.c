@@ -759,6 +759,7 @@ int gv_height_encode(const char *const *inputs, int n, const char *output,
     h.so.mosaic_rows = o->mosaic_rows;
     h.so.max_pixels = o->max_pixels;
     h.so.max_decoder_bytes = o->max_decoder_bytes;
+    h.so.plane = o->plane;
     h.so.native = 1;
     h.m.scale = o->mapped ? o->scale : 1;
     h.m.offset = o->mapped ? o->offset : 0;

@@ -32,6 +32,7 @@
 #include <stdint.h>
 
 #include "base/error.h"
+#include "imageio/imageio.h"
 #include "encode/stream_encoder.h"
 #include "store/geometry.h"
 
@@ -53,6 +54,7 @@ struct gv_height_opts {
     uint64_t max_pixels;   /* refuse larger inputs (0: GV_SOURCE_MAX_PIXELS) */
     uint64_t max_decoder_bytes; /* a decoder's memory for the whole image
                                  * (gv_image_limits; 0: the default) */
+    struct gv_image_plane plane;  /* an OME-TIFF stack's plane */
     int threads;           /* workers; 0 = every CPU */
     int mosaic_cols;       /* > 0: the inputs are a mosaic of this many */
     int mosaic_rows;       /* columns and rows (source.h) */

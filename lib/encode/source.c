@@ -531,6 +531,8 @@ struct gv_source *gv_source_open(const char *const *inputs, int n,
                                              : GV_SOURCE_MAX_PIXELS;
     s->limits.max_pixels = s->max_pixels;
     s->limits.max_decoder_bytes = opts ? opts->max_decoder_bytes : 0;
+    if (opts)
+        s->limits.plane = opts->plane;
     s->cols = 1;
     s->rows = 1;
     s->native = opts && opts->native;

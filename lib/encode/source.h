@@ -24,6 +24,7 @@
 #include <stdint.h>
 
 #include "base/error.h"
+#include "imageio/imageio.h"
 
 enum gv_tone_rule {
     GV_TONE_NONE = 0,      /* 8-bit input, copied */
@@ -42,6 +43,7 @@ struct gv_source_opts {
                                  * imageio/imageio.h) */
     double range_lo;       /* used when range_hi > range_lo */
     double range_hi;
+    struct gv_image_plane plane;  /* an OME-TIFF stack's plane (every input) */
     int native;            /* 1: samples as the input holds them (see
                             * the top); every mosaic tile must have the
                             * same channels and sample type */

@@ -34,6 +34,14 @@ struct gv_image_info {
 
 struct gv_image_in;
 
+/* The plane of an OME-TIFF stack to read (ome_tiff.h), from 0: `set` 0
+ * reads a file of one plane and refuses a stack; set, it refuses any file
+ * that is not an OME-TIFF (`gigaview encode --plane Z[,T]`). */
+struct gv_image_plane {
+    int set;
+    uint32_t z, t;
+};
+
 /* What a reader may take for one image. */
 struct gv_image_limits {
     uint64_t max_pixels;          /* width * height */
@@ -43,6 +51,7 @@ struct gv_image_limits {
                                    * file's JPEG thumbnail, an interlaced
                                    * PNG's pixels (0: the default,
                                    * GV_IMAGE_MAX_DECODER_BYTES) */
+    struct gv_image_plane plane;
 };
 
 /* The default max_decoder_bytes: 1 GiB, the coefficients of a 350 MP

@@ -325,10 +325,9 @@ static enum reader sniff(const char *path, int *soi, int *psd,
     return BY_MODULE;
 }
 
-struct gv_image_in *gv_image_open_limits(const char *path,
-                                         const struct gv_image_limits *lim,
-                                         struct gv_image_info *info,
-                                         struct gv_error *err)
+/* gv_image_open_limits but for the plane rule. */
+static struct gv_image_in *open_any(const char *path, const struct gv_image_limits *lim,
+                                    struct gv_image_info *info, struct gv_error *err)
 {
     struct gv_image_in *in = calloc(1, sizeof *in);
     if (!in) {
@@ -373,12 +372,20 @@ struct gv_image_in *gv_image_open_limits(const char *path,
         native = NULL;
         gv_error_clear(&e);
     }
-    /* An OME-TIFF whose channels are pages: all of them (ome_tiff.h). */
-    struct gv_ome *ome;
-    if (in->by == BY_TIFF && native &&
-        (ome = gv_ome_take(path, in->u.tiff, lim->max_pixels, info))) {
-        in->by = BY_OME;
-        in->u.ome = ome;
+    /* An OME-TIFF whose channels are pages: all of them, of one plane
+     * (ome_tiff.h); a stack it refuses is refused. */
+    if (in->by == BY_TIFF && native) {
+        struct gv_ome *ome = gv_ome_take(path, in->u.tiff, lim, info, &e);
+        if (ome) {
+            in->by = BY_OME;
+            in->u.ome = ome;
+        } else if (e.code != GV_OK) {
+            gv_native_tiff_close(in->u.tiff);
+            if (err)
+                *err = e;
+            free(in);
+            return NULL;
+        }
     }
     if (native)
         return in;
@@ -408,6 +415,21 @@ struct gv_image_in *gv_image_open_limits(const char *path,
     in->u.module = m ? m->open(path, lim->max_pixels, info, err) : NULL;
     if (!in->u.module) {
         free(in);
+        return NULL;
+    }
+    return in;
+}
+
+struct gv_image_in *gv_image_open_limits(const char *path,
+                                         const struct gv_image_limits *lim,
+                                         struct gv_image_info *info,
+                                         struct gv_error *err)
+{
+    struct gv_image_in *in = open_any(path, lim, info, err);
+    if (in && lim->plane.set && in->by != BY_OME) {
+        gv_image_close(in);
+        gv_fail(err, GV_EINVAL, "imageio: %s: --plane picks a plane of an OME-TIFF "
+                "stack, and this is not one", path);
         return NULL;
     }
     return in;

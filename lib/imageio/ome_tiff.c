@@ -14,6 +14,7 @@
 
 #define MAX_CHANNELS 8
 #define NAME_MAX_BYTES 256
+#define MAX_PLANES 1000000   /* of Z, of T */
 
 struct gv_ome {
     int c;
@@ -118,18 +119,84 @@ static char *channel_meta(const char *xml, const char *from, int c)
     return text;
 }
 
+/* Directory of channel c of plane (z, t) in a file whose planes follow
+ * dimension order `order` (validated: "XY" then Z, C and T, fastest
+ * first) with sizes n[] for Z, C, T. */
+static long ifd_of(const char *order, long z, long c, long t, const long n[3])
+{
+    long idx = 0, mul = 1;
+    for (int i = 2; i < 5; i++) {
+        const int d = order[i] == 'Z' ? 0 : order[i] == 'C' ? 1 : 2;
+        idx += (d == 0 ? z : d == 1 ? c : t) * mul;
+        mul *= n[d];
+    }
+    return idx;
+}
+
+static int order_valid(const char *o)
+{
+    return strlen(o) == 5 && o[0] == 'X' && o[1] == 'Y' && strchr(o + 2, 'Z') &&
+           strchr(o + 2, 'C') && strchr(o + 2, 'T');
+}
+
+/* The plane's metadata beside the channels' (the JSON of channel_meta, or
+ * NULL), for a stack. */
+static char *plane_meta(char *meta, long z, long t, long nz, long nt)
+{
+    json_error_t je;
+    json_t *o = meta ? json_loads(meta, 0, &je) : json_object();
+    free(meta);
+    if (!o)
+        return NULL;
+    json_object_set_new(o, "ome.plane_z", json_integer(z));
+    json_object_set_new(o, "ome.plane_t", json_integer(t));
+    json_object_set_new(o, "ome.size_z", json_integer(nz));
+    json_object_set_new(o, "ome.size_t", json_integer(nt));
+    char *text = json_dumps(o, JSON_COMPACT | JSON_SORT_KEYS);
+    json_decref(o);
+    return text;
+}
+
+static void close_taken(struct gv_ome *o, struct gv_native_tiff *first)
+{
+    for (int k = 0; k < o->c; k++)
+        if (o->t[k] != first)
+            gv_native_tiff_close(o->t[k]);
+    free(o);
+}
+
 struct gv_ome *gv_ome_take(const char *path, struct gv_native_tiff *first,
-                           uint64_t max_pixels, struct gv_image_info *info)
+                           const struct gv_image_limits *lim, struct gv_image_info *info,
+                           struct gv_error *err)
 {
     const char *xml = gv_native_tiff_description(first);
     const char *tag, *end;
     if (!xml || !strstr(xml, "<OME") || !element(xml, "Pixels", &tag, &end) ||
         info->channels != 1)
         return NULL;
-    const long c = int_attr(tag, end, "SizeC");
-    if (c < 2 || c > MAX_CHANNELS || int_attr(tag, end, "SizeZ") != 1 ||
-        int_attr(tag, end, "SizeT") != 1)
+    const long c = int_attr(tag, end, "SizeC"), nz = int_attr(tag, end, "SizeZ"),
+               nt = int_attr(tag, end, "SizeT");
+    char order[16] = "XYZCT";
+    if (c < 1 || c > MAX_CHANNELS || nz < 1 || nt < 1 || nz > MAX_PLANES ||
+        nt > MAX_PLANES || (attr(tag, end, "DimensionOrder", order, sizeof order) &&
+                            !order_valid(order)))
         return NULL;
+    const int stack = nz * nt > 1;
+    if (c == 1 && !stack && !lim->plane.set)
+        return NULL;   /* one page: read as any TIFF */
+    if (stack && !lim->plane.set) {
+        gv_fail(err, GV_EINVAL, "imageio: %s: an OME-TIFF stack of %ld Z plane%s and "
+                "%ld time point%s: choose a plane with --plane Z[,T] (from 0)", path, nz,
+                nz == 1 ? "" : "s", nt, nt == 1 ? "" : "s");
+        return NULL;
+    }
+    const long z = lim->plane.set ? (long)lim->plane.z : 0,
+               t = lim->plane.set ? (long)lim->plane.t : 0;
+    if (z >= nz || t >= nt) {
+        gv_fail(err, GV_EINVAL, "imageio: %s: --plane %ld,%ld is outside the stack "
+                "(Z 0..%ld, T 0..%ld)", path, z, t, nz - 1, nt - 1);
+        return NULL;
+    }
     /* Every channel one sample (SamplesPerPixel absent means 1). */
     const char *s = end, *ct, *ce;
     for (long k = 0; k < c; k++, s = ce) {
@@ -145,20 +212,41 @@ struct gv_ome *gv_ome_take(const char *path, struct gv_native_tiff *first,
     o->c = (int)c;
     o->width = info->width;
     o->sample_bytes = info->bits == 16 ? 2 : 1;
-    for (int k = 1; k < o->c; k++) {
+    const long n[3] = {nz, c, nt};
+    for (int k = 0; k < o->c; k++) {
+        const long dir = ifd_of(order, z, k, t, n);
+        if (dir == 0) {
+            o->t[k] = first;
+            continue;
+        }
         struct gv_image_info ki;
         struct gv_error e = {0};
-        o->t[k] = gv_native_tiff_open_dir(path, (uint32_t)k, max_pixels, &ki, &e);
+        o->t[k] = gv_native_tiff_open_dir(path, (uint32_t)dir, lim->max_pixels, &ki, &e);
         if (!o->t[k] || ki.width != info->width || ki.height != info->height ||
             ki.channels != 1 || ki.bits != info->bits) {
-            for (int j = 1; j <= k; j++)
-                gv_native_tiff_close(o->t[j]);
-            free(o);
+            if (stack)   /* no page of a stack is the image: refuse */
+                gv_fail(err, e.code != GV_OK ? e.code : GV_EFORMAT,
+                        "imageio: %s: OME-TIFF directory %ld (channel %d of plane "
+                        "%ld,%ld) %s", path, dir, k, z, t,
+                        o->t[k] ? "differs from the first in size or samples"
+                                : "cannot be read");
+            if (o->t[k])
+                gv_native_tiff_close(o->t[k]);
+            o->t[k] = NULL;
+            close_taken(o, first);
             return NULL;
         }
     }
-    o->t[0] = first;
     o->meta = channel_meta(xml, end, o->c);
+    if (stack)
+        o->meta = plane_meta(o->meta, z, t, nz, nt);
+    /* The first directory is ours now (xml with it): closed here when the
+     * plane does not start with it. */
+    int uses_first = 0;
+    for (int k = 0; k < o->c; k++)
+        uses_first |= o->t[k] == first;
+    if (!uses_first)
+        gv_native_tiff_close(first);
     info->channels = o->c;
     return o;
 }

@@ -6,6 +6,7 @@
  * native reader whatever its extension, unless that reader declines it.
  *
  * Byte 0 picks a file name extension (modulo the table's size;
+ * its top bit also chooses an OME-TIFF stack's plane, as --plane does;
  * OpenImageIO chooses its reader by the extension first, then by trying
  * the others); the rest is the file.  It is written to a private temporary file (the bridge takes a path, as
  * `gigaview encode` does), opened with gv_source_open with max_pixels =
@@ -102,6 +103,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     struct gv_source_opts opts;
     memset(&opts, 0, sizeof opts);
     opts.max_pixels = MAX_PIXELS;
+    /* Byte 0's top bit sets an OME-TIFF stack's plane (--plane), Z from
+     * its bit 5. */
+    if (data[0] & 0x80)
+        opts.plane = (struct gv_image_plane){.set = 1, .z = (uint32_t)(data[0] >> 5 & 1)};
     struct gv_source_info info;
     struct gv_error err = {0};
     gv_error_clear(&err);
