@@ -185,7 +185,8 @@ int access_mint(const struct access *a, struct access_claims *c, char *out,
 {
     if (!access_has_secret(a))
         return -1;
-    c->exp = (int64_t)time(NULL) + (int64_t)a->cfg->access_token_ttl;
+    c->iat = (int64_t)time(NULL);
+    c->exp = c->iat + (int64_t)a->cfg->access_token_ttl;
     return access_token_sign(a->secret, a->secret_len, c, out, size);
 }
 

@@ -34,6 +34,7 @@ void access_policy_free(struct access_policy *p)
     if (!p)
         return;
     free(p->rule);
+    free(p->revoked);
     for (int i = 0; i < ACCESS_MSG_COUNT; i++)
         free(p->message[i]);
     free(p);
@@ -209,12 +210,69 @@ static int parse_messages(struct access_policy *p, json_t *m, const char *name,
     return 0;
 }
 
+static int subject_cmp(const void *a, const void *b)
+{
+    return strcmp(a, b);
+}
+
+static int parse_revoked(struct access_policy *p, json_t *r, const char *name,
+                         struct gv_error *err)
+{
+    static const char *const known[] = {"subjects", "issued_before", NULL};
+    if (!r)
+        return 0;
+    if (!json_is_object(r))
+        return gv_fail(err, GV_EINVAL, "%s: revoked: not an object", name);
+    if (only_known(r, known, name, "revoked: ", err) < 0)
+        return -1;
+    json_t *before = json_object_get(r, "issued_before"),
+           *subs = json_object_get(r, "subjects");
+    if (before && (!json_is_integer(before) || json_integer_value(before) < 0 ||
+                   json_integer_value(before) > ACCESS_EXP_MAX))
+        return gv_fail(err, GV_EINVAL, "%s: revoked: issued_before: not a time "
+                       "in UNIX seconds", name);
+    p->issued_before = before ? (long long)json_integer_value(before) : 0;
+    if (!subs)
+        return 0;
+    if (!json_is_array(subs))
+        return gv_fail(err, GV_EINVAL, "%s: revoked: subjects: not an array", name);
+    if (json_array_size(subs) > ACCESS_POLICY_MAX_REVOKED)
+        return gv_fail(err, GV_ELIMIT, "%s: revoked: more than %d subjects", name,
+                       ACCESS_POLICY_MAX_REVOKED);
+    size_t k;
+    json_t *s;
+    if (json_array_size(subs) &&
+        !(p->revoked = calloc(json_array_size(subs), sizeof *p->revoked)))
+        return gv_fail(err, GV_ENOMEM, "%s: out of memory", name);
+    json_array_foreach(subs, k, s) {
+        const char *v = json_is_string(s) ? json_string_value(s) : NULL;
+        if (!v || !*v || json_string_length(s) > ACCESS_SUB_MAX ||
+            strlen(v) != json_string_length(s))
+            return gv_fail(err, GV_EINVAL, "%s: revoked: subjects[%zu]: not a "
+                           "subject (1 to %d bytes)", name, k, ACCESS_SUB_MAX);
+        memcpy(p->revoked[p->nrevoked++], v, json_string_length(s) + 1);
+    }
+    qsort(p->revoked, (size_t)p->nrevoked, sizeof *p->revoked, subject_cmp);
+    return 0;
+}
+
+int access_policy_revoked(const struct access_policy *p, const struct access_claims *c)
+{
+    if (!p || !c)
+        return 0;
+    if (p->issued_before && c->iat < p->issued_before)
+        return 1;
+    return c->sub[0] && p->nrevoked &&
+           bsearch(c->sub, p->revoked, (size_t)p->nrevoked, sizeof *p->revoked,
+                   subject_cmp) != NULL;
+}
+
 struct access_policy *access_policy_parse(const char *text, size_t n,
                                           const char *name,
                                           struct gv_error *err)
 {
     static const char *const known[] = {"groups", "hide", "images", "messages",
-                                        NULL};
+                                        "revoked", NULL};
     if (n > ACCESS_POLICY_MAX_BYTES) {
         gv_fail(err, GV_ELIMIT, "%s: larger than %u bytes", name,
                 ACCESS_POLICY_MAX_BYTES);
@@ -247,7 +305,8 @@ struct access_policy *access_policy_parse(const char *text, size_t n,
     if (parse_groups(p, json_object_get(j, "groups"), name, err) < 0 ||
         parse_rules(p, json_object_get(j, "images"), hide && json_is_true(hide),
                     name, err) < 0 ||
-        parse_messages(p, json_object_get(j, "messages"), name, err) < 0)
+        parse_messages(p, json_object_get(j, "messages"), name, err) < 0 ||
+        parse_revoked(p, json_object_get(j, "revoked"), name, err) < 0)
         goto out;
     rc = 0;
 out:

@@ -13,7 +13,8 @@
  *       ],
  *       "messages": {"label": "...", "heading": "...", "note": "...",
  *                    "confirm_label": "...", "denied_heading": "...",
- *                    "denied_note": "..."}
+ *                    "denied_note": "..."},
+ *       "revoked": {"subjects": ["ann"], "issued_before": 1764720000}
  *     }
  *
  * "groups" names every access group (a rule naming another is an error,
@@ -23,7 +24,12 @@
  * "hide" (the file's, or a rule's own) makes a protected image answer
  * like an absent one (404) to those without access instead of 401.
  * "messages" (optional) are the texts of the IIIF access service and of
- * a refused probe.  Unknown members are errors, so is anything past the
+ * a refused probe.  "revoked" (optional) refuses good tokens: those of
+ * the listed subjects ("sub"), and with "issued_before" (UNIX seconds)
+ * those issued before it, a token that does not say when it was issued
+ * ("iat") counting as issued before any time: the way to end one
+ * reader's access, or everyone's, without a new secret or a restart
+ * (the policy is reread on SIGHUP).  Unknown members are errors, so is anything past the
  * limits below.  Parsing is pure (tests/fuzz/fuzz_access_policy.c); a
  * policy is immutable once parsed and may be read by any thread.
  */
@@ -41,6 +47,7 @@
 #define ACCESS_POLICY_MAX_GROUPS 64
 #define ACCESS_PATTERN_MAX GV_IMAGE_ID_MAX /* an image id's longest */
 #define ACCESS_MESSAGE_MAX 1024  /* bytes of one message */
+#define ACCESS_POLICY_MAX_REVOKED 10000  /* subjects revoked */
 
 struct access_rule {
     char pattern[ACCESS_PATTERN_MAX + 1];
@@ -64,6 +71,9 @@ struct access_policy {
     int nrules;
     struct access_rule *rule;
     char *message[ACCESS_MSG_COUNT]; /* never NULL: defaults filled in */
+    int nrevoked;
+    char (*revoked)[ACCESS_SUB_MAX + 1]; /* subjects, sorted (strcmp) */
+    long long issued_before; /* 0: none */
     int refs;               /* access.c's snapshot count, 0 after parsing */
 };
 
@@ -89,6 +99,9 @@ void access_policy_free(struct access_policy *p);
  * itself) matches the whole of s, else 0.  Linear in the product of the
  * lengths at worst. */
 int access_glob(const char *pattern, const char *s);
+
+/* 1 if policy p (NULL: none) revokes a token with claims c, else 0. */
+int access_policy_revoked(const struct access_policy *p, const struct access_claims *c);
 
 enum access_verdict {
     ACCESS_PUBLIC,   /* no group needed: answer as always */

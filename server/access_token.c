@@ -25,6 +25,7 @@ const char *access_token_status_name(enum access_token_status s)
     case ACCESS_TOKEN_MALFORMED: return "malformed";
     case ACCESS_TOKEN_FORGED: return "forged";
     case ACCESS_TOKEN_EXPIRED: return "expired";
+    case ACCESS_TOKEN_REVOKED: return "revoked";
     }
     return "unknown";
 }
@@ -147,6 +148,11 @@ static int parse_claims(json_t *j, struct access_claims *c)
         json_integer_value(exp) > ACCESS_EXP_MAX)
         return -1;
     c->exp = (int64_t)json_integer_value(exp);
+    json_t *iat = json_object_get(j, "iat");
+    if (iat && (!json_is_integer(iat) || json_integer_value(iat) < 1 ||
+                json_integer_value(iat) > ACCESS_EXP_MAX))
+        return -1;
+    c->iat = iat ? (int64_t)json_integer_value(iat) : 0;
     if (!json_is_array(groups) || json_array_size(groups) > ACCESS_GROUPS_MAX)
         return -1;
     for (size_t i = 0; i < json_array_size(groups); i++) {
@@ -216,7 +222,7 @@ int access_token_sign(const uint8_t *secret, size_t secret_len,
 {
     if (c->ngroups < 0 || c->ngroups > ACCESS_GROUPS_MAX || c->exp < 1 ||
         c->exp > ACCESS_EXP_MAX || strnlen(c->sub, sizeof c->sub) > ACCESS_SUB_MAX ||
-        !printable(c->sub, strlen(c->sub)))
+        !printable(c->sub, strlen(c->sub)) || c->iat < 0 || c->iat > ACCESS_EXP_MAX)
         return -1;
     json_t *groups = json_array();
     for (int i = 0; groups && i < c->ngroups; i++) {
@@ -229,6 +235,10 @@ int access_token_sign(const uint8_t *secret, size_t secret_len,
     }
     json_t *j = json_pack("{s:s,s:o,s:I}", "sub", c->sub, "groups", groups,
                           "exp", (json_int_t)c->exp);
+    if (j && c->iat && json_object_set_new(j, "iat", json_integer((json_int_t)c->iat)) < 0) {
+        json_decref(j);
+        j = NULL;
+    }
     char *s = j ? json_dumps(j, JSON_COMPACT | JSON_PRESERVE_ORDER) : NULL;
     json_decref(j);
     if (!s)

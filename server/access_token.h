@@ -8,7 +8,8 @@
  *     base64url(payload) "." base64url(HMAC-SHA256(secret, payload))
  *
  * with the payload a compact JSON object {"sub": "...", "groups": [...],
- * "exp": UNIX_SECONDS} and base64url without padding (RFC 4648 section
+ * "exp": UNIX_SECONDS, "iat": UNIX_SECONDS} ("iat", when it was issued,
+ * is optional: tokens minted before it existed lack it) and base64url without padding (RFC 4648 section
  * 5).  The MAC covers the payload's bytes as decoded.  Verification
  * checks the lengths, the encoding (canonical: no padding, no stray
  * bits), the MAC (in constant time) and only then parses the JSON, with
@@ -38,6 +39,7 @@ struct access_claims {
     int ngroups;
     char group[ACCESS_GROUPS_MAX][ACCESS_GROUP_MAX + 1];
     int64_t exp;
+    int64_t iat;            /* issued at; 0 when the token does not say */
 };
 
 enum access_token_status {
@@ -47,9 +49,12 @@ enum access_token_status {
                                a payload that is not the JSON above */
     ACCESS_TOKEN_FORGED,    /* the MAC does not match */
     ACCESS_TOKEN_EXPIRED,   /* exp <= now */
+    ACCESS_TOKEN_REVOKED,   /* good, but the access policy revokes it
+                               (access_policy_revoked; never returned by
+                               access_token_verify) */
 };
 
-/* The status's name ("ok", "malformed", "forged", "expired"). */
+/* The status's name ("ok", "malformed", "forged", "expired", "revoked"). */
 const char *access_token_status_name(enum access_token_status s);
 
 /* 1 if s[0..n-1] is a group name: 1..ACCESS_GROUP_MAX bytes of
@@ -70,7 +75,8 @@ int access_b64url_decode(const char *in, size_t n, uint8_t *out, size_t size,
  * an object whose "exp" is an integer in 1..ACCESS_EXP_MAX, whose
  * "groups" (required) is an array of at most ACCESS_GROUPS_MAX group
  * names and whose "sub" (optional, "" when absent) is a string of at
- * most ACCESS_SUB_MAX bytes without control characters.  0, or -1 with
+ * most ACCESS_SUB_MAX bytes without control characters, and whose "iat"
+ * (optional, 0 when absent) is an integer in 1..ACCESS_EXP_MAX.  0, or -1 with
  * *c zeroed. */
 int access_payload_parse(const char *json, size_t n, struct access_claims *c);
 
@@ -82,7 +88,8 @@ enum access_token_status access_token_verify(const char *token,
                                              size_t secret_len, int64_t now,
                                              struct access_claims *c);
 
-/* Mint a token for *c under secret into out (size bytes, NUL-terminated;
+/* Mint a token for *c (its iat written when not 0) under secret into out
+ * (size bytes, NUL-terminated;
  * ACCESS_TOKEN_MAX + 1 always suffices).  The claims must be valid as
  * access_payload_parse defines them.  0, or -1 (invalid claims, no
  * memory, no room). */

@@ -401,6 +401,11 @@ const struct access_claims *http_caller(struct req *r, int *refused)
                 continue;
             enum access_token_status st =
                 access_verify(r->srv->access, tokens[i], &r->caller);
+            if (st == ACCESS_TOKEN_OK &&
+                access_policy_revoked(http_policy(r), &r->caller)) {
+                memset(&r->caller, 0, sizeof r->caller);
+                st = ACCESS_TOKEN_REVOKED;
+            }
             r->caller_state = st == ACCESS_TOKEN_OK ? 1 : -1;
             if (st != ACCESS_TOKEN_OK)
                 log_msg(LOG_DEBUG, "access", "%s token refused: %s",

@@ -391,6 +391,49 @@ req -b "gigaview_access=$COOKIE" "$(url /iiif/auth/logout)"
 check "logout: clears the cookie" \
     sh -c "[ $code = 200 ] && tr -d '\r' <'$T/h' | grep -q '^Set-Cookie: gigaview_access=; Path=/; Max-Age=0'"
 
+# ------------------------------------------------------------ revocation
+# hup_until DESC STATUS PATH [CURL ARGS]: SIGHUP, then wait (up to 5 s)
+# until PATH answers STATUS.
+hup_until() {
+    d=$1 want=$2 p=$3
+    shift 3
+    kill -HUP "$DPID"
+    i=0
+    while [ $i -lt 50 ]; do
+        req "$@" "$(url "$p")"
+        [ "$code" = "$want" ] && break
+        sleep 0.1
+        i=$((i + 1))
+    done
+    check "$d ($code)" test "$code" = "$want"
+}
+ANN=$(python3 "$srcroot/scripts/gigaview-token" --secret-file "$T/secret" --groups staff --sub ann)
+NOIAT=$(python3 "$srcroot/scripts/gigaview-token" --secret-file "$T/secret" --groups staff --no-iat)
+iat=$(python3 -c "import base64,json,sys; p=sys.argv[1].split('.')[0]; print(json.loads(base64.urlsafe_b64decode(p + '=' * (-len(p) % 4)))['iat'])" "$STAFF")
+expect_status "ann's token, before revocation" 200 /v1/images/staff-dem -H "Authorization: Bearer $ANN"
+expect_status "a token without iat, before revocation" 200 /v1/images/staff-dem -H "Authorization: Bearer $NOIAT"
+POLICY=$(cat "$T/policy.json")
+printf '%s' "$POLICY" | python3 -c "import json,sys; p=json.load(sys.stdin); p['revoked']={'subjects':['zed','ann']}; print(json.dumps(p))" >"$T/policy.json"
+hup_until "revoked subject: ann's token is refused after SIGHUP" 401 /v1/images/staff-dem -H "Authorization: Bearer $ANN"
+check "... as an invalid token" test "$(header WWW-Authenticate)" = 'Bearer realm="gigaview", error="invalid_token"'
+req -b "gigaview_access=$ANN" "$(url /iiif/3/staff-dem/info.json)"
+check "... in a cookie too" test "$code" = 401
+expect_status "another subject's token still serves" 200 /v1/images/staff-dem -H "Authorization: Bearer $STAFF"
+LATER=$(python3 "$srcroot/scripts/gigaview-token" --secret-file "$T/secret" --groups staff --iat $((iat + 1)))
+printf '%s' "$POLICY" | python3 -c "import json,sys; p=json.load(sys.stdin); p['revoked']={'issued_before':$((iat + 1))}; print(json.dumps(p))" >"$T/policy.json"
+hup_until "issued_before: a token issued a second before is refused" 401 /v1/images/staff-dem -H "Authorization: Bearer $STAFF"
+expect_status "... a token without iat too" 401 /v1/images/staff-dem -H "Authorization: Bearer $NOIAT"
+expect_status "... one issued at that second serves" 200 /v1/images/staff-dem -H "Authorization: Bearer $LATER"
+expect_status "... and ann's is no longer revoked by name" 200 /v1/images/staff-dem -H "Authorization: Bearer $ANN"
+printf '%s' "$POLICY" | python3 -c "import json,sys; p=json.load(sys.stdin); p['revoked']={'subjects':['']}; print(json.dumps(p))" >"$T/policy.json"
+kill -HUP "$DPID"
+sleep 0.5
+expect_status "a revocation of an empty subject is refused: the previous policy stays" 401 \
+    /v1/images/staff-dem -H "Authorization: Bearer $STAFF"
+check "... and the error is logged" grep -q "revoked: subjects\[0\]: not a subject" "$T/daemon.log"
+printf '%s' "$POLICY" >"$T/policy.json"
+hup_until "the policy without revocations: STAFF serves again" 200 /v1/images/staff-dem -H "Authorization: Bearer $STAFF"
+
 # ------------------------------------------------------------ SIGHUP
 cat >"$T/policy.json" <<'EOF2'
 {"groups": ["staff"], "hide": true,

@@ -103,6 +103,12 @@ static void test_errors(void)
         {"{\"messages\": {\"title\": \"x\"}}", "p.json: messages: unknown member \"title\""},
         {"{\"messages\": {\"note\": 5}}", "p.json: messages: note: not a string of at most 1024 bytes"},
         {"{\"hide\": true, \"hide\": false}", "p.json:1:21: duplicate object key near '\"hide\"'"},
+        {"{\"revoked\": []}", "p.json: revoked: not an object"},
+        {"{\"revoked\": {\"subject\": [\"a\"]}}", "p.json: revoked: unknown member \"subject\""},
+        {"{\"revoked\": {\"subjects\": [\"a\", 3]}}",
+         "p.json: revoked: subjects[1]: not a subject (1 to 128 bytes)"},
+        {"{\"revoked\": {\"issued_before\": 1.5}}",
+         "p.json: revoked: issued_before: not a time in UNIX seconds"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         struct gv_error err;
@@ -136,10 +142,39 @@ static void test_errors(void)
           err.code == GV_ENOTFOUND, "a missing file: GV_ENOTFOUND");
 }
 
+/* Revocation: by subject (sorted, found by bsearch) and by issue time. */
+static void test_revoked(void)
+{
+    struct gv_error err = {0};
+    struct access_policy *p = parse("{\"revoked\": {\"subjects\": [\"zed\", \"ann\", \"bob\"], "
+                                    "\"issued_before\": 1000}}", &err);
+    if (!p)
+        fail("%s", err.text);
+    struct access_claims c = {.iat = 2000, .exp = 3000};
+    static const struct { const char *sub; long long iat; int want; } cases[] = {
+        {"ann", 2000, 1}, {"bob", 2000, 1}, {"zed", 2000, 1}, {"amy", 2000, 0},
+        {"", 2000, 0}, {"amy", 999, 1}, {"amy", 1000, 0}, {"amy", 0, 1},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        snprintf(c.sub, sizeof c.sub, "%s", cases[i].sub);
+        c.iat = cases[i].iat;
+        check(access_policy_revoked(p, &c) == cases[i].want, "sub '%s' iat %lld: %s",
+              cases[i].sub, cases[i].iat, cases[i].want ? "revoked" : "good");
+    }
+    check(!access_policy_revoked(NULL, &c), "no policy revokes nothing");
+    access_policy_free(p);
+    p = parse("{}", &err);
+    c.iat = 0;
+    check(p && !access_policy_revoked(p, &c), "a policy without revoked: a token "
+          "without iat is good");
+    access_policy_free(p);
+}
+
 int main(void)
 {
     test_glob();
     test_verdicts();
     test_errors();
+    test_revoked();
     return tap_done();
 }

@@ -173,6 +173,11 @@ static enum access_token_status verify(const char *t, struct access_claims *c)
     return access_token_verify(t, SECRET, SECRET_LEN, NOW, c);
 }
 
+static int parse_text(const char *json, struct access_claims *c)
+{
+    return access_payload_parse(json, strlen(json), c);
+}
+
 static void test_tokens(void)
 {
     struct access_claims c, got;
@@ -199,6 +204,23 @@ static void test_tokens(void)
     snprintf(want, sizeof want, "{\"sub\":\"ann@example.org\",\"groups\":"
              "[\"staff\",\"board-2026\"],\"exp\":%lld}", NOW + 60);
     check(pn == strlen(want) && !memcmp(pl, want, pn), "payload: %.*s", (int)pn, pl);
+    /* iat: written when set, read back; absent reads 0; not an integer
+     * (or 0) is malformed. */
+    c.iat = NOW - 5;
+    access_token_sign(SECRET, SECRET_LEN, &c, tok, sizeof tok);
+    dot = strchr(tok, '.');
+    access_b64url_decode(tok, (size_t)(dot - tok), pl, sizeof pl, &pn);
+    snprintf(want, sizeof want, "{\"sub\":\"ann@example.org\",\"groups\":"
+             "[\"staff\",\"board-2026\"],\"exp\":%lld,\"iat\":%lld}", NOW + 60, NOW - 5);
+    check(pn == strlen(want) && !memcmp(pl, want, pn), "payload with iat: %.*s", (int)pn, pl);
+    check(verify(tok, &got) == ACCESS_TOKEN_OK && got.iat == NOW - 5, "iat round trip");
+    check(parse_text("{\"groups\":[],\"exp\":5}", &got) == 0 && got.iat == 0,
+          "no iat: 0");
+    check(parse_text("{\"groups\":[],\"exp\":5,\"iat\":0}", &got) < 0,
+          "iat 0: malformed");
+    check(parse_text("{\"groups\":[],\"exp\":5,\"iat\":\"1\"}", &got) < 0,
+          "iat a string: malformed");
+    c.iat = 0;
 
     /* Expiry: exp == now is expired, exp == now + 1 is not. */
     c.exp = NOW;

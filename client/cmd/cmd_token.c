@@ -104,7 +104,8 @@ int cmd_token(int argc, char **argv)
         }
         p += n + (p[n] == ',');
     }
-    c.exp = (int64_t)time(NULL) + a.ttl;
+    c.iat = (int64_t)time(NULL);
+    c.exp = c.iat + a.ttl;
     uint8_t secret[ACCESS_SECRET_MAX + 2];
     size_t slen;
     char tok[ACCESS_TOKEN_MAX + 1];

@@ -7,7 +7,7 @@
  *    GV_EINVAL, GV_ELIMIT or GV_ENOMEM;
  *  - success: the counts within their limits, every rule's pattern a
  *    valid pattern and its group an index of groups[], every message
- *    set; parsing the same bytes again gives the same rules; and the
+ *    set, the revoked subjects sorted and each one revoked; parsing the same bytes again gives the same rules; and the
  *    verdicts agree with the rules: for every rule's pattern taken as an
  *    id, a caller holding every group is never refused, and a caller
  *    with no token is refused exactly when the first rule that matches
@@ -34,6 +34,22 @@ static void check_policy(const struct access_policy *p)
     for (int i = 0; i < ACCESS_MSG_COUNT; i++)
         if (!p->message[i] || strlen(p->message[i]) > ACCESS_MESSAGE_MAX)
             abort();
+    /* Revoked subjects: within limits, sorted, each one found. */
+    if (p->nrevoked < 0 || p->nrevoked > ACCESS_POLICY_MAX_REVOKED ||
+        p->issued_before < 0 || p->issued_before > ACCESS_EXP_MAX)
+        abort();
+    for (int i = 0; i < p->nrevoked; i++) {
+        struct access_claims c;
+        memset(&c, 0, sizeof c);
+        size_t n = strlen(p->revoked[i]);
+        if (n < 1 || n > ACCESS_SUB_MAX ||
+            (i && strcmp(p->revoked[i - 1], p->revoked[i]) > 0))
+            abort();
+        memcpy(c.sub, p->revoked[i], n + 1);
+        c.iat = ACCESS_EXP_MAX;
+        if (!access_policy_revoked(p, &c))
+            abort();
+    }
     struct access_claims all;
     memset(&all, 0, sizeof all);
     for (int i = 0; i < p->ngroups && i < ACCESS_GROUPS_MAX; i++) {

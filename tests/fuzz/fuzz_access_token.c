@@ -33,7 +33,8 @@ static const size_t secret_len = sizeof FUZZ_SECRET - 1;
 
 static int same_claims(const struct access_claims *a, const struct access_claims *b)
 {
-    if (strcmp(a->sub, b->sub) || a->ngroups != b->ngroups || a->exp != b->exp)
+    if (strcmp(a->sub, b->sub) || a->ngroups != b->ngroups || a->exp != b->exp ||
+        a->iat != b->iat)
         return 0;
     for (int i = 0; i < a->ngroups; i++)
         if (strcmp(a->group[i], b->group[i]))
