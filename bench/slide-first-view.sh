@@ -84,7 +84,7 @@ cp "$GVD" "$WORK/gigaviewd"
 cp "$build/tests/make_slide" "$WORK/make_slide"
 CMP=$(build_imgcompare "$WORK")
 echo "# $(describe_build "$GV")"
-echo "# $(machine_line)"
+echo "# $(machine_line); load average $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "# $(vips --version); chromium: $(/usr/bin/chromium --version 2>/dev/null | head -1);" \
 	"openseadragon $(sed -n 's/^ *"version": "\(.*\)",*$/\1/p' \
 	"$BENCH_DIR/../tests/browser/node_modules/openseadragon/package.json" | head -1)"
@@ -183,7 +183,8 @@ log_level = info
 access_log = "off"
 EOF
 start_gigaviewd "$WORK/gigaviewd" "$WORK/gv.conf" "$WORK/gigaviewd.log"
-echo "# gigaviewd on port $GVD_PORT; REPS=$REPS SIZE=$SIZE GPU=${GPU:-swiftshader}"
+echo "# gigaviewd on port $GVD_PORT; REPS=$REPS SIZE=$SIZE GPU=${GPU:-swiftshader};" \
+	"load average $(cut -d' ' -f1-3 /proc/loadavg)"
 node "$BENCH_DIR/slide-first-view.mjs" --base "http://127.0.0.1:$GVD_PORT" --id "$id" \
 	--iiif "$WORK/iiif/$id" --reps "$REPS" --size "$SIZE" \
 	--gpu "$([ "${GPU:-}" = host ] && echo host || echo swiftshader)"

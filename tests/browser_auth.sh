@@ -4,8 +4,8 @@
 # client does"), in headless Chromium (Debian's /usr/bin/chromium driven
 # by playwright-core; tests/browser/auth.mjs lists the checks).
 #
-# gigaviewd serves two stores under an access policy: "pub" (public) and
-# "staff-pic" (group staff), with its own texts for the dialog, a token
+# gigaviewd serves three stores under an access policy: "pub" (public),
+# "staff-pic" and "staff-large" (group staff), with its own texts for the dialog, a token
 # secret and the trusted header X-Remote-Groups, which auth.mjs adds to
 # the login page's request alone, as a single sign-on proxy in front of
 # the login would.  access_origins names another site only: the viewer
@@ -26,6 +26,8 @@ run encode synth:900x600 -o "$S/pub.gv"
 [ "$rc" -eq 0 ] || bail "encode pub: $(cat "$T/err")"
 run encode "$TESTDATA/picos-1100x700.jpg" -o "$S/staff-pic.gv"
 [ "$rc" -eq 0 ] || bail "encode staff-pic: $(cat "$T/err")"
+run encode synth:6000x4000 -o "$S/staff-large.gv"
+[ "$rc" -eq 0 ] || bail "encode staff-large: $(cat "$T/err")"
 
 head -c 48 /dev/urandom | base64 >"$T/secret" || bail "secret"
 chmod 600 "$T/secret"
@@ -59,8 +61,11 @@ start_daemon "$T/a.conf"
 
 mkdir -p "$T/shots"
 brc=0
+EXPIRED=$(python3 "$(dirname "$0")/../scripts/gigaview-token" --secret-file "$T/secret" \
+    --groups staff --ttl=-10 --sub expired) || bail "mint an expired token"
 timeout 120 node "$BROWSER_DIR/auth.mjs" --base "$BASE" --public pub \
-    --restricted staff-pic --group staff --other-group visitors \
+    --restricted staff-pic --large staff-large --group staff --other-group visitors \
+    --expired-token "$EXPIRED" \
     --header X-Remote-Groups --heading "Staff only: log in" \
     --chromium "$CHROMIUM" --out "$T/shots" >"$T/auth.out" 2>&1 || brc=$?
 browser_relay "$T/auth.out" "$brc" auth.mjs

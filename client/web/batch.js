@@ -61,13 +61,16 @@ export function prepArrays(prep) {
  * tiles: [{level, tx, ty, status, error?, prep?}]}: prep from prepareTile
  * (prepareSampleTile for codes) for a well-formed 200 tile, error
  * (a message) for a damaged or missing one.  Rejects on a network error,
- * an HTTP error status or an abort (signal).
+ * an HTTP error status (the error's `status`) or an abort (signal).
  */
 export async function fetchPrepared(imageUrl, tiles, form, signal) {
     const t0 = performance.now();
     const resp = await fetch(batchUrl(imageUrl, tiles), { signal });
-    if (!resp.ok)
-        throw new Error(`batch: HTTP ${resp.status}`);
+    if (!resp.ok) {
+        const e = new Error(`batch: HTTP ${resp.status}`);
+        e.status = resp.status;   // 401: the login has expired (tile_cache.js)
+        throw e;
+    }
     const buf = await resp.arrayBuffer();
     const frames = parseBatch(buf);
     const t1 = performance.now();

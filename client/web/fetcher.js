@@ -54,6 +54,7 @@ export class Fetcher {
             j.resolve(m.result);
         else {
             const e = new Error(m.error);
+            e.status = m.status;
             if (m.aborted)
                 e.name = 'AbortError';
             j.reject(e);

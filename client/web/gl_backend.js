@@ -42,7 +42,8 @@ export class GlBackend {
     /**
      * gl: the context; image: {id, info (metadata), url (absolute),
      * levels, root: {px, w, h}} (a sample or height store's root px: its
-     * codes, a Uint16Array); opts: {cacheMiB, workers, budgetMs, onChange}.
+     * codes, a Uint16Array); opts: {cacheMiB, workers, budgetMs, onChange,
+     * onUnauthorized} (TileCache's).
      */
     static async create(gl, image, opts) {
         if (!sources) {
@@ -78,11 +79,17 @@ export class GlBackend {
         this.cache = new TileCache({
             decoder: this.decoder, info, imageUrl: image.url, levels: image.levels,
             fetcher: this.fetcher, budget: opts.cacheMiB * 1048576, onChange: opts.onChange,
+            onUnauthorized: opts.onUnauthorized,
         });
         this.cache.setRoot(image.root.px, image.root.w, image.root.h);
         this.budgetMs = opts.budgetMs;
         this.prefetch = opts.prefetch !== false;
         this.last = null;
+    }
+
+    /** Fetch tiles again after a login (TileCache resume). */
+    resume() {
+        this.cache.resume();
     }
 
     /** An image store's display window: its tables (window.js lutBytes)

@@ -157,6 +157,24 @@ async function route() {
     }
 }
 
+// A login that expires while the image is open: its tile requests answer
+// 401 and wait; log in again (the same flow as opening it) and carry on
+// where the view is.
+viewer.on('unauthorized', async (id) => {
+    if (loggingIn || !viewer.image || viewer.image.id !== id)
+        return;
+    loggingIn = true;
+    const got = await obtainAccess(id, authDialog).catch((x) => ({ ok: false, message: x.message }));
+    loggingIn = false;
+    if (got.ok) {
+        auth = got;
+        showError('');
+        viewer.resume();
+    } else {
+        showError(`${got.message} (the login has expired)`);
+    }
+});
+
 $('picker').addEventListener('change', (e) => {
     location.hash = e.target.value ? formatHash({ image: e.target.value }) : '';
 });

@@ -46,8 +46,11 @@ export class TileCache {
      * absolute URL; levels: pyramid.levelsOf(info); fetcher: a Fetcher;
      * budget: bytes of decoded tiles to keep (soft for pinned tiles);
      * onChange(): called when fetched data arrives (schedule a frame).
+     * onUnauthorized(): called when a batch answers 401 (a login that has
+     * expired): fetching then waits for resume().
      */
-    constructor({ decoder, info, imageUrl, levels, fetcher, budget, prepBudget, onChange }) {
+    constructor({ decoder, info, imageUrl, levels, fetcher, budget, prepBudget, onChange,
+        onUnauthorized }) {
         this.dec = decoder;
         this.info = info;
         this.imageUrl = imageUrl;
@@ -60,6 +63,7 @@ export class TileCache {
         this.budget = budget;
         this.prepBudget = prepBudget || 64 << 20;
         this.onChange = onChange || (() => {});
+        this.onUnauthorized = onUnauthorized || (() => {});
         this.tex = new Map();       // key -> {tex, used, fixed}
         this.prep = new Map();      // key -> {prep, used}
         this.inflight = new Set();
@@ -249,6 +253,15 @@ export class TileCache {
                     return;
                 this.stats.errors++;
                 this.stats.lastError = `batch: ${e.message}`;
+                if (e.status === 401) {
+                    // The login has expired: no more requests until the
+                    // viewer has logged in again (resume).
+                    if (this.retryAt !== Infinity) {
+                        this.retryAt = Infinity;
+                        this.onUnauthorized();
+                    }
+                    return;
+                }
                 console.warn(`gigaview: batch of ${part.length} tiles: ${e.message}`);
                 // Network trouble: try again a little later.
                 this.retryAt = performance.now() + 2000;
@@ -258,6 +271,12 @@ export class TileCache {
                     this.onChange();
             });
         }
+    }
+
+    /** Fetch again after a 401 (the viewer has logged in again). */
+    resume() {
+        this.retryAt = 0;
+        this.onChange();
     }
 
     putPrep(kk, prep) {

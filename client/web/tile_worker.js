@@ -6,7 +6,7 @@
 //               {type: 'abort', id}
 // Messages out: {type: 'done', id, result} (result as fetchPrepared,
 //               its prepared arrays transferred, not copied)
-//               {type: 'failed', id, error, aborted}
+//               {type: 'failed', id, error, status, aborted}
 
 import { fetchPrepared, prepArrays } from './batch.js';
 
@@ -33,7 +33,7 @@ self.onmessage = async (ev) => {
         self.postMessage({ type: 'done', id: m.id, result }, transfer);
     } catch (e) {
         self.postMessage({ type: 'failed', id: m.id, error: String(e && e.message || e),
-            aborted: ctl.signal.aborted });
+            status: (e && e.status) || 0, aborted: ctl.signal.aborted });
     } finally {
         pending.delete(m.id);
     }

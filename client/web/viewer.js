@@ -9,7 +9,9 @@
 // (wheel, keys, gamepad buttons), keeping an anchor point under the
 // cursor while zooming.  Frames are drawn only while something changes:
 // input, animation, tiles arriving or waiting to be decoded.  The hash is
-// rewritten (replaceState) once the view rests.
+// rewritten (replaceState) once the view rests.  Events (on): 'open',
+// 'frame', 'hash', and 'unauthorized' (id) when tile requests answer 401
+// because a login has expired: they wait for resume().
 
 import { GlBackend, webgl2 } from './gl_backend.js';
 import { RegionBackend } from './fallback.js';
@@ -189,7 +191,11 @@ export class Viewer {
         const image = { id, info, url, levels: levelsOf(info), root };
         this.timing = { openStart: t0, metaMs: performance.now() - t0, firstCompleteMs: null };
         const onChange = () => this.schedule();
-        let backend = gl ? await GlBackend.create(gl, image, { ...this.opts, onChange }) : null;
+        // A tile request answered 401: the login has expired (main.js logs
+        // in again and calls resume()).
+        const onUnauthorized = () => this.emit('unauthorized', id);
+        let backend = gl ? await GlBackend.create(gl, image, { ...this.opts, onChange, onUnauthorized })
+            : null;
         if (!backend) {
             const ctx = this.ctx2d || (this.ctx2d = this.canvas.getContext('2d', { alpha: false }));
             if (!ctx)
@@ -436,6 +442,12 @@ export class Viewer {
     }
 
     // ------------------------------------------------------------ events
+
+    /** Fetch tiles again after the 'unauthorized' event's login. */
+    resume() {
+        if (this.backend && this.backend.resume)
+            this.backend.resume();
+    }
 
     on(type, fn, active) {
         this.listeners.push({ type, fn, active: active || (() => false) });

@@ -18,10 +18,15 @@
 //      read back is not blank;
 //   5. a reader of another group logs in, is told the probe's "denied"
 //      texts in the dialog, and the image stays closed;
-//   6. no console errors but the expected 401s.
+//   6. no console errors but the expected 401s;
+//   7. the login expires while a large restricted image is open (the
+//      cookie now holds an expired token): the next tiles answer 401, the
+//      viewer asks to log in again, and after the login the new view
+//      completes where it was, its tiles answering 200.
 //
-//   node auth.mjs --base URL --public ID --restricted ID --group G
-//                 --other-group G2 --header NAME --chromium PATH --out DIR
+//   node auth.mjs --base URL --public ID --restricted ID --large ID --group G
+//                 --other-group G2 --header NAME --expired-token TOKEN
+//                 --chromium PATH --out DIR
 
 import { mkdtempSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -30,9 +35,9 @@ import { launchChromium } from './chromium.mjs';
 import { check, failed, note, parseArgs } from './report.mjs';
 
 const opt = parseArgs({ base: '', public: '', restricted: '', group: '', 'other-group': '',
-    header: '', heading: '', chromium: '/usr/bin/chromium', out: '' },
-'usage: node auth.mjs --base URL --public ID --restricted ID --group G --other-group G2 --header NAME [--heading TEXT] [--chromium PATH] [--out DIR]',
-'auth.mjs', ['base', 'public', 'restricted', 'group', 'other-group', 'header']);
+    header: '', heading: '', 'expired-token': '', large: '', chromium: '/usr/bin/chromium', out: '' },
+'usage: node auth.mjs --base URL --public ID --restricted ID --large ID --group G --other-group G2 --header NAME --expired-token TOKEN [--heading TEXT] [--chromium PATH] [--out DIR]',
+'auth.mjs', ['base', 'public', 'restricted', 'large', 'group', 'other-group', 'header', 'expired-token']);
 
 const base = opt.base.replace(/\/$/, '') + '/';
 
@@ -133,6 +138,49 @@ async function main() {
     check(b.consoleErrors.length === 0, 'no console errors (but 401s)', ...b.consoleErrors.slice(0, 5));
     if (opt.out)
         await b.page.screenshot({ path: join(opt.out, 'auth-after-login.png') }).catch(() => {});
+
+    // 7. the login expires mid-view, on a large image of the same group
+    await b.page.evaluate((id) => { location.hash = `image=${encodeURIComponent(id)}`; }, opt.large);
+    check(await opened(b.page, opt.large), 'logged in, the large restricted image opens without asking');
+    await b.page.evaluate(() => window.gigaview.viewer.settled());
+    await b.ctx.addCookies([{ name: 'gigaview_access', value: opt['expired-token'], url: base,
+        httpOnly: true }]);
+    const mark = b.log.length;
+    // Closer in, at once: tiles of a finer level are needed.
+    await b.page.evaluate(() => {
+        const v = window.gigaview.viewer;
+        v.setView({ ...v.view, zoom: Math.max(0, v.view.zoom - 2.5), cx: v.view.cx * 0.6, cy: v.view.cy * 0.6 });
+    });
+    const asked = await dialogShown(b.page);
+    const diag = await b.page.evaluate(() => {
+        const c = window.gigaview.viewer.backend.cache;
+        return JSON.stringify({ stats: c.stats, retryAt: c.retryAt, inflight: c.inflightCount,
+            view: window.gigaview.viewer.view, errors: window.gigaview.errors });
+    });
+    check(asked, 'an expired login: the next tiles ask to log in again', diag);
+    const refused = b.log.slice(mark).filter((r) => r.url.includes(`/v1/images/${opt.large}/`) &&
+        r.status === 401);
+    check(refused.length >= 1, 'an expired login: a tile request answered 401',
+        JSON.stringify(b.log.slice(mark, mark + 4)));
+    const popup3 = b.page.waitForEvent('popup', { timeout: 15000 }).catch(() => null);
+    const viewAsked = await b.page.evaluate(() => window.gigaview.viewer.hash());
+    await b.page.click('#auth-confirm');
+    check((await popup3) !== null, 'confirm opens the login window again');
+    const done = await b.page.waitForFunction(() => document.getElementById('auth').hidden, null,
+        { timeout: 20000 }).then(() => true, () => false);
+    check(done, 'after the new login the dialog closes');
+    const complete = await b.page.evaluate(() => Promise.race([
+        window.gigaview.viewer.settled().then(() => true),
+        new Promise((r) => setTimeout(() => r(false), 30000))]));
+    check(complete, 'after the new login the view completes');
+    const mark2 = b.log.findIndex((r, i) => i >= mark && r.url.includes('/iiif/auth/token') && r.status === 200);
+    const later = mark2 < 0 ? [] : b.log.slice(mark2).filter((r) => r.url.includes(`/v1/images/${opt.large}/`));
+    check(later.length >= 1 && later.every((r) => r.status === 200),
+        'after the new login the tiles of the view answer 200', JSON.stringify(later.slice(-4)));
+    const viewAfter = await b.page.evaluate(() => window.gigaview.viewer.hash());
+    check(viewAfter === viewAsked, 'the view stays where it was', `${viewAsked} -> ${viewAfter}`);
+    const err7 = await b.page.$eval('#error', (e) => e.hidden ? '' : e.textContent);
+    check(err7 === '', 'no error shown after the new login', err7);
     await b.ctx.close();
 
     // 5. a reader of another group
