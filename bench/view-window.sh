@@ -25,9 +25,10 @@
 # (the viewer builds the new tables and uploads them) and that frame
 # draws it; with --stats the viewer ends every drawn frame with glFinish
 # and writes the frame's time, so the time of that frame is the time
-# from the change to the completed frame.  The changes are the last
-# CHANGES frames of the --stats file (the script's end quits before the
-# next one is recorded), the reference frames those marked moving.  The
+# from the change to the completed frame (--stats has all it needs; no
+# outside timing).  The changes are the last CHANGES frames of the
+# --stats file (the script's end quits before the next one is
+# recorded), the reference frames the last REDRAWS marked moving.  The
 # `counters` lines say how many tiles were fetched and decoded before
 # and after the changes: a change should fetch and decode none.
 #
@@ -197,7 +198,10 @@ for id in $stores; do
 		{ cat "$work/view-$id.err" >&2; die "the viewer failed ($id)"; }
 	t1=$(now)
 	tail -n "$CHANGES" "$work/frames-$id.tsv" | cut -f2 >"$work/vchange-$id.txt"
-	awk -F'\t' 'NR > 1 && $3 == 1 { print $2 }' "$work/frames-$id.tsv" >"$work/vredraw-$id.txt"
+	# The reference: the last REDRAWS frames marked moving (the first one,
+	# the first draw, compiles the display shader).
+	awk -F'\t' 'NR > 1 && $3 == 1 { print $2 }' "$work/frames-$id.tsv" |
+		tail -n "$REDRAWS" >"$work/vredraw-$id.txt"
 	# The frames at rest before the changes (nothing drawn): the floor.
 	idle=$(head -n -"$CHANGES" "$work/frames-$id.tsv" | tail -n 20 | cut -f2 | sort -g |
 		awk '{ t[++n] = $1 } END { print n ? t[int(n * 0.5) + 1] : 0 }')

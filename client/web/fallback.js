@@ -18,13 +18,16 @@ const REST_MS = 120;
 
 export class RegionBackend {
     /** ctx: a 2D context; image as for GlBackend (info, url, levels, root);
-     * onChange(): schedule a frame. */
-    constructor(ctx, image, onChange) {
+     * onChange(): schedule a frame; onUnauthorized(): a region answered
+     * 401 (an expired login), the view waits for resume(). */
+    constructor(ctx, image, onChange, onUnauthorized) {
         this.ctx = ctx;
         this.image = image;
         this.kind = 'region';
         this.renderer = 'canvas 2d + server region endpoint';
         this.onChange = onChange;
+        this.onUnauthorized = onUnauthorized || (() => {});
+        this.held = false;        // after a 401, until resume()
         this.shown = null;        // {bitmap, level, x, y}
         this.want = '';
         this.timer = 0;
@@ -70,6 +73,10 @@ export class RegionBackend {
         const url = `${this.image.url}/region?level=${r.level}&x=${r.x}&y=${r.y}&w=${r.w}&h=${r.h}&format=${fmt}${this.winq}`;
         try {
             const resp = await fetch(url, { signal: ctl.signal });
+            if (resp.status === 401 && !this.held) {
+                this.held = true;
+                this.onUnauthorized();
+            }
             if (!resp.ok)
                 throw new Error(`region: HTTP ${resp.status}`);
             const blob = await resp.blob();
@@ -135,6 +142,13 @@ export class RegionBackend {
             w / 2 - (cs * v.cx - sn * v.cy) / 2 ** v.zoom,
             h / 2 - (sn * v.cx + cs * v.cy) / 2 ** v.zoom);
         ctx.drawImage(b, x, y);
+    }
+
+    /** Load the view again after a login (the 401 that held it). */
+    resume() {
+        this.held = false;
+        this.want = '';
+        this.onChange();
     }
 
     setFilterResult(res) {

@@ -200,7 +200,7 @@ export class Viewer {
             const ctx = this.ctx2d || (this.ctx2d = this.canvas.getContext('2d', { alpha: false }));
             if (!ctx)
                 throw new Error('this browser can draw neither WebGL2 nor a 2D canvas here');
-            backend = new RegionBackend(ctx, image, onChange);
+            backend = new RegionBackend(ctx, image, onChange, onUnauthorized);
         }
         if (seq !== this.openSeq) {
             backend.dispose();

@@ -22,7 +22,9 @@
 //   7. the login expires while a large restricted image is open (the
 //      cookie now holds an expired token): the next tiles answer 401, the
 //      viewer asks to log in again, and after the login the new view
-//      completes where it was, its tiles answering 200.
+//      completes where it was, its tiles answering 200;
+//   8. the same with the viewer drawing the server's regions
+//      (?renderer=region, as without WebGL2).
 //
 //   node auth.mjs --base URL --public ID --restricted ID --large ID --group G
 //                 --other-group G2 --header NAME --expired-token TOKEN
@@ -181,6 +183,29 @@ async function main() {
     check(viewAfter === viewAsked, 'the view stays where it was', `${viewAsked} -> ${viewAfter}`);
     const err7 = await b.page.$eval('#error', (e) => e.hidden ? '' : e.textContent);
     check(err7 === '', 'no error shown after the new login', err7);
+
+    // 8. the same where the viewer draws the server's regions (no WebGL2)
+    await b.page.goto(`${base}?renderer=region#image=${encodeURIComponent(opt.large)}`);
+    await b.page.evaluate(() => window.gigaview.ready);
+    check(await opened(b.page, opt.large), 'regions: the large image opens, logged in');
+    await b.page.evaluate(() => window.gigaview.viewer.settled());
+    await b.ctx.addCookies([{ name: 'gigaview_access', value: opt['expired-token'], url: base,
+        httpOnly: true }]);
+    await b.page.evaluate(() => {
+        const v = window.gigaview.viewer;
+        v.setView({ ...v.view, zoom: Math.max(0, v.view.zoom - 2), cx: v.view.cx * 1.3, cy: v.view.cy * 0.7 });
+    });
+    check(await dialogShown(b.page), 'regions: an expired login asks again');
+    const popup4 = b.page.waitForEvent('popup', { timeout: 15000 }).catch(() => null);
+    await b.page.click('#auth-confirm');
+    await popup4;
+    const complete8 = await b.page.evaluate(() => Promise.race([
+        window.gigaview.viewer.settled().then(() => true),
+        new Promise((r) => setTimeout(() => r(false), 30000))]));
+    const last = b.log.filter((r) => r.url.includes(`/v1/images/${opt.large}/region`)).pop();
+    check(complete8 && last && last.status === 200,
+        'regions: after the new login the view completes from a region answered 200',
+        JSON.stringify(last));
     await b.ctx.close();
 
     // 5. a reader of another group
