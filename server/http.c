@@ -15,6 +15,7 @@
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <stdarg.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -28,6 +29,7 @@
 #include "listen_fds.h"
 #include "log.h"
 #include "metrics.h"
+#include "rate_limit.h"
 #include "router.h"
 #include "routes.h"
 
@@ -40,6 +42,8 @@
  * max_header_bytes (431). */
 #define HTTP_EURI (GV_CODE_MAX + 2)
 #define HTTP_EHEAD (GV_CODE_MAX + 3)
+/* A client past its rate_limit (429). */
+#define HTTP_ERATE (GV_CODE_MAX + 4)
 
 /* Every error status and JSON code gigaviewd answers with. */
 static const struct {
@@ -66,6 +70,7 @@ static const struct {
     {HTTP_EMETHOD, 405, 405, "method_not_allowed"},
     {HTTP_EURI, 414, 414, "uri_too_long"},
     {HTTP_EHEAD, 431, 431, "headers_too_large"},
+    {HTTP_ERATE, 429, 429, "too_many_requests"},
 };
 
 /* The row of `code`; an unknown code is "internal" (500). */
@@ -602,6 +607,34 @@ static void remote_address(struct MHD_Connection *conn, char *buf, size_t size)
                   (socklen_t)size);
 }
 
+/* -1 after queueing a 429 when r's client is past rate_limit (docs/
+ * OPERATIONS.md "Rate limits"); 0 otherwise.  The client is the
+ * rate_limit_header's value when the request has one, else its address;
+ * /healthz and /metrics, the operator's, are not counted. */
+static int over_rate(struct req *r, enum MHD_Result *ret)
+{
+    struct rate_limit *rl = r->srv->rate;
+    if (!rl || !strcmp(r->path, "/healthz") || !strcmp(r->path, "/metrics"))
+        return 0;
+    const char *h = r->srv->cfg->rate_limit_header;
+    const char *key = h[0] ? MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, h) : NULL;
+    if (!key || !key[0])
+        key = r->remote;
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    double wait = 0;
+    if (rate_limit_take(rl, key, strlen(key), (double)now.tv_sec + now.tv_nsec * 1e-9,
+                        &wait))
+        return 0;
+    char secs[24], msg[160];
+    snprintf(secs, sizeof secs, "%.0f", wait < 1 ? 1.0 : ceil(wait));
+    snprintf(msg, sizeof msg, "too many requests from this client: at most %g a "
+             "second after a burst of %g (rate_limit); retry after %s s",
+             r->srv->cfg->rate_limit, r->srv->cfg->rate_limit_burst, secs);
+    *ret = send_error(r, HTTP_ERATE, msg, "Retry-After", secs);
+    return -1;
+}
+
 /* An announced body over its cap is read and dropped before the 413 when
  * it is at most this much (or the cap, if larger) over the cap. */
 #define DRAIN_MIN (1u << 20)
@@ -849,7 +882,7 @@ static enum MHD_Result handle_request(void *cls, struct MHD_Connection *conn,
         remote_address(conn, r->remote, sizeof r->remote);
         atomic_fetch_add(&metrics.in_flight, 1);
         enum MHD_Result ret;
-        if (check_head(r, &ret) < 0)
+        if (check_head(r, &ret) < 0 || over_rate(r, &ret) < 0)
             return ret;
         /* An announced oversized body: refused before it is sent when the
          * client waits for "100 Continue" or when it is far over the cap;

@@ -82,6 +82,8 @@ struct server {
      * only in tests that build a server by hand (everything public).
      * Thread-safe. */
     struct access *access;
+    /* Requests per client (rate_limit.h); NULL: no limit.  Thread-safe. */
+    struct rate_limit *rate;
 };
 
 #define HTTP_MAX_PARAMS 8

@@ -47,6 +47,7 @@
 #include "http.h"
 #include "log.h"
 #include "page_cache.h"
+#include "rate_limit.h"
 #include "output_cache.h"
 #include "render_pool.h"
 #include "render/tile_cache.h"
@@ -386,6 +387,12 @@ int main(int argc, char **argv)
         log_msg(LOG_ERROR, "access", "%s", aerr.text);
         return 1;
     }
+    if (cfg.rate_limit > 0 &&
+        !(srv.rate = rate_limit_new(cfg.rate_limit, cfg.rate_limit_burst,
+                                    (size_t)cfg.connection_limit * 16, 0))) {
+        log_msg(LOG_ERROR, "main", "out of memory");
+        return 1;
+    }
     catalog_on_close(srv.catalog, forget_pages, srv.pages);
     catalog_scan(srv.catalog);
     open_gpu(&srv);
@@ -414,6 +421,7 @@ int main(int argc, char **argv)
     close_gpu(&srv);
     catalog_free(srv.catalog);
     access_free(srv.access);
+    rate_limit_free(srv.rate);
     stop_rendering(&srv);
     page_cache_free(srv.pages);
     log_msg(LOG_INFO, "main", "stopped");

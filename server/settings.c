@@ -96,6 +96,14 @@ static const struct settings_key keys[] = {
      "largest IIIF ^ upscaling factor"},
     {"connection_limit", T_UINT, F(connection_limit), "1024", 1, 1000000,
      "simultaneous connections; further ones wait in the accept queue"},
+    {"rate_limit", T_DOUBLE, F(rate_limit), "0", 0, 1e6,
+     "requests a second each client may make, past its burst (429 with "
+     "Retry-After beyond; /healthz and /metrics are not counted); 0: no limit"},
+    {"rate_limit_burst", T_DOUBLE, F(rate_limit_burst), "200", 1, 1e6,
+     "requests a client may make at once before rate_limit paces it"},
+    {"rate_limit_header", T_STR, F(rate_limit_header), "", 0, 0,
+     "request header a trusted reverse proxy sets to the client's address, "
+     "which then names the client (\"\": the connection's address)"},
     {"connection_timeout", T_UINT, F(connection_timeout), "30", 1, 86400,
      "seconds a connection may stay idle (slow clients are closed)"},
     {"request_timeout", T_UINT, F(request_timeout), "60", 0, 86400,

@@ -43,6 +43,9 @@ struct settings {
     uint64_t max_output_side;      /* IIIF maxWidth = maxHeight */
     double max_upscale;            /* largest IIIF '^' factor */
     uint64_t connection_limit;
+    double rate_limit;             /* requests a second per client, 0 off */
+    double rate_limit_burst;       /* a client's bucket */
+    char rate_limit_header[SETTINGS_STR]; /* the client's key from a proxy */
     uint64_t connection_timeout;   /* seconds idle before a close */
     uint64_t request_timeout;      /* seconds for a whole request to arrive */
     uint64_t max_url_bytes;        /* request target (414 beyond) */
