@@ -16,19 +16,21 @@
 # Viewer: one `gigaview view` per store at $SIZE (default 1280x720),
 # --no-vsync --no-overlay --stats, on a 1:1 view of level 0 at the
 # image's centre.  Its script: `settle` (the view's tiles resident), a
-# wait of SETTLE_WAIT ms (default 3000) for the prefetching that follows
-# at rest; REDRAWS frames (default 20) that move the view one pixel and
-# back (the reference: a redraw with no window change); the wait again;
-# one window (W0) and a `shot` of it; `counters before`; then CHANGES
-# (default 40) times `window Wi` followed by `frames 1`; `counters
-# after`, and the end.  A `window` line runs at the start of a frame
+# wait of SETTLE_WAIT ms (default 10000) for the prefetching that follows
+# at rest; one window (W0) and a `shot` of it; `counters before`;
+# REDRAWS frames (default 20) drawn again with no change (the
+# reference: a Shift-press and its release at the same pixel, which show
+# and hide an empty selection, each followed by `frames 1`; no motion,
+# so nothing is prefetched); `counters redrawn`; then CHANGES (default
+# 40) times `window Wi` followed by `frames 1`; `counters after`, and
+# the end.  A `window` line runs at the start of a frame
 # (the viewer builds the new tables and uploads them) and that frame
 # draws it; with --stats the viewer ends every drawn frame with glFinish
 # and writes the frame's time, so the time of that frame is the time
 # from the change to the completed frame (--stats has all it needs; no
 # outside timing).  The changes are the last CHANGES frames of the
 # --stats file (the script's end quits before the next one is
-# recorded), the reference frames the last REDRAWS marked moving.  The
+# recorded), the reference frames the REDRAWS before them.  The
 # `counters` lines say how many tiles were fetched and decoded before
 # and after the changes: a change should fetch and decode none.
 #
@@ -55,7 +57,7 @@
 #
 # Environment: GIGAVIEW, GIGAVIEWD (default: next to bench/, or on PATH),
 # IMAGE (WxH, default 4096x4096), SIZE (default 1280x720), CHANGES
-# (default 40), REDRAWS (default 20), SETTLE_WAIT (ms, default 3000),
+# (default 40), REDRAWS (default 20, even), SETTLE_WAIT (ms, default 10000),
 # GRAY (default 1), TMPDIR.
 set -euo pipefail
 
@@ -82,7 +84,7 @@ IMAGE=${IMAGE:-4096x4096}
 SIZE=${SIZE:-1280x720}
 CHANGES=${CHANGES:-40}
 REDRAWS=${REDRAWS:-20}
-SETTLE_WAIT=${SETTLE_WAIT:-3000}
+SETTLE_WAIT=${SETTLE_WAIT:-10000}
 GRAY=${GRAY:-1}
 W=${SIZE%x*} H=${SIZE#*x}
 IW=${IMAGE%x*} IH=${IMAGE#*x}
@@ -171,19 +173,19 @@ for id in $stores; do
 		echo "view $cx,$cy,0"
 		echo "settle"
 		echo "wait $SETTLE_WAIT"
-		echo "counters settled"
-		for _ in $(seq $((REDRAWS / 2))); do
-			echo "view $((cx + 1)),$cy,0"
-			echo "frames 1"
-			echo "view $cx,$cy,0"
-			echo "frames 1"
-		done
-		echo "counters redrawn"
-		echo "settle"
-		echo "wait $SETTLE_WAIT"
 		echo "window $w0"
 		echo "shot $work/shot-$id.png"
 		echo "counters before"
+		# The reference: a redraw with no change (a Shift-press starts a
+		# selection, its release at the same pixel hides it: each draws
+		# the frame again, and nothing moves, so nothing is prefetched).
+		for _ in $(seq $((REDRAWS / 2))); do
+			echo "down $((W / 2)) $((H / 2)) shift"
+			echo "frames 1"
+			echo "up $((W / 2)) $((H / 2))"
+			echo "frames 1"
+		done
+		echo "counters redrawn"
 		tail -n +2 "$work/win-$id.txt" | while read -r wi; do
 			echo "window $wi"
 			echo "frames 1"
@@ -197,14 +199,18 @@ for id in $stores; do
 		>"$work/view-$id.out" 2>"$work/view-$id.err" ||
 		{ cat "$work/view-$id.err" >&2; die "the viewer failed ($id)"; }
 	t1=$(now)
-	tail -n "$CHANGES" "$work/frames-$id.tsv" | cut -f2 >"$work/vchange-$id.txt"
-	# The reference: the last REDRAWS frames marked moving (the first one,
-	# the first draw, compiles the display shader).
-	awk -F'\t' 'NR > 1 && $3 == 1 { print $2 }' "$work/frames-$id.tsv" |
-		tail -n "$REDRAWS" >"$work/vredraw-$id.txt"
-	# The frames at rest before the changes (nothing drawn): the floor.
-	idle=$(head -n -"$CHANGES" "$work/frames-$id.tsv" | tail -n 20 | cut -f2 | sort -g |
-		awk '{ t[++n] = $1 } END { print n ? t[int(n * 0.5) + 1] : 0 }')
+	# The last rows of --stats: REDRAWS reference frames, then CHANGES.
+	nr=$(((REDRAWS / 2) * 2))
+	tail -n "$CHANGES" "$work/frames-$id.tsv" >"$work/vchange-$id.tsv"
+	tail -n $((CHANGES + nr)) "$work/frames-$id.tsv" | head -n "$nr" >"$work/vredraw-$id.tsv"
+	cut -f2 "$work/vchange-$id.tsv" >"$work/vchange-$id.txt"
+	cut -f2 "$work/vredraw-$id.tsv" >"$work/vredraw-$id.txt"
+	# Frames of either kind drawn with decode jobs in flight, or moving.
+	busy=$(cat "$work/vredraw-$id.tsv" "$work/vchange-$id.tsv" |
+		awk -F'\t' '$9 > 0 || $3 != 0 { n++ } END { print n + 0 }')
+	# The frames at rest before them (the wait: nothing drawn): the floor.
+	idle=$(head -n -$((CHANGES + nr + 1)) "$work/frames-$id.tsv" | tail -n 20 | cut -f2 |
+		sort -g | awk '{ t[++n] = $1 } END { print n ? t[int(n * 0.5) + 1] : 0 }')
 
 	# ---- the anchor: the same rectangle from the server, one window each
 	q="$url/v1/images/$id/region?level=0&x=$rx&y=$ry&w=$W&h=$H&format=png"
@@ -227,13 +233,16 @@ for id in $stores; do
 	# ---- report
 	echo
 	echo "== $id ($ch channel(s)): view $cx,$cy at 1:1, $SIZE; region level 0 $rx,$ry ${W}x$H"
-	grep '^\(settled\|redrawn\|before\|after\) ' "$work/view-$id.out" | sed 's/ window=.*//; s/^/  counters: /'
-	b=$(sed -n 's/^before fetched=\([0-9]*\) decodes=\([0-9]*\).*/\1 \2/p' "$work/view-$id.out")
-	a=$(sed -n 's/^after fetched=\([0-9]*\) decodes=\([0-9]*\).*/\1 \2/p' "$work/view-$id.out")
-	read -r bf bd <<<"$b"
-	read -r af ad <<<"$a"
-	df=$((af - bf)) dd=$((ad - bd))
-	echo "  during the $CHANGES changes: $df tiles fetched, $dd decoded"
+	grep '^\(before\|redrawn\|after\) ' "$work/view-$id.out" | sed 's/ window=.*//; s/^/  counters: /'
+	# counts NAME: "fetched decodes" of the viewer's `counters NAME` line.
+	counts() { sed -n "s/^$1 fetched=\([0-9]*\) decodes=\([0-9]*\).*/\1 \2/p" "$work/view-$id.out"; }
+	read -r bf bd <<<"$(counts before)"
+	read -r rf rd <<<"$(counts redrawn)"
+	read -r af ad <<<"$(counts after)"
+	df=$((af - rf)) dd=$((ad - rd))
+	echo "  during the $CHANGES changes: $df tiles fetched, $dd decoded" \
+		"(during the $nr redraws before them: $((rf - bf)), $((rd - bd)));" \
+		"$busy of those frames moving or with decode jobs in flight"
 	if idiff -a "$work/shot-$id.png" "$work/region-$id.png" >"$work/idiff-$id.txt" 2>&1; then
 		same="equal"
 	else
@@ -242,7 +251,7 @@ for id in $stores; do
 	echo "  the viewer's frame of W0 and the server's region with W0: $same"
 	printf '  %-52s %s ms\n' "viewer: change -> completed frame, p50 / p99 / max" \
 		"$(pct "$work/vchange-$id.txt")"
-	printf '  %-52s %s ms\n' "viewer: redraw, no change (moved 1 px), p50/p99/max" \
+	printf '  %-52s %s ms\n' "viewer: redraw, no change, p50 / p99 / max" \
 		"$(pct "$work/vredraw-$id.txt")"
 	printf '  %-52s %s ms\n' "viewer: frame at rest, nothing drawn, p50" "$idle"
 	printf '  %-52s %s ms\n' "anchor: region request with the window, p50/p99/max" \
