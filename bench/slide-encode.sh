@@ -18,8 +18,8 @@
 # PSNR over RGB against the reference (bench/imgcompare.c).  It prints wall
 # time (best of REPS, default 2), bytes (the store; the .zip of every
 # dzsave level) and gigaview / vips as ratios.  Asserts nothing.  The
-# first-view time of a viewer is not measured here (bench/browser-bytes.sh
-# measures the bytes a viewer moves).
+# first-view time of a viewer is measured by bench/slide-first-view.sh
+# (bench/browser-bytes.sh measures the bytes a viewer moves).
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 gv_arg=

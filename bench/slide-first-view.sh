@@ -42,7 +42,7 @@
 #   JPEG_Q=J        the dzsave JPEG quality, instead of the equal-PSNR one
 #   GPU=host        the machine's GPU instead of SwiftShader
 #   TMPDIR=DIR      scratch space (default /tmp; about 1 GB at the default size)
-# Needs vips (with OpenSlide), cc, node, chromium; about 4 minutes on 2 cores.
+# Needs vips (with OpenSlide), cc, node, chromium; 2 to 3 minutes on 2 cores.
 set -euo pipefail
 
 # shellcheck source=SCRIPTDIR/http-lib.sh disable=SC1091
@@ -55,7 +55,7 @@ while [ $# -gt 0 ]; do
 	--gigaview=*) gv_arg=${1#*=}; shift ;;
 	--gigaviewd) gvd_arg=$2; shift 2 ;;
 	--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,46p' "$0"; exit 0 ;;
+	-h|--help) sed -n '2,45p' "$0"; exit 0 ;;
 	*) die "unknown argument $1" ;;
 	esac
 done
