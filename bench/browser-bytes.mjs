@@ -40,25 +40,13 @@ import { spawn } from 'node:child_process';
 import { createInterface } from 'node:readline';
 import { mkdtempSync, readFileSync, rmSync, existsSync, statSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { dirname, join, normalize } from 'node:path';
-import { fileURLToPath, pathToFileURL } from 'node:url';
+import { join, normalize } from 'node:path';
+import { chromium, nodeModules as nm, parseOptions } from './browser_lib.mjs';
 
-const here = dirname(fileURLToPath(import.meta.url));
-const nm = join(here, '..', 'tests', 'browser', 'node_modules');
-const { chromium } = await import(pathToFileURL(join(nm, 'playwright-core', 'index.mjs')).href);
-
-const opt = { base: '', id: '', iiif: '', size: '1280x800', chromium: '/usr/bin/chromium', gigaview: '',
-    'access-log': '' };
-const argv = process.argv.slice(2);
-for (let i = 0; i < argv.length; i += 2) {
-    const k = argv[i].replace(/^--/, '');
-    if (!(k in opt) || argv[i + 1] === undefined) {
-        console.error('usage: node browser-bytes.mjs --base URL --id ID --iiif DIR [--size WxH] [--chromium PATH] ' +
+const opt = parseOptions({ base: '', id: '', iiif: '', size: '1280x800', chromium: '/usr/bin/chromium', gigaview: '',
+    'access-log': '' },
+    'node browser-bytes.mjs --base URL --id ID --iiif DIR [--size WxH] [--chromium PATH] ' +
             '[--gigaview PATH --access-log FILE]');
-        process.exit(2);
-    }
-    opt[k] = argv[i + 1];
-}
 const base = opt.base.replace(/\/+$/, '');
 const [W, H] = opt.size.split('x').map(Number);
 const info = await (await fetch(`${base}/v1/images/${opt.id}`)).json();

@@ -27,32 +27,15 @@
 // in tests/browser_viewer.sh).
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { dirname, join } from 'node:path';
-import { fileURLToPath, pathToFileURL } from 'node:url';
+import { join } from 'node:path';
+import { chromium, chromiumArgs, parseOptions } from './browser_lib.mjs';
 
-const here = dirname(fileURLToPath(import.meta.url));
-const { chromium } = await import(pathToFileURL(join(here, '..', 'tests', 'browser', 'node_modules',
-    'playwright-core', 'index.mjs')).href);
-
-const opt = { base: '', images: '', reps: '3', size: '1280x800', chromium: '/usr/bin/chromium', gpu: 'swiftshader' };
-const argv = process.argv.slice(2);
-for (let i = 0; i < argv.length; i += 2) {
-    const k = argv[i].replace(/^--/, '');
-    if (!(k in opt) || argv[i + 1] === undefined) {
-        console.error('usage: node browser-viewer.mjs --base URL --images ID,... [--reps N] [--size WxH] [--chromium PATH] [--gpu swiftshader|host]');
-        process.exit(2);
-    }
-    opt[k] = argv[i + 1];
-}
+const opt = parseOptions({ base: '', images: '', reps: '3', size: '1280x800', chromium: '/usr/bin/chromium', gpu: 'swiftshader' },
+    'node browser-viewer.mjs --base URL --images ID,... [--reps N] [--size WxH] [--chromium PATH] [--gpu swiftshader|host]');
 const base = opt.base.replace(/\/+$/, '');
 const [W, H] = opt.size.split('x').map(Number);
 const reps = Math.max(1, +opt.reps);
-const args = ['--headless=new', '--no-sandbox', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--force-color-profile=srgb'];
-if (opt.gpu === 'swiftshader')
-    args.push('--use-angle=swiftshader', '--enable-unsafe-swiftshader');
-else
-    args.push('--enable-gpu', '--ignore-gpu-blocklist', '--use-angle=default');
+const args = chromiumArgs(opt.gpu);
 
 const median = (a) => [...a].sort((x, y) => x - y)[Math.floor((a.length - 1) / 2)];
 

@@ -24,32 +24,15 @@
 // GPU.
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { dirname, join } from 'node:path';
-import { fileURLToPath, pathToFileURL } from 'node:url';
+import { join } from 'node:path';
+import { chromium, chromiumArgs, parseOptions } from './browser_lib.mjs';
 
-const here = dirname(fileURLToPath(import.meta.url));
-const { chromium } = await import(pathToFileURL(join(here, '..', 'tests', 'browser', 'node_modules',
-    'playwright-core', 'index.mjs')).href);
-
-const opt = { base: '', images: '', changes: '20', size: '1280x800', chromium: '/usr/bin/chromium', gpu: 'swiftshader' };
-const argv = process.argv.slice(2);
-for (let i = 0; i < argv.length; i += 2) {
-    const k = argv[i].replace(/^--/, '');
-    if (!(k in opt) || argv[i + 1] === undefined) {
-        console.error('usage: node browser-window.mjs --base URL --images ID,... [--changes N] [--size WxH] [--chromium PATH] [--gpu swiftshader|host]');
-        process.exit(2);
-    }
-    opt[k] = argv[i + 1];
-}
+const opt = parseOptions({ base: '', images: '', changes: '20', size: '1280x800', chromium: '/usr/bin/chromium', gpu: 'swiftshader' },
+    'node browser-window.mjs --base URL --images ID,... [--changes N] [--size WxH] [--chromium PATH] [--gpu swiftshader|host]');
 const base = opt.base.replace(/\/+$/, '');
 const [W, H] = opt.size.split('x').map(Number);
 const N = Math.max(3, +opt.changes);
-const args = ['--headless=new', '--no-sandbox', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--force-color-profile=srgb'];
-if (opt.gpu === 'swiftshader')
-    args.push('--use-angle=swiftshader', '--enable-unsafe-swiftshader');
-else
-    args.push('--enable-gpu', '--ignore-gpu-blocklist', '--use-angle=default');
+const args = chromiumArgs(opt.gpu);
 
 const pct = (a, p) => [...a].sort((x, y) => x - y)[Math.min(a.length - 1, Math.floor(p * (a.length - 1) + 0.5))];
 

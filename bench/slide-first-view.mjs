@@ -38,34 +38,17 @@ import { createServer } from 'node:http';
 import { readFile } from 'node:fs/promises';
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { dirname, join, normalize, sep } from 'node:path';
-import { fileURLToPath, pathToFileURL } from 'node:url';
+import { join, normalize, sep } from 'node:path';
+import { chromium, chromiumArgs, nodeModules as nm, parseOptions } from './browser_lib.mjs';
 
-const here = dirname(fileURLToPath(import.meta.url));
-const nm = join(here, '..', 'tests', 'browser', 'node_modules');
-const { chromium } = await import(pathToFileURL(join(nm, 'playwright-core', 'index.mjs')).href);
-
-const opt = { base: '', id: '', iiif: '', reps: '3', size: '1280x800', chromium: '/usr/bin/chromium', gpu: 'swiftshader' };
-const argv = process.argv.slice(2);
-for (let i = 0; i < argv.length; i += 2) {
-    const k = argv[i].replace(/^--/, '');
-    if (!(k in opt) || argv[i + 1] === undefined) {
-        console.error('usage: node slide-first-view.mjs --base URL --id ID --iiif DIR [--reps N] [--size WxH] ' +
+const opt = parseOptions({ base: '', id: '', iiif: '', reps: '3', size: '1280x800', chromium: '/usr/bin/chromium', gpu: 'swiftshader' },
+    'node slide-first-view.mjs --base URL --id ID --iiif DIR [--reps N] [--size WxH] ' +
             '[--chromium PATH] [--gpu swiftshader|host]');
-        process.exit(2);
-    }
-    opt[k] = argv[i + 1];
-}
 const base = opt.base.replace(/\/+$/, '');
 const [W, H] = opt.size.split('x').map(Number);
 const reps = Math.max(1, +opt.reps);
 const iiifDir = normalize(opt.iiif) + sep;
-const args = ['--headless=new', '--no-sandbox', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--force-color-profile=srgb'];
-if (opt.gpu === 'swiftshader')
-    args.push('--use-angle=swiftshader', '--enable-unsafe-swiftshader');
-else
-    args.push('--enable-gpu', '--ignore-gpu-blocklist', '--use-angle=default');
+const args = chromiumArgs(opt.gpu);
 
 const info = await (await fetch(`${base}/v1/images/${opt.id}`)).json();
 const IW = info.width, IH = info.height;
