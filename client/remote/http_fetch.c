@@ -388,7 +388,12 @@ static int xfer_check(const struct gv_http *h, const struct xfer *x,
     if (m)
         snprintf(msg, sizeof msg, ": %s", m);
     json_decref(j);
-    return gv_fail(err, x->status == 404 ? GV_ENOTFOUND : GV_EIO,
+    if (x->status == 401)   /* a restricted image (docs/API.md) */
+        return gv_fail(err, GV_EAUTH, "%s: the server answered HTTP 401%s (a "
+                       "restricted image: GIGAVIEW_TOKEN must hold an access token "
+                       "of its group, not expired nor revoked)", what, msg);
+    return gv_fail(err, x->status == 404 ? GV_ENOTFOUND
+                        : x->status == 429 || x->status == 503 ? GV_EBUSY : GV_EIO,
                    "%s: the server answered HTTP %ld%s", what, x->status, msg);
 }
 
