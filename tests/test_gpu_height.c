@@ -9,7 +9,10 @@
  * channels taking whole tiles (every channel's buffer into its layer,
  * against the same layer of the parent), and compared with the CPU
  * decoder's tile, every channel.  A decoder of another channel count is
- * refused.
+ * refused.  The whole pyramid of tiles decoded in one batch
+ * (gv_gpu_height_decode_batch, parents named by job) equals the CPU
+ * decoder too; a batch with a damaged buffer or a parent named after its
+ * job is refused.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,6 +23,7 @@
 #include "codec/samples_tile.h"
 #include "encode/height_encode.h"
 #include "gpu/gpu.h"
+#include "gpu/gpu_decode.h"
 #include "gpu/gpu_height.h"
 #include "render/store_decoder.h"
 #include "store/store_read.h"
@@ -151,6 +155,95 @@ static void check_tiles(struct gv_gpu *gpu, const char *path, const char *name,
     gv_gpu_height_free(gh);
 }
 
+/* Every tiled level of store `path` in one batch, each tile's parent
+ * the job before it (the root uploaded), against the CPU decoder; then
+ * the refusals. */
+static void check_batch(struct gv_gpu *gpu, const char *path, const char *name,
+                        enum gv_gpu_path gp)
+{
+    const char *pn = gp == GV_GPU_PATH_COMPUTE ? "ssbo" : "webgl2";
+    struct gv_error err = {0};
+    struct gv_store *s = gv_store_open(path, &err);
+    if (!s)
+        fail("open %s: %s", path, err.text);
+    const struct gv_geometry *g = &gv_store_info(s)->geometry;
+    const int nc = g->channels;
+    struct gv_gpu_height *gh = gv_gpu_height_new(
+        gpu, &(struct gv_gpu_height_opts){.path = gp, .channels = nc}, &err);
+    if (!gh) {
+        gv_store_close(s);
+        tap_skip("no decoder", "%s %s batch: %s", name, pn, err.text);
+        return;
+    }
+    struct gv_decoder *cpu = gv_decoder_new(s, 256u << 20);
+    const uint8_t *px;
+    uint32_t root;
+    if (gv_decoder_tile(cpu, g->root, 0, 0, &px, &err) < 0 ||
+        gv_gpu_height_upload(gh, (const uint16_t *)(const void *)px, &root, &err) < 0)
+        fail("%s: root: %s", name, err.text);
+    /* Jobs level by level from the top; first[k]: level k's first job. */
+    size_t n = 0, first[GV_MAX_LEVELS];
+    for (int k = g->root - 1; k >= 0; k--)
+        n += (size_t)g->level[k].tiles_x * g->level[k].tiles_y;
+    struct gv_gpu_tile_job *jobs = calloc(n, sizeof *jobs);
+    uint8_t **pages = calloc(n, sizeof *pages);
+    size_t at = 0;
+    for (int k = g->root - 1; k >= 0; k--) {
+        const struct gv_level *l = &g->level[k];
+        first[k] = at;
+        for (uint32_t ty = 0; ty < l->tiles_y; ty++)
+            for (uint32_t tx = 0; tx < l->tiles_x; tx++, at++) {
+                size_t plen;
+                if (gv_store_read_page(s, k, tx / 8, ty / 8, &pages[at], &plen, &err) < 0 ||
+                    gv_page_tile(pages[at], plen, 1, (int)(tx % 8), (int)(ty % 8),
+                                 &jobs[at].buf, &jobs[at].len, &err) < 0)
+                    fail("%s: page: %s", name, err.text);
+                const int top = k == g->root - 1;
+                jobs[at].parent = top ? root : 0;
+                jobs[at].parent_job = top ? -1 : (long)(first[k + 1] +
+                    (size_t)(ty / 2) * g->level[k + 1].tiles_x + tx / 2);
+                jobs[at].qx = (int)(tx & 1);
+                jobs[at].qy = (int)(ty & 1);
+            }
+    }
+    const size_t tile_bytes = sizeof(uint16_t) * GV_HT_SAMPLES * (size_t)nc;
+    uint16_t *got = malloc(tile_bytes);
+    long same = 0;
+    if (gv_gpu_height_decode_batch(gh, jobs, n, &err) < 0)
+        fail("%s %s: batch: %s", name, pn, err.text);
+    at = 0;
+    for (int k = g->root - 1; k >= 0; k--)
+        for (uint32_t ty = 0; ty < g->level[k].tiles_y; ty++)
+            for (uint32_t tx = 0; tx < g->level[k].tiles_x; tx++, at++) {
+                if (gv_gpu_height_read(gh, jobs[at].handle, got, &err) < 0 ||
+                    gv_decoder_tile(cpu, k, tx, ty, &px, &err) < 0)
+                    fail("%s: read: %s", name, err.text);
+                same += memcmp(got, px, tile_bytes) == 0;
+                gv_gpu_height_release(gh, jobs[at].handle);
+            }
+    check(n > 1 && same == (long)n, "%s %s: the pyramid in one batch of %zu tiles, "
+          "%ld bit-exact", name, pn, n, same);
+    /* Refusals: a parent named after its job; a damaged last buffer. */
+    jobs[0].parent_job = 1;
+    check(gv_gpu_height_decode_batch(gh, jobs, n, &err) < 0 && err.code == GV_EINVAL,
+          "%s %s: a batch naming a later job as a parent is refused: %s", name, pn,
+          err.text);
+    jobs[0].parent_job = -1;
+    gv_error_clear(&err);
+    jobs[n - 1].len = 3;
+    check(gv_gpu_height_decode_batch(gh, jobs, n, &err) < 0 && err.code == GV_ECORRUPT,
+          "%s %s: a batch with a damaged buffer is refused: %s", name, pn, err.text);
+    for (size_t i = 0; i < n; i++)
+        free(pages[i]);
+    free(pages);
+    free(jobs);
+    free(got);
+    gv_gpu_height_release(gh, root);
+    gv_decoder_free(cpu);
+    gv_store_close(s);
+    gv_gpu_height_free(gh);
+}
+
 /* Encode `input` as a height store (samples 0) or a sample store of its
  * channels (1) within e, and check every channel on both paths. */
 static void check_store(struct gv_gpu *gpu, const char *input, double e,
@@ -165,6 +258,9 @@ static void check_store(struct gv_gpu *gpu, const char *input, double e,
         fail("encode %s: %s", input, err.text);
     check_tiles(gpu, out, name, GV_GPU_PATH_COMPUTE);
     check_tiles(gpu, out, name, GV_GPU_PATH_WEBGL2);
+    if (gv_gpu_info(gpu)->ssbo)
+        check_batch(gpu, out, name, GV_GPU_PATH_COMPUTE);
+    check_batch(gpu, out, name, GV_GPU_PATH_WEBGL2);
     unlink(out);
 }
 

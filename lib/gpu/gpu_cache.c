@@ -9,7 +9,7 @@
  * survives until the child is made, whatever the budget.  A range of tiles
  * can be prepared in one batch: the missing tiles and their missing
  * ancestors, found level by level upwards, go to the GPU in one call,
- * top level first (where the decoder batches: image tiles).
+ * top level first (image and codes decoders both batch).
  */
 #include <stdlib.h>
 #include <string.h>
@@ -85,6 +85,12 @@ static int codes_decode(void *dec, const uint8_t *buf, size_t len, uint32_t pare
     return gv_gpu_height_decode(dec, buf, len, parent, qx, qy, handle, err);
 }
 
+static int codes_batch(void *dec, struct gv_gpu_tile_job *jobs, size_t n,
+                       struct gv_error *err)
+{
+    return gv_gpu_height_decode_batch(dec, jobs, n, err);
+}
+
 static int codes_read(void *dec, uint32_t handle, void *pixels, struct gv_error *err)
 {
     return gv_gpu_height_read(dec, handle, pixels, err);
@@ -99,7 +105,7 @@ struct gv_gpu_tiles gv_gpu_tiles_codes(struct gv_gpu_height *h, int channels)
 {
     const size_t px = sizeof(uint16_t) * (size_t)channels;
     return (struct gv_gpu_tiles){h, (size_t)GV_TILE * GV_TILE * px, px,
-                                 codes_upload, codes_decode, NULL, codes_read,
+                                 codes_upload, codes_decode, codes_batch, codes_read,
                                  codes_release};
 }
 

@@ -3,12 +3,13 @@
  *
  * A tile is a 513x513xC R16UI array texture (shaders/height_decode.frag.glsl
  * with GV_LAYERED, as the browser compiles it), each layer decoded from the
- * same layer of its parent, a channel at a time.  One tile per call.  On the compute path the storage buffers are reused
- * from tile to tile, so each decode waits for a fence after its draw:
- * shader storage is not ordered after earlier draws' reads (the image
- * decoder, gpu_decode.c, found llvmpipe deferring draws past a later
- * compute pass).  Height tiles are few next to image tiles in a view;
- * batching can come when a client needs it.
+ * same layer of its parent, a channel at a time.  One tile per call, or
+ * a batch of them in one call to the GL thread (the image decoder's job
+ * shape).  On the compute path the storage buffers are reused from layer
+ * to layer and tile to tile, so each layer waits for a fence after its
+ * draw: shader storage is not ordered after earlier draws' reads (the
+ * image decoder, gpu_decode.c, found llvmpipe deferring draws past a
+ * later compute pass).
  */
 #include <stdlib.h>
 
@@ -231,9 +232,9 @@ static int decode_layer(struct job *j, GLuint tex, int k, struct gv_error *err)
     return 0;
 }
 
-static int decode(void *arg, struct gv_error *err)
+/* Decode job j into a new texture, j->handle.  GL thread. */
+static int decode_one(struct job *j, struct gv_error *err)
 {
-    struct job *j = arg;
     /* The target first: new_texture binds it on the active unit. */
     glActiveTexture(GL_TEXTURE0);
     GLuint tex = new_texture(j->h);
@@ -243,7 +244,70 @@ static int decode(void *arg, struct gv_error *err)
             return -1;
         }
     j->handle = tex;
+    return 0;
+}
+
+static int decode(void *arg, struct gv_error *err)
+{
+    struct job *j = arg;
+    if (decode_one(j, err) < 0)
+        return -1;
     return gv_gpu_gl_check(err, "height tile decode");
+}
+
+struct batch {
+    struct job *jobs;             /* split and checked, parents unresolved */
+    struct gv_gpu_tile_job *out;
+    size_t n;
+};
+
+static int decode_many(void *arg, struct gv_error *err)
+{
+    struct batch *b = arg;
+    size_t done = 0;
+    int rc = 0;
+    for (; done < b->n && rc == 0; done++) {
+        struct job *j = &b->jobs[done];
+        if (b->out[done].parent_job >= 0)
+            j->parent = b->jobs[b->out[done].parent_job].handle;
+        rc = decode_one(j, err);
+    }
+    if (rc == 0)
+        rc = gv_gpu_gl_check(err, "height tile batch");
+    if (rc < 0)   /* no texture made: those done go */
+        for (size_t i = 0; i < done; i++)
+            if (b->jobs[i].handle)
+                glDeleteTextures(1, &b->jobs[i].handle);
+    return rc;
+}
+
+int gv_gpu_height_decode_batch(struct gv_gpu_height *h, struct gv_gpu_tile_job *jobs,
+                               size_t n, struct gv_error *err)
+{
+    struct job *j = n ? calloc(n, sizeof *j) : NULL;
+    if (n && !j)
+        return gv_fail(err, GV_ENOMEM, "gpu: out of memory");
+    int rc = 0;
+    for (size_t i = 0; i < n && rc == 0; i++) {
+        if (jobs[i].parent_job >= (long)i)
+            rc = gv_fail(err, GV_EINVAL, "gpu: batch job %zu names job %ld as its "
+                         "parent (not an earlier one)", i, jobs[i].parent_job);
+        else if (gv_samples_tile_check(jobs[i].buf, jobs[i].len, h->channels, err) < 0 ||
+                 gv_samples_tile_split(jobs[i].buf, jobs[i].len, h->channels, j[i].part,
+                                       j[i].part_len, err) < 0)
+            rc = -1;
+        j[i].h = h;
+        j[i].parent = jobs[i].parent;
+        j[i].qx = jobs[i].qx;
+        j[i].qy = jobs[i].qy;
+    }
+    struct batch b = {j, jobs, n};
+    if (rc == 0 && n)
+        rc = gv_gpu_call(h->gpu, decode_many, &b, err);
+    for (size_t i = 0; i < n && rc == 0; i++)
+        jobs[i].handle = j[i].handle;
+    free(j);
+    return rc;
 }
 
 int gv_gpu_height_decode(struct gv_gpu_height *h, const uint8_t *buf,

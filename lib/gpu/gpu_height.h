@@ -30,6 +30,7 @@
 #include "base/error.h"
 #include "codec/samples_tile.h"
 #include "gpu/gpu.h"
+#include "gpu/gpu_decode.h"
 
 struct gv_gpu_height;
 
@@ -65,6 +66,16 @@ int gv_gpu_height_upload(struct gv_gpu_height *h, const uint16_t *codes,
 int gv_gpu_height_decode(struct gv_gpu_height *h, const uint8_t *buf,
                          size_t len, uint32_t parent, int qx, int qy,
                          uint32_t *handle, struct gv_error *err);
+
+/* Decode n tiles in one call to the GL thread, as gv_gpu_height_decode
+ * would one by one, in order: the image decoder's job shape
+ * (gpu_decode.h, struct gv_gpu_tile_job), so that a tile may name an
+ * earlier job as its parent and a pyramid decodes level by level in one
+ * batch.  Every buffer is checked first.  0 with every jobs[i].handle
+ * set, or -1 with *err and no texture made (GV_EINVAL: a parent_job not
+ * earlier than its job). */
+int gv_gpu_height_decode_batch(struct gv_gpu_height *h, struct gv_gpu_tile_job *jobs,
+                               size_t n, struct gv_error *err);
 
 /* Read a tile back as 513x513 pixels of C interleaved codes.  0 or -1. */
 int gv_gpu_height_read(struct gv_gpu_height *h, uint32_t handle,
