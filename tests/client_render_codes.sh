@@ -245,6 +245,43 @@ else
         sh -c "[ -n '$b' ] && [ '$b' = '$a' ]"
     check "view: auto sets a window from the root's codes" \
         sh -c "grep -q '^auto .* window=[0-9]*,[0-9]*,1.000$' view.out && ! grep -q '^auto .* window=7000,60000' view.out"
+    # K picks the channel the window keys move: one window becomes one a
+    # channel, and only the picked one moves; auto sets that one alone.
+    cat >keys.txt <<'EOF2'
+view 300,300,1
+settle
+window 7000,60000,1
+key k
+key k
+key b
+key b
+counters ch2
+key shift+k
+key shift+w
+counters ch1
+key k
+key k
+key a
+counters auto3
+settle
+shot k1.png
+EOF2
+    LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}detect_leaks=0"
+    export LSAN_OPTIONS
+    run view "$BASE" --image c5 --size 640x480 --script keys.txt
+    LSAN_OPTIONS=$lsan_saved
+    expect_rc "view: the channel-keys script runs" 0
+    win_of() { sed -n "s/^$1 .* window=\([^ ]*\)\$/\1/p" "$T/out"; }
+    w2=$(win_of ch2) w1=$(win_of ch1) w3=$(win_of auto3)
+    check "view: k, k, b, b moves channel 2's black point alone ($w2)" test \
+        "$w2" = '7000,60000,1.000;9570,60000,1.000;7000,60000,1.000;7000,60000,1.000;7000,60000,1.000'
+    check "view: Shift+K back to channel 1, Shift+W moves its white point alone ($w1)" test \
+        "$w1" = '7000,61285,1.000;9570,60000,1.000;7000,60000,1.000;7000,60000,1.000;7000,60000,1.000'
+    check "view: k, k then a sets channel 3 from its histogram, the others kept ($w3)" sh -c "
+        case '$w3' in '7000,61285,1.000;9570,60000,1.000;7000,60000,1.000;'*) exit 1 ;;
+        '7000,61285,1.000;9570,60000,1.000;'*';7000,60000,1.000;7000,60000,1.000') exit 0 ;; esac; exit 1"
+    view_same "view: that window a channel, drawn, equals render with it" k1.png --image c5 \
+        --center 300,300 --zoom 1 --window "$w3"
 fi
 
 stop_daemon

@@ -166,6 +166,7 @@ struct app {
     struct vg_view start_view;
     /* the display window (render/window.h): now, and the image's start */
     struct gv_window dwin, dwin_start;
+    int win_ch;               /* the channel the window keys move, from 1; 0 every one */
     int store_window;            /* the image has a store default window */
     char link_window[GV_WINDOW_MAX_TEXT]; /* --view link's, for its image */
     uint8_t *root_px;            /* the root level's samples, for auto: bytes
@@ -186,7 +187,9 @@ struct app {
     /* script */
     struct vs_script script;
     size_t pc;                   /* next command */
-    double pc_since;             /* when the current command started */
+    double pc_since;             /* when the current command started (settle:
+                                  * or last saw a tile fetched or decoded) */
+    uint64_t settle_progress;    /* tiles fetched + decoded, as settle last saw */
     uint64_t pc_frame;
     const char *shot_path;       /* due at the next draw */
     int shot_done, shot_no;
@@ -326,6 +329,7 @@ static void window_start(struct app *app, const struct vf_result *r)
         free(app->tables);
         app->tables = NULL;
     }
+    app->win_ch = 0;   /* the window keys move every channel of a new image */
     app->channels = r->img.channels;
     app->mpp = r->img.mpp;
     app->img = r->img;
@@ -363,11 +367,21 @@ static void window_start(struct app *app, const struct vf_result *r)
     }
 }
 
+/* The channels a window has one of each: a sample store's or an image's
+ * own, one for a height store's gray. */
+static int window_channels(const struct app *app)
+{
+    return app->img.kind == GV_KIND_HEIGHT ? 1 : app->channels;
+}
+
 /* A window key (view_input.h's VI_WIN_*): black and white move by 5
- * sample values, gamma by a factor of 1.1, every channel alike. */
+ * sample values, gamma by a factor of 1.1, on every channel alike or, once
+ * k has picked one (app->win_ch), on that channel alone; auto likewise
+ * sets every channel's points from the root or that channel's. */
 static void window_key(struct app *app, enum vi_action a)
 {
     const uint32_t max = app->wmax, step = max == 255 ? 5 : 5 * 257;
+    const int nc = window_channels(app), sel = app->win_ch;
     struct gv_window w = app->dwin;
     if (w.count == 0 && app->img.kind == GV_KIND_SAMPLES) {
         const struct gv_header h = gv_remote_header(&app->img);
@@ -375,13 +389,23 @@ static void window_key(struct app *app, enum vi_action a)
     } else if (w.count == 0) {
         w = (struct gv_window){.count = 1, .ch = {{0, 255, 1000}}};
     }
+    if (sel && w.count == 1 && nc > 1) {   /* one window becomes one a channel */
+        for (int k = 1; k < nc; k++)
+            w.ch[k] = w.ch[0];
+        w.count = nc;
+    }
     if (a == VI_WIN_AUTO) {
+        struct gv_window au = w;
+        const uint32_t gamma = w.ch[sel ? sel - 1 : 0].gamma_milli;
         if (app->root_n && app->img.kind == GV_KIND_SAMPLES)
             gv_window_auto16((const uint16_t *)(void *)app->root_px, app->root_n,
-                             app->channels, 1, w.ch[0].gamma_milli, &w);
+                             app->channels, !sel, gamma, &au);
         else if (app->root_n)
-            gv_window_auto8(app->root_px, app->root_n, app->img.kind != GV_KIND_IMAGE ? 1 : app->channels,
-                            1, w.ch[0].gamma_milli, &w);
+            gv_window_auto8(app->root_px, app->root_n, nc, !sel, gamma, &au);
+        if (sel && au.count == nc)
+            w.ch[sel - 1] = au.ch[sel - 1];
+        else if (!sel)
+            w = au;
         window_set(app, &w);
         return;
     }
@@ -391,6 +415,8 @@ static void window_key(struct app *app, enum vi_action a)
         return;
     }
     for (int k = 0; k < w.count; k++) {
+        if (sel && k != sel - 1)
+            continue;
         struct gv_window_channel *c = &w.ch[k];
         switch (a) {
         case VI_WIN_BLACK_UP: c->black = c->black + step < c->white ? c->black + step : c->white - 1; break;
@@ -688,6 +714,12 @@ static void act(struct app *app, enum vi_action a)
     case VI_WIN_AUTO: case VI_WIN_RESET: case VI_WIN_NONE:
         window_key(app, a);
         break;
+    case VI_WIN_CHANNEL_NEXT: case VI_WIN_CHANNEL_PREV: {
+        const int n = window_channels(app) + 1;   /* every one, then each */
+        app->win_ch = (app->win_ch + (a == VI_WIN_CHANNEL_NEXT ? 1 : n - 1)) % n;
+        app->force_draw = 1;
+        break;
+    }
     case VI_NONE: break;
     }
 }
@@ -751,8 +783,17 @@ static int script_blocked(struct app *app, const struct vs_cmd *c, double waited
         break;
     case VS_SETTLE:
         if (!settled(app)) {
-            if (waited > c->a[0])
-                script_fail(app, c, "the view did not settle in time");
+            if (waited > c->a[0]) {
+                char why[160];
+                snprintf(why, sizeof why, "the view did not settle: nothing fetched or "
+                         "decoded for %.0f ms (%s, %s, %llu tiles missing%s)", waited,
+                         app->tiles ? "image open" : "no image",
+                         memcmp(&app->in.cur, &app->in.goal, sizeof app->in.cur)
+                             ? "moving" : "at rest",
+                         (unsigned long long)app->st.missing,
+                         vx_busy(app->filt) ? ", a filter job in flight" : "");
+                script_fail(app, c, why);
+            }
             return 1;
         }
         break;
@@ -952,6 +993,16 @@ static void script_step(struct app *app, double now)
 {
     while (app->pc < app->script.n && !app->quit) {
         const struct vs_cmd *c = &app->script.cmd[app->pc];
+        if (c->op == VS_SETTLE) {
+            /* settle's bound is on time without progress: a tile fetched
+             * or decoded starts it again, so that a loaded machine, slow
+             * but not stuck, still settles. */
+            const uint64_t p = app->st.fetched + app->st.decodes;
+            if (p != app->settle_progress) {
+                app->settle_progress = p;
+                app->pc_since = now;
+            }
+        }
         double waited = (now - app->pc_since) * 1000;
         if (script_blocked(app, c, waited))
             return;
@@ -977,10 +1028,13 @@ static void overlay_content(struct app *app, const struct vt_plan *p,
     char win[GV_WINDOW_MAX_CHANNELS * 32] = "";
     if (app->dwin.count)
         gv_window_format(&app->dwin, win, sizeof win);
-    snprintf(c->bottom[0], VO_LINE, "ZOOM %s%.3g  LEVEL %d%s  ROT %.1f%s%.40s",
+    char keys_on[16] = "";
+    if (app->win_ch)
+        snprintf(keys_on, sizeof keys_on, "  KEYS CH %d", app->win_ch);
+    snprintf(c->bottom[0], VO_LINE, "ZOOM %s%.3g  LEVEL %d%s  ROT %.1f%s%.40s%s",
              mag >= 1 ? "" : "1:", mag >= 1 ? mag : 1 / mag, p->f,
              p->t > 0 ? "+" : "", vg_norm_rot(v->rot), win[0] ? "  WINDOW " : "",
-             win);
+             win, keys_on);
     if (app->tiles) {
         const struct gv_geometry *g = vt_geometry(app->tiles);
         snprintf(c->bottom[1], VO_LINE, "%.40s  %ux%u  [%d/%d]", vt_image(app->tiles),

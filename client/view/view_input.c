@@ -122,12 +122,14 @@ static enum vi_action key(struct vi *s, const SDL_KeyboardEvent *k)
     case SDLK_DELETE: return VI_ROI_CLEAR;
     case SDLK_g: return VI_NEXT_FILTER;
     /* The display window: black point b/B, white point w/W, gamma
-     * y/Y (up/down), a auto, x back to the starting one, Shift+X none. */
+     * y/Y (up/down), a auto, x back to the starting one, Shift+X none;
+     * k/K the channel they move (every one, then each in turn). */
     case SDLK_b: return shift ? VI_WIN_BLACK_DOWN : VI_WIN_BLACK_UP;
     case SDLK_w: return shift ? VI_WIN_WHITE_UP : VI_WIN_WHITE_DOWN;
     case SDLK_y: return shift ? VI_WIN_GAMMA_DOWN : VI_WIN_GAMMA_UP;
     case SDLK_a: return VI_WIN_AUTO;
     case SDLK_x: return shift ? VI_WIN_NONE : VI_WIN_RESET;
+    case SDLK_k: return shift ? VI_WIN_CHANNEL_PREV : VI_WIN_CHANNEL_NEXT;
     default:
         if (c >= SDLK_1 && c <= SDLK_9) {
             int n = (int)(c - SDLK_0);

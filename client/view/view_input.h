@@ -23,6 +23,7 @@ enum vi_action {
      * y (gamma up), Shift+Y, a (auto), x (reset), Shift+X (none) */
     VI_WIN_BLACK_UP, VI_WIN_BLACK_DOWN, VI_WIN_WHITE_DOWN, VI_WIN_WHITE_UP,
     VI_WIN_GAMMA_UP, VI_WIN_GAMMA_DOWN, VI_WIN_AUTO, VI_WIN_RESET, VI_WIN_NONE,
+    VI_WIN_CHANNEL_NEXT, VI_WIN_CHANNEL_PREV,  /* which channel the window keys move */
     VI_REDRAW                    /* the selection changed: draw again */
 };
 

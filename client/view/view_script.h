@@ -25,7 +25,8 @@
  *                           browser link's "#image=..." hash
  *   image ID                switch to image ID
  *   settle [MS]             wait until the view is at rest and every tile
- *                           it needs is drawn (at most MS, default 60000)
+ *                           it needs is drawn; fails after MS (default
+ *                           60000) with no tile fetched or decoded
  *   shot FILE               write the picture (no overlay) to FILE
  *   wait-file PATH [MS]     wait until PATH exists (default 60000)
  *   print TEXT              print TEXT and the view's link on stdout
