@@ -16,6 +16,7 @@
 
 S=$T/stores
 mkdir "$S" || bail "mkdir"
+cd "$T" || bail "cd"
 run encode synth:600x400 -o "$S/a.gv"
 [ "$rc" -eq 0 ] || bail "encode: $(cat "$T/err")"
 cat >"$T/r.conf" <<EOF2
