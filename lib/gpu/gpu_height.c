@@ -247,14 +247,6 @@ static int decode_one(struct job *j, struct gv_error *err)
     return 0;
 }
 
-static int decode(void *arg, struct gv_error *err)
-{
-    struct job *j = arg;
-    if (decode_one(j, err) < 0)
-        return -1;
-    return gv_gpu_gl_check(err, "height tile decode");
-}
-
 struct batch {
     struct job *jobs;             /* split and checked, parents unresolved */
     struct gv_gpu_tile_job *out;
@@ -314,13 +306,11 @@ int gv_gpu_height_decode(struct gv_gpu_height *h, const uint8_t *buf,
                          size_t len, uint32_t parent, int qx, int qy,
                          uint32_t *handle, struct gv_error *err)
 {
-    struct job j = {.h = h, .parent = parent, .qx = qx, .qy = qy};
-    if (gv_samples_tile_check(buf, len, h->channels, err) < 0 ||
-        gv_samples_tile_split(buf, len, h->channels, j.part, j.part_len, err) < 0)
+    struct gv_gpu_tile_job job = {.buf = buf, .len = len, .parent = parent,
+                                  .parent_job = -1, .qx = qx, .qy = qy};
+    if (gv_gpu_height_decode_batch(h, &job, 1, err) < 0)
         return -1;
-    if (gv_gpu_call(h->gpu, decode, &j, err) < 0)
-        return -1;
-    *handle = j.handle;
+    *handle = job.handle;
     return 0;
 }
 
