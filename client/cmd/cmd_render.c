@@ -776,8 +776,7 @@ static int session_open(struct session *s, const char *url, const struct render_
     s->hdr = gv_remote_header(&s->img);
     s->pc = gv_display_channels(&s->hdr);
     if (s->hdr.kind == GV_KIND_HEIGHT)
-        s->hm = (struct gv_height_meta){.scale = s->img.scale, .offset = s->img.offset,
-                                        .min = s->img.min, .max = s->img.max};
+        s->hm = gv_remote_height_meta(&s->img);
     if (!a->remote.no_cache)
         open_disk_cache(s, a);
     return 0;

@@ -279,8 +279,7 @@ static const struct gv_window *codes_set(struct app *app, const struct gv_window
     uint8_t rgb[GV_SAMPLES_MAX_CHANNELS][3] = {{0}};
     struct gv_colours col = {0};
     if (im->kind == GV_KIND_HEIGHT) {
-        const struct gv_height_meta m = {.scale = im->scale, .offset = im->offset,
-                                         .min = im->min, .max = im->max};
+        const struct gv_height_meta m = gv_remote_height_meta(im);
         for (uint32_t v = 0; v < 65536; v++)
             app->tables[v] = gv_height_gray(&m, (uint16_t)v);
         vd_set_codes(app->draw, app->tables, (const uint8_t (*)[3])rgb, 1);

@@ -612,6 +612,12 @@ int gv_remote_sample_bytes(const struct gv_remote_image *img)
     return img->kind == GV_KIND_IMAGE ? 1 : 2;
 }
 
+struct gv_height_meta gv_remote_height_meta(const struct gv_remote_image *img)
+{
+    return (struct gv_height_meta){.scale = img->scale, .offset = img->offset,
+                                   .min = img->min, .max = img->max};
+}
+
 struct gv_header gv_remote_header(const struct gv_remote_image *img)
 {
     return (struct gv_header){.kind = (uint8_t)img->kind, .channels = (uint8_t)img->channels,

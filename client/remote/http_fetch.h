@@ -17,6 +17,7 @@
 #include <stdio.h>
 
 #include "base/error.h"
+#include "render/height_region.h"
 #include "store/store_format.h"
 #include "tile_cache_disk.h"
 
@@ -88,6 +89,10 @@ int gv_remote_sample_bytes(const struct gv_remote_image *img);
 /* The store header fields the display rules read (render/samples_region.h:
  * kind, channels, a sample store's codes' range) of img, the rest 0. */
 struct gv_header gv_remote_header(const struct gv_remote_image *img);
+
+/* A height store's value mapping and range (render/height_region.h) of
+ * img: what its gray is made from. */
+struct gv_height_meta gv_remote_height_meta(const struct gv_remote_image *img);
 
 /* Fetch an image's metadata into *img.  An unknown image, or an id that
  * cannot be one, is GV_ENOTFOUND; metadata out of bounds is GV_ECORRUPT. */
