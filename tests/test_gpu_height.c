@@ -68,27 +68,41 @@ static void check_refusals(struct gv_gpu *gpu, struct gv_store *s,
 /* Decode every tile of `path` on the GPU, all channels at once, level by
  * level from the uploaded root tile, and compare each with the CPU
  * decoder. */
+/* Store `path` (*s) and a GPU decoder of its channels on path gp, or
+ * NULL (the store closed) after a skip where the context has no such
+ * path or a failed check. */
+static struct gv_gpu_height *open_store(struct gv_gpu *gpu, const char *path,
+                                        const char *name, enum gv_gpu_path gp,
+                                        struct gv_store **s)
+{
+    const char *pn = gp == GV_GPU_PATH_COMPUTE ? "ssbo" : "webgl2";
+    struct gv_error err = {0};
+    if (!(*s = gv_store_open(path, &err)))
+        fail("open %s: %s", path, err.text);
+    const int nc = gv_store_info(*s)->geometry.channels;   /* 1: a height store */
+    struct gv_gpu_height *gh = gv_gpu_height_new(
+        gpu, &(struct gv_gpu_height_opts){.path = gp, .channels = nc}, &err);
+    if (!gh) {
+        gv_store_close(*s);
+        if (err.code == GV_EFORMAT)
+            tap_skip("no OpenGL ES context", "%s %s", name, pn);
+        else
+            check(0, "%s %s: decoder: %s", name, pn, err.text);
+    }
+    return gh;
+}
+
 static void check_tiles(struct gv_gpu *gpu, const char *path, const char *name,
                         enum gv_gpu_path gp)
 {
     const char *pn = gp == GV_GPU_PATH_COMPUTE ? "ssbo" : "webgl2";
     struct gv_error err = {0};
-    struct gv_store *s = gv_store_open(path, &err);
-    if (!s)
-        fail("open %s: %s", path, err.text);
+    struct gv_store *s;
+    struct gv_gpu_height *gh = open_store(gpu, path, name, gp, &s);
+    if (!gh)
+        return;
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     const int nc = g->channels;   /* 1 for a height store */
-    struct gv_gpu_height *gh = gv_gpu_height_new(
-        gpu, &(struct gv_gpu_height_opts){.path = gp, .channels = nc}, &err);
-    if (!gh) {
-        gv_store_close(s);
-        if (err.code == GV_EFORMAT) {
-            tap_skip("no OpenGL ES context", "%s %s", name, pn);
-            return;
-        }
-        check(0, "%s %s: decoder: %s", name, pn, err.text);
-        return;
-    }
     struct gv_decoder *cpu = gv_decoder_new(s, 256u << 20);
     const size_t tile_bytes = sizeof(uint16_t) * GV_HT_SAMPLES * (size_t)nc;
     uint16_t *got = malloc(tile_bytes);
@@ -163,18 +177,12 @@ static void check_batch(struct gv_gpu *gpu, const char *path, const char *name,
 {
     const char *pn = gp == GV_GPU_PATH_COMPUTE ? "ssbo" : "webgl2";
     struct gv_error err = {0};
-    struct gv_store *s = gv_store_open(path, &err);
-    if (!s)
-        fail("open %s: %s", path, err.text);
+    struct gv_store *s;
+    struct gv_gpu_height *gh = open_store(gpu, path, name, gp, &s);
+    if (!gh)
+        return;
     const struct gv_geometry *g = &gv_store_info(s)->geometry;
     const int nc = g->channels;
-    struct gv_gpu_height *gh = gv_gpu_height_new(
-        gpu, &(struct gv_gpu_height_opts){.path = gp, .channels = nc}, &err);
-    if (!gh) {
-        gv_store_close(s);
-        tap_skip("no decoder", "%s %s batch: %s", name, pn, err.text);
-        return;
-    }
     struct gv_decoder *cpu = gv_decoder_new(s, 256u << 20);
     const uint8_t *px;
     uint32_t root;
