@@ -34,6 +34,7 @@
 
 #include <GLES3/gl31.h>
 
+#include "base/byteorder.h"
 #include "filter.h"
 #include "gpu/gpu.h"
 #include "graph_body.h"
@@ -835,7 +836,7 @@ static int upload_values(struct run *r, struct gv_error *err)
                     x = (float)in->rgba[i * 4 + (size_t)c];
                 } else if (ch < in->nvalues) {
                     const uint8_t *b = in->values + (i * (size_t)in->nvalues + (size_t)ch) * 2;
-                    x = (float)((b[0] | b[1] << 8) * in->values_scale + in->values_offset);
+                    x = (float)(gv_get16(b) * in->values_scale + in->values_offset);
                 }
                 v[i * 4 + (size_t)c] = x;
             }

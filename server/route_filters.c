@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/byteorder.h"
 #include "filter.h"
 #include "filter_call.h"
 #include "filter_jobs.h"
@@ -575,8 +576,7 @@ static int decode_values(struct gv_decoder *d, const struct gv_header *h, int ch
     for (size_t i = 0; i < n; i++) {   /* host order to little-endian, in place */
         uint16_t v;
         memcpy(&v, c->codes + 2 * i, 2);
-        c->codes[2 * i] = (uint8_t)(v & 255);
-        c->codes[2 * i + 1] = (uint8_t)(v >> 8);
+        gv_put16(c->codes + 2 * i, v);
     }
     return 0;
 }
