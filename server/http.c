@@ -620,10 +620,8 @@ static int over_rate(struct req *r, enum MHD_Result *ret)
     const char *key = h[0] ? MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, h) : NULL;
     if (!key || !key[0])
         key = r->remote;
-    struct timespec now;
-    clock_gettime(CLOCK_MONOTONIC, &now);
-    double wait = 0;
-    if (rate_limit_take(rl, key, strlen(key), (double)now.tv_sec + now.tv_nsec * 1e-9,
+    double wait = 0;   /* the request's arrival (r->t0) is its time */
+    if (rate_limit_take(rl, key, strlen(key), (double)r->t0.tv_sec + r->t0.tv_nsec * 1e-9,
                         &wait))
         return 0;
     char secs[24], msg[160];
