@@ -26,19 +26,11 @@
 # TMPDIR (scratch, default /tmp).  Needs vips, cjpeg/djpeg, cc, node.
 set -euo pipefail
 
+# shellcheck source=SCRIPTDIR/http-lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
-gv_arg="" gvd_arg="" img=""
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	--gigaviewd) gvd_arg=$2; shift 2 ;;
-	--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
-	-*) die "unknown option $1" ;;
-	*) img=$1; shift ;;
-	esac
-done
+bench_args "$@"
+img=${bench_inputs[0]:-}
 [ -n "$img" ] || img="$DATA_DIR/photos/picosdeeuropa_by_Aitzol_Berasategi.jpg"
 GV_ARGS=${GV_ARGS---rd}
 [ -x /usr/bin/chromium ] || die "no /usr/bin/chromium (apt-get install chromium)"
@@ -89,14 +81,6 @@ vips dzsave "$WORK/src.png" "$WORK/iiif/$id" --layout iiif3 --tile-size 512 --ov
 	--suffix ".jpg[Q=$best_q,optimize-coding,subsample-mode=on]" --id "http://127.0.0.1" >/dev/null
 echo "# IIIF tiles: $(find "$WORK/iiif/$id" -name '*.jpg' | wc -l) JPEG files, $(find "$WORK/iiif/$id" -name '*.jpg' -printf '%s\n' | awk '{ s += $1 } END { print s }') bytes"
 
-cat >"$WORK/gv.conf" <<EOF
-listen = 127.0.0.1
-port = 0
-store_dir = "$WORK/stores"
-threads = 2
-log_level = info
-access_log = "$WORK/access.log"
-EOF
 # The native viewer, when this gigaview has its window (SDL2).
 native=()
 if [ "${NATIVE:-1}" = 0 ]; then
@@ -106,6 +90,6 @@ elif "$GV" view --help >/dev/null 2>&1; then
 else
 	echo "# native viewer: left out ($("$GV" view --help 2>&1 | head -n 1))"
 fi
-start_gigaviewd "$GVD" "$WORK/gv.conf" "$WORK/gigaviewd.log"
+start_browser_gigaviewd "$GVD" "$WORK" "$WORK/access.log"
 node "$BENCH_DIR/browser-bytes.mjs" --base "http://127.0.0.1:$GVD_PORT" --id "$id" \
 	--iiif "$WORK/iiif/$id" --size "${SIZE:-1280x800}" "${native[@]}"

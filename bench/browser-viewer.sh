@@ -26,20 +26,11 @@
 # checkout).
 set -euo pipefail
 
+# shellcheck source=SCRIPTDIR/http-lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
-gv_arg="" gvd_arg=""
-inputs=()
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	--gigaviewd) gvd_arg=$2; shift 2 ;;
-	--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
-	-*) die "unknown option $1" ;;
-	*) inputs+=("$1"); shift ;;
-	esac
-done
+bench_args "$@"
+inputs=("${bench_inputs[@]}")
 [ ${#inputs[@]} -gt 0 ] || inputs=("$DATA_DIR/photos/picosdeeuropa_by_Aitzol_Berasategi.jpg"
 	"$DATA_DIR/large/marble-srtm-relief-10800x5400.png")
 REPS=${REPS:-3}
@@ -75,16 +66,8 @@ $(stat -c %s "$WORK/stores/$id.gv") bytes"
 	ids+=("$id")
 done
 
-cat >"$WORK/gv.conf" <<EOF
-listen = 127.0.0.1
-port = 0
-store_dir = "$WORK/stores"
-threads = 2
-log_level = info
-access_log = "off"
-EOF
-start_gigaviewd "$WORK/gigaviewd" "$WORK/gv.conf" "$WORK/gigaviewd.log"
+start_browser_gigaviewd "$WORK/gigaviewd" "$WORK"
 echo "# gigaviewd on port $GVD_PORT; REPS=$REPS SIZE=${SIZE:-1280x800} GPU=${GPU:-swiftshader}"
 node "$BENCH_DIR/browser-viewer.mjs" --base "http://127.0.0.1:$GVD_PORT" \
 	--images "$(IFS=,; echo "${ids[*]}")" --reps "$REPS" --size "${SIZE:-1280x800}" \
-	--gpu "$([ "${GPU:-}" = host ] && echo host || echo swiftshader)"
+	--gpu "$(browser_gpu)"

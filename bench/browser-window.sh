@@ -23,16 +23,11 @@
 #   TMPDIR=DIR    scratch space (default /tmp)
 set -euo pipefail
 
+# shellcheck source=SCRIPTDIR/http-lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
-gv_arg="" gvd_arg=""
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--gigaviewd) gvd_arg=$2; shift 2 ;;
-	*) die "unknown argument $1" ;;
-	esac
-done
+bench_args "$@"
+bench_no_inputs
 [ -x /usr/bin/chromium ] || die "no /usr/bin/chromium (apt-get install chromium)"
 [ -d "$BENCH_DIR/../tests/browser/node_modules/playwright-core" ] ||
 	die "no playwright-core: cd tests/browser && npm ci"
@@ -65,16 +60,8 @@ for id in etopo5 golden picos; do
 $(stat -c %s "$WORK/stores/$id.gv") bytes"
 done
 
-cat >"$WORK/gv.conf" <<EOF2
-listen = 127.0.0.1
-port = 0
-store_dir = "$WORK/stores"
-threads = 2
-log_level = info
-access_log = "off"
-EOF2
-start_gigaviewd "$WORK/gigaviewd" "$WORK/gv.conf" "$WORK/gigaviewd.log"
+start_browser_gigaviewd "$WORK/gigaviewd" "$WORK"
 echo "# gigaviewd on port $GVD_PORT; CHANGES=${CHANGES:-20} SIZE=${SIZE:-1280x800} GPU=${GPU:-swiftshader}"
 node "$BENCH_DIR/browser-window.mjs" --base "http://127.0.0.1:$GVD_PORT" \
 	--images etopo5,golden,picos --changes "${CHANGES:-20}" --size "${SIZE:-1280x800}" \
-	--gpu "$([ "${GPU:-}" = host ] && echo host || echo swiftshader)"
+	--gpu "$(browser_gpu)"

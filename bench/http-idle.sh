@@ -24,18 +24,11 @@
 # REQS (300), TMPDIR.
 set -euo pipefail
 
+# shellcheck source=SCRIPTDIR/http-lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
-gv_arg="" gvd_arg=""
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	--gigaviewd) gvd_arg=$2; shift 2 ;;
-	--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
-	*) die "unknown argument $1" ;;
-	esac
-done
+bench_args "$@"
+bench_no_inputs
 IDLE=${IDLE:-4000}
 LIMIT=${LIMIT:-4096}
 SLOW=${SLOW:-8}

@@ -47,20 +47,11 @@
 #   TMPDIR=DIR     scratch space (default /tmp)
 set -euo pipefail
 
+# shellcheck source=SCRIPTDIR/http-lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
-gv_arg="" gvd_arg=""
-inputs=()
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	--gigaviewd) gvd_arg=$2; shift 2 ;;
-	--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,52p' "$0"; exit 0 ;;
-	*) inputs+=("$1"); shift ;;
-	esac
-done
+bench_args "$@"
+inputs=("${bench_inputs[@]}")
 
 IIPSRV=${IIPSRV:-/usr/lib/iipimage-server/iipsrv.fcgi}
 need_cmd nginx nginx

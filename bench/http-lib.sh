@@ -7,6 +7,33 @@
 
 SERVER_PIDS=()
 
+# bench_args ARG...: the command line every server bench takes: --gigaview
+# PATH and --gigaviewd PATH (or --gigaview=PATH ...) into gv_arg and
+# gvd_arg, the other arguments (its inputs) into the array bench_inputs;
+# -h or --help prints the script's opening comment; another option dies.
+# shellcheck disable=SC2034 # gv_arg, gvd_arg and bench_inputs are the caller's
+bench_args() {
+	gv_arg="" gvd_arg=""
+	bench_inputs=()
+	while [ $# -gt 0 ]; do
+		case $1 in
+		--gigaview) gv_arg=$2; shift 2 ;;
+		--gigaview=*) gv_arg=${1#*=}; shift ;;
+		--gigaviewd) gvd_arg=$2; shift 2 ;;
+		--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
+		-h|--help) awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0"; exit 0 ;;
+		-*) die "unknown option $1" ;;
+		*) bench_inputs+=("$1"); shift ;;
+		esac
+	done
+}
+
+# bench_no_inputs: die unless bench_args found no input (a script that
+# takes none).
+bench_no_inputs() {
+	[ ${#bench_inputs[@]} -eq 0 ] || die "unknown argument ${bench_inputs[0]}"
+}
+
 # find_gigaviewd [PATH]: the argument, else $GIGAVIEWD, else gigaviewd next
 # to the gigaview binary in use ($GIGAVIEW), else ../gigaviewd next to this
 # directory, else gigaviewd on PATH.
@@ -59,6 +86,28 @@ wait_port() {
 		sleep 0.1
 	done
 	return 1
+}
+
+# start_browser_gigaviewd BIN DIR [ACCESS_LOG]: gigaviewd BIN serving the
+# stores of DIR/stores on 127.0.0.1 for the browser benches (2 threads, an
+# access log only where ACCESS_LOG names one), its configuration in
+# DIR/gv.conf and its log in DIR/gigaviewd.log; sets GVD_PID and GVD_PORT.
+start_browser_gigaviewd() {
+	cat >"$2/gv.conf" <<EOF
+listen = 127.0.0.1
+port = 0
+store_dir = "$2/stores"
+threads = 2
+log_level = info
+access_log = "${3:-off}"
+EOF
+	start_gigaviewd "$1" "$2/gv.conf" "$2/gigaviewd.log"
+}
+
+# browser_gpu: what the browser benches pass as --gpu: host with GPU=host,
+# else swiftshader.
+browser_gpu() {
+	if [ "${GPU:-}" = host ]; then echo host; else echo swiftshader; fi
 }
 
 # start_gigaviewd BIN CONF LOG: starts it on the port of CONF (use port = 0),

@@ -48,17 +48,8 @@ set -euo pipefail
 # shellcheck source=SCRIPTDIR/http-lib.sh disable=SC1091
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
-gv_arg="" gvd_arg=""
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--gigaview=*) gv_arg=${1#*=}; shift ;;
-	--gigaviewd) gvd_arg=$2; shift 2 ;;
-	--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
-	-h|--help) sed -n '2,45p' "$0"; exit 0 ;;
-	*) die "unknown argument $1" ;;
-	esac
-done
+bench_args "$@"
+bench_no_inputs
 SIZE_SLIDE=${SIZE_SLIDE:-8192x6144}
 SIZE=${SIZE:-1280x800}
 REPS=${REPS:-3}
@@ -174,17 +165,9 @@ awk -v g="$gv_s" -v v="$vt_s" 'BEGIN { r = g / v
 		g, v, r, (r <= 1 ? 1 / r : r), (r <= 1 ? "faster" : "slower") }'
 echo
 
-cat >"$WORK/gv.conf" <<EOF
-listen = 127.0.0.1
-port = 0
-store_dir = "$WORK/stores"
-threads = 2
-log_level = info
-access_log = "off"
-EOF
-start_gigaviewd "$WORK/gigaviewd" "$WORK/gv.conf" "$WORK/gigaviewd.log"
+start_browser_gigaviewd "$WORK/gigaviewd" "$WORK"
 echo "# gigaviewd on port $GVD_PORT; REPS=$REPS SIZE=$SIZE GPU=${GPU:-swiftshader};" \
 	"load average $(cut -d' ' -f1-3 /proc/loadavg)"
 node "$BENCH_DIR/slide-first-view.mjs" --base "http://127.0.0.1:$GVD_PORT" --id "$id" \
 	--iiif "$WORK/iiif/$id" --reps "$REPS" --size "$SIZE" \
-	--gpu "$([ "${GPU:-}" = host ] && echo host || echo swiftshader)"
+	--gpu "$(browser_gpu)"

@@ -31,16 +31,11 @@
 # Environment: GIGAVIEW, GIGAVIEWD, IMAGE, SIZE, BUDGET, PLOT, TMPDIR.
 set -euo pipefail
 
+# shellcheck source=SCRIPTDIR/http-lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
-gv_arg="" gvd_arg=""
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--gigaviewd) gvd_arg=$2; shift 2 ;;
-	*) die "usage: view-frames.sh [--gigaview PATH] [--gigaviewd PATH]" ;;
-	esac
-done
+bench_args "$@"
+bench_no_inputs
 GV=$(find_gigaview "$gv_arg")
 GIGAVIEW=$GV
 GVD=$(find_gigaviewd "$gvd_arg")

@@ -64,14 +64,8 @@ set -euo pipefail
 # shellcheck source=bench/http-lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
-gv_arg="" gvd_arg=""
-while [ $# -gt 0 ]; do
-	case $1 in
-	--gigaview) gv_arg=$2; shift 2 ;;
-	--gigaviewd) gvd_arg=$2; shift 2 ;;
-	*) die "usage: view-window.sh [--gigaview PATH] [--gigaviewd PATH]" ;;
-	esac
-done
+bench_args "$@"
+bench_no_inputs
 need_cmd oiiotool openimageio-tools
 need_cmd idiff openimageio-tools
 need_cmd curl curl
