@@ -30,7 +30,7 @@ set -euo pipefail
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
 bench_args "$@"
-img=${bench_inputs[0]:-}
+img=${inputs[0]:-}
 [ -n "$img" ] || img="$DATA_DIR/photos/picosdeeuropa_by_Aitzol_Berasategi.jpg"
 GV_ARGS=${GV_ARGS---rd}
 [ -x /usr/bin/chromium ] || die "no /usr/bin/chromium (apt-get install chromium)"

@@ -30,7 +30,6 @@ set -euo pipefail
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
 bench_args "$@"
-inputs=("${bench_inputs[@]}")
 [ ${#inputs[@]} -gt 0 ] || inputs=("$DATA_DIR/photos/picosdeeuropa_by_Aitzol_Berasategi.jpg"
 	"$DATA_DIR/large/marble-srtm-relief-10800x5400.png")
 REPS=${REPS:-3}

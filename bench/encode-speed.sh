@@ -37,7 +37,7 @@ set -euo pipefail
 
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
-parse_binary_args '2,37p' "$@"
+bench_args "$@"
 
 need_cmd vips libvips-tools
 need_cmd vipsheader libvips-tools

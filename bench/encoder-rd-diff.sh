@@ -15,7 +15,7 @@ set -euo pipefail
 
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
-parse_binary_args '2,12p' "$@"
+bench_args "$@"
 [ -n "$base_arg" ] || die "needs --baseline OLD_BINARY"
 need_cmd python3 python3
 GV=$(find_gigaview "$gv_arg")

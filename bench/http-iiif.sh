@@ -51,7 +51,6 @@ set -euo pipefail
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
 bench_args "$@"
-inputs=("${bench_inputs[@]}")
 
 IIPSRV=${IIPSRV:-/usr/lib/iipimage-server/iipsrv.fcgi}
 need_cmd nginx nginx

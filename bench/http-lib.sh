@@ -3,36 +3,10 @@
 # recorded in SERVER_PIDS and killed by http_cleanup (the scripts trap it).
 # shellcheck shell=bash
 
+# shellcheck source=SCRIPTDIR/lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 SERVER_PIDS=()
-
-# bench_args ARG...: the command line every server bench takes: --gigaview
-# PATH and --gigaviewd PATH (or --gigaview=PATH ...) into gv_arg and
-# gvd_arg, the other arguments (its inputs) into the array bench_inputs;
-# -h or --help prints the script's opening comment; another option dies.
-# shellcheck disable=SC2034 # gv_arg, gvd_arg and bench_inputs are the caller's
-bench_args() {
-	gv_arg="" gvd_arg=""
-	bench_inputs=()
-	while [ $# -gt 0 ]; do
-		case $1 in
-		--gigaview) gv_arg=$2; shift 2 ;;
-		--gigaview=*) gv_arg=${1#*=}; shift ;;
-		--gigaviewd) gvd_arg=$2; shift 2 ;;
-		--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
-		-h|--help) awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0"; exit 0 ;;
-		-*) die "unknown option $1" ;;
-		*) bench_inputs+=("$1"); shift ;;
-		esac
-	done
-}
-
-# bench_no_inputs: die unless bench_args found no input (a script that
-# takes none).
-bench_no_inputs() {
-	[ ${#bench_inputs[@]} -eq 0 ] || die "unknown argument ${bench_inputs[0]}"
-}
 
 # find_gigaviewd [PATH]: the argument, else $GIGAVIEWD, else gigaviewd next
 # to the gigaview binary in use ($GIGAVIEW), else ../gigaviewd next to this

@@ -33,7 +33,6 @@ set -euo pipefail
 . "$(dirname "${BASH_SOURCE[0]}")/http-lib.sh"
 
 bench_args "$@"
-inputs=("${bench_inputs[@]}")
 
 need_cmd nginx nginx
 need_cmd wrk wrk

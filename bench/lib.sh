@@ -34,27 +34,34 @@ find_gigaview() {
 	die "no gigaview binary: pass --gigaview PATH or set GIGAVIEW (e.g. GIGAVIEW=/path/to/build/gigaview)"
 }
 
-# parse_binary_args HELP-RANGE ARGS...: the options of the scripts that
-# run gigaview binaries: --gigaview NEW, --baseline OLD (also as
-# --opt=VALUE) and -h (prints lines HELP-RANGE, e.g. '2,12p', of the
-# script's opening comment); sets gv_arg, base_arg and inputs (the other
-# arguments, in order).
-parse_binary_args() {
-	local help=$1
-	shift
-	gv_arg=""
-	base_arg=""
+# bench_args ARG...: the command line of the scripts that run gigaview
+# binaries: --gigaview PATH, --gigaviewd PATH and --baseline PATH (also as
+# --opt=PATH) into gv_arg, gvd_arg and base_arg, the other arguments (the
+# inputs, in order) into the array inputs; -h or --help prints the
+# script's opening comment; another option dies.
+# shellcheck disable=SC2034 # gv_arg, gvd_arg, base_arg and inputs are the caller's
+bench_args() {
+	gv_arg="" gvd_arg="" base_arg=""
 	inputs=()
 	while [ $# -gt 0 ]; do
 		case $1 in
 		--gigaview) gv_arg=$2; shift 2 ;;
 		--gigaview=*) gv_arg=${1#*=}; shift ;;
+		--gigaviewd) gvd_arg=$2; shift 2 ;;
+		--gigaviewd=*) gvd_arg=${1#*=}; shift ;;
 		--baseline) base_arg=$2; shift 2 ;;
 		--baseline=*) base_arg=${1#*=}; shift ;;
-		-h|--help) sed -n "$help" "$0"; exit 0 ;;
+		-h|--help) awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0"; exit 0 ;;
+		-*) die "unknown option $1" ;;
 		*) inputs+=("$1"); shift ;;
 		esac
 	done
+}
+
+# bench_no_inputs: die unless bench_args found no input (a script that
+# takes none).
+bench_no_inputs() {
+	[ ${#inputs[@]} -eq 0 ] || die "unknown argument ${inputs[0]}"
 }
 
 # snapshot_gigaview SRC DIR: copies the binary into DIR so a rebuild during

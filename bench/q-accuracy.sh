@@ -18,7 +18,7 @@ set -euo pipefail
 
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
-parse_binary_args '2,13p' "$@"
+bench_args "$@"
 GV=$(find_gigaview "$gv_arg")
 QS=${QS:-32 36 40 44 46}
 if [ ${#inputs[@]} -eq 0 ]; then

@@ -68,7 +68,7 @@ set -euo pipefail
 
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
-parse_binary_args '2,64p' "$@"
+bench_args "$@"
 images=(${inputs[@]+"${inputs[@]}"})
 
 need_cmd python3 python3
