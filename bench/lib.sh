@@ -64,6 +64,24 @@ bench_no_inputs() {
 	[ ${#inputs[@]} -eq 0 ] || die "unknown argument ${inputs[0]}"
 }
 
+# best_wall N PREP CMD...: the least wall time, in seconds, of N runs of
+# CMD, each after an untimed run of PREP (a command, : for none; e.g. the
+# removal of the last run's output); CMD's output is dropped, and a failed
+# run dies with its standard error.
+best_wall() {
+	local n=$1 prep=$2 b="" t0 t err
+	shift 2
+	for _ in $(seq "$n"); do
+		"$prep"
+		sync
+		t0=$(now)
+		err=$("$@" 2>&1 >/dev/null) || { printf '%s\n' "$err" >&2; die "failed: $*"; }
+		t=$(echo "$(now) - $t0" | bc -l)
+		if [ -z "$b" ] || [ "$(echo "$t < $b" | bc)" = 1 ]; then b=$t; fi
+	done
+	echo "$b"
+}
+
 # snapshot_gigaview SRC DIR: copies the binary into DIR so a rebuild during
 # the run cannot change it half-way, with the OpenImageIO module beside it
 # where SRC has one (lib/imageio/imageio_loader.c looks there); prints the

@@ -44,19 +44,6 @@ vips flatten "$W/ref4.v" "$W/ref.v" --background "255 255 255"
 vips copy "$W/ref.v" "$W/ref.ppm"
 echo "# slide: $SIZE, $(stat -c %s "$W/slide.svs") bytes (JPEG tiles); reference: OpenSlide's level 0"
 
-# best CMD...: the least wall time of REPS runs of CMD.
-best() {
-	local b= t0 t1 t
-	for _ in $(seq "$REPS"); do
-		sync
-		t0=$(date +%s.%N)
-		"$@" >/dev/null 2>"$W/err" || { cat "$W/err" >&2; die "failed: $*"; }
-		t1=$(date +%s.%N)
-		t=$(echo "$t1 - $t0" | bc -l)
-		if [ -z "$b" ] || [ "$(echo "$t < $b" | bc)" = 1 ]; then b=$t; fi
-	done
-	echo "$b"
-}
 # psnr_of PPM: its PSNR against the reference.
 psnr_of() { "$CMP" "$W/ref.ppm" "$1" | sed -n 's/.*psnr=\([0-9.]*\).*/\1/p'; }
 # jpeg_psnr J: the reference as one JPEG at quality J, its PSNR.
@@ -68,7 +55,7 @@ jpeg_psnr() {
 
 printf '%-4s %-9s %8s %12s %8s %8s %8s\n' q tool psnr bytes wall_s bytes/vips time/vips
 for Q in $QS; do
-	gt=$(best "$GV" encode --quiet -q "$Q" "$W/slide.svs" -o "$W/s.gv")
+	gt=$(best_wall "$REPS" : "$GV" encode --quiet -q "$Q" "$W/slide.svs" -o "$W/s.gv")
 	"$GV" export "$W/s.gv" -o "$W/s.png" >/dev/null
 	vips copy "$W/s.png" "$W/s.ppm"
 	gp=$(psnr_of "$W/s.ppm")
@@ -84,7 +71,7 @@ for Q in $QS; do
 	for J in "$lo" "$hi"; do
 		jp=$(jpeg_psnr "$J")
 		rm -f "$W/d.zip"
-		vt=$(best vips dzsave "$W/slide.svs" "$W/d.zip" --container zip --suffix ".jpg[Q=$J]")
+		vt=$(best_wall "$REPS" : vips dzsave "$W/slide.svs" "$W/d.zip" --container zip --suffix ".jpg[Q=$J]")
 		vb=$(stat -c %s "$W/d.zip")
 		printf '%-4s %-9s %8s %12d %8.2f %8.3f %8.3f\n' "$Q" "dzsave-Q$J" "$jp" "$vb" "$vt" \
 			"$(echo "$gb / $vb" | bc -l)" "$(echo "$gt / $vt" | bc -l)"

@@ -89,19 +89,8 @@ vips copy "$WORK/ref.v" "$WORK/ref.ppm"
 echo "# slide: $SIZE_SLIDE, $(stat -c %s "$WORK/$id.svs") bytes (JPEG tiles, read by" \
 	"$(vipsheader -f vips-loader "$WORK/$id.svs")); reference: OpenSlide's level 0 on white"
 
-# best_time CMD...: the least wall time, in seconds, of BUILD_REPS runs.
-best_time() {
-	local b="" t0 t
-	for _ in $(seq "$BUILD_REPS"); do
-		if [ "$1" = vips ]; then rm -rf "$WORK/iiif"; mkdir "$WORK/iiif"; fi
-		sync
-		t0=$(now)
-		"$@" >/dev/null 2>"$WORK/err" || { cat "$WORK/err" >&2; die "failed: $*"; }
-		t=$(echo "$(now) - $t0" | bc -l)
-		if [ -z "$b" ] || [ "$(echo "$t < $b" | bc)" = 1 ]; then b=$t; fi
-	done
-	echo "$b"
-}
+# fresh_iiif: an empty directory for the next dzsave (untimed).
+fresh_iiif() { rm -rf "$WORK/iiif"; mkdir "$WORK/iiif"; }
 psnr_of() { "$CMP" "$WORK/ref.ppm" "$1" | sed -n 's/.*psnr=\([0-9.]*\).*/\1/p'; }
 # jpeg_psnr J: the reference as one JPEG at quality J, its PSNR.
 jpeg_psnr() {
@@ -113,7 +102,7 @@ jpeg_psnr() {
 # The store.
 mkdir "$WORK/stores"
 # shellcheck disable=SC2086 # GV_ARGS is a list of options
-gv_s=$(best_time "$GV" encode --quiet $GV_ARGS "$WORK/$id.svs" -o "$WORK/stores/$id.gv")
+gv_s=$(best_wall "$BUILD_REPS" : "$GV" encode --quiet $GV_ARGS "$WORK/$id.svs" -o "$WORK/stores/$id.gv")
 "$GV" export "$WORK/stores/$id.gv" -o "$WORK/gv0.tif" >/dev/null
 vips copy "$WORK/gv0.tif" "$WORK/gv0.ppm"
 gv_psnr=$(psnr_of "$WORK/gv0.ppm")
@@ -137,7 +126,7 @@ fi
 rm -f "$WORK/j.jpg" "$WORK/j.ppm"
 
 # The IIIF pyramid.
-vt_s=$(best_time vips dzsave "$WORK/$id.svs" "$WORK/iiif/$id" --layout iiif3 --tile-size 512 --overlap 0 \
+vt_s=$(best_wall "$BUILD_REPS" fresh_iiif vips dzsave "$WORK/$id.svs" "$WORK/iiif/$id" --layout iiif3 --tile-size 512 --overlap 0 \
 	--suffix ".jpg[Q=$J,optimize-coding]" --id "http://127.0.0.1")
 iiif_files=$(find "$WORK/iiif/$id" -name '*.jpg' | wc -l)
 iiif_bytes=$(find "$WORK/iiif/$id" -type f -printf '%s\n' | awk '{ s += $1 } END { print s }')
