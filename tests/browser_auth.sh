@@ -63,7 +63,7 @@ mkdir -p "$T/shots"
 brc=0
 EXPIRED=$(python3 "$(dirname "$0")/../scripts/gigaview-token" --secret-file "$T/secret" \
     --groups staff --ttl=-10 --sub expired) || bail "mint an expired token"
-timeout 120 node "$BROWSER_DIR/auth.mjs" --base "$BASE" --public pub \
+timeout "$BROWSER_HANG" node "$BROWSER_DIR/auth.mjs" --base "$BASE" --public pub \
     --restricted staff-pic --large staff-large --group staff --other-group visitors \
     --expired-token "$EXPIRED" \
     --header X-Remote-Groups --heading "Staff only: log in" \

@@ -11,26 +11,7 @@
 # is missing, and under valgrind.  Needs curl and python3 (http_util.sh).
 . "$(dirname "$0")/lib.sh"
 
-: "${CHROMIUM:=/usr/bin/chromium}"
-srcdir=${top_srcdir:-$(dirname "$0")/..}
-BROWSER_DIR=$(cd "$srcdir/tests/browser" && pwd)
-if [ ! -x "$CHROMIUM" ]; then
-    echo "1..0 # SKIP $CHROMIUM not installed (apt-get install chromium)"
-    exit 0
-fi
-if ! command -v node >/dev/null 2>&1 ||
-    [ "$(node -p 'process.versions.node.split(".")[0]' 2>/dev/null || echo 0)" -lt 20 ]; then
-    echo "1..0 # SKIP node 20 or later is needed for playwright-core"
-    exit 0
-fi
-if [ ! -d "$BROWSER_DIR/node_modules/playwright-core" ]; then
-    echo "1..0 # SKIP no tests/browser/node_modules (cd tests/browser && npm ci)"
-    exit 0
-fi
-if under_valgrind; then
-    echo "1..0 # SKIP the browser is not meant for valgrind (http_height.sh covers gigaviewd)"
-    exit 0
-fi
+browser_preflight "" "http_height.sh covers gigaviewd"
 . "$(dirname "$0")/http_util.sh"
 
 S=$T/stores
@@ -60,7 +41,7 @@ for run_of in dem terrain rgb16:0 rgb16:1 rgb16:2; do
     [ "$id" != "$run_of" ] && chan="--channel ${run_of#*:}"
     vrc=0
     # shellcheck disable=SC2086
-    timeout 300 node "$BROWSER_DIR/height.mjs" --base "$BASE" --id "$id" $chan \
+    timeout "$BROWSER_HANG" node "$BROWSER_DIR/height.mjs" --base "$BASE" --id "$id" $chan \
         --chromium "$CHROMIUM" >"$T/h.out" 2>&1 || vrc=$?
     if grep -q '^1\.\.0 # SKIP' "$T/h.out"; then
         skip "$id in the browser" "$(sed -n 's/^1\.\.0 # SKIP //p' "$T/h.out")"

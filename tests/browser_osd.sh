@@ -63,11 +63,11 @@ log_level = info
 EOF2
 start_daemon "$T/osd.conf"
 
-# osd [ARGS...]: run osd.mjs (timeout 90 s) against the daemon; its
+# osd [ARGS...]: run osd.mjs (at most BROWSER_HANG s) against the daemon; its
 # output in $T/osd.out, its status in $orc.
 osd() {
     orc=0
-    timeout 90 node "$BROWSER_DIR/osd.mjs" --base "$BASE" --id picos \
+    timeout "$BROWSER_HANG" node "$BROWSER_DIR/osd.mjs" --base "$BASE" --id picos \
         --chromium "$CHROMIUM" --out "$T/shots" "$@" >"$T/osd.out" 2>&1 ||
         orc=$?
 }

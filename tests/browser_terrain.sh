@@ -49,14 +49,14 @@ start_daemon "$T/t.conf"
 
 # 1. CesiumJS
 crc=0
-timeout 90 node "$BROWSER_DIR/terrain_cesium.mjs" --base "$BASE" --id world \
+timeout "$BROWSER_HANG" node "$BROWSER_DIR/terrain_cesium.mjs" --base "$BASE" --id world \
     --lon0 0 --chromium "$CHROMIUM" --out "$T/shots" >"$T/cesium.out" 2>&1 || crc=$?
 browser_relay "$T/cesium.out" "$crc" terrain_cesium.mjs
 
 # 2. the viewer's terrain mode
 if [ -f "$BROWSER_DIR/terrain_viewer.mjs" ]; then
     vrc=0
-    timeout 90 node "$BROWSER_DIR/terrain_viewer.mjs" --base "$BASE" --id world \
+    timeout "$BROWSER_HANG" node "$BROWSER_DIR/terrain_viewer.mjs" --base "$BASE" --id world \
         --drape picos --chromium "$CHROMIUM" --out "$T/shots" >"$T/viewer.out" 2>&1 || vrc=$?
     browser_relay "$T/viewer.out" "$vrc" terrain_viewer.mjs
 fi
@@ -68,7 +68,7 @@ if [ -f "$BROWSER_DIR/zfield.mjs" ]; then
     zrc=0
     set -- --base "$BASE" --id world --chromium "$CHROMIUM" --out "$T/shots"
     [ -x "$ZFIELD_STATES" ] && set -- "$@" --helper "$ZFIELD_STATES"
-    timeout 90 node "$BROWSER_DIR/zfield.mjs" "$@" >"$T/zfield.out" 2>&1 || zrc=$?
+    timeout "$BROWSER_HANG" node "$BROWSER_DIR/zfield.mjs" "$@" >"$T/zfield.out" 2>&1 || zrc=$?
     browser_relay "$T/zfield.out" "$zrc" zfield.mjs
 fi
 

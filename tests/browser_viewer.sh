@@ -118,11 +118,11 @@ fi
 # The layout-D helper (a check program): synthetic tiles for viewer.mjs,
 # coefficient planes for dct_unpack.mjs.
 : "${DCT_COEFS:=./tests/dct_coefs}"
-# viewer [ARGS...]: run viewer.mjs (timeout 400 s); output in
+# viewer [ARGS...]: run viewer.mjs (at most BROWSER_HANG s); output in
 # $T/viewer.out, status in $vrc.
 viewer() {
     vrc=0
-    timeout 400 node "$BROWSER_DIR/viewer.mjs" --base "$BASE" --gigaview "$GIGAVIEW" \
+    timeout "$BROWSER_HANG" node "$BROWSER_DIR/viewer.mjs" --base "$BASE" --gigaview "$GIGAVIEW" \
         --chromium "$CHROMIUM" --dctcoefs "$DCT_COEFS" "$@" >"$T/viewer.out" 2>&1 || vrc=$?
 }
 # shellcheck disable=SC2086
@@ -132,7 +132,7 @@ browser_relay "$T/viewer.out" "$vrc" viewer.mjs
 # Layout D's unpacking in JavaScript against the C decoder's, tile by
 # tile, intact and damaged (node only: tests/browser/dct_unpack.mjs).
 urc=0
-timeout 120 node "$BROWSER_DIR/dct_unpack.mjs" --base "$BASE" --helper "$DCT_COEFS" \
+timeout "$BROWSER_HANG" node "$BROWSER_DIR/dct_unpack.mjs" --base "$BASE" --helper "$DCT_COEFS" \
     --images picosd,grayd >"$T/dct.out" 2>&1 || urc=$?
 browser_relay "$T/dct.out" "$urc" dct_unpack.mjs
 

@@ -60,7 +60,7 @@ log_level = info
 EOF2
 start_daemon "$T/w.conf"
 wrc=0
-timeout 300 node "$BROWSER_DIR/window.mjs" --base "$BASE" --chromium "$CHROMIUM" >"$T/window.out" 2>&1 || wrc=$?
+timeout "$BROWSER_HANG" node "$BROWSER_DIR/window.mjs" --base "$BASE" --chromium "$CHROMIUM" >"$T/window.out" 2>&1 || wrc=$?
 browser_relay "$T/window.out" "$wrc" window.mjs
 stop_daemon
 check "gigaviewd exits 0 on SIGTERM" [ "$drc" -eq 0 ]

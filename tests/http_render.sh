@@ -40,7 +40,7 @@ EOF2
 
 # metric NAME: the value of sample NAME in a fresh /metrics.
 metric() {
-    curl -sS --max-time 30 "$(url /metrics)" | awk -v n="$1" '$1 == n { print $2 }'
+    curl -sS --max-time "$GV_TEST_PATIENCE" "$(url /metrics)" | awk -v n="$1" '$1 == n { print $2 }'
 }
 # counts: "hits misses" of the output cache.
 counts() {
@@ -70,7 +70,7 @@ check "another spelling has the same ETag" test "$(header ETag)" = "$etag"
 
 expect_status "If-None-Match with the ETag" 304 "$tile" -H "If-None-Match: $etag"
 check "304 carries the ETag" test "$(header ETag)" = "$etag"
-n=$(curl -sS --max-time 30 -o /dev/null -w '%{size_download}' \
+n=$(curl -sS --max-time "$GV_TEST_PATIENCE" -o /dev/null -w '%{size_download}' \
     -H "If-None-Match: $etag" "$(url "$tile")")
 check "304 has no body ($n bytes)" test "$n" = 0
 check "304s neither render nor look up ($(counts))" test "$(counts)" = "2 1"
@@ -102,7 +102,7 @@ check "output cache: limit is output_cache_bytes" \
 
 # A long render (the whole level 0 as PNG) does not hold the only HTTP
 # thread: /metrics answers while it runs, and says so.
-curl -sS --max-time 120 -o big.png "$(url '/v1/images/x/region?level=0&x=0&y=0&w=3000&h=2000')" &
+curl -sS --max-time "$GV_TEST_PATIENCE" -o big.png "$(url '/v1/images/x/region?level=0&x=0&y=0&w=3000&h=2000')" &
 bigpid=$!
 seen=
 while kill -0 $bigpid 2>/dev/null; do
@@ -180,7 +180,7 @@ conf 0 1
 echo "render_queue = 1" >>"$T/r.conf"
 start_daemon "$T/r.conf"
 long() {
-    curl -sS --max-time 120 -o "$1" "$(url "/v1/images/x/region?level=0&x=0&y=0&w=3000&h=$2")"
+    curl -sS --max-time "$GV_TEST_PATIENCE" -o "$1" "$(url "/v1/images/x/region?level=0&x=0&y=0&w=3000&h=$2")"
 }
 long a.png 2000 &
 apid=$!
@@ -193,7 +193,7 @@ while kill -0 $apid 2>/dev/null; do
         while kill -0 $apid 2>/dev/null && kill -0 $bpid 2>/dev/null; do
             if [ "$(metric gigaview_render_queue_depth)" = 1 ]; then
                 # render_queue = 1 is full: a third render is refused.
-                busy=$(curl -sS --max-time 30 -o busy.json -D busy.h -w '%{http_code}' \
+                busy=$(curl -sS --max-time "$GV_TEST_PATIENCE" -o busy.json -D busy.h -w '%{http_code}' \
                     "$(url '/v1/images/x/region?level=2&x=0&y=0&w=10&h=10')")
                 kill $bpid
                 queued=1

@@ -34,7 +34,7 @@ decoder_cache_bytes = $2
 EOF2
 }
 metric() {
-    curl -sS --max-time 30 "$(url /metrics)" | awk -v n="$1" '$1 == n { print $2 }'
+    curl -sS --max-time "$GV_TEST_PATIENCE" "$(url /metrics)" | awk -v n="$1" '$1 == n { print $2 }'
 }
 URLS="/iiif/3/x/0,0,2048,2000/512,/0/default.jpg
 /iiif/3/x/1024,0,1024,1024/512,/0/default.jpg

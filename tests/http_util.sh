@@ -36,20 +36,20 @@ gvd() {
     fi
 }
 
+# daemon_port: success once the daemon's log names its port (in PORT) or
+# the daemon has gone (PORT empty).
+daemon_port() {
+    PORT=$(sed -n 's|.*listening on http://.*:\([0-9][0-9]*\)/$|\1|p' \
+        "$T/daemon.log" | head -n 1)
+    [ -n "$PORT" ] || ! kill -0 "$DPID" 2>/dev/null
+}
+
 start_daemon() {
     : >"$T/daemon.log"
     (gvd -c "$1" -p 0) 2>>"$T/daemon.log" &
     DPID=$!
     PORT=
-    i=0
-    while [ $i -lt 300 ]; do
-        PORT=$(sed -n 's|.*listening on http://.*:\([0-9][0-9]*\)/$|\1|p' \
-            "$T/daemon.log" | head -n 1)
-        [ -n "$PORT" ] && break
-        kill -0 "$DPID" 2>/dev/null || break
-        sleep 0.1
-        i=$((i + 1))
-    done
+    wait_until daemon_port
     [ -n "$PORT" ] || bail "gigaviewd did not start: $(tail -n 20 "$T/daemon.log")"
     BASE="http://127.0.0.1:$PORT"
 }
@@ -78,7 +78,7 @@ no_sanitizer_report() {
 
 req() {
     code=$(curl -sS --path-as-is -o "$T/b" -D "$T/h" -w '%{http_code}' \
-        --max-time 30 "$@" 2>"$T/curl.err") || code=000
+        --max-time "$GV_TEST_PATIENCE" "$@" 2>"$T/curl.err") || code=000
 }
 
 # url PATH: the daemon's URL for PATH.

@@ -10,13 +10,23 @@
 # Environment (set by make check; defaults let a test run by hand from the
 # build directory): GIGAVIEW, the binary; TESTDATA, tests/data.
 # POSIX sh only: the harness runs the tests with $(SHELL).
+#
+# No outcome may depend on how fast the machine is.  A test waits for what
+# must happen (a daemon's first line, an answer, a page's element) with
+# wait_until, req or GV_TEST_PATIENCE: seconds after which the wait is
+# called a hang.  It is generous on purpose: on a busy machine, in the
+# sanitizer build, work that takes 0.2 s idle (loading OpenImageIO's 260
+# libraries) has taken over 30 s; the bound only decides how long a real
+# hang takes to be reported.  The browser scripts get it through the
+# environment (tests/browser/chromium.mjs).
 
 set -u
 
 : "${GIGAVIEW:=./gigaview}"
 : "${TESTDATA:=$(cd "$(dirname "$0")" && pwd)/data}"
 : "${VALGRIND:=}"
-export GIGAVIEW TESTDATA VALGRIND
+: "${GV_TEST_PATIENCE:=240}"
+export GIGAVIEW TESTDATA VALGRIND GV_TEST_PATIENCE
 
 tap_n=0
 tap_failed=0
@@ -66,15 +76,28 @@ under_valgrind() {
     [ -n "$VALGRIND" ] && [ "$VALGRIND" != 0 ]
 }
 
+# wait_until CMD...: run CMD every 0.1 s until it succeeds (status 0), or
+# until GV_TEST_PATIENCE seconds have passed (status 1).
+wait_until() {
+    wait_end=$(($(date +%s) + GV_TEST_PATIENCE))
+    until "$@"; do
+        [ "$(date +%s)" -lt "$wait_end" ] || return 1
+        sleep 0.1
+    done
+}
+
 # browser_preflight [NEEDED] [COVERED]: set CHROMIUM (default
 # /usr/bin/chromium), srcdir and BROWSER_DIR (tests/browser) for a headless
 # Chromium test, or skip the whole test (TAP "1..0 # SKIP", exit 0) when
 # chromium, node 20 or later, tests/browser/node_modules/playwright-core
 # or tests/browser/node_modules/NEEDED (a file or folder, if given) is
 # missing, and under valgrind (COVERED says which test covers the server
-# there).
+# there).  BROWSER_HANG is the bound on a whole browser script (its
+# `timeout`), after which it is called a hang: each of its waits has
+# GV_TEST_PATIENCE, and a script has several.
 browser_preflight() {
     : "${CHROMIUM:=/usr/bin/chromium}"
+    BROWSER_HANG=$((GV_TEST_PATIENCE * 8))
     srcdir=${top_srcdir:-$(dirname "$0")/..}
     BROWSER_DIR=$(cd "$srcdir/tests/browser" && pwd)
     if [ ! -x "$CHROMIUM" ]; then

@@ -33,7 +33,7 @@
 import { mkdtempSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { launchChromium } from './chromium.mjs';
+import { launchChromium, PATIENCE_MS } from './chromium.mjs';
 import { check, failed, note, parseArgs } from './report.mjs';
 
 const opt = parseArgs({ base: '', public: '', restricted: '', group: '', 'other-group': '',
@@ -65,14 +65,14 @@ async function browser(group) {
     return { ctx, page, log, consoleErrors };
 }
 
-const dialogShown = (page) => page.waitForSelector('#auth:not([hidden])', { timeout: 15000 })
+const dialogShown = (page) => page.waitForSelector('#auth:not([hidden])', { timeout: PATIENCE_MS })
     .then(() => true, () => false);
 
 async function opened(page, id) {
     return page.waitForFunction((want) => {
         const g = window.gigaview;
         return g && g.viewer.image && g.viewer.image.id === want;
-    }, id, { timeout: 20000 }).then(() => true, () => false);
+    }, id, { timeout: PATIENCE_MS }).then(() => true, () => false);
 }
 
 async function main() {
@@ -100,14 +100,14 @@ async function main() {
         JSON.stringify(okBefore.slice(0, 3)));
     await b.page.click('#auth-cancel');
     const err = await b.page.waitForFunction(() => document.getElementById('error').textContent, null,
-        { timeout: 10000 }).then((h) => h.jsonValue(), () => '');
+        { timeout: PATIENCE_MS }).then((h) => h.jsonValue(), () => '');
     check(/not logged in/.test(err), 'cancel says the image is restricted and not logged in', err);
 
     // 4. log in (the group of the image)
     await b.page.evaluate(() => { location.hash = ''; });
     await b.page.evaluate((id) => { location.hash = `image=${encodeURIComponent(id)}`; }, opt.restricted);
     check(await dialogShown(b.page), 'asked again after cancelling');
-    const popup = b.page.waitForEvent('popup', { timeout: 15000 }).catch(() => null);
+    const popup = b.page.waitForEvent('popup', { timeout: PATIENCE_MS }).catch(() => null);
     await b.page.click('#auth-confirm');
     const w = await popup;
     check(w !== null, 'confirm opens the login window');
@@ -164,16 +164,16 @@ async function main() {
         r.status === 401);
     check(refused.length >= 1, 'an expired login: a tile request answered 401',
         JSON.stringify(b.log.slice(mark, mark + 4)));
-    const popup3 = b.page.waitForEvent('popup', { timeout: 15000 }).catch(() => null);
+    const popup3 = b.page.waitForEvent('popup', { timeout: PATIENCE_MS }).catch(() => null);
     const viewAsked = await b.page.evaluate(() => window.gigaview.viewer.hash());
     await b.page.click('#auth-confirm');
     check((await popup3) !== null, 'confirm opens the login window again');
     const done = await b.page.waitForFunction(() => document.getElementById('auth').hidden, null,
-        { timeout: 20000 }).then(() => true, () => false);
+        { timeout: PATIENCE_MS }).then(() => true, () => false);
     check(done, 'after the new login the dialog closes');
-    const complete = await b.page.evaluate(() => Promise.race([
+    const complete = await b.page.evaluate((ms) => Promise.race([
         window.gigaview.viewer.settled().then(() => true),
-        new Promise((r) => setTimeout(() => r(false), 30000))]));
+        new Promise((r) => setTimeout(() => r(false), ms))]), PATIENCE_MS);
     check(complete, 'after the new login the view completes');
     const mark2 = b.log.findIndex((r, i) => i >= mark && r.url.includes('/iiif/auth/token') && r.status === 200);
     const later = mark2 < 0 ? [] : b.log.slice(mark2).filter((r) => r.url.includes(`/v1/images/${opt.large}/`));
@@ -196,12 +196,12 @@ async function main() {
         v.setView({ ...v.view, zoom: Math.max(0, v.view.zoom - 2), cx: v.view.cx * 1.3, cy: v.view.cy * 0.7 });
     });
     check(await dialogShown(b.page), 'regions: an expired login asks again');
-    const popup4 = b.page.waitForEvent('popup', { timeout: 15000 }).catch(() => null);
+    const popup4 = b.page.waitForEvent('popup', { timeout: PATIENCE_MS }).catch(() => null);
     await b.page.click('#auth-confirm');
     await popup4;
-    const complete8 = await b.page.evaluate(() => Promise.race([
+    const complete8 = await b.page.evaluate((ms) => Promise.race([
         window.gigaview.viewer.settled().then(() => true),
-        new Promise((r) => setTimeout(() => r(false), 30000))]));
+        new Promise((r) => setTimeout(() => r(false), ms))]), PATIENCE_MS);
     const last = b.log.filter((r) => r.url.includes(`/v1/images/${opt.large}/region`)).pop();
     check(complete8 && last && last.status === 200,
         'regions: after the new login the view completes from a region answered 200',
@@ -213,13 +213,13 @@ async function main() {
     await b.page.goto(`${base}#image=${encodeURIComponent(opt.restricted)}`);
     check(await dialogShown(b.page), 'another group\'s reader is asked to log in');
     const headingBefore = await b.page.$eval('#auth-heading', (e) => e.textContent);
-    const popup2 = b.page.waitForEvent('popup', { timeout: 15000 }).catch(() => null);
+    const popup2 = b.page.waitForEvent('popup', { timeout: PATIENCE_MS }).catch(() => null);
     await b.page.click('#auth-confirm');
     await popup2;
     const changed = await b.page.waitForFunction((h) => {
         const box = document.getElementById('auth');
         return !box.hidden && document.getElementById('auth-heading').textContent !== h;
-    }, headingBefore, { timeout: 20000 }).then(() => true, () => false);
+    }, headingBefore, { timeout: PATIENCE_MS }).then(() => true, () => false);
     check(changed, 'after a login that gives no access the dialog says so (the probe\'s texts)',
         await b.page.$eval('#auth-heading', (e) => e.textContent));
     check(!(await b.page.evaluate(() => !!window.gigaview.viewer.image)), 'the image stays closed');

@@ -14,7 +14,7 @@ import { inflateSync } from 'node:zlib';
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { chromium } from 'playwright-core';
+import { launchChromium } from './chromium.mjs';
 
 const opt = {};
 for (let i = 2; i + 1 < process.argv.length; i += 2)
@@ -71,12 +71,7 @@ function png16(bytes, ch = 0) {
 const profile = mkdtempSync(join(tmpdir(), 'gv-height-'));
 let ctx;
 try {
-    ctx = await chromium.launchPersistentContext(profile, {
-        executablePath: opt.chromium, headless: true, timeout: 30000,
-        args: ['--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-            '--disable-background-networking', '--disable-component-update', '--disable-sync',
-            '--no-first-run'],
-    });
+    ctx = await launchChromium(profile, opt.chromium, 800, 600);
     const pg = await ctx.newPage();
     const errors = [];
     pg.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });

@@ -36,7 +36,7 @@ import { readFileSync, mkdirSync, writeFileSync, mkdtempSync, rmSync } from 'nod
 import { dirname, join } from 'node:path';
 import { tmpdir } from 'node:os';
 import { fileURLToPath } from 'node:url';
-import { launchChromium } from './chromium.mjs';
+import { launchChromium, PATIENCE_MS } from './chromium.mjs';
 import { pass, fail, note, failed } from './report.mjs';
 
 // Thresholds (see tests/browser_osd.sh for why these values).
@@ -167,7 +167,7 @@ async function run(ctx) {
     const t0 = Date.now();
     await pg.goto(pageUrl);
     try {
-        await pg.waitForFunction(() => window.gv.fullyLoaded || window.gv.error, null, { timeout: 20000 });
+        await pg.waitForFunction(() => window.gv.fullyLoaded || window.gv.error, null, { timeout: PATIENCE_MS });
     } catch {
         // reported below
     }

@@ -67,7 +67,7 @@ import { execFileSync } from 'node:child_process';
 import { mkdtempSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { launchChromium } from './chromium.mjs';
+import { launchChromium, PATIENCE_MS } from './chromium.mjs';
 import { pass, fail, note, check, failed, parseArgs } from './report.mjs';
 
 const MAX_MAD = 1;      // mean absolute difference per channel, 8-bit units
@@ -211,7 +211,7 @@ function nativeRender(id, v) {
     const out = join(scratch, `ref-${Date.now()}.png`);
     execFileSync(opt.gigaview, ['render', base, '--image', id, '--center', `${v.cx},${v.cy}`,
         '--zoom', String(v.zoom), '--rotate', String(v.rot), '--size', `${W}x${H}`, '--no-cache', '-o', out],
-    { stdio: ['ignore', 'ignore', 'pipe'], timeout: 60000 });
+    { stdio: ['ignore', 'ignore', 'pipe'], timeout: PATIENCE_MS });
     const png = readFileSync(out);
     if (opt.out) writeFileSync(join(opt.out, `native-${v.zoom}-${v.rot}.png`), png);
     return `data:image/png;base64,${png.toString('base64')}`;
@@ -532,7 +532,9 @@ async function run(c) {
         window.dispatchEvent(new Event('gamepadconnected'));
         pad.axes[0] = 1;
     });
-    await pg.waitForTimeout(400);
+    // Held until the view has moved past the check's mark: a fixed time
+    // would be fewer frames on a busy machine.
+    await pg.waitForFunction(() => window.gigaview.viewer.view.cx > 560).catch(() => {});
     await pg.evaluate(() => { window.gvt.pad.axes[0] = 0; });
     await settle(pg);
     v = await view(pg);
@@ -556,7 +558,7 @@ async function run(c) {
     // 5: the hash round trip.
     await setView(pg, { cx: 612.25, cy: 377.5, zoom: 0.75, rot: 30 });
     await settle(pg);
-    await pg.waitForFunction(() => location.hash.includes('z=0.75'), null, { timeout: 5000 }).catch(() => {});
+    await pg.waitForFunction(() => location.hash.includes('z=0.75'), null, { timeout: PATIENCE_MS }).catch(() => {});
     const url = pg.url();
     const digest = () => {
         // FNV-1a over the picture and a count of its non-black pixels.
@@ -591,7 +593,7 @@ async function run(c) {
     check(ts.entropy > 0 && ts.fixed > 0, `both tile layouts were decoded (${ts.entropy} entropy-coded, ${ts.fixed} fixed)`);
     // The prefetch circle (thesis section 7.5) fills in around the view
     // once the view itself is complete.
-    await pg.waitForFunction(() => window.gigaview.viewer.stats.prefetched > 0, null, { timeout: 20000 }).catch(() => {});
+    await pg.waitForFunction(() => window.gigaview.viewer.stats.prefetched > 0, null, { timeout: PATIENCE_MS }).catch(() => {});
     const s2 = await pg.evaluate(() => window.gigaview.viewer.stats);
     check(s2.prefetched > 0, `tiles around the view are prefetched once it is complete (${s2.prefetched} so far)`);
     note(`synth: ${s2.decoded} tiles decoded, ${s2.resident} textures resident (${(s2.textureBytes / 1048576).toFixed(1)} MiB), ${s2.evicted} evicted`);
@@ -622,11 +624,13 @@ async function run(c) {
 
     lap('eviction tour');
     // While tiles are on their way, their ancestors stand in, upsampled:
-    // batches held back for 1.5 s, the first picture has no black hole and
-    // the loading indicator shows.
+    // batches held back until the first picture is read, which has no
+    // black hole and shows the loading indicator.
     const pg5 = await newPage(c);
+    let releaseBatches;
+    const batchesHeld = new Promise((ok) => { releaseBatches = ok; });
     await pg5.route(/\/v1\/images\/picos\/batch/, async (route) => {
-        await new Promise((ok) => setTimeout(ok, 1500));
+        await batchesHeld;
         await route.continue().catch(() => {});
     });
     await pg5.goto(`${base}/#image=picos&x=550&y=350&z=0&r=0`);
@@ -640,6 +644,7 @@ async function run(c) {
         window.gvEarly = a;
         return { black, complete: r.complete, loading: !document.getElementById('loading').hidden };
     });
+    releaseBatches();
     await settle(pg5);
     const mad = await pg5.evaluate(() => {
         const late = window.gigaview.viewer.snapshot(), early = window.gvEarly;
@@ -799,7 +804,7 @@ async function filters(c) {
         `five quick slider moves send one request, with the last value (${sent.length} sent: ${sent.map((b) => JSON.stringify(b.params)).join(' ')})`);
     await checkFiltered(pg, 'gamma 2.2 from the slider', 0, 150, 100, [100, 80, 200, 150],
         { filter: 'gamma', params: { gamma: { gamma: 2.2 } }, level: 0, region: [250, 180, 200, 150] });
-    await pg.waitForFunction(() => location.hash.includes('p=gamma.gamma%3A2.2'), null, { timeout: 3000 }).catch(() => {});
+    await pg.waitForFunction(() => location.hash.includes('p=gamma.gamma%3A2.2'), null, { timeout: PATIENCE_MS }).catch(() => {});
     const h3 = await pg.evaluate(() => location.hash);
     check(h3.includes('filter=gamma') && h3.includes('p=gamma.gamma%3A2.2'), `the hash holds the filter and its parameter (${h3})`);
 
@@ -820,7 +825,7 @@ async function filters(c) {
         i.value = '3';
         i.dispatchEvent(new Event('input'));
     });
-    await pg.waitForFunction(() => window.gigaview.runner.inflight > 0, null, { timeout: 60000 });
+    await pg.waitForFunction(() => window.gigaview.runner.inflight > 0, null, { timeout: PATIENCE_MS });
     await pg.evaluate(() => {   // debounced, then in flight: now change it
         const i = document.querySelector('#f-params input[data-key="gamma.gamma"]');
         i.value = '4';
@@ -828,7 +833,7 @@ async function filters(c) {
     });
     // The abort follows the debounce; Chromium may report it only once
     // the held request is let go, so wait a while for it, then open.
-    for (let k = 0; k < 100 && aborted.length === a0; k++)
+    for (const end = Date.now() + PATIENCE_MS; Date.now() < end && aborted.length === a0;)
         await new Promise((ok) => setTimeout(ok, 100));
     openGate();
     await idle(pg);
@@ -914,11 +919,13 @@ async function filters(c) {
     check(ok2, 'the corrected body compiles and runs inline');
     await pg.fill('#f-token', opt.token);
     await pg.click('#f-save');
-    await pg.waitForFunction(() => window.gigaview.panel.savedId, null, { timeout: 20000 }).catch(() => {});
+    await pg.waitForFunction(() => window.gigaview.panel.savedId, null, { timeout: PATIENCE_MS }).catch(() => {});
     const saved = await pg.evaluate(() => window.gigaview.panel.savedId);
     const listed = await pg.evaluate(async () => (await (await fetch('v1/filters')).json()).filters.map((f) => f.id));
     await idle(pg);
-    const hash = await pg.evaluate(() => new Promise((ok) => setTimeout(() => ok(location.hash), 400)));
+    if (saved)
+        await pg.waitForFunction((id) => location.hash.includes(`filter=${id}`), saved).catch(() => {});
+    const hash = await pg.evaluate(() => location.hash);
     check(saved && listed.includes(saved) && hash.includes(`filter=${saved}`),
         `"save" stores the graph on the server (${saved}, listed by GET /v1/filters, in the hash)`, `listed: ${listed.join(', ')}; hash ${hash}`);
     if (saved)

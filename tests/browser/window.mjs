@@ -37,7 +37,7 @@
 import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { launchChromium } from './chromium.mjs';
+import { launchChromium, PATIENCE_MS } from './chromium.mjs';
 import { check, fail, failed, note, parseArgs } from './report.mjs';
 
 const W = 800, H = 500;
@@ -151,7 +151,7 @@ async function run(c) {
     await match(pg, 'picos level 0 1:1, after the slider', 'picos', 150, 100, slid);
 
     // 3. the hash carries the window; a new page at that hash shows the same.
-    await pg.waitForFunction((w) => decodeURIComponent(location.hash).includes(`window=${w}`), slid, { timeout: 5000 })
+    await pg.waitForFunction((w) => decodeURIComponent(location.hash).includes(`window=${w}`), slid, { timeout: PATIENCE_MS })
         .catch(() => {});
     const hash = await pg.evaluate(() => location.hash);
     check(new URLSearchParams(hash.slice(1)).get('window') === slid, `the hash carries the window (${hash})`, hash);
@@ -192,7 +192,7 @@ async function run(c) {
     check(r7.complete && w7[0] === null && w7[1] === 'none', `window=none opens with no window (${JSON.stringify(w7)})`,
         `${JSON.stringify(w7)} ${JSON.stringify(r7)}`);
     await match(pg4, 'dflt level 0 1:1 with window=none', 'dflt', 150, 100, 'none');
-    await pg4.waitForFunction(() => location.hash.includes('window=none'), null, { timeout: 5000 }).catch(() => {});
+    await pg4.waitForFunction(() => location.hash.includes('window=none'), null, { timeout: PATIENCE_MS }).catch(() => {});
     const h7 = await pg4.evaluate(() => location.hash);
     check(new URLSearchParams(h7.slice(1)).get('window') === 'none', `the hash keeps window=none (${h7})`, h7);
     await pg4.close();
@@ -248,7 +248,7 @@ async function run(c) {
         `${k10}; ${reqs10.slice(0, 4).join(' ')}`);
     const w10 = await pg6.evaluate(() => window.gigaview.viewer.extra.window);
     await match(pg6, 's16 level 0 1:1, after the colour input', 's16', 150, 100, w10, `&colours=${encodeURIComponent(C2)}`);
-    await pg6.waitForFunction((t) => decodeURIComponent(location.hash).includes(`colours=${t}`), C2, { timeout: 5000 })
+    await pg6.waitForFunction((t) => decodeURIComponent(location.hash).includes(`colours=${t}`), C2, { timeout: PATIENCE_MS })
         .catch(() => {});
     const h10 = await pg6.evaluate(() => location.hash);
     check(new URLSearchParams(h10.slice(1)).get('colours') === C2, `the hash carries the colours (${h10})`, h10);
