@@ -12,6 +12,11 @@
  * same image at quality 89 differs from the module's at 90, so the
  * comparison can fail.  Images the native writer declines (2 channels,
  * 70000 pixels wide) go to the module, which answers in its own words.
+ *
+ * PNG (native_png_write.c) the same way: 1 and 3 channels of 8-bit and 1
+ * to 4 of 16-bit samples, through gv_image_encode_typed (and
+ * gv_image_encode for 8-bit), against the module's bytes; 2 and 4 of 8
+ * bits are refused by both; float samples go to the module.  Negative control: one sample changed changes the bytes.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,6 +25,7 @@
 #include "util.h"
 #include "imageio/imageio.h"
 #include "imageio/native_jpeg_write.h"
+#include "imageio/native_png_write.h"
 
 /* Pixels of kind 0 (smooth gradients), 1 (noise) or 2 (flat). */
 static uint8_t *make_image(uint32_t w, uint32_t h, int c, int kind,
@@ -75,6 +81,104 @@ static int compare(uint32_t w, uint32_t h, int c, int kind, int q,
     return same;
 }
 
+/* 16-bit samples of kind 0 (gradients over the whole range), 1 (noise)
+ * or 2 (flat), as bytes in host order. */
+static uint8_t *make_image16(uint32_t w, uint32_t h, int c, int kind,
+                             uint64_t *rng)
+{
+    uint16_t *p = malloc(sizeof *p * ((size_t)w * h * c + 1));
+    for (size_t i = 0; i < (size_t)w * h * c; i++) {
+        size_t x = i / (size_t)c % w, y = i / ((size_t)c * w);
+        p[i] = kind == 0 ? (uint16_t)(x * 517 + y * 1031 + i % (size_t)c * 9000)
+             : kind == 1 ? (uint16_t)test_rand(rng)
+                         : (uint16_t)(4000 + 12000 * (i % (size_t)c));
+    }
+    return (uint8_t *)p;
+}
+
+/* PNG of one image by the module, natively and through the loader (both
+ * entry points where they apply); 1 when all equal the module's bytes. */
+static int compare_png(uint32_t w, uint32_t h, int c, enum gv_sample t,
+                       int kind, uint64_t *rng)
+{
+    uint8_t *px = t == GV_SAMPLE_U16 ? make_image16(w, h, c, kind, rng)
+                                     : make_image(w, h, c, kind, rng);
+    uint8_t *ref = NULL, *a = NULL, *b = NULL, *d = NULL;
+    size_t nref = 0, na = 0, nb = 0, nd = 0;
+    struct gv_error e1 = {0}, e2 = {0}, e3 = {0}, e4 = {0};
+    setenv("GIGAVIEW_NATIVE_WRITERS", "0", 1);
+    int r1 = gv_image_encode_typed("png", w, h, c, t, px, &ref, &nref, &e1);
+    if (t == GV_SAMPLE_U8 && (c == 2 || c == 4)) {
+        /* Not the module's: both refuse, in the module's words. */
+        int r3 = gv_image_encode_typed("png", w, h, c, t, px, &b, &nb, &e3);
+        check(r1 < 0 && r3 < 0 && !gv_native_png_encodes(w, h, c, t) &&
+              strcmp(e1.text, e3.text) == 0, "png %ux%u x%d 8-bit: refused "
+              "by the module, natively declined (%s)", w, h, c, e3.text);
+        free(px);
+        free(ref);
+        free(b);
+        return r1 < 0 && r3 < 0;
+    }
+    unsetenv("GIGAVIEW_NATIVE_WRITERS");
+    int r2 = gv_native_png_encode(w, h, c, t, px, &a, &na, &e2);
+    int r3 = gv_image_encode_typed("png", w, h, c, t, px, &b, &nb, &e3);
+    int plain = t == GV_SAMPLE_U8 && (c == 1 || c == 3);
+    int r4 = plain ? gv_image_encode("png", w, h, c, px, 90, &d, &nd, &e4) : 0;
+    int same = r1 == 0 && r2 == 0 && r3 == 0 && r4 == 0 && nref == na &&
+               nref == nb && memcmp(ref, a, nref) == 0 &&
+               memcmp(ref, b, nref) == 0 &&
+               (!plain || (nd == nref && memcmp(ref, d, nref) == 0));
+    check(same, "png %ux%u x%d %d-bit kind %d: module %d (%zu bytes%s%s), "
+          "native %zu, through gv_image_encode_typed %zu%s, equal bytes", w,
+          h, c, t == GV_SAMPLE_U16 ? 16 : 8, kind, r1, nref, r1 ? ": " : "",
+          r1 ? e1.text : "", na, nb, plain ? " and gv_image_encode" : "");
+    free(px);
+    free(ref);
+    free(a);
+    free(b);
+    free(d);
+    return same;
+}
+
+static void png_checks(uint64_t *rng)
+{
+    static const uint32_t sizes[][2] = {
+        {1, 1}, {7, 5}, {513, 513}, {326, 163}, {1000, 3}, {3, 700}};
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
+        for (int c = 1; c <= 4; c++)
+            for (int depth = 0; depth < 2; depth++)
+                compare_png(sizes[s][0], sizes[s][1], c,
+                            depth ? GV_SAMPLE_U16 : GV_SAMPLE_U8,
+                            (int)((s + (size_t)c) % 3), rng);
+
+    /* Negative control: one sample changed is other bytes. */
+    uint8_t *px = make_image16(64, 64, 1, 0, rng), *a = NULL, *b = NULL;
+    size_t na = 0, nb = 0;
+    struct gv_error err = {0};
+    int r = gv_native_png_encode(64, 64, 1, GV_SAMPLE_U16, px, &a, &na, &err);
+    px[2 * 700] ^= 1;
+    r |= gv_native_png_encode(64, 64, 1, GV_SAMPLE_U16, px, &b, &nb, &err);
+    check(r == 0 && !(na == nb && memcmp(a, b, na) == 0),
+          "negative control: one 16-bit sample changed changes the PNG");
+    free(a);
+    free(b);
+    free(px);
+
+    /* Declined: float samples, 5 channels; they go to the module. */
+    check(!gv_native_png_encodes(8, 8, 1, GV_SAMPLE_F32) &&
+          !gv_native_png_encodes(8, 8, 2, GV_SAMPLE_U8) &&
+          !gv_native_png_encodes(8, 8, 5, GV_SAMPLE_U16) &&
+          gv_native_png_encodes(8, 8, 4, GV_SAMPLE_U16),
+          "png: float samples, 2 of 8 bits and 5 channels are declined, 4 of 16 bits taken");
+    float f[4] = {0};
+    uint8_t *out = NULL;
+    size_t len = 0;
+    err = (struct gv_error){0};
+    check(gv_native_png_encode(2, 2, 1, GV_SAMPLE_F32, f, &out, &len, &err) < 0 &&
+          err.code == GV_EINVAL, "the native PNG writer refuses float samples");
+    free(out);
+}
+
 int main(void)
 {
     uint64_t rng = 12345;
@@ -118,5 +222,6 @@ int main(void)
     err = (struct gv_error){0};
     check(gv_native_jpeg_encode(8, 8, 2, two, 90, &out, &len, &err) < 0 &&
           err.code == GV_EINVAL, "the native writer refuses 2 channels too");
+    png_checks(&rng);
     return tap_done();
 }

@@ -50,10 +50,11 @@
  * MIRAX, VMS or Sakura slide is offered to them, and what they decline
  * goes on as above.  GIGAVIEW_NATIVE_READERS does not change this.
  * Writing goes through the module, but for gv_image_encode's JPEG
- * (native_jpeg_write.c: the module's very bytes, with no module to load,
- * so that a server's first JPEG answer does not wait for OpenImageIO);
- * GIGAVIEW_NATIVE_WRITERS=0 sends that to the module too (tests compare
- * the two).
+ * (native_jpeg_write.c) and gv_image_encode's and gv_image_encode_typed's
+ * PNG of 8 or 16-bit samples (native_png_write.c): the module's very
+ * bytes, with no module to load, so that a server's first JPEG or PNG
+ * answer does not wait for OpenImageIO; GIGAVIEW_NATIVE_WRITERS=0 sends
+ * those to the module too (tests compare the two).
  */
 #include <dlfcn.h>
 #include <limits.h>
@@ -71,6 +72,7 @@
 #include "imageio/native_file.h"
 #include "imageio/native_jpeg.h"
 #include "imageio/native_jpeg_write.h"
+#include "imageio/native_png_write.h"
 #include "imageio/output_format.h"
 #include "imageio/native_png.h"
 #include "imageio/native_tiff.h"
@@ -559,6 +561,11 @@ int gv_image_encode(const char *format, uint32_t width, uint32_t height,
         native_writer_allowed())
         return gv_native_jpeg_encode(width, height, channels, pixels, quality,
                                      out, len, err);
+    if (f && strcmp(f->name, "png") == 0 && (channels == 1 || channels == 3) &&
+        gv_native_png_encodes(width, height, channels, GV_SAMPLE_U8) &&
+        native_writer_allowed())
+        return gv_native_png_encode(width, height, channels, GV_SAMPLE_U8,
+                                    pixels, out, len, err);
     const struct gv_imageio_module *m = get(err);
     return m ? m->encode(format, width, height, channels, pixels, quality,
                          out, len, err) : -1;
@@ -578,6 +585,12 @@ int gv_image_encode_typed(const char *format, uint32_t width, uint32_t height,
                           const void *pixels, uint8_t **out, size_t *len,
                           struct gv_error *err)
 {
+    const struct gv_output_format *f = gv_output_format_image(format);
+    if (f && strcmp(f->name, "png") == 0 &&
+        gv_native_png_encodes(width, height, channels, sample) &&
+        native_writer_allowed())
+        return gv_native_png_encode(width, height, channels, sample, pixels,
+                                    out, len, err);
     const struct gv_imageio_module *m = get(err);
     return m ? m->encode_typed(format, width, height, channels, sample,
                                pixels, out, len, err) : -1;
