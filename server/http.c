@@ -1104,12 +1104,18 @@ static void stop_threads(struct http_threads *h)
 
 /* libmicrohttpd's memory for one connection: the head must fit in it
  * (beyond, libmicrohttpd answers 414 or 431 itself, in HTML), so it holds
- * a head at our limits twice over, so that our JSON answers those; the
- * rest is the response's header lines and the first body bytes. */
+ * a head at our limits twice over (the target is part of the head), so
+ * that our JSON answers those; then a header entry per query argument,
+ * and the response's header lines (its body is sent from its own
+ * buffer).  Kept no larger: libmicrohttpd zeroes half the pool (the read
+ * buffer it starts each request with) between the requests of a
+ * connection, which at 118 KiB (the 32K limit and 32 KiB of slack before
+ * 2026-12-03) was a quarter of the CPU time of a raw tile. */
 static size_t pool_bytes(const struct settings *cfg)
 {
-    return (size_t)(2 * (cfg->max_url_bytes + cfg->max_header_bytes) +
-                    64 * cfg->max_query_args + 32768);
+    size_t head = cfg->max_url_bytes > cfg->max_header_bytes
+                      ? cfg->max_url_bytes : cfg->max_header_bytes;
+    return 2 * head + 64 * (size_t)cfg->max_query_args + 8192;
 }
 
 /* One daemon without a listen socket, on its own internal thread. */

@@ -111,7 +111,7 @@ static const struct settings_key keys[] = {
      "connection's start or its previous answer; 0: no bound"},
     {"max_url_bytes", T_SIZE, F(max_url_bytes), "8K", 256, 1048576,
      "longest request target (path and query) in bytes; 414 beyond"},
-    {"max_header_bytes", T_SIZE, F(max_header_bytes), "32K", 1024, 1048576,
+    {"max_header_bytes", T_SIZE, F(max_header_bytes), "16K", 1024, 1048576,
      "largest request head (every header line) in bytes; 431 beyond"},
     {"max_query_args", T_UINT, F(max_query_args), "64", 1, 4096,
      "most query arguments in one request; 400 beyond"},

@@ -93,11 +93,11 @@ expect_status "a 40 KB header (max_header_bytes)" 431 /v1/images \
 # each line (http.c, pool_bytes): a head within the limits in many lines
 # is served, one over them still gets our JSON.
 # shellcheck disable=SC2046
-expect_status "a 30 KB head in 200 lines (within max_header_bytes)" 200 /v1/images \
-    $(python3 -c "print(' '.join('-H X%d:%s' % (i, 'v' * 140) for i in range(200)))")
+expect_status "a 15 KB head in 100 lines (within max_header_bytes, 16K)" 200 /v1/images \
+    $(python3 -c "print(' '.join('-H X%d:%s' % (i, 'v' * 140) for i in range(100)))")
 # shellcheck disable=SC2046
-expect_status "a 34 KB head in 300 lines (over max_header_bytes)" 431 /v1/images \
-    $(python3 -c "print(' '.join('-H X%d:%s' % (i, 'v' * 110) for i in range(300)))")
+expect_status "an 18 KB head in 160 lines (over max_header_bytes)" 431 /v1/images \
+    $(python3 -c "print(' '.join('-H X%d:%s' % (i, 'v' * 110) for i in range(160)))")
 raw two-lengths "b'GET /v1/images HTTP/1.1\\r\\nHost: t\\r\\nContent-Length: 0\\r\\nContent-Length: 3\\r\\n\\r\\nabc'"
 raw_is two-lengths 400
 raw length-and-chunked "b'GET /v1/images HTTP/1.1\\r\\nHost: t\\r\\nContent-Length: 5\\r\\nTransfer-Encoding: chunked\\r\\n\\r\\n0\\r\\n\\r\\n'"
