@@ -16,7 +16,9 @@
  * PNG (native_png_write.c) the same way: 1 and 3 channels of 8-bit and 1
  * to 4 of 16-bit samples, through gv_image_encode_typed (and
  * gv_image_encode for 8-bit), against the module's bytes; 2 and 4 of 8
- * bits are refused by both; float samples go to the module.  Negative control: one sample changed changes the bytes.
+ * bits are refused by both; float samples go to the module.  A PNG file
+ * written by gv_image_write_typed (natively) equals the module's file; a
+ * file in a missing directory is refused with GV_EIO and its errno.  Negative control: one sample changed changes the bytes.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -179,6 +181,51 @@ static void png_checks(uint64_t *rng)
     free(out);
 }
 
+/* The whole file at path (malloc'ed, *n bytes), or NULL. */
+static uint8_t *slurp(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    uint8_t *b = malloc(1 << 22);
+    *n = b ? fread(b, 1, 1 << 22, f) : 0;
+    fclose(f);
+    return b;
+}
+
+static void png_file_checks(uint64_t *rng)
+{
+    char dir[] = "/tmp/gv-native-write-XXXXXX";
+    if (!mkdtemp(dir)) {
+        check(0, "a scratch directory");
+        return;
+    }
+    char a[64], b[64], bad[96];
+    snprintf(a, sizeof a, "%s/native.png", dir);
+    snprintf(b, sizeof b, "%s/module.png", dir);
+    snprintf(bad, sizeof bad, "%s/missing/x.png", dir);
+    uint8_t *px = make_image16(300, 200, 3, 1, rng);
+    struct gv_error e1 = {0}, e2 = {0}, e3 = {0};
+    int r1 = gv_image_write_typed(a, 300, 200, 3, GV_SAMPLE_U16, px, &e1);
+    setenv("GIGAVIEW_NATIVE_WRITERS", "0", 1);
+    int r2 = gv_image_write_typed(b, 300, 200, 3, GV_SAMPLE_U16, px, &e2);
+    unsetenv("GIGAVIEW_NATIVE_WRITERS");
+    size_t na = 0, nb = 0;
+    uint8_t *fa = slurp(a, &na), *fb = slurp(b, &nb);
+    check(r1 == 0 && r2 == 0 && fa && fb && na == nb && na > 0 &&
+          memcmp(fa, fb, na) == 0, "a 16-bit PNG file written natively "
+          "equals the module's (%zu and %zu bytes)", na, nb);
+    int r3 = gv_image_write_typed(bad, 300, 200, 3, GV_SAMPLE_U16, px, &e3);
+    check(r3 < 0 && e3.code == GV_EIO && strstr(e3.text, "imageio"),
+          "a PNG file in a missing directory: GV_EIO (%s)", e3.text);
+    free(fa);
+    free(fb);
+    free(px);
+    remove(a);
+    remove(b);
+    remove(dir);
+}
+
 int main(void)
 {
     uint64_t rng = 12345;
@@ -223,5 +270,6 @@ int main(void)
     check(gv_native_jpeg_encode(8, 8, 2, two, 90, &out, &len, &err) < 0 &&
           err.code == GV_EINVAL, "the native writer refuses 2 channels too");
     png_checks(&rng);
+    png_file_checks(&rng);
     return tap_done();
 }

@@ -51,10 +51,12 @@
  * goes on as above.  GIGAVIEW_NATIVE_READERS does not change this.
  * Writing goes through the module, but for gv_image_encode's JPEG
  * (native_jpeg_write.c) and gv_image_encode's and gv_image_encode_typed's
- * PNG of 8 or 16-bit samples (native_png_write.c): the module's very
- * bytes, with no module to load, so that a server's first JPEG or PNG
- * answer does not wait for OpenImageIO; GIGAVIEW_NATIVE_WRITERS=0 sends
- * those to the module too (tests compare the two).
+ * PNG of 8 or 16-bit samples (native_png_write.c), and a PNG file that
+ * gv_image_write or gv_image_write_typed writes: the module's very bytes,
+ * with no module to load, so that a server's first JPEG or PNG answer
+ * does not wait for OpenImageIO, nor `gigaview render -o view.png`;
+ * GIGAVIEW_NATIVE_WRITERS=0 sends those to the module too (tests compare
+ * the two).
  */
 #include <dlfcn.h>
 #include <limits.h>
@@ -67,6 +69,7 @@
 #include <unistd.h>
 
 #include "config.h"
+#include "base/atomic_file.h"
 #include "imageio/imageio.h"
 #include "imageio/imageio_module.h"
 #include "imageio/native_file.h"
@@ -536,19 +539,53 @@ const char *gv_image_meta(const struct gv_image_in *in)
     return NULL;
 }
 
-int gv_image_write(const char *path, uint32_t width, uint32_t height,
-                   int channels, const uint8_t *pixels, struct gv_error *err)
-{
-    const struct gv_imageio_module *m = get(err);
-    return m ? m->write(path, width, height, channels, pixels, err) : -1;
-}
-
-/* Whether gv_image_encode may write JPEG itself: not with
+/* Whether the native writers may write (JPEG, PNG): not with
  * GIGAVIEW_NATIVE_WRITERS=0. */
 static int native_writer_allowed(void)
 {
     const char *v = getenv("GIGAVIEW_NATIVE_WRITERS");
     return !(v && strcmp(v, "0") == 0);
+}
+
+/* A PNG that native_png_write.c takes, written as the module would
+ * (encoded in memory, then published whole by gv_atomic_file_write):
+ * 1 when written here, with 0 or -1 in *rc; 0 when the module is to
+ * write it (another format, or a name the module refuses in its own
+ * words). */
+static int write_natively(const char *path, uint32_t width, uint32_t height,
+                          int channels, enum gv_sample sample,
+                          const void *pixels, int *rc, struct gv_error *err)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    const char *dot = strrchr(base, '.');
+    const struct gv_output_format *f =
+        dot ? gv_output_format_for_extension(dot + 1) : NULL;
+    if (!f || strcmp(f->name, "png") != 0 ||
+        !gv_native_png_encodes(width, height, channels, sample) ||
+        !native_writer_allowed())
+        return 0;
+    uint8_t *bytes = NULL;
+    size_t len = 0;
+    *rc = gv_native_png_encode(width, height, channels, sample, pixels, &bytes,
+                               &len, err);
+    if (*rc == 0)
+        *rc = gv_atomic_file_write(path, bytes, len,
+                                   &(struct gv_atomic_opts){.module = "imageio"},
+                                   err);
+    free(bytes);
+    return 1;
+}
+
+int gv_image_write(const char *path, uint32_t width, uint32_t height,
+                   int channels, const uint8_t *pixels, struct gv_error *err)
+{
+    int rc;
+    if (write_natively(path, width, height, channels, GV_SAMPLE_U8, pixels,
+                       &rc, err))
+        return rc;
+    const struct gv_imageio_module *m = get(err);
+    return m ? m->write(path, width, height, channels, pixels, err) : -1;
 }
 
 int gv_image_encode(const char *format, uint32_t width, uint32_t height,
@@ -575,6 +612,10 @@ int gv_image_write_typed(const char *path, uint32_t width, uint32_t height,
                          int channels, enum gv_sample sample,
                          const void *pixels, struct gv_error *err)
 {
+    int rc;
+    if (write_natively(path, width, height, channels, sample, pixels, &rc,
+                       err))
+        return rc;
     const struct gv_imageio_module *m = get(err);
     return m ? m->write_typed(path, width, height, channels, sample, pixels,
                               err) : -1;
