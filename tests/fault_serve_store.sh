@@ -128,7 +128,8 @@ def worker(k):
         p = paths[i % len(paths)]
         i += 1
         try:
-            c = http.client.HTTPConnection('127.0.0.1', port, timeout=20)
+            c = http.client.HTTPConnection('127.0.0.1', port,
+                                           timeout=float(os.environ['GV_TEST_PATIENCE']))
             c.request('GET', p)
             r = c.getresponse()
             body = r.read()
@@ -167,15 +168,19 @@ PY
 # they have an answer, however long they take to start on a loaded
 # machine); load_stop leaves the summary in $T/w/PHASE.out and sets
 # $statuses (e.g. "200 404").
+# shellcheck disable=SC2317 # run by wait_until
+load_answered() {
+    [ -e answered ] || ! kill -0 "$LPID" 2>/dev/null
+}
 load_start() {
     rm -f stop answered
     python3 load.py "$PORT" 6 >"$1.out" 2>"$1.err" &
     LPID=$!
-    i=0
-    while [ ! -e answered ] && [ $i -lt 600 ] && kill -0 "$LPID" 2>/dev/null; do
-        sleep 0.05
-        i=$((i + 1))
-    done
+    wait_until load_answered
+}
+# shellcheck disable=SC2317 # run by wait_until
+load_answered_since_mark() {
+    [ "$(cat after 2>/dev/null | wc -l)" -ge 7 ] || ! kill -0 "$LPID" 2>/dev/null
 }
 # settled: wait until the clients have had nthreads + 1 answers since
 # now (however loaded the machine): at least one request was sent after
@@ -183,12 +188,7 @@ load_start() {
 settled() {
     rm -f after
     touch mark
-    i=0
-    while [ "$(cat after 2>/dev/null | wc -l)" -lt 7 ] && [ $i -lt 600 ] &&
-        kill -0 "$LPID" 2>/dev/null; do
-        sleep 0.05
-        i=$((i + 1))
-    done
+    wait_until load_answered_since_mark
     rm -f mark
 }
 load_stop() {
@@ -202,16 +202,22 @@ load_stop() {
     check "$1: every error has the JSON error body" grep -q '^badbody 0$' "$1.out"
     check "$1: the daemon is alive" kill -0 "$DPID"
 }
-# reload N: SIGHUP and wait until /healthz counts N stores.
+# rescanned N: the daemon has finished more than N scans of the store
+# directory (its start-up scan included); each ends with a summary line.
+# shellcheck disable=SC2317 # run by wait_until
+rescanned() {
+    [ "$(grep -cF " info catalog: $S: " "$T/daemon.log")" -gt "$1" ]
+}
+# reload N: SIGHUP, wait until a rescan begun after now has finished (the
+# count of rescans begun now, plus the start-up scan, plus it: SIGHUPs
+# sent close together may make one rescan, so the count of signals would
+# not do), then succeed if /healthz counts N stores.  Waiting for the
+# count of stores alone would not do when it does not change.
 reload() {
+    begun=$(grep -c ' info main: SIGHUP: rescanning ' "$T/daemon.log")
     kill -HUP "$DPID"
-    i=0
-    while [ $i -lt 100 ]; do
-        [ "$(curl -s "$BASE/healthz" | python3 -c 'import json,sys; print(json.load(sys.stdin)["stores"])' 2>/dev/null)" = "$1" ] && return 0
-        sleep 0.05
-        i=$((i + 1))
-    done
-    return 1
+    wait_until rescanned $((begun + 1))
+    [ "$(curl -s "$BASE/healthz" | python3 -c 'import json,sys; print(json.load(sys.stdin)["stores"])' 2>/dev/null)" = "$1" ]
 }
 # serves REF: the tiles of k equal those of REF (refa or refb).
 serves() {
@@ -224,6 +230,8 @@ check "k serves version a" serves refa
 
 load_start deleted
 rm "$S/k.gv"
+# A second of answers from the changed file before the reload; the
+# checks hold with any number of them (also after the sleeps below).
 sleep 1
 check "deleted: SIGHUP drops it" reload 3
 settled

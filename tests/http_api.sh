@@ -43,7 +43,12 @@ threads = 4
 cache_bytes = 8M   # small, but holds every page of x
 max_region_pixels = 4M
 batch_max_tiles = 8
-connection_timeout = 10
+# The SIGTERM drain below holds a request half sent while the test
+# checks the drain: no idle, request or drain timeout may end it first,
+# however slow the machine.
+connection_timeout = $GV_TEST_PATIENCE
+request_timeout = 0
+drain_timeout = $GV_TEST_PATIENCE
 access_log = stderr
 log_level = info
 EOF2
@@ -404,14 +409,14 @@ off, size, crc = struct.unpack_from('<QII', b, index + 16 * (pages - 1))
 b[off + size // 2] ^= 0x55
 open(sys.argv[2], 'wb').write(b)
 PY
-kill -HUP "$DPID"
-i=0
-while [ $i -lt 50 ]; do
+# stores_are N: /healthz counts N stores.
+# shellcheck disable=SC2317 # run by wait_until
+stores_are() {
     req "$(url /healthz)"
-    [ "$(json_get 'j["stores"]')" = 3 ] && break
-    sleep 0.1
-    i=$((i + 1))
-done
+    [ "$(json_get 'j["stores"]')" = "$1" ]
+}
+kill -HUP "$DPID"
+wait_until stores_are 3
 check "SIGHUP picks up two added stores" test "$(json_get 'j["stores"]')" = 3
 bad500=
 for ty in 0 1; do
@@ -431,13 +436,14 @@ expect_status "clean copy serves the same tile" 200 /v1/images/m2/tiles/0/9/1
 # counted when it completes, just after its access line is written: wait
 # until one /metrics answer shows no other request in flight, so that the
 # next one counts every request made before it.
-i=0
-while [ $i -lt 50 ]; do
+# in_flight PATTERN: a fresh /metrics shows requests in flight (itself
+# included) matching PATTERN.
+# shellcheck disable=SC2317 # run by wait_until
+in_flight() {
     req "$(url /metrics)"
-    grep -q '^gigaview_http_requests_in_flight 1$' "$T/b" && break
-    sleep 0.1
-    i=$((i + 1))
-done
+    grep -Eq "^gigaview_http_requests_in_flight $1\$" "$T/b"
+}
+wait_until in_flight 1
 expect_status "metrics" 200 /metrics
 check "metrics: text format 0.0.4" test "$(header Content-Type)" = "text/plain; version=0.0.4; charset=utf-8"
 cp "$T/b" metrics.txt
@@ -483,13 +489,7 @@ cp "$S/x.gv" "$S/.m2.tmp.gv"
 mv "$S/.m2.tmp.gv" "$S/m2.gv"
 rm "$S/bad.gv"
 kill -HUP "$DPID"
-i=0
-while [ $i -lt 50 ]; do
-    req "$(url /healthz)"
-    [ "$(json_get 'j["stores"]')" = 2 ] && break
-    sleep 0.1
-    i=$((i + 1))
-done
+wait_until stores_are 2
 expect_status "SIGHUP drops a removed store" 404 /v1/images/bad
 req "$(url /v1/images/m2/tiles/0/0/0)"
 check "replaced store: the new content" cmp -s "$T/b" t000
@@ -513,9 +513,9 @@ s = socket.create_connection(('127.0.0.1', int(sys.argv[1])))
 s.sendall(b'POST /v1/images/x/batch HTTP/1.1\r\nHost: t\r\nContent-Type: application/json\r\n'
           b'Content-Length: %d\r\nConnection: close\r\n\r\n' % len(body) + body[:10])
 open(sys.argv[2], 'w').write('sent\n')
-for i in range(300):        # the rest once the drain waits for it (30 s)
-    if os.path.exists(sys.argv[3]):
-        break
+# The rest once the drain waits for it (GV_TEST_PATIENCE s at most).
+t_end = time.monotonic() + float(os.environ.get('GV_TEST_PATIENCE', '240'))
+while not os.path.exists(sys.argv[3]) and time.monotonic() < t_end:
     time.sleep(0.1)
 s.sendall(body[10:])
 data = b''
@@ -528,25 +528,16 @@ print(data.split(b'\r\n')[0].decode())
 PY
 python3 slow.py "$PORT" started go >slow.out 2>&1 &
 spid=$!
-i=0
-while [ ! -s started ] && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+wait_until test -s started
 # In flight once the daemon has its head: /metrics counts it and itself.
-i=0
-while [ $i -lt 300 ]; do
-    req "$(url /metrics)"
-    grep -Eq '^gigaview_http_requests_in_flight [2-9]' "$T/b" && break
-    sleep 0.1
-    i=$((i + 1))
-done
+wait_until in_flight '[2-9][0-9]*'
 kill -TERM "$DPID"
 # The drain has stopped accepting once it logs what it waits for.
-i=0
-while ! grep -q 'waiting for 1 requests in flight' "$T/daemon.log" && [ $i -lt 300 ]; do
-    sleep 0.1
-    i=$((i + 1))
-done
+wait_until grep -q 'waiting for 1 requests in flight' "$T/daemon.log"
+# Refused at once (the listening socket is closed); a connection accepted
+# or left waiting would fail the check however long it took.
 rc=0
-curl -s -o /dev/null --max-time 2 "$(url /healthz)" || rc=$?
+curl -s -o /dev/null --max-time "$GV_TEST_PATIENCE" "$(url /healthz)" || rc=$?
 check "SIGTERM: new connections refused while draining (curl exit $rc, 7 = refused)" \
     test "$rc" -eq 7
 : >go

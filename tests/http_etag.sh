@@ -109,11 +109,7 @@ done
 # Replace the store by rename, as encoders publish, and rescan.
 cp "$T/second.gv" "$S/.x.gv.new" && mv "$S/.x.gv.new" "$S/x.gv" || bail "mv"
 kill -HUP "$DPID"
-i=0
-while [ $i -lt 100 ] && ! grep -q 'replaced x (instance' "$T/daemon.log"; do
-    sleep 0.1
-    i=$((i + 1))
-done
+wait_until grep -q 'replaced x (instance' "$T/daemon.log"
 check "SIGHUP replaces the store" grep -q 'replaced x (instance' "$T/daemon.log"
 
 n=0

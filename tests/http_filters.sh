@@ -13,9 +13,9 @@
 # the region endpoint (negate: 255 - v), every output form (PNG gray, RGB
 # and RGBA; 16-bit TIFF with two scales; float TIFF; raw), the padding
 # and alignment of the decoded region, request errors (400, 404, 413);
-# and the sandbox: a shader that never ends gets 504 while tiles keep
-# being served, and the next request runs on a new worker; a worker
-# killed during a job gets 500 and one killed while idle is replaced
+# and the sandbox: tiles keep being served while a shader that never ends
+# runs; past filter_timeout_ms it gets 504, and the next job runs on a new
+# worker; a worker killed during a job gets 500 and one killed while idle is replaced
 # unnoticed; an out-of-bounds array write; a full queue gets 503 with
 # Retry-After; SIGTERM cancels a job in flight and exits 0; gpu = off and
 # a machine with no EGL answer 503 with the reason, and a build
@@ -67,7 +67,8 @@ auth_token = "$TOKEN"
 filter_dir = "$T/stored"
 filter_library_dir = "$T/lib"
 filter_workers = 2
-filter_timeout_ms = 20000
+filter_timeout_ms = $((GV_TEST_PATIENCE * 1000))
+filter_compile_timeout_ms = $((GV_TEST_PATIENCE * 1000))
 filter_max_jobs = 4
 max_filter_pixels = 1M
 filter_max_modules = 8
@@ -442,31 +443,57 @@ expect "GET on the filter route" 405
 # A shader that does not end in any useful time.  llvmpipe stops every
 # loop after 65535 iterations, so "for (;;)" ends too; this one does
 # 65535 sines and cosines per pixel over a million pixels: about 6
-# minutes of llvmpipe on two cores, far past filter_timeout_ms.
+# minutes of llvmpipe on two cores, far past any time limit here.  The
+# jobs of this daemon have GV_TEST_PATIENCE seconds (filter_timeout_ms,
+# filter_compile_timeout_ms), so that none meets them however slow the
+# machine; the shader is ended by a killed worker, SIGTERM, or (in a daemon
+# where it is the only job that runs) filter_timeout_ms.
 spin='{"name": "spin", "output": "s", "modules": [{"id": "s", "template": "point", "inputs": ["source"], "glsl": "float s = $(FilterInput1)(rel_pos).r;\nfor (int i = 0; i < 100000000; i++) {\n  s = sin(s + float(i)) * 1.0001 + cos(s);\n  if (s > 1e30) break;\n}\nreturn vec4(s);"}]}'
 printf '{"graph": %s, "region": [0, 0, 1000, 1000]}' "$spin" >spin.json
-# wait_workers N: until /metrics shows N workers (bounded).
-wait_workers() {
-    i=0
-    while [ "$(metric gigaview_filter_workers)" != "$1" ] && [ $i -lt 300 ]; do
-        sleep 0.05
-        i=$((i + 1))
-    done
+# metric_is NAME VALUE: /metrics shows VALUE for NAME.
+# shellcheck disable=SC2317 # run by wait_until
+metric_is() {
+    [ "$(metric "$1")" = "$2" ]
 }
-# wait_running N: until /metrics shows N jobs in workers (bounded).
+# wait_workers N: until /metrics shows N workers.
+wait_workers() {
+    wait_until metric_is gigaview_filter_workers "$1"
+}
+# wait_running N: until /metrics shows N jobs in workers.
 wait_running() {
-    i=0
-    while [ "$(metric gigaview_filter_jobs_running)" != "$1" ] && [ $i -lt 300 ]; do
-        sleep 0.05
-        i=$((i + 1))
+    wait_until metric_is gigaview_filter_jobs_running "$1"
+}
+# spin_start: POST the endless shader in the background (spid), the
+# status to spin.code and the body to spin.out.
+spin_start() {
+    curl -s -o spin.out -w '%{http_code}' -X POST --data-binary @spin.json \
+        "$(url /v1/images/x/filter)" >spin.code &
+    spid=$!
+}
+
+# Kill the workers during a job: 500, and the next job succeeds.
+workers() {
+    cat /proc/"$DPID"/task/*/children 2>/dev/null
+}
+# exited PID: PID has exited, socket closed: gone, or a zombie whose other
+# threads have exited too (the leader turns zombie first, and the
+# descriptors close with the last thread).
+# shellcheck disable=SC2317 # run by wait_until
+exited() {
+    [ ! -e /proc/"$1" ] || {
+        [ "$(sed 's/.*) \(.\).*/\1/' /proc/"$1"/stat 2>/dev/null)" = Z ] &&
+            [ "$(ls /proc/"$1"/task 2>/dev/null | wc -l)" -le 1 ]
+    }
+}
+# dead PID...: until each has exited.
+dead() {
+    for p in "$@"; do
+        wait_until exited "$p"
     done
-    [ "$(metric gigaview_filter_jobs_running)" = "$1" ]
 }
 starts0=$(metric gigaview_filter_worker_starts_total)
-t0=$(date +%s%N)
-curl -s -o spin.out -w '%{http_code}' -X POST --data-binary @spin.json \
-    "$(url /v1/images/x/filter)" >spin.code &
-spid=$!
+wait_workers 2 # none starting: every child is a worker that said hello
+spin_start
 check "an endless shader: its job is running" wait_running 1
 tiles=""
 for t in 0/0/0 0/1/0 0/2/0 0/3/0 1/0/0 1/1/0 1/2/1 2/0/0 2/1/0 0/5/3; do
@@ -479,20 +506,18 @@ check "tiles keep answering while the shader runs (one connection)" test "$codes
 check "... and the shader was still running after them" test "$during" = 1
 req "$(url '/iiif/3/x/full/375,250/0/default.png')"
 check "IIIF keeps answering too" test "$code" = 200
+pids=$(workers)
+# shellcheck disable=SC2086
+kill -KILL $pids 2>/dev/null
 wait "$spid"
-t1=$(date +%s%N)
-check "the endless shader gets 504" test "$(cat spin.code)" = 504
+# shellcheck disable=SC2086
+dead $pids # the idle one too: its socket closes only when it has exited
+check "a worker killed during the job: 500" test "$(cat spin.code)" = 500
 cp spin.out "$T/b"
-check "504: the timeout error body" test "$(json_get '(j["error"]["code"], j["error"]["message"])')" = \
-    "('timeout', 'filter: the job ran past the time limit of 20000 ms (filter_timeout_ms); its worker was killed')"
-diag "504 after $(( (t1 - t0) / 1000000 )) ms (filter_timeout_ms = 20000)"
-req "$(url /v1/images/x/tiles/0/0/0)"
-check "tiles answer after the timeout" test "$code" = 200
+check "500: worker_crashed, with the signal" test "$(json_get '(j["error"]["code"], j["error"]["message"])')" = \
+    "('worker_crashed', 'filter: the worker process died during the job (killed by signal 9 (SIGKILL))')"
 run_filter "{\"filter\": \"negate\", $R}"
-check "the next job runs on a new worker" sh -c "test '$code' = 200 && cmp -s '$T/b' neg.png"
-wait_workers 2
-check "metrics: one timeout, a worker restarted" test "$(metric 'gigaview_filter_jobs_total{result="timeout"}') $(metric gigaview_filter_worker_restarts_total)" = "1 1"
-diag "$(grep 'ready in' "$T/daemon.log" | tail -n 1)"
+check "the next job succeeds on a fresh worker" sh -c "test '$code' = 200 && cmp -s '$T/b' neg.png"
 
 # A shader that crashes the worker for real: a local array of 50 million
 # floats makes LLVM (llvmpipe's compiler) run into filter_memory_limit
@@ -511,41 +536,6 @@ else
     check "the next job succeeds on a fresh worker" sh -c "test '$code' = 200 && cmp -s '$T/b' neg.png"
 fi
 
-# Kill the workers during a job: 500, and the next job succeeds.
-workers() {
-    cat /proc/"$DPID"/task/*/children 2>/dev/null
-}
-# dead PID...: until each has exited, socket closed: a zombie whose
-# other threads have exited too (the leader turns zombie first, and the
-# descriptors close with the last thread).
-dead() {
-    for p in "$@"; do
-        i=0
-        while [ $i -lt 200 ] && [ -e /proc/"$p" ] && {
-            [ "$(sed 's/.*) \(.\).*/\1/' /proc/"$p"/stat 2>/dev/null)" != Z ] ||
-                [ "$(ls /proc/"$p"/task 2>/dev/null | wc -l)" -gt 1 ]; }; do
-            sleep 0.05
-            i=$((i + 1))
-        done
-    done
-}
-wait_workers 2 # none starting: every child is a worker that said hello
-curl -s -o spin.out -w '%{http_code}' -X POST --data-binary @spin.json \
-    "$(url /v1/images/x/filter)" >spin.code &
-spid=$!
-wait_running 1 || diag "the job did not start"
-pids=$(workers)
-# shellcheck disable=SC2086
-kill -KILL $pids 2>/dev/null
-wait "$spid"
-# shellcheck disable=SC2086
-dead $pids # the idle one too: its socket closes only when it has exited
-check "a worker killed during the job: 500" test "$(cat spin.code)" = 500
-cp spin.out "$T/b"
-check "500: worker_crashed, with the signal" test "$(json_get '(j["error"]["code"], j["error"]["message"])')" = \
-    "('worker_crashed', 'filter: the worker process died during the job (killed by signal 9 (SIGKILL))')"
-run_filter "{\"filter\": \"negate\", $R}"
-check "the next job succeeds on a fresh worker" sh -c "test '$code' = 200 && cmp -s '$T/b' neg.png"
 # Kill the idle workers: they are replaced before they get a job.
 run_filter "{\"filter\": \"negate\", $R}"
 wait_workers 2
@@ -578,9 +568,7 @@ diag "worker starts: $(metric gigaview_filter_worker_starts_total) (at the sandb
 
 # SIGTERM with a job in flight: the job is cancelled after drain_timeout
 # (503) and the daemon exits 0.
-curl -s -o spin.out -w '%{http_code}' -X POST --data-binary @spin.json \
-    "$(url /v1/images/x/filter)" >spin.code &
-spid=$!
+spin_start
 wait_running 1 || diag "the job did not start"
 dpid=$DPID
 stop_daemon
@@ -608,15 +596,44 @@ expect "delete again: 404" 404
 # SIGHUP reads the directories again: a new stock graph, one gone.
 cp gain.json "$T/lib/gain.json"
 rm "$T/lib/blur.json"
-kill -HUP "$DPID"
-i=0
-while [ $i -lt 100 ]; do
+# library_is LIST: /v1/filters lists the ids LIST (a Python list).
+# shellcheck disable=SC2317 # run by wait_until
+library_is() {
     req "$(url /v1/filters)"
-    [ "$(json_get '[f["id"] for f in j["filters"]]')" = "['gain', 'negate']" ] && break
-    sleep 0.05
-    i=$((i + 1))
-done
+    [ "$(json_get '[f["id"] for f in j["filters"]]')" = "$1" ]
+}
+kill -HUP "$DPID"
+wait_until library_is "['gain', 'negate']"
 check "SIGHUP: the library read again" test "$(json_get '[f["id"] for f in j["filters"]]')" = "['gain', 'negate']"
+stop_daemon
+
+# ---------------------------------------------------------------- time limit
+# A job past filter_timeout_ms gets 504, its worker killed, and the next
+# job runs on a new worker.  The limit is 20 s here, and the endless
+# shader is the only job it counts: one worker, and the job after it
+# stores a graph (compiled under filter_compile_timeout_ms, GV_TEST_PATIENCE
+# seconds), so no job that must succeed can meet the limit on a slow
+# machine.
+sed -e 's/^filter_workers = .*/filter_workers = 1/' \
+    -e 's/^filter_timeout_ms = .*/filter_timeout_ms = 20000/' "$T/f.conf" >"$T/t.conf"
+start_daemon "$T/t.conf"
+wait_workers 1
+t0=$(date +%s%N)
+spin_start
+wait "$spid"
+t1=$(date +%s%N)
+check "the endless shader gets 504" test "$(cat spin.code)" = 504
+cp spin.out "$T/b"
+check "504: the timeout error body" test "$(json_get '(j["error"]["code"], j["error"]["message"])')" = \
+    "('timeout', 'filter: the job ran past the time limit of 20000 ms (filter_timeout_ms); its worker was killed')"
+diag "504 after $(( (t1 - t0) / 1000000 )) ms (filter_timeout_ms = 20000)"
+req "$(url /v1/images/x/tiles/0/0/0)"
+check "tiles answer after the timeout" test "$code" = 200
+wait_workers 1
+post_graph gain.json
+expect "the next job (storing a graph) runs on a new worker" 201
+check "metrics: one timeout, a worker restarted" test "$(metric 'gigaview_filter_jobs_total{result="timeout"}') $(metric gigaview_filter_worker_restarts_total)" = "1 1"
+diag "$(grep 'ready in' "$T/daemon.log" | tail -n 1)"
 stop_daemon
 
 # ---------------------------------------------------------------- a full queue
@@ -624,9 +641,7 @@ sed -e 's/^filter_workers = .*/filter_workers = 1/' \
     -e 's/^filter_max_jobs = .*/filter_max_jobs = 1/' \
     -e 's/^auth_token = .*/auth_token = ""/' "$T/f.conf" >"$T/q.conf"
 start_daemon "$T/q.conf"
-curl -s -o spin.out -w '%{http_code}' -X POST --data-binary @spin.json \
-    "$(url /v1/images/x/filter)" >spin.code &
-spid=$!
+spin_start
 wait_running 1 || diag "the job did not start"
 run_filter "{\"filter\": \"negate\", $R}"
 expect "a second job past filter_max_jobs = 1" 503 \
@@ -635,10 +650,11 @@ check "503 busy: Retry-After" test "$(header Retry-After)" = 1
 post_graph gain.json
 expect "no auth_token configured: storing is 403" 403 \
     "filter: storing and deleting graphs is disabled: no auth_token is configured"
-wait "$spid"
-check "the first job still times out (504)" test "$(cat spin.code)" = 504
 check "metrics: one rejected job" test "$(metric gigaview_filter_jobs_rejected_total)" = 1
+check "the first job is still running" test "$(metric gigaview_filter_jobs_running)" = 1
 stop_daemon
+wait "$spid"
+check "... until SIGTERM cancels it (503)" test "$(cat spin.code)" = 503
 
 # ---------------------------------------------------------------- no GPU
 { cat "$T/f.conf"; echo 'gpu = off'; } >"$T/off.conf"
