@@ -142,7 +142,9 @@ expect_rc "over an old one: the old store still opens" 0
 # each must either fail cleanly for lack of space or, if it finished
 # before dd got going, have written the whole store.  The delays fall in
 # the first 5 to 60 % of the reference encode's time (fixed delays of
-# 0.1 to 0.9 s missed most of a faster encoder's run).
+# 0.1 to 0.9 s missed most of a faster encoder's run), and the encode is
+# stopped (SIGSTOP) while dd fills the disk, so that it cannot outrun dd
+# however the machine's load shares the two.
 seed=${GV_FAULT_SEED:-$(date +%s)}
 diag "filler delays seed $seed"
 delays=$(awk -v s="$seed" -v d="$ref_s" 'BEGIN { srand(s); for (i = 0; i < 5; i++) printf "%.3f\n", d * (0.05 + rand() * 0.55) }')
@@ -152,7 +154,9 @@ for delay in $delays; do
     "$GIGAVIEW" encode $img $args -o "$M/x.gv" >"$T/out" 2>"$T/err" &
     pid=$!
     sleep "$delay"
+    kill -STOP "$pid" 2>/dev/null
     dd if=/dev/zero of="$M/fill" bs=1M 2>/dev/null
+    kill -CONT "$pid" 2>/dev/null
     rc=0
     wait "$pid" || rc=$?
     rm -f "$M/fill"

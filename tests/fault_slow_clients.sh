@@ -17,6 +17,9 @@
 #     connection it evicts, and a request sent on one of them is answered.
 #     request_timeout is off here, so that the idle connections, which
 #     trickle a header byte every 2 s, stay until the test closes them.
+#     connection_timeout is GV_TEST_PATIENCE s, so that no connection
+#     held on purpose reaches it however the machine's load starves the
+#     client; every wait for what must happen is GV_TEST_PATIENCE long.
 #  3. The flood and the idle connections go away; well-behaved clients are
 #     answered again (10 of 10) while the slow downloads are still running.
 #  4. Every slow download completes: status 200, the full length, the same
@@ -43,7 +46,7 @@ cat >"$T/c.conf" <<EOF2
 store_dir = "$S"
 threads = 4
 connection_limit = $limit
-connection_timeout = 30
+connection_timeout = $GV_TEST_PATIENCE
 request_timeout = 0
 max_region_pixels = 4M
 access_log = off
@@ -65,6 +68,7 @@ port, pid, limit = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
 n_idle, n_slow, n_flood = int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6])
 big, rate = sys.argv[7], 1 << 20        # 1 MiB/s per slow reader
 out = open(sys.argv[8], 'w')
+patience = float(os.environ['GV_TEST_PATIENCE'])   # the daemon's connection_timeout
 
 def say(*a):
     out.write(' '.join(str(x) for x in a) + '\n')
@@ -85,12 +89,12 @@ base = held()   # the listening socket (and any the filter pool keeps)
 
 # Synchronisation this client controls, so that no phase depends on how
 # long another takes on a loaded machine: the slow readers slow to
-# 256 KiB/s after their first 2 MiB until `release` is set (36 s for the
-# rest), so they are still running through the flood, yet active enough
-# that the daemon's connection_timeout does not end them; the idle and
-# flood connections send one more header byte every 2 s until
-# `stop_trickle`, so that none reaches connection_timeout while it is
-# meant to be held.
+# 512 KiB every GV_TEST_PATIENCE / 16 s after their first 2 MiB until
+# `release` is set (about GV_TEST_PATIENCE s for the rest), so they are
+# still running through the flood, yet active enough that the daemon's
+# connection_timeout does not end them; the idle and flood connections
+# send one more header byte every 2 s until `stop_trickle`, so that none
+# reaches connection_timeout while it is meant to be held.
 release = threading.Event()
 stop_trickle = threading.Event()
 trickled = []
@@ -109,7 +113,7 @@ def trickle():
 def slow_reader(k, res):
     s = socket.socket()
     s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 32768)
-    s.settimeout(60)
+    s.settimeout(patience)
     s.connect(('127.0.0.1', port))
     s.sendall(('GET %s HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n' % big).encode())
     data, t0, slice_ = b'', time.time(), 16384
@@ -122,11 +126,11 @@ def slow_reader(k, res):
         if len(data) >= 2 << 20 and not release.is_set():
             held_back += len(chunk)
             if held_back >= 512 << 10:
-                # 256 KiB/s: the daemon's socket turns writable again when
-                # half of its send queue (up to 4 MiB) has drained, which
-                # must happen within its connection_timeout (30 s: room
-                # for a reader thread starved on a loaded machine).
-                release.wait(2)
+                # The daemon's socket turns writable again when half of
+                # its send queue (up to 4 MiB) has drained: every
+                # GV_TEST_PATIENCE / 4 s, within its connection_timeout
+                # (room for a reader thread starved on a loaded machine).
+                release.wait(patience / 16)
                 held_back = 0
             continue
         ahead = len(data) / rate - (time.time() - t0)
@@ -139,7 +143,7 @@ def slow_reader(k, res):
 
 def good(path):
     try:
-        s = socket.create_connection(('127.0.0.1', port), timeout=15)
+        s = socket.create_connection(('127.0.0.1', port), timeout=patience)
         s.sendall(('GET %s HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n' % path).encode())
         data = b''
         while True:
@@ -153,7 +157,7 @@ def good(path):
         return type(e).__name__
 
 def half_open():
-    s = socket.create_connection(('127.0.0.1', port), timeout=10)
+    s = socket.create_connection(('127.0.0.1', port), timeout=patience)
     s.sendall(b'GET /healthz HTTP/1.1\r\nHost: t\r\nX-Idle: ')
     with trickle_lock:
         trickled.append(s)
@@ -168,7 +172,7 @@ def closed_by_peer(s):
     except OSError:
         return True
 
-def wait_held(cond, secs):
+def wait_held(cond, secs=patience):
     t0 = time.time()
     while time.time() - t0 < secs:
         h = held()
@@ -183,19 +187,21 @@ for i in range(n_idle):
     idle.append(half_open())
     if i % 50 == 49:
         time.sleep(0.05)        # let the daemon accept: no SYN flood
-say('held_idle', wait_held(lambda h: h >= n_idle, 20))
+say('held_idle', wait_held(lambda h: h >= n_idle))
 res = {}
 slow = [threading.Thread(target=slow_reader, args=(k, res)) for k in range(n_slow)]
 for t in slow:
     t.start()
-say('held_slow', wait_held(lambda h: h >= n_idle + n_slow, 20))
+say('held_slow', wait_held(lambda h: h >= n_idle + n_slow))
 goods = [good(p) for p in ['/healthz', '/v1/images/s/tiles/0/0/0',
                            '/v1/images/s/region?level=2&x=0&y=0&w=100&h=100']] * 10
 say('good_during', sum(g == '200' for g in goods), len(goods), ' '.join(sorted(set(goods))))
 
 # The flood: 20 connections more than there is room for.
 flood = [half_open() for i in range(limit - held() + n_flood)]
-peak = wait_held(lambda h: h >= limit, 20)
+peak = wait_held(lambda h: h >= limit)
+# Two seconds of samples: on a slow machine fewer, which can only miss a
+# peak over the limit, never make one.
 for _ in range(20):
     peak = max(peak, held())
     time.sleep(0.1)
@@ -208,7 +214,7 @@ say('slow_alive', sum(t.is_alive() for t in slow))
 queued = {}
 qt = threading.Thread(target=lambda: queued.update(r=good('/healthz')))
 qt.start()
-time.sleep(0.5)
+time.sleep(0.5)     # either outcome passes: answered, or still waiting
 say('queued_while_full', queued.get('r', 'waiting'))
 # Free the idle slots first: the flood still queued in the accept queue
 # is accepted, then the queued client.  (A connection closed while it
@@ -221,14 +227,15 @@ with trickle_lock:
     trickled.clear()
 for s in idle:
     s.close()
-qt.join(30)
+qt.join(patience)
 say('queued', queued.get('r', 'no-answer'))
-wait_held(lambda h: h <= n_slow + len(flood), 20)
+wait_held(lambda h: h <= n_slow + len(flood))
 for s in flood:
     s.close()
 # Connections libmicrohttpd did not see closing (above) go at
-# connection_timeout (30 s here): released within it, plus slack.
-say('held_released', wait_held(lambda h: h <= n_slow, 40))
+# connection_timeout (GV_TEST_PATIENCE s here): released within it, plus
+# as long again.
+say('held_released', wait_held(lambda h: h <= n_slow, 2 * patience))
 release.set()
 goods = [good('/healthz') for _ in range(10)]
 say('good_after', sum(g == '200' for g in goods), len(goods), ' '.join(sorted(set(goods))))

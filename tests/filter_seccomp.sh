@@ -38,6 +38,8 @@ filter_library_dir = "$T/lib"
 filter_workers = 1
 filter_worker = "$hooks"
 drain_timeout = 1
+# The jobs that must succeed get no limit a busy machine could meet.
+filter_timeout_ms = $((GV_TEST_PATIENCE * 1000))
 EOF
 
 # filter: one negate job; status in $code, body in $T/b.

@@ -44,7 +44,7 @@ threads = 2
 access_log = off
 filter_library_dir = "$srcdir/filters/library"
 filter_workers = 1
-filter_timeout_ms = 60000
+filter_timeout_ms = $((GV_TEST_PATIENCE * 1000))
 max_filter_pixels = 1M
 EOF2
 start_daemon "$T/v.conf"

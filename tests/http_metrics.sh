@@ -33,7 +33,7 @@ filter_dir = "$T/stored"
 filter_workers = 1
 filter_timeout_ms = 200
 resident_bytes = 0   # y's IIIF renders below must decode
-filter_compile_timeout_ms = 120000
+filter_compile_timeout_ms = $((GV_TEST_PATIENCE * 1000))
 max_request_bytes = 1K
 drain_timeout = 1
 EOF
@@ -56,17 +56,16 @@ def metric(conn, prefix):
     conn.request("GET", "/metrics")
     text = conn.getresponse().read().decode()
     return [l.split()[-1] for l in text.splitlines() if l.startswith(prefix)]
-first = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
-for i in range(600):
-    if metric(first, "gigaview_open_connections ") == ["1"]:
-        break
-    time.sleep(0.05)
+patience = float(os.environ["GV_TEST_PATIENCE"])
+def until(cond, step):  # cond() every step s, GV_TEST_PATIENCE s at most
+    end = time.monotonic() + patience
+    while not cond() and time.monotonic() < end:
+        time.sleep(step)
+first = http.client.HTTPConnection("127.0.0.1", port, timeout=patience)
+until(lambda: metric(first, "gigaview_open_connections ") == ["1"], 0.05)
 base = fds()
 socks = [socket.create_connection(("127.0.0.1", port)) for _ in range(12)]
-for i in range(3000):
-    if fds() >= base + 12:
-        break
-    time.sleep(0.01)
+until(lambda: fds() >= base + 12, 0.01)
 for s in socks:
     s.sendall(b"GET /healthz HTTP/1.1\r\nHost: t\r\n\r\n")
 for s in socks:

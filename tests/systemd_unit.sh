@@ -105,7 +105,8 @@ start_daemon "$T/act.conf"
 check "socket-activated: gigaviewd serves on the passed socket's port ($PORT)" \
     test "$PORT" = "$(cat "$T/act.port" 2>/dev/null)"
 expect_status "socket-activated: GET /v1/images/a through the passed socket" 200 /v1/images/a
-code=$(curl -s -o /dev/null -w '%{http_code}' --max-time 5 "http://127.0.0.1:$free_port/healthz") || true
+# Refused at once; an answer, however slow, fails the check.
+code=$(curl -s -o /dev/null -w '%{http_code}' --max-time "$GV_TEST_PATIENCE" "http://127.0.0.1:$free_port/healthz") || true
 check "socket-activated: the configured port $free_port stays closed (curl: $code)" test "$code" = 000
 check "socket-activated: the log says where it listens" \
     grep -q "http: listening on the socket systemd passed (fd 3, 127.0.0.1 port $PORT)" "$T/daemon.log"
@@ -194,6 +195,8 @@ gpu = auto
 filter_workers = 2
 filter_dir = "$T/stored"
 filter_library_dir = "$T/lib"
+# Jobs under strace on a busy machine: no limit that they could meet.
+filter_timeout_ms = $((GV_TEST_PATIENCE * 1000))
 EOF2
 # start_daemon runs "$GIGAVIEWD"; run it socket-activated under strace
 # instead (the launcher's own calls, before it execs gigaviewd, are left
@@ -211,9 +214,10 @@ for p in /v1/images/x/tiles/0/0/0 "/v1/images/x/batch?t=0,0,0;1,0,0" \
     /iiif/3/x/full/200,/0/default.jpg /metrics /healthz; do
     expect_status "traced: GET $p" 200 "$p"
 done
+filtered=
 for f in negate blur; do
     req -X POST --data "{\"filter\":\"$f\",\"region\":[0,0,128,96]}" "$(url /v1/images/x/filter)"
-    if [ "$code" = 200 ]; then ok "traced: filter $f (200)"
+    if [ "$code" = 200 ]; then ok "traced: filter $f (200)"; filtered=1
     elif grep -q "no usable EGL\|EGL" "$T/b"; then skip "traced: filter $f" "no EGL here"
     elif [ "$code" = 501 ] && grep -q 'without-gpu' "$T/b"; then skip "traced: filter $f" "built without the GPU"
     else not_ok "traced: filter $f (got $code)" "$(head -c 300 "$T/b")"; fi
@@ -226,42 +230,44 @@ gvpid=$(pgrep -P "$DPID" | head -n 1)
 # Only a child that has run exec is a worker: one forked a moment ago
 # still shows the daemon's environment block from before its unsetenv.
 # (The filter runs above left workers; wait for one past its exec.)
-wk=
-i=0
-while [ -z "$wk" ] && [ $i -lt 100 ]; do
+# shellcheck disable=SC2317 # run by wait_until
+worker_found() {
     for c in $(pgrep -P "$gvpid"); do
         case $(readlink "/proc/$c/exe" 2>/dev/null) in
-        *filter-worker*) wk=$c; break;;
+        *filter-worker*) wk=$c; return 0;;
         esac
     done
-    [ -n "$wk" ] || sleep 0.1
-    i=$((i + 1))
-done
+    return 1
+}
+# shellcheck disable=SC2317 # run by wait_until
+worker_env_clean() {
+    [ -r "/proc/$wk/environ" ] &&
+        ! tr '\0' '\n' <"/proc/$wk/environ" | grep -q '^LISTEN_'
+}
+wk=
+[ -n "$filtered" ] && wait_until worker_found
 if [ -n "$wk" ]; then
     # A worker caught inside its execve (exe already the worker's, the
     # environment not yet its own) can still show the daemon's block: the
     # check failed that way once in CI under load (2026-11-26, a run that
     # passed the test alone three times after).  A worker that really
-    # inherited LISTEN_* shows them every time, so look up to 10 times,
-    # 0.1 s apart, and fail only if every look finds them.
+    # inherited LISTEN_* shows them every time, so look again until one
+    # look finds none, and fail only if none does.
     clean=
-    n=0
-    while [ -z "$clean" ] && [ $n -lt 10 ]; do
-        if [ -r "/proc/$wk/environ" ] &&
-            ! tr '\0' '\n' <"/proc/$wk/environ" | grep -q '^LISTEN_'; then
-            clean=1
-        else
-            sleep 0.1
-        fi
-        n=$((n + 1))
-    done
+    wait_until worker_env_clean && clean=1
     check "socket-activated: its filter workers ($wk) get no LISTEN_FDS or LISTEN_PID" \
         test -n "$clean"
 else
     skip "socket-activated: the workers' environment" "no filter workers here"
 fi
+# SIGHUP: traced once its rescan has ended (the catalog's summary line
+# after the start-up scan's).
+# shellcheck disable=SC2317 # run by wait_until
+rescanned() {
+    [ "$(grep -cF " info catalog: $S: " "$T/daemon.log")" -ge 2 ]
+}
 kill -HUP "$gvpid"
-sleep 1
+wait_until rescanned
 expect_status "traced: after SIGHUP" 200 /healthz
 kill -TERM "$gvpid"
 drc=0
