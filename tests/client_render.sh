@@ -21,6 +21,8 @@
 # curl, python3, oiiotool and idiff.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
+# The client's bound on each HTTP request that must be answered
+# (--timeout; 30 s by default) is GV_TEST_PATIENCE.
 need_tool oiiotool idiff
 
 S=$T/stores
@@ -60,7 +62,7 @@ expect_rc "info URL with a trailing slash" 0
 # ---------------------------------------------------------------- GPU build, platform
 # A build configured --without-gpu has no render: it says what it needs,
 # exits 1 and writes nothing, and nothing below can run.
-run render "$BASE" --image x --level 2 --region 0,0,64,64 -o nb.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --level 2 --region 0,0,64,64 -o nb.png
 if grep -q 'needs a build with GPU support' "$T/err"; then
     check "not built: render exits 1, says it needs GPU support, writes nothing" \
         test "$rc" -eq 1 -a ! -e nb.png
@@ -74,12 +76,12 @@ req "$(url /healthz)"
 gpu_vendor=$(json_get 'j["gpu"].get("vendor", "")')
 GIGAVIEW_GPU_PLATFORM=wayland
 export GIGAVIEW_GPU_PLATFORM
-run render "$BASE" --image x --level 2 --region 0,0,64,64 -o p.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --level 2 --region 0,0,64,64 -o p.png
 expect_rc "GIGAVIEW_GPU_PLATFORM=wayland is refused" 2
 expect_err "GIGAVIEW_GPU_PLATFORM=wayland: says what it accepts" \
     "GIGAVIEW_GPU_PLATFORM wants auto, device, surfaceless or default, not 'wayland'"
 GIGAVIEW_GPU_PLATFORM=surfaceless
-run render "$BASE" --image x --level 2 --region 0,0,64,64 -o p.png -v
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --level 2 --region 0,0,64,64 -o p.png -v
 unset GIGAVIEW_GPU_PLATFORM
 case $gpu_vendor in
 *Mesa*)
@@ -98,7 +100,7 @@ same_as_export() {
     set -- --level "$lv"
     [ -n "$rg" ] && set -- "$@" --region "$rg"
     rm -f r.png e.png
-    run render "$BASE" --image "$st" "$@" -o r.png
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image "$st" "$@" -o r.png
     if [ "$rc" -ne 0 ] && grep -q 'EGL\|gpu' "$T/err"; then
         no_gpu=$(head -c 300 "$T/err")
         skip "$d" "no GPU context"
@@ -128,7 +130,7 @@ same_as_export "g (gray) level 1, one pixel" g 1 649,549,1,1
 if [ -z "$no_gpu" ]; then
     # Integer zoom, no rotation: output pixel centres fall on level-1
     # pixel centres, so the view is exactly the region 200,100 600x400.
-    run render "$BASE" --image x --center 1000,600 --zoom 1 --size 600x400 -o v.png
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --center 1000,600 --zoom 1 --size 600x400 -o v.png
     vrc=$rc
     run export "$S/x.gv" --level 1 --region 200,100,600,400 -o ve.png
     if [ "$vrc" -eq 0 ] && [ "$rc" -eq 0 ] && idiff -a v.png ve.png >/dev/null 2>&1; then
@@ -137,16 +139,16 @@ if [ -z "$no_gpu" ]; then
         not_ok "view at integer zoom 1 equals the level-1 region (exit $vrc)" \
             "$(cat "$T/err")"
     fi
-    run render "$BASE" --image x --center 1500,1000 --zoom 1.6 --rotate 30 \
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --center 1500,1000 --zoom 1.6 --rotate 30 \
         --size 640x480 -o vr.png
     if [ "$rc" -eq 0 ] && [ "$(image_size vr.png)" = "640 480 3" ]; then
         ok "view at zoom 1.6, rotated 30 degrees, renders 640x480"
     else
         not_ok "view at zoom 1.6 rotated (exit $rc)" "$(cat "$T/err")"
     fi
-    run render "$BASE" --image g --center 650,550 --zoom -2 --size 200x100 -o zm.png
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image g --center 650,550 --zoom -2 --size 200x100 -o zm.png
     expect_rc "view with a negative zoom (magnified)" 0
-    run render "$BASE" --image g --center 99999,99999 --zoom 0 --size 50x40 -o zo.png
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image g --center 99999,99999 --zoom 0 --size 50x40 -o zo.png
     if [ "$rc" -eq 0 ] && [ "$(image_size zo.png)" = "50 40 1" ]; then
         ok "view entirely outside the image is black, not an error"
     else
@@ -159,11 +161,11 @@ fi
 # ---------------------------------------------------------------- disk cache
 if [ -z "$no_gpu" ]; then
     rm -rf "$T/cache"
-    run render "$BASE" --image x --level 0 --region 0,0,1100,600 -o c1.png -v
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --level 0 --region 0,0,1100,600 -o c1.png -v
     down=$(sed -n 's/.* \([0-9]*\) tiles downloaded, \([0-9]*\) revalidated.*/\1 \2/p' "$T/err")
     before=$(grep -c '" 304 ' "$T/daemon.log")
     batches=$(grep -cE '"POST /v1/images/x/batch(\?[^"]*)?" 200 ' "$T/daemon.log")
-    run render "$BASE" --image x --level 0 --region 0,0,1100,600 -o c2.png -v
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --level 0 --region 0,0,1100,600 -o c2.png -v
     again=$(sed -n 's/.* \([0-9]*\) tiles downloaded, \([0-9]*\) revalidated.*/\1 \2/p' "$T/err")
     after=$(grep -c '" 304 ' "$T/daemon.log")
     batches=$(($(grep -cE '"POST /v1/images/x/batch(\?[^"]*)?" 200 ' "$T/daemon.log") - batches))
@@ -184,7 +186,7 @@ if [ -z "$no_gpu" ]; then
     f=$(find "$T/cache" -name '0-0-0' | head -n 1)
     if [ -n "$f" ]; then
         printf 'GVC1garbage' >"$f"
-        run render "$BASE" --image x --level 0 --region 0,0,1100,600 -o c3.png -v
+        run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --level 0 --region 0,0,1100,600 -o c3.png -v
         if [ "$rc" -eq 0 ] && grep -q ' 1 tiles downloaded' "$T/err" && cmp -s c1.png c3.png; then
             ok "a damaged cache entry is refetched"
         else
@@ -193,7 +195,7 @@ if [ -z "$no_gpu" ]; then
     else
         not_ok "cache entry 0-0-0 exists under \$XDG_CACHE_HOME/gigaview" "$(find "$T/cache")"
     fi
-    run render "$BASE" --image x --level 0 --region 0,0,600,600 -o c4.png -v --no-cache
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --level 0 --region 0,0,600,600 -o c4.png -v --no-cache
     # 4 tiles at level 0, 1 at each of levels 1 to 4 in one batch; the
     # metadata and the root are the other requests (the byte count varies
     # with the port).
@@ -215,7 +217,7 @@ fails() {
     rm -rf "$T/o"
     mkdir "$T/o"
     printf 'sentinel' >"$T/o/out.png"
-    run render "$@" -o "$T/o/out.png"
+    run render --timeout "$GV_TEST_PATIENCE" "$@" -o "$T/o/out.png"
     if [ "$rc" -ne 1 ]; then
         not_ok "$d (exit $rc, wanted 1)" "$(cat "$T/err")"
     elif ! grep -Eq -- "$pat" "$T/err"; then
@@ -317,15 +319,15 @@ stub_stop() {
     fi
 }
 trap 'stub_stop; http_cleanup' EXIT
+# shellcheck disable=SC2317 # run by wait_until
+stub_up() {
+    [ -s "$T/stub.port" ] || ! kill -0 "$SPID" 2>/dev/null
+}
 stub_start() {
     rm -f "$T/stub.port"
     python3 "$T/stub.py" "$1" "$BASE" "$T/stub.port" 2>"$T/stub.log" &
     SPID=$!
-    i=0
-    while [ ! -s "$T/stub.port" ] && [ $i -lt 100 ]; do
-        sleep 0.1
-        i=$((i + 1))
-    done
+    wait_until stub_up
     [ -s "$T/stub.port" ] || bail "stub did not start: $(cat "$T/stub.log")"
     STUB="http://127.0.0.1:$(cat "$T/stub.port")"
 }
@@ -342,17 +344,18 @@ if [ -z "$no_gpu" ]; then
         # 'slow' stalls each tile for 30 s: a render that waited it out would
         # succeed, so the failure with the timeout message is the proof that
         # --timeout gave up (no wall-clock check, which load would break).
-        # Only 'slow' gets the 1 s timeout: the other modes damage what
-        # comes back, however long the ASan daemon behind the stub takes.
-        to=30
+        # Only 'slow' gets the 1 s timeout (any request it cuts short fails
+        # with the same message): the other modes damage what comes back,
+        # however long the ASan daemon behind the stub takes.
+        to=$GV_TEST_PATIENCE
         [ $m = slow ] && to=1
         fails "stub '$m': tile responses damaged" "$pat" "$STUB" --image x --level 0 \
-            --region 0,0,600,600 --no-cache --timeout $to
+            --region 0,0,600,600 --no-cache --timeout "$to"
         stub_stop
     done
     # The stub passes everything through untouched in any other mode.
     stub_start none
-    run render "$STUB" --image x --level 0 --region 0,0,600,600 --no-cache -o s.png
+    run render "$STUB" --timeout "$GV_TEST_PATIENCE" --image x --level 0 --region 0,0,600,600 --no-cache -o s.png
     run export "$S/x.gv" --level 0 --region 0,0,600,600 -o se.png
     check "through the stub untouched, render still equals export" \
         sh -c 'idiff -a s.png se.png >/dev/null 2>&1'
@@ -360,7 +363,7 @@ if [ -z "$no_gpu" ]; then
     # A server that refuses the batch (a smaller batch_max_tiles): the
     # tiles come one by one, and the picture is the same.
     stub_start 413
-    run render "$STUB" --image x --level 0 --region 0,0,600,600 --no-cache -o s413.png -v
+    run render "$STUB" --timeout "$GV_TEST_PATIENCE" --image x --level 0 --region 0,0,600,600 --no-cache -o s413.png -v
     check "a batch refused with 413: the 8 tiles come one by one, render still equals export" \
         sh -c "[ $rc -eq 0 ] && grep -q '^render: 8 tiles needed (ancestors included); http: 11 requests, 8 tiles downloaded' '$T/err' &&
             idiff -a s413.png se.png >/dev/null 2>&1"

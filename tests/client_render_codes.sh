@@ -25,6 +25,10 @@
 # python3, oiiotool and idiff.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
+# The client's bounds on what must come get GV_TEST_PATIENCE: each HTTP
+# request (--timeout; 30 s by default) and a script's settle and
+# wait-file (PMS milliseconds; 60 s by default).
+PMS=$((GV_TEST_PATIENCE * 1000))
 need_tool oiiotool idiff
 
 S=$T/stores
@@ -60,7 +64,7 @@ log_level = info
 EOF2
 start_daemon "$T/d.conf"
 
-run render "$BASE" --image c5 --level 3 -o probe.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image c5 --level 3 -o probe.png
 if [ "$rc" -ne 0 ] && grep -q 'needs a build with GPU support\|EGL\|gpu' "$T/err"; then
     skip "render on stores of codes" "no GPU context: $(head -c 200 "$T/err")"
     stop_daemon
@@ -76,7 +80,7 @@ same() {
     shift
     rm -f r.png e.png
     # shellcheck disable=SC2086
-    run render "$BASE" $rargs -o r.png
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" $rargs -o r.png
     rrc=$rc
     cp "$T/err" "$T/render.err"
     run export "$@" -o e.png
@@ -106,7 +110,7 @@ region_same() {
     d=$1 id=$2 q=$3
     shift 3
     rm -f r.png
-    run render "$BASE" --image "$id" --level 0 --region 100,50,700,600 "$@" -o r.png
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image "$id" --level 0 --region 100,50,700,600 "$@" -o r.png
     rrc=$rc
     cp "$T/err" "$T/render.err"
     req "$(url "/v1/images/$id/region?level=0&x=100&y=50&w=700&h=600&format=png$q")"
@@ -130,14 +134,14 @@ region_same "s3 --colours alone: the store's window" s3 '&colours=102030%3Bfffff
 region_same "dem --window: on its gray, as the server" dem '&window=40,200,0.7' --window 40,200,0.7
 # A wrong window must not match (the comparison can see a difference).
 rm -f r.png
-run render "$BASE" --image s3 --level 0 --region 100,50,700,600 --window 2001,50000,1.5 -o r.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image s3 --level 0 --region 100,50,700,600 --window 2001,50000,1.5 -o r.png
 req "$(url "/v1/images/s3/region?level=0&x=100&y=50&w=700&h=600&format=png")"
 cp "$T/b" s.png
 check "negative control: a black point one code off differs from the store's window" \
     sh -c "[ -s r.png ] && ! idiff -a r.png s.png >/dev/null 2>&1"
 
 # ---------------------------------------------------------------- view form
-run render "$BASE" --image c5 --center 650,450 --zoom 1 --size 500x400 -o v.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image c5 --center 650,450 --zoom 1 --size 500x400 -o v.png
 vrc=$rc
 run export "$S/c5.gv" --level 1 --region 75,25,500,400 -o ve.png
 if [ "$vrc" -eq 0 ] && [ "$rc" -eq 0 ] && idiff -a v.png ve.png >/dev/null 2>&1; then
@@ -145,21 +149,21 @@ if [ "$vrc" -eq 0 ] && [ "$rc" -eq 0 ] && idiff -a v.png ve.png >/dev/null 2>&1;
 else
     not_ok "c5 view at integer zoom 1 equals the level-1 region (exit $vrc)" "$(cat "$T/err")"
 fi
-run render "$BASE" --image dem --center 500,500 --zoom 0.6 --rotate 20 --size 320x240 -o v2.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image dem --center 500,500 --zoom 0.6 --rotate 20 --size 320x240 -o v2.png
 check "dem view at zoom 0.6, turned 20 degrees: a 320x240 gray picture" \
     sh -c "[ $rc -eq 0 ] && oiiotool --info v2.png | grep -q '320 x  *240, 1 channel'"
 
 # ---------------------------------------------------------------- refusals
 rm -f x.png
-run render "$BASE" --image c5 --colours 'ff0000;00ff00' -o x.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image c5 --colours 'ff0000;00ff00' -o x.png
 expect_rc "two colours for five channels: exit 2" 2
 expect_err "... saying how many" "colours: 2 colours for an image of 5 channels"
-run render "$BASE" --image c5 --colours 'red' -o x.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image c5 --colours 'red' -o x.png
 expect_rc "colours that are not RRGGBB: exit 2" 2
-run render "$BASE" --image img --colours 'ff0000;00ff00;0000ff' -o x.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image img --colours 'ff0000;00ff00;0000ff' -o x.png
 expect_rc "--colours for an image store: exit 2" 2
 expect_err "... for sample stores only" "for sample stores only"
-run render "$BASE" --image c5 --window '0,100;0,200' -o x.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image c5 --window '0,100;0,200' -o x.png
 expect_rc "two windows for five channels: exit 2" 2
 check "nothing written by a refused render" test ! -e x.png
 
@@ -170,29 +174,29 @@ check "nothing written by a refused render" test ! -e x.png
 # tile (its counters), and auto sets one from the root's codes.
 SDL_VIDEODRIVER=offscreen
 export SDL_VIDEODRIVER
-cat >views.txt <<'EOF2'
+cat >views.txt <<EOF2
 view 512,512,0
-settle
+settle $PMS
 shot v1.png
 view 300,300,1
-settle
+settle $PMS
 shot v2.png
 counters before
 window 7000,60000,1;10000,50000,0.6;5000,65535,2;0,40000,1;20000,62000,1.3
-settle
+settle $PMS
 shot v3.png
 counters after
 key a
-settle
+settle $PMS
 counters auto
 view #image=dem&x=512&y=512&z=0&r=0
-settle
+settle $PMS
 shot v4.png
 window 40,200,0.7
-settle
+settle $PMS
 shot v5.png
 view #image=s3&x=550&y=350&z=0&r=0
-settle
+settle $PMS
 shot v6.png
 EOF2
 # --no-prefetch: nothing is fetched once the view has settled, so the
@@ -204,7 +208,7 @@ EOF2
 lsan_saved=${LSAN_OPTIONS-}
 LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}detect_leaks=0"
 export LSAN_OPTIONS
-run view "$BASE" --image c5 --size 640x480 --no-prefetch --script views.txt
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image c5 --size 640x480 --no-prefetch --script views.txt
 LSAN_OPTIONS=$lsan_saved
 cp "$T/out" view.out
 if grep -q 'needs a build with\|no window\|SDL' "$T/err"; then
@@ -216,7 +220,7 @@ else
         d=$1 shot=$2
         shift 2
         rm -f r.png
-        run render "$BASE" --size 640x480 "$@" -o r.png
+        run render "$BASE" --timeout "$GV_TEST_PATIENCE" --size 640x480 "$@" -o r.png
         if [ "$rc" -ne 0 ] || [ ! -f "$shot" ]; then
             not_ok "$d (render exit $rc)" "$(cat "$T/err")"
         elif idiff -a "$shot" r.png >"$T/idiff" 2>&1; then
@@ -238,8 +242,8 @@ else
     check "view: negative control: the windowed frame is not the plain one" \
         sh -c "! idiff -a v3.png v2.png >/dev/null 2>&1"
     # Without the decode thread the render thread decodes into the atlas.
-    printf 'view 512,512,0\nsettle\nshot n1.png\n' >nt.txt
-    run view "$BASE" --image c5 --size 640x480 --no-decode-thread --script nt.txt
+    printf 'view 512,512,0\nsettle %s\nshot n1.png\n' "$PMS" >nt.txt
+    run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image c5 --size 640x480 --no-decode-thread --script nt.txt
     view_same "view --no-decode-thread: c5 at 1:1 equals render" n1.png --image c5 \
         --center 512,512 --zoom 0
     b=$(sed -n 's/^before fetched=\([0-9]*\) decodes=\([0-9]*\).*/\1 \2/p' view.out)
@@ -250,9 +254,9 @@ else
         sh -c "grep -q '^auto .* window=[0-9]*,[0-9]*,1.000$' view.out && ! grep -q '^auto .* window=7000,60000' view.out"
     # K picks the channel the window keys move: one window becomes one a
     # channel, and only the picked one moves; auto sets that one alone.
-    cat >keys.txt <<'EOF2'
+    cat >keys.txt <<EOF2
 view 300,300,1
-settle
+settle $PMS
 window 7000,60000,1
 key k
 key k
@@ -266,12 +270,12 @@ key k
 key k
 key a
 counters auto3
-settle
+settle $PMS
 shot k1.png
 EOF2
     LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}detect_leaks=0"
     export LSAN_OPTIONS
-    run view "$BASE" --image c5 --size 640x480 --no-prefetch --script keys.txt
+    run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image c5 --size 640x480 --no-prefetch --script keys.txt
     LSAN_OPTIONS=$lsan_saved
     expect_rc "view: the channel-keys script runs" 0
     win_of() { sed -n "s/^$1 .* window=\([^ ]*\)\$/\1/p" "$T/out"; }

@@ -32,6 +32,10 @@
 # or no EGL/SDL window can be made.  Needs python3, oiiotool and idiff.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
+# The client's bounds on what must come get GV_TEST_PATIENCE: each HTTP
+# request (--timeout; 30 s by default) and a script's settle and
+# wait-file (PMS milliseconds; 60 s by default).
+PMS=$((GV_TEST_PATIENCE * 1000))
 # Under LeakSanitizer the viewer's exit reports 128 bytes that Mesa's GL
 # driver allocated, from a module already unloaded by then (its frames
 # read "<unknown module>", so no suppression can name them), and every run
@@ -60,12 +64,14 @@ threads = 4
 cache_bytes = 16M
 connection_timeout = 10
 log_level = info
+# The filter jobs below must succeed however busy the machine.
+filter_timeout_ms = $((GV_TEST_PATIENCE * 1000))
 EOF2
 start_daemon "$T/d.conf"
 
 # ---------------------------------------------------------------- built?
 printf 'quit\n' >"$T/quit.txt"
-run view "$BASE" --script "$T/quit.txt" --size 64x64
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --script "$T/quit.txt" --size 64x64
 if grep -q 'needs a build with' "$T/err"; then
     check "not built: view exits 1 and says what it needs" test "$rc" -eq 1
     stop_daemon
@@ -81,7 +87,7 @@ ok "view opens a window and quits (exit 0)"
 # same_as_render DESC SHOT IMAGE CX,CY ZOOM [ROT]: the shot equals render.
 same_as_render() {
     rm -f r.png
-    run render "$BASE" --image "$3" --center "$4" --zoom "$5" --rotate "${6:-0}" \
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image "$3" --center "$4" --zoom "$5" --rotate "${6:-0}" \
         --size 640x480 -o r.png
     if [ "$rc" -ne 0 ]; then
         not_ok "$1 (render exit $rc)" "$(cat "$T/err")"
@@ -95,28 +101,28 @@ same_as_render() {
 }
 
 # ---------------------------------------------------------------- bit for bit
-cat >"$T/views.txt" <<'EOF2'
+cat >"$T/views.txt" <<EOF2
 # level 0 across the tile corner at (512, 512) and the image's last tile
 view 512,512,0
-settle
+settle $PMS
 shot v1.png
 view 2700,1850,0
-settle
+settle $PMS
 shot v2.png
 # level 1 at 1:1 (centre on texel centres), the middle of the image
 view 1500,1000,1
-settle
+settle $PMS
 shot v3.png
 # the gray image, from a browser link
 view http://host/#image=g&x=650&y=550&z=0&r=0
-settle
+settle $PMS
 shot v4.png
 # back to x, through an image switch
 view #image=x&x=1100&y=900&z=0&r=0
-settle
+settle $PMS
 shot v5.png
 EOF2
-run view "$BASE" --image x --size 640x480 --script "$T/views.txt" -v \
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --size 640x480 --script "$T/views.txt" -v \
     --stats "$T/views.tsv"
 cp "$T/err" "$T/view.err"
 expect_rc "the views script runs" 0
@@ -150,7 +156,7 @@ else
         awk -F'\t' 'NR > 1 && $9 > 0 { f = 1 } END { exit !f }' "$T/views.tsv"
 fi
 mkdir thread && mv v1.png v2.png v3.png v4.png v5.png thread/ || bail "mv"
-run view "$BASE" --image x --size 640x480 --script "$T/views.txt" -v \
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --size 640x480 --script "$T/views.txt" -v \
     --no-decode-thread --stats "$T/views.tsv"
 expect_rc "the views script runs with --no-decode-thread" 0
 check "--no-decode-thread decodes in the frame" grep -q '; decode in frame, ' "$T/err"
@@ -164,28 +170,28 @@ check "the same five frames with and without the decode thread ($same)" test "$s
 # Quitting (and switching images) while decodes are in flight joins the
 # decode thread cleanly.
 printf 'view 1500,1000,1\nframes 2\nkey Tab\nframes 2\nquit\n' >"$T/busy.txt"
-run view "$BASE" --image x --size 640x480 --script "$T/busy.txt"
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --size 640x480 --script "$T/busy.txt"
 expect_rc "quitting with decodes in flight" 0
 
 # After evictions: 16 MiB of GPU memory leaves the atlas a few layers, so
 # the later views evict the tiles of the first, which is drawn again.
-cat >"$T/evict.txt" <<'EOF2'
+cat >"$T/evict.txt" <<EOF2
 view 512,512,0
-settle
+settle $PMS
 view 2700,1850,0
-settle
+settle $PMS
 view 300,1800,0
-settle
+settle $PMS
 view 2600,300,0
-settle
+settle $PMS
 view 512,512,0
-settle
+settle $PMS
 shot e1.png
 view 2700,1850,0
-settle
+settle $PMS
 shot e2.png
 EOF2
-run view "$BASE" --image x --size 640x480 --gpu-cache 16 --script "$T/evict.txt" -v
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --size 640x480 --gpu-cache 16 --script "$T/evict.txt" -v
 cp "$T/err" "$T/view.err"
 expect_rc "the eviction script runs" 0
 ev=$(sed -n 's/.* \([0-9][0-9]*\) atlas evictions.*/\1/p' "$T/err")
@@ -196,9 +202,9 @@ same_as_render "after evictions, another view equals render" e2.png x 2700,1850 
 # A sabotaged decode must fail the comparison.
 GIGAVIEW_VIEW_SABOTAGE=decode
 export GIGAVIEW_VIEW_SABOTAGE
-run view "$BASE" --image x --size 640x480 --script "$T/views.txt"
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --size 640x480 --script "$T/views.txt"
 unset GIGAVIEW_VIEW_SABOTAGE
-run render "$BASE" --image x --center 512,512 --zoom 0 --size 640x480 -o r.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --center 512,512 --zoom 0 --size 640x480 -o r.png
 if idiff -a v1.png r.png >/dev/null 2>&1; then
     not_ok "a sabotaged decode differs from render" "the comparison cannot fail"
 else
@@ -210,28 +216,28 @@ fi
 # (100, 100); Right pans a fifth of the window (128); a wheel notch at the
 # centre zooms in half a level about it; R turns 15 degrees; Home shows
 # the whole image (3000x2000 in 640x480: zoom log2(3000/640)).
-cat >"$T/input.txt" <<'EOF2'
+cat >"$T/input.txt" <<EOF2
 view 1500,1000,0
-settle
+settle $PMS
 drag 320 240 220 140
-settle
+settle $PMS
 shot i1.png
 print drag
 key Right
-settle
+settle $PMS
 print right
 wheel 320 240 1
-settle
+settle $PMS
 print wheel
 key R
-settle
+settle $PMS
 print rotate
 key shift+R
 key Home
-settle
+settle $PMS
 print home
 EOF2
-run view "$BASE" --image x --size 640x480 --script "$T/input.txt"
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --size 640x480 --script "$T/input.txt"
 cp "$T/err" "$T/view.err"
 expect_rc "the input script runs" 0
 check "drag pans with the pointer" grep -qx 'drag #image=x&x=1600&y=1100&z=0&r=0' "$T/out"
@@ -250,42 +256,42 @@ same_as_render "the frame after the drag equals render" i1.png x 1600,1100 0
 # level about their midpoint; the left stick held right pans right and
 # the right trigger zooms in (by amounts that depend on the frame times:
 # only their direction is checked).
-cat >"$T/pad.txt" <<'EOF2'
+cat >"$T/pad.txt" <<EOF2
 view 1500,1000,0
-settle
+settle $PMS
 pad-button rightshoulder
-settle
+settle $PMS
 print rshoulder
 pad-button leftshoulder
 pad-button leftshoulder
-settle
+settle $PMS
 print lshoulder
 view 1500,1000,0
-settle
+settle $PMS
 touch 320 240 220 140
-settle
+settle $PMS
 print touch
 view 1500,1000,0
-settle
+settle $PMS
 pinch 320 240 0.25 0
-settle
+settle $PMS
 print pinch
 view 1500,1000,0
-settle
+settle $PMS
 pad-axis leftx 1
 frames 10
 pad-axis leftx 0
-settle
+settle $PMS
 print stick
 view 1500,1000,0
-settle
+settle $PMS
 pad-axis righttrigger 1
 frames 10
 pad-axis righttrigger 0
-settle
+settle $PMS
 print trigger
 EOF2
-run view "$BASE" --image x --size 640x480 --script "$T/pad.txt"
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --size 640x480 --script "$T/pad.txt"
 cp "$T/err" "$T/view.err"
 expect_rc "the gamepad and touch script runs" 0
 check "the right shoulder turns 15 degrees" grep -qx 'rshoulder #image=x&x=1500&y=1000&z=0&r=15' "$T/out"
@@ -308,34 +314,34 @@ code=$(curl -s -o neg.png -w '%{http_code}' -H 'Content-Type: application/json' 
 if [ "$code" != 200 ]; then
     skip "filters in the viewer" "the server runs no filters here (HTTP $code)"
 else
-    cat >"$T/filt.txt" <<'EOF2'
+    cat >"$T/filt.txt" <<EOF2
 view 1500,1000,0
-settle
+settle $PMS
 shot n0.png
 filter 100 100 300 250
-settle
+settle $PMS
 shot n1.png
 graph gamma
-settle
+settle $PMS
 shot n2.png
 param +
-settle
+settle $PMS
 shot n3.png
 key Delete
-settle
+settle $PMS
 shot n4.png
 graph negate
 down 100 100 shift
 move 200 200
 up 300 250
-settle
+settle $PMS
 shot n5.png
 graph no-such-graph
 filter 100 100 300 250
-settle
+settle $PMS
 message after-error
 EOF2
-    run view "$BASE" --image x --size 640x480 --script "$T/filt.txt" -v
+    run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --size 640x480 --script "$T/filt.txt" -v
     cp "$T/err" "$T/view.err"
     expect_rc "the filter script runs on after a refused graph" 0
     check "the filter asked for the region under the rectangle" \
@@ -376,7 +382,7 @@ fi
 
 # ---------------------------------------------------------------- bad script
 printf 'view 1,2,0\nsettle\nfly 3\n' >"$T/bad.txt"
-run view "$BASE" --image x --script "$T/bad.txt"
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --script "$T/bad.txt"
 expect_rc "an unknown script command is a usage error" 2
 expect_err "the message names the line" 'bad.txt:3: unknown command'
 
@@ -440,26 +446,26 @@ view_stop() {
     VPID=
 }
 trap 'view_stop; proxy_stop; http_cleanup' EXIT
+# shellcheck disable=SC2317 # run by wait_until
+proxy_up() {
+    [ -s "$T/proxy.port" ] || ! kill -0 "$PPID_" 2>/dev/null
+}
 proxy_start() {
     rm -f "$T/proxy.port"
     python3 "$T/proxy.py" "$1" "$BASE" "$T/proxy.port" "$2" 2>"$T/proxy.log" &
     PPID_=$!
-    i=0
-    while [ ! -s "$T/proxy.port" ] && [ $i -lt 300 ]; do
-        sleep 0.1
-        i=$((i + 1))
-    done
+    wait_until proxy_up
     [ -s "$T/proxy.port" ] || bail "proxy did not start: $(cat "$T/proxy.log")"
     PROXY="http://127.0.0.1:$(cat "$T/proxy.port")"
 }
+# seen_or_ended FILE PATTERN: a line of FILE matches, or the viewer ended.
+# shellcheck disable=SC2317 # run by wait_until
+seen_or_ended() {
+    grep -q "$2" "$1" 2>/dev/null || ! kill -0 "$VPID" 2>/dev/null
+}
 # wait_for FILE PATTERN: until a line of FILE matches (or the viewer ended).
 wait_for() {
-    i=0
-    while ! grep -q "$2" "$1" 2>/dev/null && [ $i -lt 1200 ]; do
-        kill -0 "$VPID" 2>/dev/null || break
-        sleep 0.1
-        i=$((i + 1))
-    done
+    wait_until seen_or_ended "$1" "$2"
     grep -q "$2" "$1" 2>/dev/null
 }
 # view_bg URL SCRIPT ARGS...: the viewer in the background, output in
@@ -467,7 +473,7 @@ wait_for() {
 view_bg() {
     u=$1 s=$2
     shift 2
-    gv view "$u" --image x --size 640x480 --no-cache --script "$s" -v "$@" \
+    gv view "$u" --timeout "$GV_TEST_PATIENCE" --image x --size 640x480 --no-cache --script "$s" -v "$@" \
         >"$T/vout" 2>"$T/verr" &
     VPID=$!
 }
@@ -486,8 +492,8 @@ cat >"$T/f500.txt" <<EOF2
 view 1100,900,0
 frames 20
 shot f1.png
-wait-file $T/gate
-settle
+wait-file $T/gate $PMS
+settle $PMS
 shot f2.png
 EOF2
 view_bg "$PROXY" "$T/f500.txt"
@@ -506,7 +512,7 @@ same_as_render "500: after recovery the frame equals render" f2.png x 1100,900 0
 # A server without the root's WebP form (400): the viewer fetches the raw
 # mips instead, one request each, and draws the same frame.
 proxy_start oldroot ""
-printf 'view 512,512,0\nsettle\nshot o1.png\n' >"$T/old.txt"
+printf 'view 512,512,0\nsettle %s\nshot o1.png\n' "$PMS" >"$T/old.txt"
 view_bg "$PROXY" "$T/old.txt"
 view_wait
 proxy_stop
@@ -525,8 +531,8 @@ view 1700,1100,0
 frames 30
 shot h1.png
 print held
-wait-file $T/gate
-settle
+wait-file $T/gate $PMS
+settle $PMS
 shot h2.png
 EOF2
 view_bg "$PROXY" "$T/hold.txt"
@@ -549,15 +555,15 @@ fi
 # gigaviewd stopped mid-pan and started again on the same port.
 cat >"$T/down.txt" <<EOF2
 view 600,600,0
-settle
+settle $PMS
 print ready
-wait-file $T/stopped
+wait-file $T/stopped $PMS
 drag 600 240 40 240 4
 frames 20
 shot d1.png
 print panned
-wait-file $T/restarted
-settle
+wait-file $T/restarted $PMS
+settle $PMS
 shot d2.png
 EOF2
 rm -f "$T/stopped" "$T/restarted"
@@ -576,11 +582,11 @@ sed "s/^port = 0/port = $OLDPORT/" "$T/d.conf" >"$T/d2.conf"
 : >"$T/daemon.log"
 (gvd -c "$T/d2.conf") 2>>"$T/daemon.log" &
 DPID=$!
-i=0
-while ! grep -q 'listening on' "$T/daemon.log" && [ $i -lt 300 ]; do
-    sleep 0.1
-    i=$((i + 1))
-done
+# shellcheck disable=SC2317 # run by wait_until
+listening_or_gone() {
+    grep -q 'listening on' "$T/daemon.log" || ! kill -0 "$DPID" 2>/dev/null
+}
+wait_until listening_or_gone
 touch "$T/restarted"
 view_wait
 check "server down: the window kept drawing while it was down (exit $vrc)" \
@@ -673,10 +679,10 @@ PY
 # about the centre selects its image-space bounding box, 284 pixels wide
 # (floor/ceil of 1500 -+ 141.42): drawn as a diamond with corners 200.8
 # window pixels from the centre, which holds the dragged square.
-cat >"$T/sel.txt" <<'EOF2'
+cat >"$T/sel.txt" <<EOF2
 graph no-such-graph
 view 1500,1000,0
-settle
+settle $PMS
 shot s0.png
 down 100 100 shift
 move 200 200
@@ -692,19 +698,19 @@ print after-escape
 down 100 100 shift
 move 300 250
 up 300 250
-settle
+settle $PMS
 shot s5.png
 view 1500,1000,0,45
-settle
+settle $PMS
 shot r0.png
 down 220 140 shift
 move 420 340
 shot r1.png
 up 420 340
-settle
+settle $PMS
 shot r2.png
 EOF2
-run view "$BASE" --image x --size 640x480 --script "$T/sel.txt" -v
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --size 640x480 --script "$T/sel.txt" -v
 cp "$T/err" "$T/view.err"
 expect_rc "selection: the drag script runs, Esc does not quit it" 0
 pxc() {  # pxc DESC ARGS...: a px.py check
@@ -754,28 +760,34 @@ check "selection turned: after the release the outline is gone" idiff -a r2.png 
 # ---------------------------------------------------------------- prompt quit
 # The proxy above in its hang modes holds every tile request, or the
 # filter job's POST, for ever after creating $T/held.  The viewer runs
-# with a request timeout of 1000 s under `timeout 120`: quitting while
-# the request hangs must end it by itself with status 0 (124 would be
-# the wrapper's kill: the quit waited on the request).
+# with a request timeout of 8 x GV_TEST_PATIENCE s under `timeout` of 2 x
+# GV_TEST_PATIENCE: quitting while the request hangs must end it by
+# itself with status 0 (124 would be the wrapper's kill: the quit waited
+# on the request).
 # hang_start MODE: the proxy in mode hang-MODE at $HANG, marking $T/held.
 hang_start() {
     rm -f "$T/held"
     proxy_start "hang-$1" "$T/held"
     HANG=$PROXY
 }
-# hang_view SCRIPT: the viewer at $HANG under `timeout 120` (valgrind too
+# hang_view SCRIPT: the viewer at $HANG under `timeout` (valgrind too
 # when the suite runs under it), in the background as VPID.
 hang_view() {
     vg=
     if under_valgrind; then vg="valgrind -q --error-exitcode=99"; fi
-    timeout -k 5 120 $vg "$GIGAVIEW" view "$HANG" --image x --size 640x480 --no-cache \
-        --timeout 1000 --script "$1" -v >"$T/vout" 2>"$T/verr" &
+    timeout -k 5 $((GV_TEST_PATIENCE * 2)) $vg "$GIGAVIEW" view "$HANG" --image x \
+        --size 640x480 --no-cache --timeout $((GV_TEST_PATIENCE * 8)) \
+        --script "$1" -v >"$T/vout" 2>"$T/verr" &
     VPID=$!
 }
+# The scripts' wait for $T/held (which must come), and for a file that
+# never comes (until SIGINT): past the wrapper's kill either way.
+HELD_MS=$((GV_TEST_PATIENCE * 1000))
+NEVER_MS=$((GV_TEST_PATIENCE * 8000))
 
 # Quit (the script's, as Esc or closing the window) while tiles hang.
 hang_start tiles
-printf 'view 1700,1100,0\nwait-file %s 100000\nquit\n' "$T/held" >"$T/hq.txt"
+printf 'view 1700,1100,0\nwait-file %s %s\nquit\n' "$T/held" "$HELD_MS" >"$T/hq.txt"
 hang_view "$T/hq.txt"
 view_wait
 check "quit while a tile request hangs: exits by itself (exit $vrc)" test "$vrc" -eq 0
@@ -784,13 +796,13 @@ proxy_stop
 
 # Ctrl+C (SIGINT) while tiles hang: SDL turns it into a quit.
 hang_start tiles
-printf 'view 1700,1100,0\nwait-file %s/never 600000\n' "$T" >"$T/hi.txt"
+printf 'view 1700,1100,0\nwait-file %s/never %s\n' "$T" "$NEVER_MS" >"$T/hi.txt"
 hang_view "$T/hi.txt"
-i=0
-while [ ! -f "$T/held" ] && [ $i -lt 1200 ] && kill -0 "$VPID" 2>/dev/null; do
-    sleep 0.1
-    i=$((i + 1))
-done
+# shellcheck disable=SC2317 # run by wait_until
+held_or_ended() {
+    [ -f "$T/held" ] || ! kill -0 "$VPID" 2>/dev/null
+}
+wait_until held_or_ended
 kill -INT "$VPID" 2>/dev/null
 view_wait
 check "Ctrl+C while a tile request hangs: exits by itself (exit $vrc)" test "$vrc" -eq 0
@@ -798,8 +810,8 @@ proxy_stop
 
 # Quit while the filter job's POST hangs (tiles come through).
 hang_start filter
-printf 'view 1500,1000,0\nsettle\nfilter 100 100 300 250\nwait-file %s 100000\nquit\n' \
-    "$T/held" >"$T/hf.txt"
+printf 'view 1500,1000,0\nsettle %s\nfilter 100 100 300 250\nwait-file %s %s\nquit\n' \
+    "$PMS" "$T/held" "$HELD_MS" >"$T/hf.txt"
 hang_view "$T/hf.txt"
 view_wait
 check "quit while a filter job hangs: exits by itself (exit $vrc)" test "$vrc" -eq 0

@@ -14,6 +14,10 @@
 # and idiff.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
+# The client's bounds on what must come get GV_TEST_PATIENCE: each HTTP
+# request (--timeout; 30 s by default) and a script's settle and
+# wait-file (PMS milliseconds; 60 s by default).
+PMS=$((GV_TEST_PATIENCE * 1000))
 # As in client_view.sh: the GL driver's allocations from an unloaded
 # module are reported as leaks at exit; memory-error checks stay on.
 export LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}detect_leaks=0"
@@ -54,24 +58,24 @@ trap 'stop_servers; http_cleanup' EXIT
 printf 'quit\n' >"$T/quit.txt"
 SDL_VIDEODRIVER=offscreen
 export SDL_VIDEODRIVER
-run view "$BASE" --script "$T/quit.txt" --size 64x64
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --script "$T/quit.txt" --size 64x64
 if grep -q 'needs a build with' "$T/err"; then
     skip "window systems" "the build has no viewer"
     done_testing
 fi
 
-cat >"$T/views.txt" <<'EOF2'
+cat >"$T/views.txt" <<EOF2
 view 512,512,0
-settle
+settle $PMS
 shot v1.png
 view 700,500,1
-settle
+settle $PMS
 shot v2.png
 quit
 EOF2
-run render "$BASE" --image x --center 512,512 --zoom 0 --size 640x480 -o r1.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --center 512,512 --zoom 0 --size 640x480 -o r1.png
 [ "$rc" -eq 0 ] || bail "render: $(cat "$T/err")"
-run render "$BASE" --image x --center 700,500 --zoom 1 --size 640x480 -o r2.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --center 700,500 --zoom 1 --size 640x480 -o r2.png
 [ "$rc" -eq 0 ] || bail "render: $(cat "$T/err")"
 
 # on_window_system NAME: run the views script with the environment set by
@@ -79,7 +83,10 @@ run render "$BASE" --image x --center 700,500 --zoom 1 --size 640x480 -o r2.png
 on_window_system() {
     rm -f v1.png v2.png
     rc=0
-    timeout -k 5 120 "$GIGAVIEW" view "$BASE" --image x --size 640x480 \
+    # A hang guard for the whole run: many waits, each up to
+    # GV_TEST_PATIENCE (--timeout, the script's settle).
+    timeout -k 5 $((GV_TEST_PATIENCE * 4)) "$GIGAVIEW" view "$BASE" --image x --size 640x480 \
+        --timeout "$GV_TEST_PATIENCE" \
         --script "$T/views.txt" --no-cache -v >"$T/out" 2>"$T/err" || rc=$?
     expect_rc "$1: the views script runs" 0
     check "$1: drawn with the decode thread" grep -q '; decode thread, ' "$T/err"
@@ -104,11 +111,11 @@ fi
 Xvfb -displayfd 3 -screen 0 1024x768x24 -nolisten tcp 3>"$T/xdisplay" \
     >"$T/xvfb.log" 2>&1 &
 xpid=$!
-n=0
-while [ ! -s "$T/xdisplay" ] && kill -0 "$xpid" 2>/dev/null && [ "$n" -lt 600 ]; do
-    sleep 0.1
-    n=$((n + 1))
-done
+# shellcheck disable=SC2317 # run by wait_until
+x_ready() {
+    [ -s "$T/xdisplay" ] || ! kill -0 "$xpid" 2>/dev/null
+}
+wait_until x_ready
 if [ ! -s "$T/xdisplay" ]; then
     skip "X11" "Xvfb did not start: $(tail -n 2 "$T/xvfb.log")"
     skip "Wayland" "no X server to nest weston in"
@@ -131,11 +138,11 @@ sock=gigaview-test-$$
 weston --backend=x11-backend.so --socket="$sock" --idle-time=0 --no-config \
     >"$T/weston.log" 2>&1 &
 wpid=$!
-n=0
-while [ ! -S "$XDG_RUNTIME_DIR/$sock" ] && kill -0 "$wpid" 2>/dev/null && [ "$n" -lt 600 ]; do
-    sleep 0.1
-    n=$((n + 1))
-done
+# shellcheck disable=SC2317 # run by wait_until
+weston_ready() {
+    [ -S "$XDG_RUNTIME_DIR/$sock" ] || ! kill -0 "$wpid" 2>/dev/null
+}
+wait_until weston_ready
 if [ ! -S "$XDG_RUNTIME_DIR/$sock" ]; then
     skip "Wayland" "weston did not start: $(tail -n 2 "$T/weston.log")"
     done_testing

@@ -25,6 +25,10 @@
 # Needs oiiotool and idiff; the viewer part skips without a window.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/http_util.sh"
+# The client's bounds on what must come get GV_TEST_PATIENCE: each HTTP
+# request (--timeout; 30 s by default) and a script's settle and
+# wait-file (PMS milliseconds; 60 s by default).
+PMS=$((GV_TEST_PATIENCE * 1000))
 export LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}detect_leaks=0"
 need_tool oiiotool idiff
 
@@ -101,7 +105,7 @@ same "IIIF: window=none turns the default off" ixp idn
 check "the default window's IIIF answer is 8-bit" sh -c "head -c 2 idd.pnm | grep -q P6 && sed -n 3p idd.pnm | grep -qx 255"
 
 # ---------------------------------------------------------------- render --window
-run render "$BASE" --image x -o plain.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x -o plain.png
 if grep -q 'needs a build with GPU' "$T/err" || { [ "$rc" -ne 0 ] && grep -qi 'egl' "$T/err"; }; then
     skip "render and view" "no GPU context: $(head -c 200 "$T/err")"
     stop_daemon
@@ -115,9 +119,9 @@ render_case() {
     wq=$(printf '%s' "$sw" | sed 's/;/%3B/g')
     x=${rg%%,*}; r1=${rg#*,}; y=${r1%%,*}; r2=${r1#*,}; w=${r2%%,*}; h=${r2#*,}
     if [ "$rw" = - ]; then
-        run render "$BASE" --image "$img" --level "$lv" --region "$rg" -o rr.png
+        run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image "$img" --level "$lv" --region "$rg" -o rr.png
     else
-        run render "$BASE" --image "$img" --level "$lv" --region "$rg" --window "$rw" -o rr.png
+        run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image "$img" --level "$lv" --region "$rg" --window "$rw" -o rr.png
     fi
     if [ "$rc" -ne 0 ]; then
         not_ok "$d (render exit $rc)" "$(cat "$T/err")"
@@ -133,22 +137,22 @@ render_case "render --window, one a channel" x 0 0,0,700,520 "10,250,1;50,150,0.
 render_case "render --window of a gray store" g 0 100,100,400,300 "20,180,1.8"
 render_case "render uses the store's default window" d 0 400,300,600,400 "$W" -
 render_case "render --window none: no window" d 0 400,300,600,400 none none
-run render "$BASE" --image x --level 0 --region 0,0,10,10 --window '0,255,1;0,255,1' -o bad.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --level 0 --region 0,0,10,10 --window '0,255,1;0,255,1' -o bad.png
 check "render: two windows for three channels is refused" sh -c "[ $rc -ne 0 ] && [ ! -e bad.png ]"
-run render "$BASE" --image x --level 0 --region 0,0,10,10 --window '9,3' -o bad.png
+run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image x --level 0 --region 0,0,10,10 --window '9,3' -o bad.png
 check "render --window 9,3 is refused" sh -c "[ $rc -ne 0 ] && [ ! -e bad.png ]"
 
 # ---------------------------------------------------------------- view
 printf 'quit\n' >"$T/quit.txt"
-run view "$BASE" --script "$T/quit.txt" --size 64x64
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --script "$T/quit.txt" --size 64x64
 if grep -q 'needs a build with' "$T/err" || [ "$rc" -ne 0 ]; then
     skip "gigaview view" "no window: $(head -c 300 "$T/err")"
     stop_daemon
     done_testing
 fi
-cat >"$T/keys.txt" <<'EOF2'
+cat >"$T/keys.txt" <<EOF2
 view 700,500,0
-settle
+settle $PMS
 shot v0.png
 counters before
 key b
@@ -173,10 +177,10 @@ counters after
 EOF2
 : >"$T/daemon.log"
 sed -n '1,4p' "$T/keys.txt" >"$T/first.txt"
-run view "$BASE" --image d --size 640x480 --no-prefetch --no-cache --script "$T/first.txt"
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image d --size 640x480 --no-prefetch --no-cache --script "$T/first.txt"
 n_first=$(grep -cE '"(GET|POST) /v1/images/d[/?"]' "$T/daemon.log")
 : >"$T/daemon.log"
-run view "$BASE" --image d --size 640x480 --no-prefetch --no-cache --script "$T/keys.txt"
+run view "$BASE" --timeout "$GV_TEST_PATIENCE" --image d --size 640x480 --no-prefetch --no-cache --script "$T/keys.txt"
 n_all=$(grep -cE '"(GET|POST) /v1/images/d[/?"]' "$T/daemon.log")
 if [ "$rc" -ne 0 ]; then
     not_ok "view runs the window script (exit $rc)" "$(cat "$T/err")"
@@ -196,7 +200,7 @@ check "window changes fetch and decode no tile (before: $f0, after: $f1)" \
 # same_as_render DESC SHOT WINDOW: the shot equals render of the view.
 same_as_render() {
     rm -f r.png
-    run render "$BASE" --image d --center 700,500 --zoom 0 --size 640x480 --window "$3" -o r.png
+    run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image d --center 700,500 --zoom 0 --size 640x480 --window "$3" -o r.png
     if [ "$rc" -ne 0 ] || [ ! -f "$2" ]; then
         not_ok "$1 (render exit $rc)" "$(cat "$T/err")"
     elif idiff -a "$2" r.png >"$T/idiff" 2>&1; then
@@ -222,15 +226,15 @@ PERQ='10%2C250%2C1.000%3B50%2C150%2C0.500%3B0%2C100%2C3.333'
 view_link() {
     n=$1
     shift
-    run view "$BASE" --size 640x480 --no-prefetch --script "$T/$n.txt" "$@"
+    run view "$BASE" --timeout "$GV_TEST_PATIENCE" --size 640x480 --no-prefetch --script "$T/$n.txt" "$@"
     cp "$T/out" "$T/$n.out"
 }
-printf 'view 700,500,0\nsettle\nwindow %s\nframes 3\nkey c\nquit\n' "$PER" >"$T/copy.txt"
+printf 'view 700,500,0\nsettle %s\nwindow %s\nframes 3\nkey c\nquit\n' "$PMS" "$PER" >"$T/copy.txt"
 view_link copy --image d
 link=$(grep '^#image=' "$T/copy.out" | head -n 1)
 check "key c's link carries the window as the browser writes it ($link)" \
     test "$link" = "#image=d&x=700&y=500&z=0&r=0&window=$PERQ"
-printf 'settle\ncounters rt\nshot rt.png\nquit\n' >"$T/open.txt"
+printf 'settle %s\ncounters rt\nshot rt.png\nquit\n' "$PMS" >"$T/open.txt"
 rm -f rt.png
 view_link open --view "http://h/$link"
 check "--view LINK opens with the link's window ($(grep '^rt ' "$T/open.out"))" \
@@ -242,20 +246,20 @@ check "--window wins over the link's ($(grep '^rt ' "$T/open.out"))" \
 view_link open --view "${link%%&window=*}"
 check "a link without a window opens with the store's ($(grep '^rt ' "$T/open.out"))" \
     grep -q '^rt .* window=30,200,1.500$' "$T/open.out"
-printf 'view 700,500,0\nsettle\nkey shift+X\nframes 3\nkey c\nquit\n' >"$T/copy.txt"
+printf 'view 700,500,0\nsettle %s\nkey shift+X\nframes 3\nkey c\nquit\n' "$PMS" >"$T/copy.txt"
 view_link copy --image d
 nlink=$(grep '^#image=' "$T/copy.out" | head -n 1)
 check "with the window off, the link of a store with a default says window=none ($nlink)" \
     test "$nlink" = "#image=d&x=700&y=500&z=0&r=0&window=none"
 view_link open --view "$nlink"
 check "and opens with none ($(grep '^rt ' "$T/open.out"))" grep -q '^rt .* window=none$' "$T/open.out"
-printf 'view 700,500,0\nsettle\nkey c\nquit\n' >"$T/copy.txt"
+printf 'view 700,500,0\nsettle %s\nkey c\nquit\n' "$PMS" >"$T/copy.txt"
 view_link copy --image x
 xlink=$(grep '^#image=' "$T/copy.out" | head -n 1)
 check "no window set, none by default: the link has no window ($xlink)" \
     test "$xlink" = "#image=x&x=700&y=500&z=0&r=0"
 for bad in '9,3' '1%2' '0,255,1;0,255,1;0,255,1;0,255,1;0,255,1;0,255,1;0,255,1;0,255,1;0,255,1'; do
-    run view "$BASE" --size 64x64 --script "$T/quit.txt" --view "#image=d&x=1&y=1&z=0&window=$bad"
+    run view "$BASE" --timeout "$GV_TEST_PATIENCE" --size 64x64 --script "$T/quit.txt" --view "#image=d&x=1&y=1&z=0&window=$bad"
     check "--view with the link's window '$bad' is refused" sh -c "[ $rc -eq 2 ] && grep -q \"link's window\" '$T/err'"
 done
 

@@ -270,13 +270,13 @@ GIGAVIEW_TOKEN='not a token' run info "$BASE"
 check "gigaview info URL with a malformed GIGAVIEW_TOKEN: refused, said why" \
     sh -c "[ $rc -ne 0 ] && grep -q 'GIGAVIEW_TOKEN is not an access token' '$T/err'"
 # A restricted image through the GPU client, its token expired: said so.
-GIGAVIEW_TOKEN=$EXPIRED run render "$BASE" --image staff-dem --level 3 -o "$T/expired.png"
+GIGAVIEW_TOKEN=$EXPIRED run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image staff-dem --level 3 -o "$T/expired.png"
 if grep -q 'needs a build with GPU' "$T/err"; then
     skip "gigaview render with an expired GIGAVIEW_TOKEN" "built without GPU support"
 else
     check "gigaview render of a restricted image with an expired GIGAVIEW_TOKEN: refused, said why" \
         sh -c "[ $rc -ne 0 ] && grep -q 'HTTP 401.*GIGAVIEW_TOKEN must hold an access token' '$T/err' && [ ! -e $T/expired.png ]"
-    GIGAVIEW_TOKEN=$STAFF run render "$BASE" --image staff-dem --level 3 -o "$T/fresh.png"
+    GIGAVIEW_TOKEN=$STAFF run render "$BASE" --timeout "$GV_TEST_PATIENCE" --image staff-dem --level 3 -o "$T/fresh.png"
     check "... and with a good one, rendered" sh -c "[ $rc -eq 0 ] && [ -s $T/fresh.png ]"
 fi
 
