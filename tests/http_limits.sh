@@ -88,8 +88,9 @@ expect_status "the cap covers every POST route (filters)" 413 /v1/filters \
 # Announced too large: answered from the headers alone, the body is never
 # sent (the client waits for the answer before sending anything).
 python3 - "$PORT" >announce.out <<'PY'
-import socket, sys
-s = socket.create_connection(('127.0.0.1', int(sys.argv[1])), timeout=10)
+import os, socket, sys
+s = socket.create_connection(('127.0.0.1', int(sys.argv[1])),
+                             timeout=float(os.environ['GV_TEST_PATIENCE']))
 s.sendall(b'POST /v1/images/x/batch HTTP/1.1\r\nHost: t\r\n'
           b'Content-Type: application/json\r\nContent-Length: 104857600\r\n\r\n')
 print(s.recv(4096).split(b'\r\n')[0].decode())

@@ -216,10 +216,11 @@ fi
 if [ -n "$queued" ]; then
     ok "a queued render's client closed its connection"
     # Every render ends: nothing queued, nothing running, two renders done.
-    while [ "$(metric gigaview_render_queue_depth) $(metric gigaview_render_running) $(metric gigaview_render_queue_wait_seconds_count)" != "0 0 2" ]; do
-        :
-    done
-    ok "both renders ran"
+    # shellcheck disable=SC2317 # run by wait_until
+    renders_done() {
+        [ "$(metric gigaview_render_queue_depth) $(metric gigaview_render_running) $(metric gigaview_render_queue_wait_seconds_count)" = "0 0 2" ]
+    }
+    check "both renders ran" wait_until renders_done
     expect_status "the daemon answers after the abandoned render" 200 /healthz
 else
     skip "the first render ended before the second could queue" "long render"

@@ -141,7 +141,7 @@ done
 realcurl=$(command -v curl)
 cat >"$T/bin/curl" <<EOF || bail "cannot write the curl wrapper"
 #!/bin/sh
-exec "$realcurl" --fail-with-body -sS --max-time 120 "\$@"
+exec "$realcurl" --fail-with-body -sS --max-time "$GV_TEST_PATIENCE" "\$@"
 EOF
 cat >"$T/bin/image-size" <<'EOF' || bail "cannot write image-size"
 #!/bin/sh
@@ -156,6 +156,9 @@ listen = "127.0.0.1"
 store_dir = "$W/stores"
 filter_dir = ""
 access_log = "off"
+# Its filter jobs and compiles must succeed however busy the machine.
+filter_timeout_ms = $((GV_TEST_PATIENCE * 1000))
+filter_compile_timeout_ms = $((GV_TEST_PATIENCE * 1000))
 EOF
 start_daemon "$T/d.conf"
 req "$(url /healthz)"
@@ -166,7 +169,7 @@ gpu=$(json_get 'j["gpu"]["available"]')
 # daemon's address) in the scratch tree, stdout and stderr to OUT.
 in_work() {
     sed "s|127\.0\.0\.1:8080|127.0.0.1:$PORT|g" "$1" >"$T/cmd"
-    (cd "$W" && PATH="$T/bin:$PATH" timeout 300 sh -c "$(cat "$T/cmd")") >"$2" 2>&1
+    (cd "$W" && PATH="$T/bin:$PATH" timeout $((GV_TEST_PATIENCE + 60)) sh -c "$(cat "$T/cmd")") >"$2" 2>&1
 }
 
 # title FILE: the command in FILE for a TAP line: spaces squeezed, shell

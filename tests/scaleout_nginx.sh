@@ -3,7 +3,11 @@
 # load, and no client request fails.
 #
 # The nginx configuration is conf/nginx-gigaview.conf itself, with only its
-# addresses and cache directory rewritten for loopback, wrapped in a
+# addresses and cache directory rewritten for loopback and its time
+# limits (client_*_timeout, proxy_*_timeout) raised to GV_TEST_PATIENCE
+# (a request to a loaded sanitizer-build replica must not time out:
+# failover here is for the killed replica's refused and reset
+# connections), wrapped in a
 # minimal nginx.conf with a private prefix (no root needed).  Three
 # replicas serve one store directory (four stores).  A Python client with
 # 12 keep-alive connections sends a mix of tiles, POST batches, IIIF
@@ -38,17 +42,17 @@ scaleout_cleanup() {
     # nginx's master stops its workers on TERM (on KILL they would linger).
     if [ -n "$NGX" ]; then
         kill -TERM "$NGX" 2>/dev/null
-        i=0
-        while kill -0 "$NGX" 2>/dev/null && [ $i -lt 50 ]; do
-            sleep 0.1
-            i=$((i + 1))
-        done
+        wait_until ngx_gone
     fi
     for p in $PIDS $NGX; do
         kill -KILL "$p" 2>/dev/null
     done
     wait 2>/dev/null
     cleanup
+}
+# shellcheck disable=SC2317 # run by wait_until
+ngx_gone() {
+    ! kill -0 "$NGX" 2>/dev/null
 }
 trap scaleout_cleanup EXIT
 
@@ -59,6 +63,14 @@ run encode -q 30 -r 6 synth:3000x2000 -o "$S/a.gv"
 for id in b c d; do cp "$S/a.gv" "$S/$id.gv"; done
 
 # ---- three replicas on free ports, over the same store directory
+# replica_port R: success once replica R's log names its port (in port)
+# or it has gone (port empty).
+# shellcheck disable=SC2317 # run by wait_until
+replica_port() {
+    port=$(sed -n 's|.*listening on http://.*:\([0-9][0-9]*\)/$|\1|p' "$T/r$1.log" |
+        head -n 1)
+    [ -n "$port" ] || ! kill -0 "$pid" 2>/dev/null
+}
 ports=
 for r in 1 2 3; do
     cat >"$T/r$r.conf" <<EOF
@@ -77,13 +89,7 @@ EOF
     PIDS="$PIDS $pid"
     eval "pid$r=$pid"
     port=
-    i=0
-    while [ $i -lt 300 ] && [ -z "$port" ]; do
-        port=$(sed -n 's|.*listening on http://.*:\([0-9][0-9]*\)/$|\1|p' "$T/r$r.log" |
-            head -n 1)
-        [ -n "$port" ] || { kill -0 "$pid" 2>/dev/null || break; sleep 0.1; }
-        i=$((i + 1))
-    done
+    wait_until replica_port "$r"
     [ -n "$port" ] || bail "replica $r did not start: $(tail -n 5 "$T/r$r.log")"
     eval "port$r=$port"
     ports="$ports $port"
@@ -93,7 +99,7 @@ ok "three replicas listening on$ports"
 # ---- nginx: the shipped example, pointed at them
 nport=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
 python3 - "$conf_src" "$T/ngx/gigaview.conf" "$nport" "$T/ngx/cache" $ports <<'PY' ||
-import re, sys
+import os, re, sys
 src, dst, nport, cache = sys.argv[1:5]
 ports = sys.argv[5:]
 text = open(src).read()
@@ -104,6 +110,9 @@ for line, port in zip(servers, ports):
 text, n1 = re.subn(r"listen 80;", "listen 127.0.0.1:%s;" % nport, text)
 text, n2 = re.subn(r"/var/cache/nginx/gigaview", cache, text)
 assert n1 == 1 and n2 == 1, "listen or proxy_cache_path not found"
+text, n3 = re.subn(r"\b((?:client|proxy)_[a-z_]*timeout)\s+\d+s;",
+                   r"\1 %ss;" % os.environ["GV_TEST_PATIENCE"], text)
+assert n3 >= 5, "the time limits not found"
 open(dst, "w").write(text)
 PY
     bail "cannot rewrite $conf_src"
@@ -135,12 +144,8 @@ else
 fi
 "$NGINX" -p "$T/ngx" -c "$T/ngx/nginx.conf" 2>>"$T/ngx/error.log" &
 NGX=$!
-i=0
-until curl -s -o /dev/null "http://127.0.0.1:$nport/healthz"; do
-    i=$((i + 1))
-    [ $i -lt 100 ] || bail "nginx did not start: $(cat "$T/ngx/error.log")"
-    sleep 0.1
-done
+wait_until curl -s -o /dev/null "http://127.0.0.1:$nport/healthz" ||
+    bail "nginx did not start: $(cat "$T/ngx/error.log")"
 B="http://127.0.0.1:$nport"
 
 # ---- the proxy cache holds tiles
@@ -152,8 +157,9 @@ check "a repeated tile is a proxy cache hit ($c1, then $c2)" test "$c1" = MISS -
 # The client prints one line per second: "t=N served=R1,R2,R3" is not
 # known to it, so the shell reads the replicas' access logs instead.
 # It runs until the file $T/stop appears (the shell makes it once the
-# other replicas have served after the kill), 300 s at the most.
-python3 - "$B" 12 300 "$T/load.out" "$T/stop" <<'PY' &
+# other replicas have served after the kill), 3 x GV_TEST_PATIENCE s at the
+# most (a wait for the replicas, then one for the others after the kill).
+python3 - "$B" 12 $((3 * GV_TEST_PATIENCE)) "$T/load.out" "$T/stop" <<'PY' &
 import http.client, os, sys, threading, time, json
 base, conns, secs, out, stopfile = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), sys.argv[4], sys.argv[5]
 host, port = base[len("http://"):].split(":")
@@ -178,8 +184,10 @@ def one(i, k):
     x = (i * 37) % 2400
     return "region", "GET", "/v1/images/%s/region?level=0&x=%d&y=%d&w=300&h=200&format=png" % (img, x, (i * 13) % 1700), None
 
+patience = float(os.environ["GV_TEST_PATIENCE"])
+
 def worker(wid):
-    c = http.client.HTTPConnection(host, int(port), timeout=30)
+    c = http.client.HTTPConnection(host, int(port), timeout=patience)
     n = 0
     while time.time() < stop and not os.path.exists(stopfile):
         # Every worker cycles through the four kinds; i numbers requests.
@@ -196,7 +204,7 @@ def worker(wid):
         except Exception as e:  # a reset, a truncated body...
             good, why = False, repr(e)
             c.close()
-            c = http.client.HTTPConnection(host, int(port), timeout=30)
+            c = http.client.HTTPConnection(host, int(port), timeout=patience)
         with lock:
             stats["kinds"][kind] = stats["kinds"].get(kind, 0) + 1
             if good:
@@ -217,12 +225,12 @@ load=$!
 # served R: requests replica R has logged.
 served() { wc -l <"$T/r$1.access" 2>/dev/null || echo 0; }
 # Until every replica has served (however slowly the machine starts them).
-i=0
-while [ $i -lt 600 ] && kill -0 "$load" 2>/dev/null &&
-    { [ "$(served 1)" -eq 0 ] || [ "$(served 2)" -eq 0 ] || [ "$(served 3)" -eq 0 ]; }; do
-    sleep 0.1
-    i=$((i + 1))
-done
+# shellcheck disable=SC2317 # run by wait_until
+all_served() {
+    ! kill -0 "$load" 2>/dev/null ||
+        { [ "$(served 1)" -gt 0 ] && [ "$(served 2)" -gt 0 ] && [ "$(served 3)" -gt 0 ]; }
+}
+wait_until all_served
 # The busiest replica so far is the one to kill.
 best=1 most=-1
 for r in 1 2 3; do
@@ -235,18 +243,18 @@ kill -KILL "$victim"
 diag "killed replica $best (pid $victim) after it served $most requests"
 for r in 1 2 3; do eval "mark$r=\$(wc -l <\"$T/r$r.access\")"; done
 # Until the two others have served 20 more requests, then stop the load.
-i=0
-while [ $i -lt 600 ] && kill -0 "$load" 2>/dev/null; do
+# shellcheck disable=SC2317 # run by wait_until
+served_after() {
+    kill -0 "$load" 2>/dev/null || return 0
     more=0
     for r in 1 2 3; do
         [ "$r" = "$best" ] && continue
         eval "m=\$mark$r"
         more=$((more + $(served "$r") - m))
     done
-    [ "$more" -ge 20 ] && break
-    sleep 0.1
-    i=$((i + 1))
-done
+    [ "$more" -ge 20 ]
+}
+wait_until served_after
 touch "$T/stop"
 wait "$load" || bail "the load client failed"
 diag "$(head -n 1 "$T/load.out")"
