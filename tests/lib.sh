@@ -206,16 +206,18 @@ listing() {
 
 # kill_at_progress PID FILE PERCENT SIGNAL: wait until the progress line
 # (`gigaview encode --progress`) that process PID writes to FILE reaches
-# PERCENT, or PID ends (12000 polls at most), then send it SIGNAL and reap it;
-# sets $status.  A kill at a point of the work, not of the clock: a
-# loaded or a fast machine moves it in time only.
+# PERCENT, or PID ends (or GV_TEST_PATIENCE seconds pass), then send it
+# SIGNAL and reap it; sets $status.  A kill at a point of the work, not of
+# the clock: a loaded or a fast machine moves it in time only.
 kill_at_progress() {
+    kp_end=$(($(date +%s) + GV_TEST_PATIENCE))
     kp_i=0
-    while kill -0 "$1" 2>/dev/null && [ $kp_i -lt 12000 ]; do
+    while kill -0 "$1" 2>/dev/null; do
         kp_got=$(tr '\r' '\n' <"$2" | sed -n 's/.* \([0-9][0-9]*\)\.[0-9]%.*/\1/p' | tail -n 1)
         [ -n "$kp_got" ] && [ "$kp_got" -ge "$3" ] && break
-        sleep 0.01
         kp_i=$((kp_i + 1))
+        [ $((kp_i % 100)) -ne 0 ] || [ "$(date +%s)" -lt "$kp_end" ] || break
+        sleep 0.01
     done
     kill -s "$4" "$1" 2>/dev/null
     status=0
