@@ -21,12 +21,28 @@
  *
  * The cost (profiled on 1025^2 ETOPO5 grids, bench/tin-speed.sh) is memory
  * latency and branches as much as the rescans: a split or flip touches
- * one 32-byte triangle record (corners, twins, candidate, heap place),
- * heap entries carry their keys and four siblings share a cache line,
- * the arrays are reserved once, the vertices' half-edges are kept up only
+ * one 32-byte triangle record (corners, twins, candidate, scan flag), a
+ * vertex is 8 bytes, heap entries carry their keys and four siblings
+ * share a cache line, the heap places lie apart from the records, the
+ * arrays are reserved once, the vertices' half-edges are kept up only
  * while the border is inserted (hull_out), the in-circle test runs in 64
- * bits on grids up to 16384 a side, and no row of a scan divides or
- * branches on its edges.
+ * bits on grids up to 16384 a side, and no row of a scan divides.
+ *
+ * A scan reads as few heights as it can.  The used samples inside a
+ * triangle are its corners, which end the spans of their rows, and in
+ * border-first mode the border, outside the scanned box: no sample is
+ * looked up in the used map.  A triangle of twice area 1 holds no other
+ * sample (Pick's theorem): many scans end there.  The rows run in two
+ * parts split at the middle corner, with one bounding edge each side.
+ * Each row goes by runs within segments of SEG samples, whose lowest and
+ * highest heights are kept (segmm): a run whose bound, from those and the
+ * plane at its ends, cannot reach the best error so far is skipped; the
+ * bound has a slack far over the rounding, so that the skipped samples
+ * could not have won, and the candidate is the same sample.  On the bench
+ * grids a quarter of the heights are read; in cachegrind (andes, misses
+ * of a 1 MiB cache) E = 200 takes 14 % fewer instructions and a third
+ * fewer misses, E = 50 as many instructions and 15 % fewer misses.  The
+ * meshes are bit for bit those of before.
  *
  * The plane of a triangle is computed from its vertices in a canonical
  * rotation (the smallest sample index first), so its errors depend on the
@@ -45,11 +61,10 @@
 
 __extension__ typedef __int128 gv_i128;
 
-/* A vertex: its sample and height, and a half-edge leaving it. */
+/* A vertex: its sample and height, 8 bytes (sides < 2^16). */
 struct vert {
-    int32_t x, y;
+    uint16_t x, y;
     float z;
-    int32_t he;
 };
 
 /* A heap entry carries its key, so that sifting reads the heap alone:
@@ -62,11 +77,12 @@ struct hent {
 
 /* A triangle: half-edge 3t + k runs from v[k] to v[k + 1 mod 3], he[k] is
  * its opposite half-edge or -1 on the hull.  What a split, a flip and a
- * heap move touch shares one 32-byte record. */
+ * scan touch shares one 32-byte record; the heap's places are apart (the
+ * heap moves write them, many to a line). */
 struct tri {
     int32_t v[3], he[3];
     uint32_t cidx;           /* candidate sample index, NONE: none */
-    int32_t hpos;            /* position in heap, -1: not there */
+    int32_t queued;          /* in pend, to scan after this insertion */
 };
 
 #define TV(m, e) ((m)->t[(unsigned)(e) / 3].v[(unsigned)(e) % 3])
@@ -79,25 +95,33 @@ struct tin {
     double goal;             /* candidates at or below it never enter the
                                 heap; -1 with no error goal */
     int small;               /* sides <= 16384: incircle in 64 bits */
+    int inner;               /* border-first: candidates off the border */
+    float *segmm;            /* min and max height of each row's segments
+                                of SEG samples (nseg a row) */
+    uint32_t nseg;
+    double habs;             /* the largest |height| */
     uint8_t *used;           /* w*hgt: a vertex, or a border sample in
                                 border-first mode */
     uint32_t nv, capv;
     struct vert *v;
-    int track;               /* keep vert.he (border insertion only) */
+    int track;               /* keep vhe (border insertion only) */
+    int32_t *vhe;            /* a half-edge leaving each vertex */
+    uint32_t capvhe;
     uint32_t nt, capt;
     struct tri *t;           /* 64-byte aligned, 2 a cache line */
     double *cerr;            /* candidate error per triangle */
     struct hent *heap;       /* heapmem + HEAP_OFF */
     struct hent *heapmem;    /* 64-byte aligned */
     uint32_t nheap;
+    int32_t *hpos;           /* place of each triangle in heap, -1: none */
     int32_t *pend;           /* triangles to scan after this insertion */
-    uint8_t *pflag;
     uint32_t npend;
     int32_t *stack;          /* half-edges to legalize */
     uint32_t nstack, capstack;
 };
 
 #define NONE UINT32_MAX
+#define SEG 16
 #define HEAP_OFF 3u /* see the heap */
 
 struct plane {
@@ -167,11 +191,10 @@ static int reserve_tris(struct tin *m, uint32_t need)
     if (!pe)
         return -1;
     m->pend = pe;
-    /* add_tri clears a slot's flag when it takes the slot */
-    uint8_t *pf = realloc(m->pflag, (size_t)c);
-    if (!pf)
+    int32_t *hpo = realloc(m->hpos, (size_t)c * sizeof *hpo);
+    if (!hpo)
         return -1;
-    m->pflag = pf;
+    m->hpos = hpo;
     m->capt = c;
     return 0;
 }
@@ -183,12 +206,12 @@ static void release_tris(struct tin *m)
     free(m->cerr);
     free(m->heapmem);
     free(m->pend);
-    free(m->pflag);
+    free(m->hpos);
     m->t = NULL;
     m->cerr = NULL;
     m->heapmem = m->heap = NULL;
     m->pend = NULL;
-    m->pflag = NULL;
+    m->hpos = NULL;
     m->capt = 0;
 }
 
@@ -197,8 +220,11 @@ static int add_vertex(struct tin *m, int32_t x, int32_t y)
     if (m->nv == m->capv &&
         grow((void **)&m->v, &m->capv, m->nv + 1, sizeof *m->v) < 0)
         return -1;
-    m->v[m->nv].x = x;
-    m->v[m->nv].y = y;
+    if (m->track && grow((void **)&m->vhe, &m->capvhe, m->nv + 1,
+                         sizeof *m->vhe) < 0)
+        return -1;
+    m->v[m->nv].x = (uint16_t)x;
+    m->v[m->nv].y = (uint16_t)y;
     m->v[m->nv].z = hat(m, x, y);
     m->used[(size_t)y * m->w + (size_t)x] = 1;
     return (int)m->nv++;
@@ -227,7 +253,7 @@ static void heap_place(struct tin *m, uint32_t i, struct hent e)
         if (!better(&e, &hp[p]))
             break;
         hp[i] = hp[p];
-        m->t[hp[i].t].hpos = (int32_t)i;
+        m->hpos[hp[i].t] = (int32_t)i;
         i = p;
     }
     for (;;) {
@@ -242,19 +268,19 @@ static void heap_place(struct tin *m, uint32_t i, struct hent e)
         if (!better(&hp[b], &e))
             break;
         hp[i] = hp[b];
-        m->t[hp[i].t].hpos = (int32_t)i;
+        m->hpos[hp[i].t] = (int32_t)i;
         i = b;
     }
     hp[i] = e;
-    m->t[e.t].hpos = (int32_t)i;
+    m->hpos[e.t] = (int32_t)i;
 }
 
 static void heap_remove(struct tin *m, int32_t t)
 {
-    int32_t i = m->t[t].hpos;
+    int32_t i = m->hpos[t];
     if (i < 0)
         return;
-    m->t[t].hpos = -1;
+    m->hpos[t] = -1;
     uint32_t last = --m->nheap;
     if ((uint32_t)i != last)
         heap_place(m, (uint32_t)i, m->heap[last]);
@@ -264,10 +290,10 @@ static void heap_remove(struct tin *m, int32_t t)
 static void heap_set(struct tin *m, int32_t t)
 {
     struct hent e = {m->cerr[t], m->t[t].cidx, t};
-    if (m->t[t].hpos < 0)
+    if (m->hpos[t] < 0)
         heap_place(m, m->nheap++, e);
     else
-        heap_place(m, (uint32_t)m->t[t].hpos, e);
+        heap_place(m, (uint32_t)m->hpos[t], e);
 }
 
 /* ------------------------------------------------------------ planes */
@@ -333,112 +359,186 @@ static inline int32_t floor_q(double b, double inv)
     return (int32_t)(q + FLOOR_OFF) - (int32_t)FLOOR_OFF;
 }
 
+/* The samples x0 .. x1 of a row against the plane's row value zr: the
+ * first of largest error over *be goes to *be, *bx. */
+static inline void scan_run(const float *row, double zr, double gx,
+                            int32_t x0, int32_t x1, double *be, int32_t *bx)
+{
+    double b = *be;
+    int32_t bb = *bx;
+    double xd = (double)x0; /* exact: x < 2^16 */
+    for (int32_t x = x0; x <= x1; x++, xd += 1.0) {
+        double e = fabs((double)row[x] - (zr + gx * xd));
+        if (e > b) {
+            b = e;
+            bb = x;
+        }
+    }
+    *be = b;
+    *bx = bb;
+}
+
+/* What scan_part needs of a triangle: its corners and plane, the box of
+ * its candidates, and the slack of scan_part's bounds. */
+struct scan {
+    const struct tin *m;
+    int32_t px[3], py[3];
+    struct plane pl;
+    int32_t minx, maxx;
+    int all;
+    double slack;
+};
+
+/*
+ * Rows y0 .. y1 of a triangle, where edges ea and eb (edge k runs from
+ * corner k to corner k + 1) both cross every row: one bounds x from below
+ * and the other from above.  Edge k: orient(p_k, p_j, (x, y)) = A x + B(y)
+ * >= 0, B(y) = (xj - xk) (y - yk) + (yj - yk) xk, stepped by xj - xk a
+ * row; A > 0 bounds x from below (x >= -floor(B / A)), A < 0 from above
+ * (x <= floor(B / -A)).  The third edge's half-plane holds the span these
+ * two cut (its ends lie on the triangle), so the span is exact.  Updates
+ * *be, *bi as scan_tri says.
+ */
+static void scan_part(const struct scan *sc, int ea, int eb, int32_t y0,
+                      int32_t y1, double *be_io, uint32_t *bi_io)
+{
+    const struct tin *m = sc->m;
+    const int32_t *px = sc->px, *py = sc->py;
+    double b[2], dx[2], inv[2];
+    int lower = 0;
+    for (int n = 0; n < 2; n++) {
+        int k = n ? eb : ea, j = k == 2 ? 0 : k + 1;
+        int32_t A = py[k] - py[j];
+        dx[n] = (double)(px[j] - px[k]);
+        b[n] = dx[n] * (double)(y0 - py[k]) +
+               (double)(py[j] - py[k]) * (double)px[k];
+        inv[n] = 1.0 / (double)(A > 0 ? A : -A);
+        if (A > 0)
+            lower = n;
+    }
+    int upper = !lower;
+    double bl = b[lower], dl = dx[lower], il = inv[lower];
+    double bu = b[upper], du = dx[upper], iu = inv[upper];
+    double be = *be_io;
+    uint32_t bi = *bi_io;
+    const double gx = sc->pl.gx, slack = sc->slack;
+    for (int32_t y = y0; y <= y1; y++) {
+        int32_t lo = -floor_q(bl, il), hi = floor_q(bu, iu);
+        bl += dl;
+        bu += du;
+        lo = lo > sc->minx ? lo : sc->minx;
+        hi = hi < sc->maxx ? hi : sc->maxx;
+        /* the used samples inside a triangle are its corners (and the
+         * border, out of the box in border-first mode): corners lie on
+         * the first or last row of a part, and a corner, an extreme
+         * point, ends the exact span of its row */
+        if (!sc->all && (y == y0 || y == y1))
+            for (int k = 0; k < 3; k++)
+                if (py[k] == y) {
+                    if (px[k] == lo)
+                        lo++;
+                    else if (px[k] == hi)
+                        hi--;
+                }
+        const float *row = m->h + (size_t)y * m->stride;
+        double zr = row_at(&sc->pl, y);
+        int32_t bx = -1;
+        /* by runs within segments of SEG samples: a run is skipped where
+         * no sample of its segment can reach be (over the segment's
+         * heights and the plane's values at the run's ends, and slack) */
+        const float *mm = m->segmm + 2 * (size_t)y * m->nseg;
+        for (int32_t x = lo; x <= hi;) {
+            int32_t k = x / SEG, x1 = k * SEG + SEG - 1;
+            x1 = x1 < hi ? x1 : hi;
+            double pa = zr + gx * (double)x, pb = zr + gx * (double)x1;
+            double pmin = pa < pb ? pa : pb, pmax = pa < pb ? pb : pa;
+            double u = (double)mm[2 * k + 1] - pmin;
+            double d = pmax - (double)mm[2 * k];
+            if ((u > d ? u : d) + slack >= be)
+                scan_run(row, zr, gx, x, x1, &be, &bx);
+            x = x1 + 1;
+        }
+        if (bx >= 0)
+            bi = (uint32_t)y * m->w + (uint32_t)bx;
+    }
+    *be_io = be;
+    *bi_io = bi;
+}
+
 /*
  * Scan convert triangle t (edges included) row by row: for each row the
- * span where all three edge functions are >= 0, exact (floor_q).  With
- * all = 0, used samples are skipped.  The sample of largest error (the
- * first in raster order on ties) comes back in *best_err / *best_idx
- * (index NONE and error 0 when there is none).
+ * span where all three edge functions are >= 0, exact (floor_q), in two
+ * parts split at the middle corner's row.  With all = 0, used samples
+ * are skipped.  The sample of largest error (the first in raster order
+ * on ties) comes back in *best_err / *best_idx (index NONE and error 0
+ * when there is none).
  */
 static void scan_tri(const struct tin *m, int32_t t, int all,
                      double *best_err, uint32_t *best_idx)
 {
     const int32_t *tv = m->t[t].v;
     const struct vert *vv[3] = {&m->v[tv[0]], &m->v[tv[1]], &m->v[tv[2]]};
-    struct plane pl;
-    plane_from(vv, &pl);
-    int32_t px[3], py[3];
+    struct scan sc;
     for (int i = 0; i < 3; i++) {
-        px[i] = vv[i]->x;
-        py[i] = vv[i]->y;
+        sc.px[i] = vv[i]->x;
+        sc.py[i] = vv[i]->y;
     }
-    int32_t miny = py[0], maxy = py[0], minx = px[0], maxx = px[0];
+    const int32_t *px = sc.px, *py = sc.py;
+    *best_err = 0;
+    *best_idx = NONE;
+    /* Pick: twice the area is 2 I + B - 2 (I samples inside, B on the
+     * edges, the corners among them), so a triangle of twice area 1 holds
+     * its corners alone: nothing to offer (half the scans of a mesh) */
+    if (!all && orient(px[0], py[0], px[1], py[1], px[2], py[2]) == 1)
+        return;
+    sc.m = m;
+    sc.all = all;
+    plane_from(vv, &sc.pl);
+    /* far over the rounding of an error and of a bound: both are within
+     * a few ulps of |zr| + |gx x| + |height| < slack * 2^40 */
+    sc.slack = (fabs(sc.pl.z0) + m->habs +
+                (fabs(sc.pl.gy) + 2 * fabs(sc.pl.gx)) * 65536.0) * 0x1p-40;
+    /* corners by row: top a, middle b, bottom c */
+    int a = 0, b = 1, c = 2, s;
+    if (py[b] < py[a]) { s = a; a = b; b = s; }
+    if (py[c] < py[b]) { s = b; b = c; c = s; }
+    if (py[b] < py[a]) { s = a; a = b; b = s; }
+    int32_t minx = px[0], maxx = px[0], ytop = py[a], ybot = py[c];
     for (int i = 1; i < 3; i++) {
-        if (py[i] < miny) miny = py[i];
-        if (py[i] > maxy) maxy = py[i];
-        if (px[i] < minx) minx = px[i];
-        if (px[i] > maxx) maxx = px[i];
+        minx = px[i] < minx ? px[i] : minx;
+        maxx = px[i] > maxx ? px[i] : maxx;
     }
-    /* edge i -> j: orient(p_i, p_j, (x, y)) = A x + B(y) >= 0, B(y) =
-     * (xj - xi) (y - yi) + (yj - yi) xi, stepped by xj - xi a row.  A > 0
-     * bounds x from below (x >= -floor(B / A)), A < 0 from above
-     * (x <= floor(B / -A)).  A = 0 (a horizontal edge) never cuts a row
-     * of the box: the triangle lies on its inner side.  A triangle has
-     * one or two edges of each kind; a lone one is taken twice, so that
-     * every row computes two bounds each way without a branch. */
-    double lb[2], ldx[2], linv[2], ub[2], udx[2], uinv[2];
-    int nl = 0, nu = 0;
-    for (int i = 0; i < 3; i++) {
-        int j = i == 2 ? 0 : i + 1;
-        int32_t A = py[i] - py[j];
-        if (!A)
-            continue;
-        double dx = (double)(px[j] - px[i]);
-        double b0 = dx * (double)(miny - py[i]) +
-                    (double)(py[j] - py[i]) * (double)px[i];
-        double inv = 1.0 / (double)(A > 0 ? A : -A);
-        if (A > 0) {
-            lb[nl] = b0;
-            ldx[nl] = dx;
-            linv[nl++] = inv;
-        } else {
-            ub[nu] = b0;
-            udx[nu] = dx;
-            uinv[nu++] = inv;
-        }
+    /* the candidates' box: the border rows and columns go in border-first
+     * mode (they are all used) */
+    if (!all && m->inner) {
+        ytop = ytop < 1 ? 1 : ytop;
+        ybot = ybot > (int32_t)m->hgt - 2 ? (int32_t)m->hgt - 2 : ybot;
+        minx = minx < 1 ? 1 : minx;
+        maxx = maxx > (int32_t)m->w - 2 ? (int32_t)m->w - 2 : maxx;
     }
-    if (nl == 1) {
-        lb[1] = lb[0];
-        ldx[1] = ldx[0];
-        linv[1] = linv[0];
+    sc.minx = minx;
+    sc.maxx = maxx;
+    /* edge k runs from corner k to k + 1: the edge of corners u, v */
+#define EDGE(u, v) ((v) == ((u) + 1) % 3 ? (u) : (v))
+    int32_t ymid = py[b];
+    if (ymid > py[a]) {
+        /* rows to the middle corner's: edges a-b and a-c */
+        scan_part(&sc, EDGE(a, b), EDGE(a, c), ytop,
+                  ymid < ybot ? ymid : ybot, best_err, best_idx);
+        ytop = ymid + 1 > ytop ? ymid + 1 : ytop;
     }
-    if (nu == 1) {
-        ub[1] = ub[0];
-        udx[1] = udx[0];
-        uinv[1] = uinv[0];
-    }
-    double be = 0;
-    uint32_t bi = NONE;
-    const double gx = pl.gx;
-    for (int32_t y = miny; y <= maxy; y++) {
-        int32_t lo = minx, hi = maxx;
-        int32_t l0 = -floor_q(lb[0], linv[0]), l1 = -floor_q(lb[1], linv[1]);
-        int32_t u0 = floor_q(ub[0], uinv[0]), u1 = floor_q(ub[1], uinv[1]);
-        lo = l0 > lo ? l0 : lo;
-        lo = l1 > lo ? l1 : lo;
-        hi = u0 < hi ? u0 : hi;
-        hi = u1 < hi ? u1 : hi;
-        lb[0] += ldx[0];
-        lb[1] += ldx[1];
-        ub[0] += udx[0];
-        ub[1] += udx[1];
-        const float *row = m->h + (size_t)y * m->stride;
-        const uint8_t *urow = m->used + (size_t)y * m->w;
-        double zr = row_at(&pl, y);
-        int32_t bx = -1;
-        double xd = (double)lo; /* exact: x < 2^16 */
-        for (int32_t x = lo; x <= hi; x++, xd += 1.0) {
-            double e = fabs((double)row[x] - (zr + gx * xd));
-            /* used samples are skipped only where they would win: the
-             * same maximum, one load and branch less per sample */
-            if (e > be && (all || !urow[x])) {
-                be = e;
-                bx = x;
-            }
-        }
-        if (bx >= 0)
-            bi = (uint32_t)y * m->w + (uint32_t)bx;
-    }
-    *best_err = be;
-    *best_idx = bi;
+    if (py[c] > ymid) /* the rest: edges b-c and a-c */
+        scan_part(&sc, EDGE(b, c), EDGE(a, c), ytop, ybot, best_err,
+                  best_idx);
+#undef EDGE
 }
 
 /* Queue triangle t for a scan.  It may stay in the heap with a stale key
  * until flush() updates it: nothing is selected in between. */
 static void mark(struct tin *m, int32_t t)
 {
-    if (!m->pflag[t]) {
-        m->pflag[t] = 1;
+    if (!m->t[t].queued) {
+        m->t[t].queued = 1;
         m->pend[m->npend++] = t;
     }
 }
@@ -449,7 +549,7 @@ static void flush(struct tin *m, int use_heap)
 {
     for (uint32_t i = 0; i < m->npend; i++) {
         int32_t t = m->pend[i];
-        m->pflag[t] = 0;
+        m->t[t].queued = 0;
         if (!use_heap)
             continue;
         scan_tri(m, t, 0, &m->cerr[t], &m->t[t].cidx);
@@ -470,8 +570,8 @@ static int add_tri(struct tin *m, int32_t a, int32_t b, int32_t c, int ab,
 {
     if (e < 0) {
         e = (int)(3 * m->nt++);
-        m->t[e / 3].hpos = -1;
-        m->pflag[e / 3] = 0;
+        m->hpos[e / 3] = -1;
+        m->t[e / 3].queued = 0;
     }
     struct tri *T = &m->t[e / 3]; /* e is 3 t: no remainder below */
     T->v[0] = a;
@@ -486,9 +586,9 @@ static int add_tri(struct tin *m, int32_t a, int32_t b, int32_t c, int ab,
     /* every split and flip rewrites each vertex it touches, so these stay
      * valid */
     if (m->track) {
-        m->v[a].he = e;
-        m->v[b].he = e + 1;
-        m->v[c].he = e + 2;
+        m->vhe[a] = e;
+        m->vhe[b] = e + 1;
+        m->vhe[c] = e + 2;
     }
     mark(m, e / 3);
     return e;
@@ -621,7 +721,7 @@ static int insert_point(struct tin *m, int32_t t, int32_t x, int32_t y)
  * half-edges that leave it until one has no twin. */
 static int hull_out(const struct tin *m, int32_t v)
 {
-    int e = m->v[v].he;
+    int e = m->vhe[v];
     while (HE(m, e) >= 0)
         e = next_he(HE(m, e));
     return e;
@@ -679,15 +779,46 @@ int gv_tin_edge_greedy(const float *s, size_t step, uint32_t n,
 
 /* ------------------------------------------------------------ driver */
 
+/* The heights' bounds per row segment for scan_tri (after the check that
+ * they are finite).  Returns 0, or -1 out of memory. */
+static int seg_bounds(struct tin *m)
+{
+    m->nseg = (m->w + SEG - 1) / SEG;
+    m->segmm = malloc(2 * (size_t)m->nseg * m->hgt * sizeof *m->segmm);
+    if (!m->segmm)
+        return -1;
+    float habs = 0;
+    for (uint32_t y = 0; y < m->hgt; y++) {
+        const float *row = m->h + (size_t)y * m->stride;
+        float *mm = m->segmm + 2 * (size_t)y * m->nseg;
+        for (uint32_t k = 0; k < m->nseg; k++) {
+            uint32_t x0 = k * SEG, x1 = x0 + SEG < m->w ? x0 + SEG : m->w;
+            float lo = row[x0], hi = row[x0];
+            for (uint32_t x = x0 + 1; x < x1; x++) {
+                lo = row[x] < lo ? row[x] : lo;
+                hi = row[x] > hi ? row[x] : hi;
+            }
+            mm[2 * k] = lo;
+            mm[2 * k + 1] = hi;
+            float a = fabsf(lo) > fabsf(hi) ? fabsf(lo) : fabsf(hi);
+            habs = a > habs ? a : habs;
+        }
+    }
+    m->habs = habs;
+    return 0;
+}
+
 static void tin_release(struct tin *m)
 {
     free(m->used);
     free(m->v);
+    free(m->vhe);
+    free(m->segmm);
     free(m->t);
     free(m->cerr);
     free(m->heapmem);
     free(m->pend);
-    free(m->pflag);
+    free(m->hpos);
     free(m->stack);
 }
 
@@ -890,11 +1021,13 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
                         x, y);
                 goto out;
             }
+    if (seg_bounds(&m) < 0)
+        goto nomem;
     int32_t W = (int32_t)w - 1, H = (int32_t)hgt - 1;
+    m.track = 1;
     if (add_vertex(&m, 0, 0) < 0 || add_vertex(&m, W, 0) < 0 ||
         add_vertex(&m, W, H) < 0 || add_vertex(&m, 0, H) < 0)
         goto nomem;
-    m.track = 1;
     int t0 = add_tri(&m, 0, 1, 2, -1, -1, -1, -1);
     add_tri(&m, 0, 2, 3, t0 + 2, -1, -1, -1);
 
@@ -911,6 +1044,7 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
             m.used[x] = m.used[(size_t)H * w + x] = 1;
         for (uint32_t y = 0; y < hgt; y++)
             m.used[(size_t)y * w] = m.used[(size_t)y * w + (size_t)W] = 1;
+        m.inner = 1;
     }
     m.track = 0;
     flush(&m, !brute);
