@@ -36,9 +36,6 @@
 
 extern char **environ;
 
-/* A worker must say hello within this: EGL start-up takes about 0.1 s on
- * llvmpipe, but seconds under valgrind or on a loaded machine. */
-#define START_TIMEOUT_MS 20000
 /* Delay before retrying a worker that failed to start: doubled each
  * failure, so a machine with no EGL costs one spawn a minute at most. */
 #define BACKOFF_MIN_MS 1000
@@ -230,7 +227,7 @@ static int hello_failed(struct slot *s, pid_t pid, int io, const char *text,
     }
     if (io == GV_WORKER_TIMEOUT)
         gv_fail(err, GV_EIO, "filter: worker %ld said nothing within %d s; "
-                "killed", (long)pid, START_TIMEOUT_MS / 1000);
+                "killed", (long)pid, p->cfg.start_timeout_ms / 1000);
     else if (io == GV_WORKER_EOF)
         gv_fail(err, GV_EIO, "filter: worker %s %s before it was ready",
                 p->path, why);
@@ -259,7 +256,7 @@ static int start_worker(struct slot *s)
     char text[GV_WORKER_MSG_MAX + 1] = "";
     int ok = 0;
     int io = stopping ? GV_WORKER_EOF
-                      : gv_worker_recv_hello(fd, gv_worker_now_ms() + START_TIMEOUT_MS,
+                      : gv_worker_recv_hello(fd, gv_worker_now_ms() + s->pool->cfg.start_timeout_ms,
                                              &ok, text, sizeof text, &err);
     if (io || !ok)
         return hello_failed(s, pid, io, text, &err);

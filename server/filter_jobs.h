@@ -45,6 +45,7 @@ struct filter_jobs_config {
     const char *worker_path;   /* the gigaview-filter-worker program */
     int workers;               /* processes, >= 1 */
     int timeout_ms;            /* per job, from send to answer */
+    int start_timeout_ms;      /* a new worker's hello */
     uint64_t memory_limit;     /* RLIMIT_DATA of each worker; 0 none */
     uint64_t max_pixels;       /* largest padded region a worker accepts */
     int max_jobs;              /* queued plus running */

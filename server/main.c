@@ -209,9 +209,13 @@ static int start_filters(struct server *srv)
                  "filter: filters are unavailable: %s", why);
     } else {
         struct filter_jobs_config fc = {
-            path, (int)cfg->filter_workers, (int)cfg->filter_timeout_ms,
-            cfg->filter_memory_limit, cfg->max_filter_pixels,
-            (int)cfg->filter_max_jobs, cfg->gpu_platform};
+            .worker_path = path, .workers = (int)cfg->filter_workers,
+            .timeout_ms = (int)cfg->filter_timeout_ms,
+            .start_timeout_ms = (int)cfg->filter_start_timeout_ms,
+            .memory_limit = cfg->filter_memory_limit,
+            .max_pixels = cfg->max_filter_pixels,
+            .max_jobs = (int)cfg->filter_max_jobs,
+            .gpu_platform = cfg->gpu_platform};
         struct gv_error err = {0};
         srv->filters = filter_jobs_new(&fc, &err);
         if (!srv->filters) {

@@ -162,6 +162,10 @@ static const struct settings_key keys[] = {
      "10000", 100, 3600000,
      "time limit in ms of validating and compiling a graph that is stored "
      "(POST /v1/filters) in its worker (504 beyond)"},
+    {"filter_start_timeout_ms", T_UINT, F(filter_start_timeout_ms), "60000",
+     1000, 3600000,
+     "time in ms a new filter worker has to start its EGL context and say "
+     "it is ready; past it the worker is killed and started again later"},
     {"filter_memory_limit", T_SIZE, F(filter_memory_limit), "1G", 0, 1e15,
      "RLIMIT_DATA of each filter worker (heap and private mappings); 0: none"},
     {"filter_max_jobs", T_UINT, F(filter_max_jobs), "8", 1, 4096,

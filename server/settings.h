@@ -72,6 +72,7 @@ struct settings {
     uint64_t filter_workers;       /* worker processes; 0 disables filters */
     uint64_t filter_timeout_ms;    /* per job; the worker is killed past it */
     uint64_t filter_compile_timeout_ms; /* storing a graph: its compile job */
+    uint64_t filter_start_timeout_ms; /* a new worker's hello */
     uint64_t filter_memory_limit;  /* RLIMIT_DATA of a worker; 0 none */
     uint64_t filter_max_jobs;      /* queued plus running; 503 beyond */
     uint64_t max_filter_pixels;    /* padded region of one filter request */
