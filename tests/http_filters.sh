@@ -74,7 +74,7 @@ max_filter_pixels = 1M
 filter_max_modules = 8
 filter_max_json_bytes = 8K
 filter_memory_limit = 256M
-drain_timeout = 1
+drain_timeout = 5
 EOF
 
 # ---------------------------------------------------------------- settings
