@@ -21,7 +21,7 @@
  *
  * The cost (profiled on 1025^2 ETOPO5 grids, bench/tin-speed.sh) is memory
  * latency and branches as much as the rescans: a split or flip touches
- * one 32-byte triangle record (corners, twins, candidate, scan flag), a
+ * one 32-byte triangle record (corners, twins, candidate error), a
  * vertex is 8 bytes, heap entries carry their keys and four siblings
  * share a cache line (a sift down asks for the grandchildren's lines a
  * level ahead), the heap places lie apart from the records, the
@@ -83,8 +83,9 @@ struct hent {
  * heap moves write them, many to a line). */
 struct tri {
     int32_t v[3], he[3];
-    uint32_t cidx;           /* candidate sample index, NONE: none */
-    int32_t queued;          /* in pend, to scan after this insertion */
+    double cerr;             /* its candidate's error (the largest over its
+                                unused samples, 0: none); -1 while queued
+                                in pend for a scan */
 };
 
 #define TV(m, e) ((m)->t[(unsigned)(e) / 3].v[(unsigned)(e) % 3])
@@ -112,7 +113,6 @@ struct tin {
     uint32_t capvhe;
     uint32_t nt, capt;
     struct tri *t;           /* 64-byte aligned, 2 a cache line */
-    double *cerr;            /* candidate error per triangle */
     struct hent *heap;       /* heapmem + HEAP_OFF */
     struct hent *heapmem;    /* 64-byte aligned */
     uint32_t nheap;
@@ -178,10 +178,6 @@ static int reserve_tris(struct tin *m, uint32_t need)
         memcpy(nt, m->t, (size_t)m->nt * sizeof *nt);
     free(m->t);
     m->t = nt;
-    double *ce = realloc(m->cerr, (size_t)c * sizeof *ce);
-    if (!ce)
-        return -1;
-    m->cerr = ce;
     /* c + 4 entries from a line: the heap proper starts HEAP_OFF in */
     struct hent *hh = aligned_alloc(64, ((size_t)c + 4) * sizeof *hh);
     if (!hh)
@@ -207,12 +203,10 @@ static int reserve_tris(struct tin *m, uint32_t need)
 static void release_tris(struct tin *m)
 {
     free(m->t);
-    free(m->cerr);
     free(m->heapmem);
     free(m->pend);
     free(m->hpos);
     m->t = NULL;
-    m->cerr = NULL;
     m->heapmem = m->heap = NULL;
     m->pend = NULL;
     m->hpos = NULL;
@@ -294,10 +288,10 @@ static void heap_remove(struct tin *m, int32_t t)
         heap_place(m, (uint32_t)i, m->heap[last]);
 }
 
-/* Put t in the heap with its key, or move it there. */
-static void heap_set(struct tin *m, int32_t t)
+/* Put t in the heap with key (err, idx), or move it there. */
+static void heap_set(struct tin *m, int32_t t, double err, uint32_t idx)
 {
-    struct hent e = {m->cerr[t], m->t[t].cidx, t};
+    struct hent e = {err, idx, t};
     if (m->hpos[t] < 0)
         heap_place(m, m->nheap++, e);
     else
@@ -554,8 +548,8 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
  * until flush() updates it: nothing is selected in between. */
 static void mark(struct tin *m, int32_t t)
 {
-    if (!m->t[t].queued) {
-        m->t[t].queued = 1;
+    if (m->t[t].cerr >= 0) {
+        m->t[t].cerr = -1;
         m->pend[m->npend++] = t;
     }
 }
@@ -566,12 +560,15 @@ static void flush(struct tin *m, int use_heap)
 {
     for (uint32_t i = 0; i < m->npend; i++) {
         int32_t t = m->pend[i];
-        m->t[t].queued = 0;
+        double e = 0;
+        uint32_t idx = NONE;
+        if (use_heap)
+            scan_tri(m, t, 0, &e, &idx);
+        m->t[t].cerr = e;
         if (!use_heap)
             continue;
-        scan_tri(m, t, 0, &m->cerr[t], &m->t[t].cidx);
-        if (m->t[t].cidx != NONE && m->cerr[t] > 0 && m->cerr[t] > m->goal)
-            heap_set(m, t);
+        if (idx != NONE && e > 0 && e > m->goal)
+            heap_set(m, t, e, idx);
         else
             heap_remove(m, t);
     }
@@ -588,7 +585,7 @@ static int add_tri(struct tin *m, int32_t a, int32_t b, int32_t c, int ab,
     if (e < 0) {
         e = (int)(3 * m->nt++);
         m->hpos[e / 3] = -1;
-        m->t[e / 3].queued = 0;
+        m->t[e / 3].cerr = 0;
     }
     struct tri *T = &m->t[e / 3]; /* e is 3 t: no remainder below */
     T->v[0] = a;
@@ -834,7 +831,6 @@ static void tin_release(struct tin *m)
     free(m->vhe);
     free(m->segmm);
     free(m->t);
-    free(m->cerr);
     free(m->heapmem);
     free(m->pend);
     free(m->hpos);
@@ -947,7 +943,7 @@ static double measured_error(const struct tin *m, int scanned)
         } else {
             struct plane pl;
             plane_of(m, (int32_t)t, &pl);
-            e = m->cerr[t];
+            e = m->t[t].cerr;
             for (int k = 0; k < 3; k++) {
                 const struct vert *v = &m->v[TV(m, 3 * (size_t)t + k)];
                 double d = fabs((double)v->z - plane_at(&pl, v->x, v->y));
