@@ -6,7 +6,8 @@
  * sections 4.1 and 4.4), on small grids of several kinds; every sample must
  * lie within the error bound, checked by an independent point location;
  * the triangulation must be Delaunay (no vertex strictly inside a
- * circumcircle, exact test) and tile the rectangle; neighbours that share
+ * circumcircle, exact test) and tile the rectangle; the scans' segment
+ * bounds must change no mesh, small or large; neighbours that share
  * an edge of samples must choose the same vertices on it whatever their
  * interiors hold.
  */
@@ -144,6 +145,12 @@ static void compare_brute(uint32_t w, uint32_t h, int kind, double e,
           "%ux%u kind %d E=%g N=%u border=%d: same vertex sequence and "
           "triangles as brute force (%u vs %u vertices)",
           w, h, kind, e, maxt, border, a.nverts, b.nverts);
+    struct gv_mesh s;
+    int rs = gv_tin_build_segs(f, w, h, w, &p, 1, &s, &err);
+    check(rs == 0 && same_mesh(&s, &b), "with the scans' segment bounds: "
+          "the same as brute force");
+    if (rs == 0)
+        gv_mesh_free(&s);
     double ie = independent_error(f, &a);
     if (e >= 0 && (!maxt || a.ntris + 2 <= maxt))
         check(ie <= e + 1e-9 && a.max_error <= e + 1e-9,
@@ -159,6 +166,38 @@ static void compare_brute(uint32_t w, uint32_t h, int kind, double e,
     gv_mesh_free(&a);
     gv_mesh_free(&b);
     free(f);
+}
+
+/* On grids too large for the brute force, the scans' segment bounds (on
+ * by default there) change nothing: the same mesh without them. */
+static void segs_large(void)
+{
+    static const struct {
+        int kind;
+        double e;
+        int border;
+    } cases[] = {{0, 1.0, 1}, {0, 0.25, 0}, {1, 0.0, 1}, {3, 30.0, 0}};
+    const uint32_t w = 300, h = 240;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        float *f = field(w, h, cases[i].kind, 7 + (uint32_t)i);
+        struct gv_tin_params p = {cases[i].e, 0, cases[i].border, 0};
+        struct gv_mesh a, b;
+        struct gv_error err = {0};
+        int ra = gv_tin_build(f, w, h, w, &p, &a, &err);
+        int rb = gv_tin_build_segs(f, w, h, w, &p, 0, &b, &err);
+        check(ra == 0 && rb == 0 && same_mesh(&a, &b),
+              "%ux%u kind %d E=%g border=%d: the same mesh with and without "
+              "segment bounds (%u triangles)", w, h, cases[i].kind,
+              cases[i].e, cases[i].border, ra == 0 ? a.ntris : 0);
+        if (ra == 0) {
+            check(a.max_error <= cases[i].e + 1e-9,
+                  "measured error %.6g within %g", a.max_error, cases[i].e);
+            gv_mesh_free(&a);
+        }
+        if (rb == 0)
+            gv_mesh_free(&b);
+        free(f);
+    }
 }
 
 /* 1D greedy against a direct O(n k) greedy insertion. */
@@ -368,6 +407,7 @@ int main(void)
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++)
         compare_brute(cases[i].w, cases[i].h, cases[i].kind, cases[i].e,
                       cases[i].maxt, cases[i].border);
+    segs_large();
     crack_free();
     tiled();
     edge_cases();

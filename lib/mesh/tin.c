@@ -43,8 +43,10 @@
  * so the skipped samples could not have won and the candidate is the
  * same sample: the meshes are bit for bit those of before.  A quarter of
  * the heights are read; in cachegrind (andes, a 1 MiB last-level cache)
- * the data misses drop by a third at E = 200 and a fifth at E = 50, for
- * 1.5 % fewer and 5 % more instructions.
+ * the data misses drop by a third at E = 200 and a fifth at E = 50.  A
+ * grid of up to SEG_GRID samples (64^2 tiles) stays in cache, where the
+ * bounds cost more instructions than the samples they skip: its scans
+ * take whole spans.
  *
  * The plane of a triangle is computed from its vertices in a canonical
  * rotation (the smallest sample index first), so its errors depend on the
@@ -101,7 +103,8 @@ struct tin {
     int inner;               /* border-first: candidates off the border */
     float *segmm;            /* min and max height of each row's segments
                                 of SEG samples (nseg a row), SEGROWS rows
-                                of a segment to a cache line (seg_row) */
+                                of a segment to a cache line (seg_row);
+                                NULL up to SEG_GRID samples: whole spans */
     uint32_t nseg;
     double habs;             /* the largest |height| */
     uint8_t *used;           /* w*hgt: a vertex, or a border sample in
@@ -126,6 +129,8 @@ struct tin {
 #define NONE UINT32_MAX
 #define SEG 16
 #define SEGROWS 8
+#define SEG_GRID 65536 /* samples: a grid up to this stays in cache, where
+                          segmm costs more than it skips (64^2 tiles) */
 #define HEAP_OFF 3u /* see the heap */
 
 struct plane {
@@ -366,8 +371,9 @@ static inline int32_t floor_q(double b, double inv)
  * line per segment, so a narrow triangle reads a line or two of them. */
 static inline const float *seg_row(const struct tin *m, int32_t y)
 {
-    return m->segmm + 2 * ((size_t)(y / SEGROWS) * m->nseg * SEGROWS +
-                           (size_t)(y % SEGROWS));
+    uint32_t u = (uint32_t)y;
+    return m->segmm + 2 * ((size_t)(u / SEGROWS) * m->nseg * SEGROWS +
+                           u % SEGROWS);
 }
 
 /* The samples x0 .. x1 of a row against the plane's row value zr: the
@@ -387,6 +393,27 @@ static inline void scan_run(const float *row, double zr, double gx,
     }
     *be = b;
     *bx = bb;
+}
+
+/* Row samples x0 .. x1 as scan_run, by runs within segments of SEG
+ * samples (mm: the row's bounds, seg_row): a run is skipped where no
+ * sample of its segment can reach *be (over the segment's heights and the
+ * plane's values at the run's ends, and slack). */
+static inline void scan_segs(const float *mm, const float *row, double zr,
+                             double gx, double slack, int32_t x0, int32_t x1,
+                             double *be, int32_t *bx)
+{
+    for (int32_t x = x0; x <= x1;) {
+        int32_t k = x / SEG, xe = k * SEG + SEG - 1;
+        xe = xe < x1 ? xe : x1;
+        double pa = zr + gx * (double)x, pb = zr + gx * (double)xe;
+        double pmin = pa < pb ? pa : pb, pmax = pa < pb ? pb : pa;
+        double u = (double)mm[2 * SEGROWS * k + 1] - pmin;
+        double d = pmax - (double)mm[2 * SEGROWS * k];
+        if ((u > d ? u : d) + slack >= *be)
+            scan_run(row, zr, gx, x, xe, be, bx);
+        x = xe + 1;
+    }
 }
 
 /* What scan_part needs of a triangle: its corners and plane, the box of
@@ -454,21 +481,10 @@ static void scan_part(const struct scan *sc, int ea, int eb, int32_t y0,
         const float *row = m->h + (size_t)y * m->stride;
         double zr = row_at(&sc->pl, y);
         int32_t bx = -1;
-        /* by runs within segments of SEG samples: a run is skipped where
-         * no sample of its segment can reach be (over the segment's
-         * heights and the plane's values at the run's ends, and slack) */
-        const float *mm = seg_row(m, y);
-        for (int32_t x = lo; x <= hi;) {
-            int32_t k = x / SEG, x1 = k * SEG + SEG - 1;
-            x1 = x1 < hi ? x1 : hi;
-            double pa = zr + gx * (double)x, pb = zr + gx * (double)x1;
-            double pmin = pa < pb ? pa : pb, pmax = pa < pb ? pb : pa;
-            double u = (double)mm[2 * SEGROWS * k + 1] - pmin;
-            double d = pmax - (double)mm[2 * SEGROWS * k];
-            if ((u > d ? u : d) + slack >= be)
-                scan_run(row, zr, gx, x, x1, &be, &bx);
-            x = x1 + 1;
-        }
+        if (m->segmm)
+            scan_segs(seg_row(m, y), row, zr, gx, slack, lo, hi, &be, &bx);
+        else
+            scan_run(row, zr, gx, lo, hi, &be, &bx);
         if (bx >= 0)
             bi = (uint32_t)y * m->w + (uint32_t)bx;
     }
@@ -531,16 +547,20 @@ static void scan_tri(const struct tin *m, int32_t t, int all,
     sc.maxx = maxx;
     /* edge k runs from corner k to k + 1: the edge of corners u, v */
 #define EDGE(u, v) ((v) == ((u) + 1) % 3 ? (u) : (v))
+    /* rows to the middle corner's (edges a-b and a-c), then the rest
+     * (b-c and a-c); one call site, so that scan_part is inlined */
     int32_t ymid = py[b];
-    if (ymid > py[a]) {
-        /* rows to the middle corner's: edges a-b and a-c */
-        scan_part(&sc, EDGE(a, b), EDGE(a, c), ytop,
-                  ymid < ybot ? ymid : ybot, best_err, best_idx);
-        ytop = ymid + 1 > ytop ? ymid + 1 : ytop;
+    for (int part = ymid > py[a] ? 0 : 1; part < 2; part++) {
+        int32_t y0 = ytop, y1 = ybot;
+        if (part == 0)
+            y1 = ymid < ybot ? ymid : ybot;
+        else if (py[c] == ymid)
+            break;
+        else
+            y0 = py[a] < ymid && ymid + 1 > ytop ? ymid + 1 : ytop;
+        scan_part(&sc, part ? EDGE(b, c) : EDGE(a, b), EDGE(a, c), y0, y1,
+                  best_err, best_idx);
     }
-    if (py[c] > ymid) /* the rest: edges b-c and a-c */
-        scan_part(&sc, EDGE(b, c), EDGE(a, c), ytop, ybot, best_err,
-                  best_idx);
 #undef EDGE
 }
 
@@ -988,8 +1008,8 @@ static int hand_out(const struct tin *m, uint32_t w, uint32_t hgt, double me,
 }
 
 static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
-                 const struct gv_tin_params *p, int brute, struct gv_mesh *out,
-                 struct gv_error *err)
+                 const struct gv_tin_params *p, int brute, int segs,
+                 struct gv_mesh *out, struct gv_error *err)
 {
     struct tin m;
     uint32_t *bpos = NULL;
@@ -1036,7 +1056,9 @@ static int build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
                         x, y);
                 goto out;
             }
-    if (seg_bounds(&m) < 0)
+    if (segs < 0)
+        segs = (size_t)w * hgt > SEG_GRID;
+    if (segs && seg_bounds(&m) < 0)
         goto nomem;
     int32_t W = (int32_t)w - 1, H = (int32_t)hgt - 1;
     m.track = 1;
@@ -1116,12 +1138,19 @@ int gv_tin_build(const float *h, uint32_t w, uint32_t hgt, size_t stride,
                  const struct gv_tin_params *p, struct gv_mesh *out,
                  struct gv_error *err)
 {
-    return build(h, w, hgt, stride, p, 0, out, err);
+    return build(h, w, hgt, stride, p, 0, -1, out, err);
 }
 
 int gv_tin_build_brute(const float *h, uint32_t w, uint32_t hgt,
                        size_t stride, const struct gv_tin_params *p,
                        struct gv_mesh *out, struct gv_error *err)
 {
-    return build(h, w, hgt, stride, p, 1, out, err);
+    return build(h, w, hgt, stride, p, 1, 0, out, err);
+}
+
+int gv_tin_build_segs(const float *h, uint32_t w, uint32_t hgt,
+                      size_t stride, const struct gv_tin_params *p, int segs,
+                      struct gv_mesh *out, struct gv_error *err)
+{
+    return build(h, w, hgt, stride, p, 0, segs, out, err);
 }
