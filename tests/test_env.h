@@ -67,6 +67,38 @@ static inline void test_write_file(const char *path, const uint8_t *p,
         fail("%s: cannot write", path);
 }
 
+/* The whole file at path, malloc'ed (free it) with a NUL after its *len
+ * bytes, or NULL when it cannot be opened or read. */
+static inline uint8_t *test_read_file(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    uint8_t *p = NULL;
+    long n = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+    if (n >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (p = malloc((size_t)n + 1)) != NULL &&
+        fread(p, 1, (size_t)n, f) == (size_t)n) {
+        p[n] = 0;
+        *len = (size_t)n;
+    } else {
+        free(p);
+        p = NULL;
+    }
+    fclose(f);
+    return p;
+}
+
+/* test_read_file, and fail() when the file cannot be read: for the data
+ * a test is built on. */
+static inline uint8_t *test_read_file_found(const char *path, size_t *len)
+{
+    uint8_t *p = test_read_file(path, len);
+    if (!p)
+        fail("%s: cannot read: %s", path, strerror(errno));
+    return p;
+}
+
 /* A field of /proc/self/status in kB ("VmHWM", "VmRSS"), or -1. */
 static inline long long test_status_kb(const char *key)
 {

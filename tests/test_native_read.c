@@ -281,17 +281,6 @@ static void test_negative_controls(const char *dir)
     }
 }
 
-static uint8_t *slurp(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        fail("%s: %s", path, strerror(errno));
-    uint8_t *p = malloc(1 << 20);
-    *len = fread(p, 1, 1 << 20, f);
-    fclose(f);
-    return p;
-}
-
 /* A damaged file must fail (or open and read) exactly as in the module:
  * the same open result, the same read result, and a failure's code and
  * "imageio: PATH: " prefix. */
@@ -348,7 +337,7 @@ static void test_truncated(const char *dir)
     const int cuts[] = {5, 30, 200, 500, 800, 990};
     for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
         size_t len;
-        uint8_t *p = slurp(test_path_in(dir, files[f]), &len);
+        uint8_t *p = test_read_file_found(test_path_in(dir, files[f]), &len);
         for (size_t c = 0; c <= sizeof cuts / sizeof cuts[0]; c++) {
             size_t n = c < sizeof cuts / sizeof cuts[0]
                            ? len * (size_t)cuts[c] / 1000 : len - 1;
@@ -374,7 +363,7 @@ static void test_corrupt(const char *dir)
                            "rgb8-lzw-tiled.tif", "rgb16-zip.tif"};
     for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
         size_t len;
-        uint8_t *p = slurp(test_path_in(dir, files[f]), &len);
+        uint8_t *p = test_read_file_found(test_path_in(dir, files[f]), &len);
         uint64_t seed = 0x9e3779b97f4a7c15ull + f;
         for (int k = 0; k < 12; k++) {
             uint8_t *q = malloc(len);
@@ -406,7 +395,7 @@ static void test_corrupt(const char *dir)
 static void test_huge(const char *dir)
 {
     size_t len;
-    uint8_t *p = slurp(test_path_in(dir, "s420.jpg"), &len);
+    uint8_t *p = test_read_file_found(test_path_in(dir, "s420.jpg"), &len);
     /* SOF0: FF C0, length, precision, height, width */
     for (size_t i = 0; i + 9 < len; i++)
         if (p[i] == 0xFF && p[i + 1] == 0xC0) {
@@ -417,7 +406,7 @@ static void test_huge(const char *dir)
     const char *jpg = test_path_in(tmpdir, "huge.jpg");
     test_write_file(jpg, p, len);
     free(p);
-    p = slurp(test_path_in(dir, "rgb8.png"), &len);
+    p = test_read_file_found(test_path_in(dir, "rgb8.png"), &len);
     /* IHDR's width and height at 16..23; its CRC at 29..32 */
     const uint8_t wh[8] = {0, 0x0F, 0x42, 0x40, 0, 0x0F, 0x42, 0x40};
     memcpy(p + 16, wh, 8);
@@ -461,7 +450,7 @@ static const char *jpeg_claiming(const char *dir, const char *name,
                                  const char *out, unsigned w, unsigned h)
 {
     size_t len;
-    uint8_t *p = slurp(test_path_in(dir, name), &len);
+    uint8_t *p = test_read_file_found(test_path_in(dir, name), &len);
     size_t i = 2;
     while (i + 9 < len && p[i] == 0xFF && !(p[i + 1] >= 0xC0
                                             && p[i + 1] <= 0xC2))
@@ -588,7 +577,7 @@ static void test_decoder_memory(const char *dir)
         size_t len;
         const char *src = jpeg_claiming(dir, "progressive.jpg",
                                         "claims-huge.jpg", 30000, 30000);
-        uint8_t *p = slurp(src, &len);
+        uint8_t *p = test_read_file_found(src, &len);
         uint8_t *q = malloc(len + 1);
         memcpy(q, p, 2);
         q[2] = 0x00;
@@ -652,7 +641,7 @@ static void put_be(uint8_t *p, uint32_t v, int bytes)
 static const char *psd_with_thumbnail(const char *jpg, const char *out)
 {
     size_t n;
-    uint8_t *j = slurp(jpg, &n);
+    uint8_t *j = test_read_file_found(jpg, &n);
     size_t data = 28 + n + (n & 1), size = 26 + 4 + 4 + 12 + data + 4
                                            + 2 + 48;
     uint8_t *p = calloc(1, size), *q = p;
@@ -695,7 +684,7 @@ static const char *png_claiming(const char *dir, const char *name,
                                 int depth, int color, int interlaced)
 {
     size_t len;
-    uint8_t *p = slurp(test_path_in(dir, name), &len);
+    uint8_t *p = test_read_file_found(test_path_in(dir, name), &len);
     if (len < 33 || memcmp(p + 12, "IHDR", 4) != 0)
         fail("%s: no IHDR first", name);
     const uint8_t wh[8] = {w >> 24, w >> 16, w >> 8, w, h >> 24, h >> 16,
@@ -860,7 +849,7 @@ static void tiff_set_long(uint8_t *e, uint32_t v)
 static void test_tiff_hostile(const char *dir)
 {
     size_t len;
-    uint8_t *p = slurp(test_path_in(dir, "rgb8-lzw-tiled.tif"), &len);
+    uint8_t *p = test_read_file_found(test_path_in(dir, "rgb8-lzw-tiled.tif"), &len);
     uint8_t *q = malloc(len);
     /* width and height 1000000 */
     memcpy(q, p, len);
@@ -890,7 +879,7 @@ static void test_tiff_hostile(const char *dir)
      * without complaint, refused by the pixel cap, with the module's code
      * and words. */
     free(p);
-    p = slurp(test_path_in(dir, "gray8-none.tif"), &len);
+    p = test_read_file_found(test_path_in(dir, "gray8-none.tif"), &len);
     q = realloc(q, len);
     memcpy(q, p, len);
     ew = tiff_entry(q, len, 256), eh = tiff_entry(q, len, 257);
@@ -918,7 +907,7 @@ static void test_tiff_hostile(const char *dir)
     result_free(&n);
     unlink(huge);
     free(p);
-    p = slurp(test_path_in(dir, "rgb8-lzw-tiled.tif"), &len);
+    p = test_read_file_found(test_path_in(dir, "rgb8-lzw-tiled.tif"), &len);
     q = realloc(q, len);
     /* tiles of 65536 x 65536, and of 65536 x 512 (a row of tiles would
      * take 96 MiB, thousands of times the rows it covers) */
@@ -1066,7 +1055,7 @@ static void test_without_module(const char *dir)
         result_free(&r);
         /* a damaged header: IHDR's CRC */
         size_t len;
-        uint8_t *p = slurp(test_path_in(dir, "rgb8.png"), &len);
+        uint8_t *p = test_read_file_found(test_path_in(dir, "rgb8.png"), &len);
         p[30] ^= 0x55;
         const char *bad = test_path_in(tmpdir, "bad-ihdr.png");
         test_write_file(bad, p, len);

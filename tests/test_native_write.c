@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "test_env.h"
 #include "util.h"
 #include "imageio/imageio.h"
 #include "imageio/native_jpeg_write.h"
@@ -181,29 +182,13 @@ static void png_checks(uint64_t *rng)
     free(out);
 }
 
-/* The whole file at path (malloc'ed, *n bytes), or NULL. */
-static uint8_t *slurp(const char *path, size_t *n)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    uint8_t *b = malloc(1 << 22);
-    *n = b ? fread(b, 1, 1 << 22, f) : 0;
-    fclose(f);
-    return b;
-}
-
 static void png_file_checks(uint64_t *rng)
 {
-    char dir[] = "/tmp/gv-native-write-XXXXXX";
-    if (!mkdtemp(dir)) {
-        check(0, "a scratch directory");
-        return;
-    }
-    char a[64], b[64], bad[96];
-    snprintf(a, sizeof a, "%s/native.png", dir);
-    snprintf(b, sizeof b, "%s/module.png", dir);
-    snprintf(bad, sizeof bad, "%s/missing/x.png", dir);
+    char dir[4096];
+    test_tmpdir_new(dir, sizeof dir, "gv-native-write");
+    const char *a = test_path_in(dir, "native.png");
+    const char *b = test_path_in(dir, "module.png");
+    const char *bad = test_path_in(dir, "missing/x.png");
     uint8_t *px = make_image16(300, 200, 3, 1, rng);
     struct gv_error e1 = {0}, e2 = {0}, e3 = {0};
     int r1 = gv_image_write_typed(a, 300, 200, 3, GV_SAMPLE_U16, px, &e1);
@@ -211,7 +196,7 @@ static void png_file_checks(uint64_t *rng)
     int r2 = gv_image_write_typed(b, 300, 200, 3, GV_SAMPLE_U16, px, &e2);
     unsetenv("GIGAVIEW_NATIVE_WRITERS");
     size_t na = 0, nb = 0;
-    uint8_t *fa = slurp(a, &na), *fb = slurp(b, &nb);
+    uint8_t *fa = test_read_file(a, &na), *fb = test_read_file(b, &nb);
     check(r1 == 0 && r2 == 0 && fa && fb && na == nb && na > 0 &&
           memcmp(fa, fb, na) == 0, "a 16-bit PNG file written natively "
           "equals the module's (%zu and %zu bytes)", na, nb);
@@ -221,9 +206,7 @@ static void png_file_checks(uint64_t *rng)
     free(fa);
     free(fb);
     free(px);
-    remove(a);
-    remove(b);
-    remove(dir);
+    test_tmpdir_free(dir);
 }
 
 int main(void)

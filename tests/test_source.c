@@ -72,22 +72,6 @@ static void write_file(const char *path, const void *p, size_t n)
         fail("cannot write %s: %s", path, strerror(errno));
 }
 
-static unsigned char *slurp(const char *path, size_t *n)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        fail("cannot read %s: %s", path, strerror(errno));
-    fseek(f, 0, SEEK_END);
-    long len = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *p = malloc((size_t)len + 1);
-    if (!p || fread(p, 1, (size_t)len, f) != (size_t)len)
-        fail("cannot read %s", path);
-    fclose(f);
-    *n = (size_t)len;
-    return p;
-}
-
 /* Open inputs and read every row, `chunk` rows per call.  Returns the
  * pixels (malloc'd) or NULL with *err filled; *info is filled on open. */
 static uint8_t *read_source(const char *const *inputs, int n,
@@ -435,7 +419,7 @@ static void test_bad_files(void)
     struct gv_source_info info;
     struct gv_error err = {0};
     size_t n;
-    unsigned char *jpg = slurp(data("seeding-640x480.jpg"), &n);
+    unsigned char *jpg = test_read_file_found(data("seeding-640x480.jpg"), &n);
     write_file(tmp("trunc.jpg"), jpg, n * 4 / 10);
     free(jpg);
     const char *in[1] = {tmp("trunc.jpg")};

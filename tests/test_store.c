@@ -77,23 +77,6 @@ static int write_store(const char *path, int salt, struct gv_error *err)
     return gv_store_writer_finish(w, err);
 }
 
-static uint8_t *slurp(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    fseek(f, 0, SEEK_END);
-    *len = (size_t)ftell(f);
-    fseek(f, 0, SEEK_SET);
-    uint8_t *b = malloc(*len);
-    if (fread(b, 1, *len, f) != *len) {
-        free(b);
-        b = NULL;
-    }
-    fclose(f);
-    return b;
-}
-
 static void spit(const char *path, const uint8_t *b, size_t len)
 {
     FILE *f = fopen(path, "wb");
@@ -143,7 +126,7 @@ static void atomic_file_contract(void)
     ok = ok && fd >= 0 && gv_atomic_file_write(p, "second", 6, &opts, &err) == 0;
     char old[8] = {0};
     size_t n = 0;
-    uint8_t *now = slurp(p, &n);
+    uint8_t *now = test_read_file(p, &n);
     struct stat st;
     check(ok && read(fd, old, sizeof old) == 3 && memcmp(old, "one", 3) == 0 &&
               now && n == 6 && memcmp(now, "second", 6) == 0 &&
@@ -189,7 +172,7 @@ static void identity_contract(const char *path, const uint8_t *orig, size_t len)
 
     check(write_store(other, 1, &err) == 0, "identity: write a store with other pixels");
     size_t olen = 0;
-    uint8_t *ob = slurp(other, &olen);
+    uint8_t *ob = test_read_file(other, &olen);
     struct gv_store *b = gv_store_open(other, &err);
     check(ob && olen == len && memcmp(ob, orig, GV_HEADER_SIZE) == 0 &&
               memcmp(ob, orig, len) != 0,
@@ -259,7 +242,7 @@ int main(void)
     check(exercise(path) == 0, "every tile and the full region decode");
 
     size_t len;
-    uint8_t *orig = slurp(path, &len);
+    uint8_t *orig = test_read_file(path, &len);
     uint8_t *copy = malloc(len);
 
     /* A flipped byte inside page 0 (level 0, written last): that page
@@ -372,7 +355,7 @@ int main(void)
     struct gv_store_writer *wr = gv_store_writer_new(path, &hh, &err);
     gv_store_writer_abort(wr);
     size_t len2;
-    uint8_t *again = slurp(path, &len2);
+    uint8_t *again = test_read_file(path, &len2);
     check(again && len2 == len && memcmp(again, orig, len) == 0,
           "aborted rewrite leaves the old store intact");
     free(again);

@@ -42,17 +42,6 @@ static const char *const how_name[] = {"module", "loader"};
 
 static char tmpdir[4096];
 
-static uint8_t *slurp(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    uint8_t *p = malloc(1 << 16);
-    if (!f || !p)
-        fail("%s: %s", path, strerror(errno));
-    *len = fread(p, 1, 1 << 16, f);
-    fclose(f);
-    return p;
-}
-
 /* Open `path` one way under the limits, and read every row, one at a
  * time: 0 when opened and read, else -1 with *err filled. */
 static int read_all(enum how how, const char *path, uint64_t max_pixels,
@@ -292,7 +281,7 @@ static void test_hostile(const char *limits)
     /* cuts of the hostile RGB one, every 5th byte through its directory
      * and its JPEG's header, every 101st after: none opens, no crash */
     size_t len;
-    uint8_t *p = slurp(test_path_in(limits,
+    uint8_t *p = test_read_file_found(test_path_in(limits,
                                "jpeg-rgb-progressive-claims-15000.tif"),
                        &len);
     const char *cut = test_path_in(tmpdir, "cut.tif");
