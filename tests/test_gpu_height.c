@@ -65,9 +65,6 @@ static void check_refusals(struct gv_gpu *gpu, struct gv_store *s,
     free(root);
 }
 
-/* Decode every tile of `path` on the GPU, all channels at once, level by
- * level from the uploaded root tile, and compare each with the CPU
- * decoder. */
 /* Store `path` (*s) and a GPU decoder of its channels on path gp, or
  * NULL (the store closed) after a skip where the context has no such
  * path or a failed check. */
@@ -92,6 +89,9 @@ static struct gv_gpu_height *open_store(struct gv_gpu *gpu, const char *path,
     return gh;
 }
 
+/* Decode every tile of `path` on the GPU, all channels at once, level by
+ * level from the uploaded root tile, and compare each with the CPU
+ * decoder. */
 static void check_tiles(struct gv_gpu *gpu, const char *path, const char *name,
                         enum gv_gpu_path gp)
 {
