@@ -255,9 +255,9 @@ static int start_worker(struct slot *s)
     pthread_mutex_unlock(&p->lock);
     char text[GV_WORKER_MSG_MAX + 1] = "";
     int ok = 0;
+    const int64_t until = gv_worker_now_ms() + s->pool->cfg.start_timeout_ms;
     int io = stopping ? GV_WORKER_EOF
-                      : gv_worker_recv_hello(fd, gv_worker_now_ms() + s->pool->cfg.start_timeout_ms,
-                                             &ok, text, sizeof text, &err);
+                      : gv_worker_recv_hello(fd, until, &ok, text, sizeof text, &err);
     if (io || !ok)
         return hello_failed(s, pid, io, text, &err);
     s->backoff_ms = 0;

@@ -547,6 +547,16 @@ static int native_writer_allowed(void)
     return !(v && strcmp(v, "0") == 0);
 }
 
+/* Whether native_png_write.c writes this image in format f (a PNG of
+ * samples it takes, native writers allowed) rather than the module. */
+static int native_png(const struct gv_output_format *f, uint32_t width,
+                      uint32_t height, int channels, enum gv_sample sample)
+{
+    return f && strcmp(f->name, "png") == 0 &&
+           gv_native_png_encodes(width, height, channels, sample) &&
+           native_writer_allowed();
+}
+
 /* A PNG that native_png_write.c takes, written as the module would
  * (encoded in memory, then published whole by gv_atomic_file_write):
  * 1 when written here, with 0 or -1 in *rc; 0 when the module is to
@@ -559,11 +569,8 @@ static int write_natively(const char *path, uint32_t width, uint32_t height,
     const char *slash = strrchr(path, '/');
     const char *base = slash ? slash + 1 : path;
     const char *dot = strrchr(base, '.');
-    const struct gv_output_format *f =
-        dot ? gv_output_format_for_extension(dot + 1) : NULL;
-    if (!f || strcmp(f->name, "png") != 0 ||
-        !gv_native_png_encodes(width, height, channels, sample) ||
-        !native_writer_allowed())
+    if (!native_png(dot ? gv_output_format_for_extension(dot + 1) : NULL,
+                    width, height, channels, sample))
         return 0;
     uint8_t *bytes = NULL;
     size_t len = 0;
@@ -598,9 +605,7 @@ int gv_image_encode(const char *format, uint32_t width, uint32_t height,
         native_writer_allowed())
         return gv_native_jpeg_encode(width, height, channels, pixels, quality,
                                      out, len, err);
-    if (f && strcmp(f->name, "png") == 0 && (channels == 1 || channels == 3) &&
-        gv_native_png_encodes(width, height, channels, GV_SAMPLE_U8) &&
-        native_writer_allowed())
+    if (native_png(f, width, height, channels, GV_SAMPLE_U8))
         return gv_native_png_encode(width, height, channels, GV_SAMPLE_U8,
                                     pixels, out, len, err);
     const struct gv_imageio_module *m = get(err);
@@ -626,10 +631,8 @@ int gv_image_encode_typed(const char *format, uint32_t width, uint32_t height,
                           const void *pixels, uint8_t **out, size_t *len,
                           struct gv_error *err)
 {
-    const struct gv_output_format *f = gv_output_format_image(format);
-    if (f && strcmp(f->name, "png") == 0 &&
-        gv_native_png_encodes(width, height, channels, sample) &&
-        native_writer_allowed())
+    if (native_png(gv_output_format_image(format), width, height, channels,
+                   sample))
         return gv_native_png_encode(width, height, channels, sample, pixels,
                                     out, len, err);
     const struct gv_imageio_module *m = get(err);
