@@ -202,21 +202,10 @@ load_stop() {
     check "$1: every error has the JSON error body" grep -q '^badbody 0$' "$1.out"
     check "$1: the daemon is alive" kill -0 "$DPID"
 }
-# rescanned N: the daemon has finished more than N scans of the store
-# directory (its start-up scan included); each ends with a summary line.
-# shellcheck disable=SC2317 # run by wait_until
-rescanned() {
-    [ "$(grep -cF " info catalog: $S: " "$T/daemon.log")" -gt "$1" ]
-}
-# reload N: SIGHUP, wait until a rescan begun after now has finished (the
-# count of rescans begun now, plus the start-up scan, plus it: SIGHUPs
-# sent close together may make one rescan, so the count of signals would
-# not do), then succeed if /healthz counts N stores.  Waiting for the
-# count of stores alone would not do when it does not change.
+# reload N: SIGHUP, wait until a rescan begun after now has finished
+# (rescan_daemon), then succeed if /healthz counts N stores.
 reload() {
-    begun=$(grep -c ' info main: SIGHUP: rescanning ' "$T/daemon.log")
-    kill -HUP "$DPID"
-    wait_until rescanned $((begun + 1))
+    rescan_daemon
     [ "$(curl -s "$BASE/healthz" | python3 -c 'import json,sys; print(json.load(sys.stdin)["stores"])' 2>/dev/null)" = "$1" ]
 }
 # serves REF: the tiles of k equal those of REF (refa or refb).

@@ -88,15 +88,9 @@ start_daemon "$T/r.conf"
 check "x then y: x keeps 11 tiles, y what is left (its root, level 4): 13 tiles" \
     test "$(metric gigaview_tile_cache_misses_total) $(metric gigaview_tile_cache_bytes)" = "13 $((13 * TILE))"
 rm "$S/x.gv"
-# rescanned: the rescan has ended, x's image put back (the catalog's
-# summary line after the start-up scan's; /metrics counts one store
-# before the old image is let go).
-# shellcheck disable=SC2317 # run by wait_until
-rescanned() {
-    [ "$(grep -cF " info catalog: $S: " "$T/daemon.log")" -ge 2 ]
-}
-kill -HUP "$DPID"
-wait_until rescanned
+# Once the rescan has ended, x's image is put back (/metrics counts one
+# store before the old image is let go).
+rescan_daemon
 check "x dropped on a rescan lets its 11 tiles go" \
     test "$(metric gigaview_tile_cache_bytes)" = "$((2 * TILE))"
 stop_daemon

@@ -62,6 +62,25 @@ stop_daemon() {
     DPID=
 }
 
+# rescan_daemon [PID]: SIGHUP the daemon (PID, else DPID) and wait until a
+# rescan of its store directory begun after the signal has ended: the
+# catalog's summary lines (one for the start-up scan, one for each
+# rescan) number the start-up scan, the rescans begun before the signal
+# ("SIGHUP: rescanning" lines, some maybe still running) and this one.
+# SIGHUPs close together may make one rescan, so counting signals would
+# not do, nor would a count of stores that the rescan does not change.
+# Needs log_level info (the default).
+rescan_daemon() {
+    rs_begun=$(grep -c ' info main: SIGHUP: rescanning ' "$T/daemon.log")
+    kill -HUP "${1:-$DPID}"
+    wait_until scans_ended $((rs_begun + 2))
+}
+
+# scans_ended N: the daemon's log has N or more catalog summary lines.
+scans_ended() {
+    [ "$(grep -cE ' info catalog: .*: [0-9]+ images \(' "$T/daemon.log")" -ge "$1" ]
+}
+
 # no_sanitizer_report: the daemon's log has no ASan/UBSan/LSan report
 # (its first one is shown when there is one).  The reports' own first
 # lines: the filter workers of a sanitizer build log "built with

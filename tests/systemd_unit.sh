@@ -260,14 +260,8 @@ if [ -n "$wk" ]; then
 else
     skip "socket-activated: the workers' environment" "no filter workers here"
 fi
-# SIGHUP: traced once its rescan has ended (the catalog's summary line
-# after the start-up scan's).
-# shellcheck disable=SC2317 # run by wait_until
-rescanned() {
-    [ "$(grep -cF " info catalog: $S: " "$T/daemon.log")" -ge 2 ]
-}
-kill -HUP "$gvpid"
-wait_until rescanned
+# SIGHUP: traced once its rescan has ended.
+rescan_daemon "$gvpid"
 expect_status "traced: after SIGHUP" 200 /healthz
 kill -TERM "$gvpid"
 drc=0
