@@ -25,6 +25,7 @@
 #include "edt_exact.h"
 #include "filter.h"
 #include "gpu/gpu.h"
+#include "test_env.h"
 #include "util.h"
 
 #define BOUND 0.0910034   /* sqrt(485) - sqrt(481) = 0.09100335 */
@@ -42,25 +43,6 @@ static double laplace(double b)
 {
     double u = uniform01() - 0.5;
     return (u < 0 ? b : -b) * log(1 - 2 * fabs(u));
-}
-
-static char *read_file(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *s = malloc((size_t)n + 1);
-    if (s && fread(s, 1, (size_t)n, f) != (size_t)n) {
-        free(s);
-        s = NULL;
-    }
-    if (s)
-        s[n] = 0;
-    fclose(f);
-    return s;
 }
 
 struct stats {
@@ -147,10 +129,9 @@ int main(void)
     const char *top = getenv("top_srcdir") ? getenv("top_srcdir") : ".";
     char path[1024];
     snprintf(path, sizeof path, "%s/filters/library/distance-transform.json", top);
-    char *doc = read_file(path);
-    if (!doc)
-        fail("cannot read %s", path);
-    struct gv_filter_graph *g = gv_filter_graph_parse(doc, strlen(doc), NULL, &err);
+    size_t doc_len;
+    char *doc = (char *)test_read_file_found(path, &doc_len);
+    struct gv_filter_graph *g = gv_filter_graph_parse(doc, doc_len, NULL, &err);
     if (!g)
         fail("%s: %s", path, err.text);
     double params[16];

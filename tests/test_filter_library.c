@@ -41,6 +41,7 @@
 #include "gpu/gpu.h"
 #include "imageio/imageio.h"
 #include "encode/source.h"
+#include "test_env.h"
 #include "util.h"
 
 #define ROI_W 160
@@ -156,19 +157,6 @@ static void load_image(struct image *im, const char *data)
                 im->f[((size_t)y * im->w + x) * 4 + k] = q[k] / 255.0f;
         }
     free(all);
-}
-
-static char *read_file(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    char *buf = malloc(1 << 20);
-    *len = buf ? fread(buf, 1, (1 << 20) - 1, f) : 0;
-    fclose(f);
-    if (buf)
-        buf[*len] = 0;
-    return buf;
 }
 
 /* The graph with its output re-pointed at module `id`, or NULL. */
@@ -603,9 +591,7 @@ int main(void)
         char path[512];
         size_t len;
         snprintf(path, sizeof path, "%s/filters/library/%s.json", top, stock[i].file);
-        char *json = read_file(path, &len);
-        if (!json)
-            fail("cannot read %s", path);
+        char *json = (char *)test_read_file_found(path, &len);
         struct gv_error err = {0};
         graph[i] = gv_filter_graph_parse(json, len, &lim, &err);
         state_graph[i] = NULL;
