@@ -346,12 +346,14 @@ static void wait_for_stop(struct server *srv, const sigset_t *set)
 int main(int argc, char **argv)
 {
     static struct settings cfg;
-    /* Pages and decoded tiles are large blocks freed in any order as the
-     * caches evict; with glibc's sliding mmap threshold they end up on the
-     * heap, whose freed pages stay resident (measured: RSS 150 MiB above
-     * the configured caches under eviction, bench/README.md "Load and
-     * soak").  A fixed threshold keeps such blocks in their own mappings,
-     * returned to the system when freed. */
+    /* Pages and outputs are large blocks freed in any order as the caches
+     * evict; with glibc's sliding mmap threshold they end up on the heap,
+     * whose freed pages stay resident (measured: RSS 150 MiB above the
+     * configured caches under eviction, bench/README.md "Load and soak").
+     * A fixed threshold keeps such blocks in their own mappings, returned
+     * to the system when freed.  Decoded tiles, the largest and most
+     * frequent, come from the tile cache's slab (base/slab.h) instead,
+     * whose slots are reused without a page fault. */
     mallopt(M_MMAP_THRESHOLD, 128 * 1024);
     int rc = configure(argc, argv, &cfg);
     if (rc >= 0)

@@ -108,6 +108,10 @@ static void write_rendering(struct prom *p, struct server *srv)
     prom_metric(p, "gigaview_tile_cache_bytes", "gauge",
                 "Bytes of decoded tiles held.", "%llu",
                 (unsigned long long)st.bytes);
+    prom_metric(p, "gigaview_tile_cache_mapped_bytes", "gauge",
+                "Bytes of memory mapped for decoded tiles: those held, "
+                "slots free for the next decodes and one empty chunk.",
+                "%llu", (unsigned long long)st.mapped);
     prom_metric(p, "gigaview_tile_cache_limit_bytes", "gauge",
                 "The tile cache bound (decoder_cache_bytes).", "%llu",
                 (unsigned long long)st.limit);

@@ -6,16 +6,17 @@
  * its unpinned filled entries (most recent at the head).  An entry is
  * PENDING from its claim to its publish (or failure), then FILLED.  A
  * failed entry leaves the hash at once and is freed by its last holder.
- * Evicted entries are unlinked under the lock and freed after it, but
- * for one pixel buffer per shard, kept (spare) for the shard's next claim
- * of the same size: a server's cache, once full, evicts a tile for every
- * tile it decodes, and reusing the buffer spares a fresh 770 KiB mapping
- * and its page faults per decode (bench/README.md, 2026-12-02).
+ * Evicted entries are unlinked under the lock and freed after it.  The
+ * pixel buffers come from one slab (base/slab.h): a tile decoded into a
+ * slot that an evicted tile gave back, or into fresh huge pages, takes no
+ * page fault per 4 KiB, which a fresh 770 KiB mapping a decode took
+ * (bench/README.md, 2026-12-02 and 2026-12-03).
  */
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/slab.h"
 #include "render/tile_cache.h"
 
 #define MAX_SHARDS 16
@@ -43,12 +44,11 @@ struct shard {
     struct gv_tile_entry *head, *tail;     /* LRU: head most recent */
     size_t bytes, budget;
     uint64_t hits, misses, waits, evictions, entries, waiting;
-    uint8_t *spare;                        /* an evicted entry's pixels */
-    size_t spare_bytes;
 };
 
 struct gv_tile_cache {
     size_t budget;
+    struct gv_slab *pixels;                /* every entry's pixels */
     int nshards;
     struct shard shard[];
 };
@@ -82,6 +82,11 @@ struct gv_tile_cache *gv_tile_cache_new(size_t budget)
     struct gv_tile_cache *c = calloc(1, sizeof *c + (size_t)n * sizeof c->shard[0]);
     if (!c)
         return NULL;
+    c->pixels = gv_slab_new();
+    if (!c->pixels) {
+        free(c);
+        return NULL;
+    }
     c->budget = budget;
     c->nshards = n;
     for (int i = 0; i < n; i++) {
@@ -93,9 +98,9 @@ struct gv_tile_cache *gv_tile_cache_new(size_t budget)
     return c;
 }
 
-static void entry_free(struct gv_tile_entry *e)
+static void entry_free(struct gv_tile_cache *c, struct gv_tile_entry *e)
 {
-    free(e->pixels);
+    gv_slab_put(c->pixels, e->pixels, e->bytes);
     free(e);
 }
 
@@ -108,12 +113,12 @@ void gv_tile_cache_free(struct gv_tile_cache *c)
         for (int b = 0; b < BUCKETS; b++)
             for (struct gv_tile_entry *e = s->bucket[b], *n; e; e = n) {
                 n = e->hnext;
-                entry_free(e);
+                entry_free(c, e);
             }
-        free(s->spare);
         pthread_mutex_destroy(&s->lock);
         pthread_cond_destroy(&s->filled);
     }
+    gv_slab_free(c->pixels);
     free(c);
 }
 
@@ -169,22 +174,17 @@ static void evict_over_budget(struct shard *s, struct gv_tile_entry **freed)
         struct gv_tile_entry *e = s->tail;
         lru_unlink(s, e);
         hash_unlink(s, e);
-        if (!s->spare) {
-            s->spare = e->pixels;
-            s->spare_bytes = e->bytes;
-            e->pixels = NULL;
-        }
         e->hnext = *freed;
         *freed = e;
         s->evictions++;
     }
 }
 
-static void free_chain(struct gv_tile_entry *e)
+static void free_chain(struct gv_tile_cache *c, struct gv_tile_entry *e)
 {
     for (struct gv_tile_entry *n; e; e = n) {
         n = e->hnext;
-        entry_free(e);
+        entry_free(c, e);
     }
 }
 
@@ -208,17 +208,15 @@ static int wait_fill(struct shard *s, struct gv_tile_entry *e,
     return -1;
 }
 
-/* A new PENDING entry for k with a `bytes` buffer (`spare`, a buffer of
- * that size taken over, or a new one), or NULL (spare freed). */
-static struct gv_tile_entry *entry_new(const struct gv_tile_key *k,
-                                       size_t bytes, uint8_t *spare)
+/* A new PENDING entry for k with a `bytes` buffer, or NULL. */
+static struct gv_tile_entry *entry_new(struct gv_tile_cache *c,
+                                       const struct gv_tile_key *k,
+                                       size_t bytes)
 {
     struct gv_tile_entry *e = calloc(1, sizeof *e);
-    if (!e) {
-        free(spare);
+    if (!e)
         return NULL;
-    }
-    e->pixels = spare ? spare : malloc(bytes ? bytes : 1);
+    e->pixels = gv_slab_get(c->pixels, bytes);
     if (!e->pixels) {
         free(e);
         return NULL;
@@ -250,8 +248,8 @@ int gv_tile_cache_acquire(struct gv_tile_cache *c, const struct gv_tile_key *k,
                 freed = e; /* failed and already out of the hash */
             pthread_mutex_unlock(&s->lock);
             if (fresh)
-                entry_free(fresh);
-            free_chain(freed);
+                entry_free(c, fresh);
+            free_chain(c, freed);
             if (rc > 0)
                 *out = e;
             return rc;
@@ -263,19 +261,14 @@ int gv_tile_cache_acquire(struct gv_tile_cache *c, const struct gv_tile_key *k,
             s->misses++;
             evict_over_budget(s, &freed);
             pthread_mutex_unlock(&s->lock);
-            free_chain(freed);
+            free_chain(c, freed);
             *out = fresh;
             return 0;
         }
         /* Allocate without the lock, then look again: another thread may
          * have claimed the tile meanwhile. */
-        uint8_t *spare = NULL;
-        if (s->spare && s->spare_bytes == bytes) {
-            spare = s->spare;
-            s->spare = NULL;
-        }
         pthread_mutex_unlock(&s->lock);
-        fresh = entry_new(k, bytes, spare);
+        fresh = entry_new(c, k, bytes);
         if (!fresh)
             return gv_fail(err, GV_ENOMEM, "tile cache: out of memory");
         pthread_mutex_lock(&s->lock);
@@ -308,7 +301,7 @@ void gv_tile_cache_fail(struct gv_tile_cache *c, struct gv_tile_entry *e,
     int last = --e->refs == 0;
     pthread_mutex_unlock(&s->lock);
     if (last)
-        entry_free(e);
+        entry_free(c, e);
 }
 
 void gv_tile_cache_release(struct gv_tile_cache *c, struct gv_tile_entry *e)
@@ -326,7 +319,7 @@ void gv_tile_cache_release(struct gv_tile_cache *c, struct gv_tile_entry *e)
     }
     evict_over_budget(s, &freed);
     pthread_mutex_unlock(&s->lock);
-    free_chain(freed);
+    free_chain(c, freed);
 }
 
 void gv_tile_cache_forget(struct gv_tile_cache *c, uint64_t store)
@@ -346,7 +339,7 @@ void gv_tile_cache_forget(struct gv_tile_cache *c, uint64_t store)
             s->evictions++;
         }
         pthread_mutex_unlock(&s->lock);
-        free_chain(freed);
+        free_chain(c, freed);
     }
 }
 
@@ -366,4 +359,7 @@ void gv_tile_cache_stats(struct gv_tile_cache *c, struct gv_tile_cache_stats *st
         st->waiting += s->waiting;
         pthread_mutex_unlock(&s->lock);
     }
+    struct gv_slab_stats slab;
+    gv_slab_stats(c->pixels, &slab);
+    st->mapped = slab.mapped;
 }

@@ -14,9 +14,10 @@
  * others sit on an LRU list and are evicted, least recently used first,
  * whenever the bytes held exceed the budget.  The budget can thus be
  * exceeded only by pinned tiles: at most, per thread, the tile it decodes
- * and that tile's chain of ancestors.  Beyond the budget, each shard also
- * keeps one evicted tile's buffer for its next decode (not counted in
- * `bytes`).  The cache is split into up to 16
+ * and that tile's chain of ancestors.  The pixels live in slots of a
+ * slab (base/slab.h): what the cache maps (`mapped`) exceeds `bytes` by
+ * the slots' rounding (none for whole tiles of 1, 3 or 4 channels), by
+ * chunks not yet full and by one empty chunk kept.  The cache is split into up to 16
  * shards (each with its own lock, hash and LRU, and an equal part of the
  * budget) so that threads seldom contend; a small budget gets fewer shards
  * so that each still holds a useful number of tiles.
@@ -51,6 +52,7 @@ struct gv_tile_cache_stats {
     uint64_t limit;      /* the budget */
     uint64_t entries;
     uint64_t waiting;    /* threads waiting for a fill right now */
+    uint64_t mapped;     /* bytes of pixel memory mapped now */
 };
 
 /* A cache of at most budget bytes (0: nothing is kept once unpinned).
