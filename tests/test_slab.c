@@ -1,5 +1,6 @@
 /*
- * test_slab.c - the large-buffer slab (lib/base/slab.h): size classes,
+ * test_slab.c - the large-buffer slab (lib/base/slab.h): slot sizes and
+ * the table of classes,
  * slots reused without a new mapping, chunks unmapped when their slots are
  * all back (one empty chunk kept), buffers that do not overlap and keep
  * what is written in them, sizes left to malloc, and four threads taking
@@ -25,25 +26,34 @@ static struct gv_slab_stats stats(struct gv_slab *s)
 
 static void test_classes(void)
 {
-    /* 512 x 512 tiles of 1, 3, 4, 6 and 8 bytes a pixel fill a slot */
-    static const size_t exact[] = {256 * KIB, 768 * KIB, 1 * MIB, 1536 * KIB, 2 * MIB};
+    /* decoded tiles are 513 x 513 pixels of 1 to 4 bytes, or codes of 2 C */
     int ok = 1;
-    for (size_t i = 0; i < sizeof exact / sizeof exact[0]; i++)
-        ok &= gv_slab_slot_bytes(exact[i]) == exact[i];
-    check(ok, "whole 512x512 tiles of 1, 3, 4, 6, 8 bytes a pixel fill their slot");
-    check(gv_slab_slot_bytes(768 * KIB + 1) == 896 * KIB,
-          "a byte over 768 KiB takes the next class, 896 KiB");
-    check(gv_slab_slot_bytes(512 * 280 * 3) == 448 * KIB,
-          "an edge tile of 512x280x3 takes 448 KiB");
-    check(gv_slab_slot_bytes(7 * MIB + 1) == 8 * MIB, "just over 7 MiB takes 8 MiB");
-    check(gv_slab_slot_bytes(4 * KIB) == 4 * KIB && gv_slab_slot_bytes(9 * MIB) == 9 * MIB,
-          "sizes below 64 KiB and above 8 MiB are left to malloc");
-    int worst = 1;
-    for (size_t b = 64 * KIB; b <= 8 * MIB; b += 4093) {
-        size_t z = gv_slab_slot_bytes(b);
-        worst &= z >= b && (z - b) * 4 <= b;
+    for (size_t c = 1; c <= 16; c++) {
+        size_t tile = 513 * 513 * c, slot = gv_slab_slot_bytes(tile);
+        ok &= slot >= tile && slot - tile < 4096 && slot % 4096 == 0;
     }
-    check(worst, "no size from 64 KiB to 8 MiB takes more than a quarter over it");
+    check(ok, "a 513x513 tile of 1 to 16 bytes a pixel takes its size to the next 4 KiB");
+    check(gv_slab_slot_bytes(768 * KIB) == 768 * KIB, "768 KiB takes 768 KiB");
+    check(gv_slab_slot_bytes(4 * KIB) == 4 * KIB && gv_slab_slot_bytes(17 * MIB) == 17 * MIB,
+          "sizes below 64 KiB and above 16 MiB are left to malloc");
+
+    struct gv_slab *s = gv_slab_new();
+    void *p[40];
+    for (int i = 0; i < 40; i++)
+        p[i] = gv_slab_get(s, (size_t)(100 + i) * 4096);
+    struct gv_slab_stats st;
+    gv_slab_stats(s, &st);
+    size_t in_slots = 0;
+    for (int i = 0; i < 32; i++)
+        in_slots += (size_t)(100 + i) * 4096;
+    check(st.used == in_slots, "32 sizes take slots, the 33rd and later come from malloc");
+    for (int i = 0; i < 40; i++) {
+        memset(p[i], i, (size_t)(100 + i) * 4096);
+        gv_slab_put(s, p[i], (size_t)(100 + i) * 4096);
+    }
+    gv_slab_stats(s, &st);
+    check(st.used == 0 && st.chunks == 1, "all given back: one empty chunk left");
+    gv_slab_free(s);
 }
 
 static void test_reuse(void)
@@ -90,14 +100,14 @@ static void test_reuse(void)
           (unsigned long long)st.maps);
     memset(d, 1, five);
     gv_slab_put(s, d, five);
-    uint8_t *small = gv_slab_get(s, 1000), *large = gv_slab_get(s, 9 * MIB);
+    uint8_t *small = gv_slab_get(s, 1000), *large = gv_slab_get(s, 17 * MIB);
     check(small && large && ((uintptr_t)small & 63) == 0 && ((uintptr_t)large & 63) == 0 &&
               stats(s).used == 0,
           "small and large sizes come from malloc, aligned, outside the slots");
     memset(small, 2, 1000);
-    memset(large, 3, 9 * MIB);
+    memset(large, 3, 17 * MIB);
     gv_slab_put(s, small, 1000);
-    gv_slab_put(s, large, 9 * MIB);
+    gv_slab_put(s, large, 17 * MIB);
     gv_slab_put(s, NULL, tile);
     gv_slab_free(s);
     gv_slab_free(NULL);
@@ -112,7 +122,7 @@ struct worker {
 
 static void *churn(void *arg)
 {
-    static const size_t sizes[] = {256 * KIB, 768 * KIB, 512 * 280 * 3};
+    static const size_t sizes[] = {513 * 513, 513 * 513 * 3, 768 * KIB};
     struct worker *w = arg;
     enum { HELD = 12 };
     uint8_t *held[HELD] = {0};

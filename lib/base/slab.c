@@ -1,7 +1,8 @@
 /*
  * slab.c - large buffers cut from huge-page chunks (see slab.h).
  *
- * Each class keeps a doubly linked list of its chunks, those with a free
+ * The classes are a small table of slot sizes, found by a linear search
+ * (a cache has one or two).  Each class keeps a doubly linked list of its chunks, those with a free
  * slot before those without, so a get takes the head's slot or maps a
  * chunk.  A chunk's free slots are a stack of their indices.  A put finds
  * its chunk by address in the class's list (a few dozen chunks at most
@@ -23,9 +24,10 @@
 #endif
 
 #define UNIT ((size_t)2 << 20)   /* a huge page on x86-64 and most arm64 */
-#define MIN_SHIFT 16              /* 64 KiB: smaller buffers go to malloc */
-#define MAX_SHIFT 23              /* 8 MiB: larger buffers go to malloc */
-#define CLASSES ((MAX_SHIFT - MIN_SHIFT) * 4 + 1)
+#define PAGE ((size_t)4096)
+#define MIN_BYTES ((size_t)64 << 10)  /* smaller buffers go to malloc */
+#define MAX_BYTES ((size_t)16 << 20)  /* larger buffers go to malloc */
+#define CLASSES 32
 #define MAX_UNITS 16
 
 struct chunk {
@@ -40,35 +42,39 @@ struct chunk {
 
 struct gv_slab {
     pthread_mutex_t lock;
+    int nclasses;
+    size_t slot[CLASSES];         /* each class's slot size */
     struct chunk *head[CLASSES], *tail[CLASSES];
     struct chunk *empty;          /* one empty chunk kept, on no list */
     uint64_t mapped, used, chunks, maps;
 };
 
-/* The class of a size in [64 KiB, 8 MiB] and its slot size. */
-static size_t class_of(size_t bytes, int *cls)
-{
-    int k = 63 - __builtin_clzll((unsigned long long)bytes);
-    size_t quarter = ((size_t)1 << k) / 4;
-    size_t steps = (bytes + quarter - 1) / quarter;   /* 4 to 8 */
-    if (steps == 8) {
-        k++;
-        steps = 4;
-        quarter *= 2;
-    }
-    *cls = (k - MIN_SHIFT) * 4 + (int)(steps - 4);
-    return steps * quarter;
-}
-
 static int in_range(size_t bytes)
 {
-    return bytes >= ((size_t)1 << MIN_SHIFT) && bytes <= ((size_t)1 << MAX_SHIFT);
+    return bytes >= MIN_BYTES && bytes <= MAX_BYTES;
+}
+
+static size_t page_round(size_t bytes)
+{
+    return (bytes + PAGE - 1) & ~(PAGE - 1);
 }
 
 size_t gv_slab_slot_bytes(size_t bytes)
 {
-    int cls;
-    return in_range(bytes) ? class_of(bytes, &cls) : bytes;
+    return in_range(bytes) ? page_round(bytes) : bytes;
+}
+
+/* The class of slots of `slot` bytes: found, else added when `add` and
+ * the table has room; -1 otherwise.  Called with s locked. */
+static int class_of(struct gv_slab *s, size_t slot, int add)
+{
+    for (int i = 0; i < s->nclasses; i++)
+        if (s->slot[i] == slot)
+            return i;
+    if (!add || s->nclasses == CLASSES)
+        return -1;
+    s->slot[s->nclasses] = slot;
+    return s->nclasses++;
 }
 
 /* The bytes of a chunk for slots of `slot` bytes: the fewest units whose
@@ -143,7 +149,7 @@ static struct chunk *chunk_for(struct gv_slab *s, int cls, size_t slot)
         carve(c, cls, slot);
         return c;
     }
-    size_t max_slots = bytes / ((size_t)1 << MIN_SHIFT);
+    size_t max_slots = bytes / MIN_BYTES;
     c = malloc(sizeof *c + max_slots * sizeof c->free[0]);
     if (!c)
         return NULL;
@@ -195,7 +201,7 @@ void gv_slab_free(struct gv_slab *s)
 {
     if (!s)
         return;
-    for (int k = 0; k < CLASSES; k++)
+    for (int k = 0; k < s->nclasses; k++)
         for (struct chunk *c = s->head[k], *n; c; c = n) {
             n = c->next;
             unmap_chunk(s, c);
@@ -210,11 +216,16 @@ void *gv_slab_get(struct gv_slab *s, size_t bytes)
 {
     if (bytes == 0)
         bytes = 1;
-    if (!in_range(bytes))
+    const size_t slot = page_round(bytes);
+    int cls = -1;
+    if (in_range(bytes)) {
+        pthread_mutex_lock(&s->lock);
+        cls = class_of(s, slot, 1);
+        if (cls < 0)
+            pthread_mutex_unlock(&s->lock);
+    }
+    if (cls < 0)   /* outside the range, or a size past the table's room */
         return aligned_alloc(64, (bytes + 63) & ~(size_t)63);
-    int cls;
-    size_t slot = class_of(bytes, &cls);
-    pthread_mutex_lock(&s->lock);
     struct chunk *c = s->head[cls];
     if (!c || c->nfree == 0) {
         c = chunk_for(s, cls, slot);
@@ -241,19 +252,23 @@ void gv_slab_put(struct gv_slab *s, void *p, size_t bytes)
         return;
     if (bytes == 0)
         bytes = 1;
-    if (!in_range(bytes)) {
+    const size_t slot = page_round(bytes);
+    uint8_t *q = p;
+    int cls = -1;
+    struct chunk *c = NULL;
+    if (in_range(bytes)) {
+        pthread_mutex_lock(&s->lock);
+        cls = class_of(s, slot, 0);
+        for (c = cls < 0 ? NULL : s->head[cls]; c; c = c->next)
+            if (q >= c->base && q < c->base + c->bytes)
+                break;
+        if (!c)
+            pthread_mutex_unlock(&s->lock);
+    }
+    if (!c) {   /* from aligned_alloc: no chunk of the class holds it */
         free(p);
         return;
     }
-    int cls;
-    size_t slot = class_of(bytes, &cls);
-    uint8_t *q = p;
-    pthread_mutex_lock(&s->lock);
-    struct chunk *c = s->head[cls];
-    while (c && !(q >= c->base && q < c->base + c->bytes))
-        c = c->next;
-    if (!c)
-        abort();   /* not a buffer of this class: a programmer's error */
     POISON(q, slot);
     c->free[c->nfree++] = (uint16_t)((size_t)(q - c->base) / slot);
     s->used -= slot;

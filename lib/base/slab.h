@@ -15,11 +15,12 @@
  * back is unmapped, but for one empty chunk kept for the next chunk of
  * its size, so memory returns to the system as the cache shrinks.
  *
- * Size classes: four to a doubling, 2^k times 4/4, 5/4, 6/4 and 7/4, from
- * 64 KiB to 8 MiB, so a 512 x 512 tile of 1, 3, 4, 6 or 8 bytes a pixel
- * fills its slot exactly, and no buffer takes more than a quarter over
- * its size.  A chunk is the fewest 2 MiB units whose unused tail is at
- * most an eighth of it.  Smaller and larger buffers go to malloc.
+ * Size classes: a buffer of 64 KiB to 16 MiB takes a slot of its size
+ * rounded up to 4 KiB, in the class of slots of that size; a slab has room
+ * for 32 classes (a tile cache uses one a channel count: every tile of a
+ * store takes the same bytes).  A chunk is the fewest 2 MiB units whose
+ * unused tail is at most an eighth of them.  Smaller and larger buffers,
+ * and sizes past the 32nd, go to malloc.
  *
  * In an AddressSanitizer build a slot that was given back is poisoned
  * until it is taken again.  Every function is thread-safe (one mutex).
@@ -57,7 +58,7 @@ void gv_slab_put(struct gv_slab *s, void *p, size_t bytes);
 /* The slab's figures now. */
 void gv_slab_stats(struct gv_slab *s, struct gv_slab_stats *out);
 
-/* The bytes a buffer of `bytes` takes: its class's slot size, or `bytes`
+/* The bytes a buffer of `bytes` takes: its slot's size, or `bytes`
  * itself for a size the slab leaves to malloc. */
 size_t gv_slab_slot_bytes(size_t bytes);
 
