@@ -16,8 +16,8 @@
  * exceeded only by pinned tiles: at most, per thread, the tile it decodes
  * and that tile's chain of ancestors.  The pixels live in slots of a
  * slab (base/slab.h): what the cache maps (`mapped`) exceeds `bytes` by
- * the slots' rounding (none for whole tiles of 1, 3 or 4 channels), by
- * chunks not yet full and by one empty chunk kept.  The cache is split into up to 16
+ * the slots' rounding to 4 KiB, by chunks not yet full and by one empty
+ * chunk kept.  The cache is split into up to 16
  * shards (each with its own lock, hash and LRU, and an equal part of the
  * budget) so that threads seldom contend; a small budget gets fewer shards
  * so that each still holds a useful number of tiles.
