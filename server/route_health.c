@@ -105,6 +105,10 @@ static void write_rendering(struct prom *p, struct server *srv)
     prom_metric(p, "gigaview_tile_cache_evictions_total", "counter",
                 "Decoded tiles evicted.", "%llu",
                 (unsigned long long)st.evictions);
+    prom_metric(p, "gigaview_tile_cache_lent_total", "counter",
+                "Level-0 tiles decoded outside the cache, for a request "
+                "that covered them whole.", "%llu",
+                (unsigned long long)st.lent);
     prom_metric(p, "gigaview_tile_cache_bytes", "gauge",
                 "Bytes of decoded tiles held.", "%llu",
                 (unsigned long long)st.bytes);

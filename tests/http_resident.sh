@@ -63,8 +63,11 @@ check "levels 1 and 2 are answered without a decode" \
 check "...and with no decode time" test \
     "$(metric 'gigaview_render_stage_seconds_sum{stage="decode"}')" = 0.000000
 expect_status "IIIF from level 0" 200 /iiif/3/x/512,512,512,512/max/0/default.jpg
-check "a level-0 tile decodes itself alone: its parent is resident" \
-    test "$(metric gigaview_tile_cache_misses_total)" = 12
+check "a whole level-0 tile decodes itself alone, outside the cache: its parent is resident" \
+    test "$(metric gigaview_tile_cache_misses_total) $(metric gigaview_tile_cache_lent_total)" = "11 1"
+expect_status "IIIF across level-0 tiles" 200 /iiif/3/x/256,256,512,512/max/0/default.jpg
+check "...and a level-0 tile covered in part goes into the cache" \
+    test "$(metric gigaview_tile_cache_misses_total) $(metric gigaview_tile_cache_lent_total)" = "15 1"
 fetch with
 stop_daemon
 check "the daemon stopped cleanly" test "$drc" -eq 0

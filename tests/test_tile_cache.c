@@ -347,6 +347,27 @@ static void test_decoders(void)
     gv_decoder_free(big);
     gv_tile_cache_free(c);
 
+    /* A level-0 tile a region covers whole is decoded outside the cache,
+     * into a lent buffer; one covered in part goes into the cache. */
+    c = gv_tile_cache_new(64u << 20);
+    d = gv_decoder_new_shared(s, c, 1);
+    big = gv_decoder_new(s, 64u << 20);
+    uint8_t ra[GV_STEP * GV_STEP * 4], rb[GV_STEP * GV_STEP * 4];
+    int same_tile = gv_decode_region(d, 0, GV_STEP, GV_STEP, GV_STEP, GV_STEP, ra, &err) == 0 &&
+                    gv_decode_region(big, 0, GV_STEP, GV_STEP, GV_STEP, GV_STEP, rb, &err) == 0 &&
+                    !memcmp(ra, rb, (size_t)GV_STEP * GV_STEP * g->channels);
+    gv_decoder_idle(d);
+    st = stats(c);
+    check(same_tile && st.lent == 1 && st.misses == (uint64_t)g->root,
+          "a whole level-0 tile: the same pixels, lent once, only its %d "
+          "ancestors cached (misses %llu)", g->root, (unsigned long long)st.misses);
+    check(gv_decode_region(d, 0, GV_STEP / 2, GV_STEP / 2, GV_STEP, GV_STEP, ra, &err) == 0 &&
+              stats(c).lent == 1 && stats(c).misses > st.misses,
+          "a region across level-0 tiles caches them");
+    gv_decoder_free(d);
+    gv_decoder_free(big);
+    gv_tile_cache_free(c);
+
     /* A decoder pins the tile it returned last, and nothing else; idle, it
      * pins nothing. */
     c = gv_tile_cache_new(0);

@@ -10,7 +10,13 @@
  * gv_decoder_copy_region is the one tile walk behind both region readers
  * (decode_region.c for images, height_region.c for height and sample
  * codes): it copies pixel units, C bytes for an image and C 2-byte codes
- * for a height or sample store.
+ * for a height or sample store.  A level-0 tile that the region covers
+ * whole is decoded into a buffer the cache lends, not into the cache: no
+ * tile is decoded from a level-0 tile, and the request that covers one
+ * whole (an IIIF tile at full size, an export) seldom comes again but
+ * through the output cache.  So a pass over level 0 neither takes fresh
+ * memory for every tile (its page faults were most of a cold IIIF pass's
+ * CPU, bench/README.md 2026-12-03) nor evicts the ancestors it needs.
  * The time spent reading pages, decoding and in the cache is summed per
  * decoder (gv_decoder_times; one clock read before and after each).
  */
@@ -259,11 +265,11 @@ int gv_decoder_copy_region(struct gv_decoder *d, const char *module,
     if (t1y >= l->tiles_y) t1y = l->tiles_y - 1;
     if (t0x > t1x) t0x = t1x;
     if (t0y > t1y) t0y = t1y;
-    for (uint32_t ty = t0y; ty <= t1y; ty++)
+    const size_t tile_bytes = gv_tile_bytes(c);
+    uint8_t *lent = NULL;
+    int rc = 0;
+    for (uint32_t ty = t0y; ty <= t1y && rc == 0; ty++)
         for (uint32_t tx = t0x; tx <= t1x; tx++) {
-            const uint8_t *px;
-            if (gv_decoder_tile(d, level, tx, ty, &px, err) < 0)
-                return -1;
             /* Pixels this tile is the source of, clipped to the region. */
             uint32_t sx0 = tx * GV_STEP, sy0 = ty * GV_STEP;
             uint32_t sx1 = tx + 1 == l->tiles_x ? lw : sx0 + GV_STEP;
@@ -272,12 +278,28 @@ int gv_decoder_copy_region(struct gv_decoder *d, const char *module,
             uint32_t ay = y > sy0 ? y : sy0, by = y + h < sy1 ? y + h : sy1;
             if (ax >= bx || ay >= by)
                 continue;
+            const uint8_t *px;
+            if (level == 0 && ax == sx0 && bx == sx1 && ay == sy0 && by == sy1) {
+                if (!lent && !(lent = gv_tile_cache_lend(d->cache, tile_bytes))) {
+                    rc = gv_fail(err, GV_ENOMEM, "%s: out of memory", module);
+                    break;
+                }
+                if (decode_into(d, 0, tx, ty, lent, err) < 0) {
+                    rc = -1;
+                    break;
+                }
+                px = lent;
+            } else if (gv_decoder_tile(d, level, tx, ty, &px, err) < 0) {
+                rc = -1;
+                break;
+            }
             for (uint32_t yy = ay; yy < by; yy++)
                 memcpy(out + (size_t)(yy - y) * orow + (size_t)(ax - x) * c,
                        px + ((size_t)(yy - sy0) * GV_TILE + (ax - sx0)) * c,
                        (size_t)(bx - ax) * c);
         }
-    return 0;
+    gv_tile_cache_give_back(d->cache, lent, tile_bytes);
+    return rc;
 }
 
 int gv_decoder_pin_levels(struct gv_decoder *d, uint64_t budget,

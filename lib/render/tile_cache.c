@@ -13,6 +13,7 @@
  * (bench/README.md, 2026-12-02 and 2026-12-03).
  */
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -48,6 +49,7 @@ struct shard {
 
 struct gv_tile_cache {
     size_t budget;
+    _Atomic uint64_t lent;
     struct gv_slab *pixels;                /* every entry's pixels */
     int nshards;
     struct shard shard[];
@@ -322,6 +324,17 @@ void gv_tile_cache_release(struct gv_tile_cache *c, struct gv_tile_entry *e)
     free_chain(c, freed);
 }
 
+uint8_t *gv_tile_cache_lend(struct gv_tile_cache *c, size_t bytes)
+{
+    atomic_fetch_add_explicit(&c->lent, 1, memory_order_relaxed);
+    return gv_slab_get(c->pixels, bytes);
+}
+
+void gv_tile_cache_give_back(struct gv_tile_cache *c, uint8_t *p, size_t bytes)
+{
+    gv_slab_put(c->pixels, p, bytes);
+}
+
 void gv_tile_cache_forget(struct gv_tile_cache *c, uint64_t store)
 {
     for (int i = 0; i < c->nshards; i++) {
@@ -362,4 +375,5 @@ void gv_tile_cache_stats(struct gv_tile_cache *c, struct gv_tile_cache_stats *st
     struct gv_slab_stats slab;
     gv_slab_stats(c->pixels, &slab);
     st->mapped = slab.mapped;
+    st->lent = atomic_load_explicit(&c->lent, memory_order_relaxed);
 }

@@ -53,6 +53,7 @@ struct gv_tile_cache_stats {
     uint64_t entries;
     uint64_t waiting;    /* threads waiting for a fill right now */
     uint64_t mapped;     /* bytes of pixel memory mapped now */
+    uint64_t lent;       /* buffers lent (gv_tile_cache_lend) */
 };
 
 /* A cache of at most budget bytes (0: nothing is kept once unpinned).
@@ -94,6 +95,16 @@ void gv_tile_cache_fail(struct gv_tile_cache *c, struct gv_tile_entry *e,
 void gv_tile_cache_release(struct gv_tile_cache *c, struct gv_tile_entry *e);
 
 /* Evict every unpinned entry of `store` (a store being closed). */
+/* A buffer of `bytes` from the memory the cache's tiles live in, for a
+ * tile decoded outside the cache because nothing will ask for it again
+ * soon; it is not counted in the budget, so give it back
+ * (gv_tile_cache_give_back) as soon as it has been read.  A slot given
+ * back is lent again without a page fault.  NULL when out of memory. */
+uint8_t *gv_tile_cache_lend(struct gv_tile_cache *c, size_t bytes);
+
+/* Give back p, lent for the same `bytes`.  NULL does nothing. */
+void gv_tile_cache_give_back(struct gv_tile_cache *c, uint8_t *p, size_t bytes);
+
 void gv_tile_cache_forget(struct gv_tile_cache *c, uint64_t store);
 
 /* A snapshot of the counters (summed over the shards). */
