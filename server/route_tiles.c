@@ -44,15 +44,48 @@
 #define ETAG_MAX 64
 #define FRAME_HEAD 20
 
+/* `digits` lower-case hex digits of v at p; returns the end. */
+static char *put_hex(char *p, uint64_t v, int digits)
+{
+    static const char hex[] = "0123456789abcdef";
+    for (int i = digits - 1; i >= 0; i--, v >>= 4)
+        p[i] = hex[v & 15];
+    return p + digits;
+}
+
+/* v in decimal at p; returns the end. */
+static char *put_dec(char *p, uint32_t v)
+{
+    char t[10];
+    int n = 0;
+    do
+        t[n++] = (char)('0' + v % 10);
+    while (v /= 10);
+    while (n)
+        *p++ = t[--n];
+    return p;
+}
+
 /* Tile (level, tx, ty)'s strong ETag into etag (ETAG_MAX bytes): the
- * store's identity, the page CRC and the coordinates.  Returns its
- * length. */
+ * store's identity, the page CRC and the coordinates, as
+ * "%016llx%08x-%u-%u-%u" in quotes (written by hand: snprintf was 2 % of
+ * the server's CPU on raw tiles).  Returns its length. */
 static size_t tile_etag(char *etag, const struct image *img, uint32_t crc,
                         uint32_t level, uint32_t tx, uint32_t ty)
 {
-    int n = snprintf(etag, ETAG_MAX, "\"%016llx%08x-%u-%u-%u\"",
-                     (unsigned long long)img->identity, crc, level, tx, ty);
-    return n > 0 && n < ETAG_MAX ? (size_t)n : 0;
+    char *p = etag;
+    *p++ = '"';
+    p = put_hex(p, img->identity, 16);
+    p = put_hex(p, crc, 8);
+    *p++ = '-';
+    p = put_dec(p, level);
+    *p++ = '-';
+    p = put_dec(p, tx);
+    *p++ = '-';
+    p = put_dec(p, ty);
+    *p++ = '"';
+    *p = '\0';
+    return (size_t)(p - etag);
 }
 
 static void release_page(void *cls)
