@@ -238,6 +238,22 @@ fails "level out of range" "no level 20" "$BASE" --image x --level 20
 fails "not an http URL" "not an http" "ftp://127.0.0.1:$PORT" --image x
 run info "http://127.0.0.1:$dead"
 expect_rc "info on an unreachable server" 1
+# A server that accepts and never answers: info gives up after its
+# --timeout, which the message names (a 30 s default would name 30000 ms).
+python3 -c 'import socket, sys
+s = socket.socket(); s.bind(("127.0.0.1", 0)); s.listen(8)
+open(sys.argv[1], "w").write(str(s.getsockname()[1]))
+held = []
+while True: held.append(s.accept()[0])' "$T/silent.port.tmp" &
+SILENT=$!
+# shellcheck disable=SC2317 # run by wait_until
+silent_up() { [ -s "$T/silent.port.tmp" ]; }
+wait_until silent_up
+run info "http://127.0.0.1:$(cat "$T/silent.port.tmp")" --timeout 1
+kill "$SILENT" 2>/dev/null
+wait "$SILENT" 2>/dev/null
+check "info URL --timeout 1 gives up on a server that never answers, saying so" \
+    sh -c "[ $rc -eq 1 ] && grep -q 'within 1000 ms (--timeout)' '$T/err'"
 
 # ---------------------------------------------------------------- fault stub
 # A proxy in front of gigaviewd that damages tile and batch responses.

@@ -20,21 +20,22 @@
 #include "store/store_read.h"
 
 #define ME "gigaview info"
-#define HTTP_TIMEOUT_MS (REMOTE_TIMEOUT_DEFAULT * 1000) /* remote_opts.h */
 
 struct info_args {
     int json;
+    struct remote_opts remote;   /* --timeout, for a URL */
 };
 
 static const struct opt_spec info_opts[] = {
     {.name = "json", .kind = OPT_FLAG, .field = offsetof(struct info_args, json),
      .help = "one line of JSON instead of the table (not for a URL)"},
+    REMOTE_OPT_TIMEOUT(offsetof(struct info_args, remote)),
 };
 
 static const struct opt_command info_command = {
     .me = ME,
     .synopsis = "usage: gigaview info STORE [--json]\n"
-                "       gigaview info URL\n"
+                "       gigaview info URL [--timeout SEC]\n"
                 "\n"
                 "Describe a store file, or list the images of the gigaviewd at URL\n"
                 "(http:// or https://); GIGAVIEW_TOKEN, if set, is sent as the access\n"
@@ -54,11 +55,12 @@ static const char *tone_name(int tone)
     }
 }
 
-/* List the images of the server at url.  Returns the exit status. */
-static int info_server(const char *url)
+/* List the images of the server at url, each request bounded by
+ * timeout_ms.  Returns the exit status. */
+static int info_server(const char *url, long timeout_ms)
 {
     struct gv_error err = {0};
-    struct gv_http *h = gv_http_new(url, HTTP_TIMEOUT_MS, 0, &err);
+    struct gv_http *h = gv_http_new(url, timeout_ms, 0, &err);
     int bad = !h || gv_http_print_images(h, stdout, &err) < 0;
     if (bad)
         fprintf(stderr, ME ": %s\n", err.text);
@@ -252,6 +254,7 @@ static void print_text(struct gv_store *s, const char *path)
 int cmd_info(int argc, char **argv)
 {
     struct info_args a = {0};
+    remote_opts_init(&a.remote);
     int first, rc = opt_parse(&info_command, argc, argv, &a, &first);
     if (rc != OPT_GO_ON)
         return rc;
@@ -261,7 +264,7 @@ int cmd_info(int argc, char **argv)
     }
     const char *path = argv[first];
     if (!strncmp(path, "http://", 7) || !strncmp(path, "https://", 8))
-        return info_server(path);
+        return info_server(path, remote_timeout_ms(&a.remote));
     struct gv_error err = {0};
     struct gv_store *s = gv_store_open(path, &err);
     if (!s) {

@@ -9,8 +9,8 @@
  * range, one default and one message for every such command.  A new
  * option that any command with a server URL should take goes here; an
  * option of one command only goes into that command's table
- * (docs/ARCHITECTURE.md, "client/").  `gigaview info URL` takes no
- * options and uses the same request limit.
+ * (docs/ARCHITECTURE.md, "client/").  `gigaview info URL` takes
+ * --timeout alone.
  */
 #ifndef GV_REMOTE_OPTS_H
 #define GV_REMOTE_OPTS_H
