@@ -13,6 +13,9 @@
  * comparison can fail.  Images the native writer declines (2 channels,
  * 70000 pixels wide) go to the module, which answers in its own words.
  *
+ * WebP (native_webp_write.c) the same way, on half the sizes, gray and
+ * RGB, with its negative control and the images it declines.
+ *
  * PNG (native_png_write.c) the same way: 1 and 3 channels of 8-bit and 1
  * to 4 of 16-bit samples, through gv_image_encode_typed (and
  * gv_image_encode for 8-bit), against the module's bytes; 2 and 4 of 8
@@ -29,6 +32,7 @@
 #include "imageio/imageio.h"
 #include "imageio/native_jpeg_write.h"
 #include "imageio/native_png_write.h"
+#include "imageio/native_webp_write.h"
 
 /* Pixels of kind 0 (smooth gradients), 1 (noise) or 2 (flat). */
 static uint8_t *make_image(uint32_t w, uint32_t h, int c, int kind,
@@ -46,36 +50,40 @@ static uint8_t *make_image(uint32_t w, uint32_t h, int c, int kind,
     return p;
 }
 
-static int encode_by(int native, const char *how, uint32_t w, uint32_t h,
-                     int c, const uint8_t *px, int q, uint8_t **out,
-                     size_t *len, struct gv_error *err)
+/* Encode in fmt ("jpg" or "webp") by the module, the native writer
+ * ("direct") or gv_image_encode with native writers allowed. */
+static int encode_by(int native, const char *how, const char *fmt,
+                     uint32_t w, uint32_t h, int c, const uint8_t *px, int q,
+                     uint8_t **out, size_t *len, struct gv_error *err)
 {
     if (strcmp(how, "direct") == 0)
-        return gv_native_jpeg_encode(w, h, c, px, q, out, len, err);
+        return strcmp(fmt, "webp") == 0
+                   ? gv_native_webp_encode(w, h, c, px, q, out, len, err)
+                   : gv_native_jpeg_encode(w, h, c, px, q, out, len, err);
     if (native)
         unsetenv("GIGAVIEW_NATIVE_WRITERS");
     else
         setenv("GIGAVIEW_NATIVE_WRITERS", "0", 1);
-    int rc = gv_image_encode("jpg", w, h, c, px, q, out, len, err);
+    int rc = gv_image_encode(fmt, w, h, c, px, q, out, len, err);
     unsetenv("GIGAVIEW_NATIVE_WRITERS");
     return rc;
 }
 
 /* Encode one image every way; 1 when all equal the module's bytes. */
-static int compare(uint32_t w, uint32_t h, int c, int kind, int q,
-                   uint64_t *rng)
+static int compare(const char *fmt, uint32_t w, uint32_t h, int c, int kind,
+                   int q, uint64_t *rng)
 {
     uint8_t *px = make_image(w, h, c, kind, rng);
     uint8_t *ref = NULL, *a = NULL, *b = NULL;
     size_t nref = 0, na = 0, nb = 0;
     struct gv_error e1 = {0}, e2 = {0}, e3 = {0};
-    int r1 = encode_by(0, "module", w, h, c, px, q, &ref, &nref, &e1);
-    int r2 = encode_by(1, "direct", w, h, c, px, q, &a, &na, &e2);
-    int r3 = encode_by(1, "loader", w, h, c, px, q, &b, &nb, &e3);
+    int r1 = encode_by(0, "module", fmt, w, h, c, px, q, &ref, &nref, &e1);
+    int r2 = encode_by(1, "direct", fmt, w, h, c, px, q, &a, &na, &e2);
+    int r3 = encode_by(1, "loader", fmt, w, h, c, px, q, &b, &nb, &e3);
     int same = r1 == 0 && r2 == 0 && r3 == 0 && nref == na && nref == nb &&
                memcmp(ref, a, nref) == 0 && memcmp(ref, b, nref) == 0;
-    check(same, "%ux%u x%d kind %d quality %d: module %d (%zu bytes%s%s), "
-          "native %zu, through gv_image_encode %zu, equal bytes", w, h, c,
+    check(same, "%s %ux%u x%d kind %d quality %d: module %d (%zu bytes%s%s), "
+          "native %zu, through gv_image_encode %zu, equal bytes", fmt, w, h, c,
           kind, q, r1, nref, r1 ? ": " : "", r1 ? e1.text : "", na, nb);
     free(px);
     free(ref);
@@ -209,6 +217,28 @@ static void png_file_checks(uint64_t *rng)
     test_tmpdir_free(dir);
 }
 
+/* WebP's negative control and the images its native writer declines. */
+static void webp_checks(uint64_t *rng)
+{
+    uint8_t *px = make_image(64, 64, 3, 1, rng), *a = NULL, *b = NULL;
+    size_t na = 0, nb = 0;
+    struct gv_error err = {0};
+    check(encode_by(0, "module", "webp", 64, 64, 3, px, 90, &a, &na, &err) == 0 &&
+          gv_native_webp_encode(64, 64, 3, px, 89, &b, &nb, &err) == 0 &&
+          !(na == nb && memcmp(a, b, na) == 0),
+          "webp negative control: quality 89 differs from the module's 90");
+    free(a);
+    free(b);
+    free(px);
+    check(!gv_native_webp_encodes(8, 8, 2) && !gv_native_webp_encodes(8, 8, 4) &&
+          !gv_native_webp_encodes(16384, 1, 3) && gv_native_webp_encodes(16383, 1, 1),
+          "webp: 2 and 4 channels and 16384 pixels wide are declined, 16383 taken");
+    uint8_t two[8 * 8 * 2] = {0};
+    err = (struct gv_error){0};
+    check(gv_native_webp_encode(8, 8, 2, two, 90, &a, &na, &err) < 0 &&
+          err.code == GV_EINVAL, "the native webp writer refuses 2 channels");
+}
+
 int main(void)
 {
     uint64_t rng = 12345;
@@ -219,16 +249,23 @@ int main(void)
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
         for (int c = 1; c <= 3; c += 2)
             for (int kind = 0; kind < 3; kind++)
-                compare(sizes[s][0], sizes[s][1], c, kind,
+                compare("jpg", sizes[s][0], sizes[s][1], c, kind,
                         quality[(s + (size_t)kind) % 7], &rng);
     for (size_t i = 0; i < sizeof quality / sizeof quality[0]; i++)
-        compare(64, 48, 3, 1, quality[i], &rng);
+        compare("jpg", 64, 48, 3, 1, quality[i], &rng);
+    /* WebP (method 6 is slow: fewer sizes, every kind and channel count) */
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s += 2)
+        for (int c = 1; c <= 3; c += 2)
+            for (int kind = 0; kind < 3; kind++)
+                compare("webp", sizes[s][0], sizes[s][1], c, kind,
+                        quality[(s + (size_t)kind + (size_t)c) % 7], &rng);
+    webp_checks(&rng);
 
     /* Negative control: quality 89 is not the module's 90. */
     uint8_t *px = make_image(64, 64, 3, 0, &rng), *a = NULL, *b = NULL;
     size_t na = 0, nb = 0;
     struct gv_error err = {0};
-    check(encode_by(0, "module", 64, 64, 3, px, 90, &a, &na, &err) == 0 &&
+    check(encode_by(0, "module", "jpg", 64, 64, 3, px, 90, &a, &na, &err) == 0 &&
           gv_native_jpeg_encode(64, 64, 3, px, 89, &b, &nb, &err) == 0 &&
           !(na == nb && memcmp(a, b, na) == 0),
           "negative control: quality 89 differs from the module's 90");

@@ -50,10 +50,11 @@
  * MIRAX, VMS or Sakura slide is offered to them, and what they decline
  * goes on as above.  GIGAVIEW_NATIVE_READERS does not change this.
  * Writing goes through the module, but for gv_image_encode's JPEG
- * (native_jpeg_write.c) and gv_image_encode's and gv_image_encode_typed's
+ * (native_jpeg_write.c) and WebP (native_webp_write.c), gv_image_encode's
+ * and gv_image_encode_typed's
  * PNG of 8 or 16-bit samples (native_png_write.c), and a PNG file that
  * gv_image_write or gv_image_write_typed writes: the module's very bytes,
- * with no module to load, so that a server's first JPEG or PNG answer
+ * with no module to load, so that a server's first JPEG, PNG or WebP answer
  * does not wait for OpenImageIO, nor `gigaview render -o view.png`;
  * GIGAVIEW_NATIVE_WRITERS=0 sends those to the module too (tests compare
  * the two).
@@ -76,6 +77,7 @@
 #include "imageio/native_jpeg.h"
 #include "imageio/native_jpeg_write.h"
 #include "imageio/native_png_write.h"
+#include "imageio/native_webp_write.h"
 #include "imageio/output_format.h"
 #include "imageio/native_png.h"
 #include "imageio/native_tiff.h"
@@ -608,6 +610,11 @@ int gv_image_encode(const char *format, uint32_t width, uint32_t height,
     if (native_png(f, width, height, channels, GV_SAMPLE_U8))
         return gv_native_png_encode(width, height, channels, GV_SAMPLE_U8,
                                     pixels, out, len, err);
+    if (f && strcmp(f->name, "webp") == 0 &&
+        gv_native_webp_encodes(width, height, channels) &&
+        native_writer_allowed())
+        return gv_native_webp_encode(width, height, channels, pixels, quality,
+                                     out, len, err);
     const struct gv_imageio_module *m = get(err);
     return m ? m->encode(format, width, height, channels, pixels, quality,
                          out, len, err) : -1;
