@@ -2,9 +2,9 @@
  * slab.c - large buffers cut from huge-page chunks (see slab.h).
  *
  * The classes are a small table of slot sizes, found by a linear search
- * (a cache has one or two).  Each class keeps a doubly linked list of its chunks, those with a free
- * slot before those without, so a get takes the head's slot or maps a
- * chunk.  A chunk's free slots are a stack of their indices.  A put finds
+ * (a cache has one or two).  Each class keeps a doubly linked list of its
+ * chunks, those with a free slot before those without, so a get takes the
+ * head's slot or maps a chunk.  A chunk's free slots are a stack of their indices.  A put finds
  * its chunk by address in the class's list (a few dozen chunks at most
  * for a cache of a few hundred MiB; the cost is nothing beside a decode).
  */
@@ -33,8 +33,7 @@
 struct chunk {
     uint8_t *base;                /* UNIT-aligned, `bytes` long */
     size_t bytes;
-    size_t slot;
-    int cls;
+    int cls;                      /* its slots' size is the class's */
     int nslots, nfree;
     struct chunk *prev, *next;    /* in its class's list */
     uint16_t free[];              /* free slots' indices, nfree of them */
@@ -120,7 +119,6 @@ static uint8_t *map_aligned(size_t bytes)
 static void carve(struct chunk *c, int cls, size_t slot)
 {
     c->cls = cls;
-    c->slot = slot;
     c->nslots = (int)(c->bytes / slot);
     c->nfree = c->nslots;
     for (int i = 0; i < c->nslots; i++)
